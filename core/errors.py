@@ -1,0 +1,41 @@
+"""Exceptions raised by cistrack.
+
+Every error a user can trigger names what was wrong (file, table, key, plugin) and what is
+allowed, so that no one has to read a traceback from deep inside numpy.
+"""
+from __future__ import annotations
+
+
+class CistrackError(Exception):
+    """Base class of every error cistrack raises on purpose."""
+
+
+class ParameterError(CistrackError, ValueError):
+    """A component parameter has the wrong type or an inadmissible value."""
+
+
+class ConfigError(CistrackError, ValueError):
+    """A scenario or study file is unreadable or invalid."""
+
+
+class UnknownComponentError(CistrackError, KeyError):
+    """No component of the requested kind is registered under that name."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; keep it readable
+        return str(self.args[0]) if self.args else ""
+
+
+class DuplicateComponentError(CistrackError):
+    """Two plugins registered a component of the same kind under the same name."""
+
+
+class MeasurementError(CistrackError, ValueError):
+    """Measurements are missing, inconsistent or malformed."""
+
+
+class IODError(CistrackError, RuntimeError):
+    """Initial orbit determination could not produce the requested cloud."""
+
+
+class FilterError(CistrackError, RuntimeError):
+    """A filter reached a state it cannot continue from (custody cannot be represented)."""

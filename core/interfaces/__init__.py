@@ -1,0 +1,28 @@
+"""The abstract interfaces every plugin implements, all vectorised over particles.
+
+=============  ==========================================  ==========================
+kind           interface                                   registry kind string
+=============  ==========================================  ==========================
+dynamics       :class:`Dynamics`                           ``"dynamics"``
+sensor         :class:`Sensor`                             ``"sensor"``
+schedule       :class:`Schedule`                           ``"schedule"``
+IOD method     :class:`IODMethod`                          ``"iod"``
+clusterer      :class:`Clusterer`                          ``"clustering"``
+filter         :class:`Filter`                             ``"filter"``
+orbit          :class:`ReferenceOrbit` (data, not a class)  ``"orbit"``
+recorder       any object with lifecycle hookimpls         ``"recorder"``
+=============  ==========================================  ==========================
+"""
+from .clustering import Clusterer
+from .dynamics import Body, Dynamics, Propagation
+from .filter import Filter
+from .iod import IODMethod
+from .orbit import ReferenceOrbit
+from .schedule import Pass, Schedule
+from .sensor import Sensor
+
+KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder")
+"""Every registry kind, in the order `cistrack plugins` lists them."""
+
+__all__ = ["Body", "Clusterer", "Dynamics", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
+           "ReferenceOrbit", "Schedule", "Sensor"]

@@ -1,0 +1,85 @@
+"""Sensor: measurement model, noise, residuals, visibility and simulation."""
+from __future__ import annotations
+
+from abc import abstractmethod
+
+import numpy as np
+
+from ..component import Component
+from ..measurement import MeasurementSet
+from .schedule import Pass
+
+__all__ = ["Sensor"]
+
+
+class Sensor(Component):
+    """A sensor that observes states. Angles are radians, ranges LU, times TU.
+
+    The scenario's UTC epoch is handed to every sensor whose constructor has an ``epoch``
+    parameter (an ISO-8601 string); a scenario may not set it in the sensor table.
+    """
+
+    kind = "sensor"
+    names: tuple[str, ...] = ()
+    """Name of each measurement component, e.g. ("azimuth", "elevation", "range")."""
+    angular: tuple[bool, ...] = ()
+    """Whether each component is an angle that wraps at ±pi in residuals."""
+
+    @abstractmethod
+    def measure(self, states: np.ndarray, t) -> np.ndarray:
+        """Noise-free measurement h(x): states (N, 6), t scalar or (N,) TU -> (N, m)."""
+
+    @abstractmethod
+    def sigmas(self, states: np.ndarray, t) -> np.ndarray:
+        """One-sigma noise of each component for the true states (N, 6) -> (N, m)."""
+
+    def noise_covariance(self, states: np.ndarray, t) -> np.ndarray:
+        """Noise covariance R for the true states: (N, m, m), diagonal."""
+        s = self.sigmas(states, t)
+        return np.einsum("ni,ij->nij", s * s, np.eye(s.shape[1]))
+
+    def residual(self, z: np.ndarray, zhat: np.ndarray) -> np.ndarray:
+        """z - zhat (..., m) with angular components wrapped into [-pi, pi)."""
+        r = np.asarray(z, dtype=float) - np.asarray(zhat, dtype=float)
+        ang = np.asarray(self.angular, dtype=bool)
+        if ang.any():
+            r[..., ang] = (r[..., ang] + np.pi) % (2.0 * np.pi) - np.pi
+        return r
+
+    @abstractmethod
+    def visible(self, states: np.ndarray, t) -> np.ndarray:
+        """Whether each state (N, 6) can be observed at t (scalar or (N,)) -> (N,) bool."""
+
+    @abstractmethod
+    def observer_position(self, t) -> np.ndarray:
+        """Observer position in the synodic frame, LU: t scalar -> (3,), t (K,) -> (K, 3)."""
+
+    @abstractmethod
+    def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
+        """Unit vectors (N, 3) in the synodic frame along measured angle pairs (N, 2) [rad] at t
+        (scalar or (N,) TU). A target at range rho (LU) is at ``observer_position(t) + rho * los``;
+        IOD methods use this to turn angles and a range into synodic positions."""
+
+    def passes(self, times: np.ndarray, states: np.ndarray) -> list[Pass]:
+        """Visibility passes of a trajectory sampled at ``times`` (K,) with ``states`` (K, 6).
+
+        The default takes contiguous runs of visible samples; sensors may refine the edges.
+        """
+        vis = np.asarray(self.visible(states, times), dtype=bool)
+        out: list[Pass] = []
+        k = 0
+        n = vis.shape[0]
+        while k < n:
+            if vis[k]:
+                j = k
+                while j + 1 < n and vis[j + 1]:
+                    j += 1
+                out.append(Pass(float(times[k]), float(times[j])))
+                k = j + 1
+            else:
+                k += 1
+        return out
+
+    @abstractmethod
+    def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
+        """Noisy measurements of a truth trajectory: states (K, 6) at times (K,) TU."""

@@ -1,0 +1,126 @@
+"""Earth–Moon CR3BP characteristic units and conversions.
+
+States are nondimensional and synodic (barycentric, rotating) inside cistrack; everything a
+person reads or writes is in km, km/s, days and UTC. These helpers are the one place where the
+two meet.
+
+Constants (../shared/REFERENCE.md): LU = 384,400 km, TU = 375,149 s (4.342 d), VU = LU/TU.
+"""
+from __future__ import annotations
+
+from datetime import datetime, timedelta, timezone
+
+import numpy as np
+
+LU_KM: float = 384_400.0
+"""Length unit: Earth–Moon distance, km."""
+TU_S: float = 375_149.0
+"""Time unit: 1/n of the synodic rotation, seconds (4.342 days)."""
+VU_KMS: float = LU_KM / TU_S
+"""Velocity unit, km/s (about 1.02466)."""
+DAY_S: float = 86_400.0
+TU_DAYS: float = TU_S / DAY_S
+ARCSEC_RAD: float = np.pi / (180.0 * 3600.0)
+
+__all__ = [
+    "LU_KM", "TU_S", "VU_KMS", "DAY_S", "TU_DAYS", "ARCSEC_RAD",
+    "km_to_lu", "lu_to_km", "kms_to_vu", "vu_to_kms", "days_to_tu", "tu_to_days",
+    "hours_to_tu", "tu_to_hours", "seconds_to_tu", "tu_to_seconds",
+    "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc",
+]
+
+
+def km_to_lu(x):
+    """Distance km -> LU (array-like in, ndarray or float out)."""
+    return np.asarray(x, dtype=float) / LU_KM
+
+
+def lu_to_km(x):
+    """Distance LU -> km."""
+    return np.asarray(x, dtype=float) * LU_KM
+
+
+def kms_to_vu(v):
+    """Speed km/s -> VU."""
+    return np.asarray(v, dtype=float) / VU_KMS
+
+
+def vu_to_kms(v):
+    """Speed VU -> km/s."""
+    return np.asarray(v, dtype=float) * VU_KMS
+
+
+def days_to_tu(d):
+    """Duration days -> TU."""
+    return np.asarray(d, dtype=float) * DAY_S / TU_S
+
+
+def tu_to_days(t):
+    """Duration TU -> days."""
+    return np.asarray(t, dtype=float) * TU_S / DAY_S
+
+
+def hours_to_tu(h):
+    """Duration hours -> TU."""
+    return np.asarray(h, dtype=float) * 3600.0 / TU_S
+
+
+def tu_to_hours(t):
+    """Duration TU -> hours."""
+    return np.asarray(t, dtype=float) * TU_S / 3600.0
+
+
+def seconds_to_tu(s):
+    """Duration seconds -> TU."""
+    return np.asarray(s, dtype=float) / TU_S
+
+
+def tu_to_seconds(t):
+    """Duration TU -> seconds."""
+    return np.asarray(t, dtype=float) * TU_S
+
+
+def state_to_km(states):
+    """Nondimensional states (..., 6) -> km and km/s (..., 6)."""
+    s = np.array(states, dtype=float, copy=True)
+    s[..., :3] *= LU_KM
+    s[..., 3:] *= VU_KMS
+    return s
+
+
+def state_from_km(states_km):
+    """States in km and km/s (..., 6) -> nondimensional (..., 6)."""
+    s = np.array(states_km, dtype=float, copy=True)
+    s[..., :3] /= LU_KM
+    s[..., 3:] /= VU_KMS
+    return s
+
+
+def parse_utc(text: str | datetime) -> datetime:
+    """Parse an ISO-8601 UTC timestamp ('2026-01-01T00:00:00Z'); naive times are taken as UTC.
+
+    Raises ValueError with the offending text when it is not a timestamp.
+    """
+    if isinstance(text, datetime):
+        dt = text
+    else:
+        s = str(text).strip()
+        if s.endswith("Z"):
+            s = s[:-1] + "+00:00"
+        try:
+            dt = datetime.fromisoformat(s)
+        except ValueError as exc:
+            raise ValueError(f"not an ISO-8601 UTC time: {text!r}") from exc
+    if dt.tzinfo is None:
+        dt = dt.replace(tzinfo=timezone.utc)
+    return dt.astimezone(timezone.utc)
+
+
+def format_utc(dt: datetime) -> str:
+    """Format a datetime as 'YYYY-MM-DDTHH:MM:SS.ffffffZ'."""
+    return dt.astimezone(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+def tu_to_utc(epoch: datetime, t: float) -> datetime:
+    """UTC of nondimensional time t (TU since epoch)."""
+    return epoch + timedelta(seconds=float(t) * TU_S)
