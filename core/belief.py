@@ -61,12 +61,16 @@ class ParticleCloud:
         Normalised importance weights; None means equal weights.
     labels : (N,) int or None
         Component label of each particle, when a clusterer assigned one.
+    meta : dict
+        Free-form provenance of the cloud (e.g. an IOD method's draws, survivors and pruning
+        counts); never used in computations.
     """
 
     states: np.ndarray
     epoch: float
     weights: np.ndarray | None = None
     labels: np.ndarray | None = None
+    meta: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         self.states = np.atleast_2d(np.asarray(self.states, dtype=float))
