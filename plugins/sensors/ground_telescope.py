@@ -1,0 +1,270 @@
+"""A ground telescope measuring azimuth and elevation (and optionally range) of a target.
+
+Registered as sensor ``"ground-telescope"``. The observer sits at a WGS84 geodetic position
+(College Station, Texas by default); the synodic -> ECI -> ECEF -> NEU chain is delegated to a
+:class:`~cistrack.plugins.sensors.frames.FrameModel` chosen by ``frame_model``.
+
+Measurements: azimuth (rad, North through East, [0, 2pi)), elevation (rad, from the local
+horizontal, geodetic up) and, with ``measure_range``, range (LU). Noise: ``sigma_arcsec`` on
+both angles; range sigma = ``range_alpha`` x true range.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack.component import check_choice, check_positive, check_range
+from cistrack.errors import MeasurementError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Pass, Sensor
+from cistrack.measurement import MeasurementSet
+from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
+
+from .frames import FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, wrap_azimuth
+
+__all__ = ["GroundTelescope"]
+
+_BISECTION_STEPS = 48
+
+
+class GroundTelescope(Sensor):
+    """Ground-based optical telescope (az/el, optional IOD-only range).
+
+    Parameters
+    ----------
+    latitude_deg, longitude_deg : float
+        Geodetic WGS84 latitude and longitude of the observer, degrees (East positive).
+    height_m : float
+        Height above the WGS84 ellipsoid, metres.
+    sigma_arcsec : float
+        One-sigma noise of azimuth and of elevation, arcseconds.
+    measure_range : bool
+        Also measure range (the "range" component, LU), for IOD.
+    range_alpha : float
+        Range sigma as a fraction of the true range.
+    elevation_mask_deg : float
+        Lowest elevation at which the target is visible, degrees.
+    epoch : str
+        ISO-8601 UTC time of t = 0 (a scenario injects its own).
+    moon_phase_deg : float
+        Right ascension of the Earth->Moon direction at the epoch, degrees (equatorial model).
+    frame_model : str
+        Name of the synodic-to-Earth-fixed model, one of ``FRAME_MODELS`` ("equatorial").
+    """
+
+    def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
+                 height_m: float = 103.8, sigma_arcsec: float = 1.5, measure_range: bool = False,
+                 range_alpha: float = 0.05, elevation_mask_deg: float = 10.0,
+                 epoch: str = "2026-01-01T00:00:00Z", moon_phase_deg: float = 0.0,
+                 frame_model: str = "equatorial") -> None:
+        self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
+        self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
+        self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        if not isinstance(measure_range, bool):
+            self._fail("measure_range", measure_range, "must be true or false")
+        self.measure_range = measure_range
+        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
+                                              -90.0, 90.0, hi_open=True)
+        self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
+        self.frame_model = check_choice(self, "frame_model", frame_model, FRAME_MODELS)
+        try:
+            self._epoch = parse_utc(epoch)
+        except (ValueError, TypeError):
+            self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
+        self.epoch = epoch
+
+        self.names = ("azimuth", "elevation", "range") if measure_range else ("azimuth", "elevation")
+        self.angular = (True, False, False) if measure_range else (True, False)
+        self._frames = FRAME_MODELS[frame_model](self._epoch, self.moon_phase_deg)
+        self._neu = neu_basis(self.latitude_deg, self.longitude_deg)          # (3, 3) ECEF -> NEU
+        self._obs_ecef = geodetic_to_ecef(self.latitude_deg, self.longitude_deg,
+                                          self.height_m) / LU_KM             # (3,) LU
+        self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
+        self._mask_rad = np.radians(self.elevation_mask_deg)
+
+    # -- geometry -------------------------------------------------------------------------------
+    def _affine(self, t):
+        """A (.., 3, 3), b (.., 3) with NEU = A @ r_syn - b (LU) at t (scalar or (K,))."""
+        rot, earth = self._frames.synodic_to_ecef(t)
+        a = self._neu @ rot
+        b = np.einsum("...ij,...j->...i", a, earth) + self._neu @ self._obs_ecef
+        return a, b
+
+    @staticmethod
+    def _check_states(states) -> np.ndarray:
+        x = np.asarray(states, dtype=float)
+        if x.ndim != 2 or x.shape[1] < 3:
+            raise MeasurementError(f"sensor 'ground-telescope': states must have shape (N, 6), got {x.shape}")
+        if not np.all(np.isfinite(x[:, :3])):
+            raise MeasurementError("sensor 'ground-telescope': states contain NaN or infinity")
+        return x
+
+    @staticmethod
+    def _check_times(t, n: int) -> np.ndarray:
+        tt = np.asarray(t, dtype=float)
+        if tt.ndim == 0:
+            return tt
+        tt = tt.reshape(-1)
+        if tt.shape[0] != n:
+            raise MeasurementError(
+                f"sensor 'ground-telescope': t must be a scalar or have one time per row ({n}), "
+                f"got shape {np.shape(t)}")
+        if tt.size and tt[0] == tt[-1] and np.all(tt == tt[0]):
+            return tt[0]                       # one common time: the fast (3, 3) path
+        return tt
+
+    def topocentric(self, states: np.ndarray, t) -> np.ndarray:
+        """Target positions relative to the observer in the NEU frame, LU.
+
+        states (N, 6) (or (N, 3)) synodic; t scalar or (N,) TU -> (N, 3).
+        """
+        x = self._check_states(states)
+        tt = self._check_times(t, x.shape[0])
+        a, b = self._affine(tt)
+        r = x[:, :3]
+        if tt.ndim == 0:
+            return r @ a.T - b
+        return np.einsum("nij,nj->ni", a, r) - b
+
+    def measure(self, states: np.ndarray, t) -> np.ndarray:
+        """Noise-free (azimuth, elevation[, range]): states (N, 6), t scalar or (N,) TU -> (N, m).
+
+        Azimuth in [0, 2pi) rad, elevation in [-pi/2, pi/2] rad, range in LU.
+        """
+        neu = self.topocentric(states, t)
+        az, el, rng = neu_to_azelr(neu)
+        if self.measure_range:
+            return np.stack([az, el, rng], axis=1)
+        return np.stack([az, el], axis=1)
+
+    def sigmas(self, states: np.ndarray, t) -> np.ndarray:
+        """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x true range (LU)."""
+        x = np.asarray(states, dtype=float)
+        n = x.shape[0] if x.ndim == 2 else 1
+        out = np.full((n, len(self.names)), self._sigma_rad)
+        if self.measure_range:
+            out[:, 2] = self.range_alpha * np.linalg.norm(self.topocentric(x, t), axis=1)
+        return out
+
+    def visible(self, states: np.ndarray, t) -> np.ndarray:
+        """Elevation at or above the mask: states (N, 6), t scalar or (N,) -> (N,) bool."""
+        neu = self.topocentric(states, t)
+        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1])) >= self._mask_rad
+
+    def observer_position(self, t) -> np.ndarray:
+        """Observer position in the synodic frame, LU: t scalar -> (3,), (K,) -> (K, 3)."""
+        rot, earth = self._frames.synodic_to_ecef(np.asarray(t, dtype=float))
+        return earth + np.einsum("...ji,j->...i", rot, self._obs_ecef)
+
+    def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
+        """Unit synodic vectors (N, 3) along (azimuth, elevation) pairs (N, 2) rad at t (scalar or (N,) TU).
+
+        Columns beyond the first two (e.g. range) are ignored. A target at range rho (LU) is at
+        ``observer_position(t) + rho * los``.
+        """
+        ang = np.asarray(angles, dtype=float)
+        if ang.ndim != 2 or ang.shape[1] < 2:
+            raise MeasurementError(f"sensor 'ground-telescope': angles must have shape (N, 2), got {ang.shape}")
+        if not np.all(np.isfinite(ang[:, :2])):
+            raise MeasurementError("sensor 'ground-telescope': angles contain NaN or infinity")
+        tt = self._check_times(t, ang.shape[0])
+        u = azel_to_unit_neu(ang[:, 0], ang[:, 1])
+        a, _ = self._affine(tt)
+        if tt.ndim == 0:
+            return u @ a
+        return np.einsum("nji,nj->ni", a, u)
+
+    def positions_from_measurements(self, values: np.ndarray, t) -> np.ndarray:
+        """Synodic positions (N, 3) LU from (azimuth, elevation, range) rows (N, 3) (rad, rad, LU)."""
+        v = np.asarray(values, dtype=float)
+        if v.ndim != 2 or v.shape[1] < 3:
+            raise MeasurementError(
+                f"sensor 'ground-telescope': need (azimuth, elevation, range) rows (N, 3), got {v.shape}")
+        tt = self._check_times(t, v.shape[0])
+        return self.observer_position(tt) + v[:, 2:3] * self.line_of_sight(v[:, :2], tt)
+
+    # -- passes ---------------------------------------------------------------------------------
+    def _elevation_between(self, t0, t1, x0, x1, tau):
+        """Elevation (rad) at times tau inside [t0, t1] on a cubic Hermite of the synodic states."""
+        h = t1 - t0
+        s = ((tau - t0) / h)[:, None]
+        s2, s3 = s * s, s * s * s
+        p = ((2 * s3 - 3 * s2 + 1) * x0[:, :3] + (s3 - 2 * s2 + s) * h[:, None] * x0[:, 3:6]
+             + (-2 * s3 + 3 * s2) * x1[:, :3] + (s3 - s2) * h[:, None] * x1[:, 3:6])
+        neu = self.topocentric(p, tau)
+        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
+
+    def _crossings(self, times, states, k, rising: bool) -> np.ndarray:
+        """Mask-crossing times between samples k and k+1 (arrays), found by bisection."""
+        if k.size == 0:
+            return np.empty(0)
+        t0, t1 = times[k], times[k + 1]
+        x0, x1 = states[k], states[k + 1]
+        lo, hi = t0.copy(), t1.copy()      # invariant: visible side is hi if rising, lo if setting
+        for _ in range(_BISECTION_STEPS):
+            mid = 0.5 * (lo + hi)
+            above = self._elevation_between(t0, t1, x0, x1, mid) >= self._mask_rad
+            if rising:
+                hi = np.where(above, mid, hi)
+                lo = np.where(above, lo, mid)
+            else:
+                lo = np.where(above, mid, lo)
+                hi = np.where(above, hi, mid)
+        return hi if rising else lo
+
+    def passes(self, times: np.ndarray, states: np.ndarray) -> list[Pass]:
+        """Visibility passes of a trajectory sampled at ``times`` (K,) TU with ``states`` (K, 6).
+
+        Contiguous runs of visible samples, with each rise and set refined by bisection of the
+        elevation along a cubic Hermite interpolant of the synodic states between the samples.
+        A pass already under way at the first sample starts there; one still under way at the
+        last sample ends there. Sample densely enough (<= 1 h) not to miss short passes.
+        """
+        tt = np.asarray(times, dtype=float).reshape(-1)
+        x = self._check_states(states)
+        if x.shape[0] != tt.shape[0] or x.shape[1] != 6:
+            raise MeasurementError(
+                f"sensor 'ground-telescope': passes needs times (K,) and states (K, 6), got "
+                f"{tt.shape} and {x.shape}")
+        if tt.size > 1 and np.any(np.diff(tt) <= 0):
+            raise MeasurementError("sensor 'ground-telescope': pass times must increase strictly")
+        if tt.size == 0:
+            return []
+        vis = self.visible(x, tt)
+        change = np.flatnonzero(vis[1:] != vis[:-1])           # between change and change + 1
+        rise_k = change[vis[change + 1]]
+        set_k = change[vis[change]]
+        rises = self._crossings(tt, x, rise_k, rising=True)
+        sets = self._crossings(tt, x, set_k, rising=False)
+        starts = list(rises)
+        ends = list(sets)
+        if vis[0]:
+            starts.insert(0, tt[0])
+        if vis[-1]:
+            ends.append(tt[-1])
+        return [Pass(float(a), float(b)) for a, b in zip(starts, ends)]
+
+    # -- simulation -----------------------------------------------------------------------------
+    def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
+        """Noisy measurements of a truth trajectory: states (K, 6) at times (K,) TU.
+
+        Values = h(x) + N(0, sigma^2) per component; azimuth is wrapped into [0, 2pi). The
+        caller picks the times (a schedule plans them inside visibility passes).
+        """
+        x = self._check_states(states)
+        tt = np.asarray(times, dtype=float).reshape(-1)
+        if tt.shape[0] != x.shape[0]:
+            raise MeasurementError(
+                f"sensor 'ground-telescope': {tt.shape[0]} times for {x.shape[0]} states")
+        z = self.measure(x, tt)
+        s = self.sigmas(x, tt)
+        values = z + rng.standard_normal(z.shape) * s
+        values[:, 0] = wrap_azimuth(values[:, 0])
+        return MeasurementSet(tt, values, s, self.names,
+                              {"sensor": "ground-telescope", "epoch": self.epoch})
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("sensor", "ground-telescope", GroundTelescope)

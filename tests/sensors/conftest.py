@@ -1,0 +1,36 @@
+"""Shared fixtures for the sensor tests: the default observer and a short NRHO truth arc."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from cistrack.plugins.sensors.ground_telescope import GroundTelescope
+
+MU = 1.2150582e-2
+
+
+def cr3bp_rhs(_t, s):
+    """CR3BP equations of motion (REFERENCE.md) for one state (6,)."""
+    x, y, z, vx, vy, vz = s
+    r1 = np.sqrt((x + MU) ** 2 + y * y + z * z) ** 3
+    r2 = np.sqrt((x - 1 + MU) ** 2 + y * y + z * z) ** 3
+    return [vx, vy, vz,
+            x + 2 * vy - (1 - MU) * (x + MU) / r1 - MU * (x - 1 + MU) / r2,
+            y - 2 * vx - (1 - MU) * y / r1 - MU * y / r2,
+            -(1 - MU) * z / r1 - MU * z / r2]
+
+
+@pytest.fixture(scope="session")
+def telescope() -> GroundTelescope:
+    return GroundTelescope()
+
+
+@pytest.fixture(scope="session")
+def nrho_arc():
+    """Approximate 9:2 NRHO sampled every ~10 minutes for 5 days: times (K,) TU, states (K, 6)."""
+    x0 = [1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0]
+    t_end = 5 * 86400.0 / 375149.0
+    times = np.arange(0.0, t_end, 600.0 / 375149.0)
+    sol = solve_ivp(cr3bp_rhs, (0.0, t_end), x0, t_eval=times, rtol=1e-11, atol=1e-12, method="DOP853")
+    return times, sol.y.T.copy()
