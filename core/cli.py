@@ -1,0 +1,171 @@
+"""The ``cistrack`` command.
+
+    cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd] [--rerun-serve] [--rerun-spawn]
+    cistrack plugins [--check NAME] [--kind KIND]
+    cistrack scenarios
+    cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
+    cistrack study report STUDY [--out DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .errors import CistrackError
+
+DEFAULT_SCENARIO = "example-1"
+
+
+def _eprint(*a) -> None:
+    print(*a, file=sys.stderr, flush=True)
+
+
+def _fmt(v, nd=3) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{nd}g}" if abs(v) < 1e4 else f"{v:.4g}"
+    return str(v)
+
+
+def cmd_run(args) -> int:
+    from .registry import default_registry
+    from .run import run_scenario
+    from .scenario import load_scenario
+
+    reg = default_registry()
+    scen = load_scenario(args.scenario or DEFAULT_SCENARIO, reg)
+    seed = scen.seed if args.seed is None else args.seed
+    out = Path(args.out) if args.out else Path("runs") / f"{scen.name}__seed{seed}"
+    observers = []
+    if args.rerun or args.rerun_serve or args.rerun_spawn:
+        observers.append(reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
+                                    spawn=args.rerun_spawn, max_points=args.max_points))
+    _eprint(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
+    _eprint(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
+            f"{scen.duration_days:g} days; results -> {out}")
+    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out,
+                       progress=not args.quiet, log=(None if args.quiet else lambda m: _eprint(f"  {m}")))
+    s = res.summary
+    print(f"run {s['run_id']}: {s['status']}"
+          + (f" ({s['failure']})" if s["failure"] else ""))
+    print(f"  custody: {'kept' if s['custody_kept'] else 'LOST at step %s (t = %s d)' % (s['custody_lost_step'], _fmt(s['custody_lost_t_days']))}")
+    print(f"  {s['n_updates']} updates over {s['n_passes']} passes, {s['n_measurements']} measurements, "
+          f"wall time {s['wall_time_s']:.1f} s")
+    f = s["final"]
+    if f:
+        print("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
+              + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
+        if "pos_err_km" in f:
+            print(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
+                  f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
+    print(f"  results: {out}/steps.parquet, {out}/manifest.json")
+    if args.rerun:
+        print(f"  rerun recording: {args.rerun}  (open with: rerun {args.rerun})")
+    return 0 if s["status"] == "finished" else 3
+
+
+def cmd_plugins(args) -> int:
+    from .interfaces import KINDS
+    from .registry import default_registry
+
+    reg = default_registry()
+    if args.check:
+        from .testing import check_registered
+        results = check_registered(args.check, kind=args.kind, registry=reg)
+        failed = 0
+        for r in results:
+            name, passed, message = (r if isinstance(r, tuple) else (r.name, r.passed, r.message))
+            print(f"  {'PASS' if passed else 'FAIL'}  {name}" + (f": {message}" if message and not passed else ""))
+            failed += 0 if passed else 1
+        print(f"{len(results) - failed} passed, {failed} failed")
+        return 1 if failed else 0
+    kinds = [args.kind] if args.kind else list(KINDS)
+    for kind in kinds:
+        entries = reg.entries(kind)
+        print(f"{kind} ({len(entries)})")
+        for e in entries:
+            print(f"  {e.name:<30} {e.distribution} {e.version:<8} {e.summary}")
+    if reg.failures:
+        print("plugins that failed to load:")
+        for f in reg.failures:
+            print(f"  {f}")
+    return 0
+
+
+def cmd_scenarios(args) -> int:
+    from .scenario import builtin_scenarios
+
+    for name, desc in builtin_scenarios().items():
+        print(f"  {name:<28} {desc}")
+    return 0
+
+
+def cmd_study(args) -> int:
+    from . import study
+
+    if args.study_cmd == "run":
+        res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
+                              progress=not args.quiet)
+        print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
+              f"{res['failed']} failed -> {res['out_dir']}")
+        return 0 if res["failed"] == 0 else 3
+    if args.study_cmd == "report":
+        rep = study.report_study(args.study, out_dir=args.out)
+        print(rep["text"])
+        print(f"written: {', '.join(str(p) for p in rep['files'])}")
+        return 0
+    return 2
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
+    r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")
+    r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__seed<N>)")
+    r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
+    r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
+    r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
+    r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
+    r.add_argument("--quiet", action="store_true", help="no progress output")
+    r.set_defaults(func=cmd_run)
+    pl = sub.add_parser("plugins", help="list registered components, or check one")
+    pl.add_argument("--check", metavar="NAME", default=None, help="run the conformance suite on a component")
+    pl.add_argument("--kind", default=None, help="restrict to one kind")
+    pl.set_defaults(func=cmd_plugins)
+    sc = sub.add_parser("scenarios", help="list the built-in scenarios")
+    sc.set_defaults(func=cmd_scenarios)
+    st = sub.add_parser("study", help="run or report a comparative study")
+    stsub = st.add_subparsers(dest="study_cmd", required=True)
+    sr = stsub.add_parser("run", help="run every missing run of a study")
+    sr.add_argument("study", help="study TOML file or built-in study name")
+    sr.add_argument("--out", default=None, help="study directory (default studies_out/<name>)")
+    sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
+    sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
+    sr.add_argument("--quiet", action="store_true")
+    sr.set_defaults(func=cmd_study)
+    srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
+    srep.add_argument("study", help="study TOML file or built-in study name")
+    srep.add_argument("--out", default=None)
+    srep.set_defaults(func=cmd_study)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except CistrackError as exc:
+        _eprint(f"cistrack: error: {exc}")
+        return 2
+    except KeyboardInterrupt:
+        _eprint("cistrack: interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

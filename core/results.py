@@ -1,0 +1,170 @@
+"""Results of a run on disk, written as the run goes.
+
+Layout of a run directory::
+
+    manifest.json        scenario, seed, versions, timings, status ("running" / "finished" / "failed")
+    scenario.toml        the scenario as run (tables after overrides)
+    steps.parquet        one row per step (written when the run finishes)
+    steps/part-*.parquet one file per step while running (atomic rename: a killed run leaves
+                         every completed step readable); merged into steps.parquet at the end
+
+:func:`read_steps` reads either form.
+"""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .hookspecs import hookimpl
+
+__all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "step_row", "versions"]
+
+MANIFEST = "manifest.json"
+STEPS = "steps.parquet"
+PARTS = "steps"
+
+
+def write_json_atomic(path: Path, data: dict) -> None:
+    """Write JSON to ``path`` via a temporary file and rename (never a half-written file)."""
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(data, indent=2, sort_keys=True, default=_json_default))
+    os.replace(tmp, path)
+
+
+def _json_default(o: Any):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
+
+
+def versions(registry=None) -> dict[str, str]:
+    """Versions of python, numpy, cistrack and every distribution that provides a plugin."""
+    out = {"python": platform.python_version(), "numpy": np.__version__}
+    try:
+        out["cistrack"] = metadata.version("cistrack")
+    except metadata.PackageNotFoundError:
+        out["cistrack"] = "unknown"
+    if registry is not None:
+        for dist, _ep, _mod in registry.plugins:
+            try:
+                out[dist] = metadata.version(dist)
+            except metadata.PackageNotFoundError:
+                pass
+    return out
+
+
+def step_row(run, step) -> dict[str, Any]:
+    """The results-table row of one step: identifiers, time, metrics, diagnostics, timings."""
+    row: dict[str, Any] = {
+        "run_id": run.run_id, "seed": int(run.seed), "step": int(step.index), "kind": step.kind,
+        "t_tu": float(step.t), "t_days": float(step.t) * 375_149.0 / 86_400.0, "utc": step.utc,
+        "measurement_index": int(step.measurement.index) if step.measurement is not None else -1,
+    }
+    for k, v in step.metrics.items():
+        row[k] = float(v)
+    for k, v in step.diagnostics.items():
+        if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+            row[f"diag_{k}"] = float(v)
+    for k, v in step.timings.items():
+        row[f"time_{k}_s"] = float(v)
+    return row
+
+
+class ResultsWriter:
+    """Lifecycle observer that writes a run's manifest and per-step table into ``directory``."""
+
+    def __init__(self, directory: str | Path, registry=None) -> None:
+        self.directory = Path(directory)
+        self.registry = registry
+        self._t0 = 0.0
+        self._manifest: dict[str, Any] = {}
+
+    @hookimpl
+    def cistrack_run_started(self, run) -> None:
+        self.directory.mkdir(parents=True, exist_ok=True)
+        (self.directory / PARTS).mkdir(exist_ok=True)
+        for old in (self.directory / PARTS).glob("part-*.parquet"):
+            old.unlink()
+        if (self.directory / STEPS).exists():
+            (self.directory / STEPS).unlink()
+        self._t0 = time.perf_counter()
+        scen = run.scenario
+        self._manifest = {
+            "run_id": run.run_id, "scenario": scen.name, "scenario_source": scen.source,
+            "seed": int(run.seed), "status": "running", "epoch": run.epoch.isoformat(),
+            "components": {t: {"name": s.name, "params": {k: (v.name if hasattr(v, "kind") and hasattr(v, "params") else v)
+                                                         for k, v in s.params.items()}}
+                           for t, s in scen.components.items()},
+            "versions": versions(self.registry), "machine": {"platform": platform.platform(),
+                                                             "processor": platform.processor(),
+                                                             "cpu_count": os.cpu_count()},
+            "n_measurements": len(run.measurements), "n_passes": len(run.passes),
+            "iod": {"epoch_tu": float(run.iod_cloud.epoch), "n_particles": len(run.iod_cloud),
+                    **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
+                       if isinstance(v, (int, float, str, bool))}},
+            "started_unix": time.time(),
+        }
+        try:
+            import tomli_w  # optional: nicer record of the scenario as run
+            (self.directory / "scenario.toml").write_text(tomli_w.dumps(scen.raw))
+        except Exception:
+            (self.directory / "scenario.json").write_text(json.dumps(scen.raw, indent=2, default=str))
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step) -> None:
+        self._write_part(run, step)
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step) -> None:
+        if step.kind in ("predict", "initial"):  # a prediction-only step is a row of its own
+            self._write_part(run, step)
+
+    def _write_part(self, run, step) -> None:
+        table = pa.Table.from_pylist([step_row(run, step)])
+        final = self.directory / PARTS / f"part-{step.index:06d}.parquet"
+        tmp = final.with_suffix(".tmp")
+        pq.write_table(table, tmp)
+        os.replace(tmp, final)
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary) -> None:
+        parts = sorted((self.directory / PARTS).glob("part-*.parquet"))
+        if parts:
+            table = pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+            tmp = self.directory / (STEPS + ".tmp")
+            pq.write_table(table, tmp)
+            os.replace(tmp, self.directory / STEPS)
+            for p in parts:
+                p.unlink()
+        self._manifest.update({"status": summary.get("status", "finished"), "summary": summary,
+                               "wall_time_s": time.perf_counter() - self._t0,
+                               "finished_unix": time.time()})
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
+
+
+def read_manifest(directory: str | Path) -> dict:
+    """The manifest of a run directory."""
+    return json.loads((Path(directory) / MANIFEST).read_text())
+
+
+def read_steps(directory: str | Path) -> pa.Table:
+    """The per-step table of a run: steps.parquet, or the parts a killed run left behind."""
+    d = Path(directory)
+    if (d / STEPS).exists():
+        return pq.read_table(d / STEPS)
+    parts = sorted((d / PARTS).glob("part-*.parquet"))
+    if not parts:
+        raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")
+    return pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")

@@ -1,0 +1,271 @@
+"""One run: truth -> measurements -> IOD -> filter steps, observed through lifecycle hooks.
+
+    truth = dynamics.propagate(x0, grid)              (the truth model may differ from the filter's)
+    passes = sensor.passes(grid, truth)
+    times = schedule.plan(passes, duration, rng)      measurements = sensor.simulate(truth, times, rng)
+    cloud = iod.estimate(measurements, sensor, rng)
+    filter.initialize(cloud); for each later measurement: filter.predict(t); filter.update(z)
+
+Random streams: one ``numpy.random.SeedSequence(seed)`` is split into independent streams for
+the measurement noise, the schedule, the IOD and the filter, so that for one scenario and seed
+every filter and IOD variant sees the same measurements.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pluggy
+
+from . import hookspecs, units
+from .belief import Belief
+from .errors import CistrackError, ConfigError
+from .measurement import MeasurementSet
+from .metrics import step_metrics
+from .registry import Registry, default_registry
+from .run_types import RunContext, Step
+from .scenario import Scenario
+
+__all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
+
+_LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
+              "cistrack_run_finished")
+
+
+@dataclass
+class RunResult:
+    """What :func:`run_scenario` returns: the context, one metrics row per step, the summary."""
+
+    context: RunContext
+    rows: list[dict[str, Any]]
+    summary: dict[str, Any]
+    steps: list[Step] = field(default_factory=list)
+
+
+def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:
+    """A plugin manager for one run: the given observers plus installed plugins that implement
+    lifecycle hooks (third-party observers declared under the ``cistrack`` entry points)."""
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs.CistrackSpecs)
+    for dist, ep, module in registry.plugins:
+        if any(hasattr(module, h) for h in _LIFECYCLE):
+            pm.register(module, name=f"{dist}:{ep}")
+    for i, obs in enumerate(observers):
+        pm.register(obs, name=f"observer-{i}-{type(obs).__name__}")
+    return pm
+
+
+def _streams(seed: int) -> dict[str, np.random.Generator]:
+    names = ("measurements", "schedule", "iod", "filter")
+    children = np.random.SeedSequence(seed).spawn(len(names))
+    return {n: np.random.default_rng(c) for n, c in zip(names, children)}
+
+
+def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry | None = None,
+                run_id: str | None = None, output_dir: Path | None = None, log=None) -> tuple[RunContext, dict]:
+    """Build components, truth, passes, measurements and the IOD cloud (everything before the
+    first filter step). Returns the context and the random streams."""
+    reg = registry or default_registry()
+    seed = scenario.seed if seed is None else int(seed)
+    rngs = _streams(seed)
+    say = log or (lambda msg: None)
+    dynamics = scenario.build("dynamics", reg)
+    sensor = scenario.build("sensor", reg)
+    schedule = scenario.build("schedule", reg)
+    iod = scenario.build("iod", reg)
+    filt = scenario.build("filter", reg)
+    truth_dyn = scenario.truth_dynamics.build(reg) if scenario.truth_dynamics else dynamics
+    duration = scenario.duration
+
+    if scenario.measurements_file is not None:
+        from cistrack.plugins.sensors.measurement_file import read_measurements  # real observations
+        say(f"reading measurements from {scenario.measurements_file}")
+        measurements = read_measurements(scenario.measurements_file, epoch=scenario.epoch)
+        grid = np.zeros(0)
+        truth = np.zeros((0, 6))
+        passes = []
+    else:
+        x0 = scenario.initial_truth(reg)
+        n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
+        grid = np.linspace(0.0, duration, n_grid)
+        say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
+        prop = truth_dyn.propagate(x0[None], 0.0, grid[1:])
+        if not prop.alive[0]:
+            raise ConfigError(f"{scenario.source}: the truth trajectory hits a body at t = "
+                              f"{units.tu_to_days(prop.impact_time[0]):.3f} days; shorten duration_days")
+        truth = np.concatenate([x0[None], prop.states[:, 0, :]], axis=0)
+        passes = sensor.passes(grid, truth)
+        if schedule is None:
+            raise ConfigError(f"{scenario.source}: simulated measurements need a [schedule] table")
+        times = np.asarray(schedule.plan(passes, duration, rngs["schedule"]), dtype=float)
+        if times.size == 0:
+            raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
+                              f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
+        say(f"{len(passes)} passes, {times.size} measurements scheduled")
+        t_prop = truth_dyn.propagate(x0[None], 0.0, times)
+        measurements = sensor.simulate(t_prop.states[:, 0, :], times, rngs["measurements"])
+    say(f"IOD '{scenario.components['iod'].name}' on {len(measurements)} measurements")
+    cloud = iod.estimate(measurements, sensor, rngs["iod"])
+    rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"
+    ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
+                     sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
+                     truth_states=truth, passes=passes, measurements=measurements, iod_cloud=cloud,
+                     output_dir=output_dir, truth_dynamics=truth_dyn)
+    return ctx, rngs
+
+
+def _pass_index(passes, t: float) -> int:
+    for i, p in enumerate(passes):
+        if p.start - 1e-9 <= t <= p.end + 1e-9:
+            return i + 1
+    return 0
+
+
+def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
+                 observers: Iterable[Any] = (), output_dir: str | Path | None = None,
+                 progress: bool = False, run_id: str | None = None, keep_steps: bool = False,
+                 log=None) -> RunResult:
+    """Run one scenario end to end and return its metrics and summary.
+
+    ``observers`` receive the lifecycle hooks; when ``output_dir`` is given a
+    :class:`cistrack.results.ResultsWriter` writing there is added. ``progress`` shows a progress
+    bar on stderr; ``log`` (a callable taking a string) receives stage messages.
+    """
+    from .results import ResultsWriter
+
+    reg = registry or default_registry()
+    out = Path(output_dir) if output_dir is not None else None
+    obs = list(observers)
+    if out is not None:
+        obs.insert(0, ResultsWriter(out, reg))
+    pm = make_plugin_manager(obs, reg)
+    t_start = time.perf_counter()
+    t_iod0 = time.perf_counter()
+    ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
+    t_prepare = time.perf_counter() - t_iod0
+    filt, sensor = ctx.filter, ctx.sensor
+    rule = scenario.custody
+
+    t0 = time.perf_counter()
+    filt.initialize(ctx.iod_cloud, ctx.dynamics, sensor, rngs["filter"])
+    t_init = time.perf_counter() - t0
+    pm.hook.cistrack_run_started(run=ctx)
+
+    meas_idx = [i for i in range(len(ctx.measurements)) if ctx.measurements.times[i] > ctx.iod_cloud.epoch + 1e-12]
+    events: list[tuple[float, int]] = [(float(ctx.measurements.times[i]), i) for i in meas_idx]
+    t_last = ctx.iod_cloud.epoch
+    if scenario.predict_every_hours > 0:
+        dt = float(units.hours_to_tu(scenario.predict_every_hours))
+        meas_t = np.array([e[0] for e in events]) if events else np.zeros(0)
+        for t in np.arange(t_last + dt, scenario.duration, dt):
+            if meas_t.size == 0 or np.min(np.abs(meas_t - t)) > 1e-6:
+                events.append((float(t), -1))
+    if scenario.end_with_prediction and scenario.duration > max([t_last] + [e[0] for e in events]) + 1e-9:
+        events.append((scenario.duration, -1))
+    events.sort()
+
+    rows: list[dict[str, Any]] = []
+    kept: list[Step] = []
+    lost_step: int | None = None
+    hdr_run = 0
+    status = "finished"
+    failure = ""
+
+    def make_step(index, t, kind, belief, measurement=None) -> Step:
+        truth = ctx.truth_at(t) if ctx.has_truth else None
+        return Step(index=index, t=t, utc=units.format_utc(units.tu_to_utc(ctx.epoch, t)), kind=kind,
+                    belief=belief, truth=truth, measurement=measurement)
+
+    def finish_step(step: Step) -> None:
+        nonlocal lost_step, hdr_run
+        tm = time.perf_counter()
+        step.metrics = step_metrics(step.belief, step.truth)
+        step.metrics["pass_index"] = float(_pass_index(ctx.passes, step.t))
+        if step.kind == "update" and step.truth is not None and lost_step is None:
+            if step.metrics["truth_loglik"] < rule.loglik_threshold:
+                lost_step = step.index
+            hdr_run = hdr_run + 1 if step.metrics["hdr_level"] > rule.hdr_threshold else 0
+            if hdr_run >= rule.hdr_consecutive:
+                lost_step = step.index
+        step.metrics["custody"] = 0.0 if lost_step is not None else 1.0
+        step.diagnostics = dict(filt.diagnostics)
+        step.timings["metrics"] = time.perf_counter() - tm
+        row = {"step": step.index, "kind": step.kind, "t_days": float(units.tu_to_days(step.t)), **step.metrics}
+        rows.append(row)
+        if keep_steps:
+            kept.append(step)
+
+    step0 = make_step(0, ctx.iod_cloud.epoch, "initial", filt.belief)
+    step0.timings["initialize"] = t_init
+    finish_step(step0)
+    pm.hook.cistrack_step_predicted(run=ctx, step=step0)
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(events), desc=ctx.run_id, unit="step", leave=True)
+    try:
+        for k, (t, mi) in enumerate(events, start=1):
+            tp = time.perf_counter()
+            filt.predict(t)
+            t_pred = time.perf_counter() - tp
+            if mi < 0:
+                step = make_step(k, t, "predict", filt.belief)
+                step.timings["predict"] = t_pred
+                finish_step(step)
+                pm.hook.cistrack_step_predicted(run=ctx, step=step)
+            else:
+                m = ctx.measurements[mi]
+                m = m.angles_only() if "range" in m.names else m
+                prior = make_step(k, t, "update", filt.belief, m)
+                pm.hook.cistrack_step_predicted(run=ctx, step=prior)
+                tu = time.perf_counter()
+                filt.update(m)
+                t_upd = time.perf_counter() - tu
+                step = make_step(k, t, "update", filt.belief, m)
+                step.timings.update({"predict": t_pred, "update": t_upd})
+                finish_step(step)
+                pm.hook.cistrack_step_updated(run=ctx, step=step)
+            if bar is not None:
+                met = rows[-1]
+                bar.set_postfix_str(f"t={met['t_days']:.2f} d H={met['entropy']:.1f}"
+                                    + ("" if lost_step is None else " custody LOST"))
+                bar.update(1)
+    except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        status = "filter-failed"
+        failure = f"{type(exc).__name__}: {exc}"
+        if lost_step is None:
+            lost_step = len(rows)
+    finally:
+        if bar is not None:
+            bar.close()
+
+    summary = _summary(ctx, rows, lost_step, status, failure, time.perf_counter() - t_start, t_prepare)
+    pm.hook.cistrack_run_finished(run=ctx, summary=summary)
+    return RunResult(ctx, rows, summary, kept)
+
+
+def _summary(ctx: RunContext, rows, lost_step, status, failure, wall, t_prepare) -> dict[str, Any]:
+    updates = [r for r in rows if r["kind"] == "update"]
+    last = updates[-1] if updates else rows[-1]
+    keys = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+            "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level")
+    pass_end: dict[str, dict[str, float]] = {}
+    for r in updates:
+        p = int(r.get("pass_index", 0))
+        if p > 0:
+            pass_end[str(p)] = {k: r[k] for k in keys if k in r} | {"t_days": r["t_days"]}
+    lost_t = None
+    if lost_step is not None:
+        match = [r for r in rows if r["step"] == lost_step]
+        lost_t = match[0]["t_days"] if match else None
+    return {
+        "run_id": ctx.run_id, "seed": ctx.seed, "status": status, "failure": failure,
+        "custody_kept": lost_step is None, "custody_lost_step": lost_step, "custody_lost_t_days": lost_t,
+        "n_steps": len(rows), "n_updates": len(updates), "n_measurements": len(ctx.measurements),
+        "n_passes": len(ctx.passes), "final": {k: last[k] for k in keys if k in last},
+        "pass_end": pass_end, "wall_time_s": wall, "prepare_time_s": t_prepare,
+    }

@@ -1,0 +1,1 @@
+"""A tiny third-party plugin distribution for cistrack's registry tests."""
