@@ -1,0 +1,352 @@
+"""Kinematic-fitting IOD (the paper's Algorithm 1), vectorised over the Monte Carlo samples.
+
+For each sample: perturb every fitted azimuth/elevation with its noise, draw a range for each
+measurement from the range model, place the target at
+
+    r_syn(t_k) = sensor.observer_position(t_k) + rho_k * sensor.line_of_sight((az_k, el_k), t_k),
+
+fit a polynomial of order p in time to each synodic coordinate and take value and derivative at
+the last fitted time t_f. Because the positions are synodic, the derivative *is* the synodic
+velocity: no transport-theorem terms are needed.
+
+All samples share the fit times, so the fit is a fixed linear map of the data
+(:mod:`cistrack.plugins.iod.polyfit`): one matrix product for all samples and coordinates.
+
+Range models
+------------
+``noisy-range``
+    rho ~ N(rho_meas, (alpha rho_meas)^2) around the *measured* range of the measurement set's
+    'range' component (the sensor must measure range; OD later ignores that component).
+``uniform-range``
+    rho ~ U[range_min_km, range_max_km] (default 84,328-550,000 km, the cislunar bounds).
+``uniform-range-velocity-bound``
+    uniform-range plus pruning of samples faster than ``max_speed_kms`` (default 42 km/s).
+
+``range_sampling`` chooses whether each measurement gets its own range draw ("per-measurement",
+Algorithm 1 of the paper, default) or one draw is shared by all the measurements of a sample
+("per-sample", a target at constant range).
+
+Pruning and the frame of the speed bound
+----------------------------------------
+A sample survives when its fitted range from the observer at t_f lies in
+[range_min_km, range_max_km] and, for the velocity-bounded model, its speed is at most
+``max_speed_kms``. The paper fitted in the Earth-fixed (rotating) topocentric NEU frame, where a
+target at lunar distance has an apparent speed of ~29 km/s from the Earth's rotation alone; the
+42 km/s bound only makes sense in that frame. ``speed_frame="topocentric"`` (default) therefore
+bounds the speed of a second, equally cheap fit of the topocentric positions
+rho [cos el cos az, cos el sin az, sin el] (NEU); ``speed_frame="synodic"`` bounds the synodic
+speed instead (a much tighter constraint: the NRHO moves at < 2 km/s in the synodic frame).
+
+When too few samples survive, more are drawn in batches of ``oversampling * n_particles`` until
+``n_particles`` survive or ``max_oversampling * n_particles`` samples have been drawn; then an
+:class:`~cistrack.errors.IODError` says how many survived and what pruned the rest. The cloud's
+``meta`` records draws, survivors and pruning counts.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cistrack.belief import ParticleCloud
+from cistrack.component import check_choice, check_int, check_positive, check_range
+from cistrack.errors import IODError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import IODMethod, Sensor
+from cistrack.measurement import MeasurementSet
+from cistrack.units import LU_KM, VU_KMS, km_to_lu
+
+from .first_pass import select_fit_indices
+from .polyfit import evaluation_weights
+
+__all__ = ["KinematicFitIOD", "NoisyRangeIOD", "UniformRangeIOD", "UniformRangeVelocityBoundIOD",
+           "RANGE_MODELS", "FitInputs", "kinematic_states", "prepare_fit"]
+
+RANGE_MODELS = ("noisy-range", "uniform-range", "uniform-range-velocity-bound")
+SPEED_FRAMES = ("topocentric", "synodic")
+RANGE_SAMPLING = ("per-measurement", "per-sample")
+
+
+class FitInputs:
+    """The measurements a kinematic fit uses, validated and reduced to arrays.
+
+    Attributes: ``indices`` (K,) into the measurement set, ``times`` (K,) TU, ``angles`` (K, 2)
+    rad (azimuth, elevation), ``angle_sigmas`` (K, 2) rad, ``ranges`` (K,) LU or None,
+    ``observer`` (K, 3) LU synodic observer positions, ``weights`` (2, K) value/rate weights at
+    the last time (rate per TU).
+    """
+
+    def __init__(self, indices, times, angles, angle_sigmas, ranges, observer, weights):
+        self.indices = indices
+        self.times = times
+        self.angles = angles
+        self.angle_sigmas = angle_sigmas
+        self.ranges = ranges
+        self.observer = observer
+        self.weights = weights
+
+    @property
+    def epoch(self) -> float:
+        return float(self.times[-1])
+
+
+def _column(ms: MeasurementSet, name: str, who: str) -> int:
+    if name not in ms.names:
+        raise IODError(f"{who}: the measurements have no '{name}' component "
+                       f"(components: {', '.join(ms.names) or 'none'})")
+    return ms.names.index(name)
+
+
+def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pass_gap_hours: float,
+                fit_fraction: float, min_fit: int, max_fit: int, need_range: bool,
+                who: str = "kinematic IOD") -> FitInputs:
+    """Select and validate the fitted measurements (raises IODError before any sampling)."""
+    if not isinstance(measurements, MeasurementSet):
+        raise IODError(f"{who}: expected a MeasurementSet, got {type(measurements).__name__}")
+    idx = select_fit_indices(measurements.times, pass_gap_hours=pass_gap_hours,
+                             fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
+                             order=order)
+    ia = _column(measurements, "azimuth", who)
+    ie = _column(measurements, "elevation", who)
+    times = measurements.times[idx]
+    angles = measurements.values[idx][:, [ia, ie]]
+    sig = measurements.sigmas[idx][:, [ia, ie]]
+    ranges = None
+    if need_range:
+        if "range" not in measurements.names:
+            raise IODError(f"{who}: the noisy-range model needs a measured 'range' component, "
+                           f"but the measurements only have {', '.join(measurements.names)}; let "
+                           f"the sensor measure range for IOD or use 'uniform-range'")
+        ranges = measurements.values[idx][:, measurements.names.index("range")]
+        if np.any(ranges <= 0):
+            raise IODError(f"{who}: measured ranges must be > 0")
+    observer = np.asarray(sensor.observer_position(times), dtype=float).reshape(len(idx), 3)
+    weights = evaluation_weights(times, order, float(times[-1]))
+    return FitInputs(idx, times, angles, sig, ranges, observer, weights)
+
+
+def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
+                     rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fitted synodic states and topocentric velocities for sampled angles and ranges.
+
+    Parameters
+    ----------
+    fit : FitInputs
+    sensor : Sensor
+    angles : (N, K, 2) rad, sampled azimuth/elevation at the fit times
+    rho : (N, K) LU, sampled ranges
+
+    Returns
+    -------
+    states : (N, 6) synodic state at ``fit.epoch`` (LU, VU)
+    topo_velocity : (N, 3) VU, velocity of the polynomial fit of the NEU positions
+        (Earth-fixed rotating frame, what the paper's 42 km/s bound refers to)
+    """
+    n, k = rho.shape
+    flat = angles.reshape(n * k, 2)
+    tk = np.broadcast_to(fit.times, (n, k)).reshape(-1)
+    los = np.asarray(sensor.line_of_sight(flat, tk), dtype=float).reshape(n, k, 3)
+    az, el = angles[..., 0], angles[..., 1]
+    ce = np.cos(el)
+    data = np.empty((n, k, 6))
+    data[..., :3] = fit.observer[None] + rho[..., None] * los
+    data[..., 3] = rho * ce * np.cos(az)
+    data[..., 4] = rho * ce * np.sin(az)
+    data[..., 5] = rho * np.sin(el)
+    # One product for all samples and both fits: (2, K) x (N, K, 6) -> (2, N, 6).
+    out = np.einsum("jk,nkd->jnd", fit.weights, data, optimize=True)
+    states = np.concatenate([out[0, :, :3], out[1, :, :3]], axis=1)
+    return states, out[1, :, 3:]
+
+
+class KinematicFitIOD(IODMethod):
+    """Kinematic-fitting IOD with a selectable range model (see the module docstring).
+
+    Parameters (units in the names; defaults from the paper)
+    ----------
+    range_model : 'noisy-range' | 'uniform-range' | 'uniform-range-velocity-bound'
+    n_particles : particles wanted in the cloud
+    oversampling : samples drawn per batch, as a multiple of n_particles (paper: 5-10)
+    max_oversampling : give up after drawing this multiple of n_particles in total
+    order : polynomial order (paper: 4)
+    pass_gap_hours : a gap longer than this ends the first pass
+    fit_fraction, min_fit, max_fit : fit the first fit_fraction of the first pass, clipped
+    alpha : relative 1-sigma of the measured range (noisy-range only)
+    range_min_km, range_max_km : cislunar range bounds (uniform draws and pruning)
+    max_speed_kms : speed bound (velocity-bounded model only)
+    speed_frame : 'topocentric' (paper) or 'synodic': the frame of the speed bound
+    range_sampling : 'per-measurement' (Algorithm 1) or 'per-sample'
+    """
+
+    def __init__(self, *, range_model: str = "uniform-range", n_particles: int = 2000,
+                 oversampling: float = 5.0, max_oversampling: float = 50.0, order: int = 4,
+                 pass_gap_hours: float = 3.0, fit_fraction: float = 0.5, min_fit: int = 8,
+                 max_fit: int = 12, alpha: float = 0.05, range_min_km: float = 84_328.0,
+                 range_max_km: float = 550_000.0, max_speed_kms: float = 42.0,
+                 speed_frame: str = "topocentric", range_sampling: str = "per-measurement") -> None:
+        self.range_model = check_choice(self, "range_model", range_model, RANGE_MODELS)
+        self.n_particles = check_int(self, "n_particles", n_particles, minimum=1)
+        self.oversampling = check_range(self, "oversampling", oversampling, 1.0, 1e4)
+        self.max_oversampling = check_range(self, "max_oversampling", max_oversampling, 1.0, 1e6)
+        if self.max_oversampling < self.oversampling:
+            self._fail("max_oversampling", max_oversampling, f"must be >= oversampling ({oversampling})")
+        self.order = check_int(self, "order", order, minimum=1, maximum=10)
+        self.pass_gap_hours = check_positive(self, "pass_gap_hours", pass_gap_hours)
+        self.fit_fraction = check_range(self, "fit_fraction", fit_fraction, 0.0, 1.0, lo_open=True)
+        self.min_fit = check_int(self, "min_fit", min_fit, minimum=self.order + 1)
+        self.max_fit = check_int(self, "max_fit", max_fit, minimum=self.min_fit)
+        self.alpha = check_range(self, "alpha", alpha, 0.0, 1.0, lo_open=True)
+        self.range_min_km = check_positive(self, "range_min_km", range_min_km)
+        self.range_max_km = check_positive(self, "range_max_km", range_max_km)
+        if self.range_max_km <= self.range_min_km:
+            self._fail("range_max_km", range_max_km, f"must exceed range_min_km ({range_min_km})")
+        self.max_speed_kms = check_positive(self, "max_speed_kms", max_speed_kms)
+        self.speed_frame = check_choice(self, "speed_frame", speed_frame, SPEED_FRAMES)
+        self.range_sampling = check_choice(self, "range_sampling", range_sampling, RANGE_SAMPLING)
+
+    # -- sampling -------------------------------------------------------------------------------
+    def _label_name(self) -> str:
+        return type(self).registry_name or self.range_model
+
+    def _draw(self, fit: FitInputs, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Sampled angles (n, K, 2) and ranges (n, K) LU."""
+        k = fit.times.shape[0]
+        angles = fit.angles[None] + fit.angle_sigmas[None] * rng.standard_normal((n, k, 2))
+        shape = (n, k) if self.range_sampling == "per-measurement" else (n, 1)
+        if self.range_model == "noisy-range":
+            rho = fit.ranges[None] * (1.0 + self.alpha * rng.standard_normal(shape))
+        else:
+            lo, hi = float(km_to_lu(self.range_min_km)), float(km_to_lu(self.range_max_km))
+            rho = rng.uniform(lo, hi, size=shape)
+        return angles, np.broadcast_to(rho, (n, k))
+
+    def _prune(self, fit: FitInputs, states: np.ndarray, topo_vel: np.ndarray,
+               rho: np.ndarray) -> tuple[np.ndarray, dict[str, int]]:
+        """Boolean keep mask (n,) and the number of samples each reason removed (first reason
+        that applies, in the order listed)."""
+        rng_km = np.linalg.norm(states[:, :3] - fit.observer[-1], axis=1) * LU_KM
+        finite = np.all(np.isfinite(states), axis=1) & np.all(np.isfinite(topo_vel), axis=1)
+        reasons = {
+            "non_finite": ~finite,
+            "nonpositive_range_draw": np.any(rho <= 0.0, axis=1),
+            "range_below_min": rng_km < self.range_min_km,
+            "range_above_max": rng_km > self.range_max_km,
+        }
+        if self.range_model == "uniform-range-velocity-bound":
+            v = topo_vel if self.speed_frame == "topocentric" else states[:, 3:]
+            reasons["speed_above_max"] = np.linalg.norm(v, axis=1) * VU_KMS > self.max_speed_kms
+        keep = np.ones(states.shape[0], dtype=bool)
+        counts: dict[str, int] = {}
+        for name, bad in reasons.items():
+            hit = bad & keep
+            counts[name] = int(hit.sum())
+            keep &= ~bad
+        return keep, counts
+
+    def estimate(self, measurements: MeasurementSet, sensor: Sensor,
+                 rng: np.random.Generator) -> ParticleCloud:
+        """Particle cloud (n_particles, 6), synodic, at the last fitted measurement time.
+
+        Raises IODError (before sampling) when the first pass cannot be fitted, and after
+        sampling when fewer than n_particles samples survive ``max_oversampling`` draws.
+        """
+        who = f"iod '{self._label_name()}'"
+        fit = prepare_fit(measurements, sensor, order=self.order, pass_gap_hours=self.pass_gap_hours,
+                          fit_fraction=self.fit_fraction, min_fit=self.min_fit, max_fit=self.max_fit,
+                          need_range=self.range_model == "noisy-range", who=who)
+        batch = int(math.ceil(self.oversampling * self.n_particles))
+        limit = int(math.ceil(self.max_oversampling * self.n_particles))
+        kept: list[np.ndarray] = []
+        n_kept = drawn = batches = 0
+        pruned: dict[str, int] = {}
+        while n_kept < self.n_particles and drawn < limit:
+            n = min(batch, limit - drawn)
+            angles, rho = self._draw(fit, n, rng)
+            states, topo_vel = kinematic_states(fit, sensor, angles, rho)
+            keep, counts = self._prune(fit, states, topo_vel, rho)
+            for key, c in counts.items():
+                pruned[key] = pruned.get(key, 0) + c
+            kept.append(states[keep])
+            n_kept += int(keep.sum())
+            drawn += n
+            batches += 1
+        if n_kept < self.n_particles:
+            why = ", ".join(f"{c} by {k.replace('_', ' ')}" for k, c in pruned.items() if c) or "none"
+            raise IODError(
+                f"{who}: only {n_kept} of {drawn} drawn samples survived pruning, fewer than the "
+                f"{self.n_particles} particles wanted (pruned: {why}; bounds: range "
+                f"{self.range_min_km:g}-{self.range_max_km:g} km"
+                + (f", {self.speed_frame} speed <= {self.max_speed_kms:g} km/s"
+                   if self.range_model == "uniform-range-velocity-bound" else "")
+                + "). Raise max_oversampling, relax the bounds, or check the measurements.")
+        states = np.concatenate(kept, axis=0)[: self.n_particles]
+        meta = {
+            "method": self._label_name(),
+            "range_model": self.range_model,
+            "range_sampling": self.range_sampling,
+            "speed_frame": self.speed_frame if self.range_model == "uniform-range-velocity-bound" else None,
+            "order": self.order,
+            "fit_indices": fit.indices.tolist(),
+            "fit_times": fit.times.tolist(),
+            "draws": drawn,
+            "batches": batches,
+            "survivors": n_kept,
+            "survival_fraction": n_kept / drawn,
+            "pruned": pruned,
+        }
+        return ParticleCloud(states, fit.epoch, meta=meta)
+
+
+class NoisyRangeIOD(KinematicFitIOD):
+    """Kinematic-fitting IOD around noisy measured ranges, sigma = alpha * measured range."""
+
+    def __init__(self, *, n_particles: int = 2000, oversampling: float = 5.0,
+                 max_oversampling: float = 50.0, order: int = 4, pass_gap_hours: float = 3.0,
+                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
+                 alpha: float = 0.05, range_min_km: float = 84_328.0,
+                 range_max_km: float = 550_000.0, range_sampling: str = "per-measurement") -> None:
+        super().__init__(range_model="noisy-range", n_particles=n_particles, oversampling=oversampling,
+                         max_oversampling=max_oversampling, order=order, pass_gap_hours=pass_gap_hours,
+                         fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit, alpha=alpha,
+                         range_min_km=range_min_km, range_max_km=range_max_km,
+                         range_sampling=range_sampling)
+
+
+class UniformRangeIOD(KinematicFitIOD):
+    """Kinematic-fitting IOD with ranges drawn uniformly within the cislunar bounds."""
+
+    def __init__(self, *, n_particles: int = 2000, oversampling: float = 5.0,
+                 max_oversampling: float = 50.0, order: int = 4, pass_gap_hours: float = 3.0,
+                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
+                 range_min_km: float = 84_328.0, range_max_km: float = 550_000.0,
+                 range_sampling: str = "per-measurement") -> None:
+        super().__init__(range_model="uniform-range", n_particles=n_particles, oversampling=oversampling,
+                         max_oversampling=max_oversampling, order=order, pass_gap_hours=pass_gap_hours,
+                         fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
+                         range_min_km=range_min_km, range_max_km=range_max_km,
+                         range_sampling=range_sampling)
+
+
+class UniformRangeVelocityBoundIOD(KinematicFitIOD):
+    """Uniform-range kinematic-fitting IOD that also prunes samples faster than max_speed_kms."""
+
+    def __init__(self, *, n_particles: int = 2000, oversampling: float = 10.0,
+                 max_oversampling: float = 100.0, order: int = 4, pass_gap_hours: float = 3.0,
+                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
+                 range_min_km: float = 84_328.0, range_max_km: float = 550_000.0,
+                 max_speed_kms: float = 42.0, speed_frame: str = "topocentric",
+                 range_sampling: str = "per-measurement") -> None:
+        super().__init__(range_model="uniform-range-velocity-bound", n_particles=n_particles,
+                         oversampling=oversampling, max_oversampling=max_oversampling, order=order,
+                         pass_gap_hours=pass_gap_hours, fit_fraction=fit_fraction, min_fit=min_fit,
+                         max_fit=max_fit, range_min_km=range_min_km, range_max_km=range_max_km,
+                         max_speed_kms=max_speed_kms, speed_frame=speed_frame,
+                         range_sampling=range_sampling)
+
+
+@hookimpl
+def cistrack_register(registry) -> None:
+    registry.add("iod", "kinematic-fit", KinematicFitIOD)
+    registry.add("iod", "noisy-range", NoisyRangeIOD)
+    registry.add("iod", "uniform-range", UniformRangeIOD)
+    registry.add("iod", "uniform-range-velocity-bound", UniformRangeVelocityBoundIOD)

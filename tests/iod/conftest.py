@@ -1,0 +1,70 @@
+"""Fixtures for the IOD tests: the 9:2 NRHO truth, the default telescope and a first-pass
+schedule (one measurement every 45 minutes from the rise of the first long pass: the paper's
+40-60 min tasking during the first pass)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from cistrack.plugins.sensors.ground_telescope import GroundTelescope
+from cistrack.units import hours_to_tu
+
+MU = 1.2150582e-2
+NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
+
+
+def cr3bp_rhs(_t, s):
+    """CR3BP equations of motion (REFERENCE.md) for one state (6,)."""
+    x, y, z, vx, vy, vz = s
+    r1 = np.sqrt((x + MU) ** 2 + y * y + z * z) ** 3
+    r2 = np.sqrt((x - 1 + MU) ** 2 + y * y + z * z) ** 3
+    return [vx, vy, vz,
+            x + 2 * vy - (1 - MU) * (x + MU) / r1 - MU * (x - 1 + MU) / r2,
+            y - 2 * vx - (1 - MU) * y / r1 - MU * y / r2,
+            -(1 - MU) * z / r1 - MU * z / r2]
+
+
+@dataclass
+class Scenario:
+    truth: object          # callable t (TU) -> (6,) or (6, K) truth state(s)
+    sensor: GroundTelescope
+    times: np.ndarray      # (K,) measurement times, TU (first pass and the start of the second)
+
+    def truth_states(self, t) -> np.ndarray:
+        return np.asarray(self.truth(np.asarray(t, dtype=float))).T
+
+    def simulate(self, rng: np.random.Generator):
+        return self.sensor.simulate(self.truth_states(self.times), self.times, rng)
+
+
+@pytest.fixture(scope="session")
+def truth():
+    """Dense-output truth of the approximate 9:2 NRHO over 3 days (rtol 1e-12)."""
+    t_end = 3 * 86400.0 / 375149.0
+    sol = solve_ivp(cr3bp_rhs, (0.0, t_end), NRHO_9_2, rtol=1e-12, atol=1e-13, method="DOP853",
+                    dense_output=True)
+    return sol.sol
+
+
+def make_scenario(truth, sensor: GroundTelescope, interval_hours: float = 0.75) -> Scenario:
+    grid = np.arange(0.0, 3 * 86400.0 / 375149.0, hours_to_tu(1.0 / 6.0))
+    passes = [p for p in sensor.passes(grid, truth(grid).T) if p.duration > hours_to_tu(8.0)]
+    first, second = passes[0], passes[1]
+    dt = float(hours_to_tu(interval_hours))
+    t1 = np.arange(first.start + 1e-6, first.end, dt)
+    t2 = np.arange(second.start + 1e-6, second.start + 5 * dt, dt)
+    return Scenario(truth, sensor, np.concatenate([t1, t2]))
+
+
+@pytest.fixture(scope="session")
+def scenario(truth) -> Scenario:
+    """Default telescope measuring az/el and an IOD range (alpha = 0.05)."""
+    return make_scenario(truth, GroundTelescope(measure_range=True, range_alpha=0.05))
+
+
+@pytest.fixture(scope="session")
+def angles_only_scenario(truth) -> Scenario:
+    return make_scenario(truth, GroundTelescope())
