@@ -1,0 +1,58 @@
+"""k-means clustering of particles on standardised coordinates (scikit-learn)."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from sklearn.cluster import KMeans
+from sklearn.exceptions import ConvergenceWarning
+
+from cistrack.component import check_int
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Clusterer
+
+from .thread_limits import limited_threads
+from .standardize import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
+
+__all__ = ["KMeansClusterer"]
+
+
+class KMeansClusterer(Clusterer):
+    """k-means (Lloyd) on standardised coordinates; the PGM filter's default clusterer.
+
+    Parameters
+    ----------
+    n_components : int
+        Number of clusters M (fewer when there are fewer distinct particles).
+    n_init : int
+        k-means++ restarts; 1 is enough for the filter's every-step use.
+    max_iter : int
+        Lloyd iterations per restart (clusters need not be converged to be useful components).
+    n_threads : int
+        OpenMP threads for scikit-learn (0 = all cores); 1 avoids oversubscription when runs
+        are parallelised across processes.
+    """
+
+    def __init__(self, n_components: int = 6, n_init: int = 1, max_iter: int = 30, n_threads: int = 1):
+        self.n_components = check_int(self, "n_components", n_components, minimum=1)
+        self.n_init = check_int(self, "n_init", n_init, minimum=1)
+        self.max_iter = check_int(self, "max_iter", max_iter, minimum=1)
+        self.n_threads = check_int(self, "n_threads", n_threads, minimum=0)
+
+    def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Labels (N,) in [0, M) for particles ``x`` (N, d)."""
+        x = check_points(x, self.registry_name or "kmeans")
+        k = n_distinct_at_least(x, self.n_components)
+        if k <= 1:
+            return np.zeros(x.shape[0], dtype=np.intp)
+        km = KMeans(n_clusters=k, n_init=self.n_init, max_iter=self.max_iter,
+                    random_state=sklearn_seed(rng))
+        with warnings.catch_warnings(), limited_threads(self.n_threads):
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            labels = km.fit_predict(standardize(x))
+        return compact_labels(labels)
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("clustering", "kmeans", KMeansClusterer)

@@ -1,0 +1,97 @@
+"""The particle-based (ensemble) Kalman update shared by the PGM filter and the EnKF.
+
+Given particles X (N, d) with predicted-measurement residuals D = h(X) - z (N, m) and a
+grouping into M components, each component's sample moments give
+Pxz = cov(X, D), Pzz = cov(D) + R, K = Pxz Pzz^-1, innovation nu = z - zhat = -mean(D).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cistrack.belief import regularize_covariance
+
+__all__ = ["GroupMoments", "group_moments", "KalmanGains", "kalman_gains", "gaussian_log_likelihood",
+           "component_posterior"]
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+@dataclass
+class GroupMoments:
+    """Sample moments of each group of particles.
+
+    counts (M,) int; mean_x (M, d); mean_d (M, m); pxx (M, d, d); pxd (M, d, m); pdd (M, m, m).
+    Covariances are unbiased (divide by n_i - 1); a group of one particle has zero covariance.
+    """
+
+    counts: np.ndarray
+    mean_x: np.ndarray
+    mean_d: np.ndarray
+    pxx: np.ndarray
+    pxd: np.ndarray
+    pdd: np.ndarray
+
+
+def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_groups: int) -> GroupMoments:
+    """Means and (cross-)covariances of ``x`` (N, dx) and ``d`` (N, m) per label in [0, n_groups).
+
+    ``d`` None means no measurement columns (m = 0). One matrix product per group; no loop over
+    particles.
+    """
+    x = np.asarray(x, dtype=float)
+    nx = x.shape[1]
+    y = x if d is None else np.hstack([x, np.asarray(d, dtype=float)])
+    q = y.shape[1]
+    counts = np.bincount(labels, minlength=n_groups)[:n_groups]
+    means = np.zeros((n_groups, q))
+    covs = np.zeros((n_groups, q, q))
+    order = np.argsort(labels, kind="stable")
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    ys = y[order]
+    for i in range(n_groups):  # loop over components (few), vectorised over their particles
+        yi = ys[bounds[i]:bounds[i + 1]]
+        if yi.shape[0] == 0:
+            continue
+        means[i] = yi.mean(axis=0)
+        if yi.shape[0] > 1:
+            c = yi - means[i]
+            covs[i] = (c.T @ c) / (yi.shape[0] - 1)
+    return GroupMoments(counts, means[:, :nx], means[:, nx:], covs[:, :nx, :nx], covs[:, :nx, nx:],
+                        covs[:, nx:, nx:])
+
+
+@dataclass
+class KalmanGains:
+    """Innovation covariance S (M, m, m), gain K (M, d, m), innovation nu = z - zhat (M, m)."""
+
+    S: np.ndarray
+    K: np.ndarray
+    nu: np.ndarray
+
+
+def kalman_gains(moments: GroupMoments, R: np.ndarray) -> KalmanGains:
+    """Per-group S = Pzz + R, K = Pxz S^-1 and innovation -mean(D)."""
+    S = moments.pdd + R[None]
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    # K = Pxz S^-1  <=>  S K^T = Pxz^T (S symmetric)
+    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(moments.pxd, -1, -2)), -1, -2)
+    return KalmanGains(S, K, -moments.mean_d)
+
+
+def gaussian_log_likelihood(nu: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """log N(nu; 0, S) for each group: nu (M, m), S (M, m, m) -> (M,)."""
+    L = np.linalg.cholesky(S)
+    sol = np.linalg.solve(L, nu[..., None])[..., 0]
+    maha = np.sum(sol * sol, axis=-1)
+    logdet = 2.0 * np.sum(np.log(np.diagonal(L, axis1=-2, axis2=-1)), axis=-1)
+    return -0.5 * (maha + logdet + nu.shape[-1] * _LOG_2PI)
+
+
+def component_posterior(moments: GroupMoments, gains: KalmanGains) -> tuple[np.ndarray, np.ndarray]:
+    """Updated means mu + K nu (M, d) and covariances P - K S K^T (M, d, d), symmetrised and kept
+    positive definite."""
+    mu = moments.mean_x + np.einsum("mij,mj->mi", gains.K, gains.nu)
+    P = moments.pxx - gains.K @ gains.S @ np.swapaxes(gains.K, -1, -2)
+    return mu, regularize_covariance(P, 1e-12)

@@ -1,0 +1,289 @@
+"""The particle Gaussian mixture (PGM) filter (Raihan & Chakravorty 2018; paper section 3).
+
+Particles are only propagated between measurements. At a measurement the particles are
+clustered into components (weight N_i/N, sample mean and covariance), each component gets a
+Kalman update from its particles' cross-covariances with their predicted measurements, the
+component weights are multiplied by the components' measurement likelihoods (log domain), and N
+new particles are drawn from the posterior mixture.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import logsumexp
+
+from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
+from cistrack.component import check_int, check_nonnegative, check_positive
+from cistrack.errors import FilterError, ParameterError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Clusterer, Dynamics, Filter, Sensor
+from cistrack.measurement import Measurement
+
+from .cluster_merge import merge_small_clusters
+from .ensemble_propagation import propagate_ensemble
+from .kalman_update import component_posterior, gaussian_log_likelihood, group_moments, kalman_gains
+from .observation import MeasuredComponents, check_epoch
+from .process_noise import velocity_random_walk_covariance
+from .resampling import normalize_log_weights, systematic_resample
+from .state_bounds import StateBounds, earth_position
+
+__all__ = ["PGMFilter", "resolve_clusterer", "initial_particles"]
+
+_REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
+
+
+def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None) -> Clusterer:
+    """A Clusterer instance from an instance or a registry name, with ``n_components`` imposed
+    when given (on a copy; the caller's instance is not modified)."""
+    if isinstance(clusterer, str):
+        from cistrack.registry import default_registry
+        reg = default_registry()
+        cls = reg.get("clustering", clusterer).factory
+        params = {}
+        if n_components is not None and "n_components" in _params_of(cls):
+            params["n_components"] = n_components
+        return reg.create("clustering", clusterer, **params)
+    if n_components is not None and "n_components" in _params_of(type(clusterer)):
+        params = clusterer.get_params()
+        params["n_components"] = n_components
+        return type(clusterer)(**params)
+    return clusterer
+
+
+def _params_of(cls) -> dict:
+    from cistrack.component import param_specs
+    return param_specs(cls)
+
+
+def initial_particles(cloud: ParticleCloud, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` equally weighted particles (n, d) from ``cloud``: systematic resampling of a weighted
+    cloud, a subsample without replacement of a larger one, all particles plus draws with
+    replacement of a smaller one."""
+    x = np.asarray(cloud.states, dtype=float)
+    if cloud.weights is not None:
+        return x[systematic_resample(cloud.weights, n, rng)]
+    if x.shape[0] >= n:
+        return x[rng.choice(x.shape[0], size=n, replace=False)] if x.shape[0] > n else x.copy()
+    extra = rng.integers(0, x.shape[0], size=n - x.shape[0])
+    return np.concatenate([x, x[extra]])
+
+
+def check_cloud(cloud: ParticleCloud, who: str) -> None:
+    """Raise a clear error for an empty or non-finite initial cloud."""
+    if not isinstance(cloud, ParticleCloud):
+        raise ParameterError(f"filter '{who}': initialize() needs a ParticleCloud, got {type(cloud).__name__}")
+    if len(cloud) == 0 or cloud.states.ndim != 2:
+        raise FilterError(f"filter '{who}': the initial cloud is empty")
+    if not np.all(np.isfinite(cloud.states)):
+        raise FilterError(f"filter '{who}': the initial cloud contains NaN or infinite states")
+
+
+class PGMFilter(Filter):
+    """Particle Gaussian mixture filter: clustering + per-component Kalman update + resampling.
+
+    Parameters
+    ----------
+    n_particles : int
+        Particles N carried between measurements.
+    n_components : int or None
+        Components M the clusterer is asked for; None lets the clusterer choose (e.g. "bic").
+    clusterer : Clusterer or str
+        A clusterer instance or a registered clustering name.
+    min_cluster_size : int or None
+        Clusters with fewer particles are merged into the nearest cluster; None = 2 x dimension.
+    velocity_noise_kms_per_sqrt_day : float
+        Optional process noise: velocity random walk, km/s after one day (0 = off).
+    min_range_km, max_range_km, max_speed_kms : float or None
+        Optional cislunar pruning bounds (Earth distance, synodic speed); None = not applied.
+    """
+
+    def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
+                 clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
+                 velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
+                 max_range_km: float | None = None, max_speed_kms: float | None = None):
+        self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
+        self.n_components = None if n_components is None else check_int(self, "n_components", n_components,
+                                                                         minimum=1)
+        if not isinstance(clusterer, (str, Clusterer)):
+            self._fail("clusterer", clusterer, "must be a Clusterer instance or a registered clustering name")
+        self.clusterer = clusterer
+        self.min_cluster_size = None if min_cluster_size is None else check_int(
+            self, "min_cluster_size", min_cluster_size, minimum=1)
+        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
+            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.min_range_km = None if min_range_km is None else check_nonnegative(self, "min_range_km", min_range_km)
+        self.max_range_km = None if max_range_km is None else check_positive(self, "max_range_km", max_range_km)
+        self.max_speed_kms = None if max_speed_kms is None else check_positive(self, "max_speed_kms", max_speed_kms)
+        if self.min_range_km is not None and self.max_range_km is not None and self.min_range_km >= self.max_range_km:
+            self._fail("max_range_km", max_range_km, f"must exceed min_range_km = {min_range_km}")
+        self._clusterer: Clusterer | None = None
+        self._x: np.ndarray | None = None
+
+    # -- lifecycle --------------------------------------------------------------------------------
+    def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
+                   rng: np.random.Generator) -> None:
+        """Start from ``cloud`` (N, 6) at ``cloud.epoch``; resolves the clusterer."""
+        who = self._who()
+        check_cloud(cloud, who)
+        self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
+        self._dyn, self._sensor, self._rng = dynamics, sensor, rng
+        self._bounds = StateBounds(self.min_range_km, self.max_range_km, self.max_speed_kms, earth_position(dynamics))
+        self._t = float(cloud.epoch)
+        x = initial_particles(cloud, self.n_particles, rng)
+        self._lost_total = 0
+        self._pruned_total = 0
+        self._diag: dict[str, float] = {}
+        self._x = self._prune(x)
+        self._invalidate()
+        self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": 0.0,
+                      "particles_lost_step": 0.0, "particles_pruned": float(self._pruned_total)}
+
+    def predict(self, t: float) -> None:
+        """Propagate every particle to ``t`` (TU); particles that hit a body are removed and counted."""
+        self._require_init()
+        t = float(t)
+        if t == self._t:
+            return
+        x, alive = propagate_ensemble(self._dyn, self._x, self._t, t, self._who())
+        lost = int(np.count_nonzero(~alive))
+        x = x[alive]
+        q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, x.shape[1])
+        if np.any(q):
+            x = x + self._rng.standard_normal(x.shape) * np.sqrt(np.diag(q))
+        self._lost_total += lost
+        self._t = t
+        pruned_before = self._pruned_total
+        if x.shape[0] == 0:
+            raise FilterError(f"filter '{self._who()}': every particle hit a body before t = {t} TU")
+        self._x = self._prune(x)
+        self._invalidate()
+        self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": float(self._lost_total),
+                      "particles_lost_step": float(lost),
+                      "particles_pruned": float(self._pruned_total - pruned_before)}
+
+    def update(self, measurement: Measurement) -> None:
+        """Cluster, update each component with the measurement, reweight, resample."""
+        self._require_init()
+        who = self._who()
+        check_epoch(self._t, measurement, who)
+        meas = MeasuredComponents(self._sensor, measurement)
+        self._ensure_clustered()
+        x, labels, m = self._x, self._labels, self._prior.n_components
+        dres = meas.residuals_to_measurement(x)
+        if not np.all(np.isfinite(dres)):
+            raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
+        mom = group_moments(x, dres, labels, m)
+        mom.pxx = regularize_covariance(mom.pxx, 1e-12)
+        gains = kalman_gains(mom, meas.R)
+        means, covs = component_posterior(mom, gains)
+        loglik = gaussian_log_likelihood(gains.nu, gains.S)
+        logw, log_evidence = normalize_log_weights(np.log(mom.counts / mom.counts.sum()) + loglik, who)
+        w = np.exp(logw)
+        if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
+            raise FilterError(f"filter '{who}': the component update produced non-finite moments")
+        post = GaussianMixture(w, means, covs)
+        samples, slabels = self._sample_posterior(post)
+        self._x, self._sample_labels = samples, slabels
+        self._mixture = post
+        self._labels = None  # the next update clusters afresh
+        self._diag.update({
+            "n_components": float(post.n_components),
+            "effective_components": float(1.0 / np.sum(w * w)),
+            "log_likelihood": float(log_evidence),
+            "max_component_weight": float(w.max()),
+            "n_particles": float(samples.shape[0]),
+        })
+
+    # -- belief -----------------------------------------------------------------------------------
+    @property
+    def belief(self) -> Belief:
+        """Posterior mixture and resampled particles after an update; after a prediction the
+        clustered prior (the clustering is reused by the next update)."""
+        self._require_init()
+        if self._mixture is None:
+            self._ensure_clustered()
+        return Belief(self._t, self._mixture, ParticleCloud(self._x, self._t, None, self._sample_labels))
+
+    @property
+    def diagnostics(self) -> dict[str, float]:
+        d = dict(self._diag)
+        d["particles_lost"] = float(self._lost_total)
+        if self._mixture is not None:
+            d.setdefault("n_components", float(self._mixture.n_components))
+        return d
+
+    # -- internals --------------------------------------------------------------------------------
+    def _who(self) -> str:
+        return self.registry_name or "pgm"
+
+    def _require_init(self) -> None:
+        if self._x is None:
+            raise FilterError(f"filter '{self._who()}': call initialize() first")
+
+    def _invalidate(self) -> None:
+        self._labels = None
+        self._mixture = None
+        self._prior = None
+        self._sample_labels = None
+
+    def _ensure_clustered(self) -> None:
+        """Cluster the current particles into the prior mixture (once per prediction)."""
+        if self._labels is not None:
+            return
+        x = self._x
+        d = x.shape[1]
+        labels = np.asarray(self._clusterer.cluster(x, self._rng), dtype=np.intp)
+        if labels.shape != (x.shape[0],) or labels.min() < 0:
+            raise FilterError(f"filter '{self._who()}': clusterer returned labels of shape {labels.shape}")
+        _, labels = np.unique(labels, return_inverse=True)
+        labels = labels.reshape(-1)
+        min_size = self.min_cluster_size if self.min_cluster_size is not None else 2 * d
+        labels, merged = merge_small_clusters(x, labels, min(min_size, x.shape[0]))
+        m = int(labels.max()) + 1
+        mom = group_moments(x, None, labels, m)
+        self._labels = labels
+        self._prior = GaussianMixture(mom.counts / mom.counts.sum(), mom.mean_x,
+                                      regularize_covariance(mom.pxx, 1e-12))
+        if self._mixture is None:
+            self._mixture = self._prior
+            self._sample_labels = labels
+        self._diag["clusters_merged"] = float(merged)
+        self._diag["n_components"] = float(m)
+
+    def _prune(self, x: np.ndarray) -> np.ndarray:
+        if not self._bounds.active:
+            return x
+        ok = self._bounds.admissible(x)
+        n_bad = int(np.count_nonzero(~ok))
+        if n_bad == x.shape[0]:
+            raise FilterError(f"filter '{self._who()}': every particle lies outside the state bounds")
+        self._pruned_total += n_bad
+        return x[ok]
+
+    def _sample_posterior(self, post: GaussianMixture) -> tuple[np.ndarray, np.ndarray]:
+        n = self.n_particles
+        x, lab = post.sample(n, self._rng)
+        if not self._bounds.active:
+            return x, lab
+        ok = self._bounds.admissible(x)
+        x, lab = x[ok], lab[ok]
+        pruned = n - x.shape[0]
+        for _ in range(_REDRAWS):
+            short = n - x.shape[0]
+            if short == 0:
+                break
+            # draw extra to cover the rejection rate seen so far
+            extra, elab = post.sample(short * 2 + 8, self._rng)
+            ok = self._bounds.admissible(extra)
+            pruned += int(np.count_nonzero(~ok))
+            x = np.concatenate([x, extra[ok][:short]])
+            lab = np.concatenate([lab, elab[ok][:short]])
+        self._pruned_total += pruned
+        self._diag["particles_pruned"] = self._diag.get("particles_pruned", 0.0) + float(pruned)
+        if x.shape[0] == 0:
+            raise FilterError(f"filter '{self._who()}': the posterior lies entirely outside the state bounds")
+        return x, lab
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("filter", "pgm", PGMFilter)

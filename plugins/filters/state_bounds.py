@@ -1,0 +1,51 @@
+"""Optional pruning of particles outside cislunar space (paper section 2: range from the
+Earth between 84,328 km and 550,000 km, speed at most 42 km/s)."""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack.interfaces import Dynamics
+from cistrack.units import LU_KM, VU_KMS
+
+__all__ = ["StateBounds", "earth_position"]
+
+
+def earth_position(dynamics: Dynamics) -> np.ndarray:
+    """Synodic position (3,) LU of the Earth: the dynamics' body named 'Earth', else (-mu, 0, 0)
+    from a ``mu`` attribute, else the origin."""
+    for b in dynamics.bodies:
+        if b.name.lower() == "earth":
+            return np.asarray(b.position, dtype=float)
+    mu = getattr(dynamics, "mu", None)
+    if isinstance(mu, (int, float)):
+        return np.array([-float(mu), 0.0, 0.0])
+    return np.zeros(3)
+
+
+class StateBounds:
+    """Admissible states: Earth distance in [min_range_km, max_range_km] and synodic speed at most
+    max_speed_kms; any bound None is not applied."""
+
+    def __init__(self, min_range_km: float | None, max_range_km: float | None, max_speed_kms: float | None,
+                 earth: np.ndarray):
+        self.min_r = None if min_range_km is None else min_range_km / LU_KM
+        self.max_r = None if max_range_km is None else max_range_km / LU_KM
+        self.max_v = None if max_speed_kms is None else max_speed_kms / VU_KMS
+        self.earth = np.asarray(earth, dtype=float)
+
+    @property
+    def active(self) -> bool:
+        return not (self.min_r is None and self.max_r is None and self.max_v is None)
+
+    def admissible(self, states: np.ndarray) -> np.ndarray:
+        """(N,) bool for states (N, 6)."""
+        ok = np.ones(states.shape[0], dtype=bool)
+        if self.min_r is not None or self.max_r is not None:
+            r = np.linalg.norm(states[:, :3] - self.earth, axis=1)
+            if self.min_r is not None:
+                ok &= r >= self.min_r
+            if self.max_r is not None:
+                ok &= r <= self.max_r
+        if self.max_v is not None:
+            ok &= np.linalg.norm(states[:, 3:6], axis=1) <= self.max_v
+        return ok
