@@ -1,0 +1,80 @@
+"""Conformance checks for Clusterer plugins (two well-separated blobs of particles)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..interfaces.clustering import Clusterer
+from ..units import state_to_km
+from .check_support import no_global_random_state, require, round_trip, unchanged
+from .fixtures import two_blobs
+
+__all__ = ["CLUSTERING_CHECKS", "same_partition"]
+
+
+def same_partition(a: np.ndarray, b: np.ndarray) -> float:
+    """Fraction of particles whose label agrees after the best one-to-one relabelling of b."""
+    agree = 0
+    for la in np.unique(a):
+        sel = a == la
+        _, counts = np.unique(b[sel], return_counts=True)
+        agree += counts.max()
+    return agree / a.size
+
+
+def _cluster(clusterer, x, seed=0) -> np.ndarray:
+    labels = np.asarray(clusterer.cluster(x, np.random.default_rng(seed)))
+    require(labels.shape == (x.shape[0],), f"cluster() returned shape {labels.shape}, expected (N,) = ({x.shape[0]},)")
+    require(np.issubdtype(labels.dtype, np.integer), f"cluster() returned dtype {labels.dtype}, expected integers")
+    m = int(labels.max()) + 1 if labels.size else 0
+    require(labels.min() >= 0 and np.array_equal(np.unique(labels), np.arange(m)),
+            f"labels must use every value in [0, M); got {np.unique(labels)}")
+    return labels
+
+
+def check_is_clusterer(c) -> None:
+    require(isinstance(c, Clusterer), f"{type(c).__name__} does not derive from cistrack.interfaces.Clusterer")
+
+
+def check_separates_two_blobs(c) -> None:
+    """Two blobs 2,000 km apart (50 km spread) are never mixed within one cluster."""
+    x, truth = two_blobs()
+    labels = _cluster(c, x)
+    require(labels.max() >= 1, "all particles of two blobs 2,000 km apart ended in one cluster")
+    for k in range(labels.max() + 1):
+        require(np.unique(truth[labels == k]).size == 1,
+                f"cluster {k} mixes particles of two blobs 2,000 km apart")
+
+
+def check_invariant_to_units(c) -> None:
+    """The same particles in km and km/s give the same partition as in LU and VU (the
+    clusterer standardises coordinates itself)."""
+    x, _ = two_blobs()
+    a = _cluster(c, x, seed=1)
+    b = _cluster(c, state_to_km(x), seed=1)
+    frac = same_partition(a, b)
+    require(frac >= 0.99 and a.max() == b.max(),
+            f"clustering the same particles in km instead of LU changed the partition ({100 * (1 - frac):.1f}% of "
+            "particles, or the number of clusters): standardise the coordinates before clustering")
+
+
+def check_reproducible(c) -> None:
+    x, _ = two_blobs()
+    with no_global_random_state("cluster()"), unchanged(x=x):
+        a = _cluster(c, x, seed=4)
+    b = _cluster(c, x, seed=4)
+    require(np.array_equal(a, b), "cluster() with generators of the same seed gave different labels")
+
+
+def check_same_after_pickle(c) -> None:
+    x, _ = two_blobs()
+    other = round_trip(c)
+    require(np.array_equal(_cluster(c, x, 2), _cluster(other, x, 2)), "the unpickled copy clusters differently")
+
+
+CLUSTERING_CHECKS = [
+    ("is_clusterer", check_is_clusterer),
+    ("separates_two_blobs", check_separates_two_blobs),
+    ("invariant_to_units", check_invariant_to_units),
+    ("reproducible", check_reproducible),
+    ("same_after_pickle", check_same_after_pickle),
+]

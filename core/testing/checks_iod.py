@@ -1,0 +1,107 @@
+"""Conformance checks for IOD plugins (a simulated first pass of the 9:2 NRHO)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..belief import ParticleCloud
+from ..errors import IODError
+from ..interfaces.iod import IODMethod
+from ..units import km_to_lu, kms_to_vu
+from .check_support import close, describe_exception, no_global_random_state, require, round_trip, unchanged
+from .fixtures import first_pass, nrho_truth
+
+__all__ = ["IOD_CHECKS"]
+
+RANGE_MIN_LU = float(km_to_lu(84_328.0))
+RANGE_MAX_LU = float(km_to_lu(550_000.0))
+SPEED_MAX_VU = float(kms_to_vu(42.0))
+
+
+def _estimate(iod, seed=0, n_times=16):
+    ms, sensor = first_pass(n_times)
+    cloud = iod.estimate(ms, sensor, np.random.default_rng(seed))
+    require(isinstance(cloud, ParticleCloud), f"estimate() returned {type(cloud).__name__}, not ParticleCloud")
+    return cloud, ms, sensor
+
+
+def check_is_iod(iod) -> None:
+    require(isinstance(iod, IODMethod), f"{type(iod).__name__} does not derive from cistrack.interfaces.IODMethod")
+
+
+def check_cloud_shape_epoch_and_units(iod) -> None:
+    """The cloud is (N, 6) finite at the epoch of one of the measurements, in LU and VU
+    (inside the cislunar range bounds as seen from the observer, speeds below 42 km/s)."""
+    cloud, ms, sensor = _estimate(iod)
+    x = cloud.states
+    require(x.ndim == 2 and x.shape[1] == 6 and x.shape[0] >= 2, f"cloud states have shape {x.shape}, expected (N>=2, 6)")
+    require(np.all(np.isfinite(x)), "cloud states contain NaN or infinity")
+    require(np.any(np.isclose(ms.times, cloud.epoch, rtol=0, atol=1e-9)),
+            f"cloud epoch {cloud.epoch} TU is not the time of any measurement used ({ms.times[0]:.4g}..{ms.times[-1]:.4g})")
+    rho = np.linalg.norm(x[:, :3] - np.asarray(sensor.observer_position(cloud.epoch)), axis=1)
+    med = float(np.median(rho))
+    require(RANGE_MIN_LU <= med <= RANGE_MAX_LU,
+            f"median range of the cloud is {med:.4g} LU, outside cislunar space: are positions in LU?")
+    speed = float(np.median(np.linalg.norm(x[:, 3:], axis=1)))
+    require(speed <= SPEED_MAX_VU, f"median speed {speed:.4g} VU exceeds 42 km/s: are velocities in VU?")
+
+
+def check_cloud_contains_truth(iod) -> None:
+    """The truth at the cloud's epoch lies within the cloud (moment-matched Mahalanobis
+    distance below 50, i.e. inside the 99.9999% ellipsoid of 6 degrees of freedom)."""
+    cloud, ms, _ = _estimate(iod)
+    times, states = nrho_truth(16)
+    k = int(np.argmin(np.abs(times - cloud.epoch)))
+    cov = cloud.covariance
+    e = states[k] - cloud.mean
+    try:
+        d2 = float(e @ np.linalg.solve(cov, e))
+    except np.linalg.LinAlgError:
+        require(False, "the cloud's covariance is singular")
+    require(d2 < 50.0, f"the truth is {np.sqrt(d2):.3g} sigma from the cloud's mean (Mahalanobis² {d2:.3g})")
+
+
+def check_reproducible(iod) -> None:
+    with no_global_random_state("estimate()"):
+        a, _, _ = _estimate(iod, seed=5)
+    b, _, _ = _estimate(iod, seed=5)
+    ok, diff = close(a.states, b.states, 0, 0)
+    require(ok and a.epoch == b.epoch, "estimate() with generators of the same seed gave different clouds")
+
+
+def check_inputs_not_mutated(iod) -> None:
+    ms, sensor = first_pass(16)
+    with unchanged(measurements=ms):
+        iod.estimate(ms, sensor, np.random.default_rng(0))
+
+
+def check_too_few_measurements_raise_ioderror(iod) -> None:
+    """A single measurement cannot determine an orbit: IODError with a message."""
+    ms, sensor = first_pass(16)
+    one = ms.subset(np.array([0]))
+    try:
+        iod.estimate(one, sensor, np.random.default_rng(0))
+    except IODError as exc:
+        require(str(exc).strip(), "IODError without a message")
+        return
+    except Exception as exc:
+        require(False, f"estimate() from one measurement raised {describe_exception(exc)}, not cistrack.errors.IODError")
+    require(False, "estimate() returned a cloud from a single measurement; raise IODError")
+
+
+def check_same_after_pickle(iod) -> None:
+    other = round_trip(iod)
+    a, _, _ = _estimate(iod, seed=9)
+    b, _, _ = _estimate(other, seed=9)
+    ok, _ = close(a.states, b.states, 0, 0)
+    require(ok, "the unpickled copy estimates a different cloud")
+
+
+IOD_CHECKS = [
+    ("is_iod", check_is_iod),
+    ("cloud_shape_epoch_and_units", check_cloud_shape_epoch_and_units),
+    ("cloud_contains_truth", check_cloud_contains_truth),
+    ("reproducible", check_reproducible),
+    ("inputs_not_mutated", check_inputs_not_mutated),
+    ("too_few_measurements_raise_ioderror", check_too_few_measurements_raise_ioderror),
+    ("same_after_pickle", check_same_after_pickle),
+]

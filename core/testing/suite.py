@@ -1,0 +1,192 @@
+"""Running the conformance checks: per component, per registered name, or under pytest."""
+from __future__ import annotations
+
+import time
+from typing import Any, Callable, Iterable, Iterator
+
+from ..errors import ParameterError, UnknownComponentError
+from ..interfaces import KINDS
+from ..interfaces.orbit import ReferenceOrbit
+from .check_support import describe_exception, fresh
+from .checks_clustering import CLUSTERING_CHECKS
+from .checks_dynamics import DYNAMICS_CHECKS
+from .checks_filter import FILTER_CHECKS
+from .checks_iod import IOD_CHECKS
+from .checks_orbit import ORBIT_CHECKS
+from .checks_params import PARAMETER_CHECKS, check_parameters_declared
+from .checks_recorder import RECORDER_CHECKS, lifecycle_hooks
+from .checks_schedule import SCHEDULE_CHECKS
+from .checks_sensor import SENSOR_CHECKS
+from .results import CheckResult, ConformanceError, ConformanceReport
+
+__all__ = ["BoundCheck", "infer_kind", "iter_checks", "check_plugin", "check_registered",
+           "parametrize_with_checks", "KIND_CHECKS"]
+
+KIND_CHECKS: dict[str, list[tuple[str, Callable[[Any], None]]]] = {
+    "dynamics": DYNAMICS_CHECKS,
+    "sensor": SENSOR_CHECKS,
+    "schedule": SCHEDULE_CHECKS,
+    "iod": IOD_CHECKS,
+    "clustering": CLUSTERING_CHECKS,
+    "filter": FILTER_CHECKS,
+    "orbit": ORBIT_CHECKS,
+    "recorder": RECORDER_CHECKS,
+}
+"""The kind-specific checks, run after the parameter checks (which every class-based kind gets)."""
+
+
+def infer_kind(component: Any) -> str:
+    """The registry kind of a component, class or reference orbit."""
+    if isinstance(component, ReferenceOrbit):
+        return "orbit"
+    kind = getattr(component, "kind", "")
+    if isinstance(kind, str) and kind in KINDS:
+        return kind
+    if lifecycle_hooks(component):
+        return "recorder"
+    raise ParameterError(f"cannot tell which kind of plugin {component!r} is: derive it from a "
+                         f"cistrack.interfaces class or pass kind= (one of {', '.join(KINDS)})")
+
+
+def label(component: Any) -> str:
+    """A short name for messages and test ids: registry name, orbit name or class name."""
+    if isinstance(component, ReferenceOrbit):
+        return component.name
+    cls = component if isinstance(component, type) else type(component)
+    return getattr(cls, "registry_name", "") or cls.__name__
+
+
+class BoundCheck:
+    """One check bound to a component. Call it with no argument (or with the component, as
+    scikit-learn's ``parametrize_with_checks`` tests do); it raises :class:`ConformanceError`
+    naming the check and why when the component fails.
+
+    Each call works on a fresh instance: a class is built with its defaults, an instance is
+    rebuilt from ``get_params()``, so checks do not see each other's state.
+    """
+
+    def __init__(self, name: str, func: Callable[[Any], None], component: Any, kind: str):
+        self.name = name
+        self.func = func
+        self.component = component
+        self.kind = kind
+
+    def __repr__(self) -> str:
+        return f"<check {self.name} of {self.kind} {label(self.component)!r}>"
+
+    def _instance(self, component: Any) -> Any:
+        if self.kind in ("orbit", "recorder") and not isinstance(component, type):
+            return component
+        try:
+            return fresh(component)
+        except Exception as exc:
+            how = "with its default parameters" if isinstance(component, type) else "from get_params()"
+            raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(component)}': could not "
+                                   f"construct it {how}: {describe_exception(exc)}") from exc
+
+    def __call__(self, component: Any = None) -> None:
+        target = self.component if component is None else component
+        instance = self._instance(target)
+        try:
+            self.func(instance)
+        except ConformanceError as exc:
+            raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': {exc}") from None
+        except Exception as exc:
+            raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': it raised "
+                                   f"{describe_exception(exc)}") from exc
+
+
+def _constructs_with_defaults(component: Any) -> None:
+    """Building the component with no arguments works (the BoundCheck did it already)."""
+
+
+def iter_checks(component: Any, kind: str | None = None) -> Iterator[tuple[str, BoundCheck]]:
+    """Yield ``(check_name, check)`` for every check that applies to ``component`` (a class, an
+    instance, or a ReferenceOrbit). Each ``check`` is a :class:`BoundCheck`: call it to run it."""
+    kind = kind or infer_kind(component)
+    if kind not in KIND_CHECKS:
+        raise ParameterError(f"unknown plugin kind {kind!r}; kinds are: {', '.join(KINDS)}")
+    checks: list[tuple[str, Callable[[Any], None]]] = []
+    if kind != "orbit":
+        cls = component if isinstance(component, type) else type(component)
+        if isinstance(component, type):
+            checks.append(("constructs_with_defaults", _constructs_with_defaults))
+        if callable(getattr(cls, "get_params", None)):
+            checks.extend(PARAMETER_CHECKS)
+        else:
+            checks.append(("parameters_declared", check_parameters_declared))
+    checks.extend(KIND_CHECKS[kind])
+    for name, func in checks:
+        yield name, BoundCheck(name, func, component, kind)
+
+
+def _run(name: str, check: Callable[[], None]) -> CheckResult:
+    t0 = time.perf_counter()
+    try:
+        check()
+    except AssertionError as exc:
+        return CheckResult(name, False, str(exc), time.perf_counter() - t0)
+    return CheckResult(name, True, "", time.perf_counter() - t0)
+
+
+def check_plugin(component_or_class: Any, kind: str | None = None) -> ConformanceReport:
+    """Run every check on a component (class, instance or reference orbit).
+
+    Returns a :class:`ConformanceReport` when all pass; otherwise raises
+    :class:`ConformanceError` (an ``AssertionError``) whose message names each failing check and
+    why, with the full results in ``.results``.
+    """
+    kind = kind or infer_kind(component_or_class)
+    report = ConformanceReport(label(component_or_class), kind)
+    for name, check in iter_checks(component_or_class, kind):
+        report.results.append(_run(name, check))
+    if report.failures:
+        lines = [f"{kind} '{report.component}' failed {len(report.failures)} of {len(report.results)} conformance checks:"]
+        lines += [f"  - {r.message}" for r in report.failures]
+        raise ConformanceError("\n".join(lines), report.results)
+    return report
+
+
+def check_registered(name: str, kind: str | None = None, registry: Any = None) -> list[CheckResult]:
+    """Look ``name`` up in ``registry`` (default: the process-wide one) and run its checks.
+
+    ``kind`` is needed only when ``name`` is registered under several kinds. Returns one
+    :class:`CheckResult` (name, passed, message) per check; it does not raise on failures.
+    """
+    if registry is None:
+        from ..registry import default_registry
+        registry = default_registry()
+    if kind is None:
+        kinds = [k for k in registry.kinds() if (k, name) in registry]
+        if not kinds:
+            known = sorted({n for k in registry.kinds() for n in registry.names(k)})
+            raise UnknownComponentError(f"no plugin named {name!r} is registered; registered names: {', '.join(known)}")
+        if len(kinds) > 1:
+            raise ParameterError(f"{name!r} is registered as several kinds ({', '.join(kinds)}); say which with kind=")
+        kind = kinds[0]
+    factory = registry.get(kind, name).factory
+    if not isinstance(factory, type) and callable(factory) and kind not in ("orbit", "recorder"):
+        try:
+            factory = registry.create(kind, name)
+        except Exception as exc:
+            return [CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' with its "
+                                f"default parameters: {describe_exception(exc)}")]
+    return [_run(n, c) for n, c in iter_checks(factory, kind)]
+
+
+def parametrize_with_checks(components: Iterable[Any]):
+    """A ``pytest.mark.parametrize`` decorator over (component, check) for every check of
+    every component, with ids ``<name>-<check>``::
+
+        @parametrize_with_checks([MyFilter, MyClusterer(n_clusters=3)])
+        def test_conformance(component, check):
+            check(component)
+    """
+    import pytest
+
+    params, ids = [], []
+    for comp in components:
+        for name, check in iter_checks(comp):
+            params.append((comp, check))
+            ids.append(f"{label(comp)}-{name}")
+    return pytest.mark.parametrize(("component", "check"), params, ids=ids)
