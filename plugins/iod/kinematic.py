@@ -35,7 +35,9 @@ target at lunar distance has an apparent speed of ~29 km/s from the Earth's rota
 42 km/s bound only makes sense in that frame. ``speed_frame="topocentric"`` (default) therefore
 bounds the speed of a second, equally cheap fit of the topocentric positions
 rho [cos el cos az, cos el sin az, sin el] (NEU); ``speed_frame="synodic"`` bounds the synodic
-speed instead (a much tighter constraint: the NRHO moves at < 2 km/s in the synodic frame).
+speed instead. The synodic frame turns at only 1 rad/TU (~1 km/s of apparent motion at lunar
+distance instead of ~29 km/s), so the same 42 km/s is a *looser* bound there and prunes fewer
+samples; lower ``max_speed_kms`` if you bound synodic speed (the NRHO moves at < 2 km/s).
 
 When too few samples survive, more are drawn in batches of ``oversampling * n_particles`` until
 ``n_particles`` survive or ``max_oversampling * n_particles`` samples have been drawn; then an
