@@ -226,3 +226,21 @@ def test_observer_is_one_earth_radius_from_the_earth_centre(telescope):
     t = np.linspace(0, 3, 7)
     d = np.linalg.norm(telescope.observer_position(t) - np.array([-MU, 0, 0]), axis=1) * LU_KM
     assert np.all((d > 6372.0) & (d < 6374.0))                # WGS84 radius at 30.6 deg + 104 m
+
+
+def test_equatorial_target_at_upper_culmination_is_due_south_at_90_minus_latitude():
+    probe = GroundTelescope()
+    s = GroundTelescope(moon_phase_deg=(_lower_culmination_phase(probe) + 180.0) % 360.0)
+    z = s.measure(np.array([[1 - MU, 0.0, 0.0, 0.0, 0.0, 0.0]]), 0.0)[0]
+    assert np.isclose(np.degrees(z[0]), 180.0, atol=1e-6)
+    parallax = np.degrees(np.arcsin(6373.0 / 384400.0 * np.cos(np.radians(90 - LAT))))
+    assert np.isclose(np.degrees(z[1]), 90.0 - LAT - parallax, atol=0.05)
+
+
+def test_a_distant_target_rises_in_the_east_and_sets_in_the_west():
+    s = GroundTelescope(moon_phase_deg=_lower_culmination_phase(GroundTelescope()))
+    times = np.linspace(0.0, 86164.0905 / TU_S, 24 * 12 + 1)
+    states = np.tile([1 - MU, 0.0, 0.0, 0.0, 0.0, 0.0], (times.size, 1))
+    (p,) = s.passes(times, states)
+    az = np.degrees(s.measure(states[:2], np.array([p.start, p.end]))[:, 0])
+    assert 0.0 < az[0] < 180.0 and 180.0 < az[1] < 360.0
