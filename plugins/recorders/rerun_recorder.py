@@ -1,0 +1,430 @@
+"""Record runs for the rerun viewer: the synodic scene in 3-D and the step metrics over time.
+
+Registered as recorder ``"rerun"``. The recorder is a lifecycle observer: register an instance
+with the run's plugin manager and it logs every event of the run to its own
+:class:`rerun.RecordingStream` (never the global one), written to an ``.rrd`` file, served to
+viewers over gRPC on 127.0.0.1, or streamed to a native viewer it starts.
+
+What is logged (entity paths; positions in km, synodic frame, Earth–Moon barycentre at 0):
+
+=============================  ==========================================================
+``world/earth``, ``world/moon``  the primaries as spheres of radius 6378.137 / 1737.4 km (static)
+``world/libration``             L1..L5 of the run's mass ratio (static, labelled)
+``world/truth/trajectory``      the dense truth trajectory (static)
+``world/truth/position``        the truth at each step
+``world/particles``             the belief's particles at each event, class id = component
+``world/components``            n-sigma position ellipsoids of the mixture components
+``world/estimate``              the mixture mean
+``world/observer``              the observer's position at each step
+``world/line_of_sight``         the measured line of sight at update steps (cleared otherwise)
+``metrics/<name>``              every finite metric of ``step.metrics`` (steps that carry metrics)
+``components/weights``          the mixture weights, one series per component
+``run/info``, ``run/summary``   text: run id, components, seed; the run's summary
+=============================  ==========================================================
+
+Timelines: ``step`` (step index), ``utc`` (simulation time) and ``event`` (one tick per hook
+call, so the prior and the posterior of one step can be told apart when scrubbing).
+"""
+from __future__ import annotations
+
+import importlib.util
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import uuid
+from datetime import timedelta
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+from cistrack.component import Component, check_int, check_positive
+from cistrack.errors import CistrackError, ParameterError
+from cistrack.hookspecs import hookimpl
+from cistrack.units import LU_KM, TU_S, parse_utc
+
+from .scene import (
+    EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, position_ellipsoids,
+    primary_positions, system_mu,
+)
+
+__all__ = ["RerunRecorder", "ViewerUnavailableError", "subsample_indices", "LOOPBACK",
+           "find_viewer_executable"]
+
+LOOPBACK = "127.0.0.1"
+"""The only address the recorder's servers listen on."""
+
+APPLICATION_ID = "cistrack"
+UNASSIGNED_CLASS = 999
+"""Class id of particles without a component label (a clusterer's noise label, < 0)."""
+
+# Colour per component (class id); beyond the palette the viewer picks its own colours.
+_PALETTE = np.array([
+    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (188, 189, 34), (23, 190, 207), (127, 127, 127),
+    (174, 199, 232), (255, 187, 120), (152, 223, 138), (255, 152, 150), (197, 176, 213),
+    (196, 156, 148),
+], dtype=np.uint8)
+
+
+class ViewerUnavailableError(CistrackError, RuntimeError):
+    """The native rerun viewer cannot be started here (no executable, or no display)."""
+
+
+def subsample_indices(n: int, max_points: int, seed: int = 0) -> np.ndarray | None:
+    """Rows kept when a cloud of ``n`` particles is capped at ``max_points``.
+
+    Returns None when nothing is dropped, else ``max_points`` sorted distinct indices drawn with
+    ``numpy.random.default_rng([seed, n])``: the same rows for every step with the same ``n``,
+    so a cloud that is not resampled keeps its particles' identities between steps.
+    """
+    if n <= max_points:
+        return None
+    rng = np.random.default_rng([int(seed), int(n)])
+    return np.sort(rng.choice(n, size=max_points, replace=False))
+
+
+def find_viewer_executable() -> str | None:
+    """Path of the native rerun viewer binary (the ``rerun-cli`` one shipped with rerun-sdk, or
+    ``rerun`` on PATH), or None."""
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.submodule_search_locations:
+        for loc in spec.submodule_search_locations:
+            exe = Path(loc) / ("rerun.exe" if os.name == "nt" else "rerun")
+            if exe.is_file() and os.access(exe, os.X_OK):
+                return str(exe)
+    return shutil.which("rerun")
+
+
+def _has_display() -> bool:
+    if not sys.platform.startswith("linux"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            return False
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.settimeout(0.2)
+            if s.connect_ex((LOOPBACK, port)) == 0:
+                return True
+        time.sleep(0.05)
+    return False
+
+
+def default_blueprint() -> rrb.Blueprint:
+    """The 3-D synodic view beside stacked time series (errors, sigmas, entropy, NEES, weights)."""
+    series = rrb.Vertical(
+        rrb.TimeSeriesView(origin="metrics", name="Estimation error",
+                           contents=["$origin/pos_err_km", "$origin/vel_err_ms"]),
+        rrb.TimeSeriesView(origin="metrics", name="1-sigma (km, cm/s)",
+                           contents=["$origin/sigma_*"]),
+        rrb.TimeSeriesView(origin="metrics", name="Entropy (nats)", contents=["$origin/entropy"]),
+        rrb.TimeSeriesView(origin="metrics", name="NEES", contents=["$origin/nees"]),
+        rrb.TimeSeriesView(origin="components", name="Component weights"),
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin="world", name="Synodic frame (km)"),
+            series,
+            column_shares=[3, 2],
+        ),
+        collapse_panels=False,
+    )
+
+
+class RerunRecorder(Component):
+    """Record a run for the rerun viewer (3-D synodic scene, clouds, ellipsoids, metrics).
+
+    Parameters
+    ----------
+    path : str or None
+        Write the recording to this ``.rrd`` file. For studies: a path containing ``{run_id}``
+        or naming an existing directory writes one file per run (``<dir>/<run_id>.rrd``).
+    serve : bool
+        Serve the recording over gRPC on 127.0.0.1:``serve_port`` for viewers to connect to
+        (``rerun rerun+http://127.0.0.1:<port>/proxy``). Never listens on other interfaces.
+    spawn : bool
+        Start the native viewer (bound to 127.0.0.1:``viewer_port``) and stream to it; raises
+        :class:`ViewerUnavailableError` at construction when no viewer or no display exists.
+    max_points : int
+        At most this many particles are logged per event (a seeded, deterministic subsample).
+    serve_port : int
+        Port of the gRPC server for ``serve`` (rerun's default is 9876).
+    viewer_port : int
+        Port the spawned viewer listens on for ``spawn``.
+    ellipsoid_sigma : float
+        Mahalanobis radius of the component position ellipsoids (3 = 3-sigma).
+    subsample_seed : int
+        Seed of the particle subsample.
+    """
+
+    kind = "recorder"
+
+    def __init__(self, path: str | None = None, serve: bool = False, spawn: bool = False,
+                 max_points: int = 20_000, serve_port: int = 9876, viewer_port: int = 9877,
+                 ellipsoid_sigma: float = 3.0, subsample_seed: int = 0) -> None:
+        if path is not None and not isinstance(path, (str, os.PathLike)):
+            self._fail("path", path, "must be a file path (str) or None")
+        self.path = None if path is None else os.fspath(path)
+        for name, value in (("serve", serve), ("spawn", spawn)):
+            if not isinstance(value, (bool, np.bool_)):
+                self._fail(name, value, "must be true or false")
+        self.serve = bool(serve)
+        self.spawn = bool(spawn)
+        self.max_points = check_int(self, "max_points", max_points, minimum=1)
+        self.serve_port = check_int(self, "serve_port", serve_port, minimum=0, maximum=65535)
+        self.viewer_port = check_int(self, "viewer_port", viewer_port, minimum=1, maximum=65535)
+        self.ellipsoid_sigma = check_positive(self, "ellipsoid_sigma", ellipsoid_sigma)
+        self.subsample_seed = check_int(self, "subsample_seed", subsample_seed, minimum=0)
+        if self.path is None and not self.serve and not self.spawn:
+            raise ParameterError(f"{self._label()}: nothing to record to; give a path, serve=True "
+                                 "or spawn=True")
+        if self.spawn:
+            self._check_viewer()
+        self._rec: rr.RecordingStream | None = None
+        self._viewer: subprocess.Popen | None = None
+        self._event = 0
+        self._epoch = None
+        self._files: list[str] = []
+
+    # -- pickling: the stream and the viewer process stay in the process that made them ----------
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_rec"] = None
+        state["_viewer"] = None
+        return state
+
+    # -- what a caller may ask after run_started --------------------------------------------------
+    @property
+    def server_uri(self) -> str | None:
+        """URI a viewer connects to when ``serve`` is on (``rerun <uri>``), else None."""
+        return f"rerun+http://{LOOPBACK}:{self.serve_port}/proxy" if self.serve else None
+
+    @property
+    def files(self) -> list[str]:
+        """The ``.rrd`` files written so far, one per run."""
+        return list(self._files)
+
+    def close(self) -> None:
+        """Flush and drop the recording stream (this stops a ``serve`` server)."""
+        rec, self._rec = self._rec, None
+        if rec is not None:
+            rec.flush()
+            rr.bindings.finalize_deferred_sinks(recording=rec.to_native())
+            rec.disconnect()
+
+    # -- lifecycle hooks --------------------------------------------------------------------------
+    @hookimpl
+    def cistrack_run_started(self, run) -> None:
+        """Open the run's recording and log the static scene and the truth trajectory."""
+        self.close()
+        self._rec = self._open(run)
+        self._event = 0
+        self._epoch = parse_utc(run.epoch)
+        self._log_scene(self._rec, run)
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step) -> None:
+        """Log a prior (or the initial / a predict-only step): particles, ellipsoids, truth,
+        observer, and the step's metrics when it has them."""
+        self._log_step(run, step)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step) -> None:
+        """Log the posterior of a step, its line of sight and its metrics."""
+        self._log_step(run, step)
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary) -> None:
+        """Log the summary; flush and close the file (a server stays up until :meth:`close`)."""
+        rec = self._rec
+        if rec is None:
+            return
+        lines = [f"- **{k}**: {v}" for k, v in dict(summary or {}).items()]
+        rec.log("run/summary", rr.TextDocument("\n".join(lines) or "(no summary)",
+                                               media_type=rr.MediaType.MARKDOWN), static=True)
+        rec.flush()
+        rr.bindings.finalize_deferred_sinks(recording=rec.to_native())
+        if not (self.serve or self.spawn):
+            self.close()
+
+    # -- internals --------------------------------------------------------------------------------
+    def _file_for(self, run_id: str) -> str | None:
+        if self.path is None:
+            return None
+        safe = "".join(c if (c.isalnum() or c in "-_.") else "_" for c in run_id)
+        if "{run_id}" in self.path:
+            return self.path.replace("{run_id}", safe)
+        if os.path.isdir(self.path):
+            return os.path.join(self.path, f"{safe}.rrd")
+        if self._files and self._files[-1] == self.path:
+            raise ParameterError(
+                f"{self._label()}: parameter 'path' = {self.path!r} names one file but a second run "
+                f"({run_id!r}) started; use a directory or a path containing '{{run_id}}'")
+        return self.path
+
+    def _open(self, run) -> rr.RecordingStream:
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4(), send_properties=True)
+        rec.set_log_time_enabled(False)  # wall-clock time says nothing about the run
+        sinks: list[Any] = []
+        target = self._file_for(str(run.run_id))
+        if target is not None:
+            Path(target).parent.mkdir(parents=True, exist_ok=True)
+            sinks.append(rr.FileSink(target))
+            self._files.append(target)
+        if self.serve:
+            sinks.append(rr.GrpcServerSink(bind_ip=LOOPBACK, port=self.serve_port))
+        if self.spawn:
+            sinks.append(rr.GrpcSink(self._start_viewer()))
+        rec.set_sinks(*sinks, default_blueprint=default_blueprint())
+        rec.send_recording_name(str(run.run_id))
+        return rec
+
+    def _check_viewer(self) -> str:
+        exe = find_viewer_executable()
+        if exe is None:
+            raise ViewerUnavailableError(
+                "cannot start the rerun viewer: no 'rerun' executable found (it ships with "
+                "rerun-sdk as rerun-cli). Write a recording with --rerun out.rrd instead and open "
+                "it where a viewer is installed: `rerun out.rrd`.")
+        if not _has_display():
+            raise ViewerUnavailableError(
+                "cannot start the native rerun viewer: this machine has no display (DISPLAY and "
+                "WAYLAND_DISPLAY are unset). Use --rerun out.rrd and open it elsewhere with "
+                "`rerun out.rrd`, or --rerun-serve and connect a viewer to the printed URL.")
+        return exe
+
+    def _start_viewer(self) -> str:
+        exe = self._check_viewer()
+        url = f"rerun+http://{LOOPBACK}:{self.viewer_port}/proxy"
+        if self._viewer is not None and self._viewer.poll() is None:
+            return url
+        self._viewer = subprocess.Popen(
+            [exe, "--bind", LOOPBACK, "--port", str(self.viewer_port), "--expect-data-soon"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+            start_new_session=True, env={**os.environ, "RERUN_APP_ONLY": "true"})
+        if not _wait_for_port(self.viewer_port, self._viewer, timeout_s=15.0):
+            err = ""
+            if self._viewer.poll() is not None and self._viewer.stderr is not None:
+                err = self._viewer.stderr.read().decode(errors="replace").strip()[-800:]
+            raise ViewerUnavailableError(
+                f"the rerun viewer ({exe}) did not start listening on {LOOPBACK}:{self.viewer_port}"
+                + (f": {err}" if err else "") + ". Use --rerun out.rrd and open the file instead.")
+        return url
+
+    def _set_time(self, rec: rr.RecordingStream, index: int, t: float) -> None:
+        rec.set_time("event", sequence=self._event)
+        self._event += 1
+        rec.set_time("step", sequence=int(index))
+        rec.set_time("utc", timestamp=self._epoch + timedelta(seconds=float(t) * TU_S))
+
+    def _log_scene(self, rec: rr.RecordingStream, run) -> None:
+        mu = system_mu(run.dynamics)
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        classes = [rr.AnnotationInfo(id=i, label=f"component {i}", color=tuple(int(c) for c in col))
+                   for i, col in enumerate(_PALETTE)]
+        classes.append(rr.AnnotationInfo(id=UNASSIGNED_CLASS, label="unassigned", color=(90, 90, 90)))
+        rec.log("world", rr.AnnotationContext(classes), static=True)
+        prim = primary_positions(mu) * LU_KM
+        rec.log("world/earth", rr.Ellipsoids3D(centers=prim[:1], radii=[EARTH_RADIUS_KM],
+                                               colors=[(40, 90, 200)], labels=["Earth"],
+                                               fill_mode=rr.components.FillMode.Solid), static=True)
+        rec.log("world/moon", rr.Ellipsoids3D(centers=prim[1:], radii=[MOON_RADIUS_KM],
+                                              colors=[(170, 170, 170)], labels=["Moon"],
+                                              fill_mode=rr.components.FillMode.Solid), static=True)
+        rec.log("world/libration", rr.Points3D(libration_points(mu) * LU_KM, labels=list(LIBRATION_NAMES),
+                                               show_labels=True, colors=[(240, 200, 60)],
+                                               radii=rr.Radius.ui_points(4.0)), static=True)
+        if run.has_truth:
+            rec.log("world/truth/trajectory",
+                    rr.LineStrips3D([np.asarray(run.truth_states, dtype=float)[:, :3] * LU_KM],
+                                    colors=[(230, 230, 230)], radii=rr.Radius.ui_points(1.0)),
+                    static=True)
+        info = [f"- **run**: {run.run_id}", f"- **seed**: {run.seed}",
+                f"- **epoch**: {self._epoch.isoformat()}", f"- **mass ratio**: {mu}"]
+        for kind in ("dynamics", "sensor", "schedule", "iod", "filter"):
+            comp = getattr(run, kind, None)
+            if comp is not None:
+                info.append(f"- **{kind}**: {comp!r}")
+        info.append(f"- **measurements**: {len(run.measurements)}")
+        rec.log("run/info", rr.TextDocument("\n".join(info), media_type=rr.MediaType.MARKDOWN),
+                static=True)
+
+    def _log_cloud(self, rec: rr.RecordingStream, states: np.ndarray, labels: np.ndarray | None,
+                   mixture) -> None:
+        states = np.asarray(states, dtype=float)
+        keep = subsample_indices(states.shape[0], self.max_points, self.subsample_seed)
+        pos = states[:, :3] if keep is None else states[keep, :3]
+        if labels is not None:
+            lab = np.asarray(labels) if keep is None else np.asarray(labels)[keep]
+            cls = np.where(lab < 0, UNASSIGNED_CLASS, lab).astype(np.uint16)
+        elif mixture is not None and mixture.n_components > 1:
+            full = states if keep is None else states[keep]
+            cls = np.argmax(mixture.responsibilities(full), axis=1).astype(np.uint16)
+        else:
+            cls = np.zeros(pos.shape[0], dtype=np.uint16)
+        rec.log("world/particles", rr.Points3D((pos * LU_KM).astype(np.float32), class_ids=cls,
+                                               radii=rr.Radius.ui_points(1.5)))
+
+    def _log_step(self, run, step) -> None:
+        rec = self._rec
+        if rec is None:  # a step without run_started: nothing is open to log to
+            return
+        self._set_time(rec, step.index, step.t)
+        belief = step.belief
+        mix = belief.mixture
+        self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix)
+        centers, half, quat = position_ellipsoids(mix.means, mix.covariances, self.ellipsoid_sigma)
+        m = mix.n_components
+        rec.log("world/components", rr.Ellipsoids3D(
+            centers=centers, half_sizes=half, quaternions=quat, class_ids=np.arange(m, dtype=np.uint16),
+            labels=[f"w={w:.3f}" for w in mix.weights],
+            fill_mode=rr.components.FillMode.MajorWireframe))
+        mean = mix.mean[:3] * LU_KM
+        rec.log("world/estimate", rr.Points3D(mean[None], colors=[(255, 60, 60)],
+                                              radii=rr.Radius.ui_points(5.0)))
+        truth = step.truth
+        if truth is not None:
+            rec.log("world/truth/position", rr.Points3D(np.asarray(truth, dtype=float)[None, :3] * LU_KM,
+                                                        colors=[(255, 255, 255)],
+                                                        radii=rr.Radius.ui_points(6.0)))
+        sensor = run.sensor
+        obs = np.asarray(sensor.observer_position(float(step.t)), dtype=float).reshape(3)
+        rec.log("world/observer", rr.Points3D(obs[None] * LU_KM, colors=[(0, 230, 120)],
+                                              radii=rr.Radius.ui_points(5.0)))
+        if step.measurement is not None:
+            meas = step.measurement.angles_only()
+            los = np.asarray(sensor.line_of_sight(np.asarray(meas.z, dtype=float)[None, :2],
+                                                  float(step.t)), dtype=float).reshape(3)
+            reach = np.linalg.norm(mix.mean[:3] - obs)
+            if truth is not None:
+                reach = max(reach, float(np.linalg.norm(np.asarray(truth)[:3] - obs)))
+            end = obs + 1.2 * reach * los
+            rec.log("world/line_of_sight", rr.LineStrips3D([np.stack([obs, end]) * LU_KM],
+                                                           colors=[(0, 230, 120)],
+                                                           radii=rr.Radius.ui_points(1.0)))
+        else:
+            rec.log("world/line_of_sight", rr.Clear(recursive=False))
+        if step.metrics:  # one metrics row per results-table row (priors of updates have none)
+            for name, value in step.metrics.items():
+                if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+                    continue
+                v = float(value)
+                if np.isfinite(v):
+                    rec.log(f"metrics/{rr.escape_entity_path_part(str(name))}", rr.Scalars(v))
+            rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
+
+
+@hookimpl
+def cistrack_register(registry) -> None:
+    registry.add("recorder", "rerun", RerunRecorder)
