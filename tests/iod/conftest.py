@@ -1,6 +1,9 @@
-"""Fixtures for the IOD tests: the 9:2 NRHO truth, the default telescope and a first-pass
-schedule (one measurement every 45 minutes from the rise of the first long pass: the paper's
-40-60 min tasking during the first pass)."""
+"""Fixtures for the IOD tests: the 9:2 NRHO truth, the default telescope and the default
+schedule ("paper-example-1": the first pass every 40-60 min, then 5 consecutive per pass),
+planned once with a fixed seed.
+
+The truth is integrated here with scipy (REFERENCE.md's approximate 9:2 state, rtol 1e-12) until
+the orbit catalog ("nrho-9-2") lands; the IOD only needs a smooth CR3BP arc over ~2 days."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -10,6 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from cistrack.plugins.sensors.ground_telescope import GroundTelescope
+from cistrack.plugins.sensors.schedules import PaperExample1Schedule
 from cistrack.units import hours_to_tu
 
 MU = 1.2150582e-2
@@ -49,14 +53,13 @@ def truth():
     return sol.sol
 
 
-def make_scenario(truth, sensor: GroundTelescope, interval_hours: float = 0.75) -> Scenario:
-    grid = np.arange(0.0, 3 * 86400.0 / 375149.0, hours_to_tu(1.0 / 6.0))
-    passes = [p for p in sensor.passes(grid, truth(grid).T) if p.duration > hours_to_tu(8.0)]
-    first, second = passes[0], passes[1]
-    dt = float(hours_to_tu(interval_hours))
-    t1 = np.arange(first.start + 1e-6, first.end, dt)
-    t2 = np.arange(second.start + 1e-6, second.start + 5 * dt, dt)
-    return Scenario(truth, sensor, np.concatenate([t1, t2]))
+def make_scenario(truth, sensor: GroundTelescope) -> Scenario:
+    t_end = 3 * 86400.0 / 375149.0
+    grid = np.arange(0.0, t_end, hours_to_tu(1.0 / 6.0))
+    # a pass already under way at t = 0 is cut short: start tracking at the first full pass
+    passes = [p for p in sensor.passes(grid, truth(grid).T) if p.start > 0.0]
+    times = PaperExample1Schedule().plan(passes, t_end, np.random.default_rng(2025))
+    return Scenario(truth, sensor, times)
 
 
 @pytest.fixture(scope="session")

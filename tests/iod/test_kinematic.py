@@ -44,7 +44,7 @@ def test_cloud_has_the_requested_particles_at_the_last_fitted_time(scenario, rng
     cloud = UniformRangeIOD(n_particles=500).estimate(ms, scenario.sensor, rng)
     assert cloud.states.shape == (500, 6)
     assert cloud.epoch == ms.times[cloud.meta["fit_indices"][-1]]
-    assert cloud.meta["fit_indices"] == list(range(8))  # 14 in the first pass: 7 clipped to 8
+    assert cloud.meta["fit_indices"] == list(range(8))  # 12 in the first pass: 6 clipped to 8
 
 
 def test_meta_records_draws_survivors_and_pruning_reasons(scenario, rng):
@@ -150,7 +150,7 @@ def test_too_few_survivors_is_an_error_that_says_how_many_and_why(scenario, rng)
 
 
 def test_a_first_pass_too_short_for_the_fit_fails_before_sampling(scenario, rng):
-    ms = scenario.simulate(rng).subset(np.r_[0:4, 14:19])
+    ms = scenario.simulate(rng).subset(np.r_[0:4, 12:17])
     with pytest.raises(IODError, match="first pass has 4 measurement"):
         UniformRangeIOD().estimate(ms, scenario.sensor, rng)
 
