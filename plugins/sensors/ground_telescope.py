@@ -94,9 +94,9 @@ class GroundTelescope(Sensor):
     @staticmethod
     def _check_states(states) -> np.ndarray:
         x = np.asarray(states, dtype=float)
-        if x.ndim != 2 or x.shape[1] < 3:
+        if x.ndim != 2 or x.shape[1] != 6:
             raise MeasurementError(f"sensor 'ground-telescope': states must have shape (N, 6), got {x.shape}")
-        if not np.all(np.isfinite(x[:, :3])):
+        if not np.all(np.isfinite(x)):
             raise MeasurementError("sensor 'ground-telescope': states contain NaN or infinity")
         return x
 
@@ -117,12 +117,14 @@ class GroundTelescope(Sensor):
     def topocentric(self, states: np.ndarray, t) -> np.ndarray:
         """Target positions relative to the observer in the NEU frame, LU.
 
-        states (N, 6) (or (N, 3)) synodic; t scalar or (N,) TU -> (N, 3).
+        states (N, 6) synodic; t scalar or (N,) TU -> (N, 3).
         """
         x = self._check_states(states)
-        tt = self._check_times(t, x.shape[0])
+        return self._neu_of_positions(x[:, :3], self._check_times(t, x.shape[0]))
+
+    def _neu_of_positions(self, r: np.ndarray, tt: np.ndarray) -> np.ndarray:
+        """NEU (N, 3) of synodic positions r (N, 3) at validated times tt (scalar or (N,))."""
         a, b = self._affine(tt)
-        r = x[:, :3]
         if tt.ndim == 0:
             return r @ a.T - b
         return np.einsum("nij,nj->ni", a, r) - b
@@ -140,9 +142,8 @@ class GroundTelescope(Sensor):
 
     def sigmas(self, states: np.ndarray, t) -> np.ndarray:
         """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x true range (LU)."""
-        x = np.asarray(states, dtype=float)
-        n = x.shape[0] if x.ndim == 2 else 1
-        out = np.full((n, len(self.names)), self._sigma_rad)
+        x = self._check_states(states)
+        out = np.full((x.shape[0], len(self.names)), self._sigma_rad)
         if self.measure_range:
             out[:, 2] = self.range_alpha * np.linalg.norm(self.topocentric(x, t), axis=1)
         return out
@@ -192,7 +193,7 @@ class GroundTelescope(Sensor):
         s2, s3 = s * s, s * s * s
         p = ((2 * s3 - 3 * s2 + 1) * x0[:, :3] + (s3 - 2 * s2 + s) * h[:, None] * x0[:, 3:6]
              + (-2 * s3 + 3 * s2) * x1[:, :3] + (s3 - s2) * h[:, None] * x1[:, 3:6])
-        neu = self.topocentric(p, tau)
+        neu = self._neu_of_positions(p, tau)
         return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
 
     def _crossings(self, times, states, k, rising: bool) -> np.ndarray:

@@ -1,0 +1,16 @@
+"""The sensor-area plugins pass cistrack's conformance suite (cistrack.testing)."""
+from __future__ import annotations
+
+from cistrack.plugins.sensors.ground_telescope import GroundTelescope
+from cistrack.plugins.sensors.schedules import (
+    EverySchedule, PaperExample1Schedule, PaperExample2Schedule, PaperExample3Schedule, PhasedSchedule,
+    RandomConsecutiveSchedule,
+)
+from cistrack.testing import parametrize_with_checks
+
+
+@parametrize_with_checks([GroundTelescope, GroundTelescope(measure_range=True), PhasedSchedule,
+                          EverySchedule, RandomConsecutiveSchedule, PaperExample1Schedule,
+                          PaperExample2Schedule, PaperExample3Schedule])
+def test_conformance(component, check):
+    check(component)
