@@ -9,24 +9,24 @@ new particles are drawn from the posterior mixture.
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 from cistrack.component import check_int, check_nonnegative, check_positive
-from cistrack.errors import FilterError, ParameterError
+from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Filter, Sensor
 from cistrack.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
 from .ensemble_propagation import propagate_ensemble
+from .initial_cloud import check_cloud, initial_particles
 from .kalman_update import component_posterior, gaussian_log_likelihood, group_moments, kalman_gains
 from .observation import MeasuredComponents, check_epoch
 from .process_noise import velocity_random_walk_covariance
-from .resampling import normalize_log_weights, systematic_resample
+from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 
-__all__ = ["PGMFilter", "resolve_clusterer", "initial_particles"]
+__all__ = ["PGMFilter", "resolve_clusterer"]
 
 _REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
 
@@ -52,29 +52,6 @@ def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None) -> C
 def _params_of(cls) -> dict:
     from cistrack.component import param_specs
     return param_specs(cls)
-
-
-def initial_particles(cloud: ParticleCloud, n: int, rng: np.random.Generator) -> np.ndarray:
-    """``n`` equally weighted particles (n, d) from ``cloud``: systematic resampling of a weighted
-    cloud, a subsample without replacement of a larger one, all particles plus draws with
-    replacement of a smaller one."""
-    x = np.asarray(cloud.states, dtype=float)
-    if cloud.weights is not None:
-        return x[systematic_resample(cloud.weights, n, rng)]
-    if x.shape[0] >= n:
-        return x[rng.choice(x.shape[0], size=n, replace=False)] if x.shape[0] > n else x.copy()
-    extra = rng.integers(0, x.shape[0], size=n - x.shape[0])
-    return np.concatenate([x, x[extra]])
-
-
-def check_cloud(cloud: ParticleCloud, who: str) -> None:
-    """Raise a clear error for an empty or non-finite initial cloud."""
-    if not isinstance(cloud, ParticleCloud):
-        raise ParameterError(f"filter '{who}': initialize() needs a ParticleCloud, got {type(cloud).__name__}")
-    if len(cloud) == 0 or cloud.states.ndim != 2:
-        raise FilterError(f"filter '{who}': the initial cloud is empty")
-    if not np.all(np.isfinite(cloud.states)):
-        raise FilterError(f"filter '{who}': the initial cloud contains NaN or infinite states")
 
 
 class PGMFilter(Filter):

@@ -1,0 +1,192 @@
+"""Unscented Kalman filter on filterpy's UnscentedKalmanFilter, vectorised over sigma points.
+
+filterpy calls fx/hx once per sigma point; the subclass here propagates all 2n+1 sigma points
+with one ``dynamics.propagate`` call and measures them with one ``sensor.measure`` call. Angle
+components use a circular mean and wrapped residuals. filterpy's ``predict()`` redraws the
+sigma points from the predicted x and P (which includes Q) before the update; that is kept.
+"""
+from __future__ import annotations
+
+import numpy as np
+from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
+from scipy.linalg import cholesky
+
+from cistrack.belief import Belief, ParticleCloud, regularize_covariance
+from cistrack.component import check_int, check_nonnegative, check_positive
+from cistrack.errors import FilterError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Dynamics, Filter, Sensor
+from cistrack.measurement import Measurement
+
+from .ensemble_propagation import propagate_ensemble
+from .gaussian_belief import gaussian_belief
+from .observation import MeasuredComponents, check_epoch
+from .initial_cloud import check_cloud
+from .process_noise import velocity_random_walk_covariance
+
+__all__ = ["UKFFilter"]
+
+
+def _robust_sqrt(a: np.ndarray) -> np.ndarray:
+    """Upper Cholesky factor of ``a`` (filterpy's convention), regularising a matrix that is not
+    numerically positive definite."""
+    try:
+        return cholesky(a)
+    except np.linalg.LinAlgError:
+        return cholesky(regularize_covariance(a, 1e-10))
+
+
+def _not_used(*args, **kwargs):  # filterpy requires fx/hx; the batch overrides never call them
+    raise FilterError("internal: per-point fx/hx must not be called")
+
+
+def _batch_unscented_transform(sigmas, Wm, Wc, noise_cov=None, mean_fn=None, residual_fn=None):
+    """filterpy's unscented transform without its loop over sigma points: (K, n) -> mean, cov."""
+    x = Wm @ sigmas if mean_fn is None else mean_fn(sigmas, Wm)
+    y = sigmas - x if residual_fn is None or residual_fn is np.subtract else residual_fn(sigmas, x)
+    P = (y.T * Wc) @ y
+    if noise_cov is not None:
+        P = P + noise_cov
+    return x, P
+
+
+class _BatchUKF(UnscentedKalmanFilter):
+    """UnscentedKalmanFilter whose sigma points go through dynamics and sensor as one array."""
+
+    def __init__(self, dynamics: Dynamics, who: str, **kw):
+        super().__init__(hx=_not_used, fx=_not_used, dt=0.0, **kw)
+        self.dynamics = dynamics
+        self.who = who
+        self.t0 = 0.0
+        self.n_lost_last = 0
+
+    def compute_process_sigmas(self, dt, fx=None, **fx_args):
+        sigmas = self.points_fn.sigma_points(self.x, self.P)
+        final, alive = propagate_ensemble(self.dynamics, sigmas, self.t0, self.t0 + dt, self.who)
+        # a sigma point that hit a body keeps its impact state (the transform needs all points)
+        self.n_lost_last = int(np.count_nonzero(~alive))
+        self.sigmas_f = final
+
+    def cross_variance(self, x, z, sigmas_f, sigmas_h):
+        dx = sigmas_f - x
+        dz = self.residual_z(sigmas_h, z)
+        return (dx.T * self.Wc) @ dz
+
+    def update_batch(self, meas: MeasuredComponents) -> None:
+        """The measurement update with all sigma points measured at once."""
+        self.residual_z = meas.residual
+        self.z_mean = meas.mean
+        sigmas_h = meas.predict(self.sigmas_f)
+        if not np.all(np.isfinite(sigmas_h)):
+            raise FilterError(f"filter '{self.who}': the sensor returned NaN predicted measurements")
+        self.sigmas_h = sigmas_h
+        zp, self.S = _batch_unscented_transform(sigmas_h, self.Wm, self.Wc, meas.R, self.z_mean, self.residual_z)
+        self.S = 0.5 * (self.S + self.S.T)
+        self.SI = np.linalg.inv(self.S)
+        Pxz = self.cross_variance(self.x, zp, self.sigmas_f, self.sigmas_h)
+        self.K = Pxz @ self.SI
+        self.y = meas.residual(meas.z, zp)
+        self.x = self.x + self.K @ self.y
+        self.P = regularize_covariance(self.P - self.K @ self.S @ self.K.T, 1e-12)
+        self.z = meas.z.copy()
+        self.x_post, self.P_post = self.x.copy(), self.P.copy()
+        self._log_likelihood = self._likelihood = self._mahalanobis = None
+
+
+class UKFFilter(Filter):
+    """Unscented Kalman filter (filterpy) initialised from the moment-matched IOD cloud.
+
+    Parameters
+    ----------
+    alpha, beta, kappa : float
+        Merwe scaled sigma-point parameters (spread, prior knowledge, secondary scaling).
+    n_samples : int
+        Draws from the Gaussian exposed as the belief's samples.
+    velocity_noise_kms_per_sqrt_day : float
+        Process noise Q: velocity random walk, km/s after one day (0 = none).
+    """
+
+    def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, n_samples: int = 2000,
+                 velocity_noise_kms_per_sqrt_day: float = 0.0):
+        self.alpha = check_positive(self, "alpha", alpha)
+        self.beta = check_nonnegative(self, "beta", beta)
+        self.kappa = check_nonnegative(self, "kappa", kappa)
+        self.n_samples = check_int(self, "n_samples", n_samples, minimum=1)
+        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
+            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self._ukf: _BatchUKF | None = None
+
+    def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
+                   rng: np.random.Generator) -> None:
+        """Start from the cloud's mean and covariance at ``cloud.epoch``."""
+        check_cloud(cloud, self._who())
+        if len(cloud) < 2:
+            raise FilterError(f"filter '{self._who()}': need at least 2 particles to moment-match the cloud")
+        d = cloud.states.shape[1]
+        points = MerweScaledSigmaPoints(d, alpha=self.alpha, beta=self.beta, kappa=self.kappa,
+                                        sqrt_method=_robust_sqrt)
+        self._ukf = _BatchUKF(dynamics, self._who(), dim_x=d, dim_z=max(1, len(sensor.names)), points=points)
+        self._ukf.x = cloud.mean.copy()
+        self._ukf.P = regularize_covariance(cloud.covariance, 1e-12)
+        self._ukf.Q = np.zeros((d, d))
+        self._ukf.sigmas_f = points.sigma_points(self._ukf.x, self._ukf.P)  # an update before any predict
+        self._sensor, self._rng = sensor, rng
+        self._t = float(cloud.epoch)
+        self._belief: Belief | None = None
+        self._lost_total = 0
+        self._diag: dict[str, float] = {"n_components": 1.0, "sigma_points_lost": 0.0}
+
+    def predict(self, t: float) -> None:
+        """Propagate the sigma points to ``t`` (TU) and re-form mean and covariance (plus Q)."""
+        ukf = self._require_init()
+        t = float(t)
+        if t == self._t:
+            return
+        ukf.t0 = self._t
+        ukf.Q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, ukf.x.size)
+        ukf.predict(dt=t - self._t, UT=_batch_unscented_transform)
+        self._lost_total += ukf.n_lost_last
+        self._t = t
+        self._belief = None
+        self._diag = {"n_components": 1.0, "sigma_points_lost": float(ukf.n_lost_last)}
+
+    def update(self, measurement: Measurement) -> None:
+        """Condition mean and covariance on ``measurement`` (angles wrapped)."""
+        ukf = self._require_init()
+        check_epoch(self._t, measurement, self._who())
+        meas = MeasuredComponents(self._sensor, measurement)
+        ukf.update_batch(meas)
+        ukf.sigmas_f = ukf.points_fn.sigma_points(ukf.x, ukf.P)  # a second update uses the posterior
+        if not (np.all(np.isfinite(ukf.x)) and np.all(np.isfinite(ukf.P))):
+            raise FilterError(f"filter '{self._who()}': the update produced a non-finite state")
+        self._belief = None
+        y = ukf.y
+        self._diag["log_likelihood"] = float(-0.5 * (y @ ukf.SI @ y + np.linalg.slogdet(ukf.S)[1]
+                                                     + y.size * np.log(2 * np.pi)))
+
+    @property
+    def belief(self) -> Belief:
+        """The Gaussian (a mixture of one) and ``n_samples`` draws from it (drawn once per step)."""
+        ukf = self._require_init()
+        if self._belief is None:
+            self._belief = gaussian_belief(self._t, ukf.x, ukf.P, self.n_samples, self._rng)
+        return self._belief
+
+    @property
+    def diagnostics(self) -> dict[str, float]:
+        d = dict(self._diag)
+        d["sigma_points_lost_total"] = float(self._lost_total)
+        return d
+
+    def _who(self) -> str:
+        return self.registry_name or "ukf"
+
+    def _require_init(self) -> _BatchUKF:
+        if self._ukf is None:
+            raise FilterError(f"filter '{self._who()}': call initialize() first")
+        return self._ukf
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("filter", "ukf", UKFFilter)
