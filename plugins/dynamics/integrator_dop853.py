@@ -1,0 +1,334 @@
+"""Source generator for the per-particle DOP853 ensemble integrator.
+
+The Dormand–Prince 8(5,3) pair (Hairer, Nørsett & Wanner, *Solving ODEs I*, sec. II.10) is
+written out as straight-line code with only the non-zero Butcher coefficients, for one state
+dimension known at compile time, around a model's right-hand side ``rhs(t, y, params, out)``.
+The result is the text of a small Python module whose numba functions are compiled with
+``cache=True``: :mod:`cistrack.plugins.dynamics.compiled` writes it to a file once per model
+(named by a hash of everything it depends on) and imports it, so numba's on-disk cache works
+for third-party models too (a jitted function passed as an argument, or captured by a
+closure, defeats numba's cache).
+
+Generated entry points
+----------------------
+``propagate_kernel(y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps, h_init,
+out, impact_body, impact_time, status)``
+    Integrates every row of ``y0`` (N, DIM) in parallel (``prange``; one particle's whole
+    integration per iteration) to each of ``times`` (K,), writing ``out`` (K, N, DIM). Every
+    particle has its own step size and its own error control (the RMS of the particle's DIM
+    components, Hairer's combined 5th/3rd-order estimate). Steps are clipped to land exactly
+    on output times. After each accepted step the position (first three components) is tested
+    against every body; on entry the crossing of the surface is located to ~1e-13 of the step
+    by re-stepping from the step start (Illinois iteration), the state there is frozen into all
+    later outputs, ``impact_body``/``impact_time`` are set and ``status`` is 1. ``status`` 2 is
+    "step limit reached", 3 "step size underflow" (state frozen where it stopped).
+``derivatives_kernel(t, states, params, out)``
+    ``out[i] = rhs(t, states[i])`` for every row.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+__all__ = ["N_STAGES", "ERROR_EXPONENT", "TABLEAU", "generate_source", "SAFE_FASTMATH"]
+
+N_STAGES = 12
+"""Stages per step; the 13th evaluation (at the new point) is reused as the next step's first."""
+ERROR_EXPONENT = -1.0 / 8.0
+"""Step-size exponent: the embedded estimate behaves like h^8."""
+
+TABLEAU = {
+    "A": np.array(_dop.A[:N_STAGES, :N_STAGES], dtype=float),
+    "B": np.array(_dop.B, dtype=float),
+    "C": np.array(_dop.C[:N_STAGES], dtype=float),
+    "E3": np.array(_dop.E3, dtype=float),
+    "E5": np.array(_dop.E5, dtype=float),
+}
+"""The DOP853 coefficients (taken from scipy so that they are exactly scipy's)."""
+
+SAFE_FASTMATH = frozenset({"contract", "arcp", "nsz", "reassoc"})
+"""LLVM fast-math flags that keep NaN/inf semantics (the step control relies on them)."""
+
+
+def _combo(coefs, dest: str, base: str | None, scale: str | None, indent: str) -> list[str]:
+    """Lines computing ``dest[j] = base[j] + scale * sum_m coefs[m] * k[m, j]`` for all j."""
+    terms = [f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(coefs) if c != 0.0]
+    expr = " + ".join(terms) if terms else "0.0"
+    if scale is not None:
+        expr = f"{scale} * ({expr})"
+    if base is not None:
+        expr = f"{base}[j] + {expr}"
+    return [f"{indent}for j in range(DIM):", f"{indent}    {dest}[j] = {expr}"]
+
+
+def _rk_step_source() -> str:
+    """``_rk_step(t, h, y, params, k, ytmp, ynew)``: stages 2..12, the new state, f at it."""
+    A, B, C = TABLEAU["A"], TABLEAU["B"], TABLEAU["C"]
+    lines = ["@njit(cache=CACHE, fastmath=FASTMATH)",
+             "def _rk_step(t, h, y, params, k, ytmp, ynew):",
+             "    # k[0] holds f(t, y) on entry; k[1..12] are overwritten."]
+    for s in range(1, N_STAGES):
+        lines += _combo(A[s, :s], "ytmp", "y", "h", "    ")
+        lines.append(f"    rhs(t + {float(C[s])!r} * h, ytmp, params, k[{s}])")
+    lines += _combo(B, "ynew", "y", "h", "    ")
+    lines.append(f"    rhs(t + h, ynew, params, k[{N_STAGES}])")
+    return "\n".join(lines) + "\n"
+
+
+def _error_source() -> str:
+    """``_error_norm(h, y, ynew, k, rtol, atol)``: Hairer's combined DOP853 error norm."""
+    e5 = " + ".join(f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(TABLEAU["E5"]) if c != 0.0)
+    e3 = " + ".join(f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(TABLEAU["E3"]) if c != 0.0)
+    return f'''@njit(cache=CACHE, fastmath=FASTMATH)
+def _error_norm(h, y, ynew, k, rtol, atol):
+    s5 = 0.0
+    s3 = 0.0
+    for j in range(DIM):
+        sc = atol + rtol * max(abs(y[j]), abs(ynew[j]))
+        d5 = ({e5}) / sc
+        d3 = ({e3}) / sc
+        s5 += d5 * d5
+        s3 += d3 * d3
+    if s5 == 0.0 and s3 == 0.0:
+        return 0.0
+    return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * DIM)
+'''
+
+
+_BODY = '''
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _inside(y, body_pos, body_rad):
+    """Index of the first body whose surface contains position y[:3], -1 for none."""
+    for b in range(body_rad.shape[0]):
+        dx = y[0] - body_pos[b, 0]
+        dy = y[1] - body_pos[b, 1]
+        dz = y[2] - body_pos[b, 2]
+        if dx * dx + dy * dy + dz * dz < body_rad[b] * body_rad[b]:
+            return b
+    return -1
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _surface_gap(y, body_pos, body_rad, b):
+    dx = y[0] - body_pos[b, 0]
+    dy = y[1] - body_pos[b, 1]
+    dz = y[2] - body_pos[b, 2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz) - body_rad[b]
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _locate_impact(t, h, y, params, k, ytmp, yout, body_pos, body_rad, b):
+    """Fraction s of the step h at which y crosses body b's surface; yout = state there."""
+    s_lo = 0.0
+    g_lo = _surface_gap(y, body_pos, body_rad, b)
+    s_hi = 1.0
+    g_hi = _surface_gap(yout, body_pos, body_rad, b)  # yout holds the full step on entry
+    if not (g_lo > 0.0):
+        for j in range(DIM):
+            yout[j] = y[j]
+        return 0.0
+    side = 0
+    s = 1.0
+    for _ in range(80):
+        s = (s_lo * g_hi - s_hi * g_lo) / (g_hi - g_lo)
+        if not (s > s_lo and s < s_hi):
+            s = 0.5 * (s_lo + s_hi)
+        _rk_step(t, s * h, y, params, k, ytmp, yout)
+        g = _surface_gap(yout, body_pos, body_rad, b)
+        if g > 0.0:
+            s_lo = s
+            g_lo = g
+            if side == -1:
+                g_hi *= 0.5
+            side = -1
+        else:
+            s_hi = s
+            g_hi = g
+            if side == 1:
+                g_lo *= 0.5
+            side = 1
+        if abs(g) <= 1e-14 * body_rad[b] or (s_hi - s_lo) <= 1e-14:
+            break
+    return s
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _initial_step(t, y, f0, direction, params, rtol, atol, ytmp, f1, span):
+    """Hairer's starting step-size heuristic for one particle."""
+    d0 = 0.0
+    d1 = 0.0
+    for j in range(DIM):
+        sc = atol + rtol * abs(y[j])
+        d0 += (y[j] / sc) ** 2
+        d1 += (f0[j] / sc) ** 2
+    d0 = np.sqrt(d0 / DIM)
+    d1 = np.sqrt(d1 / DIM)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, span)
+    for j in range(DIM):
+        ytmp[j] = y[j] + direction * h0 * f0[j]
+    rhs(t + direction * h0, ytmp, params, f1)
+    d2 = 0.0
+    for j in range(DIM):
+        sc = atol + rtol * abs(y[j])
+        d2 += ((f1[j] - f0[j]) / sc) ** 2
+    d2 = np.sqrt(d2 / DIM) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
+    h = min(100.0 * h0, h1)
+    if not (h > 0.0):
+        h = 1e-6
+    return min(h, span)
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _freeze(i, iout, y, out, nt):
+    for m in range(iout, nt):
+        for j in range(DIM):
+            out[m, i, j] = y[j]
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
+                   max_steps, h_init, out, impact_body, impact_time, status):
+    nt = times.shape[0]
+    k = np.empty((13, DIM))
+    y = np.empty(DIM)
+    ynew = np.empty(DIM)
+    ytmp = np.empty(DIM)
+    for j in range(DIM):
+        y[j] = y0[i, j]
+    t = t0
+    b = _inside(y, body_pos, body_rad)
+    if b >= 0:
+        impact_body[i] = b
+        impact_time[i] = t0
+        status[i] = 1
+        _freeze(i, 0, y, out, nt)
+        return
+    iout = 0
+    while iout < nt and times[iout] == t0:
+        for j in range(DIM):
+            out[iout, i, j] = y[j]
+        iout += 1
+    if iout == nt:
+        return
+    rhs(t, y, params, k[0])
+    span = abs(times[nt - 1] - t0)
+    if h_init > 0.0:
+        h = min(h_init, span)
+    else:
+        h = _initial_step(t, y, k[0], direction, params, rtol, atol, ytmp, k[12], span)
+    hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
+    nsteps = 0
+    rejected = False
+    while iout < nt:
+        tout = times[iout]
+        remaining = abs(tout - t)
+        hstep = h
+        last = False
+        if hstep * 1.01 >= remaining:
+            hstep = remaining
+            last = True
+        hs = direction * hstep
+        _rk_step(t, hs, y, params, k, ytmp, ynew)
+        err = _error_norm(hs, y, ynew, k, rtol, atol)
+        nsteps += 1
+        if err <= 1.0:
+            if err == 0.0:
+                fac = 10.0
+            else:
+                fac = min(10.0, 0.9 * err ** -0.125)
+            if rejected:
+                fac = min(1.0, fac)
+            rejected = False
+            b = _inside(ynew, body_pos, body_rad)
+            if b >= 0:
+                s = _locate_impact(t, hs, y, params, k, ytmp, ynew, body_pos, body_rad, b)
+                impact_body[i] = b
+                impact_time[i] = t + s * hs
+                status[i] = 1
+                _freeze(i, iout, ynew, out, nt)
+                return
+            if last:
+                t = tout
+            else:
+                t = t + hs
+            for j in range(DIM):
+                y[j] = ynew[j]
+                k[0, j] = k[12, j]
+            if last:
+                while iout < nt and times[iout] == tout:
+                    for j in range(DIM):
+                        out[iout, i, j] = y[j]
+                    iout += 1
+                h = max(h, hstep * fac)
+            else:
+                h = hstep * fac
+        else:
+            if err > 0.0:
+                fac = max(0.2, 0.9 * err ** -0.125)
+            else:  # NaN: a stage landed on a singularity
+                fac = 0.2
+            h = hstep * fac
+            rejected = True
+            if h < hmin:
+                status[i] = 3
+                _freeze(i, iout, y, out, nt)
+                return
+        if nsteps >= max_steps and iout < nt:
+            status[i] = 2
+            _freeze(i, iout, y, out, nt)
+            return
+
+
+@njit(cache=CACHE, parallel=PARALLEL, fastmath=FASTMATH)
+def propagate_kernel(y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps, h_init,
+                     out, impact_body, impact_time, status):
+    n = y0.shape[0]
+    direction = 1.0
+    if times[times.shape[0] - 1] < t0:
+        direction = -1.0
+    for i in prange(n):
+        _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
+                       max_steps, h_init, out, impact_body, impact_time, status)
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def derivatives_kernel(t, states, params, out):
+    for i in range(states.shape[0]):
+        rhs(t, states[i], params, out[i])
+'''
+
+
+def generate_source(rhs_import: str, dim: int, *, cache: bool = True, parallel: bool = True,
+                    fastmath=SAFE_FASTMATH, title: str = "") -> str:
+    """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
+
+    Parameters
+    ----------
+    rhs_import : str
+        A line that binds the name ``rhs`` (e.g. ``"from pkg.mod import my_rhs as rhs"``), or
+        ``""`` when the caller injects ``rhs`` into the module's globals itself.
+    dim : int
+        State dimension (6 for position and velocity).
+    cache, parallel : bool
+        numba ``cache=`` and ``parallel=`` of the generated functions.
+    fastmath : set of str or bool
+        numba ``fastmath=`` flags; the default keeps NaN and inf semantics.
+    """
+    fm = ("{" + ", ".join(repr(f) for f in sorted(fastmath)) + "}") if not isinstance(fastmath, bool) else repr(fastmath)
+    header = (f'"""Generated by cistrack.plugins.dynamics.integrator_dop853 {title}: do not edit."""\n'
+              "import numpy as np\n"
+              "from numba import njit, prange\n"
+              f"{rhs_import}\n\n"
+              f"DIM = {int(dim)}\n"
+              f"CACHE = {bool(cache)!r}\n"
+              f"PARALLEL = {bool(parallel)!r}\n"
+              f"FASTMATH = {fm}\n\n\n")
+    return header + _rk_step_source() + "\n\n" + _error_source() + _BODY
