@@ -1,0 +1,381 @@
+"""Comparative studies: scenarios x filters x IOD variants x seeds through any Executor.
+
+A study file (TOML)::
+
+    name = "filter-comparison"
+    description = "PGM vs UKF vs EnKF on paper Example 1, three IOD range models"
+    scenarios = ["example-1"]                  # built-in names or paths relative to this file
+    filters = ["pgm", "ukf", "enkf"]           # names, or tables {name = ..., label = ..., params}
+    iod = ["noisy-range", "uniform-range"]     # the same; omit to keep each scenario's own
+    seeds = [1, 2, 3]                          # or n_seeds = 10 (seeds 1..10)
+    [overrides]                                # applied to every scenario first
+    duration_days = 6.6
+
+Each run is written to ``<out>/runs/<run id>/`` as it finishes (see :mod:`cistrack.results`);
+running the study again runs only what is missing. Runs are pure functions of (scenario, seed):
+the same seed gives the same numbers under any executor.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import copy
+import csv
+import difflib
+import json
+import os
+import sys
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import ConfigError
+from .results import read_manifest, read_steps
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "report_study",
+           "builtin_studies", "make_executor"]
+
+_STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "overrides"}
+_DONE = ("finished", "filter-failed")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a study (plain data: sent to worker processes)."""
+
+    run_id: str
+    scenario: str          # absolute path of the scenario file
+    seed: int
+    overrides: dict
+    out_dir: str
+    scenario_name: str
+    filter_label: str
+    iod_label: str
+
+
+def builtin_studies() -> dict[str, str]:
+    """Built-in study names -> one-line descriptions."""
+    base = resources.files("cistrack.scenarios") / "studies"
+    out = {}
+    for e in sorted(base.iterdir(), key=lambda e: e.name):
+        if e.name.endswith(".toml"):
+            out[e.name[:-5]] = str(tomllib.loads(e.read_text()).get("description", "")).strip()
+    return out
+
+
+def _study_path(path_or_name: str | Path) -> Path:
+    p = Path(path_or_name)
+    if p.exists():
+        return p
+    base = resources.files("cistrack.scenarios") / "studies" / f"{path_or_name}.toml"
+    if base.is_file():
+        return Path(str(base))
+    avail = sorted(builtin_studies())
+    msg = f"study not found: {path_or_name!r} is neither a file nor a built-in study ({', '.join(avail)})"
+    close = difflib.get_close_matches(str(path_or_name), avail, n=1)
+    if close:
+        msg += f". Did you mean {close[0]!r}?"
+    raise ConfigError(msg)
+
+
+def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
+    """Read and check a study file. Returns (data, path)."""
+    p = _study_path(path_or_name)
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    for k in data:
+        if k not in _STUDY_KEYS:
+            close = difflib.get_close_matches(k, list(_STUDY_KEYS), n=1)
+            raise ConfigError(f"{p}: unknown key {k!r}; allowed: {', '.join(sorted(_STUDY_KEYS))}"
+                              + (f". Did you mean {close[0]!r}?" if close else ""))
+    if not data.get("scenarios"):
+        raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
+    if "seeds" in data and "n_seeds" in data:
+        raise ConfigError(f"{p}: give 'seeds' or 'n_seeds', not both")
+    return data, p
+
+
+def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
+    if item is None:
+        return "", None
+    if isinstance(item, str):
+        return item, {"name": item}
+    if isinstance(item, dict) and "name" in item:
+        t = dict(item)
+        label = str(t.pop("label", t["name"]))
+        return label, t
+    raise ConfigError(f"{p}: entries of {key!r} must be names or tables with a 'name' key, got {item!r}")
+
+
+def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None) -> tuple[dict, list[RunSpec], Path]:
+    """Every run of a study, validated (each scenario variant is parsed before any run starts)."""
+    from .registry import default_registry
+    from .scenario import load_scenario
+
+    data, p = load_study(path_or_name)
+    name = str(data.get("name", p.stem))
+    out = Path(out_dir) if out_dir else Path("studies_out") / name
+    seeds = data.get("seeds") or list(range(1, int(data.get("n_seeds", 1)) + 1))
+    if not all(isinstance(s, int) and s >= 0 for s in seeds):
+        raise ConfigError(f"{p}: 'seeds' must be non-negative integers")
+    filters = [_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])]
+    iods = [_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])]
+    reg = default_registry()
+    specs: list[RunSpec] = []
+    for sc in data["scenarios"]:
+        sp = Path(sc)
+        if not sp.is_absolute() and (p.parent / sp).exists():
+            sp = p.parent / sp
+        base = load_scenario(sp if sp.exists() else sc, reg)
+        scen_path = str(Path(base.source).resolve())
+        for flabel, ftable in filters:
+            for ilabel, itable in iods:
+                ov = copy.deepcopy(data.get("overrides", {}))
+                if ftable:
+                    ov["filter"] = ftable
+                if itable:
+                    ov["iod"] = itable
+                variant = base.with_overrides(ov, reg)   # validates this combination now
+                fl = flabel or variant.components["filter"].name
+                il = ilabel or variant.components["iod"].name
+                for seed in seeds:
+                    rid = f"{base.name}__{fl}__{il}__seed{seed}"
+                    specs.append(RunSpec(rid, scen_path, int(seed), ov, str(out / "runs" / rid),
+                                         base.name, fl, il))
+    ids = [s.run_id for s in specs]
+    if len(set(ids)) != len(ids):
+        raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
+    return data, specs, out
+
+
+def execute_run(spec: RunSpec) -> dict:
+    """Run one study run in this process and write it to ``spec.out_dir``. Returns its summary."""
+    from threadpoolctl import threadpool_limits
+
+    from .registry import default_registry
+    from .run import run_scenario
+    from .scenario import load_scenario
+
+    reg = default_registry()
+    scen = load_scenario(spec.scenario, reg).with_overrides(spec.overrides, reg)
+    with threadpool_limits(1):  # one BLAS/OpenMP thread: identical numbers whichever worker runs it
+        res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id)
+    return res.summary
+
+
+def _worker_init(threads: int) -> None:
+    try:
+        import numba
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    except Exception:
+        pass
+
+
+def make_executor(workers: int | None = None, dask: str | None = None):
+    """A concurrent.futures Executor: local processes, or a Dask cluster ('local' or an address)."""
+    n = workers or os.cpu_count() or 1
+    if dask:
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ConfigError("--dask needs the optional dependency: pip install 'cistrack[dask]'") from None
+        if dask == "local":
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   host="127.0.0.1")
+            client = Client(cluster)
+        else:
+            client = Client(dask)
+        ex = client.get_executor()
+        ex._cistrack_client = client  # closed by run_study
+        return ex
+    import multiprocessing as mp
+    cores = os.cpu_count() or 1
+    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"),
+                                  initializer=_worker_init, initargs=(max(1, cores // n),))
+
+
+def _is_done(out_dir: str) -> bool:
+    m = Path(out_dir) / "manifest.json"
+    if not m.exists():
+        return False
+    try:
+        return read_manifest(out_dir).get("status") in _DONE and (Path(out_dir) / "steps.parquet").exists()
+    except (json.JSONDecodeError, OSError):
+        return False
+
+
+def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
+              dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True) -> dict:
+    """Run every missing run of a study. Returns counts and the study directory."""
+    data, specs, out = plan_runs(path_or_name, out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data}, indent=2, default=str))
+    todo = [s for s in specs if not _is_done(s.out_dir)]
+    skipped = len(specs) - len(todo)
+    own = executor is None
+    ex = executor or (make_executor(workers, dask) if todo else None)
+    completed = failed = 0
+    bar = None
+    if progress and todo:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(todo), desc=f"study {data.get('name', out.name)}", unit="run")
+    try:
+        futures = {ex.submit(execute_run, s): s for s in todo}
+        for fut in cf.as_completed(futures):
+            spec = futures[fut]
+            try:
+                summary = fut.result()
+                completed += 1
+                if bar is not None:
+                    bar.set_postfix_str(f"{spec.run_id}: {'kept' if summary['custody_kept'] else 'LOST'}")
+            except Exception as exc:  # one failing run must not stop the study
+                failed += 1
+                (Path(spec.out_dir)).mkdir(parents=True, exist_ok=True)
+                (Path(spec.out_dir) / "error.txt").write_text(f"{type(exc).__name__}: {exc}\n")
+                print(f"run {spec.run_id} failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+        if own and ex is not None:
+            ex.shutdown(wait=True)
+            client = getattr(ex, "_cistrack_client", None)
+            if client is not None:
+                cluster = client.cluster
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+    return {"name": data.get("name", out.name), "out_dir": out, "completed": completed, "skipped": skipped,
+            "failed": failed, "total": len(specs)}
+
+
+# -- report ----------------------------------------------------------------------------------------
+
+def _median(xs):
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    return float(np.median(xs)) if xs else None
+
+
+def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) -> dict:
+    """Summarise a study: terminal text, summary.csv, summary.md and PNG plots in <out>/report/."""
+    data, specs, out = plan_runs(path_or_name, out_dir)
+    groups: dict[tuple[str, str, str], list[dict]] = {}
+    tables: dict[tuple[str, str, str], list] = {}
+    missing = 0
+    for s in specs:
+        if not _is_done(s.out_dir):
+            missing += 1
+            continue
+        man = read_manifest(s.out_dir)
+        groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(man["summary"])
+        tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
+    rep_dir = out / "report"
+    rep_dir.mkdir(parents=True, exist_ok=True)
+    cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
+            "failed_runs", "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+            "pos_err_km", "vel_err_ms", "entropy"]
+    rows = []
+    for (sc, iod, flt), sums in sorted(groups.items()):
+        kept = sum(1 for x in sums if x["custody_kept"])
+        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums), "custody_kept": kept,
+               "custody_rate": kept / len(sums),
+               "median_lost_day": _median([x["custody_lost_t_days"] for x in sums if not x["custody_kept"]]),
+               "failed_runs": sum(1 for x in sums if x["status"] != "finished")}
+        for k in cols[8:]:
+            row[k] = _median([x["final"].get(k) for x in sums])
+        rows.append(row)
+    with open(rep_dir / "summary.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=cols)
+        w.writeheader()
+        w.writerows(rows)
+
+    def fmt(v):
+        if v is None:
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v)
+
+    header = ["scenario", "iod", "filter", "custody", "lost at (d, median)", "failed",
+              "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km", "entropy"]
+    lines = []
+    for r in rows:
+        lines.append([r["scenario"], r["iod"], r["filter"], f"{r['custody_kept']}/{r['runs']}",
+                      fmt(r["median_lost_day"]), str(r["failed_runs"]),
+                      "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
+                      "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
+                      fmt(r["pos_err_km"]), fmt(r["entropy"])])
+    md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    md += ["| " + " | ".join(l) + " |" for l in lines]
+    verdicts = []
+    for r in rows:
+        if r["custody_kept"] < r["runs"]:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} lost custody in "
+                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
+        else:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
+    title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
+    md_text = "\n".join([f"# {title}", "", *md, "", "## Custody", "", *verdicts, "",
+                         "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
+                         "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
+                         "region on consecutive updates (see cistrack.scenario.CustodyRule)."])
+    (rep_dir / "summary.md").write_text(md_text + "\n")
+    widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
+    text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
+                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts)
+    files = [rep_dir / "summary.csv", rep_dir / "summary.md"]
+    files += _plots(tables, rep_dir)
+    return {"text": text, "rows": rows, "files": files, "missing": missing}
+
+
+def _column(table, name):
+    if name not in table.column_names:
+        return None
+    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
+
+
+def _plots(tables, rep_dir: Path) -> list[Path]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    files = []
+    by_scen: dict[tuple[str, str], dict[str, list]] = {}
+    for (sc, iod, flt), ts in tables.items():
+        by_scen.setdefault((sc, iod), {})[flt] = ts
+    for (sc, iod), filters in sorted(by_scen.items()):
+        fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+        for ci, (flt, ts) in enumerate(sorted(filters.items())):
+            color = f"C{ci}"
+            for ti, t in enumerate(ts):
+                x = _column(t, "t_days")
+                for ax, key in zip(axes, ("entropy", "pos_err_km", "vel_err_ms")):
+                    y = _column(t, key)
+                    if y is None:
+                        continue
+                    ax.plot(x, y, color=color, alpha=0.9 if ti == 0 else 0.25, lw=1.2 if ti == 0 else 0.8,
+                            label=flt if ti == 0 else None)
+        axes[0].set_ylabel("entropy (nats, km & km/s)")
+        axes[1].set_ylabel("position error (km)")
+        axes[2].set_ylabel("velocity error (m/s)")
+        axes[1].set_yscale("log")
+        axes[2].set_yscale("log")
+        axes[2].set_xlabel("time (days)")
+        axes[0].legend()
+        axes[0].set_title(f"{sc}, IOD {iod}")
+        fig.tight_layout()
+        f = rep_dir / f"{sc}__{iod}.png"
+        fig.savefig(f, dpi=110)
+        plt.close(fig)
+        files.append(f)
+    return files
