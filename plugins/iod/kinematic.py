@@ -86,6 +86,7 @@ class FitInputs:
         self.ranges = ranges
         self.observer = observer
         self.weights = weights
+        self.neu_to_synodic: np.ndarray | None = None
 
     @property
     def epoch(self) -> float:
@@ -124,7 +125,29 @@ def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pas
             raise IODError(f"{who}: measured ranges must be > 0")
     observer = np.asarray(sensor.observer_position(times), dtype=float).reshape(len(idx), 3)
     weights = evaluation_weights(times, order, float(times[-1]))
-    return FitInputs(idx, times, angles, sig, ranges, observer, weights)
+    fit = FitInputs(idx, times, angles, sig, ranges, observer, weights)
+    fit.neu_to_synodic = _neu_to_synodic(sensor, times, angles)
+    return fit
+
+
+def _neu_to_synodic(sensor: Sensor, times: np.ndarray, angles: np.ndarray) -> np.ndarray | None:
+    """Matrices M_k (K, 3, 3) with line_of_sight(az, el, t_k) = M_k @ u_neu(az, el), or None.
+
+    An az/el sensor's line of sight is a rotation of the NEU unit vector; the columns of M_k are
+    the lines of sight of North, East and Up. Checked against the sensor at the measured angles;
+    a sensor whose angles are not NEU az/el falls back to calling line_of_sight per sample.
+    """
+    k = times.shape[0]
+    basis = np.array([[0.0, 0.0], [0.5 * np.pi, 0.0], [0.0, 0.5 * np.pi]])   # N, E, Up
+    ang = np.broadcast_to(basis, (k, 3, 2)).reshape(-1, 2)
+    cols = np.asarray(sensor.line_of_sight(ang, np.repeat(times, 3)), dtype=float).reshape(k, 3, 3)
+    m = np.swapaxes(cols, 1, 2)
+    ce = np.cos(angles[:, 1])
+    u = np.stack([ce * np.cos(angles[:, 0]), ce * np.sin(angles[:, 0]), np.sin(angles[:, 1])], axis=1)
+    direct = np.asarray(sensor.line_of_sight(angles, times), dtype=float).reshape(k, 3)
+    if np.max(np.abs(np.einsum("kij,kj->ki", m, u) - direct)) > 1e-12:
+        return None
+    return m
 
 
 def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
@@ -145,20 +168,26 @@ def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
         (Earth-fixed rotating frame, what the paper's 42 km/s bound refers to)
     """
     n, k = rho.shape
-    flat = angles.reshape(n * k, 2)
-    tk = np.broadcast_to(fit.times, (n, k)).reshape(-1)
-    los = np.asarray(sensor.line_of_sight(flat, tk), dtype=float).reshape(n, k, 3)
-    az, el = angles[..., 0], angles[..., 1]
-    ce = np.cos(el)
-    data = np.empty((n, k, 6))
-    data[..., :3] = fit.observer[None] + rho[..., None] * los
-    data[..., 3] = rho * ce * np.cos(az)
-    data[..., 4] = rho * ce * np.sin(az)
-    data[..., 5] = rho * np.sin(el)
-    # One product for all samples and both fits: (2, K) x (N, K, 6) -> (2, N, 6).
-    out = np.einsum("jk,nkd->jnd", fit.weights, data, optimize=True)
-    states = np.concatenate([out[0, :, :3], out[1, :, :3]], axis=1)
-    return states, out[1, :, 3:]
+    # Layout (K, 6, N): the fit is then one (2, K) x (K, 6N) matrix product.
+    az = angles[..., 0].T
+    el = angles[..., 1].T
+    r = rho.T
+    rce = r * np.cos(el)
+    data = np.empty((k, 6, n))
+    data[:, 3] = rce * np.cos(az)
+    data[:, 4] = rce * np.sin(az)
+    data[:, 5] = r * np.sin(el)
+    if fit.neu_to_synodic is not None:
+        # los = M_k @ u_neu: one 3x3 matrix per fit time instead of one frame chain per sample
+        data[:, :3] = fit.observer[:, :, None] + fit.neu_to_synodic @ data[:, 3:]
+    else:
+        flat = angles.reshape(n * k, 2)
+        tk = np.broadcast_to(fit.times, (n, k)).reshape(-1)
+        los = np.asarray(sensor.line_of_sight(flat, tk), dtype=float).reshape(n, k, 3)
+        data[:, :3] = fit.observer[:, :, None] + (rho[..., None] * los).transpose(1, 2, 0)
+    out = (fit.weights @ data.reshape(k, 6 * n)).reshape(2, 6, n)
+    states = np.concatenate([out[0, :3], out[1, :3]], axis=0).T.copy()
+    return states, out[1, 3:].T.copy()
 
 
 class KinematicFitIOD(IODMethod):
