@@ -18,6 +18,7 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 ``world/observer``              the observer's position at each step
 ``world/line_of_sight``         the measured line of sight at update steps (cleared otherwise)
 ``metrics/<name>``              every finite metric of ``step.metrics`` (steps that carry metrics)
+``diagnostics/<name>``          the filter's numeric diagnostics on the same steps
 ``components/weights``          the mixture weights, one series per component
 ``run/info``, ``run/summary``   text: run id, components, seed; the run's summary
 =============================  ==========================================================
@@ -416,13 +417,19 @@ class RerunRecorder(Component):
         else:
             rec.log("world/line_of_sight", rr.Clear(recursive=False))
         if step.metrics:  # one metrics row per results-table row (priors of updates have none)
-            for name, value in step.metrics.items():
-                if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
-                    continue
-                v = float(value)
-                if np.isfinite(v):
-                    rec.log(f"metrics/{rr.escape_entity_path_part(str(name))}", rr.Scalars(v))
+            _log_numbers(rec, "metrics", step.metrics)
+            _log_numbers(rec, "diagnostics", step.diagnostics)
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
+
+
+def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:
+    """Each finite real number of ``values`` as a scalar at ``prefix/<name>``."""
+    for name, value in values.items():
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+            continue
+        v = float(value)
+        if np.isfinite(v):
+            rec.log(f"{prefix}/{rr.escape_entity_path_part(str(name))}", rr.Scalars(v))
 
 
 @hookimpl

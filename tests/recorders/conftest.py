@@ -1,0 +1,112 @@
+"""A small real run (cr3bp, ground telescope, noisy-range IOD, PGM) recorded by two rerun
+recorders, plus an observer that keeps a copy of what every hook received."""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cistrack import units
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Schedule
+from cistrack.registry import load_registry
+from cistrack.results import read_steps
+from cistrack.run import run_scenario
+from cistrack.scenario import parse_scenario
+
+NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
+N_PARTICLES = 300
+SMALL_MAX_POINTS = 50
+
+
+class EveryFewMinutes(Schedule):
+    """Test tasking: ``count`` measurements ``interval_minutes`` apart from the start of the
+    first pass (enough for the kinematic IOD's fit), nothing afterwards."""
+
+    def __init__(self, interval_minutes: float = 15.0, count: int = 24) -> None:
+        self.interval_minutes = interval_minutes
+        self.count = count
+
+    def plan(self, passes, t_end, rng):
+        p = passes[0]
+        dt = float(units.hours_to_tu(self.interval_minutes / 60.0))
+        t = p.start + dt * np.arange(self.count)
+        return t[t <= min(p.end, t_end)]
+
+
+@dataclass
+class Event:
+    hook: str
+    index: int
+    kind: str
+    t: float
+    states: np.ndarray
+    labels: np.ndarray | None
+    weights: np.ndarray
+    means: np.ndarray
+    covariances: np.ndarray
+    truth: np.ndarray | None
+    has_measurement: bool
+    metrics: dict
+
+
+class EventLog:
+    """Keeps a deep copy of the belief each lifecycle hook received, in call order."""
+
+    def __init__(self) -> None:
+        self.events: list[Event] = []
+
+    def _keep(self, hook: str, step) -> None:
+        s, m = step.belief.samples, step.belief.mixture
+        self.events.append(Event(hook, step.index, step.kind, step.t, s.states.copy(),
+                                 None if s.labels is None else np.asarray(s.labels).copy(),
+                                 m.weights.copy(), m.means.copy(), m.covariances.copy(),
+                                 None if step.truth is None else np.asarray(step.truth).copy(),
+                                 step.measurement is not None, copy.deepcopy(step.metrics)))
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step):
+        self._keep("predicted", step)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step):
+        self._keep("updated", step)
+
+
+@dataclass
+class RecordedRun:
+    full_rrd: Path
+    small_rrd: Path
+    result: object
+    table: object
+    log: EventLog
+    registry: object
+
+
+def small_scenario(registry):
+    registry.add("schedule", "test-every-few-minutes", EveryFewMinutes)
+    data = {
+        "name": "recorder-test", "epoch": "2026-01-01T00:00:00Z", "seed": 3, "duration_days": 1.5,
+        "truth": {"state_km": [float(v) for v in units.state_to_km(NRHO_9_2)]},
+        "dynamics": {"name": "cr3bp"},
+        "sensor": {"name": "ground-telescope", "measure_range": True},
+        "schedule": {"name": "test-every-few-minutes"},
+        "iod": {"name": "noisy-range", "n_particles": N_PARTICLES},
+        "filter": {"name": "pgm", "n_particles": N_PARTICLES, "n_components": 3},
+    }
+    return parse_scenario(data, registry=registry)
+
+
+@pytest.fixture(scope="session")
+def recorded_run(tmp_path_factory) -> RecordedRun:
+    reg = load_registry()
+    scen = small_scenario(reg)
+    d = tmp_path_factory.mktemp("recorded")
+    full = reg.create("recorder", "rerun", path=str(d / "full.rrd"), max_points=100_000)
+    small = reg.create("recorder", "rerun", path=str(d / "small.rrd"), max_points=SMALL_MAX_POINTS)
+    log = EventLog()
+    res = run_scenario(scen, registry=reg, observers=[full, small, log], output_dir=d / "out")
+    return RecordedRun(d / "full.rrd", d / "small.rrd", res, read_steps(d / "out"), log, reg)
