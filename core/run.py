@@ -98,6 +98,12 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                               f"{units.tu_to_days(prop.impact_time[0]):.3f} days; shorten duration_days")
         truth = np.concatenate([x0[None], prop.states[:, 0, :]], axis=0)
         passes = sensor.passes(grid, truth)
+        if passes and passes[0].start <= grid[0] + 1e-12:
+            # A pass already in progress at t = 0 is cut short; the target is acquired at its
+            # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
+            say(f"skipping the pass in progress at t = 0 (visible for its first "
+                f"{units.tu_to_hours(passes[0].end - grid[0]):.1f} h only)")
+            passes = passes[1:]
         if schedule is None:
             raise ConfigError(f"{scenario.source}: simulated measurements need a [schedule] table")
         times = np.asarray(schedule.plan(passes, duration, rngs["schedule"]), dtype=float)

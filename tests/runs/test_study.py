@@ -1,0 +1,60 @@
+"""Studies: resumable, executor-independent, reported."""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cistrack.results import read_manifest, read_steps
+from cistrack.study import plan_runs, report_study, run_study
+
+
+def _tables(out: Path) -> dict[str, list]:
+    return {d.name: read_steps(d).drop_columns([c for c in read_steps(d).column_names if c.startswith("time_")]).to_pylist()
+            for d in sorted((out / "runs").iterdir())}
+
+
+def test_resumed_study_runs_only_what_is_missing_and_equals_an_uninterrupted_one(tiny_study, tmp_path):
+    full = tmp_path / "full"
+    res = run_study(tiny_study, out_dir=full, executor=cf.ThreadPoolExecutor(1), progress=False)
+    assert (res["completed"], res["failed"]) == (3, 0)
+    part = tmp_path / "part"
+    shutil.copytree(full, part)
+    runs = sorted((part / "runs").iterdir())
+    shutil.rmtree(runs[0])                                  # never started
+    (runs[1] / "steps.parquet").unlink()                    # killed mid-way
+    man = read_manifest(runs[1])
+    man["status"] = "running"
+    (runs[1] / "manifest.json").write_text(json.dumps(man))
+    res2 = run_study(tiny_study, out_dir=part, executor=cf.ThreadPoolExecutor(1), progress=False)
+    assert (res2["completed"], res2["skipped"]) == (2, 1)
+    assert _tables(part) == _tables(full)
+
+
+def test_same_seed_gives_identical_results_under_process_and_dask_executors(tiny_study, tmp_path):
+    pytest.importorskip("distributed")
+    a, b = tmp_path / "proc", tmp_path / "dask"
+    run_study(tiny_study, out_dir=a, workers=2, progress=False)
+    run_study(tiny_study, out_dir=b, workers=2, dask="local", progress=False)
+    assert _tables(a) == _tables(b)
+
+
+def test_report_writes_table_markdown_and_plots_and_says_who_kept_custody(tiny_study, tmp_path):
+    out = tmp_path / "s"
+    run_study(tiny_study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    rep = report_study(tiny_study, out_dir=out)
+    names = {Path(f).name for f in rep["files"]}
+    assert {"summary.csv", "summary.md"} <= names and any(n.endswith(".png") for n in names)
+    assert rep["rows"][0]["runs"] == 3
+    assert "pgm with noisy-range IOD on quick" in rep["text"]
+
+
+def test_study_plan_rejects_unknown_filter_before_running(tmp_path):
+    from cistrack.errors import ConfigError
+    p = tmp_path / "bad.toml"
+    p.write_text('scenarios = ["quick"]\nfilters = ["pgn"]\n')
+    with pytest.raises(ConfigError, match="Did you mean 'pgm'"):
+        plan_runs(p, tmp_path / "o")
