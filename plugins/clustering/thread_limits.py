@@ -1,4 +1,4 @@
-"""Running scikit-learn's OpenMP loops on a bounded number of threads.
+"""Running scikit-learn's OpenMP and BLAS loops on a bounded number of threads.
 
 scikit-learn's k-means uses every core through OpenMP. On a machine whose other cores are
 busy (parallel studies, other runs) OpenMP's spinning threads make a 20 ms k-means take
@@ -16,7 +16,7 @@ _CONTROLLER = None
 
 @contextmanager
 def limited_threads(n_threads: int):
-    """Limit OpenMP threads to ``n_threads`` inside the block (0 = no limit)."""
+    """Limit OpenMP and BLAS threads to ``n_threads`` inside the block (0 = no limit)."""
     global _CONTROLLER
     if n_threads <= 0:
         yield
@@ -24,5 +24,5 @@ def limited_threads(n_threads: int):
     if _CONTROLLER is None:
         from threadpoolctl import ThreadpoolController
         _CONTROLLER = ThreadpoolController()
-    with _CONTROLLER.limit(limits=n_threads, user_api="openmp"):
+    with _CONTROLLER.limit(limits=n_threads):
         yield
