@@ -6,7 +6,7 @@ import numpy as np
 from ..belief import ParticleCloud
 from ..errors import IODError
 from ..interfaces.iod import IODMethod
-from ..units import km_to_lu, kms_to_vu
+from ..units import km_to_lu
 from .check_support import close, describe_exception, no_global_random_state, require, round_trip, unchanged
 from .fixtures import first_pass, nrho_truth
 
@@ -14,7 +14,6 @@ __all__ = ["IOD_CHECKS"]
 
 RANGE_MIN_LU = float(km_to_lu(84_328.0))
 RANGE_MAX_LU = float(km_to_lu(550_000.0))
-SPEED_MAX_VU = float(kms_to_vu(42.0))
 
 
 def _estimate(iod, seed=0, n_times=16):
@@ -30,7 +29,7 @@ def check_is_iod(iod) -> None:
 
 def check_cloud_shape_epoch_and_units(iod) -> None:
     """The cloud is (N, 6) finite at the epoch of one of the measurements, in LU and VU
-    (inside the cislunar range bounds as seen from the observer, speeds below 42 km/s)."""
+    (median range from the observer inside the cislunar bounds, 84,328-550,000 km)."""
     cloud, ms, sensor = _estimate(iod)
     x = cloud.states
     require(x.ndim == 2 and x.shape[1] == 6 and x.shape[0] >= 2, f"cloud states have shape {x.shape}, expected (N>=2, 6)")
@@ -41,23 +40,18 @@ def check_cloud_shape_epoch_and_units(iod) -> None:
     med = float(np.median(rho))
     require(RANGE_MIN_LU <= med <= RANGE_MAX_LU,
             f"median range of the cloud is {med:.4g} LU, outside cislunar space: are positions in LU?")
-    speed = float(np.median(np.linalg.norm(x[:, 3:], axis=1)))
-    require(speed <= SPEED_MAX_VU, f"median speed {speed:.4g} VU exceeds 42 km/s: are velocities in VU?")
 
 
-def check_cloud_contains_truth(iod) -> None:
-    """The truth at the cloud's epoch lies within the cloud (moment-matched Mahalanobis
-    distance below 50, i.e. inside the 99.9999% ellipsoid of 6 degrees of freedom)."""
-    cloud, ms, _ = _estimate(iod)
+def check_cloud_near_truth(iod) -> None:
+    """The cloud's mean position is within half the target's range of the truth at the
+    cloud's epoch (catches a wrong frame, unit or epoch; not a test of accuracy)."""
+    cloud, ms, sensor = _estimate(iod)
     times, states = nrho_truth(16)
     k = int(np.argmin(np.abs(times - cloud.epoch)))
-    cov = cloud.covariance
-    e = states[k] - cloud.mean
-    try:
-        d2 = float(e @ np.linalg.solve(cov, e))
-    except np.linalg.LinAlgError:
-        require(False, "the cloud's covariance is singular")
-    require(d2 < 50.0, f"the truth is {np.sqrt(d2):.3g} sigma from the cloud's mean (Mahalanobis² {d2:.3g})")
+    rho = float(np.linalg.norm(states[k, :3] - np.asarray(sensor.observer_position(times[k]))))
+    miss = float(np.linalg.norm(cloud.mean[:3] - states[k, :3]))
+    require(miss < 0.5 * rho, f"the cloud's mean position is {miss:.3g} LU from the truth at its epoch (the target "
+                              f"is {rho:.3g} LU away): check the frame (synodic), units (LU) and epoch")
 
 
 def check_reproducible(iod) -> None:
@@ -99,7 +93,7 @@ def check_same_after_pickle(iod) -> None:
 IOD_CHECKS = [
     ("is_iod", check_is_iod),
     ("cloud_shape_epoch_and_units", check_cloud_shape_epoch_and_units),
-    ("cloud_contains_truth", check_cloud_contains_truth),
+    ("cloud_near_truth", check_cloud_near_truth),
     ("reproducible", check_reproducible),
     ("inputs_not_mutated", check_inputs_not_mutated),
     ("too_few_measurements_raise_ioderror", check_too_few_measurements_raise_ioderror),

@@ -1,8 +1,11 @@
-"""A geocentric angles (and optional range) sensor used as a fixture by the conformance suite.
+"""A simple angles (and optional range) sensor used as a fixture by the conformance suite.
 
-The observer sits at the Earth's centre, fixed in the synodic frame; it measures the direction
-of a target as an azimuth (in the synodic x–y plane, from +x towards +y, [0, 2π)) and an
-elevation (from that plane, [-π/2, π/2]). Its components are named "azimuth" and "elevation"
+The observer stands on the Earth's surface at latitude ``latitude_deg`` and turns with the
+Earth (the Earth–Moon plane is taken as the equator; the observer's longitude in the synodic
+frame advances at the Earth's sidereal rate minus the synodic rate, starting on the +x axis).
+It measures the direction of a target as an azimuth (in the synodic x–y plane, from +x towards
++y, [0, 2π)) and an elevation (from that plane, [-π/2, π/2]); there is no horizon, so targets
+are always visible. Its components are named "azimuth" and "elevation"
 (and "range", when ``range_fraction`` > 0) like the built-in ground telescope's, so a filter or
 IOD method that picks components by name works with it. It is not registered as a plugin.
 """
@@ -10,19 +13,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import check_nonnegative, check_positive
+from ..component import check_nonnegative, check_positive, check_range
 from ..errors import ParameterError
 from ..interfaces.schedule import Pass
 from ..interfaces.sensor import Sensor
 from ..measurement import MeasurementSet
-from ..units import ARCSEC_RAD
-from .reference_dynamics import MU_EARTH_MOON, as_states
+from ..units import ARCSEC_RAD, LU_KM, TU_S
+from .reference_dynamics import EARTH_RADIUS_KM, MU_EARTH_MOON, as_states
+
+EARTH_ROTATION_RATE_RAD_S = 7.2921159e-5
+"""Earth's sidereal rotation rate, rad/s."""
 
 __all__ = ["GeocentricAnglesSensor"]
 
 
 class GeocentricAnglesSensor(Sensor):
-    """Angles from the Earth's centre in the synodic frame, 1-sigma ``sigma_arcsec`` each.
+    """Angles in synodic axes from a point on the turning Earth, 1-sigma ``sigma_arcsec`` each.
 
     Parameters
     ----------
@@ -31,14 +37,17 @@ class GeocentricAnglesSensor(Sensor):
     range_fraction : float
         When > 0, a "range" component (LU) with one-sigma ``range_fraction`` x true range is
         added (the IOD-only range of the paper); 0 gives an angles-only sensor.
+    latitude_deg : float
+        Observer latitude, degrees.
     mu : float
         Mass ratio fixing the Earth's position (-mu, 0, 0).
     """
 
     def __init__(self, sigma_arcsec: float = 1.5, range_fraction: float = 0.0,
-                 mu: float = MU_EARTH_MOON):
+                 latitude_deg: float = 30.6, mu: float = MU_EARTH_MOON):
         self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
         self.range_fraction = check_nonnegative(self, "range_fraction", range_fraction)
+        self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.mu = check_positive(self, "mu", mu)
         with_range = self.range_fraction > 0
         self.names = ("azimuth", "elevation", "range") if with_range else ("azimuth", "elevation")
@@ -46,14 +55,24 @@ class GeocentricAnglesSensor(Sensor):
 
     def observer_position(self, t) -> np.ndarray:
         """(3,) for scalar t, (K, 3) for t of shape (K,), LU."""
-        p = np.array([-self.mu, 0.0, 0.0])
         t = np.asarray(t, dtype=float)
-        return p if t.ndim == 0 else np.broadcast_to(p, t.shape + (3,)).copy()
+        lat = np.radians(self.latitude_deg)
+        theta = (EARTH_ROTATION_RATE_RAD_S * TU_S - 1.0) * t
+        r = EARTH_RADIUS_KM / LU_KM
+        p = np.stack([-self.mu + r * np.cos(lat) * np.cos(theta), r * np.cos(lat) * np.sin(theta),
+                      np.full_like(theta, r * np.sin(lat))], axis=-1)
+        return p
+
+    def _observer_rows(self, n: int, t) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        if t.ndim not in (0, 1) or (t.ndim == 1 and t.shape[0] != n):
+            raise ParameterError(f"{self._label()}: t must be a scalar or have one time per state ({n}), got shape {t.shape}")
+        return np.broadcast_to(self.observer_position(t), (n, 3))
 
     def measure(self, states: np.ndarray, t) -> np.ndarray:
         """(N, m): azimuth, elevation [rad] and optionally range [LU]."""
         x = as_states(self, states)
-        rel = x[:, :3] - self.observer_position(0.0)
+        rel = x[:, :3] - self._observer_rows(x.shape[0], t)
         rho = np.linalg.norm(rel, axis=1)
         az = np.mod(np.arctan2(rel[:, 1], rel[:, 0]), 2.0 * np.pi)
         el = np.arcsin(np.clip(rel[:, 2] / rho, -1.0, 1.0))
@@ -65,7 +84,7 @@ class GeocentricAnglesSensor(Sensor):
         x = as_states(self, states)
         ang = np.full(x.shape[0], self.sigma_arcsec * ARCSEC_RAD)
         if self.range_fraction > 0:
-            rho = np.linalg.norm(x[:, :3] - self.observer_position(0.0), axis=1)
+            rho = np.linalg.norm(x[:, :3] - self._observer_rows(x.shape[0], t), axis=1)
             return np.stack([ang, ang, self.range_fraction * rho], axis=1)
         return np.stack([ang, ang], axis=1)
 

@@ -75,7 +75,8 @@ class BoundCheck:
         return f"<check {self.name} of {self.kind} {label(self.component)!r}>"
 
     def _instance(self, component: Any) -> Any:
-        if self.kind in ("orbit", "recorder") and not isinstance(component, type):
+        if self.kind == "orbit" or (self.kind == "recorder" and not callable(getattr(component, "get_params", None))
+                                    and not isinstance(component, type)):
             return component
         try:
             return fresh(component)
@@ -147,11 +148,14 @@ def check_plugin(component_or_class: Any, kind: str | None = None) -> Conformanc
     return report
 
 
-def check_registered(name: str, kind: str | None = None, registry: Any = None) -> list[CheckResult]:
+def check_registered(name: str, kind: str | None = None, registry: Any = None,
+                     params: dict[str, Any] | None = None) -> list[CheckResult]:
     """Look ``name`` up in ``registry`` (default: the process-wide one) and run its checks.
 
-    ``kind`` is needed only when ``name`` is registered under several kinds. Returns one
-    :class:`CheckResult` (name, passed, message) per check; it does not raise on failures.
+    ``kind`` is needed only when ``name`` is registered under several kinds. ``params`` builds
+    the component with those parameters instead of its defaults (for components such as a
+    recorder that need, e.g., an output path). Returns one :class:`CheckResult` (name, passed,
+    message) per check; it does not raise on failures.
     """
     if registry is None:
         from ..registry import default_registry
@@ -165,12 +169,13 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None) -
             raise ParameterError(f"{name!r} is registered as several kinds ({', '.join(kinds)}); say which with kind=")
         kind = kinds[0]
     factory = registry.get(kind, name).factory
-    if not isinstance(factory, type) and callable(factory) and kind not in ("orbit", "recorder"):
+    if params or (not isinstance(factory, type) and callable(factory) and kind not in ("orbit", "recorder")):
         try:
-            factory = registry.create(kind, name)
+            factory = registry.create(kind, name, **(params or {}))
         except Exception as exc:
-            return [CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' with its "
-                                f"default parameters: {describe_exception(exc)}")]
+            how = f"with {params}" if params else "with its default parameters"
+            return [CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
+                                f"{describe_exception(exc)}")]
     return [_run(n, c) for n, c in iter_checks(factory, kind)]
 
 
