@@ -1,0 +1,39 @@
+"""End to end on the 9:2 NRHO: noisy-range kinematic IOD, the paper's Example-1 tasking, the
+CR3BP dynamics and the ground telescope. Over the first two passes each filter's
+moment-matched NEES must lie inside the chi^2(6) 99 % band on most update steps."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from cistrack.run import run_scenario
+from cistrack.scenario import load_scenario
+
+LO, HI = chi2.ppf([0.005, 0.995], 6)
+
+FILTERS = {
+    "pgm": {"name": "pgm", "n_particles": 5000, "n_components": 6},
+    "enkf": {"name": "enkf", "n_members": 1000},
+    "ukf": pytest.param({"name": "ukf"}, marks=pytest.mark.xfail(
+        reason="the UKF's 13 sigma points (velocity spread ~15 km/s from the noisy-range IOD) "
+               "give an overconfident first update: NEES ~85-110 on every step", strict=False)),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("filter_table", list(FILTERS.values()), ids=list(FILTERS))
+def test_filter_is_consistent_over_the_first_two_passes(filter_table):
+    scenario = load_scenario("quick").with_overrides({   # 9:2 NRHO, paper-example-1, 2 days
+        "filter": filter_table,
+        "iod": {"name": "noisy-range", "n_particles": 5000},
+    })
+    result = run_scenario(scenario, seed=1)
+    assert result.summary["status"] == "finished"
+    updates = [r for r in result.rows if r["kind"] == "update"]
+    passes = {r["pass_index"] for r in updates}
+    assert {1.0, 2.0} <= passes
+    nees = np.array([r["nees"] for r in updates])
+    assert np.all(np.isfinite(nees))
+    inside = (nees >= LO) & (nees <= HI)
+    assert inside.mean() >= 2 / 3, nees
