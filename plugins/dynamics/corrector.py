@@ -1,0 +1,208 @@
+"""Single-shooting differential corrector for CR3BP periodic orbits symmetric about the xz-plane.
+
+A periodic orbit that crosses the xz-plane (y = 0) perpendicularly twice per period starts at
+(x0, 0, z0, 0, vy0, 0) and reaches, half a period later, another perpendicular crossing where
+vx = vz = 0. Starting from a guess, the corrector integrates the state together with its 6x6
+state-transition matrix (STM) to the chosen y = 0 crossing and applies Newton's method to the
+free initial coordinates (two of x0, z0, vy0; for planar orbits one of x0, vy0) so that
+vx and vz vanish there, accounting for the shift of the crossing time:
+
+    d(g)/d(X0) = Phi[g, X0] - (dg/dt) / vy_f * Phi[y, X0],   g in {vx, vz}.
+
+Integration: scipy DOP853 at rtol 1e-13 on the numba right-hand side (42 equations); the crossing
+is located on the dense output. Example::
+
+    from cistrack.plugins.dynamics.corrector import correct_symmetric_orbit
+    orb = correct_symmetric_orbit([1.0221, 0, -0.1821, 0, -0.1033, 0], fixed="x", period_guess=1.51)
+    orb.state, orb.period
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.integrate import solve_ivp
+
+from cistrack.errors import CistrackError
+
+from .cr3bp import MU_EARTH_MOON, cr3bp_rhs
+
+__all__ = ["CorrectionError", "CorrectedOrbit", "correct_symmetric_orbit", "propagate_with_stm",
+           "cr3bp_stm_rhs"]
+
+
+class CorrectionError(CistrackError, RuntimeError):
+    """The differential corrector did not converge (or found no crossing to target)."""
+
+
+@dataclass(frozen=True)
+class CorrectedOrbit:
+    """Result of :func:`correct_symmetric_orbit`.
+
+    state : (6,) float   corrected initial state (x0, 0, z0, 0, vy0, 0), LU and VU
+    period : float       full period, TU (twice the time of the targeted crossing)
+    iterations : int     Newton iterations used
+    residual : float     max(|vx|, |vz|) at the half-period crossing, VU
+    """
+
+    state: np.ndarray
+    period: float
+    iterations: int
+    residual: float
+
+
+@njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+def cr3bp_stm_rhs(t, y, p, out):
+    """CR3BP state + STM: y (42,) = state (6) then Phi (6x6, row-major) -> out (42,); p = [mu]."""
+    cr3bp_rhs(t, y, p, out)
+    mu = p[0]
+    xe = y[0] + mu
+    xm = y[0] - 1.0 + mu
+    yy = y[1]
+    z = y[2]
+    r1s = xe * xe + yy * yy + z * z
+    r2s = xm * xm + yy * yy + z * z
+    r13 = r1s * np.sqrt(r1s)
+    r23 = r2s * np.sqrt(r2s)
+    a = (1.0 - mu) / r13
+    b = mu / r23
+    a5 = 3.0 * a / r1s
+    b5 = 3.0 * b / r2s
+    uxx = 1.0 - a - b + a5 * xe * xe + b5 * xm * xm
+    uyy = 1.0 - a - b + (a5 + b5) * yy * yy
+    uzz = -a - b + (a5 + b5) * z * z
+    uxy = (a5 * xe + b5 * xm) * yy
+    uxz = (a5 * xe + b5 * xm) * z
+    uyz = (a5 + b5) * yy * z
+    for c in range(6):
+        p0 = y[6 + c]
+        p1 = y[12 + c]
+        p2 = y[18 + c]
+        p3 = y[24 + c]
+        p4 = y[30 + c]
+        p5 = y[36 + c]
+        out[6 + c] = p3
+        out[12 + c] = p4
+        out[18 + c] = p5
+        out[24 + c] = uxx * p0 + uxy * p1 + uxz * p2 + 2.0 * p4
+        out[30 + c] = uxy * p0 + uyy * p1 + uyz * p2 - 2.0 * p3
+        out[36 + c] = uxz * p0 + uyz * p1 + uzz * p2
+
+
+def _fun(mu: float):
+    params = np.array([mu])
+
+    def f(t, y):
+        out = np.empty(42)
+        cr3bp_stm_rhs(t, y, params, out)
+        return out
+    return f
+
+
+def propagate_with_stm(state, t: float, mu: float = MU_EARTH_MOON, rtol: float = 1e-13,
+                       atol: float = 1e-14) -> tuple[np.ndarray, np.ndarray]:
+    """State (6,) and STM (6, 6) after ``t`` TU (scipy DOP853 at tight tolerance)."""
+    y0 = np.concatenate([np.asarray(state, dtype=float), np.eye(6).ravel()])
+    sol = solve_ivp(_fun(mu), (0.0, float(t)), y0, method="DOP853", rtol=rtol, atol=atol)
+    return sol.y[:6, -1], sol.y[6:, -1].reshape(6, 6)
+
+
+def _crossing(x0: np.ndarray, mu: float, half_guess: float | None, crossing: int | None,
+              rtol: float, atol: float):
+    """State+STM (42,) and time at the targeted y = 0 crossing after t = 0."""
+    f = _fun(mu)
+
+    def event(t, y):
+        return y[1]
+
+    y0 = np.concatenate([x0, np.eye(6).ravel()])
+    if half_guess is not None:
+        t_end = 1.6 * half_guess
+    else:
+        t_end = 50.0
+    want = crossing if crossing is not None else None
+    if want is not None:
+        event.terminal = want + 1  # stop once we have the one we want (plus the start)
+    sol = solve_ivp(f, (0.0, t_end), y0, method="DOP853", rtol=rtol, atol=atol, events=event)
+    times = sol.t_events[0]
+    ys = sol.y_events[0]
+    keep = times > 1e-9
+    times, ys = times[keep], ys[keep]
+    if times.size == 0:
+        raise CorrectionError("differential corrector: the trajectory does not cross y = 0 "
+                              f"within {t_end:g} TU of the guess")
+    if want is not None:
+        if times.size < want:
+            raise CorrectionError(f"differential corrector: only {times.size} crossing(s) of y = 0, "
+                                  f"crossing={want} requested")
+        i = want - 1
+    elif half_guess is not None:
+        i = int(np.argmin(np.abs(times - half_guess)))
+    else:
+        i = 0
+    return times[i], ys[i]
+
+
+def correct_symmetric_orbit(guess, mu: float = MU_EARTH_MOON, *, fixed: str = "x",
+                            period_guess: float | None = None, crossing: int | None = None,
+                            tol: float = 1e-12, max_iter: int = 30, rtol: float = 1e-13,
+                            atol: float = 1e-14) -> CorrectedOrbit:
+    """Correct a guess of a periodic orbit symmetric about the xz-plane.
+
+    Parameters
+    ----------
+    guess : (6,) float
+        (x0, y0, z0, vx0, vy0, vz0) in LU and VU; y0, vx0 and vz0 are set to 0.
+    mu : float
+        Mass ratio.
+    fixed : {"x", "z", "vy"}
+        The initial coordinate held fixed ("z" only for spatial orbits; for planar orbits,
+        z0 = 0, one of x0/vy0 is held and the other corrected).
+    period_guess : float, optional
+        Approximate period (TU): the y = 0 crossing nearest half of it is targeted.
+    crossing : int, optional
+        Target the n-th crossing of y = 0 instead (1 = the first after t = 0).
+    tol : float
+        Convergence threshold on max(|vx|, |vz|) at the crossing (VU).
+
+    Returns
+    -------
+    CorrectedOrbit. Raises :class:`CorrectionError` if Newton's method does not reach ``tol``
+    within ``max_iter`` iterations or the trajectory never crosses y = 0.
+    """
+    x = np.array(guess, dtype=float).reshape(-1)
+    if x.shape != (6,) or not np.all(np.isfinite(x)):
+        raise CorrectionError(f"differential corrector: guess must be 6 finite numbers, got {guess!r}")
+    x[[1, 3, 5]] = 0.0
+    planar = x[2] == 0.0
+    if fixed not in ("x", "z", "vy"):
+        raise CorrectionError(f"differential corrector: fixed must be 'x', 'z' or 'vy', got {fixed!r}")
+    if planar and fixed == "z":
+        raise CorrectionError("differential corrector: a planar guess (z0 = 0) needs fixed='x' or 'vy'")
+    coord = {"x": 0, "z": 2, "vy": 4}
+    candidates = [0, 4] if planar else [0, 2, 4]
+    free = [i for i in candidates if i != coord[fixed]]
+    targets = [3] if planar else [3, 5]
+    half = None if period_guess is None else 0.5 * float(period_guess)
+    residual = np.inf
+    for it in range(max_iter + 1):
+        tc, yc = _crossing(x, mu, half, crossing, rtol, atol)
+        g = yc[targets]
+        residual = float(np.max(np.abs(g)))
+        if residual <= tol:
+            return CorrectedOrbit(state=x.copy(), period=2.0 * tc, iterations=it, residual=residual)
+        if it == max_iter:
+            break
+        phi = yc[6:].reshape(6, 6)
+        fdot = np.empty(6)
+        cr3bp_rhs(tc, np.ascontiguousarray(yc[:6]), np.array([mu]), fdot)
+        jac = phi[np.ix_(targets, free)] - np.outer(fdot[targets] / yc[4], phi[1, free])
+        dx = np.linalg.lstsq(jac, -g, rcond=None)[0]
+        x[free] += dx
+        if not np.all(np.isfinite(x)):
+            break
+        half = tc  # follow the crossing we are converging on
+    raise CorrectionError(f"differential corrector did not converge: residual {residual:.3e} VU after "
+                          f"{max_iter} iterations (tol {tol:g}); try a better guess, another 'fixed' "
+                          "coordinate, or period_guess/crossing to target the right crossing")
