@@ -155,10 +155,10 @@ class GaussianMixture:
         chol = self.cholesky()
         d = self.dim
         out = np.empty((x.shape[0], self.n_components))
+        linv = np.linalg.inv(chol)  # (M, d, d) inverse Cholesky factors, one batched call
         for i in range(self.n_components):  # loop over components (few), vectorised over points
-            diff = x - self.means[i]
-            sol = np.linalg.solve(chol[i], diff.T)  # (d, N); triangular but generic solve is fine
-            maha = np.sum(sol * sol, axis=0)
+            sol = (x - self.means[i]) @ linv[i].T  # whitened points (N, d)
+            maha = np.einsum("ij,ij->i", sol, sol)
             logdet = 2.0 * np.sum(np.log(np.diagonal(chol[i])))
             out[:, i] = -0.5 * (maha + logdet + d * _LOG_2PI)
         return out
@@ -166,8 +166,12 @@ class GaussianMixture:
     def logpdf(self, x: np.ndarray) -> np.ndarray:
         """Log density of points ``x`` (N, d) -> (N,)."""
         with np.errstate(divide="ignore"):
-            logw = np.log(self.weights)
-        return logsumexp(self.component_logpdf(x) + logw, axis=1)
+            a = self.component_logpdf(x) + np.log(self.weights)
+        if a.shape[1] == 1:
+            return a[:, 0]
+        m = np.max(a, axis=1, keepdims=True)
+        m = np.where(np.isfinite(m), m, 0.0)
+        return (m + np.log(np.sum(np.exp(a - m), axis=1, keepdims=True)))[:, 0]
 
     def responsibilities(self, x: np.ndarray) -> np.ndarray:
         """Posterior component probabilities of each point, (N, M)."""

@@ -18,10 +18,11 @@ LOG_JACOBIAN_KM: float = 3.0 * np.log(LU_KM) + 3.0 * np.log(VU_KMS)
 _SCALE = np.array([LU_KM] * 3 + [VU_KMS] * 3)
 
 
-def entropy(belief: Belief) -> float:
+def entropy(belief: Belief, sample_logpdf: np.ndarray | None = None) -> float:
     """The paper's entropy estimate H = -(1/N) sum log p(x_i) over the belief's samples, with p
-    the belief's mixture density of the state in km and km/s (nats)."""
-    lp = belief.mixture.logpdf(belief.samples.states)
+    the belief's mixture density of the state in km and km/s (nats). ``sample_logpdf`` (N,)
+    may pass the nondimensional log density of the samples when it is already known."""
+    lp = belief.mixture.logpdf(belief.samples.states) if sample_logpdf is None else sample_logpdf
     if belief.samples.weights is not None:
         h = -float(belief.samples.weights @ lp)
     else:
@@ -53,8 +54,9 @@ def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
     mean = mix.mean
     cov = mix.covariance
     sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * _SCALE
+    lp_samples = mix.logpdf(belief.samples.states)
     out: dict[str, float] = {
-        "entropy": entropy(belief),
+        "entropy": entropy(belief, lp_samples),
         "n_components": float(mix.n_components),
         "n_samples": float(len(belief.samples)),
         "sigma_x_km": sig[0], "sigma_y_km": sig[1], "sigma_z_km": sig[2],
@@ -69,7 +71,6 @@ def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
         out["nees"] = nees(e, cov)
         lp_truth = float(mix.logpdf(np.asarray(truth, dtype=float)[None])[0])
         out["truth_loglik"] = lp_truth - LOG_JACOBIAN_KM
-        lp_samples = mix.logpdf(belief.samples.states)
         w = belief.samples.weights
         above = (lp_samples > lp_truth).astype(float)
         out["hdr_level"] = float(above.mean() if w is None else w @ above)

@@ -56,6 +56,7 @@ class RunContext:
     iod_cloud: ParticleCloud
     output_dir: Path | None = None
     truth_dynamics: Dynamics | None = None
+    truth_cache: dict[float, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
     def has_truth(self) -> bool:
@@ -65,12 +66,24 @@ class RunContext:
         """Truth state (6,) at time t (TU) by propagation from the nearest grid point."""
         if not self.has_truth:
             return None
+        if float(t) in self.truth_cache:
+            return self.truth_cache[float(t)].copy()
         k = int(np.argmin(np.abs(self.truth_times - t)))
         if abs(self.truth_times[k] - t) < 1e-12:
             return self.truth_states[k].copy()
         dyn = self.truth_dynamics or self.dynamics
         prop = dyn.propagate(self.truth_states[k][None], float(self.truth_times[k]), float(t))
         return prop.final[0].copy()
+
+    def precompute_truth(self, times) -> None:
+        """Propagate the truth to all ``times`` (TU) in one call so truth_at(t) is a look-up."""
+        if not self.has_truth or len(times) == 0:
+            return
+        ts = np.unique(np.asarray(times, dtype=float))
+        dyn = self.truth_dynamics or self.dynamics
+        prop = dyn.propagate(self.truth_states[0][None], float(self.truth_times[0]), ts)
+        for t, x in zip(ts, prop.states[:, 0, :]):
+            self.truth_cache[float(t)] = x.copy()
 
 
 @dataclass
