@@ -11,7 +11,6 @@ import pytest
 
 from cistrack import units
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Schedule
 from cistrack.registry import load_registry
 from cistrack.results import read_steps
 from cistrack.run import run_scenario
@@ -20,21 +19,6 @@ from cistrack.scenario import parse_scenario
 NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
 N_PARTICLES = 300
 SMALL_MAX_POINTS = 50
-
-
-class EveryFewMinutes(Schedule):
-    """Test tasking: ``count`` measurements ``interval_minutes`` apart from the start of the
-    first pass (enough for the kinematic IOD's fit), nothing afterwards."""
-
-    def __init__(self, interval_minutes: float = 15.0, count: int = 24) -> None:
-        self.interval_minutes = interval_minutes
-        self.count = count
-
-    def plan(self, passes, t_end, rng):
-        p = passes[0]
-        dt = float(units.hours_to_tu(self.interval_minutes / 60.0))
-        t = p.start + dt * np.arange(self.count)
-        return t[t <= min(p.end, t_end)]
 
 
 @dataclass
@@ -87,13 +71,12 @@ class RecordedRun:
 
 
 def small_scenario(registry):
-    registry.add("schedule", "test-every-few-minutes", EveryFewMinutes)
     data = {
-        "name": "recorder-test", "epoch": "2026-01-01T00:00:00Z", "seed": 3, "duration_days": 1.5,
+        "name": "recorder-test", "epoch": "2026-01-01T00:00:00Z", "seed": 3, "duration_days": 1.0,
         "truth": {"state_km": [float(v) for v in units.state_to_km(NRHO_9_2)]},
         "dynamics": {"name": "cr3bp"},
         "sensor": {"name": "ground-telescope", "measure_range": True},
-        "schedule": {"name": "test-every-few-minutes"},
+        "schedule": {"name": "every", "interval_minutes": 15.0, "end_hours": 6.0},
         "iod": {"name": "noisy-range", "n_particles": N_PARTICLES},
         "filter": {"name": "pgm", "n_particles": N_PARTICLES, "n_components": 3},
     }
