@@ -51,6 +51,7 @@ import os
 import sys
 import tempfile
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from types import ModuleType
 from typing import Any, ClassVar
@@ -63,7 +64,8 @@ from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 
 from . import integrator_dop853
 
-__all__ = ["CompiledDynamics", "PropagationError", "StateError", "kernels_for", "kernel_cache_dir"]
+__all__ = ["CompiledDynamics", "PropagationError", "StateError", "kernels_for", "kernel_cache_dir",
+           "num_threads"]
 
 
 class StateError(CistrackError, ValueError):
@@ -159,10 +161,51 @@ def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
         if where is None or mod is None:  # not importable or no writable directory: in memory
             src = integrator_dop853.generate_source("", dim, cache=False, title="(in memory)")
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
-            mod.__dict__["rhs"] = rhs
+            mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
             exec(compile(src, f"<cistrack kernel for {rhs!r}>", "exec"), mod.__dict__)
         _KERNELS[key] = mod
         return mod
+
+
+# -- threads ---------------------------------------------------------------------------------------
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_PID = -1
+
+
+def num_threads() -> int:
+    """Worker threads used by propagate: ``$CISTRACK_NUM_THREADS``, else numba's thread count
+    (``$NUMBA_NUM_THREADS``, default: the CPUs this process may use)."""
+    env = os.environ.get("CISTRACK_NUM_THREADS")
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            pass
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def _pool(workers: int) -> ThreadPoolExecutor:
+    global _POOL, _POOL_PID
+    if _POOL is None or _POOL_PID != os.getpid() or _POOL._max_workers != workers:
+        _POOL = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="cistrack-propagate")
+        _POOL_PID = os.getpid()
+    return _POOL
+
+
+def _run_chunks(kernel, n: int, args: tuple) -> None:
+    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the worker threads (GIL released)."""
+    workers = min(num_threads(), n)
+    if workers <= 1 or n < 32:
+        kernel(0, n, *args)
+        return
+    # several chunks per worker so that uneven particles (close approaches) balance out
+    n_chunks = min(n, workers * 8)
+    edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
+    futures = [_pool(workers).submit(kernel, int(a), int(b), *args)
+               for a, b in zip(edges[:-1], edges[1:]) if b > a]
+    for fut in futures:
+        fut.result()
 
 
 # -- the base class ------------------------------------------------------------------------------
@@ -258,9 +301,9 @@ class CompiledDynamics(Dynamics):
         status = np.zeros(n, dtype=np.int64)
         pos, rad = self._bodies_arrays()
         if n:
-            self._kernels().propagate_kernel(arr, self._params(), t0, np.ascontiguousarray(t_out),
-                                             rtol, atol, pos, rad, int(self.max_steps), 0.0,
-                                             out, impact_body, impact_time, status)
+            _run_chunks(self._kernels().propagate_kernel, n,
+                        (arr, self._params(), t0, np.ascontiguousarray(t_out), rtol, atol, pos, rad,
+                         int(self.max_steps), 0.0, out, impact_body, impact_time, status))
         failed = status >= 2
         if np.any(failed):
             limit = int(np.sum(status == 2))

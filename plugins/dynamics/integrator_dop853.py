@@ -11,10 +11,11 @@ closure, defeats numba's cache).
 
 Generated entry points
 ----------------------
-``propagate_kernel(y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps, h_init,
-out, impact_body, impact_time, status)``
-    Integrates every row of ``y0`` (N, DIM) in parallel (``prange``; one particle's whole
-    integration per iteration) to each of ``times`` (K,), writing ``out`` (K, N, DIM). Every
+``propagate_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps,
+h_init, out, impact_body, impact_time, status)``
+    Integrates rows ``i0:i1`` of ``y0`` (N, DIM), one particle's whole integration after the
+    other, to each of ``times`` (K,), writing ``out`` (K, N, DIM). It releases the GIL
+    (``nogil=True``): the caller runs disjoint row ranges on several threads. Every
     particle has its own step size and its own error control (the RMS of the particle's DIM
     components, Hairer's combined 5th/3rd-order estimate). Steps are clipped to land exactly
     on output times. After each accepted step the position (first three components) is tested
@@ -50,49 +51,43 @@ SAFE_FASTMATH = frozenset({"contract", "arcp", "nsz", "reassoc"})
 """LLVM fast-math flags that keep NaN/inf semantics (the step control relies on them)."""
 
 
-def _combo(coefs, dest: str, base: str | None, scale: str | None, indent: str) -> list[str]:
-    """Lines computing ``dest[j] = base[j] + scale * sum_m coefs[m] * k[m, j]`` for all j."""
-    terms = [f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(coefs) if c != 0.0]
-    expr = " + ".join(terms) if terms else "0.0"
-    if scale is not None:
-        expr = f"{scale} * ({expr})"
-    if base is not None:
-        expr = f"{base}[j] + {expr}"
-    return [f"{indent}for j in range(DIM):", f"{indent}    {dest}[j] = {expr}"]
+def _lin(coefs, name: str, j: int) -> str:
+    """``c0*k0_j + c3*k3_j + ...`` over the non-zero coefficients (``0.0`` if none)."""
+    terms = [f"{float(c)!r} * {name}{m}_{j}" for m, c in enumerate(coefs) if c != 0.0]
+    return " + ".join(terms) if terms else "0.0"
 
 
-def _rk_step_source() -> str:
-    """``_rk_step(t, h, y, params, k, ytmp, ynew)``: stages 2..12, the new state, f at it."""
-    A, B, C = TABLEAU["A"], TABLEAU["B"], TABLEAU["C"]
-    lines = ["@njit(cache=CACHE, fastmath=FASTMATH)",
-             "def _rk_step(t, h, y, params, k, ytmp, ynew):",
-             "    # k[0] holds f(t, y) on entry; k[1..12] are overwritten."]
+def _rk_step_source(dim: int) -> str:
+    """``_rk_step(t, h, y, k0, params, ytmp, ynew, f, rtol, atol) -> err``.
+
+    One DOP853 step from (t, y) with f(t, y) = k0: writes the 8th-order solution to ``ynew`` and
+    f(t + h, ynew) to ``f`` (the next step's k0), returns Hairer's error norm. Every stage
+    derivative lives in a local scalar, so the only memory traffic is the rhs arguments.
+    """
+    A, B, C, E3, E5 = (TABLEAU[k] for k in ("A", "B", "C", "E3", "E5"))
+    L = ["@njit(cache=CACHE, fastmath=FASTMATH)",
+         "def _rk_step(t, h, y, k0, params, ytmp, ynew, f, rtol, atol):"]
+    L += [f"    y_{j} = y[{j}]" for j in range(dim)]
+    L += [f"    k0_{j} = k0[{j}]" for j in range(dim)]
     for s in range(1, N_STAGES):
-        lines += _combo(A[s, :s], "ytmp", "y", "h", "    ")
-        lines.append(f"    rhs(t + {float(C[s])!r} * h, ytmp, params, k[{s}])")
-    lines += _combo(B, "ynew", "y", "h", "    ")
-    lines.append(f"    rhs(t + h, ynew, params, k[{N_STAGES}])")
-    return "\n".join(lines) + "\n"
-
-
-def _error_source() -> str:
-    """``_error_norm(h, y, ynew, k, rtol, atol)``: Hairer's combined DOP853 error norm."""
-    e5 = " + ".join(f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(TABLEAU["E5"]) if c != 0.0)
-    e3 = " + ".join(f"{float(c)!r} * k[{m}, j]" for m, c in enumerate(TABLEAU["E3"]) if c != 0.0)
-    return f'''@njit(cache=CACHE, fastmath=FASTMATH)
-def _error_norm(h, y, ynew, k, rtol, atol):
-    s5 = 0.0
-    s3 = 0.0
-    for j in range(DIM):
-        sc = atol + rtol * max(abs(y[j]), abs(ynew[j]))
-        d5 = ({e5}) / sc
-        d3 = ({e3}) / sc
-        s5 += d5 * d5
-        s3 += d3 * d3
-    if s5 == 0.0 and s3 == 0.0:
-        return 0.0
-    return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * DIM)
-'''
+        L += [f"    ytmp[{j}] = y_{j} + h * ({_lin(A[s, :s], 'k', j)})" for j in range(dim)]
+        L.append(f"    rhs(t + {float(C[s])!r} * h, ytmp, params, f)")
+        L += [f"    k{s}_{j} = f[{j}]" for j in range(dim)]
+    L += [f"    yn_{j} = y_{j} + h * ({_lin(B, 'k', j)})" for j in range(dim)]
+    L += [f"    ynew[{j}] = yn_{j}" for j in range(dim)]
+    L.append("    rhs(t + h, ynew, params, f)")
+    L += [f"    k12_{j} = f[{j}]" for j in range(dim)]
+    L += ["    s5 = 0.0", "    s3 = 0.0"]
+    for j in range(dim):
+        L += [f"    sc = atol + rtol * max(abs(y_{j}), abs(yn_{j}))",
+              f"    d5 = ({_lin(E5, 'k', j)}) / sc",
+              f"    d3 = ({_lin(E3, 'k', j)}) / sc",
+              "    s5 += d5 * d5",
+              "    s3 += d3 * d3"]
+    L += ["    if s5 == 0.0 and s3 == 0.0:",
+          "        return 0.0",
+          "    return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * DIM)"]
+    return "\n".join(L) + "\n"
 
 
 _BODY = '''
@@ -117,7 +112,7 @@ def _surface_gap(y, body_pos, body_rad, b):
 
 
 @njit(cache=CACHE, fastmath=FASTMATH)
-def _locate_impact(t, h, y, params, k, ytmp, yout, body_pos, body_rad, b):
+def _locate_impact(t, h, y, k0, params, ytmp, yout, f, body_pos, body_rad, b):
     """Fraction s of the step h at which y crosses body b's surface; yout = state there."""
     s_lo = 0.0
     g_lo = _surface_gap(y, body_pos, body_rad, b)
@@ -133,7 +128,7 @@ def _locate_impact(t, h, y, params, k, ytmp, yout, body_pos, body_rad, b):
         s = (s_lo * g_hi - s_hi * g_lo) / (g_hi - g_lo)
         if not (s > s_lo and s < s_hi):
             s = 0.5 * (s_lo + s_hi)
-        _rk_step(t, s * h, y, params, k, ytmp, yout)
+        _rk_step(t, s * h, y, k0, params, ytmp, yout, f, 1.0, 1.0)
         g = _surface_gap(yout, body_pos, body_rad, b)
         if g > 0.0:
             s_lo = s
@@ -197,9 +192,10 @@ def _freeze(i, iout, y, out, nt):
 def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
                    max_steps, h_init, out, impact_body, impact_time, status):
     nt = times.shape[0]
-    k = np.empty((13, DIM))
     y = np.empty(DIM)
+    k0 = np.empty(DIM)
     ynew = np.empty(DIM)
+    f = np.empty(DIM)
     ytmp = np.empty(DIM)
     for j in range(DIM):
         y[j] = y0[i, j]
@@ -218,12 +214,12 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
         iout += 1
     if iout == nt:
         return
-    rhs(t, y, params, k[0])
+    rhs(t, y, params, k0)
     span = abs(times[nt - 1] - t0)
     if h_init > 0.0:
         h = min(h_init, span)
     else:
-        h = _initial_step(t, y, k[0], direction, params, rtol, atol, ytmp, k[12], span)
+        h = _initial_step(t, y, k0, direction, params, rtol, atol, ytmp, f, span)
     hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
     nsteps = 0
     rejected = False
@@ -236,8 +232,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
             hstep = remaining
             last = True
         hs = direction * hstep
-        _rk_step(t, hs, y, params, k, ytmp, ynew)
-        err = _error_norm(hs, y, ynew, k, rtol, atol)
+        err = _rk_step(t, hs, y, k0, params, ytmp, ynew, f, rtol, atol)
         nsteps += 1
         if err <= 1.0:
             if err == 0.0:
@@ -249,7 +244,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
             rejected = False
             b = _inside(ynew, body_pos, body_rad)
             if b >= 0:
-                s = _locate_impact(t, hs, y, params, k, ytmp, ynew, body_pos, body_rad, b)
+                s = _locate_impact(t, hs, y, k0, params, ytmp, ynew, f, body_pos, body_rad, b)
                 impact_body[i] = b
                 impact_time[i] = t + s * hs
                 status[i] = 1
@@ -261,7 +256,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
                 t = t + hs
             for j in range(DIM):
                 y[j] = ynew[j]
-                k[0, j] = k[12, j]
+                k0[j] = f[j]
             if last:
                 while iout < nt and times[iout] == tout:
                     for j in range(DIM):
@@ -287,14 +282,13 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
             return
 
 
-@njit(cache=CACHE, parallel=PARALLEL, fastmath=FASTMATH)
-def propagate_kernel(y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps, h_init,
-                     out, impact_body, impact_time, status):
-    n = y0.shape[0]
+@njit(cache=CACHE, nogil=True, fastmath=FASTMATH)
+def propagate_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_rad, max_steps,
+                     h_init, out, impact_body, impact_time, status):
     direction = 1.0
     if times[times.shape[0] - 1] < t0:
         direction = -1.0
-    for i in prange(n):
+    for i in range(i0, i1):
         _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
                        max_steps, h_init, out, impact_body, impact_time, status)
 
@@ -306,7 +300,7 @@ def derivatives_kernel(t, states, params, out):
 '''
 
 
-def generate_source(rhs_import: str, dim: int, *, cache: bool = True, parallel: bool = True,
+def generate_source(rhs_import: str, dim: int, *, cache: bool = True,
                     fastmath=SAFE_FASTMATH, title: str = "") -> str:
     """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
 
@@ -317,18 +311,20 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, parallel: 
         ``""`` when the caller injects ``rhs`` into the module's globals itself.
     dim : int
         State dimension (6 for position and velocity).
-    cache, parallel : bool
-        numba ``cache=`` and ``parallel=`` of the generated functions.
+    cache : bool
+        numba ``cache=`` of the generated functions.
     fastmath : set of str or bool
         numba ``fastmath=`` flags; the default keeps NaN and inf semantics.
     """
     fm = ("{" + ", ".join(repr(f) for f in sorted(fastmath)) + "}") if not isinstance(fastmath, bool) else repr(fastmath)
     header = (f'"""Generated by cistrack.plugins.dynamics.integrator_dop853 {title}: do not edit."""\n'
               "import numpy as np\n"
-              "from numba import njit, prange\n"
-              f"{rhs_import}\n\n"
+              "from numba import njit\n"
+              f"{rhs_import}\n"
+              "# Inline the model into the integrator (numba IR inlining): no call overhead and no\n"
+              "# reference counting of the array arguments per stage.\n"
+              "rhs = njit(inline='always', fastmath=rhs.targetoptions.get('fastmath', False))(rhs.py_func)\n\n"
               f"DIM = {int(dim)}\n"
               f"CACHE = {bool(cache)!r}\n"
-              f"PARALLEL = {bool(parallel)!r}\n"
               f"FASTMATH = {fm}\n\n\n")
-    return header + _rk_step_source() + "\n\n" + _error_source() + _BODY
+    return header + _rk_step_source(dim) + _BODY
