@@ -51,8 +51,8 @@ from cistrack.hookspecs import hookimpl
 from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .scene import (
-    EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, position_ellipsoids,
-    primary_positions, system_mu,
+    EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, most_likely_component,
+    position_ellipsoids, primary_positions, system_mu,
 )
 
 __all__ = ["RerunRecorder", "ViewerUnavailableError", "subsample_indices", "LOOPBACK",
@@ -371,7 +371,7 @@ class RerunRecorder(Component):
             cls = np.where(lab < 0, UNASSIGNED_CLASS, lab).astype(np.uint16)
         elif mixture is not None and mixture.n_components > 1:
             full = states if keep is None else states[keep]
-            cls = np.argmax(mixture.responsibilities(full), axis=1).astype(np.uint16)
+            cls = most_likely_component(full, mixture).astype(np.uint16)
         else:
             cls = np.zeros(pos.shape[0], dtype=np.uint16)
         rec.log("world/particles", rr.Points3D((pos * LU_KM).astype(np.float32), class_ids=cls,

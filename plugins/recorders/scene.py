@@ -5,6 +5,7 @@ Everything here is plain numpy: the rerun recorder turns these arrays into arche
 from __future__ import annotations
 
 import numpy as np
+from scipy.linalg import solve_triangular
 from scipy.optimize import brentq
 
 from cistrack.errors import ParameterError
@@ -13,7 +14,7 @@ from cistrack.units import LU_KM
 __all__ = [
     "EARTH_MOON_MU", "EARTH_RADIUS_KM", "MOON_RADIUS_KM", "LIBRATION_NAMES",
     "libration_points", "primary_positions", "system_mu", "position_ellipsoids",
-    "rotation_quaternions",
+    "rotation_quaternions", "most_likely_component",
 ]
 
 EARTH_MOON_MU: float = 1.2150582e-2
@@ -133,3 +134,33 @@ def position_ellipsoids(means: np.ndarray, covariances: np.ndarray,
     v[:, :, 2] *= np.where(det < 0, -1.0, 1.0)[:, None]  # make every eigenbasis a proper rotation
     half = n_sigma * np.sqrt(w) * LU_KM
     return mu * LU_KM, half, rotation_quaternions(v)
+
+
+def most_likely_component(points: np.ndarray, mixture) -> np.ndarray:
+    """Index of the component with the largest posterior probability for each point.
+
+    Parameters
+    ----------
+    points : (N, d) float, in the mixture's units
+    mixture : cistrack.belief.GaussianMixture of dimension d
+
+    Returns
+    -------
+    (N,) int
+        argmax_i of w_i N(x; mu_i, P_i), one (N, d) x (d, d) product per component (used to
+        colour particles whose filter gave no labels).
+    """
+    x = np.asarray(points, dtype=float)
+    chol = mixture.cholesky()
+    best = np.full(x.shape[0], -np.inf)
+    label = np.zeros(x.shape[0], dtype=np.int64)
+    with np.errstate(divide="ignore"):
+        logw = np.log(mixture.weights)
+    for i in range(mixture.n_components):  # few components; vectorised over points
+        linv = solve_triangular(chol[i], np.eye(chol.shape[1]), lower=True, check_finite=False)
+        z = (x - mixture.means[i]) @ linv.T
+        score = logw[i] - 0.5 * np.einsum("ij,ij->i", z, z) - np.sum(np.log(np.diagonal(chol[i])))
+        better = score > best
+        best[better] = score[better]
+        label[better] = i
+    return label

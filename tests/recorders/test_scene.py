@@ -70,3 +70,14 @@ def test_subsample_is_deterministic_sorted_and_distinct():
 
 def test_subsample_keeps_everything_when_under_the_cap():
     assert subsample_indices(100, 100) is None
+
+
+def test_most_likely_component_agrees_with_the_mixture_responsibilities(rng):
+    from cistrack.belief import GaussianMixture
+    from cistrack.plugins.recorders.scene import most_likely_component
+
+    a = rng.standard_normal((4, 6, 6))
+    mix = GaussianMixture(rng.dirichlet(np.ones(4)), rng.standard_normal((4, 6)),
+                          a @ np.swapaxes(a, 1, 2) + 0.1 * np.eye(6))
+    x, _ = mix.sample(2000, rng)
+    np.testing.assert_array_equal(most_likely_component(x, mix), np.argmax(mix.responsibilities(x), axis=1))
