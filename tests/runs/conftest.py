@@ -19,5 +19,5 @@ duration_days = {days}
 @pytest.fixture
 def tiny_study(tmp_path) -> Path:
     p = tmp_path / "tiny.toml"
-    p.write_text(STUDY.format(seeds="[1, 2, 3]", days=1.0))
+    p.write_text(STUDY.format(seeds="[1, 2, 3]", days=1.4))
     return p

@@ -16,7 +16,7 @@ from cistrack.scenario import load_scenario
 
 
 def _quick(**over):
-    return load_scenario("quick").with_overrides({"duration_days": 1.0, **over})
+    return load_scenario("quick").with_overrides({"duration_days": 1.4, **over})
 
 
 def test_same_scenario_and_seed_give_the_same_numbers():
