@@ -302,7 +302,8 @@ class RerunRecorder(Component):
             raise ViewerUnavailableError(
                 "cannot start the native rerun viewer: this machine has no display (DISPLAY and "
                 "WAYLAND_DISPLAY are unset). Use --rerun out.rrd and open it elsewhere with "
-                "`rerun out.rrd`, or --rerun-serve and connect a viewer to the printed URL.")
+                "`rerun --bind 127.0.0.1 out.rrd` (or in a browser: `rerun --web-viewer --bind 127.0.0.1 "
+                "out.rrd`), or use --rerun-serve and connect a viewer to the printed URL.")
         return exe
 
     def _start_viewer(self) -> str:
