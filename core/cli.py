@@ -40,9 +40,11 @@ def cmd_run(args) -> int:
     seed = scen.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("runs") / f"{scen.name}__seed{seed}"
     observers = []
+    recorder = None
     if args.rerun or args.rerun_serve or args.rerun_spawn:
-        observers.append(reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
-                                    spawn=args.rerun_spawn, max_points=args.max_points))
+        recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
+                              spawn=args.rerun_spawn, max_points=args.max_points)
+        observers.append(recorder)
     _eprint(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
     _eprint(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
             f"{scen.duration_days:g} days; results -> {out}")
@@ -63,7 +65,20 @@ def cmd_run(args) -> int:
                   f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
     print(f"  results: {out}/steps.parquet, {out}/manifest.json")
     if args.rerun:
-        print(f"  rerun recording: {args.rerun}  (open with: rerun {args.rerun})")
+        print(f"  rerun recording: {args.rerun}  (open with: rerun --bind 127.0.0.1 {args.rerun})")
+    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
+        uri = getattr(recorder, "server_uri", None)
+        if uri:
+            print(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
+        print("  the viewer stays available until you press Ctrl-C", flush=True)
+        try:
+            import time
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            recorder.close()
     return 0 if s["status"] == "finished" else 3
 
 
@@ -108,7 +123,7 @@ def cmd_study(args) -> int:
 
     if args.study_cmd == "run":
         res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
-                              progress=not args.quiet)
+                              progress=not args.quiet, rerun_dir=args.rerun)
         print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
               f"{res['failed']} failed -> {res['out_dir']}")
         return 0 if res["failed"] == 0 else 3
@@ -146,6 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--out", default=None, help="study directory (default studies_out/<name>)")
     sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
+    sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
     sr.add_argument("--quiet", action="store_true")
     sr.set_defaults(func=cmd_study)
     srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")

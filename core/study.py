@@ -58,6 +58,7 @@ class RunSpec:
     scenario_name: str
     filter_label: str
     iod_label: str
+    rerun_path: str | None = None
 
 
 def builtin_studies() -> dict[str, str]:
@@ -167,8 +168,12 @@ def execute_run(spec: RunSpec) -> dict:
 
     reg = default_registry()
     scen = load_scenario(spec.scenario, reg).with_overrides(spec.overrides, reg)
+    observers = []
+    if spec.rerun_path:
+        observers.append(reg.create("recorder", "rerun", path=spec.rerun_path))
     with threadpool_limits(1):  # one BLAS/OpenMP thread: identical numbers whichever worker runs it
-        res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id)
+        res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id,
+                           observers=observers)
     return res.summary
 
 
@@ -214,9 +219,18 @@ def _is_done(out_dir: str) -> bool:
 
 
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
-              dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True) -> dict:
-    """Run every missing run of a study. Returns counts and the study directory."""
+              dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
+              rerun_dir: str | Path | None = None) -> dict:
+    """Run every missing run of a study. Returns counts and the study directory.
+
+    ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
+    """
+    import dataclasses
+
     data, specs, out = plan_runs(path_or_name, out_dir)
+    if rerun_dir is not None:
+        Path(rerun_dir).mkdir(parents=True, exist_ok=True)
+        specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data}, indent=2, default=str))
     todo = [s for s in specs if not _is_done(s.out_dir)]

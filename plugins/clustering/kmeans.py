@@ -31,13 +31,20 @@ class KMeansClusterer(Clusterer):
     n_threads : int
         OpenMP threads for scikit-learn (0 = all cores); 1 avoids oversubscription when runs
         are parallelised across processes.
+    max_fit_samples : int
+        Lloyd iterations run on at most this many randomly chosen particles (drawn from the
+        rng); every particle is then labelled by its nearest centroid. 0 fits on all particles.
+        Centroids of a few clusters are estimated well from a few thousand points, and the
+        filter clusters at every step, so this is its largest saving (about 4x at N = 10,000).
     """
 
-    def __init__(self, n_components: int = 6, n_init: int = 1, max_iter: int = 30, n_threads: int = 1):
+    def __init__(self, n_components: int = 6, n_init: int = 1, max_iter: int = 30, n_threads: int = 1,
+                 max_fit_samples: int = 2500):
         self.n_components = check_int(self, "n_components", n_components, minimum=1)
         self.n_init = check_int(self, "n_init", n_init, minimum=1)
         self.max_iter = check_int(self, "max_iter", max_iter, minimum=1)
         self.n_threads = check_int(self, "n_threads", n_threads, minimum=0)
+        self.max_fit_samples = check_int(self, "max_fit_samples", max_fit_samples, minimum=0)
 
     def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Labels (N,) in [0, M) for particles ``x`` (N, d)."""
@@ -47,9 +54,18 @@ class KMeansClusterer(Clusterer):
             return np.zeros(x.shape[0], dtype=np.intp)
         km = KMeans(n_clusters=k, n_init=self.n_init, max_iter=self.max_iter,
                     random_state=sklearn_seed(rng))
+        z = standardize(x)
+        subsample = 0 < self.max_fit_samples < z.shape[0] and self.max_fit_samples >= 10 * k
+        fit = z[rng.choice(z.shape[0], size=self.max_fit_samples, replace=False)] if subsample else z
         with warnings.catch_warnings(), limited_threads(self.n_threads):
             warnings.simplefilter("ignore", ConvergenceWarning)
-            labels = km.fit_predict(standardize(x))
+            km.fit(fit)
+        if subsample:
+            c = km.cluster_centers_
+            d2 = (np.einsum("ij,ij->i", z, z)[:, None] - 2.0 * z @ c.T + np.einsum("ij,ij->i", c, c)[None, :])
+            labels = np.argmin(d2, axis=1)
+        else:
+            labels = km.labels_
         return compact_labels(labels)
 
 
