@@ -13,9 +13,15 @@ __all__ = ["DYNAMICS_CHECKS"]
 
 SHORT_TU = float(hours_to_tu(6.0))
 """Propagation span of the checks: 6 hours."""
-VECTOR_RTOL = 1e-7
-"""Agreement required between one call on N particles and N calls on one (relative)."""
-VECTOR_ATOL = 1e-9
+VECTOR_RTOL = 1e-10
+"""Agreement required between one call on N particles and N calls on one (relative). With
+per-particle error control the two are the same computation; a stacked integrator whose error
+norm mixes particles differs at the level of its tolerance."""
+VECTOR_ATOL = 1e-12
+CONSISTENT_RTOL = 1e-7
+"""Agreement required between an intermediate output time and a direct propagation to it
+(the step sequences differ, so this is at the level of the integration tolerance)."""
+CONSISTENT_ATOL = 1e-9
 
 
 def _propagate(dyn: Dynamics, x: np.ndarray, t0: float, times) -> Propagation:
@@ -78,7 +84,7 @@ def check_propagate_shapes(dyn) -> None:
 
 def check_propagate_vectorised_matches_loop(dyn) -> None:
     """Each particle's result does not depend on the others (per-particle error control)."""
-    x = nrho_states(5)
+    x = nrho_states(12)
     whole = _propagate(dyn, x, 0.0, SHORT_TU).final
     rows = np.concatenate([_propagate(dyn, x[i:i + 1], 0.0, SHORT_TU).final for i in range(len(x))])
     ok, diff = close(whole, rows, VECTOR_RTOL, VECTOR_ATOL)
@@ -91,7 +97,7 @@ def check_output_times_consistent(dyn) -> None:
     x = nrho_states(3)
     p = _propagate(dyn, x, 0.0, [0.5 * SHORT_TU, SHORT_TU])
     q = _propagate(dyn, x, 0.0, 0.5 * SHORT_TU)
-    ok, diff = close(p.states[0], q.final, VECTOR_RTOL, VECTOR_ATOL)
+    ok, diff = close(p.states[0], q.final, CONSISTENT_RTOL, CONSISTENT_ATOL)
     require(ok, f"state at an intermediate output time differs from a direct propagation by {diff:.3g}")
 
 

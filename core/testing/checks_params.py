@@ -1,6 +1,7 @@
 """Checks every component kind shares: the constructor-parameter conventions and pickling."""
 from __future__ import annotations
 
+import inspect
 import math
 import types
 import typing
@@ -8,7 +9,7 @@ from typing import Any
 
 from ..component import param_specs
 from ..errors import ParameterError
-from .check_support import describe_exception, fresh, params_equal, require, round_trip
+from .check_support import describe_exception, params_equal, require, round_trip
 
 __all__ = ["check_parameters_declared", "check_get_params_returns_constructor_values",
            "check_clone_from_params", "check_bad_parameters_raise_parameter_error",
@@ -21,7 +22,6 @@ def _specs(component: Any):
 
 def check_parameters_declared(component: Any) -> None:
     """Every constructor parameter is keyword-usable, has a type hint and a default."""
-    import inspect
     init = type(component).__init__
     params = list(inspect.signature(init).parameters.values())[1:]
     for p in params:

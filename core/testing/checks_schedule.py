@@ -24,7 +24,7 @@ def check_is_schedule(schedule) -> None:
 def check_plan_times_inside_passes(schedule) -> None:
     """Times strictly increase, each lies inside a pass, none after t_end."""
     passes = sample_passes()
-    for t_end in (passes[-1].end, 0.5 * (passes[0].end + passes[1].start) + 0.0, passes[1].start + 0.3 * passes[1].duration):
+    for t_end in (passes[-1].end, 0.5 * (passes[0].end + passes[1].start), passes[1].start + 0.3 * passes[1].duration):
         t = _plan(schedule, passes, t_end)
         require(np.all(np.isfinite(t)), "plan() returned NaN or infinite times")
         require(np.all(np.diff(t) > 0), "plan() times do not increase strictly")

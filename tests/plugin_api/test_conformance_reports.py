@@ -3,14 +3,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from cistrack.component import check_int
 from cistrack.errors import ParameterError, UnknownComponentError
-from cistrack.interfaces import Clusterer
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Clusterer, Propagation, ReferenceOrbit
 from cistrack.measurement import MeasurementSet
 from cistrack.registry import Registry
 from cistrack.testing import (CheckResult, ConformanceError, GeocentricAnglesSensor, ReferenceCR3BP,
                               check_plugin, check_registered, iter_checks, parametrize_with_checks)
+from cistrack.testing.reference_dynamics import cr3bp_derivatives
 from cistrack.units import ARCSEC_RAD
 
 
@@ -151,3 +154,36 @@ def test_check_registered_names_the_known_components_for_an_unknown_name():
 @parametrize_with_checks([HalvesClusterer, HalvesClusterer(n_components=3)])
 def test_parametrize_with_checks_runs_each_check_as_a_test(component, check):
     check(component)
+
+
+class StackedCR3BP(ReferenceCR3BP):
+    """Propagates all particles as one stacked solve_ivp system (one error norm for all)."""
+
+    def propagate(self, states, t0, times):
+        x = np.asarray(states, dtype=float)
+        n = x.shape[0]
+        ts = np.atleast_1d(np.asarray(times, dtype=float))
+        sol = solve_ivp(lambda t, y: cr3bp_derivatives(y.reshape(n, 6), self.mu).ravel(), (t0, ts[-1]), x.ravel(),
+                        t_eval=ts, rtol=1e-9, atol=1e-12)
+        return Propagation(ts, sol.y.T.reshape(len(ts), n, 6), np.ones(n, bool), np.full(n, -1), np.full(n, np.inf))
+
+
+def test_a_stacked_integrator_fails_the_vectorised_equals_loop_check():
+    _, why = _failure(StackedCR3BP, "propagate_vectorised_matches_loop")
+    assert "one at a time" in why
+
+
+def test_a_periodic_orbit_that_does_not_close_is_reported():
+    good = ReferenceOrbit("l2-lyapunov", np.array([1.1257, 0, 0, 0, 0.1508, 0]), 3.404, 1.2150582e-2, "approximate")
+    _, why = _failure(good, "periodic_orbit_closes")
+    assert "misses its initial state" in why
+
+
+def test_a_misspelt_recorder_hook_is_reported():
+    class Recorder:
+        @hookimpl
+        def cistrack_step_update(self, run, step):  # should be cistrack_step_updated
+            pass
+
+    _, why = _failure(Recorder(), "implements_lifecycle_hooks")
+    assert "cistrack_step_update" in why
