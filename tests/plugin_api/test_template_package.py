@@ -73,3 +73,11 @@ def test_a_scenario_runs_with_the_installed_components_by_name(installed_templat
     assert comps["iod"]["name"] == NAMES["iod"]
     assert comps["filter"]["params"]["clusterer"] == NAMES["clustering"]
     assert manifest["summary"]["n_updates"] > 0
+
+
+@pytest.mark.slow
+def test_the_template_own_test_suite_passes_once_installed(installed_template):
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(TEMPLATE / "tests")],
+                         capture_output=True, text=True, env=_env(), timeout=600, cwd=TEMPLATE)
+    assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
+    assert "skipped" not in out.stdout.splitlines()[-1], out.stdout[-2000:]

@@ -6,7 +6,7 @@ import numpy as np
 from cistrack import units
 from cistrack.belief import ParticleCloud
 from cistrack.component import check_int, check_positive
-from cistrack.errors import IODError, ParameterError
+from cistrack.errors import IODError
 from cistrack.interfaces import IODMethod, Sensor
 from cistrack.measurement import MeasurementSet
 
