@@ -83,7 +83,8 @@ class BoundCheck:
         except Exception as exc:
             how = "with its default parameters" if isinstance(component, type) else "from get_params()"
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(component)}': could not "
-                                   f"construct it {how}: {describe_exception(exc)}") from exc
+                                   f"construct it {how}: {describe_exception(exc)} (if it needs settings, check an instance: "
+                                   f"check_plugin(Cls(...)) or check_registered(name, params={{...}}))") from exc
 
     def __call__(self, component: Any = None) -> None:
         target = self.component if component is None else component
@@ -130,6 +131,16 @@ def _run(name: str, check: Callable[[], None]) -> CheckResult:
     return CheckResult(name, True, "", time.perf_counter() - t0)
 
 
+def _run_all(component: Any, kind: str) -> list[CheckResult]:
+    """Every check's result; if the component cannot even be constructed, only that failure."""
+    results = []
+    for name, check in iter_checks(component, kind):
+        results.append(_run(name, check))
+        if name == "constructs_with_defaults" and not results[-1].passed:
+            break
+    return results
+
+
 def check_plugin(component_or_class: Any, kind: str | None = None) -> ConformanceReport:
     """Run every check on a component (class, instance or reference orbit).
 
@@ -138,9 +149,7 @@ def check_plugin(component_or_class: Any, kind: str | None = None) -> Conformanc
     why, with the full results in ``.results``.
     """
     kind = kind or infer_kind(component_or_class)
-    report = ConformanceReport(label(component_or_class), kind)
-    for name, check in iter_checks(component_or_class, kind):
-        report.results.append(_run(name, check))
+    report = ConformanceReport(label(component_or_class), kind, _run_all(component_or_class, kind))
     if report.failures:
         lines = [f"{kind} '{report.component}' failed {len(report.failures)} of {len(report.results)} conformance checks:"]
         lines += [f"  - {r.message}" for r in report.failures]
@@ -176,7 +185,7 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
             how = f"with {params}" if params else "with its default parameters"
             return [CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
                                 f"{describe_exception(exc)}")]
-    return [_run(n, c) for n, c in iter_checks(factory, kind)]
+    return _run_all(factory, kind)
 
 
 def parametrize_with_checks(components: Iterable[Any]):
