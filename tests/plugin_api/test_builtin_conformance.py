@@ -11,8 +11,7 @@ from cistrack.testing import iter_checks
 
 _REG = load_registry(autoload_third_party=False)
 
-# Clusterers whose EM fits take seconds per call on a busy 2-core machine: run with -m slow.
-_SLOW = {("clustering", "bic"), ("clustering", "gmm")}
+_SLOW: set[tuple[str, str]] = set()  # (kind, name) of built-ins too slow for the default run
 # Components that cannot be built with defaults alone: the parameters the check uses.
 _PARAMS = {("recorder", "rerun"): lambda tmp: {"path": str(tmp / "conformance.rrd")}}
 
