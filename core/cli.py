@@ -13,7 +13,12 @@ import json
 import sys
 from pathlib import Path
 
-from .errors import CistrackError
+from .errors import CistrackError, ConfigError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 DEFAULT_SCENARIO = "example-1"
 
@@ -89,7 +94,16 @@ def cmd_plugins(args) -> int:
     reg = default_registry()
     if args.check:
         from .testing import check_registered
-        results = check_registered(args.check, kind=args.kind, registry=reg)
+        params = {}
+        for item in args.param or []:
+            key, sep, value = item.partition("=")
+            if not sep or not key.strip():
+                raise ConfigError(f"--param {item!r}: expected KEY=VALUE (VALUE in TOML syntax, e.g. path=\"out.rrd\")")
+            try:
+                params[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+            except tomllib.TOMLDecodeError:
+                params[key.strip()] = value  # a bare word: take it as a string
+        results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None)
         failed = 0
         for r in results:
             name, passed, message = (r if isinstance(r, tuple) else (r.name, r.passed, r.message))
@@ -151,6 +165,8 @@ def build_parser() -> argparse.ArgumentParser:
     pl = sub.add_parser("plugins", help="list registered components, or check one")
     pl.add_argument("--check", metavar="NAME", default=None, help="run the conformance suite on a component")
     pl.add_argument("--kind", default=None, help="restrict to one kind")
+    pl.add_argument("--param", action="append", metavar="KEY=VALUE",
+                    help="with --check: build the component with this parameter (repeatable)")
     pl.set_defaults(func=cmd_plugins)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios")
     sc.set_defaults(func=cmd_scenarios)

@@ -2,7 +2,9 @@
 
 Each entry point of the group ``cistrack`` is loaded on its own: a plugin that fails to import
 or to register is recorded in :attr:`Registry.failures` with its distribution, entry point and
-error, and the others still load. ``CISTRACK_DISABLE_PLUGIN_AUTOLOAD=1`` loads only the
+error, and the others still load. A plugin that registers a name already taken is such a
+failure too (the message names both sources); the first registration stays, and built-ins
+load first, so a third party can never silently replace a built-in. ``CISTRACK_DISABLE_PLUGIN_AUTOLOAD=1`` loads only the
 built-in components (distribution ``cistrack``).
 """
 from __future__ import annotations
@@ -121,8 +123,6 @@ class Registry:
                 for impl in impls:
                     impl.function(registry=bound)
                 self.plugins.append((dist, ep.name, module))
-            except DuplicateComponentError:
-                raise
             except Exception as exc:  # a broken plugin must not stop the others
                 self.failures.append(PluginFailure(dist, ep.name, f"{type(exc).__name__}: {exc}",
                                                    traceback.format_exc()))

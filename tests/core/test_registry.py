@@ -24,11 +24,12 @@ def _pip(*args: str) -> None:
 @pytest.fixture(scope="module")
 def third_party_plugins():
     """Install a real third-party plugin and a broken one into this environment, then remove them."""
-    _pip("install", "--no-deps", "--no-build-isolation", str(PACKAGES / "example"), str(PACKAGES / "broken"))
+    _pip("install", "--no-deps", "--no-build-isolation", str(PACKAGES / "example"), str(PACKAGES / "broken"),
+         str(PACKAGES / "duplicate"))
     import importlib
     importlib.invalidate_caches()
     yield
-    _pip("uninstall", "-y", "cistrack-example-plugin", "cistrack-broken-plugin")
+    _pip("uninstall", "-y", "cistrack-example-plugin", "cistrack-broken-plugin", "cistrack-duplicate-plugin")
     importlib.invalidate_caches()
 
 
@@ -116,3 +117,13 @@ def test_import_core_fails_and_import_cistrack_works_outside_the_source_tree(tmp
     ok = subprocess.run([sys.executable, "-c", "import cistrack, cistrack.plugins.filters; print('ok')"],
                         cwd=tmp_path, capture_output=True, text=True)
     assert ok.stdout.strip() == "ok", ok.stderr
+
+
+
+def test_a_plugin_reusing_a_taken_name_is_reported_naming_both_and_the_builtin_stays(third_party_plugins):
+    reg = load_registry(autoload_third_party=True)
+    dup = [f for f in reg.failures if f.distribution == "cistrack-duplicate-plugin"]
+    assert len(dup) == 1
+    assert "clustering 'kmeans' is registered twice" in dup[0].error
+    assert "by cistrack " in dup[0].error and "cistrack-duplicate-plugin 1.2.0" in dup[0].error
+    assert reg.get("clustering", "kmeans").distribution == "cistrack"

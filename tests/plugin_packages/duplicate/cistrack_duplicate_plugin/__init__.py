@@ -1,0 +1,1 @@
+"""Registers a taken name on purpose."""
