@@ -81,7 +81,7 @@ class CR3BP(CompiledDynamics):
 
     rhs = cr3bp_rhs
 
-    def __init__(self, mu: float = MU_EARTH_MOON, rtol: float = 1e-12, atol: float = 1e-11,
+    def __init__(self, mu: float = MU_EARTH_MOON, rtol: float = 1e-12, atol: float = 2e-11,
                  earth_radius_km: float = 6378.137, moon_radius_km: float = 1737.4,
                  max_steps: int = 5_000_000):
         self.mu = check_range(self, "mu", mu, 0.0, 0.5, lo_open=True)

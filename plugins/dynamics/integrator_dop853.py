@@ -236,9 +236,9 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
         nsteps += 1
         if err <= 1.0:
             if err == 0.0:
-                fac = 10.0
+                fac = MAX_GROWTH
             else:
-                fac = min(10.0, 0.9 * err ** -0.125)
+                fac = min(MAX_GROWTH, SAFETY * err ** -0.125)
             if rejected:
                 fac = min(1.0, fac)
             rejected = False
@@ -267,7 +267,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
                 h = hstep * fac
         else:
             if err > 0.0:
-                fac = max(0.2, 0.9 * err ** -0.125)
+                fac = max(MIN_SHRINK, SAFETY * err ** -0.125)
             else:  # NaN: a stage landed on a singularity
                 fac = 0.2
             h = hstep * fac
@@ -300,7 +300,8 @@ def derivatives_kernel(t, states, params, out):
 '''
 
 
-def generate_source(rhs_import: str, dim: int, *, cache: bool = True,
+def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: float = 0.8,
+                    max_growth: float = 4.0, min_shrink: float = 0.2,
                     fastmath=SAFE_FASTMATH, title: str = "") -> str:
     """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
 
@@ -313,6 +314,8 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True,
         State dimension (6 for position and velocity).
     cache : bool
         numba ``cache=`` of the generated functions.
+    safety, max_growth, min_shrink : float
+        Step-size controller: h_new = h * clip(safety * err^(-1/8), min_shrink, max_growth).
     fastmath : set of str or bool
         numba ``fastmath=`` flags; the default keeps NaN and inf semantics.
     """
@@ -326,5 +329,8 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True,
               "rhs = njit(inline='always', fastmath=rhs.targetoptions.get('fastmath', False))(rhs.py_func)\n\n"
               f"DIM = {int(dim)}\n"
               f"CACHE = {bool(cache)!r}\n"
+              f"SAFETY = {float(safety)!r}\n"
+              f"MAX_GROWTH = {float(max_growth)!r}\n"
+              f"MIN_SHRINK = {float(min_shrink)!r}\n"
               f"FASTMATH = {fm}\n\n\n")
     return header + _rk_step_source(dim) + _BODY
