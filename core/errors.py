@@ -39,3 +39,11 @@ class IODError(CistrackError, RuntimeError):
 
 class FilterError(CistrackError, RuntimeError):
     """A filter reached a state it cannot continue from (custody cannot be represented)."""
+
+
+class StateError(CistrackError, ValueError):
+    """States or times given to a dynamics model are malformed (shape, NaN, direction)."""
+
+
+class PropagationError(CistrackError, RuntimeError):
+    """The integrator could not reach the requested time (step limit or step-size underflow)."""

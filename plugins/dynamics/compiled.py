@@ -59,21 +59,13 @@ from typing import Any, ClassVar
 import numba
 import numpy as np
 
-from cistrack.errors import CistrackError
+from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 
 from . import integrator_dop853
 
 __all__ = ["CompiledDynamics", "PropagationError", "StateError", "kernels_for", "kernel_cache_dir",
            "num_threads"]
-
-
-class StateError(CistrackError, ValueError):
-    """States or times given to a dynamics model are malformed (shape, NaN, direction)."""
-
-
-class PropagationError(CistrackError, RuntimeError):
-    """The integrator could not reach the requested time (step limit or step-size underflow)."""
 
 
 # -- kernel generation and caching ----------------------------------------------------------------
