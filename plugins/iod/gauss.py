@@ -29,6 +29,8 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
 from cistrack.measurement import MeasurementSet
 
+from cistrack.plugins.sensors.frames import rot_z  # synodic -> ECI is R3(+t): the synodic frame turns at +1 rad/TU
+
 from .kinematic import prepare_fit
 
 __all__ = ["GaussSolution", "gauss_angles_only", "synodic_to_eci", "eci_to_synodic", "GaussIOD",
@@ -164,18 +166,6 @@ def gauss_angles_only(observer: np.ndarray, los: np.ndarray, times: np.ndarray,
     return GaussSolution(r, v2, v3, rho, valid)
 
 
-def _rot(t: np.ndarray) -> np.ndarray:
-    """Synodic -> ECI rotation R3(+t) (the synodic frame turns at +1 rad/TU): (K,) -> (K, 3, 3)."""
-    c, s = np.cos(t), np.sin(t)
-    out = np.zeros(np.shape(t) + (3, 3))
-    out[..., 0, 0] = c
-    out[..., 0, 1] = -s
-    out[..., 1, 0] = s
-    out[..., 1, 1] = c
-    out[..., 2, 2] = 1.0
-    return out
-
-
 def synodic_to_eci(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarray:
     """Synodic states (N, 6) at t (scalar or (N,) TU) -> Earth-centred inertial (N, 6) (LU, VU).
 
@@ -183,7 +173,7 @@ def synodic_to_eci(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarr
     q_dot = R (v + omega x (r - r_E)), omega = z, r_E = (-mu, 0, 0).
     """
     x = np.atleast_2d(np.asarray(states, dtype=float))
-    rot = np.broadcast_to(_rot(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
+    rot = np.broadcast_to(rot_z(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
     rel = x[:, :3] - np.array([-mu, 0.0, 0.0])
     w_x_r = np.stack([-rel[:, 1], rel[:, 0], np.zeros(len(rel))], axis=1)
     q = np.einsum("nij,nj->ni", rot, rel)
@@ -194,7 +184,7 @@ def synodic_to_eci(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarr
 def eci_to_synodic(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarray:
     """Inverse of :func:`synodic_to_eci`: v_syn = R^T q_dot - omega x (r_syn - r_E)."""
     x = np.atleast_2d(np.asarray(states, dtype=float))
-    rot = np.broadcast_to(_rot(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
+    rot = np.broadcast_to(rot_z(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
     rel = np.einsum("nji,nj->ni", rot, x[:, :3])
     v = np.einsum("nji,nj->ni", rot, x[:, 3:])
     w_x_r = np.stack([-rel[:, 1], rel[:, 0], np.zeros(len(rel))], axis=1)
@@ -238,7 +228,7 @@ class GaussIOD(IODMethod):
         k = fit.times.shape[0]
         pick = np.array([0, k // 2, k - 1])
         times = fit.times[pick]
-        rot = _rot(times)                                          # (3, 3, 3)
+        rot = rot_z(times)                                          # (3, 3, 3)
         earth = np.array([-self.mu, 0.0, 0.0])
         obs_eci = np.einsum("kij,kj->ki", rot, fit.observer[pick] - earth)   # (3, 3)
         limit = int(np.ceil(self.max_oversampling * self.n_particles))
