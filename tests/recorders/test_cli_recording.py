@@ -113,5 +113,10 @@ def test_cli_recording_particles_equal_the_filters_particles(cli_run):
     step = 2
     posterior = [e for e in log.events if e.index == step][-1]
     row = last_per_step(rows)[step]
-    np.testing.assert_array_equal(component(row, "Points3D:positions").astype(np.float32),
-                                  (posterior.states[:, :3] * LU_KM).astype(np.float32))
+    # The CLI run and this in-process rerun are separate processes: inside a long pytest session
+    # (after hundreds of other tests) they agree to ~2e-7 relative, not bitwise (seen on a clean
+    # CI clone). 1e-5 relative (~4 km at lunar distance) still catches a unit (LU vs km: 384,400x)
+    # or step mix-up (thousands of km); exact equality is asserted in-process in
+    # test_recording_contents.py.
+    np.testing.assert_allclose(component(row, "Points3D:positions").astype(np.float64),
+                               posterior.states[:, :3] * LU_KM, rtol=1e-5)
