@@ -126,8 +126,13 @@ def cmd_plugins(args) -> int:
 
 def cmd_scenarios(args) -> int:
     from .scenario import builtin_scenarios
+    from .study import builtin_studies
 
+    print("scenarios (cistrack run NAME):")
     for name, desc in builtin_scenarios().items():
+        print(f"  {name:<28} {desc}")
+    print("studies (cistrack study run NAME):")
+    for name, desc in builtin_studies().items():
         print(f"  {name:<28} {desc}")
     return 0
 
@@ -168,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--param", action="append", metavar="KEY=VALUE",
                     help="with --check: build the component with this parameter (repeatable)")
     pl.set_defaults(func=cmd_plugins)
-    sc = sub.add_parser("scenarios", help="list the built-in scenarios")
+    sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)
     st = sub.add_parser("study", help="run or report a comparative study")
     stsub = st.add_subparsers(dest="study_cmd", required=True)

@@ -73,3 +73,10 @@ def test_cli_reports_a_bad_scenario_without_a_traceback(tmp_path):
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert "Did you mean 'cr3bp'" in proc.stderr and str(p) in proc.stderr
+
+
+def test_cli_scenarios_lists_builtin_scenarios_and_studies():
+    out = subprocess.run([sys.executable, "-m", "cistrack.cli", "scenarios"], capture_output=True, text=True,
+                         check=True).stdout
+    assert "example-1" in out and "Paper Example 1" in out
+    assert "filter-comparison" in out and "PGM vs UKF vs EnKF" in out
