@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import copy
 import difflib
+import inspect
 import sys
 import types
 import typing
@@ -401,7 +402,7 @@ def _component_kind(ann: Any) -> str | None:
 def _coerce(value: Any, ann: Any, source: str, where: str, key: str, reg: Registry) -> Any:
     """Check ``value`` (from TOML) against the type annotation ``ann``; convert where lossless."""
     loc = f"{source}: {where}: key {key!r}"
-    if ann is Any or ann is inspect_empty:
+    if ann is Any or ann is inspect.Parameter.empty:
         return value
     origin = typing.get_origin(ann)
     args = typing.get_args(ann)
@@ -468,7 +469,3 @@ def _type_name(a: Any) -> str:
         return f"a {_component_kind(a)} component (name or table)"
     return getattr(a, "__name__", str(a))
 
-
-import inspect as _inspect  # noqa: E402
-
-inspect_empty = _inspect.Parameter.empty
