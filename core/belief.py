@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 from scipy.special import logsumexp
 
 __all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
@@ -45,6 +46,53 @@ def regularize_covariance(p: np.ndarray, rel: float = 1e-12) -> np.ndarray:
         return p
     w = np.maximum(w, floor)
     return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
+
+
+@njit(cache=True)
+def _whitened_logpdf(x, means, linv, const, logw, out):
+    """out[n, m] = const[m] + logw[m] - |linv[m] (x[n] - means[m])|^2 / 2 (linv lower triangular).
+
+    x (N, d), means (M, d), linv (M, d, d), const and logw (M,), out (N, M): one pass over the
+    points, no (N, d) temporaries per component.
+    """
+    n_pts, d = x.shape
+    n_comp = means.shape[0]
+    diff = np.empty(d)
+    for n in range(n_pts):
+        for m in range(n_comp):
+            for b in range(d):
+                diff[b] = x[n, b] - means[m, b]
+            maha = 0.0
+            for a in range(d):
+                s = 0.0
+                for b in range(a + 1):
+                    s += linv[m, a, b] * diff[b]
+                maha += s * s
+            out[n, m] = const[m] + logw[m] - 0.5 * maha
+
+
+@njit(cache=True)
+def _row_logsumexp(a, out):
+    """out[n] = log sum_m exp(a[n, m]) for a (N, M), -inf rows giving -inf, NaN propagating."""
+    n_pts, n_comp = a.shape
+    for n in range(n_pts):
+        mx = -np.inf
+        nan = False
+        for m in range(n_comp):
+            v = a[n, m]
+            if v != v:
+                nan = True
+            elif v > mx:
+                mx = v
+        if nan:
+            out[n] = np.nan
+            continue
+        if not np.isfinite(mx):
+            mx = 0.0
+        s = 0.0
+        for m in range(n_comp):
+            s += np.exp(a[n, m] - mx)
+        out[n] = mx + np.log(s)
 
 
 @dataclass
@@ -149,29 +197,37 @@ class GaussianMixture:
                 self._chol = np.linalg.cholesky(self.covariances)
         return self._chol
 
+    def _whitening(self) -> tuple[np.ndarray, np.ndarray]:
+        """Inverse Cholesky factors (M, d, d) and log normalising constants (M,)."""
+        chol = self.cholesky()
+        linv = np.ascontiguousarray(np.linalg.inv(chol))  # one batched call
+        logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
+        return linv, np.ascontiguousarray(-0.5 * (logdet + self.dim * _LOG_2PI))
+
+    def _logpdf_table(self, x: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
+        x = np.ascontiguousarray(np.atleast_2d(np.asarray(x, dtype=float)))
+        if x.ndim != 2 or x.shape[1] != self.dim:
+            raise ValueError(f"points must have shape (N, {self.dim}), got {x.shape}")
+        linv, const = self._whitening()
+        out = np.empty((x.shape[0], self.n_components))
+        _whitened_logpdf(x, np.ascontiguousarray(self.means), linv, const,
+                         np.ascontiguousarray(log_weights, dtype=float), out)
+        return out
+
     def component_logpdf(self, x: np.ndarray) -> np.ndarray:
         """log N(x; mu_i, P_i) for every point and component: x (N, d) -> (N, M)."""
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        chol = self.cholesky()
-        d = self.dim
-        out = np.empty((x.shape[0], self.n_components))
-        linv = np.linalg.inv(chol)  # (M, d, d) inverse Cholesky factors, one batched call
-        for i in range(self.n_components):  # loop over components (few), vectorised over points
-            sol = (x - self.means[i]) @ linv[i].T  # whitened points (N, d)
-            maha = np.einsum("ij,ij->i", sol, sol)
-            logdet = 2.0 * np.sum(np.log(np.diagonal(chol[i])))
-            out[:, i] = -0.5 * (maha + logdet + d * _LOG_2PI)
-        return out
+        return self._logpdf_table(x, np.zeros(self.n_components))
 
     def logpdf(self, x: np.ndarray) -> np.ndarray:
         """Log density of points ``x`` (N, d) -> (N,)."""
         with np.errstate(divide="ignore"):
-            a = self.component_logpdf(x) + np.log(self.weights)
+            logw = np.log(self.weights)
+        a = self._logpdf_table(x, logw)
         if a.shape[1] == 1:
             return a[:, 0]
-        m = np.max(a, axis=1, keepdims=True)
-        m = np.where(np.isfinite(m), m, 0.0)
-        return (m + np.log(np.sum(np.exp(a - m), axis=1, keepdims=True)))[:, 0]
+        out = np.empty(a.shape[0])
+        _row_logsumexp(a, out)
+        return out
 
     def responsibilities(self, x: np.ndarray) -> np.ndarray:
         """Posterior component probabilities of each point, (N, M)."""
