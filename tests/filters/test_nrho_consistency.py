@@ -35,3 +35,19 @@ def test_filter_is_consistent_over_the_first_two_passes(filter_table):
     assert np.all(np.isfinite(nees))
     inside = (nees >= LO) & (nees <= HI)
     assert inside.mean() >= 2 / 3, nees
+
+
+@pytest.mark.slow
+def test_ukf_nees_averaged_over_ten_seeds_is_inside_the_chi2_band_on_every_step():
+    """M = 10 runs: at each of the first 9 updates, M * mean(NEES) ~ chi^2(6M) (99 % band)."""
+    seeds = range(1, 11)
+    lo, hi = chi2.ppf([0.005, 0.995], 6 * len(seeds)) / len(seeds)
+    per_run = []
+    for seed in seeds:
+        scenario = load_scenario("quick").with_overrides({
+            "filter": {"name": "ukf"}, "iod": {"name": "noisy-range", "n_particles": 5000}})
+        result = run_scenario(scenario, seed=seed)
+        assert result.summary["status"] == "finished"
+        per_run.append([r["nees"] for r in result.rows if r["kind"] == "update"][:9])
+    mean = np.mean(np.array(per_run), axis=0)
+    assert np.all((mean >= lo) & (mean <= hi)), mean
