@@ -77,7 +77,9 @@ def main() -> int:
     total_prof = max(_cumtime(st, "core/run.py", "_run"), 1e-9)
     stages = {
         "IOD": _cumtime(st, "plugins/iod", "estimate"),
-        "propagation": _cumtime(st, "cistrack_kernel", "propagate_kernel"),
+        # the kernels run on worker threads, which cProfile does not see: time the Python call
+        # that waits for them (filter predictions and the truth)
+        "propagation": _cumtime(st, "plugins/dynamics/compiled.py", "propagate"),
         "clustering": _cumtime(st, "plugins/clustering", "cluster"),
         "resampling": _cumtime(st, "plugins/filters", "_sample_posterior"),
         "metrics": _cumtime(st, "core/metrics.py", "step_metrics"),

