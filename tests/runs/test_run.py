@@ -79,4 +79,4 @@ def test_cli_scenarios_lists_builtin_scenarios_and_studies():
     out = subprocess.run([sys.executable, "-m", "cistrack.cli", "scenarios"], capture_output=True, text=True,
                          check=True).stdout
     assert "example-1" in out and "Paper Example 1" in out
-    assert "filter-comparison" in out and "PGM vs UKF vs EnKF" in out
+    assert "filter-comparison" in out and "PGM vs UKF" in out
