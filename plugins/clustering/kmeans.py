@@ -18,7 +18,7 @@ __all__ = ["KMeansClusterer"]
 
 
 class KMeansClusterer(Clusterer):
-    """k-means (Lloyd) on standardised coordinates; the PGM filter's default clusterer.
+    """k-means (Lloyd) on standardised coordinates; the paper's clusterer for the PGM filter (cistrack's PGM defaults to "gmm").
 
     Parameters
     ----------
