@@ -24,11 +24,15 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["MIN_WEIGHT_POINTS", "em_fit", "em_iteration", "m_step", "e_step", "predict_labels"]
+__all__ = ["MIN_WEIGHT_POINTS", "em_fit", "em_iteration", "m_step", "e_step", "predict_labels",
+           "kmeans_labels", "one_hot"]
 
 MIN_WEIGHT_POINTS = 1e-6
 _EPS10 = 10.0 * np.finfo(np.float64).eps
 _LOG_2PI = np.log(2.0 * np.pi)
+# Responsibilities below exp(-700) ~ 1e-304 are set to 0: they change nothing at double precision,
+# and subnormal numbers they would otherwise produce make the arithmetic ~10x slower.
+_LOG_TINY = -700.0
 
 
 @nb.njit(cache=True)
@@ -53,140 +57,177 @@ def _cholesky(a, out):
     return True
 
 
-@nb.njit(cache=True)
-def _m_step(x, resp, reg_covar, active, weights, means, covs):
-    n, d = x.shape
-    k = resp.shape[1]
+_FM = {"reassoc", "contract", "nsz", "arcp"}  # vectorised reductions; keeps inf/NaN semantics
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def _m_step(xt, resp, reg_covar, active, weights, means, covs):
+    """M-step on points ``xt`` (d, n) and responsibilities ``resp`` (k, n), in place."""
+    d, n = xt.shape
+    k = resp.shape[0]
+    diff = np.empty((d, n))
+    rd = np.empty(n)
     for c in range(k):
         if not active[c]:
             weights[c] = 0.0
             continue
+        r = resp[c]
         nk = 0.0
-        mu = np.zeros(d)
         for i in range(n):
-            r = resp[i, c]
-            nk += r
-            for a in range(d):
-                mu[a] += r * x[i, a]
+            nk += r[i]
         nk += _EPS10
         if nk < MIN_WEIGHT_POINTS:
             active[c] = False
             weights[c] = 0.0
             continue
         for a in range(d):
-            mu[a] /= nk
-        cov = np.zeros((d, d))
-        diff = np.empty(d)
-        for i in range(n):
-            r = resp[i, c]
-            for a in range(d):
-                diff[a] = x[i, a] - mu[a]
-            for a in range(d):
-                ra = r * diff[a]
-                for b in range(a + 1):
-                    cov[a, b] += ra * diff[b]
+            xa = xt[a]
+            s = 0.0
+            for i in range(n):
+                s += r[i] * xa[i]
+            mu = s / nk
+            means[c, a] = mu
+            da = diff[a]
+            for i in range(n):
+                da[i] = xa[i] - mu
         for a in range(d):
+            da = diff[a]
+            for i in range(n):
+                rd[i] = r[i] * da[i]
             for b in range(a + 1):
-                v = cov[a, b] / nk
+                db = diff[b]
+                s = 0.0
+                for i in range(n):
+                    s += rd[i] * db[i]
+                v = s / nk
                 covs[c, a, b] = v
                 covs[c, b, a] = v
             covs[c, a, a] += reg_covar
-            means[c, a] = mu[a]
         weights[c] = nk / n
     return weights, means, covs
 
 
-@nb.njit(cache=True)
-def _e_step(x, weights, means, covs, active, log_resp):
-    """Fills ``log_resp`` (n, k); returns the mean log-likelihood per point. May drop components."""
-    n, d = x.shape
+@nb.njit(cache=True, fastmath=_FM)
+def _e_step(xt, weights, means, covs, active, log_resp):
+    """Fills ``log_resp`` (k, n) for points ``xt`` (d, n); returns the mean log-likelihood per
+    point. Components whose covariance is not positive definite are dropped."""
+    d, n = xt.shape
     k = weights.shape[0]
-    chol = np.zeros((k, d, d))
-    logw = np.empty(k)
+    chol = np.zeros((d, d))
+    y = np.empty((d, n))
     for c in range(k):
-        if active[c] and not _cholesky(covs[c], chol[c]):
+        lr = log_resp[c]
+        if active[c] and not _cholesky(covs[c], chol):
             active[c] = False
-        if active[c] and weights[c] > 0.0:
-            ld = 0.0
-            for a in range(d):
-                ld += np.log(chol[c, a, a])
-            logw[c] = np.log(weights[c]) - 0.5 * d * _LOG_2PI - ld
-        else:
+        if not (active[c] and weights[c] > 0.0):
             active[c] = False
-            logw[c] = -np.inf
-    y = np.empty(d)
+            for i in range(n):
+                lr[i] = -np.inf
+            continue
+        ld = 0.0
+        for a in range(d):
+            ld += np.log(chol[a, a])
+        logw = np.log(weights[c]) - 0.5 * d * _LOG_2PI - ld
+        for i in range(n):
+            lr[i] = 0.0
+        for a in range(d):
+            ya = y[a]
+            xa = xt[a]
+            mu = means[c, a]
+            inv = 1.0 / chol[a, a]
+            for i in range(n):
+                ya[i] = xa[i] - mu
+            for p in range(a):
+                lap = chol[a, p]
+                yp = y[p]
+                for i in range(n):
+                    ya[i] -= lap * yp[i]
+            for i in range(n):
+                t = ya[i] * inv
+                ya[i] = t
+                lr[i] += t * t
+        for i in range(n):
+            lr[i] = logw - 0.5 * lr[i]
+    best = np.full(n, -np.inf)
+    for c in range(k):
+        if active[c]:
+            lr = log_resp[c]
+            for i in range(n):
+                if lr[i] > best[i]:
+                    best[i] = lr[i]
+    tot = np.zeros(n)
+    for c in range(k):
+        if active[c]:
+            lr = log_resp[c]
+            for i in range(n):
+                v = lr[i] - best[i]
+                if v > _LOG_TINY:
+                    tot[i] += np.exp(v)
     total = 0.0
     for i in range(n):
-        best = -np.inf
-        for c in range(k):
-            if not active[c]:
-                log_resp[i, c] = -np.inf
-                continue
-            q = 0.0
-            for a in range(d):
-                t = x[i, a] - means[c, a]
-                for p in range(a):
-                    t -= chol[c, a, p] * y[p]
-                t /= chol[c, a, a]
-                y[a] = t
-                q += t * t
-            v = logw[c] - 0.5 * q
-            log_resp[i, c] = v
-            if v > best:
-                best = v
-        s = 0.0
-        for c in range(k):
-            if active[c]:
-                s += np.exp(log_resp[i, c] - best)
-        lse = best + np.log(s)
-        total += lse
-        for c in range(k):
-            log_resp[i, c] -= lse
+        v = best[i] + np.log(tot[i])
+        tot[i] = v
+        total += v
+    for c in range(k):
+        if active[c]:
+            lr = log_resp[c]
+            for i in range(n):
+                lr[i] -= tot[i]
     return total / n
 
 
 @nb.njit(cache=True)
-def _em(x, resp0, reg_covar, tol, max_iter, active):
-    n, d = x.shape
-    k = resp0.shape[1]
+def _em(xt, resp0, reg_covar, tol, max_iter, active):
+    d, n = xt.shape
+    k = resp0.shape[0]
     weights = np.zeros(k)
     means = np.zeros((k, d))
     covs = np.zeros((k, d, d))
-    log_resp = np.empty((n, k))
-    resp = np.empty((n, k))
-    _m_step(x, resp0, reg_covar, active, weights, means, covs)
+    log_resp = np.empty((k, n))
+    resp = np.zeros((k, n))
+    _m_step(xt, resp0, reg_covar, active, weights, means, covs)
     lower = -np.inf
     converged = False
     n_iter = 0
     for it in range(max_iter):
         n_iter = it + 1
         prev = lower
-        lower = _e_step(x, weights, means, covs, active, log_resp)
-        for i in range(n):
-            for c in range(k):
-                resp[i, c] = np.exp(log_resp[i, c]) if active[c] else 0.0
-        _m_step(x, resp, reg_covar, active, weights, means, covs)
+        lower = _e_step(xt, weights, means, covs, active, log_resp)
+        for c in range(k):
+            if active[c]:
+                for i in range(n):
+                    v = log_resp[c, i]
+                    resp[c, i] = np.exp(v) if v > _LOG_TINY else 0.0
+            else:
+                for i in range(n):
+                    resp[c, i] = 0.0
+        _m_step(xt, resp, reg_covar, active, weights, means, covs)
         if abs(lower - prev) < tol:
             converged = True
             break
-    final = _e_step(x, weights, means, covs, active, log_resp)
+    final = _e_step(xt, weights, means, covs, active, log_resp)
     return weights, means, covs, lower, final, n_iter, converged
 
 
 @nb.njit(cache=True)
-def _labels(x, weights, means, covs, active):
-    n = x.shape[0]
+def _labels(xt, weights, means, covs, active):
+    d, n = xt.shape
     k = weights.shape[0]
-    log_resp = np.empty((n, k))
-    _e_step(x, weights, means, covs, active.copy(), log_resp)
-    out = np.empty(n, dtype=np.intp)
-    for i in range(n):
-        b = 0
-        for c in range(1, k):
-            if log_resp[i, c] > log_resp[i, b]:
-                b = c
-        out[i] = b
+    log_resp = np.empty((k, n))
+    _e_step(xt, weights, means, covs, active.copy(), log_resp)
+    out = np.zeros(n, dtype=np.intp)
+    best = log_resp[0].copy()
+    for c in range(1, k):
+        lr = log_resp[c]
+        for i in range(n):
+            if lr[i] > best[i]:
+                best[i] = lr[i]
+                out[i] = c
     return out
+
+
+def _t(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(a, dtype=np.float64).T)
 
 
 def _active_from(resp: np.ndarray) -> np.ndarray:
@@ -196,24 +237,21 @@ def _active_from(resp: np.ndarray) -> np.ndarray:
 
 def m_step(x: np.ndarray, resp: np.ndarray, reg_covar: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(weights (k,), means (k, d), covariances (k, d, d), active (k,)) from responsibilities (n, k)."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    resp = np.ascontiguousarray(resp, dtype=np.float64)
     k, d = resp.shape[1], x.shape[1]
     active = _active_from(resp)
-    w, m, c = _m_step(x, resp, float(reg_covar), active, np.zeros(k), np.zeros((k, d)), np.zeros((k, d, d)))
+    w, m, c = _m_step(_t(x), _t(resp), float(reg_covar), active, np.zeros(k), np.zeros((k, d)), np.zeros((k, d, d)))
     return w, m, c, active
 
 
 def e_step(x: np.ndarray, weights: np.ndarray, means: np.ndarray, covs: np.ndarray,
            active: np.ndarray | None = None) -> tuple[float, np.ndarray]:
     """(mean log-likelihood per point, log responsibilities (n, k)) for the given mixture."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
     k = len(weights)
     act = np.ones(k, dtype=np.bool_) if active is None else np.array(active, dtype=np.bool_)
-    log_resp = np.empty((x.shape[0], k))
-    ll = _e_step(x, np.asarray(weights, float), np.ascontiguousarray(means, float),
+    log_resp = np.empty((k, x.shape[0]))
+    ll = _e_step(_t(x), np.asarray(weights, float), np.ascontiguousarray(means, float),
                  np.ascontiguousarray(covs, float), act, log_resp)
-    return float(ll), log_resp
+    return float(ll), log_resp.T
 
 
 def em_iteration(x: np.ndarray, resp: np.ndarray, reg_covar: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -236,15 +274,158 @@ def em_fit(x: np.ndarray, resp0: np.ndarray, reg_covar: float, tol: float, max_i
     lower_bound (mean log-likelihood per point at the last convergence check), log_likelihood
     (mean log-likelihood per point of the final parameters), n_iter, converged.
     """
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    resp0 = np.ascontiguousarray(resp0, dtype=np.float64)
     active = _active_from(resp0)
-    w, m, c, lower, final, n_iter, conv = _em(x, resp0, float(reg_covar), float(tol), int(max_iter), active)
+    w, m, c, lower, final, n_iter, conv = _em(_t(x), _t(resp0), float(reg_covar), float(tol), int(max_iter), active)
     return {"weights": w, "means": m, "covariances": c, "active": active, "lower_bound": float(lower),
             "log_likelihood": float(final), "n_iter": int(n_iter), "converged": bool(conv)}
 
 
 def predict_labels(x: np.ndarray, fit: dict) -> np.ndarray:
     """Most probable component (n,) of each point ``x`` (n, d) under a fit from :func:`em_fit`."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    return _labels(x, fit["weights"], fit["means"], fit["covariances"], fit["active"])
+    return _labels(_t(x), fit["weights"], fit["means"], fit["covariances"], fit["active"])
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def _sq_dist_to(xt, centre, out):
+    d, n = xt.shape
+    for i in range(n):
+        out[i] = 0.0
+    for a in range(d):
+        xa = xt[a]
+        ca = centre[a]
+        for i in range(n):
+            t = xa[i] - ca
+            out[i] += t * t
+
+
+@nb.njit(cache=True)
+def _kmeans_pp(xt, k, first, uniforms):
+    """Greedy k-means++ centres (k, d): each new centre is the best (lowest total squared
+    distance) of ``uniforms.shape[1]`` candidates drawn proportionally to the squared distance."""
+    d, n = xt.shape
+    trials = uniforms.shape[1]
+    centres = np.empty((k, d))
+    centres[0] = xt[:, first]
+    closest = np.empty(n)
+    _sq_dist_to(xt, centres[0], closest)
+    cand = np.empty(n)
+    best_d = np.empty(n)
+    cum = np.empty(n)
+    for c in range(1, k):
+        s = 0.0
+        for i in range(n):
+            s += closest[i]
+            cum[i] = s
+        best_pot = np.inf
+        best_id = 0
+        for t in range(trials):
+            idx = np.searchsorted(cum, uniforms[c - 1, t] * s)
+            if idx >= n:
+                idx = n - 1
+            _sq_dist_to(xt, xt[:, idx].copy(), cand)
+            pot = 0.0
+            for i in range(n):
+                if cand[i] < closest[i]:
+                    pot += cand[i]
+                else:
+                    pot += closest[i]
+            if pot < best_pot:
+                best_pot = pot
+                best_id = idx
+        centres[c] = xt[:, best_id]
+        _sq_dist_to(xt, centres[c], best_d)
+        for i in range(n):
+            if best_d[i] < closest[i]:
+                closest[i] = best_d[i]
+    return centres
+
+
+@nb.njit(cache=True, fastmath=_FM)
+def _assign(xt, centres, dq, labels, dist):
+    """Nearest centre of each point of ``xt`` (d, n) into ``labels``/``dist``; number changed."""
+    k = centres.shape[0]
+    n = xt.shape[1]
+    for c in range(k):
+        _sq_dist_to(xt, centres[c], dq[c])
+    changed = 0
+    for i in range(n):
+        dist[i] = dq[0, i]
+    b = np.zeros(n, dtype=np.intp)
+    for c in range(1, k):
+        dc = dq[c]
+        for i in range(n):
+            if dc[i] < dist[i]:
+                dist[i] = dc[i]
+                b[i] = c
+    for i in range(n):
+        if labels[i] != b[i]:
+            changed += 1
+            labels[i] = b[i]
+    return changed
+
+
+@nb.njit(cache=True)
+def _lloyd(xt, centres, max_iter, tol):
+    """Lloyd iterations on points ``xt`` (d, n) from ``centres`` (k, d), in place; labels (n,).
+    Stops when no label changes or the total squared centre shift is <= ``tol`` (then points are
+    re-assigned to the final centres); an empty cluster is re-seeded at the point farthest from
+    its centre."""
+    d, n = xt.shape
+    k = centres.shape[0]
+    labels = np.full(n, -1, dtype=np.intp)
+    dist = np.empty(n)
+    dq = np.empty((k, n))
+    new = np.empty((k, d))
+    count = np.empty(k)
+    for it in range(max_iter):
+        if _assign(xt, centres, dq, labels, dist) == 0:
+            break
+        new[:] = 0.0
+        count[:] = 0.0
+        for i in range(n):
+            c = labels[i]
+            count[c] += 1.0
+            for a in range(d):
+                new[c, a] += xt[a, i]
+        for c in range(k):
+            if count[c] == 0.0:
+                far = np.argmax(dist)
+                dist[far] = -1.0
+                for a in range(d):
+                    new[c, a] = xt[a, far]
+                count[c] = 1.0
+                continue
+            for a in range(d):
+                new[c, a] /= count[c]
+        shift = 0.0
+        for c in range(k):
+            for a in range(d):
+                t = new[c, a] - centres[c, a]
+                shift += t * t
+                centres[c, a] = new[c, a]
+        if shift <= tol:
+            _assign(xt, centres, dq, labels, dist)
+            break
+    return labels
+
+
+def kmeans_labels(x: np.ndarray, k: int, rng: np.random.Generator, max_iter: int = 300,
+                  tol: float = 1e-4) -> np.ndarray:
+    """k-means labels (n,) of points ``x`` (n, d): greedy k-means++ (2 + ln k candidates per
+    centre, as scikit-learn) then Lloyd iterations until no label changes or the total squared
+    centre shift is <= ``tol`` times the mean coordinate variance. Randomness from ``rng``."""
+    x = np.asarray(x, dtype=np.float64)
+    n = x.shape[0]
+    trials = 2 + int(np.log(k))
+    first = int(rng.integers(n))
+    uniforms = rng.random((max(k - 1, 1), trials))
+    xt = _t(x)
+    centres = _kmeans_pp(xt, k, first, uniforms)
+    return _lloyd(xt, centres, int(max_iter), float(tol * np.mean(np.var(x, axis=0))))
+
+
+def one_hot(labels: np.ndarray, k: int) -> np.ndarray:
+    """Responsibilities (n, k) that put each point wholly in its label's component."""
+    resp = np.zeros((labels.shape[0], k))
+    resp[np.arange(labels.shape[0]), labels] = 1.0
+    return resp
