@@ -16,19 +16,8 @@ from cistrack.plugins.sensors.ground_telescope import GroundTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
 from cistrack.units import hours_to_tu
 
-MU = 1.2150582e-2
+from reference_cr3bp import MU, cr3bp_rhs  # noqa: E402  (tests/ is on sys.path)
 NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
-
-
-def cr3bp_rhs(_t, s):
-    """CR3BP equations of motion (REFERENCE.md) for one state (6,)."""
-    x, y, z, vx, vy, vz = s
-    r1 = np.sqrt((x + MU) ** 2 + y * y + z * z) ** 3
-    r2 = np.sqrt((x - 1 + MU) ** 2 + y * y + z * z) ** 3
-    return [vx, vy, vz,
-            x + 2 * vy - (1 - MU) * (x + MU) / r1 - MU * (x - 1 + MU) / r2,
-            y - 2 * vx - (1 - MU) * y / r1 - MU * y / r2,
-            -(1 - MU) * z / r1 - MU * z / r2]
 
 
 @dataclass
