@@ -18,11 +18,10 @@ from cistrack.interfaces import Clusterer, Dynamics, Filter, Sensor
 from cistrack.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
-from .ensemble_propagation import propagate_ensemble
+from .ensemble_propagation import propagate_particles
 from .initial_cloud import check_cloud, initial_particles
 from .kalman_update import component_posterior, gaussian_log_likelihood, group_moments, kalman_gains
 from .observation import MeasuredComponents, check_epoch
-from .process_noise import velocity_random_walk_covariance
 from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 
@@ -125,17 +124,12 @@ class PGMFilter(Filter):
         t = float(t)
         if t == self._t:
             return
-        x, alive = propagate_ensemble(self._dyn, self._x, self._t, t, self._who())
+        x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
+                                       self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
-        x = x[alive]
-        q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, x.shape[1])
-        if np.any(q):
-            x = x + self._rng.standard_normal(x.shape) * np.sqrt(np.diag(q))
         self._lost_total += lost
         self._t = t
         pruned_before = self._pruned_total
-        if x.shape[0] == 0:
-            raise FilterError(f"filter '{self._who()}': every particle hit a body before t = {t} TU")
         self._x = self._prune(x)
         self._invalidate()
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": float(self._lost_total),

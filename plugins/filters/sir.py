@@ -17,11 +17,10 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Filter, Sensor
 from cistrack.measurement import Measurement
 
-from .ensemble_propagation import propagate_ensemble
+from .ensemble_propagation import propagate_particles
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
 from .observation import MeasuredComponents, check_epoch
-from .process_noise import velocity_random_walk_covariance
 from .resampling import effective_sample_size, normalize_log_weights, systematic_resample
 
 __all__ = ["SIRFilter"]
@@ -68,14 +67,9 @@ class SIRFilter(Filter):
         t = float(t)
         if t == self._t:
             return
-        x, alive = propagate_ensemble(self._dyn, self._x, self._t, t, self._who())
+        x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
+                                       self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
-        if lost == x.shape[0]:
-            raise FilterError(f"filter '{self._who()}': every particle hit a body before t = {t} TU")
-        x = x[alive]
-        q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, x.shape[1])
-        if np.any(q):
-            x = x + self._rng.standard_normal(x.shape) * np.sqrt(np.diag(q))
         self._x = x
         self._logw, _ = normalize_log_weights(self._logw[alive], self._who())
         self._lost_total += lost
