@@ -79,7 +79,7 @@ def main() -> int:
         "IOD": _cumtime(st, "plugins/iod", "estimate"),
         # the kernels run on worker threads, which cProfile does not see: time the Python call
         # that waits for them (filter predictions and the truth)
-        "propagation": _cumtime(st, "plugins/dynamics/compiled.py", "propagate"),
+        "propagation": _cumtime(st, "core/propagation/compiled.py", "propagate"),
         "clustering": _cumtime(st, "plugins/clustering", "cluster"),
         "resampling": _cumtime(st, "plugins/filters", "_sample_posterior"),
         "metrics": _cumtime(st, "core/metrics.py", "step_metrics"),

@@ -20,7 +20,7 @@ from cistrack.component import check_int, check_positive, check_range
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body
 
-from .compiled import CompiledDynamics
+from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BP", "cr3bp_rhs", "jacobi_constant", "MU_EARTH_MOON"]
 

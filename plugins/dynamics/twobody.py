@@ -18,7 +18,7 @@ from cistrack.errors import CistrackError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body
 
-from .compiled import CompiledDynamics
+from cistrack.propagation import CompiledDynamics
 
 __all__ = ["TwoBody", "twobody_rhs", "kepler_propagate", "gm_nondimensional", "GM_EARTH_KM3S2"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from cistrack.plugins.dynamics.compiled import CompiledDynamics
+from cistrack.propagation import CompiledDynamics
 
 
 @njit(cache=True)

@@ -18,7 +18,7 @@ from numba import njit
 from cistrack import units
 from cistrack.component import check_nonnegative, check_range
 from cistrack.interfaces.dynamics import Body
-from cistrack.plugins.dynamics.compiled import CompiledDynamics
+from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BPSolarPressure", "srp_acceleration_lu_tu2", "SOLAR_PRESSURE_N_M2", "SUN_RATE"]
 

@@ -1,0 +1,165 @@
+"""Kernel generation, on-disk cache and worker threads of compiled ensemble propagation.
+
+How the speed is obtained: for each right-hand side, :mod:`.dop853_source` writes a module
+with the integrator unrolled around that function, stored in the kernel cache directory
+(``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels``, else
+``~/.cache/cistrack/kernels``) under a name hashed from the integrator, the model's source file
+and numba's version; numba compiles it once (``cache=True``) and later processes load the
+machine code from disk. A right-hand side that is not importable by module and name (defined in
+``__main__`` or inside a function) still works, compiled in memory on every new process.
+
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numba
+import numpy as np
+
+from . import dop853_source
+
+__all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks"]
+
+
+# -- kernel generation and caching ----------------------------------------------------------------
+
+_LOCK = threading.Lock()
+_KERNELS: dict[tuple[int, int], ModuleType] = {}
+
+
+def kernel_cache_dir() -> Path:
+    """Directory where generated kernel modules (and numba's cache of them) are kept."""
+    env = os.environ.get("CISTRACK_KERNEL_DIR")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg) if xdg else Path.home() / ".cache"
+    return base / "cistrack" / "kernels"
+
+
+def _importable_name(rhs: Any) -> tuple[str, str] | None:
+    """(module, name) if ``rhs`` can be imported back as ``from module import name``."""
+    func = getattr(rhs, "py_func", None)
+    if func is None:
+        return None
+    mod, name = func.__module__, func.__qualname__
+    if mod in (None, "__main__") or "<" in name or "." in name:
+        return None
+    module = sys.modules.get(mod)
+    if module is None or getattr(module, name, None) is not rhs:
+        return None
+    return mod, name
+
+
+def _source_digest(rhs: Any) -> str:
+    """Hash of the file defining ``rhs`` (so editing the model invalidates its kernel)."""
+    try:
+        text = Path(inspect.getsourcefile(rhs.py_func)).read_bytes()
+    except (TypeError, OSError):
+        text = repr(rhs).encode()
+    return hashlib.sha256(text).hexdigest()
+
+
+def _load_file_module(name: str, path: Path) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".py")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
+    """The generated module (``propagate_kernel``, ``derivatives_kernel``) for ``rhs``.
+
+    Built once per process and right-hand side; on disk once per model source and numba version.
+    """
+    key = (id(rhs), int(dim))
+    with _LOCK:
+        mod = _KERNELS.get(key)
+        if mod is not None:
+            return mod
+        where = _importable_name(rhs)
+        if where is not None:
+            src = dop853_source.generate_source(
+                f"from {where[0]} import {where[1]} as rhs", dim, title=f"for {where[0]}.{where[1]}")
+            digest = hashlib.sha256(
+                (src + _source_digest(rhs) + numba.__version__ + sys.version).encode()).hexdigest()[:20]
+            name = f"cistrack_kernel_{where[1]}_{digest}"
+            mod = None
+            for directory in (kernel_cache_dir(), Path(tempfile.gettempdir()) / "cistrack-kernels"):
+                path = directory / f"{name}.py"
+                try:
+                    if not path.exists() or path.read_text() != src:
+                        _write_atomic(path, src)
+                    mod = _load_file_module(name, path)
+                    break
+                except OSError:
+                    continue
+        if where is None or mod is None:  # not importable or no writable directory: in memory
+            src = dop853_source.generate_source("", dim, cache=False, title="(in memory)")
+            mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
+            mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
+            exec(compile(src, f"<cistrack kernel for {rhs!r}>", "exec"), mod.__dict__)
+        _KERNELS[key] = mod
+        return mod
+
+
+# -- threads ---------------------------------------------------------------------------------------
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_PID = -1
+
+
+def num_threads() -> int:
+    """Worker threads used by propagate: ``$CISTRACK_NUM_THREADS``, else numba's thread count
+    (``$NUMBA_NUM_THREADS``, default: the CPUs this process may use)."""
+    env = os.environ.get("CISTRACK_NUM_THREADS")
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            pass
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def _pool(workers: int) -> ThreadPoolExecutor:
+    global _POOL, _POOL_PID
+    if _POOL is None or _POOL_PID != os.getpid() or _POOL._max_workers != workers:
+        _POOL = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="cistrack-propagate")
+        _POOL_PID = os.getpid()
+    return _POOL
+
+
+def run_chunks(kernel, n: int, args: tuple) -> None:
+    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the worker threads (GIL released)."""
+    workers = min(num_threads(), n)
+    if workers <= 1 or n < 32:
+        kernel(0, n, *args)
+        return
+    # several chunks per worker so that uneven particles (close approaches) balance out
+    n_chunks = min(n, workers * 8)
+    edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
+    futures = [_pool(workers).submit(kernel, int(a), int(b), *args)
+               for a, b in zip(edges[:-1], edges[1:]) if b > a]
+    for fut in futures:
+        fut.result()
+
+
