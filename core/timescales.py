@@ -4,8 +4,8 @@ Every conversion goes through ``astropy.time`` (which calls ERFA, the IAU SOFA l
 Earth orientation parameters (UT1-UTC and polar motion) come from the IERS tables bundled with
 astropy (package ``astropy-iers-data``: IERS finals2000A, measured values from 1973 plus about
 a year of IERS predictions). Nothing here downloads: importing this module sets
-``astropy.utils.iers.conf.auto_download = False`` for the process (astropy then reads only the
-bundled tables; see docs/real-sky.md).
+``astropy.utils.iers.conf.auto_download = False`` and ``auto_max_age = None`` for the process
+(astropy then reads only the bundled tables, whatever their age; see docs/real-sky.md).
 
 Times are given as a UTC instant ``epoch`` (``datetime`` or ISO-8601 string) plus ``seconds``
 (scalar or (K,) array) of elapsed SI seconds after it, i.e. physical (TAI) seconds, which is what
@@ -43,6 +43,7 @@ __all__ = [
 ]
 
 iers.conf.auto_download = False          # bundled IERS/leap-second tables only, never the network
+iers.conf.auto_max_age = None            # and use them however old they are (no "stale table" error)
 
 J2000_JD: float = 2451545.0
 """Julian date of J2000.0 (2000-01-01T12:00:00 TT; used here on the TDB scale)."""
