@@ -206,6 +206,34 @@ class DE421:
         pos, vel = self._eph.position_and_velocity(name, a, b)
         return np.asarray(pos).T, np.asarray(vel).T / DAY_S
 
+    def moon_acceleration(self, jd1, jd2=0.0) -> np.ndarray:
+        """Second time derivative of the geocentric Moon at TDB ``jd1 + jd2``: (N, 3) km/s^2.
+
+        Differentiates DE421's Chebyshev series twice (used for the rotation rate of the real
+        Earth-Moon frame about its x axis). Scalar dates give a (3,) array.
+        """
+        a, b, scalar = _as_jd(jd1, jd2)
+        self._check_jd(a, b)
+        sets = self._eph.load("moon")
+        nset, _, ncoef = sets.shape
+        days = (self._eph.jomega - self._eph.jalpha) / nset
+        k, off = np.divmod((a - self._eph.jalpha) + b, days)
+        k = np.minimum(k.astype(np.int64), nset - 1)
+        off = (a - self._eph.jalpha) + b - k * days
+        x = 2.0 * off / days - 1.0
+        t = np.zeros((ncoef, x.size))
+        d1 = np.zeros_like(t)
+        d2 = np.zeros_like(t)
+        t[0] = 1.0
+        t[1] = x
+        d1[1] = 1.0
+        for n in range(2, ncoef):
+            t[n] = 2.0 * x * t[n - 1] - t[n - 2]
+            d1[n] = 2.0 * x * d1[n - 1] - d1[n - 2] + 2.0 * t[n - 1]
+            d2[n] = 2.0 * x * d2[n - 1] - d2[n - 2] + 4.0 * d1[n - 1]
+        acc = np.einsum("kac,ck->ka", sets[k], d2) * (2.0 / (days * DAY_S)) ** 2
+        return acc[0] if scalar else acc
+
     def moon(self, jd1, jd2=0.0) -> tuple[np.ndarray, np.ndarray]:
         """Geocentric Moon at TDB ``jd1 + jd2``: position (N, 3) km, velocity (N, 3) km/s.
 

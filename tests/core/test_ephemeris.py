@@ -86,3 +86,11 @@ def test_dates_outside_de421_are_refused_with_its_coverage(eph):
         eph.moon(2_600_000.5)
     with pytest.raises(ValueError, match="must be one of"):
         eph.series("mars", (JD0, 0.0), 0.0, 1.0)
+
+
+def test_moon_acceleration_is_the_time_derivative_of_velocity(eph):
+    h = 60.0
+    _, v_plus = eph.moon(JD0, (TS + h) / DAY_S)
+    _, v_minus = eph.moon(JD0, (TS - h) / DAY_S)
+    acc = eph.moon_acceleration(JD0, TS / DAY_S)
+    assert np.max(np.abs((v_plus - v_minus) / (2.0 * h) - acc)) < 1e-11  # km/s^2 (|a| ~ 2.7e-6)

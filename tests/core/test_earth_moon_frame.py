@@ -1,0 +1,109 @@
+"""The real Earth-Moon rotating frame: exact inverse transforms, an orthonormal right-handed
+rotation, the Moon on the +x axis at rest, and velocity transport terms that match finite
+differences of the positions."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack import units
+from cistrack.ephemeris import DAY_S
+from cistrack.frames.earth_moon import EarthMoonFrame
+
+JD0 = (2_461_041.5, 0.0)  # 2026-01-01 00:00 TDB
+T = np.linspace(0.0, 8.0, 17)  # TU (~35 days: a full lunar month)
+
+
+@pytest.fixture(scope="module")
+def frame():
+    return EarthMoonFrame(JD0)
+
+
+@pytest.fixture
+def states(rng):
+    s = rng.normal(size=(T.size, 6))
+    s[:, :3] *= 0.5
+    s[:, 0] += 1.0
+    return s
+
+
+def test_synodic_gcrs_round_trip_is_exact(frame, states):
+    back = frame.gcrs_to_synodic(frame.synodic_to_gcrs(states, T), T)
+    assert np.max(np.abs(back - states)) < 1e-12
+
+
+def test_pulsating_gcrs_round_trip_is_exact(frame, states):
+    back = frame.gcrs_to_pulsating(frame.pulsating_to_gcrs(states, T), T)
+    assert np.max(np.abs(back - states)) < 1e-12
+
+
+def test_rotation_is_orthonormal_and_right_handed(frame):
+    rot = frame.axes(T).rotation
+    eye = np.einsum("kji,kjl->kil", rot, rot)
+    assert np.max(np.abs(eye - np.eye(3))) < 1e-14
+    assert np.allclose(np.linalg.det(rot), 1.0, atol=1e-14)
+
+
+def test_moon_sits_on_the_x_axis_at_rest(frame):
+    dd = T * units.TU_S / DAY_S
+    r, v = frame.ephemeris.moon(JD0[0], JD0[1] + dd)
+    moon = frame.gcrs_to_synodic(np.hstack([r, v]), T)
+    d = np.linalg.norm(r, axis=1)
+    np.testing.assert_allclose(moon[:, 0], (1.0 - frame.mu) * d / units.LU_KM, rtol=1e-14)
+    assert np.max(np.abs(moon[:, 1:3])) < 1e-14
+    # in the constant-unit frame the Moon moves only along x, at (1 - mu) d'
+    assert np.max(np.abs(moon[:, 4:6])) < 1e-12
+    np.testing.assert_allclose(moon[:, 0], frame.moon_synodic(T)[:, 0], rtol=1e-15)
+    assert 0.92 < moon[:, 0].min() and moon[:, 0].max() < 1.06
+
+
+def test_earth_and_moon_are_fixed_in_the_pulsating_frame(frame):
+    dd = T * units.TU_S / DAY_S
+    r, v = frame.ephemeris.moon(JD0[0], JD0[1] + dd)
+    moon = frame.gcrs_to_pulsating(np.hstack([r, v]), T)
+    earth = frame.gcrs_to_pulsating(np.zeros((T.size, 6)), T)
+    expect_moon = np.array([1.0 - frame.mu, 0, 0, 0, 0, 0])
+    expect_earth = np.array([-frame.mu, 0, 0, 0, 0, 0])
+    assert np.max(np.abs(moon - expect_moon)) < 1e-13
+    assert np.max(np.abs(earth - expect_earth)) < 1e-13
+
+
+@pytest.mark.parametrize("scaling", ["synodic", "pulsating"])
+def test_gcrs_velocity_is_the_derivative_of_gcrs_position_along_a_frame_fixed_path(frame, scaling):
+    """A point moving with constant frame coordinates: its GCRS velocity (transport terms) must
+    equal the finite difference of its GCRS positions."""
+    to_gcrs = getattr(frame, f"{scaling}_to_gcrs")
+    rho = np.array([1.1, -0.05, 0.2])
+    rho_dot = np.array([0.01, -0.02, 0.03])  # frame units of velocity
+    h = 1e-4  # TU (37.5 s)
+    for t in (0.3, 2.0, 5.7):
+        if scaling == "synodic":
+            path = lambda tt: np.concatenate([rho + rho_dot * (tt - t), rho_dot])  # noqa: E731
+        else:
+            # pulsating velocity unit is d h/d^2 per second: integrate rho in that clock
+            rate = frame.axes(t).angular_rate[0] * units.TU_S
+            path = lambda tt: np.concatenate([rho + rho_dot * rate * (tt - t), rho_dot])  # noqa: E731
+        xp = to_gcrs(path(t + h), t + h)
+        xm = to_gcrs(path(t - h), t - h)
+        x0 = to_gcrs(path(t), t)
+        fd = (xp[:3] - xm[:3]) / (2.0 * h * units.TU_S)
+        assert np.max(np.abs(fd - x0[3:])) < 1e-7  # km/s (|v| ~ 1 km/s)
+
+
+def test_synodic_and_pulsating_agree_where_distance_is_lu_and_rate_is_one_over_tu(frame):
+    """The two scalings differ only by d/LU and (h/d)/VU: check the relation directly."""
+    ax = frame.axes(1.0)
+    s = np.array([0.9, 0.1, -0.1, 0.02, 0.01, 0.0])
+    g = frame.pulsating_to_gcrs(s, 1.0)
+    syn = frame.gcrs_to_synodic(g, 1.0)
+    d = ax.distance[0]
+    np.testing.assert_allclose(syn[:3], s[:3] * d / units.LU_KM, rtol=1e-13)
+
+
+def test_malformed_states_are_refused(frame):
+    with pytest.raises(ValueError, match="shape"):
+        frame.synodic_to_gcrs(np.zeros((3, 5)), 0.0)
+    with pytest.raises(ValueError, match="one time per state"):
+        frame.synodic_to_gcrs(np.zeros((3, 6)), [0.0, 1.0])
+    with pytest.raises(ValueError, match="finite"):
+        frame.synodic_to_gcrs(np.full(6, np.nan), 0.0)
