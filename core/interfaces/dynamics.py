@@ -13,18 +13,27 @@ __all__ = ["Body", "Dynamics", "Propagation"]
 
 @dataclass(frozen=True)
 class Body:
-    """A massive body that particles can hit.
+    """A massive body of a dynamics model (a primary) and the sphere particles can hit.
 
     Attributes
     ----------
-    name : str            e.g. "Earth"
-    position : (3,) float synodic position, LU (fixed in the rotating frame)
-    radius : float        impact radius, LU
+    name : str              e.g. "Earth"
+    position : (3,) float   synodic position, LU (at t = 0 for a model whose bodies move; see
+                            :meth:`position_at`)
+    radius : float          impact radius, LU (0: no impact surface)
+    mass_fraction : float   the body's mass over the system's (Earth 1 - mu, Moon mu in the
+                            Earth-Moon CR3BP; 0 when the model does not say)
     """
 
     name: str
     position: np.ndarray
     radius: float
+    mass_fraction: float = 0.0
+
+    def position_at(self, t) -> np.ndarray:
+        """Synodic position (3,) LU at time ``t`` (TU); constant here, a model with moving
+        bodies returns Body subclasses that override this."""
+        return np.asarray(self.position, dtype=float)
 
 
 @dataclass
@@ -73,9 +82,24 @@ class Dynamics(Component):
     kind = "dynamics"
 
     @property
+    def primaries(self) -> tuple[Body, ...]:
+        """The model's massive bodies with their mass fractions, positions and radii (e.g. the
+        Earth and the Moon; :mod:`cistrack.primaries` has the Earth-Moon values). Default: the
+        impact bodies."""
+        return self.bodies
+
+    @property
     def bodies(self) -> tuple[Body, ...]:
-        """Bodies whose surfaces stop a particle (empty if the model has none)."""
-        return ()
+        """Bodies whose surfaces stop a particle (empty if the model has none). Default: the
+        primaries with a positive radius."""
+        if type(self).primaries is Dynamics.primaries:
+            return ()
+        return tuple(b for b in self.primaries if b.radius > 0)
+
+    def primary(self, name: str) -> Body | None:
+        """The primary called ``name`` (case-insensitive), or None."""
+        want = name.strip().lower()
+        return next((b for b in self.primaries if b.name.lower() == want), None)
 
     @abstractmethod
     def derivatives(self, t: float, states: np.ndarray) -> np.ndarray:

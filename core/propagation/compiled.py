@@ -13,6 +13,7 @@ Writing a new model in your own package (say a bicircular four-body problem)::
     from numba import njit
     from cistrack.component import check_positive
     from cistrack.hookspecs import hookimpl
+    from cistrack.primaries import MU_EARTH_MOON
     from cistrack.propagation import CompiledDynamics
 
     @njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
@@ -21,7 +22,7 @@ Writing a new model in your own package (say a bicircular four-body problem)::
         ...                                # write out[0..5]; no allocation, no Python objects
     class BCR4BP(CompiledDynamics):
         rhs = bcr4bp_rhs                   # a module-level njit function (so it can be cached)
-        def __init__(self, mu: float = 1.2150582e-2, rtol: float = 1e-11, atol: float = 1e-12):
+        def __init__(self, mu: float = MU_EARTH_MOON, rtol: float = 1e-11, atol: float = 1e-12):
             self.mu = mu; self.rtol = rtol; self.atol = atol   # validate with check_* here
         def params_vector(self):
             return np.array([self.mu, 328900.54, 388.81, -0.925195985])
@@ -32,7 +33,8 @@ Writing a new model in your own package (say a bicircular four-body problem)::
 
 and declare ``bcr4bp = "mypkg.bcr4bp"`` under ``[project.entry-points.cistrack]``. The right-hand
 side must be a module-level ``@njit`` function ``rhs(t, y, params, out)`` on float64 arrays.
-Bodies (impact surfaces) come from overriding :attr:`bodies`.
+The massive bodies (with their impact radii) come from overriding :attr:`primaries`
+(:func:`cistrack.primaries.earth_moon_primaries` for the Earth and the Moon).
 
 How the speed is obtained (generated kernels, their on-disk cache, worker threads) is described
 in :mod:`cistrack.propagation.kernels`.

@@ -11,6 +11,7 @@ import numpy as np
 from ..belief import ParticleCloud
 from ..interfaces.schedule import Pass
 from ..measurement import MeasurementSet
+from ..primaries import MU_EARTH_MOON
 from ..units import hours_to_tu, km_to_lu, kms_to_vu
 from .reference_dynamics import ReferenceCR3BP
 from .reference_sensor import GeocentricAnglesSensor
@@ -57,7 +58,7 @@ def lunar_distance_states(n: int = 6) -> np.ndarray:
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     v = rng.standard_normal((n, 3))
     v *= kms_to_vu(1.0) / np.linalg.norm(v, axis=1, keepdims=True)
-    earth = np.array([-1.2150582e-2, 0.0, 0.0])
+    earth = np.array([-MU_EARTH_MOON, 0.0, 0.0])
     return np.concatenate([earth + u, v], axis=1)
 
 

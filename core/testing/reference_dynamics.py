@@ -10,14 +10,12 @@ import numpy as np
 from ..component import Component, check_positive
 from ..errors import ParameterError
 from ..interfaces.dynamics import Body, Dynamics, Propagation
+from ..primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON
 from ..units import LU_KM
 from .adaptive_rk import propagate_adaptive
 
 __all__ = ["MU_EARTH_MOON", "ReferenceCR3BP", "cr3bp_derivatives", "as_states"]
 
-MU_EARTH_MOON = 1.2150582e-2
-EARTH_RADIUS_KM = 6378.137
-MOON_RADIUS_KM = 1737.4
 
 
 def as_states(owner: Component, states: np.ndarray, name: str = "states") -> np.ndarray:
@@ -64,9 +62,9 @@ class ReferenceCR3BP(Dynamics):
         self.rtol = check_positive(self, "rtol", rtol)
 
     @property
-    def bodies(self) -> tuple[Body, ...]:
-        return (Body("Earth", np.array([-self.mu, 0.0, 0.0]), EARTH_RADIUS_KM / LU_KM),
-                Body("Moon", np.array([1.0 - self.mu, 0.0, 0.0]), MOON_RADIUS_KM / LU_KM))
+    def primaries(self) -> tuple[Body, ...]:
+        return (Body("Earth", np.array([-self.mu, 0.0, 0.0]), EARTH_RADIUS_KM / LU_KM, 1.0 - self.mu),
+                Body("Moon", np.array([1.0 - self.mu, 0.0, 0.0]), MOON_RADIUS_KM / LU_KM, self.mu))
 
     def derivatives(self, t: float, states: np.ndarray) -> np.ndarray:
         """Time derivative of ``states`` (N, 6) -> (N, 6); the model is autonomous."""

@@ -19,7 +19,8 @@ from ..interfaces.schedule import Pass
 from ..interfaces.sensor import Sensor
 from ..measurement import MeasurementSet
 from ..units import ARCSEC_RAD, LU_KM, TU_S
-from .reference_dynamics import EARTH_RADIUS_KM, MU_EARTH_MOON, as_states
+from ..primaries import EARTH_RADIUS_KM, MU_EARTH_MOON
+from .reference_dynamics import as_states
 
 EARTH_ROTATION_RATE_RAD_S = 7.2921159e-5
 """Earth's sidereal rotation rate, rad/s."""

@@ -24,7 +24,7 @@ import numpy as np
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.orbit import ReferenceOrbit
 
-from .cr3bp import MU_EARTH_MOON
+from cistrack.primaries import MU_EARTH_MOON
 
 __all__ = ["ORBITS", "GUESSES", "get_orbit"]
 

@@ -26,7 +26,9 @@ from scipy.integrate import solve_ivp
 
 from cistrack.errors import CistrackError
 
-from .cr3bp import MU_EARTH_MOON, cr3bp_rhs
+from cistrack.primaries import MU_EARTH_MOON
+
+from .cr3bp import cr3bp_rhs
 
 __all__ = ["CorrectionError", "CorrectedOrbit", "correct_symmetric_orbit", "propagate_with_stm",
            "cr3bp_stm_rhs"]

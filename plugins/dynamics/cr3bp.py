@@ -15,17 +15,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from cistrack import units
 from cistrack.component import check_int, check_positive, check_range
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body
-
+from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries
 from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BP", "cr3bp_rhs", "jacobi_constant", "MU_EARTH_MOON"]
-
-MU_EARTH_MOON: float = 1.2150582e-2
-"""Earth–Moon mass ratio m_Moon / (m_Earth + m_Moon)."""
 
 
 @njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
@@ -82,7 +78,7 @@ class CR3BP(CompiledDynamics):
     rhs = cr3bp_rhs
 
     def __init__(self, mu: float = MU_EARTH_MOON, rtol: float = 1e-12, atol: float = 2e-11,
-                 earth_radius_km: float = 6378.137, moon_radius_km: float = 1737.4,
+                 earth_radius_km: float = EARTH_RADIUS_KM, moon_radius_km: float = MOON_RADIUS_KM,
                  max_steps: int = 5_000_000):
         self.mu = check_range(self, "mu", mu, 0.0, 0.5, lo_open=True)
         self.rtol = check_range(self, "rtol", rtol, 1e-15, 1e-2)
@@ -96,14 +92,10 @@ class CR3BP(CompiledDynamics):
         return np.array([self.mu])
 
     @property
-    def bodies(self) -> tuple[Body, ...]:
-        """Earth at (-mu, 0, 0) and Moon at (1-mu, 0, 0) with their radii in LU."""
-        out = []
-        if self.earth_radius_km > 0:
-            out.append(Body("Earth", np.array([-self.mu, 0.0, 0.0]), float(units.km_to_lu(self.earth_radius_km))))
-        if self.moon_radius_km > 0:
-            out.append(Body("Moon", np.array([1.0 - self.mu, 0.0, 0.0]), float(units.km_to_lu(self.moon_radius_km))))
-        return tuple(out)
+    def primaries(self) -> tuple[Body, ...]:
+        """Earth at (-mu, 0, 0) and Moon at (1-mu, 0, 0), mass fractions 1-mu and mu, radii in LU
+        (the impact bodies are those with a positive radius)."""
+        return earth_moon_primaries(self.mu, self.earth_radius_km, self.moon_radius_km)
 
     def jacobi(self, states: np.ndarray) -> np.ndarray:
         """Jacobi constant of states (N, 6) [LU, VU] -> (N,) [VU^2]."""

@@ -17,6 +17,7 @@ from cistrack.component import check_int, check_positive, check_range
 from cistrack.errors import CistrackError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body
+from cistrack.primaries import EARTH_RADIUS_KM
 
 from cistrack.propagation import CompiledDynamics
 
@@ -184,7 +185,7 @@ class TwoBody(CompiledDynamics):
 
     rhs = twobody_rhs
 
-    def __init__(self, gm_km3s2: float = GM_EARTH_KM3S2, body_radius_km: float = 6378.137,
+    def __init__(self, gm_km3s2: float = GM_EARTH_KM3S2, body_radius_km: float = EARTH_RADIUS_KM,
                  rtol: float = 1e-12, atol: float = 1e-13, max_steps: int = 5_000_000):
         self.gm_km3s2 = check_positive(self, "gm_km3s2", gm_km3s2)
         self.body_radius_km = check_range(self, "body_radius_km", body_radius_km, 0.0, 1e7)
@@ -201,10 +202,10 @@ class TwoBody(CompiledDynamics):
         return np.array([self.gm])
 
     @property
-    def bodies(self) -> tuple[Body, ...]:
-        if self.body_radius_km <= 0:
-            return ()
-        return (Body("Central body", np.zeros(3), float(units.km_to_lu(self.body_radius_km))),)
+    def primaries(self) -> tuple[Body, ...]:
+        """The central body at the origin, all of the system's mass (an impact body when its
+        radius is positive)."""
+        return (Body("Central body", np.zeros(3), float(units.km_to_lu(self.body_radius_km)), 1.0),)
 
     def kepler(self, states: np.ndarray, dt) -> np.ndarray:
         """Closed-form propagation of states (N, 6) [LU, VU] by ``dt`` TU -> (N, 6)."""

@@ -11,15 +11,10 @@ __all__ = ["StateBounds", "earth_position"]
 
 
 def earth_position(dynamics: Dynamics) -> np.ndarray:
-    """Synodic position (3,) LU of the Earth: the dynamics' body named 'Earth', else (-mu, 0, 0)
-    from a ``mu`` attribute, else the origin."""
-    for b in dynamics.bodies:
-        if b.name.lower() == "earth":
-            return np.asarray(b.position, dtype=float)
-    mu = getattr(dynamics, "mu", None)
-    if isinstance(mu, (int, float)):
-        return np.array([-float(mu), 0.0, 0.0])
-    return np.zeros(3)
+    """Synodic position (3,) LU of the Earth: the dynamics' primary named 'Earth' (at t = 0),
+    else the origin (a model without an Earth measures ranges from its origin)."""
+    earth = dynamics.primary("Earth")
+    return np.zeros(3) if earth is None else earth.position_at(0.0).copy()
 
 
 class StateBounds:

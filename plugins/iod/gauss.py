@@ -28,17 +28,13 @@ from cistrack.errors import IODError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
 from cistrack.measurement import MeasurementSet
-
-from cistrack.plugins.sensors.frames import rot_z  # synodic -> ECI is R3(+t): the synodic frame turns at +1 rad/TU
+from cistrack.primaries import MU_EARTH_MOON
+from cistrack.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
 
 from .kinematic import prepare_fit
 
 __all__ = ["GaussSolution", "gauss_angles_only", "synodic_to_eci", "eci_to_synodic", "GaussIOD",
            "MU_EARTH_MOON"]
-
-MU_EARTH_MOON = 1.2150582e-2
-"""Earth–Moon mass ratio of the synodic frame (REFERENCE.md)."""
-
 
 @dataclass
 class GaussSolution:
@@ -164,32 +160,6 @@ def gauss_angles_only(observer: np.ndarray, los: np.ndarray, times: np.ndarray,
     v2[nan] = np.nan
     v3[nan] = np.nan
     return GaussSolution(r, v2, v3, rho, valid)
-
-
-def synodic_to_eci(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarray:
-    """Synodic states (N, 6) at t (scalar or (N,) TU) -> Earth-centred inertial (N, 6) (LU, VU).
-
-    The ECI axes coincide with the synodic axes at t = 0. q = R (r - r_E),
-    q_dot = R (v + omega x (r - r_E)), omega = z, r_E = (-mu, 0, 0).
-    """
-    x = np.atleast_2d(np.asarray(states, dtype=float))
-    rot = np.broadcast_to(rot_z(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
-    rel = x[:, :3] - np.array([-mu, 0.0, 0.0])
-    w_x_r = np.stack([-rel[:, 1], rel[:, 0], np.zeros(len(rel))], axis=1)
-    q = np.einsum("nij,nj->ni", rot, rel)
-    qd = np.einsum("nij,nj->ni", rot, x[:, 3:] + w_x_r)
-    return np.concatenate([q, qd], axis=1)
-
-
-def eci_to_synodic(states: np.ndarray, t, mu: float = MU_EARTH_MOON) -> np.ndarray:
-    """Inverse of :func:`synodic_to_eci`: v_syn = R^T q_dot - omega x (r_syn - r_E)."""
-    x = np.atleast_2d(np.asarray(states, dtype=float))
-    rot = np.broadcast_to(rot_z(np.asarray(t, dtype=float)), (x.shape[0], 3, 3))
-    rel = np.einsum("nji,nj->ni", rot, x[:, :3])
-    v = np.einsum("nji,nj->ni", rot, x[:, 3:])
-    w_x_r = np.stack([-rel[:, 1], rel[:, 0], np.zeros(len(rel))], axis=1)
-    r = rel + np.array([-mu, 0.0, 0.0])
-    return np.concatenate([r, v - w_x_r], axis=1)
 
 
 class GaussIOD(IODMethod):

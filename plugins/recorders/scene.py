@@ -9,6 +9,8 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import brentq
 
 from cistrack.errors import ParameterError
+from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, mass_ratio
+from cistrack.primaries import MU_EARTH_MOON as EARTH_MOON_MU
 from cistrack.units import LU_KM
 
 __all__ = [
@@ -17,10 +19,6 @@ __all__ = [
     "rotation_quaternions", "most_likely_component",
 ]
 
-EARTH_MOON_MU: float = 1.2150582e-2
-"""Earth–Moon mass ratio used when the dynamics do not state one."""
-EARTH_RADIUS_KM: float = 6378.137
-MOON_RADIUS_KM: float = 1737.4
 LIBRATION_NAMES: tuple[str, ...] = ("L1", "L2", "L3", "L4", "L5")
 
 
@@ -64,17 +62,9 @@ def primary_positions(mu: float = EARTH_MOON_MU) -> np.ndarray:
 
 
 def system_mu(dynamics) -> float:
-    """The mass ratio of ``dynamics``: its ``mu`` attribute, else the Earth's position in its
-    ``bodies`` (Earth at x = -mu), else the Earth–Moon value."""
-    mu = getattr(dynamics, "mu", None)
-    if isinstance(mu, (int, float)) and 0.0 < float(mu) < 0.5:
-        return float(mu)
-    for body in getattr(dynamics, "bodies", ()) or ():
-        if str(getattr(body, "name", "")).lower() == "earth":
-            x = -float(np.asarray(body.position, dtype=float)[0])
-            if 0.0 < x < 0.5:
-                return x
-    return EARTH_MOON_MU
+    """The mass ratio of ``dynamics``: the Moon's mass fraction among its primaries, else the
+    Earth–Moon value (:func:`cistrack.primaries.mass_ratio`)."""
+    return mass_ratio(dynamics)
 
 
 def rotation_quaternions(rot: np.ndarray) -> np.ndarray:

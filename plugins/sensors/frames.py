@@ -26,6 +26,8 @@ from datetime import datetime, timezone
 
 import numpy as np
 
+from cistrack.primaries import MU_EARTH_MOON
+from cistrack.rotating_frame import rot_z
 from cistrack.units import DAY_S, TU_S
 
 __all__ = [
@@ -36,8 +38,8 @@ __all__ = [
     "FrameModel", "EquatorialFrameModel", "FRAME_MODELS",
 ]
 
-MU: float = 1.2150582e-2
-"""Earth–Moon mass ratio (REFERENCE.md)."""
+MU: float = MU_EARTH_MOON
+"""Earth–Moon mass ratio (:mod:`cistrack.primaries`)."""
 WGS84_A_M: float = 6_378_137.0
 """WGS84 equatorial radius, m."""
 WGS84_F: float = 1.0 / 298.257223563
@@ -67,19 +69,6 @@ def earth_rotation_angle(epoch: datetime, t) -> np.ndarray:
     dfrac = frac + np.asarray(t, dtype=float) * (TU_S / DAY_S)   # fraction of days past `whole`
     turns = 0.7790572732640 + 0.00273781191135448 * (whole + dfrac) + np.mod(dfrac, 1.0)
     return _TWO_PI * np.mod(turns, 1.0)
-
-
-def rot_z(angle) -> np.ndarray:
-    """Active rotation by ``angle`` (rad) about z: scalar -> (3, 3), (K,) -> (K, 3, 3)."""
-    a = np.asarray(angle, dtype=float)
-    c, s = np.cos(a), np.sin(a)
-    out = np.zeros(a.shape + (3, 3))
-    out[..., 0, 0] = c
-    out[..., 0, 1] = -s
-    out[..., 1, 0] = s
-    out[..., 1, 1] = c
-    out[..., 2, 2] = 1.0
-    return out
 
 
 def geodetic_to_ecef(latitude_deg: float, longitude_deg: float, height_m: float) -> np.ndarray:

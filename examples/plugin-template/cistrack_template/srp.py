@@ -18,11 +18,11 @@ from numba import njit
 from cistrack import units
 from cistrack.component import check_nonnegative, check_range
 from cistrack.interfaces.dynamics import Body
+from cistrack.primaries import MU_EARTH_MOON, earth_moon_primaries
 from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BPSolarPressure", "srp_acceleration_lu_tu2", "SOLAR_PRESSURE_N_M2", "SUN_RATE"]
 
-MU_EARTH_MOON = 1.2150582e-2
 SOLAR_PRESSURE_N_M2 = 4.56e-6
 """Solar radiation pressure on a perfect absorber at 1 au, N/m^2."""
 SUN_RATE = -0.925195985
@@ -89,7 +89,6 @@ class CR3BPSolarPressure(CompiledDynamics):
         return np.array([self.mu, a, np.radians(self.sun_angle_deg), SUN_RATE])
 
     @property
-    def bodies(self) -> tuple[Body, ...]:
-        """Earth and Moon as impact spheres (radii in LU)."""
-        return (Body("Earth", np.array([-self.mu, 0.0, 0.0]), float(units.km_to_lu(6378.137))),
-                Body("Moon", np.array([1.0 - self.mu, 0.0, 0.0]), float(units.km_to_lu(1737.4))))
+    def primaries(self) -> tuple[Body, ...]:
+        """Earth and Moon with their mass fractions and radii (also the impact spheres)."""
+        return earth_moon_primaries(self.mu)

@@ -1,0 +1,80 @@
+"""The layering rules, checked on the source: core never imports a plugin, and a plugin family
+never imports another family (a plugin imports core, ``cistrack.*``, only)."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+CORE, PLUGINS = ROOT / "core", ROOT / "plugins"
+
+
+def _module_name(path: Path) -> str:
+    if path.is_relative_to(CORE):
+        parts = ("cistrack",) + path.relative_to(CORE).with_suffix("").parts
+    else:
+        parts = ("cistrack", "plugins") + path.relative_to(PLUGINS).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports(path: Path) -> set[str]:
+    """Absolute names of every module ``path`` imports (relative imports resolved)."""
+    mod = _module_name(path)
+    package = mod if path.name == "__init__.py" else mod.rsplit(".", 1)[0]
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            out.add(target)
+            out.update(f"{target}.{a.name}" for a in node.names)
+    return out
+
+
+def _sources(root: Path) -> list[Path]:
+    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _family(name: str) -> str | None:
+    parts = name.split(".")
+    return parts[2] if len(parts) > 2 and parts[:2] == ["cistrack", "plugins"] else None
+
+
+def test_the_resolver_sees_relative_and_absolute_imports():
+    gauss = PLUGINS / "iod" / "gauss.py"
+    found = _imports(gauss)
+    assert "cistrack.plugins.iod.kinematic" in found and "cistrack.belief" in found
+
+
+# core/run.py still reads measurement files through the csv plugin; the readers work (issue 18)
+# replaces that with a registered reader component. Not strict, so the fix landing does not fail.
+_PENDING = {"core/run.py": "reader components replace the csv-plugin import (issue 18)"}
+
+
+def _core_params():
+    for p in _sources(CORE):
+        rel = str(p.relative_to(ROOT))
+        marks = [pytest.mark.xfail(reason=_PENDING[rel], strict=False)] if rel in _PENDING else []
+        yield pytest.param(p, id=rel, marks=marks)
+
+
+@pytest.mark.parametrize("path", list(_core_params()))
+def test_core_imports_no_plugin(path):
+    bad = sorted(n for n in _imports(path) if n == "cistrack.plugins" or n.startswith("cistrack.plugins."))
+    assert not bad, f"{path.relative_to(ROOT)} imports plugin modules {bad}: core must not depend on plugins"
+
+
+@pytest.mark.parametrize("path", _sources(PLUGINS), ids=lambda p: str(p.relative_to(ROOT)))
+def test_plugin_family_imports_no_other_family(path):
+    own = _family(_module_name(path))
+    other = sorted(n for n in _imports(path) if _family(n) not in (None, own))
+    assert not other, (f"{path.relative_to(ROOT)} (family {own!r}) imports {other}: a plugin imports "
+                       "core (cistrack.*), never another plugin family")
