@@ -81,9 +81,11 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     duration = scenario.duration
 
     if scenario.measurements_file is not None:
-        from cistrack.plugins.sensors.measurement_file import read_measurements  # real observations
+        from .observation_files import reader_for  # real observations, through a registered reader
         say(f"reading measurements from {scenario.measurements_file}")
-        measurements = read_measurements(scenario.measurements_file, epoch=scenario.epoch)
+        spec = scenario.measurements_reader
+        reader = spec.build(reg) if spec is not None else reader_for(scenario.measurements_file, registry=reg)
+        measurements = reader.read(scenario.measurements_file, scenario.epoch)
         grid = np.zeros(0)
         truth = np.zeros((0, 6))
         passes = []

@@ -73,7 +73,7 @@ _REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
 _CUSTODY_KEYS = {"loglik_threshold", "hdr_threshold", "hdr_consecutive"}
 _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction"}
-_MEAS_KEYS = {"file"}
+_MEAS_KEYS = {"file", "reader"}
 
 
 @dataclass(frozen=True)
@@ -121,6 +121,7 @@ class Scenario:
     predict_every_hours: float = 0.0
     end_with_prediction: bool = True
     measurements_file: Path | None = None
+    measurements_reader: ComponentSpec | None = None
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
 
@@ -257,6 +258,11 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         raise ConfigError(f"{source}: 'measurements' must be a table")
     _check_keys(meas, _MEAS_KEYS, source, "[measurements]")
     measurements_file = Path(_typed(meas["file"], str, source, "[measurements]", "file")) if "file" in meas else None
+    measurements_reader = None
+    if "reader" in meas:
+        if measurements_file is None:
+            raise ConfigError(f"{source}: [measurements]: key 'reader' needs 'file'")
+        measurements_reader = _component_spec(meas["reader"], "reader", "[measurements.reader]", source, reg)
     if truth_orbit is not None and "state_km" in truth:
         raise ConfigError(f"{source}: [truth]: give either 'orbit' or 'state_km', not both")
     if truth_orbit is not None:
@@ -310,7 +316,8 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
                     components=components, truth_orbit=truth_orbit, truth_state=truth_state,
                     truth_dynamics=truth_dyn, custody=custody, truth_grid_minutes=grid,
                     predict_every_hours=pe, end_with_prediction=ewp,
-                    measurements_file=measurements_file, source=source, raw=copy.deepcopy(data))
+                    measurements_file=measurements_file, measurements_reader=measurements_reader,
+                    source=source, raw=copy.deepcopy(data))
 
 
 # -- validation helpers --------------------------------------------------------------------------

@@ -11,6 +11,7 @@ clusterer      :class:`Clusterer`                          ``"clustering"``
 filter         :class:`Filter`                             ``"filter"``
 orbit          :class:`ReferenceOrbit` (data, not a class)  ``"orbit"``
 recorder       any object with lifecycle hookimpls         ``"recorder"``
+reader         :class:`Reader` (observation file format)   ``"reader"``
 =============  ==========================================  ==========================
 """
 from .clustering import Clusterer
@@ -18,11 +19,12 @@ from .dynamics import Body, Dynamics, Propagation
 from .filter import Filter
 from .iod import IODMethod
 from .orbit import ReferenceOrbit
+from .reader import Reader
 from .schedule import Pass, Schedule
 from .sensor import Sensor
 
-KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder")
+KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
 __all__ = ["Body", "Clusterer", "Dynamics", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
-           "ReferenceOrbit", "Schedule", "Sensor"]
+           "Reader", "ReferenceOrbit", "Schedule", "Sensor"]

@@ -6,7 +6,7 @@ import pytest
 
 from cistrack.errors import MeasurementError
 from cistrack.plugins.sensors.ground_telescope import GroundTelescope
-from cistrack.plugins.sensors.measurement_file import read_measurements, write_measurements
+from cistrack.plugins.readers.csv_file import read_measurements, write_measurements
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S
 
 EPOCH = "2026-01-01T00:00:00Z"

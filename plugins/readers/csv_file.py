@@ -1,8 +1,12 @@
 """Reading and writing ground-telescope measurements as CSV (format: docs/measurements.md).
 
-One row per measurement; a header row names the columns (any order)::
+Registered as reader ``"csv"`` (suffix ``.csv``). One row per measurement; a header row names
+the columns (any order)::
 
-    time_utc,azimuth_deg,elevation_deg[,range_km][,sigma_azimuth_arcsec][,sigma_elevation_arcsec][,sigma_range_km]
+    time_utc,azimuth_deg,elevation_deg[,range_km][,sigma_azimuth_arcsec][,sigma_elevation_arcsec][,sigma_range_km][,site]
+
+``site`` (optional) names the observing site of the row: a key of the reader's ``sites``
+parameter or an MPC observatory code of the bundled table.
 
 Lines starting with ``#`` and blank lines are ignored. Every invalid row is reported with its
 line number in one :class:`~cistrack.errors.MeasurementError` naming the file; nothing is
@@ -18,14 +22,21 @@ from pathlib import Path
 
 import numpy as np
 
+from cistrack.component import check_positive
 from cistrack.errors import MeasurementError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Reader
 from cistrack.measurement import MeasurementSet
+from cistrack.sites import Site
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
 
-__all__ = ["read_measurements", "write_measurements", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS"]
+from .decimal_units import from_rad, to_rad
+from .site_params import parse_sites, resolve_site
+
+__all__ = ["CsvReader", "read_measurements", "write_measurements", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS"]
 
 REQUIRED_COLUMNS = ("time_utc", "azimuth_deg", "elevation_deg")
-OPTIONAL_COLUMNS = ("range_km", "sigma_azimuth_arcsec", "sigma_elevation_arcsec", "sigma_range_km")
+OPTIONAL_COLUMNS = ("range_km", "sigma_azimuth_arcsec", "sigma_elevation_arcsec", "sigma_range_km", "site")
 _MAX_REPORTED = 25
 
 
@@ -40,7 +51,8 @@ def _number(text: str, column: str) -> float:
 
 
 def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcsec: float = 1.5,
-                      range_alpha: float = 0.05, include_range: bool = True) -> MeasurementSet:
+                      range_alpha: float = 0.05, include_range: bool = True,
+                      sites: dict[str, Site] | None = None) -> MeasurementSet:
     """Read a measurement CSV into a :class:`MeasurementSet` (times TU since ``epoch``).
 
     Parameters
@@ -51,6 +63,7 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
         ``sigma_elevation_arcsec`` (missing column or empty cell).
     range_alpha : range sigma = range_alpha x range for rows without ``sigma_range_km``.
     include_range : keep the ``range_km`` column when the file has one.
+    sites : explicit sites by key for the ``site`` column (other keys: MPC observatory codes).
 
     Returns a set named ("azimuth", "elevation"[, "range"]): values in rad, rad, LU;
     sigmas likewise. Raises MeasurementError naming the file and every bad line.
@@ -94,12 +107,13 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     has_range = "range_km" in col
 
     errors: list[str] = []
-    times, values, sigmas = [], [], []
+    times, values, sigmas, row_sites = [], [], [], []
+    site_table: dict[str, Site] = {}
     last_t, last_line = -math.inf, 0
     for line_no, text in rows[1:]:
         cells = [c.strip() for c in next(csv.reader([text]))]
         if len(cells) != len(header):
-            errors.append(f"line {line_no}: {len(cells)} fields, the header has {len(header)}")
+            errors.append(f"line {line_no}: {len(cells)} fields (columns), the header has {len(header)}")
             continue
         try:
             try:
@@ -119,8 +133,8 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
                 s = _number(cell, name) if cell else sigma_arcsec
                 if s <= 0:
                     raise ValueError(f"{name} {s} must be > 0")
-                row_sig.append(s * ARCSEC_RAD)
-            row_val = [math.radians(az), math.radians(el)]
+                row_sig.append(to_rad(cell, "arcsec") if cell else s * ARCSEC_RAD)
+            row_val = [to_rad(cells[col["azimuth_deg"]], "deg"), to_rad(cells[col["elevation_deg"]], "deg")]
             if has_range:
                 rng = _number(cells[col["range_km"]], "range_km")
                 if rng <= 0:
@@ -131,16 +145,25 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
                     raise ValueError(f"sigma_range_km {srng} must be > 0")
                 row_val.append(rng / LU_KM)
                 row_sig.append(srng / LU_KM)
+            if "site" in col:
+                key = cells[col["site"]]
+                if key not in site_table:
+                    try:
+                        site_table[key] = resolve_site(key, sites or {})
+                    except MeasurementError as exc:
+                        raise ValueError(f"site: {exc}") from None
         except ValueError as exc:
             errors.append(f"line {line_no}: {exc}")
             continue
         if t <= last_t:
-            errors.append(f"line {line_no}: time {cells[col['time_utc']]} is not after line {last_line}")
+            errors.append(f"line {line_no}: time_utc {cells[col['time_utc']]!r} is not after line {last_line}")
             continue
         last_t, last_line = t, line_no
         times.append(t)
         values.append(row_val)
         sigmas.append(row_sig)
+        if "site" in col:
+            row_sites.append(cells[col["site"]])
 
     if errors:
         shown = "\n  ".join(errors[:_MAX_REPORTED])
@@ -151,7 +174,8 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
 
     names = ("azimuth", "elevation", "range") if has_range else ("azimuth", "elevation")
     mset = MeasurementSet(np.array(times), np.array(values), np.array(sigmas), names,
-                          {"source": str(p), "epoch": format_utc(ep)})
+                          {"source": str(p), "epoch": format_utc(ep)},
+                          sites=np.array(row_sites) if "site" in col else None, site_table=site_table)
     if has_range and not include_range:
         mset = mset.without("range")
     return mset
@@ -162,7 +186,8 @@ def write_measurements(path: str | PathLike, mset: MeasurementSet, epoch: str | 
     ``epoch``) as a measurement CSV with per-row sigmas. Times are written to the microsecond,
     angles in degrees and ranges in km with full double precision."""
     names = tuple(mset.names)
-    if names not in (("azimuth", "elevation"), ("azimuth", "elevation", "range")):
+    if names not in (("azimuth", "elevation"), ("azimuth", "elevation", "range")) or (
+            mset.kinds is not None and set(mset.kinds.tolist()) != {"azel"}):
         raise MeasurementError(
             f"write_measurements: expected components ('azimuth', 'elevation'[, 'range']), got {names}")
     try:
@@ -176,6 +201,8 @@ def write_measurements(path: str | PathLike, mset: MeasurementSet, epoch: str | 
     header += ["sigma_azimuth_arcsec", "sigma_elevation_arcsec"]
     if has_range:
         header.append("sigma_range_km")
+    if mset.sites is not None:
+        header.append("site")
     az_deg = np.degrees(np.mod(mset.values[:, 0], 2.0 * np.pi))
     az_deg = np.where(az_deg >= 360.0, 0.0, az_deg)
     p = Path(path)
@@ -185,11 +212,55 @@ def write_measurements(path: str | PathLike, mset: MeasurementSet, epoch: str | 
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(header)
         for k in range(len(mset)):
-            row = [format_utc(tu_to_utc(ep, mset.times[k])), repr(float(az_deg[k])),
-                   repr(float(np.degrees(mset.values[k, 1])))]
+            az = float(np.mod(mset.values[k, 0], 2.0 * np.pi))
+            row = [format_utc(tu_to_utc(ep, mset.times[k])), from_rad(az, "deg"),
+                   from_rad(float(mset.values[k, 1]), "deg")]
             if has_range:
                 row.append(repr(float(mset.values[k, 2] * LU_KM)))
-            row += [repr(float(mset.sigmas[k, 0] / ARCSEC_RAD)), repr(float(mset.sigmas[k, 1] / ARCSEC_RAD))]
+            row += [from_rad(float(mset.sigmas[k, j]), "arcsec") for j in (0, 1)]
             if has_range:
                 row.append(repr(float(mset.sigmas[k, 2] * LU_KM)))
+            if mset.sites is not None:
+                row.append(str(mset.sites[k]))
             w.writerow(row)
+
+
+class CsvReader(Reader):
+    """cistrack's own CSV of azimuth/elevation (docs/measurements.md).
+
+    Parameters
+    ----------
+    sigma_arcsec : float
+        Angle sigma (arcsec) for rows without sigma columns.
+    range_alpha : float
+        Range sigma as a fraction of the range for rows without ``sigma_range_km``.
+    include_range : bool
+        Keep the ``range_km`` column when the file has one.
+    sites : dict or None
+        Explicit sites by key for the ``site`` column: KEY -> {latitude_deg, longitude_deg,
+        height_m[, name]}; other keys are MPC observatory codes.
+    """
+
+    suffixes = (".csv",)
+
+    def __init__(self, sigma_arcsec: float = 1.5, range_alpha: float = 0.05, include_range: bool = True,
+                 sites: dict | None = None) -> None:
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        if not isinstance(include_range, bool):
+            self._fail("include_range", include_range, "must be true or false")
+        self.include_range = include_range
+        self._sites = parse_sites(self, sites)
+        self.sites = sites
+
+    def read(self, path, epoch) -> MeasurementSet:
+        return read_measurements(path, epoch, sigma_arcsec=self.sigma_arcsec, range_alpha=self.range_alpha,
+                                 include_range=self.include_range, sites=self._sites)
+
+    def write(self, path, measurements, epoch) -> None:
+        write_measurements(path, measurements, epoch)
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("reader", "csv", CsvReader)

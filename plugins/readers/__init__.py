@@ -1,0 +1,1 @@
+"""Observation file formats (readers and their matching writers)."""
