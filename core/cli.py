@@ -5,6 +5,7 @@
     cistrack scenarios
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
     cistrack study report STUDY [--out DIR]
+    cistrack export RUN_DIR [--format oem|opm] [--out FILE] [--step N]
 """
 from __future__ import annotations
 
@@ -33,6 +34,15 @@ def _fmt(v, nd=3) -> str:
     if isinstance(v, float):
         return f"{v:.{nd}g}" if abs(v) < 1e4 else f"{v:.4g}"
     return str(v)
+
+
+def cmd_export(args) -> int:
+    from .export import export_run
+
+    params = {} if args.step is None else {"step": args.step}
+    out = export_run(args.run, args.format, args.out, **params)
+    print(f"wrote {out}")
+    return 0
 
 
 def cmd_run(args) -> int:
@@ -173,6 +183,12 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--param", action="append", metavar="KEY=VALUE",
                     help="with --check: build the component with this parameter (repeatable)")
     pl.set_defaults(func=cmd_plugins)
+    ex = sub.add_parser("export", help="write a run's orbit estimate as CCSDS OEM or OPM")
+    ex.add_argument("run", help="a run directory (written by 'cistrack run --out DIR')")
+    ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm")
+    ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
+    ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
+    ex.set_defaults(func=cmd_export)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)
     st = sub.add_parser("study", help="run or report a comparative study")

@@ -160,7 +160,9 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     out = Path(output_dir) if output_dir is not None else None
     obs = list(observers)
     if out is not None:
+        from .estimates import EstimateWriter
         obs.insert(0, ResultsWriter(out, reg))
+        obs.insert(1, EstimateWriter(out))
     pm = make_plugin_manager(obs, reg)
     t_start = time.perf_counter()
     t_iod0 = time.perf_counter()

@@ -32,13 +32,14 @@ _E2 = _F * (2.0 - _F)
 class Site:
     """A ground site. Angles in degrees (East longitude positive), height in metres (WGS84).
 
-    ``code`` is the MPC observatory code when the site came from one ("" otherwise).
+    ``Site(latitude_deg, longitude_deg, height_m, name="", code="")``; ``code`` is the MPC
+    observatory code when the site came from one ("" otherwise).
     """
 
-    name: str
     latitude_deg: float
     longitude_deg: float
-    height_m: float
+    height_m: float = 0.0
+    name: str = ""
     code: str = ""
 
     def __post_init__(self) -> None:

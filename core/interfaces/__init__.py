@@ -12,6 +12,7 @@ filter         :class:`Filter`                             ``"filter"``
 orbit          :class:`ReferenceOrbit` (data, not a class)  ``"orbit"``
 recorder       any object with lifecycle hookimpls         ``"recorder"``
 reader         :class:`Reader` (observation file format)   ``"reader"``
+exporter       :class:`Exporter` (estimate file format)    ``"exporter"``
 =============  ==========================================  ==========================
 """
 from .clustering import Clusterer
@@ -19,12 +20,13 @@ from .dynamics import Body, Dynamics, Propagation
 from .filter import Filter
 from .iod import IODMethod
 from .orbit import ReferenceOrbit
+from .exporter import Exporter
 from .reader import Reader
 from .schedule import Pass, Schedule
 from .sensor import Sensor
 
-KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader")
+KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
-__all__ = ["Body", "Clusterer", "Dynamics", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
+__all__ = ["Body", "Clusterer", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
            "Reader", "ReferenceOrbit", "Schedule", "Sensor"]

@@ -60,6 +60,12 @@ class Sensor(Component):
         (scalar or (N,) TU). A target at range rho (LU) is at ``observer_position(t) + rho * los``;
         IOD methods use this to turn angles and a range into synodic positions."""
 
+    def inertial_frame(self):
+        """The Earth-centred inertial frame the sensor's synodic frame is placed in, as a
+        :class:`cistrack.inertial_frame.InertialFrame` (used to export estimates), or None when
+        the sensor has no such placement."""
+        return None
+
     def passes(self, times: np.ndarray, states: np.ndarray) -> list[Pass]:
         """Visibility passes of a trajectory sampled at ``times`` (K,) with ``states`` (K, 6).
 

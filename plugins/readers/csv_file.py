@@ -175,7 +175,8 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     names = ("azimuth", "elevation", "range") if has_range else ("azimuth", "elevation")
     mset = MeasurementSet(np.array(times), np.array(values), np.array(sigmas), names,
                           {"source": str(p), "epoch": format_utc(ep)},
-                          sites=np.array(row_sites) if "site" in col else None, site_table=site_table)
+                          sites=np.array(row_sites) if "site" in col else None,
+                          kinds=np.full(len(times), "azel"), site_table=site_table)
     if has_range and not include_range:
         mset = mset.without("range")
     return mset

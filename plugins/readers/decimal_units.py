@@ -13,7 +13,7 @@ from decimal import Decimal
 
 from cistrack.errors import MeasurementError
 
-__all__ = ["to_rad", "from_rad", "fixed"]
+__all__ = ["to_rad", "from_rad", "fixed", "decimal_in"]
 
 _CTX = decimal.Context(prec=50)
 _PI = Decimal("3.14159265358979323846264338327950288419716939937510")
@@ -50,3 +50,8 @@ def from_rad(value: float, unit: str, scale: float = 1.0, min_digits: int = 12) 
 def fixed(x: float, digits: int) -> str:
     """``x`` with ``digits`` digits after the point (no exponent)."""
     return format(Decimal(float(x)), f".{digits}f")
+
+
+def decimal_in(value: float, unit: str) -> Decimal:
+    """The exact double ``value`` (rad) expressed in ``unit`` to 50 digits."""
+    return _CTX.divide(Decimal(float(value)), _UNIT[unit])

@@ -37,7 +37,7 @@ def parse_sites(owner, value: Any) -> dict[str, Site]:
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in vals):
             owner._fail("sites", {key: spec}, f"site {key!r}: coordinates must be finite numbers")
         try:
-            out[str(key)] = Site(str(spec.get("name", key)), float(vals[0]), float(vals[1]), float(vals[2]))
+            out[str(key)] = Site(float(vals[0]), float(vals[1]), float(vals[2]), name=str(spec.get("name", key)))
         except MeasurementError as exc:
             owner._fail("sites", {key: spec}, str(exc))
     return out

@@ -27,8 +27,8 @@ from datetime import datetime, timezone
 import numpy as np
 
 from cistrack.primaries import MU_EARTH_MOON
-from cistrack.rotating_frame import rot_z
-from cistrack.units import DAY_S, TU_S
+from cistrack.rotating_frame import rot_z, synodic_to_eci
+from cistrack.units import DAY_S, LU_KM, TU_S
 
 __all__ = [
     "MU", "WGS84_A_M", "WGS84_F", "J2000_UTC",
@@ -157,6 +157,10 @@ class FrameModel:
         """Rotation and Earth position such that ``r_eci = R @ (r_syn - earth_syn)``."""
         raise NotImplementedError
 
+    def inertial_frame(self):
+        """The model's Earth-centred inertial frame for exports (None: not defined)."""
+        return None
+
 
 class EquatorialFrameModel(FrameModel):
     """The paper's simplified geometry.
@@ -186,6 +190,23 @@ class EquatorialFrameModel(FrameModel):
         t = np.asarray(t, dtype=float)
         angle = self.synodic_angle(t) - earth_rotation_angle(self.epoch, t)
         return rot_z(angle), self._earth(t)
+
+    def states_to_eci_km(self, states: np.ndarray, t) -> np.ndarray:
+        """Synodic states (N, 6) at t ((N,) TU) -> this model's ECI (N, 6) km, km/s: the core
+        synodic -> ECI map (frame turning at 1 rad/TU, Earth at (-mu, 0, 0)) followed by the
+        rotation by ``moon_phase_deg``."""
+        x = np.atleast_2d(np.asarray(states, dtype=float))
+        eci = synodic_to_eci(x, np.broadcast_to(np.asarray(t, dtype=float), (x.shape[0],)), MU_EARTH_MOON)
+        rot = rot_z(np.radians(self.moon_phase_deg))
+        return np.concatenate([eci[:, :3] @ rot.T * LU_KM, eci[:, 3:] @ rot.T * (LU_KM / TU_S)], axis=1)
+
+    def inertial_frame(self):
+        from cistrack.inertial_frame import InertialFrame
+        return InertialFrame(
+            name="CIRS", ccsds=False, from_synodic=self.states_to_eci_km,
+            description="cistrack's simple equatorial model (the paper's): Earth-Moon plane in the "
+                        "equator, x at the celestial intermediate origin (UT1 = UTC); not a "
+                        "CCSDS-registered frame")
 
 
 FRAME_MODELS: dict[str, type[FrameModel]] = {"equatorial": EquatorialFrameModel}

@@ -246,6 +246,10 @@ class GroundTelescope(Sensor):
             ends.append(tt[-1])
         return [Pass(float(a), float(b)) for a, b in zip(starts, ends)]
 
+    def inertial_frame(self):
+        """The frame model's Earth-centred inertial frame (see ``FrameModel.inertial_frame``)."""
+        return self._frames.inertial_frame()
+
     # -- simulation -----------------------------------------------------------------------------
     def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
         """Noisy measurements of a truth trajectory: states (K, 6) at times (K,) TU.

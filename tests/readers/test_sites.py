@@ -49,7 +49,7 @@ def test_unknown_code_and_geocentre_are_refused_with_the_code():
 
 def test_site_refuses_out_of_range_latitude():
     with pytest.raises(MeasurementError, match="latitude_deg"):
-        Site("x", 91.0, 0.0, 0.0)
+        Site(91.0, 0.0, 0.0, name="x")
 
 
 def _two_site_set():

@@ -1,0 +1,157 @@
+"""Per-step estimates of a run on disk: mean state, covariance and the full Gaussian mixture.
+
+Written beside ``steps.parquet`` as ``estimates.parquet`` (one row per step, the same step
+numbers), in the synodic frame in km and km/s (positions barycentric, velocities relative to the
+rotating frame), so that a run's orbit estimate can be exported (``cistrack export``) or
+re-analysed without re-running. Columns::
+
+    step, kind, t_tu, utc               identifiers (utc ISO-8601)
+    mean_km          list<double>[6]    moment-matched mean (x, y, z km; vx, vy, vz km/s)
+    covariance_km    list<double>[36]   moment-matched covariance, row-major (km^2, km^2/s, km^2/s^2)
+    n_components     int
+    weights          list<double>[M]
+    means_km         list<double>[M*6]  component means, row-major
+    covariances_km   list<double>[M*36] component covariances, row-major
+
+Like the steps table, rows are written as one part file per step while the run goes (a killed
+run keeps every completed step) and merged at the end.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .hookspecs import hookimpl
+from .units import LU_KM, VU_KMS
+
+__all__ = ["EstimateWriter", "Estimates", "read_estimates", "ESTIMATES", "KM_SCALE"]
+
+ESTIMATES = "estimates.parquet"
+_PARTS = "estimates-parts"
+KM_SCALE = np.array([LU_KM, LU_KM, LU_KM, VU_KMS, VU_KMS, VU_KMS])
+"""Nondimensional synodic state -> km, km/s, per component."""
+
+
+def _to_km(mean: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return mean * KM_SCALE, cov * np.multiply.outer(KM_SCALE, KM_SCALE)
+
+
+def estimate_row(step) -> dict:
+    """The estimates-table row of one step (see the module docstring)."""
+    mix = step.belief.mixture
+    mean, cov = _to_km(np.asarray(mix.mean), np.asarray(mix.covariance))
+    means = np.asarray(mix.means) * KM_SCALE
+    covs = np.asarray(mix.covariances) * np.multiply.outer(KM_SCALE, KM_SCALE)
+    return {"step": int(step.index), "kind": step.kind, "t_tu": float(step.t), "utc": step.utc,
+            "mean_km": mean.tolist(), "covariance_km": cov.reshape(-1).tolist(),
+            "n_components": int(mix.n_components), "weights": np.asarray(mix.weights).tolist(),
+            "means_km": means.reshape(-1).tolist(), "covariances_km": covs.reshape(-1).tolist()}
+
+
+class EstimateWriter:
+    """Lifecycle observer writing ``estimates.parquet`` into ``directory``."""
+
+    def __init__(self, directory: str | Path) -> None:
+        self.directory = Path(directory)
+
+    @hookimpl
+    def cistrack_run_started(self, run) -> None:
+        parts = self.directory / _PARTS
+        parts.mkdir(parents=True, exist_ok=True)
+        for old in parts.glob("part-*.parquet"):
+            old.unlink()
+        if (self.directory / ESTIMATES).exists():
+            (self.directory / ESTIMATES).unlink()
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step) -> None:
+        if step.kind in ("predict", "initial"):
+            self._write(step)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step) -> None:
+        self._write(step)
+
+    def _write(self, step) -> None:
+        final = self.directory / _PARTS / f"part-{step.index:06d}.parquet"
+        tmp = final.with_suffix(".tmp")
+        pq.write_table(pa.Table.from_pylist([estimate_row(step)]), tmp)
+        os.replace(tmp, final)
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary) -> None:
+        parts = sorted((self.directory / _PARTS).glob("part-*.parquet"))
+        if parts:
+            table = pa.concat_tables([pq.read_table(p) for p in parts])
+            tmp = self.directory / (ESTIMATES + ".tmp")
+            pq.write_table(table, tmp)
+            os.replace(tmp, self.directory / ESTIMATES)
+            for p in parts:
+                p.unlink()
+            try:
+                (self.directory / _PARTS).rmdir()
+            except OSError:
+                pass
+
+
+@dataclass
+class Estimates:
+    """A run's per-step estimates (K steps), synodic frame, km and km/s.
+
+    Attributes
+    ----------
+    step : (K,) int; kind : (K,) str; t_tu : (K,) float; utc : (K,) str
+    mean_km : (K, 6) float
+    covariance_km : (K, 6, 6) float
+    weights, means_km, covariances_km : lists of K arrays (M_k,), (M_k, 6), (M_k, 6, 6)
+    """
+
+    step: np.ndarray
+    kind: np.ndarray
+    t_tu: np.ndarray
+    utc: np.ndarray
+    mean_km: np.ndarray
+    covariance_km: np.ndarray
+    weights: list
+    means_km: list
+    covariances_km: list
+
+    def __len__(self) -> int:
+        return int(self.step.shape[0])
+
+    def select(self, mask) -> "Estimates":
+        idx = np.arange(len(self))[mask]
+        return Estimates(self.step[idx], self.kind[idx], self.t_tu[idx], self.utc[idx], self.mean_km[idx],
+                         self.covariance_km[idx], [self.weights[i] for i in idx],
+                         [self.means_km[i] for i in idx], [self.covariances_km[i] for i in idx])
+
+
+def read_estimates(directory: str | Path) -> Estimates:
+    """The estimates of a run directory (``estimates.parquet``, or the parts of a killed run)."""
+    d = Path(directory)
+    if (d / ESTIMATES).exists():
+        table = pq.read_table(d / ESTIMATES)
+    else:
+        parts = sorted((d / _PARTS).glob("part-*.parquet"))
+        if not parts:
+            raise FileNotFoundError(f"{d}: no estimates ({ESTIMATES}); was the run written by cistrack "
+                                    f"with an output directory?")
+        table = pa.concat_tables([pq.read_table(p) for p in parts])
+    cols = table.to_pydict()
+    order = np.argsort(np.asarray(cols["step"]))
+    k = len(order)
+    m = [int(cols["n_components"][i]) for i in order]
+    return Estimates(
+        step=np.asarray(cols["step"], dtype=int)[order], kind=np.asarray(cols["kind"])[order],
+        t_tu=np.asarray(cols["t_tu"], dtype=float)[order], utc=np.asarray(cols["utc"])[order],
+        mean_km=np.asarray([cols["mean_km"][i] for i in order], dtype=float).reshape(k, 6),
+        covariance_km=np.asarray([cols["covariance_km"][i] for i in order], dtype=float).reshape(k, 6, 6),
+        weights=[np.asarray(cols["weights"][i], dtype=float) for i in order],
+        means_km=[np.asarray(cols["means_km"][i], dtype=float).reshape(mm, 6) for i, mm in zip(order, m)],
+        covariances_km=[np.asarray(cols["covariances_km"][i], dtype=float).reshape(mm, 6, 6) for i, mm in zip(order, m)],
+    )

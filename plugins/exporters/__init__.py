@@ -1,0 +1,1 @@
+"""Estimate file formats (CCSDS OEM, OPM)."""

@@ -1,0 +1,194 @@
+"""MPC 80-column optical observations: reader ``"mpc80"`` (suffixes .obs, .mpc, .80col).
+
+One observation per 80-column line (columns counted from 1):
+
+=======  ===============================================================================
+1-5      packed minor-planet number (or blank)
+6-12     provisional or temporary designation
+13       discovery asterisk
+14       note 1
+15       note 2: observation type. Optical types are read (blank, C, B, P, T, A, ...);
+         two-line observations (S/s satellite, V/v roving, R/r radar, X/x) are refused
+16-32    UTC date: ``YYYY MM DD.dddddd`` (fraction of day, 0.0864 s per unit of the 6th decimal)
+33-44    RA (topocentric astrometric): ``HH MM SS.sss``
+45-56    Dec: ``sDD MM SS.ss``
+66-71    magnitude and band (ignored)
+78-80    MPC observatory code (bundled table, or the reader's ``sites`` parameter)
+=======  ===============================================================================
+
+The format has no uncertainties: every observation gets the reader's ``sigma_arcsec``. Lines
+that are blank or start with ``#`` (not part of the format) are skipped. The writer writes the
+time to 1e-6 day, RA to 0.001 s and Dec to 0.01 arcsec; reading gives those rounded values
+back, and writing them again gives the same text.
+"""
+from __future__ import annotations
+
+import math
+from datetime import datetime, timedelta, timezone
+from decimal import ROUND_HALF_EVEN, Decimal
+from pathlib import Path
+
+from cistrack.component import check_positive
+from cistrack.errors import MeasurementError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Reader
+from cistrack.measurement import MeasurementSet
+from cistrack.observation_files import FieldError, read_text_lines, show_field
+from cistrack.units import ARCSEC_RAD, tu_to_utc
+
+from .decimal_units import decimal_in, to_rad
+from .obs_rows import ObsRow, build_set, parse_epoch
+from .site_params import parse_sites, resolve_site
+
+__all__ = ["Mpc80Reader"]
+
+_OPTICAL = set(" CBPTAeMEOHNnc")
+_TWO_LINE = {"S": "satellite", "s": "satellite", "V": "roving observer", "v": "roving observer",
+             "R": "radar", "r": "radar", "X": "replaced", "x": "deleted"}
+
+
+def _digits(text: str, path, line: int, fieldname: str, width: int) -> int:
+    if len(text) != width or not text.isdigit():
+        raise FieldError(path, line, fieldname, f"{show_field(text)} must be {width} digits")
+    return int(text)
+
+
+def _seconds(text: str, path, line: int, fieldname: str) -> Decimal:
+    t = text.strip()
+    if not t or not all(c.isdigit() or c == "." for c in t) or t.count(".") > 1:
+        raise FieldError(path, line, fieldname, f"{show_field(text)} is not a number of seconds")
+    return Decimal(t)
+
+
+def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
+    s = line_text.rstrip("\n")
+    if len(s) != 80:
+        raise FieldError(path, ln, "(line length)", f"{len(s)} characters; an MPC observation line has 80")
+    note2 = s[14]
+    if note2 in _TWO_LINE:
+        raise FieldError(path, ln, "note 2 (column 15)", f"{note2!r}: {_TWO_LINE[note2]} observations (two-line "
+                                                          f"records) are not read; optical types are")
+    if note2 not in _OPTICAL:
+        raise FieldError(path, ln, "note 2 (column 15)", f"{note2!r} is not an MPC observation type")
+    if not s[0:12].strip():
+        raise FieldError(path, ln, "designation (columns 1-12)", "blank: the observation names no object")
+    date = s[15:32]
+    y, mo, d = date[0:4], date[5:7], date[8:]
+    if date[4] != " " or date[7] != " ":
+        raise FieldError(path, ln, "date (columns 16-32)", f"{show_field(date)} is not 'YYYY MM DD.dddddd'")
+    year = _digits(y, path, ln, "date year (columns 16-19)", 4)
+    month = _digits(mo, path, ln, "date month (columns 21-22)", 2)
+    try:
+        day = Decimal(d.strip())
+        if not d.strip()[:2].isdigit() or not day.is_finite():
+            raise ValueError
+    except Exception:
+        raise FieldError(path, ln, "date day (columns 24-32)", f"{show_field(d)} is not a day with a decimal fraction") from None
+    try:
+        base = datetime(year, month, int(day), tzinfo=timezone.utc)
+    except ValueError as exc:
+        raise FieldError(path, ln, "date (columns 16-32)", f"{show_field(date)}: {exc}") from None
+    micro = ((day - int(day)) * Decimal(86_400_000_000)).to_integral_value(ROUND_HALF_EVEN)
+    t = base + timedelta(microseconds=int(micro))
+    ra_t, dec_t = s[32:44], s[44:56]
+    if ra_t[2] != " " or ra_t[5] != " ":
+        raise FieldError(path, ln, "RA (columns 33-44)", f"{show_field(ra_t)} is not 'HH MM SS.sss'")
+    hh = _digits(ra_t[0:2], path, ln, "RA hours (columns 33-34)", 2)
+    mm = _digits(ra_t[3:5], path, ln, "RA minutes (columns 36-37)", 2)
+    ss = _seconds(ra_t[6:], path, ln, "RA seconds (columns 39-44)")
+    if hh >= 24 or mm >= 60 or ss >= 60:
+        raise FieldError(path, ln, "RA (columns 33-44)", f"{show_field(ra_t)} is outside 00 00 00 - 23 59 59.999")
+    sign = dec_t[0]
+    if sign not in "+-" or dec_t[3] != " " or dec_t[6] != " ":
+        raise FieldError(path, ln, "Dec (columns 45-56)", f"{show_field(dec_t)} is not 'sDD MM SS.ss'")
+    dd = _digits(dec_t[1:3], path, ln, "Dec degrees (columns 46-47)", 2)
+    dm = _digits(dec_t[4:6], path, ln, "Dec minutes (columns 49-50)", 2)
+    ds = _seconds(dec_t[7:], path, ln, "Dec seconds (columns 52-56)")
+    if dm >= 60 or ds >= 60 or dd > 90 or (dd == 90 and (dm or ds)):
+        raise FieldError(path, ln, "Dec (columns 45-56)", f"{show_field(dec_t)} is outside -90 00 00 - +90 00 00")
+    ra = to_rad(str((hh * 3600 + mm * 60) * 15 + ss * 15), "arcsec")
+    dec_abs = to_rad(str(dd * 3600 + dm * 60 + ds), "arcsec")
+    dec = -dec_abs if sign == "-" else dec_abs
+    code = s[77:80]
+    if not code.strip() or " " in code:
+        raise FieldError(path, ln, "observatory code (columns 78-80)", f"{show_field(code)} is not a 3-character code")
+    if code not in table:
+        try:
+            table[code] = resolve_site(code, explicit)
+        except MeasurementError as exc:
+            raise FieldError(path, ln, "observatory code (columns 78-80)", str(exc)) from None
+    return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)")
+
+
+def _format(t: datetime, ra: float, dec: float, code: str, desig: str) -> str:
+    mid = t.replace(hour=0, minute=0, second=0, microsecond=0)
+    units_of_day = (Decimal((t - mid) // timedelta(microseconds=1)) / Decimal(86_400)).to_integral_value(ROUND_HALF_EVEN)
+    t = mid + timedelta(microseconds=int(units_of_day) * 86_400)  # rounded to 1e-6 day (may roll over)
+    mid = t.replace(hour=0, minute=0, second=0, microsecond=0)
+    day = Decimal(t.day) + Decimal((t - mid) // timedelta(microseconds=1)) / Decimal(86_400_000_000)
+    ra_s = (decimal_in(ra % (2 * math.pi), "arcsec") / 15).quantize(Decimal("0.001"), ROUND_HALF_EVEN)
+    ra_s %= 86400
+    h, rem = divmod(ra_s, 3600)
+    m, sec = divmod(rem, 60)
+    dec_s = decimal_in(abs(dec), "arcsec").quantize(Decimal("0.01"), ROUND_HALF_EVEN)
+    dd, rem = divmod(dec_s, 3600)
+    dm, dsec = divmod(rem, 60)
+    sign = "-" if dec < 0 and dec_s > 0 else "+"
+    line = (f"{'':5}{desig[:7]:<7}  C{t.year:04d} {t.month:02d} {day:09.6f}"
+            f"{int(h):02d} {int(m):02d} {sec:06.3f}{sign}{int(dd):02d} {int(dm):02d} {dsec:05.2f}"
+            f"{'':21}{code}")
+    return line
+
+
+class Mpc80Reader(Reader):
+    """MPC 80-column optical astrometry (RA/Dec; no uncertainties in the format).
+
+    Parameters
+    ----------
+    sigma_arcsec : float
+        RA and Dec sigma of every observation, arcsec.
+    sites : dict or None
+        Explicit sites for observatory codes outside the bundled MPC table.
+    """
+
+    suffixes = (".obs", ".mpc", ".80col")
+    measurement_kinds = ("radec",)
+    time_resolution_s = 0.0864
+    angle_resolution_rad = 0.015 * ARCSEC_RAD
+    carries_sigmas = False
+
+    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self._sites = parse_sites(self, sites)
+        self.sites = sites
+
+    def read(self, path, epoch) -> MeasurementSet:
+        ep = parse_epoch(path, epoch)
+        rows, table = [], {}
+        for i, text in enumerate(read_text_lines(path), start=1):
+            if not text.strip() or text.startswith("#"):
+                continue
+            rows.append(_parse(text, path, i, self._sites, table))
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "mpc80"})
+
+    def write(self, path, measurements, epoch) -> None:
+        who = f"reader 'mpc80' writing {path}"
+        ep = parse_epoch(path, epoch)
+        ms = measurements
+        kinds = set(ms.kinds.tolist()) if ms.kinds is not None else {"radec" if ms.names[:2] == ("right_ascension", "declination") else "?"}
+        if kinds != {"radec"}:
+            raise MeasurementError(f"{who}: MPC 80-column observations are RA/Dec; this set has types {sorted(kinds)}")
+        if ms.sites is None:
+            raise MeasurementError(f"{who}: the set has no observing sites (MPC codes)")
+        bad = sorted({k for k in ms.sites.tolist() if len(k) != 3 or " " in k})
+        if bad:
+            raise MeasurementError(f"{who}: sites {bad} are not 3-character MPC observatory codes")
+        desig = str(ms.meta.get("object", "cis0001"))
+        out = [_format(tu_to_utc(ep, ms.times[k]), float(ms.values[k, 0]), float(ms.values[k, 1]),
+                       str(ms.sites[k]), desig) for k in range(len(ms))]
+        Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("reader", "mpc80", Mpc80Reader)

@@ -1,0 +1,310 @@
+"""CCSDS Tracking Data Messages (TDM, KVN syntax) of angles: reader ``"tdm"`` (suffix .tdm).
+
+Read: a header (``CCSDS_TDM_VERS``, ``CREATION_DATE``, ``ORIGINATOR``), then segments of
+``META_START`` ... ``META_STOP`` and ``DATA_START`` ... ``DATA_STOP``. Per segment:
+
+* ``TIME_SYSTEM = UTC`` (others are refused);
+* ``PARTICIPANT_1`` the observing station: an MPC observatory code of the bundled table, a key
+  of the reader's ``sites`` parameter, or a site declared in the segment by a comment line
+  ``COMMENT cistrack site KEY latitude_deg=.. longitude_deg=.. height_m=..`` (what the writer
+  writes for sites that are not MPC codes);
+* ``ANGLE_TYPE = AZEL`` (ANGLE_1 azimuth, ANGLE_2 elevation) or ``RADEC`` (right ascension,
+  declination; ``REFERENCE_FRAME`` EME2000, ICRF or GCRF); angles in degrees;
+* data lines ``ANGLE_1 = <epoch> <value>`` and ``ANGLE_2 = <epoch> <value>``, one pair per
+  observation at the same epoch (``YYYY-MM-DDThh:mm:ss[.d...]`` or ``YYYY-DDDThh:mm:ss[.d...]``).
+
+TDM has no per-observation uncertainty: the reader's ``sigma_arcsec`` applies unless the
+segment has ``COMMENT cistrack sigma_arcsec ANGLE_1=.. ANGLE_2=..``, which the writer writes
+(one segment per run of measurements with the same site, type and sigmas). Other keywords
+(RANGE, DOPPLER, ...) are refused by name. Times round-trip to 1 microsecond, angles and sigmas
+bit for bit.
+"""
+from __future__ import annotations
+
+import math
+import re
+from datetime import datetime, timedelta, timezone
+from pathlib import Path
+
+from cistrack.component import check_positive
+from cistrack.errors import MeasurementError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Reader
+from cistrack.measurement import MeasurementSet
+from cistrack.observation_files import FieldError, read_text_lines, show_field
+from cistrack.sites import Site, observatory
+from cistrack.units import format_utc, tu_to_utc
+
+from .decimal_units import from_rad, to_rad
+from .obs_rows import ObsRow, build_set, parse_epoch
+from .site_params import resolve_site
+
+__all__ = ["TdmReader"]
+
+_HEADER_KEYS = {"CCSDS_TDM_VERS", "CREATION_DATE", "ORIGINATOR", "MESSAGE_ID"}
+_META_KEYS = {"TIME_SYSTEM", "PARTICIPANT_1", "PARTICIPANT_2", "PARTICIPANT_3", "PARTICIPANT_4", "PARTICIPANT_5",
+              "MODE", "PATH", "PATH_1", "PATH_2", "ANGLE_TYPE", "REFERENCE_FRAME", "START_TIME", "STOP_TIME",
+              "TRANSMIT_BAND", "RECEIVE_BAND", "INTEGRATION_INTERVAL", "INTEGRATION_REF", "DATA_QUALITY",
+              "TIMETAG_REF", "CORRECTIONS_APPLIED", "EPHEMERIS_NAME_1", "EPHEMERIS_NAME_2", "TRACK_ID",
+              "RANGE_MODE", "RANGE_MODULUS", "RANGE_UNITS", "INTERPOLATION", "INTERPOLATION_DEGREE"}
+_RADEC_FRAMES = {"EME2000", "ICRF", "GCRF"}
+_TIME_RE = re.compile(r"^(\d{4})-(?:(\d{2})-(\d{2})|(\d{3}))T(\d{2}):(\d{2}):(\d{2})(\.\d+)?Z?$")
+_SITE_RE = re.compile(r"^cistrack site (\S+) latitude_deg=(\S+) longitude_deg=(\S+) height_m=(\S+)$")
+_SIGMA_RE = re.compile(r"^cistrack sigma_arcsec ANGLE_1=(\S+) ANGLE_2=(\S+)$")
+
+
+def _parse_time(text: str) -> datetime:
+    m = _TIME_RE.match(text)
+    if not m:
+        raise ValueError("is not a CCSDS time (YYYY-MM-DDThh:mm:ss.d or YYYY-DDDThh:mm:ss.d)")
+    year = int(m.group(1))
+    if m.group(4):
+        base = datetime(year, 1, 1, tzinfo=timezone.utc) + timedelta(days=int(m.group(4)) - 1)
+        if base.year != year or int(m.group(4)) < 1:
+            raise ValueError("has a day of year outside the year")
+    else:
+        base = datetime(year, int(m.group(2)), int(m.group(3)), tzinfo=timezone.utc)
+    hh, mm, ss = int(m.group(5)), int(m.group(6)), int(m.group(7))
+    if hh > 23 or mm > 59 or ss > 59:
+        raise ValueError("has hours, minutes or seconds out of range (leap second 60 not supported)")
+    frac = m.group(8) or ""
+    micro = round(float("0" + frac) * 1e6) if frac else 0
+    return base + timedelta(hours=hh, minutes=mm, seconds=ss, microseconds=micro)
+
+
+def _kv(text: str, path, ln: int) -> tuple[str, str]:
+    if "=" not in text:
+        raise FieldError(path, ln, "(keyword)", f"{show_field(text.split()[0] if text.split() else text)} is not "
+                                                f"'KEYWORD = value'")
+    k, v = text.split("=", 1)
+    return k.strip(), v.strip()
+
+
+class _Segment:
+    def __init__(self, line: int):
+        self.line = line
+        self.meta: dict[str, tuple[str, int]] = {}
+        self.comments: list[tuple[str, int]] = []
+
+
+class TdmReader(Reader):
+    """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
+
+    Parameters
+    ----------
+    sigma_arcsec : float
+        Angle sigma (arcsec) for segments without a cistrack sigma comment.
+    sites : dict or None
+        Explicit sites by PARTICIPANT_1 name: NAME -> {latitude_deg, longitude_deg, height_m}.
+    """
+
+    suffixes = (".tdm", ".kvn")
+    measurement_kinds = ("azel", "radec")
+
+    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
+        from .site_params import parse_sites
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self._sites = parse_sites(self, sites)
+        self.sites = sites
+
+    # -- reading ---------------------------------------------------------------------------------
+    def read(self, path, epoch) -> MeasurementSet:
+        ep = parse_epoch(path, epoch)
+        lines = read_text_lines(path)
+        state, seg = "header", None
+        seen_version = False
+        rows: list[ObsRow] = []
+        table: dict[str, Site] = {}
+        pending: dict[datetime, tuple[str, float, int]] = {}
+        ctx: dict = {}
+        for ln, raw in enumerate(lines, start=1):
+            text = raw.strip()
+            if not text:
+                continue
+            word = text.split()[0]
+            if word == "COMMENT":
+                if seg is not None and state == "meta":
+                    seg.comments.append((text[7:].strip(), ln))
+                continue
+            if state == "header":
+                if word == "META_START":
+                    if not seen_version:
+                        raise FieldError(path, ln, "CCSDS_TDM_VERS", "the header must start with CCSDS_TDM_VERS")
+                    state, seg = "meta", _Segment(ln)
+                    continue
+                k, v = _kv(text, path, ln)
+                if k not in _HEADER_KEYS:
+                    raise FieldError(path, ln, k[:40], f"unknown header keyword; expected {', '.join(sorted(_HEADER_KEYS))} then META_START")
+                if k == "CCSDS_TDM_VERS":
+                    if v not in ("1.0", "2.0"):
+                        raise FieldError(path, ln, k, f"{show_field(v)}: versions 1.0 and 2.0 are read")
+                    seen_version = True
+                continue
+            if state == "meta":
+                if word == "META_STOP":
+                    ctx = self._segment_context(path, seg, ln, table)
+                    state = "between"
+                    continue
+                k, v = _kv(text, path, ln)
+                if k not in _META_KEYS:
+                    raise FieldError(path, ln, k[:40], "unknown metadata keyword")
+                seg.meta[k] = (v, ln)
+                continue
+            if state == "between":
+                if word != "DATA_START":
+                    raise FieldError(path, ln, word[:40], "expected DATA_START after META_STOP")
+                state = "data"
+                continue
+            if state == "data":
+                if word == "DATA_STOP":
+                    if pending:
+                        t0, (name, _v, pl) = next(iter(pending.items()))
+                        other = "ANGLE_2" if name == "ANGLE_1" else "ANGLE_1"
+                        raise FieldError(path, pl, other, f"{name} at {format_utc(t0)} has no {other} at the same epoch")
+                    state, seg = "after", None
+                    continue
+                k, v = _kv(text, path, ln)
+                if k not in ("ANGLE_1", "ANGLE_2"):
+                    raise FieldError(path, ln, k[:40], "only ANGLE_1 and ANGLE_2 data are read")
+                parts = v.split()
+                if len(parts) != 2:
+                    raise FieldError(path, ln, k, "expected '<epoch> <value>'")
+                try:
+                    t = _parse_time(parts[0])
+                except ValueError as exc:
+                    raise FieldError(path, ln, f"{k} epoch", f"{show_field(parts[0])} {exc}") from None
+                try:
+                    val = to_rad(parts[1], "deg")
+                except ValueError as exc:
+                    raise FieldError(path, ln, f"{k} value", f"{show_field(parts[1])} is {exc}") from None
+                self._check_angle(path, ln, k, parts[1], val, ctx["kind"])
+                if t in pending:
+                    name, other_v, pl = pending.pop(t)
+                    if name == k:
+                        raise FieldError(path, ln, k, f"a second {k} at {format_utc(t)} (line {pl} has the first)")
+                    a, b = (other_v, val) if name == "ANGLE_1" else (val, other_v)
+                    rows.append(ObsRow(t, a, b, ctx["sig"][0], ctx["sig"][1], ctx["site"], ctx["kind"],
+                                       min(ln, pl), "ANGLE_1 epoch"))
+                else:
+                    pending[t] = (k, val, ln)
+                continue
+            if state == "after":
+                if word != "META_START":
+                    raise FieldError(path, ln, word[:40], "expected META_START (a new segment) after DATA_STOP")
+                state, seg = "meta", _Segment(ln)
+                continue
+        if state != "after":
+            where = {"header": "META_START", "meta": "META_STOP", "between": "DATA_START", "data": "DATA_STOP"}[state]
+            raise FieldError(path, max(1, len(lines)), where, f"the file ends without {where}")
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "tdm"})
+
+    def _check_angle(self, path, ln, k, text, val, kind) -> None:
+        if k == "ANGLE_1" and not 0.0 <= val < 2.0 * math.pi:
+            raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [0, 360) degrees")
+        if k == "ANGLE_2" and not -0.5 * math.pi <= val <= 0.5 * math.pi:
+            raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [-90, 90] degrees")
+
+    def _segment_context(self, path, seg: _Segment, ln: int, table: dict) -> dict:
+        meta = seg.meta
+        for key in ("TIME_SYSTEM", "PARTICIPANT_1", "ANGLE_TYPE"):
+            if key not in meta:
+                raise FieldError(path, ln, key, f"missing from the metadata block starting at line {seg.line}")
+        ts, tl = meta["TIME_SYSTEM"]
+        if ts != "UTC":
+            raise FieldError(path, tl, "TIME_SYSTEM", f"{show_field(ts)}: only UTC is read")
+        at, al = meta["ANGLE_TYPE"]
+        if at not in ("AZEL", "RADEC"):
+            raise FieldError(path, al, "ANGLE_TYPE", f"{show_field(at)}: AZEL and RADEC are read")
+        kind = at.lower()
+        if kind == "radec":
+            rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
+            if rf not in _RADEC_FRAMES:
+                raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
+                                                              f"{', '.join(sorted(_RADEC_FRAMES))}")
+        name, nl = meta["PARTICIPANT_1"]
+        declared = {}
+        sig = (None, None)
+        for text, cl in seg.comments:
+            m = _SITE_RE.match(text)
+            if m:
+                try:
+                    declared[m.group(1)] = Site(float(m.group(2)), float(m.group(3)), float(m.group(4)), name=m.group(1))
+                except (ValueError, MeasurementError) as exc:
+                    raise FieldError(path, cl, "COMMENT cistrack site", str(exc)[:120]) from None
+                continue
+            m = _SIGMA_RE.match(text)
+            if m:
+                try:
+                    sig = (to_rad(m.group(1), "arcsec"), to_rad(m.group(2), "arcsec"))
+                except ValueError:
+                    raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas are not numbers") from None
+                if not (sig[0] > 0 and sig[1] > 0):
+                    raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas must be > 0")
+        if name in declared:
+            site = declared[name]
+        else:
+            try:
+                site = resolve_site(name, self._sites)
+            except MeasurementError as exc:
+                raise FieldError(path, nl, "PARTICIPANT_1", str(exc)) from None
+        if name in table and table[name] != site:
+            raise FieldError(path, nl, "PARTICIPANT_1", f"{show_field(name)} was declared with another position earlier")
+        table[name] = site
+        return {"kind": kind, "site": name, "sig": sig}
+
+    # -- writing ---------------------------------------------------------------------------------
+    def write(self, path, measurements, epoch) -> None:
+        ms = measurements
+        who = f"reader 'tdm' writing {path}"
+        ep = parse_epoch(path, epoch)
+        if ms.sites is None:
+            raise MeasurementError(f"{who}: TDM needs the observing station (PARTICIPANT_1); the set has no sites")
+        if len(ms) == 0:
+            raise MeasurementError(f"{who}: no measurements to write")
+        kinds = [ms.kind_at(k) for k in range(len(ms))]
+        if any(k not in ("azel", "radec") for k in kinds):
+            raise MeasurementError(f"{who}: TDM angles are AZEL or RADEC; this set has names {ms.names}")
+        bad = sorted({s for s in ms.sites.tolist() if not s or any(c.isspace() for c in s) or "=" in s})
+        if bad:
+            raise MeasurementError(f"{who}: station names {bad} cannot be TDM participants (no spaces or '=')")
+        out = ["CCSDS_TDM_VERS = 2.0", f"CREATION_DATE = {format_utc(ep)[:-1]}", "ORIGINATOR = cistrack"]
+        k = 0
+        while k < len(ms):
+            j = k
+            key = (str(ms.sites[k]), kinds[k], ms.sigmas[k, 0], ms.sigmas[k, 1])
+            while j + 1 < len(ms) and (str(ms.sites[j + 1]), kinds[j + 1], ms.sigmas[j + 1, 0], ms.sigmas[j + 1, 1]) == key:
+                j += 1
+            out += self._segment(ms, k, j, kinds[k], ep)
+            k = j + 1
+        Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
+
+    def _segment(self, ms, k, j, kind, ep) -> list[str]:
+        name = str(ms.sites[k])
+        site = ms.site_table[name]
+        out = ["", "META_START"]
+        try:
+            is_code = observatory(name) == site
+        except MeasurementError:
+            is_code = False
+        if not is_code:
+            out.append(f"COMMENT cistrack site {name} latitude_deg={site.latitude_deg!r} "
+                       f"longitude_deg={site.longitude_deg!r} height_m={site.height_m!r}")
+        out.append(f"COMMENT cistrack sigma_arcsec ANGLE_1={from_rad(float(ms.sigmas[k, 0]), 'arcsec')} "
+                   f"ANGLE_2={from_rad(float(ms.sigmas[k, 1]), 'arcsec')}")
+        out += ["TIME_SYSTEM = UTC", f"PARTICIPANT_1 = {name}", f"PARTICIPANT_2 = {ms.meta.get('object', 'cis0001')}",
+                "MODE = SEQUENTIAL", "PATH = 2,1", f"ANGLE_TYPE = {kind.upper()}"]
+        if kind == "radec":
+            out.append("REFERENCE_FRAME = ICRF")
+        out += ["META_STOP", "", "DATA_START"]
+        for i in range(k, j + 1):
+            t = format_utc(tu_to_utc(ep, ms.times[i]))[:-1]
+            a = float(ms.values[i, 0]) % (2.0 * math.pi)
+            out.append(f"ANGLE_1 = {t} {from_rad(a, 'deg')}")
+            out.append(f"ANGLE_2 = {t} {from_rad(float(ms.values[i, 1]), 'deg')}")
+        out.append("DATA_STOP")
+        return out
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("reader", "tdm", TdmReader)

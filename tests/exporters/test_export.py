@@ -1,0 +1,122 @@
+"""A run's estimates on disk and exported as CCSDS OEM / OPM, checked with an independent reader
+(the MIT-licensed `oem` package) and an independent frame check."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cistrack.estimates import KM_SCALE, read_estimates
+from cistrack.export import export_run, run_inertial_estimates
+from cistrack.plugins.exporters.opm import read_opm
+from cistrack.results import read_steps
+from cistrack.run import run_scenario
+from cistrack.scenario import load_scenario
+from cistrack.units import LU_KM, TU_S
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run")
+    scen = load_scenario("quick").with_overrides({"duration_days": 1.4, "filter": {"n_particles": 300, "n_components": 2},
+                                                  "iod": {"n_particles": 300}})
+    res = run_scenario(scen, seed=3, output_dir=out, keep_steps=True)
+    return out, res
+
+
+def test_estimates_hold_every_step_mean_covariance_and_mixture(run_dir):
+    out, res = run_dir
+    est = read_estimates(out)
+    assert len(est) == read_steps(out).num_rows
+    last = res.steps[-1]
+    mix = last.belief.mixture
+    np.testing.assert_array_equal(est.mean_km[-1], mix.mean * KM_SCALE)
+    np.testing.assert_array_equal(est.covariance_km[-1], mix.covariance * np.multiply.outer(KM_SCALE, KM_SCALE))
+    np.testing.assert_array_equal(est.weights[-1], mix.weights)
+    np.testing.assert_array_equal(est.means_km[-1], mix.means * KM_SCALE)
+    assert est.covariances_km[-1].shape == (mix.n_components, 6, 6)
+
+
+def test_the_mixture_moments_reproduce_the_stored_mean_and_covariance(run_dir):
+    est = read_estimates(run_dir[0])
+    for k in range(len(est)):
+        w, m, c = est.weights[k], est.means_km[k], est.covariances_km[k]
+        mean = w @ m
+        d = m - mean
+        cov = np.einsum("i,ijk->jk", w, c) + np.einsum("i,ij,ik->jk", w, d, d)
+        np.testing.assert_allclose(mean, est.mean_km[k], rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(cov, est.covariance_km[k], rtol=1e-7, atol=1e-12)
+
+
+def test_oem_is_read_by_the_independent_oem_package_with_the_same_states_and_covariances(run_dir, tmp_path):
+    oem = pytest.importorskip("oem")
+    out, _ = run_dir
+    path = export_run(out, "oem", tmp_path / "x.oem")
+    ie, _ = run_inertial_estimates(out)
+    msg = oem.OrbitEphemerisMessage.open(str(path))
+    seg = msg.segments[0]
+    assert seg.metadata["REF_FRAME"] == "CIRS" and seg.metadata["TIME_SYSTEM"] == "UTC"
+    rows = list(seg.states)
+    states = np.array([s.vector for s in rows])
+    keep = np.r_[np.diff(ie.t_tu) > 0, True]
+    np.testing.assert_array_equal(states, ie.state_km[keep])
+    covs = np.array([c.matrix for c in seg.covariances])
+    np.testing.assert_array_equal(covs, ie.covariance_km[keep])
+    t0 = rows[0].epoch
+    dt = np.array([(s.epoch - t0).to_value("s") for s in rows])
+    np.testing.assert_allclose(dt, (ie.t_tu[keep] - ie.t_tu[keep][0]) * TU_S, atol=2e-6)
+
+
+def test_opm_carries_the_last_state_and_its_covariance(run_dir, tmp_path):
+    out, _ = run_dir
+    path = export_run(out, "opm", tmp_path / "x.opm")
+    ie, _ = run_inertial_estimates(out)
+    opm = read_opm(path)
+    np.testing.assert_array_equal(opm["state"], ie.state_km[-1])
+    np.testing.assert_array_equal(opm["covariance"], ie.covariance_km[-1])
+    assert opm["REF_FRAME"] == "CIRS" and opm["CENTER_NAME"] == "EARTH"
+
+
+def test_inertial_velocity_is_the_time_derivative_of_inertial_position(run_dir):
+    """Transport theorem checked by central differences along a synodic CR3BP trajectory."""
+    from scipy.integrate import solve_ivp
+    from reference_cr3bp import cr3bp_rhs
+    _, res = run_dir
+    frame = res.context.sensor.inertial_frame()
+    x0 = res.context.truth_states[0]
+    h = 1e-4
+    ts = np.array([0.2 - h, 0.2, 0.2 + h])
+    sol = solve_ivp(cr3bp_rhs, (0.0, 0.2 + h), x0, t_eval=ts, rtol=1e-12, atol=1e-13, method="DOP853")
+    eci = frame.from_synodic(sol.y.T, ts)
+    v_fd = (eci[2, :3] - eci[0, :3]) / (2 * h * TU_S)
+    np.testing.assert_allclose(eci[1, 3:], v_fd, rtol=1e-6)
+    rel = sol.y[:3, 1] - np.array([-1.2150582e-2, 0, 0])
+    assert np.linalg.norm(eci[1, :3]) == pytest.approx(np.linalg.norm(rel) * LU_KM, rel=1e-13)
+
+
+def test_covariance_maps_through_the_frame_jacobian_as_sampled_states_do(run_dir):
+    """Monte Carlo: states drawn from the synodic estimate, mapped to the inertial frame, have
+    the mapped covariance (the map is affine, so this holds to sampling error)."""
+    out, res = run_dir
+    est = read_estimates(out)
+    ie, _ = run_inertial_estimates(out)
+    k = len(est) - 1
+    rng = np.random.default_rng(0)
+    draws = rng.multivariate_normal(est.mean_km[k], est.covariance_km[k], size=20000) / KM_SCALE
+    mapped = res.context.sensor.inertial_frame().from_synodic(draws, np.full(len(draws), est.t_tu[k]))
+    emp = np.cov(mapped.T)
+    sd = np.sqrt(np.diag(ie.covariance_km[k]))
+    np.testing.assert_allclose(emp / np.outer(sd, sd), ie.covariance_km[k] / np.outer(sd, sd), atol=0.05)
+
+
+def test_cli_export_writes_the_file_and_refuses_a_non_run(run_dir, tmp_path):
+    out, _ = run_dir
+    p = subprocess.run([sys.executable, "-m", "cistrack.cli", "export", str(out), "--format", "opm",
+                        "--out", str(tmp_path / "c.opm")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "c.opm").exists()
+    bad = subprocess.run([sys.executable, "-m", "cistrack.cli", "export", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "not a cistrack run directory" in bad.stderr
