@@ -19,10 +19,11 @@ from functools import lru_cache
 from importlib import resources
 
 from .errors import MeasurementError
+from .primaries import EARTH_RADIUS_KM
 
 __all__ = ["Site", "observatory", "observatory_codes", "site_from_parallax", "EARTH_EQUATORIAL_RADIUS_KM"]
 
-EARTH_EQUATORIAL_RADIUS_KM = 6378.137
+EARTH_EQUATORIAL_RADIUS_KM = EARTH_RADIUS_KM
 """WGS84 equatorial radius, km (also the unit of the MPC parallax constants)."""
 _F = 1.0 / 298.257223563
 _E2 = _F * (2.0 - _F)
