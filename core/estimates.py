@@ -12,6 +12,9 @@ re-analysed without re-running. Columns::
     weights          list<double>[M]
     means_km         list<double>[M*6]  component means, row-major
     covariances_km   list<double>[M*36] component covariances, row-major
+    nis, nis_dof     float, int         normalised innovation squared of the step's measurement
+                                        under the prior (update steps; NaN, 0 otherwise), see
+                                        :mod:`cistrack.consistency`
 
 Like the steps table, rows are written as one part file per step while the run goes (a killed
 run keeps every completed step) and merged at the end.
@@ -41,7 +44,7 @@ def _to_km(mean: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mean * KM_SCALE, cov * np.multiply.outer(KM_SCALE, KM_SCALE)
 
 
-def estimate_row(step) -> dict:
+def estimate_row(step, nis: float = float("nan"), nis_dof: int = 0) -> dict:
     """The estimates-table row of one step (see the module docstring)."""
     mix = step.belief.mixture
     mean, cov = _to_km(np.asarray(mix.mean), np.asarray(mix.covariance))
@@ -50,7 +53,8 @@ def estimate_row(step) -> dict:
     return {"step": int(step.index), "kind": step.kind, "t_tu": float(step.t), "utc": step.utc,
             "mean_km": mean.tolist(), "covariance_km": cov.reshape(-1).tolist(),
             "n_components": int(mix.n_components), "weights": np.asarray(mix.weights).tolist(),
-            "means_km": means.reshape(-1).tolist(), "covariances_km": covs.reshape(-1).tolist()}
+            "means_km": means.reshape(-1).tolist(), "covariances_km": covs.reshape(-1).tolist(),
+            "nis": float(nis), "nis_dof": int(nis_dof)}
 
 
 class EstimateWriter:
@@ -58,6 +62,7 @@ class EstimateWriter:
 
     def __init__(self, directory: str | Path) -> None:
         self.directory = Path(directory)
+        self._nis: dict[int, tuple[float, int]] = {}
 
     @hookimpl
     def cistrack_run_started(self, run) -> None:
@@ -72,15 +77,21 @@ class EstimateWriter:
     def cistrack_step_predicted(self, run, step) -> None:
         if step.kind in ("predict", "initial"):
             self._write(step)
+        elif step.kind == "update" and step.measurement is not None:
+            from .consistency import innovation_nis
+            try:
+                self._nis[step.index] = innovation_nis(step.belief, step.measurement, run.sensor)
+            except (np.linalg.LinAlgError, ValueError):
+                self._nis[step.index] = (float("nan"), 0)
 
     @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
-        self._write(step)
+        self._write(step, *self._nis.pop(step.index, (float("nan"), 0)))
 
-    def _write(self, step) -> None:
+    def _write(self, step, nis: float = float("nan"), dof: int = 0) -> None:
         final = self.directory / _PARTS / f"part-{step.index:06d}.parquet"
         tmp = final.with_suffix(".tmp")
-        pq.write_table(pa.Table.from_pylist([estimate_row(step)]), tmp)
+        pq.write_table(pa.Table.from_pylist([estimate_row(step, nis, dof)]), tmp)
         os.replace(tmp, final)
 
     @hookimpl
@@ -109,6 +120,7 @@ class Estimates:
     mean_km : (K, 6) float
     covariance_km : (K, 6, 6) float
     weights, means_km, covariances_km : lists of K arrays (M_k,), (M_k, 6), (M_k, 6, 6)
+    nis : (K,) float (NaN where no measurement); nis_dof : (K,) int
     """
 
     step: np.ndarray
@@ -120,6 +132,8 @@ class Estimates:
     weights: list
     means_km: list
     covariances_km: list
+    nis: np.ndarray | None = None
+    nis_dof: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.step.shape[0])
@@ -128,7 +142,8 @@ class Estimates:
         idx = np.arange(len(self))[mask]
         return Estimates(self.step[idx], self.kind[idx], self.t_tu[idx], self.utc[idx], self.mean_km[idx],
                          self.covariance_km[idx], [self.weights[i] for i in idx],
-                         [self.means_km[i] for i in idx], [self.covariances_km[i] for i in idx])
+                         [self.means_km[i] for i in idx], [self.covariances_km[i] for i in idx],
+                         None if self.nis is None else self.nis[idx], None if self.nis_dof is None else self.nis_dof[idx])
 
 
 def read_estimates(directory: str | Path) -> Estimates:
@@ -154,4 +169,6 @@ def read_estimates(directory: str | Path) -> Estimates:
         weights=[np.asarray(cols["weights"][i], dtype=float) for i in order],
         means_km=[np.asarray(cols["means_km"][i], dtype=float).reshape(mm, 6) for i, mm in zip(order, m)],
         covariances_km=[np.asarray(cols["covariances_km"][i], dtype=float).reshape(mm, 6, 6) for i, mm in zip(order, m)],
+        nis=np.asarray(cols["nis"], dtype=float)[order] if "nis" in cols else None,
+        nis_dof=np.asarray(cols["nis_dof"], dtype=int)[order] if "nis_dof" in cols else None,
     )

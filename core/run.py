@@ -86,6 +86,10 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         spec = scenario.measurements_reader
         reader = spec.build(reg) if spec is not None else reader_for(scenario.measurements_file, registry=reg)
         measurements = reader.read(scenario.measurements_file, scenario.epoch)
+        if measurements.sites is not None:  # several observatories: the sensor placed at each
+            from .site_network import build_site_network
+            sensor = build_site_network(scenario.components["sensor"], reg, measurements)
+            say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
         grid = np.zeros(0)
         truth = np.zeros((0, 6))
         passes = []

@@ -120,3 +120,12 @@ def test_cli_export_writes_the_file_and_refuses_a_non_run(run_dir, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "cistrack.cli", "export", str(tmp_path)],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "not a cistrack run directory" in bad.stderr
+
+
+def test_every_update_step_records_its_nis_and_the_run_passes_a_loose_nis_test(run_dir):
+    from cistrack.consistency import run_nis_test
+    est = read_estimates(run_dir[0])
+    upd = est.kind == "update"
+    assert np.all(np.isfinite(est.nis[upd])) and np.all(est.nis_dof[upd] == 2)
+    assert np.all(np.isnan(est.nis[~upd]))
+    assert run_nis_test(run_dir[0]).n == int(upd.sum())

@@ -1,0 +1,88 @@
+"""Measurement consistency without a truth: the normalised innovation squared (NIS).
+
+Before each update the prior belief predicts the measurement: its particles pushed through the
+sensor give the predicted mean z_hat (circular on angles) and covariance P_zz; with the noise R,
+S = P_zz + R and the innovation nu = z - z_hat (angles wrapped),
+
+    NIS = nu^T S^-1 nu  ~  chi^2(m)    for a consistent filter (m measured components).
+
+Over K updates the sum is chi^2(mK): :func:`nis_test` gives the two-sided bounds on the mean
+NIS, (chi2.ppf(a/2, mK) / K, chi2.ppf(1 - a/2, mK) / K), and whether the run lies within them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+__all__ = ["innovation_nis", "nis_test", "NisTest", "MAX_NIS_SAMPLES", "run_nis_test"]
+
+MAX_NIS_SAMPLES = 4000
+"""At most this many prior particles (an evenly strided subset) predict the measurement."""
+
+
+def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
+    """NIS of ``measurement`` (a :class:`cistrack.measurement.Measurement`) under the ``prior``
+    belief, measured by ``sensor``: returns (NIS, m)."""
+    names = tuple(sensor.names)
+    cols = np.array([names.index(n) for n in measurement.names], dtype=np.intp)
+    x = np.asarray(prior.samples.states, dtype=float)
+    w = prior.samples.weights
+    if x.shape[0] > MAX_NIS_SAMPLES:
+        step = int(np.ceil(x.shape[0] / MAX_NIS_SAMPLES))
+        x = x[::step]
+        w = None if w is None else w[::step] / w[::step].sum()
+    w = np.full(x.shape[0], 1.0 / x.shape[0]) if w is None else np.asarray(w, dtype=float)
+    full_z = np.zeros(len(names))
+    full_z[cols] = measurement.z
+    zs = np.asarray(sensor.measure(x, measurement.t), dtype=float)
+    r = np.asarray(sensor.residual(zs, full_z[None, :]), dtype=float)[:, cols]  # zs - z, wrapped
+    mean_r = w @ r
+    d = r - mean_r
+    pzz = (d * w[:, None]).T @ d
+    s = pzz + np.asarray(measurement.covariance, dtype=float)
+    nu = -mean_r                                                      # z - z_hat
+    return float(nu @ np.linalg.solve(s, nu)), int(cols.size)
+
+
+@dataclass(frozen=True)
+class NisTest:
+    """Mean NIS over ``n`` updates of ``dof`` components each, its two-sided ``level`` bounds,
+    and whether the mean lies within them."""
+
+    mean: float
+    n: int
+    dof: int
+    lower: float
+    upper: float
+    level: float
+
+    @property
+    def within(self) -> bool:
+        return self.lower <= self.mean <= self.upper
+
+
+def nis_test(nis, dof: int, level: float = 0.95) -> NisTest:
+    """Chi-square test of the mean of ``nis`` values (K,), each chi^2(dof) if consistent."""
+    v = np.asarray(nis, dtype=float)
+    v = v[np.isfinite(v)]
+    k = v.size
+    if k == 0:
+        return NisTest(float("nan"), 0, dof, float("nan"), float("nan"), level)
+    a = 1.0 - level
+    return NisTest(float(v.mean()), k, dof, float(chi2.ppf(a / 2, dof * k) / k),
+                   float(chi2.ppf(1 - a / 2, dof * k) / k), level)
+
+
+def run_nis_test(run_dir, level: float = 0.95) -> NisTest:
+    """The NIS test of a run directory's update steps (``estimates.parquet``)."""
+    from .estimates import read_estimates
+    est = read_estimates(run_dir)
+    if est.nis is None:
+        return nis_test([], 0, level)
+    ok = np.isfinite(est.nis) & (est.nis_dof > 0)
+    dofs = set(est.nis_dof[ok].tolist())
+    if len(dofs) > 1:
+        raise ValueError(f"{run_dir}: updates with different measurement sizes {sorted(dofs)}")
+    return nis_test(est.nis[ok], dofs.pop() if dofs else 0, level)
