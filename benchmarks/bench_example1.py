@@ -97,9 +97,10 @@ def main() -> int:
     print(f"{'total (profiled run)':<28}{total_prof:>10.2f}")
     print()
     print(f"wall time, {args.repeat} runs: min {min(walls):.2f} s, median {sorted(walls)[len(walls) // 2]:.2f} s")
-    print(f"custody {'kept' if s['custody_kept'] else 'LOST'}; {s['n_updates']} updates over {s['n_passes']} passes; "
-          f"final sigma pos {s['final']['sigma_x_km']:.2f}/{s['final']['sigma_y_km']:.2f}/{s['final']['sigma_z_km']:.2f} km, "
-          f"vel {s['final']['sigma_vx_cms']:.2f}/{s['final']['sigma_vy_cms']:.2f}/{s['final']['sigma_vz_cms']:.2f} cm/s")
+    f = s.final
+    print(f"custody {'kept' if s.custody_kept else 'LOST'}; {s.n_updates} updates over {s.n_passes} passes; "
+          f"final sigma pos {f['sigma_x_km']:.2f}/{f['sigma_y_km']:.2f}/{f['sigma_z_km']:.2f} km, "
+          f"vel {f['sigma_vx_cms']:.2f}/{f['sigma_vy_cms']:.2f}/{f['sigma_vz_cms']:.2f} cm/s")
     return 0
 
 

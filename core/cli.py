@@ -66,12 +66,11 @@ def cmd_run(args) -> int:
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out,
                        progress=not args.quiet, log=(None if args.quiet else lambda m: _eprint(f"  {m}")))
     s = res.summary
-    print(f"run {s['run_id']}: {s['status']}"
-          + (f" ({s['failure']})" if s["failure"] else ""))
-    print(f"  custody: {'kept' if s['custody_kept'] else 'LOST at step %s (t = %s d)' % (s['custody_lost_step'], _fmt(s['custody_lost_t_days']))}")
-    print(f"  {s['n_updates']} updates over {s['n_passes']} passes, {s['n_measurements']} measurements, "
-          f"wall time {s['wall_time_s']:.1f} s")
-    f = s["final"]
+    print(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    print(f"  custody: {'kept' if s.custody_kept else 'LOST at step %s (t = %s d)' % (s.custody_lost_step, _fmt(s.custody_lost_t_days))}")
+    print(f"  {s.n_updates} updates over {s.n_passes} passes, {s.n_measurements} measurements, "
+          f"wall time {s.wall_time_s:.1f} s")
+    f = s.final
     if f:
         print("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
               + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
@@ -94,7 +93,7 @@ def cmd_run(args) -> int:
             pass
         finally:
             recorder.close()
-    return 0 if s["status"] == "finished" else 3
+    return 0 if s.status == "finished" else 3
 
 
 def cmd_plugins(args) -> int:

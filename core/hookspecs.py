@@ -52,5 +52,11 @@ class CistrackSpecs:
         ``step.metrics`` the step's metrics."""
 
     @hookspec
+    def cistrack_run_failed(self, run, step_index, error):
+        """The filter raised at step ``step_index`` (``error``: "ExceptionType: message"); the run
+        stops and :func:`cistrack_run_finished` follows with status "filter-failed"."""
+
+    @hookspec
     def cistrack_run_finished(self, run, summary):
-        """The run ended (``summary`` dict: custody, final sigmas, timings, status)."""
+        """The run ended; ``summary`` is a :class:`cistrack.run_summary.RunSummary` (status,
+        custody verdict, final sigmas and errors, timings; ``summary.to_dict()`` for JSON)."""

@@ -25,8 +25,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .hookspecs import hookimpl
+from .step_table import is_table_step, step_row
 
-__all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "step_row", "versions"]
+__all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "versions"]
 
 MANIFEST = "manifest.json"
 STEPS = "steps.parquet"
@@ -62,23 +63,6 @@ def versions(registry=None) -> dict[str, str]:
             except metadata.PackageNotFoundError:
                 pass
     return out
-
-
-def step_row(run, step) -> dict[str, Any]:
-    """The results-table row of one step: identifiers, time, metrics, diagnostics, timings."""
-    row: dict[str, Any] = {
-        "run_id": run.run_id, "seed": int(run.seed), "step": int(step.index), "kind": step.kind,
-        "t_tu": float(step.t), "t_days": float(step.t) * 375_149.0 / 86_400.0, "utc": step.utc,
-        "measurement_index": int(step.measurement.index) if step.measurement is not None else -1,
-    }
-    for k, v in step.metrics.items():
-        row[k] = float(v)
-    for k, v in step.diagnostics.items():
-        if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
-            row[f"diag_{k}"] = float(v)
-    for k, v in step.timings.items():
-        row[f"time_{k}_s"] = float(v)
-    return row
 
 
 class ResultsWriter:
@@ -128,7 +112,7 @@ class ResultsWriter:
 
     @hookimpl
     def cistrack_step_predicted(self, run, step) -> None:
-        if step.kind in ("predict", "initial"):  # a prediction-only step is a row of its own
+        if is_table_step("predicted", step):  # a prediction-only step is a row of its own
             self._write_part(run, step)
 
     def _write_part(self, run, step) -> None:
@@ -148,7 +132,7 @@ class ResultsWriter:
             os.replace(tmp, self.directory / STEPS)
             for p in parts:
                 p.unlink()
-        self._manifest.update({"status": summary.get("status", "finished"), "summary": summary,
+        self._manifest.update({"status": summary.status, "summary": summary.to_dict(),
                                "wall_time_s": time.perf_counter() - self._t0,
                                "finished_unix": time.time()})
         write_json_atomic(self.directory / MANIFEST, self._manifest)

@@ -21,27 +21,31 @@ import numpy as np
 import pluggy
 
 from . import hookspecs, units
-from .belief import Belief
+from .custody import CustodyObserver
 from .errors import CistrackError, ConfigError
-from .measurement import MeasurementSet
 from .metrics import step_metrics
 from .registry import Registry, default_registry
-from .run_types import RunContext, Step
+from .run_context import RunContext, Step
+from .run_summary import RunSummary, summarize
 from .scenario import Scenario
+from .step_table import RowCollector
+from .truth import Truth
 
 __all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
 
 _LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
-              "cistrack_run_finished")
+              "cistrack_run_failed", "cistrack_run_finished")
 
 
 @dataclass
 class RunResult:
-    """What :func:`run_scenario` returns: the context, one metrics row per step, the summary."""
+    """What :func:`run_scenario` returns: the context, the table rows (one per step, as written
+    to ``steps.parquet``, see :func:`cistrack.step_table.step_row`), the typed summary and, with
+    ``keep_steps``, the steps themselves."""
 
     context: RunContext
     rows: list[dict[str, Any]]
-    summary: dict[str, Any]
+    summary: RunSummary
     steps: list[Step] = field(default_factory=list)
 
 
@@ -91,19 +95,19 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
             sensor = build_site_network(scenario.components["sensor"], reg, measurements)
             say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
         grid = np.zeros(0)
-        truth = np.zeros((0, 6))
+        grid_states = np.zeros((0, 6))
+        truth = None
         passes = []
     else:
-        x0 = scenario.initial_truth(reg)
+        truth = Truth(truth_dyn, scenario.initial_truth(reg))
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
         say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
-        prop = truth_dyn.propagate(x0[None], 0.0, grid[1:])
-        if not prop.alive[0]:
-            raise ConfigError(f"{scenario.source}: the truth trajectory hits a body at t = "
-                              f"{units.tu_to_days(prop.impact_time[0]):.3f} days; shorten duration_days")
-        truth = np.concatenate([x0[None], prop.states[:, 0, :]], axis=0)
-        passes = sensor.passes(grid, truth)
+        try:
+            grid_states = truth.states_at(grid)
+        except ConfigError as exc:
+            raise ConfigError(f"{scenario.source}: {exc}") from None
+        passes = sensor.passes(grid, grid_states)
         if passes and passes[0].start <= grid[0] + 1e-12:
             # A pass already in progress at t = 0 is cut short; the target is acquired at its
             # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
@@ -117,15 +121,14 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
             raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
                               f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
         say(f"{len(passes)} passes, {times.size} measurements scheduled")
-        t_prop = truth_dyn.propagate(x0[None], 0.0, times)
-        measurements = sensor.simulate(t_prop.states[:, 0, :], times, rngs["measurements"])
+        measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
     say(f"IOD '{scenario.components['iod'].name}' on {len(measurements)} measurements")
     cloud = iod.estimate(measurements, sensor, rngs["iod"])
     rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
                      sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
-                     truth_states=truth, passes=passes, measurements=measurements, iod_cloud=cloud,
-                     output_dir=output_dir, truth_dynamics=truth_dyn)
+                     truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
+                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth)
     return ctx, rngs
 
 
@@ -157,31 +160,11 @@ def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Regis
         return _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log)
 
 
-def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log) -> RunResult:
-    from .results import ResultsWriter
-
-    reg = registry or default_registry()
-    out = Path(output_dir) if output_dir is not None else None
-    obs = list(observers)
-    if out is not None:
-        from .estimates import EstimateWriter
-        obs.insert(0, ResultsWriter(out, reg))
-        obs.insert(1, EstimateWriter(out))
-    pm = make_plugin_manager(obs, reg)
-    t_start = time.perf_counter()
-    t_iod0 = time.perf_counter()
-    ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
-    t_prepare = time.perf_counter() - t_iod0
-    filt, sensor = ctx.filter, ctx.sensor
-    rule = scenario.custody
-
-    t0 = time.perf_counter()
-    filt.initialize(ctx.iod_cloud, ctx.dynamics, sensor, rngs["filter"])
-    t_init = time.perf_counter() - t0
-    pm.hook.cistrack_run_started(run=ctx)
-
-    meas_idx = [i for i in range(len(ctx.measurements)) if ctx.measurements.times[i] > ctx.iod_cloud.epoch + 1e-12]
-    events: list[tuple[float, int]] = [(float(ctx.measurements.times[i]), i) for i in meas_idx]
+def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, int]]:
+    """The filter's steps after the IOD epoch, in time order: (t TU, measurement index or -1 for a
+    prediction-only step)."""
+    events = [(float(ctx.measurements.times[i]), i) for i in range(len(ctx.measurements))
+              if ctx.measurements.times[i] > ctx.iod_cloud.epoch + 1e-12]
     t_last = ctx.iod_cloud.epoch
     if scenario.predict_every_hours > 0:
         dt = float(units.hours_to_tu(scenario.predict_every_hours))
@@ -192,107 +175,83 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     if scenario.end_with_prediction and scenario.duration > max([t_last] + [e[0] for e in events]) + 1e-9:
         events.append((scenario.duration, -1))
     events.sort()
-    ctx.precompute_truth([ctx.iod_cloud.epoch] + [e[0] for e in events])
+    return events
 
-    rows: list[dict[str, Any]] = []
-    kept: list[Step] = []
-    lost_step: int | None = None
-    hdr_run = 0
-    status = "finished"
-    failure = ""
 
-    def make_step(index, t, kind, belief, measurement=None) -> Step:
-        truth = ctx.truth_at(t) if ctx.has_truth else None
-        return Step(index=index, t=t, utc=units.format_utc(units.tu_to_utc(ctx.epoch, t)), kind=kind,
-                    belief=belief, truth=truth, measurement=measurement)
+def _step(ctx: RunContext, index: int, t: float, kind: str, belief, measurement=None) -> Step:
+    return Step(index=index, t=t, utc=units.format_utc(units.tu_to_utc(ctx.epoch, t)), kind=kind,
+                belief=belief, truth=ctx.truth_at(t), measurement=measurement)
 
-    def finish_step(step: Step) -> None:
-        nonlocal lost_step, hdr_run
-        tm = time.perf_counter()
-        step.metrics = step_metrics(step.belief, step.truth)
-        step.metrics["pass_index"] = float(_pass_index(ctx.passes, step.t))
-        if step.kind == "update" and step.truth is not None and lost_step is None:
-            if step.metrics["truth_loglik"] < rule.loglik_threshold:
-                lost_step = step.index
-            hdr_run = hdr_run + 1 if step.metrics["hdr_level"] > rule.hdr_threshold else 0
-            if hdr_run >= rule.hdr_consecutive:
-                lost_step = step.index
-        step.metrics["custody"] = 0.0 if lost_step is not None else 1.0
-        step.diagnostics = dict(filt.diagnostics)
-        step.timings["metrics"] = time.perf_counter() - tm
-        row = {"step": step.index, "kind": step.kind, "t_days": float(units.tu_to_days(step.t)), **step.metrics}
-        rows.append(row)
-        if keep_steps:
-            kept.append(step)
 
-    step0 = make_step(0, ctx.iod_cloud.epoch, "initial", filt.belief)
-    step0.timings["initialize"] = t_init
-    finish_step(step0)
-    pm.hook.cistrack_step_predicted(run=ctx, step=step0)
+def _measure(ctx: RunContext, step: Step) -> Step:
+    """Fill the step's metrics, pass index and the filter's diagnostics (before observers see it)."""
+    tm = time.perf_counter()
+    step.metrics = step_metrics(step.belief, step.truth)
+    step.metrics["pass_index"] = float(_pass_index(ctx.passes, step.t))
+    step.diagnostics = dict(ctx.filter.diagnostics)
+    step.timings["metrics"] = time.perf_counter() - tm
+    return step
 
-    bar = None
+
+def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log) -> RunResult:
+    """Build once, then one way through: truth, measurements, IOD, filter steps; everything else
+    (custody, rows, results files, progress, recordings) is an observer of the hooks."""
+    from .progress import ProgressBar
+    from .results import ResultsWriter
+
+    reg = registry or default_registry()
+    out = Path(output_dir) if output_dir is not None else None
+    custody = CustodyObserver(scenario.custody)
+    collector = RowCollector(keep_steps=keep_steps)
+    obs: list[Any] = [custody, collector]
+    if out is not None:
+        from .estimates import EstimateWriter
+        obs += [ResultsWriter(out, reg), EstimateWriter(out)]
+    obs.extend(observers)
+    t_start = time.perf_counter()
+    ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
+    t_prepare = time.perf_counter() - t_start
+    events = _events(scenario, ctx)
+    if ctx.truth is not None:  # the third wave of truth times (see cistrack.truth), one call
+        ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
     if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(events), desc=ctx.run_id, unit="step", leave=True)
+        obs.append(ProgressBar(ctx.run_id, len(events), custody))
+    pm = make_plugin_manager(obs, reg)
+    filt = ctx.filter
+
+    t0 = time.perf_counter()
+    filt.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rngs["filter"])
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", filt.belief)
+    step0.timings["initialize"] = time.perf_counter() - t0
+    pm.hook.cistrack_run_started(run=ctx)
+    pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
+
+    status, failure = "finished", ""
     try:
         for k, (t, mi) in enumerate(events, start=1):
             tp = time.perf_counter()
             filt.predict(t)
             t_pred = time.perf_counter() - tp
             if mi < 0:
-                step = make_step(k, t, "predict", filt.belief)
+                step = _step(ctx, k, t, "predict", filt.belief)
                 step.timings["predict"] = t_pred
-                finish_step(step)
-                pm.hook.cistrack_step_predicted(run=ctx, step=step)
-            else:
-                m = ctx.measurements[mi]
-                m = m.angles_only() if "range" in m.names else m
-                prior = make_step(k, t, "update", filt.belief, m)
-                pm.hook.cistrack_step_predicted(run=ctx, step=prior)
-                tu = time.perf_counter()
-                filt.update(m)
-                t_upd = time.perf_counter() - tu
-                step = make_step(k, t, "update", filt.belief, m)
-                step.timings.update({"predict": t_pred, "update": t_upd})
-                finish_step(step)
-                pm.hook.cistrack_step_updated(run=ctx, step=step)
-            if bar is not None:
-                met = rows[-1]
-                bar.set_postfix_str(f"t={met['t_days']:.2f} d H={met['entropy']:.1f}"
-                                    + ("" if lost_step is None else " custody LOST"))
-                bar.update(1)
+                pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step))
+                continue
+            m = ctx.measurements[mi]
+            m = m.angles_only() if "range" in m.names else m
+            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, m))
+            tu = time.perf_counter()
+            filt.update(m)
+            t_upd = time.perf_counter() - tu
+            step = _step(ctx, k, t, "update", filt.belief, m)
+            step.timings.update({"predict": t_pred, "update": t_upd})
+            pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
         status = "filter-failed"
         failure = f"{type(exc).__name__}: {exc}"
-        if lost_step is None:
-            lost_step = len(rows)
-    finally:
-        if bar is not None:
-            bar.close()
+        pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
 
-    summary = _summary(ctx, rows, lost_step, status, failure, time.perf_counter() - t_start, t_prepare)
+    summary = summarize(ctx, collector.rows, custody.verdict, status, failure,
+                        time.perf_counter() - t_start, t_prepare)
     pm.hook.cistrack_run_finished(run=ctx, summary=summary)
-    return RunResult(ctx, rows, summary, kept)
-
-
-def _summary(ctx: RunContext, rows, lost_step, status, failure, wall, t_prepare) -> dict[str, Any]:
-    updates = [r for r in rows if r["kind"] == "update"]
-    last = updates[-1] if updates else rows[-1]
-    keys = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
-            "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level")
-    pass_end: dict[str, dict[str, float]] = {}
-    for r in updates:
-        p = int(r.get("pass_index", 0))
-        if p > 0:
-            pass_end[str(p)] = {k: r[k] for k in keys if k in r} | {"t_days": r["t_days"]}
-    lost_t = None
-    if lost_step is not None:
-        match = [r for r in rows if r["step"] == lost_step]
-        lost_t = match[0]["t_days"] if match else None
-    return {
-        "run_id": ctx.run_id, "seed": ctx.seed, "status": status, "failure": failure,
-        "custody_kept": lost_step is None, "custody_lost_step": lost_step, "custody_lost_t_days": lost_t,
-        "n_steps": len(rows), "n_updates": len(updates), "n_measurements": len(ctx.measurements),
-        "n_passes": len(ctx.passes), "final": {k: last[k] for k in keys if k in last},
-        "pass_end": pass_end, "wall_time_s": wall, "prepare_time_s": t_prepare,
-    }
+    return RunResult(ctx, collector.rows, summary, collector.steps)

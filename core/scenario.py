@@ -50,6 +50,7 @@ import numpy as np
 
 from . import units
 from .component import Component, param_specs
+from .custody import CustodyRule
 from .errors import CistrackError, ConfigError, ParameterError, UnknownComponentError
 from .interfaces import ReferenceOrbit
 from .registry import Registry, default_registry
@@ -76,36 +77,41 @@ _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction"}
 _MEAS_KEYS = {"file", "reader"}
 
 
-@dataclass(frozen=True)
-class CustodyRule:
-    """When custody is lost (sticky: once lost, lost for the rest of the run).
-
-    Custody is lost at the first update step where the truth's log-likelihood under the belief's
-    mixture (state in km and km/s) is below ``loglik_threshold``, or where the truth lies outside
-    the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps.
-    """
-
-    loglik_threshold: float = -100.0
-    hdr_threshold: float = 0.997
-    hdr_consecutive: int = 2
-
-
 @dataclass
 class ComponentSpec:
-    """A validated component table: registry kind and name, parameters, where it was written."""
+    """A validated component table: registry kind and name, parameters, where it was written.
+
+    Validation constructs the component once (so value checks run before anything else); the
+    first :meth:`build` with the same registry hands out that instance, later calls construct
+    fresh ones. So a run builds each component exactly once.
+    """
 
     kind: str
     name: str
     params: dict[str, Any]
     where: str
+    _validated: Any = field(default=None, init=False, repr=False, compare=False)
 
     def build(self, registry: Registry) -> Any:
+        """The component: the instance made during validation (once), else a new one."""
+        held, self._validated = self._validated, None
+        if held is not None and held[0] is registry:
+            return held[1]
         return _build(self, registry)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_validated"] = None  # an instance is never shipped to another process
+        return state
+
+    def __deepcopy__(self, memo) -> "ComponentSpec":
+        return ComponentSpec(self.kind, self.name, copy.deepcopy(self.params, memo), self.where)
 
 
 @dataclass
 class Scenario:
-    """A validated scenario. ``build_*`` methods create fresh components each call."""
+    """A validated scenario. :meth:`build` hands out each component validation constructed, then
+    fresh ones (see :class:`ComponentSpec`)."""
 
     name: str
     description: str
@@ -131,7 +137,8 @@ class Scenario:
         return float(units.days_to_tu(self.duration_days))
 
     def build(self, table: str, registry: Registry | None = None) -> Any:
-        """A fresh component for ``table`` ('dynamics', 'sensor', 'schedule', 'iod', 'filter')."""
+        """The component for ``table`` ('dynamics', 'sensor', 'schedule', 'iod', 'filter'): the one
+        validation built the first time, a fresh one after."""
         spec = self.components.get(table)
         if spec is None:
             return None
@@ -151,19 +158,24 @@ class Scenario:
         A component table given with a different ``name`` replaces the table; with the same
         name (or no name) its keys are merged into it. The result is validated again.
         """
-        raw = copy.deepcopy(self.raw)
-        for key, value in overrides.items():
-            if key in COMPONENT_TABLES and isinstance(value, dict):
-                old = raw.get(key, {})
-                if "name" in value and value["name"] != old.get("name"):
-                    raw[key] = copy.deepcopy(value)
-                else:
-                    merged = dict(old)
-                    merged.update(value)
-                    raw[key] = merged
-            else:
+        return parse_scenario(_merge_overrides(self.raw, overrides), source or self.source, registry)
+
+
+def _merge_overrides(raw: dict, overrides: dict[str, Any] | None) -> dict:
+    """A copy of the scenario table ``raw`` with ``overrides`` applied (see ``with_overrides``)."""
+    raw = copy.deepcopy(raw)
+    for key, value in (overrides or {}).items():
+        if key in COMPONENT_TABLES and isinstance(value, dict):
+            old = raw.get(key, {})
+            if "name" in value and value["name"] != old.get("name"):
                 raw[key] = copy.deepcopy(value)
-        return parse_scenario(raw, source or self.source, registry)
+            else:
+                merged = dict(old)
+                merged.update(value)
+                raw[key] = merged
+        else:
+            raw[key] = copy.deepcopy(value)
+    return raw
 
 
 # -- loading -------------------------------------------------------------------------------------
@@ -197,8 +209,10 @@ def builtin_scenarios() -> dict[str, str]:
     return out
 
 
-def load_scenario(path_or_name: str | Path, registry: Registry | None = None) -> Scenario:
-    """Read and validate a scenario file, or a built-in scenario by name."""
+def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
+                  overrides: dict[str, Any] | None = None) -> Scenario:
+    """Read and validate a scenario file, or a built-in scenario by name; ``overrides`` (as for
+    :meth:`Scenario.with_overrides`) are applied before the one validation."""
     p = Path(path_or_name)
     if not p.exists() and p.suffix != ".toml" and "/" not in str(path_or_name):
         p = builtin_scenario_path(str(path_or_name))
@@ -210,7 +224,7 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None) ->
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{p}: cannot read: {exc}") from None
-    scen = parse_scenario(data, str(p), registry)
+    scen = parse_scenario(_merge_overrides(data, overrides) if overrides else data, str(p), registry)
     if scen.measurements_file is not None and not scen.measurements_file.is_absolute():
         scen.measurements_file = (p.parent / scen.measurements_file).resolve()
     return scen
@@ -384,7 +398,7 @@ def _component_spec(table: Any, kind: str, where: str, source: str, reg: Registr
             raise ConfigError(msg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
     spec = ComponentSpec(kind, name, out, f"{source}: {where}")
-    _build(spec, reg)  # construct once so value checks happen before anything runs
+    spec._validated = (reg, _build(spec, reg))  # value checks before anything runs; kept for the run
     return spec
 
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from .errors import ConfigError
 from .results import read_manifest, read_steps
+from .run_summary import RunSummary
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -158,7 +159,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None) -> tu
     return data, specs, out
 
 
-def execute_run(spec: RunSpec) -> dict:
+def execute_run(spec: RunSpec) -> RunSummary:
     """Run one study run in this process and write it to ``spec.out_dir``. Returns its summary."""
     from threadpoolctl import threadpool_limits
 
@@ -167,7 +168,7 @@ def execute_run(spec: RunSpec) -> dict:
     from .scenario import load_scenario
 
     reg = default_registry()
-    scen = load_scenario(spec.scenario, reg).with_overrides(spec.overrides, reg)
+    scen = load_scenario(spec.scenario, reg, overrides=spec.overrides)  # validated (and built) once
     observers = []
     if spec.rerun_path:
         observers.append(reg.create("recorder", "rerun", path=spec.rerun_path))
@@ -250,7 +251,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
                 summary = fut.result()
                 completed += 1
                 if bar is not None:
-                    bar.set_postfix_str(f"{spec.run_id}: {'kept' if summary['custody_kept'] else 'LOST'}")
+                    bar.set_postfix_str(f"{spec.run_id}: {'kept' if summary.custody_kept else 'LOST'}")
             except Exception as exc:  # one failing run must not stop the study
                 failed += 1
                 (Path(spec.out_dir)).mkdir(parents=True, exist_ok=True)
@@ -283,7 +284,7 @@ def _median(xs):
 def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) -> dict:
     """Summarise a study: terminal text, summary.csv, summary.md and PNG plots in <out>/report/."""
     data, specs, out = plan_runs(path_or_name, out_dir)
-    groups: dict[tuple[str, str, str], list[dict]] = {}
+    groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
     missing = 0
     for s in specs:
@@ -291,7 +292,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) ->
             missing += 1
             continue
         man = read_manifest(s.out_dir)
-        groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(man["summary"])
+        groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
         tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
     rep_dir = out / "report"
     rep_dir.mkdir(parents=True, exist_ok=True)
@@ -300,13 +301,13 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) ->
             "pos_err_km", "vel_err_ms", "entropy"]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
-        kept = sum(1 for x in sums if x["custody_kept"])
+        kept = sum(1 for x in sums if x.custody_kept)
         row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums), "custody_kept": kept,
                "custody_rate": kept / len(sums),
-               "median_lost_day": _median([x["custody_lost_t_days"] for x in sums if not x["custody_kept"]]),
-               "failed_runs": sum(1 for x in sums if x["status"] != "finished")}
+               "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
+               "failed_runs": sum(1 for x in sums if x.status != "finished")}
         for k in cols[8:]:
-            row[k] = _median([x["final"].get(k) for x in sums])
+            row[k] = _median([x.final.get(k) for x in sums])
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)

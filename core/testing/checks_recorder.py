@@ -8,7 +8,8 @@ from .check_support import describe_exception, require
 
 __all__ = ["RECORDER_CHECKS", "lifecycle_hooks"]
 
-LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated", "cistrack_run_finished")
+LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated", "cistrack_run_failed",
+             "cistrack_run_finished")
 
 
 def lifecycle_hooks(obj) -> list[str]:

@@ -251,7 +251,8 @@ class RerunRecorder(Component):
         rec = self._rec
         if rec is None:
             return
-        lines = [f"- **{k}**: {v}" for k, v in dict(summary or {}).items()]
+        data = summary.to_dict() if hasattr(summary, "to_dict") else dict(summary or {})
+        lines = [f"- **{k}**: {v}" for k, v in data.items()]
         rec.log("run/summary", rr.TextDocument("\n".join(lines) or "(no summary)",
                                                media_type=rr.MediaType.MARKDOWN), static=True)
         rec.flush()

@@ -27,7 +27,7 @@ def test_filter_is_consistent_over_the_first_two_passes(filter_table):
         "iod": {"name": "noisy-range", "n_particles": 5000},
     })
     result = run_scenario(scenario, seed=1)
-    assert result.summary["status"] == "finished"
+    assert result.summary.status == "finished"
     updates = [r for r in result.rows if r["kind"] == "update"]
     passes = {r["pass_index"] for r in updates}
     assert {1.0, 2.0} <= passes
@@ -47,7 +47,7 @@ def test_ukf_nees_averaged_over_ten_seeds_is_inside_the_chi2_band_on_every_step(
         scenario = load_scenario("quick").with_overrides({
             "filter": {"name": "ukf"}, "iod": {"name": "noisy-range", "n_particles": 5000}})
         result = run_scenario(scenario, seed=seed)
-        assert result.summary["status"] == "finished"
+        assert result.summary.status == "finished"
         per_run.append([r["nees"] for r in result.rows if r["kind"] == "update"][:9])
     mean = np.mean(np.array(per_run), axis=0)
     assert np.all((mean >= lo) & (mean <= hi)), mean

@@ -72,7 +72,7 @@ def test_server_listens_on_loopback_only_and_stops_on_close(recorded_run):
     try:
         assert _listening(port) == [LOOPBACK]
         assert rec.server_uri == f"rerun+http://127.0.0.1:{port}/proxy"
-        rec.cistrack_run_finished(run=recorded_run.result.context, summary={"status": "finished"})
+        rec.cistrack_run_finished(run=recorded_run.result.context, summary=recorded_run.result.summary)
         assert _listening(port) == [LOOPBACK], "the server outlives the run until close()"
     finally:
         rec.close()
@@ -88,7 +88,7 @@ def test_a_directory_path_writes_one_recording_per_run(recorded_run, tmp_path):
     for rid in ("run-a", "run-b"):
         run = dataclasses.replace(ctx, run_id=rid)
         rec.cistrack_run_started(run=run)
-        rec.cistrack_run_finished(run=run, summary={})
+        rec.cistrack_run_finished(run=run, summary=recorded_run.result.summary)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run-a.rrd", "run-b.rrd"]
     for p in tmp_path.iterdir():
         assert "/world/libration" in read_entities(p)
@@ -98,6 +98,6 @@ def test_a_single_file_path_refuses_a_second_run(recorded_run, tmp_path):
     ctx = recorded_run.result.context
     rec = RerunRecorder(path=str(tmp_path / "one.rrd"))
     rec.cistrack_run_started(run=ctx)
-    rec.cistrack_run_finished(run=ctx, summary={})
+    rec.cistrack_run_finished(run=ctx, summary=recorded_run.result.summary)
     with pytest.raises(ParameterError, match="run_id"):
         rec.cistrack_run_started(run=dataclasses.replace(ctx, run_id="other"))

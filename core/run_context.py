@@ -16,6 +16,7 @@ import numpy as np
 from .belief import Belief, ParticleCloud
 from .interfaces import Dynamics, Filter, IODMethod, Pass, Schedule, Sensor
 from .measurement import Measurement, MeasurementSet
+from .truth import Truth
 
 __all__ = ["RunContext", "Step"]
 
@@ -34,6 +35,7 @@ class RunContext:
     truth_times : (K,) float          dense truth grid, TU (also used to find passes)
     truth_states : (K, 6) float       truth on that grid, nondimensional synodic (empty when the
                                       measurements came from a file and truth is unknown)
+    truth : Truth or None             every truth state of the run, each propagated once
     passes : list of Pass             visibility passes of the truth
     measurements : MeasurementSet     all measurements, including any IOD-only range
     iod_cloud : ParticleCloud         the IOD result (epoch = last fitted measurement)
@@ -56,34 +58,15 @@ class RunContext:
     iod_cloud: ParticleCloud
     output_dir: Path | None = None
     truth_dynamics: Dynamics | None = None
-    truth_cache: dict[float, np.ndarray] = field(default_factory=dict, repr=False)
+    truth: Truth | None = field(default=None, repr=False)
 
     @property
     def has_truth(self) -> bool:
-        return self.truth_states.size > 0
+        return self.truth is not None
 
     def truth_at(self, t: float) -> np.ndarray | None:
-        """Truth state (6,) at time t (TU) by propagation from the nearest grid point."""
-        if not self.has_truth:
-            return None
-        if float(t) in self.truth_cache:
-            return self.truth_cache[float(t)].copy()
-        k = int(np.argmin(np.abs(self.truth_times - t)))
-        if abs(self.truth_times[k] - t) < 1e-12:
-            return self.truth_states[k].copy()
-        dyn = self.truth_dynamics or self.dynamics
-        prop = dyn.propagate(self.truth_states[k][None], float(self.truth_times[k]), float(t))
-        return prop.final[0].copy()
-
-    def precompute_truth(self, times) -> None:
-        """Propagate the truth to all ``times`` (TU) in one call so truth_at(t) is a look-up."""
-        if not self.has_truth or len(times) == 0:
-            return
-        ts = np.unique(np.asarray(times, dtype=float))
-        dyn = self.truth_dynamics or self.dynamics
-        prop = dyn.propagate(self.truth_states[0][None], float(self.truth_times[0]), ts)
-        for t, x in zip(ts, prop.states[:, 0, :]):
-            self.truth_cache[float(t)] = x.copy()
+        """Truth state (6,) at time t (TU), or None without a truth; see :class:`Truth`."""
+        return None if self.truth is None else self.truth.at(t)
 
 
 @dataclass

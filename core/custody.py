@@ -1,0 +1,106 @@
+"""Custody: whether the filter still holds the target, decided by an observer of the run.
+
+:class:`CustodyObserver` is registered on a run's lifecycle hooks like any other observer (as
+pytest's terminal reporter is a plugin of pytest). It judges each update step against a
+:class:`CustodyRule`, writes the ``custody`` metric (1 kept, 0 lost) into the step before the
+results writer sees it (``tryfirst``), and hands the run's :class:`Verdict` to the summary.
+
+Extending: a verdict has a ``kind`` and a ``reason``. Further judges (consistency without a
+truth, divergence, ...) can subclass :class:`CustodyObserver` (override :meth:`judge`) or be
+observers of their own that produce a :class:`Verdict`.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from . import units
+from .hookspecs import hookimpl
+
+__all__ = ["CustodyRule", "Verdict", "CustodyObserver"]
+
+
+@dataclass(frozen=True)
+class CustodyRule:
+    """When custody is lost (sticky: once lost, lost for the rest of the run).
+
+    Custody is lost at the first update step where the truth's log-likelihood under the belief's
+    mixture (state in km and km/s) is below ``loglik_threshold``, or where the truth lies outside
+    the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps.
+    """
+
+    loglik_threshold: float = -100.0
+    hdr_threshold: float = 0.997
+    hdr_consecutive: int = 2
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of a run as judged by an observer.
+
+    Attributes
+    ----------
+    kind : str                 "kept", "lost" (truth left the belief) or "filter-failed"
+                               (the filter raised); observers may add kinds
+    reason : str               one sentence a person can read, e.g. which threshold was crossed
+    step : int or None         step index where the verdict changed from "kept" (None if kept)
+    t_days : float or None     time of that step, days since the epoch
+    """
+
+    kind: str = "kept"
+    reason: str = ""
+    step: int | None = None
+    t_days: float | None = None
+
+    @property
+    def kept(self) -> bool:
+        return self.kind == "kept"
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Verdict":
+        return cls(**{k: data.get(k) for k in ("kind", "reason", "step", "t_days")})
+
+
+class CustodyObserver:
+    """Judges custody on every update step of a run with a truth (see the module docstring)."""
+
+    def __init__(self, rule: CustodyRule | None = None) -> None:
+        self.rule = rule or CustodyRule()
+        self.verdict = Verdict()
+        self._hdr_run = 0
+
+    def judge(self, step) -> Verdict | None:
+        """The verdict after update ``step`` if custody is lost there, else None."""
+        m = step.metrics
+        if m.get("truth_loglik", 0.0) < self.rule.loglik_threshold:
+            return Verdict("lost", f"truth log-likelihood {m['truth_loglik']:.1f} < "
+                           f"{self.rule.loglik_threshold:g}", step.index, float(units.tu_to_days(step.t)))
+        self._hdr_run = self._hdr_run + 1 if m.get("hdr_level", 0.0) > self.rule.hdr_threshold else 0
+        if self._hdr_run >= self.rule.hdr_consecutive:
+            return Verdict("lost", f"truth outside the {self.rule.hdr_threshold:g} highest-density region "
+                           f"on {self._hdr_run} consecutive updates", step.index, float(units.tu_to_days(step.t)))
+        return None
+
+    def _mark(self, step) -> None:
+        step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
+
+    @hookimpl(tryfirst=True)
+    def cistrack_step_predicted(self, run, step) -> None:
+        if step.kind in ("initial", "predict"):
+            self._mark(step)
+
+    @hookimpl(tryfirst=True)
+    def cistrack_step_updated(self, run, step) -> None:
+        if self.verdict.kept and step.truth is not None:
+            lost = self.judge(step)
+            if lost is not None:
+                self.verdict = lost
+        self._mark(step)
+
+    @hookimpl
+    def cistrack_run_failed(self, run, step_index, error) -> None:
+        if self.verdict.kept:
+            self.verdict = Verdict("filter-failed", str(error), step_index, None)

@@ -1,0 +1,107 @@
+"""The typed summary of one run, shared by the run, the CLI, the results store and studies.
+
+On disk (``manifest.json`` key ``summary``) it is :meth:`RunSummary.to_dict`: the flat keys
+earlier versions wrote (``custody_kept``, ``custody_lost_step``, ...) plus ``verdict``;
+:meth:`RunSummary.from_dict` reads both forms, so studies resume over old run directories.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from .custody import Verdict
+
+__all__ = ["RunSummary", "FINAL_KEYS", "summarize"]
+
+FINAL_KEYS: tuple[str, ...] = (
+    "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+    "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level")
+"""Metrics reported for the last update and at the end of each pass."""
+
+
+@dataclass
+class RunSummary:
+    """What a run ended with.
+
+    Attributes
+    ----------
+    run_id : str
+    seed : int
+    status : str                 "finished" or "filter-failed"
+    failure : str                the error that stopped the filter ("" if none)
+    verdict : Verdict            custody (kind, reason, step, t_days)
+    n_steps, n_updates, n_measurements, n_passes : int
+    final : dict                 FINAL_KEYS of the last update (or the last step), km, m/s, cm/s
+    pass_end : dict              pass number (str) -> FINAL_KEYS and t_days at its last update
+    wall_time_s, prepare_time_s : float
+    """
+
+    run_id: str
+    seed: int
+    status: str = "finished"
+    failure: str = ""
+    verdict: Verdict = field(default_factory=Verdict)
+    n_steps: int = 0
+    n_updates: int = 0
+    n_measurements: int = 0
+    n_passes: int = 0
+    final: dict[str, float] = field(default_factory=dict)
+    pass_end: dict[str, dict[str, float]] = field(default_factory=dict)
+    wall_time_s: float = 0.0
+    prepare_time_s: float = 0.0
+
+    @property
+    def custody_kept(self) -> bool:
+        return self.verdict.kept
+
+    @property
+    def custody_lost_step(self) -> int | None:
+        return self.verdict.step
+
+    @property
+    def custody_lost_t_days(self) -> float | None:
+        return self.verdict.t_days
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict (the manifest's ``summary``)."""
+        return {
+            "run_id": self.run_id, "seed": self.seed, "status": self.status, "failure": self.failure,
+            "custody_kept": self.custody_kept, "custody_lost_step": self.custody_lost_step,
+            "custody_lost_t_days": self.custody_lost_t_days, "verdict": self.verdict.to_dict(),
+            "n_steps": self.n_steps, "n_updates": self.n_updates, "n_measurements": self.n_measurements,
+            "n_passes": self.n_passes, "final": dict(self.final), "pass_end": dict(self.pass_end),
+            "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "RunSummary":
+        """Inverse of :meth:`to_dict`; also reads summaries written before ``verdict`` existed."""
+        if "verdict" in data and isinstance(data["verdict"], dict):
+            verdict = Verdict.from_dict(data["verdict"])
+        elif data.get("custody_kept", True):
+            verdict = Verdict()
+        else:
+            failed = data.get("status") == "filter-failed"
+            verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
+                              data.get("custody_lost_step"), data.get("custody_lost_t_days"))
+        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "final", "pass_end",
+                 "wall_time_s", "prepare_time_s", "status", "failure")
+        return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict,
+                   **{k: data[k] for k in names if k in data})
+
+
+def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, failure: str,
+              wall_time_s: float, prepare_time_s: float) -> RunSummary:
+    """The summary of ``run`` (a RunContext) from its table ``rows`` (see :func:`step_row`)."""
+    updates = [r for r in rows if r["kind"] == "update"]
+    last = updates[-1] if updates else (rows[-1] if rows else {})
+    pass_end: dict[str, dict[str, float]] = {}
+    for r in updates:
+        p = int(r.get("pass_index", 0))
+        if p > 0:
+            pass_end[str(p)] = {k: r[k] for k in FINAL_KEYS if k in r} | {"t_days": r["t_days"]}
+    return RunSummary(
+        run_id=run.run_id, seed=int(run.seed), status=status, failure=failure, verdict=verdict,
+        n_steps=len(rows), n_updates=len(updates), n_measurements=len(run.measurements),
+        n_passes=len(run.passes), final={k: last[k] for k in FINAL_KEYS if k in last},
+        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s)

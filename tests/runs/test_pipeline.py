@@ -1,0 +1,135 @@
+"""One way through a run: the truth is propagated once per time and at most once per wave, every
+component is constructed once, custody is an observer, one row builder, a typed summary."""
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from cistrack.custody import CustodyObserver, CustodyRule, Verdict
+from cistrack.plugins.dynamics.cr3bp import CR3BP
+from cistrack.registry import Registry, load_registry
+from cistrack.run import run_scenario
+from cistrack.run_summary import RunSummary
+from cistrack.scenario import load_scenario
+from cistrack.truth import Truth
+
+
+def _small(**over):
+    base = {"duration_days": 1.4, "filter": {"n_particles": 200, "n_components": 2},
+            "iod": {"n_particles": 200}, "run": {"predict_every_hours": 3.0}}
+    base.update(over)
+    return base
+
+
+class _CountingRegistry(Registry):
+    """The real registry (every real plugin) that counts the components it constructs."""
+
+    def __init__(self, real: Registry) -> None:
+        self.__dict__.update(real.__dict__)
+        self.created: Counter = Counter()
+
+    def create(self, kind, name, **params):
+        self.created[(kind, name)] += 1
+        return super().create(kind, name, **params)
+
+
+def test_loading_and_running_a_scenario_constructs_each_component_once():
+    reg = _CountingRegistry(load_registry())
+    scen = load_scenario("quick", reg, overrides=_small(filter={"n_particles": 200, "n_components": 2,
+                                                                "clusterer": {"name": "kmeans"}}))
+    run_scenario(scen, seed=1, registry=reg)
+    built = {k: v for k, v in reg.created.items() if k[0] != "orbit"}
+    assert built == {("dynamics", "cr3bp"): 1, ("sensor", "ground-telescope"): 1,
+                     ("schedule", "paper-example-1"): 1, ("iod", "noisy-range"): 1,
+                     ("filter", "pgm"): 1, ("clustering", "kmeans"): 1}
+
+
+def test_a_second_run_of_the_same_scenario_gets_fresh_components():
+    scen = load_scenario("quick", overrides=_small())
+    first = run_scenario(scen, seed=1).context.filter
+    second = run_scenario(scen, seed=1).context.filter
+    assert first is not second
+
+
+class _CountingCR3BP(CR3BP):
+    """The real CR3BP, counting propagate calls and the output times asked for."""
+
+    calls: list = []
+
+    def propagate(self, states, t0, times, **kw):
+        type(self).calls.append(np.atleast_1d(np.asarray(times, dtype=float)).copy())
+        return super().propagate(states, t0, times, **kw)
+
+
+def test_the_truth_is_propagated_once_per_wave_and_never_twice_for_one_time(registry):
+    reg = load_registry()
+    reg.add("dynamics", "counting-cr3bp", _CountingCR3BP)
+    _CountingCR3BP.calls = []
+    scen = load_scenario("quick", reg, overrides=_small(truth={"orbit": "nrho-9-2", "dynamics": "counting-cr3bp"}))
+    res = run_scenario(scen, seed=2, registry=reg)
+    calls = _CountingCR3BP.calls
+    assert len(calls) <= 3 and res.context.truth.propagations == len(calls)
+    every = np.concatenate(calls)
+    assert every.size == np.unique(every).size, "a truth time was propagated twice"
+    step_times = [r["t_tu"] for r in res.rows]
+    assert set(step_times) <= set(res.context.truth.known_times.tolist())
+
+
+def test_truth_states_equal_a_direct_propagation_to_the_same_times():
+    dyn = CR3BP()
+    x0 = np.array([1.0214, 0.0, -0.1825, 0.0, -0.1033, 0.0])
+    times = np.array([0.1, 0.35, 0.6])
+    truth = Truth(dyn, x0)
+    got = truth.states_at(times[::-1])[::-1]
+    np.testing.assert_array_equal(got, dyn.propagate(x0[None], 0.0, times).states[:, 0, :])
+    truth.states_at(times)
+    assert truth.propagations == 1
+
+
+class _Step:
+    def __init__(self, index, loglik, hdr):
+        self.index, self.t, self.kind, self.truth = index, 0.1 * index, "update", np.zeros(6)
+        self.metrics = {"truth_loglik": loglik, "hdr_level": hdr}
+
+
+@pytest.mark.parametrize("seq,lost_at", [([(5.0, 0.5), (-200.0, 0.5), (5.0, 0.5)], 2),
+                                         ([(5.0, 0.999), (5.0, 0.5), (5.0, 0.999), (5.0, 0.999)], 4),
+                                         ([(5.0, 0.999), (5.0, 0.5), (5.0, 0.999)], None)])
+def test_custody_is_lost_on_low_likelihood_or_consecutive_hdr_excursions(seq, lost_at):
+    obs = CustodyObserver(CustodyRule(loglik_threshold=-100.0, hdr_threshold=0.997, hdr_consecutive=2))
+    marks = []
+    for i, (ll, hdr) in enumerate(seq, start=1):
+        step = _Step(i, ll, hdr)
+        obs.cistrack_step_updated(run=None, step=step)
+        marks.append(step.metrics["custody"])
+    assert obs.verdict.step == lost_at
+    if lost_at is None:
+        assert obs.verdict.kept and marks == [1.0] * len(seq)
+    else:
+        assert obs.verdict.kind == "lost" and obs.verdict.reason
+        assert marks == [1.0] * (lost_at - 1) + [0.0] * (len(seq) - lost_at + 1)
+
+
+def test_the_summary_round_trips_through_its_dict_and_reads_old_manifests():
+    s = RunSummary("r", 3, verdict=Verdict("lost", "why", 7, 2.5), n_steps=9, final={"nees": 1.0})
+    assert RunSummary.from_dict(s.to_dict()) == s
+    old = {k: v for k, v in s.to_dict().items() if k != "verdict"}
+    back = RunSummary.from_dict(old)
+    assert (back.custody_kept, back.custody_lost_step, back.custody_lost_t_days) == (False, 7, 2.5)
+
+
+def test_the_rows_returned_are_the_rows_written(tmp_path):
+    from cistrack.results import read_steps
+
+    scen = load_scenario("quick", overrides=_small())
+    res = run_scenario(scen, seed=4, output_dir=tmp_path / "r")
+    table = read_steps(tmp_path / "r").to_pylist()
+    def strip(rows):  # timings differ between writes; NaN != NaN, so compare NaN as a marker;
+        # the table has every column in every row (None where a step had no such value)
+        return [{k: ("nan" if isinstance(v, float) and np.isnan(v) else v) for k, v in r.items()
+                 if not k.startswith("time_") and v is not None} for r in rows]
+
+    assert strip(table) == strip(res.rows)
+    assert res.summary.n_steps == len(res.rows)
