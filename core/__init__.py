@@ -12,11 +12,30 @@ try:
 except _md.PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
-from .belief import Belief, GaussianMixture, ParticleCloud
 from .errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
                      MeasurementError, ParameterError, UnknownComponentError)
 from .hookspecs import hookimpl
-from .measurement import Measurement, MeasurementSet
+
+# The belief and measurement types load on first access (PEP 562), so that ``import cistrack``
+# (and with it ``cistrack --help``) does not pay for numpy and scipy.
+_LAZY = {"Belief": "belief", "GaussianMixture": "belief", "ParticleCloud": "belief",
+         "Measurement": "measurement", "MeasurementSet": "measurement"}
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'cistrack' has no attribute {name!r}")
+    from importlib import import_module
+
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "__version__", "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",

@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
-from scipy.special import logsumexp
+
+from .lazy import lazy_njit
 
 __all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
 
@@ -48,7 +48,7 @@ def regularize_covariance(p: np.ndarray, rel: float = 1e-12) -> np.ndarray:
     return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def _whitened_logpdf(x, means, linv, const, logw, out):
     """out[n, m] = const[m] + logw[m] - |linv[m] (x[n] - means[m])|^2 / 2 (linv lower triangular).
 
@@ -71,7 +71,7 @@ def _whitened_logpdf(x, means, linv, const, logw, out):
             out[n, m] = const[m] + logw[m] - 0.5 * maha
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def _row_logsumexp(a, out):
     """out[n] = log sum_m exp(a[n, m]) for a (N, M), -inf rows giving -inf, NaN propagating."""
     n_pts, n_comp = a.shape
@@ -233,6 +233,8 @@ class GaussianMixture:
         """Posterior component probabilities of each point, (N, M)."""
         with np.errstate(divide="ignore"):
             a = self.component_logpdf(x) + np.log(self.weights)
+        from scipy.special import logsumexp  # imported on use: scipy.special is slow to import
+
         return np.exp(a - logsumexp(a, axis=1, keepdims=True))
 
     def sample(self, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

@@ -164,7 +164,10 @@ def cmd_study(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
+    p.add_argument("--version", action="version", version=f"cistrack {__version__}")
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
     r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")

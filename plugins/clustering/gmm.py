@@ -4,16 +4,12 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from sklearn.cluster import KMeans
-from sklearn.exceptions import ConvergenceWarning
-from sklearn.mixture import GaussianMixture as SkGaussianMixture
 
 from cistrack.component import check_choice, check_int, check_positive
 from cistrack.errors import ParameterError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
-from . import em_numba
 from .thread_limits import limited_threads
 from .standardize import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
 
@@ -31,6 +27,10 @@ def fit_gmm_labels(z: np.ndarray, k: int, rng: np.random.Generator, max_iter: in
     fit = z
     if z.shape[0] > max_fit_samples:
         fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
+    # scikit-learn and numba are imported on use: listing the registry must not load them.
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.mixture import GaussianMixture as SkGaussianMixture
+
     gm = SkGaussianMixture(n_components=k, covariance_type="full", max_iter=max_iter, tol=tol,
                            reg_covar=reg_covar, init_params=init, random_state=sklearn_seed(rng))
     with warnings.catch_warnings(), limited_threads(n_threads):
@@ -55,9 +55,13 @@ def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, max_it
     fit = z
     if z.shape[0] > max_fit_samples:
         fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
+    from . import em_numba  # compiled code: imported on use, not when the registry lists plugins
+
     if init == "kmeans-numba":
         start = em_numba.kmeans_labels(fit, k, rng)
     else:
+        from sklearn.cluster import KMeans
+
         with limited_threads(n_threads):
             start = KMeans(n_clusters=k, n_init=1, random_state=sklearn_seed(rng)).fit(fit).labels_
     result = em_numba.em_fit(fit, em_numba.one_hot(start, k), reg_covar, tol, max_iter)

@@ -4,8 +4,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from sklearn.cluster import KMeans
-from sklearn.exceptions import ConvergenceWarning
 
 from cistrack.component import check_int
 from cistrack.hookspecs import hookimpl
@@ -52,6 +50,9 @@ class KMeansClusterer(Clusterer):
         k = n_distinct_at_least(x, self.n_components)
         if k <= 1:
             return np.zeros(x.shape[0], dtype=np.intp)
+        from sklearn.cluster import KMeans  # on use: listing the registry must not load scikit-learn
+        from sklearn.exceptions import ConvergenceWarning
+
         km = KMeans(n_clusters=k, n_init=self.n_init, max_iter=self.max_iter,
                     random_state=sklearn_seed(rng))
         z = standardize(x)

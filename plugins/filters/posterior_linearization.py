@@ -21,13 +21,15 @@ over the posterior.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints
 
 from cistrack.belief import regularize_covariance
 from cistrack.errors import FilterError
+
+if TYPE_CHECKING:  # filterpy (and through it matplotlib) is imported only where a UKF runs
+    from filterpy.kalman import MerweScaledSigmaPoints
 
 __all__ = ["PosteriorLinearization", "posterior_linearization_update"]
 

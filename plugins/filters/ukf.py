@@ -19,8 +19,6 @@ angles wrapped), so means never straddle the 0/2pi cut.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
-from scipy.linalg import cholesky
 
 from cistrack.belief import Belief, ParticleCloud, regularize_covariance
 from cistrack.component import check_int, check_nonnegative, check_positive, check_range
@@ -29,73 +27,12 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Filter, Sensor
 from cistrack.measurement import Measurement
 
-from .ensemble_propagation import propagate_ensemble
 from .gaussian_belief import gaussian_belief
-from .posterior_linearization import posterior_linearization_update
 from .observation import MeasuredComponents, check_epoch
 from .initial_cloud import check_cloud
 from .process_noise import velocity_random_walk_covariance
 
 __all__ = ["UKFFilter"]
-
-
-def _robust_sqrt(a: np.ndarray) -> np.ndarray:
-    """Upper Cholesky factor of ``a`` (filterpy's convention), regularising a matrix that is not
-    numerically positive definite."""
-    try:
-        return cholesky(a)
-    except np.linalg.LinAlgError:
-        return cholesky(regularize_covariance(a, 1e-10))
-
-
-def _not_used(*args, **kwargs):  # filterpy requires fx/hx; the batch overrides never call them
-    raise FilterError("internal: per-point fx/hx must not be called")
-
-
-def _batch_unscented_transform(sigmas, Wm, Wc, noise_cov=None, mean_fn=None, residual_fn=None):
-    """filterpy's unscented transform without its loop over sigma points: (K, n) -> mean, cov."""
-    x = Wm @ sigmas if mean_fn is None else mean_fn(sigmas, Wm)
-    y = sigmas - x if residual_fn is None or residual_fn is np.subtract else residual_fn(sigmas, x)
-    P = (y.T * Wc) @ y
-    if noise_cov is not None:
-        P = P + noise_cov
-    return x, P
-
-
-class _BatchUKF(UnscentedKalmanFilter):
-    """UnscentedKalmanFilter whose sigma points go through dynamics and sensor as one array."""
-
-    def __init__(self, dynamics: Dynamics, who: str, **kw):
-        super().__init__(hx=_not_used, fx=_not_used, dt=0.0, **kw)
-        self.dynamics = dynamics
-        self.who = who
-        self.t0 = 0.0
-        self.n_lost_last = 0
-        self.iterations_last = 0
-        self.step_last = 0.0
-
-    def compute_process_sigmas(self, dt, fx=None, **fx_args):
-        sigmas = self.points_fn.sigma_points(self.x, self.P)
-        final, alive = propagate_ensemble(self.dynamics, sigmas, self.t0, self.t0 + dt, self.who)
-        # a sigma point that hit a body keeps its impact state (the transform needs all points)
-        self.n_lost_last = int(np.count_nonzero(~alive))
-        self.sigmas_f = final
-
-    def update_iterated(self, meas: MeasuredComponents, max_iterations: int, tolerance: float) -> None:
-        """The measurement update, iterated by posterior linearisation (one iteration = the
-        ordinary UKF update); all sigma points are measured with one sensor call per iteration."""
-        try:
-            res = posterior_linearization_update(self.points_fn, self.x, self.P, meas.residuals_to_measurement,
-                                                 meas.R, max_iterations, tolerance)
-        except (FilterError, np.linalg.LinAlgError) as exc:
-            raise FilterError(f"filter '{self.who}': measurement update failed: {exc}") from None
-        self.x, self.P = res.x, res.P
-        self.y, self.S = res.innovation, res.S
-        self.SI = np.linalg.inv(self.S)
-        self.iterations_last, self.step_last = res.iterations, res.step
-        self.z = meas.z.copy()
-        self.x_post, self.P_post = self.x.copy(), self.P.copy()
-        self._log_likelihood = self._likelihood = self._mahalanobis = None
 
 
 class UKFFilter(Filter):
@@ -131,7 +68,7 @@ class UKFFilter(Filter):
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
         self.update_tolerance = check_positive(self, "update_tolerance", update_tolerance)
-        self._ukf: _BatchUKF | None = None
+        self._ukf = None  # a ukf_batch.BatchUKF once initialised
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
@@ -143,9 +80,11 @@ class UKFFilter(Filter):
         if d + self.kappa <= 0:
             raise FilterError(f"filter '{self._who()}': kappa = {self.kappa} needs a state dimension above "
                               f"{-self.kappa:g}; the cloud has {d}")
+        from .ukf_batch import BatchUKF, MerweScaledSigmaPoints, robust_sqrt  # filterpy, on use
+
         points = MerweScaledSigmaPoints(d, alpha=self.alpha, beta=self.beta, kappa=self.kappa,
-                                        sqrt_method=_robust_sqrt)
-        self._ukf = _BatchUKF(dynamics, self._who(), dim_x=d, dim_z=max(1, len(sensor.names)), points=points)
+                                        sqrt_method=robust_sqrt)
+        self._ukf = BatchUKF(dynamics, self._who(), dim_x=d, dim_z=max(1, len(sensor.names)), points=points)
         self._ukf.x = cloud.mean.copy()
         self._ukf.P = regularize_covariance(cloud.covariance, 1e-12)
         self._ukf.Q = np.zeros((d, d))
@@ -164,7 +103,9 @@ class UKFFilter(Filter):
             return
         ukf.t0 = self._t
         ukf.Q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, ukf.x.size)
-        ukf.predict(dt=t - self._t, UT=_batch_unscented_transform)
+        from .ukf_batch import batch_unscented_transform
+
+        ukf.predict(dt=t - self._t, UT=batch_unscented_transform)
         self._lost_total += ukf.n_lost_last
         self._t = t
         self._belief = None
@@ -204,7 +145,7 @@ class UKFFilter(Filter):
     def _who(self) -> str:
         return self.registry_name or "ukf"
 
-    def _require_init(self) -> _BatchUKF:
+    def _require_init(self):
         if self._ukf is None:
             raise FilterError(f"filter '{self._who()}': call initialize() first")
         return self._ukf

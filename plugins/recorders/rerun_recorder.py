@@ -42,18 +42,21 @@ from typing import Any
 
 import numpy as np
 
-import rerun as rr
-import rerun.blueprint as rrb
 
 from cistrack.component import Component, check_int, check_positive
 from cistrack.errors import CistrackError, ParameterError
 from cistrack.hookspecs import hookimpl
+from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .scene import (
     EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, most_likely_component,
     position_ellipsoids, primary_positions, system_mu,
 )
+
+# rerun loads when a recording starts, not when the registry lists this plugin.
+rr = LazyModule("rerun")
+rrb = LazyModule("rerun.blueprint")
 
 __all__ = ["RerunRecorder", "ViewerUnavailableError", "subsample_indices", "LOOPBACK",
            "find_viewer_executable"]

@@ -5,8 +5,6 @@ Everything here is plain numpy: the rerun recorder turns these arrays into arche
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import solve_triangular
-from scipy.optimize import brentq
 
 from cistrack.errors import ParameterError
 from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, mass_ratio
@@ -48,6 +46,8 @@ def libration_points(mu: float = EARTH_MOON_MU) -> np.ndarray:
     f = lambda x: _collinear_gradient(x, mu)  # noqa: E731
     # dU/dx goes from -inf (just outside Earth) to +inf (just inside the Moon) with one root
     # between the primaries (L1); likewise beyond the Moon (L2) and beyond the Earth (L3).
+    from scipy.optimize import brentq  # on use: slow to import
+
     l1 = brentq(f, earth + eps, moon - eps, xtol=1e-14, maxiter=500)
     l2 = brentq(f, moon + eps, 2.0, xtol=1e-14, maxiter=200)
     l3 = brentq(f, -2.0, earth - eps, xtol=1e-14, maxiter=200)
@@ -140,6 +140,8 @@ def most_likely_component(points: np.ndarray, mixture) -> np.ndarray:
         argmax_i of w_i N(x; mu_i, P_i), one (N, d) x (d, d) product per component (used to
         colour particles whose filter gave no labels).
     """
+    from scipy.linalg import solve_triangular  # on use: slow to import
+
     x = np.asarray(points, dtype=float)
     chol = mixture.cholesky()
     best = np.full(x.shape[0], -np.inf)

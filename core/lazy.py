@@ -1,0 +1,71 @@
+"""Numba functions compiled on first call, so that ``import cistrack`` does not import numba.
+
+Importing numba costs about a quarter of a second, and the command line (``cistrack --help``,
+``cistrack plugins``) never runs a compiled function. :func:`lazy_njit` takes the options of
+:func:`numba.njit` and returns a :class:`LazyJit`: calling it from Python compiles (or loads
+numba's on-disk cache) on the first call and then calls the compiled function. Compiled code
+cannot call a ``LazyJit`` itself; it calls :attr:`LazyJit.dispatcher`, the numba function.
+"""
+from __future__ import annotations
+
+import functools
+import threading
+from typing import Any, Callable
+
+__all__ = ["LazyJit", "LazyModule", "lazy_njit"]
+
+
+class LazyJit:
+    """A Python function and the :func:`numba.njit` options to compile it with on first use."""
+
+    def __init__(self, func: Callable, options: dict[str, Any]):
+        self.py_func = func
+        self.options = dict(options)
+        self._dispatcher = None
+        self._lock = threading.Lock()
+        functools.update_wrapper(self, func)
+
+    @property
+    def dispatcher(self):
+        """The numba dispatcher (compiled, or loaded from numba's cache, on first access)."""
+        if self._dispatcher is None:
+            with self._lock:
+                if self._dispatcher is None:
+                    from numba import njit
+
+                    self._dispatcher = njit(**self.options)(self.py_func)
+        return self._dispatcher
+
+    def __call__(self, *args: Any) -> Any:
+        return self.dispatcher(*args)
+
+    def __repr__(self) -> str:
+        return f"LazyJit({self.py_func.__module__}.{self.py_func.__qualname__})"
+
+
+def lazy_njit(**options: Any) -> Callable[[Callable], LazyJit]:
+    """Decorator: ``@lazy_njit(cache=True)`` is ``@numba.njit(cache=True)`` compiled on first call."""
+    def wrap(func: Callable) -> LazyJit:
+        return LazyJit(func, options)
+    return wrap
+
+
+class LazyModule:
+    """A module imported on first attribute access: ``rr = LazyModule("rerun")``.
+
+    For plugin modules that the registry imports to list components: the heavy library is
+    loaded when a component first uses it, not when ``cistrack plugins`` runs.
+    """
+
+    def __init__(self, name: str):
+        self._lazy_name = name
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr.startswith("__") and attr.endswith("__"):
+            raise AttributeError(attr)
+        from importlib import import_module
+
+        return getattr(import_module(self._lazy_name), attr)
+
+    def __repr__(self) -> str:
+        return f"LazyModule({self._lazy_name!r})"
