@@ -210,8 +210,24 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _configure_logging(quiet: bool) -> None:
+    """Library progress notes (logger ``cistrack``, e.g. one-time kernel compilation) go to stderr;
+    ``--quiet`` keeps only warnings and errors."""
+    import logging
+
+    class _Stderr(logging.Handler):  # looks sys.stderr up at each message (tests swap it)
+        def emit(self, record: logging.LogRecord) -> None:
+            _eprint(f"cistrack: {record.getMessage()}")
+
+    logger = logging.getLogger("cistrack")
+    if not any(type(h).__name__ == "_Stderr" for h in logger.handlers):
+        logger.addHandler(_Stderr())
+    logger.setLevel(logging.WARNING if quiet else logging.INFO)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    _configure_logging(bool(getattr(args, "quiet", False)))
     try:
         return int(args.func(args) or 0)
     except CistrackError as exc:

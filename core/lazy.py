@@ -36,6 +36,11 @@ class LazyJit:
                     self._dispatcher = njit(**self.options)(self.py_func)
         return self._dispatcher
 
+    @property
+    def targetoptions(self) -> dict[str, Any]:
+        """The njit options, as a numba dispatcher exposes them (read by the kernel generator)."""
+        return dict(self.options)
+
     def __call__(self, *args: Any) -> Any:
         return self.dispatcher(*args)
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import inspect
+import logging
 import os
 import sys
 import tempfile
@@ -23,12 +24,17 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-import numba
 import numpy as np
 
 from . import dop853_source
 
-__all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks"]
+__all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMPILE_SECONDS"]
+
+_LOG = logging.getLogger("cistrack.propagation")
+
+COMPILE_SECONDS = "10-30"
+"""Rough one-time cost of compiling one model's kernels (measured: 28 s wall, 9 s CPU on a busy
+2-core machine; see benchmarks/bench_startup.py). Shown in the progress message only."""
 
 
 # -- kernel generation and caching ----------------------------------------------------------------
@@ -100,6 +106,8 @@ def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
         if where is not None:
             src = dop853_source.generate_source(
                 f"from {where[0]} import {where[1]} as rhs", dim, title=f"for {where[0]}.{where[1]}")
+            import numba  # imported here, not at module import: listing plugins needs no numba
+
             digest = hashlib.sha256(
                 (src + _source_digest(rhs) + numba.__version__ + sys.version).encode()).hexdigest()[:20]
             name = f"cistrack_kernel_{where[1]}_{digest}"
@@ -110,16 +118,29 @@ def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
                     if not path.exists() or path.read_text() != src:
                         _write_atomic(path, src)
                     mod = _load_file_module(name, path)
+                    if not _numba_cached(path):
+                        _announce_compile(f"{where[0]}.{where[1]}")
                     break
                 except OSError:
                     continue
         if where is None or mod is None:  # not importable or no writable directory: in memory
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)")
+            _announce_compile(repr(rhs))
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
             exec(compile(src, f"<cistrack kernel for {rhs!r}>", "exec"), mod.__dict__)
         _KERNELS[key] = mod
         return mod
+
+
+def _numba_cached(path: Path) -> bool:
+    """Whether numba's on-disk cache already holds the propagation kernel of module ``path``."""
+    return any((path.parent / "__pycache__").glob(f"{path.stem}.propagate_kernel-*.nbi"))
+
+
+def _announce_compile(what: str) -> None:
+    """Say (through logging; the command line shows it) that the next call compiles kernels."""
+    _LOG.info("compiling propagation kernels for %s (one-time, ~%s s)...", what, COMPILE_SECONDS)
 
 
 # -- threads ---------------------------------------------------------------------------------------
@@ -137,6 +158,8 @@ def num_threads() -> int:
             return max(1, int(env))
         except ValueError:
             pass
+    import numba
+
     return max(1, int(numba.config.NUMBA_NUM_THREADS))
 
 

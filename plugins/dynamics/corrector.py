@@ -28,7 +28,9 @@ from cistrack.errors import CistrackError
 
 from cistrack.primaries import MU_EARTH_MOON
 
-from .cr3bp import cr3bp_rhs
+from .cr3bp import cr3bp_rhs as _lazy_cr3bp_rhs
+
+cr3bp_rhs = _lazy_cr3bp_rhs.dispatcher  # compiled code below calls the numba function itself
 
 __all__ = ["CorrectionError", "CorrectedOrbit", "correct_symmetric_orbit", "propagate_with_stm",
            "cr3bp_stm_rhs"]

@@ -13,10 +13,10 @@ C = x^2 + y^2 + 2(1-mu)/r1 + 2 mu/r2 - |v|^2 is conserved.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from cistrack.component import check_int, check_positive, check_range
 from cistrack.hookspecs import hookimpl
+from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
 from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries
 from cistrack.propagation import CompiledDynamics
@@ -24,7 +24,8 @@ from cistrack.propagation import CompiledDynamics
 __all__ = ["CR3BP", "cr3bp_rhs", "jacobi_constant", "MU_EARTH_MOON"]
 
 
-@njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+# compiled on first use (or inlined into the propagation kernels): listing plugins needs no numba
+@lazy_njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
 def cr3bp_rhs(t, y, p, out):
     """CR3BP equations of motion: y (6,) [LU, VU] -> out (6,) [VU, VU/TU]; p = [mu]."""
     mu = p[0]

@@ -10,12 +10,12 @@ the universal anomaly), vectorised over states; it serves tests and the Gauss IO
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from cistrack import units
 from cistrack.component import check_int, check_positive, check_range
 from cistrack.errors import CistrackError
 from cistrack.hookspecs import hookimpl
+from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
 from cistrack.primaries import EARTH_RADIUS_KM
 
@@ -32,7 +32,8 @@ def gm_nondimensional(gm_km3s2: float) -> float:
     return float(gm_km3s2) * units.TU_S ** 2 / units.LU_KM ** 3
 
 
-@njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+# compiled on first use (or inlined into the propagation kernels): listing plugins needs no numba
+@lazy_njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
 def twobody_rhs(t, y, p, out):
     """Kepler equations of motion: y (6,) [LU, VU] -> out (6,); p = [gm (LU^3/TU^2)]."""
     r2 = y[0] * y[0] + y[1] * y[1] + y[2] * y[2]

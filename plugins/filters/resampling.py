@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from cistrack.errors import FilterError
 
@@ -18,6 +17,8 @@ def normalize_log_weights(logw: np.ndarray, who: str) -> tuple[np.ndarray, float
     logw = np.asarray(logw, dtype=float)
     if np.any(np.isnan(logw)) or not np.any(np.isfinite(logw)):
         raise FilterError(f"filter '{who}': every weight is zero or NaN; the belief cannot continue")
+    from scipy.special import logsumexp  # on use: scipy.special is slow to import
+
     total = float(logsumexp(logw))
     return logw - total, total
 

@@ -38,12 +38,7 @@ _CLI = ("import contextlib, io\n"
         "from cistrack.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    assert main(['plugins']) == 0\n")
-_NUMBA_PENDING = pytest.mark.xfail(
-    strict=True, reason="the dynamics plugins still jit their right-hand sides at import")
-
-
-@pytest.mark.parametrize("library", [pytest.param(m, marks=_NUMBA_PENDING) if m == "numba" else m
-                                     for m in HEAVY])
+@pytest.mark.parametrize("library", HEAVY)
 @pytest.mark.parametrize("code", [_REGISTRY, _CLI], ids=["registry", "cli-plugins"])
 def test_listing_components_does_not_load(library, code):
     assert library not in _loaded_after(code)
