@@ -32,7 +32,7 @@ def main() -> None:
     meas = [m for m in ctx.measurements if m.t > ctx.iod_cloud.epoch + 1e-12][0].angles_only()
     reg = default_registry()
     specs = [("pgm", {"n_particles": args.n, "n_components": 6}), ("pgm", {"n_particles": args.n, "n_components": 6, "clusterer": "gmm"}),
-             ("enkf", {"n_members": 1000}), ("ukf", {}), ("sir", {"n_particles": args.n})]
+             ("enkf", {"n_particles": 1000}), ("ukf", {}), ("sir", {"n_particles": args.n})]
     for name, params in specs:
         f = reg.create("filter", name, **params)
         f.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, np.random.default_rng(0))

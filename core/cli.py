@@ -1,7 +1,7 @@
 """The ``cistrack`` command.
 
     cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd] [--rerun-serve] [--rerun-spawn]
-    cistrack plugins [--check NAME] [--kind KIND]
+    cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack scenarios
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
     cistrack study report STUDY [--out DIR]
@@ -121,6 +121,8 @@ def cmd_plugins(args) -> int:
         print(f"{len(results) - failed} passed, {failed} failed")
         return 1 if failed else 0
     kinds = [args.kind] if args.kind else list(KINDS)
+    if args.name:
+        return _describe(reg, args.name, kinds)
     for kind in kinds:
         entries = reg.entries(kind)
         print(f"{kind} ({len(entries)})")
@@ -130,6 +132,23 @@ def cmd_plugins(args) -> int:
         print("plugins that failed to load:")
         for f in reg.failures:
             print(f"  {f}")
+    return 0
+
+
+def _describe(reg, name: str, kinds: list[str]) -> int:
+    """``cistrack plugins NAME``: every parameter of each component called NAME."""
+    import difflib
+
+    from .param_docs import describe_component
+
+    found = [reg.get(kind, name) for kind in kinds if (kind, name) in reg]
+    if not found:
+        every = sorted({n for kind in kinds for n in reg.names(kind)})
+        msg = f"no component named {name!r}"
+        close = difflib.get_close_matches(name, every, n=1, cutoff=0.5)
+        msg += f"; did you mean {close[0]!r}?" if close else f"; components: {', '.join(every)}"
+        raise ConfigError(msg + " (cistrack plugins lists them all)")
+    print("\n\n".join(describe_component(e.kind, e.name, e.factory, e.source) for e in found))
     return 0
 
 
@@ -179,7 +198,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
     r.add_argument("--quiet", action="store_true", help="no progress output")
     r.set_defaults(func=cmd_run)
-    pl = sub.add_parser("plugins", help="list registered components, or check one")
+    pl = sub.add_parser("plugins", help="list registered components, describe one, or check one")
+    pl.add_argument("name", nargs="?", default=None,
+                    help="describe this component: every parameter with type, default, unit and meaning")
     pl.add_argument("--check", metavar="NAME", default=None, help="run the conformance suite on a component")
     pl.add_argument("--kind", default=None, help="restrict to one kind")
     pl.add_argument("--param", action="append", metavar="KEY=VALUE",

@@ -9,6 +9,8 @@ observation) EnKF with innovations taken relative to the measurement, so angles 
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from cistrack.belief import Belief, ParticleCloud
@@ -31,23 +33,34 @@ class EnKFFilter(Filter):
 
     Parameters
     ----------
-    n_members : int
-        Ensemble size; the IOD cloud is subsampled (or resampled) to it.
+    n_particles : int
+        Ensemble size (members); the IOD cloud is subsampled (or resampled) to it.
     velocity_noise_kms_per_sqrt_day : float
         Process noise Q: velocity random walk, km/s after one day (0 = none).
+    n_members : int or None
+        Deprecated name of n_particles (every particle filter takes n_particles); still accepted
+        with a FutureWarning, and an error when both are given.
     """
 
-    def __init__(self, n_members: int = 1000, velocity_noise_kms_per_sqrt_day: float = 0.0):
-        self.n_members = check_int(self, "n_members", n_members, minimum=2)
+    def __init__(self, n_particles: int = 1000, velocity_noise_kms_per_sqrt_day: float = 0.0,
+                 n_members: int | None = None):
+        if n_members is not None:
+            if n_particles != 1000:
+                self._fail("n_members", n_members, "is the deprecated name of n_particles; give only n_particles")
+            warnings.warn("filter 'enkf': parameter 'n_members' is deprecated; use 'n_particles' "
+                          "(the name every particle filter uses)", FutureWarning, stacklevel=2)
+            n_particles = n_members
+        self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
+        self.n_members = None  # the deprecated alias is folded into n_particles
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
-        """Members are ``n_members`` particles of the cloud at ``cloud.epoch``."""
+        """Members are ``n_particles`` particles of the cloud at ``cloud.epoch``."""
         check_cloud(cloud, self._who())
-        members = initial_particles(cloud, self.n_members, rng)
+        members = initial_particles(cloud, self.n_particles, rng)
         from .enkf_batch import BatchEnKF  # filterpy, imported on use
 
         self._enkf = BatchEnKF(members, max(1, len(sensor.names)), rng)

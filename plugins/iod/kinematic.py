@@ -193,20 +193,39 @@ def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
 class KinematicFitIOD(IODMethod):
     """Kinematic-fitting IOD with a selectable range model (see the module docstring).
 
-    Parameters (units in the names; defaults from the paper)
+    Defaults are the paper's.
+
+    Parameters
     ----------
-    range_model : 'noisy-range' | 'uniform-range' | 'uniform-range-velocity-bound'
-    n_particles : particles wanted in the cloud
-    oversampling : samples drawn per batch, as a multiple of n_particles (paper: 5-10)
-    max_oversampling : give up after drawing this multiple of n_particles in total
-    order : polynomial order (paper: 4)
-    pass_gap_hours : a gap longer than this ends the first pass
-    fit_fraction, min_fit, max_fit : fit the first fit_fraction of the first pass, clipped
-    alpha : relative 1-sigma of the measured range (noisy-range only)
-    range_min_km, range_max_km : cislunar range bounds (uniform draws and pruning)
-    max_speed_kms : speed bound (velocity-bounded model only)
-    speed_frame : 'topocentric' (paper) or 'synodic': the frame of the speed bound
-    range_sampling : 'per-measurement' (Algorithm 1) or 'per-sample'
+    range_model : str
+        How ranges are drawn: "noisy-range" (around a measured range), "uniform-range" or
+        "uniform-range-velocity-bound" (uniform between the range bounds, the latter also
+        rejecting samples faster than ``max_speed_kms``).
+    n_particles : int
+        Particles wanted in the cloud.
+    oversampling : float
+        Samples drawn per batch, as a multiple of ``n_particles`` (paper: 5-10).
+    max_oversampling : float
+        Give up after drawing this multiple of ``n_particles`` in total.
+    order : int
+        Order of the polynomial fitted to each angle over time (paper: 4).
+    pass_gap_hours : float
+        A gap between measurements longer than this ends the first pass, hours.
+    fit_fraction : float
+        Fraction of the first pass's measurements that are fitted (the earliest ones).
+    min_fit, max_fit : int
+        Bounds on the number of measurements fitted.
+    alpha : float
+        Relative 1-sigma of the measured range (noisy-range only).
+    range_min_km, range_max_km : float
+        Cislunar range bounds for uniform draws and pruning, km.
+    max_speed_kms : float
+        Speed bound of the velocity-bounded model, km/s.
+    speed_frame : str
+        Frame of the speed bound: "topocentric" (paper) or "synodic".
+    range_sampling : str
+        "per-measurement" (one range per fitted measurement, the paper's Algorithm 1) or
+        "per-sample" (one range per sample).
     """
 
     def __init__(self, *, range_model: str = "uniform-range", n_particles: int = 2000,

@@ -219,8 +219,17 @@ class PhasedSchedule(Schedule):
 class EverySchedule(PhasedSchedule):
     """Every ``interval_minutes`` while visible, between ``start_hours`` and ``end_hours``.
 
-    With ``interval_max_minutes`` > ``interval_minutes`` each spacing is random in between.
-    ``align``: ``"pass"`` restarts the cadence at every pass start; ``"clock"`` keeps one grid.
+    Parameters
+    ----------
+    interval_minutes : float
+        Spacing of the measurements, minutes.
+    interval_max_minutes : float
+        When larger than ``interval_minutes``, each spacing is drawn uniformly between the two,
+        minutes (0 = fixed spacing).
+    align : str
+        ``"pass"`` restarts the cadence at every pass start; ``"clock"`` keeps one grid.
+    start_hours, end_hours : float
+        Window in which to measure, hours from the origin (the first pass by default).
     """
 
     def __init__(self, interval_minutes: float = 40.0, interval_max_minutes: float = 0.0,
@@ -240,8 +249,20 @@ class EverySchedule(PhasedSchedule):
 
 
 class RandomConsecutiveSchedule(PhasedSchedule):
-    """``count`` consecutive measurements at a random place in every pass from ``from_pass`` on,
-    spaced ``interval_minutes`` (random up to ``interval_max_minutes`` when that is larger)."""
+    """``count`` consecutive measurements at a random place in every pass from ``from_pass`` on.
+
+    Parameters
+    ----------
+    count : int
+        Consecutive measurements taken in each pass.
+    interval_minutes : float
+        Spacing of the measurements, minutes.
+    interval_max_minutes : float
+        When larger than ``interval_minutes``, each spacing is drawn uniformly between the two,
+        minutes.
+    from_pass : int
+        First pass measured (0 = the first pass).
+    """
 
     def __init__(self, count: int = 5, interval_minutes: float = 40.0,
                  interval_max_minutes: float = 60.0, from_pass: int = 0) -> None:
@@ -257,8 +278,18 @@ class RandomConsecutiveSchedule(PhasedSchedule):
 
 
 class PaperExample1Schedule(PhasedSchedule):
-    """Paper Example 1: the whole first pass every 40–60 min (random spacing); then ``count``
-    random consecutive measurements per subsequent pass, spaced the same way."""
+    """Paper Example 1: the whole first pass every 40–60 min, then a few measurements per pass.
+
+    The first pass is measured throughout with random spacing; every later pass gets ``count``
+    random consecutive measurements, spaced the same way.
+
+    Parameters
+    ----------
+    interval_minutes, interval_max_minutes : float
+        Each spacing is drawn uniformly between these two, minutes.
+    count : int
+        Consecutive measurements taken in each pass after the first.
+    """
 
     def __init__(self, interval_minutes: float = 40.0, interval_max_minutes: float = 60.0,
                  count: int = 5) -> None:
@@ -274,8 +305,20 @@ class PaperExample1Schedule(PhasedSchedule):
 
 
 class PaperExample2Schedule(PhasedSchedule):
-    """Paper Example 2: every 40 min while visible for the first 33 h (from the first pass),
-    then a 10-day shutoff, then every 16 h (one clock grid) whenever the target is visible."""
+    """Paper Example 2: every 40 min for 33 h, a 10-day shutoff, then every 16 h when visible.
+
+    Parameters
+    ----------
+    interval_minutes : float
+        Spacing while visible during the initial phase, minutes.
+    initial_hours : float
+        Length of the initial phase, hours from the start of the first pass.
+    shutoff_days : float
+        Gap without measurements after the initial phase, days.
+    final_interval_hours : float
+        Spacing after the shutoff (one clock grid; a grid time is measured when the target is
+        visible), hours.
+    """
 
     def __init__(self, interval_minutes: float = 40.0, initial_hours: float = 33.0,
                  shutoff_days: float = 10.0, final_interval_hours: float = 16.0) -> None:
@@ -295,8 +338,17 @@ class PaperExample2Schedule(PhasedSchedule):
 
 
 class PaperExample3Schedule(PhasedSchedule):
-    """Paper Example 3: every 40 min while visible for 24 h (from the first pass), a 150-day
-    shutoff, then every 40 min while visible."""
+    """Paper Example 3: every 40 min for 24 h, a 150-day shutoff, then every 40 min when visible.
+
+    Parameters
+    ----------
+    interval_minutes : float
+        Spacing while visible, minutes (both phases).
+    initial_hours : float
+        Length of the initial phase, hours from the start of the first pass.
+    shutoff_days : float
+        Gap without measurements after the initial phase, days.
+    """
 
     def __init__(self, interval_minutes: float = 40.0, initial_hours: float = 24.0,
                  shutoff_days: float = 150.0) -> None:

@@ -19,7 +19,7 @@ from .linear_models import BearingSensor, LinearDynamics, LinearSensor
 FILTERS = {
     "pgm": lambda: PGMFilter(n_particles=3000, n_components=4),
     "ukf": lambda: UKFFilter(n_samples=500),
-    "enkf": lambda: EnKFFilter(n_members=1000),
+    "enkf": lambda: EnKFFilter(n_particles=1000),
     "sir": lambda: SIRFilter(n_particles=3000),
 }
 

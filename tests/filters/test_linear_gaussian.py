@@ -110,7 +110,7 @@ def test_pgm_accepts_a_clusterer_instance_and_imposes_its_n_components(problem):
 
 def test_enkf_matches_the_kalman_filter(problem):
     *_, m, P = problem
-    belief = run_filter(EnKFFilter(n_members=4000), problem)
+    belief = run_filter(EnKFFilter(n_particles=4000), problem)
     assert_matches_kalman(belief, m, P, mean_tol=0.12, cov_tol=0.1)
 
 

@@ -14,7 +14,7 @@ LO, HI = chi2.ppf([0.005, 0.995], 6)
 
 FILTERS = {
     "pgm": {"name": "pgm", "n_particles": 5000, "n_components": 6},
-    "enkf": {"name": "enkf", "n_members": 1000},
+    "enkf": {"name": "enkf", "n_particles": 1000},
     "ukf": {"name": "ukf"},   # iterated (posterior-linearised) update; with update_iterations=1 NEES ~85-110
 }
 
