@@ -49,9 +49,12 @@ def cmd_run(args) -> int:
     from .registry import default_registry
     from .run import run_scenario
     from .scenario import load_scenario
+    from .settings import apply_settings
 
     reg = default_registry()
-    scen = load_scenario(args.scenario or DEFAULT_SCENARIO, reg)
+    scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
+    say = (lambda *a, **k: None) if args.quiet else _eprint
+    out_ = (lambda *a, **k: None) if args.quiet else print
     seed = scen.seed if args.seed is None else args.seed
     out = Path(args.out) if args.out else Path("runs") / f"{scen.name}__seed{seed}"
     observers = []
@@ -60,31 +63,34 @@ def cmd_run(args) -> int:
         recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
                               spawn=args.rerun_spawn, max_points=args.max_points)
         observers.append(recorder)
-    _eprint(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
-    _eprint(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
-            f"{scen.duration_days:g} days; results -> {out}")
+    say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
+    say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
+        f"{scen.duration_days:g} days; results -> {out}")
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out,
                        progress=not args.quiet, log=(None if args.quiet else lambda m: _eprint(f"  {m}")))
     s = res.summary
-    print(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
-    print(f"  custody: {'kept' if s.custody_kept else 'LOST at step %s (t = %s d)' % (s.custody_lost_step, _fmt(s.custody_lost_t_days))}")
-    print(f"  {s.n_updates} updates over {s.n_passes} passes, {s.n_measurements} measurements, "
-          f"wall time {s.wall_time_s:.1f} s")
+    out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    if args.quiet and s.status != "finished":
+        _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    out_(f"  custody: {'kept' if s.custody_kept else 'LOST at step %s (t = %s d)' % (s.custody_lost_step, _fmt(s.custody_lost_t_days))}")
+    passes = f" in {s.n_passes} passes" if s.n_passes else ""
+    out_(f"  {s.n_updates} updates from {s.n_measurements} measurements{passes}, "
+         f"wall time {s.wall_time_s:.1f} s")
     f = s.final
     if f:
-        print("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
+        out_("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
               + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
         if "pos_err_km" in f:
-            print(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
+            out_(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
                   f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
-    print(f"  results: {out}/steps.parquet, {out}/manifest.json")
+    out_(f"  results: {out}/steps.parquet, {out}/manifest.json")
     if args.rerun:
-        print(f"  rerun recording: {args.rerun}  (open with: rerun --bind 127.0.0.1 {args.rerun})")
+        out_(f"  rerun recording: {args.rerun}  (open with: rerun --bind 127.0.0.1 {args.rerun})")
     if recorder is not None and (args.rerun_serve or args.rerun_spawn):
         uri = getattr(recorder, "server_uri", None)
         if uri:
-            print(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
-        print("  the viewer stays available until you press Ctrl-C", flush=True)
+            out_(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
+        out_("  the viewer stays available until you press Ctrl-C", flush=True)
         try:
             import time
             while True:
@@ -170,12 +176,14 @@ def cmd_study(args) -> int:
 
     if args.study_cmd == "run":
         res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
-                              progress=not args.quiet, rerun_dir=args.rerun)
+                              progress=not args.quiet, rerun_dir=args.rerun, settings=args.set)
+        if args.quiet:
+            return 0 if res["failed"] == 0 else 3
         print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
               f"{res['failed']} failed -> {res['out_dir']}")
         return 0 if res["failed"] == 0 else 3
     if args.study_cmd == "report":
-        rep = study.report_study(args.study, out_dir=args.out)
+        rep = study.report_study(args.study, out_dir=args.out, settings=args.set)
         print(rep["text"])
         print(f"written: {', '.join(str(p) for p in rep['files'])}")
         return 0
@@ -196,7 +204,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
     r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
-    r.add_argument("--quiet", action="store_true", help="no progress output")
+    r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                   help="override a scenario value, validated like the file (repeatable), "
+                        "e.g. --set filter.n_particles=20000 --set duration_days=2")
+    r.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
     r.set_defaults(func=cmd_run)
     pl = sub.add_parser("plugins", help="list registered components, describe one, or check one")
     pl.add_argument("name", nargs="?", default=None,
@@ -222,11 +233,16 @@ def build_parser() -> argparse.ArgumentParser:
     sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
     sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
-    sr.add_argument("--quiet", action="store_true")
+    sr.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                    help="override a value in every run (after the study's own overrides and variants), "
+                         "validated like a scenario file; the default study directory names the settings")
+    sr.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sr.set_defaults(func=cmd_study)
     srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
     srep.add_argument("study", help="study TOML file or built-in study name")
     srep.add_argument("--out", default=None)
+    srep.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                      help="report the study run with these --set values")
     srep.set_defaults(func=cmd_study)
     return p
 

@@ -118,14 +118,22 @@ def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
     raise ConfigError(f"{p}: entries of {key!r} must be names or tables with a 'name' key, got {item!r}")
 
 
-def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None) -> tuple[dict, list[RunSpec], Path]:
-    """Every run of a study, validated (each scenario variant is parsed before any run starts)."""
+def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
+              settings: list[str] | None = None) -> tuple[dict, list[RunSpec], Path]:
+    """Every run of a study, validated (each scenario variant is parsed before any run starts).
+
+    ``settings``: ``--set TABLE.KEY=VALUE`` items (:mod:`cistrack.settings`) applied to every run
+    after the study's own overrides and variants; the default directory then names their hash,
+    so runs with other values are never mixed with these.
+    """
     from .registry import default_registry
     from .scenario import load_scenario
+    from .settings import merge_settings, parse_settings
 
     data, p = load_study(path_or_name)
     name = str(data.get("name", p.stem))
-    out = Path(out_dir) if out_dir else Path("studies_out") / name
+    extra = parse_settings(settings)
+    out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
     seeds = data.get("seeds") or list(range(1, int(data.get("n_seeds", 1)) + 1))
     if not all(isinstance(s, int) and s >= 0 for s in seeds):
         raise ConfigError(f"{p}: 'seeds' must be non-negative integers")
@@ -146,7 +154,18 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None) -> tu
                     ov["filter"] = ftable
                 if itable:
                     ov["iod"] = itable
-                variant = base.with_overrides(ov, reg)   # validates this combination now
+                if extra:
+                    ov = merge_settings(ov, extra)
+                    for table, value in extra.items():  # keys of the scenario's own table
+                        if isinstance(value, dict) and isinstance(base.raw.get(table), dict) \
+                                and table not in ((("filter",) if ftable else ()) + (("iod",) if itable else ())):
+                            ov[table] = merge_settings(base.raw[table], ov[table])
+                try:
+                    variant = base.with_overrides(ov, reg)   # validates this combination now
+                except ConfigError as exc:
+                    if extra:
+                        raise ConfigError(f"{exc} (with {' '.join('--set ' + i for i in settings)})") from None
+                    raise
                 fl = flabel or variant.components["filter"].name
                 il = ilabel or variant.components["iod"].name
                 for seed in seeds:
@@ -157,6 +176,14 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None) -> tu
     if len(set(ids)) != len(ids):
         raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
     return data, specs, out
+
+
+def _settings_suffix(settings: list[str] | None) -> str:
+    if not settings:
+        return ""
+    import hashlib
+
+    return "__set-" + hashlib.sha256("\n".join(settings).encode()).hexdigest()[:8]
 
 
 def execute_run(spec: RunSpec) -> RunSummary:
@@ -221,19 +248,21 @@ def _is_done(out_dir: str) -> bool:
 
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
-              rerun_dir: str | Path | None = None) -> dict:
+              rerun_dir: str | Path | None = None, settings: list[str] | None = None) -> dict:
     """Run every missing run of a study. Returns counts and the study directory.
 
     ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
+    ``settings``: ``--set`` items applied to every run (see :func:`plan_runs`).
     """
     import dataclasses
 
-    data, specs, out = plan_runs(path_or_name, out_dir)
+    data, specs, out = plan_runs(path_or_name, out_dir, settings)
     if rerun_dir is not None:
         Path(rerun_dir).mkdir(parents=True, exist_ok=True)
         specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
     out.mkdir(parents=True, exist_ok=True)
-    (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data}, indent=2, default=str))
+    (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data,
+                                               "settings": list(settings or [])}, indent=2, default=str))
     todo = [s for s in specs if not _is_done(s.out_dir)]
     skipped = len(specs) - len(todo)
     own = executor is None
@@ -281,9 +310,13 @@ def _median(xs):
     return float(np.median(xs)) if xs else None
 
 
-def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) -> dict:
-    """Summarise a study: terminal text, summary.csv, summary.md and PNG plots in <out>/report/."""
-    data, specs, out = plan_runs(path_or_name, out_dir)
+def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
+                 settings: list[str] | None = None) -> dict:
+    """Summarise a study: terminal text, summary.csv, summary.md and PNG plots in <out>/report/.
+
+    Raises ConfigError (and writes nothing) when no run of the study has finished.
+    """
+    data, specs, out = plan_runs(path_or_name, out_dir, settings)
     groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
     missing = 0
@@ -294,6 +327,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None) ->
         man = read_manifest(s.out_dir)
         groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
         tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
+    if not groups:
+        name = data.get("name", out.name)
+        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
+                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
+                          + (f" --out {out_dir}" if out_dir else ""))
     rep_dir = out / "report"
     rep_dir.mkdir(parents=True, exist_ok=True)
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",

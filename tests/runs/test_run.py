@@ -7,6 +7,11 @@ import subprocess
 import sys
 import time
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 import numpy as np
 import pytest
 
@@ -38,9 +43,9 @@ def test_different_filters_see_the_same_measurements():
     np.testing.assert_array_equal(r1.context.measurements.values, r2.context.measurements.values)
 
 
-def test_cli_run_writes_manifest_and_table(tmp_path):
+def test_cli_run_writes_manifest_and_table_and_counts_what_it_used(tmp_path):
     out = tmp_path / "r"
-    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet"],
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out)],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert "custody:" in proc.stdout
@@ -49,6 +54,32 @@ def test_cli_run_writes_manifest_and_table(tmp_path):
     t = read_steps(out)
     assert t.num_rows == man["summary"]["n_steps"]
     assert {"entropy", "pos_err_km", "sigma_vx_cms", "nees", "custody"} <= set(t.column_names)
+    s = man["summary"]
+    assert f"{s['n_updates']} updates from {s['n_measurements']} measurements in {s['n_passes']} passes" in proc.stdout
+    iod = [line for line in proc.stderr.splitlines() if "IOD '" in line]
+    assert len(iod) == 1 and "measurements of pass 1 (of " in iod[0], proc.stderr
+
+
+def test_cli_quiet_run_with_settings_prints_nothing_and_runs_the_settings(tmp_path):
+    out = tmp_path / "r"
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet",
+                           "--set", "filter.n_particles=400", "--set", "duration_days=1.2"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert (proc.stdout, proc.stderr) == ("", "")
+    ran = tomllib.loads((out / "scenario.toml").read_text())
+    assert ran["filter"]["n_particles"] == 400 and ran["duration_days"] == 1.2
+
+
+@pytest.mark.parametrize("setting, named", [("filter.n_particles=-5", "n_particles"),
+                                            ("filter.n_particle=5", "n_particle"),
+                                            ("filter", "TABLE.KEY=VALUE")])
+def test_cli_run_refuses_a_bad_setting_naming_the_key(tmp_path, setting, named):
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(tmp_path / "r"),
+                           "--set", setting], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert named in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "r").exists()
 
 
 def test_a_run_killed_mid_way_leaves_a_readable_partial_table(tmp_path):
