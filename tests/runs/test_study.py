@@ -58,3 +58,28 @@ def test_study_plan_rejects_unknown_filter_before_running(tmp_path):
     p.write_text('scenarios = ["quick"]\nfilters = ["pgn"]\n')
     with pytest.raises(ConfigError, match="Did you mean 'pgm'"):
         plan_runs(p, tmp_path / "o")
+
+
+def test_report_with_no_finished_run_exits_nonzero_and_writes_nothing(tiny_study, tmp_path, capsys):
+    from cistrack.cli import main
+
+    out = tmp_path / "never-run"
+    assert main(["study", "report", str(tiny_study), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "nothing to report" in err and "cistrack study run" in err
+    assert not (out / "report").exists()
+
+
+def test_settings_apply_to_every_run_after_the_study_variants(tiny_study, tmp_path):
+    _, specs, out = plan_runs(tiny_study, None, ["filter.n_particles=250", "duration_days=1.1"])
+    assert out.name.startswith("tiny__set-")
+    assert {s.overrides["filter"]["n_particles"] for s in specs} == {250}
+    assert {s.overrides["duration_days"] for s in specs} == {1.1}
+    assert {s.overrides["filter"]["name"] for s in specs} == {"pgm"}
+
+
+def test_a_setting_that_a_study_variant_cannot_take_is_refused_naming_it(tiny_study):
+    from cistrack.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"bogus.*--set filter.bogus=1"):
+        plan_runs(tiny_study, None, ["filter.bogus=1"])
