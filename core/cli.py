@@ -2,6 +2,7 @@
 
     cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd] [--rerun-serve] [--rerun-spawn]
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
+    cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
     cistrack study report STUDY [--out DIR]
@@ -85,7 +86,7 @@ def cmd_run(args) -> int:
                   f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
     out_(f"  results: {out}/steps.parquet, {out}/manifest.json")
     if args.rerun:
-        out_(f"  rerun recording: {args.rerun}  (open with: rerun --bind 127.0.0.1 {args.rerun})")
+        out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
     if recorder is not None and (args.rerun_serve or args.rerun_spawn):
         uri = getattr(recorder, "server_uri", None)
         if uri:
@@ -158,6 +159,25 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
     return 0
 
 
+def cmd_view(args) -> int:
+    """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
+    import time
+
+    from cistrack.plugins.recorders.web_viewer import serve_recording
+
+    served = serve_recording(args.recording, web_port=args.port)
+    print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
+    print("serving until you press Ctrl-C", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        served.close()
+    return 0
+
+
 def cmd_scenarios(args) -> int:
     from .scenario import builtin_scenarios
     from .study import builtin_studies
@@ -223,6 +243,10 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.set_defaults(func=cmd_export)
+    v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
+    v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")
+    v.add_argument("--port", type=int, default=9090, help="web viewer port on 127.0.0.1 (default 9090)")
+    v.set_defaults(func=cmd_view)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)
     st = sub.add_parser("study", help="run or report a comparative study")

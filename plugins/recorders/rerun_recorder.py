@@ -125,24 +125,80 @@ def _wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
     return False
 
 
-def default_blueprint() -> rrb.Blueprint:
-    """The 3-D synodic view beside stacked time series (errors, sigmas, entropy, NEES, weights)."""
+SIGMA_ENTITIES = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")
+"""Per-axis 1-sigma metrics, logged at ``metrics/<name>`` (rerun queries take no wildcards)."""
+
+TIMELINES = ("utc", "step", "event")
+
+
+def _whole_run() -> list:
+    """Visible time ranges covering the whole run on every timeline (not a window at the cursor)."""
+    every = rrb.TimeRangeBoundary.infinite()
+    return [rrb.VisibleTimeRange(t, start=every, end=every) for t in TIMELINES]
+
+
+def _whole_axis():
+    """An x axis that opens on the whole run (the viewer's default is a window at the cursor)."""
+    every = rrb.TimeRangeBoundary.infinite()
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
+
+
+def _series(name: str, entities: list[str] | None, origin: str = "metrics"):
+    contents = [f"$origin/{e}" for e in entities] if entities else "$origin/**"
+    return rrb.TimeSeriesView(origin=origin, name=name, contents=contents, time_ranges=_whole_run(),
+                              axis_x=_whole_axis())
+
+
+def camera_for(points_km: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """(eye position, look target), km: looking at the box around ``points_km`` (N, 3) from
+    above and to the side, far enough to see all of it; None without points."""
+    if points_km is None:
+        return None
+    pts = np.asarray(points_km, dtype=float).reshape(-1, 3)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    if pts.shape[0] == 0:
+        return None
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    target = 0.5 * (lo + hi)
+    size = max(float(np.max(hi - lo)), 2.0e4)  # at least 20,000 km across
+    direction = np.array([0.55, -0.65, 0.52])
+    return target + 1.6 * size * direction / np.linalg.norm(direction), target
+
+
+def default_blueprint(focus_km: np.ndarray | None = None) -> rrb.Blueprint:
+    """What the viewer shows at first open.
+
+    Left, the run: a 3-D view framed on ``focus_km`` (N, 3) points, the truth trajectory and the
+    initial cloud (particles, ellipsoids, estimate, truth); below it the whole Earth–Moon system
+    with the libration points. Right, time series over the whole run: estimation error, per-axis
+    1-sigma of position and of velocity (the ``metrics/sigma_*`` entities), entropy, NEES and component weights.
+    """
+    eye = camera_for(focus_km)
+    controls = (rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1],
+                                  eye_up=(0.0, 0.0, 1.0)) if eye is not None else None)
+    run_view = rrb.Spatial3DView(origin="world", name="Run: truth, cloud and ellipsoids (synodic, km)",
+                                 eye_controls=controls, background=rrb.BackgroundKind.GradientDark)
+    system = rrb.Spatial3DView(origin="world", name="Earth–Moon system (synodic, km)",
+                               contents=["$origin/earth", "$origin/moon", "$origin/libration",
+                                         "$origin/truth/**", "$origin/estimate", "$origin/observer"],
+                               background=rrb.BackgroundKind.GradientDark)
     series = rrb.Vertical(
-        rrb.TimeSeriesView(origin="metrics", name="Estimation error",
-                           contents=["$origin/pos_err_km", "$origin/vel_err_ms"]),
-        rrb.TimeSeriesView(origin="metrics", name="1-sigma (km, cm/s)",
-                           contents=["$origin/sigma_*"]),
-        rrb.TimeSeriesView(origin="metrics", name="Entropy (nats)", contents=["$origin/entropy"]),
-        rrb.TimeSeriesView(origin="metrics", name="NEES", contents=["$origin/nees"]),
-        rrb.TimeSeriesView(origin="components", name="Component weights"),
+        _series("Estimation error (km, m/s)", ["pos_err_km", "vel_err_ms"]),
+        _series("1-sigma per axis, position (km)", list(SIGMA_ENTITIES[:3])),
+        _series("1-sigma per axis, velocity (cm/s)", list(SIGMA_ENTITIES[3:])),
+        _series("Entropy (nats)", ["entropy"]),
+        _series("NEES", ["nees"]),
+        _series("Component weights", None, origin="components"),
     )
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial3DView(origin="world", name="Synodic frame (km)"),
+            rrb.Vertical(run_view, system, row_shares=[3, 2]),
             series,
             column_shares=[3, 2],
         ),
-        collapse_panels=False,
+        rrb.TimePanel(timeline="utc", state="collapsed"),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
     )
 
 
@@ -291,7 +347,7 @@ class RerunRecorder(Component):
             sinks.append(rr.GrpcServerSink(bind_ip=LOOPBACK, port=self.serve_port))
         if self.spawn:
             sinks.append(rr.GrpcSink(self._start_viewer()))
-        rec.set_sinks(*sinks, default_blueprint=default_blueprint())
+        rec.set_sinks(*sinks, default_blueprint=default_blueprint(_focus_points(run)))
         rec.send_recording_name(str(run.run_id))
         return rec
 
@@ -425,6 +481,20 @@ class RerunRecorder(Component):
             _log_numbers(rec, "metrics", step.metrics)
             _log_numbers(rec, "diagnostics", step.diagnostics)
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
+
+
+def _focus_points(run) -> np.ndarray | None:
+    """Points (N, 3) km the run's 3-D view is framed on: the truth trajectory and the IOD cloud."""
+    parts = []
+    truth = getattr(run, "truth_states", None)
+    if truth is not None and len(truth):
+        parts.append(np.asarray(truth, dtype=float)[:, :3])
+    cloud = getattr(run, "iod_cloud", None)
+    if cloud is not None and len(cloud):
+        states = np.asarray(cloud.states, dtype=float)[:, :3]
+        lo, hi = np.percentile(states, [1, 99], axis=0)  # not a stray particle far away
+        parts.append(np.stack([lo, hi]))
+    return np.concatenate(parts, axis=0) * LU_KM if parts else None
 
 
 def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:
