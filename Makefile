@@ -33,8 +33,12 @@ demo: $(BASE_STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
-## Everything, including the slow end-to-end and statistical tests.
+## Everything, including the slow end-to-end and statistical tests. The viewer test opens a
+## recording in headless Chromium (Debian package "chromium"); it is installed here if missing
+## and possible, else that test is skipped. The fast suite never needs it.
 test-all: $(STAMP)
+	command -v chromium >/dev/null 2>&1 || apt-get install -y chromium || \
+		echo "chromium not installed: tests/recorders/test_viewer_in_browser.py will be skipped"
 	$(BIN)/python -m pytest -m "slow or not slow"
 
 bench: $(STAMP)

@@ -310,9 +310,31 @@ def _median(xs):
     return float(np.median(xs)) if xs else None
 
 
+def _spread(xs) -> tuple[float | None, float | None]:
+    """5th and 95th percentiles of the finite values (None if there are none)."""
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    if not xs:
+        return None, None
+    lo, hi = np.percentile(xs, [5.0, 95.0])
+    return float(lo), float(hi)
+
+
+def _anees(tables) -> tuple[float | None, int]:
+    """Average NEES over every update step of every run, and the number of updates averaged."""
+    vals = []
+    for t in tables:
+        if "nees" not in t.column_names or "kind" not in t.column_names:
+            continue
+        nees = np.asarray(t.column("nees").to_numpy(zero_copy_only=False), dtype=float)
+        kinds = t.column("kind").to_pylist()
+        vals += [v for v, k in zip(nees, kinds) if k == "update" and np.isfinite(v)]
+    return (float(np.mean(vals)) if vals else None), len(vals)
+
+
 def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                  settings: list[str] | None = None) -> dict:
-    """Summarise a study: terminal text, summary.csv, summary.md and PNG plots in <out>/report/.
+    """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
+    :mod:`cistrack.report_plots`) in <out>/report/.
 
     Raises ConfigError (and writes nothing) when no run of the study has finished.
     """
@@ -334,9 +356,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                           + (f" --out {out_dir}" if out_dir else ""))
     rep_dir = out / "report"
     rep_dir.mkdir(parents=True, exist_ok=True)
+    finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+              "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
-            "failed_runs", "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
-            "pos_err_km", "vel_err_ms", "entropy"]
+            "failed_runs", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
+            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95"]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
         kept = sum(1 for x in sums if x.custody_kept)
@@ -344,8 +368,12 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                "custody_rate": kept / len(sums),
                "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
                "failed_runs": sum(1 for x in sums if x.status != "finished")}
-        for k in cols[8:]:
+        for k in finals:
             row[k] = _median([x.final.get(k) for x in sums])
+        row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
+        row["anees"], row["anees_updates"] = _anees(tables[(sc, iod, flt)])
+        row["wall_time_s"] = _median([x.wall_time_s for x in sums])
+        row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
@@ -360,14 +388,17 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         return str(v)
 
     header = ["scenario", "iod", "filter", "custody", "lost at (d, median)", "failed",
-              "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km", "entropy"]
+              "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km: median [5-95 %]", "ANEES (6 = consistent)",
+              "entropy", "wall time s: median [5-95 %]"]
     lines = []
     for r in rows:
         lines.append([r["scenario"], r["iod"], r["filter"], f"{r['custody_kept']}/{r['runs']}",
                       fmt(r["median_lost_day"]), str(r["failed_runs"]),
                       "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
                       "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
-                      fmt(r["pos_err_km"]), fmt(r["entropy"])])
+                      f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
+                      f"{fmt(r['anees'])} ({r['anees_updates']} updates)", fmt(r["entropy"]),
+                      f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
     md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     md += ["| " + " | ".join(l) + " |" for l in lines]
     verdicts = []
@@ -387,48 +418,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
                      + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts)
     files = [rep_dir / "summary.csv", rep_dir / "summary.md"]
-    files += _plots(tables, rep_dir)
+    from .report_plots import plot_study
+
+    figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
+    files += plot_study(figures, rep_dir, str(data.get("name", out.name)))
     return {"text": text, "rows": rows, "files": files, "missing": missing}
-
-
-def _column(table, name):
-    if name not in table.column_names:
-        return None
-    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
-
-
-def _plots(tables, rep_dir: Path) -> list[Path]:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    files = []
-    by_scen: dict[tuple[str, str], dict[str, list]] = {}
-    for (sc, iod, flt), ts in tables.items():
-        by_scen.setdefault((sc, iod), {})[flt] = ts
-    for (sc, iod), filters in sorted(by_scen.items()):
-        fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
-        for ci, (flt, ts) in enumerate(sorted(filters.items())):
-            color = f"C{ci}"
-            for ti, t in enumerate(ts):
-                x = _column(t, "t_days")
-                for ax, key in zip(axes, ("entropy", "pos_err_km", "vel_err_ms")):
-                    y = _column(t, key)
-                    if y is None:
-                        continue
-                    ax.plot(x, y, color=color, alpha=0.9 if ti == 0 else 0.25, lw=1.2 if ti == 0 else 0.8,
-                            label=flt if ti == 0 else None)
-        axes[0].set_ylabel("entropy (nats, km & km/s)")
-        axes[1].set_ylabel("position error (km)")
-        axes[2].set_ylabel("velocity error (m/s)")
-        axes[1].set_yscale("log")
-        axes[2].set_yscale("log")
-        axes[2].set_xlabel("time (days)")
-        axes[0].legend()
-        axes[0].set_title(f"{sc}, IOD {iod}")
-        fig.tight_layout()
-        f = rep_dir / f"{sc}__{iod}.png"
-        fig.savefig(f, dpi=110)
-        plt.close(fig)
-        files.append(f)
-    return files

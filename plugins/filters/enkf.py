@@ -47,6 +47,7 @@ class EnKFFilter(Filter):
         if n_members is not None:
             if n_particles != 1000:
                 self._fail("n_members", n_members, "is the deprecated name of n_particles; give only n_particles")
+            n_members = check_int(self, "n_members", n_members, minimum=2)
             warnings.warn("filter 'enkf': parameter 'n_members' is deprecated; use 'n_particles' "
                           "(the name every particle filter uses)", FutureWarning, stacklevel=2)
             n_particles = n_members

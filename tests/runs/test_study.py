@@ -50,6 +50,21 @@ def test_report_writes_table_markdown_and_plots_and_says_who_kept_custody(tiny_s
     assert {"summary.csv", "summary.md"} <= names and any(n.endswith(".png") for n in names)
     assert rep["rows"][0]["runs"] == 3
     assert "pgm with noisy-range IOD on quick" in rep["text"]
+    assert {".png", ".svg", ".pdf"} <= {Path(f).suffix for f in rep["files"]}
+    _check_spread_anees_and_wall_time_against_the_runs(rep["rows"][0], out)
+
+
+def _check_spread_anees_and_wall_time_against_the_runs(row, out):
+    import numpy as np
+
+    runs = sorted((out / "runs").iterdir())
+    nees = [v for d in runs for v, k in zip(read_steps(d).column("nees").to_pylist(), read_steps(d).column("kind").to_pylist())
+            if k == "update"]
+    assert row["anees"] == pytest.approx(np.mean(nees)) and row["anees_updates"] == len(nees)
+    walls = [read_manifest(d)["summary"]["wall_time_s"] for d in runs]
+    assert row["wall_time_s"] == pytest.approx(np.median(walls))
+    errs = [read_manifest(d)["summary"]["final"]["pos_err_km"] for d in runs]
+    assert (row["pos_err_km_p5"], row["pos_err_km_p95"]) == pytest.approx(tuple(np.percentile(errs, [5, 95])))
 
 
 def test_study_plan_rejects_unknown_filter_before_running(tmp_path):

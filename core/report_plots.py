@@ -1,0 +1,172 @@
+"""Study report figures: per filter the median and 5-95 % band across seeds over time.
+
+One figure per (scenario, IOD) compares the filters of a study on four panels sharing the time
+axis (days since the epoch): position error (km, log), 1-sigma position (root-sum-square of the
+per-axis sigmas, km, log), NEES with the chi-square 5-95 % band of a consistent filter (6
+degrees of freedom), and differential entropy (nats, symmetric-log axis, so that one filter
+collapsing to very negative entropy does not flatten the others). Each seed's series is held
+constant between its steps and sampled on a common grid; the line is the median over seeds,
+the band the 5th to 95th percentile. Ticks at the bottom mark the measurement times of the
+first seed, triangles at the top each run's custody loss. Written as PNG, SVG and PDF.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "plot_study", "FORMATS"]
+
+CHI2_DOF = 6
+FORMATS = ("png", "svg", "pdf")
+PANELS: tuple[tuple[str, str, str], ...] = (
+    ("pos_err_km", "position error (km)", "log"),
+    ("sigma_pos_km", "1-sigma position, RSS of axes (km)", "log"),
+    ("nees", "NEES", "log"),
+    ("entropy", "entropy (nats)", "symlog"),
+)
+_GRID = 600
+
+
+def _column(table: Any, name: str) -> np.ndarray | None:
+    if name not in table.column_names:
+        return None
+    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), dtype=float)
+
+
+def _held(t: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """y (K,) at times t (K,, non-decreasing) held until the next step, sampled at grid (G,);
+    NaN before the first step and after the last."""
+    ok = np.isfinite(t) & np.isfinite(y)
+    t, y = t[ok], y[ok]
+    out = np.full(grid.shape, np.nan)
+    if t.size == 0:
+        return out
+    idx = np.searchsorted(t, grid, side="right") - 1
+    inside = (idx >= 0) & (grid <= t[-1] + 1e-12)
+    out[inside] = y[idx[inside]]
+    return out
+
+
+def band_over_seeds(series: list[tuple[np.ndarray, np.ndarray]], grid: np.ndarray,
+                    q: tuple[float, float, float] = (5.0, 50.0, 95.0)) -> np.ndarray:
+    """Percentiles (3, G) over seeds of step series [(t (K,), y (K,)), ...] held on ``grid`` (G,);
+    NaN where no seed has a value."""
+    held = np.stack([_held(t, y, grid) for t, y in series])
+    out = np.full((len(q), grid.size), np.nan)
+    have = np.isfinite(held).any(axis=0)
+    if have.any():
+        out[:, have] = np.nanpercentile(held[:, have], q, axis=0)
+    return out
+
+
+def nees_band(dof: int = CHI2_DOF, level: float = 0.90) -> tuple[float, float]:
+    """The central ``level`` interval of a chi-square variable with ``dof`` degrees of freedom."""
+    from scipy.stats import chi2
+
+    a = 0.5 * (1.0 - level)
+    return float(chi2.ppf(a, dof)), float(chi2.ppf(1.0 - a, dof))
+
+
+def _series(tables: list, key: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    out = []
+    for t in tables:
+        x, y = _column(t, "t_days"), _column(t, key)
+        if x is not None and y is not None:
+            order = np.argsort(x, kind="stable")
+            out.append((x[order], y[order]))
+    return out
+
+
+def _measurement_days(table: Any) -> np.ndarray:
+    kind = table.column("kind").to_pylist() if "kind" in table.column_names else []
+    t = _column(table, "t_days")
+    if t is None:
+        return np.zeros(0)
+    return np.array([ti for ti, k in zip(t, kind) if k == "update"])
+
+
+def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path,
+               study_name: str = "") -> list[Path]:
+    """Write the figures; ``groups[(scenario, iod, filter)]`` holds ``tables`` (per-seed step
+    tables) and ``summaries`` (per-seed run summaries). Returns the files written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker  # noqa: F401  (matplotlib.ticker.* below)
+
+    by_case: dict[tuple[str, str], dict[str, dict[str, Any]]] = {}
+    for (sc, iod, flt), g in groups.items():
+        by_case.setdefault((sc, iod), {})[flt] = g
+    lo_chi, hi_chi = nees_band()
+    files: list[Path] = []
+    for (sc, iod), filters in sorted(by_case.items()):
+        all_t = [x for g in filters.values() for t in g["tables"] for x in [_column(t, "t_days")] if x is not None and x.size]
+        if not all_t:
+            continue
+        grid = np.linspace(min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t), _GRID)
+        fig, axes = plt.subplots(len(PANELS), 1, figsize=(8.5, 10.5), sharex=True)
+        n_seeds = []
+        for ci, (flt, g) in enumerate(sorted(filters.items())):
+            color = f"C{ci}"
+            n_seeds.append(len(g["tables"]))
+            for ax, (key, _, _) in zip(axes, PANELS):
+                series = _series(g["tables"], key)
+                if not series:
+                    continue
+                p5, p50, p95 = band_over_seeds(series, grid)
+                ax.fill_between(grid, p5, p95, color=color, alpha=0.18, lw=0, step="post")
+                ax.plot(grid, p50, color=color, lw=1.6, drawstyle="steps-post",
+                        label=f"{flt}: median of {len(series)} seeds, band 5-95 %")
+            lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
+            lost = [x for x in lost if x is not None]
+            for ax in axes:
+                if lost:
+                    ax.plot(lost, [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
+                            transform=ax.get_xaxis_transform(), clip_on=False,
+                            label=f"{flt}: custody lost ({len(lost)} of {len(g['summaries'])} runs)")
+            first = g["tables"][0] if g["tables"] else None
+            if first is not None and ci == 0:
+                days = _measurement_days(first)
+                for ax in axes:
+                    ax.plot(days, np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
+                            transform=ax.get_xaxis_transform(), clip_on=False,
+                            label="measurement times (first seed)" if ax is axes[0] else None)
+        nees_ax = axes[[k for k, _, _ in PANELS].index("nees")]
+        nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,
+                        label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
+        nees_ax.axhline(CHI2_DOF, color="0.4", lw=0.8, ls="--")
+        for ax, (_, label, scale) in zip(axes, PANELS):
+            ax.set_ylabel(label)
+            if scale == "symlog":
+                ax.set_yscale("symlog", linthresh=1.0)
+            else:
+                ax.set_yscale(scale)
+            if ax is nees_ax or scale == "symlog":  # plain numbers (6, 20, -10), not 2 x 10^1
+                ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+                ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            if ax is nees_ax:
+                ax.yaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+            ax.grid(True, which="major", alpha=0.3)
+        axes[-1].set_xlabel("time since epoch (days)")
+        handles, labels = [], []
+        for ax in axes:
+            for h, lab in zip(*ax.get_legend_handles_labels()):
+                if lab not in labels:
+                    handles.append(h)
+                    labels.append(lab)
+        fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+        names = " vs ".join(sorted(filters))
+        fig.suptitle(f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else ""))
+        fig.tight_layout(rect=(0, 0.015 + 0.016 * ((len(labels) + 1) // 2), 1, 0.98))
+        stem = rep_dir / f"{sc}__{iod}"
+        # text stays text in SVG and PDF (editable, searchable; TrueType fonts as journals ask)
+        with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
+            for ext in FORMATS:
+                f = stem.with_suffix(f".{ext}")
+                fig.savefig(f, dpi=130)
+                files.append(f)
+        plt.close(fig)
+    return files

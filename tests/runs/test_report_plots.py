@@ -1,0 +1,50 @@
+"""Report figures: percentiles across seeds of step series, the chi-square band, the files."""
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+import pytest
+
+from cistrack.report_plots import FORMATS, band_over_seeds, nees_band, plot_study
+
+
+def test_each_seed_is_held_between_its_steps_and_percentiles_are_taken_across_seeds():
+    grid = np.array([0.0, 0.5, 1.0, 1.5, 2.0, 2.5])
+    series = [(np.array([0.0, 1.0, 2.0]), np.array([10.0, 20.0, 30.0])),
+              (np.array([0.0, 2.0]), np.array([0.0, 40.0])),
+              (np.array([0.5, 1.5]), np.array([5.0, 7.0]))]
+    # held values per seed on the grid (NaN outside a seed's steps)
+    held = np.array([[10, 10, 20, 20, 30, np.nan],
+                     [0, 0, 0, 0, 40, np.nan],
+                     [np.nan, 5, 5, 7, np.nan, np.nan]])
+    lo, mid, hi = band_over_seeds(series, grid)
+    for j in range(5):
+        col = held[:, j][np.isfinite(held[:, j])]
+        assert mid[j] == pytest.approx(np.median(col))
+        assert lo[j] == pytest.approx(np.percentile(col, 5)) and hi[j] == pytest.approx(np.percentile(col, 95))
+    assert np.isnan(mid[5])
+
+
+def test_the_nees_band_is_the_central_90_percent_of_chi_square_6():
+    lo, hi = nees_band(6, 0.90)
+    assert lo == pytest.approx(1.635, abs=1e-3) and hi == pytest.approx(12.592, abs=1e-3)  # textbook table
+
+
+def _table(seed: int, lost: bool) -> pa.Table:
+    t = np.linspace(0.0, 2.0, 9)
+    rng = np.random.default_rng(seed)
+    return pa.table({"t_days": t, "kind": ["initial"] + ["update"] * 8,
+                     "pos_err_km": 1e4 * np.exp(-2 * t) * (1 + 0.1 * rng.random(9)),
+                     "sigma_pos_km": 2e4 * np.exp(-2 * t), "nees": 6 * (1 + 0.3 * rng.standard_normal(9)) ** 2,
+                     "entropy": 20 - 15 * t * (3 if lost else 1)})
+
+
+def test_the_figure_is_written_as_png_svg_and_pdf_and_names_the_filters(tmp_path):
+    groups = {("quick", "noisy-range", f): {"tables": [_table(s, f == "ukf") for s in (1, 2, 3)],
+                                            "summaries": [{"custody_kept": f != "ukf", "custody_lost_t_days": 1.2}] * 3}
+              for f in ("pgm", "ukf")}
+    files = plot_study(groups, tmp_path, "demo")
+    assert sorted(f.suffix for f in files) == sorted(f".{e}" for e in FORMATS)
+    assert all(f.stat().st_size > 5000 for f in files)
+    svg = next(f for f in files if f.suffix == ".svg").read_text()
+    assert "pgm vs ukf on quick" in svg and "custody lost (3 of 3 runs)" in svg
