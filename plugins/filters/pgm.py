@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.component import check_int, check_nonnegative, check_positive
+from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
 from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Filter, Sensor
@@ -20,12 +20,13 @@ from cistrack.measurement import Measurement
 from .cluster_merge import merge_small_clusters
 from .ensemble_propagation import propagate_particles
 from .initial_cloud import check_cloud, initial_particles
-from .kalman_update import component_posterior, gaussian_log_likelihood, group_moments, kalman_gains
+from .component_update import ensemble_component_update, iterated_component_update
+from .kalman_update import group_moments
 from .observation import MeasuredComponents, check_epoch
 from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 
-__all__ = ["PGMFilter", "resolve_clusterer"]
+__all__ = ["PGMFilter", "PaperPGMFilter", "resolve_clusterer"]
 
 _REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
 
@@ -80,7 +81,14 @@ class PGMFilter(Filter):
     def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
                  clusterer: Clusterer | str = "gmm", min_cluster_size: int | None = None,
                  velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
-                 max_range_km: float | None = None, max_speed_kms: float | None = None):
+                 max_range_km: float | None = None, max_speed_kms: float | None = None,
+                 component_update: str = "iterated", update_iterations: int = 10,
+                 component_likelihood: str = "posterior"):
+        self.component_update = check_choice(self, "component_update", component_update,
+                                             ("iterated", "ensemble"))
+        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
+        self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
+                                                 ("posterior", "prior"))
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
         self.n_components = None if n_components is None else check_int(self, "n_components", n_components,
                                                                          minimum=1)
@@ -149,9 +157,12 @@ class PGMFilter(Filter):
             raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
         mom = group_moments(x, dres, labels, m)
         mom.pxx = regularize_covariance(mom.pxx, 1e-12)
-        gains = kalman_gains(mom, meas.R)
-        means, covs = component_posterior(mom, gains)
-        loglik = gaussian_log_likelihood(gains.nu, gains.S)
+        if self.component_update == "ensemble":
+            means, covs, loglik = ensemble_component_update(mom, meas.R)
+        else:
+            means, covs, loglik = iterated_component_update(
+                mom.mean_x, mom.pxx, meas.residuals_to_measurement, meas.R,
+                max_iterations=self.update_iterations, likelihood=self.component_likelihood)
         logw, log_evidence = normalize_log_weights(np.log(mom.counts / mom.counts.sum()) + loglik, who)
         w = np.exp(logw)
         if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
@@ -260,6 +271,23 @@ class PGMFilter(Filter):
         return x, lab
 
 
+class PaperPGMFilter(PGMFilter):
+    """The paper's plain PGM, kept by name for comparisons: k-means clusters and the ensemble
+    (particle cross-covariance) Kalman update of each component. Same parameters as ``pgm``;
+    only the defaults of ``clusterer`` and ``component_update`` differ."""
+
+    def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
+                 clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
+                 velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
+                 max_range_km: float | None = None, max_speed_kms: float | None = None,
+                 component_update: str = "ensemble", update_iterations: int = 10,
+                 component_likelihood: str = "posterior"):
+        super().__init__(n_particles, n_components, clusterer, min_cluster_size,
+                         velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
+                         component_update, update_iterations, component_likelihood)
+
+
 @hookimpl
 def cistrack_register(registry):
     registry.add("filter", "pgm", PGMFilter)
+    registry.add("filter", "pgm-paper", PaperPGMFilter)

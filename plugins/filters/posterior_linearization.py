@@ -42,6 +42,9 @@ class PosteriorLinearization:
     step: Mahalanobis length (in the posterior's metric) of the last iteration's change of x.
     innovation (m,), S (m, m): the first (prior-linearised, ordinary UKF) innovation and its
     covariance, which give the measurement's predictive likelihood.
+    innovation_final (m,), S_final (m, m): the same under the last (posterior) linearisation,
+    z - (A x0 + b) and A P0 A^T + Omega + R: the predictive likelihood with h linearised where the
+    measurement put the state rather than over the whole prior.
     """
 
     x: np.ndarray
@@ -50,6 +53,8 @@ class PosteriorLinearization:
     step: float
     innovation: np.ndarray
     S: np.ndarray
+    innovation_final: np.ndarray | None = None
+    S_final: np.ndarray | None = None
 
 
 def _psd_part(a: np.ndarray) -> np.ndarray:
@@ -133,6 +138,7 @@ def posterior_linearization_update(points: MerweScaledSigmaPoints, x0: np.ndarra
         except np.linalg.LinAlgError:
             step = np.inf
         xi, Pi = x, P
+        last = (-dhat, S)
         if it > 1 and step < tolerance:
             break
-    return PosteriorLinearization(xi, Pi, it, step, first[0], first[1])
+    return PosteriorLinearization(xi, Pi, it, step, first[0], first[1], last[0], last[1])
