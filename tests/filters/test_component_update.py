@@ -58,8 +58,9 @@ def test_ensemble_component_update_barely_uses_a_precise_bearing():
     assert np.linalg.det(P[0]) > 100.0 * np.linalg.det(P_true)
 
 
-def test_pgm_defaults_to_the_iterated_component_update():
-    assert PGMFilter().component_update == "iterated"
+def test_pgm_defaults_to_the_iterated_component_update_with_kmeans_clusters():
+    f = PGMFilter()
+    assert (f.component_update, f.clusterer) == ("iterated", "kmeans")
 
 
 def test_pgm_paper_is_the_papers_plain_pgm():
@@ -74,3 +75,30 @@ def test_pgm_paper_is_the_papers_plain_pgm():
 def test_pgm_rejects_bad_update_settings(name, value):
     with pytest.raises(ParameterError, match=name):
         PGMFilter(**{name: value})
+
+
+def _cloud_with_an_outlying_group(n_small: int):
+    from cistrack.belief import ParticleCloud
+    rng = np.random.default_rng(2)
+    x = rng.standard_normal((1000, 6)) * 1e-3
+    x[:n_small] += 0.05                       # a small, well separated group
+    return ParticleCloud(x, 0.0)
+
+
+@pytest.mark.parametrize("n_small, merged", [(20, True), (60, False)])
+def test_pgm_merges_clusters_below_three_percent_of_its_particles(n_small, merged):
+    # 3% of 1,000 particles = 30: a 6-D covariance from 20 particles is too narrow to trust
+    from .linear_models import LinearDynamics, LinearSensor
+    filt = PGMFilter(n_particles=1000, n_components=2)
+    filt.initialize(_cloud_with_an_outlying_group(n_small), LinearDynamics(), LinearSensor(sigma=1.0, coords=(0,)),
+                    np.random.default_rng(3))
+    assert filt.belief.mixture.n_components == (1 if merged else 2)
+
+
+def test_pgm_paper_keeps_clusters_down_to_twice_the_dimension():
+    from .linear_models import LinearDynamics, LinearSensor
+    from cistrack.plugins.filters.pgm import PaperPGMFilter
+    filt = PaperPGMFilter(n_particles=1000, n_components=2)
+    filt.initialize(_cloud_with_an_outlying_group(20), LinearDynamics(), LinearSensor(sigma=1.0, coords=(0,)),
+                    np.random.default_rng(3))
+    assert filt.belief.mixture.n_components == 2

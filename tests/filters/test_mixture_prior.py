@@ -77,12 +77,6 @@ def test_pgm_with_em_clusters_reproduces_the_exact_mixture_posterior(cross):
     assert np.all(np.abs(post.mean[:2] - mean[:2]) / np.sqrt(np.diag(cov)[:2]) < 0.1)
 
 
-def test_pgm_default_clusterer_reproduces_the_exact_mixture_posterior(cross):
-    _, _, mean, cov = cross
-    post = updated_belief(cross, PGMFilter().clusterer)
-    assert abs(x1_spread_ratio(post, cov) - 1.0) < 0.05
-
-
 def test_kmeans_cells_across_the_arms_bias_the_posterior_spread(cross):
     # documents the failure mode the default avoids: k-means splits the cross into halves
     _, _, _, cov = cross
