@@ -16,7 +16,7 @@ Writing a new model in your own package (say a bicircular four-body problem)::
     from cistrack.primaries import MU_EARTH_MOON
     from cistrack.propagation import CompiledDynamics
 
-    @njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+    @njit(cache=True)                      # no fastmath: see dop853_source.DEFAULT_FASTMATH
     def bcr4bp_rhs(t, y, p, out):          # y, out: (6,) float64; p: params_vector()
         mu, ms, a_s, om_s = p[0], p[1], p[2], p[3]
         ...                                # write out[0..5]; no allocation, no Python objects

@@ -8,6 +8,18 @@ and numba's version; numba compiles it once (``cache=True``) and later processes
 machine code from disk. A right-hand side that is not importable by module and name (defined in
 ``__main__`` or inside a function) still works, compiled in memory on every new process.
 
+The cache directory holds code that is imported, so it must belong to the user running cistrack:
+it is created with mode 0700, and an existing one owned by another user or writable by group or
+others is refused (:class:`~cistrack.errors.ConfigError` naming the directory and
+``CISTRACK_KERNEL_DIR``). There is no fallback to a shared directory such as ``/tmp``: if the
+directory cannot be created or written the kernels are compiled in memory (same numbers, only
+slower to start) and a warning says why.
+
+Reproducibility: compiled kernels give bit-identical results whether they were compiled in this
+process or loaded from the cache, and for any number of threads (each particle is integrated on
+its own, so the split over threads changes nothing). This holds because the generated code uses no
+value-changing fast-math flags: see :data:`.dop853_source.DEFAULT_FASTMATH`.
+
 """
 from __future__ import annotations
 
@@ -16,9 +28,11 @@ import importlib.util
 import inspect
 import logging
 import os
+import stat
 import sys
 import tempfile
 import threading
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from types import ModuleType
@@ -26,9 +40,12 @@ from typing import Any
 
 import numpy as np
 
+from cistrack.errors import ConfigError
+
 from . import dop853_source
 
-__all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMPILE_SECONDS"]
+__all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMPILE_SECONDS",
+           "secure_cache_dir"]
 
 _LOG = logging.getLogger("cistrack.propagation")
 
@@ -44,13 +61,39 @@ _KERNELS: dict[tuple[int, int], ModuleType] = {}
 
 
 def kernel_cache_dir() -> Path:
-    """Directory where generated kernel modules (and numba's cache of them) are kept."""
+    """Directory where generated kernel modules (and numba's cache of them) are kept.
+
+    ``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels``, else
+    ``~/.cache/cistrack/kernels``; the path only (see :func:`secure_cache_dir`)."""
     env = os.environ.get("CISTRACK_KERNEL_DIR")
     if env:
         return Path(env)
     xdg = os.environ.get("XDG_CACHE_HOME")
     base = Path(xdg) if xdg else Path.home() / ".cache"
     return base / "cistrack" / "kernels"
+
+
+def secure_cache_dir(directory: Path | None = None) -> Path:
+    """Create (mode 0700) or check the kernel cache directory; return it.
+
+    Raises :class:`ConfigError` if it exists but is not a directory, is owned by another user, or
+    is writable by group or others (code is imported from it). Raises :class:`OSError` if it
+    cannot be created.
+    """
+    path = Path(directory) if directory is not None else kernel_cache_dir()
+    where = f"kernel cache directory {path} (set CISTRACK_KERNEL_DIR to choose another)"
+    if not path.exists():
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    st = path.stat()
+    if not stat.S_ISDIR(st.st_mode):
+        raise ConfigError(f"{where}: exists and is not a directory")
+    if hasattr(os, "getuid") and st.st_uid != os.getuid():
+        raise ConfigError(f"{where}: owned by another user (uid {st.st_uid}, you are uid {os.getuid()}); "
+                          "cistrack imports code from it and only uses a directory you own")
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        raise ConfigError(f"{where}: writable by group or others (mode {stat.S_IMODE(st.st_mode):o}); "
+                          f"cistrack imports code from it: run chmod 700 {path}")
+    return path
 
 
 def _importable_name(rhs: Any) -> tuple[str, str] | None:
@@ -112,17 +155,18 @@ def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
                 (src + _source_digest(rhs) + numba.__version__ + sys.version).encode()).hexdigest()[:20]
             name = f"cistrack_kernel_{where[1]}_{digest}"
             mod = None
-            for directory in (kernel_cache_dir(), Path(tempfile.gettempdir()) / "cistrack-kernels"):
-                path = directory / f"{name}.py"
-                try:
-                    if not path.exists() or path.read_text() != src:
-                        _write_atomic(path, src)
-                    mod = _load_file_module(name, path)
-                    if not _numba_cached(path):
-                        _announce_compile(f"{where[0]}.{where[1]}")
-                    break
-                except OSError:
-                    continue
+            try:
+                path = secure_cache_dir() / f"{name}.py"
+                if not path.exists() or path.read_text() != src:
+                    _write_atomic(path, src)
+                mod = _load_file_module(name, path)
+                if not _numba_cached(path):
+                    _announce_compile(f"{where[0]}.{where[1]}")
+            except OSError as exc:  # unwritable home, read-only file system: compile in memory
+                warnings.warn(f"cistrack: kernel cache directory {kernel_cache_dir()} is not usable "
+                              f"({exc}); compiling propagation kernels in memory (set "
+                              "CISTRACK_KERNEL_DIR to a writable directory of yours to cache them)",
+                              RuntimeWarning, stacklevel=2)
         if where is None or mod is None:  # not importable or no writable directory: in memory
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)")
             _announce_compile(repr(rhs))
@@ -151,13 +195,20 @@ _POOL_PID = -1
 
 def num_threads() -> int:
     """Worker threads used by propagate: ``$CISTRACK_NUM_THREADS``, else numba's thread count
-    (``$NUMBA_NUM_THREADS``, default: the CPUs this process may use)."""
+    (``$NUMBA_NUM_THREADS``, default: the CPUs this process may use). The thread count never
+    changes the numbers (particles are integrated independently).
+
+    Raises :class:`ConfigError` if ``$CISTRACK_NUM_THREADS`` is not an integer from 1 to 1024."""
     env = os.environ.get("CISTRACK_NUM_THREADS")
-    if env:
+    if env is not None and env.strip():
         try:
-            return max(1, int(env))
+            n = int(env)
         except ValueError:
-            pass
+            n = 0
+        if not 1 <= n <= 1024:
+            raise ConfigError(f"environment variable CISTRACK_NUM_THREADS={env!r}: must be an integer "
+                              "from 1 to 1024 (or unset: numba's thread count)")
+        return n
     import numba
 
     return max(1, int(numba.config.NUMBA_NUM_THREADS))

@@ -57,10 +57,34 @@ def _cholesky(a, out):
     return True
 
 
-_FM = {"reassoc", "contract", "nsz", "arcp"}  # vectorised reductions; keeps inf/NaN semantics
+# No fast-math flags: with "reassoc" the numbers depended on whether these functions were compiled
+# in the running process or loaded from numba's cache (the optimiser re-associates differently in
+# the two contexts), so the same seed gave different mixtures. See
+# cistrack.propagation.dop853_source.DEFAULT_FASTMATH. The long sums of the M-step keep their
+# speed through _dot's fixed eight-way split instead (SIMD-friendly, same order every time).
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@nb.njit(cache=True)
+def _dot(a, b):
+    """sum_i a[i] * b[i] for (n,) arrays, as eight interleaved partial sums added in a fixed order."""
+    n = a.shape[0]
+    s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+    m = n - n % 8
+    for i in range(0, m, 8):
+        s0 += a[i] * b[i]
+        s1 += a[i + 1] * b[i + 1]
+        s2 += a[i + 2] * b[i + 2]
+        s3 += a[i + 3] * b[i + 3]
+        s4 += a[i + 4] * b[i + 4]
+        s5 += a[i + 5] * b[i + 5]
+        s6 += a[i + 6] * b[i + 6]
+        s7 += a[i + 7] * b[i + 7]
+    for i in range(m, n):
+        s0 += a[i] * b[i]
+    return ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
+
+
+@nb.njit(cache=True)
 def _m_step(xt, resp, reg_covar, active, weights, means, covs):
     """M-step on points ``xt`` (d, n) and responsibilities ``resp`` (k, n), in place."""
     d, n = xt.shape
@@ -82,10 +106,7 @@ def _m_step(xt, resp, reg_covar, active, weights, means, covs):
             continue
         for a in range(d):
             xa = xt[a]
-            s = 0.0
-            for i in range(n):
-                s += r[i] * xa[i]
-            mu = s / nk
+            mu = _dot(r, xa) / nk
             means[c, a] = mu
             da = diff[a]
             for i in range(n):
@@ -95,11 +116,7 @@ def _m_step(xt, resp, reg_covar, active, weights, means, covs):
             for i in range(n):
                 rd[i] = r[i] * da[i]
             for b in range(a + 1):
-                db = diff[b]
-                s = 0.0
-                for i in range(n):
-                    s += rd[i] * db[i]
-                v = s / nk
+                v = _dot(rd, diff[b]) / nk
                 covs[c, a, b] = v
                 covs[c, b, a] = v
             covs[c, a, a] += reg_covar
@@ -107,7 +124,7 @@ def _m_step(xt, resp, reg_covar, active, weights, means, covs):
     return weights, means, covs
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@nb.njit(cache=True)
 def _e_step(xt, weights, means, covs, active, log_resp):
     """Fills ``log_resp`` (k, n) for points ``xt`` (d, n); returns the mean log-likelihood per
     point. Components whose covariance is not positive definite are dropped."""
@@ -285,7 +302,7 @@ def predict_labels(x: np.ndarray, fit: dict) -> np.ndarray:
     return _labels(_t(x), fit["weights"], fit["means"], fit["covariances"], fit["active"])
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@nb.njit(cache=True)
 def _sq_dist_to(xt, centre, out):
     d, n = xt.shape
     for i in range(n):
@@ -340,7 +357,7 @@ def _kmeans_pp(xt, k, first, uniforms):
     return centres
 
 
-@nb.njit(cache=True, fastmath=_FM)
+@nb.njit(cache=True)
 def _assign(xt, centres, dq, labels, dist):
     """Nearest centre of each point of ``xt`` (d, n) into ``labels``/``dist``; number changed."""
     k = centres.shape[0]

@@ -56,7 +56,7 @@ class CorrectedOrbit:
     residual: float
 
 
-@njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+@njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
 def cr3bp_stm_rhs(t, y, p, out):
     """CR3BP state + STM: y (42,) = state (6) then Phi (6x6, row-major) -> out (42,); p = [mu]."""
     cr3bp_rhs(t, y, p, out)

@@ -25,7 +25,8 @@ __all__ = ["CR3BP", "cr3bp_rhs", "jacobi_constant", "MU_EARTH_MOON"]
 
 
 # compiled on first use (or inlined into the propagation kernels): listing plugins needs no numba
-@lazy_njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+# no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
+@lazy_njit(cache=True)
 def cr3bp_rhs(t, y, p, out):
     """CR3BP equations of motion: y (6,) [LU, VU] -> out (6,) [VU, VU/TU]; p = [mu]."""
     mu = p[0]

@@ -33,7 +33,8 @@ def gm_nondimensional(gm_km3s2: float) -> float:
 
 
 # compiled on first use (or inlined into the propagation kernels): listing plugins needs no numba
-@lazy_njit(cache=True, fastmath={"contract", "arcp", "nsz", "reassoc"})
+# no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
+@lazy_njit(cache=True)
 def twobody_rhs(t, y, p, out):
     """Kepler equations of motion: y (6,) [LU, VU] -> out (6,); p = [gm (LU^3/TU^2)]."""
     r2 = y[0] * y[0] + y[1] * y[1] + y[2] * y[2]

@@ -1,0 +1,83 @@
+"""The kernel cache directory: private to its user, never shared, never silently replaced."""
+from __future__ import annotations
+
+import os
+import stat
+import subprocess
+import sys
+
+import pytest
+
+from cistrack.errors import ConfigError
+from cistrack.propagation import kernels
+
+
+def test_cache_directory_is_created_private(tmp_path, monkeypatch):
+    target = tmp_path / "cache" / "cistrack" / "kernels"
+    monkeypatch.setenv("CISTRACK_KERNEL_DIR", str(target))
+    assert kernels.secure_cache_dir() == target
+    assert stat.S_IMODE(target.stat().st_mode) == 0o700
+
+
+def test_cache_directory_writable_by_others_is_refused(tmp_path):
+    target = tmp_path / "shared"
+    target.mkdir()
+    target.chmod(0o777)
+    with pytest.raises(ConfigError, match=r"writable by group or others .*chmod 700") as exc:
+        kernels.secure_cache_dir(target)
+    assert str(target) in str(exc.value) and "CISTRACK_KERNEL_DIR" in str(exc.value)
+
+
+def _foreign_directory(tmp_path):
+    """A directory owned by another user: one we chown (as root), else the root directory."""
+    if os.getuid() == 0:
+        d = tmp_path / "foreign"
+        d.mkdir(mode=0o700)
+        os.chown(d, 65534, 65534)
+        return d
+    return type(tmp_path)("/")
+
+
+def test_cache_directory_owned_by_another_user_is_refused(tmp_path):
+    d = _foreign_directory(tmp_path)
+    with pytest.raises(ConfigError, match="owned by another user"):
+        kernels.secure_cache_dir(d)
+
+
+def test_cache_directory_that_is_a_file_is_refused(tmp_path):
+    f = tmp_path / "file"
+    f.write_text("x")
+    with pytest.raises(ConfigError, match="not a directory"):
+        kernels.secure_cache_dir(f)
+
+
+def test_cli_run_with_a_foreign_kernel_directory_is_refused_before_computing(tmp_path):
+    d = _foreign_directory(tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(tmp_path / "r"), "--quiet"],
+                          capture_output=True, text=True, env={**os.environ, "CISTRACK_KERNEL_DIR": str(d)})
+    assert proc.returncode == 2
+    assert "owned by another user" in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.slow
+def test_unusable_cache_directory_compiles_in_memory_with_a_warning_and_no_shared_fallback(tmp_path):
+    (tmp_path / "file").write_text("x")
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    code = ("import numpy as np\n"
+            "from cistrack.plugins.dynamics.cr3bp import CR3BP\n"
+            "p = CR3BP().propagate(np.array([[1.0221, 0, -0.1821, 0, -0.1033, 0]]), 0.0, 0.1)\n"
+            "print(p.alive[0])\n")
+    env = {**os.environ, "CISTRACK_KERNEL_DIR": str(tmp_path / "file" / "kernels"), "TMPDIR": str(tmpdir)}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "True"
+    assert "compiling propagation kernels in memory" in proc.stderr
+    assert list(tmpdir.iterdir()) == []
+
+
+@pytest.mark.parametrize("value", ["abc", "0", "-2", "1.5", "100000"])
+def test_invalid_thread_count_from_the_environment_is_refused(monkeypatch, value):
+    monkeypatch.setenv("CISTRACK_NUM_THREADS", value)
+    with pytest.raises(ConfigError, match="CISTRACK_NUM_THREADS.*integer from 1 to 1024"):
+        kernels.num_threads()
