@@ -44,7 +44,7 @@ import numpy as np
 from .observer import C_KMS, ObserverState
 
 __all__ = ["SkyCorrections", "astrometric_vector", "astrometric_radec", "apparent_azel",
-           "standard_pressure_hpa"]
+           "refract_elevation", "standard_pressure_hpa"]
 
 _TWO_PI = 2.0 * np.pi
 _SIN_EL_MIN = np.sin(np.radians(3.0))
@@ -136,8 +136,12 @@ def _aberrate(p: np.ndarray, obs: ObserverState, annual: bool, diurnal: bool) ->
     return np.asarray(erfa.ab(u, beta, s, bm1), dtype=float)
 
 
-def _refract(el: np.ndarray, c: SkyCorrections, height_m: float) -> np.ndarray:
-    """Observed elevation from vacuum elevation (rad), A tan z + B tan^3 z with a Newton step."""
+def refract_elevation(el: np.ndarray, c: SkyCorrections, height_m: float) -> np.ndarray:
+    """Observed elevation (N,) rad from vacuum elevation (N,) rad: A tan z + B tan^3 z, one Newton step.
+
+    A, B from ``erfa.refco`` with the weather of ``c`` (``pressure_hpa`` None: standard
+    atmosphere at ``height_m``).
+    """
     p = standard_pressure_hpa(height_m) if c.pressure_hpa is None else c.pressure_hpa
     a, b = erfa.refco(p, c.temperature_c, c.relative_humidity, c.wavelength_um)
     s = np.maximum(np.sin(el), _SIN_EL_MIN)
@@ -164,5 +168,5 @@ def apparent_azel(r_km: np.ndarray, v_kms: np.ndarray, obs: ObserverState, neu_b
     az = np.where(az >= _TWO_PI, 0.0, az)
     el = np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
     if corrections.refraction:
-        el = _refract(el, corrections, height_m)
+        el = refract_elevation(el, corrections, height_m)
     return az, el, rho

@@ -24,6 +24,11 @@ class Sensor(Component):
     """Name of each measurement component, e.g. ("azimuth", "elevation", "range")."""
     angular: tuple[bool, ...] = ()
     """Whether each component is an angle that wraps at ±pi in residuals."""
+    line_of_sight_tolerance_lu: float = 1e-9
+    """How far ``observer_position(t) + range * line_of_sight(measure(x, t), t)`` may miss the
+    true position of x, LU. Exact for geometric sensors; a sensor whose angles include light time
+    sees the target where it was (it moved by its velocity times the light time) and declares
+    that bound."""
 
     @abstractmethod
     def measure(self, states: np.ndarray, t) -> np.ndarray:

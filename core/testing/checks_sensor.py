@@ -77,7 +77,8 @@ def _angle_columns(sensor) -> list[int]:
 
 
 def check_line_of_sight_consistent(sensor) -> None:
-    """observer_position(t) + range × line_of_sight(angles, t) is the measured position."""
+    """observer_position(t) + range × line_of_sight(angles, t) is the measured position, to the
+    sensor's declared ``line_of_sight_tolerance_lu`` (1e-9 LU for geometric sensors)."""
     cols = _angle_columns(sensor)
     if len(cols) != 2:
         return
@@ -91,8 +92,10 @@ def check_line_of_sight_consistent(sensor) -> None:
     obs = np.asarray(sensor.observer_position(ts), dtype=float)
     require(obs.shape == (len(ts), 3), f"observer_position() of (K,) times returned shape {obs.shape}, expected (K, 3)")
     rho = np.linalg.norm(x[:, :3] - obs, axis=1)
-    ok, diff = close(obs + rho[:, None] * los, x[:, :3], 0, 1e-9)
-    require(ok, f"observer + range × line_of_sight misses the true position by {diff:.3g} LU")
+    tol = float(getattr(sensor, "line_of_sight_tolerance_lu", 1e-9))
+    ok, diff = close(obs + rho[:, None] * los, x[:, :3], 0, tol)
+    require(ok, f"observer + range × line_of_sight misses the true position by {diff:.3g} LU "
+                f"(the sensor declares line_of_sight_tolerance_lu = {tol:.3g})")
 
 
 def check_observer_and_visibility_shapes(sensor) -> None:

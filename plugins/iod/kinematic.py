@@ -39,6 +39,13 @@ speed instead. The synodic frame turns at only 1 rad/TU (~1 km/s of apparent mot
 distance instead of ~29 km/s), so the same 42 km/s is a *looser* bound there and prunes fewer
 samples; lower ``max_speed_kms`` if you bound synodic speed (the NRHO moves at < 2 km/s).
 
+The fit works with any sensor whose two angles (a, b) give the unit vector
+(cos b cos a, cos b sin a, sin b) in an observer frame that ``line_of_sight`` maps to synodic:
+az/el (NEU) or RA/Dec (ICRF axes, e.g. sensor ``real-telescope`` with ``measurement = "radec"``).
+With RA/Dec the "topocentric" speed is that of the fitted ICRF-axes topocentric positions, an
+inertial frame without the ~29 km/s of Earth rotation: as for ``speed_frame="synodic"``, the
+42 km/s bound is looser there.
+
 When too few samples survive, more are drawn in batches of ``oversampling * n_particles`` until
 ``n_particles`` survive or ``max_oversampling * n_particles`` samples have been drawn; then an
 :class:`~cistrack.errors.IODError` says how many survived and what pruned the rest. The cloud's
@@ -73,7 +80,7 @@ class FitInputs:
     """The measurements a kinematic fit uses, validated and reduced to arrays.
 
     Attributes: ``indices`` (K,) into the measurement set, ``times`` (K,) TU, ``angles`` (K, 2)
-    rad (azimuth, elevation), ``angle_sigmas`` (K, 2) rad, ``ranges`` (K,) LU or None,
+    rad (azimuth, elevation; or the sensor's other angle pair, e.g. RA, Dec), ``angle_sigmas`` (K, 2) rad, ``ranges`` (K,) LU or None,
     ``observer`` (K, 3) LU synodic observer positions, ``weights`` (2, K) value/rate weights at
     the last time (rate per TU).
     """
@@ -100,6 +107,17 @@ def _column(ms: MeasurementSet, name: str, who: str) -> int:
     return ms.names.index(name)
 
 
+def angle_names(sensor: Sensor) -> tuple[str, str]:
+    """The sensor's two angle components: (azimuth, elevation), (right_ascension, declination), ...
+
+    The fit only needs a longitude-like and a latitude-like angle of a unit vector,
+    u = (cos b cos a, cos b sin a, sin b), in some observer frame (NEU for az/el, ICRF axes for
+    RA/Dec) that the sensor's ``line_of_sight`` maps to synodic.
+    """
+    names = [n for n in getattr(sensor, "names", ()) if n != "range"]
+    return (names[0], names[1]) if len(names) >= 2 else ("azimuth", "elevation")
+
+
 def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pass_gap_hours: float,
                 fit_fraction: float, min_fit: int, max_fit: int, need_range: bool,
                 who: str = "kinematic IOD") -> FitInputs:
@@ -109,8 +127,9 @@ def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pas
     idx = select_fit_indices(measurements.times, pass_gap_hours=pass_gap_hours,
                              fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
                              order=order)
-    ia = _column(measurements, "azimuth", who)
-    ie = _column(measurements, "elevation", who)
+    first, second = angle_names(sensor)
+    ia = _column(measurements, first, who)
+    ie = _column(measurements, second, who)
     times = measurements.times[idx]
     angles = measurements.values[idx][:, [ia, ie]]
     sig = measurements.sigmas[idx][:, [ia, ie]]

@@ -16,6 +16,11 @@ equator, synodic frame turning at 1 rad/TU about z, Earth at (-mu, 0, 0)); a hig
 model (inclined lunar orbit, ephemerides) is another subclass registered in
 :data:`FRAME_MODELS`.
 
+Because ECI -> ECEF is the Earth rotation angle alone, this "ECI" is the CIRS (true equator of
+date, origin at the CIO), not J2000/ICRF nor the equinox of date: ``moon_phase_deg`` is a CIRS
+right ascension. The real geometry (DE421 Moon, precession-nutation, polar motion, UT1, light
+time, aberration, refraction) is the separate sensor ``real-telescope``; see docs/real-sky.md.
+
 Time ``t`` is TU since the epoch (UTC). UT1 is taken equal to UTC (|UT1-UTC| < 0.9 s, i.e.
 < 14 arcsec of Earth rotation; the sensor noise is 1.5 arcsec, so supply a better model if you
 fit real data to that level).

@@ -1,0 +1,319 @@
+"""A ground telescope in the real sky: apparent az/el or astrometric RA/Dec of synodic states.
+
+Registered as sensor ``"real-telescope"``. States are nondimensional synodic states in the real
+Earth-Moon rotating frame of :class:`cistrack.frames.earth_moon.EarthMoonFrame` (DE421 Moon,
+constant LU/TU scaling), the frame the ephemeris dynamics plugin propagates in; the sensor maps
+them to GCRS km, km/s with that frame, places the observer with ERFA
+(:mod:`cistrack.observer`) and measures with :mod:`cistrack.sky`:
+
+- ``measurement = "azel"``: apparent azimuth (North through East) and elevation; light time,
+  annual and diurnal aberration on by default, refraction off by default;
+- ``measurement = "radec"``: topocentric astrometric ICRF right ascension and declination as MPC
+  and ADES report them (light time on, no aberration, no refraction).
+
+With ``measure_range`` the geometric observer-target distance (LU) is a third component (IOD only).
+
+``line_of_sight`` inverts what does not depend on the target's own motion (refraction,
+aberration, the Earth's barycentric motion during the light time), so ``observer + range * los``
+misses the target only by its geocentric velocity times the light time (about 1 km for 1 km/s
+at lunar distance): :attr:`line_of_sight_tolerance_lu` declares the bound the conformance suite
+uses. Every correction applied is named in ``corrections`` and in each simulated set's meta.
+"""
+from __future__ import annotations
+
+import erfa
+import numpy as np
+
+from cistrack.component import check_choice, check_positive, check_range
+from cistrack.errors import MeasurementError
+from cistrack.hookspecs import hookimpl
+from cistrack.interfaces import Sensor
+from cistrack.measurement import MeasurementSet
+from cistrack.observer import C_KMS, ObserverGeometry, Site
+from cistrack.sky import (SkyCorrections, apparent_azel, astrometric_radec, refract_elevation,
+                          standard_pressure_hpa)
+from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
+
+__all__ = ["RealTelescope"]
+
+_MEASUREMENTS = ("azel", "radec")
+_NAMES = {"azel": ("azimuth", "elevation"), "radec": ("right_ascension", "declination")}
+
+
+class RealTelescope(Sensor):
+    """Ground telescope with real Earth orientation, light time, aberration and refraction.
+
+    Parameters
+    ----------
+    latitude_deg, longitude_deg, height_m : WGS84 geodetic site (deg, deg East, m).
+    measurement : "azel" | "radec"
+    sigma_arcsec : one-sigma noise of each angle, arcsec.
+    measure_range : also measure the geometric range (LU), for IOD.
+    range_alpha : range sigma as a fraction of the range.
+    elevation_mask_deg : lowest geometric elevation at which the target is visible, deg.
+    epoch : ISO-8601 UTC time of t = 0 (a scenario injects its own).
+    light_time, annual_aberration, diurnal_aberration, refraction, polar_motion, ut1 : bool
+        The corrections of :mod:`cistrack.sky`. For "radec" aberration and refraction must be
+        off (astrometric places have neither); the defaults then turn them off.
+    pressure_hpa : float
+        Site pressure for refraction, hPa; negative: the standard atmosphere at ``height_m``.
+    temperature_c, relative_humidity, wavelength_um : refraction weather (deg C, 0-1, micron).
+    """
+
+    def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
+                 height_m: float = 103.8, measurement: str = "azel", sigma_arcsec: float = 1.5,
+                 measure_range: bool = False, range_alpha: float = 0.05,
+                 elevation_mask_deg: float = 10.0, epoch: str = "2026-01-01T00:00:00Z",
+                 light_time: bool = True, annual_aberration: bool | None = None,
+                 diurnal_aberration: bool | None = None, refraction: bool = False,
+                 polar_motion: bool = True, ut1: bool = True, pressure_hpa: float = -1.0,
+                 temperature_c: float = 10.0, relative_humidity: float = 0.5,
+                 wavelength_um: float = 0.55) -> None:
+        self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
+        self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
+        self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
+        self.measurement = check_choice(self, "measurement", measurement, _MEASUREMENTS)
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.measure_range = self._bool("measure_range", measure_range)
+        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
+                                              -90.0, 90.0, hi_open=True)
+        try:
+            self._epoch = parse_utc(epoch)
+        except (ValueError, TypeError):
+            self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
+        self.epoch = epoch
+        azel = self.measurement == "azel"
+        self.light_time = self._bool("light_time", light_time)
+        self.annual_aberration = self._bool("annual_aberration",
+                                            azel if annual_aberration is None else annual_aberration)
+        self.diurnal_aberration = self._bool("diurnal_aberration",
+                                             azel if diurnal_aberration is None else diurnal_aberration)
+        self.refraction = self._bool("refraction", refraction)
+        self.polar_motion = self._bool("polar_motion", polar_motion)
+        self.ut1 = self._bool("ut1", ut1)
+        if not azel:
+            for name in ("annual_aberration", "diurnal_aberration", "refraction"):
+                if getattr(self, name):
+                    self._fail(name, True, "must be false for measurement = 'radec': astrometric "
+                                           "RA/Dec has no aberration or refraction (use 'azel' "
+                                           "for apparent places)")
+        self.pressure_hpa = check_range(self, "pressure_hpa", pressure_hpa, -1.0, 2000.0)
+        self.temperature_c = check_range(self, "temperature_c", temperature_c, -150.0, 200.0)
+        self.relative_humidity = check_range(self, "relative_humidity", relative_humidity, 0.0, 1.0)
+        self.wavelength_um = check_range(self, "wavelength_um", wavelength_um, 0.1, 1e6, lo_open=True)
+
+        base = _NAMES[self.measurement]
+        self.names = base + ("range",) if measure_range else base
+        self.angular = (True, False, False) if measure_range else (True, False)
+        self.corrections = SkyCorrections(
+            light_time=self.light_time, annual_aberration=self.annual_aberration,
+            diurnal_aberration=self.diurnal_aberration, refraction=self.refraction,
+            polar_motion=self.polar_motion, ut1=self.ut1,
+            pressure_hpa=(standard_pressure_hpa(self.height_m) if self.pressure_hpa < 0
+                          else self.pressure_hpa),
+            temperature_c=self.temperature_c, relative_humidity=self.relative_humidity,
+            wavelength_um=self.wavelength_um)
+        # observer + range * los misses the target by |v| tau (module docstring): allow 4 km/s.
+        self.line_of_sight_tolerance_lu = (4.0 * 1.5 / LU_KM) if self.light_time else 1e-9
+        self._site = Site(float(self.latitude_deg), float(self.longitude_deg), float(self.height_m))
+        self._neu = self._site.neu_basis()
+        self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
+        self._mask_rad = np.radians(self.elevation_mask_deg)
+        self._build()
+
+    def _bool(self, name: str, value) -> bool:
+        if not isinstance(value, (bool, np.bool_)):
+            self._fail(name, value, "must be true or false")
+        return bool(value)
+
+    def _build(self) -> None:
+        from cistrack.frames.earth_moon import EarthMoonFrame
+
+        self._frame = EarthMoonFrame.from_utc(self._epoch)
+        self._observer = ObserverGeometry(self._site, self._epoch, polar_motion=self.polar_motion,
+                                          ut1=self.ut1)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_frame", None)
+        state.pop("_observer", None)
+        return state
+
+    def __setstate__(self, state) -> None:
+        self.__dict__.update(state)
+        self._build()
+
+    # -- validation -----------------------------------------------------------------------------
+    def _check_states(self, states) -> np.ndarray:
+        x = np.asarray(states, dtype=float)
+        if x.ndim != 2 or x.shape[1] != 6:
+            raise MeasurementError(f"sensor 'real-telescope': states must have shape (N, 6), got {x.shape}")
+        if not np.all(np.isfinite(x)):
+            raise MeasurementError("sensor 'real-telescope': states contain NaN or infinity")
+        return x
+
+    def _check_times(self, t, n: int) -> np.ndarray:
+        tt = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(tt)):
+            raise MeasurementError("sensor 'real-telescope': times contain NaN or infinity")
+        if tt.ndim == 0:
+            return tt
+        tt = tt.reshape(-1)
+        if tt.shape[0] != n:
+            raise MeasurementError(f"sensor 'real-telescope': t must be a scalar or have one time "
+                                   f"per row ({n}), got shape {np.shape(t)}")
+        return tt
+
+    # -- geometry -------------------------------------------------------------------------------
+    def _gcrs(self, x: np.ndarray, tt: np.ndarray):
+        """GCRS position (N, 3) km, velocity (N, 3) km/s and observer state at times tt.
+
+        The frame (DE421) and the observer (ERFA) are evaluated once per distinct time; the
+        transform is that of ``EarthMoonFrame.synodic_to_gcrs`` (constant LU/VU scaling).
+        """
+        if tt.ndim == 0:
+            uniq, inv = tt.reshape(1), np.zeros(x.shape[0], dtype=int)
+        else:
+            uniq, inv = np.unique(tt, return_inverse=True)
+        ax = self._frame.axes(uniq)
+        rot = ax.rotation[inv]                                           # (N, 3, 3)
+        rho = np.einsum("nij,nj->ni", rot, x[:, :3] * LU_KM)
+        rhod = np.einsum("nij,nj->ni", rot, x[:, 3:] * VU_KMS)
+        r = ax.origin[inv] + rho
+        v = ax.origin_velocity[inv] + rhod + np.cross(ax.omega[inv], rho)
+        obs = self._observer.state(tt * TU_S)
+        return r, v, obs
+
+    def measure(self, states: np.ndarray, t) -> np.ndarray:
+        """Noise-free angles (rad) [and range, LU]: states (N, 6) synodic, t scalar or (N,) TU -> (N, m).
+
+        azel: azimuth [0, 2pi), elevation; radec: right ascension [0, 2pi), declination.
+        """
+        x = self._check_states(states)
+        tt = self._check_times(t, x.shape[0])
+        r, v, obs = self._gcrs(x, tt)
+        if self.measurement == "azel":
+            a, b, _ = apparent_azel(r, v, obs, self._neu, self.corrections, self.height_m)
+        else:
+            a, b, _ = astrometric_radec(r, v, obs, self.corrections.light_time)
+        if self.measure_range:
+            rng = np.linalg.norm(r - obs.position_km, axis=1) / LU_KM
+            return np.stack([a, b, rng], axis=1)
+        return np.stack([a, b], axis=1)
+
+    def sigmas(self, states: np.ndarray, t) -> np.ndarray:
+        """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x range (LU)."""
+        x = self._check_states(states)
+        out = np.full((x.shape[0], len(self.names)), self._sigma_rad)
+        if self.measure_range:
+            out[:, 2] = self.range_alpha * np.linalg.norm(
+                x[:, :3] - self.observer_position(self._check_times(t, x.shape[0])), axis=1)
+        return out
+
+    def _geometric_elevation(self, x: np.ndarray, tt: np.ndarray) -> np.ndarray:
+        r, _, obs = self._gcrs(x, tt)
+        m = self._neu @ obs.gcrs_to_itrs                                 # (K, 3, 3)
+        d = r - obs.position_km
+        neu = np.einsum("kij,kj->ki", m, d) if m.shape[0] == d.shape[0] else d @ m[0].T
+        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
+
+    def visible(self, states: np.ndarray, t) -> np.ndarray:
+        """Geometric elevation at or above the mask: states (N, 6), t scalar or (N,) -> (N,) bool."""
+        x = self._check_states(states)
+        return self._geometric_elevation(x, self._check_times(t, x.shape[0])) >= self._mask_rad
+
+    def observer_position(self, t) -> np.ndarray:
+        """Observer position in the synodic frame, LU: t scalar -> (3,), (K,) -> (K, 3)."""
+        tt = np.asarray(t, dtype=float)
+        obs = self._observer.state(tt * TU_S)
+        pv = np.concatenate([obs.position_km, obs.velocity_kms], axis=1)
+        syn = np.asarray(self._frame.gcrs_to_synodic(pv, tt.reshape(-1) if tt.ndim else tt),
+                         dtype=float).reshape(-1, 6)[:, :3]
+        return syn[0] if tt.ndim == 0 else syn
+
+    def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
+        """Unit synodic vectors (N, 3) towards the target for measured angle pairs (N, 2) rad at t.
+
+        Undoes refraction, aberration and the Earth's motion during the light time (see the
+        module docstring); extra columns (range) are ignored.
+        """
+        ang = np.asarray(angles, dtype=float)
+        if ang.ndim != 2 or ang.shape[1] < 2:
+            raise MeasurementError(f"sensor 'real-telescope': angles must have shape (N, 2), got {ang.shape}")
+        if not np.all(np.isfinite(ang[:, :2])):
+            raise MeasurementError("sensor 'real-telescope': angles contain NaN or infinity")
+        tt = self._check_times(t, ang.shape[0])
+        obs = self._observer.state(tt * TU_S)
+        a, b = ang[:, 0], ang[:, 1]
+        c = self.corrections
+        if self.measurement == "azel":
+            if c.refraction:
+                b = _unrefract(b, c)
+            cb = np.cos(b)
+            neu = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
+            m = self._neu @ obs.gcrs_to_itrs                             # GCRS -> NEU
+            u = np.einsum("kji,kj->ki", m, neu) if m.shape[0] == neu.shape[0] else neu @ m[0]
+            beta = np.zeros_like(u)
+            if c.annual_aberration:
+                beta = beta + obs.earth_velocity_kms / C_KMS
+            if c.diurnal_aberration:
+                beta = beta + obs.velocity_kms / C_KMS
+            # first-order inverse of aberration (error ~ (v/c)^2 ~ 1e-8 rad)
+            u = u - beta + np.einsum("ni,ni->n", u, beta)[:, None] * u
+            u /= np.linalg.norm(u, axis=1)[:, None]
+        else:
+            cb = np.cos(b)
+            u = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
+        if c.light_time:
+            u = u + np.broadcast_to(obs.earth_velocity_kms / C_KMS, u.shape)   # exact: p + v_E tau
+            u /= np.linalg.norm(u, axis=1)[:, None]
+        if tt.ndim == 0:
+            los = u @ self._frame.axes(float(tt)).rotation[0]
+        else:
+            uniq, inv = np.unique(tt, return_inverse=True)
+            rot = self._frame.axes(uniq).rotation[inv]                          # (N, 3, 3)
+            los = np.einsum("kji,kj->ki", rot, u)
+        return los / np.linalg.norm(los, axis=1)[:, None]
+
+    # -- passes and simulation ------------------------------------------------------------------
+    def passes(self, times: np.ndarray, states: np.ndarray):
+        """Visibility passes: contiguous runs of visible samples (sample at <= 1 h spacing)."""
+        tt = np.asarray(times, dtype=float).reshape(-1)
+        x = self._check_states(states)
+        if x.shape[0] != tt.shape[0]:
+            raise MeasurementError(f"sensor 'real-telescope': passes needs times (K,) and states "
+                                   f"(K, 6), got {tt.shape} and {x.shape}")
+        if tt.size > 1 and np.any(np.diff(tt) <= 0):
+            raise MeasurementError("sensor 'real-telescope': pass times must increase strictly")
+        return super().passes(tt, x)
+
+    def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
+        """Noisy measurements of a truth trajectory: states (K, 6) synodic at times (K,) TU."""
+        x = self._check_states(states)
+        tt = np.asarray(times, dtype=float).reshape(-1)
+        if tt.shape[0] != x.shape[0]:
+            raise MeasurementError(f"sensor 'real-telescope': {tt.shape[0]} times for {x.shape[0]} states")
+        z = self.measure(x, tt)
+        s = self.sigmas(x, tt)
+        values = z + rng.standard_normal(z.shape) * s
+        values[:, 0] = np.mod(values[:, 0], 2.0 * np.pi)
+        values[:, 0] = np.where(values[:, 0] >= 2.0 * np.pi, 0.0, values[:, 0])
+        meta = {"sensor": "real-telescope", "epoch": self.epoch, "measurement": self.measurement,
+                "frame": "real Earth-Moon rotating (DE421)", "corrections": self.corrections.applied(),
+                "site": {"latitude_deg": self.latitude_deg, "longitude_deg": self.longitude_deg,
+                         "height_m": self.height_m}}
+        return MeasurementSet(tt, values, s, self.names, meta)
+
+
+def _unrefract(el_obs: np.ndarray, c: SkyCorrections) -> np.ndarray:
+    """Vacuum elevation from observed elevation (rad): invert A tan z + B tan^3 z by iteration."""
+    el = np.array(el_obs, dtype=float, copy=True)
+    for _ in range(4):                                   # the correction changes slowly with el
+        el = el_obs - (refract_elevation(el, c, 0.0) - el)
+    return el
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("sensor", "real-telescope", RealTelescope)
