@@ -65,6 +65,19 @@ def versions(registry=None) -> dict[str, str]:
     return out
 
 
+def _json_safe(meta: dict) -> dict:
+    """The entries of a meta dict that JSON can hold (str, numbers, bools, lists and dicts of them)."""
+    def ok(v) -> bool:
+        if isinstance(v, (str, int, float, bool)) or v is None:
+            return True
+        if isinstance(v, (list, tuple)):
+            return all(ok(x) for x in v)
+        if isinstance(v, dict):
+            return all(isinstance(k, str) and ok(x) for k, x in v.items())
+        return False
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in meta.items() if ok(v)}
+
+
 class ResultsWriter:
     """Lifecycle observer that writes a run's manifest and per-step table into ``directory``."""
 
@@ -94,6 +107,9 @@ class ResultsWriter:
                                                              "processor": platform.processor(),
                                                              "cpu_count": os.cpu_count()},
             "n_measurements": len(run.measurements), "n_passes": len(run.passes),
+            # what the measurements are and which corrections made them (e.g. real-telescope's
+            # measurement kind, frame, site and applied corrections)
+            "measurement_model": _json_safe(getattr(run.measurements, "meta", None) or {}),
             "iod": {"epoch_tu": float(run.iod_cloud.epoch), "n_particles": len(run.iod_cloud),
                     **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
                        if isinstance(v, (int, float, str, bool))}},

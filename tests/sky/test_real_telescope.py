@@ -117,3 +117,17 @@ def test_kinematic_iod_works_from_astrometric_radec(iod_cls):
         d = truth(cloud.epoch) - cloud.mean
         inside += float(d @ np.linalg.solve(cloud.covariance, d)) <= 16.81     # chi2(6) 99 %
     assert inside >= 9
+
+
+def test_a_run_with_the_real_sky_names_its_corrections_in_the_manifest(tmp_path):
+    from cistrack.results import read_manifest
+    from cistrack.run import run_scenario
+    from cistrack.scenario import load_scenario
+
+    s = load_scenario("quick").with_overrides({
+        "duration_days": 1.4, "filter": {"name": "ukf"}, "iod": {"n_particles": 300},
+        "sensor": {"name": "real-telescope", "measurement": "radec", "measure_range": True}})
+    run_scenario(s, seed=3, output_dir=tmp_path / "r")
+    model = read_manifest(tmp_path / "r")["measurement_model"]
+    assert model["sensor"] == "real-telescope" and model["measurement"] == "radec"
+    assert model["corrections"] == ["ut1", "polar_motion", "light_time"]
