@@ -24,9 +24,10 @@ import erfa
 import numpy as np
 
 from . import timescales as ts
+from .sites import Site
 from .units import parse_utc
 
-__all__ = ["Site", "ObserverGeometry", "ObserverState", "AU_KM", "C_KMS"]
+__all__ = ["Site", "ObserverGeometry", "ObserverState", "site_itrs_km", "neu_basis", "AU_KM", "C_KMS"]
 
 AU_KM: float = 149_597_870.700
 """Astronomical unit, km (IAU 2012)."""
@@ -35,33 +36,18 @@ C_KMS: float = 299_792.458
 _DAY_S = 86_400.0
 
 
-@dataclass(frozen=True)
-class Site:
-    """A ground site on the WGS84 ellipsoid: latitude, longitude (East +) in degrees, height m."""
+def site_itrs_km(site: Site) -> np.ndarray:
+    """ITRS (Earth-fixed) position of a WGS84 site, km: (3,) (``erfa.gd2gc``)."""
+    xyz = erfa.gd2gc(1, np.radians(site.longitude_deg), np.radians(site.latitude_deg),
+                     float(site.height_m))
+    return np.asarray(xyz, dtype=float) / 1000.0
 
-    latitude_deg: float
-    longitude_deg: float
-    height_m: float = 0.0
 
-    def __post_init__(self) -> None:
-        for name in ("latitude_deg", "longitude_deg", "height_m"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not np.isfinite(v):
-                raise ValueError(f"site {name} must be a finite number, got {v!r}")
-        if not -90.0 <= self.latitude_deg <= 90.0:
-            raise ValueError(f"site latitude_deg must be in [-90, 90], got {self.latitude_deg}")
-
-    def itrs_km(self) -> np.ndarray:
-        """ITRS (Earth-fixed) position of the site, km: (3,)."""
-        xyz = erfa.gd2gc(1, np.radians(self.longitude_deg), np.radians(self.latitude_deg),
-                         float(self.height_m))
-        return np.asarray(xyz, dtype=float) / 1000.0
-
-    def neu_basis(self) -> np.ndarray:
-        """Rows North, East, Up (geodetic) in the ITRS: (3, 3); ``neu = B @ v_itrs``."""
-        lat, lon = np.radians(self.latitude_deg), np.radians(self.longitude_deg)
-        sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
-        return np.array([[-sl * co, -sl * so, cl], [-so, co, 0.0], [cl * co, cl * so, sl]])
+def neu_basis(site: Site) -> np.ndarray:
+    """Rows North, East, Up (geodetic) of a site in the ITRS: (3, 3); ``neu = B @ v_itrs``."""
+    lat, lon = np.radians(site.latitude_deg), np.radians(site.longitude_deg)
+    sl, cl, so, co = np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon)
+    return np.array([[-sl * co, -sl * so, cl], [-so, co, 0.0], [cl * co, cl * so, sl]])
 
 
 @dataclass(frozen=True)
@@ -95,7 +81,7 @@ class ObserverGeometry:
 
     Parameters
     ----------
-    site : Site
+    site : cistrack.sites.Site (WGS84 latitude, East longitude, height)
     epoch : datetime or ISO-8601 str, UTC instant of seconds = 0
     polar_motion : bool
         Apply polar motion (IERS x_p, y_p); off: the CIP is the ITRS z axis.
@@ -111,7 +97,6 @@ class ObserverGeometry:
         self.epoch = parse_utc(epoch)
         self.polar_motion = bool(polar_motion)
         self.ut1 = bool(ut1)
-        self._itrs = site.itrs_km()
         self._cache: dict[float, ObserverState] = {}
 
     def state(self, seconds) -> ObserverState:

@@ -157,7 +157,7 @@ def apparent_azel(r_km: np.ndarray, v_kms: np.ndarray, obs: ObserverState, neu_b
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Apparent azimuth, elevation (rad) and astrometric range (km) at the site: (N,) each.
 
-    neu_basis : (3, 3) site North/East/Up rows in the ITRS (``Site.neu_basis()``).
+    neu_basis : (3, 3) site North/East/Up rows in the ITRS (``cistrack.observer.neu_basis(site)``).
     """
     p = astrometric_vector(r_km, v_kms, obs, corrections.light_time)
     rho = np.linalg.norm(p, axis=1)

@@ -29,7 +29,8 @@ from cistrack.errors import MeasurementError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Sensor
 from cistrack.measurement import MeasurementSet
-from cistrack.observer import C_KMS, ObserverGeometry, Site
+from cistrack.observer import C_KMS, ObserverGeometry, neu_basis
+from cistrack.sites import Site
 from cistrack.sky import (SkyCorrections, apparent_azel, astrometric_radec, refract_elevation,
                           standard_pressure_hpa)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
@@ -117,7 +118,7 @@ class RealTelescope(Sensor):
         # observer + range * los misses the target by |v| tau (module docstring): allow 4 km/s.
         self.line_of_sight_tolerance_lu = (4.0 * 1.5 / LU_KM) if self.light_time else 1e-9
         self._site = Site(float(self.latitude_deg), float(self.longitude_deg), float(self.height_m))
-        self._neu = self._site.neu_basis()
+        self._neu = neu_basis(self._site)
         self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
         self._mask_rad = np.radians(self.elevation_mask_deg)
         self._build()

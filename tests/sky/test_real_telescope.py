@@ -7,7 +7,8 @@ from scipy.integrate import solve_ivp
 
 from cistrack.errors import MeasurementError, ParameterError
 from cistrack.frames.earth_moon import EarthMoonFrame
-from cistrack.observer import ObserverGeometry, Site
+from cistrack.observer import ObserverGeometry, neu_basis
+from cistrack.sites import Site
 from cistrack.plugins.iod.kinematic import NoisyRangeIOD, UniformRangeIOD
 from cistrack.plugins.sensors.real_telescope import RealTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
@@ -40,7 +41,7 @@ def test_measure_is_the_frame_transform_followed_by_the_sky_model(measurement):
     site = Site(sensor.latitude_deg, sensor.longitude_deg, sensor.height_m)
     obs = ObserverGeometry(site, EPOCH).state(t * TU_S)
     if measurement == "azel":
-        a, b, _ = apparent_azel(g[:, :3], g[:, 3:], obs, site.neu_basis(), sensor.corrections,
+        a, b, _ = apparent_azel(g[:, :3], g[:, 3:], obs, neu_basis(site), sensor.corrections,
                                 site.height_m)
     else:
         a, b, _ = astrometric_radec(g[:, :3], g[:, 3:], obs)
