@@ -23,7 +23,6 @@ from datetime import datetime
 import erfa
 import numpy as np
 
-from . import timescales as ts
 from .sites import Site
 from .units import parse_utc
 
@@ -117,6 +116,8 @@ class ObserverGeometry:
                                                  st.earth_velocity_kms, st.sun_distance_au)))
 
     def _evaluate(self, s: np.ndarray) -> ObserverState:
+        from . import timescales as ts       # astropy loads on first use, not on import
+
         eo = ts.earth_orientation(self.epoch, s)
         tt1, tt2 = ts.tt_jd(self.epoch, s)
         if self.ut1:

@@ -46,19 +46,45 @@ class RealTelescope(Sensor):
 
     Parameters
     ----------
-    latitude_deg, longitude_deg, height_m : WGS84 geodetic site (deg, deg East, m).
-    measurement : "azel" | "radec"
-    sigma_arcsec : one-sigma noise of each angle, arcsec.
-    measure_range : also measure the geometric range (LU), for IOD.
-    range_alpha : range sigma as a fraction of the range.
-    elevation_mask_deg : lowest geometric elevation at which the target is visible, deg.
-    epoch : ISO-8601 UTC time of t = 0 (a scenario injects its own).
-    light_time, annual_aberration, diurnal_aberration, refraction, polar_motion, ut1 : bool
-        The corrections of :mod:`cistrack.sky`. For "radec" aberration and refraction must be
-        off (astrometric places have neither); the defaults then turn them off.
+    latitude_deg, longitude_deg : float
+        Geodetic WGS84 latitude and East longitude of the site, degrees.
+    height_m : float
+        Height of the site above the WGS84 ellipsoid, metres.
+    measurement : str
+        "azel" (apparent azimuth and elevation) or "radec" (astrometric ICRF right ascension and
+        declination, as MPC and ADES report them).
+    sigma_arcsec : float
+        One-sigma noise of each of the two angles, arcseconds.
+    measure_range : bool
+        Also measure the geometric observer-target range (the "range" component, LU), for IOD.
+    range_alpha : float
+        Range sigma as a fraction of the true range.
+    elevation_mask_deg : float
+        Lowest geometric elevation at which the target is visible, degrees.
+    epoch : str
+        ISO-8601 UTC time of t = 0 (a scenario injects its own).
+    light_time : bool
+        Light-time correction in the barycentric frame (the target is seen where it was).
+    annual_aberration : bool or None
+        Aberration by the Earth's barycentric velocity (up to 20.5 arcsec); None: on for "azel",
+        off for "radec" (which must not have it).
+    diurnal_aberration : bool or None
+        Aberration by the site's rotation velocity (up to 0.32 arcsec); None: on for "azel",
+        off for "radec" (which must not have it).
+    refraction : bool
+        Atmospheric refraction of the elevation (azel only; needs the site weather below).
+    polar_motion : bool
+        Apply the IERS polar motion to the site (off: the rotation pole is the ITRS z axis).
+    ut1 : bool
+        Rotate the Earth by UT1 = UTC + (UT1-UTC) from the bundled IERS table (off: UT1 = UTC).
     pressure_hpa : float
-        Site pressure for refraction, hPa; negative: the standard atmosphere at ``height_m``.
-    temperature_c, relative_humidity, wavelength_um : refraction weather (deg C, 0-1, micron).
+        Site pressure for refraction, hPa; negative: the standard atmosphere at height_m.
+    temperature_c : float
+        Site air temperature for refraction, degrees Celsius.
+    relative_humidity : float
+        Site relative humidity for refraction, from 0 to 1.
+    wavelength_um : float
+        Effective observing wavelength for refraction, micrometres.
     """
 
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
