@@ -16,6 +16,8 @@ import sys
 from pathlib import Path
 
 from .errors import CistrackError, ConfigError
+from .limits import check_seed
+from .output_paths import check_output_dir
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -56,8 +58,11 @@ def cmd_run(args) -> int:
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
     say = (lambda *a, **k: None) if args.quiet else _eprint
     out_ = (lambda *a, **k: None) if args.quiet else print
-    seed = scen.seed if args.seed is None else args.seed
-    out = Path(args.out) if args.out else Path("runs") / f"{scen.name}__seed{seed}"
+    seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
+    run_id = (f"{scen.name}__{scen.components['filter'].name}__{scen.components['iod'].name}"
+              f"__seed{seed}")
+    out = Path(args.out) if args.out else Path("runs") / run_id
+    check_output_dir(out, "--out" if args.out else "the results directory")
     observers = []
     recorder = None
     if args.rerun or args.rerun_serve or args.rerun_spawn:
@@ -221,7 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
     r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")
     r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
-    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__seed<N>)")
+    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>; must be new, empty or an earlier results directory)")
     r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")

@@ -22,6 +22,7 @@ import pluggy
 
 from . import hookspecs, units
 from .custody import CustodyObserver
+from .limits import check_seed
 from .errors import CistrackError, ConfigError
 from .metrics import step_metrics
 from .registry import Registry, default_registry
@@ -73,7 +74,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     """Build components, truth, passes, measurements and the IOD cloud (everything before the
     first filter step). Returns the context and the random streams."""
     reg = registry or default_registry()
-    seed = scenario.seed if seed is None else int(seed)
+    seed = scenario.seed if seed is None else check_seed(seed, "seed")
     rngs = _streams(seed)
     say = log or (lambda msg: None)
     dynamics = scenario.build("dynamics", reg)

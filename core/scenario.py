@@ -51,6 +51,7 @@ import numpy as np
 from . import units
 from .component import Component, param_specs
 from .custody import CustodyRule
+from .limits import check_memory, check_path_component, check_seed
 from .errors import CistrackError, ConfigError, ParameterError, UnknownComponentError
 from .interfaces import ReferenceOrbit
 from .registry import Registry, default_registry
@@ -240,7 +241,8 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         if table not in data:
             raise ConfigError(f"{source}: missing table [{table}] (it names the {table} component, "
                               f"e.g. name = {_example_name(reg, COMPONENT_TABLES[table])!r})")
-    name = _typed(data.get("name", Path(source).stem), str, source, "top level", "name")
+    name = check_path_component(_typed(data.get("name", Path(source).stem), str, source, "top level", "name"),
+                                f"{source}: top level: key 'name'")
     description = _typed(data.get("description", ""), str, source, "top level", "description")
     epoch_text = _typed(data.get("epoch", "2026-01-01T00:00:00Z"), (str, datetime), source, "top level", "epoch")
     try:
@@ -249,8 +251,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         raise ConfigError(f"{source}: top level: key 'epoch' = {epoch_text!r} is not an ISO-8601 UTC time "
                           f"(e.g. '2026-01-01T00:00:00Z')") from None
     seed = _typed(data.get("seed", 0), int, source, "top level", "seed")
-    if seed < 0:
-        raise ConfigError(f"{source}: top level: key 'seed' = {seed} must be >= 0")
+    check_seed(seed, f"{source}: top level: key 'seed'")
     duration = float(_typed(data.get("duration_days", 7.0), (int, float), source, "top level", "duration_days"))
     if not np.isfinite(duration) or duration <= 0:
         raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
@@ -323,8 +324,10 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if not 0 < grid <= 120:
         raise ConfigError(f"{source}: [run]: key 'truth_grid_minutes' = {grid} must lie in (0, 120]")
     pe = float(_typed(run.get("predict_every_hours", 0.0), (int, float), source, "[run]", "predict_every_hours"))
-    if pe < 0:
-        raise ConfigError(f"{source}: [run]: key 'predict_every_hours' = {pe} must be >= 0 (0: only at measurements)")
+    if not (np.isfinite(pe) and pe >= 0):
+        raise ConfigError(f"{source}: [run]: key 'predict_every_hours' = {pe} must be a finite number >= 0 "
+                          "(0: only at measurements)")
+    _check_sizes(components, duration, grid, source)
     ewp = _typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
     return Scenario(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration,
                     components=components, truth_orbit=truth_orbit, truth_state=truth_state,
@@ -335,6 +338,33 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
 
 
 # -- validation helpers --------------------------------------------------------------------------
+
+BYTES_PER_PARTICLE = 1024
+"""Rough memory per particle of a filter or IOD sample (its state, propagation outputs, cluster
+responsibilities and temporaries): used only to refuse sizes that cannot fit before allocating."""
+
+
+def _number(v: Any) -> float | None:
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+
+def _check_sizes(components: dict[str, ComponentSpec], duration_days: float, grid_minutes: float,
+                 source: str) -> None:
+    """Refuse particle counts and durations whose arrays cannot fit in the available memory, and
+    more mixture components than particles."""
+    n_grid = duration_days * 1440.0 / grid_minutes + 1
+    check_memory(n_grid * 6 * 8 * 4, f"{source}: top level: key 'duration_days' = {duration_days:g}",
+                 f"the truth on a {grid_minutes:g}-minute grid ({n_grid:.3g} points)")
+    for table, spec in components.items():
+        n = _number(spec.params.get("n_particles"))
+        if n is None:
+            continue
+        factor = _number(spec.params.get("oversampling")) or (5.0 if table == "iod" else 1.0)
+        check_memory(n * factor * BYTES_PER_PARTICLE, f"{source}: [{table}]: key 'n_particles' = {n:g}",
+                     f"{spec.name!r} with {n:.3g} particles" + (f" (x{factor:g} oversampling)" if factor != 1 else ""))
+        m = _number(spec.params.get("n_components"))
+        if m is not None and m > n:
+            raise ConfigError(f"{source}: [{table}]: key 'n_components' = {m:g} must be <= n_particles ({n:g})")
 
 def _example_name(reg: Registry, kind: str) -> str:
     names = reg.names(kind)

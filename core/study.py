@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError
+from .limits import check_count, check_path_component, check_seed
 from .results import read_manifest, read_steps
 from .run_summary import RunSummary
 
@@ -110,10 +111,10 @@ def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
     if item is None:
         return "", None
     if isinstance(item, str):
-        return item, {"name": item}
+        return check_path_component(item, f"{p}: entry of {key!r}"), {"name": item}
     if isinstance(item, dict) and "name" in item:
         t = dict(item)
-        label = str(t.pop("label", t["name"]))
+        label = check_path_component(t.pop("label", t["name"]), f"{p}: entry of {key!r}: key 'label'")
         return label, t
     raise ConfigError(f"{p}: entries of {key!r} must be names or tables with a 'name' key, got {item!r}")
 
@@ -131,12 +132,15 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     from .settings import merge_settings, parse_settings
 
     data, p = load_study(path_or_name)
-    name = str(data.get("name", p.stem))
+    name = check_path_component(data.get("name", p.stem), f"{p}: key 'name'")
     extra = parse_settings(settings)
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
-    seeds = data.get("seeds") or list(range(1, int(data.get("n_seeds", 1)) + 1))
-    if not all(isinstance(s, int) and s >= 0 for s in seeds):
-        raise ConfigError(f"{p}: 'seeds' must be non-negative integers")
+    if "seeds" in data:
+        if not isinstance(data["seeds"], list) or not data["seeds"]:
+            raise ConfigError(f"{p}: key 'seeds' must be a non-empty list of integers from 0 to 2**63-1")
+        seeds = [check_seed(s, f"{p}: key 'seeds'") for s in data["seeds"]]
+    else:
+        seeds = list(range(1, check_count(data.get("n_seeds", 1), f"{p}: key 'n_seeds'", 1, 1_000_000) + 1))
     filters = [_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])]
     iods = [_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])]
     reg = default_registry()
@@ -215,6 +219,8 @@ def _worker_init(threads: int) -> None:
 
 def make_executor(workers: int | None = None, dask: str | None = None):
     """A concurrent.futures Executor: local processes, or a Dask cluster ('local' or an address)."""
+    if workers is not None:
+        check_count(workers, "--workers", 1, 1024)
     n = workers or os.cpu_count() or 1
     if dask:
         try:
@@ -226,7 +232,12 @@ def make_executor(workers: int | None = None, dask: str | None = None):
                                    host="127.0.0.1")
             client = Client(cluster)
         else:
-            client = Client(dask)
+            try:
+                client = Client(dask, timeout=10)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ConfigError(f"--dask {dask!r}: cannot connect to a Dask scheduler there within 10 s "
+                                  f"({type(exc).__name__}: {exc}); give a reachable address "
+                                  "(e.g. tcp://127.0.0.1:8786) or 'local'") from None
         ex = client.get_executor()
         ex._cistrack_client = client  # closed by run_study
         return ex
@@ -256,6 +267,8 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     """
     import dataclasses
 
+    if workers is not None:
+        check_count(workers, "--workers", 1, 1024)
     data, specs, out = plan_runs(path_or_name, out_dir, settings)
     if rerun_dir is not None:
         Path(rerun_dir).mkdir(parents=True, exist_ok=True)
