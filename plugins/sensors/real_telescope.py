@@ -204,11 +204,18 @@ class RealTelescope(Sensor):
         else:
             uniq, inv = np.unique(tt, return_inverse=True)
         ax = self._frame.axes(uniq)
-        rot = ax.rotation[inv]                                           # (N, 3, 3)
-        rho = np.einsum("nij,nj->ni", rot, x[:, :3] * LU_KM)
-        rhod = np.einsum("nij,nj->ni", rot, x[:, 3:] * VU_KMS)
-        r = ax.origin[inv] + rho
-        v = ax.origin_velocity[inv] + rhod + np.cross(ax.omega[inv], rho)
+        if uniq.size == 1:                                               # one time: (3, 3) products
+            rot = ax.rotation[0]
+            rho = (x[:, :3] * LU_KM) @ rot.T
+            rhod = (x[:, 3:] * VU_KMS) @ rot.T
+            r = ax.origin[0] + rho
+            v = ax.origin_velocity[0] + rhod + np.cross(ax.omega[0], rho)
+        else:
+            rot = ax.rotation[inv]                                       # (N, 3, 3)
+            rho = np.einsum("nij,nj->ni", rot, x[:, :3] * LU_KM)
+            rhod = np.einsum("nij,nj->ni", rot, x[:, 3:] * VU_KMS)
+            r = ax.origin[inv] + rho
+            v = ax.origin_velocity[inv] + rhod + np.cross(ax.omega[inv], rho)
         obs = self._observer.state(tt * TU_S)
         return r, v, obs
 
