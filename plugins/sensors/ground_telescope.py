@@ -46,9 +46,11 @@ class GroundTelescope(Sensor):
     epoch : str
         ISO-8601 UTC time of t = 0 (a scenario injects its own).
     moon_phase_deg : float
-        Right ascension of the Earth->Moon direction at the epoch, degrees (equatorial model).
+        Right ascension of the Earth->Moon direction at the epoch, degrees (equatorial model; a
+        CIRS right ascension: true equator of date, counted from the CIO, not J2000).
     frame_model : str
-        Name of the synodic-to-Earth-fixed model, one of ``FRAME_MODELS`` ("equatorial").
+        Name of the synodic-to-Earth-fixed model, one of ``FRAME_MODELS`` ("equatorial", the
+        paper's). The real sky is the sensor "real-telescope" (docs/real-sky.md).
     """
 
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
@@ -67,6 +69,10 @@ class GroundTelescope(Sensor):
         self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
                                               -90.0, 90.0, hi_open=True)
         self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
+        if frame_model == "real":
+            self._fail("frame_model", frame_model, "the real sky (DE421 Moon, IERS Earth orientation, "
+                       "light time, aberration, refraction, RA/Dec) is the sensor 'real-telescope' "
+                       "(docs/real-sky.md); frame models of this sensor: " + ", ".join(FRAME_MODELS))
         self.frame_model = check_choice(self, "frame_model", frame_model, FRAME_MODELS)
         try:
             self._epoch = parse_utc(epoch)

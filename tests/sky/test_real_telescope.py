@@ -132,3 +132,10 @@ def test_a_run_with_the_real_sky_names_its_corrections_in_the_manifest(tmp_path)
     model = read_manifest(tmp_path / "r")["measurement_model"]
     assert model["sensor"] == "real-telescope" and model["measurement"] == "radec"
     assert model["corrections"] == ["ut1", "polar_motion", "light_time"]
+
+
+def test_ground_telescope_points_a_real_frame_request_to_real_telescope():
+    from cistrack.plugins.sensors.ground_telescope import GroundTelescope
+
+    with pytest.raises(ParameterError, match="real-telescope"):
+        GroundTelescope(frame_model="real")
