@@ -9,6 +9,7 @@ the same signature before anything runs (see :mod:`cistrack.scenario`).
 from __future__ import annotations
 
 import inspect
+from abc import ABC
 import math
 import typing
 from dataclasses import dataclass
@@ -53,8 +54,9 @@ def param_specs(cls: type) -> dict[str, ParamSpec]:
     return out
 
 
-class Component:
-    """Base class of every registered component.
+class Component(ABC):
+    """Base class of every registered component (an ABC: a subclass that leaves one of its
+    interface's ``@abstractmethod`` methods unimplemented cannot be constructed).
 
     Subclasses set ``kind`` (done by the kind's interface class). The registry sets
     ``registry_name`` on the class it registers, so error messages can name the plugin.
