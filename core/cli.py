@@ -210,7 +210,9 @@ def cmd_study(args) -> int:
               f"{res['failed']} failed -> {res['out_dir']}")
         return 0 if res["failed"] == 0 else 3
     if args.study_cmd == "report":
-        rep = study.report_study(args.study, out_dir=args.out, settings=args.set)
+        from .study_report import report_study
+
+        rep = report_study(args.study, out_dir=args.out, settings=args.set)
         print(rep["text"])
         print(f"written: {', '.join(str(p) for p in rep['files'])}")
         return 0

@@ -21,7 +21,7 @@ a geocentric angles sensor shipped here, so they do not depend on any other plug
 from .fixtures import NRHO_9_2_APOLUNE
 from .reference_dynamics import ReferenceCR3BP
 from .reference_sensor import GeocentricAnglesSensor
-from .results import CheckResult, ConformanceError, ConformanceReport
+from .check_results import CheckResult, ConformanceError, ConformanceReport
 from .suite import (KIND_CHECKS, BoundCheck, check_plugin, check_registered, infer_kind, iter_checks,
                     parametrize_with_checks)
 

@@ -19,7 +19,7 @@ from .checks_reader import READER_CHECKS
 from .checks_recorder import RECORDER_CHECKS, lifecycle_hooks
 from .checks_schedule import SCHEDULE_CHECKS
 from .checks_sensor import SENSOR_CHECKS
-from .results import CheckResult, ConformanceError, ConformanceReport
+from .check_results import CheckResult, ConformanceError, ConformanceReport
 
 __all__ = ["BoundCheck", "infer_kind", "iter_checks", "check_plugin", "check_registered",
            "parametrize_with_checks", "KIND_CHECKS"]

@@ -8,7 +8,7 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .gmm import fit_gmm_labels
-from .standardize import check_points, compact_labels, n_distinct_at_least, standardize
+from .points_and_labels import check_points, compact_labels, n_distinct_at_least, standardize
 
 __all__ = ["BICClusterer"]
 

@@ -11,7 +11,7 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .thread_limits import limited_threads
-from .standardize import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
+from .points_and_labels import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
 
 __all__ = ["GMMClusterer", "fit_gmm_labels", "fit_gmm_labels_numba"]
 
@@ -47,7 +47,7 @@ def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, max_it
     ``init="kmeans"`` starts from scikit-learn's ``KMeans(n_init=1)`` with the seed the
     scikit-learn path draws (same subsample, same seed), so for the same Generator both engines
     start from the same k-means solution and end at the same mixture up to rounding.
-    ``init="kmeans-numba"`` uses em_numba's own greedy k-means++ + Lloyd (about 2x cheaper than
+    ``init="kmeans-numba"`` uses kmeans_numba.py's greedy k-means++ + Lloyd (about 2x cheaper than
     scikit-learn's k-means; statistically equivalent, not seed-for-seed identical). EM runs until
     the mean log-likelihood per point changes by less than ``tol``; every point of ``z`` is
     labelled by its most probable component.
@@ -55,10 +55,10 @@ def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, max_it
     fit = z
     if z.shape[0] > max_fit_samples:
         fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
-    from . import em_numba  # compiled code: imported on use, not when the registry lists plugins
+    from . import em_numba, kmeans_numba  # compiled code: imported on use, not when the registry lists plugins
 
     if init == "kmeans-numba":
-        start = em_numba.kmeans_labels(fit, k, rng)
+        start = kmeans_numba.kmeans_labels(fit, k, rng)
     else:
         from sklearn.cluster import KMeans
 

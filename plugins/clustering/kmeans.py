@@ -10,7 +10,7 @@ from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .thread_limits import limited_threads
-from .standardize import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
+from .points_and_labels import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
 
 __all__ = ["KMeansClusterer"]
 

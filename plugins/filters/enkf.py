@@ -22,7 +22,7 @@ from cistrack.measurement import Measurement
 
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
-from .observation import MeasuredComponents, check_epoch
+from .measured_components import MeasuredComponents, check_epoch
 from .process_noise import velocity_random_walk_covariance
 
 __all__ = ["EnKFFilter"]

@@ -15,7 +15,7 @@ from cistrack.interfaces import Dynamics
 
 from .ensemble_propagation import propagate_ensemble
 from .kalman_update import group_moments, kalman_gains
-from .observation import MeasuredComponents
+from .measured_components import MeasuredComponents
 
 __all__ = ["BatchEnKF"]
 

@@ -22,7 +22,7 @@ from .ensemble_propagation import propagate_particles
 from .initial_cloud import check_cloud, initial_particles
 from .component_update import ensemble_component_update, iterated_component_update
 from .kalman_update import group_moments
-from .observation import MeasuredComponents, check_epoch
+from .measured_components import MeasuredComponents, check_epoch
 from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 

@@ -20,7 +20,7 @@ from cistrack.measurement import Measurement
 from .ensemble_propagation import propagate_particles
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
-from .observation import MeasuredComponents, check_epoch
+from .measured_components import MeasuredComponents, check_epoch
 from .resampling import effective_sample_size, normalize_log_weights, systematic_resample
 
 __all__ = ["SIRFilter"]

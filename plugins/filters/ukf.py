@@ -28,7 +28,7 @@ from cistrack.interfaces import Dynamics, Filter, Sensor
 from cistrack.measurement import Measurement
 
 from .gaussian_belief import gaussian_belief
-from .observation import MeasuredComponents, check_epoch
+from .measured_components import MeasuredComponents, check_epoch
 from .initial_cloud import check_cloud
 from .process_noise import velocity_random_walk_covariance
 

@@ -15,7 +15,7 @@ from cistrack.errors import FilterError
 from cistrack.interfaces import Dynamics
 
 from .ensemble_propagation import propagate_ensemble
-from .observation import MeasuredComponents
+from .measured_components import MeasuredComponents
 from .posterior_linearization import posterior_linearization_update
 
 __all__ = ["BatchUKF", "MerweScaledSigmaPoints", "robust_sqrt", "batch_unscented_transform"]

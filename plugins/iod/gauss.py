@@ -31,7 +31,7 @@ from cistrack.measurement import MeasurementSet
 from cistrack.primaries import MU_EARTH_MOON
 from cistrack.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
 
-from .kinematic import prepare_fit
+from .kinematic_fit import prepare_fit
 
 __all__ = ["GaussSolution", "gauss_angles_only", "synodic_to_eci", "eci_to_synodic", "GaussIOD",
            "MU_EARTH_MOON"]

@@ -65,8 +65,7 @@ from cistrack.interfaces import IODMethod, Sensor
 from cistrack.measurement import MeasurementSet
 from cistrack.units import LU_KM, VU_KMS, km_to_lu
 
-from .first_pass import select_fit_indices
-from .polyfit import evaluation_weights
+from .kinematic_fit import FitInputs, kinematic_states, prepare_fit
 
 __all__ = ["KinematicFitIOD", "NoisyRangeIOD", "UniformRangeIOD", "UniformRangeVelocityBoundIOD",
            "RANGE_MODELS", "FitInputs", "kinematic_states", "prepare_fit"]
@@ -74,139 +73,6 @@ __all__ = ["KinematicFitIOD", "NoisyRangeIOD", "UniformRangeIOD", "UniformRangeV
 RANGE_MODELS = ("noisy-range", "uniform-range", "uniform-range-velocity-bound")
 SPEED_FRAMES = ("topocentric", "synodic")
 RANGE_SAMPLING = ("per-measurement", "per-sample")
-
-
-class FitInputs:
-    """The measurements a kinematic fit uses, validated and reduced to arrays.
-
-    Attributes: ``indices`` (K,) into the measurement set, ``times`` (K,) TU, ``angles`` (K, 2)
-    rad (azimuth, elevation; or the sensor's other angle pair, e.g. RA, Dec), ``angle_sigmas`` (K, 2) rad, ``ranges`` (K,) LU or None,
-    ``observer`` (K, 3) LU synodic observer positions, ``weights`` (2, K) value/rate weights at
-    the last time (rate per TU).
-    """
-
-    def __init__(self, indices, times, angles, angle_sigmas, ranges, observer, weights):
-        self.indices = indices
-        self.times = times
-        self.angles = angles
-        self.angle_sigmas = angle_sigmas
-        self.ranges = ranges
-        self.observer = observer
-        self.weights = weights
-        self.neu_to_synodic: np.ndarray | None = None
-
-    @property
-    def epoch(self) -> float:
-        return float(self.times[-1])
-
-
-def _column(ms: MeasurementSet, name: str, who: str) -> int:
-    if name not in ms.names:
-        raise IODError(f"{who}: the measurements have no '{name}' component "
-                       f"(components: {', '.join(ms.names) or 'none'})")
-    return ms.names.index(name)
-
-
-def angle_names(sensor: Sensor) -> tuple[str, str]:
-    """The sensor's two angle components: (azimuth, elevation), (right_ascension, declination), ...
-
-    The fit only needs a longitude-like and a latitude-like angle of a unit vector,
-    u = (cos b cos a, cos b sin a, sin b), in some observer frame (NEU for az/el, ICRF axes for
-    RA/Dec) that the sensor's ``line_of_sight`` maps to synodic.
-    """
-    names = [n for n in getattr(sensor, "names", ()) if n != "range"]
-    return (names[0], names[1]) if len(names) >= 2 else ("azimuth", "elevation")
-
-
-def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pass_gap_hours: float,
-                fit_fraction: float, min_fit: int, max_fit: int, need_range: bool,
-                who: str = "kinematic IOD") -> FitInputs:
-    """Select and validate the fitted measurements (raises IODError before any sampling)."""
-    if not isinstance(measurements, MeasurementSet):
-        raise IODError(f"{who}: expected a MeasurementSet, got {type(measurements).__name__}")
-    idx = select_fit_indices(measurements.times, pass_gap_hours=pass_gap_hours,
-                             fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
-                             order=order)
-    first, second = angle_names(sensor)
-    ia = _column(measurements, first, who)
-    ie = _column(measurements, second, who)
-    times = measurements.times[idx]
-    angles = measurements.values[idx][:, [ia, ie]]
-    sig = measurements.sigmas[idx][:, [ia, ie]]
-    ranges = None
-    if need_range:
-        if "range" not in measurements.names:
-            raise IODError(f"{who}: the noisy-range model needs a measured 'range' component, "
-                           f"but the measurements only have {', '.join(measurements.names)}; let "
-                           f"the sensor measure range for IOD or use 'uniform-range'")
-        ranges = measurements.values[idx][:, measurements.names.index("range")]
-        if np.any(ranges <= 0):
-            raise IODError(f"{who}: measured ranges must be > 0")
-    observer = np.asarray(sensor.observer_position(times), dtype=float).reshape(len(idx), 3)
-    weights = evaluation_weights(times, order, float(times[-1]))
-    fit = FitInputs(idx, times, angles, sig, ranges, observer, weights)
-    fit.neu_to_synodic = _neu_to_synodic(sensor, times, angles)
-    return fit
-
-
-def _neu_to_synodic(sensor: Sensor, times: np.ndarray, angles: np.ndarray) -> np.ndarray | None:
-    """Matrices M_k (K, 3, 3) with line_of_sight(az, el, t_k) = M_k @ u_neu(az, el), or None.
-
-    An az/el sensor's line of sight is a rotation of the NEU unit vector; the columns of M_k are
-    the lines of sight of North, East and Up. Checked against the sensor at the measured angles;
-    a sensor whose angles are not NEU az/el falls back to calling line_of_sight per sample.
-    """
-    k = times.shape[0]
-    basis = np.array([[0.0, 0.0], [0.5 * np.pi, 0.0], [0.0, 0.5 * np.pi]])   # N, E, Up
-    ang = np.broadcast_to(basis, (k, 3, 2)).reshape(-1, 2)
-    cols = np.asarray(sensor.line_of_sight(ang, np.repeat(times, 3)), dtype=float).reshape(k, 3, 3)
-    m = np.swapaxes(cols, 1, 2)
-    ce = np.cos(angles[:, 1])
-    u = np.stack([ce * np.cos(angles[:, 0]), ce * np.sin(angles[:, 0]), np.sin(angles[:, 1])], axis=1)
-    direct = np.asarray(sensor.line_of_sight(angles, times), dtype=float).reshape(k, 3)
-    if np.max(np.abs(np.einsum("kij,kj->ki", m, u) - direct)) > 1e-12:
-        return None
-    return m
-
-
-def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
-                     rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Fitted synodic states and topocentric velocities for sampled angles and ranges.
-
-    Parameters
-    ----------
-    fit : FitInputs
-    sensor : Sensor
-    angles : (N, K, 2) rad, sampled azimuth/elevation at the fit times
-    rho : (N, K) LU, sampled ranges
-
-    Returns
-    -------
-    states : (N, 6) synodic state at ``fit.epoch`` (LU, VU)
-    topo_velocity : (N, 3) VU, velocity of the polynomial fit of the NEU positions
-        (Earth-fixed rotating frame, what the paper's 42 km/s bound refers to)
-    """
-    n, k = rho.shape
-    # Layout (K, 6, N): the fit is then one (2, K) x (K, 6N) matrix product.
-    az = angles[..., 0].T
-    el = angles[..., 1].T
-    r = rho.T
-    rce = r * np.cos(el)
-    data = np.empty((k, 6, n))
-    data[:, 3] = rce * np.cos(az)
-    data[:, 4] = rce * np.sin(az)
-    data[:, 5] = r * np.sin(el)
-    if fit.neu_to_synodic is not None:
-        # los = M_k @ u_neu: one 3x3 matrix per fit time instead of one frame chain per sample
-        data[:, :3] = fit.observer[:, :, None] + fit.neu_to_synodic @ data[:, 3:]
-    else:
-        flat = angles.reshape(n * k, 2)
-        tk = np.broadcast_to(fit.times, (n, k)).reshape(-1)
-        los = np.asarray(sensor.line_of_sight(flat, tk), dtype=float).reshape(n, k, 3)
-        data[:, :3] = fit.observer[:, :, None] + (rho[..., None] * los).transpose(1, 2, 0)
-    out = (fit.weights @ data.reshape(k, 6 * n)).reshape(2, 6, n)
-    states = np.concatenate([out[0, :3], out[1, :3]], axis=0).T.copy()
-    return states, out[1, 3:].T.copy()
 
 
 class KinematicFitIOD(IODMethod):

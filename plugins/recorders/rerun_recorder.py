@@ -25,16 +25,15 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 
 Timelines: ``step`` (step index), ``utc`` (simulation time) and ``event`` (one tick per hook
 call, so the prior and the posterior of one step can be told apart when scrubbing).
+
+(Above 300 lines with this table: one recorder class whose hooks share one recording stream and
+event counter; the viewer process is in :mod:`.viewer_process`, the blueprint in
+:mod:`.blueprint`, the scene geometry in :mod:`.scene`.)
 """
 from __future__ import annotations
 
-import importlib.util
 import os
-import shutil
-import socket
 import subprocess
-import sys
-import time
 import uuid
 from datetime import timedelta
 from pathlib import Path
@@ -44,11 +43,14 @@ import numpy as np
 
 
 from cistrack.component import Component, check_int, check_positive
-from cistrack.errors import CistrackError, ParameterError
+from cistrack.errors import ParameterError
 from cistrack.hookspecs import hookimpl
 from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 
+from .blueprint import default_blueprint
+from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
+                             start_viewer)
 from .scene import (
     EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, most_likely_component,
     position_ellipsoids, primary_positions, system_mu,
@@ -60,9 +62,6 @@ rrb = LazyModule("rerun.blueprint")
 
 __all__ = ["RerunRecorder", "ViewerUnavailableError", "subsample_indices", "LOOPBACK",
            "find_viewer_executable"]
-
-LOOPBACK = "127.0.0.1"
-"""The only address the recorder's servers listen on."""
 
 APPLICATION_ID = "cistrack"
 UNASSIGNED_CLASS = 999
@@ -77,10 +76,6 @@ _PALETTE = np.array([
 ], dtype=np.uint8)
 
 
-class ViewerUnavailableError(CistrackError, RuntimeError):
-    """The native rerun viewer cannot be started here (no executable, or no display)."""
-
-
 def subsample_indices(n: int, max_points: int, seed: int = 0) -> np.ndarray | None:
     """Rows kept when a cloud of ``n`` particles is capped at ``max_points``.
 
@@ -92,117 +87,6 @@ def subsample_indices(n: int, max_points: int, seed: int = 0) -> np.ndarray | No
         return None
     rng = np.random.default_rng([int(seed), int(n)])
     return np.sort(rng.choice(n, size=max_points, replace=False))
-
-
-def find_viewer_executable() -> str | None:
-    """Path of the native rerun viewer binary (the ``rerun-cli`` one shipped with rerun-sdk, or
-    ``rerun`` on PATH), or None."""
-    spec = importlib.util.find_spec("rerun_cli")
-    if spec is not None and spec.submodule_search_locations:
-        for loc in spec.submodule_search_locations:
-            exe = Path(loc) / ("rerun.exe" if os.name == "nt" else "rerun")
-            if exe.is_file() and os.access(exe, os.X_OK):
-                return str(exe)
-    return shutil.which("rerun")
-
-
-def _has_display() -> bool:
-    if not sys.platform.startswith("linux"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
-def _wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            return False
-        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-            s.settimeout(0.2)
-            if s.connect_ex((LOOPBACK, port)) == 0:
-                return True
-        time.sleep(0.05)
-    return False
-
-
-SIGMA_ENTITIES = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")
-"""Per-axis 1-sigma metrics, logged at ``metrics/<name>`` (rerun queries take no wildcards)."""
-
-TIMELINES = ("utc", "step", "event")
-
-
-def _whole_run() -> list:
-    """Visible time ranges covering the whole run on every timeline (not a window at the cursor)."""
-    every = rrb.TimeRangeBoundary.infinite()
-    return [rrb.VisibleTimeRange(t, start=every, end=every) for t in TIMELINES]
-
-
-def _whole_axis():
-    """An x axis that opens on the whole run (the viewer's default is a window at the cursor)."""
-    every = rrb.TimeRangeBoundary.infinite()
-    return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
-
-
-def _series(name: str, entities: list[str] | None, origin: str = "metrics",
-            y_range: tuple[float, float] | None = None):
-    contents = [f"$origin/{e}" for e in entities] if entities else "$origin/**"
-    return rrb.TimeSeriesView(origin=origin, name=name, contents=contents, time_ranges=_whole_run(),
-                              axis_x=_whole_axis(),
-                              axis_y=rrb.ScalarAxis(range=y_range) if y_range is not None else None)
-
-
-def camera_for(points_km: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
-    """(eye position, look target), km: looking at the box around ``points_km`` (N, 3) from
-    above and to the side, far enough to see all of it; None without points."""
-    if points_km is None:
-        return None
-    pts = np.asarray(points_km, dtype=float).reshape(-1, 3)
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    if pts.shape[0] == 0:
-        return None
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    target = 0.5 * (lo + hi)
-    size = max(float(np.max(hi - lo)), 2.0e4)  # at least 20,000 km across
-    direction = np.array([0.55, -0.65, 0.52])
-    return target + 1.6 * size * direction / np.linalg.norm(direction), target
-
-
-def default_blueprint(focus_km: np.ndarray | None = None) -> rrb.Blueprint:
-    """What the viewer shows at first open.
-
-    Left, the run: a 3-D view framed on ``focus_km`` (N, 3) points, the truth trajectory and the
-    initial cloud (particles, ellipsoids, estimate, truth); below it the whole Earth–Moon system
-    with the libration points. Right, time series over the whole run: estimation error, per-axis
-    1-sigma of position and of velocity (the ``metrics/sigma_*`` entities), entropy, NEES and component weights.
-    """
-    eye = camera_for(focus_km)
-    controls = (rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1],
-                                  eye_up=(0.0, 0.0, 1.0)) if eye is not None else None)
-    run_view = rrb.Spatial3DView(origin="world", name="Run: truth, cloud and ellipsoids (synodic, km)",
-                                 eye_controls=controls, background=rrb.BackgroundKind.GradientDark)
-    system = rrb.Spatial3DView(origin="world", name="Earth–Moon system (synodic, km)",
-                               contents=["$origin/earth", "$origin/moon", "$origin/libration",
-                                         "$origin/truth/**", "$origin/estimate", "$origin/observer"],
-                               background=rrb.BackgroundKind.GradientDark)
-    series = rrb.Vertical(
-        _series("Estimation error (km, m/s)", ["pos_err_km", "vel_err_ms"]),
-        _series("1-sigma per axis, position (km)", list(SIGMA_ENTITIES[:3])),
-        _series("1-sigma per axis, velocity (cm/s)", list(SIGMA_ENTITIES[3:])),
-        _series("Entropy (nats)", ["entropy"]),
-        _series("NEES (6 = consistent; 90 % of a consistent filter's values lie in 1.6-12.6)", ["nees"],
-                y_range=(0.0, 20.0)),
-        _series("Component weights", None, origin="components"),
-    )
-    return rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.Vertical(run_view, system, row_shares=[3, 2]),
-            series,
-            column_shares=[3, 2],
-        ),
-        rrb.TimePanel(timeline="utc", state="collapsed"),
-        rrb.BlueprintPanel(state="collapsed"),
-        rrb.SelectionPanel(state="collapsed"),
-    )
 
 
 class RerunRecorder(Component):
@@ -253,7 +137,7 @@ class RerunRecorder(Component):
             raise ParameterError(f"{self._label()}: nothing to record to; give a path, serve=True "
                                  "or spawn=True")
         if self.spawn:
-            self._check_viewer()
+            check_viewer()
         self._rec: rr.RecordingStream | None = None
         self._viewer: subprocess.Popen | None = None
         self._event = 0
@@ -362,38 +246,11 @@ class RerunRecorder(Component):
         rec.send_recording_name(str(run.run_id))
         return rec
 
-    def _check_viewer(self) -> str:
-        exe = find_viewer_executable()
-        if exe is None:
-            raise ViewerUnavailableError(
-                "cannot start the rerun viewer: no 'rerun' executable found (it ships with "
-                "rerun-sdk as rerun-cli). Write a recording with --rerun out.rrd instead and open "
-                "it where a viewer is installed: `rerun out.rrd`.")
-        if not _has_display():
-            raise ViewerUnavailableError(
-                "cannot start the native rerun viewer: this machine has no display (DISPLAY and "
-                "WAYLAND_DISPLAY are unset). Use --rerun out.rrd and open it elsewhere with "
-                "`rerun --bind 127.0.0.1 out.rrd` (or in a browser: `rerun --web-viewer --bind 127.0.0.1 "
-                "out.rrd`), or use --rerun-serve and connect a viewer to the printed URL.")
-        return exe
-
     def _start_viewer(self) -> str:
-        exe = self._check_viewer()
-        url = f"rerun+http://{LOOPBACK}:{self.viewer_port}/proxy"
-        if self._viewer is not None and self._viewer.poll() is None:
-            return url
-        self._viewer = subprocess.Popen(
-            [exe, "--bind", LOOPBACK, "--port", str(self.viewer_port), "--expect-data-soon"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            start_new_session=True, env={**os.environ, "RERUN_APP_ONLY": "true"})
-        if not _wait_for_port(self.viewer_port, self._viewer, timeout_s=15.0):
-            err = ""
-            if self._viewer.poll() is not None and self._viewer.stderr is not None:
-                err = self._viewer.stderr.read().decode(errors="replace").strip()[-800:]
-            raise ViewerUnavailableError(
-                f"the rerun viewer ({exe}) did not start listening on {LOOPBACK}:{self.viewer_port}"
-                + (f": {err}" if err else "") + ". Use --rerun out.rrd and open the file instead.")
-        return url
+        check_viewer()
+        if self._viewer is None or self._viewer.poll() is not None:
+            self._viewer = start_viewer(self.viewer_port)
+        return f"rerun+http://{LOOPBACK}:{self.viewer_port}/proxy"
 
     def _set_time(self, rec: rr.RecordingStream, index: int, t: float) -> None:
         rec.set_time("event", sequence=self._event)

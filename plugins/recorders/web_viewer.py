@@ -18,7 +18,8 @@ from urllib.parse import quote
 
 from cistrack.errors import CistrackError
 
-from .rerun_recorder import LOOPBACK, ViewerUnavailableError, _wait_for_port, find_viewer_executable
+from .viewer_process import LOOPBACK, ViewerUnavailableError, find_viewer_executable
+from .viewer_process import wait_for_port as _wait_for_port
 
 __all__ = ["ServedRecording", "serve_recording", "viewer_url"]
 

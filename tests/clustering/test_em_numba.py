@@ -8,7 +8,8 @@ import pytest
 from sklearn.mixture import GaussianMixture
 
 from cistrack.errors import ParameterError
-from cistrack.plugins.clustering.em_numba import em_fit, em_iteration, kmeans_labels, m_step, one_hot, predict_labels
+from cistrack.plugins.clustering.em_numba import em_fit, em_iteration, m_step, one_hot, predict_labels
+from cistrack.plugins.clustering.kmeans_numba import kmeans_labels
 from cistrack.plugins.clustering.gmm import GMMClusterer
 
 D = 6

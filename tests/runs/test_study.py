@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from cistrack.results import read_manifest, read_steps
-from cistrack.study import plan_runs, report_study, run_study
+from cistrack.study import plan_runs, run_study
+from cistrack.study_report import report_study
 
 
 def _tables(out: Path) -> dict[str, list]:

@@ -1,0 +1,139 @@
+"""Reports of a study: the table (terminal, CSV, Markdown) and PNG plots in ``<out>/report/``.
+
+Reads every finished run of a study (its manifest's :class:`~cistrack.run_summary.RunSummary`
+and its ``steps.parquet``) and groups them by scenario, IOD variant and filter; the plots are
+drawn by :mod:`cistrack.report_plots`.
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ConfigError
+from .results import read_manifest, read_steps
+from .run_summary import RunSummary
+from .study import _is_done, plan_runs
+
+__all__ = ["report_study"]
+
+
+def _median(xs):
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    return float(np.median(xs)) if xs else None
+
+
+def _spread(xs) -> tuple[float | None, float | None]:
+    """5th and 95th percentiles of the finite values (None if there are none)."""
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    if not xs:
+        return None, None
+    lo, hi = np.percentile(xs, [5.0, 95.0])
+    return float(lo), float(hi)
+
+
+def _anees(tables) -> tuple[float | None, int]:
+    """Average NEES over every update step of every run, and the number of updates averaged."""
+    vals = []
+    for t in tables:
+        if "nees" not in t.column_names or "kind" not in t.column_names:
+            continue
+        nees = np.asarray(t.column("nees").to_numpy(zero_copy_only=False), dtype=float)
+        kinds = t.column("kind").to_pylist()
+        vals += [v for v, k in zip(nees, kinds) if k == "update" and np.isfinite(v)]
+    return (float(np.mean(vals)) if vals else None), len(vals)
+
+
+def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
+                 settings: list[str] | None = None) -> dict:
+    """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
+    :mod:`cistrack.report_plots`) in <out>/report/.
+
+    Raises ConfigError (and writes nothing) when no run of the study has finished.
+    """
+    data, specs, out = plan_runs(path_or_name, out_dir, settings)
+    groups: dict[tuple[str, str, str], list[RunSummary]] = {}
+    tables: dict[tuple[str, str, str], list] = {}
+    missing = 0
+    for s in specs:
+        if not _is_done(s.out_dir):
+            missing += 1
+            continue
+        man = read_manifest(s.out_dir)
+        groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
+        tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
+    if not groups:
+        name = data.get("name", out.name)
+        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
+                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
+                          + (f" --out {out_dir}" if out_dir else ""))
+    rep_dir = out / "report"
+    rep_dir.mkdir(parents=True, exist_ok=True)
+    finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+              "pos_err_km", "vel_err_ms", "entropy"]
+    cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
+            "failed_runs", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
+            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95"]
+    rows = []
+    for (sc, iod, flt), sums in sorted(groups.items()):
+        kept = sum(1 for x in sums if x.custody_kept)
+        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums), "custody_kept": kept,
+               "custody_rate": kept / len(sums),
+               "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
+               "failed_runs": sum(1 for x in sums if x.status != "finished")}
+        for k in finals:
+            row[k] = _median([x.final.get(k) for x in sums])
+        row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
+        row["anees"], row["anees_updates"] = _anees(tables[(sc, iod, flt)])
+        row["wall_time_s"] = _median([x.wall_time_s for x in sums])
+        row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
+        rows.append(row)
+    with open(rep_dir / "summary.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=cols)
+        w.writeheader()
+        w.writerows(rows)
+
+    def fmt(v):
+        if v is None:
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v)
+
+    header = ["scenario", "iod", "filter", "custody", "lost at (d, median)", "failed",
+              "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km: median [5-95 %]", "ANEES (6 = consistent)",
+              "entropy", "wall time s: median [5-95 %]"]
+    lines = []
+    for r in rows:
+        lines.append([r["scenario"], r["iod"], r["filter"], f"{r['custody_kept']}/{r['runs']}",
+                      fmt(r["median_lost_day"]), str(r["failed_runs"]),
+                      "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
+                      "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
+                      f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
+                      f"{fmt(r['anees'])} ({r['anees_updates']} updates)", fmt(r["entropy"]),
+                      f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
+    md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    md += ["| " + " | ".join(l) + " |" for l in lines]
+    verdicts = []
+    for r in rows:
+        if r["custody_kept"] < r["runs"]:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} lost custody in "
+                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
+        else:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
+    title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
+    md_text = "\n".join([f"# {title}", "", *md, "", "## Custody", "", *verdicts, "",
+                         "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
+                         "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
+                         "region on consecutive updates (see cistrack.scenario.CustodyRule)."])
+    (rep_dir / "summary.md").write_text(md_text + "\n")
+    widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
+    text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
+                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts)
+    files = [rep_dir / "summary.csv", rep_dir / "summary.md"]
+    from .report_plots import plot_study
+
+    figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
+    files += plot_study(figures, rep_dir, str(data.get("name", out.name)))
+    return {"text": text, "rows": rows, "files": files, "missing": missing}

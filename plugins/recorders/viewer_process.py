@@ -1,0 +1,89 @@
+"""The rerun viewer as a separate process: finding its executable, checking for a display,
+starting it on 127.0.0.1 and waiting until it listens."""
+from __future__ import annotations
+
+import importlib.util
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from cistrack.errors import CistrackError
+
+__all__ = ["LOOPBACK", "ViewerUnavailableError", "find_viewer_executable", "check_viewer", "start_viewer",
+           "wait_for_port"]
+
+LOOPBACK = "127.0.0.1"
+"""The only address the recorder's servers and viewers listen on."""
+
+
+class ViewerUnavailableError(CistrackError, RuntimeError):
+    """The native rerun viewer cannot be started here (no executable, or no display)."""
+
+
+def find_viewer_executable() -> str | None:
+    """Path of the native rerun viewer binary (the ``rerun-cli`` one shipped with rerun-sdk, or
+    ``rerun`` on PATH), or None."""
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.submodule_search_locations:
+        for loc in spec.submodule_search_locations:
+            exe = Path(loc) / ("rerun.exe" if os.name == "nt" else "rerun")
+            if exe.is_file() and os.access(exe, os.X_OK):
+                return str(exe)
+    return shutil.which("rerun")
+
+
+def _has_display() -> bool:
+    if not sys.platform.startswith("linux"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            return False
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            s.settimeout(0.2)
+            if s.connect_ex((LOOPBACK, port)) == 0:
+                return True
+        time.sleep(0.05)
+    return False
+
+
+def check_viewer() -> str:
+    """The viewer executable, or :class:`ViewerUnavailableError` saying what to do instead."""
+    exe = find_viewer_executable()
+    if exe is None:
+        raise ViewerUnavailableError(
+            "cannot start the rerun viewer: no 'rerun' executable found (it ships with "
+            "rerun-sdk as rerun-cli). Write a recording with --rerun out.rrd instead and open "
+            "it where a viewer is installed: `rerun out.rrd`.")
+    if not _has_display():
+        raise ViewerUnavailableError(
+            "cannot start the native rerun viewer: this machine has no display (DISPLAY and "
+            "WAYLAND_DISPLAY are unset). Use --rerun out.rrd and open it elsewhere with "
+            "`rerun --bind 127.0.0.1 out.rrd` (or in a browser: `rerun --web-viewer --bind 127.0.0.1 "
+            "out.rrd`), or use --rerun-serve and connect a viewer to the printed URL.")
+    return exe
+
+
+def start_viewer(port: int, timeout_s: float = 15.0) -> subprocess.Popen:
+    """Start the native viewer listening on 127.0.0.1:``port``; the process once it listens."""
+    exe = check_viewer()
+    proc = subprocess.Popen(
+        [exe, "--bind", LOOPBACK, "--port", str(port), "--expect-data-soon"],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+        start_new_session=True, env={**os.environ, "RERUN_APP_ONLY": "true"})
+    if not wait_for_port(port, proc, timeout_s=timeout_s):
+        err = ""
+        if proc.poll() is not None and proc.stderr is not None:
+            err = proc.stderr.read().decode(errors="replace").strip()[-800:]
+        raise ViewerUnavailableError(
+            f"the rerun viewer ({exe}) did not start listening on {LOOPBACK}:{port}"
+            + (f": {err}" if err else "") + ". Use --rerun out.rrd and open the file instead.")
+    return proc
