@@ -3,7 +3,9 @@
 A table ``{name = "pgm", n_particles = 1000, clusterer = {name = "kmeans"}}`` becomes a
 :class:`ComponentSpec` after checking that the name is registered for the kind, that every key
 is a constructor parameter, and that each value has the parameter's annotated type (converted
-where lossless; a parameter typed as a component, such as ``clusterer``, becomes a nested spec).
+where lossless; a parameter typed as a component, such as ``clusterer``, becomes a nested spec,
+also when the table leaves it at a default naming a component: every component of a run is
+built through the run's registry).
 The component is constructed once during validation, so its own value checks run before anything
 else, and that instance is the one the run uses. A sensor with an ``epoch`` parameter receives
 the scenario's epoch (the one special case: the epoch is a property of the scenario).
@@ -118,6 +120,11 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
                 msg += f". Did you mean {close[0]!r}?"
             raise ConfigError(msg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
+    for key, ps in specs.items():
+        # A parameter that names another component by default (e.g. the PGM's clusterer = "kmeans")
+        # is resolved here, through this scenario's registry, not later by the component itself.
+        if key not in out and isinstance(ps.default, str) and _union_component_kind(ps.annotation):
+            out[key] = _coerce(ps.default, ps.annotation, source, f"{where}", key, reg)
     spec = ComponentSpec(kind, name, out, f"{source}: {where}")
     spec._validated = (reg, _build(spec, reg))  # value checks before anything runs; kept for the run
     return spec
@@ -133,6 +140,13 @@ def _build(spec: ComponentSpec, reg: Registry) -> Any:
         raise
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"{spec.where}: {spec.kind} {spec.name!r} rejected its parameters: {exc}") from None
+
+
+def _union_component_kind(ann: Any) -> str | None:
+    """The component kind of an annotation such as ``Clusterer | str`` (None for other types)."""
+    if typing.get_origin(ann) in (typing.Union, types.UnionType):
+        return next((k for k in (_component_kind(a) for a in typing.get_args(ann)) if k), None)
+    return None
 
 
 def _component_kind(ann: Any) -> str | None:
