@@ -20,7 +20,6 @@ from __future__ import annotations
 from typing import Callable
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints
 
 from cistrack.belief import regularize_covariance
 
@@ -48,6 +47,8 @@ def iterated_component_update(means: np.ndarray, covs: np.ndarray,
         the states that explain z are), "prior" with the one-shot (prior-wide) linearisation.
     Returns means (M, d), covariances (M, d, d), log-likelihoods (M,).
     """
+    from filterpy.kalman import MerweScaledSigmaPoints  # imported where an update runs, not at listing
+
     m, d = means.shape
     points = MerweScaledSigmaPoints(d, alpha=1.0, beta=2.0, kappa=0.0)
     out_m = np.empty_like(means)
