@@ -100,12 +100,13 @@ def test_pgm_with_several_components_stays_close_to_the_kalman_filter_over_sever
     assert_matches_kalman(belief, m, P, mean_tol=0.5, cov_tol=0.12)
 
 
-def test_pgm_accepts_a_clusterer_instance_and_imposes_its_n_components(problem):
-    clusterer = KMeansClusterer(n_components=2)
+def test_pgm_gives_its_n_components_to_a_clusterer_instance_left_at_its_default(problem):
+    # (a clusterer whose own n_components contradicts the filter's is refused: test_pgm_clusterer.py)
+    clusterer = KMeansClusterer()
     filt = PGMFilter(n_particles=4000, n_components=3, clusterer=clusterer)
     belief = run_filter(filt, problem)
     assert belief.mixture.n_components == 3
-    assert clusterer.n_components == 2  # the caller's instance is left alone
+    assert clusterer.n_components == KMeansClusterer().n_components  # the caller's instance is left alone
 
 
 def test_enkf_matches_the_kalman_filter(problem):
