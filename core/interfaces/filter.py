@@ -2,16 +2,18 @@
 from __future__ import annotations
 
 from abc import abstractmethod
+from typing import ClassVar
 
 import numpy as np
 
 from ..belief import Belief, ParticleCloud
 from ..component import Component
+from ..errors import FilterError
 from ..measurement import Measurement
 from .dynamics import Dynamics
 from .sensor import Sensor
 
-__all__ = ["Filter"]
+__all__ = ["Filter", "FilterBase"]
 
 
 class Filter(Component):
@@ -45,3 +47,53 @@ class Filter(Component):
     def diagnostics(self) -> dict[str, float]:
         """Per-step numbers worth recording (components, particles lost to impacts, ...)."""
         return {}
+
+
+class FilterBase(Filter):
+    """A :class:`Filter` with the bookkeeping every recursive filter repeats.
+
+    - ``_who()``: the name used in error messages (the registered name, else ``default_name``);
+    - ``_require_init()``: a :class:`~cistrack.errors.FilterError` unless :meth:`_is_initialized`;
+    - :meth:`predict`: checks initialisation, does nothing when ``t`` is the current time
+      ``self._t``, else calls :meth:`_predict_to` and moves ``self._t`` to ``t``;
+    - :attr:`diagnostics`: the per-step numbers in ``self._diag`` plus :meth:`_totals`.
+
+    A subclass sets ``self._t`` (TU) and ``self._diag`` in ``initialize`` and implements
+    :meth:`_is_initialized`, :meth:`_predict_to`, ``update`` and ``belief``.
+    """
+
+    default_name: ClassVar[str] = "filter"
+
+    def _who(self) -> str:
+        return self.registry_name or self.default_name
+
+    @abstractmethod
+    def _is_initialized(self) -> bool:
+        """Whether ``initialize`` has run."""
+
+    def _require_init(self) -> None:
+        if not self._is_initialized():
+            raise FilterError(f"filter '{self._who()}': call initialize() first")
+
+    def predict(self, t: float) -> None:
+        """Propagate the belief to time ``t`` (TU); a no-op at the current time."""
+        self._require_init()
+        t = float(t)
+        if t == self._t:
+            return
+        self._predict_to(t)
+        self._t = t
+
+    @abstractmethod
+    def _predict_to(self, t: float) -> None:
+        """Move the filter's state from ``self._t`` to ``t`` (TU, a float, not the current time)."""
+
+    def _totals(self) -> dict[str, float]:
+        """Run totals added to every step's diagnostics (e.g. particles lost so far)."""
+        return {}
+
+    @property
+    def diagnostics(self) -> dict[str, float]:
+        d = dict(getattr(self, "_diag", {}))
+        d.update(self._totals())
+        return d

@@ -17,7 +17,8 @@ from cistrack.belief import Belief, ParticleCloud
 from cistrack.component import check_int, check_nonnegative
 from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Dynamics, Filter, Sensor
+from cistrack.interfaces import Dynamics, Sensor
+from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .gaussian_belief import single_gaussian
@@ -28,7 +29,7 @@ from .process_noise import velocity_random_walk_covariance
 __all__ = ["EnKFFilter"]
 
 
-class EnKFFilter(Filter):
+class EnKFFilter(FilterBase):
     """Stochastic ensemble Kalman filter (filterpy) started from the IOD cloud's particles.
 
     Parameters
@@ -41,6 +42,8 @@ class EnKFFilter(Filter):
         Deprecated name of n_particles (every particle filter takes n_particles); still accepted
         with a FutureWarning, and an error when both are given.
     """
+
+    default_name = "enkf"
 
     def __init__(self, n_particles: int = 1000, velocity_noise_kms_per_sqrt_day: float = 0.0,
                  n_members: int | None = None):
@@ -70,12 +73,9 @@ class EnKFFilter(Filter):
         self._lost_total = 0
         self._diag: dict[str, float] = {"n_components": 1.0, "n_members": float(members.shape[0])}
 
-    def predict(self, t: float) -> None:
+    def _predict_to(self, t: float) -> None:
         """Propagate every member to ``t`` (TU); members that hit a body are removed and counted."""
-        enkf = self._require_init()
-        t = float(t)
-        if t == self._t:
-            return
+        enkf = self._enkf
         enkf.Q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, enkf.dim_x)
         lost = enkf.predict_batch(self._dyn, self._t, t, self._who())
         self._lost_total += lost
@@ -84,7 +84,8 @@ class EnKFFilter(Filter):
 
     def update(self, measurement: Measurement) -> None:
         """Perturbed-observation update of every member with ``measurement``."""
-        enkf = self._require_init()
+        self._require_init()
+        enkf = self._enkf
         check_epoch(self._t, measurement, self._who())
         meas = MeasuredComponents(self._sensor, measurement)
         self._diag["log_likelihood"] = enkf.update_batch(meas, self._who())
@@ -94,22 +95,15 @@ class EnKFFilter(Filter):
     @property
     def belief(self) -> Belief:
         """The ensemble's Gaussian (a mixture of one) with the members as samples."""
-        enkf = self._require_init()
+        self._require_init()
+        enkf = self._enkf
         return Belief(self._t, single_gaussian(enkf.x, enkf.P), ParticleCloud(enkf.sigmas.copy(), self._t))
 
-    @property
-    def diagnostics(self) -> dict[str, float]:
-        d = dict(self._diag)
-        d["particles_lost"] = float(self._lost_total)
-        return d
+    def _totals(self) -> dict[str, float]:
+        return {"particles_lost": float(self._lost_total)}
 
-    def _who(self) -> str:
-        return self.registry_name or "enkf"
-
-    def _require_init(self):
-        if self._enkf is None:
-            raise FilterError(f"filter '{self._who()}': call initialize() first")
-        return self._enkf
+    def _is_initialized(self) -> bool:
+        return self._enkf is not None
 
 
 @hookimpl

@@ -14,7 +14,8 @@ from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_c
 from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
 from cistrack.errors import FilterError, ParameterError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Clusterer, Dynamics, Filter, Sensor
+from cistrack.interfaces import Clusterer, Dynamics, Sensor
+from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
@@ -69,7 +70,7 @@ def _params_of(cls) -> dict:
     return param_specs(cls)
 
 
-class PGMFilter(Filter):
+class PGMFilter(FilterBase):
     """Particle Gaussian mixture filter: clustering + per-component Kalman update + resampling.
 
     Parameters
@@ -100,6 +101,8 @@ class PGMFilter(Filter):
     """
 
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
+
+    default_name = "pgm"
 
     def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
                  clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
@@ -149,12 +152,8 @@ class PGMFilter(Filter):
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": 0.0,
                       "particles_lost_step": 0.0, "particles_pruned": float(self._pruned_total)}
 
-    def predict(self, t: float) -> None:
+    def _predict_to(self, t: float) -> None:
         """Propagate every particle to ``t`` (TU); particles that hit a body are removed and counted."""
-        self._require_init()
-        t = float(t)
-        if t == self._t:
-            return
         x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
                                        self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
@@ -213,21 +212,15 @@ class PGMFilter(Filter):
             self._ensure_clustered()
         return Belief(self._t, self._mixture, ParticleCloud(self._x, self._t, None, self._sample_labels))
 
-    @property
-    def diagnostics(self) -> dict[str, float]:
-        d = dict(self._diag)
-        d["particles_lost"] = float(self._lost_total)
-        if self._mixture is not None:
-            d.setdefault("n_components", float(self._mixture.n_components))
-        return d
+    def _totals(self) -> dict[str, float]:
+        out = {"particles_lost": float(self._lost_total)}
+        if self._mixture is not None and "n_components" not in self._diag:
+            out["n_components"] = float(self._mixture.n_components)
+        return out
 
     # -- internals --------------------------------------------------------------------------------
-    def _who(self) -> str:
-        return self.registry_name or "pgm"
-
-    def _require_init(self) -> None:
-        if self._x is None:
-            raise FilterError(f"filter '{self._who()}': call initialize() first")
+    def _is_initialized(self) -> bool:
+        return self._x is not None
 
     def _invalidate(self) -> None:
         self._labels = None

@@ -14,7 +14,8 @@ from cistrack.belief import Belief, ParticleCloud
 from cistrack.component import check_int, check_nonnegative, check_range
 from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Dynamics, Filter, Sensor
+from cistrack.interfaces import Dynamics, Sensor
+from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .ensemble_propagation import propagate_particles
@@ -28,7 +29,7 @@ __all__ = ["SIRFilter"]
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
-class SIRFilter(Filter):
+class SIRFilter(FilterBase):
     """Bootstrap particle filter with log weights and systematic resampling.
 
     Parameters
@@ -40,6 +41,8 @@ class SIRFilter(Filter):
     velocity_noise_kms_per_sqrt_day : float
         Process noise: velocity random walk, km/s after one day (0 = off).
     """
+
+    default_name = "sir"
 
     def __init__(self, n_particles: int = 10000, resample_threshold: float = 0.5,
                  velocity_noise_kms_per_sqrt_day: float = 0.0):
@@ -61,12 +64,8 @@ class SIRFilter(Filter):
         self._diag: dict[str, float] = {}
         self._refresh_diag()
 
-    def predict(self, t: float) -> None:
+    def _predict_to(self, t: float) -> None:
         """Propagate every particle to ``t`` (TU); particles that hit a body are removed."""
-        self._require_init()
-        t = float(t)
-        if t == self._t:
-            return
         x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
                                        self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
@@ -108,10 +107,6 @@ class SIRFilter(Filter):
         cloud = ParticleCloud(self._x, self._t, w)
         return Belief(self._t, single_gaussian(cloud.mean, cloud.covariance), cloud)
 
-    @property
-    def diagnostics(self) -> dict[str, float]:
-        return dict(self._diag)
-
     def _refresh_diag(self) -> None:
         w = np.exp(self._logw)
         self._diag.update({"n_components": 1.0, "n_particles": float(self._x.shape[0]),
@@ -119,12 +114,8 @@ class SIRFilter(Filter):
                            "unique_particles": float(np.unique(self._x[:, 0]).size),
                            "particles_lost": float(self._lost_total)})
 
-    def _who(self) -> str:
-        return self.registry_name or "sir"
-
-    def _require_init(self) -> None:
-        if self._x is None:
-            raise FilterError(f"filter '{self._who()}': call initialize() first")
+    def _is_initialized(self) -> bool:
+        return self._x is not None
 
 
 @hookimpl

@@ -24,7 +24,8 @@ from cistrack.belief import Belief, ParticleCloud, regularize_covariance
 from cistrack.component import check_int, check_nonnegative, check_positive, check_range
 from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Dynamics, Filter, Sensor
+from cistrack.interfaces import Dynamics, Sensor
+from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .gaussian_belief import gaussian_belief
@@ -35,7 +36,7 @@ from .process_noise import velocity_random_walk_covariance
 __all__ = ["UKFFilter"]
 
 
-class UKFFilter(Filter):
+class UKFFilter(FilterBase):
     """Unscented Kalman filter (filterpy) initialised from the moment-matched IOD cloud.
 
     Parameters
@@ -56,6 +57,8 @@ class UKFFilter(Filter):
     Defaults (alpha 1, beta 2, kappa 0, up to 10 iterations, tolerance 1e-3) were chosen on the
     quick scenario (9:2 NRHO, noisy-range IOD, 2 days): see tests/filters/test_nrho_consistency.py.
     """
+
+    default_name = "ukf"
 
     def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, n_samples: int = 2000,
                  velocity_noise_kms_per_sqrt_day: float = 0.0, update_iterations: int = 10,
@@ -95,12 +98,9 @@ class UKFFilter(Filter):
         self._lost_total = 0
         self._diag: dict[str, float] = {"n_components": 1.0, "sigma_points_lost": 0.0}
 
-    def predict(self, t: float) -> None:
+    def _predict_to(self, t: float) -> None:
         """Propagate the sigma points to ``t`` (TU) and re-form mean and covariance (plus Q)."""
-        ukf = self._require_init()
-        t = float(t)
-        if t == self._t:
-            return
+        ukf = self._ukf
         ukf.t0 = self._t
         ukf.Q = velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t - self._t, ukf.x.size)
         from .ukf_batch import batch_unscented_transform
@@ -114,7 +114,8 @@ class UKFFilter(Filter):
     def update(self, measurement: Measurement) -> None:
         """Condition mean and covariance on ``measurement`` (angles wrapped), iterating the
         posterior linearisation up to ``update_iterations`` times."""
-        ukf = self._require_init()
+        self._require_init()
+        ukf = self._ukf
         check_epoch(self._t, measurement, self._who())
         meas = MeasuredComponents(self._sensor, measurement)
         ukf.update_iterated(meas, self.update_iterations, self.update_tolerance)
@@ -131,24 +132,17 @@ class UKFFilter(Filter):
     @property
     def belief(self) -> Belief:
         """The Gaussian (a mixture of one) and ``n_samples`` draws from it (drawn once per step)."""
-        ukf = self._require_init()
+        self._require_init()
+        ukf = self._ukf
         if self._belief is None:
             self._belief = gaussian_belief(self._t, ukf.x, ukf.P, self.n_samples, self._rng)
         return self._belief
 
-    @property
-    def diagnostics(self) -> dict[str, float]:
-        d = dict(self._diag)
-        d["sigma_points_lost_total"] = float(self._lost_total)
-        return d
+    def _totals(self) -> dict[str, float]:
+        return {"sigma_points_lost_total": float(self._lost_total)}
 
-    def _who(self) -> str:
-        return self.registry_name or "ukf"
-
-    def _require_init(self):
-        if self._ukf is None:
-            raise FilterError(f"filter '{self._who()}': call initialize() first")
-        return self._ukf
+    def _is_initialized(self) -> bool:
+        return self._ukf is not None
 
 
 @hookimpl
