@@ -161,6 +161,14 @@ class RealTelescope(Sensor):
         self._observer = ObserverGeometry(self._site, self._epoch, polar_motion=self.polar_motion,
                                           ut1=self.ut1)
 
+    def inertial_frame(self):
+        """GCRS (CCSDS ``GCRF``): the real Earth-Moon frame's synodic -> GCRS map (DE421), used
+        to export estimates (``cistrack export``)."""
+        from cistrack.inertial_frame import InertialFrame
+        return InertialFrame(name="GCRF", ccsds=True, from_synodic=self._frame.synodic_to_gcrs,
+                             description="GCRS: Earth-centred, ICRF-aligned axes; from the real "
+                                         "Earth-Moon rotating frame (DE421)")
+
     def __getstate__(self):
         state = dict(self.__dict__)
         state.pop("_frame", None)
