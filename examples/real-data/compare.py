@@ -1,6 +1,6 @@
 """Compare a run's exported estimate with the truth the observations were simulated from.
 
-    .venv/bin/python examples/real-data/compare.py runs/real-data [--truth cistrack/scenarios/real-data/truth.csv]
+    .venv/bin/python examples/real-data/compare.py runs/real-data [--truth cistrack/scenarios/real_data/truth.csv]
 
 Propagates the truth (first row of truth.csv) to every step of the run and maps it into the run's export frame with the same transform
 as the export, at every step of the run, and prints the position/velocity error, the reported
@@ -40,7 +40,7 @@ def truth_at(truth_csv: Path, scen, t_tu: np.ndarray) -> np.ndarray:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run", type=Path)
-    ap.add_argument("--truth", type=Path, default=builtin_scenario_path("real-data").parent / "real-data" / "truth.csv")
+    ap.add_argument("--truth", type=Path, default=builtin_scenario_path("real-data").parent / "real_data" / "truth.csv")
     a = ap.parse_args()
     est, scen = run_inertial_estimates(a.run)
     truth = est.frame.from_synodic(truth_at(a.truth, scen, est.t_tu), est.t_tu)

@@ -10,7 +10,7 @@ Texas, and 809 ESO La Silla, Chile) with ``cistrack.site_simulation.simulate_sit
     observations.tdm   the same observations as a CCSDS TDM (RADEC)
     truth.csv          the truth every hour (UTC, synodic km and km/s of the scenario's frame)
 
-into DIR (default: the scenario's own folder, cistrack/scenarios/real-data/). Same seed, same
+into DIR (default: the scenario's own folder, cistrack/scenarios/real_data/). Same seed, same
 files. Step-by-step walk-through: docs/real-data.md.
 """
 from __future__ import annotations
@@ -51,7 +51,7 @@ def make(out: Path, seed: int | None = None):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=builtin_scenario_path("real-data").parent / "real-data")
+    ap.add_argument("--out", type=Path, default=builtin_scenario_path("real-data").parent / "real_data")
     ap.add_argument("--seed", type=int, default=None)
     a = ap.parse_args()
     make(a.out, a.seed)

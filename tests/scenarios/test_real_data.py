@@ -71,7 +71,7 @@ def test_the_exported_oem_lies_within_its_reported_three_sigma_of_the_truth(camp
 def test_the_bundled_files_hold_the_campaign_of_both_observatories(name):
     from cistrack.scenario import builtin_scenario_path
     scen = load_scenario("real-data")
-    folder = builtin_scenario_path("real-data").parent / "real-data"
+    folder = builtin_scenario_path("real-data").parent / "real_data"
     ms = read_observations(folder / name, scen.epoch)
     assert set(ms.sites.tolist()) == set(SITES) and set(ms.kinds.tolist()) == {"radec"}
     assert 0 < ms.times[0] and ms.times[-1] < scen.duration
