@@ -104,7 +104,7 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
             raise ConfigError(f"{source}: {where}: {kind} {name!r} takes no parameters")
         return ComponentSpec(kind, name, {}, f"{source}: {where}")
     specs = param_specs(factory)
-    if kind == "sensor" and "epoch" in specs:
+    if kind in ("sensor", "dynamics") and "epoch" in specs:
         if "epoch" in params:
             raise ConfigError(f"{source}: {where}: key 'epoch' is set by the scenario's top-level 'epoch'; "
                               f"remove it from {where}")

@@ -237,7 +237,8 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
                           f" or 'state_km', unless [measurements] file = ... gives real observations")
     truth_dyn = None
     if "dynamics" in truth:
-        truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg)
+        truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
+                                   epoch_text=epoch_text)
 
     cust = data.get("custody", {})
     if not isinstance(cust, dict):

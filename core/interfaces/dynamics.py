@@ -74,7 +74,9 @@ class Propagation:
 class Dynamics(Component):
     """Equations of motion of one model and propagation of ``(N, 6)`` state arrays.
 
-    States are nondimensional synodic (LU, VU), times TU. Implementations must propagate every
+    States are nondimensional synodic (LU, VU), times TU. A model whose constructor has an
+    ``epoch`` parameter (ISO-8601 UTC of t = 0; e.g. ``ephemeris``) is handed the scenario's.
+    Implementations must propagate every
     particle with its own adaptive error control, report particles that hit a body through
     :class:`Propagation` instead of returning NaN, and support propagation backward in time.
     """

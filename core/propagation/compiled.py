@@ -35,6 +35,8 @@ and declare ``bcr4bp = "mypkg.bcr4bp"`` under ``[project.entry-points.cistrack]`
 side must be a module-level ``@njit`` function ``rhs(t, y, params, out)`` on float64 arrays.
 The massive bodies (with their impact radii) come from overriding :attr:`primaries`
 (:func:`cistrack.primaries.earth_moon_primaries` for the Earth and the Moon).
+Impact bodies that move in the integration frame take their positions from the class attribute
+``body_motion``.
 
 How the speed is obtained (generated kernels, their on-disk cache, worker threads) is described
 in :mod:`cistrack.propagation.kernels`.
@@ -67,6 +69,10 @@ class CompiledDynamics(Dynamics):
     """
 
     rhs: ClassVar[Any] = None
+    body_motion: ClassVar[Any] = None
+    """Optional module-level ``@njit`` function ``(t, params, b, body_pos) -> (x, y, z)``: the
+    position of impact body ``b`` at time ``t`` for models whose bodies move in the integration
+    frame (the ephemeris model's Moon); ``None`` keeps every body at its :attr:`bodies` position."""
     dim: ClassVar[int] = 6
     max_steps: int = 5_000_000
 
@@ -79,7 +85,7 @@ class CompiledDynamics(Dynamics):
         rhs = type(self).rhs
         if rhs is None or not hasattr(rhs, "py_func"):
             raise TypeError(f"{type(self).__name__}.rhs must be a numba @njit function")
-        return kernels_for(rhs, self.dim)
+        return kernels_for(rhs, self.dim, type(self).body_motion)
 
     def _params(self) -> np.ndarray:
         return np.ascontiguousarray(self.params_vector(), dtype=np.float64).reshape(-1)

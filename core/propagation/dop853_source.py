@@ -107,22 +107,24 @@ def _rk_step_source(dim: int) -> str:
 
 _BODY = '''
 @njit(cache=CACHE, fastmath=FASTMATH)
-def _inside(y, body_pos, body_rad):
-    """Index of the first body whose surface contains position y[:3], -1 for none."""
+def _inside(t, y, params, body_pos, body_rad):
+    """Index of the first body whose surface contains position y[:3] at t, -1 for none."""
     for b in range(body_rad.shape[0]):
-        dx = y[0] - body_pos[b, 0]
-        dy = y[1] - body_pos[b, 1]
-        dz = y[2] - body_pos[b, 2]
+        bx, by, bz = body_position(t, params, b, body_pos)
+        dx = y[0] - bx
+        dy = y[1] - by
+        dz = y[2] - bz
         if dx * dx + dy * dy + dz * dz < body_rad[b] * body_rad[b]:
             return b
     return -1
 
 
 @njit(cache=CACHE, fastmath=FASTMATH)
-def _surface_gap(y, body_pos, body_rad, b):
-    dx = y[0] - body_pos[b, 0]
-    dy = y[1] - body_pos[b, 1]
-    dz = y[2] - body_pos[b, 2]
+def _surface_gap(t, y, params, body_pos, body_rad, b):
+    bx, by, bz = body_position(t, params, b, body_pos)
+    dx = y[0] - bx
+    dy = y[1] - by
+    dz = y[2] - bz
     return np.sqrt(dx * dx + dy * dy + dz * dz) - body_rad[b]
 
 
@@ -130,9 +132,9 @@ def _surface_gap(y, body_pos, body_rad, b):
 def _locate_impact(t, h, y, k0, params, ytmp, yout, f, body_pos, body_rad, b):
     """Fraction s of the step h at which y crosses body b's surface; yout = state there."""
     s_lo = 0.0
-    g_lo = _surface_gap(y, body_pos, body_rad, b)
+    g_lo = _surface_gap(t, y, params, body_pos, body_rad, b)
     s_hi = 1.0
-    g_hi = _surface_gap(yout, body_pos, body_rad, b)  # yout holds the full step on entry
+    g_hi = _surface_gap(t + h, yout, params, body_pos, body_rad, b)  # yout: the full step on entry
     if not (g_lo > 0.0):
         for j in range(DIM):
             yout[j] = y[j]
@@ -144,7 +146,7 @@ def _locate_impact(t, h, y, k0, params, ytmp, yout, f, body_pos, body_rad, b):
         if not (s > s_lo and s < s_hi):
             s = 0.5 * (s_lo + s_hi)
         _rk_step(t, s * h, y, k0, params, ytmp, yout, f, 1.0, 1.0)
-        g = _surface_gap(yout, body_pos, body_rad, b)
+        g = _surface_gap(t + s * h, yout, params, body_pos, body_rad, b)
         if g > 0.0:
             s_lo = s
             g_lo = g
@@ -215,7 +217,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
     for j in range(DIM):
         y[j] = y0[i, j]
     t = t0
-    b = _inside(y, body_pos, body_rad)
+    b = _inside(t, y, params, body_pos, body_rad)
     if b >= 0:
         impact_body[i] = b
         impact_time[i] = t0
@@ -259,7 +261,7 @@ def _integrate_one(i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
             if rejected:
                 fac = min(1.0, fac)
             rejected = False
-            b = _inside(ynew, body_pos, body_rad)
+            b = _inside(t + hs, ynew, params, body_pos, body_rad)
             if b >= 0:
                 s = _locate_impact(t, hs, y, k0, params, ytmp, ynew, f, body_pos, body_rad, b)
                 impact_body[i] = b
@@ -318,9 +320,20 @@ def derivatives_kernel(t, states, params, out):
 '''
 
 
+def _motion_source(motion_import: str | None, fm: str) -> str:
+    """Header lines binding ``body_position(t, params, b, body_pos) -> (x, y, z)`` (compiled
+    with the kernels' fast-math flags ``fm``, like the right-hand side)."""
+    if motion_import is None:
+        return ("@njit(inline='always')\n"
+                "def body_position(t, params, b, body_pos):\n"
+                "    return body_pos[b, 0], body_pos[b, 1], body_pos[b, 2]\n\n\n")
+    return (f"{motion_import}\n"
+            f"body_position = njit(inline='always', fastmath={fm})(body_position.py_func)\n\n")
+
+
 def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: float = 0.8,
                     max_growth: float = 4.0, min_shrink: float = 0.2, beta: float = 0.0,
-                    fastmath=DEFAULT_FASTMATH, title: str = "") -> str:
+                    fastmath=DEFAULT_FASTMATH, title: str = "", motion_import: str | None = None) -> str:
     """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
 
     Parameters
@@ -341,6 +354,11 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
         numba ``fastmath=`` flags of the kernels, also applied to the inlined right-hand side
         (whatever its own flags). The default (none) keeps results independent of whether the
         kernels were compiled or loaded from the cache; see :data:`DEFAULT_FASTMATH`.
+    motion_import : str, optional
+        A line that binds ``body_position`` (``""`` when the caller injects it): an ``@njit``
+        function ``body_position(t, params, b, body_pos) -> (x, y, z)`` giving body ``b``'s
+        position at ``t`` for models whose bodies move (e.g. the Moon in an inertial frame).
+        ``None`` (default): bodies sit at the fixed ``body_pos[b]``.
     """
     fm = ("{" + ", ".join(repr(f) for f in sorted(fastmath)) + "}") if not isinstance(fastmath, bool) else repr(fastmath)
     header = (f'"""Generated by cistrack.propagation.dop853_source {title}: do not edit."""\n'
@@ -350,6 +368,7 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
               "# Inline the model into the integrator (numba IR inlining): no call overhead and no\n"
               "# reference counting of the array arguments per stage.\n"
               f"rhs = njit(inline='always', fastmath={fm})(rhs.py_func)\n\n"
+              + _motion_source(motion_import, fm) +
               f"DIM = {int(dim)}\n"
               f"CACHE = {bool(cache)!r}\n"
               f"SAFETY = {float(safety)!r}\n"

@@ -135,24 +135,34 @@ def _write_atomic(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
+def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
     """The generated module (``propagate_kernel``, ``derivatives_kernel``) for ``rhs``.
 
-    Built once per process and right-hand side; on disk once per model source and numba version.
+    ``body_motion`` (optional, an ``@njit`` function ``(t, params, b, body_pos) -> (x, y, z)``)
+    moves the impact bodies with time; without it they sit at ``body_pos``. Built once per
+    process and right-hand side; on disk once per model source and numba version.
     """
-    key = (id(rhs), int(dim))
+    key = (id(rhs), int(dim), id(body_motion))
     with _LOCK:
         mod = _KERNELS.get(key)
         if mod is not None:
             return mod
         where = _importable_name(rhs)
-        if where is not None:
+        motion_where = _importable_name(body_motion) if body_motion is not None else None
+        importable = where is not None and (body_motion is None or motion_where is not None)
+        mod = None
+        if importable:
+            motion_import = (None if body_motion is None
+                             else f"from {motion_where[0]} import {motion_where[1]} as body_position")
+            title = f"for {where[0]}.{where[1]}" + (f" with {motion_where[0]}.{motion_where[1]}"
+                                                      if motion_where else "")
             src = dop853_source.generate_source(
-                f"from {where[0]} import {where[1]} as rhs", dim, title=f"for {where[0]}.{where[1]}")
+                f"from {where[0]} import {where[1]} as rhs", dim, title=title, motion_import=motion_import)
+            extra = _source_digest(body_motion) if body_motion is not None else ""
             import numba  # imported here, not at module import: listing plugins needs no numba
 
             digest = hashlib.sha256(
-                (src + _source_digest(rhs) + numba.__version__ + sys.version).encode()).hexdigest()[:20]
+                (src + _source_digest(rhs) + extra + numba.__version__ + sys.version).encode()).hexdigest()[:20]
             name = f"cistrack_kernel_{where[1]}_{digest}"
             mod = None
             try:
@@ -167,11 +177,14 @@ def kernels_for(rhs: Any, dim: int = 6) -> ModuleType:
                               f"({exc}); compiling propagation kernels in memory (set "
                               "CISTRACK_KERNEL_DIR to a writable directory of yours to cache them)",
                               RuntimeWarning, stacklevel=2)
-        if where is None or mod is None:  # not importable or no writable directory: in memory
-            src = dop853_source.generate_source("", dim, cache=False, title="(in memory)")
+        if mod is None:  # not importable or no writable directory: in memory
+            src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",
+                                                motion_import=None if body_motion is None else "")
             _announce_compile(repr(rhs))
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
+            if body_motion is not None:
+                mod.__dict__["body_position"] = body_motion
             exec(compile(src, f"<cistrack kernel for {rhs!r}>", "exec"), mod.__dict__)
         _KERNELS[key] = mod
         return mod

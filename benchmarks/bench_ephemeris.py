@@ -1,0 +1,92 @@
+"""Ephemeris dynamics vs CR3BP: cost per particle-period over one 9:2 NRHO period (not a test).
+
+    .venv/bin/python benchmarks/bench_ephemeris.py [--sizes 1000 10000] [--repeats 3] [--threads 1]
+
+Same ensemble for both models (9:2 NRHO + N(0, 10 km) position and N(0, 1 cm/s) velocity
+perturbations, CR3BP synodic states; for the ephemeris model the same states are placed in the
+real Earth-Moon frame at 2026-01-01 with the pulsating scaling, so that they fly the NRHO's
+perilune passage about the real Moon), same tolerances (rtol 1e-12, atol 2e-11), same run (one period, 1.5121 TU), warm
+kernels. Prints microseconds per particle-period, the ratio ephemeris/cr3bp (acceptance of issue
+13: <= 3), the integrator steps per period of the central particle in each model, and the machine.
+The ephemeris figure includes its frame conversions at both ends of the call.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=0, help="CISTRACK_NUM_THREADS (0: numba default)")
+    args = ap.parse_args(argv)
+    if args.threads:
+        os.environ["CISTRACK_NUM_THREADS"] = str(args.threads)
+
+    from machine import machine_lines
+
+    from cistrack import units
+    from cistrack.plugins.dynamics.catalog import ORBITS
+    from cistrack.plugins.dynamics.cr3bp import CR3BP
+    from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
+
+    orbit = ORBITS["nrho-9-2"]
+    period = float(orbit.period)
+    models = {"cr3bp": CR3BP(), "ephemeris": EphemerisDynamics(epoch="2026-01-01T00:00:00Z"),
+              "ephemeris+J2+SRP": EphemerisDynamics(epoch="2026-01-01T00:00:00Z", j2=True,
+                                                    srp_area_to_mass_m2_kg=0.01)}
+    rng = np.random.default_rng(2026)
+    sig = np.r_[[units.km_to_lu(10.0)] * 3, [units.kms_to_vu(1e-5)] * 3]
+    def placed(name, x):
+        if name == "cr3bp":
+            return x
+        m = models[name]
+        return m.frame.gcrs_to_synodic(m.frame.pulsating_to_gcrs(x, 0.0), 0.0)
+
+    for name, m in models.items():  # compile / load kernels
+        m.propagate(placed(name, orbit.state[None]), 0.0, 0.01)
+
+    for line in machine_lines():
+        print(f"# {line}")
+    print(f"# threads: {os.environ.get('CISTRACK_NUM_THREADS', 'numba default')}")
+    print(f"{'model':<18}{'N':>8}{'us/particle-period':>20}{'ratio to cr3bp':>16}")
+    for n in args.sizes:
+        x = orbit.state + rng.normal(size=(n, 6)) * sig
+        base = None
+        for name, m in models.items():
+            xm = placed(name, x)
+            best = np.inf
+            for _ in range(args.repeats):
+                t = time.perf_counter()
+                p = m.propagate(xm, 0.0, period)
+                best = min(best, time.perf_counter() - t)
+            if not np.all(p.alive):
+                print(f"# {name}: {int(np.sum(~p.alive))} particle(s) impacted")
+            us = best / n * 1e6
+            base = us if base is None else base
+            print(f"{name:<18}{n:>8}{us:>20.2f}{us / base:>16.2f}")
+    # steps per period of the central particle (max_steps search: fewest steps that still finish)
+    for name, m in models.items():
+        lo, hi = 1, 100_000
+        x0 = placed(name, orbit.state[None])
+        while lo < hi:
+            mid = (lo + hi) // 2
+            m.max_steps = mid
+            try:
+                m.propagate(x0, 0.0, period)
+                hi = mid
+            except Exception:
+                lo = mid + 1
+        print(f"# {name}: {lo} DOP853 steps (incl. rejected) for one period of the central particle")
+
+
+if __name__ == "__main__":
+    main()

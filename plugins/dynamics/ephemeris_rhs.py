@@ -1,0 +1,226 @@
+"""Compiled right-hand side of the ephemeris model: Earth, Moon and Sun from DE421 records.
+
+Inertial geocentric GCRS axes, scaled like the CR3BP: position LU (384,400 km), velocity VU,
+time TU (375,149 s) since the scenario epoch. With r the spacecraft, m the Moon and s the Sun
+(geocentric), the acceleration is
+
+    a = -GM_E r/|r|^3 + GM_M ((m - r)/|m - r|^3 - m/|m|^3) + GM_S ((s - r)/|s - r|^3 - s/|s|^3)
+        + a_J2 + a_SRP
+
+- a_J2 = -(3/2) J2 GM_E R_E^2 / |r|^5 ((1 - 5 (r.k)^2/|r|^2) r + 2 (r.k) k), k the Earth's pole;
+- a_SRP = P A_U^2 / |r - s|^2 (r - s)/|r - s| (cannonball, no eclipses), P the radiation
+  acceleration at 1 AU (C_R (A/m) 4.56e-6 N/m^2).
+
+The Moon and Sun come from DE421's own records packed into the parameter vector (no refit): the
+geocentric Moon series, and one "Sun minus Earth-Moon barycentre" series (both 16-day series of
+DE421 on the same grid, subtracted record by record), so s = (sun - emb) + m/(1+EMRAT). Both
+are re-expressed exactly (polynomial algebra, then dropping powers below 1e-8 km for the Moon and
+1e-5 km for the Sun) on one grid of 1-day records in the power basis, so one Horner loop of six
+independent chains evaluates both (:func:`pack_params`).
+
+Parameter vector layout (float64; written by :func:`pack_params`)::
+
+    [GM_E, GM_M, GM_S, J2, R_E, kx, ky, kz, P_SRP, AU, EARTH_SHARE, MOON_BODY,
+     series: start, 1/length, nrec, ncoef, offset, coefficients ...]
+
+(GM in LU^3/TU^2, lengths in LU, times in TU; MOON_BODY is the index of the Moon among the
+impact bodies, -1 when the Moon is not an impact body).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from cistrack.ephemeris import ChebyshevSeries
+
+__all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
+           "resample_power_basis", "HEADER_SIZE", "SERIES_HDR"]
+
+GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range(12)
+SERIES_HDR = 12
+HEADER_SIZE = 17
+
+_FM = {"contract", "arcp", "nsz", "reassoc"}
+
+
+@njit(cache=True, inline="always", fastmath=_FM)
+def bodies_position(p, t):
+    """Geocentric Moon (mx, my, mz) and Sun-minus-barycentre (sx, sy, sz) at ``t``, LU.
+
+    Each record holds power-basis coefficients in the record's normalised time u in [-1, 1],
+    interleaved as ``[a0 mx, my, mz, sx, sy, sz, a1 mx, ...]``; Horner's rule runs the six
+    coordinates side by side (six independent chains of fused multiply-adds).
+    """
+    start = p[SERIES_HDR]
+    inv_length = p[SERIES_HDR + 1]
+    nrec = int(p[SERIES_HDR + 2])
+    ncoef = int(p[SERIES_HDR + 3])
+    off = int(p[SERIES_HDR + 4])
+    v = (t - start) * inv_length
+    k = int(np.floor(v))
+    if k < 0:
+        k = 0
+    elif k > nrec - 1:
+        k = nrec - 1
+    u = 2.0 * (v - k) - 1.0
+    j = off + (k * ncoef + ncoef - 1) * 6
+    mx = p[j]
+    my = p[j + 1]
+    mz = p[j + 2]
+    sx = p[j + 3]
+    sy = p[j + 4]
+    sz = p[j + 5]
+    for _ in range(ncoef - 1):
+        j -= 6
+        mx = mx * u + p[j]
+        my = my * u + p[j + 1]
+        mz = mz * u + p[j + 2]
+        sx = sx * u + p[j + 3]
+        sy = sy * u + p[j + 4]
+        sz = sz * u + p[j + 5]
+    return mx, my, mz, sx, sy, sz
+
+
+@njit(cache=True, fastmath=_FM)
+def ephemeris_rhs(t, y, p, out):
+    """Ephemeris equations of motion: y (6,) [LU, VU] geocentric GCRS -> out (6,) [VU, VU/TU]."""
+    x = y[0]
+    yy = y[1]
+    z = y[2]
+    mx, my, mz, sx, sy, sz = bodies_position(p, t)
+    r2 = x * x + yy * yy + z * z
+    r = np.sqrt(r2)
+    ce = -p[GM_E] / (r2 * r)
+    ax = ce * x
+    ay = ce * yy
+    az = ce * z
+    # Moon: direct and indirect terms
+    dx = mx - x
+    dy = my - yy
+    dz = mz - z
+    d2 = dx * dx + dy * dy + dz * dz
+    cd = p[GM_M] / (d2 * np.sqrt(d2))
+    m2 = mx * mx + my * my + mz * mz
+    cm = p[GM_M] / (m2 * np.sqrt(m2))
+    ax += cd * dx - cm * mx
+    ay += cd * dy - cm * my
+    az += cd * dz - cm * mz
+    if p[GM_S] != 0.0 or p[P_SRP] != 0.0:
+        f = p[EARTH_SHARE]
+        sx += f * mx
+        sy += f * my
+        sz += f * mz
+        ux = sx - x
+        uy = sy - yy
+        uz = sz - z
+        u2 = ux * ux + uy * uy + uz * uz
+        u1 = np.sqrt(u2)
+        if p[GM_S] != 0.0:
+            cu = p[GM_S] / (u2 * u1)
+            s2 = sx * sx + sy * sy + sz * sz
+            cs = p[GM_S] / (s2 * np.sqrt(s2))
+            ax += cu * ux - cs * sx
+            ay += cu * uy - cs * sy
+            az += cu * uz - cs * sz
+        if p[P_SRP] != 0.0:
+            c = -p[P_SRP] * p[AU] * p[AU] / (u2 * u1)
+            ax += c * ux
+            ay += c * uy
+            az += c * uz
+    if p[J2] != 0.0:
+        kx = p[KX]
+        ky = p[KY]
+        kz = p[KZ]
+        rk = x * kx + yy * ky + z * kz
+        re2 = p[R_E] * p[R_E]
+        c = -1.5 * p[J2] * p[GM_E] * re2 / (r2 * r2 * r)
+        q = 1.0 - 5.0 * rk * rk / r2
+        ax += c * (q * x + 2.0 * rk * kx)
+        ay += c * (q * yy + 2.0 * rk * ky)
+        az += c * (q * z + 2.0 * rk * kz)
+    out[0] = y[3]
+    out[1] = y[4]
+    out[2] = y[5]
+    out[3] = ax
+    out[4] = ay
+    out[5] = az
+
+
+@njit(cache=True, fastmath=_FM)
+def ephemeris_body_position(t, p, b, body_pos):
+    """Position (x, y, z) LU of impact body ``b`` at ``t``: the Moon moves, the Earth is fixed."""
+    if b == int(p[MOON_BODY]):
+        mx, my, mz, sx, sy, sz = bodies_position(p, t)
+        return mx, my, mz
+    return body_pos[b, 0], body_pos[b, 1], body_pos[b, 2]
+
+
+def resample_power_basis(series: ChebyshevSeries, start_s: float, length_s: float, nrec: int,
+                         drop_below_km: float) -> np.ndarray:
+    """Re-express a Chebyshev series on a finer grid of records, in the power basis.
+
+    Record i covers [start_s + i length_s, start_s + (i+1) length_s], which must lie inside one
+    record of ``series`` (the new grid subdivides the old one). Its polynomial in the local
+    u in [-1, 1] is the series' own polynomial composed with the affine map u -> x (exact
+    algebra; rounding only). Trailing powers whose largest magnitude over all records and axes is
+    below ``drop_below_km`` are dropped. Returns (nrec, C, 3) coefficients, km.
+    """
+    cheb = np.asarray(series.coefficients, dtype=np.float64)
+    ncheb = cheb.shape[2]
+    to_power = np.zeros((ncheb, ncheb))  # row n: T_n in powers of x
+    for n in range(ncheb):
+        row = np.polynomial.chebyshev.cheb2poly(np.eye(ncheb)[n])
+        to_power[n, :row.size] = row
+    parent = np.einsum("rac,cn->ran", cheb, to_power)
+    mid = start_s + (np.arange(nrec) + 0.5) * length_s
+    k = np.floor((mid - series.start_s) / series.length_s).astype(np.int64)
+    if np.any(k < 0) or np.any(k >= cheb.shape[0]):
+        raise ValueError("resample_power_basis: the new records reach outside the series")
+    alpha = length_s / series.length_s
+    rec0 = start_s + np.arange(nrec) * length_s
+    beta = 2.0 * (rec0 - series.start_s - k * series.length_s) / series.length_s - 1.0 + alpha
+    a = parent[k]  # (nrec, 3, C)
+    ncoef = a.shape[2]
+    q = np.zeros_like(a)
+    q[:, :, 0] = a[:, :, ncoef - 1]
+    for n in range(ncoef - 2, -1, -1):  # Horner on polynomials: q <- q * (beta + alpha u) + a_n
+        shifted = np.zeros_like(q)
+        shifted[:, :, 1:] = q[:, :, :-1] * alpha
+        q = q * beta[:, None, None] + shifted
+        q[:, :, 0] += a[:, :, n]
+    peak = np.max(np.abs(q), axis=(0, 1))
+    keep = ncoef
+    while keep > 2 and peak[keep - 1] < drop_below_km:
+        keep -= 1
+    return np.ascontiguousarray(np.transpose(q[:, :, :keep], (0, 2, 1)))
+
+
+def pack_params(constants: np.ndarray, moon: ChebyshevSeries, sun_minus_emb: ChebyshevSeries,
+                lu_km: float, tu_s: float, record_s: float = 86_400.0,
+                moon_drop_below_km: float = 1e-8, sun_drop_below_km: float = 1e-5) -> np.ndarray:
+    """The flat parameter vector: ``constants`` (12,) already scaled, then one joint series.
+
+    DE421's Moon (4-day records) and Sun-minus-barycentre (16-day) series are re-expressed
+    exactly on a common grid of ``record_s`` records (default 1 day, which divides both), in the
+    power basis, scaled to LU and TU; trailing powers below ``moon_drop_below_km`` (1e-8 km) and
+    ``sun_drop_below_km`` (1e-5 km: the solar tide on a cislunar orbit changes by < 1e-17 km/s^2)
+    are dropped. Measured: 8 powers for the Moon, 4 for the Sun; the Moon agrees with DE421's own
+    evaluation to < 1e-7 km.
+    """
+    lo = max(moon.start_s, sun_minus_emb.start_s)
+    hi = min(moon.end_s, sun_minus_emb.end_s)
+    # start on the shared grid: DE421's records all start at JD 2414992.5 + multiples of 4 days
+    lo = moon.start_s + np.ceil((lo - moon.start_s) / record_s - 1e-9) * record_s
+    nrec = int(np.floor((hi - lo) / record_s + 1e-9))
+    if nrec < 1:
+        raise ValueError("pack_params: the Moon and Sun series do not overlap")
+    m = resample_power_basis(moon, lo, record_s, nrec, moon_drop_below_km)
+    s = resample_power_basis(sun_minus_emb, lo, record_s, nrec, sun_drop_below_km)
+    ncoef = max(m.shape[1], s.shape[1])
+    joint = np.zeros((nrec, ncoef, 6))
+    joint[:, :m.shape[1], :3] = m
+    joint[:, :s.shape[1], 3:] = s
+    joint /= lu_km
+    const = np.asarray(constants, dtype=np.float64).reshape(HEADER_SIZE - 5)
+    header = np.array([lo / tu_s, tu_s / record_s, nrec, ncoef, HEADER_SIZE], dtype=np.float64)
+    return np.concatenate([const, header, joint.reshape(-1)])
