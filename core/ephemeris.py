@@ -157,7 +157,7 @@ class DE421:
     gm_earth_km3s2, gm_moon_km3s2, gm_sun_km3s2 : float
         Gravitational parameters, km^3/s^2.
     earth_radius_km : float
-        DE421's Earth radius (6378.137 km).
+        DE421's Earth radius (6378.136 km), used with its J2.
     j2_earth : float
         DE421's Earth J2.
     au_km : float

@@ -31,6 +31,7 @@ from cistrack.errors import StateError
 from cistrack.frames.earth_moon import EarthMoonFrame
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body, Propagation
+from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
 from .ephemeris_rhs import ephemeris_body_position, ephemeris_rhs, pack_params
@@ -64,7 +65,7 @@ class EphemerisDynamics(CompiledDynamics):
     sun : bool
         Include the Sun's gravity (third-body term).
     j2 : bool
-        Include the Earth's J2 (DE421's value 1.0826e-3, radius 6378.137 km; the pole is the
+        Include the Earth's J2 (DE421's values: J2 1.0826e-3, radius 6378.136 km; the pole is the
         GCRS z axis rotated to the celestial intermediate pole at the epoch).
     srp_area_to_mass_m2_kg : float
         Cannonball solar radiation pressure: area / mass, m^2/kg (0 disables; no eclipses).
@@ -73,7 +74,7 @@ class EphemerisDynamics(CompiledDynamics):
     rtol, atol : float
         Per-particle integration tolerances (nondimensional, inertial LU/VU).
     earth_radius_km, moon_radius_km : float
-        Impact radii, km (0 disables impacts on that body).
+        Impact radii, km (0 disables impacts on that body); defaults from :mod:`cistrack.primaries`.
     window_days : float
         Ephemeris records handed to the kernel cover at least this many days either side of the
         epoch; a propagation reaching outside widens the window.
@@ -86,8 +87,8 @@ class EphemerisDynamics(CompiledDynamics):
 
     def __init__(self, epoch: str = "2026-01-01T00:00:00Z", sun: bool = True, j2: bool = False,
                  srp_area_to_mass_m2_kg: float = 0.0, srp_reflectivity: float = 1.3,
-                 rtol: float = 1e-12, atol: float = 2e-11, earth_radius_km: float = 6378.137,
-                 moon_radius_km: float = 1737.4, window_days: float = 40.0,
+                 rtol: float = 1e-12, atol: float = 2e-11, earth_radius_km: float = EARTH_RADIUS_KM,
+                 moon_radius_km: float = MOON_RADIUS_KM, window_days: float = 40.0,
                  max_steps: int = 5_000_000):
         try:
             when = units.parse_utc(epoch)
