@@ -17,7 +17,7 @@ For compiled right-hand sides, :meth:`DE421.series` cuts the coefficient records
 interval out of a series as a :class:`ChebyshevSeries` (times in seconds relative to a chosen TDB
 origin), and :func:`chebyshev_position` / :func:`chebyshev_state` evaluate one inside numba code
 exactly as the reader does (Clenshaw's recurrence), so a kernel sees the ephemeris itself, not a
-refit of it.
+refit of it. Importing this module loads neither numba nor jplephem.
 """
 from __future__ import annotations
 
@@ -25,7 +25,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
+
+from .lazy import lazy_njit
 
 __all__ = ["DE421", "ChebyshevSeries", "chebyshev_position", "chebyshev_state", "de421",
            "DAY_S", "J2000_JD"]
@@ -83,9 +84,12 @@ class ChebyshevSeries:
                              f"[{self.start_s:.3f}, {self.end_s:.3f}] s")
 
 
-@njit(cache=True, inline="always")
+@lazy_njit(cache=True)
 def chebyshev_position(start_s, length_s, coefficients, t_s, out):
-    """Position (3,) km of a Chebyshev series (R, 3, C) at ``t_s`` into ``out`` (numba-callable).
+    """Position (3,) km of a Chebyshev series (R, 3, C) at ``t_s`` into ``out``.
+
+    Compiled on first call (:func:`cistrack.lazy.lazy_njit`); compiled code calls
+    ``chebyshev_position.dispatcher``.
 
     Times outside the records use the nearest record (extrapolation); callers size the series
     to cover their interval.
@@ -109,9 +113,10 @@ def chebyshev_position(start_s, length_s, coefficients, t_s, out):
         out[a] = x * b1 - b2 + coefficients[k, a, 0]
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def chebyshev_state(start_s, length_s, coefficients, t_s, pos, vel):
-    """Position (3,) km and velocity (3,) km/s of a Chebyshev series at ``t_s`` (numba-callable)."""
+    """Position (3,) km and velocity (3,) km/s of a Chebyshev series at ``t_s`` (compiled on
+    first call; compiled code calls ``chebyshev_state.dispatcher``)."""
     nrec = coefficients.shape[0]
     ncoef = coefficients.shape[2]
     k = int(np.floor((t_s - start_s) / length_s))

@@ -29,9 +29,9 @@ impact bodies, -1 when the Moon is not an impact body).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from cistrack.ephemeris import ChebyshevSeries
+from cistrack.lazy import lazy_njit
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
            "resample_power_basis", "HEADER_SIZE", "SERIES_HDR"]
@@ -43,14 +43,15 @@ HEADER_SIZE = 17
 _FM = {"contract", "arcp", "nsz", "reassoc"}
 
 
-@njit(cache=True, inline="always", fastmath=_FM)
-def bodies_position(p, t):
-    """Geocentric Moon (mx, my, mz) and Sun-minus-barycentre (sx, sy, sz) at ``t``, LU.
+# The three compiled functions below repeat the same Horner evaluation on purpose: they are
+# compiled lazily (``import`` must not load numba) and compiled code cannot call a lazily compiled
+# helper. Each record holds power-basis coefficients in the record's normalised time u in [-1, 1],
+# interleaved as ``[a0 mx, my, mz, sx, sy, sz, a1 mx, ...]``; Horner's rule runs the six
+# coordinates side by side (six independent chains of fused multiply-adds).
 
-    Each record holds power-basis coefficients in the record's normalised time u in [-1, 1],
-    interleaved as ``[a0 mx, my, mz, sx, sy, sz, a1 mx, ...]``; Horner's rule runs the six
-    coordinates side by side (six independent chains of fused multiply-adds).
-    """
+@lazy_njit(cache=True, fastmath=_FM)
+def bodies_position(p, t):
+    """Geocentric Moon (mx, my, mz) and Sun-minus-barycentre (sx, sy, sz) at ``t``, LU."""
     start = p[SERIES_HDR]
     inv_length = p[SERIES_HDR + 1]
     nrec = int(p[SERIES_HDR + 2])
@@ -81,13 +82,39 @@ def bodies_position(p, t):
     return mx, my, mz, sx, sy, sz
 
 
-@njit(cache=True, fastmath=_FM)
+@lazy_njit(cache=True, fastmath=_FM)
 def ephemeris_rhs(t, y, p, out):
     """Ephemeris equations of motion: y (6,) [LU, VU] geocentric GCRS -> out (6,) [VU, VU/TU]."""
+    start = p[SERIES_HDR]
+    inv_length = p[SERIES_HDR + 1]
+    nrec = int(p[SERIES_HDR + 2])
+    ncoef = int(p[SERIES_HDR + 3])
+    off = int(p[SERIES_HDR + 4])
+    v = (t - start) * inv_length
+    k = int(np.floor(v))
+    if k < 0:
+        k = 0
+    elif k > nrec - 1:
+        k = nrec - 1
+    u = 2.0 * (v - k) - 1.0
+    j = off + (k * ncoef + ncoef - 1) * 6
+    mx = p[j]
+    my = p[j + 1]
+    mz = p[j + 2]
+    sx = p[j + 3]
+    sy = p[j + 4]
+    sz = p[j + 5]
+    for _ in range(ncoef - 1):
+        j -= 6
+        mx = mx * u + p[j]
+        my = my * u + p[j + 1]
+        mz = mz * u + p[j + 2]
+        sx = sx * u + p[j + 3]
+        sy = sy * u + p[j + 4]
+        sz = sz * u + p[j + 5]
     x = y[0]
     yy = y[1]
     z = y[2]
-    mx, my, mz, sx, sy, sz = bodies_position(p, t)
     r2 = x * x + yy * yy + z * z
     r = np.sqrt(r2)
     ce = -p[GM_E] / (r2 * r)
@@ -146,11 +173,37 @@ def ephemeris_rhs(t, y, p, out):
     out[5] = az
 
 
-@njit(cache=True, fastmath=_FM)
+@lazy_njit(cache=True, fastmath=_FM)
 def ephemeris_body_position(t, p, b, body_pos):
     """Position (x, y, z) LU of impact body ``b`` at ``t``: the Moon moves, the Earth is fixed."""
     if b == int(p[MOON_BODY]):
-        mx, my, mz, sx, sy, sz = bodies_position(p, t)
+        start = p[SERIES_HDR]
+        inv_length = p[SERIES_HDR + 1]
+        nrec = int(p[SERIES_HDR + 2])
+        ncoef = int(p[SERIES_HDR + 3])
+        off = int(p[SERIES_HDR + 4])
+        v = (t - start) * inv_length
+        k = int(np.floor(v))
+        if k < 0:
+            k = 0
+        elif k > nrec - 1:
+            k = nrec - 1
+        u = 2.0 * (v - k) - 1.0
+        j = off + (k * ncoef + ncoef - 1) * 6
+        mx = p[j]
+        my = p[j + 1]
+        mz = p[j + 2]
+        sx = p[j + 3]
+        sy = p[j + 4]
+        sz = p[j + 5]
+        for _ in range(ncoef - 1):
+            j -= 6
+            mx = mx * u + p[j]
+            my = my * u + p[j + 1]
+            mz = mz * u + p[j + 2]
+            sx = sx * u + p[j + 3]
+            sy = sy * u + p[j + 4]
+            sz = sz * u + p[j + 5]
         return mx, my, mz
     return body_pos[b, 0], body_pos[b, 1], body_pos[b, 2]
 
