@@ -40,8 +40,6 @@ GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range
 SERIES_HDR = 12
 HEADER_SIZE = 17
 
-_FM = {"contract", "arcp", "nsz", "reassoc"}
-
 
 # The three compiled functions below repeat the same Horner evaluation on purpose: they are
 # compiled lazily (``import`` must not load numba) and compiled code cannot call a lazily compiled
@@ -49,7 +47,7 @@ _FM = {"contract", "arcp", "nsz", "reassoc"}
 # interleaved as ``[a0 mx, my, mz, sx, sy, sz, a1 mx, ...]``; Horner's rule runs the six
 # coordinates side by side (six independent chains of fused multiply-adds).
 
-@lazy_njit(cache=True, fastmath=_FM)
+@lazy_njit(cache=True)
 def bodies_position(p, t):
     """Geocentric Moon (mx, my, mz) and Sun-minus-barycentre (sx, sy, sz) at ``t``, LU."""
     start = p[SERIES_HDR]
@@ -82,7 +80,7 @@ def bodies_position(p, t):
     return mx, my, mz, sx, sy, sz
 
 
-@lazy_njit(cache=True, fastmath=_FM)
+@lazy_njit(cache=True)
 def ephemeris_rhs(t, y, p, out):
     """Ephemeris equations of motion: y (6,) [LU, VU] geocentric GCRS -> out (6,) [VU, VU/TU]."""
     start = p[SERIES_HDR]
@@ -173,7 +171,7 @@ def ephemeris_rhs(t, y, p, out):
     out[5] = az
 
 
-@lazy_njit(cache=True, fastmath=_FM)
+@lazy_njit(cache=True)
 def ephemeris_body_position(t, p, b, body_pos):
     """Position (x, y, z) LU of impact body ``b`` at ``t``: the Moon moves, the Earth is fixed."""
     if b == int(p[MOON_BODY]):
