@@ -15,8 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from cistrack.plugins.iod.gauss import GaussIOD
-from cistrack.plugins.iod.kinematic import (NoisyRangeIOD, UniformRangeIOD,
-                                            UniformRangeVelocityBoundIOD)
+from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
 from cistrack.plugins.sensors.ground_telescope import GroundTelescope
 from cistrack.units import hours_to_tu
 

@@ -13,6 +13,7 @@ orbit          :class:`ReferenceOrbit` (data, not a class)  ``"orbit"``
 recorder       any object with lifecycle hookimpls         ``"recorder"``
 reader         :class:`Reader` (observation file format)   ``"reader"``
 exporter       :class:`Exporter` (estimate file format)    ``"exporter"``
+range prior    :class:`RangePrior` (IOD range model)        ``"range-prior"``
 =============  ==========================================  ==========================
 """
 from .clustering import Clusterer
@@ -21,12 +22,13 @@ from .filter import Filter
 from .iod import IODMethod
 from .orbit import ReferenceOrbit
 from .exporter import Exporter
+from .range_prior import RangePrior
 from .reader import Reader
 from .schedule import Pass, Schedule
 from .sensor import Sensor
 
-KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter")
+KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
 __all__ = ["Body", "Clusterer", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
-           "Reader", "ReferenceOrbit", "Schedule", "Sensor"]
+           "RangePrior", "Reader", "ReferenceOrbit", "Schedule", "Sensor"]

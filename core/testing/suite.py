@@ -15,6 +15,7 @@ from .checks_iod import IOD_CHECKS
 from .checks_orbit import ORBIT_CHECKS
 from .checks_params import PARAMETER_CHECKS, check_parameters_declared
 from .checks_exporter import EXPORTER_CHECKS
+from .checks_range_prior import RANGE_PRIOR_CHECKS
 from .checks_reader import READER_CHECKS
 from .checks_recorder import RECORDER_CHECKS, lifecycle_hooks
 from .checks_schedule import SCHEDULE_CHECKS
@@ -35,6 +36,7 @@ KIND_CHECKS: dict[str, list[tuple[str, Callable[[Any], None]]]] = {
     "recorder": RECORDER_CHECKS,
     "reader": READER_CHECKS,
     "exporter": EXPORTER_CHECKS,
+    "range-prior": RANGE_PRIOR_CHECKS,
 }
 """The kind-specific checks, run after the parameter checks (which every class-based kind gets)."""
 

@@ -14,13 +14,22 @@ All samples share the fit times, so the fit is a fixed linear map of the data
 
 Range models
 ------------
+The range model is a component parameter, ``range_prior`` (kind "range-prior",
+:mod:`.range_priors`): ``noisy`` (Gaussian around the measured range, ``alpha``) or ``uniform``
+(between two bounds); the speed bound is a separate parameter, ``max_speed_kms`` (None: no
+bound). The paper's three variants are registered presets with their own names::
+
+    [iod]                                     # the same as name = "noisy-range", alpha = 0.05
+    name = "kinematic-fit"
+    range_prior = { name = "noisy", alpha = 0.05 }
+
 ``noisy-range``
-    rho ~ N(rho_meas, (alpha rho_meas)^2) around the *measured* range of the measurement set's
-    'range' component (the sensor must measure range; OD later ignores that component).
+    range_prior = noisy(alpha): rho ~ N(rho_meas, (alpha rho_meas)^2) around the *measured*
+    range of the measurement set's 'range' component (OD later ignores that component).
 ``uniform-range``
-    rho ~ U[range_min_km, range_max_km] (default 84,328-550,000 km, the cislunar bounds).
+    range_prior = uniform: rho ~ U[range_min_km, range_max_km] (default 84,328-550,000 km).
 ``uniform-range-velocity-bound``
-    uniform-range plus pruning of samples faster than ``max_speed_kms`` (default 42 km/s).
+    uniform-range plus ``max_speed_kms`` = 42 km/s: samples faster than that are pruned.
 
 ``range_sampling`` chooses whether each measurement gets its own range draw ("per-measurement",
 Algorithm 1 of the paper, default) or one draw is shared by all the measurements of a sample
@@ -61,14 +70,13 @@ from cistrack.belief import ParticleCloud
 from cistrack.component import check_choice, check_int, check_positive, check_range
 from cistrack.errors import IODError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import IODMethod, Sensor
+from cistrack.interfaces import IODMethod, RangePrior, Sensor
 from cistrack.measurement import MeasurementSet
-from cistrack.units import LU_KM, VU_KMS, km_to_lu
+from cistrack.units import LU_KM, VU_KMS
 
 from .kinematic_fit import FitInputs, kinematic_states, prepare_fit
 
-__all__ = ["KinematicFitIOD", "NoisyRangeIOD", "UniformRangeIOD", "UniformRangeVelocityBoundIOD",
-           "RANGE_MODELS", "FitInputs", "kinematic_states", "prepare_fit"]
+__all__ = ["KinematicFitIOD", "RANGE_MODELS", "FitInputs", "kinematic_states", "prepare_fit"]
 
 RANGE_MODELS = ("noisy-range", "uniform-range", "uniform-range-velocity-bound")
 SPEED_FRAMES = ("topocentric", "synodic")
@@ -82,10 +90,9 @@ class KinematicFitIOD(IODMethod):
 
     Parameters
     ----------
-    range_model : str
-        How ranges are drawn: "noisy-range" (around a measured range), "uniform-range" or
-        "uniform-range-velocity-bound" (uniform between the range bounds, the latter also
-        rejecting samples faster than ``max_speed_kms``).
+    range_prior : RangePrior or str
+        How ranges are drawn: a range-prior component, e.g. "uniform" (between two bounds) or
+        "noisy" (Gaussian around the measured range).
     n_particles : int
         Particles wanted in the cloud.
     oversampling : float
@@ -100,12 +107,10 @@ class KinematicFitIOD(IODMethod):
         Fraction of the first pass's measurements that are fitted (the earliest ones).
     min_fit, max_fit : int
         Bounds on the number of measurements fitted.
-    alpha : float
-        Relative 1-sigma of the measured range (noisy-range only).
     range_min_km, range_max_km : float
-        Cislunar range bounds for uniform draws and pruning, km.
-    max_speed_kms : float
-        Speed bound of the velocity-bounded model, km/s.
+        Cislunar range bounds: samples whose fitted range falls outside are pruned, km.
+    max_speed_kms : float or None
+        Samples faster than this are pruned, km/s (None: no speed bound).
     speed_frame : str
         Frame of the speed bound: "topocentric" (paper) or "synodic".
     range_sampling : str
@@ -113,13 +118,15 @@ class KinematicFitIOD(IODMethod):
         "per-sample" (one range per sample).
     """
 
-    def __init__(self, *, range_model: str = "uniform-range", n_particles: int = 2000,
+    def __init__(self, *, range_prior: RangePrior | str = "uniform", n_particles: int = 2000,
                  oversampling: float = 5.0, max_oversampling: float = 50.0, order: int = 4,
                  pass_gap_hours: float = 3.0, fit_fraction: float = 0.5, min_fit: int = 8,
-                 max_fit: int = 12, alpha: float = 0.05, range_min_km: float = 84_328.0,
-                 range_max_km: float = 550_000.0, max_speed_kms: float = 42.0,
+                 max_fit: int = 12, range_min_km: float = 84_328.0,
+                 range_max_km: float = 550_000.0, max_speed_kms: float | None = None,
                  speed_frame: str = "topocentric", range_sampling: str = "per-measurement") -> None:
-        self.range_model = check_choice(self, "range_model", range_model, RANGE_MODELS)
+        if not isinstance(range_prior, (str, RangePrior)):
+            self._fail("range_prior", range_prior, "must be a range-prior component or its registered name")
+        self.range_prior = range_prior
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=1)
         self.oversampling = check_range(self, "oversampling", oversampling, 1.0, 1e4)
         self.max_oversampling = check_range(self, "max_oversampling", max_oversampling, 1.0, 1e6)
@@ -130,12 +137,11 @@ class KinematicFitIOD(IODMethod):
         self.fit_fraction = check_range(self, "fit_fraction", fit_fraction, 0.0, 1.0, lo_open=True)
         self.min_fit = check_int(self, "min_fit", min_fit, minimum=self.order + 1)
         self.max_fit = check_int(self, "max_fit", max_fit, minimum=self.min_fit)
-        self.alpha = check_range(self, "alpha", alpha, 0.0, 1.0, lo_open=True)
         self.range_min_km = check_positive(self, "range_min_km", range_min_km)
         self.range_max_km = check_positive(self, "range_max_km", range_max_km)
         if self.range_max_km <= self.range_min_km:
             self._fail("range_max_km", range_max_km, f"must exceed range_min_km ({range_min_km})")
-        self.max_speed_kms = check_positive(self, "max_speed_kms", max_speed_kms)
+        self.max_speed_kms = None if max_speed_kms is None else check_positive(self, "max_speed_kms", max_speed_kms)
         self.speed_frame = check_choice(self, "speed_frame", speed_frame, SPEED_FRAMES)
         self.range_sampling = check_choice(self, "range_sampling", range_sampling, RANGE_SAMPLING)
 
@@ -143,16 +149,30 @@ class KinematicFitIOD(IODMethod):
     def _label_name(self) -> str:
         return type(self).registry_name or self.range_model
 
-    def _draw(self, fit: FitInputs, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    @property
+    def range_model(self) -> str:
+        """The paper's name of this range model: "noisy-range", "uniform-range" or
+        "uniform-range-velocity-bound" (a prior of another kind: its registered name)."""
+        prior = self._prior()
+        base = {"noisy": "noisy-range", "uniform": "uniform-range"}.get(
+            type(prior).registry_name, type(prior).registry_name or type(prior).__name__)
+        return base + ("-velocity-bound" if self.max_speed_kms is not None else "")
+
+    def _prior(self) -> RangePrior:
+        """The range prior (a name given in Python is created from the installed plugins; in a
+        scenario the prior arrives built through the run's registry)."""
+        if isinstance(self.range_prior, str):
+            from cistrack.registry import default_registry
+            return default_registry().create("range-prior", self.range_prior)
+        return self.range_prior
+
+    def _draw(self, fit: FitInputs, n: int, rng: np.random.Generator,
+              prior: RangePrior) -> tuple[np.ndarray, np.ndarray]:
         """Sampled angles (n, K, 2) and ranges (n, K) LU."""
         k = fit.times.shape[0]
         angles = fit.angles[None] + fit.angle_sigmas[None] * rng.standard_normal((n, k, 2))
         shape = (n, k) if self.range_sampling == "per-measurement" else (n, 1)
-        if self.range_model == "noisy-range":
-            rho = fit.ranges[None] * (1.0 + self.alpha * rng.standard_normal(shape))
-        else:
-            lo, hi = float(km_to_lu(self.range_min_km)), float(km_to_lu(self.range_max_km))
-            rho = rng.uniform(lo, hi, size=shape)
+        rho = prior.draw(fit.ranges, shape, rng)
         return angles, np.broadcast_to(rho, (n, k))
 
     def _prune(self, fit: FitInputs, states: np.ndarray, topo_vel: np.ndarray,
@@ -167,7 +187,7 @@ class KinematicFitIOD(IODMethod):
             "range_below_min": rng_km < self.range_min_km,
             "range_above_max": rng_km > self.range_max_km,
         }
-        if self.range_model == "uniform-range-velocity-bound":
+        if self.max_speed_kms is not None:
             v = topo_vel if self.speed_frame == "topocentric" else states[:, 3:]
             reasons["speed_above_max"] = np.linalg.norm(v, axis=1) * VU_KMS > self.max_speed_kms
         keep = np.ones(states.shape[0], dtype=bool)
@@ -186,9 +206,10 @@ class KinematicFitIOD(IODMethod):
         sampling when fewer than n_particles samples survive ``max_oversampling`` draws.
         """
         who = f"iod '{self._label_name()}'"
+        prior = self._prior()
         fit = prepare_fit(measurements, sensor, order=self.order, pass_gap_hours=self.pass_gap_hours,
                           fit_fraction=self.fit_fraction, min_fit=self.min_fit, max_fit=self.max_fit,
-                          need_range=self.range_model == "noisy-range", who=who)
+                          need_range=prior.needs_measured_range, who=who)
         batch = int(math.ceil(self.oversampling * self.n_particles))
         limit = int(math.ceil(self.max_oversampling * self.n_particles))
         kept: list[np.ndarray] = []
@@ -196,7 +217,7 @@ class KinematicFitIOD(IODMethod):
         pruned: dict[str, int] = {}
         while n_kept < self.n_particles and drawn < limit:
             n = min(batch, limit - drawn)
-            angles, rho = self._draw(fit, n, rng)
+            angles, rho = self._draw(fit, n, rng, prior)
             states, topo_vel = kinematic_states(fit, sensor, angles, rho)
             keep, counts = self._prune(fit, states, topo_vel, rho)
             for key, c in counts.items():
@@ -212,14 +233,14 @@ class KinematicFitIOD(IODMethod):
                 f"{self.n_particles} particles wanted (pruned: {why}; bounds: range "
                 f"{self.range_min_km:g}-{self.range_max_km:g} km"
                 + (f", {self.speed_frame} speed <= {self.max_speed_kms:g} km/s"
-                   if self.range_model == "uniform-range-velocity-bound" else "")
+                   if self.max_speed_kms is not None else "")
                 + "). Raise max_oversampling, relax the bounds, or check the measurements.")
         states = np.concatenate(kept, axis=0)[: self.n_particles]
         meta = {
             "method": self._label_name(),
             "range_model": self.range_model,
             "range_sampling": self.range_sampling,
-            "speed_frame": self.speed_frame if self.range_model == "uniform-range-velocity-bound" else None,
+            "speed_frame": self.speed_frame if self.max_speed_kms is not None else None,
             "order": self.order,
             "fit_indices": fit.indices.tolist(),
             "fit_times": fit.times.tolist(),
@@ -232,55 +253,10 @@ class KinematicFitIOD(IODMethod):
         return ParticleCloud(states, fit.epoch, meta=meta)
 
 
-class NoisyRangeIOD(KinematicFitIOD):
-    """Kinematic-fitting IOD around noisy measured ranges, sigma = alpha * measured range."""
-
-    def __init__(self, *, n_particles: int = 2000, oversampling: float = 5.0,
-                 max_oversampling: float = 50.0, order: int = 4, pass_gap_hours: float = 3.0,
-                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
-                 alpha: float = 0.05, range_min_km: float = 84_328.0,
-                 range_max_km: float = 550_000.0, range_sampling: str = "per-measurement") -> None:
-        super().__init__(range_model="noisy-range", n_particles=n_particles, oversampling=oversampling,
-                         max_oversampling=max_oversampling, order=order, pass_gap_hours=pass_gap_hours,
-                         fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit, alpha=alpha,
-                         range_min_km=range_min_km, range_max_km=range_max_km,
-                         range_sampling=range_sampling)
-
-
-class UniformRangeIOD(KinematicFitIOD):
-    """Kinematic-fitting IOD with ranges drawn uniformly within the cislunar bounds."""
-
-    def __init__(self, *, n_particles: int = 2000, oversampling: float = 5.0,
-                 max_oversampling: float = 50.0, order: int = 4, pass_gap_hours: float = 3.0,
-                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
-                 range_min_km: float = 84_328.0, range_max_km: float = 550_000.0,
-                 range_sampling: str = "per-measurement") -> None:
-        super().__init__(range_model="uniform-range", n_particles=n_particles, oversampling=oversampling,
-                         max_oversampling=max_oversampling, order=order, pass_gap_hours=pass_gap_hours,
-                         fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
-                         range_min_km=range_min_km, range_max_km=range_max_km,
-                         range_sampling=range_sampling)
-
-
-class UniformRangeVelocityBoundIOD(KinematicFitIOD):
-    """Uniform-range kinematic-fitting IOD that also prunes samples faster than max_speed_kms."""
-
-    def __init__(self, *, n_particles: int = 2000, oversampling: float = 10.0,
-                 max_oversampling: float = 100.0, order: int = 4, pass_gap_hours: float = 3.0,
-                 fit_fraction: float = 0.5, min_fit: int = 8, max_fit: int = 12,
-                 range_min_km: float = 84_328.0, range_max_km: float = 550_000.0,
-                 max_speed_kms: float = 42.0, speed_frame: str = "topocentric",
-                 range_sampling: str = "per-measurement") -> None:
-        super().__init__(range_model="uniform-range-velocity-bound", n_particles=n_particles,
-                         oversampling=oversampling, max_oversampling=max_oversampling, order=order,
-                         pass_gap_hours=pass_gap_hours, fit_fraction=fit_fraction, min_fit=min_fit,
-                         max_fit=max_fit, range_min_km=range_min_km, range_max_km=range_max_km,
-                         max_speed_kms=max_speed_kms, speed_frame=speed_frame,
-                         range_sampling=range_sampling)
-
-
 @hookimpl
 def cistrack_register(registry) -> None:
+    from .kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
+
     registry.add("iod", "kinematic-fit", KinematicFitIOD)
     registry.add("iod", "noisy-range", NoisyRangeIOD)
     registry.add("iod", "uniform-range", UniformRangeIOD)

@@ -9,9 +9,8 @@ from scipy.stats import chi2
 
 from cistrack.errors import IODError, ParameterError
 from cistrack.measurement import MeasurementSet
-from cistrack.plugins.iod.kinematic import (KinematicFitIOD, NoisyRangeIOD, UniformRangeIOD,
-                                            UniformRangeVelocityBoundIOD, kinematic_states,
-                                            prepare_fit)
+from cistrack.plugins.iod.kinematic import KinematicFitIOD, kinematic_states, prepare_fit
+from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
 from cistrack.plugins.iod.polyfit import truncation_bounds
 from cistrack.units import LU_KM, VU_KMS
 
@@ -170,7 +169,7 @@ def test_components_are_picklable_and_report_their_parameters():
 
 
 @pytest.mark.parametrize("params, match", [
-    ({"range_model": "exact"}, "range_model"),
+    ({"range_prior": 3.0}, "range_prior"),
     ({"order": 0}, "order"),
     ({"min_fit": 4}, "min_fit"),
     ({"range_min_km": 600_000.0}, "range_max_km"),

@@ -9,7 +9,7 @@ from cistrack.errors import MeasurementError, ParameterError
 from cistrack.frames.earth_moon import EarthMoonFrame
 from cistrack.observer import ObserverGeometry, neu_basis
 from cistrack.sites import Site
-from cistrack.plugins.iod.kinematic import NoisyRangeIOD, UniformRangeIOD
+from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD
 from cistrack.plugins.sensors.real_telescope import RealTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
 from cistrack.sky import SkyCorrections, apparent_azel, astrometric_radec
