@@ -21,8 +21,9 @@ $(BASE_STAMP): pyproject.toml $(VENV)/bin/python
 	$(PIP_ENV) $(BIN)/python -m pip install --quiet -e .
 	touch $(BASE_STAMP)
 
+# The tests install small plugin packages with --no-build-isolation: they need a recent setuptools.
 $(STAMP): pyproject.toml $(BASE_STAMP)
-	$(PIP_ENV) $(BIN)/python -m pip install --quiet -e ".[test,dask]"
+	$(PIP_ENV) $(BIN)/python -m pip install --quiet "setuptools>=77" wheel -e ".[test,dask]"
 	touch $(STAMP)
 
 ## Set up, then run the built-in default scenario (paper Example 1 with the PGM filter).
