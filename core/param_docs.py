@@ -19,7 +19,7 @@ from typing import Any
 from .component import param_specs
 
 __all__ = ["ParamDoc", "UNITS", "param_docs", "parse_parameters_section", "plain_text", "unit_of",
-           "describe_component", "components_markdown"]
+           "describe_component", "components_markdown", "summary_of"]
 
 UNITS: tuple[tuple[str, str], ...] = (
     ("_kms_per_sqrt_day", "km/s per sqrt(day)"),
@@ -142,7 +142,9 @@ def param_docs(cls: type) -> list[ParamDoc]:
             for s in param_specs(cls).values()]
 
 
-def _summary(factory: Any) -> str:
+def summary_of(factory: Any) -> str:
+    """A component's summary: the first paragraph of its description or docstring, plain text,
+    on one line (never cut mid-sentence)."""
     doc = getattr(factory, "description", None) or getattr(factory, "__doc__", None) or ""
     paragraph = inspect.cleandoc(doc).split("\n\n", 1)[0] if doc.strip() else ""
     return plain_text(paragraph)
@@ -154,7 +156,7 @@ def _default_text(p: ParamDoc) -> str:
 
 def describe_component(kind: str, name: str, factory: Any, source: str = "") -> str:
     """Text for ``cistrack plugins NAME``: summary, then one block per parameter."""
-    lines = [f"{kind} '{name}'" + (f"  [{source}]" if source else ""), f"  {_summary(factory)}"]
+    lines = [f"{kind} '{name}'" + (f"  [{source}]" if source else ""), f"  {summary_of(factory)}"]
     if not isinstance(factory, type):
         lines.append("  (a ready-made object: no parameters)")
         return "\n".join(lines)
@@ -189,7 +191,7 @@ def components_markdown(registry) -> str:
             continue
         out += [f"## {kind}", ""]
         for e in entries:
-            out += [f"### `{e.name}`", "", _summary(e.factory), ""]
+            out += [f"### `{e.name}`", "", summary_of(e.factory), ""]
             if not isinstance(e.factory, type):
                 out += ["A ready-made object (no parameters).", ""]
                 continue

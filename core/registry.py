@@ -43,9 +43,10 @@ class Registration:
 
     @property
     def summary(self) -> str:
-        """First line of the factory's docstring."""
-        doc = getattr(self.factory, "description", None) or (self.factory.__doc__ or "")
-        return doc.strip().splitlines()[0] if doc.strip() else ""
+        """The factory's description or the first paragraph of its docstring, plain text, one line."""
+        from .param_docs import summary_of
+
+        return summary_of(self.factory)
 
     @property
     def source(self) -> str:

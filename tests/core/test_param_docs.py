@@ -57,6 +57,12 @@ def test_every_builtin_parameter_has_a_whole_plain_meaning(entry):
         assert not re.search(r"``|:[a-z]+:`|`", p.meaning), f"{entry.name}.{p.name}: markup left in"
 
 
+@pytest.mark.parametrize("entry", BUILTINS, ids=lambda e: f"{e.kind}-{e.name}")
+def test_the_listing_summary_is_a_whole_plain_sentence(entry):
+    assert entry.summary.endswith((".", ")")), f"{entry.name}: {entry.summary!r} is cut"
+    assert "`" not in entry.summary and "\n" not in entry.summary
+
+
 def test_plugins_name_prints_every_parameter_with_type_default_and_meaning(capsys):
     assert main(["plugins", "ground-telescope"]) == 0
     out = capsys.readouterr().out
