@@ -3,13 +3,14 @@
 Run: .venv/bin/python benchmarks/bench_startup.py [--repeat 10] [--baseline OTHER_VENV/bin/cistrack]
 Each command runs ``--repeat`` times in a fresh process after one warm-up run (hyperfine's
 method: the page cache is warm, so the figures are interpreter and import cost). Prints the
-machine, then mean, standard deviation, min and max wall time per command; with ``--baseline``
+machine, then per command the wall time (mean, standard deviation, min) and the CPU time; with ``--baseline``
 the same for another installation (e.g. a checkout before the lean-start change) and the ratio
 of the means. Not a test: timings depend on the machine and its load.
 """
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import subprocess
 import sys
@@ -19,14 +20,19 @@ from pathlib import Path
 from machine import machine_lines
 
 
-def _time(cmd: list[str], repeat: int) -> list[float]:
+def _time(cmd: list[str], repeat: int) -> tuple[list[float], list[float]]:
+    """Wall times and CPU times (user + system of the child), seconds. On a loaded machine the
+    CPU time is the steadier measure of the command's own cost."""
     subprocess.run(cmd, capture_output=True, check=True)  # warm-up
-    out = []
+    wall, cpu = [], []
     for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t = time.perf_counter()
         subprocess.run(cmd, capture_output=True, check=True)
-        out.append(time.perf_counter() - t)
-    return out
+        wall.append(time.perf_counter() - t)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu.append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+    return wall, cpu
 
 
 def _commands(cistrack: Path) -> dict[str, list[str]]:
@@ -51,18 +57,18 @@ def main() -> None:
         new = _time(cmd, args.repeat)
         base = _time(_commands(args.baseline)[label], args.repeat) if args.baseline else None
         rows.append((label, new, base))
-    head = f"{'command':<30} {'mean s':>7} {'sd':>6} {'min':>6} {'max':>6}"
+    head = f"{'command':<30} {'wall mean s':>11} {'sd':>6} {'min':>6} {'cpu mean s':>10}"
     if args.baseline:
-        head += f" | {'baseline mean':>13} {'sd':>6} {'min':>6} | {'ratio':>6}"
+        head += f" | {'baseline wall':>13} {'cpu':>6} | {'ratio wall':>10} {'cpu':>5}"
     print(head)
-    for label, new, base in rows:
-        line = (f"{label:<30} {statistics.mean(new):7.3f} {statistics.stdev(new):6.3f} "
-                f"{min(new):6.3f} {max(new):6.3f}")
+    for label, (wall, cpu), base in rows:
+        line = (f"{label:<30} {statistics.mean(wall):11.3f} {statistics.stdev(wall):6.3f} "
+                f"{min(wall):6.3f} {statistics.mean(cpu):10.3f}")
         if base:
-            line += (f" | {statistics.mean(base):13.3f} {statistics.stdev(base):6.3f} {min(base):6.3f} | "
-                     f"{statistics.mean(base) / statistics.mean(new):5.1f}x")
+            bw, bc = base
+            line += (f" | {statistics.mean(bw):13.3f} {statistics.mean(bc):6.3f} | "
+                     f"{statistics.mean(bw) / statistics.mean(wall):9.1f}x {statistics.mean(bc) / statistics.mean(cpu):4.1f}x")
         print(line)
-
 
 if __name__ == "__main__":
     main()
