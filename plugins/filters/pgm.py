@@ -98,6 +98,15 @@ class PGMFilter(FilterBase):
         Optional process noise: velocity random walk, km/s after one day (0 = off).
     min_range_km, max_range_km, max_speed_kms : float or None
         Optional cislunar pruning bounds (Earth distance, synodic speed); None = not applied.
+    component_update : str
+        How each component is conditioned on a measurement: "iterated" (posterior-linearised
+        update of the component's Gaussian, re-linearised until its mean stops moving) or
+        "ensemble" (the paper's Kalman update from the particles' sample cross-covariances).
+    update_iterations : int
+        Most posterior linearisations per component and measurement (iterated update only).
+    component_likelihood : str
+        What reweights the components under the iterated update: "posterior" (the measurement
+        likelihood with h linearised over the component's posterior) or "prior" (over its prior).
     """
 
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
