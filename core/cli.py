@@ -67,7 +67,8 @@ def cmd_run(args) -> int:
     recorder = None
     if args.rerun or args.rerun_serve or args.rerun_spawn:
         recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
-                              spawn=args.rerun_spawn, max_points=args.max_points)
+                              spawn=args.rerun_spawn, max_points=args.max_points,
+                              frame=scen.recording_frame)
         observers.append(recorder)
     say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
     say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "

@@ -70,7 +70,7 @@ _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "
 _REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
 _CUSTODY_KEYS = {"loglik_threshold", "hdr_threshold", "hdr_consecutive"}
-_RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction"}
+_RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame"}
 _MEAS_KEYS = {"file", "reader"}
 
 
@@ -92,6 +92,7 @@ class Scenario:
     truth_grid_minutes: float = 5.0
     predict_every_hours: float = 0.0
     end_with_prediction: bool = True
+    recording_frame: str = "synodic"
     measurements_file: Path | None = None
     measurements_reader: ComponentSpec | None = None
     source: str = "<memory>"
@@ -266,10 +267,14 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
                           "(0: only at measurements)")
     _check_sizes(components, duration, grid, source)
     ewp = typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
+    rframe = typed(run.get("recording_frame", "synodic"), str, source, "[run]", "recording_frame")
+    if rframe not in ("synodic", "inertial"):
+        raise ConfigError(f"{source}: [run]: key 'recording_frame' = {rframe!r} must be 'synodic' (the rotating "
+                          "frame) or 'inertial' (the sensor's Earth-centred inertial frame)")
     return Scenario(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration,
                     components=components, truth_orbit=truth_orbit, truth_state=truth_state,
                     truth_dynamics=truth_dyn, custody=custody, truth_grid_minutes=grid,
-                    predict_every_hours=pe, end_with_prediction=ewp,
+                    predict_every_hours=pe, end_with_prediction=ewp, recording_frame=rframe,
                     measurements_file=measurements_file, measurements_reader=measurements_reader,
                     source=source, raw=copy.deepcopy(data))
 

@@ -51,6 +51,7 @@ from cistrack.units import LU_KM, TU_S, parse_utc
 from .blueprint import default_blueprint
 from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
                              start_viewer)
+from .view_frame import VIEW_FRAMES, ViewFrame
 from .scene import (
     EARTH_RADIUS_KM, LIBRATION_NAMES, MOON_RADIUS_KM, libration_points, most_likely_component,
     position_ellipsoids, primary_positions, system_mu,
@@ -113,13 +114,17 @@ class RerunRecorder(Component):
         Mahalanobis radius of the component position ellipsoids (3 = 3-sigma).
     subsample_seed : int
         Seed of the particle subsample.
+    frame : str
+        Frame of the 3-D scene: "synodic" (the run's rotating frame) or "inertial" (the
+        sensor's Earth-centred inertial frame, e.g. GCRS for the real-geometry sensor; the Moon
+        then moves and the libration points are not drawn). See :mod:`.view_frame`.
     """
 
     kind = "recorder"
 
     def __init__(self, path: str | None = None, serve: bool = False, spawn: bool = False,
                  max_points: int = 20_000, serve_port: int = 9876, viewer_port: int = 9877,
-                 ellipsoid_sigma: float = 3.0, subsample_seed: int = 0) -> None:
+                 ellipsoid_sigma: float = 3.0, subsample_seed: int = 0, frame: str = "synodic") -> None:
         if path is not None and not isinstance(path, (str, os.PathLike)):
             self._fail("path", path, "must be a file path (str) or None")
         self.path = None if path is None else os.fspath(path)
@@ -133,6 +138,10 @@ class RerunRecorder(Component):
         self.viewer_port = check_int(self, "viewer_port", viewer_port, minimum=1, maximum=65535)
         self.ellipsoid_sigma = check_positive(self, "ellipsoid_sigma", ellipsoid_sigma)
         self.subsample_seed = check_int(self, "subsample_seed", subsample_seed, minimum=0)
+        if frame not in VIEW_FRAMES:
+            self._fail("frame", frame, f"must be one of {', '.join(map(repr, VIEW_FRAMES))}")
+        self.frame = frame
+        self._view: ViewFrame | None = None
         if self.path is None and not self.serve and not self.spawn:
             raise ParameterError(f"{self._label()}: nothing to record to; give a path, serve=True "
                                  "or spawn=True")
@@ -183,6 +192,7 @@ class RerunRecorder(Component):
     def cistrack_run_started(self, run) -> None:
         """Open the run's recording and log the static scene and the truth trajectory."""
         self.close()
+        self._view = ViewFrame(self.frame, run)
         self._rec = self._open(run)
         self._event = 0
         self._epoch = parse_utc(run.epoch)
@@ -242,7 +252,7 @@ class RerunRecorder(Component):
             sinks.append(rr.GrpcServerSink(bind_ip=LOOPBACK, port=self.serve_port))
         if self.spawn:
             sinks.append(rr.GrpcSink(self._start_viewer()))
-        rec.set_sinks(*sinks, default_blueprint=default_blueprint(_focus_points(run)))
+        rec.set_sinks(*sinks, default_blueprint=default_blueprint(_focus_points(run, self._view)))
         rec.send_recording_name(str(run.run_id))
         return rec
 
@@ -265,19 +275,22 @@ class RerunRecorder(Component):
                    for i, col in enumerate(_PALETTE)]
         classes.append(rr.AnnotationInfo(id=UNASSIGNED_CLASS, label="unassigned", color=(90, 90, 90)))
         rec.log("world", rr.AnnotationContext(classes), static=True)
-        prim = primary_positions(mu) * LU_KM
+        view = self._view
+        prim = primary_positions(mu) * LU_KM if view.is_synodic else np.zeros((2, 3))
         rec.log("world/earth", rr.Ellipsoids3D(centers=prim[:1], radii=[EARTH_RADIUS_KM],
                                                colors=[(40, 90, 200)], labels=["Earth"],
                                                fill_mode=rr.components.FillMode.Solid), static=True)
-        rec.log("world/moon", rr.Ellipsoids3D(centers=prim[1:], radii=[MOON_RADIUS_KM],
-                                              colors=[(170, 170, 170)], labels=["Moon"],
-                                              fill_mode=rr.components.FillMode.Solid), static=True)
-        rec.log("world/libration", rr.Points3D(libration_points(mu) * LU_KM, labels=list(LIBRATION_NAMES),
-                                               show_labels=True, colors=[(240, 200, 60)],
-                                               radii=rr.Radius.ui_points(4.0)), static=True)
+        if view.is_synodic:  # inertial: the Moon moves and is logged at every step
+            rec.log("world/moon", rr.Ellipsoids3D(centers=prim[1:], radii=[MOON_RADIUS_KM],
+                                                  colors=[(170, 170, 170)], labels=["Moon"],
+                                                  fill_mode=rr.components.FillMode.Solid), static=True)
+            rec.log("world/libration", rr.Points3D(libration_points(mu) * LU_KM, labels=list(LIBRATION_NAMES),
+                                                   show_labels=True, colors=[(240, 200, 60)],
+                                                   radii=rr.Radius.ui_points(4.0)), static=True)
         if run.has_truth:
+            truth = view.states(run.truth_states, run.truth_times)
             rec.log("world/truth/trajectory",
-                    rr.LineStrips3D([np.asarray(run.truth_states, dtype=float)[:, :3] * LU_KM],
+                    rr.LineStrips3D([truth[:, :3] * LU_KM],
                                     colors=[(230, 230, 230)], radii=rr.Radius.ui_points(1.0)),
                     static=True)
         info = [f"- **run**: {run.run_id}", f"- **seed**: {run.seed}",
@@ -291,10 +304,11 @@ class RerunRecorder(Component):
                 static=True)
 
     def _log_cloud(self, rec: rr.RecordingStream, states: np.ndarray, labels: np.ndarray | None,
-                   mixture) -> None:
+                   mixture, t: float = 0.0) -> None:
         states = np.asarray(states, dtype=float)
         keep = subsample_indices(states.shape[0], self.max_points, self.subsample_seed)
-        pos = states[:, :3] if keep is None else states[keep, :3]
+        shown = states if keep is None else states[keep]
+        pos = shown[:, :3] if self._view is None else self._view.states(shown, t)[:, :3]
         if labels is not None:
             lab = np.asarray(labels) if keep is None else np.asarray(labels)[keep]
             cls = np.where(lab < 0, UNASSIGNED_CLASS, lab).astype(np.uint16)
@@ -313,24 +327,34 @@ class RerunRecorder(Component):
         self._set_time(rec, step.index, step.t)
         belief = step.belief
         mix = belief.mixture
-        self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix)
-        centers, half, quat = position_ellipsoids(mix.means, mix.covariances, self.ellipsoid_sigma)
+        view = self._view
+        t = float(step.t)
+        self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix, t)
+        if not view.is_synodic:
+            moon = run.dynamics.primary("Moon")
+            if moon is not None:
+                rec.log("world/moon", rr.Ellipsoids3D(
+                    centers=view.positions(moon.position_at(t), t) * LU_KM, radii=[MOON_RADIUS_KM],
+                    colors=[(170, 170, 170)], labels=["Moon"], fill_mode=rr.components.FillMode.Solid))
+        means = view.states(mix.means, t)
+        centers, half, quat = position_ellipsoids(means, view.covariances(mix.means, mix.covariances, t),
+                                                  self.ellipsoid_sigma)
         m = mix.n_components
         rec.log("world/components", rr.Ellipsoids3D(
             centers=centers, half_sizes=half, quaternions=quat, class_ids=np.arange(m, dtype=np.uint16),
             labels=[f"w={w:.3f}" for w in mix.weights],
             fill_mode=rr.components.FillMode.MajorWireframe))
-        mean = mix.mean[:3] * LU_KM
+        mean = view.states(mix.mean, t)[0, :3] * LU_KM
         rec.log("world/estimate", rr.Points3D(mean[None], colors=[(255, 60, 60)],
                                               radii=rr.Radius.ui_points(5.0)))
         truth = step.truth
         if truth is not None:
-            rec.log("world/truth/position", rr.Points3D(np.asarray(truth, dtype=float)[None, :3] * LU_KM,
+            rec.log("world/truth/position", rr.Points3D(view.states(truth, t)[:, :3] * LU_KM,
                                                         colors=[(255, 255, 255)],
                                                         radii=rr.Radius.ui_points(6.0)))
         sensor = run.sensor
         obs = np.asarray(sensor.observer_position(float(step.t)), dtype=float).reshape(3)
-        rec.log("world/observer", rr.Points3D(obs[None] * LU_KM, colors=[(0, 230, 120)],
+        rec.log("world/observer", rr.Points3D(view.positions(obs, t) * LU_KM, colors=[(0, 230, 120)],
                                               radii=rr.Radius.ui_points(5.0)))
         if step.measurement is not None:
             meas = step.measurement.angles_only()
@@ -340,7 +364,7 @@ class RerunRecorder(Component):
             if truth is not None:
                 reach = max(reach, float(np.linalg.norm(np.asarray(truth)[:3] - obs)))
             end = obs + 1.2 * reach * los
-            rec.log("world/line_of_sight", rr.LineStrips3D([np.stack([obs, end]) * LU_KM],
+            rec.log("world/line_of_sight", rr.LineStrips3D([view.positions(np.stack([obs, end]), t) * LU_KM],
                                                            colors=[(0, 230, 120)],
                                                            radii=rr.Radius.ui_points(1.0)))
         else:
@@ -351,15 +375,18 @@ class RerunRecorder(Component):
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
 
 
-def _focus_points(run) -> np.ndarray | None:
-    """Points (N, 3) km the run's 3-D view is framed on: the truth trajectory and the IOD cloud."""
+def _focus_points(run, view: ViewFrame | None = None) -> np.ndarray | None:
+    """Points (N, 3) km the run's 3-D view is framed on: the truth trajectory and the IOD cloud
+    (in the recording's frame)."""
     parts = []
     truth = getattr(run, "truth_states", None)
+    inertial = view is not None and not view.is_synodic
     if truth is not None and len(truth):
-        parts.append(np.asarray(truth, dtype=float)[:, :3])
+        parts.append((view.states(truth, run.truth_times) if inertial else np.asarray(truth, dtype=float))[:, :3])
     cloud = getattr(run, "iod_cloud", None)
     if cloud is not None and len(cloud):
-        states = np.asarray(cloud.states, dtype=float)[:, :3]
+        states = (view.states(cloud.states, cloud.epoch) if inertial
+                  else np.asarray(cloud.states, dtype=float))[:, :3]
         lo, hi = np.percentile(states, [1, 99], axis=0)  # not a stray particle far away
         parts.append(np.stack([lo, hi]))
     return np.concatenate(parts, axis=0) * LU_KM if parts else None
