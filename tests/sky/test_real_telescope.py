@@ -139,3 +139,30 @@ def test_ground_telescope_points_a_real_frame_request_to_real_telescope():
 
     with pytest.raises(ParameterError, match="real-telescope"):
         GroundTelescope(frame_model="real")
+
+
+def test_the_real_sky_sensor_works_with_the_network_unreachable():
+    # Fresh interpreter, every socket connection refused: IERS tables, leap seconds, DE421 and
+    # ERFA all come from installed packages.
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import socket
+        def refuse(*a, **k):
+            raise RuntimeError("network access attempted")
+        socket.socket.connect = refuse
+        socket.create_connection = refuse
+        import numpy as np
+        from cistrack.plugins.sensors.real_telescope import RealTelescope
+        from cistrack.testing.fixtures import lunar_distance_states
+        for epoch in ("2001-02-03T04:05:06Z", "2049-12-01T00:00:00Z"):
+            for kind in ("azel", "radec"):
+                z = RealTelescope(measurement=kind, epoch=epoch).measure(lunar_distance_states(3), 0.1)
+                assert np.all(np.isfinite(z))
+        print("offline-ok")
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert "offline-ok" in out.stdout
