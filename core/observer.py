@@ -118,13 +118,10 @@ class ObserverGeometry:
     def _evaluate(self, s: np.ndarray) -> ObserverState:
         from . import timescales as ts       # astropy loads on first use, not on import
 
-        eo = ts.earth_orientation(self.epoch, s)
-        tt1, tt2 = ts.tt_jd(self.epoch, s)
-        if self.ut1:
-            u1, u2 = ts.ut1_jd(self.epoch, s, eo)
-        else:
-            utc = ts.utc_time(self.epoch, s).utc
-            u1, u2 = np.asarray(utc.jd1, dtype=float), np.asarray(utc.jd2, dtype=float)
+        scales = ts.time_scales(self.epoch, s)
+        eo = scales.orientation
+        tt1, tt2 = scales.tt
+        u1, u2 = scales.ut1 if self.ut1 else scales.utc
         xp = eo.xp if self.polar_motion else np.zeros_like(s)
         yp = eo.yp if self.polar_motion else np.zeros_like(s)
         sp = erfa.sp00(tt1, tt2)
@@ -136,7 +133,7 @@ class ObserverGeometry:
         pv = erfa.pvtob(lon, lat, float(self.site.height_m), xp, yp, sp, era)   # (K, 2, 3) CIRS, m
         pos = np.einsum("kji,kj->ki", rc2i, pv["p"]) / 1000.0
         vel = np.einsum("kji,kj->ki", rc2i, pv["v"]) / 1000.0
-        b1, b2 = ts.tdb_jd(self.epoch, s)
+        b1, b2 = scales.tdb
         pvh, pvb = erfa.epv00(b1, b2)                                   # AU, AU/day
         v_earth = np.asarray(pvb["v"], dtype=float) * (AU_KM / _DAY_S)
         d_sun = np.linalg.norm(np.asarray(pvh["p"], dtype=float), axis=1)

@@ -39,7 +39,7 @@ from .units import DAY_S, parse_utc
 __all__ = [
     "J2000_JD", "MEAN_POLE_ARCSEC", "EarthOrientation",
     "utc_time", "tai_jd", "tt_jd", "tdb_jd", "ut1_jd", "tdb_seconds_since_j2000",
-    "tai_minus_utc", "earth_orientation",
+    "tai_minus_utc", "earth_orientation", "TimeScales", "time_scales",
 ]
 
 iers.conf.auto_download = False          # bundled IERS/leap-second tables only, never the network
@@ -149,12 +149,16 @@ def earth_orientation(epoch: datetime | str, seconds=0.0) -> EarthOrientation:
 
     epoch, seconds as in :func:`utc_time`; results have the shape of ``seconds``.
     """
-    t = utc_time(epoch, seconds)
+    return _orientation_of(utc_time(epoch, seconds))
+
+
+def _orientation_of(t: Time) -> EarthOrientation:
     table = iers.earth_orientation_table.get()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        dut1, st_u = table.ut1_utc(t.utc.jd1, t.utc.jd2, return_status=True)
-        xp, yp, st_p = table.pm_xy(t.utc.jd1, t.utc.jd2, return_status=True)
+        utc = t.utc
+        dut1, st_u = table.ut1_utc(utc.jd1, utc.jd2, return_status=True)
+        xp, yp, st_p = table.pm_xy(utc.jd1, utc.jd2, return_status=True)
     dut1 = np.asarray(u.Quantity(dut1, u.s).to_value(u.s), dtype=float)
     xp = np.asarray(u.Quantity(xp, u.arcsec).to_value(u.rad), dtype=float)
     yp = np.asarray(u.Quantity(yp, u.arcsec).to_value(u.rad), dtype=float)
@@ -164,6 +168,40 @@ def earth_orientation(epoch: datetime | str, seconds=0.0) -> EarthOrientation:
     xp = np.where(in_p, xp, MEAN_POLE_ARCSEC[0] * _ARCSEC_RAD)
     yp = np.where(in_p, yp, MEAN_POLE_ARCSEC[1] * _ARCSEC_RAD)
     return EarthOrientation(dut1, xp, yp, in_u & in_p)
+
+
+@dataclass(frozen=True)
+class TimeScales:
+    """One set of times on every scale: two-part Julian dates (jd1, jd2) and Earth orientation.
+
+    Attributes: ``utc``, ``tt``, ``tdb``, ``ut1`` (each a pair of arrays shaped like the
+    seconds) and ``orientation`` (:class:`EarthOrientation`; UT1 uses its UT1-UTC).
+    """
+
+    utc: tuple[np.ndarray, np.ndarray]
+    tt: tuple[np.ndarray, np.ndarray]
+    tdb: tuple[np.ndarray, np.ndarray]
+    ut1: tuple[np.ndarray, np.ndarray]
+    orientation: EarthOrientation
+
+
+def time_scales(epoch: datetime | str, seconds=0.0) -> TimeScales:
+    """UTC, TT, TDB and UT1 Julian dates and the Earth orientation from one astropy ``Time``.
+
+    The same numbers as :func:`tt_jd`, :func:`tdb_jd`, :func:`ut1_jd` and
+    :func:`earth_orientation`, several times cheaper than calling them one by one.
+    """
+    t = utc_time(epoch, seconds)
+
+    def pair(x) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(x.jd1, dtype=float), np.asarray(x.jd2, dtype=float)
+
+    with _quiet():
+        eo = _orientation_of(t)
+        utc, tt, tdb = pair(t.utc), pair(t.tt), pair(t.tdb)
+        t.delta_ut1_utc = eo.ut1_minus_utc
+        ut1 = pair(t.ut1)
+    return TimeScales(utc, tt, tdb, ut1, eo)
 
 
 def ut1_jd(epoch: datetime | str, seconds=0.0,

@@ -118,3 +118,13 @@ def test_conversions_work_with_the_network_unreachable():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "offline-ok" in out.stdout
+
+
+def test_time_scales_gives_the_same_numbers_as_the_single_conversions():
+    epoch, secs = "2024-02-29T12:00:00Z", np.array([0.0, 3.7e5, 9.9e7])
+    s = ts.time_scales(epoch, secs)
+    for got, want in ((s.tt, ts.tt_jd(epoch, secs)), (s.tdb, ts.tdb_jd(epoch, secs)),
+                      (s.ut1, ts.ut1_jd(epoch, secs))):
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])
+    np.testing.assert_array_equal(s.orientation.xp, ts.earth_orientation(epoch, secs).xp)
