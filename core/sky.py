@@ -44,7 +44,7 @@ import numpy as np
 from .observer import C_KMS, ObserverState
 
 __all__ = ["SkyCorrections", "astrometric_vector", "astrometric_radec", "apparent_azel",
-           "refract_elevation", "standard_pressure_hpa"]
+           "refract_elevation", "unrefract_elevation", "standard_pressure_hpa", "unit_vectors_gcrs"]
 
 _TWO_PI = 2.0 * np.pi
 _SIN_EL_MIN = np.sin(np.radians(3.0))
@@ -170,3 +170,46 @@ def apparent_azel(r_km: np.ndarray, v_kms: np.ndarray, obs: ObserverState, neu_b
     if corrections.refraction:
         el = refract_elevation(el, corrections, height_m)
     return az, el, rho
+
+
+def unrefract_elevation(el_obs: np.ndarray, c: SkyCorrections, height_m: float = 0.0) -> np.ndarray:
+    """Vacuum elevation (N,) rad from observed elevation (N,) rad: :func:`refract_elevation` inverted
+    by fixed-point iteration (the correction changes slowly with elevation)."""
+    el = np.array(el_obs, dtype=float, copy=True)
+    for _ in range(4):
+        el = el_obs - (refract_elevation(el, c, height_m) - el)
+    return el
+
+
+def unit_vectors_gcrs(a: np.ndarray, b: np.ndarray, obs: ObserverState, neu_basis: np.ndarray,
+                      corrections: SkyCorrections, azel: bool, height_m: float = 0.0) -> np.ndarray:
+    """Directions (N, 3), GCRS axes, from the observer towards where targets measured at angles
+    (a, b) (N,) rad are now, up to the target's own motion during the light time.
+
+    azel: (azimuth, elevation) of :func:`apparent_azel`; refraction and aberration are undone
+    (aberration to first order, error ~ (v/c)^2 ~ 1e-8 rad). Otherwise (RA, Dec) of
+    :func:`astrometric_radec`. With light time on, the Earth's barycentric motion during the
+    light time is added back exactly: p + v_earth tau = c tau (u + v_earth / c).
+    """
+    c = corrections
+    if azel:
+        if c.refraction:
+            b = unrefract_elevation(b, c, height_m)
+        cb = np.cos(b)
+        neu = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
+        m = neu_basis @ obs.gcrs_to_itrs                                # GCRS -> NEU
+        u = np.einsum("kji,kj->ki", m, neu) if m.shape[0] == neu.shape[0] else neu @ m[0]
+        beta = np.zeros_like(u)
+        if c.annual_aberration:
+            beta = beta + obs.earth_velocity_kms / C_KMS
+        if c.diurnal_aberration:
+            beta = beta + obs.velocity_kms / C_KMS
+        u = u - beta + np.einsum("ni,ni->n", u, beta)[:, None] * u
+        u /= np.linalg.norm(u, axis=1)[:, None]
+    else:
+        cb = np.cos(b)
+        u = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
+    if c.light_time:
+        u = u + np.broadcast_to(obs.earth_velocity_kms / C_KMS, u.shape)
+        u /= np.linalg.norm(u, axis=1)[:, None]
+    return u

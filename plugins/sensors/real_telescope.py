@@ -21,7 +21,6 @@ uses. Every correction applied is named in ``corrections`` and in each simulated
 """
 from __future__ import annotations
 
-import erfa
 import numpy as np
 
 from cistrack.component import check_choice, check_positive, check_range
@@ -29,10 +28,10 @@ from cistrack.errors import MeasurementError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Sensor
 from cistrack.measurement import MeasurementSet
-from cistrack.observer import C_KMS, ObserverGeometry, neu_basis
+from cistrack.observer import ObserverGeometry, neu_basis
 from cistrack.sites import Site
-from cistrack.sky import (SkyCorrections, apparent_azel, astrometric_radec, refract_elevation,
-                          standard_pressure_hpa)
+from cistrack.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa,
+                          unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
 __all__ = ["RealTelescope"]
@@ -287,29 +286,8 @@ class RealTelescope(Sensor):
             raise MeasurementError("sensor 'real-telescope': angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
         obs = self._observer.state(tt * TU_S)
-        a, b = ang[:, 0], ang[:, 1]
-        c = self.corrections
-        if self.measurement == "azel":
-            if c.refraction:
-                b = _unrefract(b, c)
-            cb = np.cos(b)
-            neu = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
-            m = self._neu @ obs.gcrs_to_itrs                             # GCRS -> NEU
-            u = np.einsum("kji,kj->ki", m, neu) if m.shape[0] == neu.shape[0] else neu @ m[0]
-            beta = np.zeros_like(u)
-            if c.annual_aberration:
-                beta = beta + obs.earth_velocity_kms / C_KMS
-            if c.diurnal_aberration:
-                beta = beta + obs.velocity_kms / C_KMS
-            # first-order inverse of aberration (error ~ (v/c)^2 ~ 1e-8 rad)
-            u = u - beta + np.einsum("ni,ni->n", u, beta)[:, None] * u
-            u /= np.linalg.norm(u, axis=1)[:, None]
-        else:
-            cb = np.cos(b)
-            u = np.stack([cb * np.cos(a), cb * np.sin(a), np.sin(b)], axis=1)
-        if c.light_time:
-            u = u + np.broadcast_to(obs.earth_velocity_kms / C_KMS, u.shape)   # exact: p + v_E tau
-            u /= np.linalg.norm(u, axis=1)[:, None]
+        u = unit_vectors_gcrs(ang[:, 0], ang[:, 1], obs, self._neu, self.corrections,
+                              azel=self.measurement == "azel", height_m=self.height_m)
         if tt.ndim == 0:
             los = u @ self._frame.axes(float(tt)).rotation[0]
         else:
@@ -346,14 +324,6 @@ class RealTelescope(Sensor):
                 "site": {"latitude_deg": self.latitude_deg, "longitude_deg": self.longitude_deg,
                          "height_m": self.height_m}}
         return MeasurementSet(tt, values, s, self.names, meta)
-
-
-def _unrefract(el_obs: np.ndarray, c: SkyCorrections) -> np.ndarray:
-    """Vacuum elevation from observed elevation (rad): invert A tan z + B tan^3 z by iteration."""
-    el = np.array(el_obs, dtype=float, copy=True)
-    for _ in range(4):                                   # the correction changes slowly with el
-        el = el_obs - (refract_elevation(el, c, 0.0) - el)
-    return el
 
 
 @hookimpl
