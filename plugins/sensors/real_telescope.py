@@ -13,11 +13,10 @@ them to GCRS km, km/s with that frame, places the observer with ERFA
 
 With ``measure_range`` the geometric observer-target distance (LU) is a third component (IOD only).
 
-``line_of_sight`` inverts what does not depend on the target's own motion (refraction,
-aberration, the Earth's barycentric motion during the light time), so ``observer + range * los``
-misses the target only by its geocentric velocity times the light time (about 1 km for 1 km/s
-at lunar distance): :attr:`line_of_sight_tolerance_lu` declares the bound the conformance suite
-uses. Every correction applied is named in ``corrections`` and in each simulated set's meta.
+``line_of_sight`` inverts what does not depend on the target's own motion
+(:func:`cistrack.sky.unit_vectors_gcrs`); the miss left, the target's velocity times the light
+time, is declared as :attr:`line_of_sight_tolerance_lu`. Every correction applied is named in
+``corrections`` and in each simulated set's meta.
 """
 from __future__ import annotations
 
