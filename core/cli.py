@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from .errors import CistrackError, ConfigError
@@ -296,17 +298,41 @@ def _configure_logging(quiet: bool) -> None:
     logger.setLevel(logging.WARNING if quiet else logging.INFO)
 
 
+def _on_signal(signum, frame) -> None:
+    from .errors import RunInterrupted
+
+    raise RunInterrupted(signal.Signals(signum).name)
+
+
+def _install_signal_handlers() -> dict:
+    """SIGTERM and SIGHUP end a run like Ctrl-C (completed steps merged, manifest "interrupted");
+    only in the main thread of the process running ``main``. Returns the previous handlers."""
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in ("SIGTERM", "SIGHUP"):
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                old[sig] = signal.signal(sig, _on_signal)
+    return old
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _configure_logging(bool(getattr(args, "quiet", False)))
+    previous = _install_signal_handlers()
     try:
         return int(args.func(args) or 0)
     except CistrackError as exc:
         _eprint(f"cistrack: error: {exc}")
         return 2
-    except KeyboardInterrupt:
-        _eprint("cistrack: interrupted")
-        return 130
+    except KeyboardInterrupt as exc:
+        why = str(exc) or "SIGINT"
+        _eprint(f"cistrack: interrupted ({why}); completed steps are kept and the manifest says 'interrupted'")
+        sig = getattr(signal, why, None) if why.startswith("SIG") else None
+        return 128 + int(sig) if sig is not None else 130
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 if __name__ == "__main__":

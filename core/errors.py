@@ -47,3 +47,8 @@ class StateError(CistrackError, ValueError):
 
 class PropagationError(CistrackError, RuntimeError):
     """The integrator could not reach the requested time (step limit or step-size underflow)."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """A signal (SIGTERM, SIGHUP) asked the process to stop; raised where it arrives so that the
+    run ends like a Ctrl-C: completed steps merged, manifest "interrupted" with the signal."""

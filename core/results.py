@@ -2,7 +2,9 @@
 
 Layout of a run directory::
 
-    manifest.json        scenario, seed, versions, timings, status ("running" / "finished" / "failed")
+    manifest.json        scenario, seed, versions, timings, status ("running", "finished",
+                         "filter-failed", "failed" or "interrupted", with the reason in
+                         summary.failure)
     scenario.toml        the scenario as run (tables after overrides)
     steps.parquet        one row per step (written when the run finishes)
     steps/part-*.parquet one file per step while running (atomic rename: a killed run leaves
@@ -24,6 +26,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .fingerprint import scenario_fingerprint
 from .hookspecs import hookimpl
 from .step_table import is_table_step, step_row
 
@@ -100,6 +103,7 @@ class ResultsWriter:
         self._manifest = {
             "run_id": run.run_id, "scenario": scen.name, "scenario_source": scen.source,
             "seed": int(run.seed), "status": "running", "epoch": run.epoch.isoformat(),
+            "fingerprint": scenario_fingerprint(scen, run.seed),
             "components": {t: {"name": s.name, "params": {k: (v.name if hasattr(v, "kind") and hasattr(v, "params") else v)
                                                          for k, v in s.params.items()}}
                            for t, s in scen.components.items()},
@@ -140,15 +144,26 @@ class ResultsWriter:
 
     @hookimpl
     def cistrack_run_finished(self, run, summary) -> None:
+        """Merge the parts into steps.parquet and record the status. If the merge fails (a full
+        disk) the parts stay (``read_steps`` reads them) and the manifest says why."""
         parts = sorted((self.directory / PARTS).glob("part-*.parquet"))
+        status, extra = summary.status, {}
         if parts:
-            table = pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
             tmp = self.directory / (STEPS + ".tmp")
-            pq.write_table(table, tmp)
-            os.replace(tmp, self.directory / STEPS)
-            for p in parts:
-                p.unlink()
-        self._manifest.update({"status": summary.status, "summary": summary.to_dict(),
+            try:
+                table = pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+                pq.write_table(table, tmp)
+                os.replace(tmp, self.directory / STEPS)
+                for p in parts:
+                    p.unlink()
+            except OSError as exc:
+                tmp.unlink(missing_ok=True)
+                status = "failed" if status == "finished" else status
+                extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the {len(parts)} completed steps stay "
+                                          f"in {PARTS}/part-*.parquet")
+        data = summary.to_dict()
+        data["status"] = status
+        self._manifest.update({"status": status, "summary": data, **extra,
                                "wall_time_s": time.perf_counter() - self._t0,
                                "finished_unix": time.time()})
         write_json_atomic(self.directory / MANIFEST, self._manifest)

@@ -12,6 +12,7 @@ every filter and IOD variant sees the same measurements.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -224,11 +225,12 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     filt.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rngs["filter"])
     step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", filt.belief)
     step0.timings["initialize"] = time.perf_counter() - t0
-    pm.hook.cistrack_run_started(run=ctx)
-    pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
 
     status, failure = "finished", ""
+    abort: BaseException | None = None
     try:
+        pm.hook.cistrack_run_started(run=ctx)
+        pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
         for k, (t, mi) in enumerate(events, start=1):
             tp = time.perf_counter()
             filt.predict(t)
@@ -250,12 +252,46 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
         status = "filter-failed"
         failure = f"{type(exc).__name__}: {exc}"
-        pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
+        try:
+            pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
+        except Exception as obs_exc:  # an observer failing on the failure: still finish the run
+            status, failure = "failed", f"{failure}; then {type(obs_exc).__name__}: {obs_exc}"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
+        status, abort = "interrupted", exc
+        failure = f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)"
+    except Exception as exc:  # an observer (recorder, results writer: full disk) or anything else
+        status, failure = "failed", f"{type(exc).__name__}: {exc}"
 
     summary = summarize(ctx, collector.rows, custody.verdict, status, failure,
                         time.perf_counter() - t_start, t_prepare)
-    pm.hook.cistrack_run_finished(run=ctx, summary=summary)
+    summary = _finish(pm, ctx, summary)
+    if abort is not None:
+        raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _finish(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:
+    """Call every observer's ``cistrack_run_finished``, each on its own, results writers last, so
+    that one failing observer (a recorder, a full disk) never keeps the completed steps from
+    being merged; an observer's failure turns a finished run into "failed" with the reason."""
+    from .results import ResultsWriter
+
+    impls = pm.hook.cistrack_run_finished.get_hookimpls()
+    writers = [i for i in impls if isinstance(i.plugin, ResultsWriter)]
+    errors = []
+    for impl in [i for i in impls if i not in writers] + writers:
+        if impl in writers and errors:
+            summary = dataclasses.replace(
+                summary, status="failed" if summary.status == "finished" else summary.status,
+                failure="; ".join(([summary.failure] if summary.failure else []) + errors))
+        try:
+            args = {"run": ctx, "summary": summary}
+            impl.function(*[args[a] for a in impl.argnames])
+        except Exception as exc:
+            errors.append(f"{impl.plugin_name}: {type(exc).__name__}: {exc}")
+    if errors and summary.status == "finished":
+        summary = dataclasses.replace(summary, status="failed", failure="; ".join(errors))
+    return summary
 
 
 def _iod_message(name: str, cloud, n_measurements: int) -> str:

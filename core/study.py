@@ -30,6 +30,7 @@ from typing import Any
 
 
 from .errors import ConfigError
+from .fingerprint import scenario_fingerprint
 from .limits import check_count, check_path_component, check_seed
 from .results import read_manifest
 from .run_summary import RunSummary
@@ -59,6 +60,7 @@ class RunSpec:
     filter_label: str
     iod_label: str
     rerun_path: str | None = None
+    fingerprint: str = ""  # of the resolved scenario and seed (cistrack.fingerprint)
 
 
 def builtin_studies() -> dict[str, str]:
@@ -173,7 +175,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
                 for seed in seeds:
                     rid = f"{base.name}__{fl}__{il}__seed{seed}"
                     specs.append(RunSpec(rid, scen_path, int(seed), ov, str(out / "runs" / rid),
-                                         base.name, fl, il))
+                                         base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
     ids = [s.run_id for s in specs]
     if len(set(ids)) != len(ids):
         raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
@@ -245,7 +247,26 @@ def make_executor(workers: int | None = None, dask: str | None = None):
                                   initializer=_worker_init, initargs=(max(1, cores // n),))
 
 
+def _run_state(spec: RunSpec) -> str:
+    """"done" (finished with this fingerprint), "stale" (finished, but its scenario, seed or input
+    file changed since: it is rerun), or "todo" (missing, running when killed, interrupted, failed)."""
+    out_dir = spec.out_dir
+    m = Path(out_dir) / "manifest.json"
+    if not m.exists():
+        return "todo"
+    try:
+        man = read_manifest(out_dir)
+    except (json.JSONDecodeError, OSError):
+        return "todo"
+    if man.get("status") not in _DONE or not (Path(out_dir) / "steps.parquet").exists():
+        return "todo"
+    if spec.fingerprint and man.get("fingerprint") != spec.fingerprint:
+        return "stale"
+    return "done"
+
+
 def _is_done(out_dir: str) -> bool:
+    """Whether the run in ``out_dir`` ended (finished or filter-failed) with its table merged."""
     m = Path(out_dir) / "manifest.json"
     if not m.exists():
         return False
@@ -274,8 +295,14 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data,
                                                "settings": list(settings or [])}, indent=2, default=str))
-    todo = [s for s in specs if not _is_done(s.out_dir)]
+    states = {s.run_id: _run_state(s) for s in specs}
+    todo = [s for s in specs if states[s.run_id] != "done"]
     skipped = len(specs) - len(todo)
+    stale = [s.run_id for s in specs if states[s.run_id] == "stale"]
+    if stale:
+        print(f"study: {len(stale)} finished run(s) were made with another scenario, seed or input file "
+              f"(fingerprint changed) and are run again: {', '.join(stale[:5])}"
+              + (" ..." if len(stale) > 5 else ""), file=sys.stderr)
     own = executor is None
     ex = executor or (make_executor(workers, dask) if todo else None)
     completed = failed = 0

@@ -33,6 +33,7 @@ event counter; the viewer process is in :mod:`.viewer_process`, the blueprint in
 from __future__ import annotations
 
 import os
+import socket
 import subprocess
 import uuid
 from datetime import timedelta
@@ -88,6 +89,16 @@ def subsample_indices(n: int, max_points: int, seed: int = 0) -> np.ndarray | No
         return None
     rng = np.random.default_rng([int(seed), int(n)])
     return np.sort(rng.choice(n, size=max_points, replace=False))
+
+
+def _port_in_use(port: int) -> bool:
+    """Whether 127.0.0.1:``port`` cannot be bound now (another server holds it)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((LOOPBACK, port))
+        except OSError:
+            return True
+    return False
 
 
 class RerunRecorder(Component):
@@ -147,6 +158,18 @@ class RerunRecorder(Component):
                                  "or spawn=True")
         if self.spawn:
             check_viewer()
+        # Checked here, before a run computes anything: a taken port or an unwritable file would
+        # otherwise only fail when the run starts recording.
+        if self.serve and self.serve_port and _port_in_use(self.serve_port):
+            self._fail("serve_port", self.serve_port,
+                       f"127.0.0.1:{self.serve_port} is already in use (another viewer or run?); stop "
+                       "that process or give another serve_port")
+        if self.path is not None:
+            target = Path(self.path)
+            folder = target if target.is_dir() else target.parent  # a directory: one file per run
+            if not folder.is_dir() or not os.access(folder, os.W_OK):
+                self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
+                           "not writable")
         self._rec: rr.RecordingStream | None = None
         self._viewer: subprocess.Popen | None = None
         self._event = 0

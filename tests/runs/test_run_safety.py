@@ -1,0 +1,170 @@
+"""No result is lost: a failing observer, a full disk or a signal ends the run with the completed
+steps merged and a manifest that says what happened; a study reruns what changed."""
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from cistrack.hookspecs import hookimpl
+from cistrack.results import read_manifest, read_steps
+from cistrack.run import run_scenario
+from cistrack.scenario import load_scenario
+from cistrack.study import run_study
+
+
+def _small():
+    return load_scenario("quick").with_overrides({"duration_days": 1.4, "filter": {"n_particles": 300, "n_components": 2},
+                                                  "iod": {"n_particles": 300}})
+
+
+class FailsAtStep:
+    """An observer (as a third-party recorder would be) that raises when step ``k`` is updated."""
+
+    def __init__(self, k: int, exc: BaseException):
+        self.k, self.exc = k, exc
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step):
+        if step.index >= self.k:
+            raise self.exc
+
+
+def test_a_failing_observer_ends_the_run_failed_with_completed_steps_merged(tmp_path):
+    out = tmp_path / "r"
+    res = run_scenario(_small(), seed=1, output_dir=out,
+                       observers=[FailsAtStep(3, OSError(28, "No space left on device"))])
+    assert res.summary.status == "failed"
+    assert "No space left on device" in res.summary.failure
+    man = read_manifest(out)
+    assert man["status"] == "failed" and "No space left on device" in man["summary"]["failure"]
+    steps = read_steps(out)
+    assert (out / "steps.parquet").exists() and not list((out / "steps").glob("part-*"))
+    assert steps.num_rows == len(res.rows) >= 3
+
+
+def test_ctrl_c_ends_the_run_interrupted_with_completed_steps_merged(tmp_path):
+    out = tmp_path / "r"
+    with pytest.raises(KeyboardInterrupt):
+        run_scenario(_small(), seed=1, output_dir=out, observers=[FailsAtStep(2, KeyboardInterrupt())])
+    man = read_manifest(out)
+    assert man["status"] == "interrupted"
+    assert "SIGINT" in man["summary"]["failure"]
+    assert (out / "steps.parquet").exists() and read_steps(out).num_rows >= 2
+
+
+def test_sigterm_to_the_cli_leaves_an_interrupted_manifest_and_readable_steps(tmp_path):
+    out = tmp_path / "term"
+    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 240
+    parts: list = []
+    while time.time() < deadline:
+        parts = list((out / "steps").glob("part-*.parquet")) if (out / "steps").exists() else []
+        if len(parts) >= 2 or proc.poll() is not None:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert len(parts) >= 2, "the run did not get two steps in"
+    assert proc.returncode == 128 + signal.SIGTERM
+    assert "interrupted (SIGTERM)" in err and "Traceback" not in err
+    man = read_manifest(out)
+    assert man["status"] == "interrupted" and "SIGTERM" in man["summary"]["failure"]
+    assert read_steps(out).num_rows >= 2
+
+
+def test_rerun_serve_with_the_port_taken_is_refused_before_computing(tmp_path):
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        from cistrack.registry import default_registry
+        from cistrack.errors import ParameterError
+        with pytest.raises(ParameterError, match=f"127.0.0.1:{port} is already in use"):
+            default_registry().create("recorder", "rerun", serve=True, serve_port=port)
+
+
+def test_rerun_serve_from_the_cli_with_the_default_port_taken_fails_fast(tmp_path):
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind(("127.0.0.1", 9876))
+        except OSError:
+            pytest.skip("port 9876 is held by another process")
+        s.listen(1)
+        t0 = time.time()
+        proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(tmp_path / "r"),
+                               "--rerun-serve", "--quiet"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "serve_port" in proc.stderr and "already in use" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "r" / "manifest.json").exists()  # nothing was computed
+    assert time.time() - t0 < 60
+
+
+def test_rerun_to_an_unwritable_place_is_refused_before_computing(tmp_path):
+    from cistrack.errors import ParameterError
+    from cistrack.registry import default_registry
+
+    with pytest.raises(ParameterError, match="cannot be written"):
+        default_registry().create("recorder", "rerun", path=str(tmp_path / "no" / "such" / "dir" / "x.rrd"))
+
+
+def test_default_results_directory_names_filter_and_iod(tmp_path):
+    scen = tmp_path / "s.toml"
+    scen.write_text((load_scenario("quick").source and open(load_scenario("quick").source).read())
+                    .replace("n_particles = 1000", "n_particles = 300").replace("duration_days = 2.0", "duration_days = 1.4"))
+    for f in ("pgm", "enkf"):
+        proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", str(scen), "--quiet", "--set", f"filter.name=\"{f}\""]
+                              + (["--set", "filter.n_components=2"] if f == "pgm" else []),
+                              capture_output=True, text=True, cwd=tmp_path)
+        assert proc.returncode in (0, 3), proc.stderr
+    names = sorted(p.name for p in (tmp_path / "runs").iterdir())
+    assert names == ["quick__enkf__noisy-range__seed1", "quick__pgm__noisy-range__seed1"]
+
+
+STUDY = """
+name = "fp"
+scenarios = ["quick"]
+filters = [{{ name = "pgm", n_particles = 200, n_components = 2 }}]
+iod = [{{ name = "noisy-range", n_particles = 200 }}]
+seeds = [1]
+[overrides]
+duration_days = {days}
+"""
+
+
+def test_a_study_reruns_a_finished_run_whose_scenario_changed(tmp_path, capsys):
+    p = tmp_path / "fp.toml"
+    p.write_text(STUDY.format(days=1.4))
+    out = tmp_path / "out"
+    first = run_study(p, out_dir=out, workers=1, progress=False)
+    assert (first["completed"], first["skipped"]) == (1, 0)
+    again = run_study(p, out_dir=out, workers=1, progress=False)
+    assert (again["completed"], again["skipped"]) == (0, 1)
+    run_dir = next((out / "runs").iterdir())
+    fp_before = read_manifest(run_dir)["fingerprint"]
+    p.write_text(STUDY.format(days=1.3))
+    changed = run_study(p, out_dir=out, workers=1, progress=False)
+    assert (changed["completed"], changed["skipped"]) == (1, 0)
+    assert "fingerprint changed" in capsys.readouterr().err
+    assert read_manifest(run_dir)["fingerprint"] != fp_before
+
+
+def test_a_study_resumes_an_interrupted_run(tmp_path):
+    p = tmp_path / "fp.toml"
+    p.write_text(STUDY.format(days=1.4))
+    out = tmp_path / "out"
+    run_study(p, out_dir=out, workers=1, progress=False)
+    run_dir = next((out / "runs").iterdir())
+    import json
+    man = json.loads((run_dir / "manifest.json").read_text())
+    man["status"] = "interrupted"
+    (run_dir / "manifest.json").write_text(json.dumps(man))
+    again = run_study(p, out_dir=out, workers=1, progress=False)
+    assert (again["completed"], again["skipped"]) == (1, 0)
+    assert read_manifest(run_dir)["status"] == "finished"
