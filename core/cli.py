@@ -14,12 +14,12 @@ import argparse
 import json
 import signal
 import sys
-import threading
 from pathlib import Path
 
 from .errors import CistrackError, ConfigError
 from .limits import check_seed
 from .output_paths import check_output_dir
+from .signals import install_signal_handlers
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -298,28 +298,10 @@ def _configure_logging(quiet: bool) -> None:
     logger.setLevel(logging.WARNING if quiet else logging.INFO)
 
 
-def _on_signal(signum, frame) -> None:
-    from .errors import RunInterrupted
-
-    raise RunInterrupted(signal.Signals(signum).name)
-
-
-def _install_signal_handlers() -> dict:
-    """SIGTERM and SIGHUP end a run like Ctrl-C (completed steps merged, manifest "interrupted");
-    only in the main thread of the process running ``main``. Returns the previous handlers."""
-    old = {}
-    if threading.current_thread() is threading.main_thread():
-        for name in ("SIGTERM", "SIGHUP"):
-            sig = getattr(signal, name, None)
-            if sig is not None:
-                old[sig] = signal.signal(sig, _on_signal)
-    return old
-
-
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     _configure_logging(bool(getattr(args, "quiet", False)))
-    previous = _install_signal_handlers()
+    previous = install_signal_handlers()
     try:
         return int(args.func(args) or 0)
     except CistrackError as exc:

@@ -31,6 +31,7 @@ from typing import Any
 
 from .errors import ConfigError
 from .fingerprint import scenario_fingerprint
+from .study_resume import is_done, run_state
 from .limits import check_count, check_path_component, check_seed
 from .results import read_manifest
 from .run_summary import RunSummary
@@ -44,7 +45,6 @@ __all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study",
            "builtin_studies", "make_executor"]
 
 _STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "overrides"}
-_DONE = ("finished", "filter-failed")
 
 
 @dataclass(frozen=True)
@@ -247,35 +247,6 @@ def make_executor(workers: int | None = None, dask: str | None = None):
                                   initializer=_worker_init, initargs=(max(1, cores // n),))
 
 
-def _run_state(spec: RunSpec) -> str:
-    """"done" (finished with this fingerprint), "stale" (finished, but its scenario, seed or input
-    file changed since: it is rerun), or "todo" (missing, running when killed, interrupted, failed)."""
-    out_dir = spec.out_dir
-    m = Path(out_dir) / "manifest.json"
-    if not m.exists():
-        return "todo"
-    try:
-        man = read_manifest(out_dir)
-    except (json.JSONDecodeError, OSError):
-        return "todo"
-    if man.get("status") not in _DONE or not (Path(out_dir) / "steps.parquet").exists():
-        return "todo"
-    if spec.fingerprint and man.get("fingerprint") != spec.fingerprint:
-        return "stale"
-    return "done"
-
-
-def _is_done(out_dir: str) -> bool:
-    """Whether the run in ``out_dir`` ended (finished or filter-failed) with its table merged."""
-    m = Path(out_dir) / "manifest.json"
-    if not m.exists():
-        return False
-    try:
-        return read_manifest(out_dir).get("status") in _DONE and (Path(out_dir) / "steps.parquet").exists()
-    except (json.JSONDecodeError, OSError):
-        return False
-
-
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
               rerun_dir: str | Path | None = None, settings: list[str] | None = None) -> dict:
@@ -295,7 +266,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data,
                                                "settings": list(settings or [])}, indent=2, default=str))
-    states = {s.run_id: _run_state(s) for s in specs}
+    states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
     todo = [s for s in specs if states[s.run_id] != "done"]
     skipped = len(specs) - len(todo)
     stale = [s.run_id for s in specs if states[s.run_id] == "stale"]

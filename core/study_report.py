@@ -14,7 +14,8 @@ import numpy as np
 from .errors import ConfigError
 from .results import read_manifest, read_steps
 from .run_summary import RunSummary
-from .study import _is_done, plan_runs
+from .study import plan_runs
+from .study_resume import is_done
 
 __all__ = ["report_study"]
 
@@ -57,7 +58,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     tables: dict[tuple[str, str, str], list] = {}
     missing = 0
     for s in specs:
-        if not _is_done(s.out_dir):
+        if not is_done(s.out_dir):
             missing += 1
             continue
         man = read_manifest(s.out_dir)
