@@ -15,7 +15,7 @@ The Moon and Sun come from DE421's own records packed into the parameter vector 
 geocentric Moon series, and one "Sun minus Earth-Moon barycentre" series (both 16-day series of
 DE421 on the same grid, subtracted record by record), so s = (sun - emb) + m/(1+EMRAT). Both
 are re-expressed exactly (polynomial algebra, then dropping powers below 1e-8 km for the Moon and
-1e-5 km for the Sun) on one grid of 1-day records in the power basis, so one Horner loop of six
+1e-5 km for the Sun) on one grid of 6-hour records in the power basis, so one Horner loop of six
 independent chains evaluates both (:func:`pack_params`).
 
 Parameter vector layout (float64; written by :func:`pack_params`)::
@@ -247,16 +247,16 @@ def resample_power_basis(series: ChebyshevSeries, start_s: float, length_s: floa
 
 
 def pack_params(constants: np.ndarray, moon: ChebyshevSeries, sun_minus_emb: ChebyshevSeries,
-                lu_km: float, tu_s: float, record_s: float = 86_400.0,
+                lu_km: float, tu_s: float, record_s: float = 21_600.0,
                 moon_drop_below_km: float = 1e-8, sun_drop_below_km: float = 1e-5) -> np.ndarray:
     """The flat parameter vector: ``constants`` (12,) already scaled, then one joint series.
 
     DE421's Moon (4-day records) and Sun-minus-barycentre (16-day) series are re-expressed
-    exactly on a common grid of ``record_s`` records (default 1 day, which divides both), in the
+    exactly on a common grid of ``record_s`` records (default 6 hours, which divides both), in the
     power basis, scaled to LU and TU; trailing powers below ``moon_drop_below_km`` (1e-8 km) and
     ``sun_drop_below_km`` (1e-5 km: the solar tide on a cislunar orbit changes by < 1e-17 km/s^2)
-    are dropped. Measured: 8 powers for the Moon, 4 for the Sun; the Moon agrees with DE421's own
-    evaluation to < 1e-7 km.
+    are dropped. Measured: 8 powers per record (11 with 1-day records), and CPU time per
+    particle-period 2.7x cr3bp against 3.6x with 1-day records (benchmarks/bench_ephemeris.py).
     """
     lo = max(moon.start_s, sun_minus_emb.start_s)
     hi = min(moon.end_s, sun_minus_emb.end_s)
