@@ -12,13 +12,14 @@ import numpy as np
 
 from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
-from cistrack.errors import FilterError, ParameterError
+from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
+from .clusterer_choice import resolve_clusterer
 from .ensemble_propagation import propagate_particles
 from .initial_cloud import check_cloud, initial_particles
 from .component_update import ensemble_component_update, iterated_component_update
@@ -30,44 +31,6 @@ from .state_bounds import StateBounds, earth_position
 __all__ = ["PGMFilter", "PaperPGMFilter", "resolve_clusterer"]
 
 _REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
-
-
-def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, registry=None) -> Clusterer:
-    """The PGM's clusterer, with the PGM's ``n_components`` where the clusterer takes one.
-
-    In a scenario the clusterer arrives built (through the run's registry, also when left at
-    its default name). A name given in Python is created through ``registry`` (default: the
-    installed plugins). The rule for ``n_components``: a clusterer left at its class default
-    gets the PGM's value (on a copy; the caller's instance is not modified); one whose own
-    ``n_components`` was set to a different value is refused with a ParameterError (set it in
-    one place).
-    """
-    if isinstance(clusterer, str):
-        if registry is None:
-            from cistrack.registry import default_registry
-            registry = default_registry()
-        cls = registry.get("clustering", clusterer).factory
-        takes_m = n_components is not None and "n_components" in _params_of(cls)
-        return registry.create("clustering", clusterer, **({"n_components": n_components} if takes_m else {}))
-    specs = _params_of(type(clusterer))
-    if n_components is None or "n_components" not in specs:
-        return clusterer
-    own = clusterer.get_params()["n_components"]
-    if own == n_components:
-        return clusterer
-    if own != specs["n_components"].default:
-        raise ParameterError(
-            f"filter 'pgm': n_components = {n_components} conflicts with the clusterer "
-            f"'{type(clusterer).registry_name or type(clusterer).__name__}' n_components = {own}; "
-            "set it in one place (a clusterer left at its default takes the filter's n_components)")
-    params = clusterer.get_params()
-    params["n_components"] = n_components
-    return type(clusterer)(**params)
-
-
-def _params_of(cls) -> dict:
-    from cistrack.component import param_specs
-    return param_specs(cls)
 
 
 class PGMFilter(FilterBase):

@@ -1,0 +1,45 @@
+"""The PGM's clusterer: a registry name or an instance, with the filter's n_components."""
+from __future__ import annotations
+
+from cistrack.errors import ParameterError
+from cistrack.interfaces import Clusterer
+
+__all__ = ["resolve_clusterer"]
+
+
+def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, registry=None) -> Clusterer:
+    """The PGM's clusterer, with the PGM's ``n_components`` where the clusterer takes one.
+
+    In a scenario the clusterer arrives built (through the run's registry, also when left at
+    its default name). A name given in Python is created through ``registry`` (default: the
+    installed plugins). The rule for ``n_components``: a clusterer left at its class default
+    gets the PGM's value (on a copy; the caller's instance is not modified); one whose own
+    ``n_components`` was set to a different value is refused with a ParameterError (set it in
+    one place).
+    """
+    if isinstance(clusterer, str):
+        if registry is None:
+            from cistrack.registry import default_registry
+            registry = default_registry()
+        cls = registry.get("clustering", clusterer).factory
+        takes_m = n_components is not None and "n_components" in _params_of(cls)
+        return registry.create("clustering", clusterer, **({"n_components": n_components} if takes_m else {}))
+    specs = _params_of(type(clusterer))
+    if n_components is None or "n_components" not in specs:
+        return clusterer
+    own = clusterer.get_params()["n_components"]
+    if own == n_components:
+        return clusterer
+    if own != specs["n_components"].default:
+        raise ParameterError(
+            f"filter 'pgm': n_components = {n_components} conflicts with the clusterer "
+            f"'{type(clusterer).registry_name or type(clusterer).__name__}' n_components = {own}; "
+            "set it in one place (a clusterer left at its default takes the filter's n_components)")
+    params = clusterer.get_params()
+    params["n_components"] = n_components
+    return type(clusterer)(**params)
+
+
+def _params_of(cls) -> dict:
+    from cistrack.component import param_specs
+    return param_specs(cls)
