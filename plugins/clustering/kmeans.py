@@ -16,7 +16,7 @@ __all__ = ["KMeansClusterer"]
 
 
 class KMeansClusterer(Clusterer):
-    """k-means (Lloyd) on standardised coordinates; the paper's clusterer for the PGM filter (cistrack's PGM defaults to "gmm").
+    """k-means (Lloyd) on standardised coordinates; the paper's clusterer for the PGM filter (and the default of cistrack's PGM, which updates each cluster with an iterated update).
 
     Parameters
     ----------
