@@ -14,10 +14,19 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any
 
+import numpy as np
+
 from . import units
+from .primaries import MU_EARTH_MOON
 from .hookspecs import hookimpl
 
-__all__ = ["CustodyRule", "Verdict", "CustodyObserver"]
+__all__ = ["CustodyRule", "Verdict", "CustodyObserver", "KEPT_KINDS", "VERDICT_KINDS"]
+
+KEPT_KINDS: tuple[str, ...] = ("kept", "tracking", "not-converged")
+"""Verdict kinds under which custody is kept (``custody_kept`` is True)."""
+VERDICT_KINDS: tuple[str, ...] = ("tracking", "not-converged", "lost", "diverged", "filter-failed",
+                                  "no-truth")
+"""Final verdict kinds of a run."""
 
 
 @dataclass(frozen=True)
@@ -32,6 +41,21 @@ class CustodyRule:
     loglik_threshold: float = -100.0
     hdr_threshold: float = 0.997
     hdr_consecutive: int = 2
+    precision_km: float = 100.0
+    """A run that keeps custody is "tracking" only if its final largest per-axis position sigma
+    is at most this (km); above it the cloud is consistent but too wide to be a track
+    ("not-converged")."""
+    collapse_sigma_km: float = 1e-3
+    """A final largest per-axis position sigma below this (km, 1 m) is a collapsed belief: no
+    telescope at 1.5 arcsec can pin a cislunar object that tightly ("diverged")."""
+    diverged_error_km: float = 50.0
+    diverged_nees: float = 1e4
+    """A final position error above ``diverged_error_km`` (km) together with a NEES above
+    ``diverged_nees`` (error far beyond sigma: a 6-D chi-square exceeds 1e4 with probability
+    ~0) is a diverged filter."""
+    max_earth_distance_km: float = 2e6
+    """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
+    space ("diverged")."""
 
 
 @dataclass(frozen=True)
@@ -40,8 +64,12 @@ class Verdict:
 
     Attributes
     ----------
-    kind : str                 "kept", "lost" (truth left the belief) or "filter-failed"
-                               (the filter raised); observers may add kinds
+    kind : str                 during a run "kept", "lost" (truth left the belief) or
+                               "filter-failed" (the filter raised); at the end of a run with a
+                               truth :func:`cistrack.verdicts.final_verdict` turns "kept" into
+                               "tracking" or "not-converged" and any kind but "filter-failed"
+                               into "diverged" when the belief collapsed or ran away; a run
+                               without a truth ends "no-truth" (judged by its NIS instead)
     reason : str               one sentence a person can read, e.g. which threshold was crossed
     step : int or None         step index where the verdict changed from "kept" (None if kept)
     t_days : float or None     time of that step, days since the epoch
@@ -54,7 +82,8 @@ class Verdict:
 
     @property
     def kept(self) -> bool:
-        return self.kind == "kept"
+        """Custody kept: "kept" (during a run), "tracking" or "not-converged"."""
+        return self.kind in KEPT_KINDS
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -64,6 +93,9 @@ class Verdict:
         return cls(**{k: data.get(k) for k in ("kind", "reason", "step", "t_days")})
 
 
+_EARTH = np.array([-MU_EARTH_MOON, 0.0, 0.0])  # Earth in the synodic frame (LU)
+
+
 class CustodyObserver:
     """Judges custody on every update step of a run with a truth (see the module docstring)."""
 
@@ -71,6 +103,8 @@ class CustodyObserver:
         self.rule = rule or CustodyRule()
         self.verdict = Verdict()
         self._hdr_run = 0
+        self.earth_distance_km: float | None = None
+        """Distance of the last posterior mean from Earth (km), for the final verdict."""
 
     def judge(self, step) -> Verdict | None:
         """The verdict after update ``step`` if custody is lost there, else None."""
@@ -84,13 +118,19 @@ class CustodyObserver:
                            f"on {self._hdr_run} consecutive updates", step.index, float(units.tu_to_days(step.t)))
         return None
 
-    def _mark(self, step) -> None:
-        step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
+    def _mark(self, run, step) -> None:
+        if getattr(run, "truth", None) is not None:  # no truth: no custody column at all
+            step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
+
+    def _track_mean(self, step) -> None:
+        mean = np.asarray(step.belief.mixture.mean, dtype=float)
+        self.earth_distance_km = float(np.linalg.norm(mean[:3] - _EARTH) * units.LU_KM)
 
     @hookimpl(tryfirst=True)
     def cistrack_step_predicted(self, run, step) -> None:
         if step.kind in ("initial", "predict"):
-            self._mark(step)
+            self._mark(run, step)
+            self._track_mean(step)
 
     @hookimpl(tryfirst=True)
     def cistrack_step_updated(self, run, step) -> None:
@@ -98,7 +138,8 @@ class CustodyObserver:
             lost = self.judge(step)
             if lost is not None:
                 self.verdict = lost
-        self._mark(step)
+        self._mark(run, step)
+        self._track_mean(step)
 
     @hookimpl
     def cistrack_run_failed(self, run, step_index, error) -> None:

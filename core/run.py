@@ -23,6 +23,7 @@ import pluggy
 
 from . import hookspecs, units
 from .custody import CustodyObserver
+from .verdicts import final_verdict
 from .limits import check_seed
 from .errors import CistrackError, ConfigError
 from .metrics import step_metrics
@@ -262,7 +263,10 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     except Exception as exc:  # an observer (recorder, results writer: full disk) or anything else
         status, failure = "failed", f"{type(exc).__name__}: {exc}"
 
-    summary = summarize(ctx, collector.rows, custody.verdict, status, failure,
+    verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
+                            custody.earth_distance_km) if status in ("finished", "filter-failed") \
+        else custody.verdict
+    summary = summarize(ctx, collector.rows, verdict, status, failure,
                         time.perf_counter() - t_start, t_prepare)
     summary = _finish(pm, ctx, summary)
     if abort is not None:

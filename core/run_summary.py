@@ -29,7 +29,8 @@ class RunSummary:
     seed : int
     status : str                 "finished" or "filter-failed"
     failure : str                the error that stopped the filter ("" if none)
-    verdict : Verdict            custody (kind, reason, step, t_days)
+    verdict : Verdict            final verdict (kind, reason, step, t_days): tracking,
+                                 not-converged, lost, diverged, filter-failed or no-truth
     n_steps, n_updates, n_measurements, n_passes : int
     final : dict                 FINAL_KEYS of the last update (or the last step), km, m/s, cm/s
     pass_end : dict              pass number (str) -> FINAL_KEYS and t_days at its last update
@@ -64,10 +65,12 @@ class RunSummary:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict (the manifest's ``summary``)."""
+        custody = {} if self.verdict.kind == "no-truth" else {  # no truth: no custody to speak of
+            "custody_kept": self.custody_kept, "custody_lost_step": self.custody_lost_step,
+            "custody_lost_t_days": self.custody_lost_t_days}
         return {
             "run_id": self.run_id, "seed": self.seed, "status": self.status, "failure": self.failure,
-            "custody_kept": self.custody_kept, "custody_lost_step": self.custody_lost_step,
-            "custody_lost_t_days": self.custody_lost_t_days, "verdict": self.verdict.to_dict(),
+            **custody, "verdict": self.verdict.to_dict(),
             "n_steps": self.n_steps, "n_updates": self.n_updates, "n_measurements": self.n_measurements,
             "n_passes": self.n_passes, "final": dict(self.final), "pass_end": dict(self.pass_end),
             "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,

@@ -69,7 +69,7 @@ _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "
              "measurements", *COMPONENT_TABLES}
 _REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
-_CUSTODY_KEYS = {"loglik_threshold", "hdr_threshold", "hdr_consecutive"}
+_CUSTODY_KEYS = {"loglik_threshold", "hdr_threshold", "hdr_consecutive", "precision_km"}
 _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame"}
 _MEAS_KEYS = {"file", "reader"}
 
@@ -249,7 +249,10 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         loglik_threshold=float(typed(cust.get("loglik_threshold", -100.0), (int, float), source, "[custody]", "loglik_threshold")),
         hdr_threshold=float(typed(cust.get("hdr_threshold", 0.997), (int, float), source, "[custody]", "hdr_threshold")),
         hdr_consecutive=typed(cust.get("hdr_consecutive", 2), int, source, "[custody]", "hdr_consecutive"),
+        precision_km=float(typed(cust.get("precision_km", 100.0), (int, float), source, "[custody]", "precision_km")),
     )
+    if not custody.precision_km > 0:
+        raise ConfigError(f"{source}: [custody]: key 'precision_km' = {custody.precision_km} must be > 0 (km)")
     if not 0 < custody.hdr_threshold < 1:
         raise ConfigError(f"{source}: [custody]: key 'hdr_threshold' = {custody.hdr_threshold} must lie in (0, 1)")
     if custody.hdr_consecutive < 1:

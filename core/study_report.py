@@ -20,6 +20,10 @@ from .study_resume import is_done
 __all__ = ["report_study"]
 
 
+_COUNTED = ("tracking", "not-converged", "lost", "diverged")
+"""Verdict kinds counted per filter x IOD in the report's ``verdicts`` column, in this order."""
+
+
 def _median(xs):
     xs = [x for x in xs if x is not None and np.isfinite(x)]
     return float(np.median(xs)) if xs else None
@@ -74,7 +78,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
               "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
-            "failed_runs", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
+            "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
             "wall_time_s", "wall_time_s_p5", "wall_time_s_p95"]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
@@ -82,7 +86,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums), "custody_kept": kept,
                "custody_rate": kept / len(sums),
                "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
-               "failed_runs": sum(1 for x in sums if x.status != "finished")}
+               "failed_runs": sum(1 for x in sums if x.status != "finished"),
+               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in _COUNTED)}
         for k in finals:
             row[k] = _median([x.final.get(k) for x in sums])
         row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
@@ -103,12 +108,13 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         return str(v)
 
     header = ["scenario", "iod", "filter", "custody", "lost at (d, median)", "failed",
+              "verdicts: " + " / ".join(_COUNTED),
               "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km: median [5-95 %]", "ANEES (6 = consistent)",
               "entropy", "wall time s: median [5-95 %]"]
     lines = []
     for r in rows:
         lines.append([r["scenario"], r["iod"], r["filter"], f"{r['custody_kept']}/{r['runs']}",
-                      fmt(r["median_lost_day"]), str(r["failed_runs"]),
+                      fmt(r["median_lost_day"]), str(r["failed_runs"]), r["verdicts"],
                       "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
                       "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
                       f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
@@ -123,11 +129,20 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                             f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
         else:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
+    flagged = [f"- {x.run_id} ({flt} with {iod} IOD on {sc}): {x.verdict.kind}: {x.verdict.reason}"
+               for (sc, iod, flt), sums in sorted(groups.items()) for x in sums
+               if x.verdict.kind in ("diverged", "not-converged")]
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
     md_text = "\n".join([f"# {title}", "", *md, "", "## Custody", "", *verdicts, "",
                          "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
                          "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
-                         "region on consecutive updates (see cistrack.scenario.CustodyRule)."])
+                         "region on consecutive updates (see cistrack.scenario.CustodyRule).",
+                         "", "## Diverged and not-converged runs", "",
+                         *(flagged or ["None."]), "",
+                         "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position "
+                         "sigma within the rule's precision; not-converged = custody kept by a cloud too wide "
+                         "to be a track; diverged = the belief collapsed, the error is far beyond sigma, or "
+                         "the mean left cislunar space."])
     (rep_dir / "summary.md").write_text(md_text + "\n")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]

@@ -53,6 +53,18 @@ def test_report_writes_table_markdown_and_plots_and_says_who_kept_custody(tiny_s
     assert "pgm with noisy-range IOD on quick" in rep["text"]
     assert {".png", ".svg", ".pdf"} <= {Path(f).suffix for f in rep["files"]}
     _check_spread_anees_and_wall_time_against_the_runs(rep["rows"][0], out)
+    _check_verdict_counts_and_flagged_runs_against_the_runs(rep["rows"][0], out)
+
+
+def _check_verdict_counts_and_flagged_runs_against_the_runs(row, out):
+    verdicts = [read_manifest(d)["summary"]["verdict"] for d in sorted((out / "runs").iterdir())]
+    kinds = [v["kind"] for v in verdicts]
+    assert row["verdicts"] == "/".join(str(kinds.count(k)) for k in ("tracking", "not-converged", "lost", "diverged"))
+    md = (out / "report" / "summary.md").read_text()
+    assert "verdicts: tracking / not-converged / lost / diverged" in md
+    for v in verdicts:
+        if v["kind"] in ("diverged", "not-converged"):
+            assert f"{v['kind']}: {v['reason']}" in md
 
 
 def _check_spread_anees_and_wall_time_against_the_runs(row, out):

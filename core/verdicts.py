@@ -1,0 +1,72 @@
+"""The final verdict of a run, decided once at its end from the last step's metrics.
+
+During a run :class:`~cistrack.custody.CustodyObserver` only knows "kept", "lost" and
+"filter-failed". At the end :func:`final_verdict` makes it honest, with the thresholds of the
+scenario's :class:`~cistrack.custody.CustodyRule`:
+
+- no truth: "no-truth" (the CLI reports measurement consistency, the NIS, instead of custody);
+- "filter-failed" stays as it is;
+- "diverged" when the belief collapsed (largest position sigma below ``collapse_sigma_km`` or
+  entropy not finite), when the final error exceeds ``diverged_error_km`` with a NEES above
+  ``diverged_nees``, or when the mean is farther than ``max_earth_distance_km`` from Earth;
+- "lost" as the custody rule decided;
+- "not-converged" when custody is kept but the largest position sigma exceeds ``precision_km``;
+- "tracking" otherwise.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .custody import CustodyRule, Verdict
+
+__all__ = ["final_verdict"]
+
+
+def _last_update(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    updates = [r for r in rows if r.get("kind") == "update"]
+    return updates[-1] if updates else (rows[-1] if rows else {})
+
+
+def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRule, has_truth: bool,
+                  earth_distance_km: float | None = None) -> Verdict:
+    """The run's final :class:`Verdict`.
+
+    Parameters
+    ----------
+    verdict : the custody observer's verdict at the end of the run
+    rows : the run's table rows (dicts with ``kind``, ``step``, ``t_days``, ``sigma_x_km`` ...,
+        ``pos_err_km`` and ``nees`` with a truth, ``entropy``)
+    rule : thresholds (see :class:`~cistrack.custody.CustodyRule`)
+    has_truth : whether the run had a truth
+    earth_distance_km : distance of the last mean from Earth (km), if known
+    """
+    if verdict.kind == "filter-failed":
+        return verdict
+    if not has_truth:
+        return Verdict("no-truth", "no truth: judged by measurement consistency (NIS)")
+    last = _last_update(rows)
+    step, t_days = last.get("step"), last.get("t_days")
+    at = (int(step) if step is not None else None, float(t_days) if t_days is not None else None)
+    sig = max((float(last[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km") if k in last),
+              default=math.nan)
+    entropy = float(last.get("entropy", 0.0))
+    err, nees = float(last.get("pos_err_km", 0.0)), float(last.get("nees", 0.0))
+    if not math.isfinite(entropy):
+        return Verdict("diverged", f"belief collapsed: entropy {entropy} is not finite", *at)
+    if not math.isfinite(sig) or sig < rule.collapse_sigma_km:
+        return Verdict("diverged", f"belief collapsed: largest position sigma {sig:.3g} km < "
+                       f"{rule.collapse_sigma_km:g} km", *at)
+    if err > rule.diverged_error_km and not nees <= rule.diverged_nees:
+        return Verdict("diverged", f"error far beyond sigma: final position error {err:.4g} km > "
+                       f"{rule.diverged_error_km:g} km with NEES {nees:.3g} > {rule.diverged_nees:g}", *at)
+    if earth_distance_km is not None and not earth_distance_km <= rule.max_earth_distance_km:
+        return Verdict("diverged", f"left cislunar space: mean {earth_distance_km:.4g} km from Earth > "
+                       f"{rule.max_earth_distance_km:g} km", *at)
+    if not verdict.kept:
+        return verdict
+    if sig > rule.precision_km:
+        return Verdict("not-converged", f"consistent but not converged: largest position sigma "
+                       f"{sig:.4g} km > {rule.precision_km:g} km", *at)
+    return Verdict("tracking", f"consistent, largest position sigma {sig:.3g} km <= "
+                   f"{rule.precision_km:g} km")

@@ -1,0 +1,99 @@
+"""Honest verdicts (issue 16, item 3): every run with a truth ends tracking, not-converged, lost or
+diverged with its reason; a run without a truth never speaks of custody and reports its NIS.
+
+The runs are real small runs of the built-in ``quick`` scenario (2 days, 9:2 NRHO); the rules are
+the thresholds of :class:`cistrack.custody.CustodyRule`.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from cistrack.custody import CustodyRule, Verdict
+from cistrack.plugins.readers.csv_file import write_measurements
+from cistrack.results import read_manifest
+from cistrack.run import run_scenario
+from cistrack.scenario import load_scenario
+from cistrack.verdicts import final_verdict
+
+
+def _run(seed=1, out=None, **over):
+    return run_scenario(load_scenario("quick").with_overrides(over), seed=seed, output_dir=out)
+
+
+@pytest.fixture(scope="module")
+def sir_run(tmp_path_factory):
+    """A bootstrap particle filter on the quick scenario: its weights collapse onto one particle
+    (final sigma ~1e-9 km, NEES ~1e40, error ~2e5 km)."""
+    out = tmp_path_factory.mktemp("sir") / "run"
+    return _run(out=out, filter={"name": "sir", "n_particles": 500},
+                iod={"name": "noisy-range", "n_particles": 500}), out
+
+
+def test_a_collapsed_belief_is_diverged_with_its_reason_in_the_manifest(sir_run):
+    res, out = sir_run
+    v = res.summary.verdict
+    assert res.summary.final["sigma_x_km"] < 1e-3
+    assert v.kind == "diverged" and v.reason.startswith("belief collapsed: largest position sigma")
+    assert not res.summary.custody_kept
+    assert read_manifest(out)["summary"]["verdict"]["kind"] == "diverged"
+
+
+def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run):
+    res, _ = sir_run
+    f = res.summary.final
+    assert f["pos_err_km"] > 50 and f["nees"] > 1e4
+    v = final_verdict(Verdict(), res.rows, CustodyRule(collapse_sigma_km=0.0), has_truth=True)
+    assert v.kind == "diverged" and v.reason.startswith("error far beyond sigma")
+    assert v.step == [r for r in res.rows if r["kind"] == "update"][-1]["step"]   # the last update
+
+
+def test_a_far_error_within_a_wide_cloud_is_not_diverged_by_the_error_rule(sir_run):
+    res, _ = sir_run
+    rows = [dict(r, nees=5.0) for r in res.rows]   # the same error, consistent with its sigma
+    v = final_verdict(Verdict(), rows, CustodyRule(collapse_sigma_km=0.0), has_truth=True)
+    assert v.kind == "tracking"                     # sigma ~1e-9 km is within the 100 km precision
+
+
+def test_a_mean_that_left_cislunar_space_is_diverged():
+    res = _run(filter={"name": "enkf"}, iod={"name": "uniform-range", "n_particles": 500})
+    v = res.summary.verdict
+    assert v.kind == "diverged" and v.reason.startswith("left cislunar space"), v
+
+
+def test_a_wide_consistent_cloud_is_not_converged_but_keeps_custody():
+    res = _run()                                   # 2 days: one pass, sigma ~180 km along x
+    s = res.summary
+    assert max(s.final[k] for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")) > 100
+    assert s.verdict.kind == "not-converged" and "100 km" in s.verdict.reason
+    assert s.custody_kept and s.to_dict()["custody_kept"] is True
+
+
+def test_the_precision_is_a_parameter_of_the_custody_rule():
+    res = _run()
+    v = final_verdict(Verdict(), res.rows, CustodyRule(precision_km=1000.0), has_truth=True)
+    assert v.kind == "tracking"
+
+
+def test_a_good_run_is_tracking():
+    res = _run(duration_days=3.0)                  # two passes: sigma ~34 km, NEES ~5
+    s = res.summary
+    assert s.verdict.kind == "tracking" and s.custody_kept, s.verdict
+    assert s.final["pos_err_km"] < 100
+
+
+def test_a_run_on_a_measurement_file_prints_no_custody_and_reports_its_nis(tmp_path):
+    res = _run()
+    obs = tmp_path / "obs.csv"
+    write_measurements(obs, res.context.measurements, "2026-01-01T00:00:00Z")
+    out = tmp_path / "run"
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out),
+                           "--set", f"measurements.file={obs}"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "custody" not in (proc.stdout + proc.stderr).lower()
+    assert "verdict: no-truth" in proc.stdout
+    assert "measurement consistency: mean NIS" in proc.stdout and "chi-square bounds" in proc.stdout
+    assert "custody" not in (out / "manifest.json").read_text().lower()
+    assert read_manifest(out)["summary"]["verdict"]["kind"] == "no-truth"
