@@ -55,6 +55,7 @@ def cmd_run(args) -> int:
     from .run import run_scenario
     from .scenario import load_scenario
     from .settings import apply_settings
+    from .verdicts import verdict_lines
 
     reg = default_registry()
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
@@ -81,21 +82,8 @@ def cmd_run(args) -> int:
     out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     if args.quiet and s.status != "finished":
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
-    v = s.verdict
-    if v.kind == "no-truth":
-        from .consistency import run_nis_test
-        nt = run_nis_test(out)
-        out_("  verdict: no-truth (no truth to compare against: judged by measurement consistency)")
-        if nt.n:
-            out_(f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({nt.dof} components "
-                 f"each), {nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
-                 + ("consistent" if nt.within else "INCONSISTENT"))
-        else:
-            out_("  measurement consistency: no update with a finite NIS")
-    else:
-        at = f" at step {v.step} (t = {_fmt(v.t_days)} d)" if v.kind in ("lost", "diverged") else ""
-        out_(f"  verdict: {v.kind}{at}" + (f": {v.reason}" if v.reason else ""))
-        out_(f"  custody: {'kept' if s.custody_kept else 'LOST at step %s (t = %s d)' % (s.custody_lost_step, _fmt(s.custody_lost_t_days))}")
+    for line in verdict_lines(s, out, _fmt):
+        out_(line)
     passes = f" in {s.n_passes} passes" if s.n_passes else ""
     out_(f"  {s.n_updates} updates from {s.n_measurements} measurements{passes}, "
          f"wall time {s.wall_time_s:.1f} s")

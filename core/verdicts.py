@@ -20,7 +20,7 @@ from typing import Any
 
 from .custody import CustodyRule, Verdict
 
-__all__ = ["final_verdict"]
+__all__ = ["final_verdict", "verdict_lines"]
 
 
 def _last_update(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -70,3 +70,24 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
                        f"{sig:.4g} km > {rule.precision_km:g} km", *at)
     return Verdict("tracking", f"consistent, largest position sigma {sig:.3g} km <= "
                    f"{rule.precision_km:g} km")
+
+
+def verdict_lines(summary, run_dir, fmt=lambda v: f"{v:.3g}" if v is not None else "-") -> list[str]:
+    """The lines a person reads about a run's verdict (the CLI's summary): the kind and reason
+    and custody for a run with a truth; for a run without one the mean NIS of its updates
+    (``run_dir``'s estimates) against the chi-square bounds, never the word custody."""
+    v = summary.verdict
+    if v.kind == "no-truth":
+        from .consistency import run_nis_test
+
+        nt = run_nis_test(run_dir)
+        head = "  verdict: no-truth (no truth to compare against: judged by measurement consistency)"
+        if not nt.n:
+            return [head, "  measurement consistency: no update with a finite NIS"]
+        return [head, f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({nt.dof} "
+                      f"components each), {nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
+                      + ("consistent" if nt.within else "INCONSISTENT")]
+    at = f" at step {v.step} (t = {fmt(v.t_days)} d)" if v.kind in ("lost", "diverged") else ""
+    custody = ("kept" if summary.custody_kept else
+               f"LOST at step {summary.custody_lost_step} (t = {fmt(summary.custody_lost_t_days)} d)")
+    return [f"  verdict: {v.kind}{at}" + (f": {v.reason}" if v.reason else ""), f"  custody: {custody}"]
