@@ -119,11 +119,14 @@ class CustodyObserver:
         return None
 
     def _mark(self, run, step) -> None:
-        if getattr(run, "truth", None) is not None:  # no truth: no custody column at all
+        if step.truth is not None:  # a run without a truth has no custody column at all
             step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
 
     def _track_mean(self, step) -> None:
-        mean = np.asarray(step.belief.mixture.mean, dtype=float)
+        belief = getattr(step, "belief", None)
+        if belief is None:
+            return
+        mean = np.asarray(belief.mixture.mean, dtype=float)
         self.earth_distance_km = float(np.linalg.norm(mean[:3] - _EARTH) * units.LU_KM)
 
     @hookimpl(tryfirst=True)
