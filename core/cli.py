@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import sys
 from pathlib import Path
@@ -314,6 +315,9 @@ def main(argv: list[str] | None = None) -> int:
         _eprint(f"cistrack: interrupted ({why}); completed steps are kept and the manifest says 'interrupted'")
         sig = getattr(signal, why, None) if why.startswith("SIG") else None
         return 128 + int(sig) if sig is not None else 130
+    except BrokenPipeError:  # the reader closed our stdout (e.g. `cistrack scenarios | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
