@@ -11,23 +11,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cistrack.component import check_positive
 from cistrack.errors import MeasurementError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Reader
 from cistrack.measurement import MeasurementSet
 from cistrack.observation_files import FieldError, read_text_lines, show_field
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch
-from .site_params import parse_sites
+from .site_params import SiteReader
 
 __all__ = ["AdesPsvReader"]
 
 _KNOWN_FIELDS_MIN = {"obsTime", "ra", "dec", "stn"}
 
 
-class AdesPsvReader(Reader):
+class AdesPsvReader(SiteReader):
     """IAU ADES optical astrometry (RA/Dec), pipe-separated.
 
     Parameters
@@ -41,11 +39,6 @@ class AdesPsvReader(Reader):
 
     suffixes = (".psv",)
     measurement_kinds = ("radec",)
-
-    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
-        self._sites = parse_sites(self, sites)
-        self.sites = sites
 
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)

@@ -11,15 +11,13 @@ from pathlib import Path
 from xml.parsers import expat
 from xml.sax.saxutils import escape
 
-from cistrack.component import check_positive
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Reader
 from cistrack.measurement import MeasurementSet
 from cistrack.observation_files import FieldError, read_text_lines, show_field
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch
-from .site_params import parse_sites
+from .site_params import SiteReader
 
 __all__ = ["AdesXmlReader"]
 
@@ -77,7 +75,7 @@ def _records(path, text: str) -> list[tuple[int, dict]]:
     return out
 
 
-class AdesXmlReader(Reader):
+class AdesXmlReader(SiteReader):
     """IAU ADES optical astrometry (RA/Dec), XML.
 
     Parameters
@@ -90,11 +88,6 @@ class AdesXmlReader(Reader):
 
     suffixes = (".xml",)
     measurement_kinds = ("radec",)
-
-    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
-        self._sites = parse_sites(self, sites)
-        self.sites = sites
 
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)

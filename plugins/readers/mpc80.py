@@ -28,17 +28,15 @@ from datetime import datetime, timedelta, timezone
 from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
-from cistrack.component import check_positive
 from cistrack.errors import MeasurementError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Reader
 from cistrack.measurement import MeasurementSet
 from cistrack.observation_files import FieldError, read_text_lines, show_field
 from cistrack.units import ARCSEC_RAD, tu_to_utc
 
 from .decimal_units import decimal_in, to_rad
 from .obs_rows import ObsRow, build_set, parse_epoch
-from .site_params import parse_sites, resolve_site
+from .site_params import SiteReader, resolve_site
 
 __all__ = ["Mpc80Reader"]
 
@@ -140,7 +138,7 @@ def _format(t: datetime, ra: float, dec: float, code: str, desig: str) -> str:
     return line
 
 
-class Mpc80Reader(Reader):
+class Mpc80Reader(SiteReader):
     """MPC 80-column optical astrometry (RA/Dec; no uncertainties in the format).
 
     Parameters
@@ -156,11 +154,6 @@ class Mpc80Reader(Reader):
     time_resolution_s = 0.0864
     angle_resolution_rad = 0.015 * ARCSEC_RAD
     carries_sigmas = False
-
-    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
-        self._sites = parse_sites(self, sites)
-        self.sites = sites
 
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)

@@ -9,7 +9,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from cistrack.component import check_positive
 from cistrack.errors import MeasurementError
+from cistrack.interfaces import Reader
 from cistrack.sites import Site, observatory
 
 __all__ = ["parse_sites", "resolve_site", "site_columns"]
@@ -53,3 +55,21 @@ def resolve_site(key: str, explicit: dict[str, Site]) -> Site:
 def site_columns(site: Site) -> tuple[str, str, str]:
     """Latitude, longitude, height as exact text (for writers that record coordinates)."""
     return repr(float(site.latitude_deg)), repr(float(site.longitude_deg)), repr(float(site.height_m))
+
+
+class SiteReader(Reader):
+    """A reader whose files name observatories: the parameters every such format shares.
+
+    Parameters
+    ----------
+    sigma_arcsec : float
+        1-sigma noise of each angle where the file gives none, arcsec.
+    sites : dict or None
+        Explicit sites for station codes outside the bundled MPC table: CODE ->
+        {latitude_deg, longitude_deg, height_m[, name]}.
+    """
+
+    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
+        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self._sites = parse_sites(self, sites)
+        self.sites = sites

@@ -26,10 +26,8 @@ import re
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
-from cistrack.component import check_positive
 from cistrack.errors import MeasurementError
 from cistrack.hookspecs import hookimpl
-from cistrack.interfaces import Reader
 from cistrack.measurement import MeasurementSet
 from cistrack.observation_files import FieldError, read_text_lines, show_field
 from cistrack.sites import Site, observatory
@@ -37,7 +35,7 @@ from cistrack.units import format_utc, tu_to_utc
 
 from .decimal_units import from_rad, to_rad
 from .obs_rows import ObsRow, build_set, parse_epoch
-from .site_params import resolve_site
+from .site_params import SiteReader, resolve_site
 
 __all__ = ["TdmReader"]
 
@@ -87,7 +85,7 @@ class _Segment:
         self.comments: list[tuple[str, int]] = []
 
 
-class TdmReader(Reader):
+class TdmReader(SiteReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
     Parameters
@@ -100,12 +98,6 @@ class TdmReader(Reader):
 
     suffixes = (".tdm", ".kvn")
     measurement_kinds = ("azel", "radec")
-
-    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
-        from .site_params import parse_sites
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
-        self._sites = parse_sites(self, sites)
-        self.sites = sites
 
     # -- reading ---------------------------------------------------------------------------------
     def read(self, path, epoch) -> MeasurementSet:
