@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .calibration import LEVEL, group_calibration
 from .errors import ConfigError
 from .results import read_manifest, read_steps
 from .run_summary import RunSummary
@@ -50,6 +51,59 @@ def _anees(tables) -> tuple[float | None, int]:
     return (float(np.mean(vals)) if vals else None), len(vals)
 
 
+_CALIBRATION = ("custody_ci_lo", "custody_ci_hi", "final_anees", "final_anees_runs", "final_anees_lo",
+                "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p", "hdr_runs", "hdr_above_099",
+                "diverged_runs")
+"""CSV columns of :func:`cistrack.calibration.group_calibration` (None for a group without a truth)."""
+
+
+def _calibration_columns(sums: list[RunSummary]) -> dict:
+    if all(x.verdict.kind == "no-truth" for x in sums):  # no truth: no custody, NEES or HDR level
+        return dict.fromkeys(_CALIBRATION)
+    c = group_calibration(sums)
+    nan = lambda v: None if v != v else v  # noqa: E731  (NaN -> empty CSV cell)
+    return {"custody_ci_lo": c.custody_lo, "custody_ci_hi": c.custody_hi, "final_anees": nan(c.final_anees),
+            "final_anees_runs": c.final_anees_runs, "final_anees_lo": nan(c.final_anees_lo),
+            "final_anees_hi": nan(c.final_anees_hi), "final_anees_within": c.anees_within,
+            "hdr_ks": nan(c.hdr_ks), "hdr_ks_p": nan(c.hdr_ks_p), "hdr_runs": c.hdr_runs,
+            "hdr_above_099": nan(c.hdr_above_099), "diverged_runs": c.diverged}
+
+
+def _g(v, spec: str = ".3g") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def _calibration_cells(r: dict) -> list[str]:
+    """Markdown cells of one row's calibration (see :data:`_CALIBRATION`)."""
+    if r["custody_ci_lo"] is None:
+        return ["no truth", "-", "-", "-", "-"]
+    within = {True: "within", False: "OUTSIDE", None: "-"}[r["final_anees_within"]]
+    return [f"{r['custody_kept']}/{r['runs']} = {r['custody_rate']:.2f} [{r['custody_ci_lo']:.2f}-{r['custody_ci_hi']:.2f}]",
+            f"{_g(r['final_anees'])} [{_g(r['final_anees_lo'])}-{_g(r['final_anees_hi'])}] {within} "
+            f"({r['final_anees_runs']} runs)",
+            f"D = {_g(r['hdr_ks'], '.2f')}, p = {_g(r['hdr_ks_p'], '.2g')} ({r['hdr_runs']} runs)",
+            _g(None if r["hdr_above_099"] is None else 100 * r["hdr_above_099"], ".0f") + " %",
+            str(r["diverged_runs"])]
+
+
+def _calibration_markdown(rows: list[dict]) -> list[str]:
+    head = ["scenario", "iod", "filter", "custody rate [Wilson 95 %]",
+            "ANEES of final NEES [chi-square 95 % bounds]", "final truth HDR level vs uniform: KS",
+            "HDR level > 0.99 (1 % if calibrated)", "diverged"]
+    out = ["## Calibration", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    out += ["| " + " | ".join([r["scenario"], r["iod"], r["filter"], *_calibration_cells(r)]) + " |" for r in rows]
+    return out + ["", f"A consistent filter has a final ANEES within its {LEVEL:.0%} chi-square(6 x runs) / runs "
+                  "bounds and a final truth HDR level uniform on [0, 1] (KS p-value not small); the histograms "
+                  "are in `*__hdr.png`. NEES over time (median and 5-95 % band across seeds, chi-square(6) "
+                  "band drawn) is in the figure of each scenario and IOD."]
+
+
+def _calibration_line(r: dict) -> str:
+    cells = _calibration_cells(r)
+    return (f"{r['filter']} / {r['iod']} / {r['scenario']}: custody {cells[0]}; final ANEES {cells[1]}; "
+            f"HDR KS {cells[2]}; HDR > 0.99 {cells[3]}; diverged {cells[4]}")
+
+
 def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                  settings: list[str] | None = None) -> dict:
     """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
@@ -79,7 +133,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
               "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
             "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
-            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95"]
+            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
         kept = sum(1 for x in sums if x.custody_kept)
@@ -94,6 +148,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         row["anees"], row["anees_updates"] = _anees(tables[(sc, iod, flt)])
         row["wall_time_s"] = _median([x.wall_time_s for x in sums])
         row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
+        row.update(_calibration_columns(sums))
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
@@ -133,7 +188,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                for (sc, iod, flt), sums in sorted(groups.items()) for x in sums
                if x.verdict.kind in ("diverged", "not-converged")]
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
-    md_text = "\n".join([f"# {title}", "", *md, "", "## Custody", "", *verdicts, "",
+    md_text = "\n".join([f"# {title}", "", *md, "", *_calibration_markdown(rows), "", "## Custody", "", *verdicts, "",
                          "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
                          "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
                          "region on consecutive updates (see cistrack.scenario.CustodyRule).",
@@ -146,10 +201,15 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     (rep_dir / "summary.md").write_text(md_text + "\n")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
-                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts)
+                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
+                     + ["", "Calibration (95 %):"] + [f"- {_calibration_line(r)}" for r in rows])
     files = [rep_dir / "summary.csv", rep_dir / "summary.md"]
     from .report_plots import plot_study
 
     figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
     files += plot_study(figures, rep_dir, str(data.get("name", out.name)))
+    from .calibration_plots import plot_hdr_histograms
+
+    files += plot_hdr_histograms({k: v["summaries"] for k, v in figures.items()}, rep_dir,
+                                 {(r["scenario"], r["iod"], r["filter"]): r for r in rows})
     return {"text": text, "rows": rows, "files": files, "missing": missing}

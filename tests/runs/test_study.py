@@ -54,6 +54,35 @@ def test_report_writes_table_markdown_and_plots_and_says_who_kept_custody(tiny_s
     assert {".png", ".svg", ".pdf"} <= {Path(f).suffix for f in rep["files"]}
     _check_spread_anees_and_wall_time_against_the_runs(rep["rows"][0], out)
     _check_verdict_counts_and_flagged_runs_against_the_runs(rep["rows"][0], out)
+    _check_calibration_against_the_runs(rep, out)
+
+
+def _check_calibration_against_the_runs(rep, out):
+    """Custody interval, final ANEES and bounds, HDR KS and diverged count recomputed with scipy
+    from the manifests; the Markdown table, the terminal text and the histogram figure."""
+    import numpy as np
+    from scipy.stats import binomtest, chi2, kstest
+
+    row = rep["rows"][0]
+    sums = [read_manifest(d)["summary"] for d in sorted((out / "runs").iterdir())]
+    kept = sum(1 for s in sums if s["verdict"]["kind"] in ("tracking", "not-converged"))
+    ci = binomtest(kept, len(sums)).proportion_ci(0.95, method="wilson")
+    assert (row["custody_ci_lo"], row["custody_ci_hi"]) == pytest.approx((ci.low, ci.high))
+    nees = [s["final"]["nees"] for s in sums]
+    n = len(nees)
+    assert row["final_anees"] == pytest.approx(np.mean(nees)) and row["final_anees_runs"] == n
+    assert (row["final_anees_lo"], row["final_anees_hi"]) == pytest.approx(
+        (chi2.ppf(0.025, 6 * n) / n, chi2.ppf(0.975, 6 * n) / n))
+    ks = kstest([s["final"]["hdr_level"] for s in sums], "uniform")
+    assert (row["hdr_ks"], row["hdr_ks_p"]) == pytest.approx((ks.statistic, ks.pvalue))
+    assert row["diverged_runs"] == sum(1 for s in sums if s["verdict"]["kind"] == "diverged")
+    md = (out / "report" / "summary.md").read_text()
+    assert "## Calibration" in md and "custody rate [Wilson 95 %]" in md and f"D = {row['hdr_ks']:.2f}" in md
+    assert "Calibration (95 %):" in rep["text"]
+    with open(out / "report" / "summary.csv") as fh:
+        header = fh.readline().strip().split(",")
+    assert {"custody_ci_lo", "final_anees_lo", "hdr_ks_p", "diverged_runs"} <= set(header)
+    assert (out / "report" / "quick__noisy-range__hdr.png").stat().st_size > 0
 
 
 def _check_verdict_counts_and_flagged_runs_against_the_runs(row, out):
