@@ -16,15 +16,38 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-__all__ = ["innovation_nis", "nis_test", "NisTest", "MAX_NIS_SAMPLES", "run_nis_test"]
+__all__ = ["Innovation", "innovation", "innovation_nis", "nis_test", "NisTest", "MAX_NIS_SAMPLES", "run_nis_test"]
 
 MAX_NIS_SAMPLES = 4000
 """At most this many prior particles (an evenly strided subset) predict the measurement."""
 
 
-def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
-    """NIS of ``measurement`` (a :class:`cistrack.measurement.Measurement`) under the ``prior``
-    belief, measured by ``sensor``: returns (NIS, m)."""
+@dataclass(frozen=True)
+class Innovation:
+    """The innovation of one measurement under a prior belief.
+
+    Attributes
+    ----------
+    names : (m,) str          measured components (the sensor's names)
+    nu : (m,) float           z - z_hat, angles wrapped into [-pi, pi) (rad; ranges LU)
+    s : (m, m) float          P_zz + R, the predicted covariance of z
+    r : (m, m) float          the measurement noise covariance R
+    """
+
+    names: tuple[str, ...]
+    nu: np.ndarray
+    s: np.ndarray
+    r: np.ndarray
+
+    @property
+    def nis(self) -> float:
+        """nu^T S^-1 nu, chi^2(m) for a consistent filter."""
+        return float(self.nu @ np.linalg.solve(self.s, self.nu))
+
+
+def innovation(prior, measurement, sensor) -> Innovation:
+    """The :class:`Innovation` of ``measurement`` (a :class:`cistrack.measurement.Measurement`)
+    under the ``prior`` belief, measured by ``sensor``."""
     names = tuple(sensor.names)
     cols = np.array([names.index(n) for n in measurement.names], dtype=np.intp)
     x = np.asarray(prior.samples.states, dtype=float)
@@ -41,9 +64,15 @@ def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
     mean_r = w @ r
     d = r - mean_r
     pzz = (d * w[:, None]).T @ d
-    s = pzz + np.asarray(measurement.covariance, dtype=float)
-    nu = -mean_r                                                      # z - z_hat
-    return float(nu @ np.linalg.solve(s, nu)), int(cols.size)
+    noise = np.asarray(measurement.covariance, dtype=float)
+    return Innovation(tuple(names[c] for c in cols), -mean_r, pzz + noise, noise)  # nu = z - z_hat
+
+
+def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
+    """NIS of ``measurement`` (a :class:`cistrack.measurement.Measurement`) under the ``prior``
+    belief, measured by ``sensor``: returns (NIS, m)."""
+    inn = innovation(prior, measurement, sensor)
+    return inn.nis, len(inn.names)
 
 
 @dataclass(frozen=True)

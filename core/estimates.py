@@ -62,7 +62,6 @@ class EstimateWriter:
 
     def __init__(self, directory: str | Path) -> None:
         self.directory = Path(directory)
-        self._nis: dict[int, tuple[float, int]] = {}
 
     @hookimpl
     def cistrack_run_started(self, run) -> None:
@@ -77,16 +76,11 @@ class EstimateWriter:
     def cistrack_step_predicted(self, run, step) -> None:
         if step.kind in ("predict", "initial"):
             self._write(step)
-        elif step.kind == "update" and step.measurement is not None:
-            from .consistency import innovation_nis
-            try:
-                self._nis[step.index] = innovation_nis(step.belief, step.measurement, run.sensor)
-            except (np.linalg.LinAlgError, ValueError):
-                self._nis[step.index] = (float("nan"), 0)
 
     @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
-        self._write(step, *self._nis.pop(step.index, (float("nan"), 0)))
+        # the NIS under the prior, put into the step's metrics by cistrack.residuals.ResidualObserver
+        self._write(step, float(step.metrics.get("nis", float("nan"))), int(step.metrics.get("nis_dof", 0)))
 
     def _write(self, step, nis: float = float("nan"), dof: int = 0) -> None:
         final = self.directory / _PARTS / f"part-{step.index:06d}.parquet"

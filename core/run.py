@@ -29,6 +29,7 @@ from .errors import CistrackError, ConfigError
 from .metrics import step_metrics
 from .registry import Registry, default_registry
 from .run_context import RunContext, Step
+from .residuals import ResidualObserver
 from .run_summary import RunSummary, summarize
 from .scenario import Scenario
 from .step_table import RowCollector
@@ -206,7 +207,7 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     out = Path(output_dir) if output_dir is not None else None
     custody = CustodyObserver(scenario.custody)
     collector = RowCollector(keep_steps=keep_steps)
-    obs: list[Any] = [custody, collector]
+    obs: list[Any] = [custody, ResidualObserver(), collector]
     if out is not None:
         from .estimates import EstimateWriter
         obs += [ResultsWriter(out, reg), EstimateWriter(out)]

@@ -74,19 +74,25 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
 
 def verdict_lines(summary, run_dir, fmt=lambda v: f"{v:.3g}" if v is not None else "-") -> list[str]:
     """The lines a person reads about a run's verdict (the CLI's summary): the kind and reason
-    and custody for a run with a truth; for a run without one the mean NIS of its updates
-    (``run_dir``'s estimates) against the chi-square bounds, never the word custody."""
+    and custody for a run with a truth; for a run without one its measurement consistency from
+    ``run_dir``'s steps table (mean NIS against the chi-square bounds, share of measurements
+    outside their 95 % bounds, largest residual; :mod:`cistrack.residuals`), never custody."""
     v = summary.verdict
     if v.kind == "no-truth":
-        from .consistency import run_nis_test
+        from .residuals import residual_summary
+        from .results import read_steps
 
-        nt = run_nis_test(run_dir)
+        rs = residual_summary(read_steps(run_dir).to_pylist())
+        nt = rs.nis_test
         head = "  verdict: no-truth (no truth to compare against: judged by measurement consistency)"
         if not nt.n:
             return [head, "  measurement consistency: no update with a finite NIS"]
         return [head, f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({nt.dof} "
                       f"components each), {nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
-                      + ("consistent" if nt.within else "INCONSISTENT")]
+                      + ("consistent" if nt.within else "INCONSISTENT"),
+                f"  residuals: {100 * rs.share_outside_95:.0f} % of measurements outside their 95 % NIS bounds "
+                f"(5 % if consistent), largest |residual| {rs.max_abs_residual_arcsec:.3g} arcsec "
+                f"(per measurement in {run_dir}/steps.parquet: res_*_arcsec, sd_*_arcsec, nis)"]
     at = f" at step {v.step} (t = {fmt(v.t_days)} d)" if v.kind in ("lost", "diverged") else ""
     custody = ("kept" if summary.custody_kept else
                f"LOST at step {summary.custody_lost_step} (t = {fmt(summary.custody_lost_t_days)} d)")
