@@ -140,3 +140,31 @@ def test_a_setting_that_a_study_variant_cannot_take_is_refused_naming_it(tiny_st
 
     with pytest.raises(ConfigError, match=r"bogus.*--set filter.bogus=1"):
         plan_runs(tiny_study, None, ["filter.bogus=1"])
+
+
+def test_builtin_calibration_study_reports_calibration_per_iod_under_process_and_dask_executors(tmp_path):
+    """The built-in ``calibration`` study, cut to 2 seeds, 200 particles and 1.3 days (the first pass), run through
+    local processes and a local Dask cluster: the same calibration for each IOD assumption."""
+    pytest.importorskip("distributed")
+    from importlib import resources
+
+    text = (resources.files("cistrack.scenarios") / "studies" / "calibration.toml").read_text()
+    assert "n_seeds = 100" in text
+    study = tmp_path / "calibration.toml"
+    study.write_text(text.replace("n_seeds = 100", "n_seeds = 2"))
+    settings = ["filter.n_particles=200", "filter.n_components=2", "iod.n_particles=200", "duration_days=1.3"]
+    reports = {}
+    for name, kw in (("proc", {}), ("dask", {"dask": "local"})):
+        out = tmp_path / name
+        res = run_study(study, out_dir=out, workers=1, progress=False, settings=settings, **kw)
+        assert (res["completed"], res["failed"]) == (6, 0)
+        reports[name] = report_study(study, out_dir=out, settings=settings)
+    keys = ("scenario", "iod", "filter", "runs", "custody_kept", "custody_ci_lo", "custody_ci_hi", "final_anees",
+            "final_anees_lo", "final_anees_hi", "hdr_ks", "hdr_ks_p", "diverged_runs")
+    rows = {n: [{k: r[k] for k in keys} for r in rep["rows"]] for n, rep in reports.items()}
+    assert rows["proc"] == rows["dask"]
+    assert {r["iod"] for r in rows["proc"]} == {"uniform-range", "noisy-range", "uniform-range-velocity-bound"}
+    names = {Path(f).name for f in reports["dask"]["files"]}
+    for r in rows["proc"]:
+        assert r["runs"] == 2 and r["final_anees_lo"] < 6 < r["final_anees_hi"] and r["hdr_ks"] is not None
+        assert {f"example-1__{r['iod']}.png", f"example-1__{r['iod']}__hdr.png"} <= names
