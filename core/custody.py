@@ -53,6 +53,10 @@ class CustodyRule:
     """A final position error above ``diverged_error_km`` (km) together with a NEES above
     ``diverged_nees`` (error far beyond sigma: a 6-D chi-square exceeds 1e4 with probability
     ~0) is a diverged filter."""
+    degenerate_ess: float = 7.0
+    """A particle filter whose effective sample size (its ``ess_before_resampling`` diagnostic)
+    falls below this at any update has degenerate weights: fewer effective particles than the
+    state dimension + 1 cannot even define a 6-D covariance ("diverged")."""
     max_earth_distance_km: float = 2e6
     """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
     space ("diverged")."""

@@ -6,9 +6,11 @@ scenario's :class:`~cistrack.custody.CustodyRule`:
 
 - no truth: "no-truth" (the CLI reports measurement consistency, the NIS, instead of custody);
 - "filter-failed" stays as it is;
-- "diverged" when the belief collapsed (largest position sigma below ``collapse_sigma_km`` or
-  entropy not finite), when the final error exceeds ``diverged_error_km`` with a NEES above
-  ``diverged_nees``, or when the mean is farther than ``max_earth_distance_km`` from Earth;
+- "diverged" when a particle filter's weights degenerated (effective sample size below
+  ``degenerate_ess`` at an update: the reason says where), when the belief collapsed (largest
+  position sigma below ``collapse_sigma_km`` or entropy not finite), when the final error
+  exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the mean is farther
+  than ``max_earth_distance_km`` from Earth;
 - "lost" as the custody rule decided;
 - "not-converged" when custody is kept but the largest position sigma exceeds ``precision_km``;
 - "tracking" otherwise.
@@ -26,6 +28,19 @@ __all__ = ["final_verdict", "verdict_lines"]
 def _last_update(rows: list[dict[str, Any]]) -> dict[str, Any]:
     updates = [r for r in rows if r.get("kind") == "update"]
     return updates[-1] if updates else (rows[-1] if rows else {})
+
+
+def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dict[str, Any]] | None:
+    """The reason and row of the first update whose effective sample size (a particle filter's
+    ``diag_ess_before_resampling``) is below ``rule.degenerate_ess``; None if there is none."""
+    for r in rows:
+        ess = r.get("diag_ess_before_resampling")
+        if r.get("kind") == "update" and ess is not None and math.isfinite(ess) and ess < rule.degenerate_ess:
+            n = r.get("diag_n_particles")
+            of = f" of {int(n)} particles" if n is not None and math.isfinite(n) else ""
+            return (f"degenerate weights (effective sample size {ess:.3g}{of} < {rule.degenerate_ess:g} at step "
+                    f"{int(r['step'])}, t = {float(r['t_days']):.3g} d)", r)
+    return None
 
 
 def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRule, has_truth: bool,
@@ -52,11 +67,18 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
               default=math.nan)
     entropy = float(last.get("entropy", 0.0))
     err, nees = float(last.get("pos_err_km", 0.0)), float(last.get("nees", 0.0))
+    collapsed = None
     if not math.isfinite(entropy):
-        return Verdict("diverged", f"belief collapsed: entropy {entropy} is not finite", *at)
-    if not math.isfinite(sig) or sig < rule.collapse_sigma_km:
-        return Verdict("diverged", f"belief collapsed: largest position sigma {sig:.3g} km < "
-                       f"{rule.collapse_sigma_km:g} km", *at)
+        collapsed = f"belief collapsed: entropy {entropy} is not finite"
+    elif not math.isfinite(sig) or sig < rule.collapse_sigma_km:
+        collapsed = f"belief collapsed: largest position sigma {sig:.3g} km < {rule.collapse_sigma_km:g} km"
+    degenerate = _degenerate(rows, rule)
+    if degenerate is not None:
+        reason, row = degenerate
+        return Verdict("diverged", reason + (f"; then {collapsed}" if collapsed else ""),
+                       int(row["step"]), float(row["t_days"]))
+    if collapsed:
+        return Verdict("diverged", collapsed, *at)
     if err > rule.diverged_error_km and not nees <= rule.diverged_nees:
         return Verdict("diverged", f"error far beyond sigma: final position error {err:.4g} km > "
                        f"{rule.diverged_error_km:g} km with NEES {nees:.3g} > {rule.diverged_nees:g}", *at)

@@ -32,20 +32,37 @@ def sir_run(tmp_path_factory):
                 iod={"name": "noisy-range", "n_particles": 500}), out
 
 
-def test_a_collapsed_belief_is_diverged_with_its_reason_in_the_manifest(sir_run):
+def test_degenerate_weights_are_diverged_with_the_effective_sample_size_in_the_manifest(sir_run):
     res, out = sir_run
     v = res.summary.verdict
-    assert res.summary.final["sigma_x_km"] < 1e-3
-    assert v.kind == "diverged" and v.reason.startswith("belief collapsed: largest position sigma")
+    first = next(r for r in res.rows if r["kind"] == "update" and r["diag_ess_before_resampling"] < 7)
+    assert v.kind == "diverged" and v.reason.startswith(
+        f"degenerate weights (effective sample size {first['diag_ess_before_resampling']:.3g} of 500 particles")
+    assert (v.step, v.t_days) == (first["step"], pytest.approx(first["t_days"]))
+    assert "then belief collapsed: largest position sigma" in v.reason
     assert not res.summary.custody_kept
-    assert read_manifest(out)["summary"]["verdict"]["kind"] == "diverged"
+    assert read_manifest(out)["summary"]["verdict"] == v.to_dict()
+
+
+def test_a_collapsed_belief_is_diverged_with_its_reason(sir_run):
+    res, _ = sir_run
+    assert res.summary.final["sigma_x_km"] < 1e-3
+    v = final_verdict(Verdict(), res.rows, CustodyRule(degenerate_ess=0.0), has_truth=True)
+    assert v.kind == "diverged" and v.reason.startswith("belief collapsed: largest position sigma")
+
+
+def test_a_healthy_effective_sample_size_is_not_degenerate(sir_run):
+    res, _ = sir_run
+    rows = [dict(r, diag_ess_before_resampling=400.0) for r in res.rows]
+    v = final_verdict(Verdict(), rows, CustodyRule(), has_truth=True)
+    assert v.kind == "diverged" and v.reason.startswith("belief collapsed")
 
 
 def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run):
     res, _ = sir_run
     f = res.summary.final
     assert f["pos_err_km"] > 50 and f["nees"] > 1e4
-    v = final_verdict(Verdict(), res.rows, CustodyRule(collapse_sigma_km=0.0), has_truth=True)
+    v = final_verdict(Verdict(), res.rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0), has_truth=True)
     assert v.kind == "diverged" and v.reason.startswith("error far beyond sigma")
     assert v.step == [r for r in res.rows if r["kind"] == "update"][-1]["step"]   # the last update
 
@@ -53,7 +70,7 @@ def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run)
 def test_a_far_error_within_a_wide_cloud_is_not_diverged_by_the_error_rule(sir_run):
     res, _ = sir_run
     rows = [dict(r, nees=5.0) for r in res.rows]   # the same error, consistent with its sigma
-    v = final_verdict(Verdict(), rows, CustodyRule(collapse_sigma_km=0.0), has_truth=True)
+    v = final_verdict(Verdict(), rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0), has_truth=True)
     assert v.kind == "tracking"                     # sigma ~1e-9 km is within the 100 km precision
 
 
@@ -97,3 +114,12 @@ def test_a_run_on_a_measurement_file_prints_no_custody_and_reports_its_nis(tmp_p
     assert "measurement consistency: mean NIS" in proc.stdout and "chi-square bounds" in proc.stdout
     assert "custody" not in (out / "manifest.json").read_text().lower()
     assert read_manifest(out)["summary"]["verdict"]["kind"] == "no-truth"
+
+
+def test_the_regularised_particle_filter_tracks_where_the_bootstrap_filter_degenerates():
+    res = _run(duration_days=3.0, filter={"name": "rpf", "n_particles": 1000},
+               iod={"name": "noisy-range", "n_particles": 1000})
+    ups = [r for r in res.rows if r["kind"] == "update"]
+    assert min(r["diag_ess_before_resampling"] for r in ups) >= 0.5 * 1000 * (1 - 1e-6)
+    assert res.summary.verdict.kind == "tracking", res.summary.verdict
+    assert res.summary.final["nees"] < 20 and res.summary.final["pos_err_km"] < 100
