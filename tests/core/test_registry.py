@@ -99,7 +99,7 @@ def test_unknown_name_lists_available_and_suggests_the_closest():
     with pytest.raises(UnknownComponentError) as info:
         reg.get("filter", "pgn")
     msg = str(info.value)
-    assert "available: enkf, pgm, pgm-paper, sir, ukf" in msg
+    assert "available: enkf, pgm, pgm-paper, rpf, sir, ukf" in msg
     assert "Did you mean 'pgm'?" in msg
 
 
