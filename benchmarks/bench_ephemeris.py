@@ -36,7 +36,7 @@ def main(argv=None) -> None:
     from machine import machine_lines
 
     from cistrack import units
-    from cistrack.plugins.dynamics.catalog import ORBITS
+    from cistrack.plugins.dynamics.orbit_catalog import ORBITS
     from cistrack.plugins.dynamics.cr3bp import CR3BP
     from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 

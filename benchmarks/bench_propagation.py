@@ -26,7 +26,7 @@ from scipy.integrate import solve_ivp
 
 import numba
 from cistrack import units
-from cistrack.plugins.dynamics.catalog import ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 from cistrack.plugins.dynamics.cr3bp import CR3BP, cr3bp_rhs
 
 TARGET = 1e-9

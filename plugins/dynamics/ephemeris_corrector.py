@@ -1,6 +1,6 @@
 """CR3BP catalog orbits carried into the ephemeris model, and a multiple-shooting corrector.
 
-A catalog orbit (:mod:`.catalog`, CR3BP synodic) is propagated in the CR3BP over the wanted
+A catalog orbit (:mod:`.orbit_catalog`, CR3BP synodic) is propagated in the CR3BP over the wanted
 number of revolutions and sampled at patch points (``nodes_per_rev`` equally spaced in time per
 revolution, half a spacing off the catalog state so that none sits at an NRHO's perilune). Each patch point is placed in the real Earth-Moon
 frame with the *pulsating* scaling (:meth:`cistrack.frames.earth_moon.EarthMoonFrame.pulsating_to_gcrs`:

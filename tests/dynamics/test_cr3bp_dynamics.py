@@ -7,7 +7,7 @@ from scipy.integrate import solve_ivp
 
 from cistrack import units
 from cistrack.errors import ParameterError
-from cistrack.plugins.dynamics.catalog import ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 from cistrack.propagation import StateError
 from cistrack.plugins.dynamics.cr3bp import CR3BP, jacobi_constant
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from cistrack.plugins.dynamics.catalog import ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 from cistrack.plugins.dynamics.cr3bp import CR3BP
 from cistrack.plugins.dynamics.twobody import TwoBody
 from cistrack.testing import check_plugin

@@ -9,7 +9,7 @@ from scipy.signal import argrelmax, argrelmin
 
 from cistrack import units
 from cistrack.ephemeris import DAY_S
-from cistrack.plugins.dynamics.catalog import get_orbit
+from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.plugins.dynamics.ephemeris_corrector import (
     catalog_patch_points, correct_catalog_orbit, correct_multiple_shooting)

@@ -9,7 +9,7 @@ import pytest
 from cistrack import units
 from cistrack.ephemeris import DAY_S
 from cistrack.frames.earth_moon import EarthMoonFrame
-from cistrack.plugins.dynamics.catalog import get_orbit
+from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.testing import check_plugin
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cistrack import units
-from cistrack.plugins.dynamics.catalog import ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 from cistrack.plugins.dynamics.cr3bp import CR3BP
 
 

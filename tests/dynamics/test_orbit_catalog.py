@@ -7,7 +7,7 @@ from scipy.integrate import solve_ivp
 
 from cistrack import units
 from cistrack.interfaces import ReferenceOrbit
-from cistrack.plugins.dynamics.catalog import GUESSES, ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import GUESSES, ORBITS
 from cistrack.plugins.dynamics.corrector import (CorrectionError, correct_symmetric_orbit,
                                                  propagate_with_stm)
 from cistrack.plugins.dynamics.cr3bp import CR3BP
