@@ -9,6 +9,7 @@ exact Jacobian of that map, and the registered exporter writes the file.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -57,9 +58,14 @@ def run_inertial_estimates(run_dir: str | Path, registry: Registry | None = None
 
 
 def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None = None,
-               registry: Registry | None = None, **params: Any) -> Path:
+               registry: Registry | None = None, overwrite: bool = False, **params: Any) -> Path:
     """Write the estimate of the run in ``run_dir`` with exporter ``format`` ("oem", "opm", ...)
-    to ``path`` (default ``RUN_DIR/estimate.<format>``); returns the path written."""
+    to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file, replaced on each
+    export); returns the path written. An existing ``path`` is refused (before anything is
+    read) unless ``overwrite``."""
+    if path is not None and not overwrite and os.path.lexists(path):
+        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to "
+                          f"replace it")
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
     ie, scen = run_inertial_estimates(run_dir, reg)

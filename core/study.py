@@ -202,7 +202,8 @@ def execute_run(spec: RunSpec) -> RunSummary:
     scen = load_scenario(spec.scenario, reg, overrides=spec.overrides)  # validated (and built) once
     observers = []
     if spec.rerun_path:
-        observers.append(reg.create("recorder", "rerun", path=spec.rerun_path, frame=scen.recording_frame))
+        observers.append(reg.create("recorder", "rerun", path=spec.rerun_path, frame=scen.recording_frame,
+                                    overwrite=True))  # the study's own recording of a run it reruns
     with threadpool_limits(1):  # one BLAS/OpenMP thread: identical numbers whichever worker runs it
         res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id,
                            observers=observers)

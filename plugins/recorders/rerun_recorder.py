@@ -129,21 +129,27 @@ class RerunRecorder(Component):
         Frame of the 3-D scene: "synodic" (the run's rotating frame) or "inertial" (the
         sensor's Earth-centred inertial frame, e.g. GCRS for the real-geometry sensor; the Moon
         then moves and the libration points are not drawn). See :mod:`.view_frame`.
+    overwrite : bool
+        Replace a recording file that already exists (``cistrack run --overwrite``). Without it
+        an existing file is refused, at construction for a plain ``path`` and when the run
+        starts for a per-run file, so that a recording is never clobbered by accident.
     """
 
     kind = "recorder"
 
     def __init__(self, path: str | None = None, serve: bool = False, spawn: bool = False,
                  max_points: int = 20_000, serve_port: int = 9876, viewer_port: int = 9877,
-                 ellipsoid_sigma: float = 3.0, subsample_seed: int = 0, frame: str = "synodic") -> None:
+                 ellipsoid_sigma: float = 3.0, subsample_seed: int = 0, frame: str = "synodic",
+                 overwrite: bool = False) -> None:
         if path is not None and not isinstance(path, (str, os.PathLike)):
             self._fail("path", path, "must be a file path (str) or None")
         self.path = None if path is None else os.fspath(path)
-        for name, value in (("serve", serve), ("spawn", spawn)):
+        for name, value in (("serve", serve), ("spawn", spawn), ("overwrite", overwrite)):
             if not isinstance(value, (bool, np.bool_)):
                 self._fail(name, value, "must be true or false")
         self.serve = bool(serve)
         self.spawn = bool(spawn)
+        self.overwrite = bool(overwrite)
         self.max_points = check_int(self, "max_points", max_points, minimum=1)
         self.serve_port = check_int(self, "serve_port", serve_port, minimum=0, maximum=65535)
         self.viewer_port = check_int(self, "viewer_port", viewer_port, minimum=1, maximum=65535)
@@ -170,6 +176,8 @@ class RerunRecorder(Component):
             if not folder.is_dir() or not os.access(folder, os.W_OK):
                 self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
                            "not writable")
+            if "{run_id}" not in self.path and not target.is_dir():
+                self._refuse_existing(self.path)
         self._rec: rr.RecordingStream | None = None
         self._viewer: subprocess.Popen | None = None
         self._event = 0
@@ -248,14 +256,22 @@ class RerunRecorder(Component):
             self.close()
 
     # -- internals --------------------------------------------------------------------------------
+    def _refuse_existing(self, target: str) -> None:
+        """Refuse to replace an existing file ``target`` unless ``overwrite`` is on."""
+        if not self.overwrite and os.path.lexists(target):
+            self._fail("path", target, "already exists; give another file, or overwrite=true "
+                       "(cistrack run --overwrite) to replace it")
+
     def _file_for(self, run_id: str) -> str | None:
         if self.path is None:
             return None
         safe = "".join(c if (c.isalnum() or c in "-_.") else "_" for c in run_id)
-        if "{run_id}" in self.path:
-            return self.path.replace("{run_id}", safe)
-        if os.path.isdir(self.path):
-            return os.path.join(self.path, f"{safe}.rrd")
+        if "{run_id}" in self.path or os.path.isdir(self.path):
+            target = (self.path.replace("{run_id}", safe) if "{run_id}" in self.path
+                      else os.path.join(self.path, f"{safe}.rrd"))
+            if target not in self._files:
+                self._refuse_existing(target)
+            return target
         if self._files and self._files[-1] == self.path:
             raise ParameterError(
                 f"{self._label()}: parameter 'path' = {self.path!r} names one file but a second run "

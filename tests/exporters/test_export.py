@@ -129,3 +129,14 @@ def test_every_update_step_records_its_nis_and_the_run_passes_a_loose_nis_test(r
     assert np.all(np.isfinite(est.nis[upd])) and np.all(est.nis_dof[upd] == 2)
     assert np.all(np.isnan(est.nis[~upd]))
     assert run_nis_test(run_dir[0]).n == int(upd.sum())
+
+
+def test_an_existing_out_file_is_kept_unless_overwrite_is_given(run_dir, tmp_path, capsys):
+    from cistrack.cli import main
+    out, _ = run_dir
+    target = tmp_path / "e.oem"
+    target.write_text("an earlier export\n")
+    assert main(["export", str(out), "--out", str(target)]) == 2
+    assert "already exists" in capsys.readouterr().err and target.read_text() == "an earlier export\n"
+    assert main(["export", str(out), "--out", str(target), "--overwrite"]) == 0
+    assert target.read_text().startswith("CCSDS_OEM_VERS")
