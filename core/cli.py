@@ -1,12 +1,12 @@
 """The ``cistrack`` command.
 
-    cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd] [--rerun-serve] [--rerun-spawn]
+    cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd [--overwrite]] [--rerun-serve] [--rerun-spawn]
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
     cistrack study report STUDY [--out DIR]
-    cistrack export RUN_DIR [--format oem|opm] [--out FILE] [--step N]
+    cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ def cmd_export(args) -> int:
     from .export import export_run
 
     params = {} if args.step is None else {"step": args.step}
-    out = export_run(args.run, args.format, args.out, **params)
+    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, **params)
     print(f"wrote {out}")
     return 0
 
@@ -72,13 +72,13 @@ def cmd_run(args) -> int:
     if args.rerun or args.rerun_serve or args.rerun_spawn:
         recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
                               spawn=args.rerun_spawn, max_points=args.max_points,
-                              frame=scen.recording_frame)
+                              frame=scen.recording_frame, overwrite=args.overwrite)
         observers.append(recorder)
     say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
     say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
         f"{scen.duration_days:g} days; results -> {out}")
-    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out,
-                       progress=not args.quiet, log=(None if args.quiet else lambda m: _eprint(f"  {m}")))
+    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out, progress=not args.quiet,
+                       log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part)
     s = res.summary
     out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     if args.quiet and s.status != "finished":
@@ -236,9 +236,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>; must be new, empty or an earlier results directory)")
     r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file (refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
     r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
+    r.add_argument("--rows-per-part", type=int, default=None, metavar="N", help="steps per results part file (default 1000, or 10 s)")
     r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                    help="override a scenario value, validated like the file (repeatable), "
                         "e.g. --set filter.n_particles=20000 --set duration_days=2")
@@ -257,6 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm")
     ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
+    ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
     ex.set_defaults(func=cmd_export)
     v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
     v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")

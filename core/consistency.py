@@ -46,10 +46,11 @@ class Innovation:
 
 
 def innovation(prior, measurement, sensor) -> Innovation:
-    """The :class:`Innovation` of ``measurement`` (a :class:`cistrack.measurement.Measurement`)
-    under the ``prior`` belief, measured by ``sensor``."""
-    names = tuple(sensor.names)
-    cols = np.array([names.index(n) for n in measurement.names], dtype=np.intp)
+    """The :class:`Innovation` of ``measurement`` (a :class:`cistrack.measurement.Measurement`,
+    or a sequence of them taken at one time by several sites: stacked, with a block-diagonal
+    noise covariance, ``names`` repeating per measurement) under the ``prior`` belief, each
+    measurement predicted by ``sensor.for_measurement(measurement)``."""
+    group = list(measurement) if isinstance(measurement, (list, tuple)) else [measurement]
     x = np.asarray(prior.samples.states, dtype=float)
     w = prior.samples.weights
     if x.shape[0] > MAX_NIS_SAMPLES:
@@ -57,20 +58,39 @@ def innovation(prior, measurement, sensor) -> Innovation:
         x = x[::step]
         w = None if w is None else w[::step] / w[::step].sum()
     w = np.full(x.shape[0], 1.0 / x.shape[0]) if w is None else np.asarray(w, dtype=float)
-    full_z = np.zeros(len(names))
-    full_z[cols] = measurement.z
-    zs = np.asarray(sensor.measure(x, measurement.t), dtype=float)
-    r = np.asarray(sensor.residual(zs, full_z[None, :]), dtype=float)[:, cols]  # zs - z, wrapped
+    rs, noises, used = [], [], []
+    for m in group:
+        own = sensor.for_measurement(m) if hasattr(sensor, "for_measurement") else sensor
+        names = tuple(own.names)
+        cols = np.array([names.index(n) for n in m.names], dtype=np.intp)
+        full_z = np.zeros(len(names))
+        full_z[cols] = m.z
+        zs = np.asarray(own.measure(x, m.t), dtype=float)
+        rs.append(np.asarray(own.residual(zs, full_z[None, :]), dtype=float)[:, cols])  # zs - z, wrapped
+        noises.append(np.asarray(m.covariance, dtype=float))
+        used += [names[c] for c in cols]
+    r = rs[0] if len(rs) == 1 else np.concatenate(rs, axis=1)
     mean_r = w @ r
     d = r - mean_r
     pzz = (d * w[:, None]).T @ d
-    noise = np.asarray(measurement.covariance, dtype=float)
-    return Innovation(tuple(names[c] for c in cols), -mean_r, pzz + noise, noise)  # nu = z - z_hat
+    noise = noises[0] if len(noises) == 1 else _block_diagonal(noises)
+    return Innovation(tuple(used), -mean_r, pzz + noise, noise)  # nu = z - z_hat
+
+
+def _block_diagonal(blocks) -> np.ndarray:
+    n = sum(b.shape[0] for b in blocks)
+    out = np.zeros((n, n))
+    i = 0
+    for b in blocks:
+        out[i:i + b.shape[0], i:i + b.shape[0]] = b
+        i += b.shape[0]
+    return out
 
 
 def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
-    """NIS of ``measurement`` (a :class:`cistrack.measurement.Measurement`) under the ``prior``
-    belief, measured by ``sensor``: returns (NIS, m)."""
+    """NIS of ``measurement`` (a :class:`cistrack.measurement.Measurement` or a sequence of
+    them at one time, see :func:`innovation`) under the ``prior`` belief, measured by
+    ``sensor``: returns (NIS, m)."""
     inn = innovation(prior, measurement, sensor)
     return inn.nis, len(inn.names)
 
@@ -82,7 +102,7 @@ class NisTest:
 
     mean: float
     n: int
-    dof: int
+    dof: int | float
     lower: float
     upper: float
     level: float
@@ -92,16 +112,23 @@ class NisTest:
         return self.lower <= self.mean <= self.upper
 
 
-def nis_test(nis, dof: int, level: float = 0.95) -> NisTest:
-    """Chi-square test of the mean of ``nis`` values (K,), each chi^2(dof) if consistent."""
+def nis_test(nis, dof, level: float = 0.95) -> NisTest:
+    """Chi-square test of the mean of ``nis`` values (K,), each chi^2(dof) if consistent; ``dof``
+    is one int or one per value (updates stacking several sites' measurements differ in size):
+    the sum is chi^2 with the summed dof. ``NisTest.dof`` is the int when all agree, else the
+    mean number of components per update (a float)."""
     v = np.asarray(nis, dtype=float)
-    v = v[np.isfinite(v)]
+    d = np.broadcast_to(np.asarray(dof), v.shape)
+    keep = np.isfinite(v)
+    v, d = v[keep], d[keep]
     k = v.size
     if k == 0:
-        return NisTest(float("nan"), 0, dof, float("nan"), float("nan"), level)
+        return NisTest(float("nan"), 0, int(np.max(dof, initial=0)), float("nan"), float("nan"), level)
+    total = int(np.sum(d))
+    same = bool(np.all(d == d[0]))
     a = 1.0 - level
-    return NisTest(float(v.mean()), k, dof, float(chi2.ppf(a / 2, dof * k) / k),
-                   float(chi2.ppf(1 - a / 2, dof * k) / k), level)
+    return NisTest(float(v.mean()), k, int(d[0]) if same else total / k, float(chi2.ppf(a / 2, total) / k),
+                   float(chi2.ppf(1 - a / 2, total) / k), level)
 
 
 def run_nis_test(run_dir, level: float = 0.95) -> NisTest:
@@ -111,7 +138,4 @@ def run_nis_test(run_dir, level: float = 0.95) -> NisTest:
     if est.nis is None:
         return nis_test([], 0, level)
     ok = np.isfinite(est.nis) & (est.nis_dof > 0)
-    dofs = set(est.nis_dof[ok].tolist())
-    if len(dofs) > 1:
-        raise ValueError(f"{run_dir}: updates with different measurement sizes {sorted(dofs)}")
-    return nis_test(est.nis[ok], dofs.pop() if dofs else 0, level)
+    return nis_test(est.nis[ok], est.nis_dof[ok], level)

@@ -16,8 +16,8 @@ re-analysed without re-running. Columns::
                                         under the prior (update steps; NaN, 0 otherwise), see
                                         :mod:`cistrack.consistency`
 
-Like the steps table, rows are written as one part file per step while the run goes (a killed
-run keeps every completed step) and merged at the end.
+Like the steps table, rows are written in part files of many steps while the run goes
+(:mod:`cistrack.part_files`: a killed run keeps every part written) and merged at the end.
 """
 from __future__ import annotations
 
@@ -30,6 +30,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .hookspecs import hookimpl
+from .part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
 from .units import LU_KM, VU_KMS
 
 __all__ = ["EstimateWriter", "Estimates", "read_estimates", "ESTIMATES", "KM_SCALE"]
@@ -60,15 +61,14 @@ def estimate_row(step, nis: float = float("nan"), nis_dof: int = 0) -> dict:
 class EstimateWriter:
     """Lifecycle observer writing ``estimates.parquet`` into ``directory``."""
 
-    def __init__(self, directory: str | Path) -> None:
+    def __init__(self, directory: str | Path, rows_per_part: int = ROWS_PER_PART,
+                 seconds_per_part: float = SECONDS_PER_PART) -> None:
         self.directory = Path(directory)
+        self._parts = PartWriter(self.directory / _PARTS, rows_per_part, seconds_per_part)
 
     @hookimpl
     def cistrack_run_started(self, run) -> None:
-        parts = self.directory / _PARTS
-        parts.mkdir(parents=True, exist_ok=True)
-        for old in parts.glob("part-*.parquet"):
-            old.unlink()
+        self._parts.start()
         if (self.directory / ESTIMATES).exists():
             (self.directory / ESTIMATES).unlink()
 
@@ -83,16 +83,14 @@ class EstimateWriter:
         self._write(step, float(step.metrics.get("nis", float("nan"))), int(step.metrics.get("nis_dof", 0)))
 
     def _write(self, step, nis: float = float("nan"), dof: int = 0) -> None:
-        final = self.directory / _PARTS / f"part-{step.index:06d}.parquet"
-        tmp = final.with_suffix(".tmp")
-        pq.write_table(pa.Table.from_pylist([estimate_row(step, nis, dof)]), tmp)
-        os.replace(tmp, final)
+        self._parts.add(step.index, estimate_row(step, nis, dof))
 
     @hookimpl
     def cistrack_run_finished(self, run, summary) -> None:
-        parts = sorted((self.directory / _PARTS).glob("part-*.parquet"))
+        self._parts.flush()
+        parts = self._parts.parts()
         if parts:
-            table = pa.concat_tables([pq.read_table(p) for p in parts])
+            table = read_parts(self.directory / _PARTS)
             tmp = self.directory / (ESTIMATES + ".tmp")
             pq.write_table(table, tmp)
             os.replace(tmp, self.directory / ESTIMATES)

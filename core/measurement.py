@@ -75,6 +75,24 @@ class Measurement:
                            tuple(self.names[i] for i in keep), self.index, self.site, self.kind)
 
 
+def _check_same_time_rows(times: np.ndarray, sites: np.ndarray | None) -> None:
+    """Rows may share a time tag only when they come from different sites."""
+    same = np.nonzero(np.diff(times) == 0)[0]
+    if same.size == 0:
+        return
+    if sites is None:
+        i = int(same[0])
+        raise MeasurementError(f"measurement times must increase strictly without sites; row {i + 1} is "
+                               f"at the same time as row {i}")
+    for i in same:  # rows i and i + 1 share a time: every row of that time needs its own site
+        j = int(i)
+        while j > 0 and times[j - 1] == times[i]:
+            j -= 1
+        if sites[i + 1] in sites[j:i + 1]:
+            raise MeasurementError(f"rows {j}..{i + 1} share one time and row {i + 1} repeats site "
+                                   f"{str(sites[i + 1])!r}; one site measures once per time")
+
+
 @dataclass
 class MeasurementSet:
     """Time-ordered measurements, of one sensor or of several sites.
@@ -82,7 +100,8 @@ class MeasurementSet:
     Attributes
     ----------
     times : (K,) float
-        TU since the scenario epoch, strictly increasing.
+        TU since the scenario epoch, increasing; rows may share a time only when they name
+        different sites (several sites measuring at once).
     values : (K, m) float
         Measured values (rad, LU).
     sigmas : (K, m) float
@@ -119,9 +138,9 @@ class MeasurementSet:
         self.sigmas = np.asarray(self.sigmas, dtype=float).reshape(k, m)
         if k and not np.all(np.isfinite(self.times)):
             raise MeasurementError("measurement times contain NaN or infinity")
-        if k > 1 and np.any(np.diff(self.times) <= 0):
-            i = int(np.argmax(np.diff(self.times) <= 0))
-            raise MeasurementError(f"measurement times must increase strictly; row {i + 1} is not after row {i}")
+        if k > 1 and np.any(np.diff(self.times) < 0):
+            i = int(np.argmax(np.diff(self.times) < 0))
+            raise MeasurementError(f"measurement times must not decrease; row {i + 1} is before row {i}")
         if not (np.all(np.isfinite(self.values)) and np.all(np.isfinite(self.sigmas))):
             raise MeasurementError("measurement values or sigmas contain NaN or infinity")
         if np.any(self.sigmas <= 0):
@@ -134,6 +153,7 @@ class MeasurementSet:
             if unknown:
                 raise MeasurementError(f"site keys {unknown} are not in the set's site table "
                                        f"(known: {sorted(self.site_table)})")
+        _check_same_time_rows(self.times, self.sites)
         if self.kinds is not None:
             self.kinds = np.asarray(self.kinds, dtype=str).reshape(-1)
             if self.kinds.shape[0] != k:
@@ -149,6 +169,14 @@ class MeasurementSet:
 
     def __len__(self) -> int:
         return self.times.shape[0]
+
+    def time_groups(self) -> list[np.ndarray]:
+        """Row indices grouped by time tag, in time order: one (n,) int array per distinct time
+        (several rows share a time when several sites measured at once)."""
+        if len(self) == 0:
+            return []
+        cuts = np.nonzero(np.diff(self.times) > 0)[0] + 1
+        return np.split(np.arange(len(self)), cuts)
 
     def kind_at(self, i: int) -> str:
         """Measurement type of row ``i`` ("azel", "radec" or "" when not an angle pair)."""

@@ -10,7 +10,9 @@ holds, for every measured component NAME (the sensor's names: azimuth/elevation,
                       contains "range" is a range: res_NAME_km
     sd_NAME_arcsec    sqrt of the diagonal of S = P_zz + R, the residual's predicted 1-sigma
                       (sd_NAME_km for a range)
-    nis, nis_dof      nu^T S^-1 nu and the number of components m (chi^2(m) if consistent)
+    nis, nis_dof      nu^T S^-1 nu and the number of components m (chi^2(m) if consistent);
+                      for a step of several sites' measurements at one time, stacked (res_ and
+                      sd_ then hold the first measurement's components)
     nis_outside_95    1 when the NIS lies outside the central 95 % of chi^2(m), else 0
 
 :func:`residual_summary` summarises a run's rows for the CLI: mean NIS against its chi-square
@@ -47,6 +49,8 @@ def residual_columns(inn) -> dict[str, float]:
     out: dict[str, float] = {}
     for name, nu, s in zip(inn.names, inn.nu, sd):
         unit, scale = _unit(name)
+        if f"res_{name}_{unit}" in out:  # several sites at one time: the columns hold the first's
+            continue
         out[f"res_{name}_{unit}"] = float(nu * scale)
         out[f"sd_{name}_{unit}"] = float(s * scale)
     lo, hi = chi2.ppf(0.025, m), chi2.ppf(0.975, m)
@@ -68,7 +72,8 @@ class ResidualObserver:
         from .consistency import innovation
 
         try:
-            self._pending[step.index] = residual_columns(innovation(step.belief, step.measurement, run.sensor))
+            self._pending[step.index] = residual_columns(innovation(step.belief, step.group or step.measurement,
+                                                                    run.sensor))
         except (np.linalg.LinAlgError, ValueError):
             self._pending.pop(step.index, None)
 
@@ -99,15 +104,12 @@ class ResidualSummary:
 
 def residual_summary(rows: list[dict[str, Any]], level: float = 0.95) -> ResidualSummary:
     """The :class:`ResidualSummary` of a run's step rows (dicts, see :mod:`cistrack.step_table`);
-    raises ValueError when updates measured different numbers of components."""
+    updates of different sizes (several sites at one time) are tested with the summed dof."""
     from .consistency import nis_test
 
     ups = [r for r in rows if r.get("kind") == "update" and r.get("nis") is not None
            and np.isfinite(r["nis"]) and (r.get("nis_dof") or 0) > 0]
-    dofs = {int(r["nis_dof"]) for r in ups}
-    if len(dofs) > 1:
-        raise ValueError(f"updates with different measurement sizes {sorted(dofs)}")
-    test = nis_test([r["nis"] for r in ups], dofs.pop() if dofs else 0, level)
+    test = nis_test([r["nis"] for r in ups], [int(r["nis_dof"]) for r in ups], level)
     res = [abs(v) for r in ups for k, v in r.items()
            if k.startswith("res_") and k.endswith("_arcsec") and v is not None and np.isfinite(v)]
     return ResidualSummary(test, len(ups), float(np.mean([r["nis_outside_95"] for r in ups])) if ups else float("nan"),

@@ -7,8 +7,10 @@ Layout of a run directory::
                          summary.failure)
     scenario.toml        the scenario as run (tables after overrides)
     steps.parquet        one row per step (written when the run finishes)
-    steps/part-*.parquet one file per step while running (atomic rename: a killed run leaves
-                         every completed step readable); merged into steps.parquet at the end
+    steps/part-*.parquet the rows while running, many steps per part (see
+                         :mod:`cistrack.part_files`: a part per ``rows_per_part`` steps or per
+                         ``seconds_per_part`` of wall time, atomic rename, so a killed run
+                         leaves every written part readable); merged into steps.parquet at the end
 
 :func:`read_steps` reads either form.
 """
@@ -28,6 +30,7 @@ import pyarrow.parquet as pq
 
 from .fingerprint import scenario_fingerprint
 from .hookspecs import hookimpl
+from .part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
 from .step_table import is_table_step, step_row
 
 __all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "versions"]
@@ -82,20 +85,22 @@ def _json_safe(meta: dict) -> dict:
 
 
 class ResultsWriter:
-    """Lifecycle observer that writes a run's manifest and per-step table into ``directory``."""
+    """Lifecycle observer that writes a run's manifest and per-step table into ``directory``;
+    the rows go to part files of ``rows_per_part`` steps (or fewer, every ``seconds_per_part``
+    seconds), see :class:`cistrack.part_files.PartWriter`."""
 
-    def __init__(self, directory: str | Path, registry=None) -> None:
+    def __init__(self, directory: str | Path, registry=None, rows_per_part: int = ROWS_PER_PART,
+                 seconds_per_part: float = SECONDS_PER_PART) -> None:
         self.directory = Path(directory)
         self.registry = registry
         self._t0 = 0.0
         self._manifest: dict[str, Any] = {}
+        self._parts = PartWriter(self.directory / PARTS, rows_per_part, seconds_per_part)
 
     @hookimpl
     def cistrack_run_started(self, run) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
-        (self.directory / PARTS).mkdir(exist_ok=True)
-        for old in (self.directory / PARTS).glob("part-*.parquet"):
-            old.unlink()
+        self._parts.start()
         if (self.directory / STEPS).exists():
             (self.directory / STEPS).unlink()
         self._t0 = time.perf_counter()
@@ -136,22 +141,30 @@ class ResultsWriter:
             self._write_part(run, step)
 
     def _write_part(self, run, step) -> None:
-        table = pa.Table.from_pylist([step_row(run, step)])
-        final = self.directory / PARTS / f"part-{step.index:06d}.parquet"
-        tmp = final.with_suffix(".tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, final)
+        self._parts.add(step.index, step_row(run, step))
+
+    @property
+    def n_parts(self) -> int:
+        """Part files written so far in this run."""
+        return self._parts.n_parts
 
     @hookimpl
     def cistrack_run_finished(self, run, summary) -> None:
-        """Merge the parts into steps.parquet and record the status. If the merge fails (a full
-        disk) the parts stay (``read_steps`` reads them) and the manifest says why."""
-        parts = sorted((self.directory / PARTS).glob("part-*.parquet"))
+        """Write the waiting rows, merge the parts into steps.parquet and record the status. If
+        writing fails (a full disk) the parts written stay (``read_steps`` reads them) and the
+        manifest says why."""
         status, extra = summary.status, {}
+        try:
+            self._parts.flush()
+        except OSError as exc:
+            status = "failed" if status == "finished" else status
+            extra["part_failure"] = f"{type(exc).__name__}: {exc}; the last rows were not written"
+        parts = self._parts.parts()
+        extra["n_parts"] = self._parts.n_parts
         if parts:
             tmp = self.directory / (STEPS + ".tmp")
             try:
-                table = pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+                table = read_parts(self.directory / PARTS)
                 pq.write_table(table, tmp)
                 os.replace(tmp, self.directory / STEPS)
                 for p in parts:
@@ -179,7 +192,7 @@ def read_steps(directory: str | Path) -> pa.Table:
     d = Path(directory)
     if (d / STEPS).exists():
         return pq.read_table(d / STEPS)
-    parts = sorted((d / PARTS).glob("part-*.parquet"))
-    if not parts:
+    table = read_parts(d / PARTS)
+    if table is None:
         raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")
-    return pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+    return table

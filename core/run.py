@@ -24,7 +24,7 @@ import pluggy
 from . import hookspecs, units
 from .custody import CustodyObserver
 from .verdicts import final_verdict
-from .limits import check_seed
+from .limits import check_count, check_seed
 from .errors import CistrackError, ConfigError
 from .metrics import step_metrics
 from .registry import Registry, default_registry
@@ -126,7 +126,14 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                               f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
         say(f"{len(passes)} passes, {times.size} measurements scheduled")
         measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
-    cloud = iod.estimate(measurements, sensor, rngs["iod"])
+    iod_measurements, iod_sensor = measurements, sensor
+    groups = measurements.time_groups()
+    if len(groups) < len(measurements):  # several sites at one time: the IOD takes the first
+        first = np.array([g[0] for g in groups])
+        iod_measurements, iod_sensor = measurements.subset(first), sensor.subset(first)
+        say(f"{len(measurements)} measurements at {len(groups)} times: the IOD uses the first site's "
+            f"at each time, the filter all of them (one step per time)")
+    cloud = iod.estimate(iod_measurements, iod_sensor, rngs["iod"])
     say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
@@ -146,7 +153,7 @@ def _pass_index(passes, t: float) -> int:
 def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
                  observers: Iterable[Any] = (), output_dir: str | Path | None = None,
                  progress: bool = False, run_id: str | None = None, keep_steps: bool = False,
-                 log=None, blas_threads: int | None = 1) -> RunResult:
+                 log=None, blas_threads: int | None = 1, rows_per_part: int | None = None) -> RunResult:
     """Run one scenario end to end and return its metrics and summary.
 
     ``observers`` receive the lifecycle hooks; when ``output_dir`` is given a
@@ -156,35 +163,43 @@ def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Regis
     ``blas_threads`` limits BLAS threads during the run (default 1): the linear algebra of a run
     is many small matrices, for which multi-threaded BLAS is slower (measured 150x on 6x6 solves
     on a busy 2-core machine); the parallel work is the numba propagation. None leaves BLAS alone.
+
+    ``rows_per_part``: steps per results part file in ``output_dir`` (default
+    :data:`cistrack.part_files.ROWS_PER_PART`; a part is also written every
+    :data:`~cistrack.part_files.SECONDS_PER_PART` seconds); the merged tables do not depend on it.
     """
+    args = (scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log, rows_per_part)
     if blas_threads is None:
-        return _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log)
+        return _run(*args)
     from threadpoolctl import threadpool_limits
     with threadpool_limits(limits=blas_threads, user_api="blas"):
-        return _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log)
+        return _run(*args)
 
 
-def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, int]]:
-    """The filter's steps after the IOD epoch, in time order: (t TU, measurement index or -1 for a
-    prediction-only step)."""
-    events = [(float(ctx.measurements.times[i]), i) for i in range(len(ctx.measurements))
-              if ctx.measurements.times[i] > ctx.iod_cloud.epoch + 1e-12]
+def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, tuple[int, ...]]]:
+    """The filter's steps after the IOD epoch, in time order: (t TU, the indices of the
+    measurements taken at t, or () for a prediction-only step). Measurements sharing a time tag
+    (several sites at once) make one step."""
+    ms = ctx.measurements
+    events: list = [(float(ms.times[g[0]]), tuple(int(i) for i in g)) for g in ms.time_groups()
+                    if ms.times[g[0]] > ctx.iod_cloud.epoch + 1e-12]
     t_last = ctx.iod_cloud.epoch
     if scenario.predict_every_hours > 0:
         dt = float(units.hours_to_tu(scenario.predict_every_hours))
         meas_t = np.array([e[0] for e in events]) if events else np.zeros(0)
         for t in np.arange(t_last + dt, scenario.duration, dt):
             if meas_t.size == 0 or np.min(np.abs(meas_t - t)) > 1e-6:
-                events.append((float(t), -1))
+                events.append((float(t), ()))
     if scenario.end_with_prediction and scenario.duration > max([t_last] + [e[0] for e in events]) + 1e-9:
-        events.append((scenario.duration, -1))
-    events.sort()
+        events.append((scenario.duration, ()))
+    events.sort(key=lambda e: (e[0], e[1][:1] or (-1,)))
     return events
 
 
-def _step(ctx: RunContext, index: int, t: float, kind: str, belief, measurement=None) -> Step:
+def _step(ctx: RunContext, index: int, t: float, kind: str, belief, group: tuple = ()) -> Step:
     return Step(index=index, t=t, utc=units.format_utc(units.tu_to_utc(ctx.epoch, t)), kind=kind,
-                belief=belief, truth=ctx.truth_at(t), measurement=measurement)
+                belief=belief, truth=ctx.truth_at(t), measurement=group[0] if group else None,
+                group=tuple(group))
 
 
 def _measure(ctx: RunContext, step: Step) -> Step:
@@ -197,7 +212,8 @@ def _measure(ctx: RunContext, step: Step) -> Step:
     return step
 
 
-def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log) -> RunResult:
+def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
+         rows_per_part=None) -> RunResult:
     """Build once, then one way through: truth, measurements, IOD, filter steps; everything else
     (custody, rows, results files, progress, recordings) is an observer of the hooks."""
     from .progress import ProgressBar
@@ -210,7 +226,9 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     obs: list[Any] = [custody, ResidualObserver(), collector]
     if out is not None:
         from .estimates import EstimateWriter
-        obs += [ResultsWriter(out, reg), EstimateWriter(out)]
+        from .part_files import ROWS_PER_PART
+        n = check_count(rows_per_part, "rows_per_part (--rows-per-part)", 1, 10 ** 9) if rows_per_part is not None else ROWS_PER_PART
+        obs += [ResultsWriter(out, reg, rows_per_part=n), EstimateWriter(out, rows_per_part=n)]
     obs.extend(observers)
     t_start = time.perf_counter()
     ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
@@ -233,22 +251,22 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     try:
         pm.hook.cistrack_run_started(run=ctx)
         pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
-        for k, (t, mi) in enumerate(events, start=1):
+        for k, (t, group) in enumerate(events, start=1):
             tp = time.perf_counter()
             filt.predict(t)
             t_pred = time.perf_counter() - tp
-            if mi < 0:
+            if not group:
                 step = _step(ctx, k, t, "predict", filt.belief)
                 step.timings["predict"] = t_pred
                 pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step))
                 continue
-            m = ctx.measurements[mi]
-            m = m.angles_only() if "range" in m.names else m
-            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, m))
+            ms = tuple(_angles(ctx.measurements[i]) for i in group)
+            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, ms))
             tu = time.perf_counter()
-            filt.update(m)
+            for m in ms:  # one time, several sites: sequential updates within the one step
+                filt.update(m)
             t_upd = time.perf_counter() - tu
-            step = _step(ctx, k, t, "update", filt.belief, m)
+            step = _step(ctx, k, t, "update", filt.belief, ms)
             step.timings.update({"predict": t_pred, "update": t_upd})
             pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
@@ -273,6 +291,10 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _angles(m):
+    return m.angles_only() if "range" in m.names else m
 
 
 def _finish(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:

@@ -81,7 +81,10 @@ class Step:
     kind : str                   "initial" (IOD cloud), "predict" (no measurement) or "update"
     belief : Belief              prior for "predict" events and predict-only steps, posterior after update
     truth : (6,) float or None   truth state at t, nondimensional synodic
-    measurement : Measurement or None   the measurement used (angles only), for "update" steps
+    measurement : Measurement or None   the measurement used (angles only), for "update" steps;
+                                 the first of ``group`` when several share the step's time
+    group : tuple of Measurement every measurement of an "update" step (several sites measuring
+                                 at one time make one step; the filter takes them in order)
     metrics : dict               metric name -> float (km, m/s, cm/s, nats); filled before
                                  cistrack_step_updated
     diagnostics : dict           the filter's diagnostics after this step
@@ -95,6 +98,7 @@ class Step:
     belief: Belief
     truth: np.ndarray | None = None
     measurement: Measurement | None = None
+    group: tuple = ()
     metrics: dict[str, float] = field(default_factory=dict)
     diagnostics: dict[str, float] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)

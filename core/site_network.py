@@ -30,8 +30,12 @@ class SiteNetwork(Sensor):
     Parameters
     ----------
     members : dict site key -> Sensor (all measuring the same components)
-    times : (K,) float      measurement times, TU, strictly increasing
+    times : (K,) float      measurement times, TU, non-decreasing (rows at one time come from
+                            different sites)
     sites : (K,) str        site key of each measurement
+
+    A call at a time when several sites measured is answered by the first of them (in file
+    order); filters ask :meth:`for_measurement` for the sensor of each measurement instead.
     """
 
     def __init__(self, members: dict, times: Any, sites: Any) -> None:
@@ -61,6 +65,22 @@ class SiteNetwork(Sensor):
         k = np.clip(np.searchsorted(self.times, tt), 1, self.times.size - 1)
         nearer_left = np.abs(tt - self.times[k - 1]) <= np.abs(self.times[k] - tt)
         return self._code[np.where(nearer_left, k - 1, k)]
+
+    def subset(self, rows) -> "SiteNetwork":
+        """The network answering for the measurements ``rows`` (index array) only: the same
+        member sensors (nothing is built again)."""
+        return SiteNetwork(self.members, self.times[rows], self.sites[rows])
+
+    def for_measurement(self, measurement) -> Sensor:
+        """The member sensor at ``measurement.site`` (itself for a measurement naming no site)."""
+        site = getattr(measurement, "site", "")
+        if not site:
+            return self
+        try:
+            return self.members[site]
+        except KeyError:
+            raise MeasurementError(f"measurement {getattr(measurement, 'index', '?')} names site {site!r}, "
+                                   f"which is not in the network (sites: {', '.join(self._keys)})") from None
 
     def _dispatch(self, method: str, t, *arrays, out_rows: int | None = None):
         """Call ``method(*arrays_subset, t_subset)`` on each member for the rows it owns."""
@@ -148,7 +168,8 @@ def build_site_network(spec, registry, measurements: MeasurementSet) -> Sensor:
 def merge_sites(parts) -> MeasurementSet:
     """One time-ordered set from ``parts``: an iterable of (site key, Site, MeasurementSet of that
     site, all with the same component names). Measurements at the same time from two sites are
-    refused (a set's times increase strictly)."""
+    kept, in the order of ``parts`` (a filter takes them in one step); two at the same time from
+    one site are refused by the set."""
     parts = list(parts)
     if not parts:
         raise MeasurementError("no measurement sets to merge")
@@ -158,8 +179,6 @@ def merge_sites(parts) -> MeasurementSet:
             raise MeasurementError(f"site {key!r} measured {ms.names}, another site {names}")
     times = np.concatenate([ms.times for _k, _s, ms in parts])
     order = np.argsort(times, kind="stable")
-    if times.size > 1 and np.any(np.diff(times[order]) <= 0):
-        raise MeasurementError("two sites measured at the same time; shift one schedule")
     values = np.concatenate([ms.values for _k, _s, ms in parts])[order]
     sigmas = np.concatenate([ms.sigmas for _k, _s, ms in parts])[order]
     sites = np.concatenate([np.full(len(ms), key) for key, _s, ms in parts])[order]

@@ -109,8 +109,9 @@ def verdict_lines(summary, run_dir, fmt=lambda v: f"{v:.3g}" if v is not None el
         head = "  verdict: no-truth (no truth to compare against: judged by measurement consistency)"
         if not nt.n:
             return [head, "  measurement consistency: no update with a finite NIS"]
-        return [head, f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({nt.dof} "
-                      f"components each), {nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
+        each = f"{nt.dof} components each" if isinstance(nt.dof, int) else f"{nt.dof:.3g} components on average"
+        return [head, f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({each}), "
+                      f"{nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
                       + ("consistent" if nt.within else "INCONSISTENT"),
                 f"  residuals: {100 * rs.share_outside_95:.0f} % of measurements outside their 95 % NIS bounds "
                 f"(5 % if consistent), largest |residual| {rs.max_abs_residual_arcsec:.3g} arcsec "

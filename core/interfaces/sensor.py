@@ -65,6 +65,13 @@ class Sensor(Component):
         (scalar or (N,) TU). A target at range rho (LU) is at ``observer_position(t) + rho * los``;
         IOD methods use this to turn angles and a range into synodic positions."""
 
+    def for_measurement(self, measurement) -> "Sensor":
+        """The sensor that took ``measurement`` (a :class:`cistrack.measurement.Measurement`):
+        itself, except for a sensor standing for several sites, which returns the one at
+        ``measurement.site``. Filters measure predictions with it, so that two measurements at
+        the same time from two sites are each predicted from their own site."""
+        return self
+
     def inertial_frame(self):
         """The Earth-centred inertial frame the sensor's synodic frame is placed in, as a
         :class:`cistrack.inertial_frame.InertialFrame` (used to export estimates), or None when

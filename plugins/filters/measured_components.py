@@ -38,6 +38,8 @@ class MeasuredComponents:
     """
 
     def __init__(self, sensor: Sensor, measurement: Measurement):
+        # a sensor standing for several sites answers with the one that took the measurement
+        sensor = sensor.for_measurement(measurement) if hasattr(sensor, "for_measurement") else sensor
         names = tuple(sensor.names)
         unknown = [n for n in measurement.names if n not in names]
         if unknown:

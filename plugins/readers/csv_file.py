@@ -6,7 +6,8 @@ the columns (any order)::
     time_utc,azimuth_deg,elevation_deg[,range_km][,sigma_azimuth_arcsec][,sigma_elevation_arcsec][,sigma_range_km][,site]
 
 ``site`` (optional) names the observing site of the row: a key of the reader's ``sites``
-parameter or an MPC observatory code of the bundled table.
+parameter or an MPC observatory code of the bundled table. Times increase; rows of different
+sites may share a time (a filter takes them in one step).
 
 Lines starting with ``#`` and blank lines are ignored. Every invalid row is reported with its
 line number in one :class:`~cistrack.errors.MeasurementError` naming the file; nothing is
@@ -110,6 +111,7 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     times, values, sigmas, row_sites = [], [], [], []
     site_table: dict[str, Site] = {}
     last_t, last_line = -math.inf, 0
+    sites_at_t: set = set()  # sites of the rows at last_t: one time, several sites, one row each
     for line_no, text in rows[1:]:
         cells = [c.strip() for c in next(csv.reader([text]))]
         if len(cells) != len(header):
@@ -155,9 +157,12 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
         except ValueError as exc:
             errors.append(f"line {line_no}: {exc}")
             continue
-        if t <= last_t:
-            errors.append(f"line {line_no}: time_utc {cells[col['time_utc']]!r} is not after line {last_line}")
+        site_key = cells[col["site"]] if "site" in col else None
+        if t < last_t or (t == last_t and (site_key is None or site_key in sites_at_t)):
+            why = "is not after" if site_key is None or t < last_t else f"repeats site {site_key!r} at the time of"
+            errors.append(f"line {line_no}: time_utc {cells[col['time_utc']]!r} {why} line {last_line}")
             continue
+        sites_at_t = sites_at_t | {site_key} if t == last_t else {site_key}
         last_t, last_line = t, line_no
         times.append(t)
         values.append(row_val)

@@ -35,3 +35,13 @@ def test_nis_test_bounds_are_the_chi_square_quantiles_of_the_mean():
     r = nis_test(np.full(50, 2.0), 2, level=0.95)
     assert r.lower == pytest.approx(chi2.ppf(0.025, 100) / 50) and r.upper == pytest.approx(chi2.ppf(0.975, 100) / 50)
     assert r.within and not nis_test(np.full(50, 4.0), 2).within
+
+
+def test_updates_of_different_sizes_are_tested_with_the_summed_degrees_of_freedom():
+    from scipy.stats import chi2
+    rng = np.random.default_rng(1)
+    dof = np.array([2, 4] * 200)
+    r = nis_test(rng.chisquare(dof), dof, level=0.95)
+    assert r.dof == pytest.approx(3.0) and r.n == 400
+    assert r.lower == pytest.approx(chi2.ppf(0.025, 1200) / 400) and r.upper == pytest.approx(chi2.ppf(0.975, 1200) / 400)
+    assert r.within and not nis_test(rng.chisquare(dof) * 1.5, dof).within

@@ -59,8 +59,28 @@ def test_merge_names_each_measurement_by_its_site(network_and_members):
     ms = merge_sites([("711", observatory("711"), a), ("809", observatory("809"), b)])
     assert ms.sites.tolist() == ["711", "809"] * 6 and ms.kinds.tolist() == ["azel"] * 12
     np.testing.assert_array_equal(ms.values[0], a.values[0])
-    with pytest.raises(MeasurementError, match="same time"):
-        merge_sites([("711", observatory("711"), a), ("x", observatory("711"), a)])
+    with pytest.raises(MeasurementError, match="repeats site '711'"):
+        merge_sites([("711", observatory("711"), a), ("711", observatory("711"), a)])
+
+
+def test_merge_keeps_two_sites_measuring_at_the_same_time_in_the_order_given(network_and_members):
+    _, members, t, _, x = network_and_members
+    rng = np.random.default_rng(0)
+    a = members["711"].simulate(x, t, rng)
+    b = members["809"].simulate(x, t, rng)
+    ms = merge_sites([("711", observatory("711"), a), ("809", observatory("809"), b)])
+    assert ms.sites.tolist() == ["711", "809"] * 12 and len(ms.time_groups()) == 12
+    np.testing.assert_array_equal(ms.values[1], b.values[0])
+
+
+def test_for_measurement_answers_with_the_site_that_took_it(network_and_members):
+    net, members, t, _, x = network_and_members
+    rng = np.random.default_rng(0)
+    ms = merge_sites([("711", observatory("711"), members["711"].simulate(x, t, rng)),
+                      ("809", observatory("809"), members["809"].simulate(x, t, rng))])
+    for i in (0, 1):  # the same time, two sites: each measurement predicted from its own site
+        m = ms[i]
+        np.testing.assert_array_equal(net.for_measurement(m).measure(x[:1], m.t), members[m.site].measure(x[:1], m.t))
 
 
 def test_build_places_the_scenario_sensor_at_every_site(network_and_members):

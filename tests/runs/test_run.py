@@ -85,7 +85,8 @@ def test_cli_run_refuses_a_bad_setting_naming_the_key(tmp_path, setting, named):
 def test_a_run_killed_mid_way_leaves_a_readable_partial_table(tmp_path):
     out = tmp_path / "killed"
     env = dict(os.environ)
-    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet"],
+    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet",
+                             "--rows-per-part", "1"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     deadline = time.time() + 240
     while time.time() < deadline:

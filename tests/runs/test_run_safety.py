@@ -60,8 +60,8 @@ def test_ctrl_c_ends_the_run_interrupted_with_completed_steps_merged(tmp_path):
 
 def test_sigterm_to_the_cli_leaves_an_interrupted_manifest_and_readable_steps(tmp_path):
     out = tmp_path / "term"
-    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet",
+                             "--rows-per-part", "1"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 240
     parts: list = []
     while time.time() < deadline:
