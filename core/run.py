@@ -126,13 +126,8 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                               f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
         say(f"{len(passes)} passes, {times.size} measurements scheduled")
         measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
-    iod_measurements, iod_sensor = measurements, sensor
-    groups = measurements.time_groups()
-    if len(groups) < len(measurements):  # several sites at one time: the IOD takes the first
-        first = np.array([g[0] for g in groups])
-        iod_measurements, iod_sensor = measurements.subset(first), sensor.subset(first)
-        say(f"{len(measurements)} measurements at {len(groups)} times: the IOD uses the first site's "
-            f"at each time, the filter all of them (one step per time)")
+    from .site_network import one_per_time
+    iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
     cloud = iod.estimate(iod_measurements, iod_sensor, rngs["iod"])
     say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"

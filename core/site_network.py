@@ -165,6 +165,19 @@ def build_site_network(spec, registry, measurements: MeasurementSet) -> Sensor:
     return SiteNetwork(members, measurements.times, measurements.sites)
 
 
+def one_per_time(measurements: MeasurementSet, sensor, say=lambda msg: None):
+    """``(measurements, sensor)`` with one measurement per time tag, the first in file order, and
+    the network answering for those: what the IOD is given (its fits assume one observer per
+    time). Unchanged when no two measurements share a time."""
+    groups = measurements.time_groups()
+    if len(groups) == len(measurements):
+        return measurements, sensor
+    first = np.array([g[0] for g in groups])
+    say(f"{len(measurements)} measurements at {len(groups)} times: the IOD uses the first site's at each "
+        f"time, the filter all of them (one step per time)")
+    return measurements.subset(first), sensor.subset(first)
+
+
 def merge_sites(parts) -> MeasurementSet:
     """One time-ordered set from ``parts``: an iterable of (site key, Site, MeasurementSet of that
     site, all with the same component names). Measurements at the same time from two sites are
