@@ -185,6 +185,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         else:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
     flagged = [f"- {x.run_id} ({flt} with {iod} IOD on {sc}): {x.verdict.kind}: {x.verdict.reason}"
+               + (f" (step {x.verdict.step}, t = {x.verdict.t_days:.3g} d)" if x.verdict.t_days is not None else "")
                for (sc, iod, flt), sums in sorted(groups.items()) for x in sums
                if x.verdict.kind in ("diverged", "not-converged")]
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
@@ -196,7 +197,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                          *(flagged or ["None."]), "",
                          "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position "
                          "sigma within the rule's precision; not-converged = custody kept by a cloud too wide "
-                         "to be a track; diverged = the belief collapsed, the error is far beyond sigma, or "
+                         "to be a track; diverged = a particle filter's weights degenerated, the belief collapsed, the error "
+                         "is far beyond sigma, or "
                          "the mean left cislunar space."])
     (rep_dir / "summary.md").write_text(md_text + "\n")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]

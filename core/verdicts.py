@@ -38,8 +38,7 @@ def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dic
         if r.get("kind") == "update" and ess is not None and math.isfinite(ess) and ess < rule.degenerate_ess:
             n = r.get("diag_n_particles")
             of = f" of {int(n)} particles" if n is not None and math.isfinite(n) else ""
-            return (f"degenerate weights (effective sample size {ess:.3g}{of} < {rule.degenerate_ess:g} at step "
-                    f"{int(r['step'])}, t = {float(r['t_days']):.3g} d)", r)
+            return f"degenerate weights (effective sample size {ess:.3g}{of} < {rule.degenerate_ess:g})", r
     return None
 
 
