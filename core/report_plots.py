@@ -107,12 +107,16 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
         if not all_t:
             continue
         grid = np.linspace(min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t), _GRID)
-        fig, axes = plt.subplots(len(PANELS), 1, figsize=(8.5, 10.5), sharex=True)
+        panels = [p for p in PANELS if any(_series(g["tables"], p[0]) for g in filters.values())]
+        if not panels:
+            continue
+        fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 2.0 + 2.125 * len(panels)), sharex=True, squeeze=False)
+        axes = list(axes[:, 0])
         n_seeds = []
         for ci, (flt, g) in enumerate(sorted(filters.items())):
             color = f"C{ci}"
             n_seeds.append(len(g["tables"]))
-            for ax, (key, _, _) in zip(axes, PANELS):
+            for ax, (key, _, _) in zip(axes, panels):
                 series = _series(g["tables"], key)
                 if not series:
                     continue
@@ -134,11 +138,13 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
                     ax.plot(days, np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
                             transform=ax.get_xaxis_transform(), clip_on=False,
                             label="measurement times (first seed)" if ax is axes[0] else None)
-        nees_ax = axes[[k for k, _, _ in PANELS].index("nees")]
-        nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,
-                        label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
-        nees_ax.axhline(CHI2_DOF, color="0.4", lw=0.8, ls="--")
-        for ax, (_, label, scale) in zip(axes, PANELS):
+        keys = [k for k, _, _ in panels]
+        nees_ax = axes[keys.index("nees")] if "nees" in keys else None   # no truth: no NEES (nor error)
+        if nees_ax is not None:
+            nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,
+                            label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
+            nees_ax.axhline(CHI2_DOF, color="0.4", lw=0.8, ls="--")
+        for ax, (_, label, scale) in zip(axes, panels):
             ax.set_ylabel(label)
             if scale == "symlog":
                 ax.set_yscale("symlog", linthresh=1.0)

@@ -69,6 +69,36 @@ def _calibration_columns(sums: list[RunSummary]) -> dict:
             "hdr_above_099": nan(c.hdr_above_099), "diverged_runs": c.diverged}
 
 
+_CONSISTENCY = ("mean_nis", "nis_dof", "nis_lo", "nis_hi", "nis_updates", "nis_outside_95_share",
+                "max_abs_residual_arcsec")
+"""CSV columns of the measurement consistency of a group's updates (:mod:`cistrack.residuals`)."""
+
+
+def _consistency_columns(tables: list) -> dict:
+    from .residuals import residual_summary
+
+    try:
+        rs = residual_summary([row for t in tables if "nis" in t.column_names for row in t.to_pylist()])
+    except ValueError:  # updates of different measurement sizes: no single chi-square test
+        return dict.fromkeys(_CONSISTENCY)
+    nt = rs.nis_test
+    if not nt.n:
+        return dict.fromkeys(_CONSISTENCY)
+    return {"mean_nis": nt.mean, "nis_dof": nt.dof, "nis_lo": nt.lower, "nis_hi": nt.upper, "nis_updates": nt.n,
+            "nis_outside_95_share": rs.share_outside_95,
+            "max_abs_residual_arcsec": None if rs.max_abs_residual_arcsec != rs.max_abs_residual_arcsec
+            else rs.max_abs_residual_arcsec}
+
+
+def _consistency_text(r: dict) -> str:
+    if r["mean_nis"] is None:
+        return "no update with a finite NIS"
+    ok = "consistent" if r["nis_lo"] <= r["mean_nis"] <= r["nis_hi"] else "INCONSISTENT"
+    return (f"mean NIS {r['mean_nis']:.3g} over {r['nis_updates']} updates ({r['nis_dof']} components), "
+            f"95 % bounds [{r['nis_lo']:.3g}, {r['nis_hi']:.3g}]: {ok}; {100 * r['nis_outside_95_share']:.0f} % of "
+            f"measurements outside their own 95 % bounds; largest |residual| {_g(r['max_abs_residual_arcsec'])} arcsec")
+
+
 def _g(v, spec: str = ".3g") -> str:
     return "-" if v is None else format(v, spec)
 
@@ -99,6 +129,8 @@ def _calibration_markdown(rows: list[dict]) -> list[str]:
 
 
 def _calibration_line(r: dict) -> str:
+    if r["custody_kept"] is None:
+        return f"{r['filter']} / {r['iod']} / {r['scenario']}: no truth (measurement consistency: {_consistency_text(r)})"
     cells = _calibration_cells(r)
     return (f"{r['filter']} / {r['iod']} / {r['scenario']}: custody {cells[0]}; final ANEES {cells[1]}; "
             f"HDR KS {cells[2]}; HDR > 0.99 {cells[3]}; diverged {cells[4]}")
@@ -133,12 +165,13 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
               "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
             "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
-            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION]
+            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
         kept = sum(1 for x in sums if x.custody_kept)
-        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums), "custody_kept": kept,
-               "custody_rate": kept / len(sums),
+        truthless = all(x.verdict.kind == "no-truth" for x in sums)    # no custody to speak of
+        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums),
+               "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
                "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
                "failed_runs": sum(1 for x in sums if x.status != "finished"),
                "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in _COUNTED)}
@@ -149,6 +182,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         row["wall_time_s"] = _median([x.wall_time_s for x in sums])
         row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
         row.update(_calibration_columns(sums))
+        row.update(_consistency_columns(tables[(sc, iod, flt)]))
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols)
@@ -162,13 +196,15 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
             return f"{v:.3g}"
         return str(v)
 
-    header = ["scenario", "iod", "filter", "custody", "lost at (d, median)", "failed",
+    has_truth = any(r["custody_kept"] is not None for r in rows)
+    header = ["scenario", "iod", "filter", "custody" if has_truth else "truth", "lost at (d, median)", "failed",
               "verdicts: " + " / ".join(_COUNTED),
               "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km: median [5-95 %]", "ANEES (6 = consistent)",
               "entropy", "wall time s: median [5-95 %]"]
     lines = []
     for r in rows:
-        lines.append([r["scenario"], r["iod"], r["filter"], f"{r['custody_kept']}/{r['runs']}",
+        lines.append([r["scenario"], r["iod"], r["filter"],
+                      "no truth" if r["custody_kept"] is None else f"{r['custody_kept']}/{r['runs']}",
                       fmt(r["median_lost_day"]), str(r["failed_runs"]), r["verdicts"],
                       "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
                       "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
@@ -179,7 +215,10 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     md += ["| " + " | ".join(l) + " |" for l in lines]
     verdicts = []
     for r in rows:
-        if r["custody_kept"] < r["runs"]:
+        if r["custody_kept"] is None:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: no truth, measurement "
+                            f"consistency: {_consistency_text(r)}.")
+        elif r["custody_kept"] < r["runs"]:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} lost custody in "
                             f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
         else:
@@ -189,17 +228,19 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                for (sc, iod, flt), sums in sorted(groups.items()) for x in sums
                if x.verdict.kind in ("diverged", "not-converged")]
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
-    md_text = "\n".join([f"# {title}", "", *md, "", *_calibration_markdown(rows), "", "## Custody", "", *verdicts, "",
-                         "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
-                         "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
-                         "region on consecutive updates (see cistrack.scenario.CustodyRule).",
-                         "", "## Diverged and not-converged runs", "",
-                         *(flagged or ["None."]), "",
-                         "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position "
-                         "sigma within the rule's precision; not-converged = custody kept by a cloud too wide "
-                         "to be a track; diverged = a particle filter's weights degenerated, the belief collapsed, the error "
-                         "is far beyond sigma, or "
-                         "the mean left cislunar space."])
+    custody = (["## Custody", "", *verdicts, "",
+                "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
+                "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
+                "region on consecutive updates (see cistrack.scenario.CustodyRule)."] if has_truth else
+               ["## Measurement consistency (no truth)", "", *verdicts])
+    calibration = _calibration_markdown(rows) if has_truth else [
+        "## Calibration", "", "None of these runs has a truth: calibration (NEES, HDR level) needs one."]
+    diverged = ["", "## Diverged and not-converged runs", "", *(flagged or ["None."]), "",
+                "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position sigma within "
+                "the rule's precision; not-converged = custody kept by a cloud too wide to be a track; diverged = "
+                "a particle filter's weights degenerated, the belief collapsed, the error is far beyond sigma, or "
+                "the mean left cislunar space."] if has_truth else []
+    md_text = "\n".join([f"# {title}", "", *md, "", *calibration, "", *custody, *diverged])
     (rep_dir / "summary.md").write_text(md_text + "\n")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]

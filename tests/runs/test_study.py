@@ -168,3 +168,32 @@ def test_builtin_calibration_study_reports_calibration_per_iod_under_process_and
     for r in rows["proc"]:
         assert r["runs"] == 2 and r["final_anees_lo"] < 6 < r["final_anees_hi"] and r["hdr_ks"] is not None
         assert {f"example-1__{r['iod']}.png", f"example-1__{r['iod']}__hdr.png"} <= names
+
+
+def test_a_study_on_an_observation_file_reports_measurement_consistency_and_never_custody(tmp_path):
+    from cistrack.plugins.readers.csv_file import write_measurements
+    from cistrack.residuals import residual_summary
+    from cistrack.run import run_scenario
+    from cistrack.scenario import load_scenario
+
+    sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
+    obs = tmp_path / "obs.csv"
+    write_measurements(obs, sim.context.measurements, "2026-01-01T00:00:00Z")
+    study = tmp_path / "observed.toml"
+    study.write_text(f'name = "observed"\nscenarios = ["quick"]\nseeds = [1, 2]\n'
+                     f'filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]\n'
+                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
+                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs}" }}\n')
+    out = tmp_path / "s"
+    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    rep = report_study(study, out_dir=out)
+    md = (out / "report" / "summary.md").read_text()
+    assert "custody" not in md.lower() and "custody" not in rep["text"].lower()
+    assert "## Measurement consistency (no truth)" in md
+    row = rep["rows"][0]
+    s = residual_summary([r for d in sorted((out / "runs").iterdir()) for r in read_steps(d).to_pylist()])
+    assert row["custody_kept"] is None and row["nis_updates"] == s.nis_test.n
+    assert (row["mean_nis"], row["nis_lo"], row["nis_hi"]) == pytest.approx((s.nis_test.mean, s.nis_test.lower,
+                                                                              s.nis_test.upper))
+    assert row["nis_outside_95_share"] == pytest.approx(s.share_outside_95)
+    assert f"mean NIS {row['mean_nis']:.3g} over {s.nis_test.n} updates" in md
