@@ -103,7 +103,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         truth = None
         passes = []
     else:
-        truth = Truth(truth_dyn, scenario.initial_truth(reg))
+        truth = Truth(truth_dyn, scenario.initial_truth(reg), t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
         say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
@@ -229,7 +229,7 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
     t_prepare = time.perf_counter() - t_start
     events = _events(scenario, ctx)
-    if ctx.truth is not None:  # the third wave of truth times (see cistrack.truth), one call
+    if ctx.truth is not None:  # the third wave of truth times (see cistrack.truth): evaluations
         ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
     if progress:
         obs.append(ProgressBar(ctx.run_id, len(events), custody))

@@ -2,6 +2,7 @@
 
 - :class:`CompiledDynamics` (:mod:`.compiled`): base class of models given by a numba right-hand
   side; supplies per-particle adaptive DOP853 propagation with impacts on bodies.
+- :class:`DenseTrajectory` (:mod:`.dense`): one propagated trajectory evaluated at any time.
 - :func:`kernels_for`, :func:`kernel_cache_dir`, :func:`num_threads` (:mod:`.kernels`): generated
   integrator modules, their on-disk cache and the worker threads.
 - :mod:`.dop853_tableau`: the Dormand-Prince 8(5,3) coefficients; :mod:`.dop853_source`: the
@@ -10,7 +11,8 @@
 from cistrack.errors import PropagationError, StateError
 
 from .compiled import CompiledDynamics
+from .dense import DenseTrajectory
 from .kernels import kernel_cache_dir, kernels_for, num_threads
 
-__all__ = ["CompiledDynamics", "PropagationError", "StateError", "kernel_cache_dir", "kernels_for",
+__all__ = ["CompiledDynamics", "DenseTrajectory", "PropagationError", "StateError", "kernel_cache_dir", "kernels_for",
            "num_threads"]

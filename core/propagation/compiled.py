@@ -3,8 +3,9 @@
 A model subclasses :class:`CompiledDynamics`, names its equations of motion in the class
 attribute ``rhs`` and returns its constants from :meth:`CompiledDynamics.params_vector`; it
 then inherits :meth:`~CompiledDynamics.propagate` (per-particle adaptive DOP853 8(5,3), all
-cores, output at many times, forward or backward, impacts on :attr:`bodies`) and
-:meth:`~CompiledDynamics.derivatives`.
+cores, output at many times, forward or backward, impacts on :attr:`bodies`),
+:meth:`~CompiledDynamics.dense_trajectory` (one state over a span, evaluated at any time later)
+and :meth:`~CompiledDynamics.derivatives`.
 
 Writing a new model in your own package (say a bicircular four-body problem)::
 
@@ -51,6 +52,7 @@ import numpy as np
 from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics, Propagation
 
+from .dense import DenseTrajectory, integrate_dense
 from .kernels import kernels_for, run_chunks
 
 __all__ = ["CompiledDynamics", "PropagationError", "StateError"]
@@ -165,3 +167,26 @@ class CompiledDynamics(Dynamics):
                 f"({limit} hit the step limit max_steps={self.max_steps}, {under} had step-size underflow)")
         return Propagation(times=t_out, states=out, alive=impact_body < 0,
                            impact_body=impact_body, impact_time=impact_time)
+
+    def dense_trajectory(self, state: np.ndarray, t0: float, t1: float, *,
+                         rtol: float | None = None, atol: float | None = None) -> DenseTrajectory:
+        """Propagate one ``state`` (dim,) from ``t0`` to ``t1`` (TU) once, keeping the dense output.
+
+        The steps are those :meth:`propagate` takes to the single time ``t1`` (same tolerances,
+        same impact location; the state at ``t1`` is bit-identical); the returned
+        :class:`~cistrack.propagation.dense.DenseTrajectory` gives the state at any time of the
+        span from each step's 7th-order interpolant. A particle that hits a body ends the span at
+        the impact (``alive`` False). Raises :class:`StateError` for malformed input and
+        :class:`PropagationError` if the step limit is reached or the step size underflows.
+        """
+        arr = self._check_states(state)
+        if arr.shape[0] != 1:
+            raise StateError(f"{self._label()}: dense_trajectory takes one state ({self.dim},), got {arr.shape[0]}")
+        t0, t1 = float(t0), float(t1)
+        if not (np.isfinite(t0) and np.isfinite(t1)):
+            raise StateError(f"{self._label()}: t0 and t1 must be finite")
+        pos, rad = self._bodies_arrays()
+        return integrate_dense(self._kernels(), arr[0], t0, t1, self._params(),
+                               float(self.rtol if rtol is None else rtol),
+                               float(self.atol if atol is None else atol), pos, rad,
+                               int(self.max_steps), self._label())

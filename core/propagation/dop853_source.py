@@ -28,12 +28,16 @@ h_init, out, impact_body, impact_time, status)``
     "step limit reached", 3 "step size underflow" (state frozen where it stopped).
 ``derivatives_kernel(t, states, params, out)``
     ``out[i] = rhs(t, states[i])`` for every row.
+``dense_kernel(...)``
+    One particle's integration recording every step's dense output (see
+    :mod:`.dop853_dense_source`).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from . import dop853_tableau as _tab
+from .dop853_dense_source import DENSE_BODY
 
 __all__ = ["N_STAGES", "ERROR_EXPONENT", "TABLEAU", "generate_source", "DEFAULT_FASTMATH"]
 
@@ -72,16 +76,22 @@ def _lin(coefs, name: str, j: int) -> str:
     return " + ".join(terms) if terms else "0.0"
 
 
-def _rk_step_source(dim: int) -> str:
+def _rk_step_source(dim: int, dense: bool = False) -> str:
     """``_rk_step(t, h, y, k0, params, ytmp, ynew, f, rtol, atol) -> err``.
 
     One DOP853 step from (t, y) with f(t, y) = k0: writes the 8th-order solution to ``ynew`` and
     f(t + h, ynew) to ``f`` (the next step's k0), returns Hairer's error norm. Every stage
     derivative lives in a local scalar, so the only memory traffic is the rhs arguments.
+
+    ``dense=True`` writes ``_rk_step_dense(..., coef)`` instead: the same step (bit-identical
+    ``ynew``, ``f`` and error), plus three extra stages and the step's dense-output coefficients
+    F0..F6 in ``coef`` (7, DIM) (see :data:`.dop853_tableau.D`).
     """
     A, B, C, E3, E5 = (TABLEAU[k] for k in ("A", "B", "C", "E3", "E5"))
+    name = "_rk_step_dense" if dense else "_rk_step"
+    extra_arg = ", coef" if dense else ""
     L = ["@njit(cache=CACHE, fastmath=FASTMATH)",
-         "def _rk_step(t, h, y, k0, params, ytmp, ynew, f, rtol, atol):"]
+         f"def {name}(t, h, y, k0, params, ytmp, ynew, f, rtol, atol{extra_arg}):"]
     L += [f"    y_{j} = y[{j}]" for j in range(dim)]
     L += [f"    k0_{j} = k0[{j}]" for j in range(dim)]
     for s in range(1, N_STAGES):
@@ -100,8 +110,23 @@ def _rk_step_source(dim: int) -> str:
               "    s5 += d5 * d5",
               "    s3 += d3 * d3"]
     L += ["    if s5 == 0.0 and s3 == 0.0:",
-          "        return 0.0",
-          "    return abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * DIM)"]
+          "        err = 0.0",
+          "    else:",
+          "        err = abs(h) * s5 / np.sqrt((s5 + 0.01 * s3) * DIM)"]
+    if dense:
+        for e, row in enumerate(_tab.A_EXTRA_ROWS):
+            s = N_STAGES + 1 + e
+            L += [f"    ytmp[{j}] = y_{j} + h * ({_lin(row, 'k', j)})" for j in range(dim)]
+            L.append(f"    rhs(t + {float(_tab.C_EXTRA[e])!r} * h, ytmp, params, f)")
+            L += [f"    k{s}_{j} = f[{j}]" for j in range(dim)]
+        for j in range(dim):
+            L += [f"    f[{j}] = k12_{j}",
+                  f"    dy = yn_{j} - y_{j}",
+                  f"    coef[0, {j}] = dy",
+                  f"    coef[1, {j}] = h * k0_{j} - dy",
+                  f"    coef[2, {j}] = 2.0 * dy - h * (k12_{j} + k0_{j})"]
+            L += [f"    coef[{3 + r}, {j}] = h * ({_lin(_tab.D[r], 'k', j)})" for r in range(4)]
+    L.append("    return err")
     return "\n".join(L) + "\n"
 
 
@@ -377,4 +402,5 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
               f"BETA = {float(beta)!r}\n"
               f"EXPO1 = {0.125 - 0.2 * float(beta)!r}\n"
               f"FASTMATH = {fm}\n\n\n")
-    return header + _rk_step_source(dim) + _BODY
+    return (header + _rk_step_source(dim) + _BODY + "\n\n" + _rk_step_source(dim, dense=True)
+            + DENSE_BODY)

@@ -4,7 +4,8 @@ Coefficients of the 12-stage explicit pair of Hairer, Norsett & Wanner, *Solving
 Differential Equations I* (2nd ed.), sec. II.10 (the code DOP853): ``A`` the stage matrix
 (strictly lower triangular, stored by row as the ``s`` coefficients of stage ``s``), ``B`` the
 8th-order weights, ``C`` the stage nodes, ``E5`` and ``E3`` the 5th- and 3rd-order error
-estimators (their combination gives the step-size control). Each value is the nearest double
+estimators (their combination gives the step-size control), and for dense output the three
+extra stages ``C_EXTRA``/``A_EXTRA_ROWS`` and the interpolation weights ``D``. Each value is the nearest double
 to the exact rational/irrational coefficient; tests/propagation compares them with an
 independent copy (scipy's) element by element.
 """
@@ -12,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["N_STAGES", "A_ROWS", "B", "C", "E3", "E5", "stage_matrix"]
+__all__ = ["N_STAGES", "A_ROWS", "B", "C", "E3", "E5", "stage_matrix", "C_EXTRA", "A_EXTRA_ROWS", "D",
+           "INTERPOLATOR_POWER"]
 
 N_STAGES = 12
 """Stages per step; the 13th evaluation (at the new point) is reused as the next step's first."""
@@ -66,10 +68,56 @@ E5 = np.array([
     0.0,
 ])
 
+C_EXTRA = np.array([0.1, 0.2, 0.7777777777777778])
+"""Nodes of the three extra stages (14, 15, 16) evaluated only for dense output."""
+
+A_EXTRA_ROWS: tuple[tuple[float, ...], ...] = (
+    (0.056167502283047954, 0.0, 0.0, 0.0, 0.0, 0.0, 0.25350021021662483, -0.2462390374708025,
+     -0.12419142326381637, 0.15329179827876568, 0.00820105229563469, 0.007567897660545699,
+     -0.008298),
+    (0.03183464816350214, 0.0, 0.0, 0.0, 0.0, 0.028300909672366776, 0.053541988307438566,
+     -0.05492374857139099, 0.0, 0.0, -0.00010834732869724932, 0.0003825710908356584,
+     -0.00034046500868740456, 0.1413124436746325),
+    (-0.42889630158379194, 0.0, 0.0, 0.0, 0.0, -4.697621415361164, 7.683421196062599,
+     4.06898981839711, 0.3567271874552811, 0.0, 0.0, 0.0, -0.0013990241651590145,
+     2.9475147891527724, -9.15095847217987),
+)
+"""Row ``e`` holds the coefficients of extra stage ``13 + e`` on stages 0..12+e (stage 12 is
+f(t + h, y_new), the first stage of the next step)."""
+
+D = np.array([
+    (-8.428938276109013, 0.0, 0.0, 0.0, 0.0, 0.5667149535193777, -3.0689499459498917,
+     2.38466765651207, 2.117034582445028, -0.871391583777973, 2.2404374302607883,
+     0.6315787787694688, -0.08899033645133331, 18.148505520854727, -9.194632392478356,
+     -4.436036387594894),
+    (10.427508642579134, 0.0, 0.0, 0.0, 0.0, 242.28349177525817, 165.20045171727028,
+     -374.5467547226902, -22.113666853125306, 7.733432668472264, -30.674084731089398,
+     -9.332130526430229, 15.697238121770845, -31.139403219565178, -9.35292435884448,
+     35.81684148639408),
+    (19.985053242002433, 0.0, 0.0, 0.0, 0.0, -387.0373087493518, -189.17813819516758,
+     527.8081592054236, -11.57390253995963, 6.8812326946963, -1.0006050966910838,
+     0.7777137798053443, -2.778205752353508, -60.19669523126412, 84.32040550667716,
+     11.99229113618279),
+    (-25.69393346270375, 0.0, 0.0, 0.0, 0.0, -154.18974869023643, -231.5293791760455,
+     357.6391179106141, 93.40532418362432, -37.45832313645163, 104.0996495089623,
+     29.8402934266605, -43.53345659001114, 96.32455395918828, -39.17726167561544,
+     -149.72683625798564),
+])
+"""(4, 16): weights of the 16 stage derivatives in the dense-output coefficients 4..7 (Hairer's
+``d4j..d7j``); with Δy = y_new - y_old the interpolant on x = (t - t_old)/h in [0, 1] is
+y_old + x(F0 + (1-x)(F1 + x(F2 + (1-x)(F3 + x(F4 + (1-x)(F5 + x F6)))))), where F0 = Δy,
+F1 = h f_old - Δy, F2 = 2Δy - h(f_new + f_old) and F3..F6 = h D @ K (K the 16 stage derivatives).
+Order 7 (Hairer, Nørsett & Wanner, sec. II.6 and II.10)."""
+
+INTERPOLATOR_POWER = 7
+"""Number of dense-output coefficient vectors F0..F6 per step."""
+
 B.flags.writeable = False
 C.flags.writeable = False
 E3.flags.writeable = False
 E5.flags.writeable = False
+C_EXTRA.flags.writeable = False
+D.flags.writeable = False
 
 
 def stage_matrix() -> np.ndarray:

@@ -253,6 +253,17 @@ class EphemerisDynamics(CompiledDynamics):
         prop.states = out
         return prop
 
+    def dense_trajectory(self, state: np.ndarray, t0: float, t1: float, *,
+                         rtol: float | None = None, atol: float | None = None):
+        """As :meth:`cistrack.propagation.CompiledDynamics.dense_trajectory` for a synodic
+        ``state`` (6,): integrated in GCRS, evaluated states converted back to the real rotating
+        frame at their times."""
+        arr = self._check_states(state)
+        self._ensure_window(min(float(t0), float(t1)), max(float(t0), float(t1)))
+        traj = super().dense_trajectory(self.to_inertial(arr, float(t0))[0], t0, t1, rtol=rtol, atol=atol)
+        traj.transform = lambda states, times: self.from_inertial(states, times)
+        return traj
+
     def inertial_derivatives(self, t: float, states: np.ndarray) -> np.ndarray:
         """Derivatives of kernel states (N, 6) (geocentric GCRS, LU and VU) at ``t`` (TU) ->
         (N, 6) [VU, VU/TU]: the compiled right-hand side itself."""

@@ -39,3 +39,17 @@ def test_weights_meet_the_order_conditions_up_to_eight_for_the_quadrature():
 def test_the_tableau_is_read_only():
     with pytest.raises(ValueError):
         tab.B[0] = 1.0
+
+
+def test_dense_output_stages_and_weights_equal_scipys_to_the_last_bit():
+    for e, row in enumerate(tab.A_EXTRA_ROWS):
+        s = tab.N_STAGES + 1 + e
+        np.testing.assert_array_equal(np.array(row), scipy_dop.A[s, :s])
+        assert tab.C_EXTRA[e] == scipy_dop.C[s]
+    np.testing.assert_array_equal(tab.D, scipy_dop.D)
+    assert tab.INTERPOLATOR_POWER == scipy_dop.INTERPOLATOR_POWER
+
+
+def test_extra_stage_rows_sum_to_their_nodes():
+    for e, row in enumerate(tab.A_EXTRA_ROWS):
+        assert abs(sum(row) - tab.C_EXTRA[e]) < 1e-14

@@ -1,4 +1,4 @@
-"""One way through a run: the truth is propagated once per time and at most once per wave, every
+"""One way through a run: the truth is propagated once (dense output), every
 component is constructed once, custody is an observer, one row builder, a typed summary."""
 from __future__ import annotations
 
@@ -54,38 +54,61 @@ def test_a_second_run_of_the_same_scenario_gets_fresh_components():
 
 
 class _CountingCR3BP(CR3BP):
-    """The real CR3BP, counting propagate calls and the output times asked for."""
+    """The real CR3BP, counting its propagations (ensemble and dense) and their spans."""
 
     calls: list = []
 
     def propagate(self, states, t0, times, **kw):
-        type(self).calls.append(np.atleast_1d(np.asarray(times, dtype=float)).copy())
+        type(self).calls.append(("propagate", np.atleast_1d(np.asarray(times, dtype=float)).copy()))
         return super().propagate(states, t0, times, **kw)
 
+    def dense_trajectory(self, state, t0, t1, **kw):
+        type(self).calls.append(("dense", (t0, t1)))
+        return super().dense_trajectory(state, t0, t1, **kw)
 
-def test_the_truth_is_propagated_once_per_wave_and_never_twice_for_one_time(registry):
+
+def test_the_truth_is_propagated_once_per_run_over_the_whole_scenario():
     reg = load_registry()
     reg.add("dynamics", "counting-cr3bp", _CountingCR3BP)
     _CountingCR3BP.calls = []
     scen = load_scenario("quick", reg, overrides=_small(truth={"orbit": "nrho-9-2", "dynamics": "counting-cr3bp"}))
     res = run_scenario(scen, seed=2, registry=reg)
-    calls = _CountingCR3BP.calls
-    assert len(calls) <= 3 and res.context.truth.propagations == len(calls)
-    every = np.concatenate(calls)
-    assert every.size == np.unique(every).size, "a truth time was propagated twice"
+    assert _CountingCR3BP.calls == [("dense", (0.0, scen.duration))]
+    assert res.context.truth.propagations == 1
     step_times = [r["t_tu"] for r in res.rows]
     assert set(step_times) <= set(res.context.truth.known_times.tolist())
 
 
-def test_truth_states_equal_a_direct_propagation_to_the_same_times():
+def test_truth_states_match_a_direct_propagation_to_the_same_times():
     dyn = CR3BP()
     x0 = np.array([1.0214, 0.0, -0.1825, 0.0, -0.1033, 0.0])
     times = np.array([0.1, 0.35, 0.6])
-    truth = Truth(dyn, x0)
+    truth = Truth(dyn, x0, t_end=0.6)
     got = truth.states_at(times[::-1])[::-1]
-    np.testing.assert_array_equal(got, dyn.propagate(x0[None], 0.0, times).states[:, 0, :])
+    np.testing.assert_allclose(got, dyn.propagate(x0[None], 0.0, times).states[:, 0, :], rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(got[-1], dyn.propagate(x0[None], 0.0, 0.6).final[0])  # span end: exact
     truth.states_at(times)
     assert truth.propagations == 1
+
+
+def test_a_truth_time_past_the_span_extends_it_with_one_more_propagation():
+    dyn = CR3BP()
+    x0 = np.array([1.0214, 0.0, -0.1825, 0.0, -0.1033, 0.0])
+    truth = Truth(dyn, x0, t_end=0.3)
+    truth.states_at([0.1, 0.2])
+    truth.states_at([0.5])
+    truth.states_at([0.05, 0.45])
+    assert truth.propagations == 2
+
+
+def test_a_truth_model_without_dense_output_is_propagated_once_per_wave():
+    class PlainCR3BP(CR3BP):
+        dense_trajectory = None  # as a third-party Dynamics that only has propagate
+    truth = Truth(PlainCR3BP(), np.array([1.0214, 0.0, -0.1825, 0.0, -0.1033, 0.0]))
+    truth.states_at([0.1, 0.2])
+    truth.states_at([0.2, 0.3])
+    assert truth.propagations == 2
+    np.testing.assert_array_equal(truth.at(0.3), CR3BP().propagate(truth.x0[None], 0.0, 0.3).final[0])
 
 
 class _Step:
