@@ -53,7 +53,7 @@ from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics, Propagation
 
 from .dense import DenseTrajectory, integrate_dense
-from .kernels import kernels_for, run_chunks
+from .kernels import kernels_for, num_threads, run_chunks
 
 __all__ = ["CompiledDynamics", "PropagationError", "StateError"]
 
@@ -185,6 +185,7 @@ class CompiledDynamics(Dynamics):
         t0, t1 = float(t0), float(t1)
         if not (np.isfinite(t0) and np.isfinite(t1)):
             raise StateError(f"{self._label()}: t0 and t1 must be finite")
+        num_threads()  # one particle runs on one thread, but a bad CISTRACK_NUM_THREADS is refused here too
         pos, rad = self._bodies_arrays()
         return integrate_dense(self._kernels(), arr[0], t0, t1, self._params(),
                                float(self.rtol if rtol is None else rtol),
