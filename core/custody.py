@@ -55,8 +55,9 @@ class CustodyRule:
     ~0) is a diverged filter."""
     degenerate_ess: float = 7.0
     """A particle filter whose effective sample size (its ``ess_before_resampling`` diagnostic)
-    falls below this at any update has degenerate weights: fewer effective particles than the
-    state dimension + 1 cannot even define a 6-D covariance ("diverged")."""
+    or number of distinct particles (``unique_particles``) falls below this at any update has
+    degenerate weights: fewer effective particles than the state dimension + 1 cannot even
+    define a 6-D covariance ("diverged")."""
     max_earth_distance_km: float = 2e6
     """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
     space ("diverged")."""

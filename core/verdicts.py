@@ -6,8 +6,8 @@ scenario's :class:`~cistrack.custody.CustodyRule`:
 
 - no truth: "no-truth" (the CLI reports measurement consistency, the NIS, instead of custody);
 - "filter-failed" stays as it is;
-- "diverged" when a particle filter's weights degenerated (effective sample size below
-  ``degenerate_ess`` at an update: the reason says where), when the belief collapsed (largest
+- "diverged" when a particle filter's weights degenerated (effective sample size or distinct
+  particles below ``degenerate_ess`` at an update: the reason says where), when the belief collapsed (largest
   position sigma below ``collapse_sigma_km`` or entropy not finite), when the final error
   exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the mean is farther
   than ``max_earth_distance_km`` from Earth;
@@ -31,14 +31,22 @@ def _last_update(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dict[str, Any]] | None:
-    """The reason and row of the first update whose effective sample size (a particle filter's
-    ``diag_ess_before_resampling``) is below ``rule.degenerate_ess``; None if there is none."""
+    """The reason and row of the first update where a particle filter's weights degenerated: its
+    effective sample size (``diag_ess_before_resampling``) or the number of distinct particles
+    left (``diag_unique_particles``: resampling duplicates the few heavy ones, so the ESS of the
+    next updates looks healthy again) is below ``rule.degenerate_ess``; None if there is none."""
     for r in rows:
-        ess = r.get("diag_ess_before_resampling")
-        if r.get("kind") == "update" and ess is not None and math.isfinite(ess) and ess < rule.degenerate_ess:
+        if r.get("kind") != "update":
+            continue
+        ess, unique = r.get("diag_ess_before_resampling"), r.get("diag_unique_particles")
+        low_ess = ess is not None and math.isfinite(ess) and ess < rule.degenerate_ess
+        few = unique is not None and math.isfinite(unique) and unique < rule.degenerate_ess
+        if low_ess or few:
             n = r.get("diag_n_particles")
             of = f" of {int(n)} particles" if n is not None and math.isfinite(n) else ""
-            return f"degenerate weights (effective sample size {ess:.3g}{of} < {rule.degenerate_ess:g})", r
+            size = f"effective sample size {ess:.3g}{of}" if ess is not None else "weights"
+            left = f", {int(unique)} distinct particles left" if unique is not None and math.isfinite(unique) else ""
+            return f"degenerate weights ({size}{left}; fewer than {rule.degenerate_ess:g})", r
     return None
 
 

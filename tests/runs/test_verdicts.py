@@ -35,9 +35,11 @@ def sir_run(tmp_path_factory):
 def test_degenerate_weights_are_diverged_with_the_effective_sample_size_in_the_manifest(sir_run):
     res, out = sir_run
     v = res.summary.verdict
-    first = next(r for r in res.rows if r["kind"] == "update" and r["diag_ess_before_resampling"] < 7)
+    first = next(r for r in res.rows if r["kind"] == "update"
+                 and min(r["diag_ess_before_resampling"], r["diag_unique_particles"]) < 7)
     assert v.kind == "diverged" and v.reason.startswith(
-        f"degenerate weights (effective sample size {first['diag_ess_before_resampling']:.3g} of 500 particles")
+        f"degenerate weights (effective sample size {first['diag_ess_before_resampling']:.3g} of 500 particles, "
+        f"{int(first['diag_unique_particles'])} distinct particles left")
     assert (v.step, v.t_days) == (first["step"], pytest.approx(first["t_days"]))
     assert "then belief collapsed: largest position sigma" in v.reason
     assert not res.summary.custody_kept
@@ -51,11 +53,23 @@ def test_a_collapsed_belief_is_diverged_with_its_reason(sir_run):
     assert v.kind == "diverged" and v.reason.startswith("belief collapsed: largest position sigma")
 
 
-def test_a_healthy_effective_sample_size_is_not_degenerate(sir_run):
+def test_a_healthy_effective_sample_size_and_many_distinct_particles_are_not_degenerate(sir_run):
     res, _ = sir_run
-    rows = [dict(r, diag_ess_before_resampling=400.0) for r in res.rows]
+    rows = [dict(r, diag_ess_before_resampling=400.0, diag_unique_particles=450.0) for r in res.rows]
     v = final_verdict(Verdict(), rows, CustodyRule(), has_truth=True)
     assert v.kind == "diverged" and v.reason.startswith("belief collapsed")
+
+
+def test_a_healthy_looking_ess_over_a_few_duplicated_particles_is_degenerate(sir_run):
+    # after resampling onto 2 particles the next updates weigh copies alike: ESS ~N, yet degenerate
+    res, _ = sir_run
+    rows = [dict(r, diag_ess_before_resampling=400.0, diag_unique_particles=2.0) if r["kind"] == "update" else r
+            for r in res.rows]
+    v = final_verdict(Verdict(), rows, CustodyRule(), has_truth=True)
+    first = next(r for r in rows if r["kind"] == "update")
+    assert v.kind == "diverged" and v.reason.startswith(
+        "degenerate weights (effective sample size 400 of 500 particles, 2 distinct particles left")
+    assert v.step == first["step"]
 
 
 def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run):
