@@ -109,11 +109,12 @@ class Registry:
             autoload_third_party = os.environ.get(AUTOLOAD_ENV, "").strip().lower() not in ("1", "true", "yes")
         pm = pluggy.PluginManager(hookspecs.PROJECT)
         pm.add_hookspecs(hookspecs.CistrackSpecs)
+        idents: dict = {}
         eps = sorted(metadata.entry_points(group=ENTRY_POINT_GROUP),
-                     key=lambda e: (_dist_name(e) != BUILTIN_DISTRIBUTION, _dist_name(e), e.name))
+                     key=lambda e: (_dist_identity(e, idents)[0] != BUILTIN_DISTRIBUTION,
+                                    _dist_identity(e, idents)[0], e.name))
         for ep in eps:
-            dist = _dist_name(ep)
-            version = ep.dist.version if ep.dist is not None else ""
+            dist, version = _dist_identity(ep, idents)
             if dist != BUILTIN_DISTRIBUTION and not autoload_third_party:
                 continue
             try:
@@ -178,10 +179,20 @@ class Registry:
             raise UnknownComponentError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
 
 
-def _dist_name(ep: metadata.EntryPoint) -> str:
+def _dist_identity(ep: metadata.EntryPoint, cache: dict) -> tuple[str, str]:
+    """(normalised distribution name, version) of ``ep``'s distribution.
+
+    Each ``dist.metadata`` access parses the METADATA file with the email parser (~1 ms): the
+    answer is kept per distribution in ``cache`` (all of a distribution's entry points share it)."""
     dist = getattr(ep, "dist", None)
-    name = dist.metadata["Name"] if dist is not None else "<unknown>"
-    return (name or "<unknown>").lower().replace("_", "-")
+    if dist is None:
+        return "<unknown>", ""
+    key = str(getattr(dist, "_path", id(dist)))
+    if key not in cache:
+        meta = dist.metadata
+        name = (meta["Name"] or "<unknown>").lower().replace("_", "-")
+        cache[key] = (name, meta["Version"] or "")
+    return cache[key]
 
 
 _DEFAULT: Registry | None = None

@@ -2,7 +2,7 @@
 
 `cistrack --help` and `cistrack plugins` run in a fraction of a second only if importing
 cistrack and filling the registry leaves scikit-learn, numba, rerun, matplotlib, filterpy,
-astropy and Dask unloaded; they load when a component is built or used. Each check runs in a
+astropy, Dask, pyarrow and urllib.request unloaded; they load when a component is built or used. Each check runs in a
 fresh interpreter, since this test process has long since imported everything.
 """
 from __future__ import annotations
@@ -14,7 +14,9 @@ import sys
 
 import pytest
 
-HEAVY = ("sklearn", "numba", "rerun", "matplotlib", "filterpy", "astropy", "dask")
+HEAVY = ("sklearn", "numba", "rerun", "matplotlib", "filterpy", "astropy", "dask",
+         "pyarrow",          # ~35 ms: only writing or reading results needs it
+         "urllib.request")   # ~12 ms: xml.sax.saxutils imports it; the ADES XML writer escapes itself
 
 
 @functools.lru_cache(maxsize=None)  # one fresh interpreter per probe, shared by the parametrised cases
