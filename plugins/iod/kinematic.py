@@ -58,11 +58,14 @@ inertial frame without the ~29 km/s of Earth rotation: as for ``speed_frame="syn
 When too few samples survive, more are drawn in batches of ``oversampling * n_particles`` until
 ``n_particles`` survive or ``max_oversampling * n_particles`` samples have been drawn; then an
 :class:`~cistrack.errors.IODError` says how many survived and what pruned the rest. The cloud's
-``meta`` records draws, survivors and pruning counts.
+``meta`` records draws, survivors and pruning counts. Each batch is drawn and fitted in chunks
+of at most ``CHUNK_SAMPLES`` samples (:mod:`.chunked_draws`) with the numbers of one whole draw,
+so memory does not grow with the oversampling factor.
 """
 from __future__ import annotations
 
 import math
+from typing import Iterator
 
 import numpy as np
 
@@ -74,6 +77,7 @@ from cistrack.interfaces import IODMethod, RangePrior, Sensor
 from cistrack.measurement import MeasurementSet
 from cistrack.units import LU_KM, VU_KMS
 
+from .chunked_draws import CHUNK_SAMPLES, draw_in_chunks
 from .kinematic_fit import FitInputs, kinematic_states, prepare_fit
 
 __all__ = ["KinematicFitIOD", "RANGE_MODELS", "FitInputs", "kinematic_states", "prepare_fit"]
@@ -117,6 +121,8 @@ class KinematicFitIOD(IODMethod):
         "per-measurement" (one range per fitted measurement, the paper's Algorithm 1) or
         "per-sample" (one range per sample).
     """
+
+    _chunk = CHUNK_SAMPLES  # samples fitted at once (bounds memory; the numbers do not depend on it)
 
     def __init__(self, *, range_prior: RangePrior | str = "uniform", n_particles: int = 2000,
                  oversampling: float = 5.0, max_oversampling: float = 50.0, order: int = 4,
@@ -167,13 +173,19 @@ class KinematicFitIOD(IODMethod):
         return self.range_prior
 
     def _draw(self, fit: FitInputs, n: int, rng: np.random.Generator,
-              prior: RangePrior) -> tuple[np.ndarray, np.ndarray]:
-        """Sampled angles (n, K, 2) and ranges (n, K) LU."""
+              prior: RangePrior) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """Sampled angles (c, K, 2) and ranges (c, K) LU, chunk by chunk (:mod:`.chunked_draws`):
+        together the n samples of one whole draw of the angles followed by the ranges."""
         k = fit.times.shape[0]
-        angles = fit.angles[None] + fit.angle_sigmas[None] * rng.standard_normal((n, k, 2))
-        shape = (n, k) if self.range_sampling == "per-measurement" else (n, 1)
-        rho = prior.draw(fit.ranges, shape, rng)
-        return angles, np.broadcast_to(rho, (n, k))
+
+        def angles(c: int, g: np.random.Generator) -> np.ndarray:
+            return fit.angles[None] + fit.angle_sigmas[None] * g.standard_normal((c, k, 2))
+
+        def ranges(c: int, g: np.random.Generator) -> np.ndarray:
+            shape = (c, k) if self.range_sampling == "per-measurement" else (c, 1)
+            return np.broadcast_to(prior.draw(fit.ranges, shape, g), (c, k))
+
+        return draw_in_chunks(n, rng, angles, ranges, self._chunk)
 
     def _prune(self, fit: FitInputs, states: np.ndarray, topo_vel: np.ndarray,
                rho: np.ndarray) -> tuple[np.ndarray, dict[str, int]]:
@@ -217,13 +229,14 @@ class KinematicFitIOD(IODMethod):
         pruned: dict[str, int] = {}
         while n_kept < self.n_particles and drawn < limit:
             n = min(batch, limit - drawn)
-            angles, rho = self._draw(fit, n, rng, prior)
-            states, topo_vel = kinematic_states(fit, sensor, angles, rho)
-            keep, counts = self._prune(fit, states, topo_vel, rho)
-            for key, c in counts.items():
-                pruned[key] = pruned.get(key, 0) + c
-            kept.append(states[keep])
-            n_kept += int(keep.sum())
+            for angles, rho in self._draw(fit, n, rng, prior):  # memory bounded by the chunk size
+                states, topo_vel = kinematic_states(fit, sensor, angles, rho)
+                keep, counts = self._prune(fit, states, topo_vel, rho)
+                for key, c in counts.items():
+                    pruned[key] = pruned.get(key, 0) + c
+                if n_kept < self.n_particles:  # later survivors are counted, not kept
+                    kept.append(states[keep][: self.n_particles - n_kept])
+                n_kept += int(keep.sum())
             drawn += n
             batches += 1
         if n_kept < self.n_particles:
