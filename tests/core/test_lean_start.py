@@ -46,13 +46,20 @@ def test_listing_components_does_not_load(library, code):
     assert library not in _loaded_after(code)
 
 
-def test_scikit_learn_loads_when_kmeans_clusters():
-    """The probe itself can fail: clustering does load scikit-learn."""
-    code = ("import numpy as np\n"
-            "from cistrack.registry import load_registry\n"
-            "c = load_registry().create('clustering', 'kmeans', n_components=2)\n"
-            "c.cluster(np.random.default_rng(1).normal(size=(40, 6)), np.random.default_rng(2))")
-    assert "sklearn" in _loaded_after(code)
+_KMEANS = ("import numpy as np\n"
+           "from cistrack.registry import load_registry\n"
+           "c = load_registry().create('clustering', 'kmeans', n_components=2{})\n"
+           "c.cluster(np.random.default_rng(1).normal(size=(40, 6)), np.random.default_rng(2))")
+
+
+def test_scikit_learn_loads_when_the_sklearn_kmeans_engine_clusters():
+    """The probe itself can fail: the sklearn engine does load scikit-learn."""
+    assert "sklearn" in _loaded_after(_KMEANS.format(", engine='sklearn'"))
+
+
+def test_the_default_kmeans_clusters_without_loading_scikit_learn():
+    """The PGM's default clusterer runs in numpy: importing sklearn.cluster costs ~1.3 s of CPU."""
+    assert "sklearn" not in _loaded_after(_KMEANS.format(""))
 
 
 def test_rerun_loads_when_the_recorder_records(tmp_path):
