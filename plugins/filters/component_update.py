@@ -25,6 +25,7 @@ from cistrack.belief import regularize_covariance
 
 from .kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
 from .posterior_linearization import posterior_linearization_update
+from .sigma_points import MerweSigmaPoints
 
 __all__ = ["ensemble_component_update", "iterated_component_update"]
 
@@ -47,10 +48,8 @@ def iterated_component_update(means: np.ndarray, covs: np.ndarray,
         the states that explain z are), "prior" with the one-shot (prior-wide) linearisation.
     Returns means (M, d), covariances (M, d, d), log-likelihoods (M,).
     """
-    from filterpy.kalman import MerweScaledSigmaPoints  # imported where an update runs, not at listing
-
     m, d = means.shape
-    points = MerweScaledSigmaPoints(d, alpha=1.0, beta=2.0, kappa=0.0)
+    points = MerweSigmaPoints(d, alpha=1.0, beta=2.0, kappa=0.0)  # filterpy's points, without importing filterpy
     out_m = np.empty_like(means)
     out_p = np.empty_like(covs)
     nus, Ss = [], []

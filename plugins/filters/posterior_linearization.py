@@ -105,7 +105,8 @@ def posterior_linearization_update(points: MerweScaledSigmaPoints, x0: np.ndarra
 
     Parameters
     ----------
-    points : filterpy MerweScaledSigmaPoints for the state dimension d
+    points : Merwe scaled sigma points for the state dimension d (.sigma_points.MerweSigmaPoints
+             or filterpy's MerweScaledSigmaPoints: the same points and weights)
     x0 (d,), P0 (d, d) : prior mean and covariance
     residual_to_z : states (K, d) -> h(states) - z (K, m), angles wrapped (one call per iteration)
     R (m, m) : measurement noise covariance
