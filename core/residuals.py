@@ -41,7 +41,7 @@ def _unit(name: str) -> tuple[str, float]:
 def residual_columns(inn) -> dict[str, float]:
     """The step-table columns (see the module docstring) of a
     :class:`cistrack.consistency.Innovation`."""
-    from scipy.stats import chi2
+    from .consistency import chi2_ppf  # scipy.stats.chi2.ppf's value without importing scipy.stats
 
     m = len(inn.names)
     nis = inn.nis
@@ -53,7 +53,7 @@ def residual_columns(inn) -> dict[str, float]:
             continue
         out[f"res_{name}_{unit}"] = float(nu * scale)
         out[f"sd_{name}_{unit}"] = float(s * scale)
-    lo, hi = chi2.ppf(0.025, m), chi2.ppf(0.975, m)
+    lo, hi = chi2_ppf(0.025, m), chi2_ppf(0.975, m)
     out.update({"nis": nis, "nis_dof": float(m),
                 "nis_outside_95": float(not lo <= nis <= hi) if np.isfinite(nis) else float("nan")})
     return out
