@@ -63,9 +63,20 @@ def _seed_centres(x: np.ndarray, k: int, sq_norms: np.ndarray, rs: np.random.Ran
 
 
 def _assign(x: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """Index of the nearest centre of each point (n,), ties to the lowest index."""
-    d = np.einsum("ij,ij->i", centres, centres)[np.newaxis, :] + (-2.0) * (x @ centres.T)
-    return np.argmin(d, axis=1).astype(np.int32)
+    """Index of the nearest centre of each point (n,), ties to the lowest index.
+
+    Distances |c|^2 - 2 x.c; x.(-2c) is bit for bit -2 (x.c) (scaling by 2 is exact), and a loop
+    over the few centres with a strict ``<`` is numpy's fast way to an argmin along a short axis."""
+    d = x @ ((-2.0) * centres).T
+    d += np.einsum("ij,ij->i", centres, centres)[np.newaxis, :]
+    best = d[:, 0].copy()
+    labels = np.zeros(x.shape[0], dtype=np.intp)
+    for j in range(1, centres.shape[0]):
+        col = d[:, j]
+        closer = col < best
+        np.minimum(best, col, out=best)
+        labels[closer] = j
+    return labels
 
 
 def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
@@ -79,7 +90,9 @@ def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
     x -= mean
     rs = np.random.RandomState(seed)
     centres = _seed_centres(x, k, np.einsum("ij,ij->i", x, x), rs)
-    labels_old = np.full(n, -1, dtype=np.int32)
+    labels_old = np.full(n, -1, dtype=np.intp)
+    columns = np.arange(d)
+    flat = x.ravel()
     strict = False
     labels = labels_old
     for _ in range(max_iter):
@@ -88,7 +101,8 @@ def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
         if np.any(counts == 0):
             return None
         # bincount adds point by point in point order: one thread's summation order
-        new = np.stack([np.bincount(labels, weights=x[:, j], minlength=k) for j in range(d)], axis=1)
+        new = np.bincount((labels[:, np.newaxis] * d + columns).ravel(), weights=flat,
+                          minlength=k * d).reshape(k, d)
         new *= (1.0 / counts.astype(np.float64))[:, np.newaxis]  # as scikit-learn: times the reciprocal
         diff = new - centres
         shift = np.sqrt(np.sum(diff * diff, axis=1))
@@ -102,4 +116,4 @@ def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
     if not strict:
         labels = _assign(x, centres)
     centres += mean
-    return centres, labels.astype(np.intp)
+    return centres, labels
