@@ -29,7 +29,7 @@ __all__ = ["CHUNK_SAMPLES", "draw_in_chunks"]
 CHUNK_SAMPLES = 131_072
 """Samples fitted at once: about 150 MB of work arrays with 12 fitted measurements."""
 
-Draw = Callable[[int, np.random.Generator], np.ndarray]
+Draw = Callable[[int, "np.random.Generator"], np.ndarray]  # a string: numpy.random loads on use
 
 
 def _copy(rng: np.random.Generator, state: dict) -> np.random.Generator:

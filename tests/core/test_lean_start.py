@@ -16,7 +16,8 @@ import pytest
 
 HEAVY = ("sklearn", "numba", "rerun", "matplotlib", "filterpy", "astropy", "dask",
          "pyarrow",          # ~35 ms: only writing or reading results needs it
-         "urllib.request")   # ~12 ms: xml.sax.saxutils imports it; the ADES XML writer escapes itself
+         "urllib.request",   # ~12 ms: xml.sax.saxutils imports it; the ADES XML writer escapes itself
+         "numpy.random")     # ~20 ms: numpy loads it on first use
 
 
 @functools.lru_cache(maxsize=None)  # one fresh interpreter per probe, shared by the parametrised cases
