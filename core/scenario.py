@@ -284,9 +284,15 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
 
 # -- validation helpers --------------------------------------------------------------------------
 
-BYTES_PER_PARTICLE = 1024
-"""Rough memory per particle of a filter or IOD sample (its state, propagation outputs, cluster
-responsibilities and temporaries): used only to refuse sizes that cannot fit before allocating."""
+BYTES_PER_PARTICLE = 512
+"""Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
+Measured (issue 15): a whole one-period Example 1 run (IOD + PGM) peaked 404 bytes per particle
+above the process's start at 1,000,000 particles, 301 per extra particle from 1e5 to 1e6; an EnKF
+step 208 and a PGM step 157 at 1e6 (``benchmarks/bench_memory.py --sizes 100000 1000000``).
+Rounded up to 512. The IOD fits its oversampled samples in chunks of fixed size
+(:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
+IOD_CHUNK_BYTES = 256 * 2 ** 20
+"""Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""
 
 
 def _number(v: Any) -> float | None:
@@ -304,9 +310,8 @@ def _check_sizes(components: dict[str, ComponentSpec], duration_days: float, gri
         n = _number(spec.params.get("n_particles"))
         if n is None:
             continue
-        factor = _number(spec.params.get("oversampling")) or (5.0 if table == "iod" else 1.0)
-        check_memory(n * factor * BYTES_PER_PARTICLE, f"{source}: [{table}]: key 'n_particles' = {n:g}",
-                     f"{spec.name!r} with {n:.3g} particles" + (f" (x{factor:g} oversampling)" if factor != 1 else ""))
+        check_memory(n * BYTES_PER_PARTICLE + (IOD_CHUNK_BYTES if table == "iod" else 0),
+                     f"{source}: [{table}]: key 'n_particles' = {n:g}", f"{spec.name!r} with {n:.3g} particles")
         m = _number(spec.params.get("n_components"))
         if m is not None and m > n:
             raise ConfigError(f"{source}: [{table}]: key 'n_components' = {m:g} must be <= n_particles ({n:g})")

@@ -167,7 +167,7 @@ add("scenario-description-number", **run_case(words=("description",), top__descr
 add("filter-n-particles-1e12-float", **run_case(words=("[filter]", "n_particles", "integer"), filter__n_particles=1e12))
 add("filter-n-particles-int-1e12", **run_case(words=("n_particles", "memory"), filter__n_particles=10 ** 12))
 add("iod-n-particles-1e12", **run_case(words=("[iod]", "n_particles", "memory"), iod__n_particles=10 ** 12))
-add("iod-n-particles-6e7", **run_case(words=("[iod]", "n_particles", "memory", "oversampling"), iod__n_particles=60_000_000))
+add("iod-n-particles-1e10", **run_case(words=("[iod]", "n_particles", "memory"), iod__n_particles=10 ** 10))
 add("filter-n-particles-negative", **run_case(words=("n_particles",), filter__n_particles=-5))
 add("filter-n-particles-zero", **run_case(words=("n_particles",), filter__n_particles=0))
 add("filter-n-particles-string", **run_case(words=("n_particles",), filter__n_particles="many"))
