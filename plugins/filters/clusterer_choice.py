@@ -4,7 +4,7 @@ from __future__ import annotations
 from cistrack.errors import ParameterError
 from cistrack.interfaces import Clusterer
 
-__all__ = ["resolve_clusterer"]
+__all__ = ["resolve_clusterer", "split_clusterer"]
 
 
 def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, registry=None) -> Clusterer:
@@ -38,6 +38,18 @@ def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, regi
     params = clusterer.get_params()
     params["n_components"] = n_components
     return type(clusterer)(**params)
+
+
+def split_clusterer(clusterer: Clusterer | str, resolved: Clusterer, n_split: int | None,
+                    registry=None) -> Clusterer | None:
+    """The clusterer the PGM uses at a sharp measurement: ``resolved`` (the filter's clusterer)
+    asked for ``n_split`` components, on a copy. None when splitting is off or the clusterer
+    chooses its own number of components (it takes no ``n_components``)."""
+    if not n_split or "n_components" not in _params_of(type(resolved)):
+        return None
+    params = resolved.get_params()
+    params["n_components"] = int(n_split)
+    return type(resolved)(**params)
 
 
 def _params_of(cls) -> dict:

@@ -4,14 +4,17 @@ Particles are only propagated between measurements. At a measurement the particl
 clustered into components (weight N_i/N, sample mean and covariance), each component gets a
 Kalman update from its particles' cross-covariances with their predicted measurements, the
 component weights are multiplied by the components' measurement likelihoods (log domain), and N
-new particles are drawn from the posterior mixture.
+new particles are drawn from the posterior mixture. At a measurement far sharper than the cloud
+the particles are clustered into more components first (:mod:`.measurement_sharpness`).
+
+(A little over 300 lines: the paper's plain PGM restates the constructor for its defaults.)
 """
 from __future__ import annotations
 
 import numpy as np
 
 from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
+from cistrack.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.errors import FilterError
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
@@ -19,12 +22,13 @@ from cistrack.interfaces.filter import FilterBase
 from cistrack.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
-from .clusterer_choice import resolve_clusterer
+from .clusterer_choice import resolve_clusterer, split_clusterer
 from .ensemble_propagation import propagate_particles
 from .initial_cloud import check_cloud, initial_particles
 from .component_update import ensemble_component_update, iterated_component_update
 from .kalman_update import group_moments
 from .measured_components import MeasuredComponents, check_epoch
+from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
 from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 
@@ -70,6 +74,13 @@ class PGMFilter(FilterBase):
     component_likelihood : str
         What reweights the components under the iterated update: "posterior" (the measurement
         likelihood with h linearised over the component's posterior) or "prior" (over its prior).
+    split_components : int or None
+        Components the clusterer is asked for at a sharp measurement (model and measurements in
+        :mod:`.measurement_sharpness`); None or 0 = off (the paper's PGM). Default 24.
+    split_ess : float
+        A measurement is sharp when the effective sample size of the particles' likelihood
+        weights is below this fraction of the particles (0.02: fewer than 200 of 10,000 lie
+        within the noise of it).
     """
 
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
@@ -81,7 +92,11 @@ class PGMFilter(FilterBase):
                  velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
                  max_range_km: float | None = None, max_speed_kms: float | None = None,
                  component_update: str = "iterated", update_iterations: int = 10,
-                 component_likelihood: str = "posterior"):
+                 component_likelihood: str = "posterior", split_components: int | None = 24,
+                 split_ess: float = 0.02):
+        self.split_components = None if not split_components else check_int(
+            self, "split_components", split_components, minimum=1)
+        self.split_ess = check_range(self, "split_ess", split_ess, 0.0, 1.0)
         self.component_update = check_choice(self, "component_update", component_update,
                                              ("iterated", "ensemble"))
         self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
@@ -112,6 +127,7 @@ class PGMFilter(FilterBase):
         who = self._who()
         check_cloud(cloud, who)
         self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
+        self._split_clusterer = split_clusterer(self.clusterer, self._clusterer, self.split_components)
         self._dyn, self._sensor, self._rng = dynamics, sensor, rng
         self._bounds = StateBounds(self.min_range_km, self.max_range_km, self.max_speed_kms, earth_position(dynamics))
         self._t = float(cloud.epoch)
@@ -144,11 +160,17 @@ class PGMFilter(FilterBase):
         who = self._who()
         check_epoch(self._t, measurement, who)
         meas = MeasuredComponents(self._sensor, measurement)
-        self._ensure_clustered()
-        x, labels, m = self._x, self._labels, self._prior.n_components
-        dres = meas.residuals_to_measurement(x)
+        dres = meas.residuals_to_measurement(self._x)
         if not np.all(np.isfinite(dres)):
             raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
+        sharpness = 1.0
+        if self._split_clusterer is not None:  # a measurement far sharper than the cloud: smaller clusters
+            sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
+            if sharpness < self.split_ess:
+                self._labels = self._prior = None
+                self._ensure_clustered(self._split_clusterer)
+        self._ensure_clustered()
+        x, labels, m = self._x, self._labels, self._prior.n_components
         mom = group_moments(x, dres, labels, m)
         mom.pxx = regularize_covariance(mom.pxx, 1e-12)
         if self.component_update == "ensemble":
@@ -171,6 +193,7 @@ class PGMFilter(FilterBase):
             "effective_components": float(1.0 / np.sum(w * w)),
             "log_likelihood": float(log_evidence),
             "max_component_weight": float(w.max()),
+            "likelihood_ess_fraction": float(sharpness),
             "n_particles": float(samples.shape[0]),
         })
 
@@ -200,13 +223,14 @@ class PGMFilter(FilterBase):
         self._prior = None
         self._sample_labels = None
 
-    def _ensure_clustered(self) -> None:
-        """Cluster the current particles into the prior mixture (once per prediction)."""
+    def _ensure_clustered(self, clusterer: Clusterer | None = None) -> None:
+        """Cluster the current particles into the prior mixture (once per prediction), with
+        ``clusterer`` (default: the filter's)."""
         if self._labels is not None:
             return
         x = self._x
         d = x.shape[1]
-        labels = np.asarray(self._clusterer.cluster(x, self._rng), dtype=np.intp)
+        labels = np.asarray((clusterer or self._clusterer).cluster(x, self._rng), dtype=np.intp)
         if labels.shape != (x.shape[0],) or labels.min() < 0:
             raise FilterError(f"filter '{self._who()}': clusterer returned labels of shape {labels.shape}")
         _, labels = np.unique(labels, return_inverse=True)
@@ -263,8 +287,8 @@ class PGMFilter(FilterBase):
 class PaperPGMFilter(PGMFilter):
     """The paper's plain PGM, kept by name for comparisons: k-means clusters and the ensemble
     (particle cross-covariance) Kalman update of each component. Same parameters as ``pgm``;
-    only the defaults of ``clusterer``, ``component_update`` and ``min_cluster_size`` (None =
-    2 x dimension) differ."""
+    only the defaults of ``clusterer``, ``component_update``, ``split_components`` (None: no
+    splitting) and ``min_cluster_size`` (None = 2 x dimension) differ."""
 
     _min_cluster_fraction = 0.0
 
@@ -273,10 +297,12 @@ class PaperPGMFilter(PGMFilter):
                  velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
                  max_range_km: float | None = None, max_speed_kms: float | None = None,
                  component_update: str = "ensemble", update_iterations: int = 10,
-                 component_likelihood: str = "posterior"):
+                 component_likelihood: str = "posterior", split_components: int | None = None,
+                 split_ess: float = 0.02):
         super().__init__(n_particles, n_components, clusterer, min_cluster_size,
                          velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
-                         component_update, update_iterations, component_likelihood)
+                         component_update, update_iterations, component_likelihood, split_components,
+                         split_ess)
 
 
 @hookimpl
