@@ -10,11 +10,12 @@ measurement of a pass after a gap of about a day slices a slab 1.5 arcsec (~3 km
 a cloud hundreds to thousands of km wide: about one particle in 10,000 lies in it (ESS ~1). The
 conditioning then rests entirely on the Gaussian fitted to each cluster, and clusters that long
 propagation has bent (Mardia kurtosis up to 2.3x the Gaussian value) put the conditional in the
-wrong place: across that one update the truth's NEES rose from ~4-5 to ~11-15, and the next
-updates, exact by an importance-sampling check, inherited it. The model adopted: a Gaussian
-fitted to a smaller piece of a smoothly bent cloud deviates from it by the curvature times the
-piece's size squared, so at a sharp measurement the PGM clusters into more, smaller components
-(``split_components``), each still large enough for a 6-D covariance (the merge rule).
+wrong place: in single runs the truth's NEES rose from ~4-5 to ~11-15 across that one update.
+The option ``split_components``: a Gaussian fitted to a smaller piece of a smoothly bent cloud
+deviates from it by the curvature times the piece's size squared, so at a sharp measurement the
+PGM may cluster into more, smaller components, each still large enough for a 6-D covariance
+(the merge rule). Off by default: over 35 tuning seeds per IOD it did not keep custody more
+often; the aggregate drift turned out to come from every update (component_spread.py).
 """
 from __future__ import annotations
 

@@ -82,8 +82,8 @@ def test_split_pgm_update_matches_the_kalman_update_on_a_linear_problem():
     np.testing.assert_allclose(np.sqrt(np.diag(b.covariance)) / sd, 1.0, atol=0.1)
 
 
-def test_pgm_splits_by_default_and_pgm_paper_does_not():
-    assert (PGMFilter().split_components, PGMFilter().split_ess) == (24, 0.02)
+def test_splitting_is_off_by_default_in_pgm_and_pgm_paper():
+    assert (PGMFilter().split_components, PGMFilter().split_ess) == (None, 0.02)
     assert PaperPGMFilter().split_components is None
 
 
