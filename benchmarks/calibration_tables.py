@@ -1,0 +1,100 @@
+"""Calibration tables of finished studies (issue 16): one row per filter x IOD, then where the
+truth became improbable (per pass and per update within a pass).
+
+    python benchmarks/calibration_tables.py STUDY_DIR [STUDY_DIR ...]
+
+Reads each run's manifest.json and steps.parquet under STUDY_DIR/runs. Columns: runs; custody
+kept with its 95% Wilson interval; final NEES median / 90th percentile; ANEES with its
+chi-square(6 M) 95% band; share of runs whose final truth HDR level exceeds 0.99; the
+Kolmogorov-Smirnov statistic of the final HDR levels against uniform; runs ending more than
+50 km from the truth; the largest final error; runs not finished; the days custody was lost.
+The second table gives, for update k of pass p, the median posterior NEES and the share of
+runs with HDR level > 0.99 (a consistent filter: about 5.3 and 1% everywhere).
+"""
+from __future__ import annotations
+
+import glob
+import json
+import os
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+from scipy.stats import binomtest, chi2, kstest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from machine import machine_lines  # noqa: E402
+
+
+def load(study_dir: str) -> dict[tuple[str, str], list[tuple[dict, str]]]:
+    """(filter label, IOD) -> [(manifest, run dir)] for the finished runs of one study."""
+    out: dict[tuple[str, str], list] = {}
+    for m in sorted(glob.glob(f"{study_dir}/runs/*/manifest.json")):
+        with open(m) as fh:
+            man = json.load(fh)
+        if "summary" not in man:
+            continue
+        _, flt, iod, _seed = man["run_id"].split("__")
+        out.setdefault((flt, iod), []).append((man, os.path.dirname(m)))
+    return out
+
+
+def summary_table(groups) -> None:
+    print("| filter | IOD | runs | custody kept (95% CI) | final NEES median / p90 | ANEES (chi2 95% band) | "
+          "final HDR > 0.99 | KS vs uniform | final err > 50 km | max final err km | not finished | lost days |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (flt, iod), runs in sorted(groups.items()):
+        s = [m["summary"] for m, _ in runs]
+        n = len(s)
+        k = sum(x["custody_kept"] for x in s)
+        ci = binomtest(k, n).proportion_ci(0.95, method="wilson")
+        nees = np.array([x["final"].get("nees", np.nan) for x in s], float)
+        hdr = np.array([x["final"].get("hdr_level", np.nan) for x in s], float)
+        err = np.array([x["final"].get("pos_err_km", np.nan) for x in s], float)
+        lo, hi = chi2.ppf([0.025, 0.975], 6 * n) / n
+        ks = kstest(hdr[np.isfinite(hdr)], "uniform")
+        lost = sorted(round(x["custody_lost_t_days"], 2) for x in s
+                      if not x["custody_kept"] and x["custody_lost_t_days"] is not None)
+        print(f"| {flt} | {iod} | {n} | {k} ({ci.low:.2f}-{ci.high:.2f}) | {np.nanmedian(nees):.1f} / "
+              f"{np.nanpercentile(nees, 90):.1f} | {np.nanmean(nees):.3g} ({lo:.2f}-{hi:.2f}) | "
+              f"{np.mean(hdr > 0.99):.0%} | {ks.statistic:.2f} (p {ks.pvalue:.2g}) | {int(np.sum(err > 50))} | "
+              f"{np.nanmax(err):.1f} | {sum(x['status'] != 'finished' for x in s)} | {lost} |")
+
+
+def per_update_table(groups) -> None:
+    print("\nPosterior NEES median / share of runs with HDR > 0.99, at update k of each pass:")
+    for (flt, iod), runs in sorted(groups.items()):
+        acc: dict[tuple[int, int], list] = defaultdict(list)
+        for _, d in runs:
+            t = pq.read_table(f"{d}/steps.parquet", columns=["kind", "nees", "hdr_level", "pass_index"]).to_pydict()
+            prev, k = None, 0
+            for kind, ne, h, p in zip(t["kind"], t["nees"], t["hdr_level"], t["pass_index"]):
+                if kind != "update":
+                    continue
+                k = 0 if p != prev else k + 1
+                prev = p
+                acc[(int(p), k)].append((ne, h))
+        print(f"  {flt} {iod}:")
+        for p in sorted({p for p, _ in acc}):
+            cells = []
+            for k in range(10):
+                v = np.array(acc.get((p, k), []), float)
+                if len(v) >= max(5, len(runs) // 5):
+                    cells.append(f"{k}: {np.median(v[:, 0]):4.1f}/{np.mean(v[:, 1] > 0.99):4.0%}")
+            print(f"    pass {p}: " + "  ".join(cells))
+
+
+def main(argv=None) -> None:
+    dirs = sys.argv[1:] if argv is None else argv
+    print("\n".join(machine_lines()))
+    groups = {}
+    for d in dirs:
+        groups.update(load(d))
+    summary_table(groups)
+    per_update_table(groups)
+
+
+if __name__ == "__main__":
+    main()
