@@ -7,7 +7,8 @@ component weights are multiplied by the components' measurement likelihoods (log
 new particles are drawn from the posterior mixture. At a measurement far sharper than the cloud
 the particles are clustered into more components first (:mod:`.measurement_sharpness`).
 
-(A little over 300 lines: the paper's plain PGM restates the constructor for its defaults.)
+(A little over 300 lines: the parameters are documented with their measurements, and the
+paper's plain PGM restates the constructor for its defaults.)
 """
 from __future__ import annotations
 
