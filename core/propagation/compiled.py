@@ -128,7 +128,8 @@ class CompiledDynamics(Dynamics):
         """Propagate ``states`` (N, dim) from ``t0`` to each of ``times`` (scalar or (K,), TU).
 
         Every particle is integrated with its own adaptive step and error control (DOP853,
-        tolerances ``rtol``/``atol``, default the model's). ``times`` must all lie on one side of
+        tolerances ``rtol``/``atol``, default the model's); with at least ``LANES`` particles and
+        a right-hand side the generator can rewrite, in SIMD lockstep (bit-identical results). ``times`` must all lie on one side of
         ``t0`` and be monotonic away from it (backward propagation: all earlier). Returns a
         :class:`~cistrack.interfaces.dynamics.Propagation` with ``states`` (K, N, dim); particles
         that hit a body are frozen at the located impact point with ``alive`` False.
@@ -155,7 +156,11 @@ class CompiledDynamics(Dynamics):
         status = np.zeros(n, dtype=np.int64)
         pos, rad = self._bodies_arrays()
         if n:
-            run_chunks(self._kernels().propagate_kernel, n,
+            mod = self._kernels()
+            # the SIMD-lockstep kernel when the model has one and there are lanes to fill (same numbers)
+            lockstep = getattr(mod, "propagate_lanes_kernel", None)
+            kernel = lockstep if lockstep is not None and n >= mod.LANES else mod.propagate_kernel
+            run_chunks(kernel, n,
                         (arr, self._params(), t0, np.ascontiguousarray(t_out), rtol, atol, pos, rad,
                          int(self.max_steps), 0.0, out, impact_body, impact_time, status))
         failed = status >= 2

@@ -1,7 +1,9 @@
 """Kernel generation, on-disk cache and worker threads of compiled ensemble propagation.
 
 How the speed is obtained: for each right-hand side, :mod:`.dop853_source` writes a module
-with the integrator unrolled around that function, stored in the kernel cache directory
+with the integrator unrolled around that function (and, when :mod:`.lane_rhs` can rewrite the
+function into straight-line lane code, the SIMD-lockstep integrator of
+:mod:`.dop853_lanes_source`), stored in the kernel cache directory
 (``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels``, else
 ``~/.cache/cistrack/kernels``) under a name hashed from the integrator, the model's source file
 and numba's version; numba compiles it once (``cache=True``) and later processes load the
@@ -43,6 +45,8 @@ import numpy as np
 from cistrack.errors import ConfigError
 
 from . import dop853_source
+from .dop853_lanes_source import RESERVED
+from .lane_rhs import lane_body
 
 __all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMPILE_SECONDS",
            "secure_cache_dir"]
@@ -156,8 +160,11 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
                              else f"from {motion_where[0]} import {motion_where[1]} as body_position")
             title = f"for {where[0]}.{where[1]}" + (f" with {motion_where[0]}.{motion_where[1]}"
                                                       if motion_where else "")
+            body, names = _lanes_body(rhs)
+            lanes_import = f"from {where[0]} import {', '.join(names)}\n" if names else ""
             src = dop853_source.generate_source(
-                f"from {where[0]} import {where[1]} as rhs", dim, title=title, motion_import=motion_import)
+                f"from {where[0]} import {where[1]} as rhs", dim, title=title, motion_import=motion_import,
+                lanes_body=body, lanes_import=lanes_import)
             extra = _source_digest(body_motion) if body_motion is not None else ""
             import numba  # imported here, not at module import: listing plugins needs no numba
 
@@ -178,16 +185,31 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
                               "CISTRACK_KERNEL_DIR to a writable directory of yours to cache them)",
                               RuntimeWarning, stacklevel=2)
         if mod is None:  # not importable or no writable directory: in memory
+            body, names = _lanes_body(rhs)
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",
-                                                motion_import=None if body_motion is None else "")
+                                                motion_import=None if body_motion is None else "",
+                                                lanes_body=body)
             _announce_compile(repr(rhs))
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
+            for name in names:  # the globals the rewritten lane body reads
+                mod.__dict__[name] = rhs.py_func.__globals__[name]
             if body_motion is not None:
                 mod.__dict__["body_position"] = body_motion
             exec(compile(src, f"<cistrack kernel for {rhs!r}>", "exec"), mod.__dict__)
         _KERNELS[key] = mod
         return mod
+
+
+def _lanes_body(rhs: Any):
+    """(LaneBody or None, the global names of the rhs's module its body reads): the right-hand
+    side rewritten for the SIMD-lockstep kernel, or None (why logged) to use the one-particle one."""
+    body, why = lane_body(rhs, RESERVED)
+    if body is None:
+        _LOG.debug("no SIMD-lockstep kernel for %r: %s", rhs, why)
+        return None, []
+    glob = getattr(rhs, "py_func", rhs).__globals__
+    return body, sorted(n for n in body.free_names if n in glob and n not in RESERVED)
 
 
 def _numba_cached(path: Path) -> bool:

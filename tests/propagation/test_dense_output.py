@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from cistrack.errors import StateError
-from cistrack.plugins.dynamics.catalog import ORBITS
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 from cistrack.plugins.dynamics.cr3bp import CR3BP
 
 from reference_cr3bp import cr3bp_rhs  # tests/ is on sys.path
