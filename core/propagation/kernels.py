@@ -53,9 +53,12 @@ __all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMP
 
 _LOG = logging.getLogger("cistrack.propagation")
 
-COMPILE_SECONDS = "10-30"
-"""Rough one-time cost of compiling one model's kernels (measured: 28 s wall, 9 s CPU on a busy
-2-core machine; see benchmarks/bench_startup.py). Shown in the progress message only."""
+COMPILE_SECONDS = "20-100"
+"""Rough one-time cost of compiling one model's kernels, shown in the progress message only.
+Measured for the CR3BP's SIMD-lockstep kernel in a fresh cache directory: 100 s wall, 25 s CPU on
+a 2-core machine at load average ~22 (before the lockstep kernel: 28 s wall, 9 s CPU on a busy
+2-core machine; see benchmarks/bench_startup.py). The one-particle and dense-output kernels are
+compiled when first used (fewer particles than lanes, a run's truth)."""
 
 
 # -- kernel generation and caching ----------------------------------------------------------------
