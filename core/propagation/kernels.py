@@ -216,8 +216,9 @@ def _lanes_body(rhs: Any):
 
 
 def _numba_cached(path: Path) -> bool:
-    """Whether numba's on-disk cache already holds the propagation kernel of module ``path``."""
-    return any((path.parent / "__pycache__").glob(f"{path.stem}.propagate_kernel-*.nbi"))
+    """Whether numba's on-disk cache already holds a propagation kernel of module ``path`` (the
+    one-particle or the lockstep one: a run with many particles compiles only the latter)."""
+    return any((path.parent / "__pycache__").glob(f"{path.stem}.propagate*_kernel-*.nbi"))
 
 
 def _announce_compile(what: str) -> None:
