@@ -21,12 +21,15 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
     directory, is a non-empty directory without a cistrack ``manifest.json``, or cannot be
     created or written."""
     d = Path(directory)
-    if d.exists() and not d.is_dir():
-        raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
-                          "earlier results directory")
-    if d.is_dir() and any(d.iterdir()) and not (d / "manifest.json").is_file():
-        raise ConfigError(f"{where} {d}: is not empty and holds no cistrack manifest.json; results go "
-                          "to a new or empty directory, or replace an earlier run's results directory")
+    try:  # a parent that may not be searched (EACCES) answers here, not with a traceback
+        if d.exists() and not d.is_dir():
+            raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
+                              "earlier results directory")
+        if d.is_dir() and any(d.iterdir()) and not (d / "manifest.json").is_file():
+            raise ConfigError(f"{where} {d}: is not empty and holds no cistrack manifest.json; results go "
+                              "to a new or empty directory, or replace an earlier run's results directory")
+    except OSError as exc:
+        raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     try:
         d.mkdir(parents=True, exist_ok=True)
         probe = d / ".cistrack-write-test"

@@ -4,7 +4,8 @@ Layout of a run directory::
 
     manifest.json        scenario, seed, versions, timings, status ("running", "finished",
                          "filter-failed", "failed" or "interrupted", with the reason in
-                         summary.failure)
+                         summary.failure), the running process (host, pid: a "running" run
+                         whose process is gone reads as interrupted, see cistrack.run_status)
     scenario.toml        the scenario as run (tables after overrides)
     steps.parquet        one row per step (written when the run finishes)
     steps/part-*.parquet the rows while running, many steps per part (see
@@ -19,6 +20,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import socket
 import time
 from importlib import metadata
 from pathlib import Path
@@ -123,6 +125,7 @@ class ResultsWriter:
                     **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
                        if isinstance(v, (int, float, str, bool))}},
             "started_unix": time.time(),
+            "process": {"host": socket.gethostname(), "pid": os.getpid()},  # see cistrack.run_status
         }
         try:
             import tomli_w  # optional: nicer record of the scenario as run
@@ -151,14 +154,15 @@ class ResultsWriter:
     @hookimpl
     def cistrack_run_finished(self, run, summary) -> None:
         """Write the waiting rows, merge the parts into steps.parquet and record the status. If
-        writing fails (a full disk) the parts written stay (``read_steps`` reads them) and the
-        manifest says why."""
-        status, extra = summary.status, {}
+        writing fails (a full disk) the parts written stay (``read_steps`` reads them), the
+        manifest says "failed" and why, and the error is raised again (after the manifest is
+        written) so that the run's summary says so too."""
+        status, extra, problems = summary.status, {}, []
         try:
             self._parts.flush()
         except OSError as exc:
-            status = "failed" if status == "finished" else status
             extra["part_failure"] = f"{type(exc).__name__}: {exc}; the last rows were not written"
+            problems.append(f"writing the last steps to {PARTS}/: {extra['part_failure']}")
         parts = self._parts.parts()
         extra["n_parts"] = self._parts.n_parts
         if parts:
@@ -171,15 +175,20 @@ class ResultsWriter:
                     p.unlink()
             except OSError as exc:
                 tmp.unlink(missing_ok=True)
-                status = "failed" if status == "finished" else status
-                extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the {len(parts)} completed steps stay "
-                                          f"in {PARTS}/part-*.parquet")
+                extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the completed steps stay in the "
+                                          f"{len(parts)} files {PARTS}/part-*.parquet")
+                problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
         data = summary.to_dict()
+        if problems:
+            status = "failed" if status == "finished" else status
+            data["failure"] = "; ".join(([data["failure"]] if data.get("failure") else []) + problems)
         data["status"] = status
         self._manifest.update({"status": status, "summary": data, **extra,
                                "wall_time_s": time.perf_counter() - self._t0,
                                "finished_unix": time.time()})
         write_json_atomic(self.directory / MANIFEST, self._manifest)
+        if problems:
+            raise OSError(f"{self.directory}: " + "; ".join(problems))
 
 
 def read_manifest(directory: str | Path) -> dict:

@@ -275,6 +275,10 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
         print(f"study: {len(stale)} finished run(s) were made with another scenario, seed or input file "
               f"(fingerprint changed) and are run again: {', '.join(stale[:5])}"
               + (" ..." if len(stale) > 5 else ""), file=sys.stderr)
+    gone = [s.run_id for s in specs if states[s.run_id] == "gone"]
+    if gone:
+        print(f"study: {len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
+              f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""), file=sys.stderr)
     own = executor is None
     ex = executor or (make_executor(workers, dask) if todo else None)
     completed = failed = 0

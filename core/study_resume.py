@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from .results import read_manifest
+from .run_status import process_gone
 
 __all__ = ["DONE", "run_state", "is_done"]
 
@@ -20,7 +21,9 @@ DONE = ("finished", "filter-failed")
 
 def run_state(out_dir: str, fingerprint: str = "") -> str:
     """"done" (finished with this fingerprint), "stale" (finished, but its scenario, seed or input
-    file changed since: it is rerun), or "todo" (missing, running when killed, interrupted, failed)."""
+    file changed since: it is rerun), "gone" (left "running" by a process that no longer exists:
+    interrupted, see :mod:`cistrack.run_status`; it is rerun), or "todo" (missing, interrupted,
+    failed, or running elsewhere)."""
     m = Path(out_dir) / "manifest.json"
     if not m.exists():
         return "todo"
@@ -28,6 +31,8 @@ def run_state(out_dir: str, fingerprint: str = "") -> str:
         man = read_manifest(out_dir)
     except (json.JSONDecodeError, OSError):
         return "todo"
+    if man.get("status") == "running" and process_gone(man.get("process")):
+        return "gone"
     if man.get("status") not in DONE or not (Path(out_dir) / "steps.parquet").exists():
         return "todo"
     if fingerprint and man.get("fingerprint") != fingerprint:

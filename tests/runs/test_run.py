@@ -15,6 +15,7 @@ else:  # pragma: no cover
 import numpy as np
 import pytest
 
+from cistrack.run_status import run_status
 from cistrack.results import read_manifest, read_steps
 from cistrack.run import run_scenario
 from cistrack.scenario import load_scenario
@@ -100,6 +101,8 @@ def test_a_run_killed_mid_way_leaves_a_readable_partial_table(tmp_path):
     t = read_steps(out)
     assert t.num_rows >= 3
     assert read_manifest(out)["status"] == "running"
+    status, reason = run_status(out)  # the manifest's process is gone: read as interrupted
+    assert status == "interrupted" and "process gone" in reason and str(proc.pid) in reason
     assert list(t.column("step").to_pylist()) == sorted(t.column("step").to_pylist())
 
 
