@@ -63,6 +63,12 @@ class Component(ABC):
     """
 
     kind: ClassVar[str] = ""
+    nested_params: ClassVar[dict[str, tuple[str, ...]]] = {}
+    """Parameters handed on to a nested component when a scenario builds it: parameter holding
+    the nested component -> names of this component's parameters that the nested one takes too
+    (e.g. the PGM's ``{"clusterer": ("n_components",)}``). A nested table that sets the
+    parameter itself keeps its own value. So the nested component is built once, already with
+    the value, instead of being copied to change it."""
     registry_name: ClassVar[str] = ""
 
     @classmethod

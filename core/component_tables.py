@@ -111,7 +111,9 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
         if epoch_text is not None:
             params["epoch"] = units.format_utc(units.parse_utc(epoch_text))
     out: dict[str, Any] = {}
-    for key, value in params.items():
+    shared = dict(getattr(factory, "nested_params", None) or {})
+    # nested components last, so that the values handed on to them are checked and converted first
+    for key, value in sorted(params.items(), key=lambda kv: kv[0] in shared):
         if key not in specs:
             allowed = ", ".join(specs) or "(none)"
             msg = f"{source}: {where}: unknown parameter {key!r} for {kind} {name!r}; allowed: {allowed}"
@@ -119,15 +121,37 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
             if close:
                 msg += f". Did you mean {close[0]!r}?"
             raise ConfigError(msg)
+        value = _hand_on(value, shared.get(key, ()), out, specs, specs[key].annotation, reg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
     for key, ps in specs.items():
         # A parameter that names another component by default (e.g. the PGM's clusterer = "kmeans")
         # is resolved here, through this scenario's registry, not later by the component itself.
         if key not in out and isinstance(ps.default, str) and _union_component_kind(ps.annotation):
-            out[key] = _coerce(ps.default, ps.annotation, source, f"{where}", key, reg)
+            value = _hand_on(ps.default, shared.get(key, ()), out, specs, ps.annotation, reg)
+            out[key] = _coerce(value, ps.annotation, source, f"{where}", key, reg)
     spec = ComponentSpec(kind, name, out, f"{source}: {where}")
     spec._validated = (reg, _build(spec, reg))  # value checks before anything runs; kept for the run
     return spec
+
+
+def _hand_on(table: Any, names: tuple[str, ...], out: dict, specs: dict, ann: Any, reg: Registry) -> Any:
+    """The nested component table ``table`` (a name or a table) with the outer component's
+    parameters ``names`` added (its value in ``out``, else its default) where the nested
+    component takes them and its table does not set them (see ``Component.nested_params``)."""
+    kind = _union_component_kind(ann) or _component_kind(ann)
+    if not names or not kind or not isinstance(table, (str, dict)):
+        return table
+    nested = {"name": table} if isinstance(table, str) else dict(table)
+    try:
+        factory = reg.get(kind, nested.get("name")).factory
+    except (UnknownComponentError, TypeError):
+        return table  # an unknown name: _coerce reports it
+    takes = param_specs(factory) if isinstance(factory, type) else {}
+    for name in names:
+        value = out.get(name, specs[name].default if name in specs else None)
+        if name in takes and name not in nested and value is not None:
+            nested[name] = value
+    return nested
 
 
 def _build(spec: ComponentSpec, reg: Registry) -> Any:
