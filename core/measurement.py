@@ -14,7 +14,7 @@ import numpy as np
 
 from .errors import MeasurementError
 
-__all__ = ["Measurement", "MeasurementSet", "KIND_NAMES", "kind_of_names", "names_of_kind"]
+__all__ = ["Measurement", "MeasurementSet", "StackedMeasurement", "KIND_NAMES", "kind_of_names", "names_of_kind"]
 
 KIND_NAMES: dict[str, tuple[str, str]] = {
     "azel": ("azimuth", "elevation"),
@@ -73,6 +73,57 @@ class Measurement:
         keep = [i for i, n in enumerate(self.names) if n != "range"]
         return Measurement(self.t, self.z[keep], self.covariance[np.ix_(keep, keep)],
                            tuple(self.names[i] for i in keep), self.index, self.site, self.kind)
+
+
+@dataclass(frozen=True)
+class StackedMeasurement:
+    """Several measurements taken at one time (by several sites), conditioned on as one: a
+    filter whose class sets ``stacked_updates`` receives it in one ``update`` (its
+    ``MeasuredComponents`` predicts each part from its own site and stacks them); other filters
+    get the parts one after the other.
+
+    Attributes
+    ----------
+    parts : tuple of Measurement, all at the same ``t``, in file order
+    t : float             TU since the scenario epoch
+    z : (sum m,) float    the parts' values, stacked
+    covariance : (sum m, sum m) float   block-diagonal (the parts' noises are independent)
+    names : tuple of str  the parts' names, concatenated (they repeat)
+    index : int           the first part's index in its set
+    """
+
+    parts: tuple[Measurement, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.parts) < 1 or any(abs(p.t - self.parts[0].t) > 0 for p in self.parts):
+            raise MeasurementError("a stacked measurement needs one or more measurements taken at one time")
+
+    @property
+    def t(self) -> float:
+        return float(self.parts[0].t)
+
+    @property
+    def z(self) -> np.ndarray:
+        return np.concatenate([np.asarray(p.z, dtype=float).reshape(-1) for p in self.parts])
+
+    @property
+    def covariance(self) -> np.ndarray:
+        n = sum(len(p.z) for p in self.parts)
+        out = np.zeros((n, n))
+        i = 0
+        for p in self.parts:
+            m = len(p.z)
+            out[i:i + m, i:i + m] = p.covariance
+            i += m
+        return out
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(n for p in self.parts for n in p.names)
+
+    @property
+    def index(self) -> int:
+        return int(self.parts[0].index)
 
 
 def _check_same_time_rows(times: np.ndarray, sites: np.ndarray | None) -> None:

@@ -26,6 +26,7 @@ from .custody import CustodyObserver
 from .verdicts import final_verdict
 from .limits import check_count, check_seed
 from .errors import CistrackError, ConfigError
+from .measurement import StackedMeasurement
 from .metrics import step_metrics
 from .registry import Registry, default_registry
 from .run_context import RunContext, Step
@@ -258,8 +259,8 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
             ms = tuple(_angles(ctx.measurements[i]) for i in group)
             pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, ms))
             tu = time.perf_counter()
-            for m in ms:  # one time, several sites: sequential updates within the one step
-                filt.update(m)
+            for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
+                filt.update(m)  # several sites at one time: one stacked update, or one after another
             t_upd = time.perf_counter() - tu
             step = _step(ctx, k, t, "update", filt.belief, ms)
             step.timings.update({"predict": t_pred, "update": t_upd})

@@ -24,6 +24,10 @@ class Filter(Component):
     """
 
     kind = "filter"
+    stacked_updates: ClassVar[bool] = False
+    """Whether ``update`` accepts a :class:`cistrack.measurement.StackedMeasurement` (several
+    sites at one time as one measurement: stacked z, block-diagonal R, names repeating). A run
+    hands such a filter one stacked update per time; others get the parts one after another."""
 
     @abstractmethod
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,

@@ -44,6 +44,7 @@ class EnKFFilter(FilterBase):
     """
 
     default_name = "enkf"
+    stacked_updates = True  # reads measurements only through MeasuredComponents
 
     def __init__(self, n_particles: int = 1000, velocity_noise_kms_per_sqrt_day: float = 0.0,
                  n_members: int | None = None):

@@ -2,7 +2,10 @@
 
 A run may hand a filter fewer components than its sensor measures (the IOD-only 'range' is
 stripped for OD). :class:`MeasuredComponents` selects the sensor's output columns by name,
-validates z and R, and gives predictions and angle-wrapped residuals for just those columns.
+validates z and R, and gives predictions and angle-wrapped residuals for just those columns. For
+a :class:`cistrack.measurement.StackedMeasurement` (several sites at one time) it stacks the
+parts: each predicted from its own site, R block-diagonal; a filter using only ``z``, ``R`` and
+these methods updates on the stack in one step (``stacked_updates = True``).
 """
 from __future__ import annotations
 
@@ -38,6 +41,11 @@ class MeasuredComponents:
     """
 
     def __init__(self, sensor: Sensor, measurement: Measurement):
+        parts = getattr(measurement, "parts", None)
+        self._parts: list[MeasuredComponents] | None = None
+        if parts is not None:  # a cistrack.measurement.StackedMeasurement: several sites at one time
+            self._stack(sensor, measurement, parts)
+            return
         # a sensor standing for several sites answers with the one that took the measurement
         sensor = sensor.for_measurement(measurement) if hasattr(sensor, "for_measurement") else sensor
         names = tuple(sensor.names)
@@ -66,16 +74,39 @@ class MeasuredComponents:
         self.t = float(measurement.t)
         self._width = len(names)
 
+    def _stack(self, sensor: Sensor, measurement, parts) -> None:
+        """The parts' components stacked: z and the columns one after the other, R block-diagonal,
+        each part predicted by the sensor of its own site."""
+        self._parts = [MeasuredComponents(sensor, p) for p in parts]
+        self.sensor = sensor
+        self.cols = np.concatenate([p.cols for p in self._parts])
+        self.z = np.concatenate([p.z for p in self._parts])
+        self.R = np.asarray(measurement.covariance, dtype=float)
+        self.angular = np.concatenate([p.angular for p in self._parts])
+        self.t = float(measurement.t)
+        self._cuts = np.cumsum([p.dim for p in self._parts])[:-1]
+
+    def _each(self, method: str, *arrays) -> np.ndarray:
+        """``method`` of every part on its own columns of ``arrays`` (last axis), stacked."""
+        split = [np.split(np.asarray(a, dtype=float), self._cuts, axis=-1) for a in arrays]
+        return np.concatenate([getattr(p, method)(*(s[k] for s in split)) for k, p in enumerate(self._parts)],
+                              axis=-1)
+
     @property
     def dim(self) -> int:
         return int(self.cols.size)
 
     def predict(self, states: np.ndarray) -> np.ndarray:
         """Noise-free predicted measurements h(x) of ``states`` (N, 6) -> (N, m): one sensor call."""
+        if self._parts is not None:
+            return np.concatenate([p.predict(states) for p in self._parts], axis=-1)
         return np.asarray(self.sensor.measure(states, self.t), dtype=float)[:, self.cols]
 
     def residual(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """a - b (..., m) with the sensor's wrapping of angular columns (via ``sensor.residual``)."""
+        if self._parts is not None:
+            b = np.broadcast_to(np.asarray(b, dtype=float), np.shape(a))
+            return self._each("residual", a, b)
         a = np.asarray(a, dtype=float)
         b = np.broadcast_to(np.asarray(b, dtype=float), a.shape)
         shape = a.shape[:-1] + (self._width,)
@@ -88,11 +119,16 @@ class MeasuredComponents:
     def residuals_to_measurement(self, states: np.ndarray) -> np.ndarray:
         """h(x) - z for ``states`` (N, 6) -> (N, m), angles wrapped: the predictions expressed in a
         chart centred on the measurement, so means and covariances never straddle the 0/2pi cut."""
+        if self._parts is not None:
+            return np.concatenate([p.residuals_to_measurement(states) for p in self._parts], axis=-1)
         return self.residual(self.predict(states), self.z)
 
     def mean(self, zs: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """Weighted mean of predicted measurements ``zs`` (K, m) with ``weights`` (K,), circular
         (atan2 of weighted sines and cosines) on the angular columns, wrapped to [0, 2pi)."""
+        if self._parts is not None:
+            split = np.split(np.asarray(zs, dtype=float), self._cuts, axis=-1)
+            return np.concatenate([p.mean(z, weights) for p, z in zip(self._parts, split)])
         zs = np.asarray(zs, dtype=float)
         w = np.asarray(weights, dtype=float)
         out = w @ zs

@@ -98,6 +98,7 @@ class PGMFilter(FilterBase):
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
 
     default_name = "pgm"
+    stacked_updates = True  # reads measurements only through MeasuredComponents
     nested_params = {"clusterer": ("n_components",)}  # a scenario's clusterer is built with them
 
     def __init__(self, n_particles: int = 10000, n_components: int | None = 6,

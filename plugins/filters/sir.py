@@ -43,6 +43,7 @@ class SIRFilter(FilterBase):
     """
 
     default_name = "sir"
+    stacked_updates = True  # reads measurements only through MeasuredComponents
 
     def __init__(self, n_particles: int = 10000, resample_threshold: float = 0.5,
                  velocity_noise_kms_per_sqrt_day: float = 0.0):

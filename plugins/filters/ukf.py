@@ -59,6 +59,7 @@ class UKFFilter(FilterBase):
     """
 
     default_name = "ukf"
+    stacked_updates = True  # reads measurements only through MeasuredComponents
 
     def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, n_samples: int = 2000,
                  velocity_noise_kms_per_sqrt_day: float = 0.0, update_iterations: int = 10,

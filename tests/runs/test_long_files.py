@@ -127,3 +127,51 @@ def test_rows_with_different_keys_merge_as_if_each_were_its_own_part(tmp_path):
             w.add(r["step"], r)
         w.flush()
     assert read_parts(tmp_path / "one").equals(read_parts(tmp_path / "many"))
+
+
+def _count_updates(monkeypatch, cls):
+    calls = []
+    real = cls.update
+
+    def update(self, measurement):
+        calls.append(measurement)
+        return real(self, measurement)
+
+    monkeypatch.setattr(cls, "update", update)
+    return calls
+
+
+@pytest.mark.parametrize("stacked", [True, False], ids=["stacked", "one-after-another"])
+def test_a_filter_gets_one_stacked_update_per_time_or_the_parts_in_turn(two_site_file, monkeypatch, stacked):
+    from cistrack.measurement import StackedMeasurement
+    from cistrack.plugins.filters.ukf import UKFFilter
+
+    path, _ = two_site_file
+    monkeypatch.setattr(UKFFilter, "stacked_updates", stacked)
+    calls = _count_updates(monkeypatch, UKFFilter)
+    res = run_scenario(_small(duration_days=4.0, measurements={"file": str(path)}, filter={"name": "ukf"}), seed=2)
+    n_updates = sum(1 for r in res.rows if r["kind"] == "update")
+    if stacked:
+        assert len(calls) == n_updates and all(isinstance(m, StackedMeasurement) and len(m.parts) == 2 for m in calls)
+        assert {m.parts[0].site for m in calls} == {"695"} and {m.parts[1].site for m in calls} == {"691"}
+    else:
+        assert len(calls) == 2 * n_updates and not any(isinstance(m, StackedMeasurement) for m in calls)
+    assert res.summary.status == "finished"
+
+
+def test_a_stacked_measurement_is_its_parts_side_by_side_each_from_its_own_site(two_site_file):
+    from cistrack.measurement import StackedMeasurement
+    from cistrack.plugins.filters.measured_components import MeasuredComponents
+
+    path, _ = two_site_file
+    ctx, _ = prepare_run(_small(duration_days=4.0, measurements={"file": str(path)}), seed=2)
+    a, b = ctx.measurements[0].angles_only(), ctx.measurements[1].angles_only()
+    stack = StackedMeasurement((a, b))
+    x = ctx.iod_cloud.states[:50]
+    ma, mb, ms = (MeasuredComponents(ctx.sensor, m) for m in (a, b, stack))
+    np.testing.assert_array_equal(ms.residuals_to_measurement(x),
+                                  np.hstack([ma.residuals_to_measurement(x), mb.residuals_to_measurement(x)]))
+    np.testing.assert_array_equal(ms.R[:2, :2], a.covariance)
+    np.testing.assert_array_equal(ms.R[2:, 2:], b.covariance)
+    assert not ms.R[:2, 2:].any() and ms.z.tolist() == [*a.z, *b.z]
+    assert not np.allclose(ma.predict(x), mb.predict(x))  # two sites really see different angles
