@@ -7,8 +7,8 @@ component weights are multiplied by the components' measurement likelihoods (log
 new particles are drawn from the posterior mixture. At a measurement far sharper than the cloud
 the particles are clustered into more components first (:mod:`.measurement_sharpness`).
 
-(A little over 300 lines: the parameters are documented with their measurements, and the
-paper's plain PGM restates the constructor for its defaults.)
+(Above 300 lines: the parameters are documented with their measurements, and the paper's
+plain PGM restates the constructor for its defaults.)
 """
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ from .component_update import ensemble_component_update, iterated_component_upda
 from .kalman_update import group_moments
 from .measured_components import MeasuredComponents, check_epoch
 from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
+from .reacquisition_particles import measurement_spread_sigma, particles_to_draw
 from .resampling import normalize_log_weights
 from .state_bounds import StateBounds, earth_position
 
@@ -93,6 +94,12 @@ class PGMFilter(FilterBase):
         Default 0.7: on a linear-Gaussian problem (15 updates, 8 seeds) 1.0 / 0.85 / 0.7 gave mean
         NEES 16.7 / 8.0 / 7.0 against 7.1 for the exact Kalman filter
         (tests/filters/test_component_spread.py).
+    reacquire_factor : float
+        Particles resampled from a posterior, times ``n_particles``, while the prior's predicted
+        measurements spread wider than ``reacquire_spread_sigma`` noise sigmas (a cloud
+        reacquiring after a long gap; reacquisition_particles.py); 1 = off.
+    reacquire_spread_sigma : float
+        That spread threshold, in noise standard deviations.
     """
 
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
@@ -107,11 +114,14 @@ class PGMFilter(FilterBase):
                  max_range_km: float | None = None, max_speed_kms: float | None = None,
                  component_update: str = "iterated", update_iterations: int = 10,
                  component_likelihood: str = "posterior", split_components: int | None = None,
-                 split_ess: float = 0.02, kept_spread: float = 0.7):
+                 split_ess: float = 0.02, kept_spread: float = 0.7, reacquire_factor: float = 4.0,
+                 reacquire_spread_sigma: float = 1000.0):
         self.kept_spread = check_range(self, "kept_spread", kept_spread, 0.0, 1.0)
         self.split_components = None if not split_components else check_int(
             self, "split_components", split_components, minimum=1)
         self.split_ess = check_range(self, "split_ess", split_ess, 0.0, 1.0)
+        self.reacquire_factor = check_positive(self, "reacquire_factor", reacquire_factor)
+        self.reacquire_spread_sigma = check_positive(self, "reacquire_spread_sigma", reacquire_spread_sigma)
         self.component_update = check_choice(self, "component_update", component_update,
                                              ("iterated", "ensemble"))
         self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
@@ -201,7 +211,9 @@ class PGMFilter(FilterBase):
         if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
             raise FilterError(f"filter '{who}': the component update produced non-finite moments")
         post = GaussianMixture(w, means, covs)
-        samples, slabels = self._sample_posterior(post)
+        spread = measurement_spread_sigma(dres, meas.R)
+        samples, slabels = self._sample_posterior(post, particles_to_draw(
+            spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma))
         self._x, self._sample_labels = samples, slabels
         self._mixture = post
         self._labels = None  # the next update clusters afresh
@@ -212,6 +224,7 @@ class PGMFilter(FilterBase):
             "max_component_weight": float(w.max()),
             "likelihood_ess_fraction": float(sharpness),
             "n_particles": float(samples.shape[0]),
+            "prior_spread_sigma": spread,
         })
 
     # -- belief -----------------------------------------------------------------------------------
@@ -276,8 +289,7 @@ class PGMFilter(FilterBase):
         self._pruned_total += n_bad
         return x[ok]
 
-    def _sample_posterior(self, post: GaussianMixture) -> tuple[np.ndarray, np.ndarray]:
-        n = self.n_particles
+    def _sample_posterior(self, post: GaussianMixture, n: int) -> tuple[np.ndarray, np.ndarray]:
         x, lab = post.sample(n, self._rng)
         if not self._bounds.active:
             return x, lab
@@ -305,8 +317,8 @@ class PaperPGMFilter(PGMFilter):
     """The paper's plain PGM, kept by name for comparisons: k-means clusters and the ensemble
     (particle cross-covariance) Kalman update of each component. Same parameters as ``pgm``;
     only the defaults of ``clusterer``, ``component_update``, ``split_components`` (None: no
-    splitting), ``kept_spread`` (1: no shrinkage) and ``min_cluster_size`` (None = 2 x
-    dimension) differ."""
+    splitting), ``kept_spread`` (1: no shrinkage), ``reacquire_factor`` (1: off) and
+    ``min_cluster_size`` (None = 2 x dimension) differ."""
 
     _min_cluster_fraction = 0.0
 
@@ -316,11 +328,12 @@ class PaperPGMFilter(PGMFilter):
                  max_range_km: float | None = None, max_speed_kms: float | None = None,
                  component_update: str = "ensemble", update_iterations: int = 10,
                  component_likelihood: str = "posterior", split_components: int | None = None,
-                 split_ess: float = 0.02, kept_spread: float = 1.0):
+                 split_ess: float = 0.02, kept_spread: float = 1.0, reacquire_factor: float = 1.0,
+                 reacquire_spread_sigma: float = 1000.0):
         super().__init__(n_particles, n_components, clusterer, min_cluster_size,
                          velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
                          component_update, update_iterations, component_likelihood, split_components,
-                         split_ess, kept_spread)
+                         split_ess, kept_spread, reacquire_factor, reacquire_spread_sigma)
 
 
 @hookimpl
