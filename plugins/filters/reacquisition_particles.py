@@ -20,6 +20,24 @@ weight w then keeps that many times more particles. Once the cloud's predicted s
 back under the threshold, the count returns to ``n_particles`` at the next update. The spread is the largest standard deviation of
 the predicted-measurement residuals in noise units, sqrt(largest eigenvalue of
 R^-1/2 cov(h(x) - z) R^-1/2).
+
+Measured (default factor 4 and threshold 1,000 sigma; chosen on tuning seeds, not swept; custody
+kept / runs):
+
+- Example 3, tuning seeds 1-20: 18/20, against 13/20 without the rule.
+- Example 3, unseen seeds 3000-3029: 22/30.
+- Example 2, tuning seeds 1-20: 17/20, against 12/20 without the rule.
+- Example 2, unseen seeds 3000-3029: 22/30.
+- Example 1, seeds 1-10: 10/10 with and without the rule. The rule acts there on the first two
+  updates after the IOD and the first update of pass 2 (spreads of 1,100 to 45,000 sigma).
+
+Most of the remaining Example 3 losses begin in the first two updates after the gap. Four of
+the eight unseen-seed losses still end within 10 km of the truth: custody was declared lost
+during a pass (seed 3027 in the first pass, before the gap) and the filter recovered.
+
+Bounding the cloud to cislunar space instead made things worse: 12/20 on the tuning seeds. That
+bound is ``max_range_km = 550000``, which drops the 83-98% of Example 3's particles that escape
+during the gap.
 """
 from __future__ import annotations
 
