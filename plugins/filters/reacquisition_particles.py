@@ -21,8 +21,9 @@ back under the threshold, the count returns to ``n_particles`` at the next updat
 the predicted-measurement residuals in noise units, sqrt(largest eigenvalue of
 R^-1/2 cov(h(x) - z) R^-1/2).
 
-Measured (default factor 4 and threshold 1,000 sigma; chosen on tuning seeds, not swept; custody
-kept / runs):
+Measured with the default factor 4 and threshold 1,000 sigma, chosen on the tuning seeds
+without a sweep, and before the PGM's component shrinkage (``kept_spread``) was added. Custody
+kept / runs:
 
 - Example 3, tuning seeds 1-20: 18/20, against 13/20 without the rule.
 - Example 3, unseen seeds 3000-3029: 22/30.
