@@ -3,12 +3,15 @@
 Importing numba costs about a quarter of a second, and the command line (``cistrack --help``,
 ``cistrack plugins``) never runs a compiled function. :func:`lazy_njit` takes the options of
 :func:`numba.njit` and returns a :class:`LazyJit`: calling it from Python compiles (or loads
-numba's on-disk cache) on the first call and then calls the compiled function. Compiled code
+numba's on-disk cache) on the first call and then calls the compiled function; a first call that
+finds nothing in numba's cache says it is compiling (logging, shown by the command line). Compiled code
 cannot call a ``LazyJit`` itself; it calls :attr:`LazyJit.dispatcher`, the numba function.
 """
 from __future__ import annotations
 
 import functools
+import logging
+import os
 import threading
 from typing import Any, Callable
 
@@ -22,6 +25,7 @@ class LazyJit:
         self.py_func = func
         self.options = dict(options)
         self._dispatcher = None
+        self._announced = False
         self._lock = threading.Lock()
         functools.update_wrapper(self, func)
 
@@ -42,7 +46,24 @@ class LazyJit:
         return dict(self.options)
 
     def __call__(self, *args: Any) -> Any:
+        if not self._announced:
+            self._announced = True
+            self._announce_if_uncached()
         return self.dispatcher(*args)
+
+    def _announce_if_uncached(self) -> None:
+        """Log (logger ``cistrack.lazy``; the command line shows it) that this first call compiles,
+        when numba's on-disk cache holds nothing for the function yet (a fresh install)."""
+        if not self.options.get("cache"):
+            return
+        try:  # numba's index file for this function (numba.core.caching; absent: never compiled here)
+            index = self.dispatcher._cache._cache_file._index_path
+        except AttributeError:
+            return
+        if not os.path.exists(index):
+            logging.getLogger("cistrack.lazy").info(
+                "compiling %s.%s with numba (one-time, a few seconds; later runs load it from numba's cache)...",
+                self.py_func.__module__, self.py_func.__qualname__)
 
     def __repr__(self) -> str:
         return f"LazyJit({self.py_func.__module__}.{self.py_func.__qualname__})"
