@@ -224,7 +224,7 @@ class KinematicFitIOD(IODMethod):
                           need_range=prior.needs_measured_range, who=who)
         batch = int(math.ceil(self.oversampling * self.n_particles))
         limit = int(math.ceil(self.max_oversampling * self.n_particles))
-        kept: list[np.ndarray] = []
+        out = np.empty((self.n_particles, 6))  # survivors are written here as they come (no second copy)
         n_kept = drawn = batches = 0
         pruned: dict[str, int] = {}
         while n_kept < self.n_particles and drawn < limit:
@@ -235,7 +235,8 @@ class KinematicFitIOD(IODMethod):
                 for key, c in counts.items():
                     pruned[key] = pruned.get(key, 0) + c
                 if n_kept < self.n_particles:  # later survivors are counted, not kept
-                    kept.append(states[keep][: self.n_particles - n_kept])
+                    new = states[keep][: self.n_particles - n_kept]
+                    out[n_kept:n_kept + new.shape[0]] = new
                 n_kept += int(keep.sum())
             drawn += n
             batches += 1
@@ -248,7 +249,7 @@ class KinematicFitIOD(IODMethod):
                 + (f", {self.speed_frame} speed <= {self.max_speed_kms:g} km/s"
                    if self.max_speed_kms is not None else "")
                 + "). Raise max_oversampling, relax the bounds, or check the measurements.")
-        states = np.concatenate(kept, axis=0)[: self.n_particles]
+        states = out
         meta = {
             "method": self._label_name(),
             "range_model": self.range_model,
