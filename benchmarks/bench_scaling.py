@@ -100,7 +100,7 @@ def thread_scaling(threads: list[int], particles: int, repeats: int, example1: b
 
 
 def dask_scaling(workers: list[int], runs: int, particles: int) -> None:
-    from cistrack.study import execute_run, make_executor, plan_runs
+    from cistrack.study import close_dask_client, execute_run, make_executor, plan_runs
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -121,12 +121,7 @@ def dask_scaling(workers: list[int], runs: int, particles: int) -> None:
                     f.result()
                 rows.append((w, time.perf_counter() - t0, time.process_time() - c))
             finally:
-                client = getattr(ex, "_cistrack_client", None)
-                if client is not None:
-                    cluster = client.cluster
-                    client.close()
-                    if cluster is not None:
-                        cluster.close()
+                close_dask_client(ex)
     os.environ.pop("CISTRACK_NUM_THREADS", None)
     print(f"Dask study: {runs} runs (quick scenario, PGM and noisy-range IOD with {particles} particles, "
           "seeds 1..runs) on a local cluster; CPU s = the client process only")

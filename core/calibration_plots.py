@@ -34,7 +34,7 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .report_plots import FORMATS
+    from .report_plots import save_figure
 
     by_case: dict[tuple[str, str], dict[str, np.ndarray]] = {}
     for (sc, iod, flt), sums in groups.items():
@@ -60,11 +60,5 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
         ax.legend(fontsize=8, frameon=False, loc="upper left")
         ax.grid(True, alpha=0.3)
         fig.tight_layout()
-        stem = rep_dir / f"{sc}__{iod}__hdr"
-        with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
-            for ext in FORMATS:
-                f = stem.with_suffix(f".{ext}")
-                fig.savefig(f, dpi=130)
-                files.append(f)
-        plt.close(fig)
+        files.extend(save_figure(fig, rep_dir / f"{sc}__{iod}__hdr"))
     return files

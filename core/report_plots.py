@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "plot_study", "FORMATS"]
+__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "plot_study", "save_figure", "FORMATS"]
 
 CHI2_DOF = 6
 FORMATS = ("png", "svg", "pdf")
@@ -85,6 +85,22 @@ def _measurement_days(table: Any) -> np.ndarray:
     if t is None:
         return np.zeros(0)
     return np.array([ti for ti, k in zip(t, kind) if k == "update"])
+
+
+def save_figure(fig: Any, stem: Path) -> list[Path]:
+    """Write ``fig`` as ``stem``.png/.svg/.pdf (text stays text in SVG and PDF: editable,
+    searchable, TrueType fonts as journals ask), close it and return the paths written."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    files = []
+    with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
+        for ext in FORMATS:
+            f = stem.with_suffix(f".{ext}")
+            fig.savefig(f, dpi=130)
+            files.append(f)
+    plt.close(fig)
+    return files
 
 
 def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path,
@@ -167,12 +183,5 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
         names = " vs ".join(sorted(filters))
         fig.suptitle(f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else ""))
         fig.tight_layout(rect=(0, 0.015 + 0.016 * ((len(labels) + 1) // 2), 1, 0.98))
-        stem = rep_dir / f"{sc}__{iod}"
-        # text stays text in SVG and PDF (editable, searchable; TrueType fonts as journals ask)
-        with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
-            for ext in FORMATS:
-                f = stem.with_suffix(f".{ext}")
-                fig.savefig(f, dpi=130)
-                files.append(f)
-        plt.close(fig)
+        files.extend(save_figure(fig, rep_dir / f"{sc}__{iod}"))
     return files

@@ -41,7 +41,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study",
+__all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
            "builtin_studies", "make_executor"]
 
 _STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "overrides"}
@@ -248,6 +248,17 @@ def make_executor(workers: int | None = None, dask: str | None = None):
                                   initializer=_worker_init, initargs=(max(1, cores // n),))
 
 
+def close_dask_client(ex) -> None:
+    """Close the Dask client (and its local cluster) that :func:`make_executor` attached to
+    ``ex``; nothing for a process pool."""
+    client = getattr(ex, "_cistrack_client", None)
+    if client is not None:
+        cluster = client.cluster
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
               rerun_dir: str | Path | None = None, settings: list[str] | None = None) -> dict:
@@ -307,11 +318,6 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
             bar.close()
         if own and ex is not None:
             ex.shutdown(wait=True)
-            client = getattr(ex, "_cistrack_client", None)
-            if client is not None:
-                cluster = client.cluster
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+            close_dask_client(ex)
     return {"name": data.get("name", out.name), "out_dir": out, "completed": completed, "skipped": skipped,
             "failed": failed, "total": len(specs)}
