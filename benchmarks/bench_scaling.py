@@ -1,7 +1,7 @@
 """Benchmark: strong scaling over threads and over Dask worker processes (not a test).
 
     .venv/bin/python benchmarks/bench_scaling.py [--threads 1 2 4 8 16] [--particles 20000]
-        [--example1] [--workers 1 2] [--runs 8] [--study-particles 500] [--repeats 3]
+        [--example1] [--workers 1 2] [--runs 8] [--runs-for-one N] [--study-particles 500] [--repeats 3]
 
 1. Threads: the same ensemble (9:2 NRHO + N(0, 10 km), N(0, 1 cm/s), seed 1) propagated over one
    period with ``CISTRACK_NUM_THREADS`` = 1, 2, 4, ... (default: powers of two up to the cores
@@ -21,6 +21,7 @@ rows up to the core count.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import tempfile
@@ -68,7 +69,7 @@ def _table(title: str, unit: str, rows: list[tuple[int, float, float]]) -> None:
 
 
 def thread_scaling(threads: list[int], particles: int, repeats: int, example1: bool) -> None:
-    from cistrack.plugins.dynamics.catalog import ORBITS
+    from cistrack.plugins.dynamics.orbit_catalog import ORBITS
     from cistrack.plugins.dynamics.cr3bp import CR3BP
 
     orbit = ORBITS["nrho-9-2"]
@@ -99,18 +100,40 @@ def thread_scaling(threads: list[int], particles: int, repeats: int, example1: b
     os.environ.pop("CISTRACK_NUM_THREADS", None)
 
 
-def dask_scaling(workers: list[int], runs: int, particles: int) -> None:
+STAGES = ("time_initialize_s", "time_predict_s", "time_update_s", "time_metrics_s", "whole_run_s")
+
+
+def _stage_seconds(run_dir: Path) -> dict[str, float]:
+    """Seconds each pipeline stage took in one run (sums over the run's step table)."""
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(run_dir / "steps.parquet")
+    out = {}
+    for col in STAGES:
+        if col in table.column_names:
+            out[col] = float(np.nansum(table.column(col).to_numpy(zero_copy_only=False).astype(float)))
+    manifest = json.loads((run_dir / "manifest.json").read_text())
+    out["whole_run_s"] = float(manifest.get("wall_time_s", np.nan))
+    return out
+
+
+def dask_scaling(workers: list[int], runs: int, particles: int, runs_for_one: int | None) -> None:
+    """Throughput of a study on a local Dask cluster per worker count, and per pipeline stage the
+    mean seconds per run (a stage whose time per run grows with the worker count is contending for
+    a shared resource: memory bandwidth, caches, the disk)."""
     from cistrack.study import close_dask_client, execute_run, make_executor, plan_runs
 
-    rows = []
+    rows, stages = [], []
     with tempfile.TemporaryDirectory() as tmp:
-        study = Path(tmp) / "scaling.toml"
-        study.write_text(f'name = "scaling"\nscenarios = ["quick"]\n'
-                         f'filters = [{{ name = "pgm", n_particles = {particles}, n_components = 3 }}]\n'
-                         f'iod = [{{ name = "noisy-range", n_particles = {particles} }}]\n'
-                         f"seeds = {list(range(1, runs + 1))}\n")
         for w in workers:
-            _, specs, _ = plan_runs(study, Path(tmp) / f"w{w}")
+            n_runs = runs_for_one if (w == 1 and runs_for_one) else runs
+            study = Path(tmp) / f"scaling{w}.toml"
+            study.write_text(f'name = "scaling"\nscenarios = ["quick"]\n'
+                             f'filters = [{{ name = "pgm", n_particles = {particles}, n_components = 3 }}]\n'
+                             f'iod = [{{ name = "noisy-range", n_particles = {particles} }}]\n'
+                             f"seeds = {list(range(1, n_runs + 1))}\n")
+            out_dir = Path(tmp) / f"w{w}"
+            _, specs, _ = plan_runs(study, out_dir)
             os.environ["CISTRACK_NUM_THREADS"] = "1"  # inherited by the workers: one thread per run
             ex = make_executor(w, dask="local")
             try:
@@ -119,17 +142,27 @@ def dask_scaling(workers: list[int], runs: int, particles: int) -> None:
                 futures = [ex.submit(execute_run, s) for s in specs]
                 for f in futures:
                     f.result()
-                rows.append((w, time.perf_counter() - t0, time.process_time() - c))
+                rows.append((w, n_runs, time.perf_counter() - t0, time.process_time() - c))
             finally:
                 close_dask_client(ex)
+            per_run = [_stage_seconds(d) for d in sorted((out_dir / "runs").iterdir()) if (d / "steps.parquet").exists()]
+            stages.append({k: float(np.mean([r.get(k, np.nan) for r in per_run])) for k in STAGES})
     os.environ.pop("CISTRACK_NUM_THREADS", None)
-    print(f"Dask study: {runs} runs (quick scenario, PGM and noisy-range IOD with {particles} particles, "
-          "seeds 1..runs) on a local cluster; CPU s = the client process only")
-    print(f"{'workers':>9}{'wall s':>10}{'runs/s':>9}{'speedup':>9}{'efficiency':>12}")
-    base = rows[0][1] * rows[0][0]
-    for w, wall, _cpu in rows:
-        s = rows[0][1] / wall
-        print(f"{w:>9}{wall:>10.2f}{runs / wall:>9.2f}{s:>9.2f}{(base / wall) / w:>12.0%}")
+    print(f"Dask study: quick scenario, PGM and noisy-range IOD with {particles} particles, seeds 1..runs, "
+          "on a local cluster of w worker processes (one propagation thread each); wall from first "
+          "submission to last result; efficiency = throughput(w) / (w x throughput(1))")
+    print(f"{'workers':>9}{'runs':>7}{'wall s':>10}{'runs/s':>9}{'speedup':>9}{'efficiency':>12}")
+    base = rows[0][1] / rows[0][2] / rows[0][0]  # runs/s per worker at the first row
+    for w, n, wall, _cpu in rows:
+        thr = n / wall
+        print(f"{w:>9}{n:>7}{wall:>10.2f}{thr:>9.2f}{thr / (base * rows[0][0]):>9.2f}{thr / (w * base):>12.0%}")
+    print()
+    print("per stage: mean seconds per run (efficiency = time per run with the fewest workers / time per run with w)")
+    names = [k.removeprefix("time_").removesuffix("_s") for k in STAGES]
+    print(f"{'workers':>9}" + "".join(f"{n:>12}" for n in names) + "".join(f"{'eff ' + n[:6]:>13}" for n in names))
+    for (w, *_), st in zip(rows, stages):
+        print(f"{w:>9}" + "".join(f"{st[k]:>12.4f}" for k in STAGES)
+              + "".join(f"{stages[0][k] / st[k]:>13.0%}" if st[k] > 0 else f"{'-':>13}" for k in STAGES))
     print()
 
 
@@ -142,12 +175,14 @@ def main() -> int:
     ap.add_argument("--workers", type=int, nargs="*", default=[1, 2])
     ap.add_argument("--runs", type=int, default=8)
     ap.add_argument("--study-particles", type=int, default=500)
+    ap.add_argument("--runs-for-one", type=int, default=None,
+                    help="runs in the one-worker row (default --runs): the baseline of a large study")
     args = ap.parse_args()
     print("\n".join(machine_lines()))
     print()
     thread_scaling(sorted(args.threads), args.particles, args.repeats, args.example1)
     if args.workers:
-        dask_scaling(sorted(args.workers), args.runs, args.study_particles)
+        dask_scaling(sorted(args.workers), args.runs, args.study_particles, args.runs_for_one)
     return 0
 
 
