@@ -47,6 +47,7 @@ from . import units
 from .builtin_scenarios import builtin_scenario_path, builtin_scenarios
 from .component_tables import ComponentSpec, check_keys, component_spec, example_name, typed
 from .custody import CustodyRule
+from .custody_table import custody_rule
 from .limits import check_memory, check_path_component, check_seed
 from .errors import ConfigError, UnknownComponentError
 from .interfaces import ReferenceOrbit
@@ -69,7 +70,6 @@ _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "
              "measurements", *COMPONENT_TABLES}
 _REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
-_CUSTODY_KEYS = {"loglik_threshold", "hdr_threshold", "hdr_consecutive", "precision_km"}
 _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame"}
 _MEAS_KEYS = {"file", "reader"}
 
@@ -241,22 +241,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
                                    epoch_text=epoch_text)
 
-    cust = data.get("custody", {})
-    if not isinstance(cust, dict):
-        raise ConfigError(f"{source}: 'custody' must be a table")
-    check_keys(cust, _CUSTODY_KEYS, source, "[custody]")
-    custody = CustodyRule(
-        loglik_threshold=float(typed(cust.get("loglik_threshold", -100.0), (int, float), source, "[custody]", "loglik_threshold")),
-        hdr_threshold=float(typed(cust.get("hdr_threshold", 0.997), (int, float), source, "[custody]", "hdr_threshold")),
-        hdr_consecutive=typed(cust.get("hdr_consecutive", 2), int, source, "[custody]", "hdr_consecutive"),
-        precision_km=float(typed(cust.get("precision_km", 100.0), (int, float), source, "[custody]", "precision_km")),
-    )
-    if not custody.precision_km > 0:
-        raise ConfigError(f"{source}: [custody]: key 'precision_km' = {custody.precision_km} must be > 0 (km)")
-    if not 0 < custody.hdr_threshold < 1:
-        raise ConfigError(f"{source}: [custody]: key 'hdr_threshold' = {custody.hdr_threshold} must lie in (0, 1)")
-    if custody.hdr_consecutive < 1:
-        raise ConfigError(f"{source}: [custody]: key 'hdr_consecutive' must be >= 1")
+    custody = custody_rule(data.get("custody", {}), source)
     run = data.get("run", {})
     if not isinstance(run, dict):
         raise ConfigError(f"{source}: 'run' must be a table")

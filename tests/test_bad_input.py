@@ -204,6 +204,10 @@ add("custody-hdr-threshold-one", **run_case(words=("hdr_threshold",), custody__h
 add("custody-hdr-consecutive-zero", **run_case(words=("hdr_consecutive",), custody__hdr_consecutive=0))
 add("custody-loglik-string", **run_case(words=("loglik_threshold",), custody__loglik_threshold="low"))
 add("custody-unknown-key", **run_case(words=("custody",), custody__threshold=1.0))
+add("custody-degenerate-ess-negative", **run_case(words=("[custody]", "degenerate_ess", ">= 0"), custody__degenerate_ess=-1.0))
+add("custody-collapse-sigma-string", **run_case(words=("[custody]", "collapse_sigma_km"), custody__collapse_sigma_km="tiny"))
+add("custody-max-earth-distance-zero", **run_case(words=("[custody]", "max_earth_distance_km", "> 0"),
+                                                   custody__max_earth_distance_km=0.0))
 # -- scenario file: the file itself ---------------------------------------------------------------
 add("scenario-not-toml", argv=["run", "s.toml", "--quiet"], files={"s.toml": "name = = 3\n"}, words=("s.toml", "TOML"))
 add("scenario-binary", argv=["run", "s.toml", "--quiet"], files={"s.toml": b"\xff\xfe\x00garbage"}, words=("s.toml",))

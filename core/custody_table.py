@@ -1,0 +1,66 @@
+"""The scenario's ``[custody]`` table: every threshold of :class:`~cistrack.custody.CustodyRule`,
+validated like every other field (a wrong key or value names the file, the table, the key and
+what is allowed)::
+
+    [custody]
+    loglik_threshold = -100.0      # truth log-likelihood below this: lost
+    hdr_threshold = 0.997          # truth outside this highest-density region ...
+    hdr_consecutive = 2            # ... on this many consecutive updates: lost
+    precision_km = 100.0           # largest final position sigma of a "tracking" run (km)
+    collapse_sigma_km = 1e-3       # a smaller final position sigma is a collapsed belief (km; 0: off)
+    diverged_error_km = 50.0       # a final error above this (km) ...
+    diverged_nees = 1e4            # ... with a NEES above this: diverged (inf: off)
+    degenerate_ess = 7.0           # effective sample size or distinct particles below this: diverged (0: off)
+    max_earth_distance_km = 2e6    # a final mean farther from Earth (km): diverged (inf: off)
+
+The rules that need no truth (degenerate weights, collapse, leaving cislunar space) judge runs on
+measurement files too (:mod:`cistrack.verdicts`).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .component_tables import check_keys, typed
+from .custody import CustodyRule
+from .errors import ConfigError
+
+__all__ = ["custody_rule", "CUSTODY_KEYS"]
+
+_WHERE = "[custody]"
+
+# key -> (allowed range as words, check of the float value)
+_CHECKS: dict[str, tuple[str, Any]] = {
+    "loglik_threshold": ("a finite number", math.isfinite),
+    "hdr_threshold": ("a number in (0, 1)", lambda v: 0 < v < 1),
+    "precision_km": ("a finite number > 0 (km)", lambda v: math.isfinite(v) and v > 0),
+    "collapse_sigma_km": ("a finite number >= 0 (km; 0 turns the rule off)", lambda v: math.isfinite(v) and v >= 0),
+    "diverged_error_km": ("a number >= 0 (km; inf turns the rule off)", lambda v: v >= 0),
+    "diverged_nees": ("a number >= 0 (inf turns the rule off)", lambda v: v >= 0),
+    "degenerate_ess": ("a finite number >= 0 (particles; 0 turns the rule off)", lambda v: math.isfinite(v) and v >= 0),
+    "max_earth_distance_km": ("a number > 0 (km; inf turns the rule off)", lambda v: v > 0),
+}
+CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, "hdr_consecutive"})
+"""Keys allowed in a scenario's ``[custody]`` table (the fields of CustodyRule)."""
+
+
+def custody_rule(table: Any, source: str) -> CustodyRule:
+    """The :class:`CustodyRule` of a scenario's ``[custody]`` table (a dict; missing keys keep the
+    rule's defaults). Raises ConfigError naming ``source``, the table and the key."""
+    if not isinstance(table, dict):
+        raise ConfigError(f"{source}: 'custody' must be a table")
+    check_keys(table, set(CUSTODY_KEYS), source, _WHERE)
+    values: dict[str, Any] = {}
+    for key, (allowed, ok) in _CHECKS.items():
+        if key not in table:
+            continue
+        v = float(typed(table[key], (int, float), source, _WHERE, key))
+        if math.isnan(v) or not ok(v):
+            raise ConfigError(f"{source}: {_WHERE}: key {key!r} = {table[key]!r} must be {allowed}")
+        values[key] = v
+    if "hdr_consecutive" in table:
+        n = typed(table["hdr_consecutive"], int, source, _WHERE, "hdr_consecutive")
+        if n < 1:
+            raise ConfigError(f"{source}: {_WHERE}: key 'hdr_consecutive' = {n} must be an integer >= 1")
+        values["hdr_consecutive"] = n
+    return CustodyRule(**values)
