@@ -51,6 +51,21 @@ def cmd_export(args) -> int:
     return 0
 
 
+def _count_lines(s) -> list[str]:
+    """What the run's counts mean, in words: measurements, the passes they fall in (of the
+    sensor's visibility passes: a schedule or a sensor shutoff leaves some unobserved), the
+    measurements the IOD used and the filter updates after it."""
+    passes = ""
+    if s.n_passes:
+        unobserved = s.n_passes - s.n_passes_observed
+        passes = (f" in {s.n_passes_observed} of {s.n_passes} visibility passes"
+                  + (f" ({unobserved} unobserved: schedule or sensor shutoff)" if unobserved else ""))
+    iod = (f"{s.n_measurements_before_iod} up to the IOD epoch (the IOD's input), " if s.n_measurements_before_iod
+           else "")
+    return [f"  {s.n_measurements} measurements{passes}", f"  {iod}{s.n_updates} filter updates after it, "
+            f"wall time {s.wall_time_s:.1f} s"]
+
+
 def cmd_run(args) -> int:
     from .registry import default_registry
     from .run import run_scenario
@@ -85,9 +100,8 @@ def cmd_run(args) -> int:
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     for line in verdict_lines(s, out, _fmt):
         out_(line)
-    passes = f" in {s.n_passes} passes" if s.n_passes else ""
-    out_(f"  {s.n_updates} updates from {s.n_measurements} measurements{passes}, "
-         f"wall time {s.wall_time_s:.1f} s")
+    for line in _count_lines(s):
+        out_(line)
     f = s.final
     if f:
         out_("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))

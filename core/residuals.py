@@ -29,7 +29,8 @@ import numpy as np
 from .hookspecs import hookimpl
 from .units import LU_KM
 
-__all__ = ["ResidualObserver", "residual_columns", "ResidualSummary", "residual_summary", "ARCSEC_PER_RAD"]
+__all__ = ["ResidualObserver", "residual_columns", "ResidualSummary", "residual_summary", "ARCSEC_PER_RAD",
+           "CONSISTENCY_KEYS", "consistency_summary", "pool_consistency", "consistency_text"]
 
 ARCSEC_PER_RAD = 180.0 / np.pi * 3600.0
 
@@ -114,3 +115,78 @@ def residual_summary(rows: list[dict[str, Any]], level: float = 0.95) -> Residua
            if k.startswith("res_") and k.endswith("_arcsec") and v is not None and np.isfinite(v)]
     return ResidualSummary(test, len(ups), float(np.mean([r["nis_outside_95"] for r in ups])) if ups else float("nan"),
                            max(res) if res else float("nan"))
+
+
+CONSISTENCY_KEYS: tuple[str, ...] = (
+    "nis_mean", "nis_updates", "nis_dof", "nis_dof_total", "nis_lower", "nis_upper", "level", "nis_within",
+    "share_outside_95", "max_abs_residual_arcsec")
+"""Keys of :func:`consistency_summary` (the manifest's ``summary.consistency``)."""
+
+
+def _finite_or_none(v):
+    return None if v is None or not np.isfinite(v) else float(v)
+
+
+def consistency_summary(rows: list[dict[str, Any]], level: float = 0.95) -> dict[str, Any]:
+    """A run's measurement consistency as plain JSON data (the manifest's ``summary.consistency``):
+
+    nis_mean, nis_updates          mean NIS over the updates with a finite NIS, and how many
+    nis_dof                        components per update (int; a float mean when sizes differ)
+    nis_dof_total                  summed components (the chi-square dof of the summed NIS)
+    nis_lower, nis_upper, level    two-sided ``level`` chi-square bounds of the mean NIS
+    nis_within                     whether the mean lies within them (None without an update)
+    share_outside_95               share of updates whose NIS is outside its own 95 % bounds
+    max_abs_residual_arcsec        largest |angle residual| (arcsec)
+
+    NaN is stored as None."""
+    rs = residual_summary(rows, level)
+    nt = rs.nis_test
+    dof_total = int(sum(int(r["nis_dof"]) for r in rows if r.get("kind") == "update" and r.get("nis") is not None
+                        and np.isfinite(r["nis"]) and (r.get("nis_dof") or 0) > 0))
+    return {"nis_mean": _finite_or_none(nt.mean), "nis_updates": int(nt.n),
+            "nis_dof": nt.dof if nt.n else None, "nis_dof_total": dof_total,
+            "nis_lower": _finite_or_none(nt.lower), "nis_upper": _finite_or_none(nt.upper), "level": level,
+            "nis_within": bool(nt.within) if nt.n else None,
+            "share_outside_95": _finite_or_none(rs.share_outside_95),
+            "max_abs_residual_arcsec": _finite_or_none(rs.max_abs_residual_arcsec)}
+
+
+def pool_consistency(summaries: list[dict[str, Any]]) -> dict[str, Any]:
+    """The :func:`consistency_summary` of several runs' updates together (a study's group), from
+    the runs' own summaries: the mean NIS over all their updates, tested against chi-square with
+    the summed dof; the share outside weighted by updates; the largest residual of all."""
+    from .consistency import chi2_ppf
+
+    parts = [c for c in summaries if c and c.get("nis_updates")]
+    level = parts[0].get("level", 0.95) if parts else 0.95
+    k = sum(int(c["nis_updates"]) for c in parts)
+    if not k:
+        return {**dict.fromkeys(CONSISTENCY_KEYS), "nis_updates": 0, "nis_dof_total": 0, "level": level}
+    total = sum(int(c["nis_dof_total"]) for c in parts)
+    mean = sum(c["nis_mean"] * c["nis_updates"] for c in parts) / k
+    a = 1.0 - level
+    lo, hi = chi2_ppf(a / 2, total) / k, chi2_ppf(1 - a / 2, total) / k
+    dofs = {c["nis_dof"] for c in parts}
+    shares = [(c["share_outside_95"], c["nis_updates"]) for c in parts if c.get("share_outside_95") is not None]
+    res = [c["max_abs_residual_arcsec"] for c in parts if c.get("max_abs_residual_arcsec") is not None]
+    return {"nis_mean": mean, "nis_updates": k,
+            "nis_dof": dofs.pop() if len(dofs) == 1 and isinstance(next(iter(dofs)), int) else total / k,
+            "nis_dof_total": total, "nis_lower": lo, "nis_upper": hi, "level": level,
+            "nis_within": bool(lo <= mean <= hi),
+            "share_outside_95": sum(s * n for s, n in shares) / sum(n for _, n in shares) if shares else None,
+            "max_abs_residual_arcsec": max(res) if res else None}
+
+
+def consistency_text(c: dict[str, Any]) -> str:
+    """One line a person reads about a :func:`consistency_summary` (no word about custody)."""
+    if not c or not c.get("nis_updates"):
+        return "no update with a finite NIS"
+    dof = c["nis_dof"]
+    each = f"{dof} components each" if isinstance(dof, int) else f"{dof:.3g} components on average"
+    ok = "consistent" if c["nis_within"] else "INCONSISTENT"
+    share = c.get("share_outside_95")
+    res = c.get("max_abs_residual_arcsec")
+    return (f"mean NIS {c['nis_mean']:.3g} over {c['nis_updates']} updates ({each}), {c['level']:.0%} chi-square "
+            f"bounds [{c['nis_lower']:.3g}, {c['nis_upper']:.3g}]: {ok}; "
+            + ("-" if share is None else f"{100 * share:.0f} %") + " of measurements outside their 95 % NIS "
+            "bounds (5 % if consistent); largest |residual| " + ("-" if res is None else f"{res:.3g}") + " arcsec")

@@ -31,7 +31,16 @@ class RunSummary:
     failure : str                the error that stopped the filter ("" if none)
     verdict : Verdict            final verdict (kind, reason, step, t_days): tracking,
                                  not-converged, lost, diverged, filter-failed or no-truth
-    n_steps, n_updates, n_measurements, n_passes : int
+    has_truth : bool             whether the run had a truth (without one: no custody, ever)
+    n_steps, n_updates, n_measurements : int
+    n_passes : int               visibility passes of the sensor over the run (observed or not:
+                                 a sensor shutoff or the schedule leaves some unobserved)
+    n_passes_observed : int      passes with at least one measurement
+    n_measurements_before_iod : int   measurements at or before the IOD epoch (the IOD's own
+                                 input: not filter updates)
+    consistency : dict           measurement consistency of the updates
+                                 (:func:`cistrack.residuals.consistency_summary`: mean NIS and
+                                 its chi-square bounds, share outside 95 %, largest residual)
     final : dict                 FINAL_KEYS of the last update (or the last step), km, m/s, cm/s
     pass_end : dict              pass number (str) -> FINAL_KEYS and t_days at its last update
     wall_time_s, prepare_time_s : float
@@ -42,10 +51,14 @@ class RunSummary:
     status: str = "finished"
     failure: str = ""
     verdict: Verdict = field(default_factory=Verdict)
+    has_truth: bool = True
     n_steps: int = 0
     n_updates: int = 0
     n_measurements: int = 0
     n_passes: int = 0
+    n_passes_observed: int = 0
+    n_measurements_before_iod: int = 0
+    consistency: dict[str, Any] = field(default_factory=dict)
     final: dict[str, float] = field(default_factory=dict)
     pass_end: dict[str, dict[str, float]] = field(default_factory=dict)
     wall_time_s: float = 0.0
@@ -65,14 +78,16 @@ class RunSummary:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict (the manifest's ``summary``)."""
-        custody = {} if self.verdict.kind == "no-truth" else {  # no truth: no custody to speak of
+        custody = {} if not self.has_truth else {  # no truth: no custody to speak of
             "custody_kept": self.custody_kept, "custody_lost_step": self.custody_lost_step,
             "custody_lost_t_days": self.custody_lost_t_days}
         return {
             "run_id": self.run_id, "seed": self.seed, "status": self.status, "failure": self.failure,
-            **custody, "verdict": self.verdict.to_dict(),
+            **custody, "verdict": self.verdict.to_dict(), "has_truth": self.has_truth,
             "n_steps": self.n_steps, "n_updates": self.n_updates, "n_measurements": self.n_measurements,
-            "n_passes": self.n_passes, "final": dict(self.final), "pass_end": dict(self.pass_end),
+            "n_passes": self.n_passes, "n_passes_observed": self.n_passes_observed,
+            "n_measurements_before_iod": self.n_measurements_before_iod,
+            "consistency": dict(self.consistency), "final": dict(self.final), "pass_end": dict(self.pass_end),
             "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,
         }
 
@@ -87,9 +102,10 @@ class RunSummary:
             failed = data.get("status") == "filter-failed"
             verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
                               data.get("custody_lost_step"), data.get("custody_lost_t_days"))
-        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "final", "pass_end",
-                 "wall_time_s", "prepare_time_s", "status", "failure")
-        return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict,
+        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed", "n_measurements_before_iod", "consistency",
+                 "final", "pass_end", "wall_time_s", "prepare_time_s", "status", "failure")
+        has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
+        return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
                    **{k: data[k] for k in names if k in data})
 
 
@@ -103,8 +119,15 @@ def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, fa
         p = int(r.get("pass_index", 0))
         if p > 0:
             pass_end[str(p)] = {k: r[k] for k in FINAL_KEYS if k in r} | {"t_days": r["t_days"]}
+    from .residuals import consistency_summary
+
+    times = [float(m.t) for m in run.measurements]
+    observed = sum(1 for p in run.passes if any(p.start <= t <= p.end for t in times))
+    before_iod = sum(1 for t in times if t <= float(run.iod_cloud.epoch) + 1e-12)  # as the run's events
     return RunSummary(
         run_id=run.run_id, seed=int(run.seed), status=status, failure=failure, verdict=verdict,
-        n_steps=len(rows), n_updates=len(updates), n_measurements=len(run.measurements),
-        n_passes=len(run.passes), final={k: last[k] for k in FINAL_KEYS if k in last},
+        has_truth=run.truth is not None, n_steps=len(rows), n_updates=len(updates),
+        n_measurements=len(run.measurements), n_passes=len(run.passes), n_passes_observed=observed,
+        n_measurements_before_iod=before_iod,
+        consistency=consistency_summary(rows), final={k: last[k] for k in FINAL_KEYS if k in last},
         pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s)

@@ -4,13 +4,14 @@ During a run :class:`~cistrack.custody.CustodyObserver` only knows "kept", "lost
 "filter-failed". At the end :func:`final_verdict` makes it honest, with the thresholds of the
 scenario's :class:`~cistrack.custody.CustodyRule`:
 
-- no truth: "no-truth" (the CLI reports measurement consistency, the NIS, instead of custody);
 - "filter-failed" stays as it is;
-- "diverged" when a particle filter's weights degenerated (effective sample size or distinct
+- "diverged", with or without a truth, when a particle filter's weights degenerated (effective sample size or distinct
   particles below ``degenerate_ess`` at an update: the reason says where), when the belief collapsed (largest
-  position sigma below ``collapse_sigma_km`` or entropy not finite), when the final error
-  exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the mean is farther
-  than ``max_earth_distance_km`` from Earth;
+  position sigma below ``collapse_sigma_km`` or entropy not finite), when (with a truth only)
+  the final error exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the
+  mean is farther than ``max_earth_distance_km`` from Earth;
+- no truth, and none of these: "no-truth" (the CLI reports measurement consistency, the NIS,
+  instead of custody; a truthless run never speaks of custody, whatever its verdict);
 - "lost" as the custody rule decided;
 - "not-converged" when custody is kept but the largest position sigma exceeds ``precision_km``;
 - "tracking" otherwise.
@@ -65,15 +66,12 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
     """
     if verdict.kind == "filter-failed":
         return verdict
-    if not has_truth:
-        return Verdict("no-truth", "no truth: judged by measurement consistency (NIS)")
     last = _last_update(rows)
     step, t_days = last.get("step"), last.get("t_days")
     at = (int(step) if step is not None else None, float(t_days) if t_days is not None else None)
     sig = max((float(last[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km") if k in last),
               default=math.nan)
     entropy = float(last.get("entropy", 0.0))
-    err, nees = float(last.get("pos_err_km", 0.0)), float(last.get("nees", 0.0))
     collapsed = None
     if not math.isfinite(entropy):
         collapsed = f"belief collapsed: entropy {entropy} is not finite"
@@ -86,12 +84,16 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
                        int(row["step"]), float(row["t_days"]))
     if collapsed:
         return Verdict("diverged", collapsed, *at)
-    if err > rule.diverged_error_km and not nees <= rule.diverged_nees:
-        return Verdict("diverged", f"error far beyond sigma: final position error {err:.4g} km > "
-                       f"{rule.diverged_error_km:g} km with NEES {nees:.3g} > {rule.diverged_nees:g}", *at)
+    if has_truth:
+        err, nees = float(last.get("pos_err_km", 0.0)), float(last.get("nees", 0.0))
+        if err > rule.diverged_error_km and not nees <= rule.diverged_nees:
+            return Verdict("diverged", f"error far beyond sigma: final position error {err:.4g} km > "
+                           f"{rule.diverged_error_km:g} km with NEES {nees:.3g} > {rule.diverged_nees:g}", *at)
     if earth_distance_km is not None and not earth_distance_km <= rule.max_earth_distance_km:
         return Verdict("diverged", f"left cislunar space: mean {earth_distance_km:.4g} km from Earth > "
                        f"{rule.max_earth_distance_km:g} km", *at)
+    if not has_truth:
+        return Verdict("no-truth", "no truth: judged by measurement consistency (NIS)")
     if not verdict.kept:
         return verdict
     if sig > rule.precision_km:
@@ -101,29 +103,27 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
                    f"{rule.precision_km:g} km")
 
 
-def verdict_lines(summary, run_dir, fmt=lambda v: f"{v:.3g}" if v is not None else "-") -> list[str]:
-    """The lines a person reads about a run's verdict (the CLI's summary): the kind and reason
-    and custody for a run with a truth; for a run without one its measurement consistency from
-    ``run_dir``'s steps table (mean NIS against the chi-square bounds, share of measurements
-    outside their 95 % bounds, largest residual; :mod:`cistrack.residuals`), never custody."""
-    v = summary.verdict
-    if v.kind == "no-truth":
-        from .residuals import residual_summary
-        from .results import read_steps
+def verdict_lines(summary, run_dir=None, fmt=lambda v: f"{v:.3g}" if v is not None else "-") -> list[str]:
+    """The lines a person reads about a run's verdict (the CLI's summary): the kind and reason,
+    and custody for a run with a truth; for a run without one its verdict (no-truth, or diverged
+    / filter-failed with the reason) and its measurement consistency from the summary (mean NIS
+    against the chi-square bounds, share of measurements outside their 95 % bounds, largest
+    residual; :func:`cistrack.residuals.consistency_summary`), never custody. ``run_dir`` names
+    where the per-measurement residuals are (``steps.parquet``)."""
+    from .residuals import consistency_summary, consistency_text
 
-        rs = residual_summary(read_steps(run_dir).to_pylist())
-        nt = rs.nis_test
-        head = "  verdict: no-truth (no truth to compare against: judged by measurement consistency)"
-        if not nt.n:
-            return [head, "  measurement consistency: no update with a finite NIS"]
-        each = f"{nt.dof} components each" if isinstance(nt.dof, int) else f"{nt.dof:.3g} components on average"
-        return [head, f"  measurement consistency: mean NIS {nt.mean:.3g} over {nt.n} updates ({each}), "
-                      f"{nt.level:.0%} chi-square bounds [{nt.lower:.3g}, {nt.upper:.3g}]: "
-                      + ("consistent" if nt.within else "INCONSISTENT"),
-                f"  residuals: {100 * rs.share_outside_95:.0f} % of measurements outside their 95 % NIS bounds "
-                f"(5 % if consistent), largest |residual| {rs.max_abs_residual_arcsec:.3g} arcsec "
-                f"(per measurement in {run_dir}/steps.parquet: res_*_arcsec, sd_*_arcsec, nis)"]
-    at = f" at step {v.step} (t = {fmt(v.t_days)} d)" if v.kind in ("lost", "diverged") else ""
+    v = summary.verdict
+    at = f" at step {v.step} (t = {fmt(v.t_days)} d)" if v.kind in ("lost", "diverged") and v.step is not None else ""
+    if not summary.has_truth:
+        c = summary.consistency
+        if not c and run_dir is not None:  # a summary written before it stored its consistency
+            from .results import read_steps
+            c = consistency_summary(read_steps(run_dir).to_pylist())
+        head = ("  verdict: no-truth (no truth to compare against: judged by measurement consistency)"
+                if v.kind == "no-truth" else f"  verdict: {v.kind}{at}" + (f": {v.reason}" if v.reason else "")
+                + " (no truth to compare against)")
+        where = f" (per measurement in {run_dir}/steps.parquet: res_*_arcsec, sd_*_arcsec, nis)" if run_dir else ""
+        return [head, f"  measurement consistency: {consistency_text(c)}{where}"]
     custody = ("kept" if summary.custody_kept else
                f"LOST at step {summary.custody_lost_step} (t = {fmt(summary.custody_lost_t_days)} d)")
     return [f"  verdict: {v.kind}{at}" + (f": {v.reason}" if v.reason else ""), f"  custody: {custody}"]

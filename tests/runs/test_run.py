@@ -56,7 +56,11 @@ def test_cli_run_writes_manifest_and_table_and_counts_what_it_used(tmp_path):
     assert t.num_rows == man["summary"]["n_steps"]
     assert {"entropy", "pos_err_km", "sigma_vx_cms", "nees", "custody"} <= set(t.column_names)
     s = man["summary"]
-    assert f"{s['n_updates']} updates from {s['n_measurements']} measurements in {s['n_passes']} passes" in proc.stdout
+    assert (f"{s['n_measurements']} measurements in {s['n_passes_observed']} of {s['n_passes']} visibility passes"
+            in proc.stdout)
+    assert (f"{s['n_measurements_before_iod']} up to the IOD epoch (the IOD's input), {s['n_updates']} filter "
+            "updates after it" in proc.stdout)
+    assert s["n_measurements_before_iod"] + s["n_updates"] == s["n_measurements"]   # one site: one update each
     iod = [line for line in proc.stderr.splitlines() if "IOD '" in line]
     assert len(iod) == 1 and "measurements of pass 1 (of " in iod[0], proc.stderr
 

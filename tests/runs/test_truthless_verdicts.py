@@ -1,0 +1,83 @@
+"""Runs without a truth (a measurement file): their manifest stores the measurement consistency,
+a degenerate or collapsed belief ends "diverged" with its reason (never "no-truth" alone), and
+nothing they print or store speaks of custody (issue 16, item 3).
+
+The runs are real: the built-in ``quick`` scenario simulated for 1.4 days (the first pass), its
+measurements written to a CSV file and run again from the file through the CLI.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from cistrack.plugins.readers.csv_file import write_measurements
+from cistrack.residuals import consistency_summary, residual_summary
+from cistrack.results import read_manifest, read_steps
+from cistrack.run import run_scenario
+from cistrack.scenario import load_scenario
+
+
+@pytest.fixture(scope="module")
+def obs_file(tmp_path_factory):
+    sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
+    obs = tmp_path_factory.mktemp("obs") / "obs.csv"
+    write_measurements(obs, sim.context.measurements, "2026-01-01T00:00:00Z")
+    return obs
+
+
+def _cli_run(obs, out, *settings):
+    args = [sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--set", "duration_days=1.4",
+            "--set", f"measurements.file={obs}"]
+    for s in settings:
+        args += ["--set", s]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+@pytest.fixture(scope="module")
+def sir_file_run(obs_file, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sir") / "run"
+    return _cli_run(obs_file, out, "filter.name=sir", "filter.n_particles=500", "iod.n_particles=500"), out
+
+
+def test_a_truthless_run_with_degenerate_weights_is_diverged_with_the_reason(sir_file_run):
+    proc, out = sir_file_run
+    v = read_manifest(out)["summary"]["verdict"]
+    assert v["kind"] == "diverged" and v["reason"].startswith("degenerate weights (effective sample size")
+    assert f"verdict: diverged at step {v['step']}" in proc.stdout and "degenerate weights" in proc.stdout
+    assert "no-truth" not in proc.stdout
+
+
+def test_a_truthless_diverged_run_prints_and_stores_no_custody(sir_file_run):
+    proc, out = sir_file_run
+    assert "custody" not in (proc.stdout + proc.stderr).lower()
+    assert "custody" not in (out / "manifest.json").read_text().lower()
+    assert "custody" not in read_steps(out).column_names
+    assert "measurement consistency: mean NIS" in proc.stdout
+
+
+def test_a_truthless_collapsed_belief_is_diverged_when_the_weight_rule_is_off(obs_file, tmp_path):
+    out = tmp_path / "run"
+    proc = _cli_run(obs_file, out, "filter.name=sir", "filter.n_particles=500", "iod.n_particles=500",
+                    "custody.degenerate_ess=0")
+    v = read_manifest(out)["summary"]["verdict"]
+    assert v["kind"] == "diverged" and v["reason"].startswith("belief collapsed"), v
+    assert "custody" not in proc.stdout.lower()
+
+
+def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_file, tmp_path):
+    out = tmp_path / "run"
+    _cli_run(obs_file, out, "filter.n_particles=300", "iod.n_particles=300")
+    s = read_manifest(out)["summary"]
+    assert s["verdict"]["kind"] == "no-truth" and s["has_truth"] is False
+    rows = read_steps(out).to_pylist()
+    c, rs = s["consistency"], residual_summary(rows)
+    assert c == pytest.approx(consistency_summary(rows))
+    assert (c["nis_mean"], c["nis_lower"], c["nis_upper"], c["nis_updates"]) == pytest.approx(
+        (rs.nis_test.mean, rs.nis_test.lower, rs.nis_test.upper, rs.nis_test.n))
+    assert c["share_outside_95"] == pytest.approx(rs.share_outside_95)
+    assert c["max_abs_residual_arcsec"] == pytest.approx(rs.max_abs_residual_arcsec)
+    assert c["nis_dof_total"] == 2 * c["nis_updates"]          # azimuth and elevation at each update
