@@ -124,3 +124,23 @@ def test_cli_scenarios_lists_builtin_scenarios_and_studies():
                          check=True).stdout
     assert "example-1" in out and "Paper Example 1" in out
     assert "filter-comparison" in out and "PGM vs UKF" in out
+
+
+def test_the_summary_counts_passes_without_measurements_as_unobserved():
+    """A schedule that observes the first pass only: the later visibility passes are counted, and
+    said to be unobserved (as during a sensor shutoff), not passed off as observed."""
+    from cistrack.cli import _count_lines
+    from cistrack.run import run_scenario
+    from cistrack.scenario import load_scenario
+
+    scen = load_scenario("quick").with_overrides({
+        "duration_days": 3.0, "schedule": {"name": "phased", "phases": [{"rule": "every", "interval_minutes": 40.0,
+                                                                          "to_pass": 1}]}})
+    res = run_scenario(scen, seed=1)
+    s, ctx = res.summary, res.context
+    times = [m.t for m in ctx.measurements]
+    observed = [p for p in ctx.passes if any(p.start <= t <= p.end for t in times)]
+    assert s.n_passes == len(ctx.passes) > s.n_passes_observed == len(observed) >= 1
+    unobserved = s.n_passes - s.n_passes_observed
+    assert (f"{s.n_measurements} measurements in {len(observed)} of {s.n_passes} visibility passes "
+            f"({unobserved} unobserved: schedule or sensor shutoff)") in _count_lines(s)[0]
