@@ -4,8 +4,8 @@
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
-    cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR]
-    cistrack study report STUDY [--out DIR]
+    cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR] [--first-seed N] [--n-seeds N]
+    cistrack study report STUDY [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
 """
 from __future__ import annotations
@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from .errors import CistrackError, ConfigError
+from .study_cli import add_study_parser
 from .limits import check_seed
 from .output_paths import check_output_dir
 from .signals import install_signal_handlers
@@ -51,26 +52,12 @@ def cmd_export(args) -> int:
     return 0
 
 
-def _count_lines(s) -> list[str]:
-    """What the run's counts mean, in words: measurements, the passes they fall in (of the
-    sensor's visibility passes: a schedule or a sensor shutoff leaves some unobserved), the
-    measurements the IOD used and the filter updates after it."""
-    passes = ""
-    if s.n_passes:
-        unobserved = s.n_passes - s.n_passes_observed
-        passes = (f" in {s.n_passes_observed} of {s.n_passes} visibility passes"
-                  + (f" ({unobserved} unobserved: schedule or sensor shutoff)" if unobserved else ""))
-    iod = (f"{s.n_measurements_before_iod} up to the IOD epoch (the IOD's input), " if s.n_measurements_before_iod
-           else "")
-    return [f"  {s.n_measurements} measurements{passes}", f"  {iod}{s.n_updates} filter updates after it, "
-            f"wall time {s.wall_time_s:.1f} s"]
-
-
 def cmd_run(args) -> int:
     from .registry import default_registry
     from .run import run_scenario
     from .scenario import load_scenario
     from .settings import apply_settings
+    from .run_summary import count_lines
     from .verdicts import verdict_lines
 
     reg = default_registry()
@@ -100,7 +87,7 @@ def cmd_run(args) -> int:
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     for line in verdict_lines(s, out, _fmt):
         out_(line)
-    for line in _count_lines(s):
+    for line in count_lines(s):
         out_(line)
     f = s.final
     if f:
@@ -218,27 +205,6 @@ def cmd_scenarios(args) -> int:
     return 0
 
 
-def cmd_study(args) -> int:
-    from . import study
-
-    if args.study_cmd == "run":
-        res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
-                              progress=not args.quiet, rerun_dir=args.rerun, settings=args.set)
-        if args.quiet:
-            return 0 if res["failed"] == 0 else 3
-        print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
-              f"{res['failed']} failed -> {res['out_dir']}")
-        return 0 if res["failed"] == 0 else 3
-    if args.study_cmd == "report":
-        from .study_report import report_study
-
-        rep = report_study(args.study, out_dir=args.out, settings=args.set)
-        print(rep["text"])
-        print(f"written: {', '.join(str(p) for p in rep['files'])}")
-        return 0
-    return 2
-
-
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -281,25 +247,7 @@ def build_parser() -> argparse.ArgumentParser:
     v.set_defaults(func=cmd_view)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)
-    st = sub.add_parser("study", help="run or report a comparative study")
-    stsub = st.add_subparsers(dest="study_cmd", required=True)
-    sr = stsub.add_parser("run", help="run every missing run of a study")
-    sr.add_argument("study", help="study TOML file or built-in study name")
-    sr.add_argument("--out", default=None, help="study directory (default studies_out/<name>)")
-    sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
-    sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
-    sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
-    sr.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
-                    help="override a value in every run (after the study's own overrides and variants), "
-                         "validated like a scenario file; the default study directory names the settings")
-    sr.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    sr.set_defaults(func=cmd_study)
-    srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
-    srep.add_argument("study", help="study TOML file or built-in study name")
-    srep.add_argument("--out", default=None)
-    srep.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
-                      help="report the study run with these --set values")
-    srep.set_defaults(func=cmd_study)
+    add_study_parser(sub)
     return p
 
 

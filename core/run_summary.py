@@ -11,7 +11,7 @@ from typing import Any
 
 from .custody import Verdict
 
-__all__ = ["RunSummary", "FINAL_KEYS", "summarize"]
+__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines"]
 
 FINAL_KEYS: tuple[str, ...] = (
     "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
@@ -131,3 +131,17 @@ def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, fa
         n_measurements_before_iod=before_iod,
         consistency=consistency_summary(rows), final={k: last[k] for k in FINAL_KEYS if k in last},
         pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s)
+
+
+def count_lines(s: RunSummary) -> list[str]:
+    """What the run's counts mean, in words: measurements, the passes they fall in (of the
+    sensor's visibility passes: a schedule or a sensor shutoff leaves some unobserved), the
+    measurements the IOD used and the filter updates after it."""
+    passes = ""
+    if s.n_passes:
+        unobserved = s.n_passes - s.n_passes_observed
+        passes = (f" in {s.n_passes_observed} of {s.n_passes} visibility passes"
+                  + (f" ({unobserved} unobserved: schedule or sensor shutoff)" if unobserved else ""))
+    updates = (f"{s.n_measurements_before_iod} up to the IOD epoch (the IOD's input), {s.n_updates} filter "
+               "updates after it" if s.n_measurements_before_iod else f"{s.n_updates} filter updates")
+    return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"]

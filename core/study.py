@@ -7,7 +7,8 @@ A study file (TOML)::
     scenarios = ["example-1"]                  # built-in names or paths relative to this file
     filters = ["pgm", "ukf", "enkf"]           # names, or tables {name = ..., label = ..., params}
     iod = ["noisy-range", "uniform-range"]     # the same; omit to keep each scenario's own
-    seeds = [1, 2, 3]                          # or n_seeds = 10 (seeds 1..10)
+    seeds = [1, 2, 3]                          # or n_seeds = 10 (seeds 1..10), with first_seed = 500
+                                               # seeds 500..509
     [overrides]                                # applied to every scenario first
     duration_days = 6.6
 
@@ -19,32 +20,24 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import copy
-import difflib
 import json
 import os
 import sys
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
-
 from .errors import ConfigError
 from .fingerprint import scenario_fingerprint
+from .study_file import _study_path, _study_seeds, builtin_studies, load_study
 from .study_resume import is_done, run_state
-from .limits import check_count, check_path_component, check_seed
+from .limits import check_count, check_path_component
 from .results import read_manifest
 from .run_summary import RunSummary
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
            "builtin_studies", "make_executor"]
-
-_STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "overrides"}
 
 
 @dataclass(frozen=True)
@@ -63,50 +56,6 @@ class RunSpec:
     fingerprint: str = ""  # of the resolved scenario and seed (cistrack.fingerprint)
 
 
-def builtin_studies() -> dict[str, str]:
-    """Built-in study names -> one-line descriptions."""
-    base = resources.files("cistrack.scenarios") / "studies"
-    out = {}
-    for e in sorted(base.iterdir(), key=lambda e: e.name):
-        if e.name.endswith(".toml"):
-            out[e.name[:-5]] = str(tomllib.loads(e.read_text()).get("description", "")).strip()
-    return out
-
-
-def _study_path(path_or_name: str | Path) -> Path:
-    p = Path(path_or_name)
-    if p.exists():
-        return p
-    base = resources.files("cistrack.scenarios") / "studies" / f"{path_or_name}.toml"
-    if base.is_file():
-        return Path(str(base))
-    avail = sorted(builtin_studies())
-    msg = f"study not found: {path_or_name!r} is neither a file nor a built-in study ({', '.join(avail)})"
-    close = difflib.get_close_matches(str(path_or_name), avail, n=1)
-    if close:
-        msg += f". Did you mean {close[0]!r}?"
-    raise ConfigError(msg)
-
-
-def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
-    """Read and check a study file. Returns (data, path)."""
-    p = _study_path(path_or_name)
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
-    for k in data:
-        if k not in _STUDY_KEYS:
-            close = difflib.get_close_matches(k, list(_STUDY_KEYS), n=1)
-            raise ConfigError(f"{p}: unknown key {k!r}; allowed: {', '.join(sorted(_STUDY_KEYS))}"
-                              + (f". Did you mean {close[0]!r}?" if close else ""))
-    if not data.get("scenarios"):
-        raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
-    if "seeds" in data and "n_seeds" in data:
-        raise ConfigError(f"{p}: give 'seeds' or 'n_seeds', not both")
-    return data, p
-
-
 def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
     if item is None:
         return "", None
@@ -120,8 +69,12 @@ def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
 
 
 def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
-              settings: list[str] | None = None) -> tuple[dict, list[RunSpec], Path]:
+              settings: list[str] | None = None, first_seed: int | None = None,
+              n_seeds: int | None = None) -> tuple[dict, list[RunSpec], Path]:
     """Every run of a study, validated (each scenario variant is parsed before any run starts).
+
+    ``first_seed``, ``n_seeds``: run these seeds instead of the study file's (see
+    :func:`_study_seeds`); the runs go into the same study directory, named by their seed.
 
     ``settings``: ``--set TABLE.KEY=VALUE`` items (:mod:`cistrack.settings`) applied to every run
     after the study's own overrides and variants; the default directory then names their hash,
@@ -135,12 +88,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     name = check_path_component(data.get("name", p.stem), f"{p}: key 'name'")
     extra = parse_settings(settings)
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
-    if "seeds" in data:
-        if not isinstance(data["seeds"], list) or not data["seeds"]:
-            raise ConfigError(f"{p}: key 'seeds' must be a non-empty list of integers from 0 to 2**63-1")
-        seeds = [check_seed(s, f"{p}: key 'seeds'") for s in data["seeds"]]
-    else:
-        seeds = list(range(1, check_count(data.get("n_seeds", 1), f"{p}: key 'n_seeds'", 1, 1_000_000) + 1))
+    seeds = _study_seeds(data, p, first_seed, n_seeds)
     filters = [_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])]
     iods = [_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])]
     reg = default_registry()
@@ -261,23 +209,27 @@ def close_dask_client(ex) -> None:
 
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
-              rerun_dir: str | Path | None = None, settings: list[str] | None = None) -> dict:
+              rerun_dir: str | Path | None = None, settings: list[str] | None = None,
+              first_seed: int | None = None, n_seeds: int | None = None) -> dict:
     """Run every missing run of a study. Returns counts and the study directory.
 
     ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
     ``settings``: ``--set`` items applied to every run (see :func:`plan_runs`).
+    ``first_seed``, ``n_seeds``: other seeds than the study file's (see :func:`plan_runs`).
     """
     import dataclasses
 
     if workers is not None:
         check_count(workers, "--workers", 1, 1024)
-    data, specs, out = plan_runs(path_or_name, out_dir, settings)
+    data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
     if rerun_dir is not None:
         Path(rerun_dir).mkdir(parents=True, exist_ok=True)
         specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data,
-                                               "settings": list(settings or [])}, indent=2, default=str))
+                                               "settings": list(settings or []),
+                                               "run_seeds": sorted({sp.seed for sp in specs})},
+                                              indent=2, default=str))
     states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
     todo = [s for s in specs if states[s.run_id] != "done"]
     skipped = len(specs) - len(todo)
@@ -305,7 +257,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
                 summary = fut.result()
                 completed += 1
                 if bar is not None:
-                    bar.set_postfix_str(f"{spec.run_id}: {'kept' if summary.custody_kept else 'LOST'}")
+                    bar.set_postfix_str(f"{spec.run_id}: {summary.verdict.kind}")
             except Exception as exc:  # one failing run must not stop the study
                 failed += 1
                 (Path(spec.out_dir)).mkdir(parents=True, exist_ok=True)

@@ -14,6 +14,8 @@ import numpy as np
 from .calibration import LEVEL, group_calibration
 from .errors import ConfigError
 from .results import read_manifest, read_steps
+from .report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs,
+                              write_custody_by_filter, write_runs_csv)
 from .run_summary import RunSummary
 from .study import plan_runs
 from .study_resume import is_done
@@ -23,6 +25,18 @@ __all__ = ["report_study"]
 
 _COUNTED = ("tracking", "not-converged", "lost", "diverged")
 """Verdict kinds counted per filter x IOD in the report's ``verdicts`` column, in this order."""
+_COUNTED_TRUTHLESS = ("no-truth", "diverged")
+"""The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
+_TRUTH_COLUMNS = {"custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
+                  "anees_every_update", "anees_every_update_n", "custody_ci_lo", "custody_ci_hi", "final_anees",
+                  "final_anees_runs", "final_anees_lo", "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p",
+                  "hdr_runs", "hdr_above_099", "diverged_runs", "pos_err_km", "vel_err_ms"}
+"""summary.csv columns that need a truth: left out of a study without one."""
+_VERDICTS_EXPLAINED = (
+    "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position sigma within the rule's "
+    "precision; not-converged = custody kept by a cloud too wide to be a track; lost = the truth left the "
+    "belief; diverged = a particle filter's weights degenerated, the belief collapsed, the error is far beyond "
+    "sigma, or the mean left cislunar space; filter-failed = the filter raised an error.")
 
 
 def _median(xs):
@@ -58,7 +72,7 @@ _CALIBRATION = ("custody_ci_lo", "custody_ci_hi", "final_anees", "final_anees_ru
 
 
 def _calibration_columns(sums: list[RunSummary]) -> dict:
-    if all(x.verdict.kind == "no-truth" for x in sums):  # no truth: no custody, NEES or HDR level
+    if not any(x.has_truth for x in sums):  # no truth: no custody, NEES or HDR level
         return dict.fromkeys(_CALIBRATION)
     c = group_calibration(sums)
     nan = lambda v: None if v != v else v  # noqa: E731  (NaN -> empty CSV cell)
@@ -74,29 +88,25 @@ _CONSISTENCY = ("mean_nis", "nis_dof", "nis_lo", "nis_hi", "nis_updates", "nis_o
 """CSV columns of the measurement consistency of a group's updates (:mod:`cistrack.residuals`)."""
 
 
-def _consistency_columns(tables: list) -> dict:
-    from .residuals import residual_summary
+def _consistency_columns(sums: list[RunSummary], tables: list) -> dict:
+    """The group's measurement consistency, pooled from each run's manifest (``summary.consistency``;
+    a run written before manifests stored it is summarised from its steps table)."""
+    from .residuals import consistency_summary, pool_consistency
 
-    try:
-        rs = residual_summary([row for t in tables if "nis" in t.column_names for row in t.to_pylist()])
-    except ValueError:  # updates of different measurement sizes: no single chi-square test
+    per_run = [x.consistency or consistency_summary(t.to_pylist() if "nis" in t.column_names else [])
+               for x, t in zip(sums, tables)]
+    c = pool_consistency(per_run)
+    if not c["nis_updates"]:
         return dict.fromkeys(_CONSISTENCY)
-    nt = rs.nis_test
-    if not nt.n:
-        return dict.fromkeys(_CONSISTENCY)
-    return {"mean_nis": nt.mean, "nis_dof": nt.dof, "nis_lo": nt.lower, "nis_hi": nt.upper, "nis_updates": nt.n,
-            "nis_outside_95_share": rs.share_outside_95,
-            "max_abs_residual_arcsec": None if rs.max_abs_residual_arcsec != rs.max_abs_residual_arcsec
-            else rs.max_abs_residual_arcsec}
+    return {"mean_nis": c["nis_mean"], "nis_dof": c["nis_dof"], "nis_lo": c["nis_lower"], "nis_hi": c["nis_upper"],
+            "nis_updates": c["nis_updates"], "nis_outside_95_share": c["share_outside_95"],
+            "max_abs_residual_arcsec": c["max_abs_residual_arcsec"], "_consistency": c}
 
 
 def _consistency_text(r: dict) -> str:
-    if r["mean_nis"] is None:
-        return "no update with a finite NIS"
-    ok = "consistent" if r["nis_lo"] <= r["mean_nis"] <= r["nis_hi"] else "INCONSISTENT"
-    return (f"mean NIS {r['mean_nis']:.3g} over {r['nis_updates']} updates ({r['nis_dof']} components), "
-            f"95 % bounds [{r['nis_lo']:.3g}, {r['nis_hi']:.3g}]: {ok}; {100 * r['nis_outside_95_share']:.0f} % of "
-            f"measurements outside their own 95 % bounds; largest |residual| {_g(r['max_abs_residual_arcsec'])} arcsec")
+    from .residuals import consistency_text
+
+    return consistency_text(r.get("_consistency") or {})
 
 
 def _g(v, spec: str = ".3g") -> str:
@@ -118,7 +128,7 @@ def _calibration_cells(r: dict) -> list[str]:
 
 def _calibration_markdown(rows: list[dict]) -> list[str]:
     head = ["scenario", "iod", "filter", "custody rate [Wilson 95 %]",
-            "ANEES of final NEES [chi-square 95 % bounds]", "final truth HDR level vs uniform: KS",
+            "final-state ANEES: mean of the runs' last NEES [chi-square 95 % bounds]", "final truth HDR level vs uniform: KS",
             "HDR level > 0.99 (1 % if calibrated)", "diverged"]
     out = ["## Calibration", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     out += ["| " + " | ".join([r["scenario"], r["iod"], r["filter"], *_calibration_cells(r)]) + " |" for r in rows]
@@ -137,13 +147,14 @@ def _calibration_line(r: dict) -> str:
 
 
 def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
-                 settings: list[str] | None = None) -> dict:
+                 settings: list[str] | None = None, first_seed: int | None = None,
+                 n_seeds: int | None = None) -> dict:
     """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
     :mod:`cistrack.report_plots`) in <out>/report/.
 
     Raises ConfigError (and writes nothing) when no run of the study has finished.
     """
-    data, specs, out = plan_runs(path_or_name, out_dir, settings)
+    data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
     groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
     missing = 0
@@ -161,33 +172,41 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                           + (f" --out {out_dir}" if out_dir else ""))
     rep_dir = out / "report"
     rep_dir.mkdir(parents=True, exist_ok=True)
+    study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
+    counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
     finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
               "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
-            "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees", "anees_updates",
-            "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
+            "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
+            "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
+    if not study_has_truth:  # no truth anywhere: the CSV names no custody, NEES or HDR column
+        cols = [c for c in cols if c not in _TRUTH_COLUMNS]
     rows = []
     for (sc, iod, flt), sums in sorted(groups.items()):
         kept = sum(1 for x in sums if x.custody_kept)
-        truthless = all(x.verdict.kind == "no-truth" for x in sums)    # no custody to speak of
+        truthless = not any(x.has_truth for x in sums)    # no custody to speak of
         row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums),
                "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
-               "median_lost_day": _median([x.custody_lost_t_days for x in sums if not x.custody_kept]),
+               "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
+                                                                  if not x.custody_kept]),
                "failed_runs": sum(1 for x in sums if x.status != "finished"),
-               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in _COUNTED)}
+               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted)}
         for k in finals:
             row[k] = _median([x.final.get(k) for x in sums])
         row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
-        row["anees"], row["anees_updates"] = _anees(tables[(sc, iod, flt)])
+        row["anees_every_update"], row["anees_every_update_n"] = _anees(tables[(sc, iod, flt)])
         row["wall_time_s"] = _median([x.wall_time_s for x in sums])
         row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
         row.update(_calibration_columns(sums))
-        row.update(_consistency_columns(tables[(sc, iod, flt)]))
+        row.update(_consistency_columns(sums, tables[(sc, iod, flt)]))
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols)
+        w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
+    files = [rep_dir / "summary.csv", write_runs_csv(groups, rep_dir / "runs.csv")]
+    by_filter = write_custody_by_filter(rows, rep_dir / "custody_by_filter.csv")
+    files += [by_filter] if by_filter else []
 
     def fmt(v):
         if v is None:
@@ -197,20 +216,21 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         return str(v)
 
     has_truth = any(r["custody_kept"] is not None for r in rows)
-    header = ["scenario", "iod", "filter", "custody" if has_truth else "truth", "lost at (d, median)", "failed",
-              "verdicts: " + " / ".join(_COUNTED),
-              "sigma pos x/y/z km", "sigma vel x/y/z cm/s", "pos err km: median [5-95 %]", "ANEES (6 = consistent)",
+    header = ["scenario", "iod", "filter", "custody" if has_truth else "truth",
+              *(["lost at (d, median)"] if has_truth else []), "failed", "verdicts: " + " / ".join(counted),
+              "sigma pos x/y/z km", "sigma vel x/y/z cm/s",
+              *(["pos err km: median [5-95 %]", "ANEES over every update (6 = consistent)"] if has_truth else []),
               "entropy", "wall time s: median [5-95 %]"]
     lines = []
     for r in rows:
         lines.append([r["scenario"], r["iod"], r["filter"],
                       "no truth" if r["custody_kept"] is None else f"{r['custody_kept']}/{r['runs']}",
-                      fmt(r["median_lost_day"]), str(r["failed_runs"]), r["verdicts"],
+                      *([fmt(r["median_lost_day"])] if has_truth else []), str(r["failed_runs"]), r["verdicts"],
                       "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
                       "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
-                      f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
-                      f"{fmt(r['anees'])} ({r['anees_updates']} updates)", fmt(r["entropy"]),
-                      f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
+                      *([f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
+                         f"{fmt(r['anees_every_update'])} ({r['anees_every_update_n']} updates)"] if has_truth else []),
+                      fmt(r["entropy"]), f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
     md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     md += ["| " + " | ".join(l) + " |" for l in lines]
     verdicts = []
@@ -223,10 +243,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                             f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
         else:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
-    flagged = [f"- {x.run_id} ({flt} with {iod} IOD on {sc}): {x.verdict.kind}: {x.verdict.reason}"
-               + (f" (step {x.verdict.step}, t = {x.verdict.t_days:.3g} d)" if x.verdict.t_days is not None else "")
-               for (sc, iod, flt), sums in sorted(groups.items()) for x in sums
-               if x.verdict.kind in ("diverged", "not-converged")]
+    flagged = [flagged_line(f) for f in flagged_runs(groups)]
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
     custody = (["## Custody", "", *verdicts, "",
                 "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
@@ -235,18 +252,26 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                ["## Measurement consistency (no truth)", "", *verdicts])
     calibration = _calibration_markdown(rows) if has_truth else [
         "## Calibration", "", "None of these runs has a truth: calibration (NEES, HDR level) needs one."]
-    diverged = ["", "## Diverged and not-converged runs", "", *(flagged or ["None."]), "",
-                "Verdicts (see cistrack.verdicts): tracking = custody kept and the largest position sigma within "
-                "the rule's precision; not-converged = custody kept by a cloud too wide to be a track; diverged = "
-                "a particle filter's weights degenerated, the belief collapsed, the error is far beyond sigma, or "
-                "the mean left cislunar space."] if has_truth else []
-    md_text = "\n".join([f"# {title}", "", *md, "", *calibration, "", *custody, *diverged])
+    flagged_title = "Runs that did not track" if has_truth else "Diverged and failed runs"
+    explain = (_VERDICTS_EXPLAINED if has_truth else
+               "Verdicts without a truth (see cistrack.verdicts): no-truth = judged by measurement consistency "
+               "only; diverged = a particle filter's weights degenerated, the belief collapsed or its mean left "
+               "cislunar space.")
+    diverged = ["", f"## {flagged_title} (verdict and reason; every run in runs.csv)", "", *(flagged or ["None."]),
+                "", explain]
+    md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, "", *custody, *diverged])
     (rep_dir / "summary.md").write_text(md_text + "\n")
+    files.append(rep_dir / "summary.md")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
+    by_filter_text = custody_text(rows)
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
                      + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
-                     + ["", "Calibration (95 %):"] + [f"- {_calibration_line(r)}" for r in rows])
-    files = [rep_dir / "summary.csv", rep_dir / "summary.md"]
+                     + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %]):"] + by_filter_text)
+                        if len(custody_by_filter(rows)[0]) > 1 else [])
+                     + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):"]
+                     + [f"- {_calibration_line(r)}" for r in rows]
+                     + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
+                     + (flagged or ["None."]))
     from .report_plots import plot_study
 
     figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}

@@ -129,7 +129,7 @@ def test_cli_scenarios_lists_builtin_scenarios_and_studies():
 def test_the_summary_counts_passes_without_measurements_as_unobserved():
     """A schedule that observes the first pass only: the later visibility passes are counted, and
     said to be unobserved (as during a sensor shutoff), not passed off as observed."""
-    from cistrack.cli import _count_lines
+    from cistrack.run_summary import count_lines
     from cistrack.run import run_scenario
     from cistrack.scenario import load_scenario
 
@@ -143,4 +143,4 @@ def test_the_summary_counts_passes_without_measurements_as_unobserved():
     assert s.n_passes == len(ctx.passes) > s.n_passes_observed == len(observed) >= 1
     unobserved = s.n_passes - s.n_passes_observed
     assert (f"{s.n_measurements} measurements in {len(observed)} of {s.n_passes} visibility passes "
-            f"({unobserved} unobserved: schedule or sensor shutoff)") in _count_lines(s)[0]
+            f"({unobserved} unobserved: schedule or sensor shutoff)") in count_lines(s)[0]
