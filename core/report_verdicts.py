@@ -72,7 +72,8 @@ def custody_by_filter(rows: list[dict]) -> tuple[list[str], list[tuple[str, str]
     ``custody_ci_lo``, ``custody_ci_hi``; rows without a truth are left out).
 
     Returns (filters in first-seen order, the (scenario, iod) pairs, and per pair a dict filter ->
-    cell text "k/n = rate [lo-hi]")."""
+    cell text "k/n = rate [lo-hi], tracking t": custody kept counts not-converged runs too (a
+    cloud too wide to be a track), so the number of tracking runs stands beside it)."""
     filters: list[str] = []
     pairs: list[tuple[str, str]] = []
     cells: dict[tuple[str, str], dict] = {}
@@ -85,8 +86,10 @@ def custody_by_filter(rows: list[dict]) -> tuple[list[str], list[tuple[str, str]
         if key not in cells:
             pairs.append(key)
             cells[key] = {}
+        tracking = r.get("tracking_runs")
         cells[key][r["filter"]] = (f"{r['custody_kept']}/{r['runs']} = {r['custody_rate']:.2f} "
-                                   f"[{r['custody_ci_lo']:.2f}-{r['custody_ci_hi']:.2f}]")
+                                   f"[{r['custody_ci_lo']:.2f}-{r['custody_ci_hi']:.2f}]"
+                                   + (f", tracking {tracking}" if tracking is not None else ""))
     return filters, pairs, cells
 
 
@@ -96,7 +99,7 @@ def custody_markdown(rows: list[dict]) -> list[str]:
     if not pairs:
         return []
     head = ["scenario", "iod", *filters]
-    out = ["## Custody by filter (kept/runs = rate [Wilson 95 % interval])", "",
+    out = ["## Custody by filter (kept/runs = rate [Wilson 95 % interval], runs tracking)", "",
            "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     out += ["| " + " | ".join([sc, iod, *(cells[(sc, iod)].get(f, "-") for f in filters)]) + " |" for sc, iod in pairs]
     return out + [""]

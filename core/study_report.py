@@ -26,6 +26,12 @@ __all__ = ["report_study"]
 _COUNTED = ("tracking", "not-converged", "lost", "diverged")
 """Verdict kinds counted per filter x IOD in the report's ``verdicts`` column, in this order."""
 _COUNTED_TRUTHLESS = ("no-truth", "diverged")
+
+
+def _count_column(kind: str) -> str:
+    """The summary.csv column counting the runs of a verdict kind: 'not-converged' -> 'not_converged_runs'."""
+    return kind.replace("-", "_") + "_runs"
+
 """The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
 _TRUTH_COLUMNS = {"custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
                   "anees_every_update", "anees_every_update_n", "custody_ci_lo", "custody_ci_hi", "final_anees",
@@ -179,6 +185,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
             "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
             "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
+    cols[cols.index("verdicts") + 1:cols.index("verdicts") + 1] = [_count_column(k) for k in counted
+                                                                  if _count_column(k) not in cols]
     if not study_has_truth:  # no truth anywhere: the CSV names no custody, NEES or HDR column
         cols = [c for c in cols if c not in _TRUTH_COLUMNS]
     rows = []
@@ -190,7 +198,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
                                                                   if not x.custody_kept]),
                "failed_runs": sum(1 for x in sums if x.status != "finished"),
-               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted)}
+               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted),
+               **{_count_column(k): sum(1 for x in sums if x.verdict.kind == k) for k in counted}}
         for k in finals:
             row[k] = _median([x.final.get(k) for x in sums])
         row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
@@ -239,8 +248,12 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: no truth, measurement "
                             f"consistency: {_consistency_text(r)}.")
         elif r["custody_kept"] < r["runs"]:
-            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} lost custody in "
-                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs (median day {fmt(r['median_lost_day'])}).")
+            failed = r["runs"] - r["custody_kept"] - r[_count_column("lost")] - r[_count_column("diverged")]
+            why = ", ".join([f"{r[_count_column(k)]} {k}" for k in ("lost", "diverged") if r[_count_column(k)]]
+                            + ([f"{failed} filter-failed"] if failed else []))
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} did not keep custody in "
+                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs ({why}; median day "
+                            f"{fmt(r['median_lost_day'])}).")
         else:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
@@ -266,7 +279,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     by_filter_text = custody_text(rows)
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
                      + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
-                     + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %]):"] + by_filter_text)
+                     + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
                         if len(custody_by_filter(rows)[0]) > 1 else [])
                      + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):"]
                      + [f"- {_calibration_line(r)}" for r in rows]

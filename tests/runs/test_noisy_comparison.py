@@ -11,6 +11,7 @@ from importlib import resources
 
 import pytest
 
+from cistrack.results import read_manifest
 from cistrack.study import plan_runs, run_study
 from cistrack.study_report import report_study
 
@@ -50,8 +51,12 @@ def test_the_report_gives_each_filters_custody_with_its_wilson_interval_side_by_
         (row,) = list(csv.DictReader(fh))
     assert (row["scenario"], row["iod"]) == ("example-1", "noisy-range")
     for r in rep["rows"]:
+        kinds = [read_manifest(d)["summary"]["verdict"]["kind"] for d in (out / "runs").iterdir()
+                 if f"__{r['filter']}__" in d.name]
+        assert r["tracking_runs"] == kinds.count("tracking")
         ci = binomtest(r["custody_kept"], r["runs"]).proportion_ci(0.95, method="wilson")
-        cell = f"{r['custody_kept']}/2 = {r['custody_kept'] / 2:.2f} [{ci.low:.2f}-{ci.high:.2f}]"
+        cell = (f"{r['custody_kept']}/2 = {r['custody_kept'] / 2:.2f} [{ci.low:.2f}-{ci.high:.2f}], "
+                f"tracking {r['tracking_runs']}")
         assert row[f"{r['filter']} custody [Wilson 95 %]"] == cell
         assert f"{r['filter']} {cell}" in rep["text"]
     md = (out / "report" / "summary.md").read_text()
