@@ -22,6 +22,8 @@ from cistrack.run import run_scenario  # noqa: E402
 from cistrack.scenario import load_scenario  # noqa: E402
 
 def _cumtime(stats: pstats.Stats, filename_part: str, func: str) -> float:
+    """Cumulative seconds of ``func`` in files whose path contains ``filename_part``: written so that
+    it matches both the source layout (core/run.py) and an installed one (cistrack/run.py)."""
     total = 0.0
     for (fname, _line, fn), (_cc, _nc, _tt, ct, _callers) in stats.stats.items():
         if fn == func and filename_part in fname:
@@ -74,15 +76,15 @@ def main() -> int:
     run_scenario(scen, seed=args.seed)
     prof.disable()
     st = pstats.Stats(prof)
-    total_prof = max(_cumtime(st, "core/run.py", "_run"), 1e-9)
+    total_prof = max(_cumtime(st, "/run.py", "_run"), 1e-9)
     stages = {
         "IOD": _cumtime(st, "plugins/iod", "estimate"),
         # the kernels run on worker threads, which cProfile does not see: time the Python call
         # that waits for them (filter predictions and the truth)
-        "propagation": _cumtime(st, "core/propagation/compiled.py", "propagate"),
+        "propagation": _cumtime(st, "propagation/compiled.py", "propagate"),
         "clustering": _cumtime(st, "plugins/clustering", "cluster"),
         "resampling": _cumtime(st, "plugins/filters", "_sample_posterior"),
-        "metrics": _cumtime(st, "core/metrics.py", "step_metrics"),
+        "metrics": _cumtime(st, "/metrics.py", "step_metrics"),
     }
     upd = _cumtime(st, "plugins/filters", "update")
     # clustering is triggered from update() or from the belief after a prediction: it has its own
