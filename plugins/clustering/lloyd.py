@@ -1,4 +1,4 @@
-"""k-means (greedy k-means++ seeding, then Lloyd iterations) in numpy, giving scikit-learn's
+"""k-means (greedy k-means++ seeding, then Lloyd iterations) in numpy and numba, giving scikit-learn's
 ``KMeans(n_init=1, algorithm="lloyd")`` result on one thread without importing scikit-learn.
 
 Why: importing ``sklearn.cluster`` costs about 1.3 s of CPU (it imports scipy.stats, which parses
@@ -20,12 +20,20 @@ same centres and labels (``tests/clustering/test_lloyd.py`` compares them bit fo
    tolerance; if stopped by the tolerance, assign once more to the final centres;
 4. add the mean back to the centres.
 
+Each Lloyd pass used to cost about 0.2 ms in numpy calls on Example 1's 2,500-point fits (30% of
+the run). The products x.c and |c|^2 are still computed by numpy (BLAS and einsum: these fix the
+floating-point sums); the nearest-centre scan, the counts and the per-cluster sums run in one
+compiled pass (:func:`_lloyd_pass`, numba, cached), whose additions and comparisons are the ones
+the numpy code made, in the same order.
+
 A cluster that empties during the iterations is relocated by scikit-learn's own rule, which this
 module does not reproduce: :func:`kmeans_fit` then returns None and the caller uses scikit-learn.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from cistrack.lazy import lazy_njit
 
 __all__ = ["kmeans_fit"]
 
@@ -62,21 +70,54 @@ def _seed_centres(x: np.ndarray, k: int, sq_norms: np.ndarray, rs: np.random.Ran
     return centres
 
 
-def _assign(x: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """Index of the nearest centre of each point (n,), ties to the lowest index.
+def _products(x: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """x.(-2c) (n, k) and |c|^2 (k,): the two terms of the distances |c|^2 - 2 x.c, computed by
+    numpy (BLAS and einsum) exactly as before the compiled pass, so the sums are bit for bit the
+    ones scikit-learn's Lloyd compares. x.(-2c) is bit for bit -2 (x.c) (scaling by 2 is exact)."""
+    return x @ ((-2.0) * centres).T, np.einsum("ij,ij->i", centres, centres)
 
-    Distances |c|^2 - 2 x.c; x.(-2c) is bit for bit -2 (x.c) (scaling by 2 is exact), and a loop
-    over the few centres with a strict ``<`` is numpy's fast way to an argmin along a short axis."""
-    d = x @ ((-2.0) * centres).T
-    d += np.einsum("ij,ij->i", centres, centres)[np.newaxis, :]
-    best = d[:, 0].copy()
-    labels = np.zeros(x.shape[0], dtype=np.intp)
-    for j in range(1, centres.shape[0]):
-        col = d[:, j]
-        closer = col < best
-        np.minimum(best, col, out=best)
-        labels[closer] = j
-    return labels
+
+@lazy_njit(cache=True)
+def _lloyd_pass(x, products, c_norms, labels, sums, counts, update):
+    """One Lloyd pass over the points, compiled: the loops that cost microseconds each in numpy.
+
+    x (n, d) centred points; products (n, k) = x.(-2c); c_norms (k,) = |c|^2. Writes ``labels``
+    (n,): the centre with the smallest ``products[i, j] + c_norms[j]``, ties to the lowest index
+    (a strict ``<`` scan, as numpy's loop over centres). With ``update``, also writes ``counts``
+    (k,) and ``sums`` (k, d) = the new centres: per cluster, the coordinates summed in point order
+    (one thread's order, as ``np.bincount``) times the reciprocal of the count. Returns the number
+    of clusters left empty (then ``sums`` is not meaningful)."""
+    n, d = x.shape
+    k = c_norms.shape[0]
+    for i in range(n):
+        best = products[i, 0] + c_norms[0]
+        lab = 0
+        for j in range(1, k):
+            v = products[i, j] + c_norms[j]
+            if v < best:
+                best = v
+                lab = j
+        labels[i] = lab
+    if not update:
+        return 0
+    for j in range(k):
+        counts[j] = 0
+        for a in range(d):
+            sums[j, a] = 0.0
+    for i in range(n):
+        lab = labels[i]
+        counts[lab] += 1
+        for a in range(d):
+            sums[lab, a] += x[i, a]
+    empty = 0
+    for j in range(k):
+        if counts[j] == 0:
+            empty += 1
+            continue
+        inv = 1.0 / np.float64(counts[j])  # as scikit-learn: times the reciprocal
+        for a in range(d):
+            sums[j, a] *= inv
+    return empty
 
 
 def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
@@ -91,19 +132,13 @@ def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
     rs = np.random.RandomState(seed)
     centres = _seed_centres(x, k, np.einsum("ij,ij->i", x, x), rs)
     labels_old = np.full(n, -1, dtype=np.intp)
-    columns = np.arange(d)
-    flat = x.ravel()
+    labels = np.empty(n, dtype=np.intp)
+    counts = np.empty(k, dtype=np.intp)
     strict = False
-    labels = labels_old
     for _ in range(max_iter):
-        labels = _assign(x, centres)
-        counts = np.bincount(labels, minlength=k)
-        if np.any(counts == 0):
+        new = np.empty((k, d))
+        if _lloyd_pass(x, *_products(x, centres), labels, new, counts, True):
             return None
-        # bincount adds point by point in point order: one thread's summation order
-        new = np.bincount((labels[:, np.newaxis] * d + columns).ravel(), weights=flat,
-                          minlength=k * d).reshape(k, d)
-        new *= (1.0 / counts.astype(np.float64))[:, np.newaxis]  # as scikit-learn: times the reciprocal
         diff = new - centres
         shift = np.sqrt(np.sum(diff * diff, axis=1))
         centres = new
@@ -112,8 +147,8 @@ def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,
             break
         if (shift ** 2).sum() <= tolerance:
             break
-        labels_old = labels
+        labels_old, labels = labels, labels_old
     if not strict:
-        labels = _assign(x, centres)
+        _lloyd_pass(x, *_products(x, centres), labels, np.empty((k, d)), counts, False)
     centres += mean
     return centres, labels
