@@ -9,7 +9,7 @@ from cistrack.component import check_choice, check_int
 from cistrack.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
-from .lloyd import kmeans_fit
+from .lloyd import kmeans_fit, nearest_centres
 from .thread_limits import limited_threads
 from .points_and_labels import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
 
@@ -68,8 +68,7 @@ class KMeansClusterer(Clusterer):
             found = self._sklearn_fit(fit, k, seed)
         c, labels = found
         if subsample:
-            d2 = (np.einsum("ij,ij->i", z, z)[:, None] - 2.0 * z @ c.T + np.einsum("ij,ij->i", c, c)[None, :])
-            labels = np.argmin(d2, axis=1)
+            labels = nearest_centres(z, c)
         return compact_labels(labels)
 
     def _sklearn_fit(self, fit: np.ndarray, k: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

@@ -35,7 +35,7 @@ import numpy as np
 
 from cistrack.lazy import lazy_njit
 
-__all__ = ["kmeans_fit"]
+__all__ = ["kmeans_fit", "nearest_centres"]
 
 
 def _sq_distances(a: np.ndarray, b: np.ndarray, b_sq_norms: np.ndarray) -> np.ndarray:
@@ -118,6 +118,32 @@ def _lloyd_pass(x, products, c_norms, labels, sums, counts, update):
         for a in range(d):
             sums[j, a] *= inv
     return empty
+
+
+def nearest_centres(z: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """Index (n,) of the nearest of ``centres`` (k, d) for each point of ``z`` (n, d), first on
+    ties: numpy's ``argmin(|z|^2 - (2 z).c + |c|^2, axis=1)`` (the products by numpy, the sums and
+    the scan compiled, in the same order), for labelling every particle after a subsampled fit."""
+    z = np.asarray(z, dtype=np.float64)
+    labels = np.empty(z.shape[0], dtype=np.intp)
+    products = np.ascontiguousarray((2.0 * z) @ centres.T)
+    _nearest(np.einsum("ij,ij->i", z, z), products, np.einsum("ij,ij->i", centres, centres), labels)
+    return labels
+
+
+@lazy_njit(cache=True)
+def _nearest(z_norms, products, c_norms, labels):
+    """labels[i] = first j minimising (z_norms[i] - products[i, j]) + c_norms[j]."""
+    n, k = products.shape
+    for i in range(n):
+        best = (z_norms[i] - products[i, 0]) + c_norms[0]
+        lab = 0
+        for j in range(1, k):
+            v = (z_norms[i] - products[i, j]) + c_norms[j]
+            if v < best:
+                best = v
+                lab = j
+        labels[i] = lab
 
 
 def kmeans_fit(x: np.ndarray, k: int, seed: int, max_iter: int = 300,

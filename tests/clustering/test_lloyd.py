@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cistrack.plugins.clustering.kmeans import KMeansClusterer
-from cistrack.plugins.clustering.lloyd import kmeans_fit
+from cistrack.plugins.clustering.lloyd import kmeans_fit, nearest_centres
 
 
 def _cloud(seed: int, n: int, k: int) -> np.ndarray:
@@ -67,3 +67,19 @@ def test_the_numpy_engine_labels_as_the_sklearn_engine(n):
 def test_an_unknown_engine_is_refused_naming_the_choices():
     with pytest.raises(Exception, match="engine.*numpy.*sklearn"):
         KMeansClusterer(engine="fast")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_nearest_centres_equals_numpys_argmin_of_the_expanded_distances(seed):
+    g = np.random.default_rng(seed)
+    z = g.normal(size=(5000, 6))
+    c = g.normal(size=(2 + seed, 6))
+    c[-1] = z[17]  # a centre on a point: distance rounding near zero
+    want = np.argmin(np.einsum("ij,ij->i", z, z)[:, None] - 2.0 * z @ c.T + np.einsum("ij,ij->i", c, c)[None, :], axis=1)
+    assert np.array_equal(nearest_centres(z, c), want)
+
+
+def test_nearest_centres_breaks_ties_to_the_first_centre():
+    z = np.array([[0.0, 0.0], [1.0, 0.0]])
+    c = np.array([[0.5, 0.0], [0.5, 0.0], [-0.5, 0.0]])
+    assert list(nearest_centres(z, c)) == [0, 0]
