@@ -5,6 +5,14 @@ import os
 import platform
 
 
+def _usable() -> int:
+    """Cores this process may run on (``taskset -c 0,1`` gives 2)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover
+        return os.cpu_count() or 1
+
+
 def machine_lines() -> list[str]:
     """CPU model, core count, OS and library versions, one fact per line."""
     cpu = platform.processor() or ""
@@ -34,7 +42,8 @@ def machine_lines() -> list[str]:
     except OSError:  # pragma: no cover
         load = "-"
     return [
-        f"machine: {cpu} | {os.cpu_count()} logical cores | {platform.system()} {platform.release()}",
+        f"machine: {cpu} | {os.cpu_count()} logical cores ({_usable()} usable by this process) | "
+        f"{platform.system()} {platform.release()}",
         f"python {platform.python_version()} | numpy {numpy.__version__} | scipy {scipy.__version__} | "
         f"numba {nb} ({threads} threads) | scikit-learn {skl}",
         f"load average at start: {load}",
