@@ -47,13 +47,10 @@ def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_gro
     counts = np.bincount(labels, minlength=n_groups)[:n_groups]
     means = np.zeros((n_groups, q))
     covs = np.zeros((n_groups, q, q))
-    order = np.argsort(labels, kind="stable")
-    bounds = np.concatenate([[0], np.cumsum(counts)])
-    ys = y[order]
     for i in range(n_groups):  # loop over components (few), vectorised over their particles
-        yi = ys[bounds[i]:bounds[i + 1]]
-        if yi.shape[0] == 0:
+        if counts[i] == 0:
             continue
+        yi = y[labels == i]  # the group's rows in particle order (as a stable sort by label gives them)
         means[i] = yi.mean(axis=0)
         if yi.shape[0] > 1:
             c = yi - means[i]

@@ -263,8 +263,7 @@ class PGMFilter(FilterBase):
         labels = np.asarray((clusterer or self._clusterer).cluster(x, self._rng), dtype=np.intp)
         if labels.shape != (x.shape[0],) or labels.min() < 0:
             raise FilterError(f"filter '{self._who()}': clusterer returned labels of shape {labels.shape}")
-        _, labels = np.unique(labels, return_inverse=True)
-        labels = labels.reshape(-1)
+        labels = (np.cumsum(np.bincount(labels) > 0) - 1)[labels]  # np.unique's inverse, without its sort
         min_size = self.min_cluster_size if self.min_cluster_size is not None else max(
             2 * d, int(np.ceil(self._min_cluster_fraction * self.n_particles)))
         labels, merged = merge_small_clusters(x, labels, min(min_size, x.shape[0]))
