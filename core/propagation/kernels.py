@@ -267,6 +267,8 @@ def run_chunks(kernel, n: int, args: tuple) -> None:
     if workers <= 1 or n < 32:
         kernel(0, n, *args)
         return
+    if not getattr(kernel, "signatures", True):  # numba dispatcher not loaded yet: load it here on an
+        kernel(0, 0, *args)                       # empty range, or each worker thread would load it
     # several chunks per worker so that uneven particles (close approaches) balance out
     n_chunks = min(n, workers * 8)
     edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
