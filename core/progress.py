@@ -20,7 +20,7 @@ class ProgressBar:
         self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True)
 
     def _advance(self, step) -> None:
-        lost = self.custody is not None and not self.custody.verdict.kept
+        lost = self.custody is not None and step.truth is not None and not self.custody.verdict.kept
         self.bar.set_postfix_str(f"t={float(units.tu_to_days(step.t)):.2f} d H={step.metrics.get('entropy', float('nan')):.1f}"
                                  + (" custody LOST" if lost else ""))
         self.bar.update(1)

@@ -81,3 +81,34 @@ def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_
     assert c["share_outside_95"] == pytest.approx(rs.share_outside_95)
     assert c["max_abs_residual_arcsec"] == pytest.approx(rs.max_abs_residual_arcsec)
     assert c["nis_dof_total"] == 2 * c["nis_updates"]          # azimuth and elevation at each update
+
+
+def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, tmp_path):
+    import concurrent.futures as cf
+    import json
+
+    from cistrack.consistency import chi2_ppf
+    from cistrack.study import run_study
+    from cistrack.study_report import report_study
+
+    study = tmp_path / "observed.toml"
+    study.write_text(f'name = "observed"\nscenarios = ["quick"]\nseeds = [1, 2]\n'
+                     f'filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]\n'
+                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
+                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
+    out = tmp_path / "s"
+    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    cons = []
+    for i, d in enumerate(sorted((out / "runs").iterdir())):   # mark the manifests: the report must use them
+        man = json.loads((d / "manifest.json").read_text())
+        man["summary"]["consistency"]["nis_mean"] = 3.0 + i
+        (d / "manifest.json").write_text(json.dumps(man))
+        cons.append(man["summary"]["consistency"])
+    row = report_study(study, out_dir=out)["rows"][0]
+    k = sum(c["nis_updates"] for c in cons)
+    dof = sum(c["nis_dof_total"] for c in cons)
+    assert row["mean_nis"] == pytest.approx(sum(c["nis_mean"] * c["nis_updates"] for c in cons) / k)
+    assert (row["nis_lo"], row["nis_hi"]) == pytest.approx((chi2_ppf(0.025, dof) / k, chi2_ppf(0.975, dof) / k))
+    assert row["nis_updates"] == k
+    with open(out / "report" / "summary.csv") as fh:
+        assert "custody" not in fh.readline()
