@@ -61,6 +61,12 @@ class CustodyRule:
     max_earth_distance_km: float = 2e6
     """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
     space ("diverged")."""
+    diverged_nis: float = 1e3
+    diverged_nis_updates: int = 3
+    """Without a truth: a median NIS above ``diverged_nis`` over the last ``diverged_nis_updates``
+    updates means the measurements fall far outside the spread the belief predicts, the
+    no-truth counterpart of "error far beyond sigma" ("diverged"; a chi-square with 2 to 6
+    degrees of freedom exceeds 1e3 with probability ~0)."""
 
 
 @dataclass(frozen=True)

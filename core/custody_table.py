@@ -12,9 +12,12 @@ what is allowed)::
     diverged_nees = 1e4            # ... with a NEES above this: diverged (inf: off)
     degenerate_ess = 7.0           # effective sample size or distinct particles below this: diverged (0: off)
     max_earth_distance_km = 2e6    # a final mean farther from Earth (km): diverged (inf: off)
+    diverged_nis = 1e3             # without a truth: a median NIS above this ...
+    diverged_nis_updates = 3       # ... over the last this many updates: diverged (inf: off)
 
-The rules that need no truth (degenerate weights, collapse, leaving cislunar space) judge runs on
-measurement files too (:mod:`cistrack.verdicts`).
+The rules that need no truth (degenerate weights, collapse, leaving cislunar space, and the NIS
+rule that only runs without a truth use) judge runs on measurement files too
+(:mod:`cistrack.verdicts`).
 """
 from __future__ import annotations
 
@@ -39,8 +42,10 @@ _CHECKS: dict[str, tuple[str, Any]] = {
     "diverged_nees": ("a number >= 0 (inf turns the rule off)", lambda v: v >= 0),
     "degenerate_ess": ("a finite number >= 0 (particles; 0 turns the rule off)", lambda v: math.isfinite(v) and v >= 0),
     "max_earth_distance_km": ("a number > 0 (km; inf turns the rule off)", lambda v: v > 0),
+    "diverged_nis": ("a number > 0 (inf turns the rule off)", lambda v: v > 0),
 }
-CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, "hdr_consecutive"})
+_COUNTS = ("hdr_consecutive", "diverged_nis_updates")
+CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, *_COUNTS})
 """Keys allowed in a scenario's ``[custody]`` table (the fields of CustodyRule)."""
 
 
@@ -58,9 +63,10 @@ def custody_rule(table: Any, source: str) -> CustodyRule:
         if math.isnan(v) or not ok(v):
             raise ConfigError(f"{source}: {_WHERE}: key {key!r} = {table[key]!r} must be {allowed}")
         values[key] = v
-    if "hdr_consecutive" in table:
-        n = typed(table["hdr_consecutive"], int, source, _WHERE, "hdr_consecutive")
-        if n < 1:
-            raise ConfigError(f"{source}: {_WHERE}: key 'hdr_consecutive' = {n} must be an integer >= 1")
-        values["hdr_consecutive"] = n
+    for key in _COUNTS:
+        if key in table:
+            n = typed(table[key], int, source, _WHERE, key)
+            if n < 1:
+                raise ConfigError(f"{source}: {_WHERE}: key {key!r} = {n} must be an integer >= 1")
+            values[key] = n
     return CustodyRule(**values)

@@ -10,6 +10,8 @@ scenario's :class:`~cistrack.custody.CustodyRule`:
   position sigma below ``collapse_sigma_km`` or entropy not finite), when (with a truth only)
   the final error exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the
   mean is farther than ``max_earth_distance_km`` from Earth;
+- without a truth, "diverged" also when the median NIS of the last ``diverged_nis_updates``
+  updates exceeds ``diverged_nis`` (the measurements fall far outside the predicted spread);
 - no truth, and none of these: "no-truth" (the CLI reports measurement consistency, the NIS,
   instead of custody; a truthless run never speaks of custody, whatever its verdict);
 - "lost" as the custody rule decided;
@@ -19,6 +21,7 @@ scenario's :class:`~cistrack.custody.CustodyRule`:
 from __future__ import annotations
 
 import math
+import statistics
 from typing import Any
 
 from .custody import CustodyRule, Verdict
@@ -48,6 +51,21 @@ def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dic
             size = f"effective sample size {ess:.3g}{of}" if ess is not None else "weights"
             left = f", {int(unique)} distinct particles left" if unique is not None and math.isfinite(unique) else ""
             return f"degenerate weights ({size}{left}; fewer than {rule.degenerate_ess:g})", r
+    return None
+
+
+def _nis_far(rows: list[dict[str, Any]], rule: CustodyRule) -> str | None:
+    """The reason when the median NIS of the last ``rule.diverged_nis_updates`` updates with a
+    finite NIS exceeds ``rule.diverged_nis`` (measurements far outside the predicted spread);
+    None otherwise or with fewer such updates."""
+    nis = [float(r["nis"]) for r in rows if r.get("kind") == "update" and r.get("nis") is not None
+           and math.isfinite(r["nis"])][-rule.diverged_nis_updates:]
+    if len(nis) < rule.diverged_nis_updates:
+        return None
+    med = statistics.median(nis)
+    if med > rule.diverged_nis:
+        return (f"measurements far outside the predicted spread: median NIS {med:.3g} over the last "
+                f"{len(nis)} updates > {rule.diverged_nis:g}")
     return None
 
 
@@ -93,6 +111,9 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
         return Verdict("diverged", f"left cislunar space: mean {earth_distance_km:.4g} km from Earth > "
                        f"{rule.max_earth_distance_km:g} km", *at)
     if not has_truth:
+        far = _nis_far(rows, rule)
+        if far is not None:
+            return Verdict("diverged", far, *at)
         return Verdict("no-truth", "no truth: judged by measurement consistency (NIS)")
     if not verdict.kept:
         return verdict

@@ -26,7 +26,8 @@ def test_an_empty_table_keeps_the_rule_defaults():
 @pytest.mark.parametrize("key, value", [("degenerate_ess", 3.0), ("collapse_sigma_km", 0.0),
                                         ("diverged_error_km", 500.0), ("diverged_nees", math.inf),
                                         ("max_earth_distance_km", 1e7), ("precision_km", 20),
-                                        ("hdr_consecutive", 3), ("loglik_threshold", -50.0)])
+                                        ("hdr_consecutive", 3), ("loglik_threshold", -50.0),
+                                        ("diverged_nis", 500.0), ("diverged_nis_updates", 5)])
 def test_each_threshold_is_settable_from_the_table(key, value):
     assert getattr(custody_rule({key: value}, "s.toml"), key) == value
 
@@ -40,7 +41,8 @@ def test_a_scenario_setting_reaches_the_run_rule():
     ("degenerate_ess", -1.0, ">= 0"), ("degenerate_ess", math.nan, ">= 0"), ("degenerate_ess", math.inf, "finite"),
     ("collapse_sigma_km", "small", "expected int or float"), ("max_earth_distance_km", 0.0, "> 0"),
     ("diverged_nees", -5, ">= 0"), ("diverged_error_km", True, "expected int or float"),
-    ("precision_km", math.inf, "finite"), ("hdr_threshold", 1.0, "(0, 1)")])
+    ("precision_km", math.inf, "finite"), ("hdr_threshold", 1.0, "(0, 1)"), ("diverged_nis", 0.0, "> 0"),
+    ("diverged_nis_updates", 0, ">= 1"), ("diverged_nis_updates", 2.5, "expected int")])
 def test_a_bad_value_is_refused_naming_the_file_table_key_and_what_is_allowed(key, value, words):
     with pytest.raises(ConfigError) as err:
         custody_rule({key: value}, "s.toml")

@@ -68,6 +68,24 @@ def test_a_truthless_collapsed_belief_is_diverged_when_the_weight_rule_is_off(ob
     assert "custody" not in proc.stdout.lower()
 
 
+def test_truthless_measurements_far_outside_the_predicted_spread_are_diverged(obs_file, tmp_path):
+    out = tmp_path / "run"
+    _cli_run(obs_file, out, "filter.name=sir", "filter.n_particles=500", "iod.n_particles=500",
+             "custody.degenerate_ess=0", "custody.collapse_sigma_km=0")
+    nis = [r["nis"] for r in read_steps(out).to_pylist() if r["kind"] == "update"][-3:]
+    v = read_manifest(out)["summary"]["verdict"]
+    assert sorted(nis)[1] > 1e3
+    assert v["kind"] == "diverged" and v["reason"] == (
+        f"measurements far outside the predicted spread: median NIS {sorted(nis)[1]:.3g} over the last 3 updates > 1000")
+
+
+def test_a_consistent_truthless_run_is_not_diverged_by_the_nis_rule(obs_file, tmp_path):
+    out = tmp_path / "run"
+    _cli_run(obs_file, out, "filter.n_particles=300", "iod.n_particles=300", "custody.diverged_nis=1e3")
+    nis = [r["nis"] for r in read_steps(out).to_pylist() if r["kind"] == "update"][-3:]
+    assert sorted(nis)[1] < 1e3 and read_manifest(out)["summary"]["verdict"]["kind"] == "no-truth"
+
+
 def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_file, tmp_path):
     out = tmp_path / "run"
     _cli_run(obs_file, out, "filter.n_particles=300", "iod.n_particles=300")
