@@ -21,6 +21,7 @@ from .errors import CistrackError, ConfigError
 from .study_cli import add_study_parser
 from .limits import check_seed
 from .output_paths import check_output_dir
+from .process_exit import allow_quick_exit, exit_process
 from .signals import install_signal_handlers
 
 if sys.version_info >= (3, 11):
@@ -112,6 +113,8 @@ def cmd_run(args) -> int:
             pass
         finally:
             recorder.close()
+    if recorder is None:
+        allow_quick_exit()  # results written and closed; no recorder to flush at exit
     return 0 if s.status == "finished" else 3
 
 
@@ -288,5 +291,11 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(sig, handler)
 
 
+def console_main() -> None:
+    """The ``cistrack`` command: :func:`main`, then the end of the process (without interpreter
+    teardown after a run: :mod:`cistrack.process_exit`)."""
+    exit_process(main())
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console_main()

@@ -94,7 +94,8 @@ def test_generated_kernels_carry_no_fastmath_flags():
 @pytest.mark.parametrize("module", ["cistrack.plugins.dynamics.cr3bp", "cistrack.plugins.dynamics.twobody",
                                    "cistrack.plugins.dynamics.corrector", "cistrack.plugins.clustering.em_numba",
                                    "cistrack.belief", "cistrack.ephemeris",
-                                   "cistrack.plugins.dynamics.ephemeris_rhs"])
+                                   "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.clustering.lloyd",
+                                   "cistrack.plugins.clustering.points_and_labels"])
 def test_builtin_compiled_functions_carry_no_fastmath_flags(module):
     mod = __import__(module, fromlist=["_"])
     jitted = [v for v in vars(mod).values()
