@@ -311,6 +311,12 @@ add("study-workers-negative", **study_case(("--workers", "out of range"), argv=(
 add("study-workers-zero", **study_case(("--workers", "out of range"), argv=("--workers", "0")))
 add("study-workers-word", **study_case(("--workers", "invalid int"), argv=("--workers", "two")))
 add("study-workers-huge", **study_case(("--workers", "out of range"), argv=("--workers", "100000")))
+add("study-n-seeds-flag-zero", **study_case(("--n-seeds", "out of range"), argv=("--n-seeds", "0")))
+add("study-first-seed-flag-negative", **study_case(("--first-seed", "2**63-1"), argv=("--first-seed", "-5")))
+add("study-first-seed-flag-word", **study_case(("--first-seed", "invalid int"), argv=("--first-seed", "one")))
+add("study-first-seed-key-string", **study_case(("first_seed",), study_text=study(seeds=DROP, n_seeds=2, first_seed="a")))
+add("study-seeds-and-first-seed", **study_case(("not both",), study_text=study(first_seed=3)))
+add("study-last-seed-above-2**63", **study_case(("last seed",), argv=("--first-seed", str(2 ** 63 - 1), "--n-seeds", "2")))
 add("study-missing-file", argv=["study", "run", "nope.toml", "--quiet"], words=("nope",))
 add("study-report-missing", argv=["study", "report", "nope.toml"], words=("nope",))
 # -- other commands -------------------------------------------------------------------------------

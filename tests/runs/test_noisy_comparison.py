@@ -67,3 +67,11 @@ def test_the_runs_are_the_chosen_seeds(report):
     _, out = report
     assert sorted(d.name for d in (out / "runs").iterdir()) == sorted(
         f"example-1__{f}__noisy-range__seed{s}" for f in ("pgm", "enkf", "ukf") for s in (1000, 1001))
+
+
+def test_the_command_line_takes_the_seeds_for_run_and_report(tmp_path, capsys):
+    from cistrack.cli import main
+
+    assert main(["study", "report", "noisy-comparison", "--out", str(tmp_path / "s"), "--first-seed", "7",
+                 "--n-seeds", "1"]) == 2
+    assert "none of its 3 runs has finished" in capsys.readouterr().err
