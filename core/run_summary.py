@@ -102,8 +102,9 @@ class RunSummary:
             failed = data.get("status") == "filter-failed"
             verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
                               data.get("custody_lost_step"), data.get("custody_lost_t_days"))
-        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed", "n_measurements_before_iod", "consistency",
-                 "final", "pass_end", "wall_time_s", "prepare_time_s", "status", "failure")
+        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed",
+                 "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s",
+                 "status", "failure")
         has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
         return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
                    **{k: data[k] for k in names if k in data})

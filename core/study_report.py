@@ -1,8 +1,12 @@
 """Reports of a study: the table (terminal, CSV, Markdown) and PNG plots in ``<out>/report/``.
 
-Reads every finished run of a study (its manifest's :class:`~cistrack.run_summary.RunSummary`
-and its ``steps.parquet``) and groups them by scenario, IOD variant and filter; the plots are
-drawn by :mod:`cistrack.report_plots`.
+Reads every finished run of a study (its manifest's :class:`~cistrack.run_summary.RunSummary`,
+measurement consistency included, and its ``steps.parquet``) and groups them by scenario, IOD
+variant and filter. Files: ``summary.csv`` (one row per group), ``summary.md``, ``runs.csv`` (every
+run's verdict and reason) and ``custody_by_filter.csv`` (:mod:`cistrack.report_verdicts`); the
+plots are drawn by :mod:`cistrack.report_plots` and :mod:`cistrack.calibration_plots`. Two ANEES
+figures are reported and named apart: over every update of every run (``anees_every_update``)
+and over the runs' final states (``final_anees``, with its chi-square bounds).
 """
 from __future__ import annotations
 
