@@ -285,7 +285,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                      + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
                      + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
                         if len(custody_by_filter(rows)[0]) > 1 else [])
-                     + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):"]
+                     + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):" if has_truth
+                        else "Measurement consistency (95 %; no truth, so no calibration):"]
                      + [f"- {_calibration_line(r)}" for r in rows]
                      + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
                      + (flagged or ["None."]))

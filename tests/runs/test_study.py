@@ -190,6 +190,7 @@ def test_a_study_on_an_observation_file_reports_measurement_consistency_and_neve
     md = (out / "report" / "summary.md").read_text()
     assert "custody" not in md.lower() and "custody" not in rep["text"].lower()
     assert "## Measurement consistency (no truth)" in md
+    assert "Measurement consistency (95 %; no truth, so no calibration):" in rep["text"]
     row = rep["rows"][0]
     s = residual_summary([r for d in sorted((out / "runs").iterdir()) for r in read_steps(d).to_pylist()])
     assert row["custody_kept"] is None and row["nis_updates"] == s.nis_test.n

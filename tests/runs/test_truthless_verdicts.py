@@ -130,3 +130,28 @@ def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, 
     assert row["nis_updates"] == k
     with open(out / "report" / "summary.csv") as fh:
         assert "custody" not in fh.readline()
+
+
+def test_a_truthless_study_flags_its_diverged_runs_with_the_reason_and_never_says_custody(obs_file, tmp_path):
+    import concurrent.futures as cf
+
+    from cistrack.study import run_study
+    from cistrack.study_report import report_study
+
+    study = tmp_path / "observed-sir.toml"
+    study.write_text(f'name = "observed-sir"\nscenarios = ["quick"]\nseeds = [1]\n'
+                     f'filters = [{{ name = "sir", n_particles = 300 }}]\n'
+                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
+                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
+    out = tmp_path / "s"
+    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    rep = report_study(study, out_dir=out)
+    (run,) = list((out / "runs").iterdir())
+    v = read_manifest(run)["summary"]["verdict"]
+    assert v["kind"] == "diverged"
+    line = f"- {run.name} (sir with noisy-range IOD on quick): diverged: {v['reason']}"
+    md = (out / "report" / "summary.md").read_text()
+    assert line in rep["text"] and line in md and "## Diverged and failed runs" in md
+    assert rep["rows"][0]["verdicts"] == "0/1"                         # no-truth / diverged
+    for text in (rep["text"], md, *(p.read_text() for p in (out / "report").glob("*.csv"))):
+        assert "custody" not in text.lower()
