@@ -1,6 +1,6 @@
 """Diagnostic: where does the PGM first make the truth improbable? (issue 16, item 1)
 
-Runs Example 1 for the given seeds with the default PGM (or with the overrides given) and
+Runs Example 1 (or ``--scenario``) for the given seeds with the default PGM (or with the overrides given) and
 prints, for every measurement update, one line with
 
 - prior (the clustered prior the filter is about to update):
@@ -21,6 +21,7 @@ Reading: ``prH`` near 1 means propagation + Gaussian fit already lost the truth;
 
     python benchmarks/diag_pgm_updates.py --seeds 1030,1035 --iod noisy-range \
         [--set '{"filter": {"n_components": 12}}'] [--only-passes 4,5]
+    python benchmarks/diag_pgm_updates.py --scenario example-3 --seeds 5 --only-passes 147
 
 Tuning seeds only (1-60, 1000-1099). Prints the machine it ran on.
 """
@@ -114,22 +115,24 @@ _COLS = ("t", "pass", "prN", "prH", "M", "nmin", "kurt", "tcN", "ess", "isN", "p
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", default="1030")
-    ap.add_argument("--iod", default="uniform-range")
+    ap.add_argument("--scenario", default="example-1", help="built-in scenario name or TOML file")
+    ap.add_argument("--iod", default="", help="IOD name (default: the scenario's own)")
     ap.add_argument("--set", default="{}", help="scenario overrides as a Python dict literal")
     ap.add_argument("--only-passes", default="", help="print only these passes (comma list)")
     ap.add_argument("--summary-only", action="store_true")
     a = ap.parse_args(argv)
     print("\n".join(machine_lines()))
     over = ast.literal_eval(a.set)
-    over.setdefault("iod", {})["name"] = a.iod
-    sc = load_scenario("example-1").with_overrides(over)
+    if a.iod:
+        over.setdefault("iod", {})["name"] = a.iod
+    sc = load_scenario(a.scenario).with_overrides(over)
     passes = {int(p) for p in a.only_passes.split(",") if p}
     for seed in [int(s) for s in a.seeds.split(",")]:
         probe = UpdateProbe()
         t0 = time.perf_counter()
         res = run_scenario(sc, seed=seed, observers=[probe])
         s = res.summary
-        print(f"# seed {seed} {a.iod}: custody {'kept' if s.custody_kept else 'LOST'} "
+        print(f"# {a.scenario} seed {seed} {a.iod or sc.components['iod'].name}: custody {'kept' if s.custody_kept else 'LOST'} "
               f"final NEES {s.final['nees']:.1f} err {s.final['pos_err_km']:.1f} km "
               f"({time.perf_counter() - t0:.1f} s)", flush=True)
         if a.summary_only:
