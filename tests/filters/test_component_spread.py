@@ -87,3 +87,55 @@ def test_pgm_shrinks_by_default_and_pgm_paper_does_not():
 def test_pgm_rejects_a_kept_spread_outside_zero_to_one(value):
     with pytest.raises(ParameterError, match="kept_spread"):
         PGMFilter(kept_spread=value)
+
+
+_APART = np.array([1.0, 0.0, 1.0, 1.0, 1.0, 1.0])  # the hypotheses differ in every coordinate but 1
+
+
+def _two_hypotheses(seed=0, n=4000, half_gap=5.0, sd=0.3):
+    """Particles (2n, 6) in two separated blobs at -half_gap and +half_gap along _APART."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(scale=sd, size=(2 * n, 6))
+    x[:n] -= half_gap * _APART
+    x[n:] += half_gap * _APART
+    return x
+
+
+def _share_in_the_gap(filt, seed=0, sigma=1e-4):
+    """Share of the PGM's posterior particles between two separated hypotheses after one update
+    by a measurement (of coordinate 1, noise ``sigma``) that both explain equally. The prior's
+    predicted measurements spread over 0.3 / sigma noise sigmas (3,000 by default)."""
+    x = _two_hypotheses(seed)
+    sensor = LinearSensor(sigma=sigma, coords=(1,))
+    filt.initialize(ParticleCloud(x, 0.0), LinearDynamics(), sensor, np.random.default_rng(seed))
+    meas = sensor.simulate(np.zeros((1, 6)), np.array([1e-9]), np.random.default_rng(seed + 1))[0]
+    filt.predict(meas.t)
+    filt.update(meas)
+    along = filt.belief.samples.states @ _APART / np.sqrt(5.0)   # blob centres at +-11.2, sd 0.3
+    return float(np.mean(np.abs(along) < 8.0))
+
+
+def test_shrinking_while_reacquiring_drags_separated_hypotheses_into_the_gap_between_them():
+    # the failure after a long gap: shrinkage pulls both hypotheses toward their empty middle
+    share = _share_in_the_gap(PGMFilter(n_particles=8000, n_components=6, kept_spread=0.7,
+                                        shrink_spread_sigma=1e9))
+    assert share > 0.1, share
+
+
+def test_default_pgm_does_not_shrink_while_reacquiring_and_leaves_the_gap_empty():
+    filt = PGMFilter(n_particles=8000, n_components=6)
+    share = _share_in_the_gap(filt)
+    assert filt.diagnostics["components_shrunk"] == 0.0
+    assert share < 1e-3, share
+
+
+def test_default_pgm_shrinks_once_the_predicted_spread_is_under_the_threshold():
+    filt = PGMFilter(n_particles=8000, n_components=6)
+    _share_in_the_gap(filt, sigma=0.05)   # the cloud's predicted measurements spread over 6 sigmas
+    assert filt.diagnostics["components_shrunk"] == 1.0
+
+
+@pytest.mark.parametrize("value", [0.0, -5.0])
+def test_pgm_rejects_a_shrink_spread_threshold_that_is_not_positive(value):
+    with pytest.raises(ParameterError, match="shrink_spread_sigma"):
+        PGMFilter(shrink_spread_sigma=value)
