@@ -3,8 +3,9 @@ truth became improbable (per pass and per update within a pass).
 
     python benchmarks/calibration_tables.py STUDY_DIR [STUDY_DIR ...]
 
-Reads each run's manifest.json and steps.parquet under STUDY_DIR/runs. Columns: runs; custody
-kept with its 95% Wilson interval; final NEES median / 90th percentile; ANEES with its
+Reads each run's manifest.json and steps.parquet under STUDY_DIR/runs, one row per scenario x
+filter x IOD. Columns: runs; custody kept with its 95% Wilson interval; runs whose verdict is
+tracking (custody kept counts consistent-but-not-converged runs too); final NEES median / 90th percentile; ANEES with its
 chi-square(6 M) 95% band; share of runs whose final truth HDR level exceeds 0.99; the
 Kolmogorov-Smirnov statistic of the final HDR levels against uniform; runs ending more than
 50 km from the truth; the largest final error; runs not finished; the days custody was lost.
@@ -28,24 +29,25 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
 
-def load(study_dir: str) -> dict[tuple[str, str], list[tuple[dict, str]]]:
-    """(filter label, IOD) -> [(manifest, run dir)] for the finished runs of one study."""
-    out: dict[tuple[str, str], list] = {}
+def load(study_dir: str) -> dict[tuple[str, str, str], list[tuple[dict, str]]]:
+    """(scenario, filter label, IOD) -> [(manifest, run dir)] for the finished runs of one study."""
+    out: dict[tuple[str, str, str], list] = {}
     for m in sorted(glob.glob(f"{study_dir}/runs/*/manifest.json")):
         with open(m) as fh:
             man = json.load(fh)
         if "summary" not in man:
             continue
-        _, flt, iod, _seed = man["run_id"].split("__")
-        out.setdefault((flt, iod), []).append((man, os.path.dirname(m)))
+        scen, flt, iod, _seed = man["run_id"].split("__")
+        out.setdefault((scen, flt, iod), []).append((man, os.path.dirname(m)))
     return out
 
 
 def summary_table(groups) -> None:
-    print("| filter | IOD | runs | custody kept (95% CI) | final NEES median / p90 | ANEES (chi2 95% band) | "
-          "final HDR > 0.99 | KS vs uniform | final err > 50 km | max final err km | not finished | lost days |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for (flt, iod), runs in sorted(groups.items()):
+    print("| scenario | filter | IOD | runs | custody kept (95% CI) | tracking | final NEES median / p90 | "
+          "ANEES (chi2 95% band) | final HDR > 0.99 | KS vs uniform | final err > 50 km | max final err km | "
+          "not finished | lost days |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (scen, flt, iod), runs in sorted(groups.items()):
         s = [m["summary"] for m, _ in runs]
         n = len(s)
         k = sum(x["custody_kept"] for x in s)
@@ -57,7 +59,8 @@ def summary_table(groups) -> None:
         ks = kstest(hdr[np.isfinite(hdr)], "uniform")
         lost = sorted(round(x["custody_lost_t_days"], 2) for x in s
                       if not x["custody_kept"] and x["custody_lost_t_days"] is not None)
-        print(f"| {flt} | {iod} | {n} | {k} ({ci.low:.2f}-{ci.high:.2f}) | {np.nanmedian(nees):.1f} / "
+        tracking = sum((x.get("verdict") or {}).get("kind") == "tracking" for x in s)
+        print(f"| {scen} | {flt} | {iod} | {n} | {k} ({ci.low:.2f}-{ci.high:.2f}) | {tracking} | {np.nanmedian(nees):.1f} / "
               f"{np.nanpercentile(nees, 90):.1f} | {np.nanmean(nees):.3g} ({lo:.2f}-{hi:.2f}) | "
               f"{np.mean(hdr > 0.99):.0%} | {ks.statistic:.2f} (p {ks.pvalue:.2g}) | {int(np.sum(err > 50))} | "
               f"{np.nanmax(err):.1f} | {sum(x['status'] != 'finished' for x in s)} | {lost} |")
@@ -65,7 +68,7 @@ def summary_table(groups) -> None:
 
 def per_update_table(groups) -> None:
     print("\nPosterior NEES median / share of runs with HDR > 0.99, at update k of each pass:")
-    for (flt, iod), runs in sorted(groups.items()):
+    for (scen, flt, iod), runs in sorted(groups.items()):
         acc: dict[tuple[int, int], list] = defaultdict(list)
         for _, d in runs:
             t = pq.read_table(f"{d}/steps.parquet", columns=["kind", "nees", "hdr_level", "pass_index"]).to_pydict()
@@ -76,7 +79,7 @@ def per_update_table(groups) -> None:
                 k = 0 if p != prev else k + 1
                 prev = p
                 acc[(int(p), k)].append((ne, h))
-        print(f"  {flt} {iod}:")
+        print(f"  {scen} {flt} {iod}:")
         for p in sorted({p for p, _ in acc}):
             cells = []
             for k in range(10):
