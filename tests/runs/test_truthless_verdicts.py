@@ -101,21 +101,29 @@ def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_
     assert c["nis_dof_total"] == 2 * c["nis_updates"]          # azimuth and elevation at each update
 
 
-def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, tmp_path):
+def _run_observed_study(tmp_path, obs_file, name: str, filter_table: str, seeds: str):
+    """Run a small study of the quick scenario on the observation file (no truth): (study file, dir)."""
     import concurrent.futures as cf
-    import json
 
-    from cistrack.consistency import chi2_ppf
     from cistrack.study import run_study
-    from cistrack.study_report import report_study
 
-    study = tmp_path / "observed.toml"
-    study.write_text(f'name = "observed"\nscenarios = ["quick"]\nseeds = [1, 2]\n'
-                     f'filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]\n'
+    study = tmp_path / f"{name}.toml"
+    study.write_text(f'name = "{name}"\nscenarios = ["quick"]\nseeds = {seeds}\n'
+                     f'filters = [{filter_table}]\n'
                      f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
                      f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
     out = tmp_path / "s"
     run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    return study, out
+
+
+def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, tmp_path):
+    import json
+
+    from cistrack.consistency import chi2_ppf
+    from cistrack.study_report import report_study
+
+    study, out = _run_observed_study(tmp_path, obs_file, "observed", "{ name = \"pgm\", n_particles = 300, n_components = 2 }", "[1, 2]")
     cons = []
     for i, d in enumerate(sorted((out / "runs").iterdir())):   # mark the manifests: the report must use them
         man = json.loads((d / "manifest.json").read_text())
@@ -133,18 +141,9 @@ def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, 
 
 
 def test_a_truthless_study_flags_its_diverged_runs_with_the_reason_and_never_says_custody(obs_file, tmp_path):
-    import concurrent.futures as cf
-
-    from cistrack.study import run_study
     from cistrack.study_report import report_study
 
-    study = tmp_path / "observed-sir.toml"
-    study.write_text(f'name = "observed-sir"\nscenarios = ["quick"]\nseeds = [1]\n'
-                     f'filters = [{{ name = "sir", n_particles = 300 }}]\n'
-                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
-                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
-    out = tmp_path / "s"
-    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    study, out = _run_observed_study(tmp_path, obs_file, "observed-sir", "{ name = \"sir\", n_particles = 300 }", "[1]")
     rep = report_study(study, out_dir=out)
     (run,) = list((out / "runs").iterdir())
     v = read_manifest(run)["summary"]["verdict"]
