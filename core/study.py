@@ -29,7 +29,7 @@ from typing import Any
 
 from .errors import ConfigError
 from .fingerprint import scenario_fingerprint
-from .study_file import _study_path, _study_seeds, builtin_studies, load_study
+from .study_file import _study_seeds, builtin_studies, load_study, recorded_settings, study_source
 from .study_resume import is_done, run_state
 from .limits import check_count, check_path_component
 from .results import read_manifest
@@ -85,6 +85,10 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     from .settings import merge_settings, parse_settings
 
     data, p = load_study(path_or_name)
+    recorded = recorded_settings(path_or_name)  # a study results directory: its own runs, in place
+    if recorded is not None:
+        settings = recorded if settings is None else settings
+        out_dir = path_or_name if out_dir is None else out_dir
     name = check_path_component(data.get("name", p.stem), f"{p}: key 'name'")
     extra = parse_settings(settings)
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
@@ -226,7 +230,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
         Path(rerun_dir).mkdir(parents=True, exist_ok=True)
         specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
     out.mkdir(parents=True, exist_ok=True)
-    (out / "study.json").write_text(json.dumps({"source": str(_study_path(path_or_name)), **data,
+    (out / "study.json").write_text(json.dumps({"source": study_source(path_or_name), **data,
                                                "settings": list(settings or []),
                                                "run_seeds": sorted({sp.seed for sp in specs})},
                                               indent=2, default=str))

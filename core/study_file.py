@@ -3,6 +3,7 @@ the seeds it runs (see :mod:`cistrack.study` for the file's keys)."""
 from __future__ import annotations
 
 import difflib
+import json
 import sys
 from importlib import resources
 from pathlib import Path
@@ -15,7 +16,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["builtin_studies", "load_study", "STUDY_KEYS"]
+__all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS"]
 
 STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides"}
 """Keys allowed at the top of a study file."""
@@ -47,13 +48,54 @@ def _study_path(path_or_name: str | Path) -> Path:
     raise ConfigError(msg)
 
 
-def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
-    """Read and check a study file. Returns (data, path)."""
+def _recorded(directory: Path) -> dict:
+    """The ``study.json`` that ``study run`` wrote into a study results directory."""
+    rec = directory / "study.json"
+    if not rec.is_file():
+        raise ConfigError(f"{directory}: a directory, but not a study results directory (it has no "
+                          f"study.json); give a study TOML file, a built-in study name or the --out "
+                          f"directory of a 'cistrack study run'")
+    try:
+        data = json.loads(rec.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{rec}: not a readable study record: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("run_seeds"), list):
+        raise ConfigError(f"{rec}: not a study record written by 'cistrack study run' (no 'run_seeds' list)")
+    return data
+
+
+def study_source(path_or_name: str | Path) -> str:
+    """The study file a study comes from: the file itself, a built-in study's file, or for a study
+    results directory the file its ``study.json`` records."""
     p = _study_path(path_or_name)
+    return str(_recorded(p).get("source", p)) if p.is_dir() else str(p)
+
+
+def recorded_settings(path_or_name: str | Path) -> list[str] | None:
+    """The ``--set`` items a study results directory was run with; None for a study file or name."""
+    p = Path(path_or_name)
+    return [str(s) for s in _recorded(p).get("settings") or []] if p.is_dir() else None
+
+
+def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
+    """Read and check a study file, or the definition recorded in a study results directory (its
+    seeds are then the ones run). Returns (data, the study file's path)."""
+    p = _study_path(path_or_name)
+    if p.is_dir():
+        rec = _recorded(p)
+        data = {k: v for k, v in rec.items() if k in _STUDY_KEYS and k not in ("n_seeds", "first_seed")}
+        data["seeds"] = rec["run_seeds"]
+        data.setdefault("name", p.name)
+        src = Path(str(rec.get("source", "")))
+        return _checked(data, src if src.is_file() else p / "study.json"), (src if src.is_file() else p / "study.json")
     try:
         data = tomllib.loads(p.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    return _checked(data, p), p
+
+
+def _checked(data: dict, p: Path) -> dict:
     for k in data:
         if k not in _STUDY_KEYS:
             close = difflib.get_close_matches(k, list(_STUDY_KEYS), n=1)
@@ -63,7 +105,7 @@ def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
         raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
     if "seeds" in data and ("n_seeds" in data or "first_seed" in data):
         raise ConfigError(f"{p}: give 'seeds', or 'n_seeds' (and optionally 'first_seed'), not both")
-    return data, p
+    return data
 
 
 def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: int | None = None) -> list[int]:

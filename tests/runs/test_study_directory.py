@@ -1,0 +1,36 @@
+"""A study's results directory stands for the study: `cistrack study report DIR` reports the runs
+it holds, with the seeds and --set values they were run with."""
+from __future__ import annotations
+
+import concurrent.futures as cf
+
+from cistrack.cli import main
+from cistrack.study import run_study
+from cistrack.study_report import report_study
+
+SETTINGS = ["filter.n_particles=250"]
+
+
+def test_report_of_a_study_directory_equals_the_report_of_its_file_with_the_same_seeds_and_settings(
+        tiny_study, tmp_path):
+    out = tmp_path / "s"
+    run_study(tiny_study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False,
+              settings=SETTINGS, first_seed=5, n_seeds=2)
+    by_dir = report_study(out)
+    by_file = report_study(tiny_study, out_dir=out, settings=SETTINGS, first_seed=5, n_seeds=2)
+    assert by_dir["rows"][0]["runs"] == 2
+    assert by_dir["rows"] == by_file["rows"]
+
+
+def test_a_study_run_on_its_directory_finds_every_run_done(tiny_study, tmp_path):
+    out = tmp_path / "s"
+    run_study(tiny_study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False,
+              settings=SETTINGS, first_seed=5, n_seeds=2)
+    res = run_study(out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    assert (res["completed"], res["skipped"], res["failed"]) == (0, 2, 0)
+
+
+def test_report_of_a_directory_that_holds_no_study_is_refused_naming_it(tmp_path, capsys):
+    assert main(["study", "report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert str(tmp_path) in err and "no study.json" in err and "Traceback" not in err
