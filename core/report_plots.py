@@ -61,6 +61,16 @@ def band_over_seeds(series: list[tuple[np.ndarray, np.ndarray]], grid: np.ndarra
     return out
 
 
+def _nees_locator(lo: float, hi: float):
+    """Ticks 1-2-5 per decade over a few decades; over many (a diverged run's NEES reaches 1e10)
+    that asks matplotlib for too many ticks and it draws none, so then whole decades."""
+    import matplotlib.ticker
+    decades = np.log10(max(hi, 1e-300) / max(lo, 1e-300))
+    if decades <= 5.0:
+        return matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0))
+    return matplotlib.ticker.LogLocator(subs=(1.0,), numticks=8)
+
+
 def nees_band(dof: int = CHI2_DOF, level: float = 0.90) -> tuple[float, float]:
     """The central ``level`` interval of a chi-square variable with ``dof`` degrees of freedom."""
     from scipy.stats import chi2
@@ -170,7 +180,7 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
                 ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
                 ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             if ax is nees_ax:
-                ax.yaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+                ax.yaxis.set_major_locator(_nees_locator(*ax.get_ylim()))
             ax.grid(True, which="major", alpha=0.3)
         axes[-1].set_xlabel("time since epoch (days)")
         handles, labels = [], []

@@ -48,3 +48,14 @@ def test_the_figure_is_written_as_png_svg_and_pdf_and_names_the_filters(tmp_path
     assert all(f.stat().st_size > 5000 for f in files)
     svg = next(f for f in files if f.suffix == ".svg").read_text()
     assert "pgm vs ukf on quick" in svg and "custody lost (3 of 3 runs)" in svg
+
+
+def test_the_nees_axis_keeps_its_tick_labels_when_a_diverged_filter_spans_ten_decades(tmp_path):
+    def diverged(seed):
+        t = _table(seed, True)
+        return t.set_column(t.column_names.index("nees"), "nees", pa.array(np.logspace(0, 10, 9)))
+
+    groups = {("quick", "noisy-range", "pgm"): {"tables": [diverged(s) for s in (1, 2, 3)],
+                                                "summaries": [{"custody_kept": False, "custody_lost_t_days": 1.2}] * 3}}
+    svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
+    assert "1e+06" in svg and "1e+08" in svg  # decade ticks of the NEES panel (none were drawn before)
