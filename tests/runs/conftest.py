@@ -21,3 +21,37 @@ def tiny_study(tmp_path) -> Path:
     p = tmp_path / "tiny.toml"
     p.write_text(STUDY.format(seeds="[1, 2, 3]", days=1.4))
     return p
+
+
+@pytest.fixture(scope="module")
+def obs_file(tmp_path_factory) -> Path:
+    """Angles of the quick scenario (seed 1, 1.4 days) written as an observation CSV file (no truth)."""
+    from cistrack.plugins.readers.csv_file import write_measurements
+    from cistrack.run import run_scenario
+    from cistrack.scenario import load_scenario
+
+    sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
+    obs = tmp_path_factory.mktemp("obs") / "obs.csv"
+    write_measurements(obs, sim.context.measurements, "2026-01-01T00:00:00Z")
+    return obs
+
+
+@pytest.fixture
+def observed_study(tmp_path, obs_file):
+    """Run a small study of the quick scenario on ``obs_file``: call with (name, filter table as
+    TOML, seeds as TOML); returns (study file, study directory)."""
+    import concurrent.futures as cf
+
+    from cistrack.study import run_study
+
+    def run(name: str, filter_table: str, seeds: str) -> tuple[Path, Path]:
+        study = tmp_path / f"{name}.toml"
+        study.write_text(f'name = "{name}"\nscenarios = ["quick"]\nseeds = {seeds}\n'
+                         f'filters = [{filter_table}]\n'
+                         f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
+                         f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
+        out = tmp_path / "s"
+        run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+        return study, out
+
+    return run

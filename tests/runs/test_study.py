@@ -170,22 +170,10 @@ def test_builtin_calibration_study_reports_calibration_per_iod_under_process_and
         assert {f"example-1__{r['iod']}.png", f"example-1__{r['iod']}__hdr.png"} <= names
 
 
-def test_a_study_on_an_observation_file_reports_measurement_consistency_and_never_custody(tmp_path):
-    from cistrack.plugins.readers.csv_file import write_measurements
+def test_a_study_on_an_observation_file_reports_measurement_consistency_and_never_custody(observed_study):
     from cistrack.residuals import residual_summary
-    from cistrack.run import run_scenario
-    from cistrack.scenario import load_scenario
 
-    sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
-    obs = tmp_path / "obs.csv"
-    write_measurements(obs, sim.context.measurements, "2026-01-01T00:00:00Z")
-    study = tmp_path / "observed.toml"
-    study.write_text(f'name = "observed"\nscenarios = ["quick"]\nseeds = [1, 2]\n'
-                     f'filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]\n'
-                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
-                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs}" }}\n')
-    out = tmp_path / "s"
-    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    study, out = observed_study("observed", '{ name = "pgm", n_particles = 300, n_components = 2 }', "[1, 2]")
     rep = report_study(study, out_dir=out)
     md = (out / "report" / "summary.md").read_text()
     assert "custody" not in md.lower() and "custody" not in rep["text"].lower()

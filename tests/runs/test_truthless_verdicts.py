@@ -12,19 +12,8 @@ import sys
 
 import pytest
 
-from cistrack.plugins.readers.csv_file import write_measurements
 from cistrack.residuals import consistency_summary, residual_summary
 from cistrack.results import read_manifest, read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
-
-
-@pytest.fixture(scope="module")
-def obs_file(tmp_path_factory):
-    sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
-    obs = tmp_path_factory.mktemp("obs") / "obs.csv"
-    write_measurements(obs, sim.context.measurements, "2026-01-01T00:00:00Z")
-    return obs
 
 
 def _cli_run(obs, out, *settings):
@@ -101,29 +90,13 @@ def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_
     assert c["nis_dof_total"] == 2 * c["nis_updates"]          # azimuth and elevation at each update
 
 
-def _run_observed_study(tmp_path, obs_file, name: str, filter_table: str, seeds: str):
-    """Run a small study of the quick scenario on the observation file (no truth): (study file, dir)."""
-    import concurrent.futures as cf
-
-    from cistrack.study import run_study
-
-    study = tmp_path / f"{name}.toml"
-    study.write_text(f'name = "{name}"\nscenarios = ["quick"]\nseeds = {seeds}\n'
-                     f'filters = [{filter_table}]\n'
-                     f'iod = [{{ name = "noisy-range", n_particles = 300 }}]\n'
-                     f'[overrides]\nduration_days = 1.4\nmeasurements = {{ file = "{obs_file}" }}\n')
-    out = tmp_path / "s"
-    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
-    return study, out
-
-
-def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, tmp_path):
+def test_a_study_report_reads_each_runs_consistency_from_its_manifest(observed_study):
     import json
 
     from cistrack.consistency import chi2_ppf
     from cistrack.study_report import report_study
 
-    study, out = _run_observed_study(tmp_path, obs_file, "observed", "{ name = \"pgm\", n_particles = 300, n_components = 2 }", "[1, 2]")
+    study, out = observed_study("observed", "{ name = \"pgm\", n_particles = 300, n_components = 2 }", "[1, 2]")
     cons = []
     for i, d in enumerate(sorted((out / "runs").iterdir())):   # mark the manifests: the report must use them
         man = json.loads((d / "manifest.json").read_text())
@@ -140,10 +113,10 @@ def test_a_study_report_reads_each_runs_consistency_from_its_manifest(obs_file, 
         assert "custody" not in fh.readline()
 
 
-def test_a_truthless_study_flags_its_diverged_runs_with_the_reason_and_never_says_custody(obs_file, tmp_path):
+def test_a_truthless_study_flags_its_diverged_runs_with_the_reason_and_never_says_custody(observed_study):
     from cistrack.study_report import report_study
 
-    study, out = _run_observed_study(tmp_path, obs_file, "observed-sir", "{ name = \"sir\", n_particles = 300 }", "[1]")
+    study, out = observed_study("observed-sir", "{ name = \"sir\", n_particles = 300 }", "[1]")
     rep = report_study(study, out_dir=out)
     (run,) = list((out / "runs").iterdir())
     v = read_manifest(run)["summary"]["verdict"]
