@@ -67,12 +67,21 @@ def summary_table(groups) -> None:
               f"{np.nanmax(err):.1f} | {sum(x['status'] != 'finished' for x in s)} | {lost} |")
 
 
-def per_update_table(groups) -> None:
+_STEP_COLUMNS = ["kind", "nees", "hdr_level", "pass_index", "sigma_pos_km", "pos_err_km"]
+
+
+def read_step_tables(groups) -> dict[str, dict]:
+    """Run directory -> the step-table columns both per-run tables need, each file read once."""
+    return {d: pq.read_table(f"{d}/steps.parquet", columns=_STEP_COLUMNS).to_pydict()
+            for runs in groups.values() for _, d in runs}
+
+
+def per_update_table(groups, steps) -> None:
     print("\nPosterior NEES median / share of runs with HDR > 0.99, at update k of each pass:")
     for (scen, flt, iod), runs in sorted(groups.items()):
         acc: dict[tuple[int, int], list] = defaultdict(list)
         for _, d in runs:
-            t = pq.read_table(f"{d}/steps.parquet", columns=["kind", "nees", "hdr_level", "pass_index"]).to_pydict()
+            t = steps[d]
             prev, k = None, 0
             for kind, ne, h, p in zip(t["kind"], t["nees"], t["hdr_level"], t["pass_index"]):
                 if kind != "update":
@@ -90,14 +99,13 @@ def per_update_table(groups) -> None:
             print(f"    pass {p}: " + "  ".join(cells))
 
 
-def per_pass_precision_table(groups) -> None:
+def per_pass_precision_table(groups, steps) -> None:
     print("\nMedian position sigma / position error (km) at the last update of each pass (custody alone "
           "favours wide clouds; this shows what each filter pays for it):")
     for (scen, flt, iod), runs in sorted(groups.items()):
         acc: dict[int, list] = defaultdict(list)
         for _, d in runs:
-            t = pq.read_table(f"{d}/steps.parquet",
-                              columns=["kind", "pass_index", "sigma_pos_km", "pos_err_km"]).to_pydict()
+            t = steps[d]
             last = {int(p): (sg, e) for kind, p, sg, e in zip(t["kind"], t["pass_index"], t["sigma_pos_km"],
                                                                t["pos_err_km"]) if kind == "update"}
             for p, v in last.items():
@@ -114,8 +122,9 @@ def main(argv=None) -> None:
     for d in dirs:
         groups.update(load(d))
     summary_table(groups)
-    per_update_table(groups)
-    per_pass_precision_table(groups)
+    steps = read_step_tables(groups)
+    per_update_table(groups, steps)
+    per_pass_precision_table(groups, steps)
 
 
 if __name__ == "__main__":

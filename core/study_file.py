@@ -87,7 +87,8 @@ def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
         data["seeds"] = rec["run_seeds"]
         data.setdefault("name", p.name)
         src = Path(str(rec.get("source", "")))
-        return _checked(data, src if src.is_file() else p / "study.json"), (src if src.is_file() else p / "study.json")
+        src = src if src.is_file() else p / "study.json"  # relative scenario paths resolve beside it
+        return _checked(data, src), src
     try:
         data = tomllib.loads(p.read_text())
     except tomllib.TOMLDecodeError as exc:
