@@ -19,6 +19,15 @@ def transition(dt: float) -> np.ndarray:
     return f
 
 
+def kalman_step(m: np.ndarray, P: np.ndarray, dt: float, H: np.ndarray, R: np.ndarray,
+                z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The textbook Kalman filter's prediction over dt (free motion) and update with z = H x + v."""
+    F = transition(dt)
+    m, P = F @ m, F @ P @ F.T
+    K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    return m + K @ (z - H @ m), (np.eye(6) - K @ H) @ P
+
+
 class LinearDynamics(Dynamics):
     """Free motion; a particle is stopped when its position enters the ball ``body_radius``
     around ``body_center`` at the final time (enough for the tests that use it)."""

@@ -9,7 +9,7 @@ from cistrack.errors import ParameterError
 from cistrack.plugins.filters.component_spread import shrink_components
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 
-from .linear_models import LinearDynamics, LinearSensor, transition
+from .linear_models import LinearDynamics, LinearSensor, kalman_step, transition
 
 
 def _mixture(seed=0, m=4, d=3):
@@ -53,10 +53,8 @@ def _pgm_against_kalman(filt, sigma=0.02, seed=0):
     filt.initialize(cloud, LinearDynamics(), sensor, np.random.default_rng(seed + 100))
     m, P, tp, H, R = cloud.mean, cloud.covariance, 0.0, sensor.H, sigma ** 2 * np.eye(1)
     for t, meas in zip(times, ms):   # the textbook Kalman filter beside it
-        F = transition(t - tp)
-        m, P, tp = F @ m, F @ P @ F.T, t
-        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
-        m, P = m + K @ (meas.z - H @ m), (np.eye(6) - K @ H) @ P
+        m, P = kalman_step(m, P, t - tp, H, R, meas.z)
+        tp = t
         filt.predict(meas.t)
         filt.update(meas)
     return np.sqrt(np.diag(filt.belief.mixture.covariance) / np.diag(P))

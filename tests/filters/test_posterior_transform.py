@@ -10,7 +10,7 @@ from cistrack.errors import ParameterError
 from cistrack.plugins.filters.pgm import PGMFilter
 from cistrack.plugins.filters.posterior_transform import moment_map, transform_clusters
 
-from .linear_models import LinearDynamics, LinearSensor, transition
+from .linear_models import LinearDynamics, LinearSensor, kalman_step, transition
 
 
 def _spd(seed, d=6):
@@ -87,10 +87,8 @@ def test_one_component_pgm_with_transformed_particles_is_the_kalman_filter():
     filt.initialize(cloud, LinearDynamics(), sensor, np.random.default_rng(11))
     m, P, tp, H, R = cloud.mean, cloud.covariance, 0.0, sensor.H, sigma ** 2 * np.eye(2)
     for t, meas in zip(times, ms):
-        F = transition(t - tp)
-        m, P, tp = F @ m, F @ P @ F.T, t
-        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
-        m, P = m + K @ (meas.z - H @ m), (np.eye(6) - K @ H) @ P
+        m, P = kalman_step(m, P, t - tp, H, R, meas.z)
+        tp = t
         filt.predict(meas.t)
         filt.update(meas)
     x = filt.belief.samples.states
