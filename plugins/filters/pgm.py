@@ -5,8 +5,9 @@ clustered into components (weight N_i/N, sample mean and covariance), each compo
 Kalman update from its particles' cross-covariances with their predicted measurements, the
 component weights are multiplied by the components' measurement likelihoods (log domain), and the
 N posterior particles are each cluster's own, mapped onto its component's posterior
-(:mod:`.posterior_transform`; the paper drew them from the posterior mixture). At a measurement far sharper than the cloud
-the particles are clustered into more components first (:mod:`.measurement_sharpness`).
+(:mod:`.posterior_transform`; the paper drew them from the posterior mixture). At a measurement
+far sharper than the cloud the particles are clustered into more components first
+(:mod:`.measurement_sharpness`).
 
 (Above 300 lines: the parameters are documented with their measurements, and the paper's
 plain PGM restates the constructor for its defaults.)
@@ -237,7 +238,14 @@ class PGMFilter(FilterBase):
         post = GaussianMixture(w, means, covs)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
         if self.posterior_draw == "transform" and n_draw == self.n_particles and not self._bounds.active:
-            samples, slabels = transform_clusters(x, labels, raw_mean, raw_cov, post, n_draw, self._rng)
+            try:
+                samples, slabels = transform_clusters(x, labels, raw_mean, raw_cov, post, n_draw, self._rng)
+            except np.linalg.LinAlgError as exc:
+                raise FilterError(f"filter '{who}': a cluster's covariance could not be factorised "
+                                  f"for the posterior transform ({exc}); posterior_draw = 'gaussian' "
+                                  "avoids it") from None
+            if not np.all(np.isfinite(samples)):
+                raise FilterError(f"filter '{who}': the posterior transform produced non-finite particles")
         else:
             samples, slabels = self._sample_posterior(post, n_draw)
         self._x, self._sample_labels = samples, slabels
