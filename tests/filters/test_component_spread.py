@@ -9,7 +9,7 @@ from cistrack.errors import ParameterError
 from cistrack.plugins.filters.component_spread import shrink_components
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 
-from .linear_models import LinearDynamics, LinearSensor, kalman_step, transition
+from .linear_models import LinearDynamics, LinearSensor, filter_beside_kalman
 
 
 def _mixture(seed=0, m=4, d=3):
@@ -45,18 +45,9 @@ def _pgm_against_kalman(filt, sigma=0.02, seed=0):
     p0 = np.diag([0.5, 0.5, 0.5, 0.05, 0.05, 0.05])
     p0[0, 3] = p0[3, 0] = 0.03
     times = np.arange(1, 16) * 0.3
-    rng = np.random.default_rng(seed)
     sensor = LinearSensor(sigma=sigma, coords=(0,))
-    truth0 = rng.multivariate_normal(m0, p0)
-    ms = sensor.simulate(np.stack([transition(t) @ truth0 for t in times]), times, rng)
-    cloud = ParticleCloud(rng.multivariate_normal(m0, p0, filt.n_particles), 0.0)
-    filt.initialize(cloud, LinearDynamics(), sensor, np.random.default_rng(seed + 100))
-    m, P, tp, H, R = cloud.mean, cloud.covariance, 0.0, sensor.H, sigma ** 2 * np.eye(1)
-    for t, meas in zip(times, ms):   # the textbook Kalman filter beside it
-        m, P = kalman_step(m, P, t - tp, H, R, meas.z)
-        tp = t
-        filt.predict(meas.t)
-        filt.update(meas)
+    _, P = filter_beside_kalman(filt, m0, p0, times, sensor, np.random.default_rng(seed),
+                                np.random.default_rng(seed + 100))
     return np.sqrt(np.diag(filt.belief.mixture.covariance) / np.diag(P))
 
 

@@ -10,7 +10,7 @@ from cistrack.errors import ParameterError
 from cistrack.plugins.filters.pgm import PGMFilter
 from cistrack.plugins.filters.posterior_transform import moment_map, transform_clusters
 
-from .linear_models import LinearDynamics, LinearSensor, kalman_step, transition
+from .linear_models import LinearDynamics, LinearSensor, filter_beside_kalman
 
 
 def _spd(seed, d=6):
@@ -78,19 +78,10 @@ def test_one_component_pgm_with_transformed_particles_is_the_kalman_filter():
     m0 = np.array([1.0, 2.0, -0.5, 0.1, -0.1, 0.05])
     p0 = np.diag([0.5, 0.5, 0.5, 0.05, 0.05, 0.05])
     times = np.arange(1, 11) * 0.3
-    rng = np.random.default_rng(10)
     sensor = LinearSensor(sigma=sigma, coords=(0, 4))
-    truth0 = rng.multivariate_normal(m0, p0)
-    ms = sensor.simulate(np.stack([transition(t) @ truth0 for t in times]), times, rng)
-    cloud = ParticleCloud(rng.multivariate_normal(m0, p0, 5000), 0.0)
     filt = PGMFilter(n_particles=5000, n_components=1, posterior_draw="transform")
-    filt.initialize(cloud, LinearDynamics(), sensor, np.random.default_rng(11))
-    m, P, tp, H, R = cloud.mean, cloud.covariance, 0.0, sensor.H, sigma ** 2 * np.eye(2)
-    for t, meas in zip(times, ms):
-        m, P = kalman_step(m, P, t - tp, H, R, meas.z)
-        tp = t
-        filt.predict(meas.t)
-        filt.update(meas)
+    m, P = filter_beside_kalman(filt, m0, p0, times, sensor, np.random.default_rng(10),
+                                np.random.default_rng(11))
     x = filt.belief.samples.states
     np.testing.assert_allclose(x.mean(axis=0), m, atol=1e-9)
     np.testing.assert_allclose(np.cov(x.T), P, rtol=1e-6, atol=1e-12)
