@@ -44,7 +44,7 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
     edges = np.linspace(0.0, 1.0, HDR_BINS + 1)
     files: list[Path] = []
     for (sc, iod), filters in sorted(by_case.items()):
-        fig, ax = plt.subplots(figsize=(7.0, 4.2))
+        fig, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
         for ci, (flt, lv) in enumerate(sorted(filters.items())):
             r = rows.get((sc, iod, flt), {})
             d, p = r.get("hdr_ks"), r.get("hdr_ks_p")
@@ -57,8 +57,8 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
         ax.set_xlabel("truth's final highest-density level (0 = at the mode, 1 = far in the tails)")
         ax.set_ylabel("runs")
         ax.set_title(f"Final truth HDR level on {sc}, IOD {iod}", fontsize=10)
-        ax.legend(fontsize=8, frameon=False, loc="upper left")
+        # below the axes: inside, the legend hides the tops of the bars it describes
+        fig.legend(fontsize=8, frameon=False, loc="outside lower center", ncol=2)
         ax.grid(True, alpha=0.3)
-        fig.tight_layout()
         files.extend(save_figure(fig, rep_dir / f"{sc}__{iod}__hdr"))
     return files
