@@ -19,8 +19,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
-from cistrack.run import run_scenario  # noqa: E402
-from cistrack.scenario import load_scenario  # noqa: E402
+from cistrack.runs.pipeline import run_scenario  # noqa: E402
+from cistrack.scenario.loading import load_scenario  # noqa: E402
 
 
 def main() -> int:

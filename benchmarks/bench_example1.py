@@ -28,12 +28,12 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
-from cistrack.run import run_scenario  # noqa: E402
-from cistrack.scenario import load_scenario  # noqa: E402
+from cistrack.runs.pipeline import run_scenario  # noqa: E402
+from cistrack.scenario.loading import load_scenario  # noqa: E402
 
 def _cumtime(stats: pstats.Stats, filename_part: str, func: str) -> float:
     """Cumulative seconds of ``func`` in files whose path contains ``filename_part``: written so that
-    it matches both the source layout (core/run.py) and an installed one (cistrack/run.py)."""
+    it matches both the source layout (core/runs/pipeline.py) and an installed one (cistrack/run.py)."""
     total = 0.0
     for (fname, _line, fn), (_cc, _nc, _tt, ct, _callers) in stats.stats.items():
         if fn == func and filename_part in fname:

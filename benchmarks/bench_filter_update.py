@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from cistrack.registry import default_registry
-from cistrack.run import prepare_run
-from cistrack.scenario import load_scenario
+from cistrack.plugin.registry import default_registry
+from cistrack.runs.pipeline import prepare_run
+from cistrack.scenario.loading import load_scenario
 
 
 def main() -> None:

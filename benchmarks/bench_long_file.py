@@ -68,9 +68,9 @@ def _prefix(src: Path, rows: int, dst: Path) -> tuple[int, float]:
 
 def one(scenario: str, out: str) -> dict:
     """Run one scenario file into ``out``; the figures as a dict (in the child process)."""
-    from cistrack.results import read_manifest
-    from cistrack.run import run_scenario
-    from cistrack.scenario import load_scenario
+    from cistrack.results.store import read_manifest
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
 
     t0 = time.perf_counter()
     res = run_scenario(load_scenario(scenario), output_dir=out)

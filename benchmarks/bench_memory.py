@@ -56,10 +56,10 @@ def _peak_bytes() -> int:
 
 
 def _child(case: str, n: int, seed: int) -> dict:
-    from cistrack.metrics import step_metrics
-    from cistrack.registry import default_registry
-    from cistrack.run import prepare_run, run_scenario
-    from cistrack.scenario import load_scenario
+    from cistrack.evaluation.metrics import step_metrics
+    from cistrack.plugin.registry import default_registry
+    from cistrack.runs.pipeline import prepare_run, run_scenario
+    from cistrack.scenario.loading import load_scenario
 
     reg = default_registry()
     filt = "enkf" if case == "enkf-step" else "pgm"

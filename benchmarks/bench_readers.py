@@ -16,7 +16,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
-from cistrack.registry import load_registry  # noqa: E402
+from cistrack.plugin.registry import load_registry  # noqa: E402
 from cistrack.testing.checks_reader import EPOCH, sample_measurements  # noqa: E402
 
 

@@ -86,8 +86,8 @@ def thread_scaling(threads: list[int], particles: int, repeats: int, example1: b
     _table(f"propagation: {particles} particles over one 9:2 NRHO period ({orbit.period:.4f} TU), "
            f"min of {repeats}", "threads", rows)
     if example1:
-        from cistrack.run import run_scenario
-        from cistrack.scenario import load_scenario
+        from cistrack.runs.pipeline import run_scenario
+        from cistrack.scenario.loading import load_scenario
 
         scen = load_scenario("example-1")
         run_scenario(scen, seed=1)
@@ -121,7 +121,7 @@ def dask_scaling(workers: list[int], runs: int, particles: int, runs_for_one: in
     """Throughput of a study on a local Dask cluster per worker count, and per pipeline stage the
     mean seconds per run (a stage whose time per run grows with the worker count is contending for
     a shared resource: memory bandwidth, caches, the disk)."""
-    from cistrack.study import close_dask_client, execute_run, make_executor, plan_runs
+    from cistrack.studies.study import close_dask_client, execute_run, make_executor, plan_runs
 
     rows, stages = [], []
     with tempfile.TemporaryDirectory() as tmp:

@@ -2,7 +2,7 @@
 
     python benchmarks/custody_ceiling.py [SCENARIO] [--first-seed N] [--n-seeds K] [--realizations M]
 
-A reference for the custody counts of docs/calibration.md. The rule (core/custody.py) declares
+A reference for the custody counts of docs/calibration.md. The rule (core/evaluation/custody.py) declares
 custody lost when the truth lies outside the 0.997 highest-density region on 2 consecutive
 updates, or its log-density falls below -100. A filter whose belief is the exact posterior still
 sees its truth there now and then; how often depends on how long an unlucky error persists from
@@ -35,9 +35,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
 from cistrack import units  # noqa: E402
-from cistrack.custody import CustodyRule  # noqa: E402
-from cistrack.run import prepare_run  # noqa: E402
-from cistrack.scenario import load_scenario  # noqa: E402
+from cistrack.evaluation.custody import CustodyRule  # noqa: E402
+from cistrack.runs.pipeline import prepare_run  # noqa: E402
+from cistrack.scenario.loading import load_scenario  # noqa: E402
 
 _STEP_STATE = np.array([1e-7] * 3 + [1e-7] * 3)  # central-difference steps (LU, VU)
 

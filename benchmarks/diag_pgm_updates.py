@@ -38,11 +38,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine_lines  # noqa: E402
 
-from cistrack.hookspecs import hookimpl  # noqa: E402
-from cistrack.metrics import nees, step_metrics  # noqa: E402
+from cistrack.plugin.hookspecs import hookimpl  # noqa: E402
+from cistrack.evaluation.metrics import nees, step_metrics  # noqa: E402
 from cistrack.plugins.filters.measured_components import MeasuredComponents  # noqa: E402
-from cistrack.run import run_scenario  # noqa: E402
-from cistrack.scenario import load_scenario  # noqa: E402
+from cistrack.runs.pipeline import run_scenario  # noqa: E402
+from cistrack.scenario.loading import load_scenario  # noqa: E402
 
 
 def mardia_kurtosis_ratio(x: np.ndarray) -> float:

@@ -20,10 +20,10 @@ import numpy as np
 
 from cistrack import units
 from cistrack.plugins.readers.csv_file import write_measurements
-from cistrack.registry import default_registry
-from cistrack.scenario import load_scenario
-from cistrack.site_network import merge_sites
-from cistrack.sites import observatory
+from cistrack.plugin.registry import default_registry
+from cistrack.scenario.loading import load_scenario
+from cistrack.astro.site_network import merge_sites
+from cistrack.astro.sites import observatory
 
 SITES = ("695", "691", "711", "H01")  # Kitt Peak (two), McDonald, Magdalena Ridge: one region, shared passes
 
@@ -59,7 +59,7 @@ def simulate(rows: int, cadence_s: float, sites: tuple[str, ...], seed: int, max
 
 
 def _concat(sets):
-    from cistrack.measurement import MeasurementSet
+    from cistrack.model.measurement import MeasurementSet
     return MeasurementSet(np.concatenate([m.times for m in sets]), np.concatenate([m.values for m in sets]),
                           np.concatenate([m.sigmas for m in sets]), sets[0].names, dict(sets[0].meta))
 

@@ -62,10 +62,10 @@ def main(argv: list[str]) -> int:
     import numpy  # noqa: F401
 
     _mark("import numpy")
-    import cistrack.cli as cli
+    import cistrack.cli.main as cli
     import cistrack.propagation.compiled as compiled
-    import cistrack.registry as registry
-    import cistrack.run as run
+    import cistrack.plugin.registry as registry
+    import cistrack.runs.pipeline as run
 
     _mark("import cistrack (cli, run, registry)")
     _wrap(registry, "default_registry", None, "build the registry (import plugins)")

@@ -12,14 +12,17 @@ try:
 except _md.PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
-from .errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
-                     MeasurementError, ParameterError, UnknownComponentError)
-from .hookspecs import hookimpl
+from cistrack import _moved
+from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
+                             MeasurementError, ParameterError, UnknownComponentError)
+from cistrack.plugin.hookspecs import hookimpl
+
+_moved.install()  # old import paths of moved modules keep working, with a DeprecationWarning
 
 # The belief and measurement types load on first access (PEP 562), so that ``import cistrack``
 # (and with it ``cistrack --help``) does not pay for numpy and scipy.
-_LAZY = {"Belief": "belief", "GaussianMixture": "belief", "ParticleCloud": "belief",
-         "Measurement": "measurement", "MeasurementSet": "measurement"}
+_LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
+         "Measurement": "model.measurement", "MeasurementSet": "model.measurement"}
 
 
 def __getattr__(name: str):

@@ -17,6 +17,6 @@ def rng() -> np.random.Generator:
 
 @pytest.fixture(scope="session")
 def registry():
-    from cistrack.registry import load_registry
+    from cistrack.plugin.registry import load_registry
 
     return load_registry()

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from cistrack.cli import main
+from cistrack.cli.main import main
 
 
 class Raw(str):
@@ -117,7 +117,7 @@ class Case:
     files: dict[str, str | bytes] = field(default_factory=dict)
     env: dict[str, str] = field(default_factory=dict)
     code: int | None = None
-    subprocess: bool = False  # run `python -m cistrack.cli` (for what a process reads once: kernels)
+    subprocess: bool = False  # run `python -m cistrack.cli.main` (for what a process reads once: kernels)
 
     def __post_init__(self):
         if self.code is None:

@@ -16,16 +16,16 @@ exporter       :class:`Exporter` (estimate file format)    ``"exporter"``
 range prior    :class:`RangePrior` (IOD range model)        ``"range-prior"``
 =============  ==========================================  ==========================
 """
-from .clustering import Clusterer
-from .dynamics import Body, Dynamics, Propagation
-from .filter import Filter
-from .iod import IODMethod
-from .orbit import ReferenceOrbit
-from .exporter import Exporter
-from .range_prior import RangePrior
-from .reader import Reader
-from .schedule import Pass, Schedule
-from .sensor import Sensor
+from cistrack.interfaces.clustering import Clusterer
+from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
+from cistrack.interfaces.filter import Filter
+from cistrack.interfaces.iod import IODMethod
+from cistrack.interfaces.orbit import ReferenceOrbit
+from cistrack.interfaces.exporter import Exporter
+from cistrack.interfaces.range_prior import RangePrior
+from cistrack.interfaces.reader import Reader
+from cistrack.interfaces.schedule import Pass, Schedule
+from cistrack.interfaces.sensor import Sensor
 
 KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior")
 """Every registry kind, in the order `cistrack plugins` lists them."""

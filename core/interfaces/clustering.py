@@ -5,7 +5,7 @@ from abc import abstractmethod
 
 import numpy as np
 
-from ..component import Component
+from cistrack.interfaces.component import Component
 
 __all__ = ["Clusterer"]
 

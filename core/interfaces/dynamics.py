@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..component import Component
+from cistrack.interfaces.component import Component
 
 __all__ = ["Body", "Dynamics", "Propagation"]
 
@@ -86,7 +86,7 @@ class Dynamics(Component):
     @property
     def primaries(self) -> tuple[Body, ...]:
         """The model's massive bodies with their mass fractions, positions and radii (e.g. the
-        Earth and the Moon; :mod:`cistrack.primaries` has the Earth-Moon values). Default: the
+        Earth and the Moon; :mod:`cistrack.astro.primaries` has the Earth-Moon values). Default: the
         impact bodies."""
         return self.bodies
 

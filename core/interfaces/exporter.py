@@ -5,7 +5,7 @@ from abc import abstractmethod
 from os import PathLike
 from typing import ClassVar
 
-from ..component import Component
+from cistrack.interfaces.component import Component
 
 __all__ = ["Exporter"]
 
@@ -13,7 +13,7 @@ __all__ = ["Exporter"]
 class Exporter(Component):
     """An estimate file format (registry kind ``"exporter"``).
 
-    ``write(path, estimates, meta)`` writes :class:`cistrack.inertial_frame.InertialEstimates`
+    ``write(path, estimates, meta)`` writes :class:`cistrack.results.inertial_frame.InertialEstimates`
     (UTC times, Earth-centred inertial km, km/s states and covariances in a named frame);
     ``meta`` carries ``object_name``, ``object_id`` and ``originator``.
     """

@@ -6,12 +6,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..belief import Belief, ParticleCloud
-from ..component import Component
-from ..errors import FilterError
-from ..measurement import Measurement
-from .dynamics import Dynamics
-from .sensor import Sensor
+from cistrack.model.belief import Belief, ParticleCloud
+from cistrack.interfaces.component import Component
+from cistrack.errors import FilterError
+from cistrack.model.measurement import Measurement
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.interfaces.sensor import Sensor
 
 __all__ = ["Filter", "FilterBase"]
 
@@ -25,7 +25,7 @@ class Filter(Component):
 
     kind = "filter"
     stacked_updates: ClassVar[bool] = False
-    """Whether ``update`` accepts a :class:`cistrack.measurement.StackedMeasurement` (several
+    """Whether ``update`` accepts a :class:`cistrack.model.measurement.StackedMeasurement` (several
     sites at one time as one measurement: stacked z, block-diagonal R, names repeating). A run
     hands such a filter one stacked update per time; others get the parts one after another."""
 

@@ -5,10 +5,10 @@ from abc import abstractmethod
 
 import numpy as np
 
-from ..belief import ParticleCloud
-from ..component import Component
-from ..measurement import MeasurementSet
-from .sensor import Sensor
+from cistrack.model.belief import ParticleCloud
+from cistrack.interfaces.component import Component
+from cistrack.model.measurement import MeasurementSet
+from cistrack.interfaces.sensor import Sensor
 
 __all__ = ["IODMethod"]
 

@@ -6,7 +6,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..component import Component
+from cistrack.interfaces.component import Component
 
 __all__ = ["RangePrior"]
 

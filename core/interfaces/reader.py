@@ -6,8 +6,8 @@ from datetime import datetime
 from os import PathLike
 from typing import ClassVar
 
-from ..component import Component
-from ..measurement import MeasurementSet
+from cistrack.interfaces.component import Component
+from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["Reader"]
 
@@ -15,7 +15,7 @@ __all__ = ["Reader"]
 class Reader(Component):
     """An observation file format (registry kind ``"reader"``).
 
-    ``read`` turns a file into a :class:`~cistrack.measurement.MeasurementSet` with times in TU
+    ``read`` turns a file into a :class:`~cistrack.model.measurement.MeasurementSet` with times in TU
     since ``epoch`` (the scenario's UTC epoch), angles in rad, ranges in LU, and per-measurement
     site keys and types where the format has them; ``write`` writes a set so that ``read`` gives
     it back (to the format's stated resolution). A malformed file raises

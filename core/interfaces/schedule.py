@@ -7,7 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..component import Component
+from cistrack.interfaces.component import Component
 
 __all__ = ["Pass", "Schedule"]
 

@@ -5,9 +5,9 @@ from abc import abstractmethod
 
 import numpy as np
 
-from ..component import Component
-from ..measurement import MeasurementSet
-from .schedule import Pass
+from cistrack.interfaces.component import Component
+from cistrack.model.measurement import MeasurementSet
+from cistrack.interfaces.schedule import Pass
 
 __all__ = ["Sensor"]
 
@@ -66,7 +66,7 @@ class Sensor(Component):
         IOD methods use this to turn angles and a range into synodic positions."""
 
     def for_measurement(self, measurement) -> "Sensor":
-        """The sensor that took ``measurement`` (a :class:`cistrack.measurement.Measurement`):
+        """The sensor that took ``measurement`` (a :class:`cistrack.model.measurement.Measurement`):
         itself, except for a sensor standing for several sites, which returns the one at
         ``measurement.site``. Filters measure predictions with it, so that two measurements at
         the same time from two sites are each predicted from their own site."""
@@ -74,7 +74,7 @@ class Sensor(Component):
 
     def inertial_frame(self):
         """The Earth-centred inertial frame the sensor's synodic frame is placed in, as a
-        :class:`cistrack.inertial_frame.InertialFrame` (used to export estimates), or None when
+        :class:`cistrack.results.inertial_frame.InertialFrame` (used to export estimates), or None when
         the sensor has no such placement."""
         return None
 

@@ -10,9 +10,9 @@
 """
 from cistrack.errors import PropagationError, StateError
 
-from .compiled import CompiledDynamics
-from .dense import DenseTrajectory
-from .kernels import kernel_cache_dir, kernels_for, num_threads
+from cistrack.propagation.compiled import CompiledDynamics
+from cistrack.propagation.dense import DenseTrajectory
+from cistrack.propagation.kernels import kernel_cache_dir, kernels_for, num_threads
 
 __all__ = ["CompiledDynamics", "DenseTrajectory", "PropagationError", "StateError", "kernel_cache_dir", "kernels_for",
            "num_threads"]

@@ -12,9 +12,9 @@ Writing a new model in your own package (say a bicircular four-body problem)::
     # mypkg/bcr4bp.py
     import numpy as np
     from numba import njit
-    from cistrack.component import check_positive
-    from cistrack.hookspecs import hookimpl
-    from cistrack.primaries import MU_EARTH_MOON
+    from cistrack.interfaces.component import check_positive
+    from cistrack.plugin.hookspecs import hookimpl
+    from cistrack.astro.primaries import MU_EARTH_MOON
     from cistrack.propagation import CompiledDynamics
 
     @njit(cache=True)                      # no fastmath: see dop853_source.DEFAULT_FASTMATH
@@ -35,7 +35,7 @@ Writing a new model in your own package (say a bicircular four-body problem)::
 and declare ``bcr4bp = "mypkg.bcr4bp"`` under ``[project.entry-points.cistrack]``. The right-hand
 side must be a module-level ``@njit`` function ``rhs(t, y, params, out)`` on float64 arrays.
 The massive bodies (with their impact radii) come from overriding :attr:`primaries`
-(:func:`cistrack.primaries.earth_moon_primaries` for the Earth and the Moon).
+(:func:`cistrack.astro.primaries.earth_moon_primaries` for the Earth and the Moon).
 Impact bodies that move in the integration frame take their positions from the class attribute
 ``body_motion``.
 
@@ -52,8 +52,8 @@ import numpy as np
 from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics, Propagation
 
-from .dense import DenseTrajectory, integrate_dense
-from .kernels import kernels_for, num_threads, run_chunks
+from cistrack.propagation.dense import DenseTrajectory, integrate_dense
+from cistrack.propagation.kernels import kernels_for, num_threads, run_chunks
 
 __all__ = ["CompiledDynamics", "PropagationError", "StateError"]
 

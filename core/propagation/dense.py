@@ -17,8 +17,8 @@ import numpy as np
 
 from cistrack.errors import PropagationError, StateError
 
-from .dop853_dense_source import CTL_SIZE
-from .dop853_tableau import INTERPOLATOR_POWER
+from cistrack.propagation.dop853_dense_source import CTL_SIZE
+from cistrack.propagation.dop853_tableau import INTERPOLATOR_POWER
 
 __all__ = ["DenseTrajectory", "integrate_dense"]
 

@@ -21,7 +21,7 @@ particles left than lanes) repeat an active lane's state; their results are disc
 """
 from __future__ import annotations
 
-from . import dop853_tableau as _tab
+from cistrack.propagation import dop853_tableau as _tab
 
 __all__ = ["lanes_source", "DEFAULT_LANES", "RESERVED"]
 

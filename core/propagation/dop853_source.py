@@ -39,9 +39,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import dop853_tableau as _tab
-from .dop853_dense_source import DENSE_BODY
-from .dop853_lanes_source import DEFAULT_LANES, lanes_source
+from cistrack.propagation import dop853_tableau as _tab
+from cistrack.propagation.dop853_dense_source import DENSE_BODY
+from cistrack.propagation.dop853_lanes_source import DEFAULT_LANES, lanes_source
 
 __all__ = ["N_STAGES", "ERROR_EXPONENT", "TABLEAU", "generate_source", "DEFAULT_FASTMATH"]
 

@@ -44,9 +44,9 @@ import numpy as np
 
 from cistrack.errors import ConfigError
 
-from . import dop853_source
-from .dop853_lanes_source import RESERVED
-from .lane_rhs import lane_body
+from cistrack.propagation import dop853_source
+from cistrack.propagation.dop853_lanes_source import RESERVED
+from cistrack.propagation.lane_rhs import lane_body
 
 __all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMPILE_SECONDS",
            "secure_cache_dir"]

@@ -18,12 +18,11 @@ or, in a pytest module, one test per check::
 NRHO (:mod:`cistrack.testing.fixtures`) and, for filters and IOD methods, a reference CR3BP and
 a geocentric angles sensor shipped here, so they do not depend on any other plugin.
 """
-from .fixtures import NRHO_9_2_APOLUNE
-from .reference_dynamics import ReferenceCR3BP
-from .reference_sensor import GeocentricAnglesSensor
-from .check_results import CheckResult, ConformanceError, ConformanceReport
-from .suite import (KIND_CHECKS, BoundCheck, check_plugin, check_registered, infer_kind, iter_checks,
-                    parametrize_with_checks)
+from cistrack.testing.fixtures import NRHO_9_2_APOLUNE
+from cistrack.testing.reference_dynamics import ReferenceCR3BP
+from cistrack.testing.reference_sensor import GeocentricAnglesSensor
+from cistrack.testing.check_results import CheckResult, ConformanceError, ConformanceReport
+from cistrack.testing.suite import (KIND_CHECKS, BoundCheck, check_plugin, check_registered, infer_kind, iter_checks, parametrize_with_checks)
 
 __all__ = [
     "check_plugin", "check_registered", "iter_checks", "parametrize_with_checks", "infer_kind",

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .check_results import ConformanceError
+from cistrack.testing.check_results import ConformanceError
 
 __all__ = ["require", "fresh", "params_equal", "no_global_random_state", "unchanged",
            "round_trip", "close", "describe_exception"]

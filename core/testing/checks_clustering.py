@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..interfaces.clustering import Clusterer
-from ..units import state_to_km
-from .check_support import no_global_random_state, require, round_trip, unchanged
-from .fixtures import two_blobs
+from cistrack.interfaces.clustering import Clusterer
+from cistrack.units import state_to_km
+from cistrack.testing.check_support import no_global_random_state, require, round_trip, unchanged
+from cistrack.testing.fixtures import two_blobs
 
 __all__ = ["CLUSTERING_CHECKS", "same_partition"]
 

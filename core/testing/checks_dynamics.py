@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import CistrackError
-from ..interfaces.dynamics import Dynamics, Propagation
-from ..units import hours_to_tu, km_to_lu, kms_to_vu
-from .check_support import close, describe_exception, no_global_random_state, require, round_trip, unchanged
-from .fixtures import nrho_states
+from cistrack.errors import CistrackError
+from cistrack.interfaces.dynamics import Dynamics, Propagation
+from cistrack.units import hours_to_tu, km_to_lu, kms_to_vu
+from cistrack.testing.check_support import (close, describe_exception, no_global_random_state, require, round_trip, unchanged)
+from cistrack.testing.fixtures import nrho_states
 
 __all__ = ["DYNAMICS_CHECKS"]
 

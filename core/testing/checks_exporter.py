@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CistrackError
-from ..inertial_frame import InertialEstimates, InertialFrame
-from ..interfaces.exporter import Exporter
-from .check_support import require
+from cistrack.errors import CistrackError
+from cistrack.results.inertial_frame import InertialEstimates, InertialFrame
+from cistrack.interfaces.exporter import Exporter
+from cistrack.testing.check_support import require
 
 __all__ = ["EXPORTER_CHECKS", "sample_inertial_estimates"]
 

@@ -6,13 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..belief import Belief, GaussianMixture, ParticleCloud
-from ..interfaces.filter import Filter
-from ..measurement import Measurement
-from .check_support import close, fresh, no_global_random_state, require, round_trip, unchanged
-from .fixtures import FIXTURE_SEED, initial_cloud, nrho_truth
-from .reference_dynamics import ReferenceCR3BP
-from .reference_sensor import GeocentricAnglesSensor
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
+from cistrack.interfaces.filter import Filter
+from cistrack.model.measurement import Measurement
+from cistrack.testing.check_support import (close, fresh, no_global_random_state, require, round_trip, unchanged)
+from cistrack.testing.fixtures import FIXTURE_SEED, initial_cloud, nrho_truth
+from cistrack.testing.reference_dynamics import ReferenceCR3BP
+from cistrack.testing.reference_sensor import GeocentricAnglesSensor
 
 __all__ = ["FILTER_CHECKS"]
 
@@ -39,7 +39,7 @@ def _case() -> _Case:
 
 def _check_belief(f, epoch: float, when: str) -> Belief:
     b = f.belief
-    require(isinstance(b, Belief), f"belief {when} is {type(b).__name__}, not cistrack.belief.Belief")
+    require(isinstance(b, Belief), f"belief {when} is {type(b).__name__}, not cistrack.model.belief.Belief")
     require(abs(float(b.epoch) - epoch) < 1e-9, f"belief epoch {when} is {b.epoch}, expected {epoch}")
     gm = b.mixture
     require(isinstance(gm, GaussianMixture) and gm.dim == 6, f"belief.mixture {when} must be a 6-dimensional GaussianMixture")

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..belief import ParticleCloud
-from ..errors import IODError
-from ..interfaces.iod import IODMethod
-from ..units import km_to_lu
-from .check_support import close, describe_exception, no_global_random_state, require, round_trip, unchanged
-from .fixtures import first_pass, nrho_truth
+from cistrack.model.belief import ParticleCloud
+from cistrack.errors import IODError
+from cistrack.interfaces.iod import IODMethod
+from cistrack.units import km_to_lu
+from cistrack.testing.check_support import (close, describe_exception, no_global_random_state, require, round_trip, unchanged)
+from cistrack.testing.fixtures import first_pass, nrho_truth
 
 __all__ = ["IOD_CHECKS"]
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ..interfaces.orbit import ReferenceOrbit
-from .check_support import require, round_trip
-from .reference_dynamics import cr3bp_derivatives
+from cistrack.interfaces.orbit import ReferenceOrbit
+from cistrack.testing.check_support import require, round_trip
+from cistrack.testing.reference_dynamics import cr3bp_derivatives
 
 __all__ = ["ORBIT_CHECKS"]
 

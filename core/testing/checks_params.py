@@ -7,9 +7,9 @@ import types
 import typing
 from typing import Any
 
-from ..component import param_specs
-from ..errors import ParameterError
-from .check_support import describe_exception, params_equal, require, round_trip
+from cistrack.interfaces.component import param_specs
+from cistrack.errors import ParameterError
+from cistrack.testing.check_support import describe_exception, params_equal, require, round_trip
 
 __all__ = ["check_parameters_declared", "check_get_params_returns_constructor_values",
            "check_clone_from_params", "check_bad_parameters_raise_parameter_error",
@@ -38,7 +38,7 @@ def check_get_params_returns_constructor_values(component: Any) -> None:
     for name in _specs(component):
         require(hasattr(component, name),
                 f"parameter '{name}' is not stored as attribute self.{name} (get_params() reads it from there)")
-    require(callable(getattr(component, "get_params", None)), "no get_params(); derive from cistrack.component.Component")
+    require(callable(getattr(component, "get_params", None)), "no get_params(); derive from cistrack.interfaces.component.Component")
     params = component.get_params()
     require(set(params) == set(_specs(component)),
             f"get_params() returned {sorted(params)} but the constructor takes {sorted(_specs(component))}")
@@ -97,9 +97,9 @@ def check_bad_parameters_raise_parameter_error(component: Any) -> None:
                 continue
             except Exception as exc:
                 require(False, f"{cls.__name__}({name}={value!r}) ({what}) raised {describe_exception(exc)} instead of "
-                               "cistrack.errors.ParameterError; validate with cistrack.component.check_*")
+                               "cistrack.errors.ParameterError; validate with cistrack.interfaces.component.check_*")
             require(False, f"{cls.__name__}({name}={value!r}) ({what}) was accepted; validate '{name}' in __init__ "
-                           "with cistrack.component.check_positive/check_range/check_int")
+                           "with cistrack.interfaces.component.check_positive/check_range/check_int")
 
 
 def check_picklable(component: Any) -> None:

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..units import km_to_lu
-from .check_support import require
+from cistrack.units import km_to_lu
+from cistrack.testing.check_support import require
 
 __all__ = ["RANGE_PRIOR_CHECKS"]
 

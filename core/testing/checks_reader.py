@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeasurementError
-from ..interfaces.reader import Reader
-from ..measurement import KIND_NAMES, MeasurementSet
-from ..sites import observatory
-from ..units import ARCSEC_RAD, TU_S
-from .check_support import require
+from cistrack.errors import MeasurementError
+from cistrack.interfaces.reader import Reader
+from cistrack.model.measurement import KIND_NAMES, MeasurementSet
+from cistrack.astro.sites import observatory
+from cistrack.units import ARCSEC_RAD, TU_S
+from cistrack.testing.check_support import require
 
 __all__ = ["READER_CHECKS", "sample_measurements"]
 

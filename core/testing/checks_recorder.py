@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pluggy
 
-from .. import hookspecs
-from .check_support import describe_exception, require
+from cistrack.plugin import hookspecs
+from cistrack.testing.check_support import describe_exception, require
 
 __all__ = ["RECORDER_CHECKS", "lifecycle_hooks"]
 

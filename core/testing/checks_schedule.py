@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..interfaces.schedule import Schedule
-from .check_support import no_global_random_state, require, round_trip, unchanged
-from .fixtures import sample_passes
+from cistrack.interfaces.schedule import Schedule
+from cistrack.testing.check_support import no_global_random_state, require, round_trip, unchanged
+from cistrack.testing.fixtures import sample_passes
 
 __all__ = ["SCHEDULE_CHECKS"]
 

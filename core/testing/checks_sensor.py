@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import CistrackError
-from ..interfaces.sensor import Sensor
-from ..measurement import MeasurementSet
-from .check_support import close, describe_exception, no_global_random_state, require, round_trip, unchanged
-from .fixtures import lunar_distance_states, nrho_truth
+from cistrack.errors import CistrackError
+from cistrack.interfaces.sensor import Sensor
+from cistrack.model.measurement import MeasurementSet
+from cistrack.testing.check_support import (close, describe_exception, no_global_random_state, require, round_trip, unchanged)
+from cistrack.testing.fixtures import lunar_distance_states, nrho_truth
 
 __all__ = ["SENSOR_CHECKS"]
 

@@ -8,13 +8,13 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..belief import ParticleCloud
-from ..interfaces.schedule import Pass
-from ..measurement import MeasurementSet
-from ..primaries import MU_EARTH_MOON
-from ..units import hours_to_tu, km_to_lu, kms_to_vu
-from .reference_dynamics import ReferenceCR3BP
-from .reference_sensor import GeocentricAnglesSensor
+from cistrack.model.belief import ParticleCloud
+from cistrack.interfaces.schedule import Pass
+from cistrack.model.measurement import MeasurementSet
+from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.units import hours_to_tu, km_to_lu, kms_to_vu
+from cistrack.testing.reference_dynamics import ReferenceCR3BP
+from cistrack.testing.reference_sensor import GeocentricAnglesSensor
 
 __all__ = [
     "NRHO_9_2_APOLUNE", "nrho_states", "lunar_distance_states", "nrho_truth", "first_pass",

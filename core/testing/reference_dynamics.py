@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import Component, check_positive
-from ..errors import ParameterError
-from ..interfaces.dynamics import Body, Dynamics, Propagation
-from ..primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON
-from ..units import LU_KM
-from .adaptive_rk import propagate_adaptive
+from cistrack.interfaces.component import Component, check_positive
+from cistrack.errors import ParameterError
+from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
+from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON
+from cistrack.units import LU_KM
+from cistrack.testing.adaptive_rk import propagate_adaptive
 
 __all__ = ["MU_EARTH_MOON", "ReferenceCR3BP", "cr3bp_derivatives", "as_states"]
 

@@ -13,14 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import check_nonnegative, check_positive, check_range
-from ..errors import ParameterError
-from ..interfaces.schedule import Pass
-from ..interfaces.sensor import Sensor
-from ..measurement import MeasurementSet
-from ..units import ARCSEC_RAD, LU_KM, TU_S
-from ..primaries import EARTH_RADIUS_KM, MU_EARTH_MOON
-from .reference_dynamics import as_states
+from cistrack.interfaces.component import check_nonnegative, check_positive, check_range
+from cistrack.errors import ParameterError
+from cistrack.interfaces.schedule import Pass
+from cistrack.interfaces.sensor import Sensor
+from cistrack.model.measurement import MeasurementSet
+from cistrack.units import ARCSEC_RAD, LU_KM, TU_S
+from cistrack.astro.primaries import EARTH_RADIUS_KM, MU_EARTH_MOON
+from cistrack.testing.reference_dynamics import as_states
 
 EARTH_ROTATION_RATE_RAD_S = 7.2921159e-5
 """Earth's sidereal rotation rate, rad/s."""

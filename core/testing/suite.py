@@ -4,23 +4,23 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Iterable, Iterator
 
-from ..errors import ParameterError, UnknownComponentError
-from ..interfaces import KINDS
-from ..interfaces.orbit import ReferenceOrbit
-from .check_support import describe_exception, fresh
-from .checks_clustering import CLUSTERING_CHECKS
-from .checks_dynamics import DYNAMICS_CHECKS
-from .checks_filter import FILTER_CHECKS
-from .checks_iod import IOD_CHECKS
-from .checks_orbit import ORBIT_CHECKS
-from .checks_params import PARAMETER_CHECKS, check_parameters_declared
-from .checks_exporter import EXPORTER_CHECKS
-from .checks_range_prior import RANGE_PRIOR_CHECKS
-from .checks_reader import READER_CHECKS
-from .checks_recorder import RECORDER_CHECKS, lifecycle_hooks
-from .checks_schedule import SCHEDULE_CHECKS
-from .checks_sensor import SENSOR_CHECKS
-from .check_results import CheckResult, ConformanceError, ConformanceReport
+from cistrack.errors import ParameterError, UnknownComponentError
+from cistrack.interfaces import KINDS
+from cistrack.interfaces.orbit import ReferenceOrbit
+from cistrack.testing.check_support import describe_exception, fresh
+from cistrack.testing.checks_clustering import CLUSTERING_CHECKS
+from cistrack.testing.checks_dynamics import DYNAMICS_CHECKS
+from cistrack.testing.checks_filter import FILTER_CHECKS
+from cistrack.testing.checks_iod import IOD_CHECKS
+from cistrack.testing.checks_orbit import ORBIT_CHECKS
+from cistrack.testing.checks_params import PARAMETER_CHECKS, check_parameters_declared
+from cistrack.testing.checks_exporter import EXPORTER_CHECKS
+from cistrack.testing.checks_range_prior import RANGE_PRIOR_CHECKS
+from cistrack.testing.checks_reader import READER_CHECKS
+from cistrack.testing.checks_recorder import RECORDER_CHECKS, lifecycle_hooks
+from cistrack.testing.checks_schedule import SCHEDULE_CHECKS
+from cistrack.testing.checks_sensor import SENSOR_CHECKS
+from cistrack.testing.check_results import CheckResult, ConformanceError, ConformanceReport
 
 __all__ = ["BoundCheck", "infer_kind", "iter_checks", "check_plugin", "check_registered",
            "parametrize_with_checks", "KIND_CHECKS"]
@@ -173,7 +173,7 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
     message) per check; it does not raise on failures.
     """
     if registry is None:
-        from ..registry import default_registry
+        from cistrack.plugin.registry import default_registry
         registry = default_registry()
     if kind is None:
         kinds = [k for k in registry.kinds() if (k, name) in registry]

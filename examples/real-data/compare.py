@@ -17,15 +17,15 @@ import numpy as np
 from scipy.stats import chi2
 
 from cistrack import units
-from cistrack.consistency import run_nis_test
-from cistrack.export import run_inertial_estimates
-from cistrack.scenario import builtin_scenario_path
+from cistrack.evaluation.consistency import run_nis_test
+from cistrack.runs.export import run_inertial_estimates
+from cistrack.scenario.loading import builtin_scenario_path
 
 
 def truth_at(truth_csv: Path, scen, t_tu: np.ndarray) -> np.ndarray:
     """Truth states (nondimensional synodic) at ``t_tu``: the first row of ``truth_csv``
     propagated with the scenario's truth dynamics (the model the observations came from)."""
-    from cistrack.registry import default_registry
+    from cistrack.plugin.registry import default_registry
     rows = [r for r in csv.reader(line for line in truth_csv.read_text().splitlines() if not line.startswith("#"))][1:]
     t0 = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
     x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))

@@ -4,7 +4,7 @@
 
 Reads the built-in scenario ``real-data`` (its [truth], [dynamics], [sensor] and [schedule]
 tables), simulates RA/Dec observations of the truth from two observatories (MPC 711 McDonald,
-Texas, and 809 ESO La Silla, Chile) with ``cistrack.site_simulation.simulate_sites``, and writes
+Texas, and 809 ESO La Silla, Chile) with ``cistrack.astro.site_simulation.simulate_sites``, and writes
 
     observations.psv   IAU ADES, pipe-separated (what the scenario reads)
     observations.tdm   the same observations as a CCSDS TDM (RADEC)
@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from cistrack import units
-from cistrack.observation_files import write_observations
-from cistrack.scenario import builtin_scenario_path, load_scenario
-from cistrack.site_simulation import simulate_sites
-from cistrack.sites import observatory
+from cistrack.runs.observation_files import write_observations
+from cistrack.scenario.loading import builtin_scenario_path, load_scenario
+from cistrack.astro.site_simulation import simulate_sites
+from cistrack.astro.sites import observatory
 
 SITES = ("711", "809")
 

@@ -5,9 +5,9 @@ import warnings
 
 import numpy as np
 
-from cistrack.component import check_choice, check_int, check_positive
+from cistrack.interfaces.component import check_choice, check_int, check_positive
 from cistrack.errors import ParameterError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .thread_limits import limited_threads

@@ -5,8 +5,8 @@ import warnings
 
 import numpy as np
 
-from cistrack.component import check_choice, check_int
-from cistrack.hookspecs import hookimpl
+from cistrack.interfaces.component import check_choice, check_int
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .lloyd import kmeans_fit, nearest_centres

@@ -26,7 +26,7 @@ from scipy.integrate import solve_ivp
 
 from cistrack.errors import CistrackError
 
-from cistrack.primaries import MU_EARTH_MOON
+from cistrack.astro.primaries import MU_EARTH_MOON
 
 from .cr3bp import cr3bp_rhs as _lazy_cr3bp_rhs
 

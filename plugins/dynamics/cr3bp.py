@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_int, check_positive, check_range
-from cistrack.hookspecs import hookimpl
+from cistrack.interfaces.component import check_int, check_positive, check_range
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
-from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries
+from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries
 from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BP", "cr3bp_rhs", "jacobi_constant", "MU_EARTH_MOON"]

@@ -1,7 +1,7 @@
 """Ephemeris dynamics: Earth, Moon and Sun from JPL DE421, registered as dynamics "ephemeris".
 
 States in and out are nondimensional synodic states of the *real* Earth-Moon rotating frame
-(:mod:`cistrack.frames.earth_moon`: barycentric, x to the Moon, z along its orbital angular
+(:mod:`cistrack.astro.earth_moon`: barycentric, x to the Moon, z along its orbital angular
 momentum, constant LU/TU scaling), so filters, IOD and sensors use this model exactly like
 ``cr3bp``. Inside, each propagate call converts the states to geocentric GCRS (scaled to LU, VU,
 TU), integrates them with the compiled per-particle DOP853 of :mod:`cistrack.propagation`
@@ -13,7 +13,7 @@ Impacts: the Earth's surface (fixed at the geocentre) and the Moon's (moving wit
 particle as in ``cr3bp``; its state is frozen at the impact point, expressed in the rotating frame
 at the impact time.
 
-Time: t = 0 is the scenario's UTC ``epoch`` (converted once to TDB by :mod:`cistrack.timescales`);
+Time: t = 0 is the scenario's UTC ``epoch`` (converted once to TDB by :mod:`cistrack.astro.timescales`);
 t advances at the TT rate.
 """
 from __future__ import annotations
@@ -25,13 +25,13 @@ from typing import Any
 import numpy as np
 
 from cistrack import units
-from cistrack.component import check_int, check_range
-from cistrack.ephemeris import DAY_S, ChebyshevSeries
+from cistrack.interfaces.component import check_int, check_range
+from cistrack.astro.ephemeris import DAY_S, ChebyshevSeries
 from cistrack.errors import StateError
-from cistrack.frames.earth_moon import EarthMoonFrame
-from cistrack.hookspecs import hookimpl
+from cistrack.astro.earth_moon import EarthMoonFrame
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces.dynamics import Body, Propagation
-from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
+from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
 from .ephemeris_rhs import ephemeris_body_position, ephemeris_rhs, pack_params
@@ -74,7 +74,7 @@ class EphemerisDynamics(CompiledDynamics):
     rtol, atol : float
         Per-particle integration tolerances (nondimensional, inertial LU/VU).
     earth_radius_km, moon_radius_km : float
-        Impact radii, km (0 disables impacts on that body); defaults from :mod:`cistrack.primaries`.
+        Impact radii, km (0 disables impacts on that body); defaults from :mod:`cistrack.astro.primaries`.
     window_days : float
         Ephemeris records handed to the kernel cover at least this many days either side of the
         epoch; a propagation reaching outside widens the window.

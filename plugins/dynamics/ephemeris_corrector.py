@@ -3,7 +3,7 @@
 A catalog orbit (:mod:`.orbit_catalog`, CR3BP synodic) is propagated in the CR3BP over the wanted
 number of revolutions and sampled at patch points (``nodes_per_rev`` equally spaced in time per
 revolution, half a spacing off the catalog state so that none sits at an NRHO's perilune). Each patch point is placed in the real Earth-Moon
-frame with the *pulsating* scaling (:meth:`cistrack.frames.earth_moon.EarthMoonFrame.pulsating_to_gcrs`:
+frame with the *pulsating* scaling (:meth:`cistrack.astro.earth_moon.EarthMoonFrame.pulsating_to_gcrs`:
 Earth and Moon where the CR3BP has them) at the time when the real frame has turned by the same
 angle as the CR3BP's (:func:`synodic_angle_times`).
 

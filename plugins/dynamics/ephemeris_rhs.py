@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.ephemeris import ChebyshevSeries
+from cistrack.astro.ephemeris import ChebyshevSeries
 from cistrack.lazy import lazy_njit
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",

@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces.orbit import ReferenceOrbit
 
-from cistrack.primaries import MU_EARTH_MOON
+from cistrack.astro.primaries import MU_EARTH_MOON
 
 __all__ = ["ORBITS", "GUESSES", "get_orbit"]
 

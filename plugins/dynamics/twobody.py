@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack import units
-from cistrack.component import check_int, check_positive, check_range
+from cistrack.interfaces.component import check_int, check_positive, check_range
 from cistrack.errors import CistrackError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
-from cistrack.primaries import EARTH_RADIUS_KM
+from cistrack.astro.primaries import EARTH_RADIUS_KM
 
 from cistrack.propagation import CompiledDynamics
 

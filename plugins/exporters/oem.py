@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cistrack.errors import CistrackError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Exporter
 
 from .ccsds_text import ccsds_epoch, lower_triangle, num

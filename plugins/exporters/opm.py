@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cistrack.component import check_int
+from cistrack.interfaces.component import check_int
 from cistrack.errors import CistrackError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Exporter
 
 from .ccsds_text import COV_KEYS, ccsds_epoch, num

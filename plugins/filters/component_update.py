@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from cistrack.belief import regularize_covariance
+from cistrack.model.belief import regularize_covariance
 
 from .kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
 from .posterior_linearization import posterior_linearization_update

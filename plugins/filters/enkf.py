@@ -13,13 +13,13 @@ import warnings
 
 import numpy as np
 
-from cistrack.belief import Belief, ParticleCloud
-from cistrack.component import check_int, check_nonnegative
+from cistrack.model.belief import Belief, ParticleCloud
+from cistrack.interfaces.component import check_int, check_nonnegative
 from cistrack.errors import FilterError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles

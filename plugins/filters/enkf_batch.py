@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from filterpy.kalman import EnsembleKalmanFilter
 
-from cistrack.belief import sample_covariance
+from cistrack.model.belief import sample_covariance
 from cistrack.errors import FilterError
 from cistrack.interfaces import Dynamics
 

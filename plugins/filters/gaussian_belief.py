@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 
 __all__ = ["single_gaussian", "gaussian_belief"]
 

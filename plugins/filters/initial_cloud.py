@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import ParticleCloud
+from cistrack.model.belief import ParticleCloud
 from cistrack.errors import FilterError, ParameterError
 
 from .resampling import systematic_resample

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cistrack.belief import regularize_covariance
+from cistrack.model.belief import regularize_covariance
 
 __all__ = ["GroupMoments", "group_moments", "KalmanGains", "kalman_gains", "gaussian_log_likelihood",
            "component_posterior"]

@@ -3,7 +3,7 @@
 A run may hand a filter fewer components than its sensor measures (the IOD-only 'range' is
 stripped for OD). :class:`MeasuredComponents` selects the sensor's output columns by name,
 validates z and R, and gives predictions and angle-wrapped residuals for just those columns. For
-a :class:`cistrack.measurement.StackedMeasurement` (several sites at one time) it stacks the
+a :class:`cistrack.model.measurement.StackedMeasurement` (several sites at one time) it stacks the
 parts: each predicted from its own site, R block-diagonal; a filter using only ``z``, ``R`` and
 these methods updates on the stack in one step (``stacked_updates = True``).
 """
@@ -13,7 +13,7 @@ import numpy as np
 
 from cistrack.errors import FilterError, MeasurementError
 from cistrack.interfaces import Sensor
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 
 __all__ = ["MeasuredComponents", "check_epoch", "EPOCH_TOLERANCE_TU"]
 
@@ -43,7 +43,7 @@ class MeasuredComponents:
     def __init__(self, sensor: Sensor, measurement: Measurement):
         parts = getattr(measurement, "parts", None)
         self._parts: list[MeasuredComponents] | None = None
-        if parts is not None:  # a cistrack.measurement.StackedMeasurement: several sites at one time
+        if parts is not None:  # a cistrack.model.measurement.StackedMeasurement: several sites at one time
             self._stack(sensor, measurement, parts)
             return
         # a sensor standing for several sites answers with the one that took the measurement

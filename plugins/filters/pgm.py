@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.component import check_choice, check_int, check_nonnegative, check_positive, check_range
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
+from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range)
 from cistrack.errors import FilterError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from cistrack.belief import regularize_covariance
+from cistrack.model.belief import regularize_covariance
 from cistrack.errors import FilterError
 
 if TYPE_CHECKING:  # filterpy (and through it matplotlib) is imported only where a UKF runs

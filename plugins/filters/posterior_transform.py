@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import GaussianMixture
+from cistrack.model.belief import GaussianMixture
 
 __all__ = ["moment_map", "transform_clusters"]
 

@@ -29,10 +29,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_choice, check_int, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.errors import FilterError
-from cistrack.hookspecs import hookimpl
-from cistrack.measurement import Measurement
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.model.measurement import Measurement
 
 from .measured_components import MeasuredComponents, check_epoch
 from .resampling import effective_sample_size, normalize_log_weights, systematic_resample

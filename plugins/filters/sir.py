@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import Belief, ParticleCloud
-from cistrack.component import check_int, check_nonnegative, check_range
+from cistrack.model.belief import Belief, ParticleCloud
+from cistrack.interfaces.component import check_int, check_nonnegative, check_range
 from cistrack.errors import FilterError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 
 from .ensemble_propagation import propagate_particles
 from .gaussian_belief import single_gaussian

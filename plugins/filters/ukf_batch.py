@@ -10,7 +10,7 @@ import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 from scipy.linalg import cholesky
 
-from cistrack.belief import regularize_covariance
+from cistrack.model.belief import regularize_covariance
 from cistrack.errors import FilterError
 from cistrack.interfaces import Dynamics
 

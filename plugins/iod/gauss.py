@@ -22,14 +22,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cistrack.belief import ParticleCloud
-from cistrack.component import check_choice, check_int, check_positive, check_range
+from cistrack.model.belief import ParticleCloud
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.errors import IODError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
-from cistrack.measurement import MeasurementSet
-from cistrack.primaries import MU_EARTH_MOON
-from cistrack.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
+from cistrack.model.measurement import MeasurementSet
+from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.astro.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
 
 from .kinematic_fit import prepare_fit
 

@@ -69,12 +69,12 @@ from typing import Iterator
 
 import numpy as np
 
-from cistrack.belief import ParticleCloud
-from cistrack.component import check_choice, check_int, check_positive, check_range
+from cistrack.model.belief import ParticleCloud
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.errors import IODError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, RangePrior, Sensor
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 from cistrack.units import LU_KM, VU_KMS
 
 from .chunked_draws import CHUNK_SAMPLES, draw_in_chunks
@@ -168,7 +168,7 @@ class KinematicFitIOD(IODMethod):
         """The range prior (a name given in Python is created from the installed plugins; in a
         scenario the prior arrives built through the run's registry)."""
         if isinstance(self.range_prior, str):
-            from cistrack.registry import default_registry
+            from cistrack.plugin.registry import default_registry
             return default_registry().create("range-prior", self.range_prior)
         return self.range_prior
 
@@ -265,13 +265,3 @@ class KinematicFitIOD(IODMethod):
             "pruned": pruned,
         }
         return ParticleCloud(states, fit.epoch, meta=meta)
-
-
-@hookimpl
-def cistrack_register(registry) -> None:
-    from .kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
-
-    registry.add("iod", "kinematic-fit", KinematicFitIOD)
-    registry.add("iod", "noisy-range", NoisyRangeIOD)
-    registry.add("iod", "uniform-range", UniformRangeIOD)
-    registry.add("iod", "uniform-range-velocity-bound", UniformRangeVelocityBoundIOD)

@@ -9,7 +9,7 @@ import numpy as np
 
 from cistrack.errors import IODError
 from cistrack.interfaces import Sensor
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 
 from .first_pass import select_fit_indices
 from .polyfit import evaluation_weights

@@ -5,7 +5,8 @@ cloud as the composed component with the same seed.
 """
 from __future__ import annotations
 
-from cistrack.component import check_positive
+from cistrack.interfaces.component import check_positive
+from cistrack import hookimpl
 from cistrack.errors import ParameterError
 
 from .kinematic import KinematicFitIOD
@@ -90,3 +91,13 @@ def _uniform(owner: KinematicFitIOD, range_min_km: float, range_max_km: float) -
         return UniformRange(range_min_km=range_min_km, range_max_km=range_max_km)
     except ParameterError as exc:
         raise ParameterError(str(exc).replace("range-prior 'uniform'", owner._label())) from None
+
+
+@hookimpl
+def cistrack_register(registry) -> None:
+    """The composed component and its three presets, in this order (this module is the entry point
+    ``kinematic-fit``: registering here keeps kinematic.py free of an import of its presets)."""
+    registry.add("iod", "kinematic-fit", KinematicFitIOD)
+    registry.add("iod", "noisy-range", NoisyRangeIOD)
+    registry.add("iod", "uniform-range", UniformRangeIOD)
+    registry.add("iod", "uniform-range-velocity-bound", UniformRangeVelocityBoundIOD)

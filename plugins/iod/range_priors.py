@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_positive, check_range
-from cistrack.hookspecs import hookimpl
+from cistrack.interfaces.component import check_positive, check_range
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import RangePrior
 from cistrack.units import km_to_lu
 

@@ -23,9 +23,9 @@ import math
 from datetime import datetime
 
 from cistrack.errors import MeasurementError
-from cistrack.measurement import MeasurementSet
-from cistrack.observation_files import FieldError, show_field
-from cistrack.sites import Site, observatory
+from cistrack.model.measurement import MeasurementSet
+from cistrack.runs.observation_files import FieldError, show_field
+from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
 from .decimal_units import from_rad, to_rad

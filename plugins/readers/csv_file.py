@@ -23,12 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from cistrack.component import check_positive
+from cistrack.interfaces.component import check_positive
 from cistrack.errors import MeasurementError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Reader
-from cistrack.measurement import MeasurementSet
-from cistrack.sites import Site
+from cistrack.model.measurement import MeasurementSet
+from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
 
 from .decimal_units import from_rad, to_rad

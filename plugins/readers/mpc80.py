@@ -29,9 +29,9 @@ from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
-from cistrack.hookspecs import hookimpl
-from cistrack.measurement import MeasurementSet
-from cistrack.observation_files import FieldError, read_text_lines, show_field
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.model.measurement import MeasurementSet
+from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
 from cistrack.units import ARCSEC_RAD, tu_to_utc
 
 from .decimal_units import decimal_in, to_rad

@@ -12,9 +12,9 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from cistrack.measurement import KIND_NAMES, MeasurementSet
-from cistrack.observation_files import FieldError
-from cistrack.sites import Site
+from cistrack.model.measurement import KIND_NAMES, MeasurementSet
+from cistrack.runs.observation_files import FieldError
+from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
 
 __all__ = ["ObsRow", "build_set", "parse_epoch", "parse_iso_utc", "TIME_FIELD_HELP"]

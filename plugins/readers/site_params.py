@@ -9,10 +9,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from cistrack.component import check_positive
+from cistrack.interfaces.component import check_positive
 from cistrack.errors import MeasurementError
 from cistrack.interfaces import Reader
-from cistrack.sites import Site, observatory
+from cistrack.astro.sites import Site, observatory
 
 __all__ = ["parse_sites", "resolve_site", "site_columns"]
 

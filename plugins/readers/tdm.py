@@ -27,10 +27,10 @@ from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
-from cistrack.hookspecs import hookimpl
-from cistrack.measurement import MeasurementSet
-from cistrack.observation_files import FieldError, read_text_lines, show_field
-from cistrack.sites import Site, observatory
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.model.measurement import MeasurementSet
+from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
+from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
 from .decimal_units import from_rad, to_rad

@@ -43,9 +43,9 @@ from typing import Any
 import numpy as np
 
 
-from cistrack.component import Component, check_int, check_positive
+from cistrack.interfaces.component import Component, check_int, check_positive
 from cistrack.errors import ParameterError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 

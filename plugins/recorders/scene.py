@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.errors import ParameterError
-from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, mass_ratio
-from cistrack.primaries import MU_EARTH_MOON as EARTH_MOON_MU
+from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, mass_ratio
+from cistrack.astro.primaries import MU_EARTH_MOON as EARTH_MOON_MU
 from cistrack.units import LU_KM
 
 __all__ = [
@@ -63,7 +63,7 @@ def primary_positions(mu: float = EARTH_MOON_MU) -> np.ndarray:
 
 def system_mu(dynamics) -> float:
     """The mass ratio of ``dynamics``: the Moon's mass fraction among its primaries, else the
-    Earth–Moon value (:func:`cistrack.primaries.mass_ratio`)."""
+    Earth–Moon value (:func:`cistrack.astro.primaries.mass_ratio`)."""
     return mass_ratio(dynamics)
 
 
@@ -132,7 +132,7 @@ def most_likely_component(points: np.ndarray, mixture) -> np.ndarray:
     Parameters
     ----------
     points : (N, d) float, in the mixture's units
-    mixture : cistrack.belief.GaussianMixture of dimension d
+    mixture : cistrack.model.belief.GaussianMixture of dimension d
 
     Returns
     -------

@@ -31,8 +31,8 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from cistrack.primaries import MU_EARTH_MOON
-from cistrack.rotating_frame import rot_z, synodic_to_eci
+from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.astro.rotating_frame import rot_z, synodic_to_eci
 from cistrack.units import DAY_S, LU_KM, TU_S
 
 __all__ = [
@@ -44,7 +44,7 @@ __all__ = [
 ]
 
 MU: float = MU_EARTH_MOON
-"""Earth–Moon mass ratio (:mod:`cistrack.primaries`)."""
+"""Earth–Moon mass ratio (:mod:`cistrack.astro.primaries`)."""
 WGS84_A_M: float = 6_378_137.0
 """WGS84 equatorial radius, m."""
 WGS84_F: float = 1.0 / 298.257223563
@@ -206,7 +206,7 @@ class EquatorialFrameModel(FrameModel):
         return np.concatenate([eci[:, :3] @ rot.T * LU_KM, eci[:, 3:] @ rot.T * (LU_KM / TU_S)], axis=1)
 
     def inertial_frame(self):
-        from cistrack.inertial_frame import InertialFrame
+        from cistrack.results.inertial_frame import InertialFrame
         return InertialFrame(
             name="CIRS", ccsds=False, from_synodic=self.states_to_eci_km,
             description="cistrack's simple equatorial model (the paper's): Earth-Moon plane in the "

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_choice, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_positive, check_range
 from cistrack.errors import MeasurementError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Pass, Sensor
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
 
 from .frames import FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, wrap_azimuth

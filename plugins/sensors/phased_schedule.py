@@ -9,7 +9,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
 from cistrack.interfaces import Pass, Schedule
 from cistrack.units import TU_S
 

@@ -1,10 +1,10 @@
 """A ground telescope in the real sky: apparent az/el or astrometric RA/Dec of synodic states.
 
 Registered as sensor ``"real-telescope"``. States are nondimensional synodic states in the real
-Earth-Moon rotating frame of :class:`cistrack.frames.earth_moon.EarthMoonFrame` (DE421 Moon,
+Earth-Moon rotating frame of :class:`cistrack.astro.earth_moon.EarthMoonFrame` (DE421 Moon,
 constant LU/TU scaling), the frame the ephemeris dynamics plugin propagates in; the sensor maps
 them to GCRS km, km/s with that frame, places the observer with ERFA
-(:mod:`cistrack.observer`) and measures with :mod:`cistrack.sky`:
+(:mod:`cistrack.astro.observer`) and measures with :mod:`cistrack.astro.sky`:
 
 - ``measurement = "azel"``: apparent azimuth (North through East) and elevation; light time,
   annual and diurnal aberration on by default, refraction off by default;
@@ -14,7 +14,7 @@ them to GCRS km, km/s with that frame, places the observer with ERFA
 With ``measure_range`` the geometric observer-target distance (LU) is a third component (IOD only).
 
 ``line_of_sight`` inverts what does not depend on the target's own motion
-(:func:`cistrack.sky.unit_vectors_gcrs`); the miss left, the target's velocity times the light
+(:func:`cistrack.astro.sky.unit_vectors_gcrs`); the miss left, the target's velocity times the light
 time, is declared as :attr:`line_of_sight_tolerance_lu`. Every correction applied is named in
 ``corrections`` and in each simulated set's meta.
 """
@@ -22,15 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_choice, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_positive, check_range
 from cistrack.errors import MeasurementError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Sensor
-from cistrack.measurement import MeasurementSet
-from cistrack.observer import ObserverGeometry, neu_basis
-from cistrack.sites import Site
-from cistrack.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa,
-                          unit_vectors_gcrs)
+from cistrack.model.measurement import MeasurementSet
+from cistrack.astro.observer import ObserverGeometry, neu_basis
+from cistrack.astro.sites import Site
+from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
 __all__ = ["RealTelescope"]
@@ -153,7 +152,7 @@ class RealTelescope(Sensor):
         return bool(value)
 
     def _build(self) -> None:
-        from cistrack.frames.earth_moon import EarthMoonFrame
+        from cistrack.astro.earth_moon import EarthMoonFrame
 
         self._frame = EarthMoonFrame.from_utc(self._epoch)
         self._observer = ObserverGeometry(self._site, self._epoch, polar_motion=self.polar_motion,
@@ -162,7 +161,7 @@ class RealTelescope(Sensor):
     def inertial_frame(self):
         """GCRS (CCSDS ``GCRF``): the real Earth-Moon frame's synodic -> GCRS map (DE421), used
         to export estimates (``cistrack export``)."""
-        from cistrack.inertial_frame import InertialFrame
+        from cistrack.results.inertial_frame import InertialFrame
         return InertialFrame(name="GCRF", ccsds=True, from_synodic=self._frame.synodic_to_gcrs,
                              description="GCRS: Earth-centred, ICRF-aligned axes; from the real "
                                          "Earth-Moon rotating frame (DE421)")

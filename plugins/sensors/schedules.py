@@ -47,8 +47,8 @@ from __future__ import annotations
 
 import math
 
-from cistrack.component import check_choice, check_int, check_nonnegative, check_positive
-from cistrack.hookspecs import hookimpl
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
+from cistrack.plugin.hookspecs import hookimpl
 
 from .phased_schedule import RULES, PhasedSchedule
 

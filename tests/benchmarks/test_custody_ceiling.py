@@ -11,7 +11,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from custody_ceiling import calibrated_losses  # noqa: E402
 
-from cistrack.custody import CustodyRule  # noqa: E402
+from cistrack.evaluation.custody import CustodyRule  # noqa: E402
 
 N = 400_000
 TOL = 5 * np.sqrt(0.003 * 0.997 / N)

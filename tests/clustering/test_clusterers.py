@@ -9,7 +9,7 @@ import pytest
 
 from cistrack.errors import ParameterError
 from cistrack.interfaces import Clusterer
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 
 NAMES = ["kmeans", "gmm", "bic"]
 

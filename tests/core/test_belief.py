@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from cistrack.belief import Belief, GaussianMixture, ParticleCloud
-from cistrack.metrics import LOG_JACOBIAN_KM, entropy, step_metrics
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
+from cistrack.evaluation.metrics import LOG_JACOBIAN_KM, entropy, step_metrics
 
 
 def _spd(rng, d):
@@ -99,7 +99,7 @@ def _per_point_logpdf(x, means, linv, const, logw):
 
 @pytest.mark.parametrize("n", [1, 255, 256, 300, 513])  # around the kernel's block of 256 points
 def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n):
-    from cistrack.belief import _whitened_logpdf
+    from cistrack.model.belief import _whitened_logpdf
 
     g = np.random.default_rng(n)
     m = 3

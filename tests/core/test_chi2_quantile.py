@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from scipy.stats import chi2
 
-from cistrack.consistency import chi2_ppf
+from cistrack.evaluation.consistency import chi2_ppf
 
 
 @pytest.mark.parametrize("dof", [1, 2, 6, 58, 2 * 29, 1000])

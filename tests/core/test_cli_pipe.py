@@ -6,7 +6,7 @@ import sys
 
 
 def test_a_reader_closing_the_pipe_early_ends_the_listing_quietly():
-    code = ("import subprocess, sys; p = subprocess.Popen([sys.executable, '-m', 'cistrack.cli', "
+    code = ("import subprocess, sys; p = subprocess.Popen([sys.executable, '-m', 'cistrack.cli.main', "
             "'scenarios'], stdout=subprocess.PIPE, stderr=subprocess.PIPE); p.stdout.read(10); "
             "p.stdout.close(); err = p.stderr.read().decode(); rc = p.wait(); print(rc); print(err)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

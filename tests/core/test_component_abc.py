@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from cistrack.component import Component
+from cistrack.interfaces.component import Component
 from cistrack.interfaces import Clusterer, Dynamics, Filter, IODMethod, Sensor
 
 

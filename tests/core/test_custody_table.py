@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from cistrack.custody import CustodyRule
-from cistrack.custody_table import CUSTODY_KEYS, custody_rule
+from cistrack.evaluation.custody import CustodyRule
+from cistrack.scenario.custody_table import CUSTODY_KEYS, custody_rule
 from cistrack.errors import ConfigError
-from cistrack.scenario import load_scenario
+from cistrack.scenario.loading import load_scenario
 
 
 def test_every_field_of_the_custody_rule_is_a_key_of_the_table():

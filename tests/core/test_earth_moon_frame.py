@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cistrack import units
-from cistrack.ephemeris import DAY_S
-from cistrack.frames.earth_moon import EarthMoonFrame
+from cistrack.astro.ephemeris import DAY_S
+from cistrack.astro.earth_moon import EarthMoonFrame
 
 JD0 = (2_461_041.5, 0.0)  # 2026-01-01 00:00 TDB
 T = np.linspace(0.0, 8.0, 17)  # TU (~35 days: a full lunar month)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.ephemeris import DAY_S, de421
+from cistrack.astro.ephemeris import DAY_S, de421
 
 JD0 = 2_461_041.5  # 2026-01-01 00:00 TDB
 TS = np.linspace(0.0, 60.0 * DAY_S, 41)

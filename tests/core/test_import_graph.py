@@ -51,7 +51,7 @@ def _family(name: str) -> str | None:
 def test_the_resolver_sees_relative_and_absolute_imports():
     gauss = PLUGINS / "iod" / "gauss.py"
     found = _imports(gauss)
-    assert "cistrack.plugins.iod.kinematic_fit" in found and "cistrack.belief" in found
+    assert "cistrack.plugins.iod.kinematic_fit" in found and "cistrack.model.belief" in found
 
 
 # Files of core allowed to import a plugin for now (none: measurement files are read through

@@ -33,12 +33,12 @@ def test_import_cistrack_loads_no_heavy_library():
     assert _loaded_after("import cistrack") == []
 
 
-_REGISTRY = ("from cistrack.registry import load_registry\n"
+_REGISTRY = ("from cistrack.plugin.registry import load_registry\n"
              "reg = load_registry()\n"
              "assert not reg.failures, reg.failures\n"
              "assert 'pgm' in reg.names('filter') and 'rerun' in reg.names('recorder')")
 _CLI = ("import contextlib, io\n"
-        "from cistrack.cli import main\n"
+        "from cistrack.cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    assert main(['plugins']) == 0\n")
 @pytest.mark.parametrize("library", HEAVY)
@@ -48,7 +48,7 @@ def test_listing_components_does_not_load(library, code):
 
 
 _KMEANS = ("import numpy as np\n"
-           "from cistrack.registry import load_registry\n"
+           "from cistrack.plugin.registry import load_registry\n"
            "c = load_registry().create('clustering', 'kmeans', n_components=2{})\n"
            "c.cluster(np.random.default_rng(1).normal(size=(40, 6)), np.random.default_rng(2))")
 
@@ -64,7 +64,7 @@ def test_the_default_kmeans_clusters_without_loading_scikit_learn():
 
 
 def test_rerun_loads_when_the_recorder_records(tmp_path):
-    code = ("from cistrack.registry import load_registry\n"
+    code = ("from cistrack.plugin.registry import load_registry\n"
             f"c = load_registry().create('recorder', 'rerun', path={str(tmp_path / 'r.rrd')!r})\n"
             "import cistrack.plugins.recorders.rerun_recorder as m\n"
             "m.rr.RecordingStream")
@@ -84,7 +84,7 @@ def test_a_pgm_run_loads_neither_scikit_learn_nor_filterpy_nor_scipy_stats(tmp_p
     """Issue 15: a default PGM run (k-means, iterated update, results written) paid ~2.7 s of CPU
     for importing sklearn.cluster, filterpy.kalman and scipy.stats; none of them is needed."""
     probe = ("import json, sys\n"
-             "from cistrack.cli import main\n"
+             "from cistrack.cli.main import main\n"
              f"assert main(['run', 'quick', '--quiet', '--out', {str(tmp_path / 'run')!r}]) == 0\n"
              "print(json.dumps([m for m in ('sklearn', 'filterpy', 'scipy.stats', 'matplotlib', 'numba')"
              " if m in sys.modules]))")

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from cistrack.cli import main
+from cistrack.cli.main import main
 from cistrack.errors import ParameterError
 from cistrack.interfaces import KINDS
-from cistrack.param_docs import components_markdown, param_docs, parse_parameters_section, plain_text, unit_of
-from cistrack.registry import load_registry
+from cistrack.plugin.param_docs import (components_markdown, param_docs, parse_parameters_section, plain_text, unit_of)
+from cistrack.plugin.registry import load_registry
 
 ROOT = Path(__file__).resolve().parents[2]
 REG = load_registry(autoload_third_party=False)
@@ -38,7 +38,7 @@ def test_numpydoc_groups_document_each_name():
 
 
 def test_markup_is_removed():
-    assert plain_text("one of ``FRAME_MODELS`` (:class:`~cistrack.belief.ParticleCloud`, *x*)") == \
+    assert plain_text("one of ``FRAME_MODELS`` (:class:`~cistrack.model.belief.ParticleCloud`, *x*)") == \
         "one of FRAME_MODELS (ParticleCloud, x)"
 
 
@@ -79,7 +79,7 @@ def test_plugins_with_an_unknown_name_suggests_the_closest(capsys):
 
 
 def test_components_document_is_up_to_date():
-    """Regenerate with: python -m cistrack.param_docs > docs/components.md"""
+    """Regenerate with: python -m cistrack.plugin.param_docs > docs/components.md"""
     assert (ROOT / "docs" / "components.md").read_text() == components_markdown(REG)
 
 

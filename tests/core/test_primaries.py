@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cistrack.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries, mass_ratio
+from cistrack.astro.primaries import (EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries, mass_ratio)
 from cistrack.units import LU_KM
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -71,9 +71,9 @@ def test_no_file_but_primaries_defines_the_earth_moon_constants(value, name):
     offenders = []
     for folder in ("core", "plugins", "examples"):
         for path in sorted((ROOT / folder).rglob("*.py")):
-            if path == ROOT / "core" / "primaries.py":
+            if path == ROOT / "core" / "astro" / "primaries.py":
                 continue
             for line, v in _float_assignments(path) + _default_floats(path):
                 if v == value:
                     offenders.append(f"{path.relative_to(ROOT)}:{line}")
-    assert not offenders, f"the {name} is defined outside core/primaries.py: {offenders}"
+    assert not offenders, f"the {name} is defined outside core/astro/primaries.py: {offenders}"

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from cistrack.errors import DuplicateComponentError, UnknownComponentError
-from cistrack.registry import AUTOLOAD_ENV, Registry, load_registry
+from cistrack.plugin.registry import AUTOLOAD_ENV, Registry, load_registry
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ROOT / "tests" / "plugin_packages"

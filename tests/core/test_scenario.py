@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from cistrack.errors import ConfigError
-from cistrack.scenario import builtin_scenarios, load_scenario
+from cistrack.scenario.loading import builtin_scenarios, load_scenario
 
 GOOD = """
 name = "t"
@@ -131,7 +131,7 @@ def test_unknown_builtin_scenario_suggests_the_closest():
 
 
 def _example1_with(n: int):
-    from cistrack.scenario import load_scenario
+    from cistrack.scenario.loading import load_scenario
 
     return load_scenario("example-1").with_overrides({"filter": {"n_particles": n}, "iod": {"n_particles": n}})
 
@@ -139,14 +139,14 @@ def _example1_with(n: int):
 def test_ten_million_particles_over_one_period_pass_the_memory_check_in_16_gib(monkeypatch):
     """Issue 15: 10,000,000 particles over one period fit in 16 GB (measured peak of a 1e6 run:
     404 bytes per particle; the IOD's oversampling no longer multiplies its memory)."""
-    import cistrack.limits as limits
+    import cistrack.scenario.limits as limits
 
     monkeypatch.setattr(limits, "available_memory_bytes", lambda: 16 * 2 ** 30)
     assert _example1_with(10_000_000).components["filter"].params["n_particles"] == 10_000_000
 
 
 def test_a_hundred_million_particles_are_refused_in_16_gib_naming_the_key(monkeypatch):
-    import cistrack.limits as limits
+    import cistrack.scenario.limits as limits
     from cistrack.errors import ConfigError
 
     monkeypatch.setattr(limits, "available_memory_bytes", lambda: 16 * 2 ** 30)

@@ -4,8 +4,8 @@ from __future__ import annotations
 import pytest
 
 from cistrack.errors import ConfigError
-from cistrack.scenario import load_scenario
-from cistrack.settings import apply_settings, merge_settings, parse_settings
+from cistrack.scenario.loading import load_scenario
+from cistrack.scenario.settings import apply_settings, merge_settings, parse_settings
 
 
 def test_values_are_toml_and_bare_words_are_strings():

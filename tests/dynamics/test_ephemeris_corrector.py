@@ -8,7 +8,7 @@ import pytest
 from scipy.signal import argrelmax, argrelmin
 
 from cistrack import units
-from cistrack.ephemeris import DAY_S
+from cistrack.astro.ephemeris import DAY_S
 from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.plugins.dynamics.ephemeris_corrector import (

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cistrack import units
-from cistrack.ephemeris import DAY_S
-from cistrack.frames.earth_moon import EarthMoonFrame
+from cistrack.astro.ephemeris import DAY_S
+from cistrack.astro.earth_moon import EarthMoonFrame
 from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.testing import check_plugin
@@ -193,7 +193,7 @@ def test_kernel_moon_and_sun_reproduce_de421_within_a_millimetre_and_a_centimetr
 def test_a_scenario_hands_its_epoch_to_the_ephemeris_dynamics(registry):
     import tomllib
 
-    from cistrack.scenario import builtin_scenario_path, parse_scenario
+    from cistrack.scenario.loading import builtin_scenario_path, parse_scenario
 
     data = tomllib.loads(builtin_scenario_path("quick").read_text())
     data["epoch"] = "2027-03-04T05:06:07Z"

@@ -8,12 +8,12 @@ import sys
 import numpy as np
 import pytest
 
-from cistrack.estimates import KM_SCALE, read_estimates
-from cistrack.export import export_run, run_inertial_estimates
+from cistrack.results.estimates import KM_SCALE, read_estimates
+from cistrack.runs.export import export_run, run_inertial_estimates
 from cistrack.plugins.exporters.opm import read_opm
-from cistrack.results import read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.results.store import read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 from cistrack.units import LU_KM, TU_S
 
 
@@ -123,7 +123,7 @@ def test_cli_export_writes_the_file_and_refuses_a_non_run(run_dir, tmp_path):
 
 
 def test_every_update_step_records_its_nis_and_the_run_passes_a_loose_nis_test(run_dir):
-    from cistrack.consistency import run_nis_test
+    from cistrack.evaluation.consistency import run_nis_test
     est = read_estimates(run_dir[0])
     upd = est.kind == "update"
     assert np.all(np.isfinite(est.nis[upd])) and np.all(est.nis_dof[upd] == 2)
@@ -132,7 +132,7 @@ def test_every_update_step_records_its_nis_and_the_run_passes_a_loose_nis_test(r
 
 
 def test_an_existing_out_file_is_kept_unless_overwrite_is_given(run_dir, tmp_path, capsys):
-    from cistrack.cli import main
+    from cistrack.cli.main import main
     out, _ = run_dir
     target = tmp_path / "e.oem"
     target.write_text("an earlier export\n")

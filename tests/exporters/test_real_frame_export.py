@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.ephemeris import de421
-from cistrack.registry import default_registry
+from cistrack.astro.ephemeris import de421
+from cistrack.plugin.registry import default_registry
 from cistrack.units import TU_S
 
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.belief import ParticleCloud
+from cistrack.model.belief import ParticleCloud
 from cistrack.interfaces import Body, Dynamics, Propagation, Sensor
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 
 
 def transition(dt: float) -> np.ndarray:

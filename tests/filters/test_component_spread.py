@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import GaussianMixture, ParticleCloud
+from cistrack.model.belief import GaussianMixture, ParticleCloud
 from cistrack.errors import ParameterError
 from cistrack.plugins.filters.component_spread import shrink_components
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter

@@ -64,7 +64,7 @@ def test_pgm_defaults_to_the_iterated_component_update_with_kmeans_clusters():
 
 
 def test_pgm_paper_is_the_papers_plain_pgm():
-    from cistrack.registry import default_registry
+    from cistrack.plugin.registry import default_registry
     f = default_registry().create("filter", "pgm-paper")
     assert f.component_update == "ensemble"
     assert f.clusterer == "kmeans"
@@ -78,7 +78,7 @@ def test_pgm_rejects_bad_update_settings(name, value):
 
 
 def _cloud_with_an_outlying_group(n_small: int):
-    from cistrack.belief import ParticleCloud
+    from cistrack.model.belief import ParticleCloud
     rng = np.random.default_rng(2)
     x = rng.standard_normal((1000, 6)) * 1e-3
     x[:n_small] += 0.05                       # a small, well separated group

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
+from cistrack.model.belief import ParticleCloud
 from cistrack.errors import FilterError, MeasurementError
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 from cistrack.plugins.filters.cluster_merge import merge_small_clusters
 from cistrack.plugins.filters.enkf import EnKFFilter
 from cistrack.plugins.filters.pgm import PGMFilter

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
+from cistrack.model.belief import ParticleCloud
 from cistrack.plugins.clustering.kmeans import KMeansClusterer
 from cistrack.plugins.filters.enkf import EnKFFilter
 from cistrack.plugins.filters.pgm import PGMFilter

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
+from cistrack.model.belief import ParticleCloud
 from cistrack.errors import ParameterError
 from cistrack.plugins.filters.measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
-from cistrack.measurement import MeasurementSet
+from cistrack.model.belief import ParticleCloud
+from cistrack.model.measurement import MeasurementSet
 from cistrack.plugins.clustering.gmm import GMMClusterer
 from cistrack.plugins.clustering.kmeans import KMeansClusterer
 from cistrack.plugins.filters.pgm import PGMFilter

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
-from cistrack.measurement import Measurement
+from cistrack.model.belief import ParticleCloud
+from cistrack.model.measurement import Measurement
 from cistrack.plugins.filters.pgm import PGMFilter
 from cistrack.plugins.filters.ukf import UKFFilter
 

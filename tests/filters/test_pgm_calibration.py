@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 SEEDS = range(6000, 6020)
 

@@ -5,7 +5,7 @@ import pytest
 
 from cistrack.errors import ParameterError
 from cistrack.plugins.filters.pgm import resolve_clusterer
-from cistrack.scenario import load_scenario
+from cistrack.scenario.loading import load_scenario
 
 
 def test_a_default_clusterer_name_is_built_through_the_scenarios_registry(registry):

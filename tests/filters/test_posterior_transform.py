@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import skew
 
-from cistrack.belief import GaussianMixture, ParticleCloud
+from cistrack.model.belief import GaussianMixture, ParticleCloud
 from cistrack.errors import ParameterError
 from cistrack.plugins.filters.pgm import PGMFilter
 from cistrack.plugins.filters.posterior_transform import moment_map, transform_clusters

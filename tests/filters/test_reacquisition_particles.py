@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import ParticleCloud
-from cistrack.measurement import Measurement
+from cistrack.model.belief import ParticleCloud
+from cistrack.model.measurement import Measurement
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 from cistrack.plugins.filters.reacquisition_particles import measurement_spread_sigma, particles_to_draw
 

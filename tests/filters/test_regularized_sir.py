@@ -10,7 +10,7 @@ from cistrack.errors import ParameterError
 from cistrack.plugins.filters.regularized_sir import RegularizedSIRFilter, kernel_bandwidth
 from cistrack.plugins.filters.sir import SIRFilter
 
-from cistrack.measurement import Measurement
+from cistrack.model.measurement import Measurement
 
 from .linear_models import LinearDynamics, LinearSensor
 from .test_linear_gaussian import assert_matches_kalman, problem, run_filter  # noqa: F401  (fixture)

@@ -8,7 +8,7 @@ import pytest
 from scipy.stats import chi2
 
 from cistrack.errors import IODError, ParameterError
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 from cistrack.plugins.iod.kinematic import KinematicFitIOD, kinematic_states, prepare_fit
 from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
 from cistrack.plugins.iod.polyfit import truncation_bounds

@@ -8,7 +8,7 @@ import pytest
 from cistrack.plugins.iod.kinematic import KinematicFitIOD
 from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD, UniformRangeVelocityBoundIOD
 from cistrack.plugins.iod.range_priors import NoisyRange, UniformRange
-from cistrack.scenario import parse_scenario
+from cistrack.scenario.loading import parse_scenario
 from cistrack.testing import check_plugin
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 from cistrack.testing import iter_checks
 
 _REG = load_registry(autoload_third_party=False)

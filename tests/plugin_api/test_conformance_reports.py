@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from cistrack.component import check_int
+from cistrack.interfaces.component import check_int
 from cistrack.errors import ParameterError, UnknownComponentError
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Propagation, ReferenceOrbit
-from cistrack.measurement import MeasurementSet
-from cistrack.registry import Registry
+from cistrack.model.measurement import MeasurementSet
+from cistrack.plugin.registry import Registry
 from cistrack.testing import (CheckResult, ConformanceError, GeocentricAnglesSensor, ReferenceCR3BP,
                               check_plugin, check_registered, iter_checks, parametrize_with_checks)
 from cistrack.testing.reference_dynamics import cr3bp_derivatives

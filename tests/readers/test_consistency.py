@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.belief import Belief, GaussianMixture, ParticleCloud
-from cistrack.consistency import innovation_nis, nis_test
-from cistrack.measurement import Measurement
-from cistrack.registry import default_registry
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
+from cistrack.evaluation.consistency import innovation_nis, nis_test
+from cistrack.model.measurement import Measurement
+from cistrack.plugin.registry import default_registry
 
 
 def test_nis_of_measurements_drawn_from_the_prior_averages_the_dimension(nrho_arc):

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import pytest
 
-from cistrack.observation_files import read_observations, reader_for, write_observations
+from cistrack.runs.observation_files import read_observations, reader_for, write_observations
 from cistrack.errors import MeasurementError
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 from cistrack.testing import check_plugin
 from cistrack.testing.checks_reader import EPOCH, sample_measurements
 

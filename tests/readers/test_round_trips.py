@@ -6,13 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 from cistrack.plugins.readers.ades_psv import AdesPsvReader
 from cistrack.plugins.readers.ades_xml import AdesXmlReader
 from cistrack.plugins.readers.csv_file import CsvReader
 from cistrack.plugins.readers.mpc80 import Mpc80Reader
 from cistrack.plugins.readers.tdm import TdmReader
-from cistrack.sites import Site, observatory
+from cistrack.astro.sites import Site, observatory
 from cistrack.testing.checks_reader import EPOCH, sample_measurements
 from cistrack.units import ARCSEC_RAD, TU_S
 

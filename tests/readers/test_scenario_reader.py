@@ -4,8 +4,8 @@ from __future__ import annotations
 import pytest
 
 from cistrack.errors import ConfigError
-from cistrack.registry import default_registry
-from cistrack.scenario import parse_scenario
+from cistrack.plugin.registry import default_registry
+from cistrack.scenario.loading import parse_scenario
 
 
 def _raw(reader):

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from cistrack.errors import ConfigError, MeasurementError
-from cistrack.measurement import MeasurementSet
-from cistrack.registry import default_registry
-from cistrack.scenario import ComponentSpec
-from cistrack.site_network import SiteNetwork, build_site_network, merge_sites
-from cistrack.sites import observatory
+from cistrack.model.measurement import MeasurementSet
+from cistrack.plugin.registry import default_registry
+from cistrack.scenario.loading import ComponentSpec
+from cistrack.astro.site_network import SiteNetwork, build_site_network, merge_sites
+from cistrack.astro.sites import observatory
 
 
 def _telescope(code):

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from cistrack.errors import MeasurementError
-from cistrack.measurement import MeasurementSet
-from cistrack.sites import EARTH_EQUATORIAL_RADIUS_KM, Site, observatory, observatory_codes
+from cistrack.model.measurement import MeasurementSet
+from cistrack.astro.sites import EARTH_EQUATORIAL_RADIUS_KM, Site, observatory, observatory_codes
 
 
 @pytest.mark.parametrize("code", ["568", "705", "711", "807", "F51", "000"])
 def test_observatory_code_gives_a_site_whose_parallax_constants_match_the_table(code):
-    import cistrack.sites as sites
+    import cistrack.astro.sites as sites
     lon, rc, rs, _name = sites._table()[code]
     s = observatory(code)
     x, y, z = s.ecef_km()

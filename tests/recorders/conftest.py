@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from cistrack import units
-from cistrack.hookspecs import hookimpl
-from cistrack.registry import load_registry
-from cistrack.results import read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import parse_scenario
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.plugin.registry import load_registry
+from cistrack.results.store import read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import parse_scenario
 
 NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
 N_PARTICLES = 300

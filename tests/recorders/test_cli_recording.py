@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from cistrack.registry import load_registry
-from cistrack.results import read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.plugin.registry import load_registry
+from cistrack.results.store import read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 from cistrack import units
 from cistrack.units import LU_KM
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cistrack.errors import ParameterError
-from cistrack.registry import load_registry
-from cistrack.run import run_scenario
+from cistrack.plugin.registry import load_registry
+from cistrack.runs.pipeline import run_scenario
 from cistrack.units import LU_KM
 
 from .conftest import EventLog, small_scenario
@@ -60,7 +60,7 @@ def test_an_unknown_frame_is_refused_by_name():
 
 def test_a_scenario_chooses_the_recording_frame():
     from cistrack.errors import ConfigError
-    from cistrack.scenario import load_scenario, parse_scenario
+    from cistrack.scenario.loading import load_scenario, parse_scenario
 
     reg = load_registry()
     assert load_scenario("example-1-ephemeris", reg).recording_frame == "inertial"

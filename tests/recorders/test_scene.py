@@ -73,7 +73,7 @@ def test_subsample_keeps_everything_when_under_the_cap():
 
 
 def test_most_likely_component_agrees_with_the_mixture_responsibilities(rng):
-    from cistrack.belief import GaussianMixture
+    from cistrack.model.belief import GaussianMixture
     from cistrack.plugins.recorders.scene import most_likely_component
 
     a = rng.standard_normal((4, 6, 6))

@@ -27,8 +27,8 @@ def tiny_study(tmp_path) -> Path:
 def obs_file(tmp_path_factory) -> Path:
     """Angles of the quick scenario (seed 1, 1.4 days) written as an observation CSV file (no truth)."""
     from cistrack.plugins.readers.csv_file import write_measurements
-    from cistrack.run import run_scenario
-    from cistrack.scenario import load_scenario
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
 
     sim = run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.4}), seed=1)
     obs = tmp_path_factory.mktemp("obs") / "obs.csv"
@@ -42,7 +42,7 @@ def observed_study(tmp_path, obs_file):
     TOML, seeds as TOML); returns (study file, study directory)."""
     import concurrent.futures as cf
 
-    from cistrack.study import run_study
+    from cistrack.studies.study import run_study
 
     def run(name: str, filter_table: str, seeds: str) -> tuple[Path, Path]:
         study = tmp_path / f"{name}.toml"

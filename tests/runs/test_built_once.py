@@ -9,10 +9,10 @@ from contextlib import contextmanager
 
 import pytest
 
-from cistrack.component import Component
-from cistrack.registry import default_registry
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.interfaces.component import Component
+from cistrack.plugin.registry import default_registry
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 
 def _subclasses(cls):

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from cistrack.calibration import anees_bounds, group_calibration, uniformity_ks, wilson_interval
-from cistrack.custody import Verdict
-from cistrack.run_summary import RunSummary
+from cistrack.studies.calibration import anees_bounds, group_calibration, uniformity_ks, wilson_interval
+from cistrack.evaluation.custody import Verdict
+from cistrack.evaluation.run_summary import RunSummary
 
 
 @pytest.mark.parametrize("k, n, lo, hi", [

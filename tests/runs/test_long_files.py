@@ -8,13 +8,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from cistrack.part_files import PartWriter, read_parts
+from cistrack.results.part_files import PartWriter, read_parts
 from cistrack.plugins.readers.csv_file import write_measurements
-from cistrack.results import read_manifest, read_steps
-from cistrack.run import prepare_run, run_scenario
-from cistrack.scenario import load_scenario
-from cistrack.site_network import merge_sites
-from cistrack.sites import observatory
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.runs.pipeline import prepare_run, run_scenario
+from cistrack.scenario.loading import load_scenario
+from cistrack.astro.site_network import merge_sites
+from cistrack.astro.sites import observatory
 
 EPOCH = "2026-01-01T00:00:00Z"
 SITES = ("695", "691")  # two Kitt Peak telescopes: they see the same passes
@@ -28,7 +28,7 @@ def _small(**over):
 @pytest.fixture(scope="module")
 def two_site_file(tmp_path_factory):
     """Both sites measure the quick scenario's truth at the same scheduled times."""
-    from cistrack.registry import default_registry
+    from cistrack.plugin.registry import default_registry
 
     ctx, _ = prepare_run(_small(duration_days=4.0), seed=2)
     times = ctx.measurements.times
@@ -143,7 +143,7 @@ def _count_updates(monkeypatch, cls):
 
 @pytest.mark.parametrize("stacked", [True, False], ids=["stacked", "one-after-another"])
 def test_a_filter_gets_one_stacked_update_per_time_or_the_parts_in_turn(two_site_file, monkeypatch, stacked):
-    from cistrack.measurement import StackedMeasurement
+    from cistrack.model.measurement import StackedMeasurement
     from cistrack.plugins.filters.ukf import UKFFilter
 
     path, _ = two_site_file
@@ -160,7 +160,7 @@ def test_a_filter_gets_one_stacked_update_per_time_or_the_parts_in_turn(two_site
 
 
 def test_a_stacked_measurement_is_its_parts_side_by_side_each_from_its_own_site(two_site_file):
-    from cistrack.measurement import StackedMeasurement
+    from cistrack.model.measurement import StackedMeasurement
     from cistrack.plugins.filters.measured_components import MeasuredComponents
 
     path, _ = two_site_file

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import pytest
 
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 SEEDS = range(8000, 8010)
 

@@ -11,9 +11,9 @@ from importlib import resources
 
 import pytest
 
-from cistrack.results import read_manifest
-from cistrack.study import plan_runs, run_study
-from cistrack.study_report import report_study
+from cistrack.results.store import read_manifest
+from cistrack.studies.study import plan_runs, run_study
+from cistrack.studies.report import report_study
 
 SETTINGS = ["duration_days=1.3", "iod.n_particles=2000"]
 
@@ -70,7 +70,7 @@ def test_the_runs_are_the_chosen_seeds(report):
 
 
 def test_the_command_line_takes_the_seeds_for_run_and_report(tmp_path, capsys):
-    from cistrack.cli import main
+    from cistrack.cli.main import main
 
     assert main(["study", "report", "noisy-comparison", "--out", str(tmp_path / "s"), "--first-seed", "7",
                  "--n-seeds", "1"]) == 2

@@ -7,13 +7,13 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from cistrack.custody import CustodyObserver, CustodyRule, Verdict
+from cistrack.evaluation.custody import CustodyObserver, CustodyRule, Verdict
 from cistrack.plugins.dynamics.cr3bp import CR3BP
-from cistrack.registry import Registry, load_registry
-from cistrack.run import run_scenario
-from cistrack.run_summary import RunSummary
-from cistrack.scenario import load_scenario
-from cistrack.truth import Truth
+from cistrack.plugin.registry import Registry, load_registry
+from cistrack.runs.pipeline import run_scenario
+from cistrack.evaluation.run_summary import RunSummary
+from cistrack.scenario.loading import load_scenario
+from cistrack.runs.truth import Truth
 
 
 def _small(**over):
@@ -144,7 +144,7 @@ def test_the_summary_round_trips_through_its_dict_and_reads_old_manifests():
 
 
 def test_the_rows_returned_are_the_rows_written(tmp_path):
-    from cistrack.results import read_steps
+    from cistrack.results.store import read_steps
 
     scen = load_scenario("quick", overrides=_small())
     res = run_scenario(scen, seed=4, output_dir=tmp_path / "r")

@@ -1,5 +1,5 @@
 """The command line ends a finished run's process without interpreter teardown
-(cistrack.process_exit), and that shortcut loses nothing: output flushed, results complete, exit
+(cistrack.cli.process_exit), and that shortcut loses nothing: output flushed, results complete, exit
 handlers run, exit status kept; the ordinary exit where the shortcut is not allowed."""
 from __future__ import annotations
 
@@ -15,10 +15,10 @@ SMALL = ["--set", "duration_days=1.4", "--set", "filter.n_particles=300", "--set
 
 
 def _console(tmp_path, argv: list[str], prelude: str = "", env_extra: dict | None = None):
-    """Run cistrack.cli.console_main (the installed command's entry point) in a child process."""
+    """Run cistrack.cli.main.console_main (the installed command's entry point) in a child process."""
     code = textwrap.dedent(prelude) + textwrap.dedent(f"""
         import sys
-        from cistrack.cli import console_main
+        from cistrack.cli.main import console_main
         sys.argv = ["cistrack", *{argv!r}]
         console_main()
         """)

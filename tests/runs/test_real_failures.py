@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from cistrack.hookspecs import hookimpl
-from cistrack.results import read_manifest, read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 FULL = Path("/dev/full")
 needs_dev_full = pytest.mark.skipif(not FULL.exists(), reason="no /dev/full on this system")
@@ -97,7 +97,7 @@ def _as_nobody(args, cwd, tmp_path):
         os.chmod(tmp_path / d, 0o700)
     os.chmod(tmp_path, 0o755)
     nobody = ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", sys.executable]
-    probe = subprocess.run([*nobody, "-c", "import cistrack.cli"], capture_output=True, text=True, cwd=tmp_path,
+    probe = subprocess.run([*nobody, "-c", "import cistrack.cli.main"], capture_output=True, text=True, cwd=tmp_path,
                            env=env, timeout=120)
     if probe.returncode != 0:  # e.g. a checkout or venv inside a root-only 0700 folder (mktemp -d)
         pytest.skip("the unprivileged user nobody cannot import cistrack from this checkout: "

@@ -12,9 +12,9 @@ import csv
 
 import pytest
 
-from cistrack.results import read_manifest
-from cistrack.study import run_study
-from cistrack.study_report import report_study
+from cistrack.results.store import read_manifest
+from cistrack.studies.study import run_study
+from cistrack.studies.report import report_study
 
 STUDY = """
 name = "flags"

@@ -5,7 +5,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from cistrack.report_plots import FORMATS, band_over_seeds, nees_band, plot_study
+from cistrack.studies.report_plots import FORMATS, band_over_seeds, nees_band, plot_study
 
 
 def test_each_seed_is_held_between_its_steps_and_percentiles_are_taken_across_seeds():

@@ -21,9 +21,9 @@ import pytest
 
 from cistrack.lazy import LazyJit
 from cistrack.propagation import dop853_source
-from cistrack.results import read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.results.store import read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 SCENARIO = """
 name = "repro"
@@ -93,7 +93,7 @@ def test_generated_kernels_carry_no_fastmath_flags():
 
 @pytest.mark.parametrize("module", ["cistrack.plugins.dynamics.cr3bp", "cistrack.plugins.dynamics.twobody",
                                    "cistrack.plugins.dynamics.corrector", "cistrack.plugins.clustering.em_numba",
-                                   "cistrack.belief", "cistrack.ephemeris",
+                                   "cistrack.model.belief", "cistrack.astro.ephemeris",
                                    "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.clustering.lloyd",
                                    "cistrack.plugins.clustering.points_and_labels"])
 def test_builtin_compiled_functions_carry_no_fastmath_flags(module):

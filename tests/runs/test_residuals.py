@@ -16,10 +16,10 @@ import pytest
 from scipy.stats import chi2
 
 from cistrack.plugins.readers.csv_file import write_measurements
-from cistrack.residuals import ARCSEC_PER_RAD, residual_summary
-from cistrack.results import read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.evaluation.residuals import ARCSEC_PER_RAD, residual_summary
+from cistrack.results.store import read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 SIGMA_ARCSEC = 1.5
 

@@ -15,10 +15,10 @@ else:  # pragma: no cover
 import numpy as np
 import pytest
 
-from cistrack.run_status import run_status
-from cistrack.results import read_manifest, read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.results.run_status import run_status
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 
 
 def _quick(**over):
@@ -129,9 +129,9 @@ def test_cli_scenarios_lists_builtin_scenarios_and_studies():
 def test_the_summary_counts_passes_without_measurements_as_unobserved():
     """A schedule that observes the first pass only: the later visibility passes are counted, and
     said to be unobserved (as during a sensor shutoff), not passed off as observed."""
-    from cistrack.run_summary import count_lines
-    from cistrack.run import run_scenario
-    from cistrack.scenario import load_scenario
+    from cistrack.evaluation.run_summary import count_lines
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
 
     scen = load_scenario("quick").with_overrides({
         "duration_days": 3.0, "schedule": {"name": "phased", "phases": [{"rule": "every", "interval_minutes": 40.0,

@@ -11,11 +11,11 @@ import time
 
 import pytest
 
-from cistrack.hookspecs import hookimpl
-from cistrack.results import read_manifest, read_steps
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
-from cistrack.study import run_study
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
+from cistrack.studies.study import run_study
 
 
 def _small():
@@ -84,7 +84,7 @@ def test_rerun_serve_with_the_port_taken_is_refused_before_computing(tmp_path):
         s.bind(("127.0.0.1", 0))
         s.listen(1)
         port = s.getsockname()[1]
-        from cistrack.registry import default_registry
+        from cistrack.plugin.registry import default_registry
         from cistrack.errors import ParameterError
         with pytest.raises(ParameterError, match=f"127.0.0.1:{port} is already in use"):
             default_registry().create("recorder", "rerun", serve=True, serve_port=port)
@@ -108,7 +108,7 @@ def test_rerun_serve_from_the_cli_with_the_default_port_taken_fails_fast(tmp_pat
 
 def test_rerun_to_an_unwritable_place_is_refused_before_computing(tmp_path):
     from cistrack.errors import ParameterError
-    from cistrack.registry import default_registry
+    from cistrack.plugin.registry import default_registry
 
     with pytest.raises(ParameterError, match="cannot be written"):
         default_registry().create("recorder", "rerun", path=str(tmp_path / "no" / "such" / "dir" / "x.rrd"))

@@ -7,8 +7,8 @@ import socket
 import subprocess
 import sys
 
-from cistrack.run_status import process_gone, run_status
-from cistrack.study_resume import run_state
+from cistrack.results.run_status import process_gone, run_status
+from cistrack.studies.resume import run_state
 
 
 def _manifest(d, **kw):

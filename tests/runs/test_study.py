@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from cistrack.results import read_manifest, read_steps
-from cistrack.study import plan_runs, run_study
-from cistrack.study_report import report_study
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.studies.study import plan_runs, run_study
+from cistrack.studies.report import report_study
 
 
 def _tables(out: Path) -> dict[str, list]:
@@ -118,7 +118,7 @@ def test_study_plan_rejects_unknown_filter_before_running(tmp_path):
 
 
 def test_report_with_no_finished_run_exits_nonzero_and_writes_nothing(tiny_study, tmp_path, capsys):
-    from cistrack.cli import main
+    from cistrack.cli.main import main
 
     out = tmp_path / "never-run"
     assert main(["study", "report", str(tiny_study), "--out", str(out)]) == 2
@@ -171,7 +171,7 @@ def test_builtin_calibration_study_reports_calibration_per_iod_under_process_and
 
 
 def test_a_study_on_an_observation_file_reports_measurement_consistency_and_never_custody(observed_study):
-    from cistrack.residuals import residual_summary
+    from cistrack.evaluation.residuals import residual_summary
 
     study, out = observed_study("observed", '{ name = "pgm", n_particles = 300, n_components = 2 }', "[1, 2]")
     rep = report_study(study, out_dir=out)

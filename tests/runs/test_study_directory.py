@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 
-from cistrack.cli import main
-from cistrack.study import run_study
-from cistrack.study_report import report_study
+from cistrack.cli.main import main
+from cistrack.studies.study import run_study
+from cistrack.studies.report import report_study
 
 SETTINGS = ["filter.n_particles=250"]
 

@@ -12,8 +12,8 @@ import sys
 
 import pytest
 
-from cistrack.residuals import consistency_summary, residual_summary
-from cistrack.results import read_manifest, read_steps
+from cistrack.evaluation.residuals import consistency_summary, residual_summary
+from cistrack.results.store import read_manifest, read_steps
 
 
 def _cli_run(obs, out, *settings):
@@ -93,8 +93,8 @@ def test_a_truthless_run_stores_its_measurement_consistency_in_the_manifest(obs_
 def test_a_study_report_reads_each_runs_consistency_from_its_manifest(observed_study):
     import json
 
-    from cistrack.consistency import chi2_ppf
-    from cistrack.study_report import report_study
+    from cistrack.evaluation.consistency import chi2_ppf
+    from cistrack.studies.report import report_study
 
     study, out = observed_study("observed", "{ name = \"pgm\", n_particles = 300, n_components = 2 }", "[1, 2]")
     cons = []
@@ -114,7 +114,7 @@ def test_a_study_report_reads_each_runs_consistency_from_its_manifest(observed_s
 
 
 def test_a_truthless_study_flags_its_diverged_runs_with_the_reason_and_never_says_custody(observed_study):
-    from cistrack.study_report import report_study
+    from cistrack.studies.report import report_study
 
     study, out = observed_study("observed-sir", "{ name = \"sir\", n_particles = 300 }", "[1]")
     rep = report_study(study, out_dir=out)

@@ -2,7 +2,7 @@
 diverged with its reason; a run without a truth never speaks of custody and reports its NIS.
 
 The runs are real small runs of the built-in ``quick`` scenario (2 days, 9:2 NRHO); the rules are
-the thresholds of :class:`cistrack.custody.CustodyRule`.
+the thresholds of :class:`cistrack.evaluation.custody.CustodyRule`.
 """
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ import sys
 
 import pytest
 
-from cistrack.custody import CustodyRule, Verdict
+from cistrack.evaluation.custody import CustodyRule, Verdict
 from cistrack.plugins.readers.csv_file import write_measurements
-from cistrack.results import read_manifest
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
-from cistrack.verdicts import final_verdict
+from cistrack.results.store import read_manifest
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
+from cistrack.evaluation.verdicts import final_verdict
 
 
 def _run(seed=1, out=None, **over):

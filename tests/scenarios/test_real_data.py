@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from cistrack.consistency import run_nis_test
-from cistrack.export import export_run
-from cistrack.observation_files import read_observations
-from cistrack.run import run_scenario
-from cistrack.scenario import load_scenario
+from cistrack.evaluation.consistency import run_nis_test
+from cistrack.runs.export import export_run
+from cistrack.runs.observation_files import read_observations
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
 from cistrack.units import parse_utc
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples" / "real-data"))
@@ -69,7 +69,7 @@ def test_the_exported_oem_lies_within_its_reported_three_sigma_of_the_truth(camp
 
 @pytest.mark.parametrize("name", ["observations.psv", "observations.tdm"])
 def test_the_bundled_files_hold_the_campaign_of_both_observatories(name):
-    from cistrack.scenario import builtin_scenario_path
+    from cistrack.scenario.loading import builtin_scenario_path
     scen = load_scenario("real-data")
     folder = builtin_scenario_path("real-data").parent / "real_data"
     ms = read_observations(folder / name, scen.epoch)

@@ -9,7 +9,7 @@ import pytest
 from cistrack.errors import MeasurementError, ParameterError
 from cistrack.plugins.sensors.frames import MU
 from cistrack.plugins.sensors.ground_telescope import GroundTelescope
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S
 
 LAT, LON = 30.618963, -96.339214

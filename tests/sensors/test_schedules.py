@@ -12,7 +12,7 @@ from cistrack.plugins.sensors.schedules import (
     EverySchedule, PaperExample1Schedule, PaperExample2Schedule, PaperExample3Schedule, PhasedSchedule,
     RandomConsecutiveSchedule,
 )
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 from cistrack.units import TU_S
 
 HOUR = 3600.0 / TU_S

@@ -1,5 +1,5 @@
 """Independent reference for the real-sky tests: astropy's own observer, Earth ephemeris,
-light-time iteration and ICRS -> AltAz transform (no cistrack.sky or cistrack.observer code)."""
+light-time iteration and ICRS -> AltAz transform (no cistrack.astro.sky or cistrack.astro.observer code)."""
 from __future__ import annotations
 
 import warnings

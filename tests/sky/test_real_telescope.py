@@ -1,4 +1,4 @@
-"""Sensor 'real-telescope': real Earth-Moon frame + ERFA observer + cistrack.sky measurements."""
+"""Sensor 'real-telescope': real Earth-Moon frame + ERFA observer + cistrack.astro.sky measurements."""
 from __future__ import annotations
 
 import numpy as np
@@ -6,13 +6,13 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from cistrack.errors import MeasurementError, ParameterError
-from cistrack.frames.earth_moon import EarthMoonFrame
-from cistrack.observer import ObserverGeometry, neu_basis
-from cistrack.sites import Site
+from cistrack.astro.earth_moon import EarthMoonFrame
+from cistrack.astro.observer import ObserverGeometry, neu_basis
+from cistrack.astro.sites import Site
 from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD
 from cistrack.plugins.sensors.real_telescope import RealTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
-from cistrack.sky import SkyCorrections, apparent_azel, astrometric_radec
+from cistrack.astro.sky import SkyCorrections, apparent_azel, astrometric_radec
 from cistrack.testing import parametrize_with_checks
 from cistrack.testing.fixtures import lunar_distance_states
 from cistrack.units import TU_S, hours_to_tu
@@ -121,9 +121,9 @@ def test_kinematic_iod_works_from_astrometric_radec(iod_cls):
 
 
 def test_a_run_with_the_real_sky_names_its_corrections_in_the_manifest(tmp_path):
-    from cistrack.results import read_manifest
-    from cistrack.run import run_scenario
-    from cistrack.scenario import load_scenario
+    from cistrack.results.store import read_manifest
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
 
     s = load_scenario("quick").with_overrides({
         "duration_days": 1.4, "filter": {"name": "ukf"}, "iod": {"n_particles": 300},

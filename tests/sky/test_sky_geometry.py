@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import sky_reference as ref
-from cistrack import sky, timescales as ts
-from cistrack.observer import C_KMS, ObserverGeometry, neu_basis
-from cistrack.sites import Site
+from cistrack.astro import sky, timescales as ts
+from cistrack.astro.observer import C_KMS, ObserverGeometry, neu_basis
+from cistrack.astro.sites import Site
 
 ARCSEC = np.pi / 648000.0
 EPOCH = "2000-01-01T00:00:00Z"

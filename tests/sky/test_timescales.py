@@ -1,4 +1,4 @@
-"""cistrack.timescales: UTC/TAI/TT/TDB/UT1 offline, checked against closed forms and IERS facts."""
+"""cistrack.astro.timescales: UTC/TAI/TT/TDB/UT1 offline, checked against closed forms and IERS facts."""
 from __future__ import annotations
 
 import subprocess
@@ -8,7 +8,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from cistrack import timescales as ts
+from cistrack.astro import timescales as ts
 
 
 def test_tai_minus_utc_counts_the_leap_seconds_in_force():

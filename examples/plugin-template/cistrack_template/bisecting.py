@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.component import check_int
+from cistrack.interfaces.component import check_int
 from cistrack.errors import ParameterError
 from cistrack.interfaces import Clusterer
 

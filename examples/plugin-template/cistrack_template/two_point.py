@@ -4,11 +4,11 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack import units
-from cistrack.belief import ParticleCloud
-from cistrack.component import check_int, check_positive
+from cistrack.model.belief import ParticleCloud
+from cistrack.interfaces.component import check_int, check_positive
 from cistrack.errors import IODError
 from cistrack.interfaces import IODMethod, Sensor
-from cistrack.measurement import MeasurementSet
+from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["TwoPointIOD"]
 

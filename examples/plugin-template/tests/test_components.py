@@ -4,7 +4,7 @@ import pytest
 
 from cistrack import units
 from cistrack.errors import ParameterError
-from cistrack.registry import load_registry
+from cistrack.plugin.registry import load_registry
 from cistrack.testing import NRHO_9_2_APOLUNE, ReferenceCR3BP
 
 from cistrack_template import BisectingClusterer, CR3BPSolarPressure

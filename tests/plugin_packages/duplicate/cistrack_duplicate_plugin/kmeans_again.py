@@ -1,7 +1,7 @@
 """Registers a clusterer under the built-in name 'kmeans' (a name clash)."""
 import numpy as np
 
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 

@@ -1,7 +1,7 @@
 """A clusterer that puts every particle in one component (a plain single-Gaussian PGM)."""
 import numpy as np
 
-from cistrack.hookspecs import hookimpl
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer
 
 

@@ -1,0 +1,194 @@
+"""The real Earth-Moon rotating frame, and synodic <-> GCRS state transforms.
+
+Frame at TDB time t, from DE421's geocentric Moon r(t), v(t), a(t) (:mod:`cistrack.astro.ephemeris`):
+
+- origin: the Earth-Moon barycentre b = mu r, mu = m_Moon / (m_Earth + m_Moon) of DE421
+  (1/(1 + EMRAT) = 0.0121505843; the CR3BP's constant is 0.0121505820);
+- x = r / |r| (Earth to Moon), z = (r x v) / |r x v| (the Moon's orbital angular momentum),
+  y = z x x; the rotation C = [x y z] maps frame components to GCRS components;
+- angular velocity (GCRS components) omega = (h / d^2) z + (d (a . z) / h) x, with d = |r|,
+  h = |r x v|: the first term turns x with the Moon, the second tilts the orbit plane about the
+  Earth-Moon line as the Sun and the Earth's figure pull the Moon out of plane.
+
+Scalings (both exact transforms, inverses of each other):
+
+- ``synodic`` (the states cistrack carries, filters and IOD see): constant units, position
+  rho = C^T (R - b) / LU and velocity rho' = C^T (V - b' - omega x (R - b)) / VU, with the CR3BP's
+  LU = 384,400 km, TU = 375,149 s, VU = LU/TU (:mod:`cistrack.units`). The Earth and Moon sit at
+  (-mu d/LU, 0, 0) and ((1-mu) d/LU, 0, 0): on the x axis, moving along it as d(t) varies
+  (356,000-407,000 km).
+- ``pulsating``: position scaled by the instantaneous distance d(t) and velocity by the
+  instantaneous d(t) * (h / d^2) (the local "VU"), velocity relative to the pulsating frame:
+  R = b + d C rho, V = b' + d' C rho + (h / d) C rho' + omega x (d C rho). The Earth and Moon sit
+  at (-mu, 0, 0) and (1 - mu, 0, 0) exactly, which makes CR3BP catalog states good initial
+  guesses for the ephemeris model.
+
+Time: t is TU since a TDB origin (jd1, jd2); a scenario's UTC epoch is converted once to TDB by
+:mod:`cistrack.astro.timescales` (:meth:`EarthMoonFrame.from_utc`), and TDB is then advanced at the TT
+rate (the periodic TDB - TT term, <= 1.7 ms, moves the Moon by <= 2 m and is neglected).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import datetime
+
+import numpy as np
+
+from cistrack import units
+from cistrack.astro.ephemeris import DAY_S, DE421, de421
+
+__all__ = ["EarthMoonFrame", "FrameAxes"]
+
+
+@dataclass(frozen=True)
+class FrameAxes:
+    """The real rotating frame at K times (all GCRS components, km, s).
+
+    Attributes
+    ----------
+    rotation : (K, 3, 3)   columns are the frame's x, y, z axes
+    origin : (K, 3)        barycentre position, km
+    origin_velocity : (K, 3)  barycentre velocity, km/s
+    omega : (K, 3)         frame angular velocity, rad/s
+    distance : (K,)        Earth-Moon distance d, km
+    distance_rate : (K,)   d', km/s
+    angular_rate : (K,)    h / d^2, rad/s
+    """
+
+    rotation: np.ndarray
+    origin: np.ndarray
+    origin_velocity: np.ndarray
+    omega: np.ndarray
+    distance: np.ndarray
+    distance_rate: np.ndarray
+    angular_rate: np.ndarray
+
+
+def _broadcast(states, t) -> tuple[np.ndarray, np.ndarray, bool]:
+    s = np.asarray(states, dtype=float)
+    single = s.ndim == 1
+    s = np.atleast_2d(s)
+    if s.shape[-1] != 6 or s.ndim != 2:
+        raise ValueError(f"states must have shape (6,) or (N, 6), got {np.shape(states)}")
+    tt = np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1)
+    if tt.size not in (1, s.shape[0]):
+        raise ValueError(f"t must be a scalar or have one time per state ({s.shape[0]}), got {tt.size}")
+    if not (np.all(np.isfinite(s)) and np.all(np.isfinite(tt))):
+        raise ValueError("states and times must be finite")
+    return s, np.broadcast_to(tt, (s.shape[0],)) if tt.size > 1 else tt, single
+
+
+class EarthMoonFrame:
+    """Transforms between the real Earth-Moon rotating frame and GCRS (see module docstring).
+
+    Parameters
+    ----------
+    epoch_tdb : (float, float)
+        TDB Julian date (two parts) of t = 0.
+    ephemeris : DE421, optional
+        Reader to use (default: the process-wide DE421).
+    """
+
+    def __init__(self, epoch_tdb: tuple[float, float], ephemeris: DE421 | None = None):
+        self.epoch_tdb = (float(epoch_tdb[0]), float(epoch_tdb[1]))
+        self.ephemeris = ephemeris if ephemeris is not None else de421()
+        self.mu = self.ephemeris.earth_share
+
+    @classmethod
+    def from_utc(cls, epoch: datetime | str, ephemeris: DE421 | None = None) -> "EarthMoonFrame":
+        """Frame whose t = 0 is the UTC ``epoch`` (datetime or ISO-8601 text)."""
+        from cistrack.astro import timescales
+
+        jd1, jd2 = timescales.tdb_jd(units.parse_utc(epoch))
+        return cls((float(np.ravel(jd1)[0]), float(np.ravel(jd2)[0])), ephemeris)
+
+    def tdb_days(self, t) -> np.ndarray:
+        """Days after the TDB origin of times ``t`` (TU), (K,)."""
+        return np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1) * (units.TU_S / DAY_S)
+
+    def axes(self, t) -> FrameAxes:
+        """The frame at times ``t`` (scalar or (K,) TU) as :class:`FrameAxes` with K entries."""
+        jd1, jd2 = self.epoch_tdb
+        dd = self.tdb_days(t)
+        r, v = self.ephemeris.moon(jd1, jd2 + dd)
+        a = self.ephemeris.moon_acceleration(jd1, jd2 + dd)
+        r, v, a = np.atleast_2d(r), np.atleast_2d(v), np.atleast_2d(a)
+        d = np.linalg.norm(r, axis=1)
+        hv = np.cross(r, v)
+        h = np.linalg.norm(hv, axis=1)
+        ex = r / d[:, None]
+        ez = hv / h[:, None]
+        ey = np.cross(ez, ex)
+        rot = np.stack([ex, ey, ez], axis=2)
+        rate = h / d ** 2
+        tilt = d * np.sum(a * ez, axis=1) / h
+        omega = rate[:, None] * ez + tilt[:, None] * ex
+        return FrameAxes(rotation=rot, origin=self.mu * r, origin_velocity=self.mu * v, omega=omega,
+                         distance=d, distance_rate=np.sum(r * v, axis=1) / d, angular_rate=rate)
+
+    # -- constant-unit synodic states (what cistrack carries) ---------------------------------
+    def synodic_to_gcrs(self, states, t) -> np.ndarray:
+        """Synodic states (N, 6) [LU, VU] at ``t`` (scalar or (N,) TU) -> GCRS (N, 6) km, km/s.
+
+        A (6,) state gives a (6,) result.
+        """
+        s, tt, single = _broadcast(states, t)
+        ax = self.axes(tt)
+        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
+        rho = np.einsum("nij,nj->ni", rot, s[:, :3] * units.LU_KM)
+        rhod = np.einsum("nij,nj->ni", rot, s[:, 3:] * units.VU_KMS)
+        out = np.empty_like(s)
+        out[:, :3] = ax.origin + rho
+        out[:, 3:] = ax.origin_velocity + rhod + np.cross(ax.omega, rho)
+        return out[0] if single else out
+
+    def gcrs_to_synodic(self, states_km, t) -> np.ndarray:
+        """GCRS states (N, 6) km, km/s at ``t`` (scalar or (N,) TU) -> synodic (N, 6) [LU, VU]."""
+        s, tt, single = _broadcast(states_km, t)
+        ax = self.axes(tt)
+        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
+        rel = s[:, :3] - ax.origin
+        relv = s[:, 3:] - ax.origin_velocity - np.cross(ax.omega, rel)
+        out = np.empty_like(s)
+        out[:, :3] = np.einsum("nji,nj->ni", rot, rel) / units.LU_KM
+        out[:, 3:] = np.einsum("nji,nj->ni", rot, relv) / units.VU_KMS
+        return out[0] if single else out
+
+    # -- pulsating states (CR3BP-like: Earth and Moon fixed) ----------------------------------
+    def pulsating_to_gcrs(self, states, t) -> np.ndarray:
+        """Pulsating synodic states (N, 6) at ``t`` (TU) -> GCRS (N, 6) km, km/s."""
+        s, tt, single = _broadcast(states, t)
+        ax = self.axes(tt)
+        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
+        d = np.broadcast_to(ax.distance, (s.shape[0],))[:, None]
+        dd = np.broadcast_to(ax.distance_rate, (s.shape[0],))[:, None]
+        vu = d * np.broadcast_to(ax.angular_rate, (s.shape[0],))[:, None]
+        crho = np.einsum("nij,nj->ni", rot, s[:, :3])
+        out = np.empty_like(s)
+        out[:, :3] = ax.origin + d * crho
+        out[:, 3:] = (ax.origin_velocity + dd * crho + vu * np.einsum("nij,nj->ni", rot, s[:, 3:])
+                      + np.cross(ax.omega, d * crho))
+        return out[0] if single else out
+
+    def gcrs_to_pulsating(self, states_km, t) -> np.ndarray:
+        """GCRS states (N, 6) km, km/s at ``t`` (TU) -> pulsating synodic states (N, 6)."""
+        s, tt, single = _broadcast(states_km, t)
+        ax = self.axes(tt)
+        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
+        d = np.broadcast_to(ax.distance, (s.shape[0],))[:, None]
+        dd = np.broadcast_to(ax.distance_rate, (s.shape[0],))[:, None]
+        vu = d * np.broadcast_to(ax.angular_rate, (s.shape[0],))[:, None]
+        rel = s[:, :3] - ax.origin
+        crho = rel / d
+        relv = s[:, 3:] - ax.origin_velocity - dd * crho - np.cross(ax.omega, rel)
+        out = np.empty_like(s)
+        out[:, :3] = np.einsum("nji,nj->ni", rot, crho)
+        out[:, 3:] = np.einsum("nji,nj->ni", rot, relv) / vu
+        return out[0] if single else out
+
+    def moon_synodic(self, t) -> np.ndarray:
+        """Synodic positions of the Moon (K, 3) LU at ``t`` (TU): ((1-mu) d / LU, 0, 0)."""
+        ax = self.axes(t)
+        out = np.zeros((ax.distance.size, 3))
+        out[:, 0] = (1.0 - self.mu) * ax.distance / units.LU_KM
+        return out

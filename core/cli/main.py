@@ -1,0 +1,301 @@
+"""The ``cistrack`` command.
+
+    cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd [--overwrite]] [--rerun-serve] [--rerun-spawn]
+    cistrack plugins [NAME] [--check NAME] [--kind KIND]
+    cistrack view FILE.rrd [--port 9090]
+    cistrack scenarios
+    cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR] [--first-seed N] [--n-seeds N]
+    cistrack study report STUDY [--out DIR] [--first-seed N] [--n-seeds N]
+    cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import sys
+from pathlib import Path
+
+from cistrack.errors import CistrackError, ConfigError
+from cistrack.cli.study import add_study_parser
+from cistrack.scenario.limits import check_seed
+from cistrack.results.output_paths import check_output_dir
+from cistrack.cli.process_exit import allow_quick_exit, exit_process
+from cistrack.cli.signals import install_signal_handlers
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+DEFAULT_SCENARIO = "example-1"
+
+
+def _eprint(*a) -> None:
+    print(*a, file=sys.stderr, flush=True)
+
+
+def _fmt(v, nd=3) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{nd}g}" if abs(v) < 1e4 else f"{v:.4g}"
+    return str(v)
+
+
+def cmd_export(args) -> int:
+    from cistrack.runs.export import export_run
+
+    params = {} if args.step is None else {"step": args.step}
+    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, **params)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from cistrack.plugin.registry import default_registry
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+    from cistrack.scenario.settings import apply_settings
+    from cistrack.evaluation.run_summary import count_lines
+    from cistrack.evaluation.verdicts import verdict_lines
+
+    reg = default_registry()
+    scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
+    say = (lambda *a, **k: None) if args.quiet else _eprint
+    out_ = (lambda *a, **k: None) if args.quiet else print
+    seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
+    run_id = (f"{scen.name}__{scen.components['filter'].name}__{scen.components['iod'].name}"
+              f"__seed{seed}")
+    out = Path(args.out) if args.out else Path("runs") / run_id
+    check_output_dir(out, "--out" if args.out else "the results directory")
+    observers = []
+    recorder = None
+    if args.rerun or args.rerun_serve or args.rerun_spawn:
+        recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
+                              spawn=args.rerun_spawn, max_points=args.max_points,
+                              frame=scen.recording_frame, overwrite=args.overwrite)
+        observers.append(recorder)
+    say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
+    say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
+        f"{scen.duration_days:g} days; results -> {out}")
+    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out, progress=not args.quiet,
+                       log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part)
+    s = res.summary
+    out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    if args.quiet and s.status != "finished":
+        _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    for line in verdict_lines(s, out, _fmt):
+        out_(line)
+    for line in count_lines(s):
+        out_(line)
+    f = s.final
+    if f:
+        out_("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
+              + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
+        if "pos_err_km" in f:
+            out_(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
+                  f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
+    out_(f"  results: {out}/steps.parquet, {out}/manifest.json")
+    if args.rerun:
+        out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
+    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
+        uri = getattr(recorder, "server_uri", None)
+        if uri:
+            out_(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
+        out_("  the viewer stays available until you press Ctrl-C", flush=True)
+        try:
+            import time
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            recorder.close()
+    if recorder is None:
+        allow_quick_exit()  # results written and closed; no recorder to flush at exit
+    return 0 if s.status == "finished" else 3
+
+
+def cmd_plugins(args) -> int:
+    from cistrack.interfaces import KINDS
+    from cistrack.plugin.registry import default_registry
+
+    reg = default_registry()
+    if args.check:
+        from cistrack.testing import check_registered
+        params = {}
+        for item in args.param or []:
+            key, sep, value = item.partition("=")
+            if not sep or not key.strip():
+                raise ConfigError(f"--param {item!r}: expected KEY=VALUE (VALUE in TOML syntax, e.g. path=\"out.rrd\")")
+            try:
+                params[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+            except tomllib.TOMLDecodeError:
+                params[key.strip()] = value  # a bare word: take it as a string
+        results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None)
+        failed = 0
+        for r in results:
+            name, passed, message = (r if isinstance(r, tuple) else (r.name, r.passed, r.message))
+            print(f"  {'PASS' if passed else 'FAIL'}  {name}" + (f": {message}" if message and not passed else ""))
+            failed += 0 if passed else 1
+        print(f"{len(results) - failed} passed, {failed} failed")
+        return 1 if failed else 0
+    kinds = [args.kind] if args.kind else list(KINDS)
+    if args.name:
+        return _describe(reg, args.name, kinds)
+    for kind in kinds:
+        entries = reg.entries(kind)
+        print(f"{kind} ({len(entries)})")
+        for e in entries:
+            print(f"  {e.name:<30} {e.distribution} {e.version:<8} {e.summary}")
+    if reg.failures:
+        print("plugins that failed to load:")
+        for f in reg.failures:
+            print(f"  {f}")
+    return 0
+
+
+def _describe(reg, name: str, kinds: list[str]) -> int:
+    """``cistrack plugins NAME``: every parameter of each component called NAME."""
+    import difflib
+
+    from cistrack.plugin.param_docs import describe_component
+
+    found = [reg.get(kind, name) for kind in kinds if (kind, name) in reg]
+    if not found:
+        every = sorted({n for kind in kinds for n in reg.names(kind)})
+        msg = f"no component named {name!r}"
+        close = difflib.get_close_matches(name, every, n=1, cutoff=0.5)
+        msg += f"; did you mean {close[0]!r}?" if close else f"; components: {', '.join(every)}"
+        raise ConfigError(msg + " (cistrack plugins lists them all)")
+    print("\n\n".join(describe_component(e.kind, e.name, e.factory, e.source) for e in found))
+    return 0
+
+
+def cmd_view(args) -> int:
+    """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
+    import time
+
+    from cistrack.plugin.registry import default_registry
+
+    # the recorder that wrote the file serves it (core never imports a plugin)
+    recorder = default_registry().get("recorder", "rerun").factory
+    served = recorder.serve_file(args.recording, web_port=args.port)
+    print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
+    print("serving until you press Ctrl-C", flush=True)
+    try:
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        served.close()
+    return 0
+
+
+def cmd_scenarios(args) -> int:
+    from cistrack.scenario.loading import builtin_scenarios
+    from cistrack.studies.study import builtin_studies
+
+    print("scenarios (cistrack run NAME):")
+    for name, desc in builtin_scenarios().items():
+        print(f"  {name:<28} {desc}")
+    print("studies (cistrack study run NAME):")
+    for name, desc in builtin_studies().items():
+        print(f"  {name:<28} {desc}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from cistrack import __version__
+
+    p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
+    p.add_argument("--version", action="version", version=f"cistrack {__version__}")
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
+    r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")
+    r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>; must be new, empty or an earlier results directory)")
+    r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file (refused otherwise)")
+    r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
+    r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
+    r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
+    r.add_argument("--rows-per-part", type=int, default=None, metavar="N", help="steps per results part file (default 1000, or 10 s)")
+    r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                   help="override a scenario value, validated like the file (repeatable), "
+                        "e.g. --set filter.n_particles=20000 --set duration_days=2")
+    r.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
+    r.set_defaults(func=cmd_run)
+    pl = sub.add_parser("plugins", help="list registered components, describe one, or check one")
+    pl.add_argument("name", nargs="?", default=None,
+                    help="describe this component: every parameter with type, default, unit and meaning")
+    pl.add_argument("--check", metavar="NAME", default=None, help="run the conformance suite on a component")
+    pl.add_argument("--kind", default=None, help="restrict to one kind")
+    pl.add_argument("--param", action="append", metavar="KEY=VALUE",
+                    help="with --check: build the component with this parameter (repeatable)")
+    pl.set_defaults(func=cmd_plugins)
+    ex = sub.add_parser("export", help="write a run's orbit estimate as CCSDS OEM or OPM")
+    ex.add_argument("run", help="a run directory (written by 'cistrack run --out DIR')")
+    ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm")
+    ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
+    ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
+    ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
+    ex.set_defaults(func=cmd_export)
+    v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
+    v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")
+    v.add_argument("--port", type=int, default=9090, help="web viewer port on 127.0.0.1 (default 9090)")
+    v.set_defaults(func=cmd_view)
+    sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
+    sc.set_defaults(func=cmd_scenarios)
+    add_study_parser(sub)
+    return p
+
+
+def _configure_logging(quiet: bool) -> None:
+    """Library progress notes (logger ``cistrack``, e.g. one-time kernel compilation) go to stderr;
+    ``--quiet`` keeps only warnings and errors."""
+    import logging
+
+    class _Stderr(logging.Handler):  # looks sys.stderr up at each message (tests swap it)
+        def emit(self, record: logging.LogRecord) -> None:
+            _eprint(f"cistrack: {record.getMessage()}")
+
+    logger = logging.getLogger("cistrack")
+    if not any(type(h).__name__ == "_Stderr" for h in logger.handlers):
+        logger.addHandler(_Stderr())
+    logger.setLevel(logging.WARNING if quiet else logging.INFO)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    _configure_logging(bool(getattr(args, "quiet", False)))
+    previous = install_signal_handlers()
+    try:
+        return int(args.func(args) or 0)
+    except CistrackError as exc:
+        _eprint(f"cistrack: error: {exc}")
+        return 2
+    except KeyboardInterrupt as exc:
+        why = str(exc) or "SIGINT"
+        _eprint(f"cistrack: interrupted ({why}); completed steps are kept and the manifest says 'interrupted'")
+        sig = getattr(signal, why, None) if why.startswith("SIG") else None
+        return 128 + int(sig) if sig is not None else 130
+    except BrokenPipeError:  # the reader closed our stdout (e.g. `cistrack scenarios | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def console_main() -> None:
+    """The ``cistrack`` command: :func:`main`, then the end of the process (without interpreter
+    teardown after a run: :mod:`cistrack.cli.process_exit`)."""
+    exit_process(main())
+
+
+if __name__ == "__main__":
+    console_main()

@@ -1,0 +1,31 @@
+"""Signals that end a run like Ctrl-C, so that its completed steps and manifest are kept.
+
+A SIGTERM (``kill``, a batch scheduler, a container stop) or SIGHUP (a closed terminal) raises
+:class:`~cistrack.errors.RunInterrupted` where it arrives; the run then merges its completed
+steps and records "interrupted (SIGTERM)" in its manifest, and the CLI exits with 128 + the
+signal number.
+"""
+from __future__ import annotations
+
+import signal
+import threading
+
+from cistrack.errors import RunInterrupted
+
+__all__ = ["install_signal_handlers"]
+
+
+def _raise_interrupted(signum, frame) -> None:
+    raise RunInterrupted(signal.Signals(signum).name)
+
+
+def install_signal_handlers() -> dict:
+    """SIGTERM and SIGHUP end a run like Ctrl-C (completed steps merged, manifest "interrupted");
+    only in the main thread of the process running ``main``. Returns the previous handlers."""
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in ("SIGTERM", "SIGHUP"):
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                old[sig] = signal.signal(sig, _raise_interrupted)
+    return old

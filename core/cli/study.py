@@ -1,0 +1,60 @@
+"""The ``cistrack study`` command: ``study run`` and ``study report`` (see :mod:`cistrack.studies.study`
+and :mod:`cistrack.studies.report`)."""
+from __future__ import annotations
+
+__all__ = ["add_study_parser", "cmd_study"]
+
+
+def cmd_study(args) -> int:
+    from cistrack.studies import study
+
+    if args.study_cmd == "run":
+        res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
+                              progress=not args.quiet, rerun_dir=args.rerun, settings=args.set,
+                              first_seed=args.first_seed, n_seeds=args.n_seeds)
+        if args.quiet:
+            return 0 if res["failed"] == 0 else 3
+        print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
+              f"{res['failed']} failed -> {res['out_dir']}")
+        return 0 if res["failed"] == 0 else 3
+    if args.study_cmd == "report":
+        from cistrack.studies.report import report_study
+
+        rep = report_study(args.study, out_dir=args.out, settings=args.set, first_seed=args.first_seed,
+                           n_seeds=args.n_seeds)
+        print(rep["text"])
+        print(f"written: {', '.join(str(p) for p in rep['files'])}")
+        return 0
+    return 2
+
+
+def _seed_arguments(parser) -> None:
+    parser.add_argument("--first-seed", type=int, default=None, metavar="N",
+                        help="run (or report) consecutive seeds from N instead of the study's own")
+    parser.add_argument("--n-seeds", type=int, default=None, metavar="N",
+                        help="how many seeds (default: the study's own number)")
+
+
+def add_study_parser(subparsers) -> None:
+    """Add ``study run`` and ``study report`` to the ``cistrack`` command's subparsers."""
+    st = subparsers.add_parser("study", help="run or report a comparative study")
+    stsub = st.add_subparsers(dest="study_cmd", required=True)
+    sr = stsub.add_parser("run", help="run every missing run of a study")
+    sr.add_argument("study", help="study TOML file, built-in study name or study results directory")
+    sr.add_argument("--out", default=None, help="study directory (default studies_out/<name>)")
+    sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
+    sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
+    sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
+    sr.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                    help="override a value in every run (after the study's own overrides and variants), "
+                         "validated like a scenario file; the default study directory names the settings")
+    sr.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    _seed_arguments(sr)
+    sr.set_defaults(func=cmd_study)
+    srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
+    srep.add_argument("study", help="study TOML file, built-in study name or study results directory (its own seeds and --set values)")
+    srep.add_argument("--out", default=None)
+    srep.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                      help="report the study run with these --set values")
+    _seed_arguments(srep)
+    srep.set_defaults(func=cmd_study)

@@ -1,0 +1,161 @@
+"""Custody: whether the filter still holds the target, decided by an observer of the run.
+
+:class:`CustodyObserver` is registered on a run's lifecycle hooks like any other observer (as
+pytest's terminal reporter is a plugin of pytest). It judges each update step against a
+:class:`CustodyRule`, writes the ``custody`` metric (1 kept, 0 lost) into the step before the
+results writer sees it (``tryfirst``), and hands the run's :class:`Verdict` to the summary.
+
+Extending: a verdict has a ``kind`` and a ``reason``. Further judges (consistency without a
+truth, divergence, ...) can subclass :class:`CustodyObserver` (override :meth:`judge`) or be
+observers of their own that produce a :class:`Verdict`.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.plugin.hookspecs import hookimpl
+
+__all__ = ["CustodyRule", "Verdict", "CustodyObserver", "KEPT_KINDS", "VERDICT_KINDS"]
+
+KEPT_KINDS: tuple[str, ...] = ("kept", "tracking", "not-converged")
+"""Verdict kinds under which custody is kept (``custody_kept`` is True)."""
+VERDICT_KINDS: tuple[str, ...] = ("tracking", "not-converged", "lost", "diverged", "filter-failed",
+                                  "no-truth")
+"""Final verdict kinds of a run."""
+
+
+@dataclass(frozen=True)
+class CustodyRule:
+    """When custody is lost (sticky: once lost, lost for the rest of the run).
+
+    Custody is lost at the first update step where the truth's log-likelihood under the belief's
+    mixture (state in km and km/s) is below ``loglik_threshold``, or where the truth lies outside
+    the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps.
+    """
+
+    loglik_threshold: float = -100.0
+    hdr_threshold: float = 0.997
+    hdr_consecutive: int = 2
+    precision_km: float = 100.0
+    """A run that keeps custody is "tracking" only if its final largest per-axis position sigma
+    is at most this (km); above it the cloud is consistent but too wide to be a track
+    ("not-converged")."""
+    collapse_sigma_km: float = 1e-3
+    """A final largest per-axis position sigma below this (km, 1 m) is a collapsed belief: no
+    telescope at 1.5 arcsec can pin a cislunar object that tightly ("diverged")."""
+    diverged_error_km: float = 50.0
+    diverged_nees: float = 1e4
+    """A final position error above ``diverged_error_km`` (km) together with a NEES above
+    ``diverged_nees`` (error far beyond sigma: a 6-D chi-square exceeds 1e4 with probability
+    ~0) is a diverged filter."""
+    degenerate_ess: float = 7.0
+    """A particle filter whose effective sample size (its ``ess_before_resampling`` diagnostic)
+    or number of distinct particles (``unique_particles``) falls below this at any update has
+    degenerate weights: fewer effective particles than the state dimension + 1 cannot even
+    define a 6-D covariance ("diverged")."""
+    max_earth_distance_km: float = 2e6
+    """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
+    space ("diverged")."""
+    diverged_nis: float = 1e3
+    diverged_nis_updates: int = 3
+    """Without a truth: a median NIS above ``diverged_nis`` over the last ``diverged_nis_updates``
+    updates means the measurements fall far outside the spread the belief predicts, the
+    no-truth counterpart of "error far beyond sigma" ("diverged"; a chi-square with 2 to 6
+    degrees of freedom exceeds 1e3 with probability ~0)."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of a run as judged by an observer.
+
+    Attributes
+    ----------
+    kind : str                 during a run "kept", "lost" (truth left the belief) or
+                               "filter-failed" (the filter raised); at the end of a run with a
+                               truth :func:`cistrack.evaluation.verdicts.final_verdict` turns "kept" into
+                               "tracking" or "not-converged" and any kind but "filter-failed"
+                               into "diverged" when the belief collapsed or ran away; a run
+                               without a truth ends "no-truth" (judged by its NIS instead)
+    reason : str               one sentence a person can read, e.g. which threshold was crossed
+    step : int or None         step index where the verdict changed from "kept" (None if kept)
+    t_days : float or None     time of that step, days since the epoch
+    """
+
+    kind: str = "kept"
+    reason: str = ""
+    step: int | None = None
+    t_days: float | None = None
+
+    @property
+    def kept(self) -> bool:
+        """Custody kept: "kept" (during a run), "tracking" or "not-converged"."""
+        return self.kind in KEPT_KINDS
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Verdict":
+        return cls(**{k: data.get(k) for k in ("kind", "reason", "step", "t_days")})
+
+
+_EARTH = np.array([-MU_EARTH_MOON, 0.0, 0.0])  # Earth in the synodic frame (LU)
+
+
+class CustodyObserver:
+    """Judges custody on every update step of a run with a truth (see the module docstring)."""
+
+    def __init__(self, rule: CustodyRule | None = None) -> None:
+        self.rule = rule or CustodyRule()
+        self.verdict = Verdict()
+        self._hdr_run = 0
+        self.earth_distance_km: float | None = None
+        """Distance of the last posterior mean from Earth (km), for the final verdict."""
+
+    def judge(self, step) -> Verdict | None:
+        """The verdict after update ``step`` if custody is lost there, else None."""
+        m = step.metrics
+        if m.get("truth_loglik", 0.0) < self.rule.loglik_threshold:
+            return Verdict("lost", f"truth log-likelihood {m['truth_loglik']:.1f} < "
+                           f"{self.rule.loglik_threshold:g}", step.index, float(units.tu_to_days(step.t)))
+        self._hdr_run = self._hdr_run + 1 if m.get("hdr_level", 0.0) > self.rule.hdr_threshold else 0
+        if self._hdr_run >= self.rule.hdr_consecutive:
+            return Verdict("lost", f"truth outside the {self.rule.hdr_threshold:g} highest-density region "
+                           f"on {self._hdr_run} consecutive updates", step.index, float(units.tu_to_days(step.t)))
+        return None
+
+    def _mark(self, run, step) -> None:
+        if step.truth is not None:  # a run without a truth has no custody column at all
+            step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
+
+    def _track_mean(self, step) -> None:
+        belief = getattr(step, "belief", None)
+        if belief is None:
+            return
+        mean = np.asarray(belief.mixture.mean, dtype=float)
+        self.earth_distance_km = float(np.linalg.norm(mean[:3] - _EARTH) * units.LU_KM)
+
+    @hookimpl(tryfirst=True)
+    def cistrack_step_predicted(self, run, step) -> None:
+        if step.kind in ("initial", "predict"):
+            self._mark(run, step)
+            self._track_mean(step)
+
+    @hookimpl(tryfirst=True)
+    def cistrack_step_updated(self, run, step) -> None:
+        if self.verdict.kept and step.truth is not None:
+            lost = self.judge(step)
+            if lost is not None:
+                self.verdict = lost
+        self._mark(run, step)
+        self._track_mean(step)
+
+    @hookimpl
+    def cistrack_run_failed(self, run, step_index, error) -> None:
+        if self.verdict.kept:
+            self.verdict = Verdict("filter-failed", str(error), step_index, None)

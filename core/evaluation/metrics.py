@@ -1,0 +1,77 @@
+"""Per-step metrics, in the terms of ../shared/REFERENCE.md.
+
+Person-facing units: positions km, velocities km/s (errors in m/s, sigmas in cm/s), densities of
+the state in km and km/s (entropy and log-likelihood in nats of that density).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack.model.belief import Belief
+from cistrack.units import LU_KM, VU_KMS
+
+__all__ = ["step_metrics", "entropy", "nees", "LOG_JACOBIAN_KM"]
+
+LOG_JACOBIAN_KM: float = 3.0 * np.log(LU_KM) + 3.0 * np.log(VU_KMS)
+"""log |d(state_km)/d(state_nd)|: log p_km(x) = log p_nd(x) - LOG_JACOBIAN_KM."""
+
+_SCALE = np.array([LU_KM] * 3 + [VU_KMS] * 3)
+
+
+def entropy(belief: Belief, sample_logpdf: np.ndarray | None = None) -> float:
+    """The paper's entropy estimate H = -(1/N) sum log p(x_i) over the belief's samples, with p
+    the belief's mixture density of the state in km and km/s (nats). ``sample_logpdf`` (N,)
+    may pass the nondimensional log density of the samples when it is already known."""
+    lp = belief.mixture.logpdf(belief.samples.states) if sample_logpdf is None else sample_logpdf
+    if belief.samples.weights is not None:
+        h = -float(belief.samples.weights @ lp)
+    else:
+        h = -float(np.mean(lp))
+    return h + LOG_JACOBIAN_KM
+
+
+def nees(error: np.ndarray, covariance: np.ndarray) -> float:
+    """Normalised estimation error squared e^T P^-1 e (unit-free): e (d,), P (d, d)."""
+    try:
+        c = np.linalg.cholesky(covariance)
+        y = np.linalg.solve(c, error)
+        return float(y @ y)
+    except np.linalg.LinAlgError:
+        return float(error @ np.linalg.pinv(covariance) @ error)
+
+
+def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
+    """All metrics of one belief against the truth (6,) nondimensional, or None if unknown.
+
+    Keys: entropy (nats, km/km/s density); n_components; n_samples; sigma_x_km, sigma_y_km,
+    sigma_z_km; sigma_vx_cms, sigma_vy_cms, sigma_vz_cms (per-axis standard deviations of the
+    mixture); with truth also pos_err_km, vel_err_ms (error of the mixture mean), nees (of the
+    moment-matched mean and covariance), truth_loglik (log density of the truth, km/km/s) and
+    hdr_level (probability mass of the highest-density region whose boundary passes through the
+    truth, estimated from the samples: 0 at the mode, 1 far outside).
+    """
+    mix = belief.mixture
+    mean = mix.mean
+    cov = mix.covariance
+    sig = np.sqrt(np.maximum(np.diag(cov), 0.0)) * _SCALE
+    lp_samples = mix.logpdf(belief.samples.states)
+    out: dict[str, float] = {
+        "entropy": entropy(belief, lp_samples),
+        "n_components": float(mix.n_components),
+        "n_samples": float(len(belief.samples)),
+        "sigma_x_km": sig[0], "sigma_y_km": sig[1], "sigma_z_km": sig[2],
+        "sigma_vx_cms": sig[3] * 1e5, "sigma_vy_cms": sig[4] * 1e5, "sigma_vz_cms": sig[5] * 1e5,
+        "sigma_pos_km": float(np.sqrt(np.sum(sig[:3] ** 2))),
+        "sigma_vel_cms": float(np.sqrt(np.sum(sig[3:] ** 2)) * 1e5),
+    }
+    if truth is not None:
+        e = np.asarray(truth, dtype=float) - mean
+        out["pos_err_km"] = float(np.linalg.norm(e[:3]) * LU_KM)
+        out["vel_err_ms"] = float(np.linalg.norm(e[3:]) * VU_KMS * 1e3)
+        out["nees"] = nees(e, cov)
+        lp_truth = float(mix.logpdf(np.asarray(truth, dtype=float)[None])[0])
+        out["truth_loglik"] = lp_truth - LOG_JACOBIAN_KM
+        w = belief.samples.weights
+        above = (lp_samples > lp_truth).astype(float)
+        out["hdr_level"] = float(above.mean() if w is None else w @ above)
+    return out

@@ -1,0 +1,148 @@
+"""The typed summary of one run, shared by the run, the CLI, the results store and studies.
+
+On disk (``manifest.json`` key ``summary``) it is :meth:`RunSummary.to_dict`: the flat keys
+earlier versions wrote (``custody_kept``, ``custody_lost_step``, ...) plus ``verdict``;
+:meth:`RunSummary.from_dict` reads both forms, so studies resume over old run directories.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from cistrack.evaluation.custody import Verdict
+
+__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines"]
+
+FINAL_KEYS: tuple[str, ...] = (
+    "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+    "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level")
+"""Metrics reported for the last update and at the end of each pass."""
+
+
+@dataclass
+class RunSummary:
+    """What a run ended with.
+
+    Attributes
+    ----------
+    run_id : str
+    seed : int
+    status : str                 "finished" or "filter-failed"
+    failure : str                the error that stopped the filter ("" if none)
+    verdict : Verdict            final verdict (kind, reason, step, t_days): tracking,
+                                 not-converged, lost, diverged, filter-failed or no-truth
+    has_truth : bool             whether the run had a truth (without one: no custody, ever)
+    n_steps, n_updates, n_measurements : int
+    n_passes : int               visibility passes of the sensor over the run (observed or not:
+                                 a sensor shutoff or the schedule leaves some unobserved)
+    n_passes_observed : int      passes with at least one measurement
+    n_measurements_before_iod : int   measurements at or before the IOD epoch (the IOD's own
+                                 input: not filter updates)
+    consistency : dict           measurement consistency of the updates
+                                 (:func:`cistrack.evaluation.residuals.consistency_summary`: mean NIS and
+                                 its chi-square bounds, share outside 95 %, largest residual)
+    final : dict                 FINAL_KEYS of the last update (or the last step), km, m/s, cm/s
+    pass_end : dict              pass number (str) -> FINAL_KEYS and t_days at its last update
+    wall_time_s, prepare_time_s : float
+    """
+
+    run_id: str
+    seed: int
+    status: str = "finished"
+    failure: str = ""
+    verdict: Verdict = field(default_factory=Verdict)
+    has_truth: bool = True
+    n_steps: int = 0
+    n_updates: int = 0
+    n_measurements: int = 0
+    n_passes: int = 0
+    n_passes_observed: int = 0
+    n_measurements_before_iod: int = 0
+    consistency: dict[str, Any] = field(default_factory=dict)
+    final: dict[str, float] = field(default_factory=dict)
+    pass_end: dict[str, dict[str, float]] = field(default_factory=dict)
+    wall_time_s: float = 0.0
+    prepare_time_s: float = 0.0
+
+    @property
+    def custody_kept(self) -> bool:
+        return self.verdict.kept
+
+    @property
+    def custody_lost_step(self) -> int | None:
+        return self.verdict.step
+
+    @property
+    def custody_lost_t_days(self) -> float | None:
+        return self.verdict.t_days
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict (the manifest's ``summary``)."""
+        custody = {} if not self.has_truth else {  # no truth: no custody to speak of
+            "custody_kept": self.custody_kept, "custody_lost_step": self.custody_lost_step,
+            "custody_lost_t_days": self.custody_lost_t_days}
+        return {
+            "run_id": self.run_id, "seed": self.seed, "status": self.status, "failure": self.failure,
+            **custody, "verdict": self.verdict.to_dict(), "has_truth": self.has_truth,
+            "n_steps": self.n_steps, "n_updates": self.n_updates, "n_measurements": self.n_measurements,
+            "n_passes": self.n_passes, "n_passes_observed": self.n_passes_observed,
+            "n_measurements_before_iod": self.n_measurements_before_iod,
+            "consistency": dict(self.consistency), "final": dict(self.final), "pass_end": dict(self.pass_end),
+            "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "RunSummary":
+        """Inverse of :meth:`to_dict`; also reads summaries written before ``verdict`` existed."""
+        if "verdict" in data and isinstance(data["verdict"], dict):
+            verdict = Verdict.from_dict(data["verdict"])
+        elif data.get("custody_kept", True):
+            verdict = Verdict()
+        else:
+            failed = data.get("status") == "filter-failed"
+            verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
+                              data.get("custody_lost_step"), data.get("custody_lost_t_days"))
+        names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed",
+                 "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s",
+                 "status", "failure")
+        has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
+        return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
+                   **{k: data[k] for k in names if k in data})
+
+
+def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, failure: str,
+              wall_time_s: float, prepare_time_s: float) -> RunSummary:
+    """The summary of ``run`` (a RunContext) from its table ``rows`` (see :func:`step_row`)."""
+    updates = [r for r in rows if r["kind"] == "update"]
+    last = updates[-1] if updates else (rows[-1] if rows else {})
+    pass_end: dict[str, dict[str, float]] = {}
+    for r in updates:
+        p = int(r.get("pass_index", 0))
+        if p > 0:
+            pass_end[str(p)] = {k: r[k] for k in FINAL_KEYS if k in r} | {"t_days": r["t_days"]}
+    from cistrack.evaluation.residuals import consistency_summary
+
+    times = [float(m.t) for m in run.measurements]
+    observed = sum(1 for p in run.passes if any(p.start <= t <= p.end for t in times))
+    before_iod = sum(1 for t in times if t <= float(run.iod_cloud.epoch) + 1e-12)  # as the run's events
+    return RunSummary(
+        run_id=run.run_id, seed=int(run.seed), status=status, failure=failure, verdict=verdict,
+        has_truth=run.truth is not None, n_steps=len(rows), n_updates=len(updates),
+        n_measurements=len(run.measurements), n_passes=len(run.passes), n_passes_observed=observed,
+        n_measurements_before_iod=before_iod,
+        consistency=consistency_summary(rows), final={k: last[k] for k in FINAL_KEYS if k in last},
+        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s)
+
+
+def count_lines(s: RunSummary) -> list[str]:
+    """What the run's counts mean, in words: measurements, the passes they fall in (of the
+    sensor's visibility passes: a schedule or a sensor shutoff leaves some unobserved), the
+    measurements the IOD used and the filter updates after it."""
+    passes = ""
+    if s.n_passes:
+        unobserved = s.n_passes - s.n_passes_observed
+        passes = (f" in {s.n_passes_observed} of {s.n_passes} visibility passes"
+                  + (f" ({unobserved} unobserved: schedule or sensor shutoff)" if unobserved else ""))
+    updates = (f"{s.n_measurements_before_iod} up to the IOD epoch (the IOD's input), {s.n_updates} filter "
+               "updates after it" if s.n_measurements_before_iod else f"{s.n_updates} filter updates")
+    return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"]

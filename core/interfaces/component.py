@@ -1,0 +1,148 @@
+"""The base of every plugin component: constructor parameters only, scikit-learn style.
+
+A component declares its parameters as keyword arguments of ``__init__`` with type hints and
+defaults, stores each under the same attribute name, and checks values in ``__init__`` with the
+``check_*`` helpers below, which raise :class:`~cistrack.errors.ParameterError` naming the
+component, the parameter, the value and what is allowed. Scenario files are validated against
+the same signature before anything runs (see :mod:`cistrack.scenario.loading`).
+"""
+from __future__ import annotations
+
+import inspect
+from abc import ABC
+import math
+import typing
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from cistrack.errors import ParameterError
+
+__all__ = [
+    "Component", "ParamSpec", "param_specs",
+    "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
+]
+
+_EMPTY = inspect.Parameter.empty
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One constructor parameter: its name, type annotation, default and doc line."""
+
+    name: str
+    annotation: Any
+    default: Any
+    required: bool
+
+
+def param_specs(cls: type) -> dict[str, ParamSpec]:
+    """Parameters of ``cls.__init__`` (keyword parameters after ``self``), in order."""
+    init = cls.__init__
+    if init is object.__init__:
+        return {}
+    try:
+        hints = typing.get_type_hints(init)
+    except Exception:  # unresolved forward references: fall back to raw annotations
+        hints = {}
+    out: dict[str, ParamSpec] = {}
+    for p in list(inspect.signature(init).parameters.values())[1:]:
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+            continue
+        ann = hints.get(p.name, p.annotation if p.annotation is not _EMPTY else Any)
+        out[p.name] = ParamSpec(p.name, ann, p.default if p.default is not _EMPTY else None,
+                                p.default is _EMPTY)
+    return out
+
+
+class Component(ABC):
+    """Base class of every registered component (an ABC: a subclass that leaves one of its
+    interface's ``@abstractmethod`` methods unimplemented cannot be constructed).
+
+    Subclasses set ``kind`` (done by the kind's interface class). The registry sets
+    ``registry_name`` on the class it registers, so error messages can name the plugin.
+    """
+
+    kind: ClassVar[str] = ""
+    nested_params: ClassVar[dict[str, tuple[str, ...]]] = {}
+    """Parameters handed on to a nested component when a scenario builds it: parameter holding
+    the nested component -> names of this component's parameters that the nested one takes too
+    (e.g. the PGM's ``{"clusterer": ("n_components",)}``). A nested table that sets the
+    parameter itself keeps its own value. So the nested component is built once, already with
+    the value, instead of being copied to change it."""
+    registry_name: ClassVar[str] = ""
+
+    @classmethod
+    def _label(cls) -> str:
+        return f"{cls.kind or 'component'} '{cls.registry_name or cls.__name__}'"
+
+    def get_params(self) -> dict[str, Any]:
+        """The constructor parameters and their current values (scikit-learn's contract)."""
+        return {name: getattr(self, name) for name in param_specs(type(self))}
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
+        return f"{type(self).__name__}({args})"
+
+    # -- validation helpers usable as self.check_xxx in __init__ ---------------------------------
+    def _fail(self, name: str, value: Any, allowed: str) -> None:
+        raise ParameterError(f"{self._label()}: parameter '{name}' = {value!r} is invalid: {allowed}")
+
+
+def _real(owner: Component, name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        owner._fail(name, value, "must be a number")
+    v = float(value)
+    if not math.isfinite(v):
+        owner._fail(name, value, "must be finite")
+    return v
+
+
+def check_positive(owner: Component, name: str, value: Any) -> float:
+    """Return ``value`` as float; raise ParameterError unless it is finite and > 0."""
+    v = _real(owner, name, value)
+    if v <= 0:
+        owner._fail(name, value, "must be > 0")
+    return v
+
+
+def check_nonnegative(owner: Component, name: str, value: Any) -> float:
+    """Return ``value`` as float; raise ParameterError unless it is finite and >= 0."""
+    v = _real(owner, name, value)
+    if v < 0:
+        owner._fail(name, value, "must be >= 0")
+    return v
+
+
+def check_range(owner: Component, name: str, value: Any, lo: float, hi: float,
+                *, lo_open: bool = False, hi_open: bool = False) -> float:
+    """Return ``value`` as float; raise ParameterError unless lo <= value <= hi (or open ends)."""
+    v = _real(owner, name, value)
+    bad = (v < lo or v > hi or (lo_open and v == lo) or (hi_open and v == hi))
+    if bad:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        owner._fail(name, value, f"must lie in {left}{lo}, {hi}{right}")
+    return v
+
+
+def check_int(owner: Component, name: str, value: Any, minimum: int | None = None,
+              maximum: int | None = None) -> int:
+    """Return ``value`` as int; raise ParameterError unless it is an integer within bounds."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            owner._fail(name, value, "must be an integer")
+    if minimum is not None and value < minimum:
+        owner._fail(name, value, f"must be >= {minimum}")
+    if maximum is not None and value > maximum:
+        owner._fail(name, value, f"must be <= {maximum}")
+    return int(value)
+
+
+def check_choice(owner: Component, name: str, value: Any, choices: typing.Iterable[str]) -> str:
+    """Return ``value``; raise ParameterError unless it is one of ``choices``."""
+    choices = list(choices)
+    if value not in choices:
+        owner._fail(name, value, f"must be one of {', '.join(map(repr, choices))}")
+    return value

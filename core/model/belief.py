@@ -1,0 +1,309 @@
+"""Belief types shared by every filter, IOD method and metric.
+
+States are nondimensional synodic, shape ``(N, d)`` with d = 6 for orbits
+(x, y, z in LU; vx, vy, vz in VU). Times are TU since the scenario epoch.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cistrack.lazy import lazy_njit
+
+__all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+def sample_covariance(x: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Unbiased (weighted) sample covariance of rows of ``x`` (N, d) -> (d, d)."""
+    x = np.asarray(x, dtype=float)
+    if weights is None:
+        if x.shape[0] < 2:
+            return np.zeros((x.shape[1], x.shape[1]))
+        return np.cov(x, rowvar=False).reshape(x.shape[1], x.shape[1])
+    w = np.asarray(weights, dtype=float)
+    w = w / w.sum()
+    mean = w @ x
+    d = x - mean
+    denom = 1.0 - np.sum(w * w)
+    c = (d * w[:, None]).T @ d
+    return c / denom if denom > 0 else c
+
+
+def regularize_covariance(p: np.ndarray, rel: float = 1e-12) -> np.ndarray:
+    """Symmetrise ``p`` (..., d, d) and lift eigenvalues below ``rel``·max(diag) to that floor.
+
+    Keeps a covariance positive definite after a Joseph-less Kalman update or a degenerate
+    cluster without changing well-conditioned matrices.
+    """
+    p = 0.5 * (p + np.swapaxes(p, -1, -2))
+    w, v = np.linalg.eigh(p)
+    scale = np.max(np.abs(np.diagonal(p, axis1=-2, axis2=-1)), axis=-1, keepdims=True)
+    floor = np.maximum(rel * scale, np.finfo(float).tiny)
+    if np.all(w >= floor):
+        return p
+    w = np.maximum(w, floor)
+    return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
+
+
+_BLOCK = 256  # points per block of the compiled density: the block's work arrays stay in L1
+
+
+@lazy_njit(cache=True)
+def _whitened_logpdf(x, means, linv, const, logw, out):
+    """out[n, m] = const[m] + logw[m] - |linv[m] (x[n] - means[m])|^2 / 2 (linv lower triangular).
+
+    x (N, d), means (M, d), linv (M, d, d), const and logw (M,), out (N, M). Points go in blocks
+    of ``_BLOCK``; within a block each operation runs over the points in an inner loop, which
+    the compiler turns into SIMD instructions. Every point sees the same operations in the same
+    order as a plain per-point loop (``s = 0; s += linv[a, b] diff[b]`` for b = 0..a, then
+    ``maha += s^2`` for a = 0..d-1), so the numbers do not depend on the blocking.
+    """
+    n_pts, d = x.shape
+    n_comp = means.shape[0]
+    diff = np.empty((d, _BLOCK))
+    s = np.empty(_BLOCK)
+    maha = np.empty(_BLOCK)
+    for start in range(0, n_pts, _BLOCK):
+        nb = min(_BLOCK, n_pts - start)
+        for m in range(n_comp):
+            for b in range(d):
+                mb = means[m, b]
+                for i in range(nb):
+                    diff[b, i] = x[start + i, b] - mb
+            for i in range(nb):
+                maha[i] = 0.0
+            for a in range(d):
+                for i in range(nb):
+                    s[i] = 0.0
+                for b in range(a + 1):
+                    lab = linv[m, a, b]
+                    for i in range(nb):
+                        s[i] += lab * diff[b, i]
+                for i in range(nb):
+                    maha[i] += s[i] * s[i]
+            c = const[m] + logw[m]
+            for i in range(nb):
+                out[start + i, m] = c - 0.5 * maha[i]
+
+
+@lazy_njit(cache=True)
+def _row_logsumexp(a, out):
+    """out[n] = log sum_m exp(a[n, m]) for a (N, M), -inf rows giving -inf, NaN propagating."""
+    n_pts, n_comp = a.shape
+    for n in range(n_pts):
+        mx = -np.inf
+        nan = False
+        for m in range(n_comp):
+            v = a[n, m]
+            if v != v:
+                nan = True
+            elif v > mx:
+                mx = v
+        if nan:
+            out[n] = np.nan
+            continue
+        if not np.isfinite(mx):
+            mx = 0.0
+        s = 0.0
+        for m in range(n_comp):
+            s += np.exp(a[n, m] - mx)
+        out[n] = mx + np.log(s)
+
+
+@dataclass
+class ParticleCloud:
+    """Samples of a belief.
+
+    Attributes
+    ----------
+    states : (N, d) float
+        Particles, nondimensional synodic.
+    epoch : float
+        Time of the states, TU since the scenario epoch.
+    weights : (N,) float or None
+        Normalised importance weights; None means equal weights.
+    labels : (N,) int or None
+        Component label of each particle, when a clusterer assigned one.
+    meta : dict
+        Free-form provenance of the cloud (e.g. an IOD method's draws, survivors and pruning
+        counts); never used in computations.
+    """
+
+    states: np.ndarray
+    epoch: float
+    weights: np.ndarray | None = None
+    labels: np.ndarray | None = None
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        self.states = np.atleast_2d(np.asarray(self.states, dtype=float))
+        if self.weights is not None:
+            w = np.asarray(self.weights, dtype=float)
+            if w.shape != (self.states.shape[0],):
+                raise ValueError(f"weights shape {w.shape} does not match {self.states.shape[0]} particles")
+            self.weights = w / w.sum()
+
+    def __len__(self) -> int:
+        return self.states.shape[0]
+
+    @property
+    def mean(self) -> np.ndarray:
+        """Weighted mean, (d,)."""
+        if self.weights is None:
+            return self.states.mean(axis=0)
+        return self.weights @ self.states
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """Weighted sample covariance, (d, d)."""
+        return sample_covariance(self.states, self.weights)
+
+    def moment_match(self) -> "GaussianMixture":
+        """Single-component mixture with the cloud's mean and covariance."""
+        return GaussianMixture(np.ones(1), self.mean[None], self.covariance[None])
+
+
+@dataclass
+class GaussianMixture:
+    """A Gaussian mixture density.
+
+    Attributes
+    ----------
+    weights : (M,) float, normalised to sum 1
+    means : (M, d) float
+    covariances : (M, d, d) float, symmetric positive definite
+    """
+
+    weights: np.ndarray
+    means: np.ndarray
+    covariances: np.ndarray
+    _chol: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self.weights = np.atleast_1d(np.asarray(self.weights, dtype=float))
+        self.means = np.atleast_2d(np.asarray(self.means, dtype=float))
+        self.covariances = np.asarray(self.covariances, dtype=float)
+        if self.covariances.ndim == 2:
+            self.covariances = self.covariances[None]
+        m, d = self.means.shape
+        if self.weights.shape != (m,) or self.covariances.shape != (m, d, d):
+            raise ValueError(
+                f"inconsistent mixture shapes: weights {self.weights.shape}, means {self.means.shape}, "
+                f"covariances {self.covariances.shape}")
+        if not (np.all(np.isfinite(self.weights)) and np.all(self.weights >= 0) and self.weights.sum() > 0):
+            raise ValueError("mixture weights must be finite, non-negative and not all zero")
+        self.weights = self.weights / self.weights.sum()
+
+    @property
+    def n_components(self) -> int:
+        return self.means.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.means.shape[1]
+
+    def cholesky(self) -> np.ndarray:
+        """Lower Cholesky factors (M, d, d), regularising a covariance that is not PD."""
+        if self._chol is None:
+            try:
+                self._chol = np.linalg.cholesky(self.covariances)
+            except np.linalg.LinAlgError:
+                self.covariances = regularize_covariance(self.covariances, 1e-10)
+                self._chol = np.linalg.cholesky(self.covariances)
+        return self._chol
+
+    def _whitening(self) -> tuple[np.ndarray, np.ndarray]:
+        """Inverse Cholesky factors (M, d, d) and log normalising constants (M,)."""
+        chol = self.cholesky()
+        linv = np.ascontiguousarray(np.linalg.inv(chol))  # one batched call
+        logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
+        return linv, np.ascontiguousarray(-0.5 * (logdet + self.dim * _LOG_2PI))
+
+    def _logpdf_table(self, x: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
+        x = np.ascontiguousarray(np.atleast_2d(np.asarray(x, dtype=float)))
+        if x.ndim != 2 or x.shape[1] != self.dim:
+            raise ValueError(f"points must have shape (N, {self.dim}), got {x.shape}")
+        linv, const = self._whitening()
+        out = np.empty((x.shape[0], self.n_components))
+        _whitened_logpdf(x, np.ascontiguousarray(self.means), linv, const,
+                         np.ascontiguousarray(log_weights, dtype=float), out)
+        return out
+
+    def component_logpdf(self, x: np.ndarray) -> np.ndarray:
+        """log N(x; mu_i, P_i) for every point and component: x (N, d) -> (N, M)."""
+        return self._logpdf_table(x, np.zeros(self.n_components))
+
+    def logpdf(self, x: np.ndarray) -> np.ndarray:
+        """Log density of points ``x`` (N, d) -> (N,)."""
+        with np.errstate(divide="ignore"):
+            logw = np.log(self.weights)
+        a = self._logpdf_table(x, logw)
+        if a.shape[1] == 1:
+            return a[:, 0]
+        out = np.empty(a.shape[0])
+        _row_logsumexp(a, out)
+        return out
+
+    def responsibilities(self, x: np.ndarray) -> np.ndarray:
+        """Posterior component probabilities of each point, (N, M)."""
+        with np.errstate(divide="ignore"):
+            a = self.component_logpdf(x) + np.log(self.weights)
+        from scipy.special import logsumexp  # imported on use: scipy.special is slow to import
+
+        return np.exp(a - logsumexp(a, axis=1, keepdims=True))
+
+    def sample(self, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Draw ``n`` points. Returns (samples (n, d), component labels (n,))."""
+        labels = rng.choice(self.n_components, size=n, p=self.weights)
+        labels.sort()
+        z = rng.standard_normal((n, self.dim))
+        chol = self.cholesky()
+        out = np.empty((n, self.dim))
+        for i in range(self.n_components):
+            sel = labels == i
+            out[sel] = self.means[i] + z[sel] @ chol[i].T
+        return out, labels
+
+    @property
+    def mean(self) -> np.ndarray:
+        """Mixture mean, (d,)."""
+        return self.weights @ self.means
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """Mixture covariance (law of total covariance), (d, d)."""
+        mu = self.mean
+        diff = self.means - mu
+        return (np.einsum("m,mij->ij", self.weights, self.covariances)
+                + np.einsum("m,mi,mj->ij", self.weights, diff, diff))
+
+    def moment_match(self) -> "GaussianMixture":
+        """Single Gaussian with the mixture's mean and covariance."""
+        return GaussianMixture(np.ones(1), self.mean[None], self.covariance[None])
+
+    def marginal(self, idx) -> "GaussianMixture":
+        """Marginal over coordinates ``idx`` (e.g. slice(0, 3) for position)."""
+        idx = np.arange(self.dim)[idx]
+        return GaussianMixture(self.weights, self.means[:, idx], self.covariances[:, idx][:, :, idx])
+
+
+@dataclass
+class Belief:
+    """What every filter exposes: its density as a mixture plus samples of it.
+
+    Attributes
+    ----------
+    epoch : float
+        TU since the scenario epoch.
+    mixture : GaussianMixture
+        The filter's density (a Kalman filter's is a mixture of one).
+    samples : ParticleCloud
+        Particles of the belief (the filter's own particles, or draws from the mixture).
+    """
+
+    epoch: float
+    mixture: GaussianMixture
+    samples: ParticleCloud

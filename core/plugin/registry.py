@@ -1,0 +1,216 @@
+"""The component registry, filled by plugins through pluggy and entry points.
+
+Each entry point of the group ``cistrack`` is loaded on its own: a plugin that fails to import
+or to register is recorded in :attr:`Registry.failures` with its distribution, entry point and
+error, and the others still load. A plugin that registers a name already taken is such a
+failure too (the message names both sources); the first registration stays, and built-ins
+load first, so a third party can never silently replace a built-in. ``CISTRACK_DISABLE_PLUGIN_AUTOLOAD=1`` loads only the
+built-in components (distribution ``cistrack``).
+"""
+from __future__ import annotations
+
+import difflib
+import os
+import traceback
+from dataclasses import dataclass
+from importlib import metadata
+from typing import Any, Iterable
+
+import pluggy
+
+from cistrack.plugin import hookspecs
+from cistrack.errors import DuplicateComponentError, ParameterError, UnknownComponentError
+from cistrack.interfaces import KINDS
+
+__all__ = ["Registration", "PluginFailure", "Registry", "default_registry", "load_registry",
+           "AUTOLOAD_ENV", "ENTRY_POINT_GROUP"]
+
+ENTRY_POINT_GROUP = "cistrack"
+AUTOLOAD_ENV = "CISTRACK_DISABLE_PLUGIN_AUTOLOAD"
+BUILTIN_DISTRIBUTION = "cistrack"
+
+
+@dataclass(frozen=True)
+class Registration:
+    """A registered component: the factory (class or object) and where it came from."""
+
+    kind: str
+    name: str
+    factory: Any
+    distribution: str
+    version: str
+    entry_point: str
+
+    @property
+    def summary(self) -> str:
+        """The factory's description or the first paragraph of its docstring, plain text, one line."""
+        from cistrack.plugin.param_docs import summary_of
+
+        return summary_of(self.factory)
+
+    @property
+    def source(self) -> str:
+        return f"{self.distribution} {self.version} (entry point '{self.entry_point}')"
+
+
+@dataclass(frozen=True)
+class PluginFailure:
+    """A plugin that could not be loaded or could not register."""
+
+    distribution: str
+    entry_point: str
+    error: str
+    detail: str
+
+    def __str__(self) -> str:
+        return f"{self.distribution}: entry point '{self.entry_point}' failed: {self.error}"
+
+
+class _BoundRegistry:
+    """What a plugin's ``cistrack_register`` receives: adds on behalf of one entry point."""
+
+    def __init__(self, registry: "Registry", distribution: str, version: str, entry_point: str):
+        self._registry = registry
+        self._source = (distribution, version, entry_point)
+
+    def add(self, kind: str, name: str, factory: Any) -> None:
+        """Register ``factory`` (a component class, or an object for kinds 'orbit') as ``name``."""
+        self._registry.add(kind, name, factory, *self._source)
+
+
+class Registry:
+    """Named components of each kind (see :data:`cistrack.interfaces.KINDS`)."""
+
+    def __init__(self) -> None:
+        self._entries: dict[str, dict[str, Registration]] = {k: {} for k in KINDS}
+        self.failures: list[PluginFailure] = []
+        self.plugins: list[tuple[str, str, Any]] = []  # (distribution, entry point, module)
+
+    # -- filling ----------------------------------------------------------------------------------
+    def add(self, kind: str, name: str, factory: Any, distribution: str = "<local>",
+            version: str = "", entry_point: str = "<direct>") -> None:
+        """Register ``factory`` under ``kind``/``name``; a duplicate name names both sources."""
+        if kind not in self._entries:
+            raise ParameterError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
+        if not isinstance(name, str) or not name:
+            raise ParameterError(f"component names must be non-empty strings, got {name!r}")
+        reg = Registration(kind, name, factory, distribution, version, entry_point)
+        old = self._entries[kind].get(name)
+        if old is not None:
+            raise DuplicateComponentError(
+                f"{kind} '{name}' is registered twice: by {old.source} and by {reg.source}")
+        if isinstance(factory, type) and hasattr(factory, "registry_name") and not factory.__dict__.get("registry_name"):
+            factory.registry_name = name
+        self._entries[kind][name] = reg
+
+    def load_entry_points(self, autoload_third_party: bool | None = None) -> "Registry":
+        """Load every entry point of the group ``cistrack``, each on its own."""
+        if autoload_third_party is None:
+            autoload_third_party = os.environ.get(AUTOLOAD_ENV, "").strip().lower() not in ("1", "true", "yes")
+        pm = pluggy.PluginManager(hookspecs.PROJECT)
+        pm.add_hookspecs(hookspecs.CistrackSpecs)
+        idents: dict = {}
+        eps = sorted(metadata.entry_points(group=ENTRY_POINT_GROUP),
+                     key=lambda e: (_dist_identity(e, idents)[0] != BUILTIN_DISTRIBUTION,
+                                    _dist_identity(e, idents)[0], e.name))
+        for ep in eps:
+            dist, version = _dist_identity(ep, idents)
+            if dist != BUILTIN_DISTRIBUTION and not autoload_third_party:
+                continue
+            try:
+                module = ep.load()
+                pm.register(module, name=f"{dist}:{ep.name}")
+                impls = [i for i in pm.hook.cistrack_register.get_hookimpls() if i.plugin is module]
+                bound = _BoundRegistry(self, dist, version, ep.name)
+                for impl in impls:
+                    impl.function(registry=bound)
+                self.plugins.append((dist, ep.name, module))
+            except Exception as exc:  # a broken plugin must not stop the others
+                self.failures.append(PluginFailure(dist, ep.name, f"{type(exc).__name__}: {exc}",
+                                                   traceback.format_exc()))
+        return self
+
+    # -- lookup -----------------------------------------------------------------------------------
+    def kinds(self) -> tuple[str, ...]:
+        return tuple(self._entries)
+
+    def names(self, kind: str) -> list[str]:
+        """Registered names of ``kind``, sorted."""
+        self._check_kind(kind)
+        return sorted(self._entries[kind])
+
+    def entries(self, kind: str) -> list[Registration]:
+        return [self._entries[kind][n] for n in self.names(kind)]
+
+    def get(self, kind: str, name: str) -> Registration:
+        """The registration of ``kind``/``name``; unknown names list what is available."""
+        self._check_kind(kind)
+        try:
+            return self._entries[kind][name]
+        except (KeyError, TypeError):
+            raise UnknownComponentError(self.unknown_message(kind, name)) from None
+
+    def unknown_message(self, kind: str, name: Any) -> str:
+        avail = self.names(kind)
+        msg = f"unknown {kind} {name!r}; available: {', '.join(avail) if avail else '(none registered)'}"
+        close = difflib.get_close_matches(str(name), avail, n=1, cutoff=0.5)
+        if close:
+            msg += f". Did you mean {close[0]!r}?"
+        failed = [f for f in self.failures]
+        if failed:
+            msg += " (plugins that failed to load: " + "; ".join(str(f) for f in failed) + ")"
+        return msg
+
+    def create(self, kind: str, name: str, **params: Any) -> Any:
+        """Build ``kind``/``name`` with ``params`` (validated by the component itself)."""
+        factory = self.get(kind, name).factory
+        if isinstance(factory, type) or callable(factory):
+            return factory(**params)
+        if params:
+            raise ParameterError(f"{kind} '{name}' takes no parameters, got {sorted(params)}")
+        return factory
+
+    def __contains__(self, item: tuple[str, str]) -> bool:
+        kind, name = item
+        return name in self._entries.get(kind, {})
+
+    def _check_kind(self, kind: str) -> None:
+        if kind not in self._entries:
+            raise UnknownComponentError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
+
+
+def _dist_identity(ep: metadata.EntryPoint, cache: dict) -> tuple[str, str]:
+    """(normalised distribution name, version) of ``ep``'s distribution.
+
+    Each ``dist.metadata`` access parses the METADATA file with the email parser (~1 ms): the
+    answer is kept per distribution in ``cache`` (all of a distribution's entry points share it)."""
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return "<unknown>", ""
+    key = str(getattr(dist, "_path", id(dist)))
+    if key not in cache:
+        meta = dist.metadata
+        name = (meta["Name"] or "<unknown>").lower().replace("_", "-")
+        cache[key] = (name, meta["Version"] or "")
+    return cache[key]
+
+
+_DEFAULT: Registry | None = None
+
+
+def load_registry(autoload_third_party: bool | None = None) -> Registry:
+    """A fresh registry filled from the installed entry points."""
+    return Registry().load_entry_points(autoload_third_party)
+
+
+def default_registry() -> Registry:
+    """The process-wide registry, loaded on first use."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        _DEFAULT = load_registry()
+    return _DEFAULT
+
+
+def iter_registrations(registry: Registry, kinds: Iterable[str] = KINDS):
+    for kind in kinds:
+        yield from registry.entries(kind)

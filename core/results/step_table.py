@@ -1,0 +1,64 @@
+"""The per-step results table: one function builds a step's row, one observer collects rows.
+
+:func:`step_row` is the only place a row is built: the results writer (``steps.parquet``), the
+in-memory :attr:`cistrack.runs.pipeline.RunResult.rows` and the run summary all use it.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.plugin.hookspecs import hookimpl
+
+__all__ = ["step_row", "RowCollector"]
+
+
+def step_row(run, step) -> dict[str, Any]:
+    """The results-table row of one step: identifiers, time (TU, days, UTC), the measurement
+    index (-1 for none), metrics (km, m/s, cm/s, nats), numeric diagnostics as ``diag_*`` and
+    stage timings as ``time_*_s``."""
+    row: dict[str, Any] = {
+        "run_id": run.run_id, "seed": int(run.seed), "step": int(step.index), "kind": step.kind,
+        "t_tu": float(step.t), "t_days": float(units.tu_to_days(step.t)), "utc": step.utc,
+        "measurement_index": int(step.measurement.index) if step.measurement is not None else -1,
+    }
+    for k, v in step.metrics.items():
+        row[k] = float(v)
+    for k, v in step.diagnostics.items():
+        if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+            row[f"diag_{k}"] = float(v)
+    for k, v in step.timings.items():
+        row[f"time_{k}_s"] = float(v)
+    return row
+
+
+def is_table_step(hook: str, step) -> bool:
+    """Whether the event ``hook`` of ``step`` is a row of the table: every update (posterior),
+    the initial cloud and prediction-only steps (not the prior of an update)."""
+    return hook == "updated" or step.kind in ("predict", "initial")
+
+
+class RowCollector:
+    """Observer that keeps every table row of a run in memory (``rows``) and, optionally, the
+    steps themselves (``steps``)."""
+
+    def __init__(self, keep_steps: bool = False) -> None:
+        self.rows: list[dict[str, Any]] = []
+        self.steps: list = []
+        self.keep_steps = keep_steps
+
+    def _add(self, run, step) -> None:
+        self.rows.append(step_row(run, step))
+        if self.keep_steps:
+            self.steps.append(step)
+
+    @hookimpl(trylast=True)
+    def cistrack_step_predicted(self, run, step) -> None:
+        if is_table_step("predicted", step):
+            self._add(run, step)
+
+    @hookimpl(trylast=True)
+    def cistrack_step_updated(self, run, step) -> None:
+        self._add(run, step)

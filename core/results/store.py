@@ -1,0 +1,207 @@
+"""Results of a run on disk, written as the run goes.
+
+Layout of a run directory::
+
+    manifest.json        scenario, seed, versions, timings, status ("running", "finished",
+                         "filter-failed", "failed" or "interrupted", with the reason in
+                         summary.failure), the running process (host, pid: a "running" run
+                         whose process is gone reads as interrupted, see cistrack.results.run_status)
+    scenario.toml        the scenario as run (tables after overrides)
+    steps.parquet        one row per step (written when the run finishes)
+    steps/part-*.parquet the rows while running, many steps per part (see
+                         :mod:`cistrack.results.part_files`: a part per ``rows_per_part`` steps or per
+                         ``seconds_per_part`` of wall time, atomic rename, so a killed run
+                         leaves every written part readable); merged into steps.parquet at the end
+
+:func:`read_steps` reads either form.
+"""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import socket
+import time
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from cistrack.results.fingerprint import scenario_fingerprint
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
+from cistrack.results.step_table import is_table_step, step_row
+
+__all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "versions"]
+
+MANIFEST = "manifest.json"
+STEPS = "steps.parquet"
+PARTS = "steps"
+
+
+def write_json_atomic(path: Path, data: dict) -> None:
+    """Write JSON to ``path`` via a temporary file and rename (never a half-written file)."""
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(data, indent=2, sort_keys=True, default=_json_default))
+    os.replace(tmp, path)
+
+
+def _json_default(o: Any):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
+
+
+def versions(registry=None) -> dict[str, str]:
+    """Versions of python, numpy, cistrack and every distribution that provides a plugin."""
+    out = {"python": platform.python_version(), "numpy": np.__version__}
+    try:
+        out["cistrack"] = metadata.version("cistrack")
+    except metadata.PackageNotFoundError:
+        out["cistrack"] = "unknown"
+    if registry is not None:
+        for dist, _ep, _mod in registry.plugins:
+            try:
+                out[dist] = metadata.version(dist)
+            except metadata.PackageNotFoundError:
+                pass
+    return out
+
+
+def _json_safe(meta: dict) -> dict:
+    """The entries of a meta dict that JSON can hold (str, numbers, bools, lists and dicts of them)."""
+    def ok(v) -> bool:
+        if isinstance(v, (str, int, float, bool)) or v is None:
+            return True
+        if isinstance(v, (list, tuple)):
+            return all(ok(x) for x in v)
+        if isinstance(v, dict):
+            return all(isinstance(k, str) and ok(x) for k, x in v.items())
+        return False
+    return {k: (list(v) if isinstance(v, tuple) else v) for k, v in meta.items() if ok(v)}
+
+
+class ResultsWriter:
+    """Lifecycle observer that writes a run's manifest and per-step table into ``directory``;
+    the rows go to part files of ``rows_per_part`` steps (or fewer, every ``seconds_per_part``
+    seconds), see :class:`cistrack.results.part_files.PartWriter`."""
+
+    def __init__(self, directory: str | Path, registry=None, rows_per_part: int = ROWS_PER_PART,
+                 seconds_per_part: float = SECONDS_PER_PART) -> None:
+        self.directory = Path(directory)
+        self.registry = registry
+        self._t0 = 0.0
+        self._manifest: dict[str, Any] = {}
+        self._parts = PartWriter(self.directory / PARTS, rows_per_part, seconds_per_part)
+
+    @hookimpl
+    def cistrack_run_started(self, run) -> None:
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self._parts.start()
+        if (self.directory / STEPS).exists():
+            (self.directory / STEPS).unlink()
+        self._t0 = time.perf_counter()
+        scen = run.scenario
+        self._manifest = {
+            "run_id": run.run_id, "scenario": scen.name, "scenario_source": scen.source,
+            "seed": int(run.seed), "status": "running", "epoch": run.epoch.isoformat(),
+            "fingerprint": scenario_fingerprint(scen, run.seed),
+            "components": {t: {"name": s.name, "params": {k: (v.name if hasattr(v, "kind") and hasattr(v, "params") else v)
+                                                         for k, v in s.params.items()}}
+                           for t, s in scen.components.items()},
+            "versions": versions(self.registry), "machine": {"platform": platform.platform(),
+                                                             "processor": platform.processor(),
+                                                             "cpu_count": os.cpu_count()},
+            "n_measurements": len(run.measurements), "n_passes": len(run.passes),
+            # what the measurements are and which corrections made them (e.g. real-telescope's
+            # measurement kind, frame, site and applied corrections)
+            "measurement_model": _json_safe(getattr(run.measurements, "meta", None) or {}),
+            "iod": {"epoch_tu": float(run.iod_cloud.epoch), "n_particles": len(run.iod_cloud),
+                    **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
+                       if isinstance(v, (int, float, str, bool))}},
+            "started_unix": time.time(),
+            "process": {"host": socket.gethostname(), "pid": os.getpid()},  # see cistrack.results.run_status
+        }
+        try:
+            import tomli_w  # optional: nicer record of the scenario as run
+            (self.directory / "scenario.toml").write_text(tomli_w.dumps(scen.raw))
+        except Exception:
+            (self.directory / "scenario.json").write_text(json.dumps(scen.raw, indent=2, default=str))
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step) -> None:
+        self._write_part(run, step)
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step) -> None:
+        if is_table_step("predicted", step):  # a prediction-only step is a row of its own
+            self._write_part(run, step)
+
+    def _write_part(self, run, step) -> None:
+        self._parts.add(step.index, step_row(run, step))
+
+    @property
+    def n_parts(self) -> int:
+        """Part files written so far in this run."""
+        return self._parts.n_parts
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary) -> None:
+        """Write the waiting rows, merge the parts into steps.parquet and record the status. If
+        writing fails (a full disk) the parts written stay (``read_steps`` reads them), the
+        manifest says "failed" and why, and the error is raised again (after the manifest is
+        written) so that the run's summary says so too."""
+        status, extra, problems = summary.status, {}, []
+        try:
+            self._parts.flush()
+        except OSError as exc:
+            extra["part_failure"] = f"{type(exc).__name__}: {exc}; the last rows were not written"
+            problems.append(f"writing the last steps to {PARTS}/: {extra['part_failure']}")
+        parts = self._parts.parts()
+        extra["n_parts"] = self._parts.n_parts
+        if parts:
+            tmp = self.directory / (STEPS + ".tmp")
+            try:
+                table = read_parts(self.directory / PARTS)
+                pq.write_table(table, tmp)
+                os.replace(tmp, self.directory / STEPS)
+                for p in parts:
+                    p.unlink()
+            except OSError as exc:
+                tmp.unlink(missing_ok=True)
+                extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the completed steps stay in the "
+                                          f"{len(parts)} files {PARTS}/part-*.parquet")
+                problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
+        data = summary.to_dict()
+        if problems:
+            status = "failed" if status == "finished" else status
+            data["failure"] = "; ".join(([data["failure"]] if data.get("failure") else []) + problems)
+        data["status"] = status
+        self._manifest.update({"status": status, "summary": data, **extra,
+                               "wall_time_s": time.perf_counter() - self._t0,
+                               "finished_unix": time.time()})
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
+        if problems:
+            raise OSError(f"{self.directory}: " + "; ".join(problems))
+
+
+def read_manifest(directory: str | Path) -> dict:
+    """The manifest of a run directory."""
+    return json.loads((Path(directory) / MANIFEST).read_text())
+
+
+def read_steps(directory: str | Path) -> pa.Table:
+    """The per-step table of a run: steps.parquet, or the parts a killed run left behind."""
+    d = Path(directory)
+    if (d / STEPS).exists():
+        return pq.read_table(d / STEPS)
+    table = read_parts(d / PARTS)
+    if table is None:
+        raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")
+    return table

@@ -1,0 +1,328 @@
+"""One run: truth -> measurements -> IOD -> filter steps, observed through lifecycle hooks.
+
+    truth = dynamics.propagate(x0, grid)              (the truth model may differ from the filter's)
+    passes = sensor.passes(grid, truth)
+    times = schedule.plan(passes, duration, rng)      measurements = sensor.simulate(truth, times, rng)
+    cloud = iod.estimate(measurements, sensor, rng)
+    filter.initialize(cloud); for each later measurement: filter.predict(t); filter.update(z)
+
+Random streams: one ``numpy.random.SeedSequence(seed)`` is split into independent streams for
+the measurement noise, the schedule, the IOD and the filter, so that for one scenario and seed
+every filter and IOD variant sees the same measurements.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pluggy
+
+from cistrack.plugin import hookspecs
+from cistrack import units
+from cistrack.evaluation.custody import CustodyObserver
+from cistrack.evaluation.verdicts import final_verdict
+from cistrack.scenario.limits import check_count, check_seed
+from cistrack.errors import CistrackError, ConfigError
+from cistrack.model.measurement import StackedMeasurement
+from cistrack.evaluation.metrics import step_metrics
+from cistrack.plugin.registry import Registry, default_registry
+from cistrack.runs.run_context import RunContext, Step
+from cistrack.evaluation.residuals import ResidualObserver
+from cistrack.evaluation.run_summary import RunSummary, summarize
+from cistrack.scenario.loading import Scenario
+from cistrack.results.step_table import RowCollector
+from cistrack.runs.truth import Truth
+
+__all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
+
+_LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
+              "cistrack_run_failed", "cistrack_run_finished")
+
+
+@dataclass
+class RunResult:
+    """What :func:`run_scenario` returns: the context, the table rows (one per step, as written
+    to ``steps.parquet``, see :func:`cistrack.results.step_table.step_row`), the typed summary and, with
+    ``keep_steps``, the steps themselves."""
+
+    context: RunContext
+    rows: list[dict[str, Any]]
+    summary: RunSummary
+    steps: list[Step] = field(default_factory=list)
+
+
+def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:
+    """A plugin manager for one run: the given observers plus installed plugins that implement
+    lifecycle hooks (third-party observers declared under the ``cistrack`` entry points)."""
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs.CistrackSpecs)
+    for dist, ep, module in registry.plugins:
+        if any(hasattr(module, h) for h in _LIFECYCLE):
+            pm.register(module, name=f"{dist}:{ep}")
+    for i, obs in enumerate(observers):
+        pm.register(obs, name=f"observer-{i}-{type(obs).__name__}")
+    return pm
+
+
+def _streams(seed: int) -> dict[str, np.random.Generator]:
+    names = ("measurements", "schedule", "iod", "filter")
+    children = np.random.SeedSequence(seed).spawn(len(names))
+    return {n: np.random.default_rng(c) for n, c in zip(names, children)}
+
+
+def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry | None = None,
+                run_id: str | None = None, output_dir: Path | None = None, log=None) -> tuple[RunContext, dict]:
+    """Build components, truth, passes, measurements and the IOD cloud (everything before the
+    first filter step). Returns the context and the random streams."""
+    reg = registry or default_registry()
+    seed = scenario.seed if seed is None else check_seed(seed, "seed")
+    rngs = _streams(seed)
+    say = log or (lambda msg: None)
+    dynamics = scenario.build("dynamics", reg)
+    sensor = scenario.build("sensor", reg)
+    schedule = scenario.build("schedule", reg)
+    iod = scenario.build("iod", reg)
+    filt = scenario.build("filter", reg)
+    truth_dyn = scenario.truth_dynamics.build(reg) if scenario.truth_dynamics else dynamics
+    duration = scenario.duration
+
+    if scenario.measurements_file is not None:
+        from cistrack.runs.observation_files import reader_for  # real observations, through a registered reader
+        say(f"reading measurements from {scenario.measurements_file}")
+        spec = scenario.measurements_reader
+        reader = spec.build(reg) if spec is not None else reader_for(scenario.measurements_file, registry=reg)
+        measurements = reader.read(scenario.measurements_file, scenario.epoch)
+        if measurements.sites is not None:  # several observatories: the sensor placed at each
+            from cistrack.astro.site_network import build_site_network
+            sensor = build_site_network(scenario.components["sensor"], reg, measurements)
+            say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
+        grid = np.zeros(0)
+        grid_states = np.zeros((0, 6))
+        truth = None
+        passes = []
+    else:
+        truth = Truth(truth_dyn, scenario.initial_truth(reg), t_end=duration)
+        n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
+        grid = np.linspace(0.0, duration, n_grid)
+        say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
+        try:
+            grid_states = truth.states_at(grid)
+        except ConfigError as exc:
+            raise ConfigError(f"{scenario.source}: {exc}") from None
+        passes = sensor.passes(grid, grid_states)
+        if passes and passes[0].start <= grid[0] + 1e-12:
+            # A pass already in progress at t = 0 is cut short; the target is acquired at its
+            # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
+            say(f"skipping the pass in progress at t = 0 (visible for its first "
+                f"{units.tu_to_hours(passes[0].end - grid[0]):.1f} h only)")
+            passes = passes[1:]
+        if schedule is None:
+            raise ConfigError(f"{scenario.source}: simulated measurements need a [schedule] table")
+        times = np.asarray(schedule.plan(passes, duration, rngs["schedule"]), dtype=float)
+        if times.size == 0:
+            raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
+                              f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
+        say(f"{len(passes)} passes, {times.size} measurements scheduled")
+        measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
+    from cistrack.astro.site_network import one_per_time
+    iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
+    cloud = iod.estimate(iod_measurements, iod_sensor, rngs["iod"])
+    say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
+    rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"
+    ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
+                     sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
+                     truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
+                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth)
+    return ctx, rngs
+
+
+def _pass_index(passes, t: float) -> int:
+    for i, p in enumerate(passes):
+        if p.start - 1e-9 <= t <= p.end + 1e-9:
+            return i + 1
+    return 0
+
+
+def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
+                 observers: Iterable[Any] = (), output_dir: str | Path | None = None,
+                 progress: bool = False, run_id: str | None = None, keep_steps: bool = False,
+                 log=None, blas_threads: int | None = 1, rows_per_part: int | None = None) -> RunResult:
+    """Run one scenario end to end and return its metrics and summary.
+
+    ``observers`` receive the lifecycle hooks; when ``output_dir`` is given a
+    :class:`cistrack.results.store.ResultsWriter` writing there is added. ``progress`` shows a progress
+    bar on stderr; ``log`` (a callable taking a string) receives stage messages.
+
+    ``blas_threads`` limits BLAS threads during the run (default 1): the linear algebra of a run
+    is many small matrices, for which multi-threaded BLAS is slower (measured 150x on 6x6 solves
+    on a busy 2-core machine); the parallel work is the numba propagation. None leaves BLAS alone.
+
+    ``rows_per_part``: steps per results part file in ``output_dir`` (default
+    :data:`cistrack.results.part_files.ROWS_PER_PART`; a part is also written every
+    :data:`~cistrack.results.part_files.SECONDS_PER_PART` seconds); the merged tables do not depend on it.
+    """
+    args = (scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log, rows_per_part)
+    if blas_threads is None:
+        return _run(*args)
+    from threadpoolctl import threadpool_limits
+    with threadpool_limits(limits=blas_threads, user_api="blas"):
+        return _run(*args)
+
+
+def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, tuple[int, ...]]]:
+    """The filter's steps after the IOD epoch, in time order: (t TU, the indices of the
+    measurements taken at t, or () for a prediction-only step). Measurements sharing a time tag
+    (several sites at once) make one step."""
+    ms = ctx.measurements
+    events: list = [(float(ms.times[g[0]]), tuple(int(i) for i in g)) for g in ms.time_groups()
+                    if ms.times[g[0]] > ctx.iod_cloud.epoch + 1e-12]
+    t_last = ctx.iod_cloud.epoch
+    if scenario.predict_every_hours > 0:
+        dt = float(units.hours_to_tu(scenario.predict_every_hours))
+        meas_t = np.array([e[0] for e in events]) if events else np.zeros(0)
+        for t in np.arange(t_last + dt, scenario.duration, dt):
+            if meas_t.size == 0 or np.min(np.abs(meas_t - t)) > 1e-6:
+                events.append((float(t), ()))
+    if scenario.end_with_prediction and scenario.duration > max([t_last] + [e[0] for e in events]) + 1e-9:
+        events.append((scenario.duration, ()))
+    events.sort(key=lambda e: (e[0], e[1][:1] or (-1,)))
+    return events
+
+
+def _step(ctx: RunContext, index: int, t: float, kind: str, belief, group: tuple = ()) -> Step:
+    return Step(index=index, t=t, utc=units.format_utc(units.tu_to_utc(ctx.epoch, t)), kind=kind,
+                belief=belief, truth=ctx.truth_at(t), measurement=group[0] if group else None,
+                group=tuple(group))
+
+
+def _measure(ctx: RunContext, step: Step) -> Step:
+    """Fill the step's metrics, pass index and the filter's diagnostics (before observers see it)."""
+    tm = time.perf_counter()
+    step.metrics = step_metrics(step.belief, step.truth)
+    step.metrics["pass_index"] = float(_pass_index(ctx.passes, step.t))
+    step.diagnostics = dict(ctx.filter.diagnostics)
+    step.timings["metrics"] = time.perf_counter() - tm
+    return step
+
+
+def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
+         rows_per_part=None) -> RunResult:
+    """Build once, then one way through: truth, measurements, IOD, filter steps; everything else
+    (custody, rows, results files, progress, recordings) is an observer of the hooks."""
+    from cistrack.runs.progress import ProgressBar
+    from cistrack.results.store import ResultsWriter
+
+    reg = registry or default_registry()
+    out = Path(output_dir) if output_dir is not None else None
+    custody = CustodyObserver(scenario.custody)
+    collector = RowCollector(keep_steps=keep_steps)
+    obs: list[Any] = [custody, ResidualObserver(), collector]
+    if out is not None:
+        from cistrack.results.estimates import EstimateWriter
+        from cistrack.results.part_files import ROWS_PER_PART
+        n = check_count(rows_per_part, "rows_per_part (--rows-per-part)", 1, 10 ** 9) if rows_per_part is not None else ROWS_PER_PART
+        obs += [ResultsWriter(out, reg, rows_per_part=n), EstimateWriter(out, rows_per_part=n)]
+    obs.extend(observers)
+    t_start = time.perf_counter()
+    ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
+    t_prepare = time.perf_counter() - t_start
+    events = _events(scenario, ctx)
+    if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
+        ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
+    if progress:
+        obs.append(ProgressBar(ctx.run_id, len(events), custody))
+    pm = make_plugin_manager(obs, reg)
+    filt = ctx.filter
+
+    t0 = time.perf_counter()
+    filt.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rngs["filter"])
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", filt.belief)
+    step0.timings["initialize"] = time.perf_counter() - t0
+
+    status, failure = "finished", ""
+    abort: BaseException | None = None
+    try:
+        pm.hook.cistrack_run_started(run=ctx)
+        pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
+        for k, (t, group) in enumerate(events, start=1):
+            tp = time.perf_counter()
+            filt.predict(t)
+            t_pred = time.perf_counter() - tp
+            if not group:
+                step = _step(ctx, k, t, "predict", filt.belief)
+                step.timings["predict"] = t_pred
+                pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step))
+                continue
+            ms = tuple(_angles(ctx.measurements[i]) for i in group)
+            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, ms))
+            tu = time.perf_counter()
+            for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
+                filt.update(m)  # several sites at one time: one stacked update, or one after another
+            t_upd = time.perf_counter() - tu
+            step = _step(ctx, k, t, "update", filt.belief, ms)
+            step.timings.update({"predict": t_pred, "update": t_upd})
+            pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
+    except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        status = "filter-failed"
+        failure = f"{type(exc).__name__}: {exc}"
+        try:
+            pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
+        except Exception as obs_exc:  # an observer failing on the failure: still finish the run
+            status, failure = "failed", f"{failure}; then {type(obs_exc).__name__}: {obs_exc}"
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
+        status, abort = "interrupted", exc
+        failure = f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)"
+    except Exception as exc:  # an observer (recorder, results writer: full disk) or anything else
+        status, failure = "failed", f"{type(exc).__name__}: {exc}"
+
+    verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
+                            custody.earth_distance_km) if status in ("finished", "filter-failed") \
+        else custody.verdict
+    summary = summarize(ctx, collector.rows, verdict, status, failure,
+                        time.perf_counter() - t_start, t_prepare)
+    summary = _finish(pm, ctx, summary)
+    if abort is not None:
+        raise abort
+    return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _angles(m):
+    return m.angles_only() if "range" in m.names else m
+
+
+def _finish(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:
+    """Call every observer's ``cistrack_run_finished``, each on its own, results writers last, so
+    that one failing observer (a recorder, a full disk) never keeps the completed steps from
+    being merged; an observer's failure turns a finished run into "failed" with the reason."""
+    from cistrack.results.store import ResultsWriter
+
+    impls = pm.hook.cistrack_run_finished.get_hookimpls()
+    writers = [i for i in impls if isinstance(i.plugin, ResultsWriter)]
+    errors = []
+    for impl in [i for i in impls if i not in writers] + writers:
+        if impl in writers and errors:
+            summary = dataclasses.replace(
+                summary, status="failed" if summary.status == "finished" else summary.status,
+                failure="; ".join(([summary.failure] if summary.failure else []) + errors))
+        try:
+            args = {"run": ctx, "summary": summary}
+            impl.function(*[args[a] for a in impl.argnames])
+        except Exception as exc:
+            errors.append(f"{impl.plugin_name}: {type(exc).__name__}: {exc}")
+    if errors and summary.status == "finished":
+        summary = dataclasses.replace(summary, status="failed", failure="; ".join(errors))
+    return summary
+
+
+def _iod_message(name: str, cloud, n_measurements: int) -> str:
+    """What the IOD used, counted: 'IOD 'x' on 8 measurements of pass 1 (of 39): 2000 particles'."""
+    meta = cloud.meta if isinstance(getattr(cloud, "meta", None), dict) else {}
+    used = meta.get("fit_indices")
+    if used is None:
+        return f"IOD '{name}': {len(cloud)} particles from the {n_measurements} measurements it was given"
+    return (f"IOD '{name}' on {len(used)} measurements of pass 1 (of {n_measurements} in all): "
+            f"{len(cloud)} particles at t = {units.tu_to_days(cloud.epoch):.3f} d")

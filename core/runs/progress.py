@@ -1,0 +1,39 @@
+"""A progress bar on stderr as an observer of a run's hooks."""
+from __future__ import annotations
+
+from cistrack import units
+from cistrack.plugin.hookspecs import hookimpl
+
+__all__ = ["ProgressBar"]
+
+
+class ProgressBar:
+    """tqdm bar over a run's ``total`` filter steps, showing time, entropy and custody.
+
+    ``custody`` is the run's :class:`~cistrack.evaluation.custody.CustodyObserver` (its verdict is shown).
+    """
+
+    def __init__(self, run_id: str, total: int, custody=None) -> None:
+        from tqdm.auto import tqdm
+
+        self.custody = custody
+        self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True)
+
+    def _advance(self, step) -> None:
+        lost = self.custody is not None and step.truth is not None and not self.custody.verdict.kept
+        self.bar.set_postfix_str(f"t={float(units.tu_to_days(step.t)):.2f} d H={step.metrics.get('entropy', float('nan')):.1f}"
+                                 + (" custody LOST" if lost else ""))
+        self.bar.update(1)
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step) -> None:
+        if step.kind == "predict":
+            self._advance(step)
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step) -> None:
+        self._advance(step)
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary) -> None:
+        self.bar.close()

@@ -1,0 +1,104 @@
+"""What a run hands its observers: the run context and one step.
+
+Observers (hook implementations of ``cistrack_run_started``, ``cistrack_step_predicted``,
+``cistrack_step_updated``, ``cistrack_run_finished``) receive these objects and must treat them
+as read-only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cistrack.model.belief import Belief, ParticleCloud
+from cistrack.interfaces import Dynamics, Filter, IODMethod, Pass, Schedule, Sensor
+from cistrack.model.measurement import Measurement, MeasurementSet
+from cistrack.runs.truth import Truth
+
+__all__ = ["RunContext", "Step"]
+
+
+@dataclass
+class RunContext:
+    """Everything fixed for one run, known before the first filter step.
+
+    Attributes
+    ----------
+    run_id : str                      e.g. "example-1__pgm__uniform-range__seed1"
+    scenario : cistrack.scenario.loading.Scenario
+    seed : int
+    epoch : datetime                  UTC of t = 0
+    dynamics, sensor, schedule, iod, filter : the built components
+    truth_times : (K,) float          dense truth grid, TU (also used to find passes)
+    truth_states : (K, 6) float       truth on that grid, nondimensional synodic (empty when the
+                                      measurements came from a file and truth is unknown)
+    truth : Truth or None             every truth state of the run, each propagated once
+    passes : list of Pass             visibility passes of the truth
+    measurements : MeasurementSet     all measurements, including any IOD-only range
+    iod_cloud : ParticleCloud         the IOD result (epoch = last fitted measurement)
+    output_dir : Path or None         where results of this run are written
+    """
+
+    run_id: str
+    scenario: Any
+    seed: int
+    epoch: datetime
+    dynamics: Dynamics
+    sensor: Sensor
+    schedule: Schedule | None
+    iod: IODMethod
+    filter: Filter
+    truth_times: np.ndarray
+    truth_states: np.ndarray
+    passes: list[Pass]
+    measurements: MeasurementSet
+    iod_cloud: ParticleCloud
+    output_dir: Path | None = None
+    truth_dynamics: Dynamics | None = None
+    truth: Truth | None = field(default=None, repr=False)
+
+    @property
+    def has_truth(self) -> bool:
+        return self.truth is not None
+
+    def truth_at(self, t: float) -> np.ndarray | None:
+        """Truth state (6,) at time t (TU), or None without a truth; see :class:`Truth`."""
+        return None if self.truth is None else self.truth.at(t)
+
+
+@dataclass
+class Step:
+    """One filter step.
+
+    Attributes
+    ----------
+    index : int                  0 for the IOD cloud, then 1, 2, ... in time order
+    t : float                    TU since the epoch
+    utc : str                    ISO-8601 UTC of t
+    kind : str                   "initial" (IOD cloud), "predict" (no measurement) or "update"
+    belief : Belief              prior for "predict" events and predict-only steps, posterior after update
+    truth : (6,) float or None   truth state at t, nondimensional synodic
+    measurement : Measurement or None   the measurement used (angles only), for "update" steps;
+                                 the first of ``group`` when several share the step's time
+    group : tuple of Measurement every measurement of an "update" step (several sites measuring
+                                 at one time make one step; the filter takes them in order)
+    metrics : dict               metric name -> float (km, m/s, cm/s, nats); filled before
+                                 cistrack_step_updated
+    diagnostics : dict           the filter's diagnostics after this step
+    timings : dict               stage -> seconds (propagation, update, metrics)
+    """
+
+    index: int
+    t: float
+    utc: str
+    kind: str
+    belief: Belief
+    truth: np.ndarray | None = None
+    measurement: Measurement | None = None
+    group: tuple = ()
+    metrics: dict[str, float] = field(default_factory=dict)
+    diagnostics: dict[str, float] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)

@@ -1,0 +1,302 @@
+"""Scenario files (TOML): validated before anything runs.
+
+A scenario names each component by its registry name plus parameters::
+
+    name = "example-1"
+    description = "9:2 NRHO, uniform-range IOD, PGM, one orbit"
+    epoch = "2026-01-01T00:00:00Z"     # UTC of t = 0
+    seed = 1
+    duration_days = 6.6
+
+    [truth]
+    orbit = "nrho-9-2"                  # a registered orbit, or state_km = [x, y, z, vx, vy, vz]
+
+    [dynamics]
+    name = "cr3bp"
+
+    [sensor]
+    name = "ground-telescope"
+    measure_range = true
+
+    [schedule]
+    name = "paper-example-1"
+
+    [iod]
+    name = "uniform-range"
+
+    [filter]
+    name = "pgm"
+    n_particles = 10000
+    [filter.clusterer]                 # a parameter that is itself a component
+    name = "kmeans"
+
+Every error names the file, the table and the key, and what is allowed.
+"""
+from __future__ import annotations
+
+import copy
+import sys
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.scenario.builtin_scenarios import builtin_scenario_path, builtin_scenarios
+from cistrack.plugin.component_tables import ComponentSpec, check_keys, component_spec, example_name, typed
+from cistrack.evaluation.custody import CustodyRule
+from cistrack.scenario.custody_table import custody_rule
+from cistrack.scenario.limits import check_memory, check_path_component, check_seed
+from cistrack.errors import ConfigError, UnknownComponentError
+from cistrack.interfaces import ReferenceOrbit
+from cistrack.plugin.registry import Registry, default_registry
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Scenario", "ComponentSpec", "CustodyRule", "load_scenario", "parse_scenario",
+           "builtin_scenarios", "builtin_scenario_path", "COMPONENT_TABLES"]
+
+COMPONENT_TABLES: dict[str, str] = {
+    "dynamics": "dynamics", "sensor": "sensor", "schedule": "schedule", "iod": "iod", "filter": "filter",
+}
+"""Scenario table -> registry kind of the component it builds."""
+
+_TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "custody", "run",
+             "measurements", *COMPONENT_TABLES}
+_REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
+_TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
+_RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame"}
+_MEAS_KEYS = {"file", "reader"}
+
+
+@dataclass
+class Scenario:
+    """A validated scenario. :meth:`build` hands out each component validation constructed, then
+    fresh ones (see :class:`ComponentSpec`)."""
+
+    name: str
+    description: str
+    epoch: datetime
+    seed: int
+    duration_days: float
+    components: dict[str, ComponentSpec]
+    truth_orbit: str | None
+    truth_state: np.ndarray | None
+    truth_dynamics: ComponentSpec | None
+    custody: CustodyRule
+    truth_grid_minutes: float = 5.0
+    predict_every_hours: float = 0.0
+    end_with_prediction: bool = True
+    recording_frame: str = "synodic"
+    measurements_file: Path | None = None
+    measurements_reader: ComponentSpec | None = None
+    source: str = "<memory>"
+    raw: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def duration(self) -> float:
+        """Duration in TU."""
+        return float(units.days_to_tu(self.duration_days))
+
+    def build(self, table: str, registry: Registry | None = None) -> Any:
+        """The component for ``table`` ('dynamics', 'sensor', 'schedule', 'iod', 'filter'): the one
+        validation built the first time, a fresh one after."""
+        spec = self.components.get(table)
+        if spec is None:
+            return None
+        return spec.build(registry or default_registry())
+
+    def initial_truth(self, registry: Registry | None = None) -> np.ndarray:
+        """Truth state at t = 0, (6,) nondimensional synodic."""
+        if self.truth_state is not None:
+            return self.truth_state.copy()
+        orbit = (registry or default_registry()).create("orbit", self.truth_orbit)
+        return np.asarray(orbit.state, dtype=float).copy()
+
+    def with_overrides(self, overrides: dict[str, Any], registry: Registry | None = None,
+                       source: str | None = None) -> "Scenario":
+        """A new scenario with tables/keys replaced, e.g. {"filter": {"name": "ukf"}, "seed": 3}.
+
+        A component table given with a different ``name`` replaces the table; with the same
+        name (or no name) its keys are merged into it. The result is validated again.
+        """
+        return parse_scenario(_merge_overrides(self.raw, overrides), source or self.source, registry)
+
+
+def _merge_overrides(raw: dict, overrides: dict[str, Any] | None) -> dict:
+    """A copy of the scenario table ``raw`` with ``overrides`` applied (see ``with_overrides``)."""
+    raw = copy.deepcopy(raw)
+    for key, value in (overrides or {}).items():
+        if key in COMPONENT_TABLES and isinstance(value, dict):
+            old = raw.get(key, {})
+            if "name" in value and value["name"] != old.get("name"):
+                raw[key] = copy.deepcopy(value)
+            else:
+                merged = dict(old)
+                merged.update(value)
+                raw[key] = merged
+        else:
+            raw[key] = copy.deepcopy(value)
+    return raw
+
+
+# -- loading -------------------------------------------------------------------------------------
+
+def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
+                  overrides: dict[str, Any] | None = None) -> Scenario:
+    """Read and validate a scenario file, or a built-in scenario by name; ``overrides`` (as for
+    :meth:`Scenario.with_overrides`) are applied before the one validation."""
+    p = Path(path_or_name)
+    if not p.exists() and p.suffix != ".toml" and "/" not in str(path_or_name):
+        p = builtin_scenario_path(str(path_or_name))
+    if not p.exists():
+        raise ConfigError(f"scenario file not found: {p}")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{p}: cannot read: {exc}") from None
+    scen = parse_scenario(_merge_overrides(data, overrides) if overrides else data, str(p), registry)
+    if scen.measurements_file is not None and not scen.measurements_file.is_absolute():
+        scen.measurements_file = (p.parent / scen.measurements_file).resolve()
+    return scen
+
+
+def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | None = None) -> Scenario:
+    """Validate a scenario given as a dict (as read from TOML)."""
+    reg = registry or default_registry()
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: a scenario must be a TOML table")
+    check_keys(data, _TOP_KEYS, source, "top level")
+    for table in _REQUIRED_TABLES:
+        if table not in data:
+            raise ConfigError(f"{source}: missing table [{table}] (it names the {table} component, "
+                              f"e.g. name = {example_name(reg, COMPONENT_TABLES[table])!r})")
+    name = check_path_component(typed(data.get("name", Path(source).stem), str, source, "top level", "name"),
+                                f"{source}: top level: key 'name'")
+    description = typed(data.get("description", ""), str, source, "top level", "description")
+    epoch_text = typed(data.get("epoch", "2026-01-01T00:00:00Z"), (str, datetime), source, "top level", "epoch")
+    try:
+        epoch = units.parse_utc(epoch_text)
+    except ValueError:
+        raise ConfigError(f"{source}: top level: key 'epoch' = {epoch_text!r} is not an ISO-8601 UTC time "
+                          f"(e.g. '2026-01-01T00:00:00Z')") from None
+    seed = typed(data.get("seed", 0), int, source, "top level", "seed")
+    check_seed(seed, f"{source}: top level: key 'seed'")
+    duration = float(typed(data.get("duration_days", 7.0), (int, float), source, "top level", "duration_days"))
+    if not np.isfinite(duration) or duration <= 0:
+        raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
+
+    components: dict[str, ComponentSpec] = {}
+    for table, kind in COMPONENT_TABLES.items():
+        if table in data:
+            components[table] = component_spec(data[table], kind, f"[{table}]", source, reg,
+                                                epoch_text=epoch_text)
+
+    truth = data.get("truth", {})
+    if not isinstance(truth, dict):
+        raise ConfigError(f"{source}: 'truth' must be a table")
+    check_keys(truth, _TRUTH_KEYS, source, "[truth]")
+    truth_orbit = truth.get("orbit")
+    truth_state = None
+    meas = data.get("measurements", {})
+    if not isinstance(meas, dict):
+        raise ConfigError(f"{source}: 'measurements' must be a table")
+    check_keys(meas, _MEAS_KEYS, source, "[measurements]")
+    measurements_file = Path(typed(meas["file"], str, source, "[measurements]", "file")) if "file" in meas else None
+    measurements_reader = None
+    if "reader" in meas:
+        if measurements_file is None:
+            raise ConfigError(f"{source}: [measurements]: key 'reader' needs 'file'")
+        measurements_reader = component_spec(meas["reader"], "reader", "[measurements.reader]", source, reg)
+    if truth_orbit is not None and "state_km" in truth:
+        raise ConfigError(f"{source}: [truth]: give either 'orbit' or 'state_km', not both")
+    if truth_orbit is not None:
+        typed(truth_orbit, str, source, "[truth]", "orbit")
+        try:
+            obj = reg.get("orbit", truth_orbit).factory
+        except UnknownComponentError as exc:
+            raise ConfigError(f"{source}: [truth]: key 'orbit': {exc}") from None
+        if not isinstance(obj, ReferenceOrbit):
+            raise ConfigError(f"{source}: [truth]: orbit {truth_orbit!r} is not a ReferenceOrbit")
+    elif "state_km" in truth:
+        st = truth["state_km"]
+        if (not isinstance(st, list) or len(st) != 6
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in st)
+                or not np.all(np.isfinite(np.asarray(st, dtype=float)))):
+            raise ConfigError(f"{source}: [truth]: key 'state_km' must be 6 finite numbers "
+                              f"[x, y, z (km), vx, vy, vz (km/s)] in the synodic barycentric frame")
+        truth_state = units.state_from_km(np.asarray(st, dtype=float))
+    elif measurements_file is None:
+        raise ConfigError(f"{source}: [truth] needs 'orbit' (one of: {', '.join(reg.names('orbit')) or 'none registered'})"
+                          f" or 'state_km', unless [measurements] file = ... gives real observations")
+    truth_dyn = None
+    if "dynamics" in truth:
+        truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
+                                   epoch_text=epoch_text)
+
+    custody = custody_rule(data.get("custody", {}), source)
+    run = data.get("run", {})
+    if not isinstance(run, dict):
+        raise ConfigError(f"{source}: 'run' must be a table")
+    check_keys(run, _RUN_KEYS, source, "[run]")
+    grid = float(typed(run.get("truth_grid_minutes", 5.0), (int, float), source, "[run]", "truth_grid_minutes"))
+    if not 0 < grid <= 120:
+        raise ConfigError(f"{source}: [run]: key 'truth_grid_minutes' = {grid} must lie in (0, 120]")
+    pe = float(typed(run.get("predict_every_hours", 0.0), (int, float), source, "[run]", "predict_every_hours"))
+    if not (np.isfinite(pe) and pe >= 0):
+        raise ConfigError(f"{source}: [run]: key 'predict_every_hours' = {pe} must be a finite number >= 0 "
+                          "(0: only at measurements)")
+    _check_sizes(components, duration, grid, source)
+    ewp = typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
+    rframe = typed(run.get("recording_frame", "synodic"), str, source, "[run]", "recording_frame")
+    if rframe not in ("synodic", "inertial"):
+        raise ConfigError(f"{source}: [run]: key 'recording_frame' = {rframe!r} must be 'synodic' (the rotating "
+                          "frame) or 'inertial' (the sensor's Earth-centred inertial frame)")
+    return Scenario(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration,
+                    components=components, truth_orbit=truth_orbit, truth_state=truth_state,
+                    truth_dynamics=truth_dyn, custody=custody, truth_grid_minutes=grid,
+                    predict_every_hours=pe, end_with_prediction=ewp, recording_frame=rframe,
+                    measurements_file=measurements_file, measurements_reader=measurements_reader,
+                    source=source, raw=copy.deepcopy(data))
+
+
+# -- validation helpers --------------------------------------------------------------------------
+
+BYTES_PER_PARTICLE = 512
+"""Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
+Measured (issue 15): a whole one-period Example 1 run (IOD + PGM) peaked 404 bytes per particle
+above the process's start at 1,000,000 particles, 301 per extra particle from 1e5 to 1e6; an EnKF
+step 208 and a PGM step 157 at 1e6 (``benchmarks/bench_memory.py --sizes 100000 1000000``).
+Rounded up to 512. The IOD fits its oversampled samples in chunks of fixed size
+(:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
+IOD_CHUNK_BYTES = 256 * 2 ** 20
+"""Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""
+
+
+def _number(v: Any) -> float | None:
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+
+def _check_sizes(components: dict[str, ComponentSpec], duration_days: float, grid_minutes: float,
+                 source: str) -> None:
+    """Refuse particle counts and durations whose arrays cannot fit in the available memory, and
+    more mixture components than particles."""
+    n_grid = duration_days * 1440.0 / grid_minutes + 1
+    check_memory(n_grid * 6 * 8 * 4, f"{source}: top level: key 'duration_days' = {duration_days:g}",
+                 f"the truth on a {grid_minutes:g}-minute grid ({n_grid:.3g} points)")
+    for table, spec in components.items():
+        n = _number(spec.params.get("n_particles"))
+        if n is None:
+            continue
+        check_memory(n * BYTES_PER_PARTICLE + (IOD_CHUNK_BYTES if table == "iod" else 0),
+                     f"{source}: [{table}]: key 'n_particles' = {n:g}", f"{spec.name!r} with {n:.3g} particles")
+        m = _number(spec.params.get("n_components"))
+        if m is not None and m > n:
+            raise ConfigError(f"{source}: [{table}]: key 'n_components' = {m:g} must be <= n_particles ({n:g})")

@@ -1,0 +1,300 @@
+"""Reports of a study: the table (terminal, CSV, Markdown) and PNG plots in ``<out>/report/``.
+
+Reads every finished run of a study (its manifest's :class:`~cistrack.evaluation.run_summary.RunSummary`,
+measurement consistency included, and its ``steps.parquet``) and groups them by scenario, IOD
+variant and filter. Files: ``summary.csv`` (one row per group), ``summary.md``, ``runs.csv`` (every
+run's verdict and reason) and ``custody_by_filter.csv`` (:mod:`cistrack.studies.report_verdicts`); the
+plots are drawn by :mod:`cistrack.studies.report_plots` and :mod:`cistrack.studies.calibration_plots`. Two ANEES
+figures are reported and named apart: over every update of every run (``anees_every_update``)
+and over the runs' final states (``final_anees``, with its chi-square bounds).
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from cistrack.studies.calibration import LEVEL, group_calibration
+from cistrack.errors import ConfigError
+from cistrack.results.store import read_manifest, read_steps
+from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
+from cistrack.evaluation.run_summary import RunSummary
+from cistrack.studies.study import plan_runs
+from cistrack.studies.resume import is_done
+
+__all__ = ["report_study"]
+
+
+_COUNTED = ("tracking", "not-converged", "lost", "diverged")
+"""Verdict kinds counted per filter x IOD in the report's ``verdicts`` column, in this order."""
+_COUNTED_TRUTHLESS = ("no-truth", "diverged")
+
+
+def _count_column(kind: str) -> str:
+    """The summary.csv column counting the runs of a verdict kind: 'not-converged' -> 'not_converged_runs'."""
+    return kind.replace("-", "_") + "_runs"
+
+"""The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
+_TRUTH_COLUMNS = {"custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
+                  "anees_every_update", "anees_every_update_n", "custody_ci_lo", "custody_ci_hi", "final_anees",
+                  "final_anees_runs", "final_anees_lo", "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p",
+                  "hdr_runs", "hdr_above_099", "diverged_runs", "pos_err_km", "vel_err_ms"}
+"""summary.csv columns that need a truth: left out of a study without one."""
+_VERDICTS_EXPLAINED = (
+    "Verdicts (see cistrack.evaluation.verdicts): tracking = custody kept and the largest position sigma within the rule's "
+    "precision; not-converged = custody kept by a cloud too wide to be a track; lost = the truth left the "
+    "belief; diverged = a particle filter's weights degenerated, the belief collapsed, the error is far beyond "
+    "sigma, or the mean left cislunar space; filter-failed = the filter raised an error.")
+
+
+def _median(xs):
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    return float(np.median(xs)) if xs else None
+
+
+def _spread(xs) -> tuple[float | None, float | None]:
+    """5th and 95th percentiles of the finite values (None if there are none)."""
+    xs = [x for x in xs if x is not None and np.isfinite(x)]
+    if not xs:
+        return None, None
+    lo, hi = np.percentile(xs, [5.0, 95.0])
+    return float(lo), float(hi)
+
+
+def _anees(tables) -> tuple[float | None, int]:
+    """Average NEES over every update step of every run, and the number of updates averaged."""
+    vals = []
+    for t in tables:
+        if "nees" not in t.column_names or "kind" not in t.column_names:
+            continue
+        nees = np.asarray(t.column("nees").to_numpy(zero_copy_only=False), dtype=float)
+        kinds = t.column("kind").to_pylist()
+        vals += [v for v, k in zip(nees, kinds) if k == "update" and np.isfinite(v)]
+    return (float(np.mean(vals)) if vals else None), len(vals)
+
+
+_CALIBRATION = ("custody_ci_lo", "custody_ci_hi", "final_anees", "final_anees_runs", "final_anees_lo",
+                "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p", "hdr_runs", "hdr_above_099",
+                "diverged_runs")
+"""CSV columns of :func:`cistrack.studies.calibration.group_calibration` (None for a group without a truth)."""
+
+
+def _calibration_columns(sums: list[RunSummary]) -> dict:
+    if not any(x.has_truth for x in sums):  # no truth: no custody, NEES or HDR level
+        return dict.fromkeys(_CALIBRATION)
+    c = group_calibration(sums)
+    nan = lambda v: None if v != v else v  # noqa: E731  (NaN -> empty CSV cell)
+    return {"custody_ci_lo": c.custody_lo, "custody_ci_hi": c.custody_hi, "final_anees": nan(c.final_anees),
+            "final_anees_runs": c.final_anees_runs, "final_anees_lo": nan(c.final_anees_lo),
+            "final_anees_hi": nan(c.final_anees_hi), "final_anees_within": c.anees_within,
+            "hdr_ks": nan(c.hdr_ks), "hdr_ks_p": nan(c.hdr_ks_p), "hdr_runs": c.hdr_runs,
+            "hdr_above_099": nan(c.hdr_above_099), "diverged_runs": c.diverged}
+
+
+_CONSISTENCY = ("mean_nis", "nis_dof", "nis_lo", "nis_hi", "nis_updates", "nis_outside_95_share",
+                "max_abs_residual_arcsec")
+"""CSV columns of the measurement consistency of a group's updates (:mod:`cistrack.evaluation.residuals`)."""
+
+
+def _consistency_columns(sums: list[RunSummary], tables: list) -> dict:
+    """The group's measurement consistency, pooled from each run's manifest (``summary.consistency``;
+    a run written before manifests stored it is summarised from its steps table)."""
+    from cistrack.evaluation.residuals import consistency_summary, pool_consistency
+
+    per_run = [x.consistency or consistency_summary(t.to_pylist() if "nis" in t.column_names else [])
+               for x, t in zip(sums, tables)]
+    c = pool_consistency(per_run)
+    if not c["nis_updates"]:
+        return dict.fromkeys(_CONSISTENCY)
+    return {"mean_nis": c["nis_mean"], "nis_dof": c["nis_dof"], "nis_lo": c["nis_lower"], "nis_hi": c["nis_upper"],
+            "nis_updates": c["nis_updates"], "nis_outside_95_share": c["share_outside_95"],
+            "max_abs_residual_arcsec": c["max_abs_residual_arcsec"], "_consistency": c}
+
+
+def _consistency_text(r: dict) -> str:
+    from cistrack.evaluation.residuals import consistency_text
+
+    return consistency_text(r.get("_consistency") or {})
+
+
+def _g(v, spec: str = ".3g") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def _calibration_cells(r: dict) -> list[str]:
+    """Markdown cells of one row's calibration (see :data:`_CALIBRATION`)."""
+    if r["custody_ci_lo"] is None:
+        return ["no truth", "-", "-", "-", "-"]
+    within = {True: "within", False: "OUTSIDE", None: "-"}[r["final_anees_within"]]
+    return [f"{r['custody_kept']}/{r['runs']} = {r['custody_rate']:.2f} [{r['custody_ci_lo']:.2f}-{r['custody_ci_hi']:.2f}]",
+            f"{_g(r['final_anees'])} [{_g(r['final_anees_lo'])}-{_g(r['final_anees_hi'])}] {within} "
+            f"({r['final_anees_runs']} runs)",
+            f"D = {_g(r['hdr_ks'], '.2f')}, p = {_g(r['hdr_ks_p'], '.2g')} ({r['hdr_runs']} runs)",
+            _g(None if r["hdr_above_099"] is None else 100 * r["hdr_above_099"], ".0f") + " %",
+            str(r["diverged_runs"])]
+
+
+def _calibration_markdown(rows: list[dict]) -> list[str]:
+    head = ["scenario", "iod", "filter", "custody rate [Wilson 95 %]",
+            "final-state ANEES: mean of the runs' last NEES [chi-square 95 % bounds]", "final truth HDR level vs uniform: KS",
+            "HDR level > 0.99 (1 % if calibrated)", "diverged"]
+    out = ["## Calibration", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    out += ["| " + " | ".join([r["scenario"], r["iod"], r["filter"], *_calibration_cells(r)]) + " |" for r in rows]
+    return out + ["", f"A consistent filter has a final ANEES within its {LEVEL:.0%} chi-square(6 x runs) / runs "
+                  "bounds and a final truth HDR level uniform on [0, 1] (KS p-value not small); the histograms "
+                  "are in `*__hdr.png`. NEES over time (median and 5-95 % band across seeds, chi-square(6) "
+                  "band drawn) is in the figure of each scenario and IOD."]
+
+
+def _calibration_line(r: dict) -> str:
+    if r["custody_kept"] is None:
+        return f"{r['filter']} / {r['iod']} / {r['scenario']}: no truth (measurement consistency: {_consistency_text(r)})"
+    cells = _calibration_cells(r)
+    return (f"{r['filter']} / {r['iod']} / {r['scenario']}: custody {cells[0]}; final ANEES {cells[1]}; "
+            f"HDR KS {cells[2]}; HDR > 0.99 {cells[3]}; diverged {cells[4]}")
+
+
+def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
+                 settings: list[str] | None = None, first_seed: int | None = None,
+                 n_seeds: int | None = None) -> dict:
+    """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
+    :mod:`cistrack.studies.report_plots`) in <out>/report/.
+
+    Raises ConfigError (and writes nothing) when no run of the study has finished.
+    """
+    data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
+    groups: dict[tuple[str, str, str], list[RunSummary]] = {}
+    tables: dict[tuple[str, str, str], list] = {}
+    missing = 0
+    for s in specs:
+        if not is_done(s.out_dir):
+            missing += 1
+            continue
+        man = read_manifest(s.out_dir)
+        groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
+        tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
+    if not groups:
+        name = data.get("name", out.name)
+        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
+                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
+                          + (f" --out {out_dir}" if out_dir else ""))
+    rep_dir = out / "report"
+    rep_dir.mkdir(parents=True, exist_ok=True)
+    study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
+    counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
+    finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+              "pos_err_km", "vel_err_ms", "entropy"]
+    cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
+            "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
+            "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
+    cols[cols.index("verdicts") + 1:cols.index("verdicts") + 1] = [_count_column(k) for k in counted
+                                                                  if _count_column(k) not in cols]
+    if not study_has_truth:  # no truth anywhere: the CSV names no custody, NEES or HDR column
+        cols = [c for c in cols if c not in _TRUTH_COLUMNS]
+    rows = []
+    for (sc, iod, flt), sums in sorted(groups.items()):
+        kept = sum(1 for x in sums if x.custody_kept)
+        truthless = not any(x.has_truth for x in sums)    # no custody to speak of
+        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums),
+               "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
+               "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
+                                                                  if not x.custody_kept]),
+               "failed_runs": sum(1 for x in sums if x.status != "finished"),
+               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted),
+               **{_count_column(k): sum(1 for x in sums if x.verdict.kind == k) for k in counted}}
+        for k in finals:
+            row[k] = _median([x.final.get(k) for x in sums])
+        row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
+        row["anees_every_update"], row["anees_every_update_n"] = _anees(tables[(sc, iod, flt)])
+        row["wall_time_s"] = _median([x.wall_time_s for x in sums])
+        row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
+        row.update(_calibration_columns(sums))
+        row.update(_consistency_columns(sums, tables[(sc, iod, flt)]))
+        rows.append(row)
+    with open(rep_dir / "summary.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    files = [rep_dir / "summary.csv", write_runs_csv(groups, rep_dir / "runs.csv")]
+    by_filter = write_custody_by_filter(rows, rep_dir / "custody_by_filter.csv")
+    files += [by_filter] if by_filter else []
+
+    def fmt(v):
+        if v is None:
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v)
+
+    has_truth = any(r["custody_kept"] is not None for r in rows)
+    header = ["scenario", "iod", "filter", "custody" if has_truth else "truth",
+              *(["lost at (d, median)"] if has_truth else []), "failed", "verdicts: " + " / ".join(counted),
+              "sigma pos x/y/z km", "sigma vel x/y/z cm/s",
+              *(["pos err km: median [5-95 %]", "ANEES over every update (6 = consistent)"] if has_truth else []),
+              "entropy", "wall time s: median [5-95 %]"]
+    lines = []
+    for r in rows:
+        lines.append([r["scenario"], r["iod"], r["filter"],
+                      "no truth" if r["custody_kept"] is None else f"{r['custody_kept']}/{r['runs']}",
+                      *([fmt(r["median_lost_day"])] if has_truth else []), str(r["failed_runs"]), r["verdicts"],
+                      "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
+                      "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
+                      *([f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
+                         f"{fmt(r['anees_every_update'])} ({r['anees_every_update_n']} updates)"] if has_truth else []),
+                      fmt(r["entropy"]), f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
+    md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    md += ["| " + " | ".join(l) + " |" for l in lines]
+    verdicts = []
+    for r in rows:
+        if r["custody_kept"] is None:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: no truth, measurement "
+                            f"consistency: {_consistency_text(r)}.")
+        elif r["custody_kept"] < r["runs"]:
+            failed = r["runs"] - r["custody_kept"] - r[_count_column("lost")] - r[_count_column("diverged")]
+            why = ", ".join([f"{r[_count_column(k)]} {k}" for k in ("lost", "diverged") if r[_count_column(k)]]
+                            + ([f"{failed} filter-failed"] if failed else []))
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} did not keep custody in "
+                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs ({why}; median day "
+                            f"{fmt(r['median_lost_day'])}).")
+        else:
+            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
+    flagged = [flagged_line(f) for f in flagged_runs(groups)]
+    title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
+    custody = (["## Custody", "", *verdicts, "",
+                "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
+                "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
+                "region on consecutive updates (see cistrack.scenario.loading.CustodyRule)."] if has_truth else
+               ["## Measurement consistency (no truth)", "", *verdicts])
+    calibration = _calibration_markdown(rows) if has_truth else [
+        "## Calibration", "", "None of these runs has a truth: calibration (NEES, HDR level) needs one."]
+    flagged_title = "Runs that did not track" if has_truth else "Diverged and failed runs"
+    explain = (_VERDICTS_EXPLAINED if has_truth else
+               "Verdicts without a truth (see cistrack.evaluation.verdicts): no-truth = judged by measurement consistency "
+               "only; diverged = a particle filter's weights degenerated, the belief collapsed or its mean left "
+               "cislunar space.")
+    diverged = ["", f"## {flagged_title} (verdict and reason; every run in runs.csv)", "", *(flagged or ["None."]),
+                "", explain]
+    md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, "", *custody, *diverged])
+    (rep_dir / "summary.md").write_text(md_text + "\n")
+    files.append(rep_dir / "summary.md")
+    widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
+    by_filter_text = custody_text(rows)
+    text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
+                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
+                     + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
+                        if len(custody_by_filter(rows)[0]) > 1 else [])
+                     + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):" if has_truth
+                        else "Measurement consistency (95 %; no truth, so no calibration):"]
+                     + [f"- {_calibration_line(r)}" for r in rows]
+                     + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
+                     + (flagged or ["None."]))
+    from cistrack.studies.report_plots import plot_study
+
+    figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
+    files += plot_study(figures, rep_dir, str(data.get("name", out.name)))
+    from cistrack.studies.calibration_plots import plot_hdr_histograms
+
+    files += plot_hdr_histograms({k: v["summaries"] for k, v in figures.items()}, rep_dir,
+                                 {(r["scenario"], r["iod"], r["filter"]): r for r in rows})
+    return {"text": text, "rows": rows, "files": files, "missing": missing}

@@ -1,0 +1,279 @@
+"""Comparative studies: scenarios x filters x IOD variants x seeds through any Executor.
+
+A study file (TOML)::
+
+    name = "filter-comparison"
+    description = "PGM vs UKF vs EnKF on paper Example 1, three IOD range models"
+    scenarios = ["example-1"]                  # built-in names or paths relative to this file
+    filters = ["pgm", "ukf", "enkf"]           # names, or tables {name = ..., label = ..., params}
+    iod = ["noisy-range", "uniform-range"]     # the same; omit to keep each scenario's own
+    seeds = [1, 2, 3]                          # or n_seeds = 10 (seeds 1..10), with first_seed = 500
+                                               # seeds 500..509
+    [overrides]                                # applied to every scenario first
+    duration_days = 6.6
+
+Each run is written to ``<out>/runs/<run id>/`` as it finishes (see :mod:`cistrack.results.store`);
+running the study again runs only what is missing (reports: :mod:`cistrack.studies.report`). Runs are pure functions of (scenario, seed):
+the same seed gives the same numbers under any executor.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import copy
+import json
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from cistrack.errors import ConfigError
+from cistrack.results.fingerprint import scenario_fingerprint
+from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, study_source)
+from cistrack.studies.resume import is_done, run_state
+from cistrack.scenario.limits import check_count, check_path_component
+from cistrack.results.store import read_manifest
+from cistrack.evaluation.run_summary import RunSummary
+
+
+__all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
+           "builtin_studies", "make_executor"]
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a study (plain data: sent to worker processes)."""
+
+    run_id: str
+    scenario: str          # absolute path of the scenario file
+    seed: int
+    overrides: dict
+    out_dir: str
+    scenario_name: str
+    filter_label: str
+    iod_label: str
+    rerun_path: str | None = None
+    fingerprint: str = ""  # of the resolved scenario and seed (cistrack.results.fingerprint)
+
+
+def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
+    if item is None:
+        return "", None
+    if isinstance(item, str):
+        return check_path_component(item, f"{p}: entry of {key!r}"), {"name": item}
+    if isinstance(item, dict) and "name" in item:
+        t = dict(item)
+        label = check_path_component(t.pop("label", t["name"]), f"{p}: entry of {key!r}: key 'label'")
+        return label, t
+    raise ConfigError(f"{p}: entries of {key!r} must be names or tables with a 'name' key, got {item!r}")
+
+
+def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
+              settings: list[str] | None = None, first_seed: int | None = None,
+              n_seeds: int | None = None) -> tuple[dict, list[RunSpec], Path]:
+    """Every run of a study, validated (each scenario variant is parsed before any run starts).
+
+    ``first_seed``, ``n_seeds``: run these seeds instead of the study file's (see
+    :func:`_study_seeds`); the runs go into the same study directory, named by their seed.
+
+    ``settings``: ``--set TABLE.KEY=VALUE`` items (:mod:`cistrack.scenario.settings`) applied to every run
+    after the study's own overrides and variants; the default directory then names their hash,
+    so runs with other values are never mixed with these.
+    """
+    from cistrack.plugin.registry import default_registry
+    from cistrack.scenario.loading import load_scenario
+    from cistrack.scenario.settings import merge_settings, parse_settings
+
+    data, p = load_study(path_or_name)
+    recorded = recorded_settings(path_or_name)  # a study results directory: its own runs, in place
+    if recorded is not None:
+        settings = recorded if settings is None else settings
+        out_dir = path_or_name if out_dir is None else out_dir
+    name = check_path_component(data.get("name", p.stem), f"{p}: key 'name'")
+    extra = parse_settings(settings)
+    out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
+    seeds = _study_seeds(data, p, first_seed, n_seeds)
+    filters = [_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])]
+    iods = [_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])]
+    reg = default_registry()
+    specs: list[RunSpec] = []
+    for sc in data["scenarios"]:
+        sp = Path(sc)
+        if not sp.is_absolute() and (p.parent / sp).exists():
+            sp = p.parent / sp
+        base = load_scenario(sp if sp.exists() else sc, reg)
+        scen_path = str(Path(base.source).resolve())
+        for flabel, ftable in filters:
+            for ilabel, itable in iods:
+                ov = copy.deepcopy(data.get("overrides", {}))
+                if ftable:
+                    ov["filter"] = ftable
+                if itable:
+                    ov["iod"] = itable
+                if extra:
+                    ov = merge_settings(ov, extra)
+                    for table, value in extra.items():  # keys of the scenario's own table
+                        if isinstance(value, dict) and isinstance(base.raw.get(table), dict) \
+                                and table not in ((("filter",) if ftable else ()) + (("iod",) if itable else ())):
+                            ov[table] = merge_settings(base.raw[table], ov[table])
+                try:
+                    variant = base.with_overrides(ov, reg)   # validates this combination now
+                except ConfigError as exc:
+                    if extra:
+                        raise ConfigError(f"{exc} (with {' '.join('--set ' + i for i in settings)})") from None
+                    raise
+                fl = flabel or variant.components["filter"].name
+                il = ilabel or variant.components["iod"].name
+                for seed in seeds:
+                    rid = f"{base.name}__{fl}__{il}__seed{seed}"
+                    specs.append(RunSpec(rid, scen_path, int(seed), ov, str(out / "runs" / rid),
+                                         base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
+    ids = [s.run_id for s in specs]
+    if len(set(ids)) != len(ids):
+        raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
+    return data, specs, out
+
+
+def _settings_suffix(settings: list[str] | None) -> str:
+    if not settings:
+        return ""
+    import hashlib
+
+    return "__set-" + hashlib.sha256("\n".join(settings).encode()).hexdigest()[:8]
+
+
+def execute_run(spec: RunSpec) -> RunSummary:
+    """Run one study run in this process and write it to ``spec.out_dir``. Returns its summary."""
+    from threadpoolctl import threadpool_limits
+
+    from cistrack.plugin.registry import default_registry
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+
+    reg = default_registry()
+    scen = load_scenario(spec.scenario, reg, overrides=spec.overrides)  # validated (and built) once
+    observers = []
+    if spec.rerun_path:
+        observers.append(reg.create("recorder", "rerun", path=spec.rerun_path, frame=scen.recording_frame,
+                                    overwrite=True))  # the study's own recording of a run it reruns
+    with threadpool_limits(1):  # one BLAS/OpenMP thread: identical numbers whichever worker runs it
+        res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id,
+                           observers=observers)
+    return res.summary
+
+
+def _worker_init(threads: int) -> None:
+    try:
+        import numba
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    except Exception:
+        pass
+
+
+def make_executor(workers: int | None = None, dask: str | None = None):
+    """A concurrent.futures Executor: local processes, or a Dask cluster ('local' or an address)."""
+    if workers is not None:
+        check_count(workers, "--workers", 1, 1024)
+    n = workers or os.cpu_count() or 1
+    if dask:
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ConfigError("--dask needs the optional dependency: pip install 'cistrack[dask]'") from None
+        if dask == "local":
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                                   host="127.0.0.1")
+            client = Client(cluster)
+        else:
+            try:
+                client = Client(dask, timeout=10)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ConfigError(f"--dask {dask!r}: cannot connect to a Dask scheduler there within 10 s "
+                                  f"({type(exc).__name__}: {exc}); give a reachable address "
+                                  "(e.g. tcp://127.0.0.1:8786) or 'local'") from None
+        ex = client.get_executor()
+        ex._cistrack_client = client  # closed by run_study
+        return ex
+    import multiprocessing as mp
+    cores = os.cpu_count() or 1
+    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"),
+                                  initializer=_worker_init, initargs=(max(1, cores // n),))
+
+
+def close_dask_client(ex) -> None:
+    """Close the Dask client (and its local cluster) that :func:`make_executor` attached to
+    ``ex``; nothing for a process pool."""
+    client = getattr(ex, "_cistrack_client", None)
+    if client is not None:
+        cluster = client.cluster
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
+              dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
+              rerun_dir: str | Path | None = None, settings: list[str] | None = None,
+              first_seed: int | None = None, n_seeds: int | None = None) -> dict:
+    """Run every missing run of a study. Returns counts and the study directory.
+
+    ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
+    ``settings``: ``--set`` items applied to every run (see :func:`plan_runs`).
+    ``first_seed``, ``n_seeds``: other seeds than the study file's (see :func:`plan_runs`).
+    """
+    import dataclasses
+
+    if workers is not None:
+        check_count(workers, "--workers", 1, 1024)
+    data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
+    if rerun_dir is not None:
+        Path(rerun_dir).mkdir(parents=True, exist_ok=True)
+        specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "study.json").write_text(json.dumps({"source": study_source(path_or_name), **data,
+                                               "settings": list(settings or []),
+                                               "run_seeds": sorted({sp.seed for sp in specs})},
+                                              indent=2, default=str))
+    states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
+    todo = [s for s in specs if states[s.run_id] != "done"]
+    skipped = len(specs) - len(todo)
+    stale = [s.run_id for s in specs if states[s.run_id] == "stale"]
+    if stale:
+        print(f"study: {len(stale)} finished run(s) were made with another scenario, seed or input file "
+              f"(fingerprint changed) and are run again: {', '.join(stale[:5])}"
+              + (" ..." if len(stale) > 5 else ""), file=sys.stderr)
+    gone = [s.run_id for s in specs if states[s.run_id] == "gone"]
+    if gone:
+        print(f"study: {len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
+              f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""), file=sys.stderr)
+    own = executor is None
+    ex = executor or (make_executor(workers, dask) if todo else None)
+    completed = failed = 0
+    bar = None
+    if progress and todo:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(todo), desc=f"study {data.get('name', out.name)}", unit="run")
+    try:
+        futures = {ex.submit(execute_run, s): s for s in todo}
+        for fut in cf.as_completed(futures):
+            spec = futures[fut]
+            try:
+                summary = fut.result()
+                completed += 1
+                if bar is not None:
+                    bar.set_postfix_str(f"{spec.run_id}: {summary.verdict.kind}")
+            except Exception as exc:  # one failing run must not stop the study
+                failed += 1
+                (Path(spec.out_dir)).mkdir(parents=True, exist_ok=True)
+                (Path(spec.out_dir) / "error.txt").write_text(f"{type(exc).__name__}: {exc}\n")
+                print(f"run {spec.run_id} failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+        if own and ex is not None:
+            ex.shutdown(wait=True)
+            close_dask_client(ex)
+    return {"name": data.get("name", out.name), "out_dir": out, "completed": completed, "skipped": skipped,
+            "failed": failed, "total": len(specs)}

@@ -1,0 +1,131 @@
+"""Study files (TOML): finding a study by path or built-in name, reading and checking it, and
+the seeds it runs (see :mod:`cistrack.studies.study` for the file's keys)."""
+from __future__ import annotations
+
+import difflib
+import json
+import sys
+from importlib import resources
+from pathlib import Path
+
+from cistrack.errors import ConfigError
+from cistrack.scenario.limits import check_count, check_seed
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS"]
+
+STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides"}
+"""Keys allowed at the top of a study file."""
+_STUDY_KEYS = STUDY_KEYS
+
+
+def builtin_studies() -> dict[str, str]:
+    """Built-in study names -> one-line descriptions."""
+    base = resources.files("cistrack.scenarios") / "studies"
+    out = {}
+    for e in sorted(base.iterdir(), key=lambda e: e.name):
+        if e.name.endswith(".toml"):
+            out[e.name[:-5]] = str(tomllib.loads(e.read_text()).get("description", "")).strip()
+    return out
+
+
+def _study_path(path_or_name: str | Path) -> Path:
+    p = Path(path_or_name)
+    if p.exists():
+        return p
+    base = resources.files("cistrack.scenarios") / "studies" / f"{path_or_name}.toml"
+    if base.is_file():
+        return Path(str(base))
+    avail = sorted(builtin_studies())
+    msg = f"study not found: {path_or_name!r} is neither a file nor a built-in study ({', '.join(avail)})"
+    close = difflib.get_close_matches(str(path_or_name), avail, n=1)
+    if close:
+        msg += f". Did you mean {close[0]!r}?"
+    raise ConfigError(msg)
+
+
+def _recorded(directory: Path) -> dict:
+    """The ``study.json`` that ``study run`` wrote into a study results directory."""
+    rec = directory / "study.json"
+    if not rec.is_file():
+        raise ConfigError(f"{directory}: a directory, but not a study results directory (it has no "
+                          f"study.json); give a study TOML file, a built-in study name or the --out "
+                          f"directory of a 'cistrack study run'")
+    try:
+        data = json.loads(rec.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{rec}: not a readable study record: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("run_seeds"), list):
+        raise ConfigError(f"{rec}: not a study record written by 'cistrack study run' (no 'run_seeds' list)")
+    return data
+
+
+def study_source(path_or_name: str | Path) -> str:
+    """The study file a study comes from: the file itself, a built-in study's file, or for a study
+    results directory the file its ``study.json`` records."""
+    p = _study_path(path_or_name)
+    return str(_recorded(p).get("source", p)) if p.is_dir() else str(p)
+
+
+def recorded_settings(path_or_name: str | Path) -> list[str] | None:
+    """The ``--set`` items a study results directory was run with; None for a study file or name."""
+    p = Path(path_or_name)
+    return [str(s) for s in _recorded(p).get("settings") or []] if p.is_dir() else None
+
+
+def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
+    """Read and check a study file, or the definition recorded in a study results directory (its
+    seeds are then the ones run). Returns (data, the study file's path)."""
+    p = _study_path(path_or_name)
+    if p.is_dir():
+        rec = _recorded(p)
+        data = {k: v for k, v in rec.items() if k in _STUDY_KEYS and k not in ("n_seeds", "first_seed")}
+        data["seeds"] = rec["run_seeds"]
+        data.setdefault("name", p.name)
+        src = Path(str(rec.get("source", "")))
+        src = src if src.is_file() else p / "study.json"  # relative scenario paths resolve beside it
+        return _checked(data, src), src
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    return _checked(data, p), p
+
+
+def _checked(data: dict, p: Path) -> dict:
+    for k in data:
+        if k not in _STUDY_KEYS:
+            close = difflib.get_close_matches(k, list(_STUDY_KEYS), n=1)
+            raise ConfigError(f"{p}: unknown key {k!r}; allowed: {', '.join(sorted(_STUDY_KEYS))}"
+                              + (f". Did you mean {close[0]!r}?" if close else ""))
+    if not data.get("scenarios"):
+        raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
+    if "seeds" in data and ("n_seeds" in data or "first_seed" in data):
+        raise ConfigError(f"{p}: give 'seeds', or 'n_seeds' (and optionally 'first_seed'), not both")
+    return data
+
+
+def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: int | None = None) -> list[int]:
+    """The study's seeds: its ``seeds`` list, or ``n_seeds`` seeds from ``first_seed`` (default 1);
+    ``first_seed`` / ``n_seeds`` given here (the CLI's ``--first-seed`` / ``--n-seeds``) replace the
+    file's, and turn a ``seeds`` list into consecutive seeds from its first."""
+    if "seeds" in data:
+        if not isinstance(data["seeds"], list) or not data["seeds"]:
+            raise ConfigError(f"{p}: key 'seeds' must be a non-empty list of integers from 0 to 2**63-1")
+        seeds = [check_seed(s, f"{p}: key 'seeds'") for s in data["seeds"]]
+        if first_seed is None and n_seeds is None:
+            return seeds
+        first, count = seeds[0], len(seeds)
+    else:
+        first = check_seed(data.get("first_seed", 1), f"{p}: key 'first_seed'")
+        count = check_count(data.get("n_seeds", 1), f"{p}: key 'n_seeds'", 1, 1_000_000)
+    if first_seed is not None:
+        first = check_seed(first_seed, "--first-seed")
+    if n_seeds is not None:
+        count = check_count(n_seeds, "--n-seeds", 1, 1_000_000)
+    check_seed(first + count - 1, f"{p}: the last seed (first seed + number of seeds - 1)")
+    return list(range(first, first + count))
