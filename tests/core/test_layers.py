@@ -31,6 +31,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("cistrack.evaluation",),
     ("cistrack.scenario",),
     ("cistrack.runs",),
+    ("cistrack.fit",),
     ("cistrack.studies",),
     ("cistrack.cli",),
     ("cistrack.api",),
