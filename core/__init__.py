@@ -4,7 +4,12 @@ The framework (this package) holds no physics choices: the interfaces, belief ty
 registry, scenario files, runs, metrics and studies. Dynamics, sensors, schedules, IOD
 methods, clusterers, filters and recorders are plugins (``cistrack.plugins``), found through
 the entry-point group ``cistrack`` exactly like third-party ones.
+
+``cistrack.run(...)``, ``cistrack.read_run(...)`` and ``cistrack.load_scenario(...)`` run scenarios
+from Python; :mod:`cistrack.api` holds every public name (see docs/python-api.md).
 """
+import sys as _sys
+import types as _types
 from importlib import metadata as _md
 
 try:
@@ -19,10 +24,11 @@ from cistrack.plugin.hookspecs import hookimpl
 
 _moved.install()  # old import paths of moved modules keep working, with a DeprecationWarning
 
-# The belief and measurement types load on first access (PEP 562), so that ``import cistrack``
-# (and with it ``cistrack --help``) does not pay for numpy and scipy.
+# The belief and measurement types and the run API load on first access (PEP 562), so that
+# ``import cistrack`` (and with it ``cistrack --help``) does not pay for numpy and scipy.
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
-         "Measurement": "model.measurement", "MeasurementSet": "model.measurement"}
+         "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
+         "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api"}
 
 
 def __getattr__(name: str):
@@ -40,8 +46,22 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
+class _Package(_types.ModuleType):
+    """``cistrack.run`` is the run function, and ``cistrack.run`` was also a module (now
+    :mod:`cistrack.runs.pipeline`): importing the old module path must not replace the function
+    with the module on this package (the import system sets submodules as attributes)."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if isinstance(value, _types.ModuleType) and _LAZY.get(name) == "api":
+            return
+        super().__setattr__(name, value)
+
+
+_sys.modules[__name__].__class__ = _Package
+
 __all__ = [
-    "__version__", "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",
+    "__version__", "run", "read_run", "load_scenario", "Run",
+    "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",
     "hookimpl", "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError",
     "MeasurementError", "ParameterError", "UnknownComponentError",
 ]

@@ -56,6 +56,7 @@ def cmd_export(args) -> int:
 def cmd_run(args) -> int:
     from cistrack.plugin.registry import default_registry
     from cistrack.runs.pipeline import run_scenario
+    from cistrack.runs.run_id import scenario_run_id
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings
     from cistrack.evaluation.run_summary import count_lines
@@ -66,8 +67,7 @@ def cmd_run(args) -> int:
     say = (lambda *a, **k: None) if args.quiet else _eprint
     out_ = (lambda *a, **k: None) if args.quiet else print
     seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
-    run_id = (f"{scen.name}__{scen.components['filter'].name}__{scen.components['iod'].name}"
-              f"__seed{seed}")
+    run_id = scenario_run_id(scen, seed)
     out = Path(args.out) if args.out else Path("runs") / run_id
     check_output_dir(out, "--out" if args.out else "the results directory")
     observers = []

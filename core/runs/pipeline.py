@@ -31,6 +31,7 @@ from cistrack.model.measurement import StackedMeasurement
 from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.run_context import RunContext, Step
+from cistrack.runs.run_id import scenario_run_id
 from cistrack.evaluation.residuals import ResidualObserver
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
@@ -132,7 +133,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
     cloud = iod.estimate(iod_measurements, iod_sensor, rngs["iod"])
     say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
-    rid = run_id or f"{scenario.name}__{scenario.components['filter'].name}__{scenario.components['iod'].name}__seed{seed}"
+    rid = run_id or scenario_run_id(scenario, seed)
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
                      sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
                      truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,

@@ -34,6 +34,7 @@ from cistrack.studies.resume import is_done, run_state
 from cistrack.scenario.limits import check_count, check_path_component
 from cistrack.results.store import read_manifest
 from cistrack.evaluation.run_summary import RunSummary
+from cistrack.runs.run_id import run_id
 
 
 __all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
@@ -125,7 +126,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
                 fl = flabel or variant.components["filter"].name
                 il = ilabel or variant.components["iod"].name
                 for seed in seeds:
-                    rid = f"{base.name}__{fl}__{il}__seed{seed}"
+                    rid = run_id(base.name, fl, il, seed)
                     specs.append(RunSpec(rid, scen_path, int(seed), ov, str(out / "runs" / rid),
                                          base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
     ids = [s.run_id for s in specs]

@@ -1,0 +1,234 @@
+"""cistrack's public Python API: what notebook users and plugin authors import.
+
+Running::
+
+    import cistrack as ct
+
+    r = ct.run("quick", seed=2)                       # a built-in scenario, or a path to a TOML file
+    r.verdict.kind, r.summary.final["pos_err_km"]      # "tracking", 3.1
+    r.steps                                            # one row per step (pandas DataFrame)
+    r2 = ct.run("example-1", seed=5, settings={"filter.n_particles": 2000}, out="runs/ex1-5")
+    again = ct.read_run("runs/ex1-5")                  # the same run, read back from its folder
+
+Writing a plugin (see docs/plugins.md)::
+
+    from cistrack.api import Clusterer, Component, check_int, hookimpl, ParticleCloud
+
+Every name here is a promise: it stays importable from ``cistrack.api`` (and the run functions
+from ``cistrack``) across releases; a name that moves keeps working from its old path with a
+DeprecationWarning for at least one release (:mod:`cistrack._moved`).
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
+                             MeasurementError, ParameterError, UnknownComponentError)
+from cistrack.evaluation.custody import Verdict
+from cistrack.evaluation.run_summary import RunSummary
+from cistrack.interfaces import (KINDS, Body, Clusterer, Dynamics, Exporter, Filter, IODMethod, Pass,
+                                 Propagation, RangePrior, Reader, ReferenceOrbit, Schedule, Sensor)
+from cistrack.interfaces.component import (Component, check_choice, check_int, check_nonnegative,
+                                           check_positive, check_range)
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
+from cistrack.model.measurement import Measurement, MeasurementSet
+from cistrack.plugin.hookspecs import hookimpl
+from cistrack.plugin.registry import Registry, default_registry, load_registry
+from cistrack.propagation import CompiledDynamics
+from cistrack.scenario.loading import Scenario
+
+if TYPE_CHECKING:
+    import pandas
+    import pyarrow
+
+__all__ = [
+    # running scenarios
+    "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict",
+    # the registry
+    "Registry", "default_registry", "load_registry", "KINDS",
+    # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
+    "Component", "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
+    "Dynamics", "Body", "Propagation", "Sensor", "Schedule", "Pass", "IODMethod", "RangePrior", "Clusterer",
+    "Filter", "Reader", "Exporter", "ReferenceOrbit", "hookimpl", "CompiledDynamics",
+    "Belief", "ParticleCloud", "GaussianMixture", "Measurement", "MeasurementSet",
+    # errors
+    "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError", "MeasurementError",
+    "ParameterError", "UnknownComponentError",
+]
+
+#: The scenario :func:`run` runs when given none: the paper's Example 1 with the PGM filter.
+DEFAULT_SCENARIO = "example-1"
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run's outcome: its typed summary, its per-step rows and, if it wrote one, its folder.
+
+    Attributes
+    ----------
+    summary : RunSummary
+        Status, final verdict, counts, consistency and the final metrics (km, m/s, cm/s).
+    directory : Path or None
+        The results folder (``steps.parquet``, ``manifest.json``), or None for a run kept in memory.
+    rows : tuple of dict
+        One dict per step, the columns of ``steps.parquet`` (see ``docs/`` and
+        :func:`cistrack.results.step_table.step_row`).
+    """
+
+    summary: RunSummary
+    directory: Path | None = None
+    rows: tuple[dict[str, Any], ...] = field(default=(), repr=False)
+
+    @property
+    def run_id(self) -> str:
+        return self.summary.run_id
+
+    @property
+    def seed(self) -> int:
+        return self.summary.seed
+
+    @property
+    def status(self) -> str:
+        """``"finished"`` or ``"filter-failed"``."""
+        return self.summary.status
+
+    @property
+    def verdict(self) -> Verdict:
+        """The final verdict: ``.kind`` is tracking, not-converged, lost, diverged, filter-failed or no-truth."""
+        return self.summary.verdict
+
+    @property
+    def final(self) -> dict[str, float]:
+        """Metrics of the last update: per-axis sigmas (km, cm/s), errors (km, m/s), NEES, entropy."""
+        return dict(self.summary.final)
+
+    def table(self) -> pyarrow.Table:
+        """The per-step table as a pyarrow Table (the contents of ``steps.parquet``)."""
+        import pyarrow as pa
+
+        if self.rows:
+            return pa.Table.from_pylist(list(self.rows))
+        if self.directory is not None:
+            from cistrack.results.store import read_steps
+
+            return read_steps(self.directory)
+        return pa.table({})
+
+    @property
+    def steps(self) -> pandas.DataFrame:
+        """The per-step table as a pandas DataFrame, one row per step (predict or update)."""
+        return self.table().to_pandas()
+
+    def __repr__(self) -> str:
+        where = f", directory={str(self.directory)!r}" if self.directory else ""
+        return f"Run({self.run_id!r}, status={self.status!r}, verdict={self.verdict.kind!r}{where})"
+
+
+def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
+    """``{"filter.n_particles": 500, "filter": {"name": "ukf"}}`` or ``["duration_days=2"]`` as
+    ``--set`` items (values in TOML syntax)."""
+    if settings is None:
+        return []
+    if isinstance(settings, str):
+        return [settings]
+    if not isinstance(settings, Mapping):
+        return [str(s) for s in settings]
+    import tomli_w
+
+    items: list[str] = []
+
+    def add(prefix: str, value: Any) -> None:
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                add(f"{prefix}.{k}" if prefix else str(k), v)
+            return
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"settings[{prefix!r}] = {value!r}: a setting must be a finite number")
+        try:
+            text = tomli_w.dumps({"v": value}).partition("=")[2].strip()
+        except TypeError:
+            raise ConfigError(f"settings[{prefix!r}] = {value!r}: not a TOML value (numbers, strings, "
+                              "booleans, lists and tables are)") from None
+        items.append(f"{prefix}={text}")
+
+    add("", settings)
+    return items
+
+
+def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
+                  settings: Mapping[str, Any] | Iterable[str] | None = None,
+                  registry: Registry | None = None) -> Scenario:
+    """A validated scenario: a built-in name (``cistrack scenarios`` lists them), a TOML file, or a
+    :class:`Scenario`, with ``settings`` applied exactly as ``--set`` applies them on the command line.
+
+    ``settings``: ``{"filter.n_particles": 2000, "duration_days": 2}`` (dotted keys or nested
+    dicts) or ``["filter.n_particles=2000"]``; a wrong key or value raises :class:`ConfigError`
+    naming the table and key.
+    """
+    from cistrack.scenario.loading import load_scenario as _load
+    from cistrack.scenario.settings import apply_settings
+
+    reg = registry or default_registry()
+    scen = scenario if isinstance(scenario, Scenario) else _load(scenario, reg)
+    return apply_settings(scen, _setting_items(settings), reg)
+
+
+def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,
+        settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
+        progress: bool = False, log: Any = None, observers: Iterable[Any] = (),
+        registry: Registry | None = None) -> Run:
+    """Run one scenario end to end, as ``cistrack run`` does, and return its :class:`Run`.
+
+    Parameters
+    ----------
+    scenario : str, Path or Scenario
+        A built-in scenario name, a TOML file, or a scenario from :func:`load_scenario`.
+    seed : int, optional
+        The run's seed (default: the scenario's). The same scenario and seed give the same numbers.
+    settings : mapping or list of str, optional
+        Overrides, as for :func:`load_scenario`.
+    out : path, optional
+        Write the results folder here (a new or empty folder, as ``cistrack run --out``); by default
+        the run is kept in memory only.
+    progress : bool
+        Show a progress bar on stderr.
+    log : callable, optional
+        Receives one string per stage of the run ("reading measurements ...", "IOD ...").
+    observers : iterable
+        Extra lifecycle-hook observers (for example a rerun recorder from the registry).
+    """
+    from cistrack.results.output_paths import check_output_dir
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.limits import check_seed
+
+    reg = registry or default_registry()
+    scen = load_scenario(scenario, settings=settings, registry=reg)
+    seed = scen.seed if seed is None else check_seed(seed, "seed")
+    directory = None
+    if out is not None:
+        directory = Path(out)
+        check_output_dir(directory, "out")
+    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
+                       progress=progress, log=log)
+    return Run(res.summary, directory, tuple(res.rows))
+
+
+def read_run(directory: str | Path) -> Run:
+    """A finished (or interrupted) run read back from its results folder."""
+    from cistrack.results.store import read_manifest
+
+    d = Path(directory)
+    if not d.is_dir():
+        raise ConfigError(f"{d}: not a run's results folder (no such directory)")
+    try:
+        manifest = read_manifest(d)
+    except FileNotFoundError:
+        raise ConfigError(f"{d}: not a run's results folder (no manifest.json)") from None
+    summary = manifest.get("summary")
+    if not isinstance(summary, dict):
+        raise ConfigError(f"{d}/manifest.json: holds no run summary (the run did not finish writing it)")
+    return Run(RunSummary.from_dict(summary), d)
