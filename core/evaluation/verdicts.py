@@ -25,6 +25,7 @@ import statistics
 from typing import Any
 
 from cistrack.evaluation.custody import CustodyRule, Verdict
+from cistrack.interfaces.filter import diagnostic_column
 
 __all__ = ["final_verdict", "verdict_lines"]
 
@@ -32,6 +33,9 @@ __all__ = ["final_verdict", "verdict_lines"]
 def _last_update(rows: list[dict[str, Any]]) -> dict[str, Any]:
     updates = [r for r in rows if r.get("kind") == "update"]
     return updates[-1] if updates else (rows[-1] if rows else {})
+
+
+_ESS, _UNIQUE, _N = (diagnostic_column(k) for k in ("ess_before_resampling", "unique_particles", "n_particles"))
 
 
 def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dict[str, Any]] | None:
@@ -42,11 +46,11 @@ def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dic
     for r in rows:
         if r.get("kind") != "update":
             continue
-        ess, unique = r.get("diag_ess_before_resampling"), r.get("diag_unique_particles")
+        ess, unique = r.get(_ESS), r.get(_UNIQUE)
         low_ess = ess is not None and math.isfinite(ess) and ess < rule.degenerate_ess
         few = unique is not None and math.isfinite(unique) and unique < rule.degenerate_ess
         if low_ess or few:
-            n = r.get("diag_n_particles")
+            n = r.get(_N)
             of = f" of {int(n)} particles" if n is not None and math.isfinite(n) else ""
             size = f"effective sample size {ess:.3g}{of}" if ess is not None else "weights"
             left = f", {int(unique)} distinct particles left" if unique is not None and math.isfinite(unique) else ""

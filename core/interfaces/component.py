@@ -18,11 +18,43 @@ from typing import Any, ClassVar
 from cistrack.errors import ParameterError
 
 __all__ = [
-    "Component", "ParamSpec", "param_specs",
+    "Component", "ParamSpec", "param_specs", "MemoryNeed", "BYTES_PER_PARTICLE", "IOD_CHUNK_BYTES",
     "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
 ]
 
 _EMPTY = inspect.Parameter.empty
+
+BYTES_PER_PARTICLE = 512
+"""Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
+Measured (issue 15): a whole one-period Example 1 run (IOD + PGM) peaked 404 bytes per particle
+above the process's start at 1,000,000 particles, 301 per extra particle from 1e5 to 1e6; an EnKF
+step 208 and a PGM step 157 at 1e6 (``benchmarks/bench_memory.py --sizes 100000 1000000``).
+Rounded up to 512. The IOD fits its oversampled samples in chunks of fixed size
+(:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
+IOD_CHUNK_BYTES = 256 * 2 ** 20
+"""Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""
+
+
+@dataclass(frozen=True)
+class MemoryNeed:
+    """What a component will hold in memory during a run, and the parameter that sets it.
+
+    A scenario asks every component for it (:meth:`Component.memory_need`) and refuses, before
+    anything is allocated, a need larger than the memory available, naming ``parameter``."""
+
+    bytes: float
+    """Bytes, estimated."""
+    parameter: str
+    """The constructor parameter that sets the need (``"n_particles"``)."""
+    value: float
+    """Its value."""
+    what: str
+    """What needs the memory, for the message (``"1e+07 particles"``)."""
+
+    @classmethod
+    def particles(cls, n: int, extra_bytes: float = 0.0) -> "MemoryNeed":
+        """``n`` particles at :data:`BYTES_PER_PARTICLE` each, plus ``extra_bytes``."""
+        return cls(n * BYTES_PER_PARTICLE + extra_bytes, "n_particles", float(n), f"{n:.3g} particles")
 
 
 @dataclass(frozen=True)
@@ -74,6 +106,11 @@ class Component(ABC):
     @classmethod
     def _label(cls) -> str:
         return f"{cls.kind or 'component'} '{cls.registry_name or cls.__name__}'"
+
+    def memory_need(self) -> MemoryNeed | None:
+        """The memory this component will hold during a run (:class:`MemoryNeed`), or None when it
+        is small. Particle filters and IOD methods override it."""
+        return None
 
     def get_params(self) -> dict[str, Any]:
         """The constructor parameters and their current values (scikit-learn's contract)."""

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from abc import abstractmethod
-from typing import ClassVar
+from typing import ClassVar, TypedDict
 
 import numpy as np
 
@@ -13,7 +13,38 @@ from cistrack.model.measurement import Measurement
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 
-__all__ = ["Filter", "FilterBase"]
+__all__ = ["Filter", "FilterBase", "Diagnostics", "DIAGNOSTIC_PREFIX", "diagnostic_column"]
+
+
+class Diagnostics(TypedDict, total=False):
+    """The diagnostics whose meaning the framework relies on, by key (all floats; a filter reports
+    those that apply to it, and any others it likes, in :attr:`Filter.diagnostics`).
+
+    Each step's table has them as columns ``diag_<key>`` (:func:`diagnostic_column`); the final
+    verdict reads ``ess_before_resampling``, ``unique_particles`` and ``n_particles`` to call a
+    particle filter's weights degenerate.
+    """
+
+    n_particles: float
+    """Particles carried after this step."""
+    ess_before_resampling: float
+    """Effective sample size 1 / sum(w^2) of the weights before resampling (the smallest over the
+    stages of one update)."""
+    unique_particles: float
+    """Distinct particles after resampling (resampling duplicates the heavy ones)."""
+    n_components: float
+    """Gaussian components of the belief after this step."""
+    particles_lost: float
+    """Particles lost to impacts so far in the run."""
+
+
+DIAGNOSTIC_PREFIX = "diag_"
+"""Prefix of the diagnostics' columns in a run's step table."""
+
+
+def diagnostic_column(key: str) -> str:
+    """The step-table column of diagnostic ``key``: ``diag_ess_before_resampling``."""
+    return DIAGNOSTIC_PREFIX + key
 
 
 class Filter(Component):
@@ -49,7 +80,8 @@ class Filter(Component):
 
     @property
     def diagnostics(self) -> dict[str, float]:
-        """Per-step numbers worth recording (components, particles lost to impacts, ...)."""
+        """Per-step numbers worth recording, as floats by key; the keys of :class:`Diagnostics`
+        carry the meaning declared there (components, particles, effective sample size, ...)."""
         return {}
 
 

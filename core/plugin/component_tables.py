@@ -43,6 +43,13 @@ class ComponentSpec:
     where: str
     _validated: Any = field(default=None, init=False, repr=False, compare=False)
 
+    def memory_need(self) -> Any:
+        """The validated component's :meth:`~cistrack.interfaces.component.Component.memory_need`
+        (None before validation or for objects that are not components)."""
+        held = self._validated[1] if self._validated is not None else None
+        ask = getattr(held, "memory_need", None)
+        return ask() if callable(ask) else None
+
     def build(self, registry: Registry) -> Any:
         """The component: the instance made during validation (once), else a new one."""
         held, self._validated = self._validated, None

@@ -11,6 +11,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
+from cistrack.interfaces.filter import diagnostic_column
 
 __all__ = ["step_row", "RowCollector"]
 
@@ -28,7 +29,7 @@ def step_row(run, step) -> dict[str, Any]:
         row[k] = float(v)
     for k, v in step.diagnostics.items():
         if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
-            row[f"diag_{k}"] = float(v)
+            row[diagnostic_column(k)] = float(v)
     for k, v in step.timings.items():
         row[f"time_{k}_s"] = float(v)
     return row

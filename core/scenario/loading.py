@@ -269,15 +269,8 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
 
 # -- validation helpers --------------------------------------------------------------------------
 
-BYTES_PER_PARTICLE = 512
-"""Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
-Measured (issue 15): a whole one-period Example 1 run (IOD + PGM) peaked 404 bytes per particle
-above the process's start at 1,000,000 particles, 301 per extra particle from 1e5 to 1e6; an EnKF
-step 208 and a PGM step 157 at 1e6 (``benchmarks/bench_memory.py --sizes 100000 1000000``).
-Rounded up to 512. The IOD fits its oversampled samples in chunks of fixed size
-(:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
-IOD_CHUNK_BYTES = 256 * 2 ** 20
-"""Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""
+# Moved to cistrack.interfaces.component (issue 26); kept here for code that imported them.
+from cistrack.interfaces.component import BYTES_PER_PARTICLE, IOD_CHUNK_BYTES  # noqa: E402,F401
 
 
 def _number(v: Any) -> float | None:
@@ -292,11 +285,12 @@ def _check_sizes(components: dict[str, ComponentSpec], duration_days: float, gri
     check_memory(n_grid * 6 * 8 * 4, f"{source}: top level: key 'duration_days' = {duration_days:g}",
                  f"the truth on a {grid_minutes:g}-minute grid ({n_grid:.3g} points)")
     for table, spec in components.items():
-        n = _number(spec.params.get("n_particles"))
-        if n is None:
+        need = spec.memory_need()
+        if need is None:
             continue
-        check_memory(n * BYTES_PER_PARTICLE + (IOD_CHUNK_BYTES if table == "iod" else 0),
-                     f"{source}: [{table}]: key 'n_particles' = {n:g}", f"{spec.name!r} with {n:.3g} particles")
+        check_memory(need.bytes, f"{source}: [{table}]: key '{need.parameter}' = {need.value:g}",
+                     f"{spec.name!r} with {need.what}")
+        n = need.value
         m = _number(spec.params.get("n_components"))
-        if m is not None and m > n:
+        if m is not None and need.parameter == "n_particles" and m > n:
             raise ConfigError(f"{source}: [{table}]: key 'n_components' = {m:g} must be <= n_particles ({n:g})")

@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative
+from cistrack.interfaces.component import check_int, check_nonnegative, MemoryNeed
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
@@ -60,6 +60,10 @@ class EnKFFilter(FilterBase):
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
+
+    def memory_need(self) -> MemoryNeed:
+        """Its particles (``n_particles``)."""
+        return MemoryNeed.particles(self.n_particles)
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range)
+from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive, check_range)
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
@@ -167,6 +167,10 @@ class PGMFilter(FilterBase):
         self._x: np.ndarray | None = None
 
     # -- lifecycle --------------------------------------------------------------------------------
+    def memory_need(self) -> MemoryNeed:
+        """Its particles (``n_particles``)."""
+        return MemoryNeed.particles(self.n_particles)
+
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """Start from ``cloud`` (N, 6) at ``cloud.epoch``; resolves the clusterer."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative, check_range
+from cistrack.interfaces.component import check_int, check_nonnegative, check_range, MemoryNeed
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
@@ -52,6 +52,10 @@ class SIRFilter(FilterBase):
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._x: np.ndarray | None = None
+
+    def memory_need(self) -> MemoryNeed:
+        """Its particles (``n_particles``)."""
+        return MemoryNeed.particles(self.n_particles)
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.model.belief import ParticleCloud
-from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
 from cistrack.errors import IODError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
@@ -187,6 +187,10 @@ class GaussIOD(IODMethod):
         self.min_fit = check_int(self, "min_fit", min_fit, minimum=3)
         self.max_fit = check_int(self, "max_fit", max_fit, minimum=self.min_fit)
         self.mu = check_range(self, "mu", mu, 0.0, 0.5, lo_open=True)
+
+    def memory_need(self) -> MemoryNeed:
+        """The particles it returns plus one chunk of oversampled fits (``n_particles``)."""
+        return MemoryNeed.particles(self.n_particles, IOD_CHUNK_BYTES)
 
     def estimate(self, measurements: MeasurementSet, sensor: Sensor,
                  rng: np.random.Generator) -> ParticleCloud:

@@ -70,7 +70,7 @@ from typing import Iterator
 import numpy as np
 
 from cistrack.model.belief import ParticleCloud
-from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
 from cistrack.errors import IODError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, RangePrior, Sensor
@@ -152,6 +152,10 @@ class KinematicFitIOD(IODMethod):
         self.range_sampling = check_choice(self, "range_sampling", range_sampling, RANGE_SAMPLING)
 
     # -- sampling -------------------------------------------------------------------------------
+    def memory_need(self) -> MemoryNeed:
+        """The particles it returns plus one chunk of oversampled fits (``n_particles``)."""
+        return MemoryNeed.particles(self.n_particles, IOD_CHUNK_BYTES)
+
     def _label_name(self) -> str:
         return type(self).registry_name or self.range_model
 
