@@ -1,7 +1,8 @@
 """The per-step results table: one function builds a step's row, one observer collects rows.
 
-:func:`step_row` is the only place a row is built: the results writer (``steps.parquet``), the
-in-memory :attr:`cistrack.runs.pipeline.RunResult.rows` and the run summary all use it.
+:func:`step_row` is the only place a row is built, and :func:`row_of` builds it once per step:
+the results writer (``steps.parquet``), the in-memory :attr:`cistrack.runs.pipeline.RunResult.rows`
+and the run summary all hold the same dict.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces.filter import diagnostic_column
 
-__all__ = ["step_row", "RowCollector"]
+__all__ = ["step_row", "row_of", "RowCollector"]
 
 
 def step_row(run, step) -> dict[str, Any]:
@@ -35,6 +36,15 @@ def step_row(run, step) -> dict[str, Any]:
     return row
 
 
+def row_of(run, step) -> dict[str, Any]:
+    """The step's row, built on the first call and kept on the step: every observer that writes
+    rows (the in-memory collector, the results writer) hands on the same dict. A step's row is
+    asked for only once its metrics, diagnostics and timings are final (in the step hooks)."""
+    if step.row is None:
+        step.row = step_row(run, step)
+    return step.row
+
+
 def is_table_step(hook: str, step) -> bool:
     """Whether the event ``hook`` of ``step`` is a row of the table: every update (posterior),
     the initial cloud and prediction-only steps (not the prior of an update)."""
@@ -51,7 +61,7 @@ class RowCollector:
         self.keep_steps = keep_steps
 
     def _add(self, run, step) -> None:
-        self.rows.append(step_row(run, step))
+        self.rows.append(row_of(run, step))
         if self.keep_steps:
             self.steps.append(step)
 

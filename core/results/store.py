@@ -33,9 +33,9 @@ import pyarrow.parquet as pq
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
-from cistrack.results.step_table import is_table_step, step_row
+from cistrack.results.step_table import is_table_step, row_of
 
-__all__ = ["ResultsWriter", "read_steps", "read_manifest", "write_json_atomic", "versions"]
+__all__ = ["ResultsWriter", "read_steps", "read_manifest", "results_line", "write_json_atomic", "versions"]
 
 MANIFEST = "manifest.json"
 STEPS = "steps.parquet"
@@ -144,14 +144,14 @@ class ResultsWriter:
             self._write_part(run, step)
 
     def _write_part(self, run, step) -> None:
-        self._parts.add(step.index, step_row(run, step))
+        self._parts.add(step.index, row_of(run, step))
 
     @property
     def n_parts(self) -> int:
         """Part files written so far in this run."""
         return self._parts.n_parts
 
-    @hookimpl
+    @hookimpl(trylast=True)  # after every other observer: it records their failures in the manifest
     def cistrack_run_finished(self, run, summary) -> None:
         """Write the waiting rows, merge the parts into steps.parquet and record the status. If
         writing fails (a full disk) the parts written stay (``read_steps`` reads them), the

@@ -296,26 +296,28 @@ def _angles(m):
 
 
 def _finish(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:
-    """Call every observer's ``cistrack_run_finished``, each on its own, results writers last, so
-    that one failing observer (a recorder, a full disk) never keeps the completed steps from
-    being merged; an observer's failure turns a finished run into "failed" with the reason."""
-    from cistrack.results.store import ResultsWriter
-
-    impls = pm.hook.cistrack_run_finished.get_hookimpls()
-    writers = [i for i in impls if isinstance(i.plugin, ResultsWriter)]
-    errors = []
-    for impl in [i for i in impls if i not in writers] + writers:
-        if impl in writers and errors:
+    """Call every observer's ``cistrack_run_finished``, each on its own and in pluggy's order
+    (results writers declare ``trylast``, so they come last), so that one failing observer (a
+    recorder, a full disk) never keeps the completed steps from being merged; an observer's
+    failure turns a finished run into "failed" with the reason, and every later observer is handed
+    that summary."""
+    errors: list[str] = []
+    told = 0  # errors already in the summary
+    for impl in reversed(pm.hook.cistrack_run_finished.get_hookimpls()):  # pluggy's call order
+        if len(errors) > told:
             summary = dataclasses.replace(
                 summary, status="failed" if summary.status == "finished" else summary.status,
-                failure="; ".join(([summary.failure] if summary.failure else []) + errors))
+                failure="; ".join(([summary.failure] if summary.failure else []) + errors[told:]))
+            told = len(errors)
         try:
             args = {"run": ctx, "summary": summary}
             impl.function(*[args[a] for a in impl.argnames])
         except Exception as exc:
             errors.append(f"{impl.plugin_name}: {type(exc).__name__}: {exc}")
-    if errors and summary.status == "finished":
-        summary = dataclasses.replace(summary, status="failed", failure="; ".join(errors))
+    if len(errors) > told:  # the last observers failed: say so in the summary returned
+        summary = dataclasses.replace(
+            summary, status="failed" if summary.status == "finished" else summary.status,
+            failure="; ".join(([summary.failure] if summary.failure else []) + errors[told:]))
     return summary
 
 

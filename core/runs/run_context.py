@@ -89,6 +89,7 @@ class Step:
                                  cistrack_step_updated
     diagnostics : dict           the filter's diagnostics after this step
     timings : dict               stage -> seconds (propagation, update, metrics)
+    row : dict or None           its results-table row, once an observer asked for it
     """
 
     index: int
@@ -102,3 +103,5 @@ class Step:
     metrics: dict[str, float] = field(default_factory=dict)
     diagnostics: dict[str, float] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
+    row: dict[str, Any] | None = field(default=None, repr=False, compare=False)
+    """Its results-table row, built once by :func:`cistrack.results.step_table.row_of`."""
