@@ -36,7 +36,7 @@ Angles rad (RA in [0, 2pi), azimuth North through East in [0, 2pi)), ranges km.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import erfa
 import numpy as np
@@ -80,10 +80,6 @@ class SkyCorrections:
         order = ("ut1", "polar_motion", "light_time", "annual_aberration", "diurnal_aberration",
                  "refraction")
         return [n for n in order if getattr(self, n)]
-
-    def as_dict(self) -> dict:
-        """All switches and weather values (for manifests)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
 def astrometric_vector(r_km: np.ndarray, v_kms: np.ndarray, obs: ObserverState,

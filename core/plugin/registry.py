@@ -14,7 +14,7 @@ import os
 import traceback
 from dataclasses import dataclass
 from importlib import metadata
-from typing import Any, Iterable
+from typing import Any
 
 import pluggy
 
@@ -209,8 +209,3 @@ def default_registry() -> Registry:
     if _DEFAULT is None:
         _DEFAULT = load_registry()
     return _DEFAULT
-
-
-def iter_registrations(registry: Registry, kinds: Iterable[str] = KINDS):
-    for kind in kinds:
-        yield from registry.entries(kind)

@@ -136,13 +136,6 @@ class Estimates:
     def __len__(self) -> int:
         return int(self.step.shape[0])
 
-    def select(self, mask) -> "Estimates":
-        idx = np.arange(len(self))[mask]
-        return Estimates(self.step[idx], self.kind[idx], self.t_tu[idx], self.utc[idx], self.mean_km[idx],
-                         self.covariance_km[idx], [self.weights[i] for i in idx],
-                         [self.means_km[i] for i in idx], [self.covariances_km[i] for i in idx],
-                         None if self.nis is None else self.nis[idx], None if self.nis_dof is None else self.nis_dof[idx])
-
 
 def read_estimates(directory: str | Path) -> Estimates:
     """The estimates of a run directory (``estimates.parquet``, or the parts of a killed run)."""

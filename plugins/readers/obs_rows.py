@@ -79,9 +79,3 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
                           {"source": str(path), "epoch": format_utc(epoch), **(meta or {})},
                           sites=np.array([r.site for r in rows]), kinds=np.array([r.kind for r in rows]),
                           site_table={k: v for k, v in site_table.items() if k in used})
-
-
-def utc_rows_of(measurements: MeasurementSet, epoch: datetime) -> list[datetime]:
-    """UTC of every measurement, rounded to the microsecond."""
-    from cistrack.units import tu_to_utc
-    return [tu_to_utc(epoch, t) for t in measurements.times]

@@ -109,3 +109,15 @@ def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n):
     out = np.empty((n, m))
     _whitened_logpdf(x, means, linv, const, logw, out)
     assert np.array_equal(out, _per_point_logpdf(x, means, linv, const, logw))
+
+
+def test_position_marginal_of_a_mixture_has_the_position_blocks_and_the_closed_form_density():
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=(2, 6, 6))
+    covs = np.einsum("kij,klj->kil", a, a) + 0.1 * np.eye(6)
+    gm = GaussianMixture(np.array([0.3, 0.7]), rng.normal(size=(2, 6)), covs)
+    pos = gm.marginal(slice(0, 3))
+    x = rng.normal(size=(5, 3))
+    expected = np.log(sum(w * multivariate_normal(m[:3], c[:3, :3]).pdf(x)
+                          for w, m, c in zip(gm.weights, gm.means, gm.covariances)))
+    np.testing.assert_allclose(pos.logpdf(x), expected, rtol=1e-12)
