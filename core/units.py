@@ -4,7 +4,7 @@ States are nondimensional and synodic (barycentric, rotating) inside cistrack; e
 person reads or writes is in km, km/s, days and UTC. These helpers are the one place where the
 two meet.
 
-Constants (../shared/REFERENCE.md): LU = 384,400 km, TU = 375,149 s (4.342 d), VU = LU/TU.
+Constants (the Earth-Moon CR3BP units used throughout): LU = 384,400 km, TU = 375,149 s (4.342 d), VU = LU/TU.
 """
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ its massive bodies are through :attr:`cistrack.interfaces.Dynamics.primaries`; c
 "where is the Earth" asks ``dynamics.primary("Earth")`` and "what is the mass ratio"
 :func:`mass_ratio`, never a model attribute such as ``mu``.
 
-Constants (../shared/REFERENCE.md):
+Constants of the Earth-Moon system used throughout:
 
 - ``MU_EARTH_MOON`` = 1.2150582e-2: m_Moon / (m_Earth + m_Moon) of the synodic frame;
 - ``EARTH_RADIUS_KM`` = 6378.137 (WGS-84 equatorial), ``MOON_RADIUS_KM`` = 1737.4 (IAU mean).

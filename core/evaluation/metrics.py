@@ -1,4 +1,4 @@
-"""Per-step metrics, in the terms of ../shared/REFERENCE.md.
+"""Per-step metrics of a belief against the truth: errors, per-axis sigmas, NEES, entropy, truth likelihood.
 
 Person-facing units: positions km, velocities km/s (errors in m/s, sigmas in cm/s), densities of
 the state in km and km/s (entropy and log-likelihood in nats of that density).

@@ -24,7 +24,7 @@ __all__ = [
 FIXTURE_SEED = 20240917
 
 NRHO_9_2_APOLUNE = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
-"""Approximate 9:2 L2 southern NRHO state at apolune (REFERENCE.md), LU and VU."""
+"""Approximate 9:2 L2 southern NRHO state at apolune (published approximate initial condition), LU and VU."""
 
 MEASUREMENT_INTERVAL_TU = float(hours_to_tu(40.0 / 60.0))
 """Interval between simulated measurements: 40 minutes, in TU."""

@@ -2,7 +2,7 @@
 
 Every periodic state below was produced by :func:`.corrector.correct_symmetric_orbit` (x0 held
 fixed at the published value, rtol 1e-13, residual |vx|, |vz| < 1e-13 VU at the half-period
-crossing) from the approximate initial conditions in the project's REFERENCE.md, for
+crossing) from approximate published initial conditions, for
 mu = 1.2150582e-2; the literals are full precision so that they close after one period to
 ~1e-12 LU. Checked properties (tight-tolerance integration over one period):
 
