@@ -69,7 +69,7 @@ class ParamSpec:
 
 def param_specs(cls: type) -> dict[str, ParamSpec]:
     """Parameters of ``cls.__init__`` (keyword parameters after ``self``), in order."""
-    init = cls.__init__
+    init: Any = getattr(cls, "__init__")  # the class's own or inherited constructor (not bound)
     if init is object.__init__:
         return {}
     try:

@@ -99,6 +99,10 @@ class FilterBase(Filter):
     """
 
     default_name: ClassVar[str] = "filter"
+    _t: float
+    """The filter's current time, TU (set by ``initialize``)."""
+    _diag: dict[str, float]
+    """This step's diagnostics (set by ``initialize`` and each step)."""
 
     def _who(self) -> str:
         return self.registry_name or self.default_name

@@ -135,8 +135,9 @@ def _check_same_time_rows(times: np.ndarray, sites: np.ndarray | None) -> None:
         i = int(same[0])
         raise MeasurementError(f"measurement times must increase strictly without sites; row {i + 1} is "
                                f"at the same time as row {i}")
-    for i in same:  # rows i and i + 1 share a time: every row of that time needs its own site
-        j = int(i)
+    for k in same:  # rows k and k + 1 share a time: every row of that time needs its own site
+        i = int(k)
+        j = i
         while j > 0 and times[j - 1] == times[i]:
             j -= 1
         if sites[i + 1] in sites[j:i + 1]:

@@ -150,7 +150,7 @@ def _hand_on(table: Any, names: tuple[str, ...], out: dict, specs: dict, ann: An
         return table
     nested = {"name": table} if isinstance(table, str) else dict(table)
     try:
-        factory = reg.get(kind, nested.get("name")).factory
+        factory = reg.get(kind, str(nested.get("name"))).factory
     except (UnknownComponentError, TypeError):
         return table  # an unknown name: _coerce reports it
     takes = param_specs(factory) if isinstance(factory, type) else {}
