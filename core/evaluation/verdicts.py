@@ -85,9 +85,27 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
     rule : thresholds (see :class:`~cistrack.evaluation.custody.CustodyRule`)
     has_truth : whether the run had a truth
     earth_distance_km : distance of the last mean from Earth (km), if known
+
+    Times: a run that keeps custody (tracking, not-converged) has no step or time; a run that
+    was lost and then diverged keeps the step and time at which the custody rule first fired;
+    otherwise the step and time are where the verdict's condition was found.
     """
     if verdict.kind == "filter-failed":
         return verdict
+    final = _final_verdict(verdict, rows, rule, has_truth, earth_distance_km)
+    if final.kept:  # custody kept: no loss time (the verdict was judged on the last update)
+        return Verdict(final.kind, final.reason)
+    if verdict.kind == "lost" and verdict.step is not None and final.kind == "diverged" \
+            and (final.step is None or verdict.step <= final.step):
+        # lost first, then diverged: the loss time stays the time the custody rule fired
+        return Verdict("diverged", f"{final.reason} (custody lost first at step {verdict.step}, "
+                       f"t = {verdict.t_days:.3f} d: {verdict.reason})", verdict.step, verdict.t_days)
+    return final
+
+
+def _final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRule, has_truth: bool,
+                   earth_distance_km: float | None) -> Verdict:
+    """:func:`final_verdict` before the loss time is settled."""
     last = _last_update(rows)
     step, t_days = last.get("step"), last.get("t_days")
     at = (int(step) if step is not None else None, float(t_days) if t_days is not None else None)
