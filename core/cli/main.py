@@ -19,7 +19,7 @@ from pathlib import Path
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
-from cistrack.scenario.limits import check_seed
+from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
@@ -174,6 +174,15 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
     return 0
 
 
+def _port_option(text: str) -> int:
+    """``--port``: a TCP port number, decimal digits only, from 1 to 65535 (argparse prints the
+    error naming the option)."""
+    if not (text.isascii() and text.isdigit()) or not PORT_MIN <= int(text) <= PORT_MAX:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port: give an integer from {PORT_MIN} "
+                                         f"to {PORT_MAX} (default 9090)")
+    return int(text)
+
+
 def cmd_view(args) -> int:
     """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
     import time
@@ -182,7 +191,7 @@ def cmd_view(args) -> int:
 
     # the recorder that wrote the file serves it (core never imports a plugin)
     recorder = default_registry().get("recorder", "rerun").factory
-    served = recorder.serve_file(args.recording, web_port=args.port)
+    served = recorder.serve_file(args.recording, web_port=args.port, option="--port")
     print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
     print("serving until you press Ctrl-C", flush=True)
     try:
@@ -246,7 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.set_defaults(func=cmd_export)
     v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
     v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")
-    v.add_argument("--port", type=int, default=9090, help="web viewer port on 127.0.0.1 (default 9090)")
+    v.add_argument("--port", type=_port_option, default=9090,
+                   help="web viewer port on 127.0.0.1, 1 to 65535, not in use (default 9090)")
     v.set_defaults(func=cmd_view)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)

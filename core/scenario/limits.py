@@ -1,4 +1,4 @@
-"""Shared rules for user-facing values: seeds, names that become paths, and memory needs.
+"""Shared rules for user-facing values: seeds, names that become paths, ports, and memory needs.
 
 The same rule applies whether a value comes from a scenario or study file or from a command-line
 flag; each check raises :class:`~cistrack.errors.ConfigError` naming where the value came from
@@ -13,11 +13,15 @@ from typing import Any
 
 from cistrack.errors import ConfigError
 
-__all__ = ["SEED_MAX", "check_seed", "check_path_component", "check_count", "available_memory_bytes",
-           "check_memory", "format_bytes"]
+__all__ = ["SEED_MAX", "PORT_MIN", "PORT_MAX", "check_seed", "check_path_component", "check_count",
+           "check_port", "available_memory_bytes", "check_memory", "format_bytes"]
 
 SEED_MAX = 2 ** 63 - 1
 """Largest seed: seeds are stored as signed 64-bit integers (manifests, step tables)."""
+
+PORT_MIN, PORT_MAX = 1, 65535
+"""TCP port numbers a server may be asked to listen on (0 means "any free port" to the operating
+system, so it is never a port the user can be sent to)."""
 
 
 def check_seed(value: Any, where: str) -> int:
@@ -38,6 +42,21 @@ def check_count(value: Any, where: str, minimum: int = 1, maximum: int | None = 
         raise ConfigError(f"{where}: {value} is out of range: allowed {minimum} to "
                           f"{maximum if maximum is not None else 'any larger integer'}")
     return int(value)
+
+
+def check_port(value: Any, where: str) -> int:
+    """``value`` as a TCP port to listen on: an integer in [1, 65535]."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ConfigError(f"{where}: port {value!r} must be an integer from {PORT_MIN} to {PORT_MAX}")
+    if not PORT_MIN <= value <= PORT_MAX:
+        raise ConfigError(f"{where}: port {value} is out of range: allowed {PORT_MIN} to {PORT_MAX}")
+    return int(value)
+
+
+_UNPRINTABLE = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
+"""Unicode categories refused in names: control, format (bidirectional overrides and isolates,
+zero-width characters), surrogate, private-use and unassigned characters, line and paragraph
+separators. They would make a folder name that reads differently from what it is."""
 
 
 def check_path_component(value: Any, where: str) -> str:

@@ -212,12 +212,13 @@ class RerunRecorder(Component):
 
     # -- lifecycle hooks --------------------------------------------------------------------------
     @staticmethod
-    def serve_file(path: str, web_port: int = 9090):
+    def serve_file(path: str, web_port: int = 9090, option: str = "--port"):
         """Serve a recording and the web viewer on 127.0.0.1 (see :mod:`.web_viewer`); the
-        returned object's ``url`` loads it, ``close()`` stops serving."""
+        returned object's ``url`` loads it, ``close()`` stops serving. ``option`` names what chose
+        ``web_port`` in errors (out of range, in use)."""
         from .web_viewer import serve_recording
 
-        return serve_recording(path, web_port=web_port)
+        return serve_recording(path, web_port=web_port, option=option)
 
     @hookimpl
     def cistrack_run_started(self, run) -> None:

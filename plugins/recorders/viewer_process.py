@@ -1,5 +1,5 @@
 """The rerun viewer as a separate process: finding its executable, checking for a display,
-starting it on 127.0.0.1 and waiting until it listens."""
+starting it on 127.0.0.1 and waiting until it (not another process) listens."""
 from __future__ import annotations
 
 import importlib.util
@@ -13,11 +13,10 @@ from pathlib import Path
 
 from cistrack.errors import CistrackError
 
+from .ports import LOOPBACK, listened_by
+
 __all__ = ["LOOPBACK", "ViewerUnavailableError", "find_viewer_executable", "check_viewer", "start_viewer",
            "wait_for_port"]
-
-LOOPBACK = "127.0.0.1"
-"""The only address the recorder's servers and viewers listen on."""
 
 
 class ViewerUnavailableError(CistrackError, RuntimeError):
@@ -43,14 +42,20 @@ def _has_display() -> bool:
 
 
 def wait_for_port(port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
+    """True once ``proc`` listens on 127.0.0.1:``port``; False if it exits or ``timeout_s`` passes.
+
+    A connection that another process answers does not count (where the system tells the
+    listener's process: :func:`.ports.listened_by`): a viewer that cannot bind a busy port exits,
+    and this returns False instead of sending the user to the other process."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if proc.poll() is not None:
             return False
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
             s.settimeout(0.2)
-            if s.connect_ex((LOOPBACK, port)) == 0:
-                return True
+            answered = s.connect_ex((LOOPBACK, port)) == 0
+        if answered and listened_by(port, proc.pid) is not False:
+            return True
         time.sleep(0.05)
     return False
 

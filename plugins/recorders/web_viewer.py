@@ -1,24 +1,29 @@
 """Open a recording in a browser: the rerun web viewer plus the .rrd served on 127.0.0.1.
 
-``cistrack view FILE.rrd`` (and the slow browser test) use :func:`serve_recording`: a small HTTP
-server sends the file (with a CORS header, so the viewer's page may fetch it), ``rerun
---serve-web`` hosts the web viewer, and the URL ``http://127.0.0.1:<web port>/?url=<file URL>``
-opens the viewer with the recording loaded (the plain viewer address opens its welcome page).
-Both servers listen on 127.0.0.1 only.
+``cistrack view FILE.rrd`` (and the slow browser test) use :func:`serve_recording`: a
+:class:`~.recording_server.RecordingServer` serves that one file (and nothing else) to the viewer's
+page, ``rerun --serve-web`` hosts the web viewer, and the URL
+``http://127.0.0.1:<web port>/?url=<file URL>`` opens the viewer with the recording loaded (the plain
+viewer address opens its welcome page). Both servers listen on 127.0.0.1 only.
+
+The web port is checked before anything starts (an integer from 1 to 65535, not in use by another
+process), and the URL is returned only once the viewer we started is the process listening on it,
+so it never opens another process's viewer.
 """
 from __future__ import annotations
 
-import functools
 import subprocess
-import threading
+import tempfile
 from dataclasses import dataclass, field
-from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import quote
 
 from cistrack.errors import CistrackError
+from cistrack.scenario.limits import check_port
 
-from .viewer_process import LOOPBACK, ViewerUnavailableError, find_viewer_executable
+from .ports import LOOPBACK, PortInUseError, ensure_port_free, in_use_message
+from .recording_server import RecordingServer
+from .viewer_process import ViewerUnavailableError, find_viewer_executable
 from .viewer_process import wait_for_port as _wait_for_port
 
 __all__ = ["ServedRecording", "serve_recording", "viewer_url"]
@@ -29,17 +34,6 @@ def viewer_url(web_port: int, file_url: str) -> str:
     return f"http://{LOOPBACK}:{web_port}/?url={quote(file_url, safe='')}"
 
 
-class _OneFileHandler(SimpleHTTPRequestHandler):
-    """Serves the files of one directory, read-only, with CORS for the viewer's page."""
-
-    def end_headers(self) -> None:
-        self.send_header("Access-Control-Allow-Origin", "*")
-        super().end_headers()
-
-    def log_message(self, *args) -> None:  # quiet: the command prints the URL, not every request
-        pass
-
-
 @dataclass
 class ServedRecording:
     """A recording being served; :meth:`close` stops both servers."""
@@ -47,18 +41,18 @@ class ServedRecording:
     url: str
     file_url: str
     web_port: int
-    _http: ThreadingHTTPServer = field(repr=False)
+    _http: RecordingServer = field(repr=False)
     _viewer: subprocess.Popen = field(repr=False)
 
     def close(self) -> None:
-        self._http.shutdown()
-        self._http.server_close()
+        self._http.close()
         if self._viewer.poll() is None:
             self._viewer.terminate()
             try:
                 self._viewer.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 self._viewer.kill()
+                self._viewer.wait()
 
     def __enter__(self) -> "ServedRecording":
         return self
@@ -67,29 +61,44 @@ class ServedRecording:
         self.close()
 
 
-def serve_recording(path: str | Path, web_port: int = 9090, timeout_s: float = 30.0) -> ServedRecording:
-    """Serve ``path`` (an .rrd file) and the rerun web viewer on 127.0.0.1; returns the URL to open."""
-    rrd = Path(path).resolve()
+def _stop(viewer: subprocess.Popen) -> None:
+    if viewer.poll() is None:
+        viewer.kill()
+    viewer.wait()
+
+
+def serve_recording(path: str | Path, web_port: int = 9090, timeout_s: float = 30.0,
+                    option: str = "--port") -> ServedRecording:
+    """Serve ``path`` (an .rrd file) and the rerun web viewer on 127.0.0.1; returns the URL to open.
+
+    ``option`` names what chose ``web_port`` in errors: a port outside 1-65535 is a
+    :class:`~cistrack.errors.ConfigError`, one held by another process a
+    :class:`~.ports.PortInUseError`, both raised before anything starts."""
+    rrd = Path(path)
     if not rrd.is_file():
-        raise CistrackError(f"recording not found: {path}")
+        raise CistrackError(f"recording not found: {path}" if not rrd.exists()
+                            else f"{path}: not a file; expected a rerun recording (.rrd)")
+    rrd = rrd.resolve()
     if rrd.suffix != ".rrd":
         raise CistrackError(f"{path}: expected a rerun recording (.rrd)")
+    web_port = check_port(web_port, option)
+    ensure_port_free(web_port, option)
     exe = find_viewer_executable()
     if exe is None:
         raise ViewerUnavailableError("the rerun viewer is not installed (it ships with rerun-sdk: "
                                      "pip install rerun-sdk); cannot host the web viewer")
-    handler = functools.partial(_OneFileHandler, directory=str(rrd.parent))
-    http = ThreadingHTTPServer((LOOPBACK, 0), handler)
-    threading.Thread(target=http.serve_forever, name="cistrack-rrd-http", daemon=True).start()
-    file_url = f"http://{LOOPBACK}:{http.server_address[1]}/{quote(rrd.name)}"
-    viewer = subprocess.Popen([exe, "--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(web_port),
-                               file_url], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE)
-    if not _wait_for_port(web_port, viewer, timeout_s):
-        err = viewer.stderr.read().decode(errors="replace").strip()[-800:] if viewer.poll() is not None else ""
-        viewer.kill()
-        http.shutdown()
-        http.server_close()
-        raise ViewerUnavailableError(f"the rerun web viewer did not start on {LOOPBACK}:{web_port}"
-                                     + (f": {err}" if err else ""))
-    return ServedRecording(viewer_url(web_port, file_url), file_url, web_port, http, viewer)
+    http = RecordingServer(rrd, viewer_origin=f"http://{LOOPBACK}:{web_port}").start()
+    # the viewer's log goes to a file: a pipe nobody reads would block it once full
+    with tempfile.TemporaryFile() as log:
+        viewer = subprocess.Popen([exe, "--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(web_port),
+                                   http.url], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log)
+        if _wait_for_port(web_port, viewer, timeout_s):
+            return ServedRecording(viewer_url(web_port, http.url), http.url, web_port, http, viewer)
+        _stop(viewer)
+        http.close()
+        log.seek(0)
+        err = log.read().decode(errors="replace").strip()[-800:]
+    if "address already in use" in err.lower() or "os error 98" in err.lower():
+        raise PortInUseError(in_use_message(web_port, option))
+    raise ViewerUnavailableError(f"the rerun web viewer did not start on {LOOPBACK}:{web_port}"
+                                 + (f": {err}" if err else ""))
