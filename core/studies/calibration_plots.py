@@ -4,7 +4,7 @@ For a consistent belief the probability mass of the highest-density region whose
 through the truth is uniform on [0, 1] across runs: a pile-up near 1 means an overconfident
 filter (truth in the tails), near 0 an underconfident one. One figure per (scenario, IOD) overlays
 the filters' histograms (10 bins over [0, 1], counts of runs) with the count a uniform level would
-give; the legend states each filter's Kolmogorov-Smirnov statistic and p-value against uniform
+give, as side-by-side bars (whole counts on the axis); the legend states each filter's Kolmogorov-Smirnov statistic and p-value against uniform
 (:func:`cistrack.studies.calibration.uniformity_ks`). Written as ``<scenario>__<iod>__hdr`` PNG, SVG, PDF.
 """
 from __future__ import annotations
@@ -33,6 +33,7 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     from cistrack.studies.report_plots import save_figure
 
@@ -45,13 +46,16 @@ def plot_hdr_histograms(groups: dict[tuple[str, str, str], list[dict[str, Any]]]
     files: list[Path] = []
     for (sc, iod), filters in sorted(by_case.items()):
         fig, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
+        width = (edges[1] - edges[0]) / (len(filters) + 1)  # side by side within each bin, a gap between bins
         for ci, (flt, lv) in enumerate(sorted(filters.items())):
             r = rows.get((sc, iod, flt), {})
             d, p = r.get("hdr_ks"), r.get("hdr_ks_p")
             ks = f"KS D = {d:.2f}, p = {p:.2g}" if d is not None and p is not None else "KS -"
-            ax.hist(lv, bins=edges, histtype="step", lw=1.8, color=f"C{ci}",
-                    label=f"{flt}: {lv.size} runs, {ks}")
+            counts, _ = np.histogram(lv, bins=edges)
+            ax.bar(edges[:-1] + (ci + 0.5) * width + 0.5 * width, counts, width=width, color=f"C{ci}",
+                   label=f"{flt}: {lv.size} runs, {ks}")
             ax.axhline(lv.size / HDR_BINS, color=f"C{ci}", lw=0.9, ls="--")
+        ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))  # counts of runs
         ax.plot([], [], color="0.3", lw=0.9, ls="--", label="uniform (a calibrated filter): runs / bins")
         ax.set_xlim(0.0, 1.0)
         ax.set_xlabel("truth's final highest-density level (0 = at the mode, 1 = far in the tails)")

@@ -3,11 +3,16 @@
 One figure per (scenario, IOD) compares the filters of a study on four panels sharing the time
 axis (days since the epoch): position error (km, log), 1-sigma position (root-sum-square of the
 per-axis sigmas, km, log), NEES with the chi-square 5-95 % band of a consistent filter (6
-degrees of freedom), and differential entropy (nats, symmetric-log axis, so that one filter
-collapsing to very negative entropy does not flatten the others). Each seed's series is held
-constant between its steps and sampled on a common grid; the line is the median over seeds,
-the band the 5th to 95th percentile. Ticks at the bottom mark the measurement times of the
-first seed, triangles at the top each run's custody loss. Written as PNG, SVG and PDF.
+degrees of freedom) and its median as the reference line, and differential entropy (nats). Each
+seed's series is held constant between its steps and sampled on a common grid; the line is the
+median over seeds, the band the 5th to 95th percentile. Ticks at the bottom mark the measurement
+times of the first seed, triangles at the top each run's custody loss (the time the custody rule
+fired). Written as PNG, SVG and PDF.
+
+A filter that diverged or failed in most of its runs never sets the axes: the limits come from the
+other filters, and it is drawn as a thin dashed median (no band), clipped at the edge, its legend
+entry saying so. (In filter-comparison the bootstrap SIR's collapse, NEES ~1e38 and sigma ~1e-9 km,
+otherwise squashed every working filter into a line.)
 """
 from __future__ import annotations
 
@@ -16,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "plot_study", "save_figure", "FORMATS"]
+__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "nees_median", "plot_study", "save_figure",
+           "FORMATS"]
 
 CHI2_DOF = 6
 FORMATS = ("png", "svg", "pdf")
@@ -24,9 +30,11 @@ PANELS: tuple[tuple[str, str, str], ...] = (
     ("pos_err_km", "position error (km)", "log"),
     ("sigma_pos_km", "1-sigma position, RSS of axes (km)", "log"),
     ("nees", "NEES", "log"),
-    ("entropy", "entropy (nats)", "symlog"),
+    ("entropy", "entropy (nats)", "linear"),
 )
 _GRID = 600
+_OFF_SCALE_KINDS = ("diverged", "filter-failed", "failed")
+"""Verdict kinds of a run that does not set a figure's axes."""
 
 
 def _column(table: Any, name: str) -> np.ndarray | None:
@@ -79,6 +87,14 @@ def nees_band(dof: int = CHI2_DOF, level: float = 0.90) -> tuple[float, float]:
     return float(chi2.ppf(a, dof)), float(chi2.ppf(1.0 - a, dof))
 
 
+def nees_median(dof: int = CHI2_DOF) -> float:
+    """The median of a chi-square variable with ``dof`` degrees of freedom (5.35 for 6): the
+    reference for the plotted medians of NEES."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(0.5, dof))
+
+
 def _series(tables: list, key: str) -> list[tuple[np.ndarray, np.ndarray]]:
     out = []
     for t in tables:
@@ -113,6 +129,34 @@ def save_figure(fig: Any, stem: Path) -> list[Path]:
     return files
 
 
+def _off_scale(summaries: list[dict[str, Any]]) -> tuple[bool, int]:
+    """Whether a filter's runs mostly diverged or failed (then it does not set the axes), and how many did."""
+    bad = sum(1 for x in summaries
+              if ((x.get("verdict") or {}).get("kind") in _OFF_SCALE_KINDS or x.get("status") not in (None, "finished")))
+    return bool(summaries) and 2 * bad > len(summaries), bad
+
+
+def _limits(values: list[np.ndarray], scale: str, extra: tuple[float, ...] = ()) -> tuple[float, float] | None:
+    """Axis limits holding every finite value (positive ones on a log axis), with a margin."""
+    v = np.concatenate([np.ravel(x) for x in values] + [np.asarray(extra, dtype=float)]) if values or extra else np.zeros(0)
+    v = v[np.isfinite(v)]
+    if scale == "log":
+        v = v[v > 0]
+    if v.size == 0:
+        return None
+    lo, hi = float(v.min()), float(v.max())
+    if scale == "log":
+        return lo / 2.0, hi * 2.0
+    pad = 0.06 * (hi - lo) if hi > lo else max(1.0, abs(hi) * 0.1)
+    return lo - pad, hi + pad
+
+
+def _wrapped_title(text: str, width: int = 78) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width)) or text
+
+
 def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path,
                study_name: str = "") -> list[Path]:
     """Write the figures; ``groups[(scenario, iod, filter)]`` holds ``tables`` (per-seed step
@@ -139,17 +183,27 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
         fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 2.0 + 2.125 * len(panels)), sharex=True, squeeze=False)
         axes = list(axes[:, 0])
         n_seeds = []
+        shown: dict[str, list[np.ndarray]] = {key: [] for key, _, _ in panels}  # what sets each axis
+        thin = len(filters) > 3  # several filters: lighter bands, so they stay legible
+        late: list[tuple[Any, str, np.ndarray, dict[str, Any]]] = []  # off-scale medians
         for ci, (flt, g) in enumerate(sorted(filters.items())):
             color = f"C{ci}"
             n_seeds.append(len(g["tables"]))
+            off, n_bad = _off_scale(g["summaries"])
             for ax, (key, _, _) in zip(axes, panels):
                 series = _series(g["tables"], key)
                 if not series:
                     continue
                 p5, p50, p95 = band_over_seeds(series, grid)
-                ax.fill_between(grid, p5, p95, color=color, alpha=0.18, lw=0, step="post")
+                if off:  # drawn once the axes are set, clipped, never setting them
+                    late.append((ax, key, p50, dict(color=color, lw=1.0, ls="--", drawstyle="steps-post",
+                                                    label=f"{flt}: diverged {n_bad} of {len(g['summaries'])} "
+                                                          "runs, median (clipped)")))
+                    continue
+                shown[key] += [p5, p50, p95]
+                ax.fill_between(grid, p5, p95, color=color, alpha=0.10 if thin else 0.18, lw=0, step="post")
                 ax.plot(grid, p50, color=color, lw=1.6, drawstyle="steps-post",
-                        label=f"{flt}: median of {len(series)} seeds, band 5-95 %")
+                        label=f"{flt}: median of {len(series)} seed{'s' if len(series) != 1 else ''}, band 5-95 %")
             lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
             lost = [x for x in lost if x is not None]
             for ax in axes:
@@ -169,19 +223,28 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
         if nees_ax is not None:
             nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,
                             label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
-            nees_ax.axhline(CHI2_DOF, color="0.4", lw=0.8, ls="--")
-        for ax, (_, label, scale) in zip(axes, panels):
+            nees_ax.axhline(nees_median(), color="0.4", lw=0.8, ls="--",
+                            label=f"chi-square({CHI2_DOF}) median {nees_median():.2f} (beside the plotted medians)")
+        if not any(shown[k] for k in shown):  # every filter diverged: then they set the axes after all
+            for flt, g in filters.items():
+                for key, _, _ in panels:
+                    shown[key] += [band_over_seeds(sr, grid)[1] for sr in [_series(g["tables"], key)] if sr]
+        for ax, (key, label, scale) in zip(axes, panels):
             ax.set_ylabel(label)
-            if scale == "symlog":
-                ax.set_yscale("symlog", linthresh=1.0)
-            else:
-                ax.set_yscale(scale)
-            if ax is nees_ax or scale == "symlog":  # plain numbers (6, 20, -10), not 2 x 10^1
+            ax.set_yscale(scale)
+            lim = _limits(shown[key], scale, (lo_chi, hi_chi) if ax is nees_ax else ())
+            if lim is not None:
+                ax.set_ylim(*lim)
+            if ax is nees_ax:  # plain numbers (6, 20), not 2 x 10^1
                 ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
                 ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-            if ax is nees_ax:
                 ax.yaxis.set_major_locator(_nees_locator(*ax.get_ylim()))
+            elif scale == "linear":
+                ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=6))
             ax.grid(True, which="major", alpha=0.3)
+        for ax, key, y, style in late:  # off-scale medians: only where inside the axes (no jumps across)
+            lo, hi = ax.get_ylim()
+            ax.plot(grid, np.where((y >= lo) & (y <= hi), y, np.nan), **style)
         axes[-1].set_xlabel("time since epoch (days)")
         handles, labels = [], []
         for ax in axes:
@@ -191,7 +254,8 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
                     labels.append(lab)
         fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
         names = " vs ".join(sorted(filters))
-        fig.suptitle(f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else ""))
+        fig.suptitle(_wrapped_title(f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else "")),
+                     fontsize=11)
         fig.tight_layout(rect=(0, 0.015 + 0.016 * ((len(labels) + 1) // 2), 1, 0.98))
         files.extend(save_figure(fig, rep_dir / f"{sc}__{iod}"))
     return files

@@ -59,3 +59,29 @@ def test_the_nees_axis_keeps_its_tick_labels_when_a_diverged_filter_spans_ten_de
                                                 "summaries": [{"custody_kept": False, "custody_lost_t_days": 1.2}] * 3}}
     svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
     assert "1e+06" in svg and "1e+08" in svg  # decade ticks of the NEES panel (none were drawn before)
+
+
+def _collapsed(seed: int) -> pa.Table:
+    """A bootstrap particle filter's collapse: sigma 1e-9 km, NEES 1e38, entropy -1e8."""
+    t = _table(seed, True)
+    for name, values in (("nees", np.full(9, 1e38)), ("sigma_pos_km", np.full(9, 1e-9)), ("entropy", np.full(9, -1e8))):
+        t = t.set_column(t.column_names.index(name), name, pa.array(values))
+    return t
+
+
+def test_a_diverged_filter_never_sets_the_axes_and_is_named_off_scale(tmp_path):
+    diverged = {"custody_kept": False, "custody_lost_t_days": 0.3, "verdict": {"kind": "diverged"}}
+    groups = {("quick", "noisy-range", "pgm"): {"tables": [_table(s, False) for s in (1, 2, 3)],
+                                                "summaries": [{"custody_kept": True, "verdict": {"kind": "tracking"}}] * 3},
+              ("quick", "noisy-range", "sir"): {"tables": [_collapsed(s) for s in (1, 2, 3)], "summaries": [diverged] * 3}}
+    svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
+    assert "sir: diverged 3 of 3 runs, median (clipped)" in svg
+    for tick in ("1e+36", "1e+30", "1e+20", "-1e+08", "10^{-9}"):  # the collapse's scale on no axis
+        assert f">{tick}<" not in svg
+
+
+def test_the_nees_reference_line_is_the_chi_square_median_beside_the_plotted_medians(tmp_path):
+    groups = {("quick", "noisy-range", "pgm"): {"tables": [_table(s, False) for s in (1, 2, 3)],
+                                                "summaries": [{"custody_kept": True}] * 3}}
+    svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
+    assert "chi-square(6) median 5.35" in svg
