@@ -15,7 +15,7 @@ __all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines"]
 
 FINAL_KEYS: tuple[str, ...] = (
     "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
-    "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level")
+    "pos_err_km", "vel_err_ms", "nees", "entropy", "truth_loglik", "hdr_level", "bound_pos_km")
 """Metrics reported for the last update and at the end of each pass."""
 
 

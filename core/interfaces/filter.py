@@ -78,6 +78,12 @@ class Filter(Component):
     def belief(self) -> Belief:
         """The current density as a Gaussian mixture plus samples."""
 
+    def process_noise(self, t0: float, t1: float) -> np.ndarray | None:
+        """The covariance (6, 6, nondimensional) this filter adds to its belief when predicting
+        from ``t0`` to ``t1`` (TU), or None when it adds none (the default). The information bound
+        (:mod:`cistrack.evaluation.information_bound`) adds the same."""
+        return None
+
     @property
     def diagnostics(self) -> dict[str, float]:
         """Per-step numbers worth recording, as floats by key; the keys of :class:`Diagnostics`

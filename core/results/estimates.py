@@ -78,12 +78,12 @@ class EstimateWriter:
         if (self.directory / ESTIMATES).exists():
             (self.directory / ESTIMATES).unlink()
 
-    @hookimpl
+    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
     def cistrack_step_predicted(self, run, step) -> None:
         if step.kind in ("predict", "initial"):
             self._write(step)
 
-    @hookimpl
+    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
     def cistrack_step_updated(self, run, step) -> None:
         # the NIS under the prior, put into the step's metrics by cistrack.evaluation.residuals.ResidualObserver
         self._write(step, float(step.metrics.get("nis", float("nan"))), int(step.metrics.get("nis_dof", 0)))

@@ -134,11 +134,11 @@ class ResultsWriter:
             (self.directory / "scenario.json").write_text(json.dumps(scen.raw, indent=2, default=str))
         write_json_atomic(self.directory / MANIFEST, self._manifest)
 
-    @hookimpl
+    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
     def cistrack_step_updated(self, run, step) -> None:
         self._write_part(run, step)
 
-    @hookimpl
+    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
     def cistrack_step_predicted(self, run, step) -> None:
         if is_table_step("predicted", step):  # a prediction-only step is a row of its own
             self._write_part(run, step)

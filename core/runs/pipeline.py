@@ -32,6 +32,7 @@ from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.run_context import RunContext, Step
 from cistrack.runs.run_id import scenario_run_id
+from cistrack.evaluation.information_bound import InformationBoundObserver
 from cistrack.evaluation.residuals import ResidualObserver
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
@@ -221,7 +222,7 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     out = Path(output_dir) if output_dir is not None else None
     custody = CustodyObserver(scenario.custody)
     collector = RowCollector(keep_steps=keep_steps)
-    obs: list[Any] = [custody, ResidualObserver(), collector]
+    obs: list[Any] = [custody, ResidualObserver(), InformationBoundObserver(), collector]
     if out is not None:
         from cistrack.results.estimates import EstimateWriter
         from cistrack.results.part_files import ROWS_PER_PART

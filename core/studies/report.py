@@ -18,6 +18,7 @@ import numpy as np
 from cistrack.studies.calibration import LEVEL, group_calibration
 from cistrack.errors import ConfigError
 from cistrack.results.store import read_manifest, read_steps
+from cistrack.studies.efficiency import efficiency_text, group_efficiency
 from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
 from cistrack.evaluation.run_summary import RunSummary
 from cistrack.studies.study import plan_runs
@@ -36,7 +37,7 @@ def _count_column(kind: str) -> str:
     return kind.replace("-", "_") + "_runs"
 
 """The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
-_TRUTH_COLUMNS = {"custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
+_TRUTH_COLUMNS = {"bound_pos_km", "efficiency_final", "efficiency_by_pass", "custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
                   "anees_every_update", "anees_every_update_n", "custody_ci_lo", "custody_ci_hi", "final_anees",
                   "final_anees_runs", "final_anees_lo", "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p",
                   "hdr_runs", "hdr_above_099", "diverged_runs", "pos_err_km", "vel_err_ms"}
@@ -187,7 +188,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
               "pos_err_km", "vel_err_ms", "entropy"]
     cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
             "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
-            "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY]
+            "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY,
+            "bound_pos_km", "efficiency_final", "efficiency_by_pass"]
     cols[cols.index("verdicts") + 1:cols.index("verdicts") + 1] = [_count_column(k) for k in counted
                                                                   if _count_column(k) not in cols]
     if not study_has_truth:  # no truth anywhere: the CSV names no custody, NEES or HDR column
@@ -211,6 +213,10 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
         row.update(_calibration_columns(sums))
         row.update(_consistency_columns(sums, tables[(sc, iod, flt)]))
+        eff = group_efficiency(sums)
+        row.update({"bound_pos_km": eff.bound_km, "efficiency_final": eff.final,
+                    "efficiency_by_pass": " ".join(f"{p}:{r:.4g}" for p, r in eff.by_pass.items()) or None,
+                    "efficiency_text": efficiency_text(eff)})
         rows.append(row)
     with open(rep_dir / "summary.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
@@ -275,7 +281,13 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                "cislunar space.")
     diverged = ["", f"## {flagged_title} (verdict and reason; every run in runs.csv)", "", *(flagged or ["None."]),
                 "", explain]
-    md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, "", *custody, *diverged])
+    efficiency = (["", "## Efficiency against the information bound", "",
+                   "RMS position error across runs / RMS of the posterior Cramer-Rao bound along the truth "
+                   "(1 = the best the data allow; cistrack.evaluation.information_bound):", "",
+                   *[f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: {r['efficiency_text']}" for r in rows]]
+                  if has_truth else [])
+    md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, *efficiency, "", *custody,
+                         *diverged])
     (rep_dir / "summary.md").write_text(md_text + "\n")
     files.append(rep_dir / "summary.md")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
@@ -287,6 +299,9 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                      + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):" if has_truth
                         else "Measurement consistency (95 %; no truth, so no calibration):"]
                      + [f"- {_calibration_line(r)}" for r in rows]
+                     + (["", "Efficiency (RMS position error / RMS information bound; 1 = the best the data allow):"]
+                        + [f"- {r['filter']} / {r['iod']} / {r['scenario']}: {r['efficiency_text']}" for r in rows]
+                        if has_truth else [])
                      + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
                      + (flagged or ["None."]))
     from cistrack.studies.report_plots import plot_study

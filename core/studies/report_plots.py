@@ -7,7 +7,9 @@ degrees of freedom) and its median as the reference line, and differential entro
 seed's series is held constant between its steps and sampled on a common grid; the line is the
 median over seeds, the band the 5th to 95th percentile. Ticks at the bottom mark the measurement
 times of the first seed, triangles at the top each run's custody loss (the time the custody rule
-fired). Written as PNG, SVG and PDF.
+fired), and a dotted black line the information bound's RMS position sigma
+(:mod:`cistrack.evaluation.information_bound`) in the error and sigma panels. Written as PNG, SVG
+and PDF.
 
 A filter that diverged or failed in most of its runs never sets the axes: the limits come from the
 other filters, and it is drawn as a thin dashed median (no band), clipped at the edge, its legend
@@ -219,6 +221,14 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
                             transform=ax.get_xaxis_transform(), clip_on=False,
                             label="measurement times (first seed)" if ax is axes[0] else None)
         keys = [k for k, _, _ in panels]
+        bound = [sr for g in filters.values() for sr in [_series(g["tables"], "bound_pos_km")] if sr]
+        if bound:  # the information bound along the truth: the same for every filter from one IOD
+            b50 = band_over_seeds(bound[0], grid)[1]
+            for key in ("pos_err_km", "sigma_pos_km"):
+                if key in keys:
+                    axes[keys.index(key)].plot(grid, b50, color="k", lw=1.2, ls=":", drawstyle="steps-post",
+                                               label="information bound (posterior CRB along the truth), median")
+                    shown[key].append(b50)
         nees_ax = axes[keys.index("nees")] if "nees" in keys else None   # no truth: no NEES (nor error)
         if nees_ax is not None:
             nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,

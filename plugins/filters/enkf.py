@@ -61,6 +61,12 @@ class EnKFFilter(FilterBase):
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
 
+    def process_noise(self, t0: float, t1: float) -> np.ndarray | None:
+        """The velocity random walk it adds between ``t0`` and ``t1`` (None when off)."""
+        if self.velocity_noise_kms_per_sqrt_day <= 0:
+            return None
+        return velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t1 - t0)
+
     def memory_need(self) -> MemoryNeed:
         """Its particles (``n_particles``)."""
         return MemoryNeed.particles(self.n_particles)

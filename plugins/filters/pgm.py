@@ -24,6 +24,7 @@ from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.model.measurement import Measurement
 
+from .process_noise import velocity_random_walk_covariance
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .ensemble_propagation import propagate_particles
@@ -167,6 +168,12 @@ class PGMFilter(FilterBase):
         self._x: np.ndarray | None = None
 
     # -- lifecycle --------------------------------------------------------------------------------
+    def process_noise(self, t0: float, t1: float) -> np.ndarray | None:
+        """The velocity random walk it adds between ``t0`` and ``t1`` (None when off)."""
+        if self.velocity_noise_kms_per_sqrt_day <= 0:
+            return None
+        return velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t1 - t0)
+
     def memory_need(self) -> MemoryNeed:
         """Its particles (``n_particles``)."""
         return MemoryNeed.particles(self.n_particles)
