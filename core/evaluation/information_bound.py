@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from cistrack.interfaces.transition_matrix import stm_by_central_differences
 from cistrack.model.belief import sample_covariance
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.units import LU_KM, VU_KMS
@@ -124,10 +125,10 @@ class InformationBoundObserver:
         start = self._x if self._x is not None else None
         if start is None:  # the first step after the IOD epoch: the truth at the IOD epoch
             start = x
-            _, stm = self._dynamics.propagate_with_stm(x, t, [self._t])
+            _, stm = stm_by_central_differences(self._dynamics, x, t, [self._t])
             f = np.linalg.inv(stm[-1])  # from the IOD epoch to t
         else:
-            _, stm = self._dynamics.propagate_with_stm(start, self._t, [t])
+            _, stm = stm_by_central_differences(self._dynamics, start, self._t, [t])
             f = stm[-1]
         q = None
         declare = getattr(self._filter, "process_noise", None)

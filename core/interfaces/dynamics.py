@@ -113,3 +113,19 @@ class Dynamics(Component):
 
         ``times`` must be monotonic in one direction from ``t0`` (all later, or all earlier).
         """
+
+    def propagate_with_stm(self, state: np.ndarray, t0: float, times) -> tuple[np.ndarray, np.ndarray]:
+        """One ``state`` (6,) and its state transition matrix from ``t0`` to each of ``times``.
+
+        Optional. Returns ``(states (K, 6), stms (K, 6, 6))`` with ``stms[k] = d states[k] / d state``
+        (synodic LU, VU, times TU; ``times`` as for :meth:`propagate`: (K,) or scalar, monotonic
+        in one direction from ``t0``). Used by the batch least-squares fit (:mod:`cistrack.fit`).
+        The default differences :meth:`propagate` centrally
+        (:func:`cistrack.interfaces.transition_matrix.stm_by_central_differences`); models with
+        variational equations override it. Raises :class:`cistrack.errors.StateError` for
+        malformed input and :class:`cistrack.errors.PropagationError` when the trajectory hits a
+        body.
+        """
+        from cistrack.interfaces.transition_matrix import stm_by_central_differences
+
+        return stm_by_central_differences(self, state, t0, times)

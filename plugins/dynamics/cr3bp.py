@@ -99,6 +99,18 @@ class CR3BP(CompiledDynamics):
         (the impact bodies are those with a positive radius)."""
         return earth_moon_primaries(self.mu, self.earth_radius_km, self.moon_radius_km)
 
+    def propagate_with_stm(self, state: np.ndarray, t0: float, times) -> tuple[np.ndarray, np.ndarray]:
+        """State (6,) and state transition matrix from ``t0`` to ``times`` (K,) TU -> (states
+        (K, 6), stms (K, 6, 6)): the variational equations (:mod:`.cr3bp_variational`)
+        integrated with the state by the compiled DOP853
+        (:func:`cistrack.propagation.variational.propagate_variational`) at the model's
+        tolerances. Raises ``PropagationError`` when the trajectory hits a body."""
+        from cistrack.propagation.variational import propagate_variational
+
+        from .cr3bp_variational import cr3bp_variational_rhs
+
+        return propagate_variational(self, cr3bp_variational_rhs, state, t0, times)
+
     def jacobi(self, states: np.ndarray) -> np.ndarray:
         """Jacobi constant of states (N, 6) [LU, VU] -> (N,) [VU^2]."""
         return jacobi_constant(self._check_states(states), self.mu)

@@ -253,6 +253,15 @@ class EphemerisDynamics(CompiledDynamics):
         prop.states = out
         return prop
 
+    def propagate_with_stm(self, state: np.ndarray, t0: float, times) -> tuple[np.ndarray, np.ndarray]:
+        """Synodic ``state`` (6,) and its state transition matrix from ``t0`` to ``times`` (K,) TU
+        -> (states (K, 6), stms (K, 6, 6)) in the real rotating frame: the variational equations
+        integrated in GCRS by the compiled DOP853 (:func:`.ephemeris_variational.synodic_stm`).
+        Raises ``PropagationError`` when the trajectory hits a body."""
+        from .ephemeris_variational import synodic_stm  # compiles numba code: first use only
+
+        return synodic_stm(self, state, t0, times)
+
     def dense_trajectory(self, state: np.ndarray, t0: float, t1: float, *,
                          rtol: float | None = None, atol: float | None = None):
         """As :meth:`cistrack.propagation.CompiledDynamics.dense_trajectory` for a synodic

@@ -163,8 +163,8 @@ _REPLACED_MODULES = {"cistrack.results": "cistrack.results.store", "cistrack.sce
 @pytest.mark.parametrize("path", _sources(CORE) + _sources(PLUGINS) + _sources(ROOT / "tests") + _sources(ROOT / "benchmarks"),
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_project_code_uses_no_deprecated_import_path(path):
-    if path.name in ("test_moved_modules.py", "_moved.py"):
-        return
+    if path.name in ("test_moved_modules.py", "_moved.py") or "plugin_packages" in path.parts:
+        return  # the alias table, its test, and the plugin package written against the old paths on purpose
     used = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         names = []

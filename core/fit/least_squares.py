@@ -1,0 +1,329 @@
+"""Batch least-squares differential correction of an orbit over an arc of measurements.
+
+Unknown: the state x (6,) at the epoch t0 (synodic LU, VU). With r_i = O - C the residual of
+observation i (angles wrapped), W = diag(1/sigma^2) and H_i = (d h / d x)(x(t_i)) Phi(t_i, t0) the
+measurement Jacobian chained with the state transition matrix, each iteration solves the damped
+normal equations
+
+    (N + lambda diag N) dx = g,   N = sum_i H_i^T W H_i + P0^-1,   g = sum_i H_i^T W r_i + P0^-1 (x0 - x)
+
+(Levenberg-Marquardt; lambda -> 0 is Gauss-Newton; P0, x0 an optional prior) and accepts the step
+when the cost sum_i r_i^T W r_i + (x - x0)^T P0^-1 (x - x0) decreases. Convergence: the
+Gauss-Newton step is below ``step_tolerance`` sigma, or an accepted step changes the weighted RMS
+by less than ``rms_tolerance``. Outliers are rejected and readmitted between passes
+(:mod:`cistrack.fit.outliers`). The covariance is N^-1 at the estimate.
+
+Residuals are computed from the dynamics' ``propagate`` (the same propagation that simulates
+measurements), Jacobians from its ``propagate_with_stm``; an approximate STM only slows the
+convergence, the fixed point is the least-squares solution of the model ``propagate`` defines.
+"""
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from cistrack.errors import MeasurementError, PropagationError, StateError
+from cistrack.fit.errors import FitError, UnobservableWarning
+from cistrack.fit.measurement_model import MeasurementModel
+from cistrack.fit.observability import observability
+from cistrack.fit.options import FitOptions
+from cistrack.fit.outliers import update_rejections
+from cistrack.fit.residual_table import residual_table
+from cistrack.fit.result import FitResult
+from cistrack.fit.trajectory import arc_states, arc_states_and_stms
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.interfaces.sensor import Sensor
+from cistrack.model.measurement import MeasurementSet
+
+__all__ = ["fit_orbit"]
+
+
+def _check_state(state: Any, name: str) -> np.ndarray:
+    try:
+        x = np.asarray(state, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise StateError(f"fit: {name} must be 6 numbers (LU, VU): {exc}") from None
+    if x.shape != (6,):
+        raise StateError(f"fit: {name} must have shape (6,) (synodic LU, VU), got {np.shape(state)}")
+    if not np.all(np.isfinite(x)):
+        raise StateError(f"fit: {name} contains NaN or infinity: {x}")
+    return x
+
+
+def _check_prior(prior: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    if prior is None:
+        return None
+    try:
+        mean, cov = prior
+    except (TypeError, ValueError):
+        raise StateError("fit: prior must be a pair (mean (6,), covariance (6, 6)) in LU, VU") from None
+    mean = _check_state(mean, "the prior mean")
+    cov = np.asarray(cov, dtype=float)
+    if cov.shape != (6, 6) or not np.all(np.isfinite(cov)):
+        raise StateError(f"fit: the prior covariance must be a finite (6, 6) matrix, got shape {cov.shape}")
+    if not np.allclose(cov, cov.T, rtol=1e-10, atol=0.0):
+        raise StateError("fit: the prior covariance is not symmetric")
+    try:
+        np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        raise StateError("fit: the prior covariance is not positive definite") from None
+    return mean, np.linalg.inv(cov)
+
+
+class _Problem:
+    """Residuals, cost and normal equations of one fit."""
+
+    def __init__(self, dynamics: Dynamics, model: MeasurementModel, t0: float,
+                 prior: tuple[np.ndarray, np.ndarray] | None) -> None:
+        self.dynamics, self.model, self.t0, self.prior = dynamics, model, t0, prior
+
+    def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(weighted residuals (K, m), states (K, 6)) at the epoch state x."""
+        states = arc_states(self.dynamics, x, self.t0, self.model.times)
+        return self.model.residuals(states) / self.model.sigmas, states
+
+    def cost(self, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> float:
+        c = float(np.sum(w[used] ** 2))
+        if self.prior is not None:
+            e = x - self.prior[0]
+            c += float(e @ self.prior[1] @ e)
+        return c
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """Weighted d r / d x0 (K, m, 6): H(x(t_i)) Phi(t_i, t0) / sigma."""
+        states, stms = arc_states_and_stms(self.dynamics, x, self.t0, self.model.times)
+        h = self.model.jacobian(states)
+        return np.einsum("kmj,kjl->kml", h, stms) / self.model.sigmas[:, :, None]
+
+    def normal(self, a: np.ndarray, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Normal matrix (6, 6) and right-hand side (6,) over the used rows."""
+        au = a[used].reshape(-1, 6)
+        n = au.T @ au
+        g = au.T @ w[used].reshape(-1)
+        if self.prior is not None:
+            n = n + self.prior[1]
+            g = g + self.prior[1] @ (self.prior[0] - x)
+        return 0.5 * (n + n.T), g
+
+
+def _diagonal_scale(n: np.ndarray) -> np.ndarray:
+    """sqrt(diag N), with 1 where a coordinate has no information (diagonal <= 0)."""
+    diag = np.diag(n)
+    return np.where(diag > 0, np.sqrt(np.abs(diag)), 1.0)
+
+
+def _solve(n: np.ndarray, g: np.ndarray, lam: float) -> np.ndarray:
+    """(N + lam diag N)^-1 g, in unit-diagonal scaling; raises LinAlgError when singular."""
+    d = _diagonal_scale(n)
+    ns = n / np.outer(d, d) + lam * np.eye(6)
+    return np.linalg.solve(ns, g / d) / d
+
+
+def _step_size(n: np.ndarray, dx: np.ndarray) -> float:
+    return float(np.sqrt(max(dx @ n @ dx, 0.0)))
+
+
+def _one_pass(prob: _Problem, x: np.ndarray, used: np.ndarray, opts: FitOptions,
+              say: list[str]) -> tuple[np.ndarray, int, bool]:
+    """Levenberg-Marquardt with a fixed set of used rows: (state, iterations, converged)."""
+    w, _ = prob.evaluate(x)
+    cost = prob.cost(w, x, used)
+    a = prob.jacobian(x)
+    lam = opts.damping
+    its = 0
+    small_change = False  # the last accepted step changed the weighted RMS by < rms_tolerance
+    while its < opts.max_iterations:
+        n, g = prob.normal(a, w, x, used)
+        try:
+            gn = _solve(n, g, 0.0)
+            gn_size = _step_size(n, gn)
+        except np.linalg.LinAlgError:
+            gn, gn_size = None, np.inf
+        if gn is not None and (gn_size < opts.step_tolerance or small_change):
+            its += 1
+            try:  # the last Gauss-Newton step: take it when it does not raise the cost
+                w_new, _ = prob.evaluate(x + gn)
+                if prob.cost(w_new, x + gn, used) <= cost:
+                    x = x + gn
+            except (PropagationError, MeasurementError):
+                pass
+            return x, its, True
+        accepted = False
+        while not accepted:
+            try:
+                dx = _solve(n, g, lam)
+            except np.linalg.LinAlgError:
+                dx = None
+            its += 1
+            new_cost = np.inf
+            if dx is not None and np.all(np.isfinite(dx)):
+                try:
+                    w_new, _ = prob.evaluate(x + dx)
+                    new_cost = prob.cost(w_new, x + dx, used)
+                except (PropagationError, MeasurementError):
+                    new_cost = np.inf
+            if new_cost < cost:
+                accepted = True
+                rel = (cost - new_cost) / max(cost, 1e-300)
+                x, w, cost = x + dx, w_new, new_cost
+                lam_was = lam
+                lam = max(lam / opts.damping_factor, 1e-12)
+                small_change = lam_was <= opts.damping and 0.5 * rel < opts.rms_tolerance
+                a = prob.jacobian(x)
+            else:
+                lam *= opts.damping_factor
+                if lam > opts.max_damping or its >= opts.max_iterations:
+                    if lam > opts.max_damping:
+                        ok = gn_size < opts.stall_step
+                        say.append(f"the cost stopped decreasing with a Gauss-Newton step of {gn_size:.3g} sigma"
+                                   + (" (numerical floor: converged)" if ok else " (not converged)"))
+                        return x, its, ok
+                    break
+    say.append(f"no convergence within {opts.max_iterations} iterations")
+    return x, its, False
+
+
+def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state: Any, t0: float, *,
+              prior: tuple[Any, Any] | None = None, options: FitOptions | None = None) -> FitResult:
+    """Least-squares orbit from ``measurements``, starting at ``state`` (6,) at epoch ``t0``.
+
+    Parameters
+    ----------
+    dynamics : Dynamics
+        Propagates the orbit (its ``propagate_with_stm`` gives the transition matrices).
+    sensor : Sensor
+        The sensor (or site network) that took the measurements; predicts them.
+    measurements : MeasurementSet
+        Times TU since the scenario epoch, values rad (range LU), one-sigma noise per component.
+    state : (6,) float
+        Initial estimate at ``t0``: synodic LU, VU.
+    t0 : float
+        Epoch of the estimated state, TU (anywhere in or outside the arc).
+    prior : (mean (6,), covariance (6, 6)), optional
+        Gaussian prior on the state at ``t0`` (LU, VU), added to the normal equations.
+    options : FitOptions, optional
+
+    Returns
+    -------
+    FitResult. Raises :class:`cistrack.fit.FitError` when there are fewer measurement components
+    than unknowns (without a prior), when the normal matrix at the estimate is not positive
+    definite, or when the orbit cannot be propagated over the arc; :class:`cistrack.errors.StateError`
+    and :class:`cistrack.errors.MeasurementError` for malformed input. Warns
+    :class:`cistrack.fit.UnobservableWarning` when the condition number exceeds
+    ``options.max_condition`` or the weakest direction's one sigma ``options.max_weak_sigma_km``.
+    """
+    opts = FitOptions() if options is None else options
+    if not isinstance(opts, FitOptions):
+        raise StateError(f"fit: options must be a FitOptions, got {type(opts).__name__}")
+    x = _check_state(state, "the initial state")
+    try:
+        t0 = float(t0)
+    except (TypeError, ValueError):
+        raise StateError(f"fit: the epoch t0 must be a number (TU), got {t0!r}") from None
+    if not np.isfinite(t0):
+        raise StateError(f"fit: the epoch t0 must be finite, got {t0}")
+    pri = _check_prior(prior)
+    model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
+    k, m = len(measurements), model.m
+    if pri is None and k * m < 6:
+        raise FitError(f"fit: {k} observation(s) of {m} component(s) give {k * m} numbers for 6 unknowns; "
+                       "add observations or a prior")
+    prob = _Problem(dynamics, model, t0, pri)
+    say: list[str] = []
+    try:
+        prob.evaluate(x)
+    except PropagationError as exc:
+        raise FitError(f"fit: the initial state cannot be propagated over the arc: {exc}") from exc
+
+    rejected = np.zeros(k, dtype=bool)
+    threshold = float("inf")
+    iterations = 0
+    converged = False
+    seen: list[np.ndarray] = []
+    min_rows = 0 if pri is not None else int(np.ceil(6 / m))
+    for _ in range(opts.max_passes):
+        x, its, converged = _one_pass(prob, x, ~rejected, opts, say)
+        iterations += its
+        if not opts.reject_outliers:
+            break
+        w, _ = prob.evaluate(x)
+        new, threshold = update_rejections(np.sum(w ** 2, axis=1), m, rejected, opts.reject_sigma,
+                                           opts.robust_threshold, opts.max_reject_fraction)
+        if k - int(new.sum()) < min_rows:
+            say.append("rejection would leave fewer components than unknowns: the rejected set is kept")
+            break
+        if np.array_equal(new, rejected):
+            break
+        back = int(np.sum(rejected & ~new))
+        say.append(f"pass {len(seen) + 1}: {int(np.sum(new & ~rejected))} observation(s) rejected"
+                   + (f", {back} readmitted" if back else "") + f" (chi-square threshold {threshold:.4g})")
+        if any(np.array_equal(new, s) for s in seen):
+            say.append("the rejected set cycles between passes: stopped at the last one")
+            converged = False
+            rejected = new
+            x, its, _ = _one_pass(prob, x, ~rejected, opts, say)
+            iterations += its
+            break
+        seen.append(rejected.copy())
+        rejected = new
+    else:
+        converged = False
+        say.append(f"the rejected set did not settle within {opts.max_passes} passes")
+
+    used = ~rejected
+    try:
+        w, states = prob.evaluate(x)
+        a = prob.jacobian(x)
+    except PropagationError as exc:
+        raise FitError(f"fit: the estimate cannot be propagated over the arc: {exc}") from exc
+    n, _ = prob.normal(a, w, x, used)
+    obs = observability(n)
+    try:
+        d = _diagonal_scale(n)
+        cov = np.linalg.inv(np.linalg.cholesky(n / np.outer(d, d)))
+        cov = (cov.T @ cov) / np.outer(d, d)
+    except (np.linalg.LinAlgError, FloatingPointError):
+        raise FitError(f"fit: the normal matrix is not positive definite (condition number "
+                       f"{obs.condition:.3g}); the arc does not determine the direction "
+                       f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s): "
+                       "add observations over a longer arc or a prior") from None
+    cov = 0.5 * (cov + cov.T)
+    if not np.all(np.isfinite(cov)):
+        raise FitError("fit: the covariance is not finite")
+    weak_km = float(np.linalg.norm(obs.weakest_direction_km[:3]))
+    unobservable = obs.condition > opts.max_condition or weak_km > opts.max_weak_sigma_km
+    if unobservable:
+        text = (f"the arc leaves a direction nearly unobservable: condition number {obs.condition:.3g} "
+                f"(limit {opts.max_condition:.3g}), one sigma along the weakest direction "
+                f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s), {weak_km:.4g} km in "
+                f"position (limit {opts.max_weak_sigma_km:.4g} km); observe over a longer arc or add a prior")
+        say.append(text)
+        warnings.warn(f"fit: {text}", UnobservableWarning, stacklevel=2)
+    resid = model.residuals(states)
+    table = residual_table(model.times, np.array([measurements.site_at(i) for i in range(k)]),
+                           np.array([measurements.kind_at(i) for i in range(k)]), model.names,
+                           model.values, resid, model.sigmas, rejected)
+    n_comp = int(used.sum()) * m
+    chi2 = float(np.sum(w[used] ** 2))
+    rms = float(np.sqrt(chi2 / n_comp)) if n_comp else float("inf")
+    if n_comp > 6:
+        noise_scale = float(np.sqrt(chi2 / (n_comp - 6)))
+    else:
+        noise_scale = float("nan")
+        say.append("no redundancy (as many components as unknowns): noise scale undefined")
+    if converged and rms > opts.max_rms:
+        converged = False
+        say.append(f"the orbit does not fit the observations: weighted RMS {rms:.4g} > {opts.max_rms:g} "
+                   "(a wrong local minimum from a poor start, or a wrong model or sensor); start closer "
+                   "to the truth or check the data")
+    if int(rejected.sum()):
+        say.append(f"{int(rejected.sum())} of {k} observations rejected (chi-square > {threshold:.4g})")
+    say.insert(0, ("converged" if converged else "NOT converged") + f" after {iterations} iterations; "
+               f"weighted RMS {rms:.4g}, noise scale {noise_scale:.4g}")
+    return FitResult(state=x, covariance=cov, epoch=t0, residuals=table, rms=rms, chi2=chi2,
+                     n_used=int(used.sum()), n_rejected=int(rejected.sum()), iterations=iterations,
+                     converged=bool(converged), condition_number=obs.condition,
+                     weakest_direction_km=obs.weakest_direction_km, noise_scale=noise_scale,
+                     rejection_threshold=threshold, unobservable=bool(unobservable), messages=tuple(say))

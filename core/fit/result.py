@@ -1,0 +1,78 @@
+"""The result of a least-squares orbit fit."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cistrack.fit.observability import to_km
+from cistrack.fit.residual_table import ResidualTable
+
+__all__ = ["FitResult"]
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """A fitted orbit, its covariance and its post-fit residuals.
+
+    Attributes
+    ----------
+    state : (6,) float            estimate at ``epoch``: synodic LU, VU
+    covariance : (6, 6) float     inverse of the normal matrix at the estimate (prior included), LU, VU
+    epoch : float                 TU since the measurements' epoch
+    residuals : ResidualTable     post-fit O - C of every observation, used or rejected
+    rms : float                   weighted RMS: sqrt(chi2 / number of used components) (1 if the
+                                  noise is as stated)
+    chi2 : float                  sum of squared normalised residuals of the used observations
+    n_used, n_rejected : int      observations (rows) used and rejected
+    iterations : int              Gauss-Newton / Levenberg-Marquardt iterations, all passes together
+    converged : bool              the iteration met its criteria and the rejected set settled
+    condition_number : float      of the unit-diagonal normal matrix (units do not matter)
+    weakest_direction_km : (6,) float  one-sigma displacement along the least determined
+                                  direction, km and km/s
+    noise_scale : float           sqrt(chi2 / (used components - 6)): the factor by which the
+                                  post-fit residuals say the stated noise is off (1: right)
+    rejection_threshold : float   chi-square above which an observation was rejected (inf: no rejection)
+    unobservable : bool           the condition number or the weakest direction's sigma exceeded
+                                  the fit's limits (a warning was given)
+    messages : tuple of str       what happened, in words (convergence, rejections, warnings)
+    """
+
+    state: np.ndarray
+    covariance: np.ndarray
+    epoch: float
+    residuals: ResidualTable
+    rms: float
+    chi2: float
+    n_used: int
+    n_rejected: int
+    iterations: int
+    converged: bool
+    condition_number: float
+    weakest_direction_km: np.ndarray
+    noise_scale: float
+    rejection_threshold: float = float("inf")
+    unobservable: bool = False
+    messages: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def state_km(self) -> np.ndarray:
+        """The estimate (6,) in km and km/s (synodic)."""
+        return to_km(self.state)
+
+    @property
+    def covariance_km(self) -> np.ndarray:
+        """The covariance (6, 6) in km^2, km^2/s, km^2/s^2."""
+        k = to_km(np.ones(6))
+        return self.covariance * np.outer(k, k)
+
+    @property
+    def sigmas_km(self) -> np.ndarray:
+        """One-sigma uncertainty of each coordinate (6,), km and km/s."""
+        return np.sqrt(np.diag(self.covariance_km))
+
+    def mahalanobis2(self, truth: np.ndarray) -> float:
+        """(truth - state)^T covariance^-1 (truth - state) for a true state (6,) [LU, VU] at the epoch
+        (chi-square with 6 degrees of freedom if the covariance is right)."""
+        e = np.asarray(truth, dtype=float).reshape(6) - self.state
+        return float(e @ np.linalg.solve(self.covariance, e))

@@ -1,0 +1,80 @@
+"""The fitted trajectory over an arc: states (and transition matrices) at measurement times.
+
+The fit's epoch ``t0`` may lie anywhere in the arc: times before it are propagated backward and
+times after it forward (the dynamics' ``propagate`` takes one direction per call); repeated
+times (several sites at once) are propagated once.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack.errors import PropagationError
+from cistrack.interfaces.dynamics import Dynamics
+
+__all__ = ["arc_states", "arc_states_and_stms"]
+
+
+def _sides(t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Distinct times, the index of each time among them, and the distinct times split into
+    (at t0, after t0 increasing, before t0 decreasing)."""
+    uniq, inv = np.unique(times, return_inverse=True)
+    return uniq, inv, [uniq[uniq == t0], uniq[uniq > t0], uniq[uniq < t0][::-1]]
+
+
+def _label(dynamics: Dynamics) -> str:
+    return getattr(dynamics, "_label", lambda: type(dynamics).__name__)()
+
+
+def arc_states(dynamics: Dynamics, state: np.ndarray, t0: float, times: np.ndarray) -> np.ndarray:
+    """States (K, 6) [LU, VU] of ``state`` (6,) at ``t0`` propagated to ``times`` (K,) TU.
+
+    Raises :class:`cistrack.errors.PropagationError` naming the body when the trajectory hits one.
+    """
+    uniq, inv, (at, after, before) = _sides(t0, times)
+    out = {}
+    x = np.asarray(state, dtype=float).reshape(1, 6)
+    for t in at:
+        out[float(t)] = x[0]
+    for side in (after, before):
+        if side.size == 0:
+            continue
+        prop = dynamics.propagate(x, t0, side)
+        if not bool(np.all(prop.alive)):
+            b = int(prop.impact_body[0])
+            bodies = dynamics.bodies
+            name = bodies[b].name if 0 <= b < len(bodies) else f"body {b}"
+            raise PropagationError(f"{_label(dynamics)}: the fitted trajectory hits the {name} at "
+                                   f"t={float(prop.impact_time[0]):.6g} TU, inside the arc "
+                                   f"[{times.min():.6g}, {times.max():.6g}] TU")
+        for k, t in enumerate(side):
+            out[float(t)] = prop.states[k, 0]
+    per_time = np.array([out[float(t)] for t in uniq])
+    return per_time[inv]
+
+
+def arc_states_and_stms(dynamics: Dynamics, state: np.ndarray, t0: float,
+                        times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """States (K, 6) and transition matrices (K, 6, 6) d x(t_k) / d x(t0) over ``times`` (K,) TU,
+    from the dynamics' ``propagate_with_stm`` (variational equations where the model has them)."""
+    uniq, inv, (at, after, before) = _sides(t0, times)
+    states = {}
+    stms = {}
+    x = np.asarray(state, dtype=float).reshape(6)
+    for t in at:
+        states[float(t)], stms[float(t)] = x, np.eye(6)
+    for side in (after, before):
+        if side.size == 0:
+            continue
+        s, phi = dynamics.propagate_with_stm(x, t0, side)
+        s, phi = np.asarray(s, dtype=float), np.asarray(phi, dtype=float)
+        if s.shape != (side.size, 6) or phi.shape != (side.size, 6, 6):
+            raise PropagationError(f"{_label(dynamics)}: propagate_with_stm returned shapes {s.shape} and "
+                                   f"{phi.shape} for {side.size} times; expected (K, 6) and (K, 6, 6)")
+        for k, t in enumerate(side):
+            states[float(t)], stms[float(t)] = s[k], phi[k]
+    st = np.array([states[float(t)] for t in uniq])
+    ph = np.array([stms[float(t)] for t in uniq])
+    if not (np.all(np.isfinite(st)) and np.all(np.isfinite(ph))):
+        raise PropagationError(f"{_label(dynamics)}: the state or its transition matrix is not finite "
+                               "over the arc")
+    return st[inv], ph[inv]

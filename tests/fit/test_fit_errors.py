@@ -1,0 +1,96 @@
+"""Malformed input and impossible fits are refused with errors naming what is wrong; an arc that
+leaves a direction unobservable gives a warning naming it."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack.errors import MeasurementError, ParameterError, StateError
+from cistrack.fit import FitError, FitOptions, UnobservableWarning, fit_orbit
+from cistrack.model.measurement import MeasurementSet
+
+from .arcs import GUESS_OFFSET, cr3bp_arc
+from .linear_components import FreeParticle, LinearSensor
+
+
+def test_fewer_components_than_unknowns_is_refused():
+    arc = cr3bp_arc()
+    with pytest.raises(FitError, match="4 numbers for 6 unknowns"):
+        fit_orbit(arc.dynamics, arc.sensor, arc.exact.subset(np.arange(2)), arc.truth0, 0.0)
+
+
+def test_a_state_of_the_wrong_shape_is_refused():
+    arc = cr3bp_arc()
+    with pytest.raises(StateError, match=r"shape \(6,\)"):
+        fit_orbit(arc.dynamics, arc.sensor, arc.exact, arc.truth0[:5], 0.0)
+
+
+def test_a_state_with_nan_is_refused():
+    arc = cr3bp_arc()
+    bad = arc.truth0.copy()
+    bad[2] = np.nan
+    with pytest.raises(StateError, match="NaN"):
+        fit_orbit(arc.dynamics, arc.sensor, arc.exact, bad, 0.0)
+
+
+def test_a_prior_covariance_that_is_not_positive_definite_is_refused():
+    arc = cr3bp_arc()
+    with pytest.raises(StateError, match="positive definite"):
+        fit_orbit(arc.dynamics, arc.sensor, arc.exact, arc.truth0, 0.0, prior=(arc.truth0, -np.eye(6)))
+
+
+def test_measurements_of_another_sensor_are_refused_naming_the_components():
+    arc = cr3bp_arc()
+    ms = MeasurementSet(arc.times, arc.exact.values, arc.exact.sigmas, ("right_ascension", "declination"))
+    with pytest.raises(MeasurementError, match="right_ascension"):
+        fit_orbit(arc.dynamics, arc.sensor, ms, arc.truth0, 0.0)
+
+
+def test_an_initial_state_inside_the_moon_is_refused_naming_the_moon():
+    arc = cr3bp_arc()
+    inside = np.array([1.0 - arc.dynamics.mu, 0.0, 0.001, 0.0, 0.0, 0.0])
+    with pytest.raises(FitError, match="Moon"):
+        fit_orbit(arc.dynamics, arc.sensor, arc.exact, inside, 0.0)
+
+
+def test_invalid_options_are_refused_naming_the_option():
+    with pytest.raises(ParameterError, match="max_iterations"):
+        FitOptions(max_iterations=0)
+
+
+def _degenerate_sensor(scale: float) -> LinearSensor:
+    sen = LinearSensor()
+    sen.matrix[:, 5] = scale * sen.matrix[:, 2]     # z and vz enter only in one combination
+    sen.matrix[:, 2] = 0.0
+    return sen
+
+
+def test_a_nearly_unobservable_direction_warns_and_is_reported_in_km():
+    times = np.linspace(-1.0, 1.0, 5)
+    sen = _degenerate_sensor(1.0)
+    sen.matrix[0, 2] = 1e-6                          # barely separates z from vz
+    ms = sen.simulate(np.zeros((5, 6)), times, np.random.default_rng(1))
+    ms = MeasurementSet(times, ms.values, ms.sigmas, ms.names)
+    with pytest.warns(UnobservableWarning, match="unobservable"):
+        res = fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0)
+    assert res.unobservable and res.condition_number > 1e7
+    w = res.weakest_direction_km
+    assert abs(w[2]) > 10 * np.max(np.abs(np.delete(w, [2, 5])))   # the z/vz direction
+
+
+def test_an_unobservable_direction_with_no_information_is_refused():
+    times = np.linspace(-1.0, 1.0, 5)
+    sen = _degenerate_sensor(0.0)                    # nothing depends on z or vz at all
+    ms = sen.simulate(np.zeros((5, 6)), times, np.random.default_rng(1))
+    with pytest.raises(FitError, match="not positive definite"):
+        fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0)
+
+
+def test_a_fit_settling_far_above_the_noise_is_reported_as_not_converged():
+    arc = cr3bp_arc()
+    ms = arc.noisy(1)
+    stated = MeasurementSet(ms.times, ms.values, ms.sigmas / 1000.0, ms.names)   # noise 1000x understated
+    res = fit_orbit(arc.dynamics, arc.sensor, stated, arc.truth0 + GUESS_OFFSET, 0.0,
+                    options=FitOptions(reject_outliers=False))
+    assert not res.converged and res.rms > 100.0
+    assert any("does not fit the observations" in m for m in res.messages)
