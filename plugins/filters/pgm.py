@@ -54,20 +54,12 @@ class PGMFilter(FilterBase):
     n_components : int or None
         Components M the clusterer is asked for; None lets the clusterer choose (e.g. "bic").
     clusterer : Clusterer or str
-        A clusterer instance or a registered clustering name. Default "kmeans" (the paper's).
-        With the ensemble update, k-means cells that cut an elongated first-pass cloud across
-        its long axis gave too-narrow posteriors (tests/filters/test_mixture_prior.py) and EM
-        ("gmm") was the better choice; with the iterated update, EM's small clusters (below)
-        lost custody late. On Example 1, uniform-range IOD, tuning seeds: EM + iterated lost 3
-        of seeds 1-20 (12, 17, 19); k-means + iterated kept those three and lost 1 of 21-31,
-        and runs ~30% faster. Issue 16's note has the table.
+        A clusterer instance or a registered clustering name. Default "kmeans" (the paper's);
+        "gmm" (EM) suits the "ensemble" update better. Why: docs/pgm-parameters.md.
     min_cluster_size : int or None
         Clusters with fewer particles are merged into the nearest cluster. None = the larger of
-        2 x dimension and 3% of ``n_particles`` (300 of 10,000). Why: the sample covariance of n
-        points in d = 6 dimensions underestimates its smallest eigenvalues by about
-        (1 - sqrt(d / n))^2 (0.09 at n = 12, 0.74 at n = 300), and a component that narrow makes
-        the mixture overconfident where it holds the truth; EM produced clusters of 4-99
-        particles on 13% of the updates of Example 1 (seed 11).
+        2 x dimension and 3% of ``n_particles`` (300 of 10,000): smaller clusters give
+        overconfident components.
     velocity_noise_kms_per_sqrt_day : float
         Optional process noise: velocity random walk, km/s after one day (0 = off).
     min_range_km, max_range_km, max_speed_kms : float or None
@@ -82,43 +74,34 @@ class PGMFilter(FilterBase):
         What reweights the components under the iterated update: "posterior" (the measurement
         likelihood with h linearised over the component's posterior) or "prior" (over its prior).
     split_components : int or None
-        Components the clusterer is asked for at a sharp measurement (model and measurements in
-        :mod:`.measurement_sharpness`); None or 0 = off (default). On Example 1 (tuning seeds
-        1000-1034) 24 components at ``split_ess`` 0.02 kept custody no more often than without
-        (30/34 uniform, 29/35 noisy against 31/35 and 31/35), and more, smaller k-means cells
-        need more shrinkage (``kept_spread``) on a linear-Gaussian problem.
+        Components the clusterer is asked for at a sharp measurement (see ``split_ess``); None
+        or 0 = off (default).
     split_ess : float
         A measurement is sharp when the effective sample size of the particles' likelihood
         weights is below this fraction of the particles (0.02: fewer than 200 of 10,000 lie
         within the noise of it).
     kept_spread : float
         Share lam^2 of the spread between the clustered components kept as spread of their means
-        at an update; the rest is added to every component's covariance (moment-preserving; model
-        and measurements in :mod:`.component_spread`). 1 = the plain partition (the paper's).
-        Default 0.7: on a linear-Gaussian problem (15 updates, 8 seeds) 1.0 / 0.85 / 0.7 gave mean
-        NEES 16.7 / 8.0 / 7.0 against 7.1 for the exact Kalman filter
-        (tests/filters/test_component_spread.py). Not applied while reacquiring
-        (``shrink_spread_sigma``).
+        at an update; the rest is added to every component's covariance (moment-preserving).
+        1 = the plain partition (the paper's); the default 0.7 is calibrated against the exact
+        Kalman filter. Not applied while reacquiring (``shrink_spread_sigma``).
     reacquire_factor : float
         Particles resampled from a posterior, times ``n_particles``, while the prior's predicted
         measurements spread wider than ``reacquire_spread_sigma`` noise sigmas (a cloud
-        reacquiring after a long gap; reacquisition_particles.py); 1 = off.
+        reacquiring after a long gap); 1 = off.
     reacquire_spread_sigma : float
         That spread threshold, in noise standard deviations.
     shrink_spread_sigma : float
         Components are shrunk (``kept_spread``) only while the prior's predicted measurements
         spread over at most this many noise standard deviations; above it the components are
-        separate hypotheses of a cloud reacquiring after a gap, not cells of one cloud. Default
-        1,000 (the reacquisition threshold). Example 3, seeds 3000-3029: 27/30 custody against
-        9/30 shrinking at every update (component_spread.py has the measurements).
+        separate hypotheses of a cloud reacquiring after a gap, not cells of one cloud.
     posterior_draw : str
         Where the posterior particles come from. "transform" (default): each cluster's own
         particles, mapped affinely onto its component's posterior, so the cloud keeps its
-        non-Gaussian shape (:mod:`.posterior_transform`); "gaussian" (the paper's): N draws from
-        the posterior mixture. While reacquiring (more particles drawn) or with state bounds the
-        draws are Gaussian either way. Example 1, noisy range: losses by day 2.1 on seen seeds
-        10000-10999, 5 against 12 with "gaussian"; custody on unseen seeds 11000-11499, 495 of
-        500 (EnKF 494), ANEES 5.90 (docs/calibration.md).
+        non-Gaussian shape; "gaussian" (the paper's): N draws from the posterior mixture. While
+        reacquiring (more particles drawn) or with state bounds the draws are Gaussian either way.
+
+    How the defaults were chosen, with the seeds and figures: docs/pgm-parameters.md.
     """
 
     _min_cluster_fraction = 0.03  # default minimum cluster size, as a fraction of n_particles
