@@ -11,6 +11,10 @@ fired), and a dotted black line the information bound's RMS position sigma
 (:mod:`cistrack.evaluation.information_bound`) in the error and sigma panels. Written as PNG, SVG
 and PDF.
 
+A gap without measurements longer than 10 days and a fifth of the span (Example 3's 150-day
+shutoff) is shrunk to a hatched band that names its length (:mod:`cistrack.studies.time_axis`),
+so the passes on both sides stay legible.
+
 A filter that diverged or failed in most of its runs never sets the axes: the limits come from the
 other filters, and it is drawn as a thin dashed median (no band), clipped at the edge, its legend
 entry saying so. (In filter-comparison the bootstrap SIR's collapse, NEES ~1e38 and sigma ~1e-9 km,
@@ -22,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from cistrack.studies.time_axis import GapAxis
 
 __all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "nees_median", "plot_study", "save_figure",
            "FORMATS"]
@@ -178,7 +184,12 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
         all_t = [x for g in filters.values() for t in g["tables"] for x in [_column(t, "t_days")] if x is not None and x.size]
         if not all_t:
             continue
-        grid = np.linspace(min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t), _GRID)
+        t_lo, t_hi = min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t)
+        days_all = np.unique(np.concatenate([_measurement_days(t) for g in filters.values() for t in g["tables"][:1]]
+                                            or [np.zeros(0)]))
+        tax = GapAxis.from_times(days_all, t_lo, t_hi)  # long gaps shrunk: the passes around them stay legible
+        grid = tax.inverse(np.linspace(float(tax.forward(t_lo)), float(tax.forward(t_hi)), _GRID))
+        xg = tax.forward(grid)
         panels = [p for p in PANELS if any(_series(g["tables"], p[0]) for g in filters.values())]
         if not panels:
             continue
@@ -203,21 +214,21 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
                                                           "runs, median (clipped)")))
                     continue
                 shown[key] += [p5, p50, p95]
-                ax.fill_between(grid, p5, p95, color=color, alpha=0.10 if thin else 0.18, lw=0, step="post")
-                ax.plot(grid, p50, color=color, lw=1.6, drawstyle="steps-post",
+                ax.fill_between(xg, p5, p95, color=color, alpha=0.10 if thin else 0.18, lw=0, step="post")
+                ax.plot(xg, p50, color=color, lw=1.6, drawstyle="steps-post",
                         label=f"{flt}: median of {len(series)} seed{'s' if len(series) != 1 else ''}, band 5-95 %")
             lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
             lost = [x for x in lost if x is not None]
             for ax in axes:
                 if lost:
-                    ax.plot(lost, [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
+                    ax.plot(tax.forward(np.asarray(lost)), [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
                             transform=ax.get_xaxis_transform(), clip_on=False,
                             label=f"{flt}: custody lost ({len(lost)} of {len(g['summaries'])} runs)")
             first = g["tables"][0] if g["tables"] else None
             if first is not None and ci == 0:
                 days = _measurement_days(first)
                 for ax in axes:
-                    ax.plot(days, np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
+                    ax.plot(tax.forward(days), np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
                             transform=ax.get_xaxis_transform(), clip_on=False,
                             label="measurement times (first seed)" if ax is axes[0] else None)
         keys = [k for k, _, _ in panels]
@@ -226,7 +237,7 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
             b50 = band_over_seeds(bound[0], grid)[1]
             for key in ("pos_err_km", "sigma_pos_km"):
                 if key in keys:
-                    axes[keys.index(key)].plot(grid, b50, color="k", lw=1.2, ls=":", drawstyle="steps-post",
+                    axes[keys.index(key)].plot(xg, b50, color="k", lw=1.2, ls=":", drawstyle="steps-post",
                                                label="information bound (posterior CRB along the truth), median")
                     shown[key].append(b50)
         nees_ax = axes[keys.index("nees")] if "nees" in keys else None   # no truth: no NEES (nor error)
@@ -254,8 +265,18 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
             ax.grid(True, which="major", alpha=0.3)
         for ax, key, y, style in late:  # off-scale medians: only where inside the axes (no jumps across)
             lo, hi = ax.get_ylim()
-            ax.plot(grid, np.where((y >= lo) & (y <= hi), y, np.nan), **style)
-        axes[-1].set_xlabel("time since epoch (days)")
+            ax.plot(xg, np.where((y >= lo) & (y <= hi), y, np.nan), **style)
+        axes[-1].set_xlabel("time since epoch (days)" + ("; gaps without measurements shrunk" if tax.shrinks else ""))
+        if tax.shrinks:
+            axes[-1].xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=10))
+            axes[-1].xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(
+                lambda v, _: f"{float(tax.inverse(np.asarray(v))):.4g}"))
+            for a, b in tax.gaps:
+                xa, xb = float(tax.forward(a)), float(tax.forward(b))
+                for ax in axes:
+                    ax.axvspan(xa, xb, facecolor="none", edgecolor="0.55", hatch="//", lw=0)
+                axes[0].text(0.5 * (xa + xb), 0.5, f"{b - a:.0f} d\nwithout\nmeasurements", ha="center",
+                             va="center", fontsize=7, color="0.3", transform=axes[0].get_xaxis_transform())
         handles, labels = [], []
         for ax in axes:
             for h, lab in zip(*ax.get_legend_handles_labels()):
