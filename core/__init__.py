@@ -5,8 +5,9 @@ registry, scenario files, runs, metrics and studies. Dynamics, sensors, schedule
 methods, clusterers, filters and recorders are plugins (``cistrack.plugins``), found through
 the entry-point group ``cistrack`` exactly like third-party ones.
 
-``cistrack.run(...)``, ``cistrack.read_run(...)`` and ``cistrack.load_scenario(...)`` run scenarios
-from Python; :mod:`cistrack.api` holds every public name (see docs/python-api.md).
+``cistrack.run(...)``, ``cistrack.read_run(...)``, ``cistrack.load_scenario(...)`` and
+``cistrack.study(...)`` run scenarios and studies from Python; :mod:`cistrack.api` holds every
+public name (see docs/python-api.md).
 """
 import sys as _sys
 import types as _types
@@ -28,7 +29,8 @@ _moved.install()  # old import paths of moved modules keep working, with a Depre
 # ``import cistrack`` (and with it ``cistrack --help``) does not pay for numpy and scipy.
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
-         "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api"}
+         "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
+         "study": "api", "StudyResult": "api"}
 
 
 def __getattr__(name: str):
@@ -48,8 +50,9 @@ def __dir__() -> list[str]:
 
 class _Package(_types.ModuleType):
     """``cistrack.run`` is the run function, and ``cistrack.run`` was also a module (now
-    :mod:`cistrack.runs.pipeline`): importing the old module path must not replace the function
-    with the module on this package (the import system sets submodules as attributes)."""
+    :mod:`cistrack.runs.pipeline`), as was ``cistrack.study`` (now :mod:`cistrack.studies.study`):
+    importing the old module path must not replace the function with the module on this package
+    (the import system sets submodules as attributes)."""
 
     def __setattr__(self, name: str, value) -> None:
         if isinstance(value, _types.ModuleType) and _LAZY.get(name) == "api":
@@ -60,7 +63,7 @@ class _Package(_types.ModuleType):
 _sys.modules[__name__].__class__ = _Package
 
 __all__ = [
-    "__version__", "run", "read_run", "load_scenario", "Run",
+    "__version__", "run", "read_run", "load_scenario", "Run", "study", "StudyResult",
     "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",
     "hookimpl", "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError",
     "MeasurementError", "ParameterError", "UnknownComponentError",

@@ -9,6 +9,8 @@ Running::
     r.steps                                            # one row per step (pandas DataFrame)
     r2 = ct.run("example-1", seed=5, settings={"filter.n_particles": 2000}, out="runs/ex1-5")
     again = ct.read_run("runs/ex1-5")                  # the same run, read back from its folder
+    fig = r.plot()                                     # error, sigma, NEES with its band, entropy
+    s = ct.study("quick-comparison", n_seeds=2)        # a StudyResult: s.table, s.runs, s.plot()
 
 Writing a plugin (see docs/plugins.md)::
 
@@ -44,10 +46,11 @@ from cistrack.scenario.loading import Scenario
 if TYPE_CHECKING:
     import pandas
     import pyarrow
+    from matplotlib.figure import Figure
 
 __all__ = [
     # running scenarios
-    "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict",
+    "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict", "study", "StudyResult",
     # the registry
     "Registry", "default_registry", "load_registry", "KINDS",
     # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
@@ -110,8 +113,9 @@ class Run:
         """The per-step table as a pyarrow Table (the contents of ``steps.parquet``)."""
         import pyarrow as pa
 
-        if self.rows:
-            return pa.Table.from_pylist(list(self.rows))
+        if self.rows:  # every column any row has (the first, the IOD's, has no NIS)
+            names = list(dict.fromkeys(k for row in self.rows for k in row))
+            return pa.Table.from_pydict({k: [row.get(k) for row in self.rows] for k in names})
         if self.directory is not None:
             from cistrack.results.store import read_steps
 
@@ -122,6 +126,16 @@ class Run:
     def steps(self) -> pandas.DataFrame:
         """The per-step table as a pandas DataFrame, one row per step (predict or update)."""
         return self.table().to_pandas()
+
+    def plot(self) -> Figure:
+        """A matplotlib Figure of the run over time: position error (under its 3-sigma envelope),
+        1-sigma position with the band of the per-axis sigmas, NEES with the chi-square 5-95 % band
+        of 6 degrees of freedom, NIS with its band, entropy; the panels the run has columns for (a
+        run without a truth has no error and no NEES). Log axes where the values span decades; the
+        custody loss, if any, is marked. See :mod:`cistrack.studies.run_figure`."""
+        from cistrack.studies.run_figure import plot_run
+
+        return plot_run(self.steps, self.summary.to_dict(), self.run_id)
 
     def __repr__(self) -> str:
         where = f", directory={str(self.directory)!r}" if self.directory else ""
@@ -232,3 +246,74 @@ def read_run(directory: str | Path) -> Run:
     if not isinstance(summary, dict):
         raise ConfigError(f"{d}/manifest.json: holds no run summary (the run did not finish writing it)")
     return Run(RunSummary.from_dict(summary), d)
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """A study's finished runs: ``name``; ``directory``, the study folder (``cistrack study report``
+    on it writes the full report); ``runs``, a :class:`Run` per run done on disk (``.steps`` reads
+    its table); ``rows``, their :attr:`table` rows (:mod:`cistrack.studies.study_table`);
+    ``problems``, (run id, why) of each run that did not finish."""
+
+    name: str
+    directory: Path
+    runs: tuple[Run, ...] = ()
+    rows: tuple[dict[str, Any], ...] = field(default=(), repr=False)
+    problems: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def summaries(self) -> list[RunSummary]:
+        """Each run's summary, in the order of :attr:`runs`."""
+        return [r.summary for r in self.runs]
+
+    @property
+    def table(self) -> pandas.DataFrame:
+        """One row per run: scenario, filter, iod, seed, run_id, status, verdict, reason,
+        custody_kept, the final metrics (km, m/s, cm/s, NEES, entropy) and wall_time_s."""
+        import pandas as pd
+
+        return pd.DataFrame([{k: v for k, v in row.items() if k not in ("summary", "directory")} for row in self.rows])
+
+    def plot(self) -> Figure:
+        """A matplotlib Figure: per filter, IOD and scenario the median over seeds and the 5-95 %
+        band of position error, 1-sigma position, NEES (with its chi-square band) and entropy (see
+        :mod:`cistrack.studies.study_figure`; ``cistrack study report`` writes the full figures)."""
+        from cistrack.studies.study_figure import plot_study_groups
+
+        varying = [k for k in ("filter", "iod", "scenario") if len({row[k] for row in self.rows}) > 1] or ["filter"]
+        groups: dict[str, dict[str, list[Any]]] = {}
+        for row, r in zip(self.rows, self.runs):
+            g = groups.setdefault(" / ".join(str(row[k]) for k in varying), {"steps": [], "summaries": []})
+            g["steps"].append(r.steps)
+            g["summaries"].append(row["summary"])
+        return plot_study_groups(groups, f"study {self.name}: {len(self.runs)} runs")
+
+    def __repr__(self) -> str:
+        kinds = [r.verdict.kind for r in self.runs]
+        counts = ", ".join(f"{kinds.count(k)} {k}" for k in dict.fromkeys(kinds))
+        return f"StudyResult({self.name!r}, {len(self.runs)} runs: {counts or 'none'}, directory={str(self.directory)!r})"
+
+
+def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | None = None,
+          settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
+          workers: int | None = None, progress: bool = False) -> StudyResult:
+    """Run every missing run of a study, as ``cistrack study run`` does, and return its :class:`StudyResult`.
+
+    ``study``: a built-in study name (``cistrack scenarios``), a study TOML file or a study folder.
+    ``n_seeds``, ``first_seed``: these seeds instead of the file's (``--n-seeds``, ``--first-seed``).
+    ``settings``: overrides of every run, as for :func:`load_scenario` (``--set``; the default
+    folder then names their hash). ``out``: the study folder (default ``studies_out/<name>``);
+    runs already done there are not run again. ``workers``: local processes (default: one per
+    core). ``progress``: a progress bar on stderr.
+    """
+    from cistrack.studies.study import plan_runs, run_study
+    from cistrack.studies.study_table import study_rows
+
+    items = _setting_items(settings) or None
+    res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
+                    first_seed=first_seed, n_seeds=n_seeds)
+    _, specs, directory = plan_runs(study, out, items, first_seed, n_seeds)
+    rows = study_rows(specs)
+    runs = tuple(Run(RunSummary.from_dict(row["summary"]), Path(row["directory"])) for row in rows)
+    return StudyResult(str(res["name"]), Path(directory), runs, tuple(rows),
+                       tuple((str(a), str(b)) for a, b in res.get("problems") or ()))

@@ -4,6 +4,7 @@
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
+    cistrack init [NAME]
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack study report STUDY [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
@@ -19,6 +20,7 @@ from pathlib import Path
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
+from cistrack.cli.init_scenario import add_init_parser
 from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
@@ -261,6 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
     sc.set_defaults(func=cmd_scenarios)
     add_study_parser(sub)
+    add_init_parser(sub)
     return p
 
 

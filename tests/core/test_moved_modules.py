@@ -57,6 +57,23 @@ def test_importing_the_old_run_module_leaves_cistrack_run_the_function():
     assert callable(cistrack.run) and cistrack.run.__module__ == "cistrack.api"
 
 
+def test_importing_the_old_study_module_leaves_cistrack_study_the_function():
+    import cistrack
+
+    sys.modules.pop("cistrack.study", None)
+    with pytest.warns(DeprecationWarning):
+        from cistrack.study import plan_runs  # noqa: F401
+    assert callable(cistrack.study) and cistrack.study.__module__ == "cistrack.api"
+
+
+def test_old_study_module_imported_first_in_a_fresh_process_leaves_cistrack_study_the_function():
+    code = ("import warnings\nwarnings.simplefilter('ignore')\nimport cistrack as ct\n"
+            "from cistrack.study import plan_runs\nimport cistrack.study\nprint(ct.study.__module__, plan_runs.__name__)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["cistrack.api", "plan_runs"]
+
+
 def test_a_name_the_replaced_module_never_had_is_an_attribute_error():
     import cistrack.results
 

@@ -1,7 +1,7 @@
 """Honest verdicts (issue 16, item 3): every run with a truth ends tracking, not-converged, lost or
 diverged with its reason; a run without a truth never speaks of custody and reports its NIS.
 
-The runs are real small runs of the built-in ``quick`` scenario (2 days, 9:2 NRHO); the rules are
+The runs are real small runs of the built-in ``quick`` scenario cut to 2 days (9:2 NRHO); the rules are
 the thresholds of :class:`cistrack.evaluation.custody.CustodyRule`.
 """
 from __future__ import annotations
@@ -20,6 +20,7 @@ from cistrack.evaluation.verdicts import final_verdict
 
 
 def _run(seed=1, out=None, **over):
+    over.setdefault("duration_days", 2.0)  # one pass after the IOD: a cloud still ~200 km wide
     return run_scenario(load_scenario("quick").with_overrides(over), seed=seed, output_dir=out)
 
 

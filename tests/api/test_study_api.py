@@ -1,0 +1,54 @@
+"""``ct.study(...)``: runs a study as ``cistrack study run`` does and gives its runs, a table with
+one row per run and a figure. A real small study: quick-comparison (PGM and EnKF), one seed."""
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import pytest
+
+import cistrack as ct
+from cistrack.api import Run, StudyResult
+
+
+@pytest.fixture(scope="module")
+def small_study(tmp_path_factory) -> StudyResult:
+    return ct.study("quick-comparison", n_seeds=1, settings={"duration_days": 2},
+                    out=tmp_path_factory.mktemp("study") / "s", workers=1)
+
+
+def test_study_returns_one_run_per_filter_and_seed(small_study):
+    assert isinstance(small_study, StudyResult) and small_study.name == "quick-comparison"
+    assert [(r.run_id, type(r)) for r in small_study.runs] == [
+        ("quick__pgm__noisy-range__seed1", Run), ("quick__enkf__noisy-range__seed1", Run)]
+    assert small_study.problems == ()
+
+
+def test_the_table_has_one_row_per_run_with_its_verdict_and_final_metrics(small_study):
+    t = small_study.table
+    assert list(t["filter"]) == ["pgm", "enkf"] and list(t["seed"]) == [1, 1]
+    assert {"scenario", "iod", "verdict", "reason", "pos_err_km", "nees", "entropy", "sigma_x_km"} <= set(t.columns)
+    assert list(t["verdict"]) == [r.verdict.kind for r in small_study.runs]
+    assert list(t["pos_err_km"]) == [r.final["pos_err_km"] for r in small_study.runs]
+
+
+def test_the_settings_reach_every_run(small_study):
+    assert all(r.steps["t_days"].max() <= 2.0 + 1e-9 for r in small_study.runs)
+
+
+def test_running_the_study_again_reads_the_same_runs_back(small_study):
+    again = ct.study("quick-comparison", n_seeds=1, settings={"duration_days": 2}, out=small_study.directory)
+    assert [r.summary for r in again.runs] == [r.summary for r in small_study.runs]
+
+
+def test_the_study_figure_has_a_median_per_filter_and_the_nees_band(small_study):
+    fig = small_study.plot()
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["position error (km)", "1-sigma position (km)", "NEES", "entropy (nats)"]
+    legend = [t.get_text() for t in fig.axes[2].get_legend().get_texts()]
+    assert any(x.startswith("pgm: median") for x in legend) and any(x.startswith("enkf: median") for x in legend)
+    assert any(x.startswith("chi-square(6) 5-95 %") for x in legend)
+    assert fig.axes[0].get_yscale() == "log"
+    plt.close(fig)
+
+
+def test_study_is_on_the_package():
+    assert ct.study.__module__ == "cistrack.api" and ct.StudyResult is StudyResult
