@@ -50,7 +50,13 @@ def cmd_export(args) -> int:
     from cistrack.runs.export import export_run
 
     params = {} if args.step is None else {"step": args.step}
-    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, **params)
+    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force, **params)
+    if args.force:
+        from cistrack.runs.export import export_refusal
+
+        why = export_refusal(args.run)
+        if why:
+            _eprint(f"cistrack: warning: exported with --force: {why} (the file says so in a COMMENT)")
     print(f"wrote {out}")
     return 0
 
@@ -63,6 +69,7 @@ def cmd_run(args) -> int:
     from cistrack.scenario.settings import apply_settings
     from cistrack.evaluation.run_summary import count_lines
     from cistrack.evaluation.verdicts import verdict_lines
+    from cistrack.results.store import results_line
 
     reg = default_registry()
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
@@ -88,7 +95,8 @@ def cmd_run(args) -> int:
     out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     if args.quiet and s.status != "finished":
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
-    for line in verdict_lines(s, out, _fmt):
+    ended = s.status in ("finished", "filter-failed")  # a failed run has no verdict to give
+    for line in (verdict_lines(s, out, _fmt) if ended else ["  verdict: none (the run did not finish; see its status above)"]):
         out_(line)
     for line in count_lines(s):
         out_(line)
@@ -99,7 +107,7 @@ def cmd_run(args) -> int:
         if "pos_err_km" in f:
             out_(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
                   f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
-    out_(f"  results: {out}/steps.parquet, {out}/manifest.json")
+    out_(results_line(out))  # only files that exist (a full disk may have kept some from being written)
     if args.rerun:
         out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
     if recorder is not None and (args.rerun_serve or args.rerun_spawn):
@@ -254,6 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
+    ex.add_argument("--force", action="store_true", help="export a run that did not finish, was killed or diverged "
+                    "(refused otherwise); the file then says so in a COMMENT")
     ex.set_defaults(func=cmd_export)
     v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
     v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")

@@ -6,16 +6,18 @@ __all__ = ["add_study_parser", "cmd_study"]
 
 
 def cmd_study(args) -> int:
+    """``cistrack study run`` and ``cistrack study report``; the exit status: 0, or 3 when a run
+    of the study is not done (failed, missing or left running), 2 for a refused input."""
     from cistrack.studies import study
 
     if args.study_cmd == "run":
         res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
                               progress=not args.quiet, rerun_dir=args.rerun, settings=args.set,
                               first_seed=args.first_seed, n_seeds=args.n_seeds)
-        if args.quiet:
-            return 0 if res["failed"] == 0 else 3
-        print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
-              f"{res['failed']} failed -> {res['out_dir']}")
+        if not args.quiet:
+            print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
+                  f"{res['failed']} failed -> {res['out_dir']}")
+        _report_problems(res)
         return 0 if res["failed"] == 0 else 3
     if args.study_cmd == "report":
         from cistrack.studies.report import report_study
@@ -26,6 +28,20 @@ def cmd_study(args) -> int:
         print(f"written: {', '.join(str(p) for p in rep['files'])}")
         return 0
     return 2
+
+
+def _report_problems(res: dict) -> None:
+    """On stderr (also with --quiet): every run of the study that is not done on disk, and why."""
+    problems = res.get("problems") or []
+    if not problems:
+        return
+    import sys
+
+    for run_id, why in problems:
+        print(f"cistrack: run {run_id} did not finish: {why}", file=sys.stderr)
+    print(f"cistrack: error: study '{res['name']}': {len(problems)} of {res['total']} runs did not finish "
+          f"(listed above; their results in {res['out_dir']} are incomplete); 'cistrack study run' on the "
+          f"same study and --out runs them again", file=sys.stderr)
 
 
 def _seed_arguments(parser) -> None:

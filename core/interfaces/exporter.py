@@ -15,7 +15,9 @@ class Exporter(Component):
 
     ``write(path, estimates, meta)`` writes :class:`cistrack.results.inertial_frame.InertialEstimates`
     (UTC times, Earth-centred inertial km, km/s states and covariances in a named frame);
-    ``meta`` carries ``object_name``, ``object_id`` and ``originator``.
+    ``meta`` carries ``object_name``, ``object_id`` and ``originator``, and may carry ``comments``
+    (a list of one-line texts the file should carry as comments, e.g. that the run did not finish).
+    ``path`` is a temporary file that ``cistrack export`` renames onto the target once written.
     """
 
     kind = "exporter"

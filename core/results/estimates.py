@@ -21,13 +21,13 @@ Like the steps table, rows are written in part files of many steps while the run
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from cistrack.plugin.hookspecs import hookimpl
+from cistrack.results.atomic_files import atomic_target
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
 from cistrack.units import LU_KM, VU_KMS
 
@@ -97,9 +97,8 @@ class EstimateWriter:
         parts = self._parts.parts()
         if parts:
             table = read_parts(self.directory / _PARTS)
-            tmp = self.directory / (ESTIMATES + ".tmp")
-            _arrow()[1].write_table(table, tmp)
-            os.replace(tmp, self.directory / ESTIMATES)
+            with atomic_target(self.directory / ESTIMATES, ESTIMATES + ".tmp") as tmp:  # no partial file on a full disk
+                _arrow()[1].write_table(table, tmp)
             for p in parts:
                 p.unlink()
             try:

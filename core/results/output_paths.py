@@ -4,6 +4,10 @@ A results directory is either new, empty, or an earlier cistrack results directo
 ``manifest.json``); anything else is refused, so that starting a run never deletes or replaces
 files that cistrack did not write. The directory is created here, so an unwritable place fails
 at once with the reason, not after the run has computed every step.
+
+A study directory (:func:`check_study_dir`) follows the same rule with a study's record in place of
+a run's manifest: new, empty, or an earlier directory of the same study (its ``study.json`` names
+it); never the root of the file system, a single run's results directory or a file.
 """
 from __future__ import annotations
 
@@ -11,7 +15,14 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir"]
+__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK"]
+
+STUDY_RECORD = "study.json"
+"""The record a study directory holds (written by ``cistrack study run``)."""
+STUDY_LOCK = ".study.lock"
+"""The lock file of a study directory (see :mod:`cistrack.studies.study_lock`); not content."""
+STUDY_RUNS_LOCK = ".study-runs.lock"
+"""The lock file its runs share while they write (see :mod:`cistrack.studies.study_lock`); not content."""
 
 
 def check_output_dir(directory: str | Path, where: str) -> Path:
@@ -30,6 +41,24 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
                               "to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
+    return _create_writable(d, where)
+
+
+def check_writable_dir(directory: str | Path, where: str) -> Path:
+    """Create ``directory`` (parents included) if needed and check that files can be made there
+    (a folder for files of cistrack's own names, e.g. ``study run --rerun DIR``); return it.
+    Raises :class:`ConfigError` naming ``where`` for a file, or a place that cannot be written."""
+    d = Path(directory)
+    try:
+        if d.exists() and not d.is_dir():
+            raise ConfigError(f"{where} {d}: exists and is not a directory; give a directory")
+    except OSError as exc:
+        raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
+    return _create_writable(d, where)
+
+
+def _create_writable(d: Path, where: str) -> Path:
+    """Create ``d`` (parents included) and check that a file can be made there."""
     try:
         d.mkdir(parents=True, exist_ok=True)
         probe = d / ".cistrack-write-test"
@@ -38,3 +67,55 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot write there ({exc.strerror or exc})") from None
     return d
+
+
+def _recorded_study(record: Path) -> tuple[str | None, str | None]:
+    """(name, source) of the study a ``study.json`` records; raises OSError or ValueError when it
+    cannot be read."""
+    import json
+
+    data = json.loads(record.read_text())
+    if not isinstance(data, dict):
+        raise ValueError("not a JSON object")
+    name, source = data.get("name"), data.get("source")
+    return (str(name) if name is not None else None), (str(source) if source is not None else None)
+
+
+def check_study_dir(directory: str | Path, name: str, source: str, where: str) -> Path:
+    """Create the study directory ``directory`` or check that study ``name`` (from the study file
+    ``source``) may write there; return it.
+
+    Allowed: a new or empty directory, or an earlier directory of the same study (its
+    ``study.json`` records ``name``, or, written before it recorded names, ``source``). Raises
+    :class:`ConfigError` naming ``where`` (``--out`` or "the study directory") for the root of
+    the file system, a file, a single run's results directory, another study's directory, any
+    other non-empty directory, and a place that cannot be created or written."""
+    d = Path(directory)
+    allowed = ("give a new or empty directory, or the directory of an earlier run of the same study")
+    try:
+        if d.resolve() == Path(d.resolve().anchor):
+            raise ConfigError(f"{where} {d}: the root of the file system; {allowed}")
+        if d.exists() and not d.is_dir():
+            raise ConfigError(f"{where} {d}: exists and is not a directory; {allowed}")
+        if d.is_dir():
+            record = d / STUDY_RECORD
+            if (d / "manifest.json").is_file():
+                raise ConfigError(f"{where} {d}: holds the results of a single run (manifest.json), not a "
+                                  f"study; {allowed}")
+            if record.is_file():
+                try:
+                    rec_name, rec_source = _recorded_study(record)
+                except (OSError, ValueError) as exc:
+                    raise ConfigError(f"{where} {d}: its {STUDY_RECORD} cannot be read ({exc}); {allowed} "
+                                      f"(or delete that {STUDY_RECORD} if the directory is this study's)") from None
+                same = rec_name == name if rec_name is not None else rec_source == source
+                if not same:
+                    raise ConfigError(f"{where} {d}: holds another study ("
+                                      + (f"'{rec_name}'" if rec_name is not None else f"from {rec_source}")
+                                      + f"), not '{name}'; {allowed}")
+            elif any(e.name not in (STUDY_LOCK, STUDY_RUNS_LOCK) for e in d.iterdir()):
+                raise ConfigError(f"{where} {d}: is not empty and holds no {STUDY_RECORD} of a cistrack "
+                                  f"study; {allowed}")
+    except OSError as exc:
+        raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
+    return _create_writable(d, where)

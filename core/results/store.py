@@ -30,6 +30,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
@@ -43,10 +44,9 @@ PARTS = "steps"
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
-    """Write JSON to ``path`` via a temporary file and rename (never a half-written file)."""
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, sort_keys=True, default=_json_default))
-    os.replace(tmp, path)
+    """Write JSON to ``path`` via a temporary file and rename (never a half-written file; the
+    temporary file is removed when writing fails, e.g. on a full disk)."""
+    write_text_atomic(path, json.dumps(data, indent=2, sort_keys=True, default=_json_default))
 
 
 def _json_default(o: Any):
@@ -129,9 +129,11 @@ class ResultsWriter:
         }
         try:
             import tomli_w  # optional: nicer record of the scenario as run
-            (self.directory / "scenario.toml").write_text(tomli_w.dumps(scen.raw))
-        except Exception:
-            (self.directory / "scenario.json").write_text(json.dumps(scen.raw, indent=2, default=str))
+            text = tomli_w.dumps(scen.raw)
+        except Exception:  # not installed, or a value TOML cannot hold: JSON instead
+            write_text_atomic(self.directory / "scenario.json", json.dumps(scen.raw, indent=2, default=str))
+        else:  # a failing write (full disk) is raised, never hidden behind the JSON fallback
+            write_text_atomic(self.directory / "scenario.toml", text)
         write_json_atomic(self.directory / MANIFEST, self._manifest)
 
     @hookimpl(trylast=True)  # after every observer that adds metrics to the step
@@ -166,15 +168,13 @@ class ResultsWriter:
         parts = self._parts.parts()
         extra["n_parts"] = self._parts.n_parts
         if parts:
-            tmp = self.directory / (STEPS + ".tmp")
             try:
                 table = read_parts(self.directory / PARTS)
-                pq.write_table(table, tmp)
-                os.replace(tmp, self.directory / STEPS)
+                with atomic_target(self.directory / STEPS, STEPS + ".tmp") as tmp:
+                    pq.write_table(table, tmp)
                 for p in parts:
                     p.unlink()
             except OSError as exc:
-                tmp.unlink(missing_ok=True)
                 extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the completed steps stay in the "
                                           f"{len(parts)} files {PARTS}/part-*.parquet")
                 problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
@@ -205,3 +205,17 @@ def read_steps(directory: str | Path) -> pa.Table:
     if table is None:
         raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")
     return table
+
+
+def results_line(directory: str | Path) -> str:
+    """The line naming a run's results for a person (``cistrack run``): only files that exist, the
+    unmerged parts of a run whose merge failed, or that nothing was written."""
+    d = Path(directory)
+    found = [f"{d}/{STEPS}"] if (d / STEPS).is_file() else []
+    n_parts = len(list((d / PARTS).glob("part-*.parquet"))) if (d / PARTS).is_dir() else 0
+    if not found and n_parts:
+        found.append(f"{d}/{PARTS}/part-*.parquet ({n_parts} files, not merged)")
+    found += [f"{d}/{MANIFEST}"] if (d / MANIFEST).is_file() else []
+    if not found:
+        return f"  results: none written in {d}"
+    return "  results: " + ", ".join(found)

@@ -4,7 +4,13 @@
 The run directory holds ``estimates.parquet`` (synodic, km) and the scenario as run; the
 scenario's sensor places the synodic frame in inertial space
 (:meth:`cistrack.interfaces.Sensor.inertial_frame`), the estimates are carried there with the
-exact Jacobian of that map, and the registered exporter writes the file.
+exact Jacobian of that map, and the registered exporter writes the file (through a temporary file
+and a rename: a full disk never leaves a partial file that would block the next export).
+
+Only a run that finished and did not diverge is exported (:func:`export_refusal` says why not):
+the estimate of a failed, killed or still-running run stops wherever the run stopped, and that
+of a diverged filter is not an orbit. ``force`` exports such a run anyway, and the file then says
+so in a COMMENT line (exporters read ``meta["comments"]``).
 """
 from __future__ import annotations
 
@@ -15,7 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from cistrack.errors import CistrackError, ConfigError
+from cistrack.results.atomic_files import atomic_target
 from cistrack.results.estimates import read_estimates
+from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
 from cistrack.plugin.registry import Registry, default_registry
 
@@ -24,7 +32,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["export_run", "run_inertial_estimates"]
+__all__ = ["export_run", "export_refusal", "run_inertial_estimates"]
 
 
 def _scenario_of(run_dir: Path, reg: Registry):
@@ -57,20 +65,70 @@ def run_inertial_estimates(run_dir: str | Path, registry: Registry | None = None
     return to_inertial(est, frame), scen
 
 
+def export_refusal(run_dir: str | Path) -> str | None:
+    """Why the estimate of the run in ``run_dir`` should not be exported without ``force``: it
+    did not finish (failed, filter-failed, interrupted or killed, still running, or no readable
+    manifest tells) or its filter diverged; None for a finished run that did not diverge."""
+    d = Path(run_dir)
+    if not (d / "manifest.json").is_file():
+        return "it has no manifest.json, so whether it finished is unknown"
+    try:
+        status, reason = run_status(d)
+        man = json.loads((d / "manifest.json").read_text())
+    except (OSError, ValueError) as exc:
+        return f"its manifest.json cannot be read ({exc}), so whether it finished is unknown"
+    why = f" ({reason})" if reason else ""
+    if status == "running":
+        proc = man.get("process") or {}
+        return (f"it is still running (process {proc.get('pid', '?')} on {proc.get('host', '?')}); its "
+                f"estimate stops at the last step written")
+    if status == "interrupted":
+        return f"it was interrupted or killed before it finished{why}; its estimate stops where it stopped"
+    if status != "finished":
+        return f"it did not finish (status '{status}'{why}); its estimate stops where the run stopped"
+    verdict = (man.get("summary") or {}).get("verdict") or {}
+    if verdict.get("kind") == "diverged":
+        return "its filter diverged" + (f" ({verdict['reason']})" if verdict.get("reason") else "") + \
+            "; the estimate is not a usable orbit"
+    return None
+
+
 def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None = None,
-               registry: Registry | None = None, overwrite: bool = False, **params: Any) -> Path:
+               registry: Registry | None = None, overwrite: bool = False, force: bool = False,
+               **params: Any) -> Path:
     """Write the estimate of the run in ``run_dir`` with exporter ``format`` ("oem", "opm", ...)
     to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file, replaced on each
     export); returns the path written. An existing ``path`` is refused (before anything is
-    read) unless ``overwrite``."""
+    read) unless ``overwrite``; a run that did not finish or diverged (:func:`export_refusal`)
+    unless ``force``, and then the file carries the reason as a COMMENT."""
     if path is not None and not overwrite and os.path.lexists(path):
         raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to "
                           f"replace it")
+    d = Path(run_dir)
+    if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
+        raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
+                          "no such directory") + "); give the --out directory of a 'cistrack run'")
+    refusal = export_refusal(d)
+    if refusal is not None and not force:
+        raise CistrackError(f"{d}: not exported: {refusal}. Export only finished runs, or add --force to "
+                            f"export it anyway (the file then says this in a COMMENT)")
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
-    ie, scen = run_inertial_estimates(run_dir, reg)
-    out = Path(path) if path is not None else Path(run_dir) / f"estimate{exporter.suffix}"
-    manifest = Path(run_dir) / "manifest.json"
-    run_id = json.loads(manifest.read_text()).get("run_id", scen.name) if manifest.exists() else scen.name
-    exporter.write(out, ie, {"object_name": scen.name, "object_id": run_id, "originator": "cistrack"})
+    ie, scen = run_inertial_estimates(d, reg)
+    out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
+    manifest = d / "manifest.json"
+    try:
+        run_id = json.loads(manifest.read_text()).get("run_id", scen.name) if manifest.exists() else scen.name
+    except (OSError, ValueError):
+        run_id = scen.name
+    meta = {"object_name": scen.name, "object_id": run_id, "originator": "cistrack"}
+    if refusal is not None:
+        meta["comments"] = [f"WARNING: exported with --force although run {run_id} is not a finished, "
+                            f"converged run: {refusal}"]
+    try:
+        with atomic_target(out) as tmp:  # a full disk leaves no partial file under the final name
+            exporter.write(tmp, ie, meta)
+    except OSError as exc:
+        raise CistrackError(("--out " if path is not None else "") + f"{out}: cannot write the {format} file "
+                            f"({exc.strerror or exc}); nothing was written there") from None
     return out

@@ -17,6 +17,7 @@ import numpy as np
 
 from cistrack.studies.calibration import LEVEL, group_calibration
 from cistrack.errors import ConfigError
+from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.studies.efficiency import efficiency_text, group_efficiency
 from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
@@ -218,7 +219,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                     "efficiency_by_pass": " ".join(f"{p}:{r:.4g}" for p, r in eff.by_pass.items()) or None,
                     "efficiency_text": efficiency_text(eff)})
         rows.append(row)
-    with open(rep_dir / "summary.csv", "w", newline="") as fh:
+    with atomic_target(rep_dir / "summary.csv") as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
@@ -288,7 +289,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                   if has_truth else [])
     md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, *efficiency, "", *custody,
                          *diverged])
-    (rep_dir / "summary.md").write_text(md_text + "\n")
+    write_text_atomic(rep_dir / "summary.md", md_text + "\n")
     files.append(rep_dir / "summary.md")
     widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
     by_filter_text = custody_text(rows)

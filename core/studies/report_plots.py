@@ -29,6 +29,8 @@ import numpy as np
 
 from cistrack.studies.time_axis import GapAxis
 
+from cistrack.results.atomic_files import atomic_target
+
 __all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "nees_median", "plot_study", "save_figure",
            "FORMATS"]
 
@@ -131,7 +133,8 @@ def save_figure(fig: Any, stem: Path) -> list[Path]:
     with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
         for ext in FORMATS:
             f = stem.with_suffix(f".{ext}")
-            fig.savefig(f, dpi=130)
+            with atomic_target(f) as tmp:  # never a partial figure (a full disk)
+                fig.savefig(tmp, dpi=130, format=ext)
             files.append(f)
     plt.close(fig)
     return files

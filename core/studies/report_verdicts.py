@@ -15,6 +15,8 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+from cistrack.results.atomic_files import atomic_target
+
 __all__ = ["FLAGGED_KINDS", "flagged_runs", "flagged_line", "write_runs_csv", "RUN_COLUMNS",
            "custody_by_filter", "custody_markdown", "custody_text", "write_custody_by_filter"]
 
@@ -53,7 +55,7 @@ def flagged_line(f: dict) -> str:
 
 def write_runs_csv(groups: dict, path: Path) -> Path:
     """Write ``runs.csv``: every run's verdict, reason and final figures (:data:`RUN_COLUMNS`)."""
-    with open(path, "w", newline="") as fh:
+    with atomic_target(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(RUN_COLUMNS))
         w.writeheader()
         for (sc, iod, flt), sums in sorted(groups.items()):
@@ -118,7 +120,7 @@ def write_custody_by_filter(rows: list[dict], path: Path) -> Path | None:
     filters, pairs, cells = custody_by_filter(rows)
     if not pairs:
         return None
-    with open(path, "w", newline="") as fh:
+    with atomic_target(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["scenario", "iod", *(f"{f} custody [Wilson 95 %]" for f in filters)])
         for sc, iod in pairs:

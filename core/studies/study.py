@@ -27,13 +27,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cistrack.errors import ConfigError
+from cistrack.errors import CistrackError, ConfigError
+from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, study_source)
 from cistrack.studies.resume import is_done, run_state
 from cistrack.scenario.limits import check_count, check_path_component
 from cistrack.results.store import read_manifest
-from cistrack.evaluation.run_summary import RunSummary
+from cistrack.studies.workers import execute_run, init_worker, run_spec
 from cistrack.runs.run_id import run_id
 
 
@@ -143,34 +144,6 @@ def _settings_suffix(settings: list[str] | None) -> str:
     return "__set-" + hashlib.sha256("\n".join(settings).encode()).hexdigest()[:8]
 
 
-def execute_run(spec: RunSpec) -> RunSummary:
-    """Run one study run in this process and write it to ``spec.out_dir``. Returns its summary."""
-    from threadpoolctl import threadpool_limits
-
-    from cistrack.plugin.registry import default_registry
-    from cistrack.runs.pipeline import run_scenario
-    from cistrack.scenario.loading import load_scenario
-
-    reg = default_registry()
-    scen = load_scenario(spec.scenario, reg, overrides=spec.overrides)  # validated (and built) once
-    observers = []
-    if spec.rerun_path:
-        observers.append(reg.create("recorder", "rerun", path=spec.rerun_path, frame=scen.recording_frame,
-                                    overwrite=True))  # the study's own recording of a run it reruns
-    with threadpool_limits(1):  # one BLAS/OpenMP thread: identical numbers whichever worker runs it
-        res = run_scenario(scen, seed=spec.seed, registry=reg, output_dir=spec.out_dir, run_id=spec.run_id,
-                           observers=observers)
-    return res.summary
-
-
-def _worker_init(threads: int) -> None:
-    try:
-        import numba
-        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    except Exception:
-        pass
-
-
 def make_executor(workers: int | None = None, dask: str | None = None):
     """A concurrent.futures Executor: local processes, or a Dask cluster ('local' or an address)."""
     if workers is not None:
@@ -197,8 +170,8 @@ def make_executor(workers: int | None = None, dask: str | None = None):
         return ex
     import multiprocessing as mp
     cores = os.cpu_count() or 1
-    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"),
-                                  initializer=_worker_init, initargs=(max(1, cores // n),))
+    return cf.ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"),  # workers end with this process
+                                  initializer=init_worker, initargs=(max(1, cores // n), os.getpid()))
 
 
 def close_dask_client(ex) -> None:
@@ -216,28 +189,72 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
               rerun_dir: str | Path | None = None, settings: list[str] | None = None,
               first_seed: int | None = None, n_seeds: int | None = None) -> dict:
-    """Run every missing run of a study. Returns counts and the study directory.
+    """Run every missing run of a study. Returns counts, the study directory and the runs that are
+    not done on disk afterwards (``problems``: (run id, why) pairs; ``failed`` counts them).
 
+    The study directory must be new, empty or this study's own
+    (:func:`cistrack.results.output_paths.check_study_dir`), and only one study process at a time
+    may write there (:func:`cistrack.studies.study_lock.study_lock`).
     ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
     ``settings``: ``--set`` items applied to every run (see :func:`plan_runs`).
     ``first_seed``, ``n_seeds``: other seeds than the study file's (see :func:`plan_runs`).
     """
     import dataclasses
 
+    from cistrack.results.output_paths import STUDY_RECORD, check_study_dir
+    from cistrack.studies.execution import run_all, run_problems, shutdown
+    from cistrack.studies.study_lock import study_lock
+
     if workers is not None:
         check_count(workers, "--workers", 1, 1024)
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
+    source = study_source(path_or_name)
+    name = str(data.get("name") or Path(source).stem)
+    where = "--out" if out_dir is not None else "the study directory"
+    check_study_dir(out, name, source, where)
     if rerun_dir is not None:
-        Path(rerun_dir).mkdir(parents=True, exist_ok=True)
+        from cistrack.results.output_paths import check_writable_dir
+
+        check_writable_dir(rerun_dir, "--rerun")
         specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "study.json").write_text(json.dumps({"source": study_source(path_or_name), **data,
-                                               "settings": list(settings or []),
-                                               "run_seeds": sorted({sp.seed for sp in specs})},
-                                              indent=2, default=str))
-    states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
-    todo = [s for s in specs if states[s.run_id] != "done"]
-    skipped = len(specs) - len(todo)
+    with study_lock(out, where):
+        record = {"source": source, **data, "name": name, "settings": list(settings or []),
+                  "run_seeds": sorted({sp.seed for sp in specs})}
+        try:
+            write_text_atomic(out / STUDY_RECORD, json.dumps(record, indent=2, default=str))
+        except OSError as exc:
+            raise CistrackError(f"{where} {out}: cannot write {STUDY_RECORD} ({exc.strerror or exc}); "
+                                f"nothing was run") from None
+        states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
+        todo = [s for s in specs if states[s.run_id] != "done"]
+        _say_rerun(specs, states)
+        own = executor is None
+        ex = executor or (make_executor(workers, dask) if todo else None)
+        bar = None
+        if progress and todo:
+            from tqdm.auto import tqdm
+            bar = tqdm(total=len(todo), desc=f"study {name}", unit="run")
+        said: dict[str, str] = {}
+        ended = False
+        try:
+            if todo:
+                said = run_all(ex, todo, run_spec, bar)
+            ended = True
+        finally:
+            if bar is not None:
+                bar.close()
+            if own and ex is not None:
+                shutdown(ex, cancel=not ended)
+                close_dask_client(ex)
+        problems = run_problems(specs, said)  # from disk, not from what the workers said
+    bad = {rid for rid, _ in problems}
+    return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
+            "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
+            "problems": problems}
+
+
+def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:
+    """Tell on stderr which finished runs are stale and which were left by a process that is gone."""
     stale = [s.run_id for s in specs if states[s.run_id] == "stale"]
     if stale:
         print(f"study: {len(stale)} finished run(s) were made with another scenario, seed or input file "
@@ -247,34 +264,3 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     if gone:
         print(f"study: {len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
               f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""), file=sys.stderr)
-    own = executor is None
-    ex = executor or (make_executor(workers, dask) if todo else None)
-    completed = failed = 0
-    bar = None
-    if progress and todo:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(todo), desc=f"study {data.get('name', out.name)}", unit="run")
-    try:
-        futures = {ex.submit(execute_run, s): s for s in todo}
-        for fut in cf.as_completed(futures):
-            spec = futures[fut]
-            try:
-                summary = fut.result()
-                completed += 1
-                if bar is not None:
-                    bar.set_postfix_str(f"{spec.run_id}: {summary.verdict.kind}")
-            except Exception as exc:  # one failing run must not stop the study
-                failed += 1
-                (Path(spec.out_dir)).mkdir(parents=True, exist_ok=True)
-                (Path(spec.out_dir) / "error.txt").write_text(f"{type(exc).__name__}: {exc}\n")
-                print(f"run {spec.run_id} failed: {type(exc).__name__}: {exc}", file=sys.stderr)
-            if bar is not None:
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
-        if own and ex is not None:
-            ex.shutdown(wait=True)
-            close_dask_client(ex)
-    return {"name": data.get("name", out.name), "out_dir": out, "completed": completed, "skipped": skipped,
-            "failed": failed, "total": len(specs)}

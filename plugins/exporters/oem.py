@@ -3,7 +3,8 @@
 One segment: the run's estimate at every step (moment-matched mean of the filter's belief, in
 km and km/s), with a covariance block (km^2, km^2/s, km^2/s^2; the lower triangle) at every
 epoch. ``TIME_SYSTEM = UTC``; ``CENTER_NAME`` and ``REF_FRAME`` come from the run's inertial
-frame; a frame that is not CCSDS-registered is named and described in a COMMENT line.
+frame; a frame that is not CCSDS-registered is named and described in a COMMENT line, and
+``meta["comments"]`` (e.g. that the run did not finish) are COMMENT lines of the header.
 Numbers are written with the shortest text that reads back to the same double. Steps at the
 same epoch (an update right after a prediction) keep the last one.
 """
@@ -18,7 +19,7 @@ from cistrack.errors import CistrackError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Exporter
 
-from .ccsds_text import ccsds_epoch, lower_triangle, num
+from .ccsds_text import ccsds_epoch, comment_lines, lower_triangle, num
 
 __all__ = ["OemExporter"]
 
@@ -42,8 +43,8 @@ class OemExporter(Exporter):
         idx = np.nonzero(keep)[0]
         epochs = [ccsds_epoch(est.utc[k]) for k in idx]
         now = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S")
-        out = ["CCSDS_OEM_VERS = 2.0", f"CREATION_DATE = {now}", f"ORIGINATOR = {meta.get('originator', 'cistrack')}",
-               "", "META_START"]
+        out = ["CCSDS_OEM_VERS = 2.0", *comment_lines(meta), f"CREATION_DATE = {now}",
+               f"ORIGINATOR = {meta.get('originator', 'cistrack')}", "", "META_START"]
         if not est.frame.ccsds:
             out.append(f"COMMENT REF_FRAME {est.frame.name}: {est.frame.description}")
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",

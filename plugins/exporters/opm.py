@@ -1,7 +1,7 @@
 """CCSDS Orbit Parameter Message (OPM 2.0, KVN): exporter ``"opm"``.
 
 The state vector and its covariance at one step (the last one by default; ``step`` selects
-another), km and km/s, ``TIME_SYSTEM = UTC``, frame as in the OEM exporter.
+another), km and km/s, ``TIME_SYSTEM = UTC``, frame and ``meta["comments"]`` as in the OEM exporter.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from cistrack.errors import CistrackError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Exporter
 
-from .ccsds_text import COV_KEYS, ccsds_epoch, num
+from .ccsds_text import COV_KEYS, ccsds_epoch, comment_lines, num
 
 __all__ = ["OpmExporter", "read_opm"]
 
@@ -49,7 +49,8 @@ class OpmExporter(Exporter):
                                     f"{int(est.step[0])}..{int(est.step[-1])})")
             k = int(hits[-1])
         now = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S")
-        out = ["CCSDS_OPM_VERS = 2.0", f"CREATION_DATE = {now}", f"ORIGINATOR = {meta.get('originator', 'cistrack')}", ""]
+        out = ["CCSDS_OPM_VERS = 2.0", *comment_lines(meta), f"CREATION_DATE = {now}",
+               f"ORIGINATOR = {meta.get('originator', 'cistrack')}", ""]
         if not est.frame.ccsds:
             out.append(f"COMMENT REF_FRAME {est.frame.name}: {est.frame.description}")
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",

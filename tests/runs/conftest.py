@@ -55,3 +55,49 @@ def observed_study(tmp_path, obs_file):
         return study, out
 
     return run
+
+
+class SmallDisk:
+    """A small tmpfs mounted at ``path``: :meth:`fill` leaves only so many bytes free (a real full
+    disk: the kernel's own ENOSPC), :meth:`free_up` gives the space back."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.filler = path / ".filler"
+
+    def fill(self, free_bytes: int) -> None:
+        import os
+
+        st = os.statvfs(self.path)
+        avail = st.f_bavail * st.f_frsize
+        with open(self.filler, "ab") as fh:
+            fh.write(b"\0" * max(0, avail - free_bytes))
+
+    def free_up(self) -> None:
+        self.filler.unlink(missing_ok=True)
+
+    def files(self) -> list[Path]:
+        """Every file on the disk but the filler."""
+        return sorted(p for p in self.path.rglob("*") if p.is_file() and p != self.filler)
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 1 MiB tmpfs at ``tmp_path/disk`` (needs root and a kernel that lets us mount one)."""
+    import os
+    import shutil
+    import subprocess
+
+    if os.geteuid() != 0 or shutil.which("mount") is None:
+        pytest.skip("needs root and mount(8) to make a small tmpfs")
+    d = tmp_path / "disk"
+    d.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m,mode=0755", "tmpfs", str(d)],
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.strip()}")
+    try:
+        yield SmallDisk(d)
+    finally:
+        if subprocess.run(["umount", str(d)], capture_output=True).returncode != 0:
+            subprocess.run(["umount", "-l", str(d)], capture_output=True)

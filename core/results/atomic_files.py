@@ -1,0 +1,62 @@
+"""Writing a file so that it is either whole or absent: a temporary file in the same folder, then
+a rename over the target.
+
+A write that fails half-way (a full disk, a quota, a killed process) would otherwise leave a
+truncated or 0-byte file under the final name, which later commands read as a result, or which
+blocks the next attempt (an existing ``--out`` file is refused). Here the data first goes to a
+hidden temporary file beside the target (``.NAME.XXXX.tmp``: same file system, so the rename
+cannot fail half-way), which is removed again when writing fails, and only a complete file is
+renamed (:func:`os.replace`) onto the target.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+from pathlib import Path
+from typing import Iterator
+
+__all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic"]
+
+
+@contextlib.contextmanager
+def atomic_target(path: str | Path, tmp_name: str | None = None) -> Iterator[Path]:
+    """Yield a fresh temporary path beside ``path`` to write to; on leaving the block without an
+    exception it replaces ``path``, on an exception (of any kind) it is deleted and ``path`` is
+    left as it was. The temporary file exists (empty) when the block starts, unless ``tmp_name``
+    names it: a fixed name beside ``path``, for a file only one process ever writes (a run's own
+    tables), which a failed earlier attempt's leftover can never block."""
+    target = Path(path)
+    tmp = target.parent / tmp_name if tmp_name else _new_file(target)
+    try:
+        yield tmp
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def _new_file(target: Path) -> Path:
+    """Create an empty, new file beside ``target`` with the permissions an ordinary ``open`` would
+    give it (0o666 less the umask; ``tempfile.mkstemp`` would make it private)."""
+    for _ in range(100):
+        tmp = target.parent / f".{target.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            return tmp
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"{target.parent}: no free temporary name for {target.name}")
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename (never a partial file)."""
+    with atomic_target(path) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+
+
+def write_text_atomic(path: str | Path, text: str, encoding: str = "utf-8") -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (never a partial file)."""
+    write_bytes_atomic(path, text.encode(encoding))
