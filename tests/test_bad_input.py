@@ -7,7 +7,9 @@ working directory). Every case runs through the real entry point ``cistrack.cli.
 working directory, and nothing may appear outside it.
 
 Cases come from issue 17's list of failures (sizes, seeds, paths, study options, silent
-acceptances, names that became paths) plus the refusals that already held.
+acceptances, names that became paths), issue 27's (work limits, nesting, epochs, numbers with
+underscores, invisible characters in names, files that are not observations) plus the refusals
+that already held.
 """
 from __future__ import annotations
 
@@ -329,6 +331,74 @@ add("rerun-file-exists", argv=["run", "s.toml", "--rerun", "rec.rrd", "--quiet"]
     files={"s.toml": scenario(), "rec.rrd": b"an earlier recording"}, words=("rec.rrd", "already exists", "--overwrite"))
 add("rerun-file-is-a-link", argv=["run", "s.toml", "--rerun", "rec.rrd", "--quiet"],
     files={"s.toml": scenario(), "_LINK rec.rrd": "elsewhere.rrd"}, words=("rec.rrd", "already exists"))
+# -- issue 27: up-front limits on work ------------------------------------------------------------
+add("run-predict-every-1e-7", **run_case(words=("[run]", "predict_every_hours", "3.36e+08 filter steps", "1,000,000"),
+                                         run__predict_every_hours=1e-7))
+add("schedule-interval-1e-6", **run_case(words=("[schedule]", "interval_minutes", "measurement times", "1,000,000"),
+                                         schedule={"name": "every", "interval_minutes": 1e-6}))
+add("schedule-phase-interval-1e-6", **run_case(words=("[schedule]", "phases[0].interval_minutes", "1,000,000"),
+                                               schedule={"name": "phased", "phases": [
+                                                   Raw('{ rule = "every", interval_minutes = 1e-6 }')]}))
+add("schedule-count-1e9", **run_case(words=("[schedule]", "count", "1,000,000"),
+                                     schedule={"name": "random-consecutive", "count": 10 ** 9}))
+OBS_LATE = "2030-01-01T03:40:00Z,101.2,12.3\n"
+add("meas-years-after-the-span", **meas_case(measurements(ROW + OBS_LATE),
+                                             ("obs.csv", "outside the scenario's span", "duration_days", "1,461")))
+add("meas-before-the-epoch", **meas_case(measurements("2025-12-01T03:40:00Z,101.2,12.3\n" + ROW),
+                                         ("obs.csv", "outside the scenario's span", "epoch")))
+# -- issue 27: deeply nested TOML -----------------------------------------------------------------
+
+
+def nested(n: int) -> Raw:
+    return Raw("[" * n + "]" * n)
+
+
+add("scenario-nested-3000", **run_case(words=("s.toml", "nested", "16 levels"), filter__clusterer=nested(3000)))
+add("scenario-nested-400", **run_case(words=("s.toml", "nested", "16 levels"), filter__clusterer=nested(400)))
+add("scenario-nested-tables-3000", argv=["run", "s.toml", "--quiet"],
+    files={"s.toml": scenario() + "[run]\nx = " + "{a = " * 3000 + "1" + "}" * 3000 + "\n"}, words=("s.toml", "nested"))
+add("scenario-dotted-keys-3000", argv=["run", "s.toml", "--quiet"],
+    files={"s.toml": scenario() + "[" + ".".join(["t"] * 3000) + "]\nx = 1\n"}, words=("s.toml", "nested"))
+add("flag-set-nested-3000", **run_case(argv=("s.toml", "--set", "filter.n_particles=" + nested(3000)),
+                                       words=("--set", "nested", "16 levels")))
+add("study-nested-3000", **study_case(("st.toml", "nested", "16 levels"), study_text=study(filters=[nested(3000)])))
+# -- issue 27: epochs -----------------------------------------------------------------------------
+add("epoch-9999-12-31", **run_case(words=("top level", "epoch", "1800-01-01 to 2200-01-01"), top__epoch="9999-12-31T00:00:00Z"))
+add("epoch-0001-01-01", **run_case(words=("top level", "epoch", "1800-01-01 to 2200-01-01"), top__epoch="0001-01-01T00:00:00Z"))
+add("epoch-span-ends-after-2200", **run_case(words=("epoch", "duration_days", "2200-01-01"), top__epoch="2199-12-31T12:00:00Z"))
+add("real-telescope-epoch-1800", **run_case(words=("[sensor]", "epoch", "DE421", "1900 to 2052"),
+                                            sensor={"name": "real-telescope"}, top__epoch="1800-01-01T00:00:00Z"))
+add("real-telescope-epoch-2060", **run_case(words=("[sensor]", "epoch", "DE421", "1900 to 2052"),
+                                            sensor={"name": "real-telescope"}, top__epoch="2060-01-01T00:00:00Z"))
+# -- issue 27: numbers, names, files, sizes -------------------------------------------------------
+add("meas-azimuth-underscores", **meas_case(measurements("2026-01-01T03:40:00Z,1_01.2,12.3\n"),
+                                            ("obs.csv", "azimuth", "not a number")))
+add("meas-range-underscores", **meas_case(measurements("2026-01-01T03:40:00Z,101.2,12.3,3_84000\n",
+                                                       "time_utc,azimuth_deg,elevation_deg,range_km\n"),
+                                          ("obs.csv", "range_km", "not a number")))
+add("env-threads-underscores", **run_case(env={"CISTRACK_NUM_THREADS": "1_0"}, words=("CISTRACK_NUM_THREADS", "1 to 1024")))
+add("scenario-name-rtl-override", **run_case(words=("name", "U+202E"), top__name="evil\u202ecod.exe"))
+add("scenario-name-zero-width", **run_case(words=("name", "U+200B"), top__name="a\u200bb"))
+add("study-name-rtl-override", **study_case(("name", "U+202E"), study_text=study(name="st\u202eudy")))
+add("study-label-rtl-override", **study_case(("label", "U+2067"),
+                                             study_text=study(filters=[Raw('{ name = "pgm", label = "p\\u2067gm" }')])))
+add("meas-bom-csv-header-read", **meas_case("\ufeff" + measurements("2026-01-01T03:40:00Z,400.0,12.3\n"),
+                                            ("obs.csv", "line 2", "azimuth")))
+
+
+def meas_file_case(file: str, words, files=None) -> dict:
+    return dict(argv=["run", "s.toml", "--quiet"], words=words,
+                files={"s.toml": scenario(truth=None, schedule=None) + f'[measurements]\nfile = "{file}"\n', **(files or {})})
+
+
+add("meas-file-dot", **meas_file_case(".", ("[measurements]", "file", "is a directory")))
+add("meas-file-directory", **meas_file_case("obs", ("obs", "is a directory"), {"obs/a.csv": CSV_HEAD}))
+add("meas-file-passwd", **meas_file_case("passwd", ("passwd", "not an observation file of any known format"),
+                                         {"passwd": "root:x:0:0:root:/root:/bin/bash\n"}))
+add("iod-n-particles-1", **run_case(words=("[iod]", "n_particles", ">= 100", "collapsed"), iod__n_particles=1))
+add("truth-state-3e6-km", **run_case(words=("[truth]", "state_km", "km from Earth"), truth__orbit=DROP,
+                                     truth__state_km=[3e6, 0.0, 0.0, 0.0, 1.0, 0.0]))
+add("study-seeds-repeat", **study_case(("seeds", "repeats seed(s) 1"), study_text=study(seeds=[1, 1])))
 # -- inputs that must run correctly ---------------------------------------------------------------
 add("ok-small-scenario", **run_case(expect="run"))
 add("ok-seed-zero-flag", **run_case(argv=("s.toml", "--seed", "0"), expect="run"))

@@ -29,7 +29,7 @@ import numpy as np
 from cistrack.lazy import lazy_njit
 
 __all__ = ["DE421", "ChebyshevSeries", "chebyshev_position", "chebyshev_state", "de421",
-           "DAY_S", "J2000_JD"]
+           "DAY_S", "J2000_JD", "check_de421_epoch"]
 
 DAY_S: float = 86_400.0
 J2000_JD: float = 2_451_545.0
@@ -301,3 +301,11 @@ class DE421:
 def de421() -> DE421:
     """The process-wide DE421 reader (loaded once; series are read lazily)."""
     return DE421()
+
+
+def check_de421_epoch(owner, value, year: int) -> None:
+    """Refuse a component's ``epoch`` parameter (``value``, in ``year``) outside DE421's whole
+    years, 1900 to 2052, with the component's ParameterError (``owner._fail``)."""
+    if not 1900 <= year <= 2052:
+        owner._fail("epoch", value, "must lie within DE421's span (years 1900 to 2052; a scenario's top-level "
+                                    "'epoch' sets it)")

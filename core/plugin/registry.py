@@ -1,8 +1,9 @@
 """The component registry, filled by plugins through pluggy and entry points.
 
 Each entry point of the group ``cistrack`` is loaded on its own: a plugin that fails to import
-or to register is recorded in :attr:`Registry.failures` with its distribution, entry point and
-error, and the others still load. A plugin that registers a name already taken is such a
+or to register (any exception, ``sys.exit`` and KeyboardInterrupt included) is recorded in
+:attr:`Registry.failures` with its distribution, entry point and error, a warning goes to the
+``cistrack`` logger, and the others still load. A plugin that registers a name already taken is such a
 failure too (the message names both sources); the first registration stays, and built-ins
 load first, so a third party can never silently replace a built-in. ``CISTRACK_DISABLE_PLUGIN_AUTOLOAD=1`` loads only the
 built-in components (distribution ``cistrack``).
@@ -10,6 +11,7 @@ built-in components (distribution ``cistrack``).
 from __future__ import annotations
 
 import difflib
+import logging
 import os
 import traceback
 from dataclasses import dataclass
@@ -19,7 +21,7 @@ from typing import Any
 import pluggy
 
 from cistrack.plugin import hookspecs
-from cistrack.errors import DuplicateComponentError, ParameterError, UnknownComponentError
+from cistrack.errors import DuplicateComponentError, ParameterError, RunInterrupted, UnknownComponentError
 from cistrack.interfaces import KINDS
 
 __all__ = ["Registration", "PluginFailure", "Registry", "default_registry", "load_registry",
@@ -125,9 +127,14 @@ class Registry:
                 for impl in impls:
                     impl.function(registry=bound)
                 self.plugins.append((dist, ep.name, module))
-            except Exception as exc:  # a broken plugin must not stop the others
-                self.failures.append(PluginFailure(dist, ep.name, f"{type(exc).__name__}: {exc}",
+            except RunInterrupted:  # a real SIGTERM/SIGHUP arrived while loading: stop as asked
+                raise
+            except BaseException as exc:  # a broken plugin must not stop the others, nor the process:
+                # SystemExit (sys.exit on import), KeyboardInterrupt and other BaseExceptions included
+                self.failures.append(PluginFailure(dist, ep.name, _describe_failure(exc),
                                                    traceback.format_exc()))
+                logging.getLogger("cistrack").warning(f"warning: plugin {self.failures[-1]}; it is skipped "
+                                                      "(cistrack plugins lists plugins that failed to load)")
         return self
 
     # -- lookup -----------------------------------------------------------------------------------
@@ -177,6 +184,14 @@ class Registry:
     def _check_kind(self, kind: str) -> None:
         if kind not in self._entries:
             raise UnknownComponentError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
+
+
+def _describe_failure(exc: BaseException) -> str:
+    """One line for a plugin's import or registration error; for ``sys.exit`` it says so."""
+    if isinstance(exc, SystemExit):
+        return f"SystemExit: it called sys.exit({exc.code!r}) while loading"
+    text = str(exc)
+    return f"{type(exc).__name__}: {text}" if text else f"{type(exc).__name__} raised while loading"
 
 
 def _dist_identity(ep: metadata.EntryPoint, cache: dict) -> tuple[str, str]:

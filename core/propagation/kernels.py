@@ -240,10 +240,8 @@ def num_threads() -> int:
     Raises :class:`ConfigError` if ``$CISTRACK_NUM_THREADS`` is not an integer from 1 to 1024."""
     env = os.environ.get("CISTRACK_NUM_THREADS")
     if env is not None and env.strip():
-        try:
-            n = int(env)
-        except ValueError:
-            n = 0
+        digits = env.strip()
+        n = int(digits) if digits.isascii() and digits.isdigit() else 0  # int() would take "1_0" as 10
         if not 1 <= n <= 1024:
             raise ConfigError(f"environment variable CISTRACK_NUM_THREADS={env!r}: must be an integer "
                               "from 1 to 1024 (or unset: numba's thread count)")

@@ -32,6 +32,7 @@ from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.run_context import RunContext, Step
 from cistrack.runs.run_id import scenario_run_id
+from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
 from cistrack.evaluation.information_bound import InformationBoundObserver
 from cistrack.evaluation.residuals import ResidualObserver
 from cistrack.evaluation.run_summary import RunSummary, summarize
@@ -92,16 +93,8 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     truth_dyn = scenario.truth_dynamics.build(reg) if scenario.truth_dynamics else dynamics
     duration = scenario.duration
 
-    if scenario.measurements_file is not None:
-        from cistrack.runs.observation_files import reader_for  # real observations, through a registered reader
-        say(f"reading measurements from {scenario.measurements_file}")
-        spec = scenario.measurements_reader
-        reader = spec.build(reg) if spec is not None else reader_for(scenario.measurements_file, registry=reg)
-        measurements = reader.read(scenario.measurements_file, scenario.epoch)
-        if measurements.sites is not None:  # several observatories: the sensor placed at each
-            from cistrack.astro.site_network import build_site_network
-            sensor = build_site_network(scenario.components["sensor"], reg, measurements)
-            say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
+    if scenario.measurements_file is not None:  # real observations, through a registered reader
+        measurements, sensor = read_scenario_observations(scenario, sensor, reg, say)
         grid = np.zeros(0)
         grid_states = np.zeros((0, 6))
         truth = None
@@ -124,7 +117,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
             passes = passes[1:]
         if schedule is None:
             raise ConfigError(f"{scenario.source}: simulated measurements need a [schedule] table")
-        times = np.asarray(schedule.plan(passes, duration, rngs["schedule"]), dtype=float)
+        times = plan_measurement_times(scenario, schedule, passes, rngs["schedule"])
         if times.size == 0:
             raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
                               f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
@@ -132,7 +125,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
     from cistrack.astro.site_network import one_per_time
     iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
-    cloud = iod.estimate(iod_measurements, iod_sensor, rngs["iod"])
+    cloud = estimate_iod(scenario, iod, iod_measurements, iod_sensor, rngs["iod"], truth is not None)
     say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or scenario_run_id(scenario, seed)
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
@@ -185,10 +178,14 @@ def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, tuple[int,
     t_last = ctx.iod_cloud.epoch
     if scenario.predict_every_hours > 0:
         dt = float(units.hours_to_tu(scenario.predict_every_hours))
-        meas_t = np.array([e[0] for e in events]) if events else np.zeros(0)
-        for t in np.arange(t_last + dt, scenario.duration, dt):
-            if meas_t.size == 0 or np.min(np.abs(meas_t - t)) > 1e-6:
-                events.append((float(t), ()))
+        meas_t = np.sort([e[0] for e in events]) if events else np.zeros(0)
+        ts = np.arange(t_last + dt, scenario.duration, dt)
+        if meas_t.size:  # distance to the nearest measurement time, in O(log n) per prediction
+            k = np.searchsorted(meas_t, ts)
+            before, after = meas_t[np.clip(k - 1, 0, None)], meas_t[np.minimum(k, meas_t.size - 1)]
+            near = np.minimum(np.abs(before - ts), np.abs(after - ts))
+            ts = ts[near > 1e-6]
+        events += [(float(t), ()) for t in ts]
     if scenario.end_with_prediction and scenario.duration > max([t_last] + [e[0] for e in events]) + 1e-9:
         events.append((scenario.duration, ()))
     events.sort(key=lambda e: (e[0], e[1][:1] or (-1,)))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import unicodedata
 from typing import Any
 
 from cistrack.errors import ConfigError
@@ -63,7 +64,8 @@ def check_path_component(value: Any, where: str) -> str:
     """``value`` as a name that becomes one directory or file name (a run id, a label).
 
     Refused: non-strings, empty, ``.`` and ``..``, leading or trailing spaces, a leading ``.`` or
-    ``-``, path separators, and control characters; at most 100 characters."""
+    ``-``, path separators, and control or invisible formatting characters (bidirectional
+    overrides, zero-width characters); at most 100 characters."""
     if not isinstance(value, str):
         raise ConfigError(f"{where}: {value!r} must be a string")
     bad = ""
@@ -75,8 +77,10 @@ def check_path_component(value: Any, where: str) -> str:
         bad = "contains a path separator"
     elif value.startswith((".", "-")) or value != value.strip():
         bad = "starts with '.' or '-' or has leading/trailing spaces"
-    elif any(ord(c) < 32 or ord(c) == 127 for c in value):
-        bad = "contains control characters"
+    elif any(unicodedata.category(c) in _UNPRINTABLE for c in value):
+        c = next(c for c in value if unicodedata.category(c) in _UNPRINTABLE)
+        bad = (f"contains a control or invisible formatting character (U+{ord(c):04X}; control characters, "
+               "bidirectional overrides and zero-width characters are refused)")
     if bad:
         raise ConfigError(f"{where}: {value!r} {bad}; it names a directory, so it must be one path "
                           "component (letters, digits, spaces, '.', '_', '-'; no '/' or '..')")

@@ -49,6 +49,8 @@ from cistrack.plugin.component_tables import ComponentSpec, check_keys, componen
 from cistrack.evaluation.custody import CustodyRule
 from cistrack.scenario.custody_table import custody_rule
 from cistrack.scenario.limits import check_memory, check_path_component, check_seed
+from cistrack.scenario import toml_input
+from cistrack.scenario.work_limits import check_epoch_span, check_steps
 from cistrack.errors import ConfigError, UnknownComponentError
 from cistrack.interfaces import ReferenceOrbit
 from cistrack.plugin.registry import Registry, default_registry
@@ -157,7 +159,7 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
     if not p.exists():
         raise ConfigError(f"scenario file not found: {p}")
     try:
-        data = tomllib.loads(p.read_text())
+        data = toml_input.loads(p.read_text(), str(p))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -173,6 +175,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     reg = registry or default_registry()
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: a scenario must be a TOML table")
+    toml_input.check_depth(data, source)
     check_keys(data, _TOP_KEYS, source, "top level")
     for table in _REQUIRED_TABLES:
         if table not in data:
@@ -187,6 +190,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     except ValueError:
         raise ConfigError(f"{source}: top level: key 'epoch' = {epoch_text!r} is not an ISO-8601 UTC time "
                           f"(e.g. '2026-01-01T00:00:00Z')") from None
+    check_epoch_span(epoch, 0.0, f"{source}: top level: key 'epoch'")
     seed = typed(data.get("seed", 0), int, source, "top level", "seed")
     check_seed(seed, f"{source}: top level: key 'seed'")
     duration = float(typed(data.get("duration_days", 7.0), (int, float), source, "top level", "duration_days"))
@@ -254,6 +258,10 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         raise ConfigError(f"{source}: [run]: key 'predict_every_hours' = {pe} must be a finite number >= 0 "
                           "(0: only at measurements)")
     _check_sizes(components, duration, grid, source)
+    check_epoch_span(epoch, duration, f"{source}: top level: key 'epoch'")
+    if pe > 0:
+        check_steps(duration * 24.0 / pe, f"{source}: [run]: key 'predict_every_hours' = {pe:g}",
+                    f"a prediction every {pe:g} h over duration_days = {duration:g}")
     ewp = typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
     rframe = typed(run.get("recording_frame", "synodic"), str, source, "[run]", "recording_frame")
     if rframe not in ("synodic", "inertial"):

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from cistrack.errors import ConfigError
+from cistrack.scenario import toml_input
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -24,9 +25,10 @@ else:  # pragma: no cover
 __all__ = ["parse_settings", "merge_settings", "apply_settings", "describe_settings"]
 
 
-def _value(text: str) -> Any:
+def _value(text: str, item: str) -> Any:
+    """The TOML value ``text`` of the setting ``item`` (a bare word: the string itself)."""
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        return toml_input.loads(f"v = {text}", f"--set {item!r}")["v"]
     except tomllib.TOMLDecodeError:
         return text  # a bare word: take it as a string
 
@@ -46,7 +48,7 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
             if not isinstance(child, dict):
                 raise ConfigError(f"--set {item!r}: '{part}' was already set to a value, not a table")
             node = child
-        node[path[-1]] = _value(text.strip())
+        node[path[-1]] = _value(text.strip(), item if len(item) <= 60 else item[:60] + "...")
     return out
 
 

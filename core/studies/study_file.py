@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import difflib
 import json
+from collections import Counter
 import sys
 from importlib import resources
 from pathlib import Path
 
 from cistrack.errors import ConfigError
+from cistrack.scenario import toml_input
 from cistrack.scenario.limits import check_count, check_seed
 
 if sys.version_info >= (3, 11):
@@ -90,7 +92,7 @@ def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
         src = src if src.is_file() else p / "study.json"  # relative scenario paths resolve beside it
         return _checked(data, src), src
     try:
-        data = tomllib.loads(p.read_text())
+        data = toml_input.loads(p.read_text(), str(p))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
     return _checked(data, p), p
@@ -117,6 +119,10 @@ def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: in
         if not isinstance(data["seeds"], list) or not data["seeds"]:
             raise ConfigError(f"{p}: key 'seeds' must be a non-empty list of integers from 0 to 2**63-1")
         seeds = [check_seed(s, f"{p}: key 'seeds'") for s in data["seeds"]]
+        repeated = sorted(s for s, n in Counter(seeds).items() if n > 1)
+        if repeated:
+            raise ConfigError(f"{p}: key 'seeds' repeats seed(s) {', '.join(map(str, repeated))}; each seed "
+                              "must appear once (a seed names its runs)")
         if first_seed is None and n_seeds is None:
             return seeds
         first, count = seeds[0], len(seeds)

@@ -27,6 +27,7 @@ from cistrack.interfaces.component import check_choice, check_int, check_positiv
 from cistrack.errors import IODError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
+from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.astro.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
@@ -180,7 +181,7 @@ class GaussIOD(IODMethod):
     def __init__(self, *, n_particles: int = 2000, max_oversampling: float = 10.0,
                  pass_gap_hours: float = 3.0, fit_fraction: float = 0.5, min_fit: int = 3,
                  max_fit: int = 12, mu: float = MU_EARTH_MOON) -> None:
-        self.n_particles = check_int(self, "n_particles", n_particles, minimum=1)
+        self.n_particles = check_iod_particles(self, n_particles)
         self.max_oversampling = check_range(self, "max_oversampling", max_oversampling, 1.0, 1e6)
         self.pass_gap_hours = check_positive(self, "pass_gap_hours", pass_gap_hours)
         self.fit_fraction = check_range(self, "fit_fraction", fit_fraction, 0.0, 1.0, lo_open=True)

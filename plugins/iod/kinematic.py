@@ -74,6 +74,7 @@ from cistrack.interfaces.component import check_choice, check_int, check_positiv
 from cistrack.errors import IODError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, RangePrior, Sensor
+from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import LU_KM, VU_KMS
 
@@ -133,7 +134,7 @@ class KinematicFitIOD(IODMethod):
         if not isinstance(range_prior, (str, RangePrior)):
             self._fail("range_prior", range_prior, "must be a range-prior component or its registered name")
         self.range_prior = range_prior
-        self.n_particles = check_int(self, "n_particles", n_particles, minimum=1)
+        self.n_particles = check_iod_particles(self, n_particles)
         self.oversampling = check_range(self, "oversampling", oversampling, 1.0, 1e4)
         self.max_oversampling = check_range(self, "max_oversampling", max_oversampling, 1.0, 1e6)
         if self.max_oversampling < self.oversampling:

@@ -28,7 +28,7 @@ from cistrack.runs.observation_files import FieldError, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
-from .decimal_units import from_rad, to_rad
+from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, parse_iso_utc
 from .site_params import resolve_site
 
@@ -83,7 +83,7 @@ def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) ->
         for f in ("pos1", "pos2", "pos3"):
             text, pln = _get(rec, f, path, line)
             try:
-                v = float(text)
+                v = plain_float(text)
             except ValueError:
                 raise FieldError(path, pln, f, f"{show_field(text)} is not a number") from None
             if not math.isfinite(v):
@@ -123,7 +123,8 @@ def record_to_row(rec: dict, path, line: int, explicit: dict[str, Site], table: 
     s_ra = _sigma(rec, "rmsRA", path, line, scale=math.cos(dec))
     s_dec = _sigma(rec, "rmsDec", path, line)
     site = _site(rec, path, line, explicit, table)
-    return ObsRow(t, ra, dec, s_ra, s_dec, site, "radec", line, "obsTime")
+    obj = next(rec[f][0].strip() for f in _ID_FIELDS if rec.get(f, ("", 0))[0].strip())
+    return ObsRow(t, ra, dec, s_ra, s_dec, site, "radec", line, "obsTime", obj)
 
 
 def rows_for_writing(ms: MeasurementSet, epoch: datetime, who: str) -> tuple[list[dict[str, str]], bool]:

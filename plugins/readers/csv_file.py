@@ -31,7 +31,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
 
-from .decimal_units import from_rad, to_rad
+from .decimal_units import from_rad, plain_float, to_rad
 from .site_params import parse_sites, resolve_site
 
 __all__ = ["CsvReader", "read_measurements", "write_measurements", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS"]
@@ -43,7 +43,7 @@ _MAX_REPORTED = 25
 
 def _number(text: str, column: str) -> float:
     try:
-        v = float(text)
+        v = plain_float(text)
     except ValueError:
         raise ValueError(f"{column} {text!r} is not a number") from None
     if not math.isfinite(v):
@@ -77,7 +77,7 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     if not (sigma_arcsec > 0 and range_alpha > 0):
         raise MeasurementError(f"{p}: default sigma_arcsec and range_alpha must be > 0")
     try:
-        lines = p.read_text(encoding="utf-8").splitlines()
+        lines = p.read_text(encoding="utf-8-sig").splitlines()  # a leading byte-order mark is dropped
     except OSError as exc:
         raise MeasurementError(f"cannot read measurement file {p}: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:

@@ -13,7 +13,7 @@ from decimal import Decimal
 
 from cistrack.errors import MeasurementError
 
-__all__ = ["to_rad", "from_rad", "fixed", "decimal_in"]
+__all__ = ["to_rad", "plain_float", "from_rad", "fixed", "decimal_in"]
 
 _CTX = decimal.Context(prec=50)
 _PI = Decimal("3.14159265358979323846264338327950288419716939937510")
@@ -21,12 +21,24 @@ _UNIT = {"rad": Decimal(1), "deg": _CTX.divide(_PI, Decimal(180)),
          "arcsec": _CTX.divide(_PI, Decimal(648000)), "hour": _CTX.divide(_PI, Decimal(12))}
 
 
+def plain_float(text: str) -> float:
+    """The number written in ``text`` (decimal or exponent notation, as ``float`` reads it);
+    ValueError for anything else, including digits grouped with underscores (``1_08.5``), which
+    Python's ``float`` and ``Decimal`` would read but no observation format allows."""
+    if not isinstance(text, str) or "_" in text:
+        raise ValueError("not a number")
+    return float(text)
+
+
 def to_rad(text: str, unit: str, scale: float = 1.0) -> float:
     """Radians of the decimal ``text`` in ``unit`` ("deg", "arcsec", "hour", "rad"), divided
-    by ``scale``; ValueError when the text is not a finite decimal number."""
+    by ``scale``; ValueError when the text is not a finite decimal number (underscores between
+    digits are refused)."""
     try:
+        if "_" in text:
+            raise decimal.InvalidOperation
         d = Decimal(text.strip())
-    except (decimal.InvalidOperation, AttributeError):
+    except (decimal.InvalidOperation, AttributeError, TypeError):
         raise ValueError("not a number") from None
     if not d.is_finite():
         raise ValueError("not a finite number")

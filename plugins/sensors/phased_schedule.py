@@ -11,6 +11,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
 from cistrack.interfaces import Pass, Schedule
+from cistrack.scenario.work_limits import MAX_STEPS
 from cistrack.units import TU_S
 
 __all__ = ["PhasedSchedule", "RULES"]
@@ -25,12 +26,15 @@ _EPS = 1e-12
 
 
 class _Phase:
-    """A validated phase in TU (internal)."""
+    """A validated phase in TU (internal). ``names`` are the parameters that set its spacing
+    and its count, for messages."""
 
     def __init__(self, rule, start, end, from_pass, to_pass, dt_min, dt_max, align, count):
         self.rule, self.start, self.end = rule, start, end
         self.from_pass, self.to_pass = from_pass, to_pass
         self.dt_min, self.dt_max, self.align, self.count = dt_min, dt_max, align, count
+        self.names: tuple[str, str] = ("interval_minutes", "count")
+        self.values: tuple[Any, Any] = (None, None)
 
     def spacings(self, n: int, rng: np.random.Generator) -> np.ndarray:
         if self.dt_max > self.dt_min:
@@ -57,10 +61,18 @@ class PhasedSchedule(Schedule):
         self._phases = self._parse(self.phases, "phases")
 
     # -- validation -----------------------------------------------------------------------------
-    def _parse(self, phases: Any, pname: str) -> list[_Phase]:
+    def _parse(self, phases: Any, pname: str, names: Sequence[tuple[str, str]] | None = None) -> list[_Phase]:
+        """Validated phases; ``names`` give, per phase, the parameters that set its spacing and
+        count when they are not the phase's own keys (presets)."""
         if not isinstance(phases, (list, tuple)) or not phases:
             self._fail(pname, phases, "must be a non-empty list of tables (one per phase)")
-        return [self._parse_one(p, f"{pname}[{i}]") for i, p in enumerate(phases)]
+        out = []
+        for i, p in enumerate(phases):
+            ph = self._parse_one(p, f"{pname}[{i}]")
+            ph.names = names[i] if names else (f"{pname}[{i}].interval_minutes", f"{pname}[{i}].count")
+            ph.values = (p.get("interval_minutes"), p.get("count", 5))
+            out.append(ph)
+        return out
 
     def _parse_one(self, p: Any, where: str) -> _Phase:
         if not isinstance(p, dict):
@@ -114,17 +126,50 @@ class PhasedSchedule(Schedule):
         if not spans:
             return np.empty(0)
         origin = spans[0][0] if self.origin == "first-pass" else 0.0
+        self._check_count(spans, origin)
         chunks = [self._plan_phase(ph, spans, origin, rng) for ph in self._phases]
         times = np.unique(np.concatenate(chunks)) if chunks else np.empty(0)
         return times[times <= t_end]
 
-    def _plan_phase(self, ph: _Phase, spans, origin: float, rng) -> np.ndarray:
-        if ph.rule == "off":
-            return np.empty(0)
+    @staticmethod
+    def _segments(ph: _Phase, spans, origin: float) -> list[tuple[float, float]]:
+        """The parts of the passes ``spans`` that phase ``ph`` measures in."""
         w0, w1 = origin + ph.start, origin + ph.end
         stop = len(spans) if ph.to_pass is None else min(ph.to_pass, len(spans))
         segs = [(max(a, w0), min(b, w1)) for a, b in spans[ph.from_pass:stop]]
-        segs = [(a, b) for a, b in segs if a <= b]
+        return [(a, b) for a, b in segs if a <= b]
+
+    def _check_count(self, spans, origin: float) -> None:
+        """Refuse, before building them, more measurement times than a run may take as filter
+        steps (:data:`~cistrack.scenario.work_limits.MAX_STEPS`), naming the parameter of the
+        phase that makes the most."""
+        counts = []
+        for ph in self._phases:
+            segs = self._segments(ph, spans, origin) if ph.rule != "off" else []
+            if not segs:
+                counts.append((0.0, ph))
+            elif ph.rule == "random-consecutive":
+                counts.append((float(ph.count) * len(segs), ph))
+            elif ph.align == "clock":
+                counts.append(((segs[-1][1] - origin - ph.start) / ph.dt_min + 1, ph))
+            else:
+                counts.append((sum((b - a) / ph.dt_min + 1 for a, b in segs), ph))
+        total = sum(n for n, _ in counts)
+        if total > MAX_STEPS:
+            n, ph = max(counts, key=lambda c: c[0])
+            which = 1 if ph.rule == "random-consecutive" else 0
+            name = ph.names[which]
+            self._fail(name, getattr(self, name, ph.values[which]),
+                       f"it would plan about {total:.3g} measurement times in {len(spans)} visibility "
+                       f"pass{'' if len(spans) == 1 else 'es'} "
+                       f"({sum(b - a for a, b in spans) * TU_S / 86400.0:.3g} days); at most {MAX_STEPS:,} are "
+                       "allowed (each is a filter step): choose a " + ("smaller count" if which else "longer interval"))
+
+    def _plan_phase(self, ph: _Phase, spans, origin: float, rng) -> np.ndarray:
+        if ph.rule == "off":
+            return np.empty(0)
+        w0 = origin + ph.start
+        segs = self._segments(ph, spans, origin)
         if not segs:
             return np.empty(0)
         if ph.rule == "every" and ph.align == "clock":

@@ -55,6 +55,9 @@ from .phased_schedule import RULES, PhasedSchedule
 __all__ = ["PhasedSchedule", "EverySchedule", "RandomConsecutiveSchedule",
            "PaperExample1Schedule", "PaperExample2Schedule", "PaperExample3Schedule", "RULES"]
 
+_NAMES = ("interval_minutes", "count")
+"""The preset parameters that set a phase's spacing and count (for messages)."""
+
 
 class EverySchedule(PhasedSchedule):
     """Every ``interval_minutes`` while visible, between ``start_hours`` and ``end_hours``.
@@ -85,7 +88,7 @@ class EverySchedule(PhasedSchedule):
                  "start_hours": start_hours, "end_hours": end_hours}
         if interval_max_minutes:
             phase["interval_max_minutes"] = interval_max_minutes
-        self._phases = self._parse([phase], "parameters")
+        self._phases = self._parse([phase], "parameters", [_NAMES])
 
 
 class RandomConsecutiveSchedule(PhasedSchedule):
@@ -114,7 +117,7 @@ class RandomConsecutiveSchedule(PhasedSchedule):
         phase = {"rule": "random-consecutive", "count": count, "interval_minutes": interval_minutes,
                  "interval_max_minutes": max(interval_max_minutes, interval_minutes),
                  "from_pass": from_pass}
-        self._phases = self._parse([phase], "parameters")
+        self._phases = self._parse([phase], "parameters", [_NAMES])
 
 
 class PaperExample1Schedule(PhasedSchedule):
@@ -141,7 +144,7 @@ class PaperExample1Schedule(PhasedSchedule):
         self._phases = self._parse([
             {"rule": "every", "to_pass": 1, **spacing},
             {"rule": "random-consecutive", "from_pass": 1, "count": count, **spacing},
-        ], "parameters")
+        ], "parameters", [_NAMES, _NAMES])
 
 
 class PaperExample2Schedule(PhasedSchedule):
@@ -174,7 +177,7 @@ class PaperExample2Schedule(PhasedSchedule):
             {"rule": "every", "interval_minutes": interval_minutes, "end_hours": initial_hours},
             {"rule": "every", "interval_minutes": 60.0 * final_interval_hours, "align": "clock",
              "start_hours": resume},
-        ], "parameters")
+        ], "parameters", [_NAMES, ("final_interval_hours", "count")])
 
 
 class PaperExample3Schedule(PhasedSchedule):
@@ -201,7 +204,7 @@ class PaperExample3Schedule(PhasedSchedule):
         self._phases = self._parse([
             {"rule": "every", "interval_minutes": interval_minutes, "end_hours": initial_hours},
             {"rule": "every", "interval_minutes": interval_minutes, "start_hours": resume},
-        ], "parameters")
+        ], "parameters", [_NAMES, _NAMES])
 
 
 @hookimpl

@@ -1,0 +1,125 @@
+"""What a run reads or plans before its first filter step, checked against the scenario.
+
+- :func:`read_scenario_observations`: the scenario's observation file through a registered
+  reader; refused when it is a directory or of no known format, when observations lie outside
+  the scenario's span (epoch to epoch + duration_days), or when it has more observation times
+  than a run may take as filter steps.
+- :func:`plan_measurement_times`: the schedule's times, with its refusals (too many times to
+  plan) named as the scenario's ``[schedule]`` table.
+- :func:`estimate_iod`: the IOD, whose failure on measurements simulated from a ``state_km``
+  truth points at that state.
+
+Every refusal is a :class:`~cistrack.errors.CistrackError` naming the scenario file and key.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from cistrack import units
+from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.errors import ConfigError, IODError, MeasurementError, ParameterError
+from cistrack.model.measurement import MeasurementSet
+from cistrack.plugin.registry import Registry
+from cistrack.scenario.loading import Scenario
+from cistrack.scenario.work_limits import check_steps
+
+__all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod"]
+
+_SPAN_TOLERANCE_TU = 1e-9
+"""Observations this close to the span's ends (about 0.4 ms) count as inside."""
+
+
+def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Registry,
+                               say: Callable[[str], None]) -> tuple[MeasurementSet, Any]:
+    """The observations of ``scenario``'s ``[measurements] file`` and the sensor that took them
+    (the scenario's sensor placed at each site, for files from several observatories)."""
+    from cistrack.runs.observation_files import reader_for
+
+    path = scenario.measurements_file
+    say(f"reading measurements from {path}")
+    spec = scenario.measurements_reader
+    try:
+        reader = spec.build(registry) if spec is not None else reader_for(path, registry=registry)
+    except MeasurementError as exc:
+        raise ConfigError(f"{scenario.source}: [measurements]: key 'file': {exc}") from None
+    measurements = reader.read(path, scenario.epoch)
+    if weights_note(measurements):
+        say(weights_note(measurements))
+    check_observation_span(scenario, measurements)
+    groups = measurements.time_groups()
+    check_steps(len(groups), f"{scenario.source}: [measurements]: key 'file' = {str(path)!r}",
+                f"{len(measurements):,} observations at {len(groups):,} times")
+    if measurements.sites is not None:  # several observatories: the sensor placed at each
+        from cistrack.astro.site_network import build_site_network
+        sensor = build_site_network(scenario.components["sensor"], registry, measurements)
+        say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
+    return measurements, sensor
+
+
+def weights_note(measurements: MeasurementSet) -> str:
+    """One line on where the observations' weights came from: the file's own uncertainties, or
+    for how many the reader's default ``sigma_arcsec`` (meta ``default_sigma_count`` and
+    ``default_sigma_arcsec``, which the astrometry readers record); "" for a reader that does
+    not record them."""
+    meta = measurements.meta
+    n, fmt = meta.get("default_sigma_count"), meta.get("format", "the")
+    if n is None:  # a reader that does not record it
+        return ""
+    if n == 0:
+        return f"weights: the file's own uncertainties for all {len(measurements)} observations"
+    return (f"weights: {n} of {len(measurements)} observations have no uncertainty in the file: "
+            f"the {fmt} reader's default sigma_arcsec = {meta.get('default_sigma_arcsec'):g} arcsec on "
+            f"the sky (RA x cos(Dec), Dec) applies; set [measurements] reader.sigma_arcsec to your data's noise")
+
+
+def _utc(scenario: Scenario, t: float) -> str:
+    return units.format_utc(units.tu_to_utc(scenario.epoch, t))[:19] + "Z"
+
+
+def check_observation_span(scenario: Scenario, measurements: MeasurementSet) -> None:
+    """Refuse observations before the scenario's epoch or after epoch + duration_days, naming
+    the file, how many lie outside, the first and last of them and the span."""
+    t = np.asarray(measurements.times, dtype=float)
+    end = scenario.duration
+    outside = (t < -_SPAN_TOLERANCE_TU) | (t > end + _SPAN_TOLERANCE_TU)
+    if not np.any(outside):
+        return
+    bad = t[outside]
+    days = units.tu_to_days(bad)
+    where = (f"{bad.size:,} of {t.size:,} observations lie outside the scenario's span "
+             f"({_utc(scenario, 0.0)} to {_utc(scenario, end)}: top-level 'epoch' + 'duration_days' = "
+             f"{scenario.duration_days:g})")
+    first, last = float(bad.min()), float(bad.max())
+    shown = (f"from {_utc(scenario, first)} ({float(days.min()):,.1f} days from the epoch) to "
+             f"{_utc(scenario, last)} ({float(days.max()):,.1f} days)" if bad.size > 1
+             else f"at {_utc(scenario, first)} ({float(days.min()):,.1f} days from the epoch)")
+    raise ConfigError(f"{scenario.source}: [measurements]: key 'file' = {str(scenario.measurements_file)!r}: "
+                      f"{where}, {shown}; set 'epoch' and 'duration_days' to cover the observations, or "
+                      "remove those outside from the file")
+
+
+def plan_measurement_times(scenario: Scenario, schedule: Any, passes: list, rng: np.random.Generator) -> np.ndarray:
+    """The schedule's measurement times (TU); a schedule refusing its parameters for these
+    passes (e.g. too many times) is named as the scenario's ``[schedule]`` table."""
+    try:
+        return np.asarray(schedule.plan(passes, scenario.duration, rng), dtype=float)
+    except ParameterError as exc:
+        raise ConfigError(f"{scenario.source}: [schedule]: {exc}") from None
+
+
+def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sensor: Any,
+                 rng: np.random.Generator, simulated: bool) -> Any:
+    """The IOD's cloud. When the measurements were simulated from a ``[truth] state_km`` and the
+    IOD finds no orbit, the message points at that state (where the target is from Earth)."""
+    try:
+        return iod.estimate(measurements, sensor, rng)
+    except IODError as exc:
+        if not simulated or scenario.truth_state is None:
+            raise
+        earth = np.array([-MU_EARTH_MOON, 0.0, 0.0])  # the Earth in the synodic frame (LU)
+        r_km = float(np.linalg.norm(scenario.truth_state[:3] - earth) * units.LU_KM)
+        where = f" (it puts the target {r_km:,.0f} km from Earth at t = 0)"
+        raise IODError(f"{exc} The measurements were simulated from {scenario.source}: [truth]: key "
+                       f"'state_km'{where}: check that state, which the IOD's bounds must admit.") from None
