@@ -1,10 +1,13 @@
 """Observing sites: geodetic coordinates, and MPC observatory codes from a bundled table.
 
 A :class:`Site` is a WGS84 geodetic position (latitude, East longitude, height above the
-ellipsoid). MPC observatory codes are looked up in ``cistrack/data/mpc_observatories.csv``, a
-bundled subset of the Minor Planet Center's list (code, East longitude, parallax constants
-rho*cos(phi'), rho*sin(phi') in Earth equatorial radii); nothing is downloaded. Codes outside
-the table are given to readers as explicit coordinates (their ``sites`` parameter).
+ellipsoid). MPC observatory codes are looked up in ``cistrack/data/mpc_observatories.csv``, the
+Minor Planet Center's full list of observatory codes (code, East longitude, parallax constants
+rho*cos(phi'), rho*sin(phi') in Earth equatorial radii, name; its header names the source and
+date); nothing is downloaded. Codes of roving and space-based observers (no fixed parallax
+constants in the list, e.g. 247, 250, C51) and the geocentre (500, 244) are refused with a
+message saying so. Sites outside the list are given to readers as explicit coordinates (their
+``sites`` parameter: WGS84 latitude/longitude/height, or parallax constants).
 
 The parallax constants are converted to geodetic coordinates exactly: the Earth-fixed position
 (rho cos phi' cos lon, rho cos phi' sin lon, rho sin phi') x 6378.137 km is inverted to WGS84
@@ -66,12 +69,30 @@ class Site:
 
 def site_from_parallax(code: str, name: str, longitude_deg: float, rho_cos_phi: float,
                        rho_sin_phi: float) -> Site:
-    """The geodetic site of MPC parallax constants (Earth equatorial radii)."""
-    lon = longitude_deg - 360.0 if longitude_deg > 180.0 else longitude_deg
+    """The WGS84 geodetic site of MPC parallax constants.
+
+    ``longitude_deg``: East longitude, degrees (0 to 360, or -180 to 180); ``rho_cos_phi`` (>= 0)
+    and ``rho_sin_phi``: rho cos(phi') and rho sin(phi'), the distance from the Earth's axis and
+    from its equatorial plane in Earth equatorial radii (6378.137 km; phi' the geocentric
+    latitude). Raises MeasurementError naming ``code`` for values that are not finite numbers,
+    a negative rho cos(phi'), the geocentre, or a point whose height is outside the
+    :class:`Site` bounds."""
+    vals = {"longitude_deg": longitude_deg, "rho_cos_phi": rho_cos_phi, "rho_sin_phi": rho_sin_phi}
+    for key, v in vals.items():
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+            raise MeasurementError(f"observatory {code} ({name}): {key} = {v!r} must be a finite number")
+    if not -360.0 <= longitude_deg <= 360.0:
+        raise MeasurementError(f"observatory {code} ({name}): longitude_deg {longitude_deg} is outside [-360, 360]")
+    if rho_cos_phi < 0.0:
+        raise MeasurementError(f"observatory {code} ({name}): rho_cos_phi {rho_cos_phi} must be >= 0 "
+                               f"(the distance from the Earth's axis, Earth radii)")
+    lon = longitude_deg - 360.0 if longitude_deg > 180.0 else (
+        longitude_deg + 360.0 if longitude_deg < -180.0 else longitude_deg)
     p = rho_cos_phi * EARTH_EQUATORIAL_RADIUS_KM
     z = rho_sin_phi * EARTH_EQUATORIAL_RADIUS_KM
     if p == 0.0 and z == 0.0:
-        raise MeasurementError(f"observatory {code} ({name}) is the geocentre, not a ground site")
+        raise MeasurementError(f"observatory {code} ({name}) has parallax constants (0, 0): the geocentre, "
+                               f"not a ground site")
     lat = math.atan2(z, p * (1.0 - _E2))
     h = 0.0
     for _ in range(50):
@@ -86,29 +107,38 @@ def site_from_parallax(code: str, name: str, longitude_deg: float, rho_cos_phi: 
 
 
 @lru_cache(maxsize=1)
-def _table() -> dict[str, tuple[float, float, float, str]]:
+def _table() -> dict[str, tuple[float, float, float, str] | tuple[None, None, None, str]]:
+    """code -> (East longitude deg, rho cos phi', rho sin phi' in Earth radii, name); the three
+    numbers are None for a roving or space-based observer (empty fields in the table)."""
     text = resources.files("cistrack").joinpath("data/mpc_observatories.csv").read_text(encoding="utf-8")
     rows = [r for r in csv.reader(line for line in text.splitlines() if line and not line.startswith("#"))]
-    out = {}
+    out: dict = {}
     for r in rows[1:]:
-        out[r[0]] = (float(r[1]), float(r[2]), float(r[3]), r[4])
+        out[r[0]] = ((None, None, None, r[4]) if not (r[1] or r[2] or r[3])
+                     else (float(r[1]), float(r[2]), float(r[3]), r[4]))
     return out
 
 
 def observatory_codes() -> list[str]:
-    """The MPC observatory codes in the bundled table, sorted."""
-    return sorted(_table())
+    """The MPC observatory codes that :func:`observatory` resolves to a ground site, sorted
+    (every code of the bundled list but roving and space-based observers and the geocentre)."""
+    return sorted(c for c, (lon, rc, rs, _n) in _table().items() if rc is not None and (rc, rs) != (0.0, 0.0))
 
 
 def observatory(code: str) -> Site:
-    """The ground site of MPC observatory ``code`` from the bundled table.
+    """The ground site of MPC observatory ``code`` from the bundled list.
 
-    Raises MeasurementError for a code not in the table (give its coordinates explicitly) or
-    for the geocentre (500)."""
+    Raises MeasurementError for a code not in the list (give its coordinates explicitly), for a
+    roving or space-based observer (no fixed parallax constants) and for the geocentre (500)."""
     try:
         lon, rc, rs, name = _table()[str(code)]
     except KeyError:
-        raise MeasurementError(f"MPC observatory code {code!r} is not in cistrack's bundled table "
-                               f"({len(_table())} codes); give its coordinates explicitly (reader "
-                               f"parameter 'sites')") from None
+        raise MeasurementError(f"MPC observatory code {code!r} is not in the MPC list bundled with "
+                               f"cistrack ({len(_table())} codes); give its coordinates explicitly "
+                               f"(reader parameter 'sites')") from None
+    if lon is None or rc is None or rs is None:
+        raise MeasurementError(f"MPC observatory code {code!r} ({name}) is a roving or space-based "
+                               f"observer: the MPC list gives it no fixed parallax constants, and "
+                               f"cistrack reads observations from fixed ground sites only (give a "
+                               f"fixed site's coordinates in the reader parameter 'sites')")
     return site_from_parallax(str(code), name, lon, rc, rs)

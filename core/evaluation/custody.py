@@ -61,6 +61,13 @@ class CustodyRule:
     max_earth_distance_km: float = 2e6
     """A final mean farther than this from Earth (km, ~5 lunar distances) has left cislunar
     space ("diverged")."""
+    blowup_nis: float = 1e6
+    blowup_nis_updates: int = 3
+    """With or without a truth: an NIS above ``blowup_nis`` on ``blowup_nis_updates`` consecutive
+    updates is a filter whose innovations blew up ("diverged" at the first of them: the step and
+    time where it started). A consistent filter's NIS is chi-square with 2 to 6 degrees of
+    freedom, above 40 with probability < 1e-6; 1e6 is a residual a thousand predicted sigmas away,
+    beyond any outlier a real data set holds (100 arcsec at 0.5 arcsec is an NIS of 4e4)."""
     diverged_nis: float = 1e3
     diverged_nis_updates: int = 3
     """Without a truth: a median NIS above ``diverged_nis`` over the last ``diverged_nis_updates``

@@ -5,8 +5,11 @@ During a run :class:`~cistrack.evaluation.custody.CustodyObserver` only knows "k
 scenario's :class:`~cistrack.evaluation.custody.CustodyRule`:
 
 - "filter-failed" stays as it is;
-- "diverged", with or without a truth, when a particle filter's weights degenerated (effective sample size or distinct
-  particles below ``degenerate_ess`` at an update: the reason says where), when the belief collapsed (largest
+- "diverged", with or without a truth, when the normalised innovations blew up (NIS above
+  ``blowup_nis`` on ``blowup_nis_updates`` consecutive updates: the step and time are those of
+  the first), when a particle filter's weights degenerated (effective sample size or distinct
+  particles below ``degenerate_ess`` at an update: the reason says where; the earlier of the two
+  is reported), when the belief collapsed (largest
   position sigma below ``collapse_sigma_km`` or entropy not finite), when (with a truth only)
   the final error exceeds ``diverged_error_km`` with a NEES above ``diverged_nees``, or when the
   mean is farther than ``max_earth_distance_km`` from Earth;
@@ -55,6 +58,27 @@ def _degenerate(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dic
             size = f"effective sample size {ess:.3g}{of}" if ess is not None else "weights"
             left = f", {int(unique)} distinct particles left" if unique is not None and math.isfinite(unique) else ""
             return f"degenerate weights ({size}{left}; fewer than {rule.degenerate_ess:g})", r
+    return None
+
+
+def _nis_blowup(rows: list[dict[str, Any]], rule: CustodyRule) -> tuple[str, dict[str, Any]] | None:
+    """The reason and row of the first update of a sustained blow-up of the innovations: the
+    first of ``rule.blowup_nis_updates`` consecutive updates whose NIS exceeds ``rule.blowup_nis``
+    (an infinite NIS counts; updates without an NIS, or with NaN, neither count nor break the
+    run); None if there is none."""
+    start, count, worst = None, 0, 0.0
+    for r in rows:
+        if r.get("kind") != "update" or r.get("nis") is None or math.isnan(float(r["nis"])):
+            continue
+        nis = float(r["nis"])
+        if nis > rule.blowup_nis:
+            start, count, worst = (r if count == 0 else start), count + 1, max(worst, nis)
+            if count >= rule.blowup_nis_updates:
+                return (f"innovations blew up: NIS {float(start['nis']):.3g} at this update and above "
+                        f"{rule.blowup_nis:g} on {count} consecutive updates (largest {worst:.3g}; a "
+                        f"consistent filter's NIS is chi-square with a few degrees of freedom)", start)
+        else:
+            start, count, worst = None, 0, 0.0
     return None
 
 
@@ -117,7 +141,8 @@ def _final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRu
         collapsed = f"belief collapsed: entropy {entropy} is not finite"
     elif not math.isfinite(sig) or sig < rule.collapse_sigma_km:
         collapsed = f"belief collapsed: largest position sigma {sig:.3g} km < {rule.collapse_sigma_km:g} km"
-    degenerate = _degenerate(rows, rule)
+    found = [f for f in (_nis_blowup(rows, rule), _degenerate(rows, rule)) if f is not None]
+    degenerate = min(found, key=lambda f: int(f[1]["step"])) if found else None  # the earlier
     if degenerate is not None:
         reason, row = degenerate
         return Verdict("diverged", reason + (f"; then {collapsed}" if collapsed else ""),

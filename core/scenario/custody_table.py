@@ -12,11 +12,13 @@ what is allowed)::
     diverged_nees = 1e4            # ... with a NEES above this: diverged (inf: off)
     degenerate_ess = 7.0           # effective sample size or distinct particles below this: diverged (0: off)
     max_earth_distance_km = 2e6    # a final mean farther from Earth (km): diverged (inf: off)
+    blowup_nis = 1e6               # an NIS above this ...
+    blowup_nis_updates = 3         # ... on this many consecutive updates: diverged there (inf: off)
     diverged_nis = 1e3             # without a truth: a median NIS above this ...
     diverged_nis_updates = 3       # ... over the last this many updates: diverged (inf: off)
 
-The rules that need no truth (degenerate weights, collapse, leaving cislunar space, and the NIS
-rule that only runs without a truth use) judge runs on measurement files too
+The rules that need no truth (degenerate weights, collapse, leaving cislunar space, the NIS
+blow-up, and the NIS rule that only runs without a truth use) judge runs on measurement files too
 (:mod:`cistrack.evaluation.verdicts`).
 """
 from __future__ import annotations
@@ -43,8 +45,9 @@ _CHECKS: dict[str, tuple[str, Any]] = {
     "degenerate_ess": ("a finite number >= 0 (particles; 0 turns the rule off)", lambda v: math.isfinite(v) and v >= 0),
     "max_earth_distance_km": ("a number > 0 (km; inf turns the rule off)", lambda v: v > 0),
     "diverged_nis": ("a number > 0 (inf turns the rule off)", lambda v: v > 0),
+    "blowup_nis": ("a number > 0 (inf turns the rule off)", lambda v: v > 0),
 }
-_COUNTS = ("hdr_consecutive", "diverged_nis_updates")
+_COUNTS = ("hdr_consecutive", "diverged_nis_updates", "blowup_nis_updates")
 CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, *_COUNTS})
 """Keys allowed in a scenario's ``[custody]`` table (the fields of CustodyRule)."""
 

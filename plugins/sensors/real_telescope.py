@@ -28,6 +28,7 @@ from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.observer import ObserverGeometry, neu_basis
+from cistrack.astro.ephemeris import check_de421_epoch
 from cistrack.astro.sites import Site
 from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
@@ -51,7 +52,7 @@ class RealTelescope(Sensor):
         "azel" (apparent azimuth and elevation) or "radec" (astrometric ICRF right ascension and
         declination, as MPC and ADES report them).
     sigma_arcsec : float
-        One-sigma noise of each of the two angles, arcseconds.
+        One-sigma noise of each angle, arcseconds ("radec": on the sky, on RA x cos(Dec) and Dec).
     measure_range : bool
         Also measure the geometric observer-target range (the "range" component, LU), for IOD.
     range_alpha : float
@@ -106,6 +107,7 @@ class RealTelescope(Sensor):
             self._epoch = parse_utc(epoch)
         except (ValueError, TypeError):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
+        check_de421_epoch(self, epoch, self._epoch.year)  # the Moon and Sun come from DE421
         self.epoch = epoch
         azel = self.measurement == "azel"
         self.light_time = self._bool("light_time", light_time)
@@ -134,8 +136,7 @@ class RealTelescope(Sensor):
             light_time=self.light_time, annual_aberration=self.annual_aberration,
             diurnal_aberration=self.diurnal_aberration, refraction=self.refraction,
             polar_motion=self.polar_motion, ut1=self.ut1,
-            pressure_hpa=(standard_pressure_hpa(self.height_m) if self.pressure_hpa < 0
-                          else self.pressure_hpa),
+            pressure_hpa=(standard_pressure_hpa(self.height_m) if self.pressure_hpa < 0 else self.pressure_hpa),
             temperature_c=self.temperature_c, relative_humidity=self.relative_humidity,
             wavelength_um=self.wavelength_um)
         # observer + range * los misses the target by |v| tau (module docstring): allow 4 km/s.
@@ -155,8 +156,7 @@ class RealTelescope(Sensor):
         from cistrack.astro.earth_moon import EarthMoonFrame
 
         self._frame = EarthMoonFrame.from_utc(self._epoch)
-        self._observer = ObserverGeometry(self._site, self._epoch, polar_motion=self.polar_motion,
-                                          ut1=self.ut1)
+        self._observer = ObserverGeometry(self._site, self._epoch, polar_motion=self.polar_motion, ut1=self.ut1)
 
     def inertial_frame(self):
         """GCRS (CCSDS ``GCRF``): the real Earth-Moon frame's synodic -> GCRS map (DE421), used
@@ -242,12 +242,13 @@ class RealTelescope(Sensor):
         return np.stack([a, b], axis=1)
 
     def sigmas(self, states: np.ndarray, t) -> np.ndarray:
-        """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x range (LU)."""
-        x = self._check_states(states)
+        """One-sigma noise (N, m): sigma_arcsec per angle, rad ("radec": on the sky, / cos(Dec) on RA); range_alpha x range."""
+        x, tt = self._check_states(states), self._check_times(t, np.shape(states)[0])
         out = np.full((x.shape[0], len(self.names)), self._sigma_rad)
+        if self.measurement == "radec":
+            out[:, 0] /= np.cos(self.measure(x, tt)[:, 1])
         if self.measure_range:
-            out[:, 2] = self.range_alpha * np.linalg.norm(
-                x[:, :3] - self.observer_position(self._check_times(t, x.shape[0])), axis=1)
+            out[:, 2] = self.range_alpha * np.linalg.norm(x[:, :3] - self.observer_position(tt), axis=1)
         return out
 
     def _geometric_elevation(self, x: np.ndarray, tt: np.ndarray) -> np.ndarray:

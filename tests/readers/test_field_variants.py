@@ -80,4 +80,6 @@ def test_tdm_with_day_of_year_epochs_and_comments(tmp_path):
     ms = TdmReader(sigma_arcsec=0.8).read(p, "2026-03-01T00:00:00Z")
     assert ms.times[0] * TU_S == pytest.approx(3 * 3600 + 40 * 60 + 0.5, abs=1e-6)   # day 60 = 1 March
     np.testing.assert_allclose(ms.values[0], np.radians([101.25, -12.5]), atol=1e-15)
-    assert ms.sigmas[0, 0] == pytest.approx(0.8 * ARCSEC_RAD) and ms.kinds[0] == "radec"
+    # the default applies on the sky: 0.8 arcsec on RA x cos(Dec), so 0.8 / cos(Dec) on RA
+    assert ms.sigmas[0, 0] == pytest.approx(0.8 * ARCSEC_RAD / np.cos(np.radians(-12.5)), rel=1e-15)
+    assert ms.sigmas[0, 1] == pytest.approx(0.8 * ARCSEC_RAD, rel=1e-15) and ms.kinds[0] == "radec"

@@ -56,7 +56,8 @@ def test_mpc80_rounds_to_a_millisecond_of_ra_and_a_hundredth_arcsec_of_dec(tmp_p
     ddec = (back.values[:, 1] - ms.values[:, 1]) / ARCSEC_RAD
     assert np.max(np.abs(dra)) <= 0.0075 + 1e-9 and np.max(np.abs(ddec)) <= 0.005 + 1e-9
     assert np.max(np.abs(dra)) > 0.004  # really rounded, not exact
-    assert np.all(back.sigmas == 0.7 * ARCSEC_RAD)
+    assert np.all(back.sigmas[:, 1] == 0.7 * ARCSEC_RAD)   # on the sky: Dec, and RA x cos(Dec)
+    np.testing.assert_allclose(back.sigmas[:, 0] * np.cos(back.values[:, 1]), 0.7 * ARCSEC_RAD, rtol=1e-15)
 
 
 def _explicit_site_set(kind):

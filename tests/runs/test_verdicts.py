@@ -6,6 +6,7 @@ the thresholds of :class:`cistrack.evaluation.custody.CustodyRule`.
 """
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 
@@ -50,14 +51,14 @@ def test_degenerate_weights_are_diverged_with_the_effective_sample_size_in_the_m
 def test_a_collapsed_belief_is_diverged_with_its_reason(sir_run):
     res, _ = sir_run
     assert res.summary.final["sigma_x_km"] < 1e-3
-    v = final_verdict(Verdict(), res.rows, CustodyRule(degenerate_ess=0.0), has_truth=True)
+    v = final_verdict(Verdict(), res.rows, CustodyRule(degenerate_ess=0.0, blowup_nis=math.inf), has_truth=True)
     assert v.kind == "diverged" and v.reason.startswith("belief collapsed: largest position sigma")
 
 
 def test_a_healthy_effective_sample_size_and_many_distinct_particles_are_not_degenerate(sir_run):
     res, _ = sir_run
     rows = [dict(r, diag_ess_before_resampling=400.0, diag_unique_particles=450.0) for r in res.rows]
-    v = final_verdict(Verdict(), rows, CustodyRule(), has_truth=True)
+    v = final_verdict(Verdict(), rows, CustodyRule(blowup_nis=math.inf), has_truth=True)
     assert v.kind == "diverged" and v.reason.startswith("belief collapsed")
 
 
@@ -77,7 +78,8 @@ def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run)
     res, _ = sir_run
     f = res.summary.final
     assert f["pos_err_km"] > 50 and f["nees"] > 1e4
-    v = final_verdict(Verdict(), res.rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0), has_truth=True)
+    v = final_verdict(Verdict(), res.rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0, blowup_nis=math.inf),
+                      has_truth=True)
     assert v.kind == "diverged" and v.reason.startswith("error far beyond sigma")
     assert v.step == [r for r in res.rows if r["kind"] == "update"][-1]["step"]   # the last update
 
@@ -85,8 +87,21 @@ def test_a_far_error_with_a_huge_nees_is_diverged_as_error_beyond_sigma(sir_run)
 def test_a_far_error_within_a_wide_cloud_is_not_diverged_by_the_error_rule(sir_run):
     res, _ = sir_run
     rows = [dict(r, nees=5.0) for r in res.rows]   # the same error, consistent with its sigma
-    v = final_verdict(Verdict(), rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0), has_truth=True)
+    v = final_verdict(Verdict(), rows, CustodyRule(collapse_sigma_km=0.0, degenerate_ess=0.0, blowup_nis=math.inf),
+                      has_truth=True)
     assert v.kind == "tracking"                     # sigma ~1e-9 km is within the 100 km precision
+
+
+def test_innovations_that_blow_up_in_a_real_run_are_diverged_at_the_first_update_of_the_blow_up(sir_run):
+    # the bootstrap filter's innovations leave their chi-square bounds by orders of magnitude;
+    # with the weight rule off the verdict names the first of three consecutive updates with NIS > 1e6
+    res, _ = sir_run
+    ups = [r for r in res.rows if r["kind"] == "update"]
+    first = next(i for i in range(len(ups) - 2) if all(r["nis"] > 1e6 for r in ups[i:i + 3]))
+    v = final_verdict(Verdict(), res.rows, CustodyRule(degenerate_ess=0.0), has_truth=True)
+    assert v.kind == "diverged" and v.reason.startswith(f"innovations blew up: NIS {ups[first]['nis']:.3g} at this update")
+    assert (v.step, v.t_days) == (ups[first]["step"], pytest.approx(ups[first]["t_days"]))
+    assert v.step < ups[-1]["step"]                 # said where it starts, not at the end of the run
 
 
 def test_a_mean_that_left_cislunar_space_is_diverged():
