@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import inspect
 import re
-import typing
 from dataclasses import dataclass
 from typing import Any
 

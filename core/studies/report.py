@@ -251,7 +251,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                          f"{fmt(r['anees_every_update'])} ({r['anees_every_update_n']} updates)"] if has_truth else []),
                       fmt(r["entropy"]), f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
     md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    md += ["| " + " | ".join(l) + " |" for l in lines]
+    md += ["| " + " | ".join(cells) + " |" for cells in lines]
     verdicts = []
     for r in rows:
         if r["custody_kept"] is None:
@@ -291,10 +291,10 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                          *diverged])
     write_text_atomic(rep_dir / "summary.md", md_text + "\n")
     files.append(rep_dir / "summary.md")
-    widths = [max(len(h), *(len(l[i]) for l in lines)) if lines else len(h) for i, h in enumerate(header)]
+    widths = [max(len(h), *(len(cells[i]) for cells in lines)) if lines else len(h) for i, h in enumerate(header)]
     by_filter_text = custody_text(rows)
     text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
-                     + ["  ".join(c.ljust(wd) for c, wd in zip(l, widths)) for l in lines] + [""] + verdicts
+                     + ["  ".join(c.ljust(wd) for c, wd in zip(cells, widths)) for cells in lines] + [""] + verdicts
                      + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
                         if len(custody_by_filter(rows)[0]) > 1 else [])
                      + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):" if has_truth

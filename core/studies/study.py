@@ -31,9 +31,8 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, study_source)
-from cistrack.studies.resume import is_done, run_state
+from cistrack.studies.resume import run_state
 from cistrack.scenario.limits import check_count, check_path_component
-from cistrack.results.store import read_manifest
 from cistrack.studies.workers import execute_run, init_worker, run_spec
 from cistrack.runs.run_id import run_id
 

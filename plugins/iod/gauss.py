@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.model.belief import ParticleCloud
-from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
+from cistrack.interfaces.component import check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
 from cistrack.errors import IODError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor

@@ -8,7 +8,6 @@ import pytest
 
 from cistrack import units
 from cistrack.astro.ephemeris import DAY_S
-from cistrack.astro.earth_moon import EarthMoonFrame
 from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.testing import check_plugin

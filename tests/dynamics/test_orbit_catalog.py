@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from cistrack import units
 from cistrack.interfaces import ReferenceOrbit
@@ -69,8 +68,9 @@ def test_stm_matches_finite_differences():
     eps = 1e-6
     fd = np.empty((6, 6))
     for j in range(6):
-        dp = x0.copy(); dp[j] += eps
-        dm = x0.copy(); dm[j] -= eps
+        dp, dm = x0.copy(), x0.copy()
+        dp[j] += eps
+        dm[j] -= eps
         fd[:, j] = (propagate_with_stm(dp, 0.5)[0] - propagate_with_stm(dm, 0.5)[0]) / (2 * eps)
     np.testing.assert_allclose(phi, fd, rtol=1e-6, atol=1e-6)
 

@@ -16,7 +16,7 @@ from cistrack.plugins.sensors.ground_telescope import GroundTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
 from cistrack.units import hours_to_tu
 
-from reference_cr3bp import MU, cr3bp_rhs  # noqa: E402  (tests/ is on sys.path)
+from reference_cr3bp import cr3bp_rhs  # noqa: E402  (tests/ is on sys.path)
 NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
 
 

@@ -3,7 +3,6 @@ cislunar failure it is the baseline for."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from scipy.integrate import solve_ivp
 from scipy.stats import chi2
 

@@ -2,7 +2,6 @@
 steps merged and a manifest that says what happened; a study reruns what changed."""
 from __future__ import annotations
 
-import os
 import signal
 import socket
 import subprocess

@@ -12,7 +12,7 @@ from cistrack.astro.sites import Site
 from cistrack.plugins.iod.kinematic_presets import NoisyRangeIOD, UniformRangeIOD
 from cistrack.plugins.sensors.real_telescope import RealTelescope
 from cistrack.plugins.sensors.schedules import PaperExample1Schedule
-from cistrack.astro.sky import SkyCorrections, apparent_azel, astrometric_radec
+from cistrack.astro.sky import apparent_azel, astrometric_radec
 from cistrack.testing import parametrize_with_checks
 from cistrack.testing.fixtures import lunar_distance_states
 from cistrack.units import TU_S, hours_to_tu
