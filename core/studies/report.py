@@ -166,12 +166,15 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     Raises ConfigError (and writes nothing) when no run of the study has finished.
     """
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
+    if first_seed is None and n_seeds is None and not Path(path_or_name).is_dir() and (out / "study.json").is_file():
+        # report what 'study run' produced there (its recorded seeds), not the study file's full list
+        data, specs, out = plan_runs(out, out, settings)
     groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
-    missing = 0
+    missing_ids: list[str] = []
     for s in specs:
         if not is_done(s.out_dir):
-            missing += 1
+            missing_ids.append(s.run_id)
             continue
         man = read_manifest(s.out_dir)
         groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
@@ -267,7 +270,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         else:
             verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
+    missing = len(missing_ids)
     title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
+    if missing:
+        shown = ", ".join(missing_ids[:8]) + (f", ... ({missing - 8} more)" if missing > 8 else "")
+        title += f" (not finished: {shown}; 'cistrack study run' with the same options runs them)"
     custody = (["## Custody", "", *verdicts, "",
                 "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
                 "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "

@@ -186,3 +186,21 @@ def test_a_study_on_an_observation_file_reports_measurement_consistency_and_neve
                                                                               s.nis_test.upper))
     assert row["nis_outside_95_share"] == pytest.approx(s.share_outside_95)
     assert f"mean NIS {row['mean_nis']:.3g} over {s.nis_test.n} updates" in md
+
+
+def test_report_without_seed_options_reports_the_seeds_study_run_ran(tiny_study, tmp_path):
+    """`study run STUDY --n-seeds 1` then `study report STUDY`: the one seed's runs, all complete
+    (it used to plan the file's three seeds and report a partial set)."""
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=1)
+    rep = report_study(tiny_study, out_dir=out)
+    assert rep["missing"] == 0
+    assert {r["runs"] for r in rep["rows"]} == {1}
+
+
+def test_report_names_the_runs_that_did_not_finish(tiny_study, tmp_path):
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=1)
+    rep = report_study(tiny_study, out_dir=out, n_seeds=2)
+    assert rep["missing"] > 0
+    assert "not finished:" in rep["text"] and "seed2" in rep["text"]
