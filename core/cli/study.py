@@ -25,7 +25,9 @@ def cmd_study(args) -> int:
         rep = report_study(args.study, out_dir=args.out, settings=args.set, first_seed=args.first_seed,
                            n_seeds=args.n_seeds)
         print(rep["text"])
-        print(f"written: {', '.join(str(p) for p in rep['files'])}")
+        files = rep["files"]
+        where = sorted({str(p.parent) for p in files})
+        print(f"written: {len(files)} files in {', '.join(where)} (summary.md, summary.csv, runs.csv, figures)")
         return 0
     return 2
 

@@ -20,6 +20,7 @@ from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.studies.efficiency import efficiency_text, group_efficiency
+from cistrack.studies.terminal_table import terminal_table, wrap_lines
 from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
 from cistrack.evaluation.run_summary import RunSummary
 from cistrack.studies.study import plan_runs
@@ -298,10 +299,9 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                          *diverged])
     write_text_atomic(rep_dir / "summary.md", md_text + "\n")
     files.append(rep_dir / "summary.md")
-    widths = [max(len(h), *(len(cells[i]) for cells in lines)) if lines else len(h) for i, h in enumerate(header)]
     by_filter_text = custody_text(rows)
-    text = "\n".join([title, "  ".join(h.ljust(wd) for h, wd in zip(header, widths))]
-                     + ["  ".join(c.ljust(wd) for c, wd in zip(cells, widths)) for cells in lines] + [""] + verdicts
+    text = "\n".join(wrap_lines([title, *terminal_table(rows, has_truth, counted), "(every column: summary.md, summary.csv)"]
+                     + [""] + verdicts
                      + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
                         if len(custody_by_filter(rows)[0]) > 1 else [])
                      + ["", "Calibration (95 %; the final ANEES averages each run's last NEES):" if has_truth
@@ -311,7 +311,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                         + [f"- {r['filter']} / {r['iod']} / {r['scenario']}: {r['efficiency_text']}" for r in rows]
                         if has_truth else [])
                      + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
-                     + (flagged or ["None."]))
+                     + (flagged or ["None."])))
     from cistrack.studies.report_plots import plot_study
 
     figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}

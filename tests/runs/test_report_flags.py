@@ -27,6 +27,11 @@ duration_days = 1.4
 """
 
 
+def _flat(text: str) -> str:
+    """The text with its line wrapping undone (the terminal report wraps at 120 columns)."""
+    return " ".join(text.split())
+
+
 @pytest.fixture(scope="module")
 def flagged(tmp_path_factory):
     d = tmp_path_factory.mktemp("flags")
@@ -49,9 +54,9 @@ def test_every_run_that_did_not_track_is_in_the_terminal_text_with_its_reason(fl
     for run_id, v in verdicts.items():
         line = f"- {run_id} ("
         if v["kind"] == "tracking":
-            assert line not in rep["text"]
+            assert _flat(line) not in _flat(rep["text"])
         else:
-            assert f"{line}" in rep["text"] and f": {v['kind']}: {v['reason']}" in rep["text"]
+            assert _flat(line) in _flat(rep["text"]) and _flat(f": {v['kind']}: {v['reason']}") in _flat(rep["text"])
 
 
 def test_every_run_that_did_not_track_is_in_the_markdown_with_its_reason(flagged):
@@ -75,4 +80,4 @@ def test_the_degenerate_weights_reason_reaches_the_report(flagged):
     rep, _, verdicts = flagged
     sir = [v for k, v in verdicts.items() if "__sir__" in k]
     assert sir and all(v["kind"] == "diverged" and v["reason"].startswith("degenerate weights") for v in sir)
-    assert rep["text"].count("degenerate weights (effective sample size") == len(sir)
+    assert _flat(rep["text"]).count("degenerate weights (effective sample size") == len(sir)
