@@ -43,7 +43,10 @@ class RunSummary:
                                  its chi-square bounds, share outside 95 %, largest residual)
     final : dict                 FINAL_KEYS of the last update (or the last step), km, m/s, cm/s
     pass_end : dict              pass number (str) -> FINAL_KEYS and t_days at its last update
-    wall_time_s, prepare_time_s : float
+    wall_time_s, prepare_time_s : float   seconds of the run and of its preparation (truth,
+                                 measurements, IOD), compilation excluded
+    compile_time_s : float       seconds numba spent compiling during the run (0 with a warm kernel
+                                 cache; ~1 min for a model's first run on a new machine)
     """
 
     run_id: str
@@ -63,6 +66,7 @@ class RunSummary:
     pass_end: dict[str, dict[str, float]] = field(default_factory=dict)
     wall_time_s: float = 0.0
     prepare_time_s: float = 0.0
+    compile_time_s: float = 0.0
 
     @property
     def custody_kept(self) -> bool:
@@ -89,6 +93,7 @@ class RunSummary:
             "n_measurements_before_iod": self.n_measurements_before_iod,
             "consistency": dict(self.consistency), "final": dict(self.final), "pass_end": dict(self.pass_end),
             "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,
+            "compile_time_s": self.compile_time_s,
         }
 
     @classmethod
@@ -103,7 +108,7 @@ class RunSummary:
             verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
                               data.get("custody_lost_step"), data.get("custody_lost_t_days"))
         names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed",
-                 "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s",
+                 "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s", "compile_time_s",
                  "status", "failure")
         has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
         return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
@@ -111,7 +116,7 @@ class RunSummary:
 
 
 def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, failure: str,
-              wall_time_s: float, prepare_time_s: float) -> RunSummary:
+              wall_time_s: float, prepare_time_s: float, compile_time_s: float = 0.0) -> RunSummary:
     """The summary of ``run`` (a RunContext) from its table ``rows`` (see :func:`step_row`)."""
     updates = [r for r in rows if r["kind"] == "update"]
     last = updates[-1] if updates else (rows[-1] if rows else {})
@@ -131,7 +136,7 @@ def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, fa
         n_measurements=len(run.measurements), n_passes=len(run.passes), n_passes_observed=observed,
         n_measurements_before_iod=before_iod,
         consistency=consistency_summary(rows), final={k: last[k] for k in FINAL_KEYS if k in last},
-        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s)
+        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s, compile_time_s=compile_time_s)
 
 
 def count_lines(s: RunSummary) -> list[str]:
@@ -145,4 +150,5 @@ def count_lines(s: RunSummary) -> list[str]:
                   + (f" ({unobserved} unobserved: schedule or sensor shutoff)" if unobserved else ""))
     updates = (f"{s.n_measurements_before_iod} up to the IOD epoch (the IOD's input), {s.n_updates} filter "
                "updates after it" if s.n_measurements_before_iod else f"{s.n_updates} filter updates")
-    return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"]
+    return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"
+            + (f" (and {s.compile_time_s:.1f} s compiling, once per machine)" if s.compile_time_s >= 0.05 else "")]

@@ -30,6 +30,7 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
+from cistrack.runs.compile_clock import CompileClock
 from cistrack.runs.run_context import RunContext, Step
 from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
@@ -210,6 +211,15 @@ def _measure(ctx: RunContext, step: Step) -> Step:
 
 def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
          rows_per_part=None) -> RunResult:
+    """:func:`_run_timed` with numba's compilation timed apart (:class:`CompileClock`)."""
+    clock = CompileClock()
+    with clock:
+        return _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
+                          rows_per_part, clock)
+
+
+def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
+               rows_per_part, clock: CompileClock) -> RunResult:
     """Build once, then one way through: truth, measurements, IOD, filter steps; everything else
     (custody, rows, results files, progress, recordings) is an observer of the hooks."""
     from cistrack.runs.progress import ProgressBar
@@ -229,6 +239,7 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
     t_start = time.perf_counter()
     ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
     t_prepare = time.perf_counter() - t_start
+    compiled_in_prepare = clock.seconds
     events = _events(scenario, ctx)
     if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
         ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
@@ -282,7 +293,7 @@ def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep
                             custody.earth_distance_km) if status in ("finished", "filter-failed") \
         else custody.verdict
     summary = summarize(ctx, collector.rows, verdict, status, failure,
-                        time.perf_counter() - t_start, t_prepare)
+                        time.perf_counter() - t_start - clock.seconds, t_prepare - compiled_in_prepare, clock.seconds)
     summary = _finish(pm, ctx, summary)
     if abort is not None:
         raise abort
