@@ -1,6 +1,14 @@
-"""What the rerun viewer shows at first open: the blueprint (views, their contents, camera).
+"""What the rerun viewer shows at first open: the blueprint (views, their contents, cameras, playback).
 
 Plain data for :mod:`.rerun_recorder`, which hands it to every recording it opens.
+
+Left, two 3-D views. Top, the run about the estimate: its origin is ``world/estimate_frame``
+(see :mod:`.estimate_frame`), a frame that follows the estimate and scales with the cloud, so the
+fixed camera :data:`RUN_VIEW_EYE` keeps the cloud and its ellipsoids filling the view from the IOD
+to convergence. Bottom, the Earth–Moon system seen from above, from the Earth to beyond L2. Right,
+time series over the whole run in log10 (see :mod:`.run_series`), their colours named in the
+titles instead of legends over the data, and the time panel set so that playing the run takes
+about :data:`PLAYBACK_S` seconds.
 """
 from __future__ import annotations
 
@@ -8,15 +16,28 @@ import numpy as np
 
 from cistrack.lazy import LazyModule
 
+from .run_series import NEES_BAND, NEES_BAND_ENTITIES, SERIES
+
 rrb = LazyModule("rerun.blueprint")  # loads with the first recording, not with the registry
 
-__all__ = ["SIGMA_ENTITIES", "TIMELINES", "camera_for", "default_blueprint"]
+__all__ = ["PLAYBACK_S", "RUN_VIEW_EYE", "TIMELINES", "axis_range_s", "camera_for",
+           "default_blueprint", "playback_speed"]
 
-
-SIGMA_ENTITIES = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")
-"""Per-axis 1-sigma metrics, logged at ``metrics/<name>`` (rerun queries take no wildcards)."""
 
 TIMELINES = ("utc", "step", "event")
+
+PLAYBACK_S = 60.0
+"""Seconds that playing a whole run takes at the speed the time panel opens with."""
+
+RUN_VIEW_EYE = (1.8, -3.0, 1.7)
+"""Camera of the run view in the estimate frame (units of the cloud's extent): from the radial,
+negative along-track, cross-track side, far enough to see the cloud (most of it within one unit)
+and most of its 3-sigma ellipsoids."""
+
+RUN_VIEW_CONTENTS = ("/world/particles", "/world/components", "/world/estimate", "/world/truth/position",
+                     "/world/truth/trajectory", "/world/estimate_frame/**")
+SYSTEM_VIEW_CONTENTS = ("/world/earth", "/world/moon", "/world/libration", "/world/truth/**",
+                        "/world/estimate", "/world/observer", "/world/particles", "/world/line_of_sight")
 
 
 def _whole_run() -> list:
@@ -25,23 +46,58 @@ def _whole_run() -> list:
     return [rrb.VisibleTimeRange(t, start=every, end=every) for t in TIMELINES]
 
 
-def _whole_axis():
-    """An x axis that opens on the whole run (the viewer's default is a window at the cursor)."""
-    every = rrb.TimeRangeBoundary.infinite()
-    return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
+AXIS_MARGIN = 0.07
+"""Fraction of a series panel's width kept free of day and half-day ticks at either end: a date
+label centred on a tick closer to an edge would be cut by the panel ("6-01-02")."""
+
+_HALF_DAY_S = 43_200.0
 
 
-def _series(name: str, entities: list[str] | None, origin: str = "metrics",
+def axis_range_s(start: float, end: float) -> tuple[float, float]:
+    """The x range (unix seconds) that shows ``start`` .. ``end`` with no day or half-day tick
+    within :data:`AXIS_MARGIN` of an end (each end moves outwards past such a tick); a run of
+    more than four days is padded by that margin on both sides."""
+    lo, hi = float(start), float(end)
+    if hi - lo > 8 * _HALF_DAY_S:  # ticks farther apart than half days: pad both ends instead
+        pad = AXIS_MARGIN * (hi - lo)
+        return lo - pad, hi + pad
+    for _ in range(4):  # widening moves the other margin; a few rounds settle it
+        m = AXIS_MARGIN * (hi - lo)
+        first = np.ceil(lo / _HALF_DAY_S) * _HALF_DAY_S
+        if first < lo + m:
+            lo = first - m / (1.0 - AXIS_MARGIN)
+        last = np.floor(hi / _HALF_DAY_S) * _HALF_DAY_S
+        if last > hi - m:
+            hi = last + m / (1.0 - AXIS_MARGIN)
+    return lo, hi
+
+
+def _whole_axis(utc_range_s: tuple[float, float] | None = None):
+    """An x axis that opens on the whole run (the viewer's default is a window at the cursor):
+    ``utc_range_s`` (unix seconds) widened by :func:`axis_range_s`, else every time there is."""
+    if utc_range_s is None or not utc_range_s[1] > utc_range_s[0]:
+        every = rrb.TimeRangeBoundary.infinite()
+        return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
+    lo, hi = axis_range_s(*utc_range_s)
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.absolute(seconds=lo),
+                                                 end=rrb.TimeRangeBoundary.absolute(seconds=hi)))
+
+
+def _series(name: str, entities: list[str], utc_range_s: tuple[float, float] | None,
             y_range: tuple[float, float] | None = None):
-    contents = [f"$origin/{e}" for e in entities] if entities else "$origin/**"
-    return rrb.TimeSeriesView(origin=origin, name=name, contents=contents, time_ranges=_whole_run(),
-                              axis_x=_whole_axis(),
-                              axis_y=rrb.ScalarAxis(range=y_range) if y_range is not None else None)
+    """A time-series panel of ``entities``. No legend: a legend box covers some curve wherever it
+    sits, so each title names its curves' colours (see :mod:`.run_series`)."""
+    return rrb.TimeSeriesView(origin="/", name=name, contents=[f"/{e}" for e in entities],
+                              time_ranges=_whole_run(), axis_x=_whole_axis(utc_range_s),
+                              axis_y=rrb.ScalarAxis(range=y_range) if y_range is not None else None,
+                              plot_legend=rrb.PlotLegend(visible=False))
 
 
-def camera_for(points_km: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
-    """(eye position, look target), km: looking at the box around ``points_km`` (N, 3) from
-    above and to the side, far enough to see all of it; None without points."""
+def camera_for(points_km: np.ndarray | None, direction=(0.55, -0.65, 0.52),
+               distance: float = 1.6) -> tuple[np.ndarray, np.ndarray] | None:
+    """(eye position, look target), km: looking at the box around ``points_km`` (N, 3) along
+    ``direction`` (from the target to the eye), ``distance`` times the box's largest side away;
+    None without points."""
     if points_km is None:
         return None
     pts = np.asarray(points_km, dtype=float).reshape(-1, 3)
@@ -51,35 +107,57 @@ def camera_for(points_km: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | 
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     target = 0.5 * (lo + hi)
     size = max(float(np.max(hi - lo)), 2.0e4)  # at least 20,000 km across
-    direction = np.array([0.55, -0.65, 0.52])
-    return target + 1.6 * size * direction / np.linalg.norm(direction), target
+    d = np.asarray(direction, dtype=float)
+    return target + distance * size * d / np.linalg.norm(d), target
 
 
-def default_blueprint(focus_km: np.ndarray | None = None) -> rrb.Blueprint:
+def playback_speed(utc_range_s: tuple[float, float] | None) -> float:
+    """Playback multiplier that plays a run spanning ``utc_range_s`` (unix seconds, first and
+    last time) in :data:`PLAYBACK_S` seconds (1 without a range)."""
+    if utc_range_s is None:
+        return 1.0
+    span = float(utc_range_s[1] - utc_range_s[0])
+    return max(1.0, span / PLAYBACK_S) if np.isfinite(span) and span > 0 else 1.0
+
+
+def _eye(eye: tuple[np.ndarray, np.ndarray] | None):
+    if eye is None:
+        return None
+    return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1],
+                             eye_up=(0.0, 0.0, 1.0))
+
+
+def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[float, float] | None = None,
+                      live: bool = False) -> rrb.Blueprint:
     """What the viewer shows at first open.
 
-    Left, the run: a 3-D view framed on ``focus_km`` (N, 3) points, the truth trajectory and the
-    initial cloud (particles, ellipsoids, estimate, truth); below it the whole Earth–Moon system
-    with the libration points. Right, time series over the whole run: estimation error, per-axis
-    1-sigma of position and of velocity (the ``metrics/sigma_*`` entities), entropy, NEES and component weights.
+    ``system_km`` (N, 3): points the system view frames from above (Earth, Moon, L1, L2 and the
+    truth trajectory); ``utc_range_s``: the run's first and last time on the ``utc`` timeline,
+    unix seconds, which set the series' x axes and the playback speed (:func:`playback_speed`);
+    ``live``: the run streams to a viewer (follow the newest data instead of opening paused at the
+    start).
     """
-    eye = camera_for(focus_km)
-    controls = (rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye[0], look_target=eye[1],
-                                  eye_up=(0.0, 0.0, 1.0)) if eye is not None else None)
-    run_view = rrb.Spatial3DView(origin="world", name="Run: truth, cloud and ellipsoids (synodic, km)",
-                                 eye_controls=controls, background=rrb.BackgroundKind.GradientDark)
-    system = rrb.Spatial3DView(origin="world", name="Earth–Moon system (synodic, km)",
-                               contents=["$origin/earth", "$origin/moon", "$origin/libration",
-                                         "$origin/truth/**", "$origin/estimate", "$origin/observer"],
+    r = utc_range_s
+    run_view = rrb.Spatial3DView(
+        origin="/world/estimate_frame", contents=list(RUN_VIEW_CONTENTS),
+        name="Run about the estimate: radial, along-track, cross-track (km: the cloud's reach per axis)",
+        eye_controls=_eye((np.array(RUN_VIEW_EYE), np.zeros(3))), background=rrb.BackgroundKind.GradientDark)
+    system = rrb.Spatial3DView(origin="/world", name="Earth–Moon system (synodic, km, from above)",
+                               contents=list(SYSTEM_VIEW_CONTENTS),
+                               eye_controls=_eye(camera_for(system_km, direction=(0.0, -0.35, 1.0),
+                                                            distance=0.78)),
                                background=rrb.BackgroundKind.GradientDark)
+    lo, hi = (float(np.log10(b)) for b in NEES_BAND)
     series = rrb.Vertical(
-        _series("Estimation error (km, m/s)", ["pos_err_km", "vel_err_ms"]),
-        _series("1-sigma per axis, position (km)", list(SIGMA_ENTITIES[:3])),
-        _series("1-sigma per axis, velocity (cm/s)", list(SIGMA_ENTITIES[3:])),
-        _series("Entropy (nats)", ["entropy"]),
-        _series("NEES (6 = consistent; 90 % of a consistent filter's values lie in 1.6-12.6)", ["nees"],
-                y_range=(0.0, 20.0)),
-        _series("Component weights", None, origin="components"),
+        _series("Position, log10 km: error red; 1-sigma x blue, y green, z orange",
+                [s.entity for s in SERIES if s.panel == "position"], r),
+        _series("Velocity, log10 m/s: error red; 1-sigma x blue, y green, z orange",
+                [s.entity for s in SERIES if s.panel == "velocity"], r),
+        _series("Entropy, nats", ["metrics/entropy"], r),
+        _series(f"log10 NEES; grey: chi-square 90 % band ({NEES_BAND[0]:.1f} to {NEES_BAND[1]:.1f})",
+                ["series/nees/nees", *NEES_BAND_ENTITIES], r, y_range=(lo - 1.0, hi + 1.0)),
+        _series("Component weights, largest first (brightest)", ["components/ranked/**"], r,
+                y_range=(0.0, 1.05)),
     )
     return rrb.Blueprint(
         rrb.Horizontal(
@@ -87,7 +165,8 @@ def default_blueprint(focus_km: np.ndarray | None = None) -> rrb.Blueprint:
             series,
             column_shares=[3, 2],
         ),
-        rrb.TimePanel(timeline="utc", state="collapsed"),
+        rrb.TimePanel(timeline="utc", state="collapsed", playback_speed=playback_speed(r),
+                      play_state=None if live else "paused"),
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),
     )

@@ -13,13 +13,22 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 ``world/truth/trajectory``      the dense truth trajectory (static)
 ``world/truth/position``        the truth at each step
 ``world/particles``             the belief's particles at each event, class id = component
-``world/components``            n-sigma position ellipsoids of the mixture components
+``world/components``            n-sigma position ellipsoids of the mixture components (weights as
+                                hidden labels, shown on hover)
 ``world/estimate``              the mixture mean
+``world/estimate_frame``        transform of the run view's frame: radial / along-track / cross-track
+                                about the mean, one unit per axis = the cloud's extent along it
+                                (:mod:`.estimate_frame`)
+``world/estimate_frame/axes``   the frame's three axes, one unit long, and ``.../axis_labels`` their
+                                names and units in km ("radial ±4,755 km"), past the tips
+``world/estimate_frame/...``    ``line_of_sight``: the line of sight near the estimate, frame units
 ``world/observer``              the observer's position at each step
 ``world/line_of_sight``         the measured line of sight at update steps (cleared otherwise)
 ``metrics/<name>``              every finite metric of ``step.metrics`` (steps that carry metrics)
 ``diagnostics/<name>``          the filter's numeric diagnostics on the same steps
 ``components/weights``          the mixture weights, one series per component
+``components/ranked/<k>``       the k-th largest weight (0 beyond the components there are)
+``series/<panel>/<name>``       log10 of errors and sigmas, NEES and its chi-square band (:mod:`.run_series`)
 ``run/info``, ``run/summary``   text: run id, components, seed; the run's summary
 =============================  ==========================================================
 
@@ -28,7 +37,8 @@ call, so the prior and the posterior of one step can be told apart when scrubbin
 
 (Above 300 lines with this table: one recorder class whose hooks share one recording stream and
 event counter; the viewer process is in :mod:`.viewer_process`, the blueprint in
-:mod:`.blueprint`, the scene geometry in :mod:`.scene`.)
+:mod:`.blueprint`, the scene geometry in :mod:`.scene`, the run view's frame and series in
+:mod:`.run_view_log`.)
 """
 from __future__ import annotations
 
@@ -50,6 +60,9 @@ from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .blueprint import default_blueprint
+from .estimate_frame import line_through_frame
+from .run_extents import system_points_km, utc_range_s
+from .run_view_log import log_estimate_frame, log_run_view_styles, log_series
 from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
                              start_viewer)
 from .view_frame import VIEW_FRAMES, ViewFrame
@@ -183,6 +196,8 @@ class RerunRecorder(Component):
         self._event = 0
         self._epoch = None
         self._files: list[str] = []
+        self._mu = 0.0
+        self._n_ranks = 0
 
     # -- pickling: the stream and the viewer process stay in the process that made them ----------
     def __getstate__(self) -> dict[str, Any]:
@@ -225,9 +240,11 @@ class RerunRecorder(Component):
         """Open the run's recording and log the static scene and the truth trajectory."""
         self.close()
         self._view = ViewFrame(self.frame, run)
+        self._epoch = parse_utc(run.epoch)
         self._rec = self._open(run)
         self._event = 0
-        self._epoch = parse_utc(run.epoch)
+        self._n_ranks = 0
+        self._mu = system_mu(run.dynamics)
         self._log_scene(self._rec, run)
 
     @hookimpl
@@ -292,7 +309,9 @@ class RerunRecorder(Component):
             sinks.append(rr.GrpcServerSink(bind_ip=LOOPBACK, port=self.serve_port))
         if self.spawn:
             sinks.append(rr.GrpcSink(self._start_viewer()))
-        rec.set_sinks(*sinks, default_blueprint=default_blueprint(_focus_points(run, self._view)))
+        rec.set_sinks(*sinks, default_blueprint=default_blueprint(system_points_km(run, self._view),
+                                                                  utc_range_s(run, self._epoch),
+                                                                  live=self.serve or self.spawn))
         rec.send_recording_name(str(run.run_id))
         return rec
 
@@ -342,9 +361,11 @@ class RerunRecorder(Component):
         info.append(f"- **measurements**: {len(run.measurements)}")
         rec.log("run/info", rr.TextDocument("\n".join(info), media_type=rr.MediaType.MARKDOWN),
                 static=True)
+        log_run_view_styles(rec)
 
     def _log_cloud(self, rec: rr.RecordingStream, states: np.ndarray, labels: np.ndarray | None,
-                   mixture, t: float = 0.0) -> None:
+                   mixture, t: float = 0.0) -> np.ndarray:
+        """Log the particles (at most ``max_points``) in km; returns their positions (N, 3) km."""
         states = np.asarray(states, dtype=float)
         keep = subsample_indices(states.shape[0], self.max_points, self.subsample_seed)
         shown = states if keep is None else states[keep]
@@ -357,8 +378,9 @@ class RerunRecorder(Component):
             cls = most_likely_component(full, mixture).astype(np.uint16)
         else:
             cls = np.zeros(pos.shape[0], dtype=np.uint16)
-        rec.log("world/particles", rr.Points3D((pos * LU_KM).astype(np.float32), class_ids=cls,
-                                               radii=rr.Radius.ui_points(1.5)))
+        km = (pos * LU_KM).astype(np.float32)
+        rec.log("world/particles", rr.Points3D(km, class_ids=cls, radii=rr.Radius.ui_points(2.0)))
+        return km.astype(float)
 
     def _log_step(self, run, step) -> None:
         rec = self._rec
@@ -369,7 +391,7 @@ class RerunRecorder(Component):
         mix = belief.mixture
         view = self._view
         t = float(step.t)
-        self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix, t)
+        cloud_km = self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix, t)
         if not view.is_synodic:
             moon = run.dynamics.primary("Moon")
             if moon is not None:
@@ -382,9 +404,13 @@ class RerunRecorder(Component):
         m = mix.n_components
         rec.log("world/components", rr.Ellipsoids3D(
             centers=centers, half_sizes=half, quaternions=quat, class_ids=np.arange(m, dtype=np.uint16),
-            labels=[f"w={w:.3f}" for w in mix.weights],
+            labels=[f"w={w:.3f}" for w in mix.weights], show_labels=False,
             fill_mode=rr.components.FillMode.MajorWireframe))
-        mean = view.states(mix.mean, t)[0, :3] * LU_KM
+        mean_state = view.states(mix.mean, t)[0]
+        mean = mean_state[:3] * LU_KM
+        cov = view.covariances(mix.mean[None], mix.covariance[None], t)[0][:3, :3] * LU_KM**2
+        earth = view.positions(primary_positions(self._mu)[0], t)[0] * LU_KM
+        axes, units = log_estimate_frame(rec, mean, mean_state[3:], cloud_km, cov, earth)
         rec.log("world/estimate", rr.Points3D(mean[None], colors=[(255, 60, 60)],
                                               radii=rr.Radius.ui_points(5.0)))
         truth = step.truth
@@ -404,32 +430,20 @@ class RerunRecorder(Component):
             if truth is not None:
                 reach = max(reach, float(np.linalg.norm(np.asarray(truth)[:3] - obs)))
             end = obs + 1.2 * reach * los
-            rec.log("world/line_of_sight", rr.LineStrips3D([view.positions(np.stack([obs, end]), t) * LU_KM],
-                                                           colors=[(0, 230, 120)],
+            seg = view.positions(np.stack([obs, end]), t) * LU_KM
+            rec.log("world/line_of_sight", rr.LineStrips3D([seg], colors=[(0, 230, 120)],
                                                            radii=rr.Radius.ui_points(1.0)))
+            rec.log("world/estimate_frame/line_of_sight", rr.LineStrips3D(
+                [line_through_frame(seg[0], seg[1], mean, axes, units)], colors=[(0, 230, 120)],
+                radii=rr.Radius.ui_points(1.0)))
         else:
             rec.log("world/line_of_sight", rr.Clear(recursive=False))
+            rec.log("world/estimate_frame/line_of_sight", rr.Clear(recursive=False))
         if step.metrics:  # one metrics row per results-table row (priors of updates have none)
             _log_numbers(rec, "metrics", step.metrics)
             _log_numbers(rec, "diagnostics", step.diagnostics)
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
-
-
-def _focus_points(run, view: ViewFrame | None = None) -> np.ndarray | None:
-    """Points (N, 3) km the run's 3-D view is framed on: the truth trajectory and the IOD cloud
-    (in the recording's frame)."""
-    parts = []
-    truth = getattr(run, "truth_states", None)
-    inertial = view is not None and not view.is_synodic
-    if truth is not None and len(truth):
-        parts.append((view.states(truth, run.truth_times) if inertial else np.asarray(truth, dtype=float))[:, :3])
-    cloud = getattr(run, "iod_cloud", None)
-    if cloud is not None and len(cloud):
-        states = (view.states(cloud.states, cloud.epoch) if inertial
-                  else np.asarray(cloud.states, dtype=float))[:, :3]
-        lo, hi = np.percentile(states, [1, 99], axis=0)  # not a stray particle far away
-        parts.append(np.stack([lo, hi]))
-    return np.concatenate(parts, axis=0) * LU_KM if parts else None
+            self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
 
 
 def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:

@@ -4,8 +4,9 @@
 for the page, then ask for the picture. The protocol runs over ``--remote-debugging-pipe``
 (file descriptors 3 and 4, NUL-terminated JSON), so no WebSocket client is needed.
 
-Run as a script to write the README picture:
-    .venv/bin/python tests/recorders/headless_browser.py RUN.rrd docs/img/viewer.png
+Run as a script for one picture of a recording as it opens (the README's start, middle and end
+pictures come from :mod:`.viewer_shots`):
+    .venv/bin/python tests/recorders/headless_browser.py RUN.rrd OUT.png
 """
 from __future__ import annotations
 
@@ -64,9 +65,27 @@ class _Pipe:
                 return reply.get("result", {})
 
 
-def screenshot(url: str, out_png: str | Path, *, width: int = 1600, height: int = 1000,
-               settle_s: float = 25.0, chromium: str | None = None) -> Path:
-    """Open ``url``, wait ``settle_s`` seconds for it to draw, write a PNG to ``out_png``."""
+_KEY_CODES = {"Home": 36, "End": 35, "ArrowLeft": 37, "ArrowRight": 39, " ": 32}
+_MODIFIERS = {"Alt": 1, "Ctrl": 2, "Meta": 4, "Shift": 8}
+
+
+def _press(pipe: _Pipe, session: str, chord: str) -> None:
+    """Press and release a key chord such as "End" or "Ctrl+ArrowRight" in the page."""
+    *mods, key = chord.split("+")
+    flags = sum(_MODIFIERS[m] for m in mods)
+    base = {"key": key, "code": "Space" if key == " " else key, "modifiers": flags,
+            "windowsVirtualKeyCode": _KEY_CODES[key], "nativeVirtualKeyCode": _KEY_CODES[key]}
+    pipe.call("Input.dispatchKeyEvent", {"type": "rawKeyDown", **base}, session)
+    pipe.call("Input.dispatchKeyEvent", {"type": "keyUp", **base}, session)
+
+
+def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: int = 1600,
+                height: int = 1000, settle_s: float = 25.0, after_keys_s: float = 6.0,
+                chromium: str | None = None) -> list[Path]:
+    """Open ``url``, wait ``settle_s`` seconds for it to draw, then for each ``(png, keys)`` of
+    ``shots`` press the key chords ``keys`` in order (e.g. ``["Ctrl+ArrowRight"]`` steps the
+    viewer's time to the next logged time, ``["End"]`` to the end), wait ``after_keys_s`` seconds
+    when keys were pressed, and write a PNG to ``png``."""
     exe = chromium or find_chromium()
     if exe is None:
         raise FileNotFoundError("chromium is not installed (Debian: apt-get install -y chromium)")
@@ -93,11 +112,19 @@ def screenshot(url: str, out_png: str | Path, *, width: int = 1600, height: int 
         pipe.call("Page.enable", {}, session)
         pipe.call("Page.navigate", {"url": url}, session)
         time.sleep(settle_s)
-        data = pipe.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
-        out = Path(out_png)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_bytes(base64.b64decode(data))
-        return out
+        written = []
+        for png, keys in shots:
+            for chord in keys:
+                _press(pipe, session, chord)
+                time.sleep(0.3)
+            if keys:
+                time.sleep(after_keys_s)
+            data = pipe.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
+            out = Path(png)
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_bytes(base64.b64decode(data))
+            written.append(out)
+        return written
     finally:
         if proc is not None:
             proc.terminate()
@@ -106,6 +133,13 @@ def screenshot(url: str, out_png: str | Path, *, width: int = 1600, height: int 
             except subprocess.TimeoutExpired:
                 proc.kill()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def screenshot(url: str, out_png: str | Path, *, width: int = 1600, height: int = 1000,
+               settle_s: float = 25.0, chromium: str | None = None) -> Path:
+    """Open ``url``, wait ``settle_s`` seconds for it to draw, write a PNG to ``out_png``."""
+    return screenshots(url, [(out_png, [])], width=width, height=height, settle_s=settle_s,
+                       chromium=chromium)[0]
 
 
 if __name__ == "__main__":

@@ -1,0 +1,44 @@
+"""What the blueprint is set from: the run's span on the ``utc`` timeline and the points the
+system view frames."""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack.units import LU_KM, TU_S
+
+from .scene import libration_points, primary_positions, system_mu
+from .view_frame import ViewFrame
+
+__all__ = ["utc_range_s", "system_points_km"]
+
+
+def utc_range_s(run, epoch) -> tuple[float, float] | None:
+    """First and last time of the run's steps on ``utc``, unix seconds: from the IOD epoch to the
+    last truth time or measurement (None when unknown). ``epoch``: the scenario epoch (datetime)."""
+    ends = []
+    truth = getattr(run, "truth_times", None)
+    if truth is not None and len(truth):
+        ends.append(float(np.max(truth)))
+    times = getattr(getattr(run, "measurements", None), "times", None)
+    if times is not None and len(times):
+        ends.append(float(np.max(times)))
+    start = float(getattr(getattr(run, "iod_cloud", None), "epoch", 0.0) or 0.0)
+    if not ends or not max(ends) > start:
+        return None
+    t0 = epoch.timestamp()
+    return t0 + start * TU_S, t0 + max(ends) * TU_S
+
+
+def system_points_km(run, view: ViewFrame | None = None) -> np.ndarray | None:
+    """Points (N, 3) km the system view is framed on: Earth, Moon, L1 and L2 (synodic frame) and
+    the truth trajectory (in ``view``'s frame)."""
+    parts = []
+    if view is None or view.is_synodic:
+        mu = system_mu(run.dynamics)
+        parts.append(primary_positions(mu))
+        parts.append(libration_points(mu)[:2])
+    truth = getattr(run, "truth_states", None)
+    if truth is not None and len(truth):
+        parts.append((view.states(truth, run.truth_times) if view is not None and not view.is_synodic
+                      else np.asarray(truth, dtype=float))[:, :3])
+    return np.concatenate(parts, axis=0) * LU_KM if parts else None

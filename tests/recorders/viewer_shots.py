@@ -1,0 +1,110 @@
+"""Screenshots of a recording in the web viewer at the start, middle and end of the run, and the
+pixel measures the browser test applies to them.
+
+The viewer opens paused at the run's first time; Ctrl+ArrowRight steps its time cursor to the
+next time with data, so the middle and end shots step through half and then all of the
+recording's ``utc`` times. Positions are fractions of the 1600 x 1000 page (the default
+blueprint's layout: 3-D views on the left 60 %, run view above the system view, five series
+panels on the right).
+
+Run as a script to write the README pictures:
+    .venv/bin/python tests/recorders/viewer_shots.py RUN.rrd docs/img
+which writes docs/img/viewer_start.png, viewer_middle.png and viewer_end.png (in 256 colours).
+"""
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import numpy as np
+
+SHOTS = ("start", "middle", "end")
+
+RUN_VIEW = (0.01, 0.59, 0.08, 0.58)
+"""x0, x1, y0, y1 of the run view's drawing area (page fractions)."""
+
+POSITION_PANEL = (0.62, 0.98, 0.07, 0.19)
+"""x0, x1, y0, y1 of the first time-series panel's plot (page fractions)."""
+
+CLOUD_COLOURS = np.array([(31, 119, 180), (255, 127, 14)])
+"""RGB of the first two mixture components (the recorder's palette): particles and ellipsoids of
+these colours are the cloud; no axis, line of sight or label of the run view has them."""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def n_times(rrd: str | Path) -> int:
+    """How many distinct ``utc`` times the recording's particles were logged at."""
+    from .rrd_reading import read_entities
+
+    rows = read_entities(rrd)["/world/particles"]
+    return len({r.times["utc"] for r in rows if "utc" in r.times})
+
+
+def take(rrd: str | Path, out_dir: str | Path, *, settle_s: float = 30.0) -> dict[str, Path]:
+    """Serve ``rrd``, open it in headless Chromium and write ``viewer_<shot>.png`` for each of
+    :data:`SHOTS` under ``out_dir``; returns shot name -> PNG path."""
+    from cistrack.plugins.recorders.web_viewer import serve_recording
+
+    from .headless_browser import screenshots
+
+    n = n_times(rrd)
+    steps = {"start": 0, "middle": n // 2, "end": n - 1 - n // 2}  # presses since the previous shot
+    out = Path(out_dir)
+    with serve_recording(rrd, web_port=free_port()) as served:
+        pngs = screenshots(served.url, [(out / f"viewer_{s}.png", ["Ctrl+ArrowRight"] * steps[s]) for s in SHOTS],
+                           settle_s=settle_s)
+    return dict(zip(SHOTS, pngs))
+
+
+def region(img: np.ndarray, box: tuple[float, float, float, float]) -> np.ndarray:
+    h, w, _ = img.shape
+    x0, x1, y0, y1 = box
+    return img[int(y0 * h):int(y1 * h), int(x0 * w):int(x1 * w)]
+
+
+def cloud_mask(img: np.ndarray) -> np.ndarray:
+    """Pixels (H, W) of the run view within 45 of a cloud colour in every channel."""
+    r = region(img, RUN_VIEW).astype(int)
+    return np.any(np.abs(r[:, :, None, :] - CLOUD_COLOURS[None, None]).max(axis=3) < 45, axis=2)
+
+
+def cloud_spread(mask: np.ndarray) -> float:
+    """How far the cloud's pixels spread over the run view: between their 5th and 95th percentile
+    columns as a fraction of its width, or rows as a fraction of its height, whichever is more
+    (0 without pixels)."""
+    ys, xs = np.nonzero(mask)
+    if xs.size == 0:
+        return 0.0
+    return max(float(np.percentile(xs, 95) - np.percentile(xs, 5)) / mask.shape[1],
+               float(np.percentile(ys, 95) - np.percentile(ys, 5)) / mask.shape[0])
+
+
+def raised_fraction(img: np.ndarray) -> float:
+    """Of the position panel's columns that hold a curve, the fraction whose highest curve pixel
+    is above the panel's bottom quarter (a linear axis flattens a decreasing error onto it)."""
+    r = region(img, POSITION_PANEL).astype(int)
+    coloured = (r.max(axis=2) - r.min(axis=2)) > 60
+    cols = np.nonzero(coloured.any(axis=0))[0]
+    if cols.size == 0:
+        return 0.0
+    top = np.array([np.nonzero(coloured[:, c])[0].min() for c in cols])
+    return float(np.mean(top < 0.75 * r.shape[0]))
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+    from tests.recorders import viewer_shots
+
+    from PIL import Image
+
+    for name, png in viewer_shots.take(sys.argv[1], sys.argv[2]).items():
+        # 256 colours: a quarter of the size, no visible change for the README
+        Image.open(png).convert("RGB").quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(png, optimize=True)
+        print(name, png)
