@@ -12,16 +12,13 @@ every filter and IOD variant sees the same measurements.
 """
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
-import pluggy
 
-from cistrack.plugin import hookspecs
 from cistrack import units
 from cistrack.evaluation.custody import CustodyObserver
 from cistrack.evaluation.verdicts import final_verdict
@@ -31,6 +28,7 @@ from cistrack.model.measurement import StackedMeasurement
 from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
+from cistrack.runs.observers import finish_observers, make_plugin_manager
 from cistrack.runs.run_context import RunContext, Step
 from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
@@ -43,8 +41,6 @@ from cistrack.runs.truth import Truth
 
 __all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
 
-_LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
-              "cistrack_run_failed", "cistrack_run_finished")
 
 
 @dataclass
@@ -57,19 +53,6 @@ class RunResult:
     rows: list[dict[str, Any]]
     summary: RunSummary
     steps: list[Step] = field(default_factory=list)
-
-
-def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:
-    """A plugin manager for one run: the given observers plus installed plugins that implement
-    lifecycle hooks (third-party observers declared under the ``cistrack`` entry points)."""
-    pm = pluggy.PluginManager(hookspecs.PROJECT)
-    pm.add_hookspecs(hookspecs.CistrackSpecs)
-    for dist, ep, module in registry.plugins:
-        if any(hasattr(module, h) for h in _LIFECYCLE):
-            pm.register(module, name=f"{dist}:{ep}")
-    for i, obs in enumerate(observers):
-        pm.register(obs, name=f"observer-{i}-{type(obs).__name__}")
-    return pm
 
 
 def _streams(seed: int) -> dict[str, np.random.Generator]:
@@ -294,7 +277,7 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
         else custody.verdict
     summary = summarize(ctx, collector.rows, verdict, status, failure,
                         time.perf_counter() - t_start - clock.seconds, t_prepare - compiled_in_prepare, clock.seconds)
-    summary = _finish(pm, ctx, summary)
+    summary = finish_observers(pm, ctx, summary)
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
@@ -302,32 +285,6 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
 
 def _angles(m):
     return m.angles_only() if "range" in m.names else m
-
-
-def _finish(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:
-    """Call every observer's ``cistrack_run_finished``, each on its own and in pluggy's order
-    (results writers declare ``trylast``, so they come last), so that one failing observer (a
-    recorder, a full disk) never keeps the completed steps from being merged; an observer's
-    failure turns a finished run into "failed" with the reason, and every later observer is handed
-    that summary."""
-    errors: list[str] = []
-    told = 0  # errors already in the summary
-    for impl in reversed(pm.hook.cistrack_run_finished.get_hookimpls()):  # pluggy's call order
-        if len(errors) > told:
-            summary = dataclasses.replace(
-                summary, status="failed" if summary.status == "finished" else summary.status,
-                failure="; ".join(([summary.failure] if summary.failure else []) + errors[told:]))
-            told = len(errors)
-        try:
-            args = {"run": ctx, "summary": summary}
-            impl.function(*[args[a] for a in impl.argnames])
-        except Exception as exc:
-            errors.append(f"{impl.plugin_name}: {type(exc).__name__}: {exc}")
-    if len(errors) > told:  # the last observers failed: say so in the summary returned
-        summary = dataclasses.replace(
-            summary, status="failed" if summary.status == "finished" else summary.status,
-            failure="; ".join(([summary.failure] if summary.failure else []) + errors[told:]))
-    return summary
 
 
 def _iod_message(name: str, cloud, n_measurements: int) -> str:
