@@ -30,7 +30,7 @@ _moved.install()  # old import paths of moved modules keep working, with a Depre
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
          "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
-         "study": "api", "StudyResult": "api"}
+         "study": "api", "StudyResult": "api", "fit": "api"}
 
 
 def __getattr__(name: str):
@@ -63,7 +63,7 @@ class _Package(_types.ModuleType):
 _sys.modules[__name__].__class__ = _Package
 
 __all__ = [
-    "__version__", "run", "read_run", "load_scenario", "Run", "study", "StudyResult",
+    "__version__", "run", "read_run", "load_scenario", "Run", "study", "StudyResult", "fit",
     "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",
     "hookimpl", "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError",
     "MeasurementError", "ParameterError", "UnknownComponentError",

@@ -50,7 +50,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     # running scenarios
-    "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict", "study", "StudyResult",
+    "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict", "study", "StudyResult", "fit",
     # the registry
     "Registry", "default_registry", "load_registry", "KINDS",
     # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
@@ -229,6 +229,16 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
                        progress=progress, log=log)
     return Run(res.summary, directory, tuple(res.rows))
+
+
+def fit(files: str | Path | Iterable[str | Path], *, out: str | Path | None = None, settings: Mapping[str, Any]
+        | Iterable[str] | None = None, progress: bool = False, log: Any = None, registry: Registry | None = None) -> list:
+    """Fit an orbit to each object in observation ``files`` (one path or several), as ``cistrack fit``
+    does (docs/real-data.md); ``settings`` as for :func:`run`, plus ``fit.*`` and ``measurements.reader.*``.
+    Returns a :class:`cistrack.fit.from_observations.ObjectFit` per object (``.result``, ``.ok``, ``.directory``)."""
+    from cistrack.fit.from_observations import fit_files
+    paths = [files] if isinstance(files, (str, Path)) else list(files)
+    return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress)
 
 
 def read_run(directory: str | Path) -> Run:

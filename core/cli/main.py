@@ -8,11 +8,11 @@
     cistrack study run STUDY [--workers N] [--dask ADDRESS|local] [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack study report STUDY [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
+    cistrack fit FILE [FILE ...] [--out DIR] [--set TABLE.KEY=VALUE ...] [--quiet]
 """
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import sys
@@ -21,6 +21,7 @@ from pathlib import Path
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
+from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
 from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
@@ -49,6 +50,8 @@ def _fmt(v, nd=3) -> str:
 def cmd_export(args) -> int:
     from cistrack.runs.export import export_run
 
+    if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
+        return cmd_export_fit(args)
     params = {} if args.step is None else {"step": args.step}
     out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force, **params)
     if args.force:
@@ -274,6 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
     sc.set_defaults(func=cmd_scenarios)
     add_study_parser(sub)
     add_init_parser(sub)
+    add_fit_parser(sub, export_parser=ex)
     return p
 
 

@@ -16,7 +16,7 @@ from cistrack.errors import MeasurementError
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry, default_registry
 
-__all__ = ["read_observations", "write_observations", "reader_for", "FieldError", "field_error",
+__all__ = ["read_observations", "write_observations", "reader_for", "FieldError", "SeveralObjectsError", "field_error",
            "show_field", "read_text_lines"]
 
 _SHOWN = 40
@@ -28,6 +28,19 @@ class FieldError(MeasurementError):
     def __init__(self, path: str | PathLike, line: int, fieldname: str, reason: str):
         self.path, self.line, self.field, self.reason = str(path), int(line), fieldname, reason
         super().__init__(f"{path}, line {line}, field {fieldname}: {reason}")
+
+
+class SeveralObjectsError(MeasurementError):
+    """An observation file names several objects (designations ``objects``, in file order) and
+    the reader was not told which one to read (reader parameter ``designation``)."""
+
+    def __init__(self, path: str | PathLike, objects: list[str]):
+        self.path, self.objects = str(path), list(objects)
+        shown = ", ".join(repr(o) for o in self.objects[:10]) + (", ..." if len(self.objects) > 10 else "")
+        super().__init__(f"{path}: holds observations of {len(self.objects)} objects ({shown}); read one at a "
+                         f"time with the reader parameter designation (e.g. [measurements] reader = {{ name = "
+                         f"..., designation = {self.objects[0]!r} }}), or give the file to 'cistrack fit', "
+                         f"which fits each object")
 
 
 def show_field(text: str) -> str:
@@ -42,14 +55,15 @@ def field_error(path, line: int, fieldname: str, reason: str) -> FieldError:
 
 
 def read_text_lines(path: str | PathLike) -> list[str]:
-    """The lines of a UTF-8 text file, with a MeasurementError naming the file if unreadable."""
+    """The lines of a UTF-8 text file (a leading byte-order mark is dropped), with a
+    MeasurementError naming the file if unreadable."""
     p = Path(path)
     try:
         data = p.read_bytes()
     except OSError as exc:
         raise MeasurementError(f"cannot read observation file {p}: {exc.strerror or exc}") from exc
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = data[:exc.start].count(b"\n") + 1
         raise FieldError(p, line, "(encoding)", f"not UTF-8 text ({exc.reason})") from None
@@ -64,6 +78,9 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
     """The reader component for ``format`` (a registered reader name), or the one whose
     suffixes match ``path`` when ``format`` is None."""
     reg = registry or default_registry()
+    if Path(path).is_dir():
+        raise MeasurementError(f"{path}: is a directory, not an observation file; give the path of a file "
+                               "(e.g. [measurements] file = \"obs.psv\")")
     if format is not None:
         return reg.create("reader", format, **params)
     name = str(path).lower()
@@ -71,9 +88,10 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
                if any(name.endswith(s) for s in getattr(e.factory, "suffixes", ()))]
     if len(matches) != 1:
         known = {e.name: list(getattr(e.factory, "suffixes", ())) for e in reg.entries("reader")}
-        why = "no reader recognises" if not matches else f"several readers ({', '.join(matches)}) recognise"
-        raise MeasurementError(f"{path}: {why} this file name; name the format (one of "
-                               f"{', '.join(f'{k} {v}' for k, v in known.items())})")
+        why = ("not an observation file of any known format: no reader recognises" if not matches
+               else f"several readers ({', '.join(matches)}) recognise")
+        raise MeasurementError(f"{path}: {why} this file name; give a file whose name ends in a known "
+                               f"suffix, or name the format (one of {', '.join(f'{k} {v}' for k, v in known.items())})")
     return reg.create("reader", matches[0], **params)
 
 

@@ -6,7 +6,9 @@ epoch. ``TIME_SYSTEM = UTC``; ``CENTER_NAME`` and ``REF_FRAME`` come from the ru
 frame; a frame that is not CCSDS-registered is named and described in a COMMENT line, and
 ``meta["comments"]`` (e.g. that the run did not finish) are COMMENT lines of the header.
 Numbers are written with the shortest text that reads back to the same double. Steps at the
-same epoch (an update right after a prediction) keep the last one.
+same epoch (an update right after a prediction) keep the last one. ``meta["interpolation"]`` and
+``meta["interpolation_degree"]`` (a fitted orbit on a regular grid) add the INTERPOLATION keywords,
+and ``meta["data_comment"]`` replaces the comment that says what the states are.
 """
 from __future__ import annotations
 
@@ -50,8 +52,13 @@ class OemExporter(Exporter):
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",
                 f"OBJECT_ID = {meta.get('object_id', 'cistrack-target')}",
                 f"CENTER_NAME = {est.frame.center}", f"REF_FRAME = {est.frame.name}", "TIME_SYSTEM = UTC",
-                f"START_TIME = {epochs[0]}", f"STOP_TIME = {epochs[-1]}", "META_STOP", ""]
-        out.append("COMMENT moment-matched mean of the filter's belief at each step, km and km/s")
+                f"START_TIME = {epochs[0]}", f"STOP_TIME = {epochs[-1]}"]
+        if meta.get("interpolation"):  # states on a grid a reader may interpolate (a fitted orbit)
+            out += [f"INTERPOLATION = {meta['interpolation']}",
+                    f"INTERPOLATION_DEGREE = {int(meta.get('interpolation_degree', 7))}"]
+        out += ["META_STOP", ""]
+        out.append("COMMENT " + str(meta.get("data_comment") or "moment-matched mean of the filter's belief at each "
+                                                                 "step, km and km/s"))
         for e, k in zip(epochs, idx):
             out.append(" ".join([e] + [num(v) for v in est.state_km[k]]))
         out += ["", "COVARIANCE_START"]

@@ -14,7 +14,7 @@ from pathlib import Path
 from cistrack.errors import MeasurementError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
+from cistrack.runs.observation_files import FieldError, read_text_lines
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch
@@ -31,10 +31,12 @@ class AdesPsvReader(SiteReader):
     Parameters
     ----------
     sigma_arcsec : float
-        RA and Dec sigma (arcsec, RA as an angle) for observations without rmsRA / rmsDec.
+        Sigma on the sky (arcsec: on RA x cos(Dec), like rmsRA, and on Dec) for observations
+        without rmsRA / rmsDec.
     sites : dict or None
-        Explicit sites for station codes outside the bundled MPC table: CODE ->
-        {latitude_deg, longitude_deg, height_m[, name]}.
+        Explicit sites for station codes outside the bundled MPC list: CODE ->
+        {latitude_deg, longitude_deg, height_m[, name]} or {longitude_deg, rho_cos_phi,
+        rho_sin_phi[, name]}.
     """
 
     suffixes = (".psv",)
@@ -72,7 +74,7 @@ class AdesPsvReader(SiteReader):
         if header is None and not rows:
             raise FieldError(path, max(1, len(lines)), "(header)", "no ADES PSV field-name line "
                                                                   "(obsTime|ra|dec|stn|...) found")
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-psv"})
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-psv"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:
         who = f"reader 'ades-psv' writing {path}"

@@ -12,7 +12,7 @@ from xml.parsers import expat
 
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
+from cistrack.runs.observation_files import FieldError, read_text_lines
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch
@@ -86,9 +86,10 @@ class AdesXmlReader(SiteReader):
     Parameters
     ----------
     sigma_arcsec : float
-        RA and Dec sigma (arcsec, RA as an angle) for observations without rmsRA / rmsDec.
+        Sigma on the sky (arcsec: on RA x cos(Dec), like rmsRA, and on Dec) for observations
+        without rmsRA / rmsDec.
     sites : dict or None
-        Explicit sites for station codes outside the bundled MPC table.
+        Explicit sites for station codes outside the bundled MPC list (as for ades-psv).
     """
 
     suffixes = (".xml",)
@@ -100,7 +101,7 @@ class AdesXmlReader(SiteReader):
         rows, table = [], {}
         for line, rec in _records(path, text):
             rows.append(record_to_row(rec, path, line, self._sites, table))
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"})
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:
         ep = parse_epoch(path, epoch)

@@ -16,7 +16,8 @@ One observation per 80-column line (columns counted from 1):
 78-80    MPC observatory code (bundled table, or the reader's ``sites`` parameter)
 =======  ===============================================================================
 
-The format has no uncertainties: every observation gets the reader's ``sigma_arcsec``. Lines
+The format has no uncertainties: every observation gets the reader's ``sigma_arcsec`` (default
+1.0 arcsec) on the sky, i.e. on RA x cos(Dec) (sigma_arcsec / cos(Dec) on RA) and on Dec. Lines
 that are blank or start with ``#`` (not part of the format) are skipped. The writer writes the
 time to 1e-6 day, RA to 0.001 s and Dec to 0.01 arcsec; reading gives those rounded values
 back, and writing them again gives the same text.
@@ -78,7 +79,7 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     month = _digits(mo, path, ln, "date month (columns 21-22)", 2)
     try:
         day = Decimal(d.strip())
-        if not d.strip()[:2].isdigit() or not day.is_finite():
+        if not d.strip()[:2].isdigit() or "_" in d or not day.is_finite():
             raise ValueError
     except Exception:
         raise FieldError(path, ln, "date day (columns 24-32)", f"{show_field(d)} is not a day with a decimal fraction") from None
@@ -115,7 +116,7 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
             table[code] = resolve_site(code, explicit)
         except MeasurementError as exc:
             raise FieldError(path, ln, "observatory code (columns 78-80)", str(exc)) from None
-    return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)")
+    return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)", s[0:12].strip())
 
 
 def _format(t: datetime, ra: float, dec: float, code: str, desig: str) -> str:
@@ -144,9 +145,9 @@ class Mpc80Reader(SiteReader):
     Parameters
     ----------
     sigma_arcsec : float
-        RA and Dec sigma of every observation, arcsec.
+        Sigma of every observation on the sky, arcsec: on RA x cos(Dec) and on Dec.
     sites : dict or None
-        Explicit sites for observatory codes outside the bundled MPC table.
+        Explicit sites for observatory codes outside the bundled MPC list.
     """
 
     suffixes = (".obs", ".mpc", ".80col")
@@ -162,7 +163,7 @@ class Mpc80Reader(SiteReader):
             if not text.strip() or text.startswith("#"):
                 continue
             rows.append(_parse(text, path, i, self._sites, table))
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "mpc80"})
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "mpc80"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:
         who = f"reader 'mpc80' writing {path}"

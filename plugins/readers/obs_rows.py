@@ -7,24 +7,28 @@ per-measurement sites and types. Times are given as UTC datetimes.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from datetime import datetime, timezone
 
 import numpy as np
 
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet
-from cistrack.runs.observation_files import FieldError
+from cistrack.runs.observation_files import FieldError, SeveralObjectsError, show_field
 from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
 
-__all__ = ["ObsRow", "build_set", "parse_epoch", "parse_iso_utc", "TIME_FIELD_HELP"]
+from .decimal_units import to_rad
+
+__all__ = ["ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "TIME_FIELD_HELP"]
 
 TIME_FIELD_HELP = "an ISO-8601 UTC time such as 2026-03-01T03:40:00.000000Z"
 
 
 @dataclass
 class ObsRow:
-    """One parsed observation: ``t`` UTC, angles (rad), sigmas (rad or None: reader default)."""
+    """One parsed observation: ``t`` UTC, angles (rad), sigmas (rad, on the angles themselves:
+    the RA sigma is the RA x cos(Dec) sigma / cos(Dec); or None: the reader's default)."""
 
     t: datetime
     a: float
@@ -35,6 +39,8 @@ class ObsRow:
     kind: str
     line: int
     time_field: str
+    obj: str = ""
+    """The object's designation in the file ("": the format names none)."""
 
 
 def parse_epoch(path, epoch) -> datetime:
@@ -56,11 +62,41 @@ def parse_iso_utc(text: str) -> datetime:
     return dt.astimezone(timezone.utc)
 
 
+def _default_first(row: ObsRow, sigma_arcsec: float, default_rad: float) -> float:
+    """The reader's default sigma of a row's first angle, rad: on the sky for RA/Dec (sigma_arcsec
+    on RA x cos(Dec), so sigma_arcsec / cos(Dec) on RA, correctly rounded), as is for az/el."""
+    if row.kind != "radec":
+        return default_rad
+    return to_rad(repr(float(sigma_arcsec)), "arcsec", scale=math.cos(row.b))
+
+
+def one_object(path, rows: list[ObsRow], designation: str | None) -> tuple[list[ObsRow], str | None]:
+    """The rows of one object and its designation: those of ``designation`` when given (a
+    FieldError when the file has none), else all rows, refused with :class:`SeveralObjectsError`
+    when they name several objects."""
+    objects = list(dict.fromkeys(r.obj for r in rows if r.obj))
+    if designation is not None:
+        keep = [r for r in rows if r.obj == designation]
+        if not keep:
+            raise FieldError(path, 1, "(designation)", f"no observation of object {show_field(designation)}; the "
+                                                       f"file names {', '.join(objects) or 'no object'}")
+        return keep, designation
+    if len(objects) > 1:
+        raise SeveralObjectsError(path, objects)
+    return rows, (objects[0] if objects else None)
+
+
 def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, Site],
-              sigma_arcsec: float, meta: dict | None = None) -> MeasurementSet:
-    """The MeasurementSet of ``rows`` in time order (TU since ``epoch``)."""
+              sigma_arcsec: float, meta: dict | None = None, designation: str | None = None) -> MeasurementSet:
+    """The MeasurementSet of ``rows`` in time order (TU since ``epoch``).
+
+    Rows without sigmas get the reader's default ``sigma_arcsec`` on the sky: on Dec, and on
+    RA x cos(Dec) (so sigma_arcsec / cos(Dec) on RA itself; az/el: on each angle). The set's meta
+    records ``default_sigma_arcsec`` and ``default_sigma_count`` (observations that took it)."""
     if not rows:
         raise FieldError(path, 1, "(observations)", "the file has no observations")
+    rows, obj = one_object(path, rows, designation)
+    meta = {**(meta or {}), **({"object": obj} if obj else {})}
     rows = sorted(rows, key=lambda r: (r.t, r.line))
     for prev, cur in zip(rows, rows[1:]):
         if cur.t == prev.t:
@@ -72,10 +108,12 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     default = sigma_arcsec * ARCSEC_RAD
     times = np.array([(r.t - epoch).total_seconds() / TU_S for r in rows])
     values = np.array([[r.a, r.b] for r in rows])
-    sigmas = np.array([[r.sigma_a if r.sigma_a is not None else default,
+    sigmas = np.array([[r.sigma_a if r.sigma_a is not None else _default_first(r, sigma_arcsec, default),
                         r.sigma_b if r.sigma_b is not None else default] for r in rows])
+    defaulted = sum(r.sigma_a is None or r.sigma_b is None for r in rows)
     used = {r.site for r in rows}
     return MeasurementSet(times, values, sigmas, names,
-                          {"source": str(path), "epoch": format_utc(epoch), **(meta or {})},
+                          {"source": str(path), "epoch": format_utc(epoch), **(meta or {}),
+                           "default_sigma_arcsec": float(sigma_arcsec), "default_sigma_count": int(defaulted)},
                           sites=np.array([r.site for r in rows]), kinds=np.array([r.kind for r in rows]),
                           site_table={k: v for k, v in site_table.items() if k in used})

@@ -1,20 +1,26 @@
 """The ``sites`` parameter shared by the readers: explicit site coordinates by key.
 
-``sites = {"KEY": {"latitude_deg": .., "longitude_deg": .., "height_m": .., "name": ..}}`` (or
-``[lat, lon, height_m]``) declares sites that a file names by KEY; any other key is looked up as
-an MPC observatory code in the bundled table.
+``sites = {"KEY": {"latitude_deg": .., "longitude_deg": .., "height_m": .., "name": ..}}`` (WGS84;
+or ``[lat, lon, height_m]``), or ``{"longitude_deg": .., "rho_cos_phi": .., "rho_sin_phi": ..}``
+(MPC parallax constants: East longitude in degrees, rho cos(phi') and rho sin(phi') in Earth
+equatorial radii, converted exactly to WGS84) declares sites that a file names by KEY; any other
+key is looked up as an MPC observatory code in the bundled list.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 from cistrack.interfaces.component import check_positive
 from cistrack.errors import MeasurementError
 from cistrack.interfaces import Reader
-from cistrack.astro.sites import Site, observatory
+from cistrack.astro.sites import Site, observatory, site_from_parallax
 
 __all__ = ["parse_sites", "resolve_site", "site_columns"]
+
+_SITE_FIELDS = (("latitude_deg", "longitude_deg", "height_m"), ("longitude_deg", "rho_cos_phi", "rho_sin_phi"))
+"""The two ways to give a site: WGS84 geodetic, or MPC parallax constants."""
 
 
 def parse_sites(owner, value: Any) -> dict[str, Site]:
@@ -22,8 +28,8 @@ def parse_sites(owner, value: Any) -> dict[str, Site]:
     if value is None:
         return {}
     if not isinstance(value, dict):
-        owner._fail("sites", value, "must be a table KEY -> {latitude_deg, longitude_deg, height_m} "
-                                    "or KEY -> [lat, lon, height_m]")
+        owner._fail("sites", value, "must be a table KEY -> {latitude_deg, longitude_deg, height_m}, "
+                                    "KEY -> {longitude_deg, rho_cos_phi, rho_sin_phi} or KEY -> [lat, lon, height_m]")
     out = {}
     for key, spec in value.items():
         if isinstance(spec, Site):
@@ -31,15 +37,23 @@ def parse_sites(owner, value: Any) -> dict[str, Site]:
             continue
         if isinstance(spec, (list, tuple)) and len(spec) == 3:
             spec = {"latitude_deg": spec[0], "longitude_deg": spec[1], "height_m": spec[2]}
-        if not isinstance(spec, dict) or not {"latitude_deg", "longitude_deg", "height_m"} <= set(spec) \
-                or not set(spec) <= {"latitude_deg", "longitude_deg", "height_m", "name"}:
-            owner._fail("sites", {key: spec}, f"site {key!r} needs latitude_deg, longitude_deg, height_m "
-                                              f"(and optionally name)")
-        vals = [spec["latitude_deg"], spec["longitude_deg"], spec["height_m"]]
+        given = set(spec) - {"name"} if isinstance(spec, dict) else set()
+        fields = next((f for f in _SITE_FIELDS if given == set(f)), None)
+        if fields is None:
+            owner._fail("sites", {key: spec}, f"site {key!r} needs either latitude_deg, longitude_deg, "
+                                              f"height_m (WGS84: degrees, metres) or longitude_deg, "
+                                              f"rho_cos_phi, rho_sin_phi (MPC parallax constants: degrees, "
+                                              f"Earth equatorial radii), and optionally name")
+        vals = [spec[f] for f in fields]
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in vals):
             owner._fail("sites", {key: spec}, f"site {key!r}: coordinates must be finite numbers")
+        name = str(spec.get("name", key))
         try:
-            out[str(key)] = Site(float(vals[0]), float(vals[1]), float(vals[2]), name=str(spec.get("name", key)))
+            if fields == _SITE_FIELDS[0]:
+                out[str(key)] = Site(float(vals[0]), float(vals[1]), float(vals[2]), name=name)
+            else:
+                site = site_from_parallax(str(key), name, float(vals[0]), float(vals[1]), float(vals[2]))
+                out[str(key)] = replace(site, code="")  # a declared site, not one from the MPC list
         except MeasurementError as exc:
             owner._fail("sites", {key: spec}, str(exc))
     return out
@@ -63,13 +77,23 @@ class SiteReader(Reader):
     Parameters
     ----------
     sigma_arcsec : float
-        1-sigma noise of each angle where the file gives none, arcsec.
+        1-sigma noise where the file gives none, arcsec; for RA/Dec on the sky (on RA x cos(Dec)
+        and on Dec), for az/el on each angle.
     sites : dict or None
-        Explicit sites for station codes outside the bundled MPC table: CODE ->
-        {latitude_deg, longitude_deg, height_m[, name]}.
+        Explicit sites for station codes outside the bundled MPC list: CODE ->
+        {latitude_deg, longitude_deg, height_m[, name]} (WGS84, degrees and metres) or CODE ->
+        {longitude_deg, rho_cos_phi, rho_sin_phi[, name]} (MPC parallax constants, degrees and
+        Earth equatorial radii).
+    designation : str or None
+        Read only the observations of this object (permID / provID / trkSub, MPC designation,
+        TDM PARTICIPANT_2); None: all, refused when the file names several objects.
     """
 
-    def __init__(self, sigma_arcsec: float = 1.5, sites: dict | None = None) -> None:
+    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
+                 designation: str | None = None) -> None:
         self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
         self._sites = parse_sites(self, sites)
         self.sites = sites
+        if designation is not None and (not isinstance(designation, str) or not designation.strip()):
+            self._fail("designation", designation, "must be an object designation (non-empty text) or absent")
+        self.designation = None if designation is None else designation.strip()

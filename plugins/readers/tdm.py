@@ -13,8 +13,9 @@ Read: a header (``CCSDS_TDM_VERS``, ``CREATION_DATE``, ``ORIGINATOR``), then seg
 * data lines ``ANGLE_1 = <epoch> <value>`` and ``ANGLE_2 = <epoch> <value>``, one pair per
   observation at the same epoch (``YYYY-MM-DDThh:mm:ss[.d...]`` or ``YYYY-DDDThh:mm:ss[.d...]``).
 
-TDM has no per-observation uncertainty: the reader's ``sigma_arcsec`` applies unless the
-segment has ``COMMENT cistrack sigma_arcsec ANGLE_1=.. ANGLE_2=..``, which the writer writes
+TDM has no per-observation uncertainty: the reader's ``sigma_arcsec`` (default 1.0 arcsec, on
+the sky: RA x cos(Dec) and Dec) applies unless the segment has ``COMMENT cistrack sigma_arcsec
+ANGLE_1=.. ANGLE_2=..`` (arcsec; for RADEC ANGLE_1 is on RA x cos(Dec)), which the writer writes
 (one segment per run of measurements with the same site, type and sigmas). Other keywords
 (RANGE, DOPPLER, ...) are refused by name. Times round-trip to 1 microsecond, angles and sigmas
 bit for bit.
@@ -33,7 +34,7 @@ from cistrack.runs.observation_files import FieldError, read_text_lines, show_fi
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
-from .decimal_units import from_rad, to_rad
+from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, build_set, parse_epoch
 from .site_params import SiteReader, resolve_site
 
@@ -85,15 +86,38 @@ class _Segment:
         self.comments: list[tuple[str, int]] = []
 
 
+def _first_sigma(ctx: dict, dec: float) -> float | None:
+    """ANGLE_1's sigma (rad) of an observation in a segment with a cistrack sigma comment: for
+    RADEC the comment's value is on the sky (RA x cos(Dec)), so it is divided by cos(Dec)."""
+    if ctx["sig"][0] is None or ctx["kind"] != "radec":
+        return ctx["sig"][0]
+    return to_rad(ctx["sig_text"], "arcsec", math.cos(dec))
+
+
+def _sigma_texts(ms, k: int, kind: str) -> tuple[str, str]:
+    """The sigma comment's texts (arcsec) of measurement k: ANGLE_1 on the sky for RADEC."""
+    scale = math.cos(float(ms.values[k, 1])) if kind == "radec" else 1.0
+    return from_rad(float(ms.sigmas[k, 0]), "arcsec", scale=scale), from_rad(float(ms.sigmas[k, 1]), "arcsec")
+
+
+def _reads_back(texts: tuple[str, str], ms, k: int, kind: str) -> bool:
+    """Whether a segment whose sigma comment says ``texts`` reads measurement k's sigmas exactly."""
+    scale = math.cos(float(ms.values[k, 1])) if kind == "radec" else 1.0
+    return (to_rad(texts[0], "arcsec", scale) == float(ms.sigmas[k, 0])
+            and to_rad(texts[1], "arcsec") == float(ms.sigmas[k, 1]))
+
+
 class TdmReader(SiteReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
     Parameters
     ----------
     sigma_arcsec : float
-        Angle sigma (arcsec) for segments without a cistrack sigma comment.
+        Angle sigma (arcsec) for segments without a cistrack sigma comment; for RADEC on the
+        sky (on RA x cos(Dec) and on Dec).
     sites : dict or None
-        Explicit sites by PARTICIPANT_1 name: NAME -> {latitude_deg, longitude_deg, height_m}.
+        Explicit sites by PARTICIPANT_1 name: NAME -> {latitude_deg, longitude_deg, height_m}
+        or {longitude_deg, rho_cos_phi, rho_sin_phi}.
     """
 
     suffixes = (".tdm", ".kvn")
@@ -175,8 +199,8 @@ class TdmReader(SiteReader):
                     if name == k:
                         raise FieldError(path, ln, k, f"a second {k} at {format_utc(t)} (line {pl} has the first)")
                     a, b = (other_v, val) if name == "ANGLE_1" else (val, other_v)
-                    rows.append(ObsRow(t, a, b, ctx["sig"][0], ctx["sig"][1], ctx["site"], ctx["kind"],
-                                       min(ln, pl), "ANGLE_1 epoch"))
+                    rows.append(ObsRow(t, a, b, _first_sigma(ctx, b), ctx["sig"][1], ctx["site"], ctx["kind"],
+                                       min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
                 else:
                     pending[t] = (k, val, ln)
                 continue
@@ -188,7 +212,7 @@ class TdmReader(SiteReader):
         if state != "after":
             where = {"header": "META_START", "meta": "META_STOP", "between": "DATA_START", "data": "DATA_STOP"}[state]
             raise FieldError(path, max(1, len(lines)), where, f"the file ends without {where}")
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "tdm"})
+        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
 
     def _check_angle(self, path, ln, k, text, val, kind) -> None:
         if k == "ANGLE_1" and not 0.0 <= val < 2.0 * math.pi:
@@ -215,12 +239,13 @@ class TdmReader(SiteReader):
                                                               f"{', '.join(sorted(_RADEC_FRAMES))}")
         name, nl = meta["PARTICIPANT_1"]
         declared = {}
-        sig = (None, None)
+        sig, sig_text = (None, None), ""
         for text, cl in seg.comments:
             m = _SITE_RE.match(text)
             if m:
                 try:
-                    declared[m.group(1)] = Site(float(m.group(2)), float(m.group(3)), float(m.group(4)), name=m.group(1))
+                    lat, lon, height = (plain_float(m.group(i)) for i in (2, 3, 4))
+                    declared[m.group(1)] = Site(lat, lon, height, name=m.group(1))
                 except (ValueError, MeasurementError) as exc:
                     raise FieldError(path, cl, "COMMENT cistrack site", str(exc)[:120]) from None
                 continue
@@ -228,6 +253,7 @@ class TdmReader(SiteReader):
             if m:
                 try:
                     sig = (to_rad(m.group(1), "arcsec"), to_rad(m.group(2), "arcsec"))
+                    sig_text = m.group(1)
                 except ValueError:
                     raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas are not numbers") from None
                 if not (sig[0] > 0 and sig[1] > 0):
@@ -242,7 +268,8 @@ class TdmReader(SiteReader):
         if name in table and table[name] != site:
             raise FieldError(path, nl, "PARTICIPANT_1", f"{show_field(name)} was declared with another position earlier")
         table[name] = site
-        return {"kind": kind, "site": name, "sig": sig}
+        return {"kind": kind, "site": name, "sig": sig, "sig_text": sig_text,
+                "object": meta.get("PARTICIPANT_2", ("", ln))[0]}
 
     # -- writing ---------------------------------------------------------------------------------
     def write(self, path, measurements, epoch) -> None:
@@ -263,14 +290,15 @@ class TdmReader(SiteReader):
         k = 0
         while k < len(ms):
             j = k
-            key = (str(ms.sites[k]), kinds[k], ms.sigmas[k, 0], ms.sigmas[k, 1])
-            while j + 1 < len(ms) and (str(ms.sites[j + 1]), kinds[j + 1], ms.sigmas[j + 1, 0], ms.sigmas[j + 1, 1]) == key:
+            key, texts = (str(ms.sites[k]), kinds[k]), _sigma_texts(ms, k, kinds[k])
+            while j + 1 < len(ms) and (str(ms.sites[j + 1]), kinds[j + 1]) == key \
+                    and _reads_back(texts, ms, j + 1, kinds[k]):
                 j += 1
-            out += self._segment(ms, k, j, kinds[k], ep)
+            out += self._segment(ms, k, j, kinds[k], ep, texts)
             k = j + 1
         Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
 
-    def _segment(self, ms, k, j, kind, ep) -> list[str]:
+    def _segment(self, ms, k, j, kind, ep, sigma_texts: tuple[str, str]) -> list[str]:
         name = str(ms.sites[k])
         site = ms.site_table[name]
         out = ["", "META_START"]
@@ -281,8 +309,7 @@ class TdmReader(SiteReader):
         if not is_code:
             out.append(f"COMMENT cistrack site {name} latitude_deg={site.latitude_deg!r} "
                        f"longitude_deg={site.longitude_deg!r} height_m={site.height_m!r}")
-        out.append(f"COMMENT cistrack sigma_arcsec ANGLE_1={from_rad(float(ms.sigmas[k, 0]), 'arcsec')} "
-                   f"ANGLE_2={from_rad(float(ms.sigmas[k, 1]), 'arcsec')}")
+        out.append(f"COMMENT cistrack sigma_arcsec ANGLE_1={sigma_texts[0]} ANGLE_2={sigma_texts[1]}")
         out += ["TIME_SYSTEM = UTC", f"PARTICIPANT_1 = {name}", f"PARTICIPANT_2 = {ms.meta.get('object', 'cis0001')}",
                 "MODE = SEQUENTIAL", "PATH = 2,1", f"ANGLE_TYPE = {kind.upper()}"]
         if kind == "radec":

@@ -1,0 +1,152 @@
+"""``cistrack fit FILE [FILE ...] [--out DIR] [--set TABLE.KEY=VALUE ...] [--quiet]`` and the
+export of a fit directory (``cistrack export FIT_DIR [--predict DAYS]``).
+
+The work is :func:`cistrack.fit.from_observations.fit_files`; this module parses the options and
+prints, per object: the filter run's outcome, the least-squares RMS and chi-square, the assumed
+and estimated noise, the rejected count, the position and velocity sigmas at the fit epoch, and
+every warning. Exit status: 0 when every object's fit converged, 3 otherwise, 2 for an input
+error (before anything runs).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["add_fit_parser", "add_predict_option", "is_fit_export", "cmd_fit", "cmd_export_fit", "summary_lines"]
+
+
+def _eprint(*a) -> None:
+    print(*a, file=sys.stderr, flush=True)
+
+
+def summary_lines(one) -> list[str]:
+    """The printed summary of one :class:`~cistrack.fit.from_observations.ObjectFit`."""
+    from cistrack import units
+    from cistrack.fit.fit_record import noise_summary
+
+    lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED") + f"  (results in {one.directory})"]
+    if one.run is not None:
+        s = one.run.summary
+        lines.append(f"  filter {one.scenario.components['filter'].name} after IOD "
+                     f"{one.scenario.components['iod'].name}: {s.status}"
+                     + (f" ({s.failure})" if s.failure else "")
+                     + (f"; verdict {s.verdict.kind}" if getattr(s.verdict, "kind", None) else ""))
+    if one.failure:
+        lines.append(f"  error: {one.failure}")
+    r = one.result
+    if r is None:
+        lines.append("  no orbit: see docs/real-data.md, 'When a fit fails'")
+        return lines
+    ms = one.run.context.measurements
+    epoch = units.format_utc(units.tu_to_utc(one.scenario.epoch, r.epoch))[:19] + "Z"
+    lines.append(f"  least squares at {epoch} ({one.choices.epoch} observation): {len(ms)} observations, "
+                 f"{r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}, chi-square {r.chi2:.1f} "
+                 f"for {2 * r.n_used - 6} degrees of freedom")
+    for name, v in noise_summary(ms, r).items():
+        unit = "km" if name.endswith("_km") else "arcsec"
+        label = name.rsplit("_", 1)[0].replace("ra_cos_dec", "RA cos(Dec)").replace("declination", "Dec")
+        lines.append(f"  {label}: assumed noise {v['assumed']:.3g} {unit}, estimated {v['estimated']:.3g} {unit} "
+                     f"(noise scale {r.noise_scale:.3f}), post-fit RMS {v['post_fit_rms']:.3g} {unit}")
+    sig = r.sigmas_km
+    lines.append("  1-sigma at the fit epoch (synodic): position " + " / ".join(f"{v:.3g}" for v in sig[:3])
+                 + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; condition number "
+                 f"{r.condition_number:.3g}")
+    if r.noise_scale > 1.0:
+        lines.append(f"  the exported covariance is this one times the noise scale squared ({r.noise_scale ** 2:.3g}): "
+                     "the residuals exceed the stated noise")
+    for m in r.messages[1:]:
+        lines.append(f"  note: {m}")
+    if r.unobservable:
+        lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
+    if not r.converged:
+        lines.append("  warning: the least squares did not converge; the orbit is not exported without --force "
+                     "(docs/real-data.md, 'When a fit fails')")
+    if r.noise_scale > 1.5:
+        lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
+                     "(--set measurements.reader.sigma_arcsec=...) or the data")
+    return lines
+
+
+def cmd_fit(args) -> int:
+    from cistrack.fit.from_observations import fit_files
+    from cistrack.plugin.registry import default_registry
+
+    quiet = bool(args.quiet)
+    say = None if quiet else (lambda m: _eprint(f"  {m}"))
+    results = fit_files(args.files, out=args.out, settings=args.set, registry=default_registry(), log=say,
+                        progress=not quiet)
+    if not quiet:
+        for one in results:
+            for note in one.notes:
+                print(f"  weights: {note}")
+            for line in summary_lines(one):
+                print(line)
+            print(f"  next: cistrack export {one.directory} --format oem [--predict DAYS]")
+    else:
+        for one in results:
+            if not one.ok:
+                _eprint(f"cistrack: error: fit {one.designation} failed: " + (one.failure or "; ".join(
+                    one.result.messages[:1] if one.result else [])))
+    return 0 if all(one.ok for one in results) else 3
+
+
+def cmd_export_fit(args) -> int:
+    """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fit.fit_export`)."""
+    from cistrack.fit.fit_export import export_fit
+
+    params = {} if getattr(args, "step", None) is None else {"step": args.step}
+    out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
+                     predict_days=getattr(args, "predict", None), **params)
+    print(f"wrote {out}")
+    return 0
+
+
+def _nonnegative_days(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of days") from None
+    if not (v >= 0 and v == v and v != float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number of days >= 0")
+    return v
+
+
+def add_fit_parser(sub, export_parser=None) -> None:
+    """Add ``cistrack fit`` to the sub-command parsers ``sub``, and ``--predict`` to ``export_parser``."""
+    if export_parser is not None:
+        add_predict_option(export_parser)
+    f = sub.add_parser("fit", help="fit an orbit to observation files (IOD, filter, then least squares)",
+                       description="Observation files in (ADES PSV/XML, MPC 80-column, CCSDS TDM, cistrack CSV; "
+                                   "several files and sites are merged, one fit per object), a least-squares "
+                                   "orbit with covariance and post-fit residuals out. Defaults: "
+                                   "cistrack/scenarios/fit-defaults.toml; docs/real-data.md.")
+    f.add_argument("files", nargs="+", metavar="FILE", help="observation files")
+    f.add_argument("--out", default=None, help="results directory (default runs/fit-<designation>; with several "
+                   "objects, one directory per object inside it); new, empty or an earlier results directory")
+    f.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
+                   help="change a default (repeatable): a scenario key (filter.n_particles=8000), a reader "
+                        "parameter (measurements.reader.sigma_arcsec=0.5) or a fit setting (fit.epoch=middle, "
+                        "fit.reject_sigma=4)")
+    f.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
+    f.set_defaults(func=cmd_fit)
+
+
+def add_predict_option(export_parser) -> None:
+    """``--predict DAYS`` on ``cistrack export`` (fit directories)."""
+    export_parser.add_argument("--predict", type=_nonnegative_days, default=None, metavar="DAYS",
+                               help="fit directories: also write the orbit this many days beyond the last "
+                                    "observation, with its propagated covariance")
+
+
+def is_fit_export(args) -> bool:
+    """Whether ``cistrack export`` was given a fit directory (or --predict, which needs one)."""
+    from cistrack.fit.fit_export import is_fit_directory
+
+    if is_fit_directory(args.run):
+        return True
+    if getattr(args, "predict", None) is not None:
+        from cistrack.errors import ConfigError
+        raise ConfigError(f"--predict: {args.run} is not a fit directory (no fit.json); --predict extends a "
+                          f"fitted orbit: run 'cistrack fit FILE --out DIR' first")
+    return False
+

@@ -1,0 +1,178 @@
+"""Exporting a fitted orbit: ``cistrack export FIT_DIR --format oem [--predict DAYS]``.
+
+The state and covariance of ``fit.json`` are propagated with :func:`cistrack.fit.predict`
+(linear covariance propagation with the dynamics' transition matrices) to a regular grid of
+:data:`GRID_MINUTES` over the arc (from the first observation, floored to a whole minute, to the
+first grid point at or after the last one) and, with ``predict_days``, on beyond the arc; they are
+carried into the sensor's inertial frame like a run's estimates and written by the registered
+exporter: an OEM gets every grid point with its covariance, OBJECT_NAME and OBJECT_ID from the
+designation and Lagrange interpolation keywords; an OPM the state at the fit epoch.
+
+The covariance exported is the fit's (the inverse normal matrix of the stated weights) times
+:func:`covariance_scale`: the noise scale squared when the post-fit residuals exceed the stated
+noise (weights too optimistic, e.g. a format's default), 1 otherwise, so that the covariance is
+never smaller than the residuals say it should be.
+
+A fit that did not converge (or whose filter run gave no estimate) is refused unless ``force``,
+and then the file says why in a COMMENT.
+"""
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import CistrackError, ConfigError
+from cistrack.fit.fit_record import read_fit_record
+from cistrack.fit.prediction import predict
+from cistrack.fit.residual_table import residual_table
+from cistrack.fit.result import FitResult
+from cistrack.plugin.registry import Registry, default_registry
+from cistrack.results.atomic_files import atomic_target
+from cistrack.results.estimates import KM_SCALE, Estimates
+from cistrack.results.inertial_frame import to_inertial
+
+__all__ = ["export_fit", "fit_refusal", "fit_grid", "covariance_scale", "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
+
+GRID_MINUTES = 10.0
+"""Spacing of the exported states, minutes."""
+INTERPOLATION_DEGREE = 7
+"""Lagrange degree recommended to a reader of the OEM (8 points span 70 minutes of the grid)."""
+MAX_PREDICT_DAYS = 365.0
+"""Longest prediction span accepted, days."""
+
+
+def is_fit_directory(run_dir: str | Path) -> bool:
+    """Whether ``run_dir`` holds a ``fit.json`` (written by ``cistrack fit``)."""
+    return (Path(run_dir) / "fit.json").is_file()
+
+
+def fit_refusal(record: dict[str, Any]) -> str | None:
+    """Why the fit of ``record`` (a ``fit.json``) should not be exported without ``force``."""
+    if "state" not in record:
+        return "it has no fitted orbit (" + (record.get("failure") or "the fit was not made") + ")"
+    if not record.get("converged"):
+        return "its least squares did not converge (" + "; ".join(record.get("messages", [])[:2]) + ")"
+    return None
+
+
+def covariance_scale(record: dict[str, Any]) -> float:
+    """max(1, noise scale)^2 of a fit record (1 when the noise scale is undefined)."""
+    s = float(record.get("noise_scale", float("nan")))
+    return s * s if math.isfinite(s) and s > 1.0 else 1.0
+
+
+def _result(record: dict[str, Any]) -> FitResult:
+    """A FitResult holding the record's state, covariance (times :func:`covariance_scale`) and
+    epoch: what prediction needs."""
+    empty = residual_table(np.zeros(0), np.zeros(0, dtype=str), np.zeros(0, dtype=str), ("a", "b"),
+                           np.zeros((0, 2)), np.zeros((0, 2)), np.ones((0, 2)), np.zeros(0, dtype=bool))
+    cov = np.asarray(record["covariance"], dtype=float) * covariance_scale(record)
+    return FitResult(state=np.asarray(record["state"], dtype=float), covariance=cov,
+                     epoch=float(record["epoch_tu"]), residuals=empty, rms=float(record["rms"]), chi2=float(record["chi2"]),
+                     n_used=int(record["n_used"]), n_rejected=int(record["n_rejected"]),
+                     iterations=int(record["iterations"]), converged=bool(record["converged"]),
+                     condition_number=float(record["condition_number"]),
+                     weakest_direction_km=np.asarray(record["weakest_direction_km"], dtype=float),
+                     noise_scale=float(record["noise_scale"]))
+
+
+def fit_grid(first_tu: float, last_tu: float, epoch, predict_days: float = 0.0,
+             minutes: float = GRID_MINUTES) -> tuple[np.ndarray, int]:
+    """Grid times (TU since ``epoch``) every ``minutes`` from the first observation floored to a
+    whole minute through the last one, then ``predict_days`` on; and the number of grid points
+    that cover the arc."""
+    first_utc = units.tu_to_utc(epoch, first_tu).replace(second=0, microsecond=0)
+    start = (first_utc - epoch).total_seconds() / units.TU_S
+    step = minutes * 60.0 / units.TU_S
+    n_arc = int(math.ceil((last_tu - start) / step - 1e-9)) + 1
+    n_all = n_arc + int(math.ceil(predict_days * 1440.0 / minutes - 1e-9))
+    return start + step * np.arange(n_all), n_arc
+
+
+def _scenario(d: Path, reg: Registry):
+    import sys
+
+    from cistrack.scenario.loading import parse_scenario
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    p = d / "scenario.toml"
+    try:
+        return parse_scenario(tomllib.loads(p.read_text()), str(p), reg)
+    except FileNotFoundError:
+        raise ConfigError(f"{d}: not a fit directory (no scenario.toml); run 'cistrack fit FILE --out DIR' first") from None
+
+
+def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None = None, *,
+               overwrite: bool = False, force: bool = False, predict_days: float | None = None,
+               registry: Registry | None = None, **params: Any) -> Path:
+    """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
+    (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path. ``predict_days`` (>= 0, at most
+    :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation. Refusals name the
+    option: an existing ``path`` without ``overwrite``, a fit that did not converge without
+    ``force``."""
+    if path is not None and not overwrite and os.path.lexists(path):
+        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to replace it")
+    days = 0.0 if predict_days is None else predict_days
+    if not (isinstance(days, (int, float)) and math.isfinite(days) and 0.0 <= days <= MAX_PREDICT_DAYS):
+        raise ConfigError(f"--predict {predict_days!r}: must be a number of days from 0 to {MAX_PREDICT_DAYS:g}")
+    d = Path(run_dir)
+    record = read_fit_record(d)
+    refusal = fit_refusal(record)
+    if refusal is not None and not force:
+        raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or add "
+                            "--force to export it anyway (the file then says this in a COMMENT)")
+    if "state" not in record:
+        raise CistrackError(f"{d}: nothing to export: {refusal}")
+    reg = registry or default_registry()
+    exporter = reg.create("exporter", format, **params)
+    scen = _scenario(d, reg)
+    frame = scen.build("sensor", reg).inertial_frame()
+    if frame is None:
+        raise CistrackError(f"{d}: sensor '{scen.components['sensor'].name}' does not place its synodic frame in an "
+                            "inertial frame; cannot export")
+    result = _result(record)
+    arc = record["arc"]
+    if format == "opm":
+        times, n_arc = np.array([result.epoch]), 1
+    else:
+        times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
+    states, covs = predict(result, scen.build("dynamics", reg), times)
+    k = len(times)
+    kinds = np.array(["fit"] * n_arc + ["predict"] * (k - n_arc))
+    utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
+    est = Estimates(step=np.arange(k), kind=kinds, t_tu=times, utc=utc, mean_km=states * KM_SCALE,
+                    covariance_km=covs * np.multiply.outer(KM_SCALE, KM_SCALE), weights=[np.ones(1)] * k,
+                    means_km=[(states[i] * KM_SCALE)[None] for i in range(k)],
+                    covariances_km=[(covs[i] * np.multiply.outer(KM_SCALE, KM_SCALE))[None] for i in range(k)])
+    ie = to_inertial(est, frame)
+    name = str(record.get("designation") or scen.name)
+    comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
+                f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
+                f"weighted RMS {record['rms']:.4g}, noise scale {record['noise_scale']:.4g}, "
+                f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
+    if covariance_scale(record) > 1.0:
+        comments.append(f"covariance scaled by the noise scale squared ({covariance_scale(record):.4g}): the "
+                        "post-fit residuals exceed the stated noise")
+    if k > n_arc:
+        comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
+                        f"({days:g} days), covariance propagated linearly")
+    if refusal is not None:
+        comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
+    meta = {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
+            "interpolation": "LAGRANGE", "interpolation_degree": INTERPOLATION_DEGREE,
+            "data_comment": f"least-squares state and covariance propagated every {GRID_MINUTES:g} min, km and km/s"}
+    out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
+    try:
+        with atomic_target(out) as tmp:
+            exporter.write(tmp, ie, meta)
+    except OSError as exc:
+        raise CistrackError(("--out " if path is not None else "") + f"{out}: cannot write the {format} file "
+                            f"({exc.strerror or exc}); nothing was written there") from None
+    return out

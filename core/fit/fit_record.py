@@ -1,0 +1,147 @@
+"""The files ``cistrack fit`` writes beside the filter run's results, and reading them back.
+
+- ``fit.json``: the fitted state and covariance at the fit epoch (synodic frame of the
+  scenario's dynamics: exact nondimensional values and km, km/s), the epoch in UTC and TU, the
+  arc, RMS, chi-square, assumed and estimated noise, counts, condition number, messages, the
+  filter run it started from and the settings;
+- ``residuals.csv``: one row per observation: time UTC, site, O - C (RA x cos(Dec) and Dec in
+  arcsec for RA/Dec), normalised residuals, chi-square, rejected;
+- ``residuals-<site>.png`` / ``.svg``: the residual plot of each site
+  (:mod:`cistrack.fit.residual_plots`).
+
+Each file is written whole or not at all (temporary file, then rename).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import ConfigError
+from cistrack.results.atomic_files import write_text_atomic
+
+__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "noise_summary"]
+
+FIT_RECORD = "fit.json"
+RESIDUALS = "residuals.csv"
+_FORMAT = "cistrack-fit"
+
+
+def _utc(scen, t: float) -> str:
+    return units.format_utc(units.tu_to_utc(scen.epoch, float(t)))
+
+
+def noise_summary(measurements, result) -> dict[str, dict[str, float]]:
+    """Assumed (median of the observations' sigmas) and estimated (assumed x noise scale) noise
+    per component, arcsec on the sky (RA x cos(Dec)), with the post-fit RMS of each column."""
+    names = result.residuals.column_names()
+    sig = np.asarray(measurements.sigmas[:, :len(names)], dtype=float) / units.ARCSEC_RAD
+    kinds = np.array([measurements.kind_at(i) for i in range(len(measurements))])
+    if sig.shape[1] >= 2:
+        radec = kinds == "radec"
+        sig[radec, 0] *= np.cos(measurements.values[radec, 1])
+    rms = result.residuals.rms()
+    out = {}
+    for j, name in enumerate(names):
+        assumed = float(np.median(sig[:, j]))
+        out[name] = {"assumed": assumed, "estimated": assumed * float(result.noise_scale),
+                     "post_fit_rms": float(rms[j])}
+    return out
+
+
+def _fit_dict(one, obs) -> dict[str, Any]:
+    scen, r = one.scenario, one.result
+    ms = one.run.context.measurements if one.run is not None else None
+    data: dict[str, Any] = {
+        "format": _FORMAT, "version": 1, "designation": one.designation,
+        "files": [str(f) for f in obs.files], "weights": list(one.notes),
+        "scenario_epoch_utc": units.format_utc(scen.epoch) if scen is not None else None,
+        "settings": {"epoch": one.choices.epoch, "prior": one.choices.prior,
+                     "options": {k: getattr(one.choices.options, k) for k in one.choices.options.__dataclass_fields__
+                                 if k != "sensor_steps"}},
+        "converged": bool(r.converged) if r is not None else False,
+        "failure": one.failure,
+    }
+    if ms is not None and len(ms):
+        data["arc"] = {"first_utc": _utc(scen, ms.times[0]), "last_utc": _utc(scen, ms.times[-1]),
+                       "first_tu": float(ms.times[0]), "last_tu": float(ms.times[-1]),
+                       "sites": ms.site_keys(), "n_observations": int(len(ms))}
+    if one.run is not None:
+        s = one.run.summary
+        belief = one.run.context.filter.belief
+        data["filter"] = {"name": scen.components["filter"].name, "iod": scen.components["iod"].name,
+                          "status": s.status, "failure": s.failure,
+                          "verdict": getattr(s.verdict, "kind", None), "verdict_reason": getattr(s.verdict, "reason", None),
+                          "final_epoch_utc": _utc(scen, belief.epoch)}
+    if r is None:
+        return data
+    data.update({
+        "frame": "synodic frame of the scenario's dynamics (barycentric Earth-Moon rotating), km and km/s",
+        "epoch_utc": _utc(scen, r.epoch), "epoch_tu": float(r.epoch),
+        "state": [float(v) for v in r.state], "covariance": np.asarray(r.covariance).tolist(),
+        "state_km": [float(v) for v in r.state_km], "covariance_km": np.asarray(r.covariance_km).tolist(),
+        "sigmas_km": [float(v) for v in r.sigmas_km],
+        "rms": float(r.rms), "chi2": float(r.chi2), "noise_scale": float(r.noise_scale),
+        "n_used": int(r.n_used), "n_rejected": int(r.n_rejected), "iterations": int(r.iterations),
+        "condition_number": float(r.condition_number),
+        "weakest_direction_km": [float(v) for v in r.weakest_direction_km],
+        "unobservable": bool(r.unobservable), "rejection_threshold": float(r.rejection_threshold),
+        "noise_arcsec": noise_summary(ms, r), "messages": list(r.messages),
+    })
+    return data
+
+
+def _residuals_csv(scen, table) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    cols = [c.replace("declination", "dec") for c in table.column_names()]
+    w.writerow(["utc", "site", *cols, *[f"norm_{c.rsplit('_', 1)[0]}" for c in cols], "chi2", "rejected"])
+    for i in range(len(table)):
+        w.writerow([_utc(scen, table.times[i]), table.sites[i],
+                    *[repr(float(v)) for v in table.o_c[i]], *[repr(float(v)) for v in table.normalised[i]],
+                    repr(float(table.chi2[i])), "true" if table.rejected[i] else "false"])
+    return buf.getvalue()
+
+
+def _json_default(v: Any) -> Any:
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    raise TypeError(f"not JSON serialisable: {type(v).__name__}")
+
+
+def write_fit_outputs(one, obs) -> list[Path]:
+    """Write ``fit.json`` (always, also for a failed fit), and with a fit ``residuals.csv`` and the
+    residual plots into ``one.directory``; returns the paths written."""
+    from cistrack.fit.residual_plots import plot_residuals
+
+    d = Path(one.directory)
+    text = json.dumps(_fit_dict(one, obs), indent=1, default=_json_default, allow_nan=True)
+    write_text_atomic(d / FIT_RECORD, text + "\n")
+    written = [d / FIT_RECORD]
+    if one.result is not None:
+        write_text_atomic(d / RESIDUALS, _residuals_csv(one.scenario, one.result.residuals))
+        written.append(d / RESIDUALS)
+        written += plot_residuals(d, one.result.residuals, one.scenario.epoch, one.designation)
+    return written
+
+
+def read_fit_record(run_dir: str | Path) -> dict[str, Any]:
+    """The ``fit.json`` of a fit directory; ConfigError naming the file when absent or unreadable."""
+    p = Path(run_dir) / FIT_RECORD
+    try:
+        data = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"{run_dir}: not a fit directory (no {FIT_RECORD}); run 'cistrack fit FILE --out DIR' "
+                          "first") from None
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{p}: cannot be read ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != _FORMAT:
+        raise ConfigError(f"{p}: not a cistrack fit record (no \"format\": \"{_FORMAT}\")")
+    return data

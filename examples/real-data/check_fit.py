@@ -1,0 +1,147 @@
+"""Check a fitted orbit against the truth its observations were simulated from.
+
+    .venv/bin/python examples/real-data/check_fit.py FIT_DIR [--truth truth.csv] [--oem FILE] [--sigma-arcsec S]
+
+FIT_DIR is a ``cistrack fit --out`` directory, exported with ``cistrack export FIT_DIR --format
+oem`` (the OEM read is FIT_DIR/estimate.oem unless ``--oem``). The truth (first row of truth.csv,
+synodic km and km/s at its UTC) is propagated with the fit scenario's dynamics to every epoch of
+the OEM and mapped into the OEM's frame with the same transform as the export. Printed:
+
+- the largest Mahalanobis distance squared of the truth under the exported covariance over the
+  epochs inside the arc (chi-square with 6 degrees of freedom if the covariance is right; 99 %
+  bound 16.8), and over the prediction if the OEM has one;
+- the position and velocity error of the fit at its epoch (the last observation by default);
+- the post-fit residual RMS of each component against the true noise ``--sigma-arcsec`` (the
+  simulation's noise per angle; on the sky RA x cos(Dec) it is that times cos(Dec)).
+Exit status 0 when the three acceptance bounds hold (Mahalanobis^2 <= 16.8 at every arc epoch,
+position error <= ``--max-error-km``, the RMS of both angles' residuals within 20 % of the
+true noise), 1 otherwise.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from cistrack import units
+from cistrack.plugin.registry import default_registry
+
+MAHALANOBIS2_99 = 16.81  # chi-square, 6 degrees of freedom, 99 %
+
+
+def read_oem(path: Path) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """(epochs, states (K, 6) km and km/s, covariances (K, 6, 6)) of a one-segment OEM."""
+    lines = [ln.strip() for ln in path.read_text().splitlines()]
+    epochs, states, covs = [], [], []
+    i, in_data, in_cov = 0, False, False
+    while i < len(lines):
+        ln = lines[i]
+        if ln == "META_STOP":
+            in_data = True
+        elif ln == "COVARIANCE_START":
+            in_data, in_cov = False, True
+        elif ln == "COVARIANCE_STOP":
+            in_cov = False
+        elif in_cov and ln.startswith("EPOCH"):
+            tri = [float(v) for k in range(1, 7) for v in lines[i + k].split()]
+            c, n = np.zeros((6, 6)), 0
+            for r in range(6):
+                for col in range(r + 1):
+                    c[r, col] = c[col, r] = tri[n]
+                    n += 1
+            covs.append(c)
+            i += 6
+        elif in_data and ln and not ln.startswith("COMMENT"):
+            parts = ln.split()
+            epochs.append(parts[0])
+            states.append([float(v) for v in parts[1:7]])
+        i += 1
+    return epochs, np.array(states), np.array(covs)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("fit", type=Path)
+    ap.add_argument("--truth", type=Path, default=None, help="truth.csv (default: beside the first observation file)")
+    ap.add_argument("--oem", type=Path, default=None)
+    ap.add_argument("--sigma-arcsec", type=float, default=1.0, help="true noise per angle of the simulation")
+    ap.add_argument("--max-error-km", type=float, default=1.5)
+    a = ap.parse_args()
+    from cistrack.fit.fit_export import _scenario
+
+    rec = json.loads((a.fit / "fit.json").read_text())
+    truth_csv = a.truth or Path(rec["files"][0]).parent / "truth.csv"
+    reg = default_registry()
+    scen = _scenario(a.fit, reg)
+    dyn = scen.build("dynamics", reg)
+    frame = scen.build("sensor", reg).inertial_frame()
+    rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
+    t_truth = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
+    x_truth = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
+
+    def truth_at(t: np.ndarray) -> np.ndarray:
+        out = np.empty((len(t), 6))
+        for side in (t >= t_truth, t < t_truth):
+            if np.any(side):
+                ts = t[side]
+                order = np.argsort(ts) if ts[0] >= t_truth else np.argsort(-ts)
+                res = np.empty((len(ts), 6))
+                res[order] = dyn.propagate(x_truth[None], t_truth, ts[order]).states[:, 0, :]
+                out[side] = res
+        return out
+
+    epochs, states, covs = read_oem(a.oem or a.fit / "estimate.oem")
+    t = np.array([(units.parse_utc(e + "Z") - scen.epoch).total_seconds() / units.TU_S for e in epochs])
+    truth_i = frame.from_synodic(truth_at(t), t)
+    m2 = np.array([float((truth_i[k] - states[k]) @ np.linalg.solve(covs[k], truth_i[k] - states[k]))
+                   for k in range(len(t))])
+    arc = t <= rec["arc"]["last_tu"] + 600.0 / units.TU_S  # the grid's last point may lie up to 10 min after
+    ok = True
+    print(f"{a.fit}: {len(t)} OEM epochs, {int(arc.sum())} over the arc")
+    worst = float(m2[arc].max())
+    ok &= worst <= MAHALANOBIS2_99
+    print(f"  Mahalanobis^2 of the truth over the arc: max {worst:.2f}, median {np.median(m2[arc]):.2f} "
+          f"(bound {MAHALANOBIS2_99})")
+    if np.any(~arc):
+        print(f"  over the prediction: max {m2[~arc].max():.2f}")
+    xt = truth_at(np.array([rec["epoch_tu"]]))[0]
+    e = units.state_to_km(xt) - np.asarray(rec["state_km"])
+    pos, vel = float(np.linalg.norm(e[:3])), 1e3 * float(np.linalg.norm(e[3:]))
+    ok &= pos <= a.max_error_km
+    print(f"  error at the fit epoch {rec['epoch_utc'][:19]}Z: position {pos:.3f} km (bound {a.max_error_km}), "
+          f"velocity {vel:.3f} m/s; 1-sigma position {np.linalg.norm(rec['sigmas_km'][:3]):.3f} km")
+    with (a.fit / "residuals.csv").open() as fh:
+        res = [r for r in csv.DictReader(fh) if r["rejected"] == "false"]
+    dec = np.array([float(r["dec_arcsec"]) for r in res])
+    ra = np.array([float(r["ra_cos_dec_arcsec"]) for r in res])
+    ms_dec = _declinations(a.fit)  # the true sky noise of RA x cos(Dec) is sigma x cos(Dec)
+    true_ra = a.sigma_arcsec * float(np.sqrt(np.mean(np.cos(ms_dec) ** 2))) if ms_dec.size else a.sigma_arcsec
+    for name, v, s in (("RA cos(Dec)", ra, true_ra), ("Dec", dec, a.sigma_arcsec)):
+        rms = float(np.sqrt(np.mean(v ** 2)))
+        print(f"  post-fit RMS {name}: {rms:.3f} arcsec, true noise {s:.3f} arcsec (ratio {rms / s:.3f})")
+    rms = float(np.sqrt(np.mean(np.concatenate([ra, dec]) ** 2)))
+    true = float(np.sqrt(0.5 * (true_ra ** 2 + a.sigma_arcsec ** 2)))
+    ok &= abs(rms / true - 1.0) <= 0.2
+    print(f"  post-fit RMS of both angles: {rms:.3f} arcsec, true noise {true:.3f} arcsec (ratio {rms / true:.3f}, "
+          "bound 0.8-1.2)")
+    print(f"  rejected: {rec['n_rejected']}; noise scale {rec['noise_scale']:.3f}; "
+          + ("all bounds hold" if ok else "A BOUND IS EXCEEDED"))
+    return 0 if ok else 1
+
+
+def _declinations(fit_dir: Path) -> np.ndarray:
+    """Declinations (rad) of the used observations, from the fit's merged observation file."""
+    from cistrack.runs.observation_files import read_observations
+
+    files = sorted(fit_dir.glob("observations.*"))
+    if not files:
+        return np.zeros(0)
+    return read_observations(files[0], "2026-01-01T00:00:00Z").values[:, 1]
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,98 @@
+"""`cistrack export` of a `cistrack fit` directory: the fitted orbit on a regular grid over the
+arc, optionally predicted beyond it, read back by the independent `oem` package. One fit of the
+shipped example (1,000 particles in the IOD and filter) serves every test."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from cistrack.cli.main import main
+from cistrack.errors import CistrackError
+from cistrack.fit.fit_export import GRID_MINUTES, export_fit
+from cistrack.fit.from_observations import fit_files
+from cistrack.scenario.loading import builtin_scenario_path
+from cistrack.units import TU_S
+
+DATA = builtin_scenario_path("real-data").parent / "real_data"
+
+
+@pytest.fixture(scope="module")
+def fit_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("fit") / "fit"
+    [one] = fit_files([DATA / "observations.psv"], out=out,
+                      settings=["iod.n_particles=1000", "filter.n_particles=1000"])
+    assert one.ok
+    return out
+
+
+def _read(path):
+    oem = pytest.importorskip("oem")
+    return oem.OrbitEphemerisMessage.open(str(path)).segments[0]
+
+
+def test_oem_names_the_object_by_its_designation(fit_dir, tmp_path):
+    seg = _read(export_fit(fit_dir, "oem", tmp_path / "a.oem"))
+    assert seg.metadata["OBJECT_NAME"] == "cis0001" and seg.metadata["OBJECT_ID"] == "cis0001"
+
+
+def test_oem_has_interpolation_keywords_and_utc(fit_dir, tmp_path):
+    seg = _read(export_fit(fit_dir, "oem", tmp_path / "a.oem"))
+    assert seg.metadata["INTERPOLATION"] == "LAGRANGE" and int(seg.metadata["INTERPOLATION_DEGREE"]) == 7
+    assert seg.metadata["TIME_SYSTEM"] == "UTC" and seg.metadata["REF_FRAME"] == "GCRF"
+
+
+def test_oem_states_lie_on_a_regular_grid_covering_the_arc(fit_dir, tmp_path):
+    seg = _read(export_fit(fit_dir, "oem", tmp_path / "a.oem"))
+    rows = list(seg.states)
+    dt = np.array([(s.epoch - rows[0].epoch).to_value("s") for s in rows])
+    np.testing.assert_allclose(np.diff(dt), GRID_MINUTES * 60.0, atol=1e-5)
+    arc = json.loads((fit_dir / "fit.json").read_text())["arc"]
+    span = (arc["last_tu"] - arc["first_tu"]) * TU_S
+    assert dt[-1] >= span - 60.0 and dt[-1] <= span + GRID_MINUTES * 60.0 + 60.0
+    assert len(list(seg.covariances)) == len(rows)
+
+
+def test_predict_extends_the_grid_by_the_days_asked_with_growing_covariance(fit_dir, tmp_path):
+    arc_only = list(_read(export_fit(fit_dir, "oem", tmp_path / "a.oem")).states)
+    seg = _read(export_fit(fit_dir, "oem", tmp_path / "p.oem", predict_days=2.0))
+    rows = list(seg.states)
+    assert len(rows) == len(arc_only) + int(2 * 1440 / GRID_MINUTES)
+    covs = [c.matrix for c in seg.covariances]
+    sig_end = np.sqrt(np.trace(np.asarray(covs[-1])[:3, :3]))
+    sig_arc = np.sqrt(np.trace(np.asarray(covs[len(arc_only) - 1])[:3, :3]))
+    assert sig_end > sig_arc
+    assert "predicted beyond the last observation" in (tmp_path / "p.oem").read_text()
+
+
+def test_cli_export_of_a_fit_directory_writes_the_fitted_orbit(fit_dir, tmp_path, capsys):
+    d = tmp_path / "copy"
+    shutil.copytree(fit_dir, d)
+    assert main(["export", str(d), "--format", "oem"]) == 0
+    text = (d / "estimate.oem").read_text()
+    assert "least-squares" in text and "OBJECT_NAME = cis0001" in text
+
+
+def test_a_fit_that_did_not_converge_is_refused_unless_forced(fit_dir, tmp_path):
+    d = tmp_path / "bad"
+    shutil.copytree(fit_dir, d)
+    rec = json.loads((d / "fit.json").read_text())
+    rec["converged"] = False
+    (d / "fit.json").write_text(json.dumps(rec))
+    with pytest.raises(CistrackError, match="did not converge.*--force"):
+        export_fit(d, "oem")
+    path = export_fit(d, "oem", force=True)
+    assert "COMMENT WARNING: exported with --force" in path.read_text()
+
+
+def test_predict_on_a_run_that_is_not_a_fit_is_refused_naming_the_option(tmp_path, capsys):
+    (tmp_path / "scenario.toml").write_text("")
+    assert main(["export", str(tmp_path), "--predict", "1"]) == 2
+    assert "--predict" in capsys.readouterr().err
+
+
+def test_a_negative_prediction_span_is_refused(fit_dir, tmp_path):
+    with pytest.raises(CistrackError, match="--predict"):
+        export_fit(fit_dir, "oem", tmp_path / "n.oem", predict_days=-1.0)

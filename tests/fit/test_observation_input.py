@@ -1,0 +1,80 @@
+"""Observation files for `cistrack fit`: formats, several files merged, several objects split."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack.errors import MeasurementError
+from cistrack.fit.observation_input import read_object_observations
+from cistrack.plugin.registry import default_registry
+from cistrack.runs.observation_files import SeveralObjectsError, read_observations
+from cistrack.scenario.loading import builtin_scenario_path
+
+DATA = builtin_scenario_path("real-data").parent / "real_data"
+
+
+def _psv_lines():
+    return (DATA / "observations.psv").read_text().splitlines()
+
+
+def _two_objects(tmp_path):
+    """The shipped file with every observation also given for a second object at the same times."""
+    lines = _psv_lines()
+    header, rows = lines[:2], lines[2:]
+    p = tmp_path / "two.psv"
+    p.write_text("\n".join(header + rows + [r.replace("cis0001", "cis0002", 1) for r in rows]) + "\n")
+    return p
+
+
+def test_a_file_of_one_object_gives_one_set_with_its_designation():
+    objs = read_object_observations([DATA / "observations.psv"], default_registry())
+    assert [o.designation for o in objs] == ["cis0001"]
+    assert len(objs[0].measurements) == 65
+
+
+def test_a_file_of_two_objects_gives_one_set_per_object(tmp_path):
+    objs = read_object_observations([_two_objects(tmp_path)], default_registry())
+    assert [o.designation for o in objs] == ["cis0001", "cis0002"]
+    assert [len(o.measurements) for o in objs] == [65, 65]
+
+
+def test_a_reader_refuses_several_objects_naming_them_and_the_parameter(tmp_path):
+    with pytest.raises(SeveralObjectsError, match="cis0002.*designation"):
+        read_observations(_two_objects(tmp_path), "2026-03-01T00:00:00Z")
+
+
+def test_the_designation_parameter_reads_one_object(tmp_path):
+    ms = read_observations(_two_objects(tmp_path), "2026-03-01T00:00:00Z", designation="cis0002")
+    assert len(ms) == 65 and ms.meta["object"] == "cis0002"
+
+
+def test_two_files_of_one_object_merge_in_time_order(tmp_path):
+    lines = _psv_lines()
+    header, rows = lines[:2], lines[2:]
+    a, b = tmp_path / "a.psv", tmp_path / "b.psv"
+    a.write_text("\n".join(header + rows[::2]) + "\n")
+    b.write_text("\n".join(header + rows[1::2]) + "\n")
+    objs = read_object_observations([a, b], default_registry())
+    whole = read_object_observations([DATA / "observations.psv"], default_registry())[0].measurements
+    assert len(objs) == 1
+    np.testing.assert_array_equal(objs[0].measurements.times, whole.times)
+    np.testing.assert_array_equal(objs[0].measurements.sites, whole.sites)
+
+
+def test_the_same_observation_in_two_files_is_refused_naming_both(tmp_path):
+    with pytest.raises(MeasurementError, match="observations.psv and .*observations.tdm"):
+        read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry())
+
+
+def test_a_file_without_a_known_suffix_is_read_by_its_content(tmp_path):
+    p = tmp_path / "observations.txt"
+    p.write_text((DATA / "observations.psv").read_text())
+    objs = read_object_observations([p], default_registry())
+    assert len(objs[0].measurements) == 65
+
+
+def test_a_file_no_reader_reads_is_refused_with_each_readers_reason(tmp_path):
+    p = tmp_path / "notes.txt"
+    p.write_text("hello\n")
+    with pytest.raises(MeasurementError, match="no reader reads its content.*ades-psv"):
+        read_object_observations([p], default_registry())
