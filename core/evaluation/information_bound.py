@@ -4,8 +4,10 @@ For a run with a truth, the Bayesian information recursion is evaluated along th
 (in covariance form, so a vague prior causes no trouble):
 
     prior        P_0 = the IOD cloud's sample covariance (the information the IOD gives)
-    prediction   P^- = F P F^T + Q        F: state transition matrix of the truth model from the
-                                          previous step to this one (``Dynamics.propagate_with_stm``),
+    prediction   P^- = F P F^T + Q        F: state transition matrix of the filters' dynamics model
+                                          from the previous step to this one, along the truth, by
+                                          central differences of its ``propagate`` (the run's own
+                                          compiled kernel: nothing more to compile; ~1e-7 relative),
                                           Q: the process noise the filter declares
                                           (``Filter.process_noise``, none by default)
     update       P   = (P^-^-1 + sum_i H_i^T R_i^-1 H_i)^-1   for every measurement of the step,
@@ -14,7 +16,10 @@ For a run with a truth, the Bayesian information recursion is evaluated along th
 
 With linear dynamics and measurements and a Gaussian prior this is exactly the Kalman filter's
 covariance; otherwise it bounds the mean-square error of any estimator that uses the same data
-and prior (a Gaussian prior of the IOD cloud's covariance stands for the IOD's information).
+and prior (a Gaussian prior of the IOD cloud's covariance stands for the IOD's information). The
+model is the one the filters use (the scenario's ``[dynamics]``), so the bound is that of any
+estimator built on it; the truth model (``[truth] dynamics``) only supplies the trajectory, and is
+still propagated once per run.
 
 :class:`InformationBoundObserver` writes, into every step's metrics (so into ``steps.parquet``):
 ``bound_sigma_{x,y,z}_km`` and ``bound_sigma_{vx,vy,vz}_cms``, the bound's per-axis sigma, and
@@ -107,7 +112,7 @@ class InformationBoundObserver:
     def cistrack_run_started(self, run) -> None:
         if run.truth is None:
             return
-        self._dynamics = getattr(run.truth, "dynamics", None) or run.dynamics
+        self._dynamics = run.dynamics  # the filters' model, along the true trajectory
         self._filter = run.filter
         cloud = run.iod_cloud
         self._p = sample_covariance(np.asarray(cloud.states, dtype=float), getattr(cloud, "weights", None))
