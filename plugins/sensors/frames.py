@@ -208,11 +208,15 @@ class EquatorialFrameModel(FrameModel):
     def inertial_frame(self):
         from cistrack.results.inertial_frame import InertialFrame
         return InertialFrame(
-            name="CIRS", ccsds=False, from_synodic=self.states_to_eci_km,
-            description="cistrack's simple equatorial model (the paper's): Earth-Moon plane in the "
-                        "equator, x at the celestial intermediate origin (UT1 = UTC); not a "
-                        "CCSDS-registered frame")
+            name=IDEAL_FRAME_NAME, ccsds=False, from_synodic=self.states_to_eci_km,
+            description="cistrack's idealised equatorial model (the paper's CR3BP geometry): "
+                        "Earth-Moon plane in the equator, x at the celestial intermediate origin "
+                        "(UT1 = UTC); axes like CIRS but not CIRS, and not a CCSDS-registered frame")
 
+
+IDEAL_FRAME_NAME = "CISTRACK-IDEAL-EQUATORIAL"
+"""REF_FRAME of estimates exported from the idealised model: a name no reader can take for a real
+IERS or CCSDS frame (CIRS was written before: the axes are CIRS-like, the geometry is not)."""
 
 FRAME_MODELS: dict[str, type[FrameModel]] = {"equatorial": EquatorialFrameModel}
 """Frame models selectable by a sensor's ``frame_model`` parameter (name -> class)."""

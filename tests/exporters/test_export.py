@@ -57,7 +57,7 @@ def test_oem_is_read_by_the_independent_oem_package_with_the_same_states_and_cov
     ie, _ = run_inertial_estimates(out)
     msg = oem.OrbitEphemerisMessage.open(str(path))
     seg = msg.segments[0]
-    assert seg.metadata["REF_FRAME"] == "CIRS" and seg.metadata["TIME_SYSTEM"] == "UTC"
+    assert seg.metadata["REF_FRAME"] == "CISTRACK-IDEAL-EQUATORIAL" and seg.metadata["TIME_SYSTEM"] == "UTC"
     rows = list(seg.states)
     states = np.array([s.vector for s in rows])
     keep = np.r_[np.diff(ie.t_tu) > 0, True]
@@ -76,7 +76,7 @@ def test_opm_carries_the_last_state_and_its_covariance(run_dir, tmp_path):
     opm = read_opm(path)
     np.testing.assert_array_equal(opm["state"], ie.state_km[-1])
     np.testing.assert_array_equal(opm["covariance"], ie.covariance_km[-1])
-    assert opm["REF_FRAME"] == "CIRS" and opm["CENTER_NAME"] == "EARTH"
+    assert opm["REF_FRAME"] == "CISTRACK-IDEAL-EQUATORIAL" and opm["CENTER_NAME"] == "EARTH"
 
 
 def test_inertial_velocity_is_the_time_derivative_of_inertial_position(run_dir):
