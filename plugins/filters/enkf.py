@@ -14,13 +14,14 @@ import warnings
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative, MemoryNeed
+from cistrack.interfaces.component import check_int, check_nonnegative
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.model.measurement import Measurement
 
+from .particle_declarations import ParticleFilterDeclarations
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
 from .measured_components import MeasuredComponents, check_epoch
@@ -29,7 +30,7 @@ from .process_noise import velocity_random_walk_covariance
 __all__ = ["EnKFFilter"]
 
 
-class EnKFFilter(FilterBase):
+class EnKFFilter(ParticleFilterDeclarations, FilterBase):
     """Stochastic ensemble Kalman filter (filterpy) started from the IOD cloud's particles.
 
     Parameters
@@ -60,16 +61,6 @@ class EnKFFilter(FilterBase):
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
-
-    def process_noise(self, t0: float, t1: float) -> np.ndarray | None:
-        """The velocity random walk it adds between ``t0`` and ``t1`` (None when off)."""
-        if self.velocity_noise_kms_per_sqrt_day <= 0:
-            return None
-        return velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t1 - t0)
-
-    def memory_need(self) -> MemoryNeed:
-        """Its particles (``n_particles``)."""
-        return MemoryNeed.particles(self.n_particles)
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:

@@ -17,14 +17,14 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive, check_range)
+from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range)
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.model.measurement import Measurement
 
-from .process_noise import velocity_random_walk_covariance
+from .particle_declarations import ParticleFilterDeclarations
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .ensemble_propagation import propagate_particles
@@ -44,7 +44,7 @@ __all__ = ["PGMFilter", "PaperPGMFilter", "resolve_clusterer"]
 _REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
 
 
-class PGMFilter(FilterBase):
+class PGMFilter(ParticleFilterDeclarations, FilterBase):
     """Particle Gaussian mixture filter: clustering + per-component Kalman update + resampling.
 
     Parameters
@@ -151,16 +151,6 @@ class PGMFilter(FilterBase):
         self._x: np.ndarray | None = None
 
     # -- lifecycle --------------------------------------------------------------------------------
-    def process_noise(self, t0: float, t1: float) -> np.ndarray | None:
-        """The velocity random walk it adds between ``t0`` and ``t1`` (None when off)."""
-        if self.velocity_noise_kms_per_sqrt_day <= 0:
-            return None
-        return velocity_random_walk_covariance(self.velocity_noise_kms_per_sqrt_day, t1 - t0)
-
-    def memory_need(self) -> MemoryNeed:
-        """Its particles (``n_particles``)."""
-        return MemoryNeed.particles(self.n_particles)
-
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """Start from ``cloud`` (N, 6) at ``cloud.epoch``; resolves the clusterer."""

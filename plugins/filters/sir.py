@@ -11,13 +11,14 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative, check_range, MemoryNeed
+from cistrack.interfaces.component import check_int, check_nonnegative, check_range
 from cistrack.errors import FilterError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.model.measurement import Measurement
 
+from .particle_declarations import ParticleFilterDeclarations
 from .ensemble_propagation import propagate_particles
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
@@ -29,7 +30,7 @@ __all__ = ["SIRFilter"]
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
 
-class SIRFilter(FilterBase):
+class SIRFilter(ParticleFilterDeclarations, FilterBase):
     """Bootstrap particle filter with log weights and systematic resampling.
 
     Parameters
@@ -52,10 +53,6 @@ class SIRFilter(FilterBase):
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self._x: np.ndarray | None = None
-
-    def memory_need(self) -> MemoryNeed:
-        """Its particles (``n_particles``)."""
-        return MemoryNeed.particles(self.n_particles)
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:

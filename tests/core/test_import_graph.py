@@ -2,45 +2,23 @@
 never imports another family (a plugin imports core, ``cistrack.*``, only)."""
 from __future__ import annotations
 
-import ast
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-CORE, PLUGINS = ROOT / "core", ROOT / "plugins"
-
-
-def _module_name(path: Path) -> str:
-    if path.is_relative_to(CORE):
-        parts = ("cistrack",) + path.relative_to(CORE).with_suffix("").parts
-    else:
-        parts = ("cistrack", "plugins") + path.relative_to(PLUGINS).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+from source_imports import CORE, PLUGINS, ROOT, import_statements, module_name, sources
 
 
 def _imports(path: Path) -> set[str]:
-    """Absolute names of every module ``path`` imports (relative imports resolved)."""
-    mod = _module_name(path)
-    package = mod if path.name == "__init__.py" else mod.rsplit(".", 1)[0]
+    """Absolute names of every module ``path`` imports, and of every name it imports from one."""
     out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            out.add(target)
-            out.update(f"{target}.{a.name}" for a in node.names)
+    for target, names in import_statements(path):
+        out.add(target)
+        out.update(f"{target}.{n}" for n in names)
     return out
 
 
-def _sources(root: Path) -> list[Path]:
-    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+_module_name, _sources = module_name, sources
 
 
 def _family(name: str) -> str | None:

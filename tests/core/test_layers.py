@@ -14,8 +14,7 @@ import pytest
 
 from cistrack._moved import MOVED
 
-ROOT = Path(__file__).resolve().parents[2]
-CORE, PLUGINS = ROOT / "core", ROOT / "plugins"
+from source_imports import CORE, PLUGINS, ROOT, import_statements, module_name, sources
 
 #: Lowest first. A module may import its own layer and the layers before it.
 LAYERS: list[tuple[str, ...]] = [
@@ -38,16 +37,7 @@ LAYERS: list[tuple[str, ...]] = [
 ]
 
 
-def _module_name(path: Path) -> str:
-    if path.is_relative_to(CORE):
-        parts = ("cistrack",) + path.relative_to(CORE).with_suffix("").parts
-    else:
-        parts = ("cistrack", "plugins") + path.relative_to(PLUGINS).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-def _sources(root: Path) -> list[Path]:
-    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+_module_name, _sources = module_name, sources
 
 
 MODULES = {_module_name(p): p for p in _sources(CORE) + _sources(PLUGINS)}
@@ -56,22 +46,14 @@ MODULES = {_module_name(p): p for p in _sources(CORE) + _sources(PLUGINS)}
 def _imports(path: Path) -> set[str]:
     """The project modules ``path`` imports, anywhere in the file (``from a import b`` is an import
     of ``a.b`` when that is a module, else of ``a``)."""
-    mod = _module_name(path)
-    package = mod if path.name == "__init__.py" else mod.rsplit(".", 1)[0]
     out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                target = ".".join(base[: len(base) - (node.level - 1)] + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            for a in node.names:
-                if target == "cistrack" and a.name == "__version__":
-                    continue  # the version is the root package's own
-                out.add(f"{target}.{a.name}" if f"{target}.{a.name}" in MODULES else target)
+    for target, names in import_statements(path):
+        if not names:
+            out.add(target)
+        for n in names:
+            if target == "cistrack" and n == "__version__":
+                continue  # the version is the root package's own
+            out.add(f"{target}.{n}" if f"{target}.{n}" in MODULES else target)
     return {n for n in out if n == "cistrack" or n.startswith("cistrack.")}
 
 
