@@ -21,13 +21,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.integrate import solve_ivp
 
 from cistrack.errors import CistrackError
 
 from cistrack.astro.primaries import MU_EARTH_MOON
 
+from .cr3bp_variational import cr3bp_variational_rhs
 from .cr3bp import cr3bp_rhs as _lazy_cr3bp_rhs
 
 cr3bp_rhs = _lazy_cr3bp_rhs.dispatcher  # compiled code below calls the numba function itself
@@ -56,42 +56,9 @@ class CorrectedOrbit:
     residual: float
 
 
-@njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
-def cr3bp_stm_rhs(t, y, p, out):
-    """CR3BP state + STM: y (42,) = state (6) then Phi (6x6, row-major) -> out (42,); p = [mu]."""
-    cr3bp_rhs(t, y, p, out)
-    mu = p[0]
-    xe = y[0] + mu
-    xm = y[0] - 1.0 + mu
-    yy = y[1]
-    z = y[2]
-    r1s = xe * xe + yy * yy + z * z
-    r2s = xm * xm + yy * yy + z * z
-    r13 = r1s * np.sqrt(r1s)
-    r23 = r2s * np.sqrt(r2s)
-    a = (1.0 - mu) / r13
-    b = mu / r23
-    a5 = 3.0 * a / r1s
-    b5 = 3.0 * b / r2s
-    uxx = 1.0 - a - b + a5 * xe * xe + b5 * xm * xm
-    uyy = 1.0 - a - b + (a5 + b5) * yy * yy
-    uzz = -a - b + (a5 + b5) * z * z
-    uxy = (a5 * xe + b5 * xm) * yy
-    uxz = (a5 * xe + b5 * xm) * z
-    uyz = (a5 + b5) * yy * z
-    for c in range(6):
-        p0 = y[6 + c]
-        p1 = y[12 + c]
-        p2 = y[18 + c]
-        p3 = y[24 + c]
-        p4 = y[30 + c]
-        p5 = y[36 + c]
-        out[6 + c] = p3
-        out[12 + c] = p4
-        out[18 + c] = p5
-        out[24 + c] = uxx * p0 + uxy * p1 + uxz * p2 + 2.0 * p4
-        out[30 + c] = uxy * p0 + uyy * p1 + uyz * p2 - 2.0 * p3
-        out[36 + c] = uxz * p0 + uyz * p1 + uzz * p2
+cr3bp_stm_rhs = cr3bp_variational_rhs
+"""CR3BP state + STM on 42 components (the variational equations of :mod:`.cr3bp_variational`,
+shared with ``CR3BP.propagate_with_stm``)."""
 
 
 def _fun(mu: float):

@@ -1,26 +1,17 @@
 from __future__ import annotations
 
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
+from study_files import write_study
 
-STUDY = """
-name = "tiny"
-description = "tiny study for tests"
-scenarios = ["quick"]
-filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]
-iod = [{{ name = "noisy-range", n_particles = 300 }}]
-seeds = {seeds}
-[overrides]
-duration_days = {days}
-"""
 
 
 @pytest.fixture
 def tiny_study(tmp_path) -> Path:
-    p = tmp_path / "tiny.toml"
-    p.write_text(STUDY.format(seeds="[1, 2, 3]", days=1.4))
-    return p
+    return write_study(tmp_path)
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +92,16 @@ def small_disk(tmp_path):
     finally:
         if subprocess.run(["umount", str(d)], capture_output=True).returncode != 0:
             subprocess.run(["umount", "-l", str(d)], capture_output=True)
+
+
+@pytest.fixture
+def open_tmp():
+    """A fresh directory under /tmp that ``nobody`` can reach (pytest's own tmp_path lies in a
+    root-only 0700 folder: ``nobody`` could not even look there)."""
+    d = Path(tempfile.mkdtemp(prefix="cistrack-ro-"))
+    d.chmod(0o755)
+    yield d
+    for p in d.rglob("*"):
+        if p.is_dir() and not p.is_symlink():
+            p.chmod(0o755)
+    shutil.rmtree(d)

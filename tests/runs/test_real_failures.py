@@ -9,7 +9,6 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -70,18 +69,6 @@ def test_a_full_disk_at_the_merge_keeps_the_parts_and_the_cli_says_failed(tmp_pa
     assert man["status"] == "failed" and "No space left on device" in man["merge_failure"]
     assert not (out / "steps.parquet").exists() and read_steps(out).num_rows == man["summary"]["n_steps"] > 3
 
-
-@pytest.fixture
-def open_tmp():
-    """A fresh directory under /tmp that ``nobody`` can reach (pytest's own tmp_path lies in a
-    root-only 0700 folder: ``nobody`` could not even look there)."""
-    d = Path(tempfile.mkdtemp(prefix="cistrack-ro-"))
-    d.chmod(0o755)
-    yield d
-    for p in d.rglob("*"):
-        if p.is_dir() and not p.is_symlink():
-            p.chmod(0o755)
-    shutil.rmtree(d)
 
 
 def _as_nobody(args, cwd, tmp_path):

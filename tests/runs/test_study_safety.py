@@ -9,32 +9,22 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 import pytest
 
+from study_files import write_study
+
 from cistrack.cli.main import main
 from cistrack.results.store import read_manifest
 from cistrack.studies.resume import run_state
 
-STUDY = """
-name = "{name}"
-scenarios = ["quick"]
-filters = [{{ name = "pgm", n_particles = 300, n_components = 2 }}]
-iod = [{{ name = "noisy-range", n_particles = 300 }}]
-seeds = {seeds}
-[overrides]
-duration_days = {days}
-"""
 needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
 
 
 def _study(tmp_path: Path, name: str = "safe", seeds: str = "[1, 2, 3]", days: float = 1.4) -> Path:
-    p = tmp_path / f"{name}.toml"
-    p.write_text(STUDY.format(name=name, seeds=seeds, days=days))
-    return p
+    return write_study(tmp_path, name, seeds, days)
 
 
 def _cli(*args: str, cwd: Path, **kw) -> subprocess.CompletedProcess:
@@ -104,17 +94,6 @@ def test_an_empty_directory_and_the_same_study_again_are_accepted(tmp_path, caps
     assert main(["study", "run", str(study), "--out", str(out), "--workers", "1"]) == 0
     assert "0 runs completed, 1 already done, 0 failed" in capsys.readouterr().out
 
-
-@pytest.fixture
-def open_tmp():
-    """A directory under /tmp that the user ``nobody`` can reach (pytest's tmp_path is root-only)."""
-    d = Path(tempfile.mkdtemp(prefix="cistrack-study-ro-"))
-    d.chmod(0o755)
-    yield d
-    for p in d.rglob("*"):
-        if p.is_dir() and not p.is_symlink():
-            p.chmod(0o755)
-    shutil.rmtree(d)
 
 
 def _as_nobody(open_tmp: Path, *args: str) -> subprocess.CompletedProcess:
