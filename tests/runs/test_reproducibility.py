@@ -92,7 +92,8 @@ def test_generated_kernels_carry_no_fastmath_flags():
 
 
 @pytest.mark.parametrize("module", ["cistrack.plugins.dynamics.cr3bp", "cistrack.plugins.dynamics.twobody",
-                                   "cistrack.plugins.dynamics.corrector", "cistrack.plugins.clustering.em_numba",
+                                   "cistrack.plugins.dynamics.cr3bp_variational", "cistrack.plugins.dynamics.ephemeris_variational",
+                                   "cistrack.plugins.clustering.em_numba",
                                    "cistrack.model.belief", "cistrack.astro.ephemeris",
                                    "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.clustering.lloyd",
                                    "cistrack.plugins.clustering.points_and_labels"])
