@@ -11,7 +11,9 @@ Kolmogorov-Smirnov statistic of the final HDR levels against uniform; runs endin
 50 km from the truth; the largest final error; runs not finished; the days custody was lost.
 The second table gives, for update k of pass p, the median posterior NEES and the share of
 runs with HDR level > 0.99 (a consistent filter: about 5.3 and 1% everywhere). The third gives
-the median position sigma and error at the end of each pass.
+the median position sigma and error at the end of each pass. The fourth gives the efficiency:
+RMS position error across the runs divided by the RMS of the information bound (bound_pos_km) at
+the last update of each pass and at the end (1 = the bound; every run counts, lost ones too).
 """
 from __future__ import annotations
 
@@ -67,7 +69,7 @@ def summary_table(groups) -> None:
               f"{np.nanmax(err):.1f} | {sum(x['status'] != 'finished' for x in s)} | {lost} |")
 
 
-_STEP_COLUMNS = ["kind", "nees", "hdr_level", "pass_index", "sigma_pos_km", "pos_err_km"]
+_STEP_COLUMNS = ["kind", "nees", "hdr_level", "pass_index", "sigma_pos_km", "pos_err_km", "bound_pos_km"]
 
 
 def read_step_tables(groups) -> dict[str, dict]:
@@ -115,6 +117,39 @@ def per_pass_precision_table(groups, steps) -> None:
         print(f"  {scen} {flt} {iod}: " + "  ".join(cells))
 
 
+def _rms_ratio(pairs) -> tuple[float, float, int]:
+    v = np.array([(e, b) for e, b in pairs if np.isfinite(e) and np.isfinite(b) and b > 0], float)
+    if v.size == 0:
+        return np.nan, np.nan, 0
+    rms_b = float(np.sqrt(np.mean(v[:, 1] ** 2)))
+    return float(np.sqrt(np.mean(v[:, 0] ** 2))) / rms_b, rms_b, v.shape[0]
+
+
+def efficiency_table(groups, steps, passes=range(1, 7)) -> None:
+    print("\nEfficiency: RMS position error / RMS information bound at the last update of each pass and "
+          "at the end (1 = the bound), with the end's RMS bound:")
+    print("| scenario | filter | IOD | runs | " + " | ".join(f"pass {p}" for p in passes)
+          + " | passes 3-6 pooled | end | RMS bound at end, km |")
+    print("|---|---|---|---|" + "---|" * (len(passes) + 3))
+    for (scen, flt, iod), runs in sorted(groups.items()):
+        acc: dict[int, list] = defaultdict(list)
+        for _, d in runs:
+            t = steps[d]
+            last = {int(p): (e, b) for kind, p, e, b in zip(t["kind"], t["pass_index"], t["pos_err_km"],
+                                                            t["bound_pos_km"]) if kind == "update"}
+            for p, v in last.items():
+                acc[p].append(v)
+        cells = []
+        for p in passes:
+            r, _, n = _rms_ratio(acc.get(p, []))
+            cells.append(f"{r:.2f}" if n >= max(5, len(runs) // 5) else "-")
+        pooled, _, npool = _rms_ratio([v for p in (3, 4, 5, 6) for v in acc.get(p, [])])
+        s = [m["summary"]["final"] for m, _ in runs]
+        end, bound, _ = _rms_ratio([(f.get("pos_err_km", np.nan), f.get("bound_pos_km", np.nan)) for f in s])
+        print(f"| {scen} | {flt} | {iod} | {len(runs)} | " + " | ".join(cells)
+              + f" | {pooled:.2f} | {end:.2f} | {bound:.3g} |")
+
+
 def main(argv=None) -> None:
     dirs = sys.argv[1:] if argv is None else argv
     print("\n".join(machine_lines()))
@@ -125,6 +160,7 @@ def main(argv=None) -> None:
     steps = read_step_tables(groups)
     per_update_table(groups, steps)
     per_pass_precision_table(groups, steps)
+    efficiency_table(groups, steps)
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from .particle_declarations import ParticleFilterDeclarations
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .ensemble_propagation import propagate_particles
+from .gap_reanchor import GapReanchor
 from .initial_cloud import check_cloud, initial_particles
 from .component_spread import shrink_components
 from .component_update import ensemble_component_update, iterated_component_update
@@ -95,6 +96,18 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         Components are shrunk (``kept_spread``) only while the prior's predicted measurements
         spread over at most this many noise standard deviations; above it the components are
         separate hypotheses of a cloud reacquiring after a gap, not cells of one cloud.
+    reanchor_gap_days : float
+        After a gap between updates of at least this many days, re-anchor when the next pass is
+        over: batch least squares over every measurement the filter has conditioned on, started
+        from the posterior particles that fit them best; accepted fits replace the belief
+        (:mod:`.gap_reanchor`). 0 = off (default).
+    reanchor_pause_hours : float
+        A pause between updates at least this long ends the post-gap pass (the attempt is made
+        at the prediction that crosses it).
+    reanchor_measurements : int
+        Updates since the gap needed before the attempt.
+    reanchor_starts : int
+        Most fits started, from the best-fitting posterior particles.
     posterior_draw : str
         Where the posterior particles come from. "transform" (default): each cluster's own
         particles, mapped affinely onto its component's posterior, so the cloud keeps its
@@ -118,7 +131,12 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                  component_likelihood: str = "posterior", split_components: int | None = None,
                  split_ess: float = 0.02, kept_spread: float = 0.7, reacquire_factor: float = 4.0,
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
-                 posterior_draw: str = "transform"):
+                 posterior_draw: str = "transform", reanchor_gap_days: float = 0.0,
+                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8):
+        self.reanchor_gap_days = check_nonnegative(self, "reanchor_gap_days", reanchor_gap_days)
+        self.reanchor_pause_hours = check_positive(self, "reanchor_pause_hours", reanchor_pause_hours)
+        self.reanchor_measurements = check_int(self, "reanchor_measurements", reanchor_measurements, minimum=1)
+        self.reanchor_starts = check_int(self, "reanchor_starts", reanchor_starts, minimum=1)
         self.posterior_draw = check_choice(self, "posterior_draw", posterior_draw, ("gaussian", "transform"))
         self.kept_spread = check_range(self, "kept_spread", kept_spread, 0.0, 1.0)
         self.shrink_spread_sigma = check_positive(self, "shrink_spread_sigma", shrink_spread_sigma)
@@ -167,11 +185,14 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag: dict[str, float] = {}
         self._x = self._prune(x)
         self._invalidate()
+        self._reanchor = GapReanchor(self.reanchor_gap_days, self.reanchor_pause_hours, self.reanchor_measurements,
+                                     self.reanchor_starts) if self.reanchor_gap_days > 0 else None
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": 0.0,
                       "particles_lost_step": 0.0, "particles_pruned": float(self._pruned_total)}
 
     def _predict_to(self, t: float) -> None:
         """Propagate every particle to ``t`` (TU); particles that hit a body are removed and counted."""
+        reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
         x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
                                        self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
@@ -183,12 +204,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": float(self._lost_total),
                       "particles_lost_step": float(lost),
                       "particles_pruned": float(self._pruned_total - pruned_before)}
+        if reanchored:
+            self._diag["reanchored"] = 1.0
 
     def update(self, measurement: Measurement) -> None:
         """Cluster, update each component with the measurement, reweight, resample."""
         self._require_init()
         who = self._who()
         check_epoch(self._t, measurement, who)
+        if self._reanchor is not None:
+            self._reanchor.observe(measurement)
         meas = MeasuredComponents(self._sensor, measurement)
         dres = meas.residuals_to_measurement(self._x)
         if not np.all(np.isfinite(dres)):
@@ -245,6 +270,14 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "prior_spread_sigma": spread,
             "components_shrunk": float(shrink),
         })
+
+    def _try_reanchor(self) -> bool:
+        """Replace the particles by draws from the accepted least-squares solutions, if any."""
+        mix = self._reanchor.attempt(self._x, self._t, self._dyn, self._sensor)
+        if mix is None:
+            return False
+        self._x, _ = self._sample_posterior(mix, self.n_particles)
+        return True
 
     # -- belief -----------------------------------------------------------------------------------
     @property
@@ -349,12 +382,14 @@ class PaperPGMFilter(PGMFilter):
                  component_likelihood: str = "posterior", split_components: int | None = None,
                  split_ess: float = 0.02, kept_spread: float = 1.0, reacquire_factor: float = 1.0,
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
-                 posterior_draw: str = "gaussian"):
+                 posterior_draw: str = "gaussian", reanchor_gap_days: float = 0.0,
+                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8):
         super().__init__(n_particles, n_components, clusterer, min_cluster_size,
                          velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
                          component_update, update_iterations, component_likelihood, split_components,
                          split_ess, kept_spread, reacquire_factor, reacquire_spread_sigma,
-                         shrink_spread_sigma, posterior_draw)
+                         shrink_spread_sigma, posterior_draw, reanchor_gap_days, reanchor_pause_hours,
+                         reanchor_measurements, reanchor_starts)
 
 
 @hookimpl
