@@ -1,4 +1,4 @@
-"""Re-anchoring after a gap (plugins/filters/gap_reanchor.py): when it is due, and what it returns.
+"""Re-anchoring (plugins/filters/reanchoring.py): when it is due, and what it returns.
 
 Two nights of az/el measurements of the 9:2 NRHO from the ground (1.5 arcsec, every 40 minutes
 while visible), ten days apart, simulated with the real ``ground-telescope`` and ``cr3bp``
@@ -14,8 +14,8 @@ import pytest
 from cistrack.errors import ParameterError
 from cistrack.model.measurement import Measurement
 from cistrack.plugin.registry import default_registry
-from cistrack.plugins.filters.gap_reanchor import GapReanchor
-from cistrack.plugins.filters.pgm import PGMFilter
+from cistrack.plugins.filters.reanchoring import Reanchoring
+from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 from cistrack.units import days_to_tu, hours_to_tu, km_to_lu, kms_to_vu
 
 NRHO = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
@@ -53,7 +53,7 @@ def _particles(seed: int, n: int = 400) -> np.ndarray:
     return truth[-1] + np.random.default_rng(seed).standard_normal((n, 6)) * spread
 
 
-def _observed(reanchor: GapReanchor, ms: list[Measurement]) -> GapReanchor:
+def _observed(reanchor: Reanchoring, ms: list[Measurement]) -> Reanchoring:
     for m in ms:
         reanchor.observe(m)
     return reanchor
@@ -65,32 +65,39 @@ def test_the_two_nights_are_ten_days_apart_and_each_has_a_pass():
     assert 6 <= np.count_nonzero(~late) and 6 <= np.count_nonzero(late)
 
 
-def test_nothing_is_due_without_a_gap():
+def test_nothing_is_due_while_a_pass_goes_on():
     ms = _measurements(1)
     early = [m for m in ms if m.t < days_to_tu(5.0)]
-    r = _observed(GapReanchor(5.0, 3.0, 6, 8), early)
-    assert not r.due(early[-1].t + days_to_tu(1.0))
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 8), early)
+    assert not r.due(early[-1].t + hours_to_tu(1.0))
 
 
 def test_an_attempt_is_due_once_the_post_gap_pass_pauses():
     ms = _measurements(1)
-    r = _observed(GapReanchor(5.0, 3.0, 6, 8), ms)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
     assert not r.due(ms[-1].t + hours_to_tu(1.0))
     assert r.due(ms[-1].t + hours_to_tu(3.5))
 
 
-def test_too_few_measurements_since_the_gap_are_not_enough():
+def test_an_arc_starts_afresh_after_a_gap():
     ms = _measurements(1)
     n_late = sum(m.t > days_to_tu(5.0) for m in ms)
-    r = _observed(GapReanchor(5.0, 3.0, n_late + 1, 8), ms)
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, n_late + 1, 8), ms)
+    assert len(r.history) == n_late
     assert not r.due(ms[-1].t + days_to_tu(1.0))
+
+
+def test_across_gaps_the_arc_keeps_every_measurement():
+    ms = _measurements(1)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
+    assert len(r.history) == len(ms)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_the_solution_holds_the_truth_inside_its_covariance(seed):
     dyn, sen, _, truth, _, _ = _two_nights()
     ms = _measurements(seed)
-    r = _observed(GapReanchor(5.0, 3.0, 6, 8), ms)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
     mix = r.attempt(_particles(seed), ms[-1].t, dyn, sen)
     assert mix is not None
     best = int(np.argmax(mix.weights))
@@ -102,7 +109,7 @@ def test_the_solution_is_far_sharper_than_the_particles_it_started_from():
     dyn, sen, _, _, _, _ = _two_nights()
     ms = _measurements(4)
     x = _particles(4)
-    mix = _observed(GapReanchor(5.0, 3.0, 6, 8), ms).attempt(x, ms[-1].t, dyn, sen)
+    mix = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms).attempt(x, ms[-1].t, dyn, sen)
     sigma_fit = np.sqrt(np.trace(mix.covariances[0][:3, :3]))
     sigma_cloud = np.sqrt(np.trace(np.cov(x[:, :3].T)))
     assert sigma_fit < 0.1 * sigma_cloud
@@ -111,14 +118,14 @@ def test_the_solution_is_far_sharper_than_the_particles_it_started_from():
 def test_measurements_no_orbit_fits_leave_the_belief_alone():
     dyn, sen, _, _, _, _ = _two_nights()
     ms = _measurements(5, bias_arcsec=60.0)  # the second night displaced by one arcminute
-    r = _observed(GapReanchor(5.0, 3.0, 6, 4), ms)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 4), ms)
     assert r.attempt(_particles(5), ms[-1].t, dyn, sen) is None
 
 
-def test_one_attempt_per_gap():
+def test_no_second_attempt_without_new_measurements():
     dyn, sen, _, _, _, _ = _two_nights()
     ms = _measurements(6)
-    r = _observed(GapReanchor(5.0, 3.0, 6, 2), ms)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 2), ms)
     r.attempt(_particles(6), ms[-1].t, dyn, sen)
     assert not r.due(ms[-1].t + days_to_tu(1.0))
 
@@ -128,5 +135,46 @@ def test_pgm_refuses_a_negative_gap_naming_the_parameter():
         PGMFilter(reanchor_gap_days=-1.0)
 
 
-def test_pgm_re_anchoring_is_off_by_default():
-    assert PGMFilter().reanchor_gap_days == 0.0
+def test_pgm_refuses_an_unknown_mode_naming_the_choices():
+    with pytest.raises(ParameterError, match="across-gaps"):
+        PGMFilter(reanchor="sometimes")
+
+
+def test_pgm_re_anchors_arcs_by_default_and_the_paper_pgm_does_not():
+    assert PGMFilter().reanchor == "arcs"
+    assert PaperPGMFilter().reanchor == "off"
+
+
+def test_arcs_mode_is_due_at_the_end_of_each_pass_with_new_measurements():
+    dyn, sen, _, _, _, _ = _two_nights()
+    ms = _measurements(7)
+    early = [m for m in ms if m.t < days_to_tu(5.0)]
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 2), early)
+    assert r.due(early[-1].t + hours_to_tu(3.5))
+
+
+def test_arcs_mode_waits_for_new_measurements_after_an_attempt():
+    dyn, sen, _, _, _, _ = _two_nights()
+    ms = _measurements(7)
+    early = [m for m in ms if m.t < days_to_tu(5.0)]
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 2), early[:-1])
+    r.attempt(_particles(7)[:50], early[-2].t, dyn, sen)
+    assert not r.due(early[-2].t + days_to_tu(1.0))
+    r.observe(early[-1])
+    assert r.due(early[-1].t + hours_to_tu(3.5))
+
+
+def test_a_single_pass_is_never_fitted_on_its_own():
+    ms = _measurements(8)
+    first_pass = [m for m in ms if m.t < hours_to_tu(10.0)]  # 6 measurements in the first 4 hours
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 8), first_pass)
+    assert len(r.history) >= 6
+    assert not r.due(first_pass[-1].t + days_to_tu(1.0))
+
+
+def test_after_a_gap_an_arc_waits_for_its_second_pass():
+    ms = _measurements(8)
+    late = [m for m in ms if m.t > days_to_tu(5.0)]  # one 10-hour pass after the gap
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 8), ms)
+    assert len(r.history) == len(late)
+    assert not r.due(ms[-1].t + days_to_tu(1.0))
