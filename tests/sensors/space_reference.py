@@ -49,3 +49,68 @@ def angle_between(ra1, dec1, ra2, dec2) -> float:
     """Great-circle angle (rad) between two directions, accurate for tiny angles (haversine)."""
     h = np.sin((dec2 - dec1) / 2) ** 2 + np.cos(dec1) * np.cos(dec2) * np.sin((ra2 - ra1) / 2) ** 2
     return float(2 * np.arcsin(np.sqrt(h)))
+
+
+# -- ephemeris model: GCRS from jplephem, the real Earth-Moon frame built by hand -------------
+
+def tdb_jd(epoch_utc: str) -> tuple[float, float]:
+    """TDB Julian date (two parts) of a UTC time, by astropy."""
+    from astropy.time import Time
+    t = Time(epoch_utc.replace("Z", ""), scale="utc").tdb
+    return float(t.jd1), float(t.jd2)
+
+
+def _moon(eph, jd1: float, jd2: float):
+    """Geocentric Moon position (3,) km and velocity (3,) km/s from jplephem."""
+    p, v = eph.position_and_velocity("moon", jd1, jd2)
+    return np.reshape(p, 3), np.reshape(v, 3) / 86400.0
+
+
+def synodic_to_gcrs_by_hand(x: np.ndarray, jd: tuple[float, float], t_s: float) -> np.ndarray:
+    """Synodic state (6,) LU, VU of the real Earth-Moon frame -> GCRS (6,) km, km/s: x axis to the
+    Moon, z along the Moon's orbital angular momentum, origin at the barycentre, axes turning at
+    omega = (h / d^2) z + (d (a . z) / h) x (a: the Moon's acceleration, central differences)."""
+    from dynamics.reference_ephemeris import _EPH as eph
+    jd1, jd2 = jd[0], jd[1] + t_s / 86400.0
+    r, v = _moon(eph, jd1, jd2)
+    dt = 1.0
+    a = (_moon(eph, jd1, jd2 + dt / 86400.0)[1] - _moon(eph, jd1, jd2 - dt / 86400.0)[1]) / (2 * dt)
+    d = np.linalg.norm(r)
+    hv = np.cross(r, v)
+    h = np.linalg.norm(hv)
+    ex, ez = r / d, hv / h
+    rot = np.stack([ex, np.cross(ez, ex), ez], axis=1)
+    omega = h / d ** 2 * ez + d * np.dot(a, ez) / h * ex
+    share = 1.0 / (1.0 + eph.EMRAT)
+    rho = rot @ (np.asarray(x[:3]) * LU_KM)
+    vel = share * v + rot @ (np.asarray(x[3:]) * LU_KM / TU_S) + np.cross(omega, rho)
+    return np.concatenate([share * r + rho, vel])
+
+
+def _earth_bary_km(jd1: float, jd2: float) -> np.ndarray:
+    from dynamics.reference_ephemeris import _EPH as eph
+    emb = np.reshape(eph.position("earthmoon", jd1, jd2), 3)
+    moon = np.reshape(eph.position("moon", jd1, jd2), 3)
+    return emb - moon / (1.0 + eph.EMRAT)
+
+
+def ephemeris_radec(target_at_t: np.ndarray, observer_x0: np.ndarray, observer_t0: float, t: float,
+                    epoch_utc: str) -> tuple[float, float]:
+    """Astrometric RA, Dec (rad, ICRF) of a target (synodic state at t) from an observer passing
+    ``observer_x0`` at ``observer_t0`` (TU), under Earth, Moon and Sun point masses (DE421):
+    p = (r_t(t - tau) + E(t - tau)) - (r_o(t) + E(t)), E the barycentric geocentre."""
+    from dynamics.reference_ephemeris import propagate_km
+    jd = tdb_jd(epoch_utc)
+    t0_s, t_s = observer_t0 * TU_S, t * TU_S
+    obs0 = synodic_to_gcrs_by_hand(observer_x0, jd, t0_s)
+    jd_obs0 = (jd[0], jd[1] + t0_s / 86400.0)
+    obs = propagate_km(obs0, jd_obs0, np.array([t_s - t0_s]))[-1] if t_s > t0_s else obs0
+    tgt = synodic_to_gcrs_by_hand(target_at_t, jd, t_s)
+    jd_t = (jd[0], jd[1] + t_s / 86400.0)
+    e_now = _earth_bary_km(*jd_t)
+    tau = 0.0
+    for _ in range(5):
+        back = propagate_km(tgt, jd_t, np.array([-tau]))[-1] if tau > 0 else tgt
+        p = back[:3] + _earth_bary_km(jd_t[0], jd_t[1] - tau / 86400.0) - obs[:3] - e_now
+        tau = np.linalg.norm(p) / C_KMS
+    return float(np.mod(np.arctan2(p[1], p[0]), 2 * np.pi)), float(np.arctan2(p[2], np.hypot(p[0], p[1])))

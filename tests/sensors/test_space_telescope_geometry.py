@@ -42,3 +42,25 @@ def test_light_time_moves_the_direction_by_more_than_the_tolerance():
     on = SpaceTelescope(orbit="dro-2-1", phase=0.25).measure(x_t[None], 0.3)[0]
     off = SpaceTelescope(orbit="dro-2-1", phase=0.25, light_time=False).measure(x_t[None], 0.3)[0]
     assert angle_between(*on, *off) > 0.1 * ARCSEC_RAD
+
+
+EPOCH = "2026-01-01T00:00:00Z"
+
+
+@pytest.fixture(scope="module")
+def ephemeris():
+    from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
+    return EphemerisDynamics(epoch=EPOCH)
+
+
+@pytest.mark.parametrize("orbit, phase, target, t", [("dro-2-1", 0.25, "nrho-9-2", 0.3),
+                                                      ("l2-lyapunov", 0.6, "nrho-9-2", 1.1),
+                                                      ("dro-2-1", 0.0, "mirror-3-1", 0.9)])
+def test_ephemeris_radec_matches_independent_reference(ephemeris, orbit, phase, target, t):
+    from sensors.space_reference import ephemeris_radec
+    sensor = SpaceTelescope(orbit=orbit, phase=phase, dynamics=ephemeris, epoch=EPOCH)
+    x_t = np.asarray(ORBITS[target].state, dtype=float)     # any state near the Moon will do
+    ra, dec = sensor.measure(x_t[None], t)[0]
+    o = ORBITS[orbit]
+    ref = ephemeris_radec(x_t, np.array(o.state), -phase * o.period, t, EPOCH)
+    assert angle_between(ra, dec, *ref) < 0.01 * ARCSEC_RAD
