@@ -107,6 +107,21 @@ def check_observer_and_visibility_shapes(sensor) -> None:
     require(v.shape == (len(x),) and v.dtype == bool, f"visible() returned {v.dtype} shape {v.shape}, expected (N,) bool")
 
 
+def check_observer_path_consistent(sensor) -> None:
+    """observer_position() of (K,) times equals K scalar calls, whatever order the times are
+    asked in (a sensor that moves, e.g. on its own orbit, must not depend on which times it was
+    asked for before), and every visited position is finite and in LU."""
+    ts = T_CHECK + np.array([0.9, 0.0, 0.45, 8.0, 0.2])   # 8 TU: past 32 days
+    fresh = round_trip(sensor)
+    late_first = np.stack([np.asarray(fresh.observer_position(float(t)), dtype=float) for t in ts])
+    whole = np.asarray(sensor.observer_position(np.sort(ts)), dtype=float)
+    require(whole.shape == (len(ts), 3) and np.all(np.isfinite(whole)),
+            f"observer_position() of (K,) times returned shape {whole.shape} or non-finite values")
+    require(np.all(np.linalg.norm(whole, axis=1) < 10.0), "the observer leaves cislunar space: km instead of LU?")
+    ok, diff = close(late_first[np.argsort(ts)], whole, 0, 1e-13)
+    require(ok, f"observer_position() depends on the order of the times asked (off by {diff:.3g} LU)")
+
+
 def check_residual_wraps_angles(sensor) -> None:
     ang = np.asarray(sensor.angular, dtype=bool)
     if not ang.any():
@@ -192,6 +207,7 @@ SENSOR_CHECKS = [
     ("measure_vectorised_matches_loop", check_measure_vectorised_matches_loop),
     ("line_of_sight_consistent", check_line_of_sight_consistent),
     ("observer_and_visibility_shapes", check_observer_and_visibility_shapes),
+    ("observer_path_consistent", check_observer_path_consistent),
     ("residual_wraps_angles", check_residual_wraps_angles),
     ("simulate_noise_matches_sigmas", check_simulate_noise_matches_sigmas),
     ("simulate_reproducible", check_simulate_reproducible),

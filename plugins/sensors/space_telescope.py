@@ -93,13 +93,15 @@ class SpaceTelescope(Sensor):
         self.light_time = bool(light_time)
         self.range_alpha = check_positive(self, "range_alpha", range_alpha)
         self.range_rate_sigma_kms = check_positive(self, "range_rate_sigma_kms", range_rate_sigma_kms)
-        self.exclusion = ExclusionRules(*(check_range(self, n, v, -1.0, 180.0) for n, v in (
-            ("sun_exclusion_deg", sun_exclusion_deg), ("earth_exclusion_deg", earth_exclusion_deg),
-            ("moon_exclusion_deg", moon_exclusion_deg))))
-        self.photometry = Photometry(check_positive(self, "diameter_m", diameter_m),
-                                     check_range(self, "albedo", albedo, 0.0, 1.0, lo_open=True),
-                                     check_range(self, "limiting_magnitude", limiting_magnitude, -30.0, 40.0),
-                                     check_range(self, "max_range_km", max_range_km, -1.0, 1e9))
+        for name, value in (("sun_exclusion_deg", sun_exclusion_deg), ("earth_exclusion_deg", earth_exclusion_deg),
+                            ("moon_exclusion_deg", moon_exclusion_deg)):
+            setattr(self, name, check_range(self, name, value, -1.0, 180.0))
+        self.diameter_m = check_positive(self, "diameter_m", diameter_m)
+        self.albedo = check_range(self, "albedo", albedo, 0.0, 1.0, lo_open=True)
+        self.limiting_magnitude = check_range(self, "limiting_magnitude", limiting_magnitude, -30.0, 40.0)
+        self.max_range_km = check_range(self, "max_range_km", max_range_km, -1.0, 1e9)
+        self.exclusion = ExclusionRules(self.sun_exclusion_deg, self.earth_exclusion_deg, self.moon_exclusion_deg)
+        self.photometry = Photometry(self.diameter_m, self.albedo, self.limiting_magnitude, self.max_range_km)
         self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
         try:
             self._epoch = parse_utc(epoch)
