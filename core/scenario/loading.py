@@ -197,15 +197,16 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if not np.isfinite(duration) or duration <= 0:
         raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
 
+    truth = data.get("truth", {})
+    if not isinstance(truth, dict):
+        raise ConfigError(f"{source}: 'truth' must be a table")
+    moving = truth.get("dynamics", data.get("dynamics"))   # what moves an observer in space
     components: dict[str, ComponentSpec] = {}
     for table, kind in COMPONENT_TABLES.items():
         if table in data:
             components[table] = component_spec(data[table], kind, f"[{table}]", source, reg,
-                                                epoch_text=epoch_text)
+                                                epoch_text=epoch_text, dynamics_table=moving)
 
-    truth = data.get("truth", {})
-    if not isinstance(truth, dict):
-        raise ConfigError(f"{source}: 'truth' must be a table")
     check_keys(truth, _TRUTH_KEYS, source, "[truth]")
     truth_orbit = truth.get("orbit")
     truth_state = None

@@ -17,9 +17,10 @@ import math
 import numpy as np
 
 from cistrack import units
+from cistrack.units import TU_S, parse_utc, state_from_km
 from cistrack.errors import ConfigError, MeasurementError
 
-__all__ = ["ObserverOrbit", "start_of_orbit", "CHUNK_DAYS", "OBSERVER_RTOL", "OBSERVER_ATOL"]
+__all__ = ["ObserverOrbit", "start_of_orbit", "observer_start", "CHUNK_DAYS", "OBSERVER_RTOL", "OBSERVER_ATOL"]
 
 CHUNK_DAYS: float = 32.0
 """Length of each extension of the observer's propagated span, days."""
@@ -100,3 +101,37 @@ def start_of_orbit(registry_orbit, phase: float) -> tuple[np.ndarray, float]:
             raise ConfigError(f"orbit {registry_orbit.name!r} is not periodic: its phase must be 0")
         return np.asarray(registry_orbit.state, dtype=float).copy(), 0.0
     return np.asarray(registry_orbit.state, dtype=float).copy(), -float(phase) * float(period)
+
+
+def observer_start(orbit: str, phase: float, state_km, state_epoch: str, epoch, fail):
+    """(x0, t0, orbit) of an observer given by a catalog ``orbit`` and ``phase``, or by
+    ``state_km`` (synodic km, km/s) at ``state_epoch`` (UTC text, "" = ``epoch``, a datetime);
+    ``fail(name, value, allowed)`` reports a bad parameter. The orbit returned is "" for a state."""
+    if state_km is not None:
+        s = state_km
+        if (not isinstance(s, (list, tuple)) or len(s) != 6
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in s)
+                or not np.all(np.isfinite(np.asarray(s, dtype=float)))):
+            fail("state_km", s, "must be 6 finite numbers [x, y, z km, vx, vy, vz km/s]")
+        if orbit not in ("", "dro-2-1"):
+            fail("orbit", orbit, "give either 'orbit' or 'state_km', not both (orbit = \"\")")
+        t0 = 0.0
+        if state_epoch:
+            try:
+                when = parse_utc(state_epoch)
+            except (ValueError, TypeError):
+                fail("state_epoch", state_epoch, "must be an ISO-8601 UTC time")
+            t0 = (when - epoch).total_seconds() / TU_S
+            if t0 > 0:
+                fail("state_epoch", state_epoch, "must be at or before the scenario epoch")
+        return state_from_km(np.asarray(s, dtype=float)), t0, ""
+    if state_epoch:
+        fail("state_epoch", state_epoch, "goes with 'state_km' (a catalog orbit uses 'phase')")
+    from cistrack.plugins.dynamics.orbit_catalog import ORBITS
+    if orbit not in ORBITS:
+        fail("orbit", orbit, "must be a catalog orbit, one of: " + ", ".join(ORBITS))
+    try:
+        x0, t0 = start_of_orbit(ORBITS[orbit], phase)
+    except ConfigError as exc:
+        fail("phase", phase, str(exc))
+    return x0, t0, orbit

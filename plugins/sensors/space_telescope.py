@@ -20,14 +20,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.errors import ConfigError, MeasurementError
+from cistrack.errors import MeasurementError
 from cistrack.interfaces import Dynamics, Sensor
+from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.interfaces.component import check_positive, check_range
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.hookspecs import hookimpl
-from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc, state_from_km
+from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
-from .observer_orbit import ObserverOrbit, start_of_orbit
+from .observer_orbit import ObserverOrbit, observer_start
 from .space_frames import RealSky, sky_for
 from .space_geometry import astrometric_direction, radec_of, unit_of_radec
 from .visibility_rules import ExclusionRules, Photometry
@@ -72,6 +73,10 @@ class SpaceTelescope(Sensor):
         Largest range at which the target is sought, km (<= 0: no limit).
     moon_phase_deg : float
         CR3BP only: right ascension of the Earth->Moon direction at the epoch, degrees.
+    revisit_hours, window_hours, first_window_hours : float
+        Tasking: the sensor turns to the target for ``window_hours`` every ``revisit_hours``, the
+        first window opening at ``first_window_hours``; passes are the visible parts of those
+        windows (what the schedules plan in). revisit_hours = 0: passes are the whole visibility.
     """
 
     def __init__(self, orbit: str = "dro-2-1", phase: float = 0.0, state_km: list[float] | None = None,
@@ -82,7 +87,8 @@ class SpaceTelescope(Sensor):
                  sun_exclusion_deg: float = 30.0, earth_exclusion_deg: float = 10.0,
                  moon_exclusion_deg: float = 5.0, diameter_m: float = 2.0, albedo: float = 0.2,
                  limiting_magnitude: float = 19.0, max_range_km: float = 0.0,
-                 moon_phase_deg: float = 0.0) -> None:
+                 moon_phase_deg: float = 0.0, revisit_hours: float = 0.0, window_hours: float = 8.0,
+                 first_window_hours: float = 1.0) -> None:
         self.phase = check_range(self, "phase", phase, 0.0, 1.0, hi_open=True)
         self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
         for name, value in (("measure_range", measure_range), ("measure_range_rate", measure_range_rate),
@@ -103,6 +109,11 @@ class SpaceTelescope(Sensor):
         self.exclusion = ExclusionRules(self.sun_exclusion_deg, self.earth_exclusion_deg, self.moon_exclusion_deg)
         self.photometry = Photometry(self.diameter_m, self.albedo, self.limiting_magnitude, self.max_range_km)
         self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
+        self.revisit_hours = check_range(self, "revisit_hours", revisit_hours, 0.0, 1e5)
+        self.window_hours = check_positive(self, "window_hours", window_hours)
+        self.first_window_hours = check_range(self, "first_window_hours", first_window_hours, 0.0, 1e5)
+        if 0 < self.revisit_hours < self.window_hours:
+            self._fail("window_hours", window_hours, f"must not exceed revisit_hours = {self.revisit_hours:g}")
         try:
             self._epoch = parse_utc(epoch)
         except (ValueError, TypeError):
@@ -137,35 +148,9 @@ class SpaceTelescope(Sensor):
         self._sky = sky_for(self.dynamics, self._epoch, self.moon_phase_deg)
 
     def _start(self) -> tuple[np.ndarray, float]:
-        if self.state_km is not None:
-            s = self.state_km
-            if (not isinstance(s, (list, tuple)) or len(s) != 6
-                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in s)
-                    or not np.all(np.isfinite(np.asarray(s, dtype=float)))):
-                self._fail("state_km", s, "must be 6 finite numbers [x, y, z km, vx, vy, vz km/s]")
-            if self.orbit not in ("", "dro-2-1"):
-                self._fail("orbit", self.orbit, "give either 'orbit' or 'state_km', not both (orbit = \"\")")
-            self.orbit = ""
-            t0 = 0.0
-            if self.state_epoch:
-                try:
-                    when = parse_utc(self.state_epoch)
-                except (ValueError, TypeError):
-                    self._fail("state_epoch", self.state_epoch, "must be an ISO-8601 UTC time")
-                t0 = (when - self._epoch).total_seconds() / TU_S
-                if t0 > 0:
-                    self._fail("state_epoch", self.state_epoch, "must be at or before the scenario epoch "
-                                                                f"{self.epoch}")
-            return state_from_km(np.asarray(s, dtype=float)), t0
-        if self.state_epoch:
-            self._fail("state_epoch", self.state_epoch, "goes with 'state_km' (a catalog orbit uses 'phase')")
-        from cistrack.plugins.dynamics.orbit_catalog import ORBITS
-        if self.orbit not in ORBITS:
-            self._fail("orbit", self.orbit, "must be a catalog orbit, one of: " + ", ".join(ORBITS))
-        try:
-            return start_of_orbit(ORBITS[self.orbit], self.phase)
-        except ConfigError as exc:
-            self._fail("phase", self.phase, str(exc))
+        x0, t0, self.orbit = observer_start(self.orbit, self.phase, self.state_km, self.state_epoch,
+                                            self._epoch, self._fail)
+        return x0, t0
 
     # -- validation -----------------------------------------------------------------------------
     def _check_states(self, states) -> np.ndarray:
@@ -251,6 +236,25 @@ class SpaceTelescope(Sensor):
         if self.photometry.active:
             ok &= self.photometry.detected(los, los - bodies["sun"])
         return ok
+
+    def in_window(self, t) -> np.ndarray:
+        """Whether the sensor is tasked on the target at times t (K,) TU -> (K,) bool."""
+        tt = np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1)
+        if self.revisit_hours <= 0:
+            return np.ones(tt.shape, dtype=bool)
+        h = tt * (TU_S / 3600.0) - self.first_window_hours
+        return (h >= 0) & (np.mod(h, self.revisit_hours) <= self.window_hours)
+
+    def passes(self, times: np.ndarray, states: np.ndarray):
+        """Visible samples inside the tasking windows, as contiguous runs (sample at <= 5 min)."""
+        tt = np.asarray(times, dtype=float).reshape(-1)
+        x = self._check_states(states)
+        if x.shape[0] != tt.shape[0]:
+            raise MeasurementError(f"sensor 'space-telescope': passes needs times (K,) and states (K, 6), "
+                                   f"got {tt.shape} and {x.shape}")
+        if tt.size > 1 and np.any(np.diff(tt) <= 0):
+            raise MeasurementError("sensor 'space-telescope': pass times must increase strictly")
+        return passes_from_mask(tt, self.visible(x, tt) & self.in_window(tt))
 
     def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
         """Unit synodic vectors (N, 3) along (RA, Dec) pairs (N, 2) rad at t (scalar or (N,) TU).
