@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from reference_cr3bp import MU, cr3bp_rhs
+from reference_cr3bp import cr3bp_rhs
 
 LU_KM, TU_S = 384_400.0, 375_149.0
 C_KMS = 299_792.458
