@@ -16,11 +16,15 @@ from cistrack.interfaces.component import check_choice, check_positive, check_ra
 from cistrack.errors import MeasurementError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Pass, Sensor
+from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
 
 from .frames import FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, wrap_azimuth
+from .input_checks import checked_states
+from .space_frames import IdealSky
 from .space_geometry import radec_of, unit_of_radec
+from .visibility_rules import sky_rules
 
 __all__ = ["GroundTelescope"]
 
@@ -57,13 +61,18 @@ class GroundTelescope(Sensor):
         model's ECI axes (geometric, as the angles of "azel"), the angles a space telescope under
         the CR3BP measures, so that ground and space observers make one network
         (docs/space-observers.md). Sigma on RA is sigma_arcsec / cos(Dec).
+    visibility : dict or None
+        Rules a space telescope also applies, off unless given (docs/space-observers.md): a table of
+        sun_exclusion_deg, moon_exclusion_deg, sun_max_elevation_deg, limiting_magnitude,
+        diameter_m, albedo, max_range_km. Pass edges are then the samples' (no bisection).
     """
 
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
                  height_m: float = 103.8, sigma_arcsec: float = 1.5, measure_range: bool = False,
                  range_alpha: float = 0.05, elevation_mask_deg: float = 10.0,
                  epoch: str = "2026-01-01T00:00:00Z", moon_phase_deg: float = 0.0,
-                 frame_model: str = "equatorial", measurement: str = "azel") -> None:
+                 frame_model: str = "equatorial", measurement: str = "azel",
+                 visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
         self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
@@ -96,6 +105,9 @@ class GroundTelescope(Sensor):
                                           self.height_m) / LU_KM             # (3,) LU
         self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
         self._mask_rad = np.radians(self.elevation_mask_deg)
+        self.visibility = visibility
+        self._rules = sky_rules(self, visibility)
+        self._sky = IdealSky(self._epoch, self.moon_phase_deg)
 
     # -- geometry -------------------------------------------------------------------------------
     def _affine(self, t):
@@ -107,12 +119,7 @@ class GroundTelescope(Sensor):
 
     @staticmethod
     def _check_states(states) -> np.ndarray:
-        x = np.asarray(states, dtype=float)
-        if x.ndim != 2 or x.shape[1] != 6:
-            raise MeasurementError(f"sensor 'ground-telescope': states must have shape (N, 6), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise MeasurementError("sensor 'ground-telescope': states contain NaN or infinity")
-        return x
+        return checked_states("ground-telescope", states)
 
     @staticmethod
     def _check_times(t, n: int) -> np.ndarray:
@@ -180,7 +187,17 @@ class GroundTelescope(Sensor):
     def visible(self, states: np.ndarray, t) -> np.ndarray:
         """Elevation at or above the mask: states (N, 6), t scalar or (N,) -> (N,) bool."""
         neu = self.topocentric(states, t)
-        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1])) >= self._mask_rad
+        up = np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1])) >= self._mask_rad
+        return up & self._sky_allows(states, t) if self._rules.active else up
+
+    def _sky_allows(self, states, t) -> np.ndarray:
+        """The ``visibility`` rules, in synodic axes (km): (N,) bool."""
+        x, tt = self._check_states(states), self._check_times(t, np.shape(states)[0])
+        rot = np.swapaxes(self._sky.rotation(tt), 1, 2)               # inertial -> synodic, (K, 3, 3)
+        bodies = {k: np.einsum("kij,kj->ki", rot, v) for k, v in self._sky.bodies_km(tt).items()}
+        obs = np.atleast_2d(self.observer_position(tt)) * LU_KM
+        up = np.atleast_2d(self._affine(tt)[0][..., 2, :])
+        return self._rules.allowed(x[:, :3] * LU_KM - obs, obs, bodies, self._sky.radii_km, up)
 
     def observer_position(self, t) -> np.ndarray:
         """Observer position in the synodic frame, LU: t scalar -> (3,), (K,) -> (K, 3)."""
@@ -266,6 +283,8 @@ class GroundTelescope(Sensor):
         if tt.size == 0:
             return []
         vis = self.visible(x, tt)
+        if self._rules.active:
+            return passes_from_mask(tt, vis)
         change = np.flatnonzero(vis[1:] != vis[:-1])           # between change and change + 1
         rise_k = change[vis[change + 1]]
         set_k = change[vis[change]]

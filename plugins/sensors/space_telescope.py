@@ -28,10 +28,11 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
+from .input_checks import checked_states, checked_times
 from .observer_orbit import ObserverOrbit, observer_start
 from .space_frames import RealSky, sky_for
 from .space_geometry import astrometric_direction, radec_of, unit_of_radec
-from .visibility_rules import ExclusionRules, Photometry
+from .visibility_rules import ExclusionRules, Photometry, SkyRules
 
 __all__ = ["SpaceTelescope"]
 
@@ -106,8 +107,8 @@ class SpaceTelescope(Sensor):
         self.albedo = check_range(self, "albedo", albedo, 0.0, 1.0, lo_open=True)
         self.limiting_magnitude = check_range(self, "limiting_magnitude", limiting_magnitude, -30.0, 40.0)
         self.max_range_km = check_range(self, "max_range_km", max_range_km, -1.0, 1e9)
-        self.exclusion = ExclusionRules(self.sun_exclusion_deg, self.earth_exclusion_deg, self.moon_exclusion_deg)
-        self.photometry = Photometry(self.diameter_m, self.albedo, self.limiting_magnitude, self.max_range_km)
+        self._rules = SkyRules(ExclusionRules(self.sun_exclusion_deg, self.earth_exclusion_deg, self.moon_exclusion_deg),
+                               Photometry(self.diameter_m, self.albedo, self.limiting_magnitude, self.max_range_km))
         self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
         self.revisit_hours = check_range(self, "revisit_hours", revisit_hours, 0.0, 1e5)
         self.window_hours = check_positive(self, "window_hours", window_hours)
@@ -154,24 +155,10 @@ class SpaceTelescope(Sensor):
 
     # -- validation -----------------------------------------------------------------------------
     def _check_states(self, states) -> np.ndarray:
-        x = np.asarray(states, dtype=float)
-        if x.ndim != 2 or x.shape[1] != 6:
-            raise MeasurementError(f"sensor 'space-telescope': states must have shape (N, 6), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise MeasurementError("sensor 'space-telescope': states contain NaN or infinity")
-        return x
+        return checked_states("space-telescope", states)
 
     def _check_times(self, t, n: int) -> np.ndarray:
-        tt = np.asarray(t, dtype=float)
-        if not np.all(np.isfinite(tt)):
-            raise MeasurementError("sensor 'space-telescope': times contain NaN or infinity")
-        if tt.ndim == 0:
-            return tt
-        tt = tt.reshape(-1)
-        if tt.shape[0] != n:
-            raise MeasurementError(f"sensor 'space-telescope': t must be a scalar or have one time per row "
-                                   f"({n}), got shape {np.shape(t)}")
-        return tt
+        return checked_times("space-telescope", t, n)
 
     # -- geometry -------------------------------------------------------------------------------
     def observer_states(self, t) -> np.ndarray:
@@ -230,12 +217,7 @@ class SpaceTelescope(Sensor):
         x = self._check_states(states)
         tt = self._check_times(t, x.shape[0])
         tgt, obs = self._inertial(x, tt)
-        los = tgt[:, :3] - obs[:, :3]
-        bodies = {k: np.broadcast_to(v - obs[:, :3], los.shape) for k, v in self._sky.bodies_km(tt).items()}
-        ok = self.exclusion.allowed(los, bodies, self._sky.radii_km)
-        if self.photometry.active:
-            ok &= self.photometry.detected(los, los - bodies["sun"])
-        return ok
+        return self._rules.allowed(tgt[:, :3] - obs[:, :3], obs[:, :3], self._sky.bodies_km(tt), self._sky.radii_km)
 
     def in_window(self, t) -> np.ndarray:
         """Whether the sensor is tasked on the target at times t (K,) TU -> (K,) bool."""

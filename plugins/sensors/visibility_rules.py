@@ -25,7 +25,7 @@ import numpy as np
 
 from cistrack.astro.observer import AU_KM
 
-__all__ = ["M_SUN_V", "ExclusionRules", "Photometry", "limb_margins", "phase_angle",
+__all__ = ["M_SUN_V", "ExclusionRules", "Photometry", "SkyRules", "sky_rules", "RULE_KEYS", "limb_margins", "phase_angle",
            "lambert_phase_function", "apparent_magnitude"]
 
 M_SUN_V: float = -26.74
@@ -116,3 +116,60 @@ class Photometry:
             ok &= apparent_magnitude(obs_to_target_km, sun_to_target_km, self.diameter_m,
                                      self.albedo) <= self.limiting_magnitude
         return ok
+
+
+RULE_KEYS: dict[str, tuple[float, float]] = {
+    "sun_exclusion_deg": (-1.0, 180.0), "earth_exclusion_deg": (-1.0, 180.0), "moon_exclusion_deg": (-1.0, 180.0),
+    "sun_max_elevation_deg": (-90.0, 90.0), "diameter_m": (1e-6, 1e6), "albedo": (1e-6, 1.0),
+    "limiting_magnitude": (-30.0, 40.0), "max_range_km": (-1.0, 1e9)}
+"""Keys of a ground telescope's ``visibility`` table and their allowed ranges (the space
+telescope's parameters of the same names)."""
+
+
+@dataclass(frozen=True)
+class SkyRules:
+    """Exclusion cones, detection model and, for a ground site, the darkest sky it needs: the
+    Sun's elevation at most ``sun_max_elevation_deg`` (90: any time of day)."""
+
+    exclusion: ExclusionRules = ExclusionRules()
+    photometry: Photometry = Photometry()
+    sun_max_elevation_deg: float = 90.0
+
+    @property
+    def active(self) -> bool:
+        return self.exclusion.active or self.photometry.active or self.sun_max_elevation_deg < 90.0
+
+    def allowed(self, los_km: np.ndarray, observer_km: np.ndarray, bodies_km: dict[str, np.ndarray],
+                radii_km: dict[str, float], up: np.ndarray | None = None) -> np.ndarray:
+        """(N,) bool for lines of sight ``los_km`` (N, 3) from observers at ``observer_km`` (N or 1,
+        3) with the Sun, Earth and Moon at ``bodies_km`` (K = N or 1, 3), all in one frame, km;
+        ``up`` (N or 1, 3) the site's local vertical (for the Sun's elevation), None in space."""
+        rel = {k: np.broadcast_to(v - observer_km, los_km.shape) for k, v in bodies_km.items()}
+        ok = self.exclusion.allowed(los_km, rel, radii_km)
+        if self.photometry.active:
+            ok &= self.photometry.detected(los_km, los_km - rel["sun"])
+        if up is not None and self.sun_max_elevation_deg < 90.0:
+            sin_el = np.einsum("ni,ni->n", np.broadcast_to(up, los_km.shape), _unit(rel["sun"]))
+            ok &= sin_el <= np.sin(np.radians(self.sun_max_elevation_deg))
+        return ok
+
+
+def sky_rules(owner, table) -> SkyRules:
+    """The rules of a sensor's ``visibility`` table (keys of :data:`RULE_KEYS`; absent keys are
+    off, or the detection model's defaults); a bad key or value fails through ``owner._fail``."""
+    if table is None:
+        return SkyRules()
+    if not isinstance(table, dict):
+        owner._fail("visibility", table, "must be a table of " + ", ".join(RULE_KEYS))
+    for key, value in table.items():
+        if key not in RULE_KEYS:
+            owner._fail("visibility", table, f"unknown key {key!r}; allowed: " + ", ".join(RULE_KEYS))
+        lo, hi = RULE_KEYS[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= float(value) <= hi:
+            owner._fail("visibility", table, f"{key} = {value!r} must be a number in [{lo:g}, {hi:g}]")
+    v = {k: float(x) for k, x in table.items()}
+    return SkyRules(ExclusionRules(v.get("sun_exclusion_deg", -1.0), v.get("earth_exclusion_deg", -1.0),
+                                   v.get("moon_exclusion_deg", -1.0)),
+                    Photometry(v.get("diameter_m", 2.0), v.get("albedo", 0.2), v.get("limiting_magnitude", 0.0),
+                               v.get("max_range_km", 0.0)),
+                    v.get("sun_max_elevation_deg", 90.0))
