@@ -219,6 +219,21 @@ class SpaceTelescope(Sensor):
         tgt, obs = self._inertial(x, tt)
         return self._rules.allowed(tgt[:, :3] - obs[:, :3], obs[:, :3], self._sky.bodies_km(tt), self._sky.radii_km)
 
+    def exclusion_cones(self, t: float) -> dict[str, tuple[np.ndarray, float]]:
+        """The active exclusion cones at t (TU): body -> (unit synodic axis (3,) from the observer to
+        the body's centre, half-angle rad = apparent radius + exclusion angle). For viewers."""
+        rot = self._sky.rotation(float(t))[0]
+        obs = self._sky.states_km(self._orbit.states(float(t)), float(t))[0, :3]
+        out = {}
+        for body, pos in self._sky.bodies_km(float(t)).items():
+            deg = getattr(self._rules.exclusion, f"{body}_deg")
+            if deg >= 0:
+                d = pos[0] - obs
+                dist = float(np.linalg.norm(d))
+                half = float(np.arcsin(min(1.0, self._sky.radii_km[body] / dist)))
+                out[body] = (rot.T @ d / dist, half + np.radians(deg))
+        return out
+
     def in_window(self, t) -> np.ndarray:
         """Whether the sensor is tasked on the target at times t (K,) TU -> (K,) bool."""
         tt = np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1)
