@@ -43,7 +43,8 @@ class SpaceTelescope(Sensor):
     Parameters
     ----------
     orbit : str
-        Catalog orbit the observer flies (``cistrack list orbits``); "" when ``state_km`` is given.
+        Built-in catalog orbit the observer flies (``cistrack plugins`` lists them under "orbit");
+        "" when ``state_km`` is given.
     phase : float
         Fraction of the orbit's period the observer is along it at t = 0, in [0, 1).
     state_km : list of 6 floats or None
