@@ -127,11 +127,13 @@ def observer_start(orbit: str, phase: float, state_km, state_epoch: str, epoch, 
         return state_from_km(np.asarray(s, dtype=float)), t0, ""
     if state_epoch:
         fail("state_epoch", state_epoch, "goes with 'state_km' (a catalog orbit uses 'phase')")
-    from cistrack.plugins.dynamics.orbit_catalog import ORBITS
-    if orbit not in ORBITS:
-        fail("orbit", orbit, "must be a catalog orbit, one of: " + ", ".join(ORBITS))
+    from cistrack.plugin.registry import default_registry
+    reg = default_registry()
+    names = reg.names("orbit")
+    if orbit not in names:
+        fail("orbit", orbit, "must be a registered orbit, one of: " + ", ".join(names))
     try:
-        x0, t0 = start_of_orbit(ORBITS[orbit], phase)
+        x0, t0 = start_of_orbit(reg.get("orbit", orbit).factory, phase)
     except ConfigError as exc:
         fail("phase", phase, str(exc))
     return x0, t0, orbit

@@ -43,7 +43,7 @@ class SpaceTelescope(Sensor):
     Parameters
     ----------
     orbit : str
-        Built-in catalog orbit the observer flies (``cistrack plugins`` lists them under "orbit");
+        Registered orbit the observer flies (``cistrack plugins`` lists them under "orbit");
         "" when ``state_km`` is given.
     phase : float
         Fraction of the orbit's period the observer is along it at t = 0, in [0, 1).
@@ -121,9 +121,9 @@ class SpaceTelescope(Sensor):
         except (ValueError, TypeError):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         self.epoch = epoch
-        if dynamics is None:
-            from cistrack.plugins.dynamics.cr3bp import CR3BP
-            dynamics = CR3BP()
+        if dynamics is None:                    # outside a scenario: the registered Earth-Moon CR3BP
+            from cistrack.plugin.registry import default_registry
+            dynamics = default_registry().create("dynamics", "cr3bp")
         if not isinstance(dynamics, Dynamics):
             self._fail("dynamics", dynamics, "must be a dynamics model (a scenario hands the run's own)")
         self.dynamics = dynamics
