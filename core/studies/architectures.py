@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from cistrack.errors import UnknownComponentError
+from cistrack.interfaces.component import param_specs
+from cistrack.plugin.registry import default_registry
 from cistrack.scenario.loading import load_scenario
 
 __all__ = ["describe_observer", "scenario_architecture", "architectures_of"]
@@ -19,9 +22,22 @@ def describe_observer(table: dict) -> str:
         where = (f"on {table['orbit']} at phase {float(table.get('phase', 0.0)):g}" if table.get("orbit")
                  else "from a given state" if "state_km" in table else "on dro-2-1 at phase 0")
         return f"{name} {where}"
-    if "latitude_deg" in table or "longitude_deg" in table:
-        return f"{name} at ({float(table.get('latitude_deg', 0.0)):.2f}, {float(table.get('longitude_deg', 0.0)):.2f}) deg"
-    return name
+    site = _site(name, table)
+    kind = f" ({table['measurement']})" if "measurement" in table else ""
+    return f"{name}{kind} at {site}" if site else name
+
+
+def _site(name: str, table: dict) -> str:
+    """"(lat, lon) deg" of a ground sensor's table, its defaults filling what the table leaves out."""
+    try:
+        specs = param_specs(default_registry().get("sensor", name).factory)
+    except (UnknownComponentError, TypeError, ValueError):  # unknown or not a class: no site to name
+        return ""
+    if "latitude_deg" not in specs or "longitude_deg" not in specs:
+        return ""
+    lat = float(table.get("latitude_deg", specs["latitude_deg"].default))
+    lon = float(table.get("longitude_deg", specs["longitude_deg"].default))
+    return f"({lat:.2f}, {lon:.2f}) deg"
 
 
 def scenario_architecture(raw: dict) -> str:
