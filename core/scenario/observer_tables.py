@@ -3,7 +3,7 @@ tables (ground sites and telescopes in space in one network, docs/space-observer
 
     [sensors.texas]
     name = "ground-telescope"
-    measurement = "radec"
+    angles = "radec"
 
     [sensors.dro]
     name = "space-telescope"
@@ -60,7 +60,7 @@ def observer_specs(data: dict, source: str, reg: Registry, epoch_text: Any,
         if own != names:
             raise ConfigError(f"{source}: [sensors.{key}] measures {', '.join(own)} but [sensors.{first_key}] "
                               f"{', '.join(names)}; a network fuses one set of components (ground telescopes "
-                              f"take measurement = 'radec' to join space telescopes)")
+                              f"take angles = 'radec' to join space telescopes)")
     return out
 
 

@@ -23,7 +23,7 @@ def describe_observer(table: dict) -> str:
                  else "from a given state" if "state_km" in table else "on dro-2-1 at phase 0")
         return f"{name} {where}"
     site = _site(name, table)
-    kind = f" ({table['measurement']})" if "measurement" in table else ""
+    kind = next((f" ({table[k]})" for k in ("measurement", "angles") if k in table), "")
     return f"{name}{kind} at {site}" if site else name
 
 

@@ -56,11 +56,12 @@ class GroundTelescope(Sensor):
     frame_model : str
         Name of the synodic-to-Earth-fixed model, one of ``FRAME_MODELS`` ("equatorial", the
         paper's). The real sky is the sensor "real-telescope" (docs/real-sky.md).
-    measurement : str
+    angles : str
         "azel" (the default) or "radec": topocentric right ascension and declination in the frame
         model's ECI axes (geometric, as the angles of "azel"), the angles a space telescope under
-        the CR3BP measures, so that ground and space observers make one network
-        (docs/space-observers.md). Sigma on RA is sigma_arcsec / cos(Dec).
+        the CR3BP measures, so that simulated ground and space observers make one network
+        (docs/space-observers.md; not the ICRF of real astrometry: that is "real-telescope").
+        Sigma on RA is sigma_arcsec / cos(Dec).
     visibility : dict or None
         Rules a space telescope also applies, off unless given (docs/space-observers.md): a table of
         sun_exclusion_deg, moon_exclusion_deg, sun_max_elevation_deg, limiting_magnitude,
@@ -71,7 +72,7 @@ class GroundTelescope(Sensor):
                  height_m: float = 103.8, sigma_arcsec: float = 1.5, measure_range: bool = False,
                  range_alpha: float = 0.05, elevation_mask_deg: float = 10.0,
                  epoch: str = "2026-01-01T00:00:00Z", moon_phase_deg: float = 0.0,
-                 frame_model: str = "equatorial", measurement: str = "azel",
+                 frame_model: str = "equatorial", angles: str = "azel",
                  visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
@@ -95,8 +96,8 @@ class GroundTelescope(Sensor):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         self.epoch = epoch
 
-        self.measurement = check_choice(self, "measurement", measurement, ("azel", "radec"))
-        base = ("azimuth", "elevation") if self.measurement == "azel" else ("right_ascension", "declination")
+        self.angles = check_choice(self, "angles", angles, ("azel", "radec"))
+        base = ("azimuth", "elevation") if self.angles == "azel" else ("right_ascension", "declination")
         self.names = base + ("range",) if measure_range else base
         self.angular = (True, False, False) if measure_range else (True, False)
         self._frames = FRAME_MODELS[frame_model](self._epoch, self.moon_phase_deg)
@@ -151,12 +152,12 @@ class GroundTelescope(Sensor):
         return np.einsum("nij,nj->ni", a, r) - b
 
     def measure(self, states: np.ndarray, t) -> np.ndarray:
-        """Noise-free (azimuth, elevation[, range]) or, with measurement = "radec", (RA, Dec[, range]):
+        """Noise-free (azimuth, elevation[, range]) or, with angles = "radec", (RA, Dec[, range]):
         states (N, 6), t scalar or (N,) TU -> (N, m).
 
         Azimuth in [0, 2pi) rad, elevation in [-pi/2, pi/2] rad, range in LU.
         """
-        if self.measurement == "radec":
+        if self.angles == "radec":
             az, el, rng = self._radec_range(states, t)
         else:
             az, el, rng = neu_to_azelr(self.topocentric(states, t))
@@ -168,7 +169,7 @@ class GroundTelescope(Sensor):
         """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x true range (LU)."""
         x = self._check_states(states)
         out = np.full((x.shape[0], len(self.names)), self._sigma_rad)
-        if self.measurement == "radec":
+        if self.angles == "radec":
             out[:, 0] /= np.cos(self._radec_range(x, t)[1])
         if self.measure_range:
             out[:, 2] = self.range_alpha * np.linalg.norm(self.topocentric(x, t), axis=1)
@@ -216,7 +217,7 @@ class GroundTelescope(Sensor):
         if not np.all(np.isfinite(ang[:, :2])):
             raise MeasurementError("sensor 'ground-telescope': angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
-        if self.measurement == "radec":
+        if self.angles == "radec":
             rot, _ = self._frames.synodic_to_eci(tt)
             u = unit_of_radec(ang[:, 0], ang[:, 1])
             return u @ rot if tt.ndim == 0 else np.einsum("nji,nj->ni", rot, u)
@@ -319,8 +320,8 @@ class GroundTelescope(Sensor):
         values = z + rng.standard_normal(z.shape) * s
         values[:, 0] = wrap_azimuth(values[:, 0])
         meta = {"sensor": "ground-telescope", "epoch": self.epoch}
-        if self.measurement == "radec":
-            meta["measurement"] = "radec"
+        if self.angles == "radec":
+            meta["angles"] = "radec"
         return MeasurementSet(tt, values, s, self.names, meta)
 
 

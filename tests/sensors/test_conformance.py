@@ -10,7 +10,7 @@ from cistrack.plugins.sensors.schedules import (
 from cistrack.testing import parametrize_with_checks
 
 
-@parametrize_with_checks([GroundTelescope, GroundTelescope(measure_range=True), GroundTelescope(measurement="radec"),
+@parametrize_with_checks([GroundTelescope, GroundTelescope(measure_range=True), GroundTelescope(angles="radec"),
                           GroundTelescope(visibility={"sun_max_elevation_deg": -12.0, "limiting_magnitude": 18.0}),
                           SpaceTelescope,
                           SpaceTelescope(measure_range=True, measure_range_rate=True), PhasedSchedule,

@@ -247,12 +247,12 @@ def test_a_distant_target_rises_in_the_east_and_sets_in_the_west():
 
 
 def test_radec_is_the_direction_of_the_azel_line_of_sight_in_eci_axes():
-    """RA/Dec of measurement = "radec" point where the az/el telescope at the same site looks,
+    """RA/Dec of angles = "radec" point where the az/el telescope at the same site looks,
     expressed in the frame model's ECI axes (right ascension of the synodic x axis = moon_phase + t)."""
     from cistrack.testing.fixtures import lunar_distance_states
     x, t, phase = lunar_distance_states(4), 0.37, 25.0
     azel = GroundTelescope(moon_phase_deg=phase)
-    radec = GroundTelescope(moon_phase_deg=phase, measurement="radec")
+    radec = GroundTelescope(moon_phase_deg=phase, angles="radec")
     los = azel.line_of_sight(azel.measure(x, t), t)
     a = np.radians(phase) + t
     eci = los @ np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]]).T
