@@ -126,6 +126,9 @@ class SpaceTelescope(Sensor):
             dynamics = default_registry().create("dynamics", "cr3bp")
         if not isinstance(dynamics, Dynamics):
             self._fail("dynamics", dynamics, "must be a dynamics model (a scenario hands the run's own)")
+        own = getattr(dynamics, "epoch", None)
+        if isinstance(own, str) and parse_utc(own) != self._epoch:
+            self._fail("dynamics", dynamics, f"its epoch {own} must be the sensor's epoch {epoch}")
         self.dynamics = dynamics
         self.orbit, self.state_km, self.state_epoch = orbit, state_km, state_epoch
         x0, t0 = self._start()

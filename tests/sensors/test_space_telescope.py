@@ -98,6 +98,13 @@ def test_bad_parameters_are_refused_naming_the_parameter(params, named):
         SpaceTelescope(**params)
 
 
+def test_a_dynamics_model_with_another_epoch_is_refused():
+    from cistrack.plugin.registry import default_registry
+    eph = default_registry().create("dynamics", "ephemeris", epoch="2026-02-01T00:00:00Z")
+    with pytest.raises(ParameterError, match="epoch"):
+        SpaceTelescope(dynamics=eph, epoch="2026-01-01T00:00:00Z")
+
+
 def test_an_observer_orbit_that_hits_the_moon_is_refused():
     km = [384_400.0 * (1 - 0.0121505), 0.0, 2000.0, 0.0, 0.0, 0.0]    # 2000 km above the Moon's centre, at rest
     sensor = SpaceTelescope(orbit="", state_km=km)
