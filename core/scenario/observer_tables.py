@@ -32,12 +32,9 @@ def observer_specs(data: dict, source: str, reg: Registry, epoch_text: Any,
     order); {} when the scenario has a single ``[sensor]``. Refuses both forms at once, a table
     that is not a table, and observers measuring different components."""
     if "sensors" not in data:
-        if "sensor" not in data and "measurements" not in data:
+        if "sensor" not in data:
             raise ConfigError(f"{source}: missing table [sensor] (it names the sensor component, e.g. "
                               f"name = 'ground-telescope'), or [sensors.<key>] tables for several observers")
-        if "sensor" not in data:
-            raise ConfigError(f"{source}: missing table [sensor] (it names the sensor that took the "
-                              f"measurements, e.g. name = 'real-telescope')")
         return {}
     if "sensor" in data:
         raise ConfigError(f"{source}: give either one [sensor] table or [sensors.<key>] tables, not both")
