@@ -71,3 +71,18 @@ def test_sensor_and_sensors_together_are_refused():
 def test_an_unknown_iod_observer_is_refused():
     with pytest.raises(ConfigError, match="iod_observer"):
         load_scenario("example-1-ground-space", overrides={"run": {"iod_observer": "goldstone"}})
+
+
+@pytest.mark.parametrize("sensors, match", [({}, "one table per observer"),
+                                            ({"dro": "space-telescope"}, "one table per observer")])
+def test_sensors_must_hold_one_table_per_observer(sensors, match):
+    with pytest.raises(ConfigError, match=match):
+        load_scenario("example-1-ground-space", overrides={"sensors": sensors})
+
+
+def test_a_scenario_without_any_sensor_is_refused_naming_both_forms():
+    raw = dict(load_scenario("example-1").raw)
+    raw.pop("sensor")
+    from cistrack.scenario.loading import parse_scenario
+    with pytest.raises(ConfigError, match=r"missing table \[sensor\].*\[sensors.<key>\]"):
+        parse_scenario(raw)
