@@ -9,7 +9,23 @@ from cistrack.interfaces.component import Component
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.schedule import Pass
 
-__all__ = ["Sensor"]
+__all__ = ["Sensor", "passes_from_mask"]
+
+
+def passes_from_mask(times: np.ndarray, mask: np.ndarray) -> list[Pass]:
+    """The contiguous runs of True in ``mask`` (K,) as passes between the sample ``times`` (K,) TU."""
+    out: list[Pass] = []
+    k, n = 0, mask.shape[0]
+    while k < n:
+        if mask[k]:
+            j = k
+            while j + 1 < n and mask[j + 1]:
+                j += 1
+            out.append(Pass(float(times[k]), float(times[j])))
+            k = j + 1
+        else:
+            k += 1
+    return out
 
 
 class Sensor(Component):
@@ -83,20 +99,7 @@ class Sensor(Component):
 
         The default takes contiguous runs of visible samples; sensors may refine the edges.
         """
-        vis = np.asarray(self.visible(states, times), dtype=bool)
-        out: list[Pass] = []
-        k = 0
-        n = vis.shape[0]
-        while k < n:
-            if vis[k]:
-                j = k
-                while j + 1 < n and vis[j + 1]:
-                    j += 1
-                out.append(Pass(float(times[k]), float(times[j])))
-                k = j + 1
-            else:
-                k += 1
-        return out
+        return passes_from_mask(times, np.asarray(self.visible(states, times), dtype=bool))
 
     @abstractmethod
     def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:

@@ -91,7 +91,7 @@ def typed(value: Any, types_: Any, source: str, where: str, key: str) -> Any:
 
 
 def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry,
-                    epoch_text: Any = None) -> ComponentSpec:
+                    epoch_text: Any = None, dynamics_table: Any = None) -> ComponentSpec:
     if isinstance(table, str):
         table = {"name": table}
     if not isinstance(table, dict):
@@ -118,6 +118,13 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
         if epoch_text is not None:
             params["epoch"] = units.format_utc(units.parse_utc(epoch_text))
     out: dict[str, Any] = {}
+    if kind == "sensor" and "dynamics" in specs and _union_component_kind(specs["dynamics"].annotation) == "dynamics":
+        # A sensor that moves under the run's dynamics (a space telescope) gets the scenario's
+        # model (and, through it, the epoch) unless its table names its own.
+        dyn = params.pop("dynamics", dynamics_table)
+        if dyn is not None:
+            out["dynamics"] = component_spec(dyn, "dynamics", f"{where[:-1]}.dynamics]" if where.endswith("]")
+                                             else f"{where}.dynamics", source, reg, epoch_text=epoch_text)
     shared = dict(getattr(factory, "nested_params", None) or {})
     # nested components last, so that the values handed on to them are checked and converted first
     for key, value in sorted(params.items(), key=lambda kv: kv[0] in shared):

@@ -92,23 +92,21 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
             grid_states = truth.states_at(grid)
         except ConfigError as exc:
             raise ConfigError(f"{scenario.source}: {exc}") from None
-        passes = sensor.passes(grid, grid_states)
-        if passes and passes[0].start <= grid[0] + 1e-12:
-            # A pass already in progress at t = 0 is cut short; the target is acquired at its
-            # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
-            say(f"skipping the pass in progress at t = 0 (visible for its first "
-                f"{units.tu_to_hours(passes[0].end - grid[0]):.1f} h only)")
-            passes = passes[1:]
         if schedule is None:
             raise ConfigError(f"{scenario.source}: simulated measurements need a [schedule] table")
-        times = plan_measurement_times(scenario, schedule, passes, rngs["schedule"])
-        if times.size == 0:
-            raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
-                              f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
-        say(f"{len(passes)} passes, {times.size} measurements scheduled")
-        measurements = sensor.simulate(truth.states_at(times), times, rngs["measurements"])
-    from cistrack.astro.site_network import one_per_time
-    iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
+        if scenario.observers:  # several observers: each plans and measures, one network fuses them
+            from cistrack.runs.network import simulate_network
+            seen = simulate_network(scenario, reg, truth, grid, grid_states, rngs, say)
+            measurements, sensor, passes = seen.measurements, seen.sensor, seen.passes
+        else:
+            measurements, passes = _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say)
+    if scenario.observers and truth is not None:
+        from cistrack.runs.network import iod_input
+        iod_measurements, iod_sensor = iod_input(scenario, measurements, sensor)
+        say(f"the IOD works from observer {scenario.iod_observer!r} ({len(iod_measurements)} measurements)")
+    else:
+        from cistrack.astro.site_network import one_per_time
+        iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
     cloud = estimate_iod(scenario, iod, iod_measurements, iod_sensor, rngs["iod"], truth is not None)
     say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or scenario_run_id(scenario, seed)
@@ -117,6 +115,24 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                      truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
                      output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth)
     return ctx, rngs
+
+
+def _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say):
+    """(measurements, passes) of the scenario's one sensor: its passes of the truth (a pass in
+    progress at t = 0 skipped), the schedule's times in them, noisy measurements at those times."""
+    passes = sensor.passes(grid, grid_states)
+    if passes and passes[0].start <= grid[0] + 1e-12:
+        # A pass already in progress at t = 0 is cut short; the target is acquired at its
+        # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
+        say(f"skipping the pass in progress at t = 0 (visible for its first "
+            f"{units.tu_to_hours(passes[0].end - grid[0]):.1f} h only)")
+        passes = passes[1:]
+    times = plan_measurement_times(scenario, schedule, passes, rngs["schedule"])
+    if times.size == 0:
+        raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
+                          f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
+    say(f"{len(passes)} passes, {times.size} measurements scheduled")
+    return sensor.simulate(truth.states_at(times), times, rngs["measurements"]), passes
 
 
 def _pass_index(passes, t: float) -> int:

@@ -48,6 +48,7 @@ from cistrack.scenario.builtin_scenarios import builtin_scenario_path, builtin_s
 from cistrack.plugin.component_tables import ComponentSpec, check_keys, component_spec, example_name, typed
 from cistrack.evaluation.custody import CustodyRule
 from cistrack.scenario.custody_table import custody_rule
+from cistrack.scenario.observer_tables import observer_specs
 from cistrack.scenario.limits import check_memory, check_path_component, check_seed
 from cistrack.scenario import toml_input
 from cistrack.scenario.work_limits import check_epoch_span, check_steps
@@ -69,10 +70,11 @@ COMPONENT_TABLES: dict[str, str] = {
 """Scenario table -> registry kind of the component it builds."""
 
 _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "custody", "run",
-             "measurements", *COMPONENT_TABLES}
-_REQUIRED_TABLES = ("dynamics", "sensor", "iod", "filter")
+             "measurements", "sensors", *COMPONENT_TABLES}
+_REQUIRED_TABLES = ("dynamics", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
-_RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame"}
+_RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame",
+             "iod_observer"}
 _MEAS_KEYS = {"file", "reader"}
 
 
@@ -97,6 +99,8 @@ class Scenario:
     recording_frame: str = "synodic"
     measurements_file: Path | None = None
     measurements_reader: ComponentSpec | None = None
+    observers: dict[str, ComponentSpec] = field(default_factory=dict)
+    iod_observer: str = ""
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
 
@@ -197,15 +201,19 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if not np.isfinite(duration) or duration <= 0:
         raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
 
+    truth = data.get("truth", {})
+    if not isinstance(truth, dict):
+        raise ConfigError(f"{source}: 'truth' must be a table")
+    moving = truth.get("dynamics", data.get("dynamics"))   # what moves an observer in space
     components: dict[str, ComponentSpec] = {}
     for table, kind in COMPONENT_TABLES.items():
         if table in data:
             components[table] = component_spec(data[table], kind, f"[{table}]", source, reg,
-                                                epoch_text=epoch_text)
+                                                epoch_text=epoch_text, dynamics_table=moving)
+    observers = observer_specs(data, source, reg, epoch_text, moving)
+    if observers:
+        components["sensor"] = next(iter(observers.values()))
 
-    truth = data.get("truth", {})
-    if not isinstance(truth, dict):
-        raise ConfigError(f"{source}: 'truth' must be a table")
     check_keys(truth, _TRUTH_KEYS, source, "[truth]")
     truth_orbit = truth.get("orbit")
     truth_state = None
@@ -263,6 +271,10 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         check_steps(duration * 24.0 / pe, f"{source}: [run]: key 'predict_every_hours' = {pe:g}",
                     f"a prediction every {pe:g} h over duration_days = {duration:g}")
     ewp = typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
+    iod_obs = typed(run.get("iod_observer", next(iter(observers), "")), str, source, "[run]", "iod_observer")
+    if iod_obs and iod_obs not in observers:
+        raise ConfigError(f"{source}: [run]: key 'iod_observer' = {iod_obs!r} names no [sensors] table; "
+                          f"observers: {', '.join(observers) or '(none: the scenario has one [sensor])'}")
     rframe = typed(run.get("recording_frame", "synodic"), str, source, "[run]", "recording_frame")
     if rframe not in ("synodic", "inertial"):
         raise ConfigError(f"{source}: [run]: key 'recording_frame' = {rframe!r} must be 'synodic' (the rotating "
@@ -272,7 +284,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
                     truth_dynamics=truth_dyn, custody=custody, truth_grid_minutes=grid,
                     predict_every_hours=pe, end_with_prediction=ewp, recording_frame=rframe,
                     measurements_file=measurements_file, measurements_reader=measurements_reader,
-                    source=source, raw=copy.deepcopy(data))
+                    observers=observers, iod_observer=iod_obs, source=source, raw=copy.deepcopy(data))
 
 
 # -- validation helpers --------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cistrack.studies.architectures import architectures_of
 from cistrack.studies.calibration import LEVEL, group_calibration
 from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
@@ -191,7 +192,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
     finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
               "pos_err_km", "vel_err_ms", "entropy"]
-    cols = ["scenario", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
+    arch = architectures_of(specs)
+    cols = ["scenario", "architecture", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
             "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
             "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY,
             "bound_pos_km", "efficiency_final", "efficiency_by_pass"]
@@ -203,7 +205,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     for (sc, iod, flt), sums in sorted(groups.items()):
         kept = sum(1 for x in sums if x.custody_kept)
         truthless = not any(x.has_truth for x in sums)    # no custody to speak of
-        row = {"scenario": sc, "iod": iod, "filter": flt, "runs": len(sums),
+        row = {"scenario": sc, "architecture": arch.get(sc), "iod": iod, "filter": flt, "runs": len(sums),
                "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
                "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
                                                                   if not x.custody_kept]),
@@ -295,7 +297,8 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                    "(1 = the best the data allow; cistrack.evaluation.information_bound):", "",
                    *[f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: {r['efficiency_text']}" for r in rows]]
                   if has_truth else [])
-    md_text = "\n".join([f"# {title}", "", *md, "", *custody_markdown(rows), *calibration, *efficiency, "", *custody,
+    observers = ["## Observers", "", *[f"- {sc}: {a}" for sc, a in arch.items()], ""]
+    md_text = "\n".join([f"# {title}", "", *md, "", *observers, *custody_markdown(rows), *calibration, *efficiency, "", *custody,
                          *diverged])
     write_text_atomic(rep_dir / "summary.md", md_text + "\n")
     files.append(rep_dir / "summary.md")

@@ -33,12 +33,16 @@ def fresh(component: Any) -> Any:
 
 
 def params_equal(a: dict, b: dict) -> bool:
-    """Parameter dicts equal, comparing arrays element-wise."""
+    """Parameter dicts equal, comparing arrays element-wise and nested components (such as a
+    sensor's dynamics model) by type and parameters."""
     if set(a) != set(b):
         return False
     for k in a:
         x, y = a[k], b[k]
-        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+        if callable(getattr(x, "get_params", None)) and type(x) is type(y) and x is not y:
+            if not params_equal(x.get_params(), y.get_params()):
+                return False
+        elif isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
             if not np.array_equal(np.asarray(x), np.asarray(y)):
                 return False
         elif x != y and not (isinstance(x, float) and isinstance(y, float) and np.isnan(x) and np.isnan(y)):

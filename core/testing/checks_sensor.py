@@ -107,6 +107,26 @@ def check_observer_and_visibility_shapes(sensor) -> None:
     require(v.shape == (len(x),) and v.dtype == bool, f"visible() returned {v.dtype} shape {v.shape}, expected (N,) bool")
 
 
+def check_observer_path_consistent(sensor) -> None:
+    """observer_position() at a time is the same whatever was asked before (two fresh copies
+    asked the same times in opposite orders agree exactly: a sensor that moves, e.g. on its own
+    orbit, must not depend on its history), and one call on (K,) times equals K scalar calls
+    to 1e-9 LU; every position is finite and in LU."""
+    ts = T_CHECK + np.array([0.9, 0.0, 0.45, 8.0, 0.2])   # 8 TU: past 32 days
+    order = np.argsort(ts)
+    up, down = round_trip(sensor), round_trip(sensor)
+    rising = {float(ts[i]): np.asarray(up.observer_position(float(ts[i])), dtype=float) for i in order}
+    falling = {float(ts[i]): np.asarray(down.observer_position(float(ts[i])), dtype=float) for i in order[::-1]}
+    diff = max(float(np.max(np.abs(rising[t] - falling[t]))) for t in rising)
+    require(diff == 0.0, f"observer_position() depends on the times asked before (off by {diff:.3g} LU)")
+    whole = np.asarray(sensor.observer_position(ts[order]), dtype=float)
+    require(whole.shape == (len(ts), 3) and np.all(np.isfinite(whole)),
+            f"observer_position() of (K,) times returned shape {whole.shape} or non-finite values")
+    require(np.all(np.linalg.norm(whole, axis=1) < 10.0), "the observer leaves cislunar space: km instead of LU?")
+    ok, diff = close(np.stack([rising[float(t)] for t in ts[order]]), whole, 0, 1e-9)
+    require(ok, f"observer_position() of (K,) times differs from K scalar calls by {diff:.3g} LU")
+
+
 def check_residual_wraps_angles(sensor) -> None:
     ang = np.asarray(sensor.angular, dtype=bool)
     if not ang.any():
@@ -192,6 +212,7 @@ SENSOR_CHECKS = [
     ("measure_vectorised_matches_loop", check_measure_vectorised_matches_loop),
     ("line_of_sight_consistent", check_line_of_sight_consistent),
     ("observer_and_visibility_shapes", check_observer_and_visibility_shapes),
+    ("observer_path_consistent", check_observer_path_consistent),
     ("residual_wraps_angles", check_residual_wraps_angles),
     ("simulate_noise_matches_sigmas", check_simulate_noise_matches_sigmas),
     ("simulate_reproducible", check_simulate_reproducible),

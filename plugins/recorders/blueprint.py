@@ -37,7 +37,8 @@ and most of its 3-sigma ellipsoids."""
 RUN_VIEW_CONTENTS = ("/world/particles", "/world/components", "/world/estimate", "/world/truth/position",
                      "/world/truth/trajectory", "/world/estimate_frame/**")
 SYSTEM_VIEW_CONTENTS = ("/world/earth", "/world/moon", "/world/libration", "/world/truth/**",
-                        "/world/estimate", "/world/observer", "/world/particles", "/world/line_of_sight")
+                        "/world/estimate", "/world/observer", "/world/particles", "/world/line_of_sight",
+                        "/world/observers/**")
 
 
 def _whole_run() -> list:

@@ -24,6 +24,7 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 ``world/estimate_frame/...``    ``line_of_sight``: the line of sight near the estimate, frame units
 ``world/observer``              the observer's position at each step
 ``world/line_of_sight``         the measured line of sight at update steps (cleared otherwise)
+``world/observers/<key>/...``   every observer, its lines of sight and exclusion cones (observers_view)
 ``metrics/<name>``              every finite metric of ``step.metrics`` (steps that carry metrics)
 ``diagnostics/<name>``          the filter's numeric diagnostics on the same steps
 ``components/weights``          the mixture weights, one series per component
@@ -61,6 +62,7 @@ from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .blueprint import default_blueprint
 from .estimate_frame import line_through_frame
+from .observers_view import log_observers
 from .run_extents import system_points_km, utc_range_s
 from .run_view_log import log_estimate_frame, log_run_view_styles, log_series
 from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
@@ -439,6 +441,7 @@ class RerunRecorder(Component):
         else:
             rec.log("world/line_of_sight", rr.Clear(recursive=False))
             rec.log("world/estimate_frame/line_of_sight", rr.Clear(recursive=False))
+        log_observers(rec, run, step, view, np.asarray(mix.mean[:3], dtype=float))  # every observer, its cones
         if step.metrics:  # one metrics row per results-table row (priors of updates have none)
             _log_numbers(rec, "metrics", step.metrics)
             _log_numbers(rec, "diagnostics", step.diagnostics)

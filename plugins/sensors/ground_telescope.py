@@ -16,10 +16,15 @@ from cistrack.interfaces.component import check_choice, check_positive, check_ra
 from cistrack.errors import MeasurementError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Pass, Sensor
+from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
 
 from .frames import FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, wrap_azimuth
+from .input_checks import checked_states
+from .space_frames import IdealSky
+from .space_geometry import radec_of, unit_of_radec
+from .visibility_rules import sky_rules
 
 __all__ = ["GroundTelescope"]
 
@@ -51,13 +56,24 @@ class GroundTelescope(Sensor):
     frame_model : str
         Name of the synodic-to-Earth-fixed model, one of ``FRAME_MODELS`` ("equatorial", the
         paper's). The real sky is the sensor "real-telescope" (docs/real-sky.md).
+    angles : str
+        "azel" (the default) or "radec": topocentric right ascension and declination in the frame
+        model's ECI axes (geometric, as the angles of "azel"), the angles a space telescope under
+        the CR3BP measures, so that simulated ground and space observers make one network
+        (docs/space-observers.md; not the ICRF of real astrometry: that is "real-telescope").
+        Sigma on RA is sigma_arcsec / cos(Dec).
+    visibility : dict or None
+        Rules a space telescope also applies, off unless given (docs/space-observers.md): a table of
+        sun_exclusion_deg, moon_exclusion_deg, sun_max_elevation_deg, limiting_magnitude,
+        diameter_m, albedo, max_range_km. Pass edges are then the samples' (no bisection).
     """
 
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
                  height_m: float = 103.8, sigma_arcsec: float = 1.5, measure_range: bool = False,
                  range_alpha: float = 0.05, elevation_mask_deg: float = 10.0,
                  epoch: str = "2026-01-01T00:00:00Z", moon_phase_deg: float = 0.0,
-                 frame_model: str = "equatorial") -> None:
+                 frame_model: str = "equatorial", angles: str = "azel",
+                 visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
         self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
@@ -80,7 +96,9 @@ class GroundTelescope(Sensor):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         self.epoch = epoch
 
-        self.names = ("azimuth", "elevation", "range") if measure_range else ("azimuth", "elevation")
+        self.angles = check_choice(self, "angles", angles, ("azel", "radec"))
+        base = ("azimuth", "elevation") if self.angles == "azel" else ("right_ascension", "declination")
+        self.names = base + ("range",) if measure_range else base
         self.angular = (True, False, False) if measure_range else (True, False)
         self._frames = FRAME_MODELS[frame_model](self._epoch, self.moon_phase_deg)
         self._neu = neu_basis(self.latitude_deg, self.longitude_deg)          # (3, 3) ECEF -> NEU
@@ -88,6 +106,9 @@ class GroundTelescope(Sensor):
                                           self.height_m) / LU_KM             # (3,) LU
         self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
         self._mask_rad = np.radians(self.elevation_mask_deg)
+        self.visibility = visibility
+        self._rules = sky_rules(self, visibility)
+        self._sky = IdealSky(self._epoch, self.moon_phase_deg)
 
     # -- geometry -------------------------------------------------------------------------------
     def _affine(self, t):
@@ -99,12 +120,7 @@ class GroundTelescope(Sensor):
 
     @staticmethod
     def _check_states(states) -> np.ndarray:
-        x = np.asarray(states, dtype=float)
-        if x.ndim != 2 or x.shape[1] != 6:
-            raise MeasurementError(f"sensor 'ground-telescope': states must have shape (N, 6), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise MeasurementError("sensor 'ground-telescope': states contain NaN or infinity")
-        return x
+        return checked_states("ground-telescope", states)
 
     @staticmethod
     def _check_times(t, n: int) -> np.ndarray:
@@ -136,12 +152,15 @@ class GroundTelescope(Sensor):
         return np.einsum("nij,nj->ni", a, r) - b
 
     def measure(self, states: np.ndarray, t) -> np.ndarray:
-        """Noise-free (azimuth, elevation[, range]): states (N, 6), t scalar or (N,) TU -> (N, m).
+        """Noise-free (azimuth, elevation[, range]) or, with angles = "radec", (RA, Dec[, range]):
+        states (N, 6), t scalar or (N,) TU -> (N, m).
 
         Azimuth in [0, 2pi) rad, elevation in [-pi/2, pi/2] rad, range in LU.
         """
-        neu = self.topocentric(states, t)
-        az, el, rng = neu_to_azelr(neu)
+        if self.angles == "radec":
+            az, el, rng = self._radec_range(states, t)
+        else:
+            az, el, rng = neu_to_azelr(self.topocentric(states, t))
         if self.measure_range:
             return np.stack([az, el, rng], axis=1)
         return np.stack([az, el], axis=1)
@@ -150,14 +169,36 @@ class GroundTelescope(Sensor):
         """One-sigma noise (N, m): angles sigma_arcsec in rad; range range_alpha x true range (LU)."""
         x = self._check_states(states)
         out = np.full((x.shape[0], len(self.names)), self._sigma_rad)
+        if self.angles == "radec":
+            out[:, 0] /= np.cos(self._radec_range(x, t)[1])
         if self.measure_range:
             out[:, 2] = self.range_alpha * np.linalg.norm(self.topocentric(x, t), axis=1)
         return out
 
+    def _radec_range(self, states, t):
+        """Topocentric RA [0, 2pi), Dec (rad) and range (LU) in the frame model's ECI axes, (N,) each."""
+        x = self._check_states(states)
+        tt = self._check_times(t, x.shape[0])
+        rot, _ = self._frames.synodic_to_eci(tt)
+        d = x[:, :3] - self.observer_position(tt)
+        p = d @ rot.T if tt.ndim == 0 else np.einsum("nij,nj->ni", rot, d)
+        ra, dec = radec_of(p)
+        return ra, dec, np.linalg.norm(p, axis=1)
+
     def visible(self, states: np.ndarray, t) -> np.ndarray:
         """Elevation at or above the mask: states (N, 6), t scalar or (N,) -> (N,) bool."""
         neu = self.topocentric(states, t)
-        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1])) >= self._mask_rad
+        up = np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1])) >= self._mask_rad
+        return up & self._sky_allows(states, t) if self._rules.active else up
+
+    def _sky_allows(self, states, t) -> np.ndarray:
+        """The ``visibility`` rules, in synodic axes (km): (N,) bool."""
+        x, tt = self._check_states(states), self._check_times(t, np.shape(states)[0])
+        rot = np.swapaxes(self._sky.rotation(tt), 1, 2)               # inertial -> synodic, (K, 3, 3)
+        bodies = {k: np.einsum("kij,kj->ki", rot, v) for k, v in self._sky.bodies_km(tt).items()}
+        obs = np.atleast_2d(self.observer_position(tt)) * LU_KM
+        up = np.atleast_2d(self._affine(tt)[0][..., 2, :])
+        return self._rules.allowed(x[:, :3] * LU_KM - obs, obs, bodies, self._sky.radii_km, up)
 
     def observer_position(self, t) -> np.ndarray:
         """Observer position in the synodic frame, LU: t scalar -> (3,), (K,) -> (K, 3)."""
@@ -176,6 +217,10 @@ class GroundTelescope(Sensor):
         if not np.all(np.isfinite(ang[:, :2])):
             raise MeasurementError("sensor 'ground-telescope': angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
+        if self.angles == "radec":
+            rot, _ = self._frames.synodic_to_eci(tt)
+            u = unit_of_radec(ang[:, 0], ang[:, 1])
+            return u @ rot if tt.ndim == 0 else np.einsum("nji,nj->ni", rot, u)
         u = azel_to_unit_neu(ang[:, 0], ang[:, 1])
         a, _ = self._affine(tt)
         if tt.ndim == 0:
@@ -239,6 +284,8 @@ class GroundTelescope(Sensor):
         if tt.size == 0:
             return []
         vis = self.visible(x, tt)
+        if self._rules.active:
+            return passes_from_mask(tt, vis)
         change = np.flatnonzero(vis[1:] != vis[:-1])           # between change and change + 1
         rise_k = change[vis[change + 1]]
         set_k = change[vis[change]]
@@ -272,8 +319,10 @@ class GroundTelescope(Sensor):
         s = self.sigmas(x, tt)
         values = z + rng.standard_normal(z.shape) * s
         values[:, 0] = wrap_azimuth(values[:, 0])
-        return MeasurementSet(tt, values, s, self.names,
-                              {"sensor": "ground-telescope", "epoch": self.epoch})
+        meta = {"sensor": "ground-telescope", "epoch": self.epoch}
+        if self.angles == "radec":
+            meta["angles"] = "radec"
+        return MeasurementSet(tt, values, s, self.names, meta)
 
 
 @hookimpl

@@ -33,6 +33,10 @@ from cistrack.astro.sites import Site
 from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
+from .input_checks import checked_states, checked_times
+from .space_frames import RealSky
+from .visibility_rules import sky_rules
+
 __all__ = ["RealTelescope"]
 
 _MEASUREMENTS = ("azel", "radec")
@@ -83,6 +87,8 @@ class RealTelescope(Sensor):
         Site relative humidity for refraction, from 0 to 1.
     wavelength_um : float
         Effective observing wavelength for refraction, micrometres.
+    visibility : dict or None
+        Sky rules, off unless given, as for "ground-telescope" (docs/space-observers.md); DE421 Sun.
     """
 
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
@@ -93,7 +99,7 @@ class RealTelescope(Sensor):
                  diurnal_aberration: bool | None = None, refraction: bool = False,
                  polar_motion: bool = True, ut1: bool = True, pressure_hpa: float = -1.0,
                  temperature_c: float = 10.0, relative_humidity: float = 0.5,
-                 wavelength_um: float = 0.55) -> None:
+                 wavelength_um: float = 0.55, visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
         self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
@@ -145,6 +151,7 @@ class RealTelescope(Sensor):
         self._neu = neu_basis(self._site)
         self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
         self._mask_rad = np.radians(self.elevation_mask_deg)
+        self.visibility, self._rules = visibility, sky_rules(self, visibility)
         self._build()
 
     def _bool(self, name: str, value) -> bool:
@@ -178,24 +185,10 @@ class RealTelescope(Sensor):
 
     # -- validation -----------------------------------------------------------------------------
     def _check_states(self, states) -> np.ndarray:
-        x = np.asarray(states, dtype=float)
-        if x.ndim != 2 or x.shape[1] != 6:
-            raise MeasurementError(f"sensor 'real-telescope': states must have shape (N, 6), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise MeasurementError("sensor 'real-telescope': states contain NaN or infinity")
-        return x
+        return checked_states("real-telescope", states)
 
     def _check_times(self, t, n: int) -> np.ndarray:
-        tt = np.asarray(t, dtype=float)
-        if not np.all(np.isfinite(tt)):
-            raise MeasurementError("sensor 'real-telescope': times contain NaN or infinity")
-        if tt.ndim == 0:
-            return tt
-        tt = tt.reshape(-1)
-        if tt.shape[0] != n:
-            raise MeasurementError(f"sensor 'real-telescope': t must be a scalar or have one time "
-                                   f"per row ({n}), got shape {np.shape(t)}")
-        return tt
+        return checked_times("real-telescope", t, n)
 
     # -- geometry -------------------------------------------------------------------------------
     def _gcrs(self, x: np.ndarray, tt: np.ndarray):
@@ -256,10 +249,15 @@ class RealTelescope(Sensor):
         m = self._neu @ obs.gcrs_to_itrs                                 # (K, 3, 3)
         d = r - obs.position_km
         neu = np.einsum("kij,kj->ki", m, d) if m.shape[0] == d.shape[0] else d @ m[0].T
-        return np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
+        el = np.arctan2(neu[:, 2], np.hypot(neu[:, 0], neu[:, 1]))
+        if not self._rules.active:
+            return el
+        sky = RealSky(self._frame)       # the visibility rules: a target they refuse is "below"
+        ok = self._rules.allowed(d, obs.position_km, sky.bodies_km(tt), sky.radii_km, m[:, 2, :])
+        return np.where(ok, el, -np.pi / 2)
 
     def visible(self, states: np.ndarray, t) -> np.ndarray:
-        """Geometric elevation at or above the mask: states (N, 6), t scalar or (N,) -> (N,) bool."""
+        """Geometric elevation at or above the mask (and the ``visibility`` rules): (N, 6), t -> (N,) bool."""
         x = self._check_states(states)
         return self._geometric_elevation(x, self._check_times(t, x.shape[0])) >= self._mask_rad
 

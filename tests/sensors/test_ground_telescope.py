@@ -244,3 +244,19 @@ def test_a_distant_target_rises_in_the_east_and_sets_in_the_west():
     (p,) = s.passes(times, states)
     az = np.degrees(s.measure(states[:2], np.array([p.start, p.end]))[:, 0])
     assert 0.0 < az[0] < 180.0 and 180.0 < az[1] < 360.0
+
+
+def test_radec_is_the_direction_of_the_azel_line_of_sight_in_eci_axes():
+    """RA/Dec of angles = "radec" point where the az/el telescope at the same site looks,
+    expressed in the frame model's ECI axes (right ascension of the synodic x axis = moon_phase + t)."""
+    from cistrack.testing.fixtures import lunar_distance_states
+    x, t, phase = lunar_distance_states(4), 0.37, 25.0
+    azel = GroundTelescope(moon_phase_deg=phase)
+    radec = GroundTelescope(moon_phase_deg=phase, angles="radec")
+    los = azel.line_of_sight(azel.measure(x, t), t)
+    a = np.radians(phase) + t
+    eci = los @ np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]]).T
+    ra = np.mod(np.arctan2(eci[:, 1], eci[:, 0]), 2 * np.pi)
+    dec = np.arcsin(eci[:, 2])
+    z = radec.measure(x, t)
+    assert np.allclose(z[:, 0], ra, atol=1e-12) and np.allclose(z[:, 1], dec, atol=1e-12)

@@ -1,0 +1,88 @@
+"""Scenarios with several observers ([sensors.<key>] tables): ground and space measurements fused
+in one run, the IOD from one observer's arc, refusals at validation."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack.errors import ConfigError
+from cistrack.runs.pipeline import prepare_run, run_scenario
+from cistrack.scenario.loading import load_scenario
+
+SMALL = {"iod": {"n_particles": 400}, "filter": {"n_particles": 400, "n_components": 3}, "duration_days": 2.5}
+
+
+@pytest.fixture(scope="module")
+def network_run():
+    return run_scenario(load_scenario("example-1-ground-space", overrides=SMALL), seed=3, keep_steps=True)
+
+
+def test_measurements_of_every_observer_reach_the_filter(network_run):
+    ms = network_run.context.measurements
+    assert set(ms.sites.tolist()) == {"texas", "dro"}
+    updated = {m.site for s in network_run.steps for m in s.group}
+    assert network_run.summary.status == "finished"
+    assert updated == {"texas", "dro"}
+
+
+def test_each_measurement_is_predicted_from_its_own_observer(network_run):
+    ctx = network_run.context
+    ms = ctx.measurements
+    for i in (int(np.flatnonzero(ms.sites == "texas")[0]), int(np.flatnonzero(ms.sites == "dro")[0])):
+        m = ms[i]
+        own = ctx.sensor.for_measurement(m)
+        assert own is ctx.sensor.members[m.site]
+        z = own.measure(ctx.truth.states_at(m.t), m.t)[0]
+        assert np.all(np.abs(own.residual(m.z, z)[:2]) < 6 * np.sqrt(np.diag(m.covariance))[:2])
+
+
+def test_the_iod_works_from_the_named_observer():
+    scen = load_scenario("example-1-ground-space", overrides=SMALL)
+    ctx, _ = prepare_run(scen, seed=3)
+    dro = ctx.measurements.times[ctx.measurements.sites == "dro"]
+    assert ctx.iod_cloud.epoch in set(dro.tolist())
+
+
+def test_an_observer_keeps_its_measurements_when_another_is_added_after_it():
+    one = load_scenario("example-1-ground-space", overrides={**SMALL, "run": {"iod_observer": "dro"}})
+    raw = dict(one.raw)
+    raw_sensors = {"dro": raw["sensors"]["dro"]}
+    alone = load_scenario("example-1-ground-space", overrides={**SMALL, "sensors": raw_sensors,
+                                                               "run": {"iod_observer": "dro"}})
+    a, _ = prepare_run(alone, seed=5)
+    b, _ = prepare_run(load_scenario("example-1-ground-space", overrides={
+        **SMALL, "sensors": {**raw_sensors, "texas": raw["sensors"]["texas"]}, "run": {"iod_observer": "dro"}}), seed=5)
+    first = b.measurements.subset(b.measurements.sites == "dro")
+    assert np.array_equal(a.measurements.values, first.values)
+
+
+def test_observers_measuring_different_components_are_refused():
+    with pytest.raises(ConfigError, match=r"\[sensors.dro\] measures right_ascension.*\[sensors.texas\] azimuth"):
+        load_scenario("example-1-ground-space", overrides={"sensors": {
+            "texas": {"name": "ground-telescope", "measure_range": True},
+            "dro": {"name": "space-telescope", "measure_range": True}}})
+
+
+def test_sensor_and_sensors_together_are_refused():
+    with pytest.raises(ConfigError, match="not both"):
+        load_scenario("example-1-ground-space", overrides={"sensor": {"name": "ground-telescope"}})
+
+
+def test_an_unknown_iod_observer_is_refused():
+    with pytest.raises(ConfigError, match="iod_observer"):
+        load_scenario("example-1-ground-space", overrides={"run": {"iod_observer": "goldstone"}})
+
+
+@pytest.mark.parametrize("sensors, match", [({}, "one table per observer"),
+                                            ({"dro": "space-telescope"}, "one table per observer")])
+def test_sensors_must_hold_one_table_per_observer(sensors, match):
+    with pytest.raises(ConfigError, match=match):
+        load_scenario("example-1-ground-space", overrides={"sensors": sensors})
+
+
+def test_a_scenario_without_any_sensor_is_refused_naming_both_forms():
+    raw = dict(load_scenario("example-1").raw)
+    raw.pop("sensor")
+    from cistrack.scenario.loading import parse_scenario
+    with pytest.raises(ConfigError, match=r"missing table \[sensor\].*\[sensors.<key>\]"):
+        parse_scenario(raw)
