@@ -101,17 +101,22 @@ def per_update_table(groups, steps) -> None:
             print(f"    pass {p}: " + "  ".join(cells))
 
 
+def _pass_ends(runs, steps, a: str, b: str) -> dict[int, list]:
+    """Pass number -> [(column a, column b) at the last update of that pass, one pair per run]."""
+    acc: dict[int, list] = defaultdict(list)
+    for _, d in runs:
+        t = steps[d]
+        last = {int(p): (x, y) for kind, p, x, y in zip(t["kind"], t["pass_index"], t[a], t[b]) if kind == "update"}
+        for p, v in last.items():
+            acc[p].append(v)
+    return acc
+
+
 def per_pass_precision_table(groups, steps) -> None:
     print("\nMedian position sigma / position error (km) at the last update of each pass (custody alone "
           "favours wide clouds; this shows what each filter pays for it):")
     for (scen, flt, iod), runs in sorted(groups.items()):
-        acc: dict[int, list] = defaultdict(list)
-        for _, d in runs:
-            t = steps[d]
-            last = {int(p): (sg, e) for kind, p, sg, e in zip(t["kind"], t["pass_index"], t["sigma_pos_km"],
-                                                               t["pos_err_km"]) if kind == "update"}
-            for p, v in last.items():
-                acc[p].append(v)
+        acc = _pass_ends(runs, steps, "sigma_pos_km", "pos_err_km")
         cells = [f"pass {p}: {np.median([v[0] for v in acc[p]]):.3g} / {np.median([v[1] for v in acc[p]]):.3g}"
                  for p in sorted(acc) if len(acc[p]) >= max(5, len(runs) // 5)]
         print(f"  {scen} {flt} {iod}: " + "  ".join(cells))
@@ -132,13 +137,7 @@ def efficiency_table(groups, steps, passes=range(1, 7)) -> None:
           + " | passes 3-6 pooled | end | RMS bound at end, km |")
     print("|---|---|---|---|" + "---|" * (len(passes) + 3))
     for (scen, flt, iod), runs in sorted(groups.items()):
-        acc: dict[int, list] = defaultdict(list)
-        for _, d in runs:
-            t = steps[d]
-            last = {int(p): (e, b) for kind, p, e, b in zip(t["kind"], t["pass_index"], t["pos_err_km"],
-                                                            t["bound_pos_km"]) if kind == "update"}
-            for p, v in last.items():
-                acc[p].append(v)
+        acc = _pass_ends(runs, steps, "pos_err_km", "bound_pos_km")
         cells = []
         for p in passes:
             r, _, n = _rms_ratio(acc.get(p, []))

@@ -110,6 +110,18 @@ def wrap_azimuth(az) -> np.ndarray:
     return np.where(a >= _TWO_PI, 0.0, a)
 
 
+def noisy_measurements(sensor, states: np.ndarray, times: np.ndarray,
+                       rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """``sensor``'s measurements of states (K, 6) at times (K,) TU with Gaussian noise of its
+    sigmas, the first angle (azimuth or right ascension) wrapped into [0, 2pi): (values, sigmas),
+    each (K, m)."""
+    z = sensor.measure(states, times)
+    s = sensor.sigmas(states, times)
+    values = z + rng.standard_normal(z.shape) * s
+    values[:, 0] = wrap_azimuth(values[:, 0])
+    return values, s
+
+
 def neu_to_azelr(neu: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Topocentric NEU vectors (..., 3) -> azimuth [0, 2pi), elevation [-pi/2, pi/2], range.
 

@@ -20,7 +20,7 @@ from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
 
-from .frames import FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, wrap_azimuth
+from .frames import (FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, noisy_measurements)
 from .input_checks import checked_states
 from .space_frames import IdealSky
 from .space_geometry import radec_of, unit_of_radec
@@ -315,10 +315,7 @@ class GroundTelescope(Sensor):
         if tt.shape[0] != x.shape[0]:
             raise MeasurementError(
                 f"sensor 'ground-telescope': {tt.shape[0]} times for {x.shape[0]} states")
-        z = self.measure(x, tt)
-        s = self.sigmas(x, tt)
-        values = z + rng.standard_normal(z.shape) * s
-        values[:, 0] = wrap_azimuth(values[:, 0])
+        values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "ground-telescope", "epoch": self.epoch}
         if self.angles == "radec":
             meta["angles"] = "radec"

@@ -33,6 +33,7 @@ from cistrack.astro.sites import Site
 from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
+from .frames import noisy_measurements
 from .input_checks import checked_states, checked_times
 from .space_frames import RealSky
 from .visibility_rules import sky_rules
@@ -311,11 +312,7 @@ class RealTelescope(Sensor):
         tt = np.asarray(times, dtype=float).reshape(-1)
         if tt.shape[0] != x.shape[0]:
             raise MeasurementError(f"sensor 'real-telescope': {tt.shape[0]} times for {x.shape[0]} states")
-        z = self.measure(x, tt)
-        s = self.sigmas(x, tt)
-        values = z + rng.standard_normal(z.shape) * s
-        values[:, 0] = np.mod(values[:, 0], 2.0 * np.pi)
-        values[:, 0] = np.where(values[:, 0] >= 2.0 * np.pi, 0.0, values[:, 0])
+        values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "real-telescope", "epoch": self.epoch, "measurement": self.measurement,
                 "frame": "real Earth-Moon rotating (DE421)", "corrections": self.corrections.applied(),
                 "site": {"latitude_deg": self.latitude_deg, "longitude_deg": self.longitude_deg,

@@ -28,6 +28,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
+from .frames import noisy_measurements
 from .input_checks import checked_states, checked_times
 from .observer_orbit import ObserverOrbit, observer_start
 from .space_frames import RealSky, sky_for
@@ -289,11 +290,7 @@ class SpaceTelescope(Sensor):
         tt = np.asarray(times, dtype=float).reshape(-1)
         if tt.shape[0] != x.shape[0]:
             raise MeasurementError(f"sensor 'space-telescope': {tt.shape[0]} times for {x.shape[0]} states")
-        z = self.measure(x, tt)
-        s = self.sigmas(x, tt)
-        values = z + rng.standard_normal(z.shape) * s
-        values[:, 0] = np.mod(values[:, 0], 2.0 * np.pi)
-        values[:, 0] = np.where(values[:, 0] >= 2.0 * np.pi, 0.0, values[:, 0])
+        values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "space-telescope", "epoch": self.epoch, "measurement": "radec",
                 "frame": self._sky.name, "observer": self.orbit or "state_km",
                 "light_time": self.light_time}
