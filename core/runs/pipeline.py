@@ -84,7 +84,9 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         truth = None
         passes = []
     else:
-        truth = Truth(truth_dyn, scenario.initial_truth(reg), t_end=duration)
+        initial = scenario.initial_truth(reg)
+        _compile_ahead(dynamics, initial)
+        truth = Truth(truth_dyn, initial, t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
         say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
@@ -117,6 +119,18 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                      truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
                      output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth)
     return ctx, rngs
+
+
+def _compile_ahead(dynamics, state) -> None:
+    """On a first run (kernel not in the cache) start compiling the filter's lockstep propagation
+    kernel in a second process while the truth and the IOD run here (see
+    :mod:`cistrack.propagation.background_compile`); same kernels, same numbers."""
+    from cistrack.propagation.compiled import CompiledDynamics
+
+    if isinstance(dynamics, CompiledDynamics):
+        from cistrack.propagation import background_compile
+
+        background_compile.start(dynamics, np.asarray(state, dtype=float).reshape(-1)[:dynamics.dim])
 
 
 def _pass_index(passes, t: float) -> int:
