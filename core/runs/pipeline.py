@@ -255,7 +255,9 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
     try:
         pm.hook.cistrack_run_started(run=ctx)
         pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
+        step = step0 = None  # the observers are done with it: its particles need not outlive the step
         for k, (t, group) in enumerate(events, start=1):
+            step = None  # the previous step's belief (its particle arrays) is free before predict and update
             tp = time.perf_counter()
             filt.predict(t)
             t_pred = time.perf_counter() - tp
