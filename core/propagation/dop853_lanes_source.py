@@ -68,25 +68,30 @@ def _stage_sum(coefs, j: int, rows: dict, dim: int, lanes: int) -> str:
     return " + ".join(terms) if terms else "0.0"
 
 
+def _stage_point(s: int, rows: dict, dim: int, lanes: int, indent: str) -> list[str]:
+    """Lines of stage ``s`` that set the lane's ``_h``, stage state ``_y0..`` (stored in YN at
+    stage 12) and stage time ``_t``."""
+    new = s == _tab.N_STAGES
+    coefs = _tab.B if new else _tab.stage_matrix()[s, :s]
+    tnode = "" if new else f"{float(_tab.C[s])!r} * "
+    L = [f"{indent}_h = {_w(rows['H'], lanes)}"]
+    for j in range(dim):
+        L.append(f"{indent}_y{j} = {_w(rows['Y'] + j, lanes)} + _h * ({_stage_sum(coefs, j, rows, dim, lanes)})")
+        if new:
+            L.append(f"{indent}{_w(rows['YN'] + j, lanes)} = _y{j}")
+    L.append(f"{indent}_t = {_w(rows['T'], lanes)} + {tnode}_h")
+    return L
+
+
 def _stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` (1..12): ytmp = y + h * sum(a_sm k_m), then k_s = rhs(t + c_s h, ytmp) per lane;
     ``s == 12`` is the new state (weights B, stored in YN) and its derivative (next step's k0)."""
     if body.key is not None:
         return _keyed_stage_function(s, body, dim, lanes)
     rows = _rows(dim)
-    a = _tab.stage_matrix()
-    new = s == _tab.N_STAGES
-    coefs = _tab.B if new else a[s, :s]
-    tnode = "" if new else f"{float(_tab.C[s])!r} * "
     L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
          f"def _lanes_stage{s}(_w, _p):",
-         "    for _l in range(LANES):",
-         f"        _h = {_w(rows['H'], lanes)}"]
-    for j in range(dim):
-        L.append(f"        _y{j} = {_w(rows['Y'] + j, lanes)} + _h * ({_stage_sum(coefs, j, rows, dim, lanes)})")
-        if new:
-            L.append(f"        {_w(rows['YN'] + j, lanes)} = _y{j}")
-    L.append(f"        _t = {_w(rows['T'], lanes)} + {tnode}_h")
+         "    for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "        ")
     out0 = rows["KS"] + (s - 1) * dim
     text = body.render(lambda k: _w(out0 + k, lanes))
     L += ["        " + line for line in text.splitlines()]
@@ -98,10 +103,7 @@ def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     every lane's key; then, once per distinct key ``_K``, the lane loop runs with the key fixed to
     ``_K`` (uniform loads: vectorised) and keeps the results of the lanes whose key is ``_K``."""
     rows = _rows(dim, keyed=True)
-    a = _tab.stage_matrix()
-    new = s == _tab.N_STAGES
-    coefs = _tab.B if new else a[s, :s]
-    tnode = "" if new else f"{float(_tab.C[s])!r} * "
+    tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
     key, done = _w(rows["KEY"], lanes), _w(rows["DONE"], lanes)
     time = [f"        _h = {_w(rows['H'], lanes)}", f"        _t = {_w(rows['T'], lanes)} + {tnode}_h"]
     L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
@@ -113,13 +115,7 @@ def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
           "    _first = 0", "    while _first < LANES:",
           f"        _K = _w[{rows['KEY'] * lanes} + _first]"]
     L += ["        " + line for line in body.key.per_key.splitlines()]
-    L += ["        for _l in range(LANES):",
-          f"            _h = {_w(rows['H'], lanes)}"]
-    for j in range(dim):
-        L.append(f"            _y{j} = {_w(rows['Y'] + j, lanes)} + _h * ({_stage_sum(coefs, j, rows, dim, lanes)})")
-        if new:
-            L.append(f"            {_w(rows['YN'] + j, lanes)} = _y{j}")
-    L.append(f"            _t = {_w(rows['T'], lanes)} + {tnode}_h")
+    L += ["        for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "            ")
     out0 = rows["KS"] + (s - 1) * dim
     L += [f"            _uo{k} = {_w(out0 + k, lanes)}" for k in range(dim)]
     L += ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import ast
 
-__all__ = ["hoist_invariants"]
+__all__ = ["hoist_invariants", "invariant_expression"]
 
 _PURE_CALLS = {"int", "float", "abs", "min", "max"}
 
@@ -34,7 +34,9 @@ class _Names(ast.NodeTransformer):
         return node
 
 
-def _invariant(node: ast.AST, known: set[str]) -> bool:
+def invariant_expression(node: ast.AST, known: set[str]) -> bool:
+    """Whether ``node`` reads only ``known`` names and calls only pure functions (int, float, abs,
+    min, max, ``np.*``): the same value in every lane."""
     for n in ast.walk(node):
         if isinstance(n, ast.Name) and n.id not in known and n.id not in _PURE_CALLS:
             return False
@@ -57,7 +59,7 @@ class _Loads(ast.NodeTransformer):
     def visit_Subscript(self, node: ast.Subscript):
         node = self.generic_visit(node)
         if (isinstance(node.value, ast.Name) and node.value.id == "_p" and isinstance(node.ctx, ast.Load)
-                and _invariant(node.slice, self.known)):
+                and invariant_expression(node.slice, self.known)):
             name = self.fresh()
             self.hoisted.append(ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=node))
             return ast.copy_location(ast.Name(id=name, ctx=ast.Load()), node)
@@ -82,7 +84,7 @@ class _Tests(ast.NodeTransformer):
     def visit_Subscript(self, node: ast.Subscript):
         node = self.generic_visit(node)
         if (isinstance(node.value, ast.Name) and node.value.id == "_p" and isinstance(node.ctx, ast.Load)
-                and _invariant(node.slice, self.consts)):
+                and invariant_expression(node.slice, self.consts)):
             text = ast.unparse(node.slice)
             if text not in self.loads:
                 self.loads[text] = self._out(node, node).id
@@ -91,7 +93,7 @@ class _Tests(ast.NodeTransformer):
 
     def visit_If(self, node: ast.If):
         node = self.generic_visit(node)
-        if _invariant(node.test, self.known):
+        if invariant_expression(node.test, self.known):
             node.test = self._out(node.test, node.test)
         return node
 
@@ -126,7 +128,7 @@ def hoist_invariants(body: list[ast.stmt], invariant: set[str],
             value = ast.BinOp(left=ast.Name(id=target, ctx=ast.Load()), op=stmt.op, right=stmt.value)
         if value is not None:
             value = _Names(current).visit(value)
-            if _invariant(value, known):
+            if invariant_expression(value, known):
                 name = fresh()
                 before.append(ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=value))
                 current[target] = name

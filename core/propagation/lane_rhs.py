@@ -34,7 +34,7 @@ import inspect
 import textwrap
 from typing import Any
 
-from cistrack.propagation.lane_hoist import _PURE_CALLS, hoist_invariants
+from cistrack.propagation.lane_hoist import hoist_invariants, invariant_expression
 from cistrack.propagation.lane_unroll import MAX_UNROLL, Unroll, const_int
 
 __all__ = ["LaneBody", "LaneKey", "LaneUniform", "lane_body", "MAX_UNROLL", "LANE_LOCALS"]
@@ -221,22 +221,10 @@ def _split_invariant(prefix: list[ast.stmt], body: list[ast.stmt], free: set[str
             if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store):
                 counts[n.id] = counts.get(n.id, 0) + 1
     known = (set(free) - {"_t"}) | {"_p"}
-
-    def invariant(node) -> bool:
-        for n in ast.walk(node):
-            if isinstance(n, ast.Name) and n.id not in known and n.id not in _PURE_CALLS:
-                return False
-            if isinstance(n, ast.Call) and not (
-                    (isinstance(n.func, ast.Name) and n.func.id in _PURE_CALLS)
-                    or (isinstance(n.func, ast.Attribute) and isinstance(n.func.value, ast.Name)
-                        and n.func.value.id == "np")):
-                return False
-        return True
-
     fixed, varying = [], []
     for s in prefix:
         if (isinstance(s, ast.Assign) and len(s.targets) == 1 and isinstance(s.targets[0], ast.Name)
-                and counts.get(s.targets[0].id) == 1 and invariant(s.value)):
+                and counts.get(s.targets[0].id) == 1 and invariant_expression(s.value, known)):
             fixed.append(s)
             known.add(s.targets[0].id)
         else:
