@@ -1,5 +1,6 @@
-"""The memory-lean forms of mixture sampling and group moments give the same numbers, bit for
-bit, as the plain formulas (one normal draw for all points, a copy of each group's rows)."""
+"""The memory-lean forms of mixture sampling, group moments and nearest-centre labelling give the
+same numbers, bit for bit, as the plain formulas (one normal draw for all points, a copy of each
+group's rows, one product for all points)."""
 from __future__ import annotations
 
 import numpy as np
@@ -54,3 +55,13 @@ def test_group_moments_equal_the_per_group_formulas(with_d):
         if with_d:
             assert np.array_equal(mom.mean_d[i], mean[6:]) and np.array_equal(mom.pxd[i], cov[:6, 6:])
     assert mom.counts[7] == 0 and not mom.pxx[7].any()
+
+
+def test_nearest_centres_in_blocks_equal_the_one_product_formula():
+    from cistrack.plugins.clustering.lloyd import _ROWS_AT_ONCE, nearest_centres
+
+    r = np.random.default_rng(3)
+    z = np.round(r.normal(size=(2 * _ROWS_AT_ONCE + 5, 6)), 1)  # rounded: ties occur
+    c = np.round(r.normal(size=(9, 6)), 1)
+    plain = np.argmin(np.einsum("ij,ij->i", z, z)[:, None] - (2.0 * z) @ c.T + np.einsum("ij,ij->i", c, c), axis=1)
+    assert np.array_equal(nearest_centres(z, c), plain)
