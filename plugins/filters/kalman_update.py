@@ -62,8 +62,8 @@ def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_gro
         yi = y[edges[i]:edges[i + 1]]
         means[i] = yi.mean(axis=0)
         if yi.shape[0] > 1:
-            c = yi - means[i]
-            covs[i] = (c.T @ c) / (yi.shape[0] - 1)
+            yi -= means[i]  # centred in place: y is this function's own array
+            covs[i] = (yi.T @ yi) / (yi.shape[0] - 1)
     return GroupMoments(counts, means[:, :nx], means[:, nx:], covs[:, :nx, :nx], covs[:, :nx, nx:],
                         covs[:, nx:, nx:])
 
