@@ -2,7 +2,7 @@
 
 On the first run on a machine (empty kernel cache) numba compiles what a run needs one function
 after the other, under its process-wide compiler lock: the truth's dense-output kernel (measured
-9.5 s of CPU on the 2-core development machine), then the filter's SIMD-lockstep kernel (11 s).
+5.9 s of CPU on the 2-core development machine), then the filter's SIMD-lockstep kernel (8.2 s).
 With a second core, :func:`start` launches ``python -m cistrack.propagation.background_compile``,
 which builds the same generated kernel module and propagates ``LANES`` copies of one state for a
 moment, so that numba compiles the lockstep kernel there and writes it to its on-disk cache;
@@ -29,10 +29,11 @@ __all__ = ["start", "wait_for", "lockstep_cached", "idle_core", "COMPILE_CPU_SEC
 
 _LOG = logging.getLogger("cistrack.propagation")
 
-COMPILE_CPU_SECONDS = {"dense_kernel": 9.5, "propagate_lanes_kernel": 11.0, "propagate_kernel": 1.2,
+COMPILE_CPU_SECONDS = {"dense_kernel": 5.9, "propagate_lanes_kernel": 8.2, "propagate_kernel": 1.2,
                        "process start": 1.5}
 """CPU seconds of compiling each kernel of the CR3BP (and of starting the compiling process),
-measured on the 2-core AMD EPYC development machine (numba 0.68; benchmarks/bench_first_run.py)."""
+measured with numba's ``numba:compile`` events on the 2-core AMD EPYC development machine
+(numba 0.68; the lockstep kernel after the dense one, which compiles the helpers both use)."""
 
 _CHILDREN: dict[str, subprocess.Popen] = {}
 
