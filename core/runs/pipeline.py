@@ -121,6 +121,13 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     return ctx, rngs
 
 
+def _pass_index(passes, t: float) -> int:
+    for i, p in enumerate(passes):
+        if p.start - 1e-9 <= t <= p.end + 1e-9:
+            return i + 1
+    return 0
+
+
 def _compile_ahead(dynamics, state) -> None:
     """On a first run (kernel not in the cache) start compiling the filter's lockstep propagation
     kernel in a second process while the truth and the IOD run here (see
@@ -131,13 +138,6 @@ def _compile_ahead(dynamics, state) -> None:
         from cistrack.propagation import background_compile
 
         background_compile.start(dynamics, np.asarray(state, dtype=float).reshape(-1)[:dynamics.dim])
-
-
-def _pass_index(passes, t: float) -> int:
-    for i, p in enumerate(passes):
-        if p.start - 1e-9 <= t <= p.end + 1e-9:
-            return i + 1
-    return 0
 
 
 def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
