@@ -24,12 +24,15 @@ __all__ = [
 
 _EMPTY = inspect.Parameter.empty
 
-BYTES_PER_PARTICLE = 512
+BYTES_PER_PARTICLE = 896
 """Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
-Measured (issue 15): a whole one-period Example 1 run (IOD + PGM) peaked 404 bytes per particle
-above the process's start at 1,000,000 particles, 301 per extra particle from 1e5 to 1e6; an EnKF
-step 208 and a PGM step 157 at 1e6 (``benchmarks/bench_memory.py --sizes 100000 1000000``).
-Rounded up to 512. The IOD fits its oversampled samples in chunks of fixed size
+Measured (issue 31): a whole one-period Example 1 run (IOD + PGM) peaked 779 MiB above the
+process's start at 1,000,000 particles, 816 bytes per particle
+(``benchmarks/bench_memory.py --sizes 1000000 --cases run``); rounded up by 10 %. The peak is in
+the PGM's first updates after the IOD, which draw ``reacquire_factor`` (4) x ``n_particles``
+particles (:mod:`cistrack.plugins.filters.reacquisition_particles`). The former 512 was too
+low for that: the same run peaked 1,157 MiB above its start (1,214 bytes per particle) before
+issue 31's changes. The IOD fits its oversampled samples in chunks of fixed size
 (:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
 IOD_CHUNK_BYTES = 256 * 2 ** 20
 """Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""

@@ -39,6 +39,16 @@ The massive bodies (with their impact radii) come from overriding :attr:`primari
 Impact bodies that move in the integration frame take their positions from the class attribute
 ``body_motion``.
 
+Speed: with 4 or more particles the right-hand side runs in the SIMD-lockstep kernel when
+:mod:`cistrack.propagation.lane_rhs` can rewrite it: ``y`` and ``out`` indexed by integers
+known when the kernel is generated (literals, module constants, the variable of a
+``for i in range(<constants>)`` loop, which is unrolled); other loops and branches are fine. A
+right-hand side that reads a table by time (``params[j]`` with ``j`` computed from ``t``) marks
+the table index ``k: LaneUniform = <int expression of t and params>`` (see
+:class:`~cistrack.propagation.lane_rhs.LaneUniform`), as the ephemeris model does; otherwise it
+still runs in lockstep, without SIMD. Anything else falls back to the one-particle kernel (the
+reason is logged at debug level). The numbers are the same bit for bit in every case.
+
 How the speed is obtained (generated kernels, their on-disk cache, worker threads) is described
 in :mod:`cistrack.propagation.kernels`.
 """
@@ -52,10 +62,19 @@ import numpy as np
 from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics, Propagation
 
+from cistrack.propagation import background_compile
 from cistrack.propagation.dense import DenseTrajectory, integrate_dense
 from cistrack.propagation.kernels import kernels_for, num_threads, run_chunks
 
-__all__ = ["CompiledDynamics", "PropagationError", "StateError"]
+__all__ = ["CompiledDynamics", "PropagationError", "StateError", "LOCKSTEP_MIN_PARTICLES"]
+
+LOCKSTEP_MIN_PARTICLES = 4
+"""Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel (16 lanes; idle
+lanes repeat an active one). A full batch costs a quarter to a third of what the one-particle
+kernel costs for 16 particles (CR3BP: 5.7 against 24.1 us per particle-period on one thread here;
+7.1 against 22.9 in docs/performance.md), so a part-filled batch of 4-5 particles costs about
+what the one-particle kernel does; and a run then needs no one-particle kernel compiled (the
+information bound's central differences propagate 12 particles)."""
 
 
 # -- the base class ------------------------------------------------------------------------------
@@ -128,8 +147,9 @@ class CompiledDynamics(Dynamics):
         """Propagate ``states`` (N, dim) from ``t0`` to each of ``times`` (scalar or (K,), TU).
 
         Every particle is integrated with its own adaptive step and error control (DOP853,
-        tolerances ``rtol``/``atol``, default the model's); with at least ``LANES`` particles and
-        a right-hand side the generator can rewrite, in SIMD lockstep (bit-identical results). ``times`` must all lie on one side of
+        tolerances ``rtol``/``atol``, default the model's); with at least
+        :data:`LOCKSTEP_MIN_PARTICLES` particles and a right-hand side the generator can rewrite,
+        in SIMD lockstep (bit-identical results). ``times`` must all lie on one side of
         ``t0`` and be monotonic away from it (backward propagation: all earlier). Returns a
         :class:`~cistrack.interfaces.dynamics.Propagation` with ``states`` (K, N, dim); particles
         that hit a body are frozen at the located impact point with ``alive`` False.
@@ -157,9 +177,13 @@ class CompiledDynamics(Dynamics):
         pos, rad = self._bodies_arrays()
         if n:
             mod = self._kernels()
-            # the SIMD-lockstep kernel when the model has one and there are lanes to fill (same numbers)
+            # the SIMD-lockstep kernel when the model has one and enough lanes are filled (same numbers)
             lockstep = getattr(mod, "propagate_lanes_kernel", None)
-            kernel = lockstep if lockstep is not None and n >= mod.LANES else mod.propagate_kernel
+            if lockstep is not None and n >= LOCKSTEP_MIN_PARTICLES:
+                background_compile.wait_for(mod)
+                kernel = lockstep
+            else:
+                kernel = mod.propagate_kernel
             run_chunks(kernel, n,
                         (arr, self._params(), t0, np.ascontiguousarray(t_out), rtol, atol, pos, rad,
                          int(self.max_steps), 0.0, out, impact_body, impact_time, status))

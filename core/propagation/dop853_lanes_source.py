@@ -22,6 +22,7 @@ particles left than lanes) repeat an active lane's state; their results are disc
 from __future__ import annotations
 
 from cistrack.propagation import dop853_tableau as _tab
+from cistrack.propagation.dop853_lanes_driver import DRIVER as _DRIVER
 
 __all__ = ["lanes_source", "DEFAULT_LANES", "RESERVED"]
 
@@ -37,7 +38,7 @@ RESERVED = {"np", "njit", "rhs", "body_position", "DIM", "CACHE", "SAFETY", "MAX
 """Module-level names of a generated kernel module other than the underscored ones."""
 
 
-def _rows(dim: int) -> dict[str, int]:
+def _rows(dim: int, keyed: bool = False) -> dict[str, int]:
     n = _tab.N_STAGES
     r = {"Y": 0, "K0": dim}
     r["KS"] = 2 * dim                      # stage s (1..12) at KS + (s - 1) * dim; stage 12 = f(t+h, ynew)
@@ -46,6 +47,10 @@ def _rows(dim: int) -> dict[str, int]:
     r["H"] = r["T"] + 1
     r["ERR"] = r["H"] + 1
     r["ROWS"] = r["ERR"] + 1
+    if keyed:  # a body with a LaneUniform key: each lane's key, and whether its lane is done
+        r["KEY"] = r["ROWS"]
+        r["DONE"] = r["KEY"] + 1
+        r["ROWS"] = r["DONE"] + 1
     return r
 
 
@@ -63,26 +68,62 @@ def _stage_sum(coefs, j: int, rows: dict, dim: int, lanes: int) -> str:
     return " + ".join(terms) if terms else "0.0"
 
 
+def _stage_point(s: int, rows: dict, dim: int, lanes: int, indent: str) -> list[str]:
+    """Lines of stage ``s`` that set the lane's ``_h``, stage state ``_y0..`` (stored in YN at
+    stage 12) and stage time ``_t``."""
+    new = s == _tab.N_STAGES
+    coefs = _tab.B if new else _tab.stage_matrix()[s, :s]
+    tnode = "" if new else f"{float(_tab.C[s])!r} * "
+    L = [f"{indent}_h = {_w(rows['H'], lanes)}"]
+    for j in range(dim):
+        L.append(f"{indent}_y{j} = {_w(rows['Y'] + j, lanes)} + _h * ({_stage_sum(coefs, j, rows, dim, lanes)})")
+        if new:
+            L.append(f"{indent}{_w(rows['YN'] + j, lanes)} = _y{j}")
+    L.append(f"{indent}_t = {_w(rows['T'], lanes)} + {tnode}_h")
+    return L
+
+
 def _stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` (1..12): ytmp = y + h * sum(a_sm k_m), then k_s = rhs(t + c_s h, ytmp) per lane;
     ``s == 12`` is the new state (weights B, stored in YN) and its derivative (next step's k0)."""
+    if body.key is not None:
+        return _keyed_stage_function(s, body, dim, lanes)
     rows = _rows(dim)
-    a = _tab.stage_matrix()
-    new = s == _tab.N_STAGES
-    coefs = _tab.B if new else a[s, :s]
-    tnode = "" if new else f"{float(_tab.C[s])!r} * "
     L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
          f"def _lanes_stage{s}(_w, _p):",
-         "    for _l in range(LANES):",
-         f"        _h = {_w(rows['H'], lanes)}"]
-    for j in range(dim):
-        L.append(f"        _y{j} = {_w(rows['Y'] + j, lanes)} + _h * ({_stage_sum(coefs, j, rows, dim, lanes)})")
-        if new:
-            L.append(f"        {_w(rows['YN'] + j, lanes)} = _y{j}")
-    L.append(f"        _t = {_w(rows['T'], lanes)} + {tnode}_h")
+         "    for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "        ")
     out0 = rows["KS"] + (s - 1) * dim
     text = body.render(lambda k: _w(out0 + k, lanes))
     L += ["        " + line for line in text.splitlines()]
+    return "\n".join(L) + "\n\n\n"
+
+
+def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
+    """Stage ``s`` for a body with a :class:`~.lane_rhs.LaneUniform` key: a scalar pass computes
+    every lane's key; then, once per distinct key ``_K``, the lane loop runs with the key fixed to
+    ``_K`` (uniform loads: vectorised) and keeps the results of the lanes whose key is ``_K``."""
+    rows = _rows(dim, keyed=True)
+    tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
+    key, done = _w(rows["KEY"], lanes), _w(rows["DONE"], lanes)
+    time = [f"        _h = {_w(rows['H'], lanes)}", f"        _t = {_w(rows['T'], lanes)} + {tnode}_h"]
+    L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
+         f"def _lanes_stage{s}(_w, _p):"]
+    L += ["    " + line for line in body.key.invariant.splitlines()]
+    L += ["    for _l in range(LANES):"] + time
+    L += ["        " + line for line in body.key.prefix.splitlines()]
+    L += [f"        {key} = {body.key.expr}", f"        {done} = 0.0",
+          "    _first = 0", "    while _first < LANES:",
+          f"        _K = _w[{rows['KEY'] * lanes} + _first]"]
+    L += ["        " + line for line in body.key.per_key.splitlines()]
+    L += ["        for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "            ")
+    out0 = rows["KS"] + (s - 1) * dim
+    L += [f"            _uo{k} = {_w(out0 + k, lanes)}" for k in range(dim)]
+    L += ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
+    L.append(f"            _m = {key} == _K")
+    L += [f"            {_w(out0 + k, lanes)} = _uo{k} if _m else {_w(out0 + k, lanes)}" for k in range(dim)]
+    L += ["        for _l in range(LANES):", f"            if {key} == _K:", f"                {done} = 1.0",
+          f"        while _first < LANES and _w[{rows['DONE'] * lanes} + _first] != 0.0:",
+          "            _first += 1"]
     return "\n".join(L) + "\n\n\n"
 
 
@@ -105,202 +146,6 @@ def _error_function(dim: int, lanes: int) -> str:
     return "\n".join(L) + "\n\n\n"
 
 
-_DRIVER = '''
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lanes_step(w, params, rtol, atol):
-{STAGES}    _lanes_error(w, rtol, atol)
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_get(w, row, l, col):
-    for j in range(DIM):
-        col[j] = w[(row + j) * LANES + l]
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_put(w, row, l, col):
-    for j in range(DIM):
-        w[(row + j) * LANES + l] = col[j]
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad, h_init,
-                out, impact_body, impact_time, status, w, tl, hl, iout, nsteps, rejected,
-                err_old, col, col2, col3, col4):
-    """Load particle i into lane l; False if it needs no step (done at t0)."""
-    nt = times.shape[0]
-    for j in range(DIM):
-        col[j] = y0[i, j]
-    b = _inside(t0, col, params, body_pos, body_rad)
-    if b >= 0:
-        impact_body[i] = b
-        impact_time[i] = t0
-        status[i] = 1
-        _freeze(i, 0, col, out, nt)
-        return False
-    io = 0
-    while io < nt and times[io] == t0:
-        for j in range(DIM):
-            out[io, i, j] = col[j]
-        io += 1
-    if io == nt:
-        return False
-    rhs(t0, col, params, col2)
-    _lane_put(w, ROW_Y, l, col)
-    _lane_put(w, ROW_K0, l, col2)
-    span = abs(times[nt - 1] - t0)
-    if h_init > 0.0:
-        hl[l] = min(h_init, span)
-    else:
-        hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
-    tl[l] = t0
-    iout[l] = io
-    nsteps[l] = 0
-    rejected[l] = False
-    err_old[l] = 1e-4
-    return True
-
-
-@njit(cache=CACHE, nogil=True, fastmath=FASTMATH)
-def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_rad,
-                           max_steps, h_init, out, impact_body, impact_time, status):
-    nt = times.shape[0]
-    direction = 1.0
-    if times[nt - 1] < t0:
-        direction = -1.0
-    hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
-    w = np.zeros(ROWS * LANES)
-    tl = np.empty(LANES)
-    hl = np.empty(LANES)
-    hstep = np.empty(LANES)
-    err_old = np.empty(LANES)
-    last = np.zeros(LANES, dtype=np.bool_)
-    rejected = np.zeros(LANES, dtype=np.bool_)
-    iout = np.zeros(LANES, dtype=np.int64)
-    nsteps = np.zeros(LANES, dtype=np.int64)
-    who = np.full(LANES, -1, dtype=np.int64)
-    col = np.empty(DIM)
-    col2 = np.empty(DIM)
-    col3 = np.empty(DIM)
-    col4 = np.empty(DIM)
-    nxt = i0
-    active = 0
-    for l in range(LANES):
-        while nxt < i1:
-            i = nxt
-            nxt += 1
-            if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
-                           h_init, out, impact_body, impact_time, status, w, tl, hl, iout,
-                           nsteps, rejected, err_old, col, col2, col3, col4):
-                who[l] = i
-                active += 1
-                break
-    while active > 0:
-        src = 0
-        while who[src] < 0:
-            src += 1
-        for l in range(LANES):
-            if who[l] < 0:  # idle: repeat an active lane (finite arithmetic, result discarded)
-                tl[l] = tl[src]
-                hl[l] = hl[src]
-                iout[l] = iout[src]
-                _lane_get(w, ROW_Y, src, col)
-                _lane_put(w, ROW_Y, l, col)
-                _lane_get(w, ROW_K0, src, col)
-                _lane_put(w, ROW_K0, l, col)
-        for l in range(LANES):
-            tout = times[iout[l]]
-            remaining = abs(tout - tl[l])
-            hst = hl[l]
-            lst = False
-            if hst * 1.01 >= remaining:
-                hst = remaining
-                lst = True
-            hstep[l] = hst
-            last[l] = lst
-            w[ROW_T * LANES + l] = tl[l]
-            w[ROW_H * LANES + l] = direction * hst
-        _lanes_step(w, params, rtol, atol)
-        for l in range(LANES):
-            i = who[l]
-            if i < 0:
-                continue
-            nsteps[l] += 1
-            e = w[ROW_ERR * LANES + l]
-            hs = w[ROW_H * LANES + l]
-            done = False
-            if e <= 1.0:
-                if e == 0.0:
-                    fac = MAX_GROWTH
-                else:
-                    fac = min(MAX_GROWTH, SAFETY * e ** -EXPO1 * err_old[l] ** BETA)
-                err_old[l] = max(e, 1e-4)
-                if rejected[l]:
-                    fac = min(1.0, fac)
-                rejected[l] = False
-                _lane_get(w, ROW_YN, l, col)
-                b = _inside(tl[l] + hs, col, params, body_pos, body_rad)
-                if b >= 0:
-                    _lane_get(w, ROW_Y, l, col2)
-                    _lane_get(w, ROW_K0, l, col3)
-                    s = _locate_impact(tl[l], hs, col2, col3, params, col4, col, np.empty(DIM),
-                                       body_pos, body_rad, b)
-                    impact_body[i] = b
-                    impact_time[i] = tl[l] + s * hs
-                    status[i] = 1
-                    _freeze(i, iout[l], col, out, nt)
-                    done = True
-                else:
-                    tout = times[iout[l]]
-                    if last[l]:
-                        tl[l] = tout
-                    else:
-                        tl[l] = tl[l] + hs
-                    _lane_put(w, ROW_Y, l, col)
-                    _lane_get(w, ROW_F, l, col2)
-                    _lane_put(w, ROW_K0, l, col2)
-                    if last[l]:
-                        io = iout[l]
-                        while io < nt and times[io] == tout:
-                            for j in range(DIM):
-                                out[io, i, j] = col[j]
-                            io += 1
-                        iout[l] = io
-                        hl[l] = max(hl[l], hstep[l] * fac)
-                        if io >= nt:
-                            done = True
-                    else:
-                        hl[l] = hstep[l] * fac
-            else:
-                if e > 0.0:
-                    fac = max(MIN_SHRINK, SAFETY * e ** -EXPO1)
-                else:
-                    fac = 0.2
-                hl[l] = hstep[l] * fac
-                rejected[l] = True
-                if hl[l] < hmin:
-                    status[i] = 3
-                    _lane_get(w, ROW_Y, l, col)
-                    _freeze(i, iout[l], col, out, nt)
-                    done = True
-            if not done and nsteps[l] >= max_steps and iout[l] < nt:
-                status[i] = 2
-                _lane_get(w, ROW_Y, l, col)
-                _freeze(i, iout[l], col, out, nt)
-                done = True
-            if done:
-                who[l] = -1
-                active -= 1
-                while nxt < i1:
-                    i = nxt
-                    nxt += 1
-                    if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos,
-                                   body_rad, h_init, out, impact_body, impact_time, status, w,
-                                   tl, hl, iout, nsteps, rejected, err_old, col, col2, col3, col4):
-                        who[l] = i
-                        active += 1
-                        break
-'''
 
 
 def lanes_source(dim: int, body, lanes: int = DEFAULT_LANES) -> str:
@@ -308,7 +153,7 @@ def lanes_source(dim: int, body, lanes: int = DEFAULT_LANES) -> str:
     ``_inside``, ``_locate_impact``, ``_initial_step`` and ``_freeze`` it reuses) for a right-hand
     side rewritten by :func:`.lane_rhs.lane_body`: the stage functions, ``_lanes_step`` and the
     entry point ``propagate_lanes_kernel``."""
-    rows = _rows(dim)
+    rows = _rows(dim, keyed=body.key is not None)
     n = _tab.N_STAGES
     head = [f"\n\nLANES = {int(lanes)}", f"ROWS = {rows['ROWS']}", f"ROW_Y = {rows['Y']}",
             f"ROW_K0 = {rows['K0']}", f"ROW_F = {rows['KS'] + (n - 1) * dim}", f"ROW_YN = {rows['YN']}",

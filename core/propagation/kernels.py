@@ -53,12 +53,9 @@ __all__ = ["kernels_for", "kernel_cache_dir", "num_threads", "run_chunks", "COMP
 
 _LOG = logging.getLogger("cistrack.propagation")
 
-COMPILE_SECONDS = "20-100"
-"""Rough one-time cost of compiling one model's kernels, shown in the progress message only.
-Measured for the CR3BP's SIMD-lockstep kernel in a fresh cache directory: 100 s wall, 25 s CPU on
-a 2-core machine at load average ~22 (before the lockstep kernel: 28 s wall, 9 s CPU on a busy
-2-core machine; see benchmarks/bench_startup.py). The one-particle and dense-output kernels are
-compiled when first used (fewer particles than lanes, a run's truth)."""
+COMPILE_SECONDS = "10-40"
+"""Rough one-time cost of compiling one model's kernels (kept for callers; the progress message
+now gives an estimate for this machine, :func:`.background_compile.estimate_seconds`)."""
 
 
 # -- kernel generation and caching ----------------------------------------------------------------
@@ -222,8 +219,13 @@ def _numba_cached(path: Path) -> bool:
 
 
 def _announce_compile(what: str) -> None:
-    """Say (through logging; the command line shows it) that the next call compiles kernels."""
-    _LOG.info("compiling propagation kernels for %s (one-time, ~%s s)...", what, COMPILE_SECONDS)
+    """Say (through logging; the command line shows it) that the next call compiles kernels, and
+    about how long a run's kernels (dense and lockstep, the latter in a second process when
+    there is a second core) take on this machine."""
+    from cistrack.propagation.background_compile import estimate_seconds, idle_core
+
+    seconds = estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=idle_core())
+    _LOG.info("compiling propagation kernels for %s (one-time, first run here: ~%.0f s)...", what, seconds)
 
 
 # -- threads ---------------------------------------------------------------------------------------

@@ -84,7 +84,9 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         truth = None
         passes = []
     else:
-        truth = Truth(truth_dyn, scenario.initial_truth(reg), t_end=duration)
+        initial = scenario.initial_truth(reg)
+        _compile_ahead(dynamics, initial)
+        truth = Truth(truth_dyn, initial, t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
         say(f"propagating the truth over {scenario.duration_days:g} days ({n_grid} grid points)")
@@ -140,6 +142,18 @@ def _pass_index(passes, t: float) -> int:
         if p.start - 1e-9 <= t <= p.end + 1e-9:
             return i + 1
     return 0
+
+
+def _compile_ahead(dynamics, state) -> None:
+    """On a first run (kernel not in the cache) start compiling the filter's lockstep propagation
+    kernel in a second process while the truth and the IOD run here (see
+    :mod:`cistrack.propagation.background_compile`); same kernels, same numbers."""
+    from cistrack.propagation.compiled import CompiledDynamics
+
+    if isinstance(dynamics, CompiledDynamics):
+        from cistrack.propagation import background_compile
+
+        background_compile.start(dynamics, np.asarray(state, dtype=float).reshape(-1)[:dynamics.dim])
 
 
 def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
@@ -257,7 +271,9 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
     try:
         pm.hook.cistrack_run_started(run=ctx)
         pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
+        step = step0 = None  # the observers are done with it: its particles need not outlive the step
         for k, (t, group) in enumerate(events, start=1):
+            step = None  # the previous step's belief (its particle arrays) is free before predict and update
             tp = time.perf_counter()
             filt.predict(t)
             t_pred = time.perf_counter() - tp

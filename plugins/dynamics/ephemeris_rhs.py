@@ -32,12 +32,18 @@ import numpy as np
 
 from cistrack.astro.ephemeris import ChebyshevSeries
 from cistrack.lazy import lazy_njit
+from cistrack.propagation.lane_rhs import LaneUniform
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
            "resample_power_basis", "HEADER_SIZE", "SERIES_HDR"]
 
 GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range(12)
 SERIES_HDR = 12
+NCOEF = 8
+"""Powers per record that the compiled functions evaluate (a constant, so that the Horner loop is
+unrolled: the lockstep kernel then evaluates it with every lane's loads at one address).
+DE421 on 6-hour records needs 8 everywhere from 1950 to 2046 (measured every 4 years);
+:func:`pack_params` pads fewer with leading zeros (exact) and refuses more."""
 HEADER_SIZE = 17
 
 
@@ -53,7 +59,6 @@ def bodies_position(p, t):
     start = p[SERIES_HDR]
     inv_length = p[SERIES_HDR + 1]
     nrec = int(p[SERIES_HDR + 2])
-    ncoef = int(p[SERIES_HDR + 3])
     off = int(p[SERIES_HDR + 4])
     v = (t - start) * inv_length
     k = int(np.floor(v))
@@ -62,14 +67,14 @@ def bodies_position(p, t):
     elif k > nrec - 1:
         k = nrec - 1
     u = 2.0 * (v - k) - 1.0
-    j = off + (k * ncoef + ncoef - 1) * 6
+    j = off + (k * NCOEF + NCOEF - 1) * 6
     mx = p[j]
     my = p[j + 1]
     mz = p[j + 2]
     sx = p[j + 3]
     sy = p[j + 4]
     sz = p[j + 5]
-    for _ in range(ncoef - 1):
+    for _ in range(NCOEF - 1):
         j -= 6
         mx = mx * u + p[j]
         my = my * u + p[j + 1]
@@ -86,23 +91,19 @@ def ephemeris_rhs(t, y, p, out):
     start = p[SERIES_HDR]
     inv_length = p[SERIES_HDR + 1]
     nrec = int(p[SERIES_HDR + 2])
-    ncoef = int(p[SERIES_HDR + 3])
     off = int(p[SERIES_HDR + 4])
     v = (t - start) * inv_length
-    k = int(np.floor(v))
-    if k < 0:
-        k = 0
-    elif k > nrec - 1:
-        k = nrec - 1
+    # the record: lanes of the lockstep kernel in the same record share its coefficient loads
+    k: LaneUniform = min(max(int(np.floor(v)), 0), nrec - 1)
     u = 2.0 * (v - k) - 1.0
-    j = off + (k * ncoef + ncoef - 1) * 6
+    j = off + (k * NCOEF + NCOEF - 1) * 6
     mx = p[j]
     my = p[j + 1]
     mz = p[j + 2]
     sx = p[j + 3]
     sy = p[j + 4]
     sz = p[j + 5]
-    for _ in range(ncoef - 1):
+    for _ in range(NCOEF - 1):
         j -= 6
         mx = mx * u + p[j]
         my = my * u + p[j + 1]
@@ -178,7 +179,6 @@ def ephemeris_body_position(t, p, b, body_pos):
         start = p[SERIES_HDR]
         inv_length = p[SERIES_HDR + 1]
         nrec = int(p[SERIES_HDR + 2])
-        ncoef = int(p[SERIES_HDR + 3])
         off = int(p[SERIES_HDR + 4])
         v = (t - start) * inv_length
         k = int(np.floor(v))
@@ -187,14 +187,14 @@ def ephemeris_body_position(t, p, b, body_pos):
         elif k > nrec - 1:
             k = nrec - 1
         u = 2.0 * (v - k) - 1.0
-        j = off + (k * ncoef + ncoef - 1) * 6
+        j = off + (k * NCOEF + NCOEF - 1) * 6
         mx = p[j]
         my = p[j + 1]
         mz = p[j + 2]
         sx = p[j + 3]
         sy = p[j + 4]
         sz = p[j + 5]
-        for _ in range(ncoef - 1):
+        for _ in range(NCOEF - 1):
             j -= 6
             mx = mx * u + p[j]
             my = my * u + p[j + 1]
@@ -255,8 +255,8 @@ def pack_params(constants: np.ndarray, moon: ChebyshevSeries, sun_minus_emb: Che
     exactly on a common grid of ``record_s`` records (default 6 hours, which divides both), in the
     power basis, scaled to LU and TU; trailing powers below ``moon_drop_below_km`` (1e-8 km) and
     ``sun_drop_below_km`` (1e-5 km: the solar tide on a cislunar orbit changes by < 1e-17 km/s^2)
-    are dropped. Measured: 8 powers per record (11 with 1-day records), and CPU time per
-    particle-period 2.7x cr3bp against 3.6x with 1-day records (benchmarks/bench_ephemeris.py).
+    are dropped; then padded to :data:`NCOEF` powers (more raise ``ValueError``). Measured: 8
+    powers per record (11 with 1-day records, which are therefore refused).
     """
     lo = max(moon.start_s, sun_minus_emb.start_s)
     hi = min(moon.end_s, sun_minus_emb.end_s)
@@ -268,6 +268,10 @@ def pack_params(constants: np.ndarray, moon: ChebyshevSeries, sun_minus_emb: Che
     m = resample_power_basis(moon, lo, record_s, nrec, moon_drop_below_km)
     s = resample_power_basis(sun_minus_emb, lo, record_s, nrec, sun_drop_below_km)
     ncoef = max(m.shape[1], s.shape[1])
+    if ncoef > NCOEF:
+        raise ValueError(f"pack_params: {record_s:g} s records need {ncoef} powers, the kernel evaluates "
+                         f"NCOEF = {NCOEF}; use shorter records (the default 21600 s needs 8)")
+    ncoef = NCOEF  # zero leading powers change no value: 0 * u + a == a
     joint = np.zeros((nrec, ncoef, 6))
     joint[:, :m.shape[1], :3] = m
     joint[:, :s.shape[1], 3:] = s

@@ -15,13 +15,14 @@ def propagate_ensemble(dynamics: Dynamics, states: np.ndarray, t0: float, t1: fl
                        who: str) -> tuple[np.ndarray, np.ndarray]:
     """One ``dynamics.propagate`` call for all ``states`` (N, 6) from t0 to t1 (TU).
 
-    Returns (final states (N, 6), alive (N,) bool). Raises FilterError if the dynamics return
+    Returns (final states (N, 6), alive (N,) bool); the states are the propagation's own array
+    (a view of its last output time), not a copy. Raises FilterError if the dynamics return
     non-finite states for particles that are alive.
     """
     prop = dynamics.propagate(states, float(t0), float(t1))
-    final = np.array(prop.final, dtype=float)
+    final = np.asarray(prop.final, dtype=float)  # no copy: at 1e6 particles each copy is 48 MB
     alive = np.asarray(prop.alive, dtype=bool)
-    if not np.all(np.isfinite(final[alive])):
+    if not np.all(np.isfinite(final).all(axis=1)[alive]):
         raise FilterError(f"filter '{who}': dynamics returned NaN or infinite states for live particles")
     return final, alive
 

@@ -42,19 +42,28 @@ def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_gro
     """
     x = np.asarray(x, dtype=float)
     nx = x.shape[1]
-    y = x if d is None else np.hstack([x, np.asarray(d, dtype=float)])
-    q = y.shape[1]
+    m = 0 if d is None else np.shape(d)[1]
+    q = nx + m
     counts = np.bincount(labels, minlength=n_groups)[:n_groups]
+    # [x d] with the rows grouped by label, each group in particle order (a stable sort): one
+    # array, whose groups are views, instead of [x d] and a copy of the largest group
+    order = np.argsort(labels, kind="stable")
+    y = np.empty((x.shape[0], q))
+    np.take(x, order, axis=0, out=y[:, :nx], mode="clip")  # "clip": unbuffered (the indices are valid)
+    if m:
+        np.take(np.asarray(d, dtype=float), order, axis=0, out=y[:, nx:], mode="clip")
+    del order
+    edges = np.concatenate(([0], np.cumsum(counts)))
     means = np.zeros((n_groups, q))
     covs = np.zeros((n_groups, q, q))
     for i in range(n_groups):  # loop over components (few), vectorised over their particles
         if counts[i] == 0:
             continue
-        yi = y[labels == i]  # the group's rows in particle order (as a stable sort by label gives them)
+        yi = y[edges[i]:edges[i + 1]]
         means[i] = yi.mean(axis=0)
         if yi.shape[0] > 1:
-            c = yi - means[i]
-            covs[i] = (c.T @ c) / (yi.shape[0] - 1)
+            yi -= means[i]  # centred in place: y is this function's own array
+            covs[i] = (yi.T @ yi) / (yi.shape[0] - 1)
     return GroupMoments(counts, means[:, :nx], means[:, nx:], covs[:, :nx, :nx], covs[:, :nx, nx:],
                         covs[:, nx:, nx:])
 

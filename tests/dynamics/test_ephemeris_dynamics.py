@@ -202,3 +202,14 @@ def test_a_scenario_hands_its_epoch_to_the_ephemeris_dynamics(registry):
     built = sc.components["dynamics"].build(registry)
     assert built.epoch.startswith("2027-03-04T05:06:07") and built.j2
     assert sc.truth_dynamics.build(registry).epoch.startswith("2027-03-04T05:06:07")
+
+
+def test_records_needing_more_powers_than_the_kernel_evaluates_are_refused(dyn):
+    from cistrack.plugins.dynamics.ephemeris_rhs import NCOEF, pack_params
+
+    eph, origin = dyn.frame.ephemeris, dyn.frame.epoch_tdb
+    moon = eph.series("moon", origin, 0.0, 10 * DAY_S)
+    sun = eph.series("sun", origin, 0.0, 10 * DAY_S)
+    with pytest.raises(ValueError, match=f"need 11 powers.*NCOEF = {NCOEF}"):
+        pack_params(np.zeros(12), moon, sun, units.LU_KM, units.TU_S, record_s=86_400.0)
+    assert pack_params(np.zeros(12), moon, sun, units.LU_KM, units.TU_S)[15] == NCOEF

@@ -12,17 +12,9 @@ from cistrack.plugins.dynamics.twobody import TwoBody
 from cistrack.propagation.dop853_lanes_source import RESERVED
 from cistrack.propagation.lane_rhs import lane_body
 
+from .kernel_runs import run_kernel as _run, same_results as _same
+
 NRHO = ORBITS["nrho-9-2"]
-
-
-def _run(kernel, dyn, states, times, max_steps=5_000_000, rtol=None, atol=None):
-    n = states.shape[0]
-    out = np.empty((times.size, n, 6))
-    ib, it, st = np.full(n, -1), np.full(n, np.inf), np.zeros(n, dtype=np.int64)
-    pos, rad = dyn._bodies_arrays()
-    kernel(0, n, np.ascontiguousarray(states), dyn._params(), 0.0, times, dyn.rtol if rtol is None else rtol,
-           dyn.atol if atol is None else atol, pos, rad, max_steps, 0.0, out, ib, it, st)
-    return out, ib, it, st
 
 
 def _mixed_ensemble(dyn, n, seed=3):
@@ -34,10 +26,6 @@ def _mixed_ensemble(dyn, n, seed=3):
     cloud[17] = np.r_[moon + [0.0, 0.05, 0.01], [0.03, -0.5, 0.0]]
     cloud[30] = [-dyn.mu + 1e-3, 0, 0, 0, 0.1, 0]
     return cloud
-
-
-def _same(a, b):
-    return all(np.array_equal(u, v) for u, v in zip(a, b))
 
 
 @pytest.mark.parametrize("times", [np.array([0.2, 0.2, 0.9, 2.0]), np.array([-0.4, -1.3])],
@@ -74,7 +62,7 @@ def test_the_cr3bp_right_hand_side_is_rewritten_to_lane_code():
 
 
 def _indexed_by_loop(t, y, p, out):
-    for i in range(6):
+    for i in range(int(p[1])):  # a bound known only at run time: not unrolled
         out[i] = -p[0] * y[i]
 
 
@@ -106,7 +94,7 @@ def test_a_model_without_a_lockstep_kernel_still_propagates():
 
     @njit
     def loop_rhs(t, y, p, out):
-        for i in range(6):
+        for i in range(int(p[1])):
             out[i] = -p[0] * y[i]
 
     class Decay(CompiledDynamics):
@@ -116,7 +104,7 @@ def test_a_model_without_a_lockstep_kernel_still_propagates():
             self.rtol, self.atol = rtol, atol
 
         def params_vector(self):
-            return np.array([0.5])
+            return np.array([0.5, 6.0])
 
     dyn = Decay()
     assert not hasattr(dyn._kernels(), "propagate_lanes_kernel")

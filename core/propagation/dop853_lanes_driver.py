@@ -1,0 +1,206 @@
+"""Template of the SIMD-lockstep kernel's driver: ``propagate_lanes_kernel`` and its helpers.
+
+Part of the module text that :mod:`.dop853_lanes_source` generates (``{STAGES}`` is replaced by
+the calls of the stage functions): the per-lane scalar code that loads particles into lanes,
+controls each lane's step size, locates impacts, writes outputs and refills finished lanes,
+around one vectorised ``_lanes_step`` per step of all lanes. See :mod:`.dop853_lanes_source`.
+"""
+
+__all__ = ["DRIVER"]
+
+DRIVER = '''
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _lanes_step(w, params, rtol, atol):
+{STAGES}    _lanes_error(w, rtol, atol)
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _lane_get(w, row, l, col):
+    for j in range(DIM):
+        col[j] = w[(row + j) * LANES + l]
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _lane_put(w, row, l, col):
+    for j in range(DIM):
+        w[(row + j) * LANES + l] = col[j]
+
+
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad, h_init,
+                out, impact_body, impact_time, status, w, tl, hl, iout, nsteps, rejected,
+                err_old, col, col2, col3, col4):
+    """Load particle i into lane l; False if it needs no step (done at t0)."""
+    nt = times.shape[0]
+    for j in range(DIM):
+        col[j] = y0[i, j]
+    b = _inside(t0, col, params, body_pos, body_rad)
+    if b >= 0:
+        impact_body[i] = b
+        impact_time[i] = t0
+        status[i] = 1
+        _freeze(i, 0, col, out, nt)
+        return False
+    io = 0
+    while io < nt and times[io] == t0:
+        for j in range(DIM):
+            out[io, i, j] = col[j]
+        io += 1
+    if io == nt:
+        return False
+    rhs(t0, col, params, col2)
+    _lane_put(w, ROW_Y, l, col)
+    _lane_put(w, ROW_K0, l, col2)
+    span = abs(times[nt - 1] - t0)
+    if h_init > 0.0:
+        hl[l] = min(h_init, span)
+    else:
+        hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
+    tl[l] = t0
+    iout[l] = io
+    nsteps[l] = 0
+    rejected[l] = False
+    err_old[l] = 1e-4
+    return True
+
+
+@njit(cache=CACHE, nogil=True, fastmath=FASTMATH)
+def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_rad,
+                           max_steps, h_init, out, impact_body, impact_time, status):
+    nt = times.shape[0]
+    direction = 1.0
+    if times[nt - 1] < t0:
+        direction = -1.0
+    hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
+    w = np.zeros(ROWS * LANES)
+    tl = np.empty(LANES)
+    hl = np.empty(LANES)
+    hstep = np.empty(LANES)
+    err_old = np.empty(LANES)
+    last = np.zeros(LANES, dtype=np.bool_)
+    rejected = np.zeros(LANES, dtype=np.bool_)
+    iout = np.zeros(LANES, dtype=np.int64)
+    nsteps = np.zeros(LANES, dtype=np.int64)
+    who = np.full(LANES, -1, dtype=np.int64)
+    col = np.empty(DIM)
+    col2 = np.empty(DIM)
+    col3 = np.empty(DIM)
+    col4 = np.empty(DIM)
+    nxt = i0
+    active = 0
+    for l in range(LANES):
+        while nxt < i1:
+            i = nxt
+            nxt += 1
+            if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
+                           h_init, out, impact_body, impact_time, status, w, tl, hl, iout,
+                           nsteps, rejected, err_old, col, col2, col3, col4):
+                who[l] = i
+                active += 1
+                break
+    while active > 0:
+        src = 0
+        while who[src] < 0:
+            src += 1
+        for l in range(LANES):
+            if who[l] < 0:  # idle: repeat an active lane (finite arithmetic, result discarded)
+                tl[l] = tl[src]
+                hl[l] = hl[src]
+                iout[l] = iout[src]
+                _lane_get(w, ROW_Y, src, col)
+                _lane_put(w, ROW_Y, l, col)
+                _lane_get(w, ROW_K0, src, col)
+                _lane_put(w, ROW_K0, l, col)
+        for l in range(LANES):
+            tout = times[iout[l]]
+            remaining = abs(tout - tl[l])
+            hst = hl[l]
+            lst = False
+            if hst * 1.01 >= remaining:
+                hst = remaining
+                lst = True
+            hstep[l] = hst
+            last[l] = lst
+            w[ROW_T * LANES + l] = tl[l]
+            w[ROW_H * LANES + l] = direction * hst
+        _lanes_step(w, params, rtol, atol)
+        for l in range(LANES):
+            i = who[l]
+            if i < 0:
+                continue
+            nsteps[l] += 1
+            e = w[ROW_ERR * LANES + l]
+            hs = w[ROW_H * LANES + l]
+            done = False
+            if e <= 1.0:
+                if e == 0.0:
+                    fac = MAX_GROWTH
+                else:
+                    fac = min(MAX_GROWTH, SAFETY * e ** -EXPO1 * err_old[l] ** BETA)
+                err_old[l] = max(e, 1e-4)
+                if rejected[l]:
+                    fac = min(1.0, fac)
+                rejected[l] = False
+                _lane_get(w, ROW_YN, l, col)
+                b = _inside(tl[l] + hs, col, params, body_pos, body_rad)
+                if b >= 0:
+                    _lane_get(w, ROW_Y, l, col2)
+                    _lane_get(w, ROW_K0, l, col3)
+                    s = _locate_impact(tl[l], hs, col2, col3, params, col4, col, np.empty(DIM),
+                                       body_pos, body_rad, b)
+                    impact_body[i] = b
+                    impact_time[i] = tl[l] + s * hs
+                    status[i] = 1
+                    _freeze(i, iout[l], col, out, nt)
+                    done = True
+                else:
+                    tout = times[iout[l]]
+                    if last[l]:
+                        tl[l] = tout
+                    else:
+                        tl[l] = tl[l] + hs
+                    _lane_put(w, ROW_Y, l, col)
+                    _lane_get(w, ROW_F, l, col2)
+                    _lane_put(w, ROW_K0, l, col2)
+                    if last[l]:
+                        io = iout[l]
+                        while io < nt and times[io] == tout:
+                            for j in range(DIM):
+                                out[io, i, j] = col[j]
+                            io += 1
+                        iout[l] = io
+                        hl[l] = max(hl[l], hstep[l] * fac)
+                        if io >= nt:
+                            done = True
+                    else:
+                        hl[l] = hstep[l] * fac
+            else:
+                if e > 0.0:
+                    fac = max(MIN_SHRINK, SAFETY * e ** -EXPO1)
+                else:
+                    fac = 0.2
+                hl[l] = hstep[l] * fac
+                rejected[l] = True
+                if hl[l] < hmin:
+                    status[i] = 3
+                    _lane_get(w, ROW_Y, l, col)
+                    _freeze(i, iout[l], col, out, nt)
+                    done = True
+            if not done and nsteps[l] >= max_steps and iout[l] < nt:
+                status[i] = 2
+                _lane_get(w, ROW_Y, l, col)
+                _freeze(i, iout[l], col, out, nt)
+                done = True
+            if done:
+                who[l] = -1
+                active -= 1
+                while nxt < i1:
+                    i = nxt
+                    nxt += 1
+                    if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos,
+                                   body_rad, h_init, out, impact_body, impact_time, status, w,
+                                   tl, hl, iout, nsteps, rejected, err_old, col, col2, col3, col4):
+                        who[l] = i
+                        active += 1
+                        break
+'''

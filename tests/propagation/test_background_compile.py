@@ -1,0 +1,72 @@
+"""First runs: the lockstep kernel can be compiled in a second process while this one works, and
+a handful of particles already goes through the lockstep kernel (no one-particle kernel to compile)."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from cistrack.plugins.dynamics.cr3bp import CR3BP
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
+from cistrack.propagation import background_compile
+from cistrack.propagation.compiled import LOCKSTEP_MIN_PARTICLES
+
+from .kernel_runs import run_kernel
+
+NRHO = ORBITS["nrho-9-2"]
+
+
+def test_a_few_particles_go_through_the_lockstep_kernel_with_the_one_particle_results():
+    dyn = CR3BP()
+    states = NRHO.state + np.random.default_rng(2).normal(size=(LOCKSTEP_MIN_PARTICLES, 6)) * 1e-5
+    times = np.array([0.4, 1.1])
+    got = dyn.propagate(states, 0.0, times)
+    one = run_kernel(dyn._kernels().propagate_kernel, dyn, states, times)
+    assert np.array_equal(got.states, one[0]) and dyn._kernels().propagate_lanes_kernel.signatures
+
+
+def test_no_second_process_when_the_setting_says_no(monkeypatch):
+    monkeypatch.setenv("CISTRACK_BACKGROUND_COMPILE", "0")
+    assert not background_compile.idle_core()
+    monkeypatch.setenv("CISTRACK_BACKGROUND_COMPILE", "1")
+    assert background_compile.idle_core()
+
+
+def test_the_estimate_grows_with_the_load(monkeypatch):
+    monkeypatch.setattr(background_compile.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    idle = background_compile.estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=False)
+    monkeypatch.setattr(background_compile.os, "getloadavg", lambda: (8.0, 8.0, 8.0))
+    busy = background_compile.estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=False)
+    assert busy > idle >= 14.0
+
+
+@pytest.mark.slow
+def test_a_kernel_compiled_in_the_second_process_is_loaded_here_not_compiled_again(tmp_path):
+    """Fresh caches; the child compiles the lockstep kernel, this process only loads it."""
+    script = textwrap.dedent('''
+        import numpy as np
+        from numba.core import event
+        from cistrack.plugins.dynamics.cr3bp import CR3BP
+        from cistrack.plugins.dynamics.orbit_catalog import ORBITS
+        from cistrack.propagation import background_compile
+        compiled = []
+        class L(event.Listener):
+            def on_start(self, ev):
+                compiled.append(ev.data["dispatcher"].py_func.__name__)
+            def on_end(self, ev):
+                pass
+        event.register("numba:compile", L())
+        dyn, x = CR3BP(), ORBITS["nrho-9-2"].state
+        assert background_compile.start(dyn, x)
+        p = dyn.propagate(x + np.zeros((20, 6)), 0.0, 1.0)
+        print(int("propagate_lanes_kernel" in compiled), repr(float(p.states[-1, 0, 0])))
+    ''')
+    env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "CISTRACK_KERNEL_DIR": str(tmp_path / "kernels"), "CISTRACK_BACKGROUND_COMPILE": "1"}
+    out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    compiled_here, value = out.stdout.split()
+    reference = CR3BP().propagate(NRHO.state[None], 0.0, 1.0).states[-1, 0, 0]
+    assert compiled_here == "0" and float(value) == reference

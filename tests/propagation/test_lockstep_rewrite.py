@@ -1,0 +1,136 @@
+"""Right-hand sides written with ordinary Python (loops, ``_`` names, a table indexed by time) run
+on the SIMD-lockstep kernel and give the one-particle kernel's results bit for bit."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numba import njit
+
+from cistrack import units
+from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
+from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_rhs
+from cistrack.plugins.dynamics.orbit_catalog import ORBITS
+from cistrack.propagation import CompiledDynamics
+from cistrack.propagation.dop853_lanes_source import RESERVED
+from cistrack.propagation.lane_rhs import LaneUniform, lane_body
+
+from .kernel_runs import run_kernel, same_results
+
+N_TABLE = 40
+
+
+@njit
+def loop_rhs(t, y, p, out):
+    """Oscillator written with a constant-range loop and a run-time loop with ``_``."""
+    c = p[0]
+    for _ in range(int(p[1])):  # c <- c * (1 + t / 8), as often as p[1] says
+        c = c + c * t * 0.125
+    for i in range(3):
+        out[i] = y[i + 3]
+        out[i + 3] = -c * y[i]
+
+
+@njit
+def table_rhs(t, y, p, out):
+    """Oscillator pushed by a force that is constant over each of N_TABLE intervals of time."""
+    width = p[0]
+    k: LaneUniform = min(max(int(np.floor(t / width)), 0), N_TABLE - 1)
+    f = p[1 + k]
+    for i in range(3):
+        out[i] = y[i + 3]
+        out[i + 3] = -y[i] + f * (i + 1)
+
+
+class _Model(CompiledDynamics):
+    def __init__(self, params, rtol: float = 1e-10, atol: float = 1e-12):
+        self.params, self.rtol, self.atol = np.asarray(params, dtype=float), rtol, atol
+
+    def params_vector(self):
+        return self.params
+
+
+class Loops(_Model):
+    rhs = loop_rhs
+
+
+class Table(_Model):
+    rhs = table_rhs
+
+
+def _spread(n, seed=5):
+    """Amplitudes from 0.1 to 3: the particles take different steps, so lanes drift apart in time."""
+    rng = np.random.default_rng(seed)
+    return rng.normal(size=(n, 6)) * np.linspace(0.1, 3.0, n)[:, None]
+
+
+def _lockstep_equals_one_particle(dyn, states, times):
+    mod = dyn._kernels()
+    assert hasattr(mod, "propagate_lanes_kernel")
+    return same_results(run_kernel(mod.propagate_kernel, dyn, states, times),
+                        run_kernel(mod.propagate_lanes_kernel, dyn, states, times))
+
+
+def test_a_constant_range_loop_is_unrolled_into_fixed_state_slots():
+    body, why = lane_body(loop_rhs, RESERVED)
+    assert why == "" and "_y3" in body.text and "__OUT__[5]" in body.text and "for i" not in body.text
+
+
+def test_a_loop_over_a_run_time_range_with_an_underscore_variable_stays_a_loop():
+    body, why = lane_body(loop_rhs, RESERVED)
+    assert why == "" and "for _u_ in range(int(_p[1]))" in body.text
+
+
+@pytest.mark.parametrize("times", [np.array([0.7, 3.0]), np.array([-2.5])], ids=["forward", "backward"])
+def test_loops_give_the_one_particle_results_bit_for_bit(times):
+    assert _lockstep_equals_one_particle(Loops([1.0, 3.0]), _spread(37), times)
+
+
+@pytest.mark.parametrize("times", [np.array([1.3, 7.9]), np.array([-6.0])], ids=["forward", "backward"])
+def test_a_time_table_keyed_by_lane_uniform_gives_the_one_particle_results_bit_for_bit(times):
+    force = np.random.default_rng(1).normal(size=N_TABLE)
+    table = Table(np.r_[0.25, force])
+    assert _lockstep_equals_one_particle(table, _spread(45), times)
+
+
+def test_the_keyed_lane_loop_reads_no_parameter_inside_the_loop():
+    """What makes LLVM vectorise it: every params load is done once before the lane loop."""
+    body, why = lane_body(ephemeris_rhs, RESERVED)
+    assert why == "" and body.key.name == "k"
+    assert "_p[" not in body.text and "_p[" in body.key.per_key
+
+
+def _key_nested(t, y, p, out):
+    if t > 0.0:
+        k: LaneUniform = int(t)
+        out[0] = p[k]
+
+
+def _key_after_state(t, y, p, out):
+    x = y[0]
+    k: LaneUniform = int(t + x)
+    out[0] = p[k]
+
+
+@pytest.mark.parametrize("func,reason", [(_key_nested, "top level"), (_key_after_state, "reads the state")])
+def test_a_lane_uniform_key_that_may_differ_by_state_or_branch_is_refused(func, reason):
+    body, why = lane_body(func, RESERVED)
+    assert body is None and reason in why
+
+
+@pytest.mark.parametrize("times", [np.array([0.9, 1.5121]), np.array([-0.8])], ids=["forward", "backward"])
+def test_ephemeris_lockstep_results_equal_the_one_particle_kernel_bit_for_bit(times):
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z", j2=True, srp_area_to_mass_m2_kg=0.01)
+    nrho = ORBITS["nrho-9-2"]
+    rng = np.random.default_rng(11)
+    syn = nrho.state + rng.normal(size=(41, 6)) * np.r_[[3e-5] * 3, [1e-4] * 3]
+    dyn._ensure_window(min(0.0, times.min()), max(0.0, times.max()))
+    states = dyn.to_inertial(syn, 0.0)
+    moon, moon_v = dyn.frame.ephemeris.moon(*dyn.frame.epoch_tdb)  # GCRS km, km/s
+    down = np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81])
+    states[5] = units.state_from_km(np.r_[moon + (dyn.moon_radius_km + 2000.0) * down, moon_v - 2.0 * down])
+    mod = dyn._kernels()
+    one = run_kernel(mod.propagate_kernel, dyn, states, times)
+    lock = run_kernel(mod.propagate_lanes_kernel, dyn, states, times)
+    assert same_results(one, lock)
+    if times[-1] > 0:
+        assert (one[3] == 1).sum() >= 1  # an impact on the moving Moon was exercised
