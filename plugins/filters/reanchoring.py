@@ -57,6 +57,28 @@ _MAX_ITERATIONS = 300  # Example 3's 150-day arcs needed up to ~260 from the bes
 _SAME_SOLUTION_M2 = 16.81  # chi-square(6) 99 %: two fits this close are one solution
 
 
+class _DifferencedDynamics:
+    """The filter's dynamics with transition matrices by central differences of its own
+    ``propagate`` (13 trajectories in one call of the run's compiled kernel): the variational
+    kernels the model may also have would be one more compilation on a first run (~17 s on 2
+    cores for Example 1). Levenberg-Marquardt only needs the Jacobian approximately; the fixed
+    point is the model's own least-squares solution either way."""
+
+    def __init__(self, dynamics: Dynamics) -> None:
+        self._dynamics = dynamics
+
+    def __getattr__(self, name: str):
+        return getattr(self._dynamics, name)
+
+    def propagate(self, *args, **kwargs):
+        return self._dynamics.propagate(*args, **kwargs)
+
+    def propagate_with_stm(self, state: np.ndarray, t0: float, times) -> tuple[np.ndarray, np.ndarray]:
+        from cistrack.interfaces.transition_matrix import stm_by_central_differences
+
+        return stm_by_central_differences(self._dynamics, state, t0, times)
+
+
 def _chi2_limit(dof: int) -> float:
     """The 99.9 % point of chi-square with ``dof`` degrees of freedom (scipy.special: scipy.stats
     costs a second to import)."""
@@ -151,6 +173,7 @@ class Reanchoring:
         from cistrack.fit.least_squares import fit_orbit
         from cistrack.fit.options import FitOptions
 
+        dynamics = _DifferencedDynamics(dynamics)
         after_gap, self._gap_open = self._gap_open, False
         self._new = 0
         self.attempts += 1
