@@ -48,6 +48,7 @@ from cistrack.model.belief import GaussianMixture
 from cistrack.model.measurement import Measurement, MeasurementSet
 
 from .measured_components import MeasuredComponents
+from .measurement_sharpness import measurement_quadratic
 
 __all__ = ["Reanchoring", "REANCHOR_MODES"]
 
@@ -164,7 +165,7 @@ class Reanchoring:
         for m in self.history:
             meas = MeasuredComponents(sensor, m)
             d = meas.residuals_to_measurement(states[float(m.t)])
-            chi2 += np.einsum("ni,ij,nj->n", d, np.linalg.inv(meas.R), d)
+            chi2 += measurement_quadratic(d, meas.R)
         return np.where(np.isfinite(chi2), chi2, np.inf)
 
     def attempt(self, x: np.ndarray, t: float, dynamics: Dynamics, sensor: Sensor) -> GaussianMixture | None:

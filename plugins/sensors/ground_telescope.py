@@ -21,7 +21,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD, LU_KM, parse_utc
 
 from .frames import (FRAME_MODELS, azel_to_unit_neu, geodetic_to_ecef, neu_basis, neu_to_azelr, noisy_measurements)
-from .input_checks import checked_states
+from .input_checks import checked_states, checked_pass_samples
 from .space_frames import IdealSky
 from .space_geometry import radec_of, unit_of_radec
 from .visibility_rules import sky_rules
@@ -273,14 +273,7 @@ class GroundTelescope(Sensor):
         A pass already under way at the first sample starts there; one still under way at the
         last sample ends there. Sample densely enough (<= 1 h) not to miss short passes.
         """
-        tt = np.asarray(times, dtype=float).reshape(-1)
-        x = self._check_states(states)
-        if x.shape[0] != tt.shape[0] or x.shape[1] != 6:
-            raise MeasurementError(
-                f"sensor 'ground-telescope': passes needs times (K,) and states (K, 6), got "
-                f"{tt.shape} and {x.shape}")
-        if tt.size > 1 and np.any(np.diff(tt) <= 0):
-            raise MeasurementError("sensor 'ground-telescope': pass times must increase strictly")
+        tt, x = checked_pass_samples("ground-telescope", times, states)
         if tt.size == 0:
             return []
         vis = self.visible(x, tt)

@@ -5,7 +5,7 @@ import numpy as np
 
 from cistrack.errors import MeasurementError
 
-__all__ = ["checked_states", "checked_times"]
+__all__ = ["checked_states", "checked_times", "checked_pass_samples"]
 
 
 def checked_states(label: str, states) -> np.ndarray:
@@ -30,3 +30,16 @@ def checked_times(label: str, t, n: int) -> np.ndarray:
         raise MeasurementError(f"sensor {label!r}: t must be a scalar or have one time per row ({n}), "
                                f"got shape {np.shape(t)}")
     return tt
+
+
+def checked_pass_samples(label: str, times, states) -> tuple[np.ndarray, np.ndarray]:
+    """``(times (K,), states (K, 6))`` for a sensor's ``passes``: finite states, one per time, times
+    strictly increasing; else MeasurementError naming sensor ``label``."""
+    tt = np.asarray(times, dtype=float).reshape(-1)
+    x = checked_states(label, states)
+    if x.shape[0] != tt.shape[0]:
+        raise MeasurementError(f"sensor {label!r}: passes needs times (K,) and states (K, 6), got "
+                               f"{tt.shape} and {x.shape}")
+    if tt.size > 1 and np.any(np.diff(tt) <= 0):
+        raise MeasurementError(f"sensor {label!r}: pass times must increase strictly")
+    return tt, x

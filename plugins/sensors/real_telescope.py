@@ -34,7 +34,7 @@ from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
 from .frames import noisy_measurements
-from .input_checks import checked_states, checked_times
+from .input_checks import checked_states, checked_times, checked_pass_samples
 from .space_frames import RealSky
 from .visibility_rules import sky_rules
 
@@ -297,13 +297,7 @@ class RealTelescope(Sensor):
     # -- passes and simulation ------------------------------------------------------------------
     def passes(self, times: np.ndarray, states: np.ndarray):
         """Visibility passes: contiguous runs of visible samples (sample at <= 1 h spacing)."""
-        tt = np.asarray(times, dtype=float).reshape(-1)
-        x = self._check_states(states)
-        if x.shape[0] != tt.shape[0]:
-            raise MeasurementError(f"sensor 'real-telescope': passes needs times (K,) and states "
-                                   f"(K, 6), got {tt.shape} and {x.shape}")
-        if tt.size > 1 and np.any(np.diff(tt) <= 0):
-            raise MeasurementError("sensor 'real-telescope': pass times must increase strictly")
+        tt, x = checked_pass_samples("real-telescope", times, states)
         return super().passes(tt, x)
 
     def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:

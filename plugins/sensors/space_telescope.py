@@ -29,7 +29,7 @@ from cistrack.plugin.hookspecs import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
 from .frames import noisy_measurements
-from .input_checks import checked_states, checked_times
+from .input_checks import checked_states, checked_times, checked_pass_samples
 from .observer_orbit import ObserverOrbit, observer_start
 from .space_frames import RealSky, sky_for
 from .space_geometry import astrometric_direction, radec_of, unit_of_radec
@@ -249,13 +249,7 @@ class SpaceTelescope(Sensor):
 
     def passes(self, times: np.ndarray, states: np.ndarray):
         """Visible samples inside the tasking windows, as contiguous runs (sample at <= 5 min)."""
-        tt = np.asarray(times, dtype=float).reshape(-1)
-        x = self._check_states(states)
-        if x.shape[0] != tt.shape[0]:
-            raise MeasurementError(f"sensor 'space-telescope': passes needs times (K,) and states (K, 6), "
-                                   f"got {tt.shape} and {x.shape}")
-        if tt.size > 1 and np.any(np.diff(tt) <= 0):
-            raise MeasurementError("sensor 'space-telescope': pass times must increase strictly")
+        tt, x = checked_pass_samples("space-telescope", times, states)
         return passes_from_mask(tt, self.visible(x, tt) & self.in_window(tt))
 
     def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
