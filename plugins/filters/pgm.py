@@ -281,7 +281,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         mix = self._reanchor.attempt(self._x, self._t, self._dyn, self._sensor)
         if mix is None:
             return False
-        x = self._reanchor.draw(mix, self._t, self.n_particles, self._rng, self._dyn)
+        x = self._reanchor.draw(self.n_particles, self._rng)
         self._x = self._sample_posterior(mix, self.n_particles)[0] if x is None else self._prune(x)
         return True
 

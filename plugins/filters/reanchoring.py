@@ -26,12 +26,16 @@ An arc ends at a gap of ``gap_days`` or more between updates. In mode "arcs" the
 afresh (fits never span a gap) and is not fitted before its second pass: a single pass of angles
 leaves the range ambiguous (on Example 3, fits to the one night after the gap alone put 3 of 22
 runs on a wrong solution ~950 km away). In mode "across-gaps" the fit spans the gap, attempted
-when the first pass after it is over, with the particles drawn at the arc's first measurement and propagated
-(the linearised covariance at the end of a months-long arc is too narrow where the posterior
-bends). Measured: on Example 2 (10-day gap, seen seeds 3000-3029) across-gaps fits ended all 30
-runs tracking within 27 km (6 ended 52-70 km off without); on Example 3 (150-day gap) the median
-final error fell from 64 to 6 km but 3 of 30 runs ended overconfident (truth 10-12 km away
-outside a 4-7 km sigma), so Example 3 does not use it (docs/information-bound.md).
+when the first pass after it is over. After a gap the chi-square valley is long and bent: on
+Example 3 (150-day gap, seed 3007) the least-squares solution lay 20 km from the truth with a
+chi-square only 11.8 below the truth's, 80 sigmas off along the fit's sharpest direction, so its
+linearised covariance (or one at the arc's start, drawn and propagated, as first built) called
+the run lost. The belief after a gap is therefore each solution's line of variations
+(:mod:`cistrack.fit.line_of_variations`): least-squares points every half sigma along the weakest
+direction out to 4 sigma, each a Gaussian on its hyperplane widened along the line by the spacing,
+weighted by its Laplace evidence; on seed 3007 it passes 1.3 km from the truth.
+Measured on seen seeds 3000-3029: Example 3 29/30 tracking, median final error 5.4 km, NEES p90
+11.3 (26 tracking, 63.8 km without re-anchoring); Example 2 30/30, largest error 26.9 km.
 
 The IOD's own measurements are not refitted (the filter never sees them); their information
 reaches the fit through the particles that start it.
@@ -56,6 +60,27 @@ REANCHOR_MODES = ("off", "arcs", "across-gaps")
 _PASS_SCORED = 1000  # particles scored at a pass end (all of them after a gap, across-gaps)
 _MAX_ITERATIONS = 300  # Example 3's 150-day arcs needed up to ~260 from the best particles
 _SAME_SOLUTION_M2 = 16.81  # chi-square(6) 99 %: two fits this close are one solution
+_GAP_STM_STEP = 1e-8  # LU, VU: see _DifferencedDynamics
+_LOV_STEP = 0.5  # sigmas between the points of the line of variations after a gap
+_LOV_MAX_SIGMA = 4.0
+
+
+def _valley(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit, opts) -> tuple[list, np.ndarray]:
+    """A solution's line of variations: its points and the weakest direction they follow."""
+    from cistrack.fit.line_of_variations import line_of_variations, weakest_direction
+
+    pts = line_of_variations(dynamics, sensor, ms, fit, step=_LOV_STEP, max_sigma=_LOV_MAX_SIGMA, options=opts)
+    return pts, weakest_direction(fit.covariance)
+
+
+def _valley_mixture(pts: list, v: np.ndarray) -> GaussianMixture:
+    """The line as a Gaussian mixture: a component at every point, its covariance on the point's
+    hyperplane widened along the line by the spacing, weighted by its Laplace evidence."""
+    from cistrack.fit.line_of_variations import line_weights
+
+    along = (_LOV_STEP ** 2) * np.outer(v, v)
+    return GaussianMixture(line_weights(pts, _LOV_STEP, v), np.array([p.state for p in pts]),
+                           np.array([p.covariance + along for p in pts]))
 
 
 class _DifferencedDynamics:
@@ -63,10 +88,17 @@ class _DifferencedDynamics:
     ``propagate`` (13 trajectories in one call of the run's compiled kernel): the variational
     kernels the model may also have would be one more compilation on a first run (~17 s on 2
     cores for Example 1). Levenberg-Marquardt only needs the Jacobian approximately; the fixed
-    point is the model's own least-squares solution either way."""
+    point is the model's own least-squares solution either way.
 
-    def __init__(self, dynamics: Dynamics) -> None:
+    Across a months-long gap the default steps (1e-6 LU = 384 m, 1e-6 VU) are too large: the 3:1
+    NRHO stretches a displacement 3,585-fold in 150 days, so the perturbed trajectories leave the
+    linear regime and the Levenberg-Marquardt iteration stalls short of the minimum (Example 3,
+    seeds 3388 and 3389: chi-square 44.1 and 54.3, within the limit, but "not converged" from
+    every start). After a gap the steps are 1e-8 (3.8 m, 1 cm/s): the same starts converge."""
+
+    def __init__(self, dynamics: Dynamics, step: float | None = None) -> None:
         self._dynamics = dynamics
+        self._steps = None if step is None else np.full(6, step)
 
     def __getattr__(self, name: str):
         return getattr(self._dynamics, name)
@@ -77,7 +109,7 @@ class _DifferencedDynamics:
     def propagate_with_stm(self, state: np.ndarray, t0: float, times) -> tuple[np.ndarray, np.ndarray]:
         from cistrack.interfaces.transition_matrix import stm_by_central_differences
 
-        return stm_by_central_differences(self._dynamics, state, t0, times)
+        return stm_by_central_differences(self._dynamics, state, t0, times, steps=self._steps)
 
 
 def _chi2_limit(dof: int) -> float:
@@ -115,9 +147,9 @@ class Reanchoring:
         self._segment = 0  # updates since the latest gap (or the start)
         self._passes = 1  # passes since the latest gap (or the start), the current one included
         self._gap_open = False  # a gap has come since the latest attempt
-        self._draw_from: tuple[float, GaussianMixture] | None = None
         self.attempts = 0
         self.solutions = 0
+        self._valleys: tuple[np.ndarray, list] | None = None
 
     def observe(self, measurement: Measurement) -> None:
         """Record a measurement the filter is about to condition on."""
@@ -174,10 +206,11 @@ class Reanchoring:
         from cistrack.fit.least_squares import fit_orbit
         from cistrack.fit.options import FitOptions
 
-        dynamics = _DifferencedDynamics(dynamics)
         after_gap, self._gap_open = self._gap_open, False
+        dynamics = _DifferencedDynamics(dynamics, _GAP_STM_STEP if after_gap else None)
         self._new = 0
         self.attempts += 1
+        self._valleys = None
         ms = self._measurement_set()
         if ms is None:
             return None
@@ -211,34 +244,25 @@ class Reanchoring:
         self.solutions = len(kept)
         logw = np.array([-0.5 * r.chi2 + 0.5 * np.linalg.slogdet(r.covariance)[1] for r in kept])
         w = np.exp(logw - logw.max())
-        mix = GaussianMixture(w / w.sum(), np.array([r.state for r in kept]), np.array([r.covariance for r in kept]))
-        self._draw_from = None
-        if after_gap:  # the same solutions at the arc's first measurement, where they are Gaussian
-            t0 = float(ms.times[0])
-            at0 = []
-            for r in kept:
-                x0 = dynamics.propagate(r.state[None], t, np.array([t0])).states[-1][0]
-                try:
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        at0.append(fit_orbit(dynamics, sensor, ms, x0, t0, options=opts))
-                except (CistrackError, np.linalg.LinAlgError, FloatingPointError):
-                    break
-            if len(at0) == len(kept) and all(np.all(np.isfinite(r.covariance)) for r in at0):
-                self._draw_from = (t0, GaussianMixture(mix.weights, np.array([r.state for r in at0]),
-                                                       np.array([r.covariance for r in at0])))
-        return mix
+        w = w / w.sum()
+        if not after_gap:
+            return GaussianMixture(w, np.array([r.state for r in kept]), np.array([r.covariance for r in kept]))
+        valleys = [_valley(dynamics, sensor, ms, r, opts) for r in kept]
+        parts = [_valley_mixture(pts, v) for pts, v in valleys]
+        self._valleys = (w, valleys)
+        return GaussianMixture(np.concatenate([wk * p.weights for wk, p in zip(w, parts)]),
+                               np.concatenate([p.means for p in parts]),
+                               np.concatenate([p.covariances for p in parts]))
 
-    def draw(self, mix: GaussianMixture, t: float, n: int, rng: np.random.Generator,
-             dynamics: Dynamics) -> np.ndarray | None:
-        """Particles (<= n, 6) at ``t`` from the latest accepted solutions ``mix``: after a gap drawn
-        at the arc's first measurement and propagated to ``t`` (the linearised covariance at ``t``
-        is too narrow there: the posterior is bent by the months-long propagation); None: draw from
-        ``mix`` at ``t``."""
-        if self._draw_from is None:
+    def draw(self, n: int, rng: np.random.Generator) -> np.ndarray | None:
+        """Particles (n, 6) along the lines of variations of the latest accepted solutions after a
+        gap (:func:`cistrack.fit.line_of_variations.sample_line`: they follow the bend, which the
+        mixture's straight components do not); None when the latest attempt was within an arc."""
+        from cistrack.fit.line_of_variations import sample_line
+
+        if self._valleys is None:
             return None
-        t0, mix0 = self._draw_from
-        x0, _ = mix0.sample(n, rng)
-        prop = dynamics.propagate(x0, t0, np.array([t]))
-        alive = np.asarray(prop.alive, dtype=bool)
-        return np.array(prop.states[-1][alive], dtype=float) if alive.any() else None
+        w, valleys = self._valleys
+        counts = rng.multinomial(n, w)
+        return np.concatenate([sample_line(pts, int(c), rng, _LOV_STEP, v)
+                               for c, (pts, v) in zip(counts, valleys) if c > 0])

@@ -100,9 +100,24 @@ def test_the_solution_holds_the_truth_inside_its_covariance(seed):
     r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
     mix = r.attempt(_particles(seed), ms[-1].t, dyn, sen)
     assert mix is not None
-    best = int(np.argmax(mix.weights))
-    e = truth[-1] - mix.means[best]
-    assert e @ np.linalg.solve(mix.covariances[best], e) < MAHALANOBIS2_99
+    e = truth[-1] - mix.mean
+    assert e @ np.linalg.solve(mix.covariance, e) < MAHALANOBIS2_99
+
+
+def test_after_a_gap_the_solution_is_its_line_of_variations():
+    dyn, sen, _, _, _, _ = _two_nights()
+    ms = _measurements(1)
+    mix = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms).attempt(_particles(1), ms[-1].t, dyn, sen)
+    assert mix.n_components >= 9  # the nominal point and at least 4 on each side, half a sigma apart
+    assert np.argmax(mix.weights) == mix.n_components // 2  # the nominal solution weighs most
+
+
+def test_within_an_arc_the_solution_is_one_gaussian_per_minimum():
+    dyn, sen, _, _, _, _ = _two_nights()
+    early = [m for m in _measurements(7) if m.t < days_to_tu(5.0)]
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 2), early)
+    mix = r.attempt(_particles(7)[:50], early[-1].t, dyn, sen)
+    assert mix is None or mix.n_components == r.solutions
 
 
 def test_the_solution_is_far_sharper_than_the_particles_it_started_from():
@@ -178,3 +193,23 @@ def test_after_a_gap_an_arc_waits_for_its_second_pass():
     r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 8), ms)
     assert len(r.history) == len(late)
     assert not r.due(ms[-1].t + days_to_tu(1.0))
+
+
+def test_after_a_gap_the_particles_are_drawn_along_the_line():
+    dyn, sen, _, truth, _, _ = _two_nights()
+    ms = _measurements(2)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
+    mix = r.attempt(_particles(2), ms[-1].t, dyn, sen)
+    x = r.draw(3000, np.random.default_rng(0))
+    assert x.shape == (3000, 6)
+    e = truth[-1] - x.mean(axis=0)
+    assert e @ np.linalg.solve(np.cov(x.T), e) < MAHALANOBIS2_99
+    np.testing.assert_allclose(x.mean(axis=0), mix.mean, atol=3 * np.sqrt(np.diag(mix.covariance)).max() / np.sqrt(3000))
+
+
+def test_within_an_arc_the_particles_come_from_the_mixture():
+    dyn, sen, _, _, _, _ = _two_nights()
+    early = [m for m in _measurements(7) if m.t < days_to_tu(5.0)]
+    r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 2), early)
+    r.attempt(_particles(7)[:50], early[-1].t, dyn, sen)
+    assert r.draw(100, np.random.default_rng(0)) is None
