@@ -101,7 +101,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         measurements, started from the posterior particles that fit them best, replaces the
         belief when a fit is accepted (:mod:`.reanchoring`; on Example 1 it brings the RMS error
         at the ends of passes 3-6 from 2.5-4.8 to 0.9 times the information bound). "across-gaps":
-        the fits also span gaps (Example 2). "off": the PGM alone (the paper's).
+        the fits also span gaps, and after a gap the belief is the fit's line of variations
+        (Examples 2 and 3). "off": the PGM alone (the paper's).
     reanchor_gap_days : float
         A gap between updates at least this long ends an arc.
     reanchor_pause_hours : float
@@ -111,6 +112,13 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         Measurements an arc needs before an attempt.
     reanchor_starts : int
         Most fits started, from the best-fitting posterior particles.
+    kernel_ess : float
+        At a measurement whose likelihood weights' effective sample size is below this fraction
+        of the particles, every particle is conditioned as its own Gaussian kernel (covariance:
+        its cluster's, times Silverman's bandwidth) instead of the clusters' Gaussians
+        (:mod:`.kernel_update`): after a gap of months the first measurements cut a slab a few km
+        thick out of a filament millions of km long, where a cluster's Gaussian is far from the
+        cloud's shape. 0 = off (default); Example 3 uses 0.02.
     posterior_draw : str
         Where the posterior particles come from. "transform" (default): each cluster's own
         particles, mapped affinely onto its component's posterior, so the cloud keeps its
@@ -135,7 +143,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                  split_ess: float = 0.02, kept_spread: float = 0.7, reacquire_factor: float = 4.0,
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
                  posterior_draw: str = "transform", reanchor: str = "arcs", reanchor_gap_days: float = 5.0,
-                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8):
+                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8,
+                 kernel_ess: float = 0.0):
+        self.kernel_ess = check_range(self, "kernel_ess", kernel_ess, 0.0, 1.0)
         self.reanchor = check_choice(self, "reanchor", reanchor, REANCHOR_MODES)
         self.reanchor_gap_days = check_positive(self, "reanchor_gap_days", reanchor_gap_days)
         self.reanchor_pause_hours = check_positive(self, "reanchor_pause_hours", reanchor_pause_hours)
@@ -231,6 +241,12 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                 self._ensure_clustered(self._split_clusterer)
         self._ensure_clustered()
         x, labels, m = self._x, self._labels, self._prior.n_components
+        if self.kernel_ess > 0:
+            if self._split_clusterer is None:
+                sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
+            if sharpness < self.kernel_ess:
+                self._kernel_update(meas, sharpness, who)
+                return
         mom = group_moments(x, dres, labels, m)
         mom.pxx = regularize_covariance(mom.pxx, 1e-12)
         raw_mean, raw_cov = mom.mean_x.copy(), mom.pxx.copy()
@@ -275,6 +291,25 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "prior_spread_sigma": spread,
             "components_shrunk": float(shrink),
         })
+
+    def _kernel_update(self, meas: MeasuredComponents, sharpness: float, who: str) -> None:
+        """Every particle its own kernel (kernel_update.py) at a measurement sharper than kernel_ess."""
+        from .kernel_update import kernel_update
+
+        x, labels, m = self._x, self._labels, self._prior.n_components
+        mom = group_moments(x, None, labels, m)
+        dres = meas.residuals_to_measurement(x)
+        spread = measurement_spread_sigma(dres, meas.R)
+        n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
+        samples, slabels, log_evidence, w = kernel_update(
+            x, labels, regularize_covariance(mom.pxx, 1e-12), mom.counts, meas.residuals_to_measurement,
+            meas.R, n_draw, self._rng, who)
+        self._x, self._sample_labels = samples, slabels
+        self._mixture = None
+        self._labels = self._prior = None
+        self._diag.update({"log_likelihood": log_evidence, "likelihood_ess_fraction": float(sharpness),
+                           "n_particles": float(samples.shape[0]), "prior_spread_sigma": spread,
+                           "kernel_update": 1.0})
 
     def _try_reanchor(self) -> bool:
         """Replace the particles by draws from the accepted least-squares solutions, if any."""
@@ -389,13 +424,14 @@ class PaperPGMFilter(PGMFilter):
                  split_ess: float = 0.02, kept_spread: float = 1.0, reacquire_factor: float = 1.0,
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
                  posterior_draw: str = "gaussian", reanchor: str = "off", reanchor_gap_days: float = 5.0,
-                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8):
+                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8,
+                 kernel_ess: float = 0.0):
         super().__init__(n_particles, n_components, clusterer, min_cluster_size,
                          velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
                          component_update, update_iterations, component_likelihood, split_components,
                          split_ess, kept_spread, reacquire_factor, reacquire_spread_sigma,
                          shrink_spread_sigma, posterior_draw, reanchor, reanchor_gap_days, reanchor_pause_hours,
-                         reanchor_measurements, reanchor_starts)
+                         reanchor_measurements, reanchor_starts, kernel_ess)
 
 
 @hookimpl

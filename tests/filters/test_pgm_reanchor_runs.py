@@ -48,3 +48,32 @@ def test_re_anchoring_across_the_10_day_gap_keeps_example_2_near_the_bound():
     assert final["pos_err_km"] < 20.0
     assert final["sigma_pos_km"] < 2.0 * final["bound_pos_km"]
     assert np.isfinite(final["nees"]) and final["nees"] < CHI2_6_99
+
+
+def _kernel_rows(run) -> list[dict]:
+    return [r for r in run.rows if r.get("diag_kernel_update") == 1.0]
+
+
+def test_kernel_updates_are_off_by_default():
+    assert not _kernel_rows(_run("quick", 1))
+
+
+def test_kernel_updates_at_sharp_measurements_end_consistent():
+    run = _run("quick", 1, kernel_ess=0.5)  # half the particles' likelihood ESS: most updates qualify
+    assert _kernel_rows(run)
+    assert run.rows[-1]["nees"] < CHI2_6_99
+
+
+@pytest.mark.slow
+def test_example_3_keeps_custody_where_the_first_post_gap_updates_lost_it():
+    run = _run("example-3", 3029)  # diverged to 1,083 km with cluster updates after the gap
+    final = run.rows[-1]
+    assert run.verdict.kind == "tracking"
+    assert final["pos_err_km"] < 20.0 and final["nees"] < CHI2_6_99
+
+
+@pytest.mark.slow
+def test_example_3_holds_the_truth_in_the_bent_valley_after_the_gap():
+    run = _run("example-3", 3007)  # least squares 20 km from the truth, 80 sigmas off its covariance
+    final = run.rows[-1]
+    assert final["pos_err_km"] < 20.0 and final["nees"] < CHI2_6_99
