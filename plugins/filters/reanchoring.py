@@ -32,10 +32,13 @@ chi-square only 11.8 below the truth's, 80 sigmas off along the fit's sharpest d
 linearised covariance (or one at the arc's start, drawn and propagated, as first built) called
 the run lost. The belief after a gap is therefore each solution's line of variations
 (:mod:`cistrack.fit.line_of_variations`): least-squares points every half sigma along the weakest
-direction out to 4 sigma, each a Gaussian on its hyperplane widened along the line by the spacing,
-weighted by its Laplace evidence; on seed 3007 it passes 1.3 km from the truth.
-Measured on seen seeds 3000-3029: Example 3 29/30 tracking, median final error 5.4 km, NEES p90
-11.3 (26 tracking, 63.8 km without re-anchoring); Example 2 30/30, largest error 26.9 km.
+direction out to 4 sigma, each with its covariance on its hyperplane and weighted by its Laplace
+evidence; the particles are drawn along the line (:meth:`Reanchoring.draw`), following the bend.
+On seed 3007 it passes 1.3 km from the truth.
+Across a gap the fits' transition matrices use difference steps of 1e-8 (see
+:class:`_DifferencedDynamics`). Measured on seen seeds 3000-3029: Example 3 29/30 tracking, median
+final error 5.6 km, NEES p90 10.8 (26 tracking, 63.8 km without re-anchoring); Example 2 30/30,
+largest error 27.0 km (docs/information-bound.md, docs/calibration.md for unseen seeds).
 
 The IOD's own measurements are not refitted (the filter never sees them); their information
 reaches the fit through the particles that start it.
@@ -60,6 +63,8 @@ REANCHOR_MODES = ("off", "arcs", "across-gaps")
 _PASS_SCORED = 1000  # particles scored at a pass end (all of them after a gap, across-gaps)
 _MAX_ITERATIONS = 300  # Example 3's 150-day arcs needed up to ~260 from the best particles
 _SAME_SOLUTION_M2 = 16.81  # chi-square(6) 99 %: two fits this close are one solution
+_CONTINUATION_STARTS = 4  # starts fitted by continuation when no direct fit is accepted after a gap
+_CONTINUATION_SCALES = (1e3, 1e2, 1e1, 1.0)  # noise factors of the pre-gap measurements, stage by stage
 _GAP_STM_STEP = 1e-8  # LU, VU: see _DifferencedDynamics
 _LOV_STEP = 0.5  # sigmas between the points of the line of variations after a gap
 _LOV_MAX_SIGMA = 4.0
@@ -150,6 +155,7 @@ class Reanchoring:
         self.attempts = 0
         self.solutions = 0
         self._valleys: tuple[np.ndarray, list] | None = None
+        self._before_gap = 0  # measurements of the history before the latest gap
 
     def observe(self, measurement: Measurement) -> None:
         """Record a measurement the filter is about to condition on."""
@@ -158,6 +164,7 @@ class Reanchoring:
             self._segment, self._passes = 0, 1
             if self.across_gaps:
                 self._gap_open = True
+                self._before_gap = len(self.history)
             else:
                 self.history = []  # a new arc
         elif self._t_last is not None and t - self._t_last >= self.pause_tu:
@@ -239,6 +246,8 @@ class Reanchoring:
             if same:
                 break  # the same solution from a second start: enough
             kept.append(r)
+        if not kept and after_gap:
+            kept = self._continued_fits(order, x, t, ms, dynamics, sensor, opts, limit)
         if not kept:
             return None
         self.solutions = len(kept)
@@ -253,6 +262,33 @@ class Reanchoring:
         return GaussianMixture(np.concatenate([wk * p.weights for wk, p in zip(w, parts)]),
                                np.concatenate([p.means for p in parts]),
                                np.concatenate([p.covariances for p in parts]))
+
+    def _continued_fits(self, order, x, t, ms, dynamics, sensor, opts, limit) -> list:
+        """Fits across the gap by continuation, when no direct fit was accepted: the measurements
+        before the gap first count with their noise times 1,000, then 100, 10 and 1, each stage
+        started from the one before. The first stage is nearly the post-gap arc alone (short and
+        well conditioned); each later one moves the solution a little along the valley the
+        pre-gap measurements cut, which a direct fit from a particle tens of km off does not
+        reach in its iterations."""
+        from cistrack.fit.least_squares import fit_orbit
+
+        before = np.arange(len(ms)) < self._before_gap
+        for i in order[: _CONTINUATION_STARTS]:
+            xi = x[i]
+            r = None
+            try:
+                for scale in _CONTINUATION_SCALES:
+                    sig = np.where(before[:, None], ms.sigmas * scale, ms.sigmas)
+                    staged = MeasurementSet(ms.times, ms.values, sig, ms.names)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        r = fit_orbit(dynamics, sensor, staged, xi, t, options=opts)
+                    xi = r.state
+            except (CistrackError, np.linalg.LinAlgError, FloatingPointError):
+                continue
+            if r.converged and r.chi2 <= limit and np.all(np.isfinite(r.covariance)):
+                return [r]
+        return []
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray | None:
         """Particles (n, 6) along the lines of variations of the latest accepted solutions after a

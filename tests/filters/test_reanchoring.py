@@ -213,3 +213,8 @@ def test_within_an_arc_the_particles_come_from_the_mixture():
     r = _observed(Reanchoring("arcs", 5.0, 3.0, 6, 2), early)
     r.attempt(_particles(7)[:50], early[-1].t, dyn, sen)
     assert r.draw(100, np.random.default_rng(0)) is None
+
+
+def test_pgm_refuses_a_kernel_threshold_outside_0_1_naming_it():
+    with pytest.raises(ParameterError, match="kernel_ess"):
+        PGMFilter(kernel_ess=1.5)
