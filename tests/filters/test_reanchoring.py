@@ -218,3 +218,21 @@ def test_within_an_arc_the_particles_come_from_the_mixture():
 def test_pgm_refuses_a_kernel_threshold_outside_0_1_naming_it():
     with pytest.raises(ParameterError, match="kernel_ess"):
         PGMFilter(kernel_ess=1.5)
+
+
+def test_continued_fits_across_the_gap_reach_the_direct_fits_solution():
+    from cistrack.fit import FitOptions
+    from cistrack.plugins.filters.reanchoring import _DifferencedDynamics
+
+    dyn, sen, _, truth, _, _ = _two_nights()
+    ms = _measurements(3)
+    r = _observed(Reanchoring("across-gaps", 5.0, 3.0, 6, 8), ms)
+    r.attempt(_particles(3), ms[-1].t, dyn, sen)
+    nominal = next(p.state for p in r._valleys[1][0][0] if p.sigma == 0.0)
+    x = _particles(3, n=4)
+    opts = FitOptions(reject_outliers=False, max_iterations=300, max_damping=1e12)
+    kept = r._continued_fits(np.arange(4), x, ms[-1].t, r._measurement_set(), _DifferencedDynamics(dyn, 1e-8),
+                             sen, opts, 1e9)
+    assert len(kept) == 1
+    e = kept[0].state - nominal
+    assert e @ np.linalg.solve(kept[0].covariance, e) < 1e-2  # the same minimum
