@@ -113,12 +113,13 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     reanchor_starts : int
         Most fits started, from the best-fitting posterior particles.
     kernel_ess : float
-        At a measurement whose likelihood weights' effective sample size is below this fraction
-        of the particles, every particle is conditioned as its own Gaussian kernel (covariance:
-        its cluster's, times Silverman's bandwidth) instead of the clusters' Gaussians
-        (:mod:`.kernel_update`): after a gap of months the first measurements cut a slab a few km
-        thick out of a filament millions of km long, where a cluster's Gaussian is far from the
-        cloud's shape. 0 = off (default); Example 3 uses 0.02.
+        In the first pass after a gap of ``reanchor_gap_days`` or more, at a measurement whose
+        likelihood weights' effective sample size is below this fraction of the particles, every
+        particle is conditioned as its own Gaussian kernel (covariance: its cluster's, times
+        Silverman's bandwidth) instead of the clusters' Gaussians (:mod:`.kernel_update`): after a
+        gap of months the first measurements cut a slab a few km thick out of a filament millions
+        of km long, where a cluster's Gaussian is far from the cloud's shape. 0 = off (default);
+        1 = every update of that pass (Example 3).
     posterior_draw : str
         Where the posterior particles come from. "transform" (default): each cluster's own
         particles, mapped affinely onto its component's posterior, so the cloud keeps its
@@ -199,6 +200,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag: dict[str, float] = {}
         self._x = self._prune(x)
         self._invalidate()
+        self._t_last_update, self._after_gap = None, False
         self._reanchor = None if self.reanchor == "off" else Reanchoring(
             self.reanchor, self.reanchor_gap_days, self.reanchor_pause_hours, self.reanchor_measurements,
             self.reanchor_starts)
@@ -241,10 +243,10 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                 self._ensure_clustered(self._split_clusterer)
         self._ensure_clustered()
         x, labels, m = self._x, self._labels, self._prior.n_components
-        if self.kernel_ess > 0:
+        if self.kernel_ess > 0 and self._pass_after_gap(float(measurement.t)):
             if self._split_clusterer is None:
                 sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
-            if sharpness < self.kernel_ess:
+            if sharpness < self.kernel_ess:  # after a gap, and far sharper than the cloud
                 self._kernel_update(meas, sharpness, who)
                 return
         mom = group_moments(x, dres, labels, m)
@@ -291,6 +293,18 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "prior_spread_sigma": spread,
             "components_shrunk": float(shrink),
         })
+
+    def _pass_after_gap(self, t: float) -> bool:
+        """True while the updates are in the first pass after a gap of ``reanchor_gap_days`` or more
+        (a pause of ``reanchor_pause_hours`` ends a pass); records ``t`` (TU) as the latest update."""
+        from cistrack import units
+
+        last, self._t_last_update = self._t_last_update, t
+        if last is not None and t - last >= float(units.days_to_tu(self.reanchor_gap_days)):
+            self._after_gap = True
+        elif last is not None and t - last >= float(units.hours_to_tu(self.reanchor_pause_hours)):
+            self._after_gap = False
+        return self._after_gap
 
     def _kernel_update(self, meas: MeasuredComponents, sharpness: float, who: str) -> None:
         """Every particle its own kernel (kernel_update.py) at a measurement sharper than kernel_ess."""

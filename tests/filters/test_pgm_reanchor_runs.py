@@ -58,10 +58,28 @@ def test_kernel_updates_are_off_by_default():
     assert not _kernel_rows(_run("quick", 1))
 
 
-def test_kernel_updates_at_sharp_measurements_end_consistent():
-    run = _run("quick", 1, kernel_ess=0.5)  # half the particles' likelihood ESS: most updates qualify
+def test_kernel_updates_in_passes_after_gaps_end_consistent():
+    # a day between passes counts as a gap here: every pass after the first is kernel-updated
+    run = _run("quick", 1, kernel_ess=1.0, reanchor_gap_days=0.5)
     assert _kernel_rows(run)
     assert run.rows[-1]["nees"] < CHI2_6_99
+
+
+def test_kernel_updates_wait_for_a_pass_after_a_gap():
+    run = _run("quick", 1, kernel_ess=1.0)  # three days without a 5-day gap
+    assert not _kernel_rows(run)
+
+
+def test_the_pass_after_a_gap_ends_at_the_next_pause():
+    from cistrack.plugins.filters.pgm import PGMFilter
+    from cistrack.units import days_to_tu, hours_to_tu
+
+    f = PGMFilter(reanchor_gap_days=5.0, reanchor_pause_hours=3.0)
+    f._t_last_update, f._after_gap = None, False
+    t = [0.0, float(hours_to_tu(0.7))]
+    t += [t[-1] + float(days_to_tu(10.0)), t[-1] + float(days_to_tu(10.0) + hours_to_tu(0.7))]
+    t += [t[-1] + float(hours_to_tu(5.0))]
+    assert [f._pass_after_gap(x) for x in t] == [False, False, True, True, False]
 
 
 @pytest.mark.slow
