@@ -56,6 +56,17 @@ def summary_lines(one) -> list[str]:
                      "the residuals exceed the stated noise")
     for m in r.messages[1:]:
         lines.append(f"  note: {m}")
+    if one.lov:
+        from cistrack.fit.line_of_variations import line_summary
+
+        lv = line_summary(one.lov, r)
+        lo, hi = lv["sigma_range"]
+        lines.append(f"  line of variations {lo:g} to {hi:g} sigma ({len(one.lov)} points, lov.csv): leaves the "
+                     f"straight line by at most {lv['max_departure_sigma']:.3g} sigma ({lv['max_departure_km']:.3g} km), "
+                     f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2")
+        if not lv["linear"]:
+            lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
+                         "understates the uncertainty; sample the line (lov.csv, cistrack.fit.line_of_variations)")
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
     if not r.converged:

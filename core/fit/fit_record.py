@@ -7,7 +7,11 @@
 - ``residuals.csv``: one row per observation: time UTC, site, O - C (RA x cos(Dec) and Dec in
   arcsec for RA/Dec), normalised residuals, chi-square, rejected;
 - ``residuals-<site>.png`` / ``.svg``: the residual plot of each site
-  (:mod:`cistrack.fit.residual_plots`).
+  (:mod:`cistrack.fit.residual_plots`);
+- ``lov.csv`` with ``--set fit.lov=N``: the line of variations (:mod:`cistrack.fit.line_of_variations`),
+  one row per point: sigma, chi-square and its rise, the state (km, km/s, synodic), its
+  distance from the fitted state and its departure from the straight line x* + sigma v (km); its
+  summary is ``line_of_variations`` in ``fit.json``.
 
 Each file is written whole or not at all (temporary file, then rename).
 """
@@ -25,10 +29,11 @@ from cistrack import units
 from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 
-__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "noise_summary"]
+__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary"]
 
 FIT_RECORD = "fit.json"
 RESIDUALS = "residuals.csv"
+LOV = "lov.csv"
 _FORMAT = "cistrack-fit"
 
 
@@ -61,7 +66,7 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "format": _FORMAT, "version": 1, "designation": one.designation,
         "files": [str(f) for f in obs.files], "weights": list(one.notes),
         "scenario_epoch_utc": units.format_utc(scen.epoch) if scen is not None else None,
-        "settings": {"epoch": one.choices.epoch, "prior": one.choices.prior,
+        "settings": {"epoch": one.choices.epoch, "prior": one.choices.prior, "lov": one.choices.lov,
                      "options": {k: getattr(one.choices.options, k) for k in one.choices.options.__dataclass_fields__
                                  if k != "sensor_steps"}},
         "converged": bool(r.converged) if r is not None else False,
@@ -93,7 +98,29 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "unobservable": bool(r.unobservable), "rejection_threshold": float(r.rejection_threshold),
         "noise_arcsec": noise_summary(ms, r), "messages": list(r.messages),
     })
+    if one.lov:
+        from cistrack.fit.line_of_variations import line_summary
+
+        data["line_of_variations"] = {**line_summary(one.lov, r), "points": len(one.lov), "file": LOV}
     return data
+
+
+def _lov_csv(points, fit) -> str:
+    from cistrack.fit.line_of_variations import weakest_direction
+    from cistrack.fit.observability import to_km
+
+    v = weakest_direction(fit.covariance)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["sigma", "chi2", "delta_chi2", "x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms",
+                "offset_km", "departure_km"])
+    for p in points:
+        km = to_km(p.state)
+        w.writerow([repr(float(p.sigma)), repr(float(p.chi2)), repr(float(p.chi2 - fit.chi2)),
+                    *[repr(float(c)) for c in km],
+                    repr(float(np.linalg.norm(to_km(p.state - fit.state)[:3]))),
+                    repr(float(np.linalg.norm(to_km(p.state - fit.state - p.sigma * v)[:3])))])
+    return buf.getvalue()
 
 
 def _residuals_csv(scen, table) -> str:
@@ -129,6 +156,9 @@ def write_fit_outputs(one, obs) -> list[Path]:
         write_text_atomic(d / RESIDUALS, _residuals_csv(one.scenario, one.result.residuals))
         written.append(d / RESIDUALS)
         written += plot_residuals(d, one.result.residuals, one.scenario.epoch, one.designation)
+    if one.result is not None and one.lov:
+        write_text_atomic(d / LOV, _lov_csv(one.lov, one.result))
+        written.append(d / LOV)
     return written
 
 

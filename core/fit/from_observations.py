@@ -64,11 +64,13 @@ _PRIORS = ("none", "filter")
 @dataclass(frozen=True)
 class FitChoices:
     """The ``[fit]`` settings: ``epoch`` ("last", "middle" or "first" observation), ``prior``
-    ("none" or "filter") and the :class:`FitOptions` of the least squares."""
+    ("none" or "filter"), the :class:`FitOptions` of the least squares and ``lov`` (sigmas: the
+    line of variations out to that many sigmas each side, every half sigma; 0 = none)."""
 
     epoch: str = "last"
     prior: str = "none"
     options: FitOptions = field(default_factory=FitOptions)
+    lov: float = 0.0
 
 
 def fit_choices(table: dict[str, Any]) -> FitChoices:
@@ -78,6 +80,10 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     opts = dict(table)
     epoch = opts.pop("epoch", "last")
     prior = opts.pop("prior", "none")
+    lov = opts.pop("lov", 0.0)
+    if isinstance(lov, bool) or not isinstance(lov, (int, float)) or not (lov == 0 or 0.5 <= lov <= 20):
+        raise ConfigError(f"--set fit.lov={lov!r}: must be 0 (default: none) or a number of sigmas from 0.5 "
+                          "to 20 (the line of variations out to that many sigmas each side)")
     if epoch not in _EPOCHS:
         raise ConfigError(f"--set fit.epoch={epoch!r}: must be one of {', '.join(_EPOCHS)} (the observation "
                           "at which the state is estimated)")
@@ -87,10 +93,10 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     known = set(FitOptions.__dataclass_fields__)
     unknown = sorted(set(opts) - known)
     if unknown:
-        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, "
+        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, "
                           + ", ".join(sorted(known)))
     try:
-        return FitChoices(epoch, prior, FitOptions(**opts))
+        return FitChoices(epoch, prior, FitOptions(**opts), float(lov))
     except (TypeError, ValueError, CistrackError) as exc:
         raise ConfigError(f"--set fit.*: {exc}") from None
 
@@ -108,6 +114,7 @@ class ObjectFit:
     result : FitResult or None  the least-squares fit (None when it could not be made)
     failure : str               why there is no fit, or "" (the fit's own messages are in ``result``)
     notes : list of str         the files and their weights
+    lov : list of LovPoint      the line of variations (``--set fit.lov=N``), or empty
     """
 
     designation: str
@@ -118,6 +125,7 @@ class ObjectFit:
     failure: str = ""
     notes: list[str] = field(default_factory=list)
     choices: FitChoices = field(default_factory=FitChoices)
+    lov: list = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -195,6 +203,21 @@ def _least_squares(ctx, choices: FitChoices) -> FitResult:
         return fit_orbit(ctx.dynamics, ctx.sensor, ms, start[0], t0, prior=prior, options=choices.options)
 
 
+def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
+    """The fit's line of variations over the observations it used (see
+    :mod:`cistrack.fit.line_of_variations`), every half sigma to +-``choices.lov`` (each point's
+    Levenberg-Marquardt gets at least 300 iterations: the constraint's stiff penalty slows it)."""
+    from dataclasses import replace
+
+    from cistrack.fit.line_of_variations import line_of_variations
+
+    used = ctx.measurements.subset(~np.asarray(result.residuals.rejected, dtype=bool))
+    return line_of_variations(ctx.dynamics, ctx.sensor, used, result, step=0.5, max_sigma=choices.lov,
+                              max_delta_chi2=float("inf"),
+                              options=replace(choices.options, reject_outliers=False,
+                                              max_iterations=max(choices.options.max_iterations, 300)))
+
+
 def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
               settings: Iterable[str] | None = None, registry: Registry | None = None,
               log: Callable[[str], None] | None = None, progress: bool = False) -> list[ObjectFit]:
@@ -249,6 +272,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
                 one.result = _least_squares(one.run.context, choices)
             except (FitError, PropagationError) as exc:
                 one.failure = f"least squares: {exc}"
+        if one.result is not None and one.result.converged and choices.lov > 0:
+            say(f"{obs.designation}: line of variations to +-{choices.lov:g} sigma")
+            one.lov = _line_of_variations(one.run.context, one.result, choices)
         write_fit_outputs(one, obs)
         results.append(one)
     return results

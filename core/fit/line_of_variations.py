@@ -38,7 +38,7 @@ from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["LovPoint", "weakest_direction", "line_of_variations", "line_weights", "sample_line"]
+__all__ = ["LovPoint", "weakest_direction", "line_of_variations", "line_weights", "sample_line", "line_summary"]
 
 _STIFFNESS = 1e8  # penalty per squared sigma off the hyperplane: the point stays within 1e-4 sigma
 
@@ -190,3 +190,29 @@ def sample_line(points: list[LovPoint], n: int, rng: np.random.Generator, step: 
             on_line = xk + uk * direction
         x[idx] = on_line + z[idx] @ _square_root(points[k].covariance).T
     return x
+
+
+def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
+    """How far the line of variations departs from the linearised fit, for a report.
+
+    With v the weakest direction and N the fit's normal matrix, each point's departure from the
+    straight line is d = x_k - (x* + sigma_k v), measured as sqrt(d^T N d) (sigmas of the fit)
+    and in position km; its chi-square rise is compared with the linear sigma^2. Returns a dict:
+    ``sigma_range`` [lowest, highest], ``max_departure_sigma``, ``max_departure_km``,
+    ``max_chi2_excess`` (largest |delta chi2 - sigma^2|) and ``linear`` (departure below 1
+    sigma and chi-square within 1 of sigma^2 everywhere: the covariance describes the solutions)."""
+    from cistrack.fit.observability import to_km
+
+    v = weakest_direction(fit.covariance)
+    n = np.linalg.inv(fit.covariance)
+    dep_sigma, dep_km, excess = [], [], []
+    for p in points:
+        d = p.state - (fit.state + p.sigma * v)
+        dep_sigma.append(float(np.sqrt(max(d @ n @ d, 0.0))))
+        dep_km.append(float(np.linalg.norm(to_km(d)[:3])))
+        excess.append(abs(p.chi2 - fit.chi2 - p.sigma ** 2))
+    out = {"sigma_range": [float(min(p.sigma for p in points)), float(max(p.sigma for p in points))],
+           "max_departure_sigma": max(dep_sigma), "max_departure_km": max(dep_km),
+           "max_chi2_excess": float(max(excess))}
+    out["linear"] = bool(out["max_departure_sigma"] < 1.0 and out["max_chi2_excess"] < 1.0)
+    return out

@@ -30,3 +30,17 @@ def test_an_unknown_prior_is_refused_naming_the_choices():
 def test_a_bad_option_value_is_refused_naming_it():
     with pytest.raises(ConfigError, match="reject_sigma"):
         fit_choices({"reject_sigma": -1.0})
+
+
+def test_no_line_of_variations_by_default():
+    assert fit_choices({}).lov == 0.0
+
+
+def test_the_line_of_variations_is_asked_in_sigmas():
+    assert fit_choices({"lov": 3}).lov == 3.0
+
+
+@pytest.mark.parametrize("bad", [-1, 0.2, 50, "wide", True])
+def test_a_bad_line_of_variations_is_refused_naming_it(bad):
+    with pytest.raises(ConfigError, match="fit.lov=.*0.5 to 20"):
+        fit_choices({"lov": bad})

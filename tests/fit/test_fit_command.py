@@ -14,6 +14,7 @@ from cistrack.scenario.loading import builtin_scenario_path
 
 DATA = builtin_scenario_path("real-data").parent / "real_data"
 FAST = ["--set", "iod.n_particles=1000", "--set", "filter.n_particles=1000"]
+LOV = ["--set", "fit.lov=1"]  # the line of variations, -1 to 1 sigma
 
 
 @pytest.fixture(scope="module")
@@ -26,10 +27,29 @@ def fitted(tmp_path_factory):
     buf = io.StringIO()
     mp.setattr(sys, "stdout", buf)
     try:
-        rc = main(["fit", str(DATA / "observations.psv"), "--out", str(out), *FAST])
+        rc = main(["fit", str(DATA / "observations.psv"), "--out", str(out), *FAST, *LOV])
     finally:
         mp.undo()
     return out, rc, buf.getvalue()
+
+
+def test_the_line_of_variations_is_written_every_half_sigma(fitted):
+    rows = list(csv.DictReader((fitted[0] / "lov.csv").read_text().splitlines()))
+    assert [float(r["sigma"]) for r in rows] == [-1.0, -0.5, 0.0, 0.5, 1.0]
+
+
+def test_on_the_shipped_arc_the_line_of_variations_is_straight(fitted):
+    """A 4.6-day arc from two sites: the chi-square rises as sigma^2 along the line and the line
+    stays on the covariance's axis, so the covariance describes the solutions."""
+    rows = list(csv.DictReader((fitted[0] / "lov.csv").read_text().splitlines()))
+    for r in rows:
+        assert float(r["delta_chi2"]) == pytest.approx(float(r["sigma"]) ** 2, abs=0.02)
+    rec = json.loads((fitted[0] / "fit.json").read_text())["line_of_variations"]
+    assert rec["linear"] is True and rec["points"] == 5 and rec["max_departure_sigma"] < 0.05
+
+
+def test_summary_reports_the_line_of_variations(fitted):
+    assert "line of variations -1 to 1 sigma (5 points, lov.csv)" in fitted[2]
 
 
 def test_fit_converges_and_exits_zero(fitted):

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from cistrack.fit import FitOptions, fit_orbit
-from cistrack.fit.line_of_variations import line_of_variations, line_weights, sample_line, weakest_direction
+from cistrack.fit.line_of_variations import line_of_variations, line_summary, line_weights, sample_line, weakest_direction
 from cistrack.model.measurement import MeasurementSet
 
 from .arcs import GUESS_OFFSET, cr3bp_arc
@@ -166,3 +166,15 @@ def test_draws_are_reproducible_from_the_seed():
     a = sample_line(pts, 100, np.random.default_rng(3), 0.5, v)
     b = sample_line(pts, 100, np.random.default_rng(3), 0.5, v)
     assert np.array_equal(a, b)
+
+
+def test_the_summary_calls_a_long_arc_linear():
+    _, _, fit, pts = _fit_and_line("all", 4)
+    s = line_summary(pts, fit)
+    assert s["linear"] and s["sigma_range"] == [-3.0, 3.0] and s["max_departure_sigma"] < 0.05
+
+
+def test_the_summary_sees_one_night_bend():
+    _, _, fit, pts = _fit_and_line("one", 4)
+    s = line_summary(pts, fit)
+    assert not s["linear"] and s["max_departure_sigma"] > 1.0
