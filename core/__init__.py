@@ -30,10 +30,18 @@ _moved.install()  # old import paths of moved modules keep working, with a Depre
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
          "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
-         "study": "api", "StudyResult": "api", "fit": "api"}
+         "study": "api", "StudyResult": "api"}
+# ``cistrack.fit`` is the package cistrack.fit, which is callable: ``cistrack.fit(files, ...)`` is
+# cistrack.api.fit. (As the function alone it hid the package: ``import cistrack.fit.least_squares
+# as m`` failed with "cannot import name 'least_squares' from 'fit'".)
+_SUBPACKAGES = ("fit",)
 
 
 def __getattr__(name: str):
+    if name in _SUBPACKAGES:
+        from importlib import import_module
+
+        return import_module(f".{name}", __name__)
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'cistrack' has no attribute {name!r}")
@@ -45,7 +53,7 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBPACKAGES))
 
 
 class _Package(_types.ModuleType):
@@ -57,7 +65,18 @@ class _Package(_types.ModuleType):
     def __setattr__(self, name: str, value) -> None:
         if isinstance(value, _types.ModuleType) and _LAZY.get(name) == "api":
             return
+        if name in _SUBPACKAGES and isinstance(value, _types.ModuleType):
+            value.__class__ = _CallableFit  # set here, however the package was imported
         super().__setattr__(name, value)
+
+
+class _CallableFit(_types.ModuleType):
+    """The package cistrack.fit, callable as :func:`cistrack.api.fit`."""
+
+    def __call__(self, *args, **kwargs):
+        from cistrack.api import fit
+
+        return fit(*args, **kwargs)
 
 
 _sys.modules[__name__].__class__ = _Package

@@ -12,6 +12,9 @@ residuals.
 - :mod:`.trajectory`: states and transition matrices over an arc (epoch anywhere in it);
   :mod:`.measurement_model`: predicted measurements, residuals and their Jacobian per site.
 
+The package is callable: ``cistrack.fit(files, ...)`` is :func:`cistrack.api.fit` (observation
+files in, one :class:`ObjectFit` per object out; the top-level package makes it so).
+
 May import the layers below it, up to :mod:`cistrack.runs`.
 """
 from cistrack.fit.errors import FitError, UnobservableWarning
@@ -22,3 +25,4 @@ from cistrack.fit.residual_table import ResidualTable
 from cistrack.fit.result import FitResult
 
 __all__ = ["fit_orbit", "predict", "FitOptions", "FitResult", "ResidualTable", "FitError", "UnobservableWarning"]
+
