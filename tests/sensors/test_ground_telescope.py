@@ -260,3 +260,21 @@ def test_radec_is_the_direction_of_the_azel_line_of_sight_in_eci_axes():
     dec = np.arcsin(eci[:, 2])
     z = radec.measure(x, t)
     assert np.allclose(z[:, 0], ra, atol=1e-12) and np.allclose(z[:, 1], dec, atol=1e-12)
+
+
+def test_repeated_times_give_the_same_measurements_as_a_fresh_sensor():
+    """The sensor keeps the last time's frame; measuring at t1, t2, t1 must not reuse t2's."""
+    x = np.array([[1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0], [0.9, 0.1, 0.05, 0.0, 0.1, 0.0]])
+    used = GroundTelescope(latitude_deg=LAT, longitude_deg=LON)
+    first = used.measure(x, 0.3)
+    used.measure(x, 0.7)
+    again = used.measure(x, 0.3)
+    fresh = GroundTelescope(latitude_deg=LAT, longitude_deg=LON).measure(x, 0.3)
+    assert np.array_equal(first, fresh) and np.array_equal(again, fresh)
+
+
+def test_a_pickled_sensor_measures_as_the_original():
+    s = GroundTelescope(latitude_deg=LAT, longitude_deg=LON)
+    x = np.array([[1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0]])
+    s.measure(x, 0.3)
+    assert np.array_equal(pickle.loads(pickle.dumps(s)).measure(x, 0.5), s.measure(x, 0.5))
