@@ -99,7 +99,7 @@ class _DifferencedDynamics:
     NRHO stretches a displacement 3,585-fold in 150 days, so the perturbed trajectories leave the
     linear regime and the Levenberg-Marquardt iteration stalls short of the minimum (Example 3,
     seeds 3388 and 3389: chi-square 44.1 and 54.3, within the limit, but "not converged" from
-    every start). After a gap the steps are 1e-8 (3.8 m, 1 cm/s): the same starts converge."""
+    every start). After a gap the steps are 1e-8 (3.8 m, 0.01 mm/s): the same starts converge."""
 
     def __init__(self, dynamics: Dynamics, step: float | None = None) -> None:
         self._dynamics = dynamics
