@@ -112,22 +112,16 @@ class GroundTelescope(Sensor):
 
     # -- geometry -------------------------------------------------------------------------------
     def _affine(self, t):
-        """A (.., 3, 3), b (.., 3) with NEU = A @ r_syn - b (LU) at t (scalar or (K,)).
-
-        The last scalar time's pair is kept (read-only): a filter step evaluates the sensor at one
-        time many times over (sigma points, iterations, the consistency check), and the Earth's
-        orientation there is the same every time."""
-        scalar = np.ndim(t) == 0
-        if scalar:
-            cached = getattr(self, "_affine_last", None)
-            if cached is not None and cached[0] == float(t):
-                return cached[1], cached[2]
+        """A (.., 3, 3), b (.., 3) with NEU = A @ r_syn - b (LU) at t (scalar or (K,)). The last scalar
+        time's pair is kept, read-only: a filter step asks for one time many times over."""
+        last = getattr(self, "_affine_last", None)
+        if last is not None and np.ndim(t) == 0 and last[0] == float(t):
+            return last[1], last[2]
         rot, earth = self._frames.synodic_to_ecef(t)
         a = self._neu @ rot
         b = np.einsum("...ij,...j->...i", a, earth) + self._neu @ self._obs_ecef
-        if scalar:
-            a.flags.writeable = False
-            b.flags.writeable = False
+        if np.ndim(t) == 0:
+            a.flags.writeable = b.flags.writeable = False
             self._affine_last = (float(t), a, b)
         return a, b
 
