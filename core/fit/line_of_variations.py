@@ -72,9 +72,9 @@ def weakest_direction(covariance: np.ndarray) -> np.ndarray:
     return -v if v[int(np.argmax(np.abs(v[:3])))] < 0 else v
 
 
-def _conditional_covariance(prob: _Problem, x: np.ndarray) -> np.ndarray | None:
-    """(N + penalty)^-1 at x: the covariance on the hyperplane; None when not positive definite."""
-    w, _ = prob.evaluate(x)
+def _conditional_covariance(prob: _Problem, x: np.ndarray, w: np.ndarray) -> np.ndarray | None:
+    """(N + penalty)^-1 at x (weighted residuals w there): the covariance on the hyperplane; None
+    when not positive definite."""
     n, _ = prob.normal(prob.jacobian(x), w, x, np.ones(w.shape[0], dtype=bool))
     d = np.sqrt(np.abs(np.diag(n)))
     try:
@@ -132,7 +132,7 @@ def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: Measure
                     x, _, ok = _one_pass(prob, x + sign * step * v, np.ones(len(measurements), dtype=bool),
                                          opts, [])
                     w, _ = prob.evaluate(x)
-                    cov = _conditional_covariance(prob, x) if ok else None
+                    cov = _conditional_covariance(prob, x, w) if ok else None
             except (PropagationError, MeasurementError, np.linalg.LinAlgError, FloatingPointError):
                 break
             chi2 = float(np.sum(w ** 2))

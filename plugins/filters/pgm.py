@@ -247,7 +247,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             if self._split_clusterer is None:
                 sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
             if sharpness < self.kernel_ess:  # after a gap, and far sharper than the cloud
-                self._kernel_update(meas, sharpness, who)
+                self._kernel_update(meas, dres, sharpness, who)
                 return
         mom = group_moments(x, dres, labels, m)
         mom.pxx = regularize_covariance(mom.pxx, 1e-12)
@@ -306,18 +306,17 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             self._after_gap = False
         return self._after_gap
 
-    def _kernel_update(self, meas: MeasuredComponents, sharpness: float, who: str) -> None:
-        """Every particle its own kernel (kernel_update.py) at a measurement sharper than kernel_ess."""
+    def _kernel_update(self, meas: MeasuredComponents, dres: np.ndarray, sharpness: float, who: str) -> None:
+        """Every particle its own kernel (kernel_update.py): the clustered prior gives each cluster's
+        covariance and size, ``dres`` (N, m) are the particles' residuals to the measurement."""
         from .kernel_update import kernel_update
 
-        x, labels, m = self._x, self._labels, self._prior.n_components
-        mom = group_moments(x, None, labels, m)
-        dres = meas.residuals_to_measurement(x)
+        x, labels, prior = self._x, self._labels, self._prior
         spread = measurement_spread_sigma(dres, meas.R)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
         samples, slabels, log_evidence, w = kernel_update(
-            x, labels, regularize_covariance(mom.pxx, 1e-12), mom.counts, meas.residuals_to_measurement,
-            meas.R, n_draw, self._rng, who)
+            x, labels, prior.covariances, np.bincount(labels, minlength=prior.n_components),
+            meas.residuals_to_measurement, meas.R, n_draw, self._rng, who)
         self._x, self._sample_labels = samples, slabels
         self._mixture = None
         self._labels = self._prior = None
