@@ -128,7 +128,7 @@ def main() -> int:
     run_scenario(scen, seed=args.seed)
     prof.disable()
     st = pstats.Stats(prof)
-    total_prof = max(_cumtime(st, "/run.py", "_run"), 1e-9)
+    total_prof = max(_cumtime(st, "runs/pipeline.py", "_run"), 1e-9)
     stages = {
         "IOD": _cumtime(st, "plugins/iod", "estimate"),
         # the kernels run on worker threads, which cProfile does not see: time the Python call

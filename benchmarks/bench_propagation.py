@@ -161,7 +161,7 @@ def cpu_comparison(dyn, big: np.ndarray, period: float, n: int, loose: float, hy
             out = np.empty((1, n, 6))
             c = time.process_time()
             mod.propagate_kernel(0, n, x, dyn._params(), 0.0, np.array([period]), loose / 10, loose, pos, rad,
-                                 dyn.max_steps, 0.0, out, np.full(n, -1), np.full(n, np.inf),
+                                 dyn.max_steps, np.zeros(n), out, np.full(n, -1), np.full(n, np.inf),
                                  np.zeros(n, dtype=np.int64))
             cpu.append((time.process_time() - c) / n * 1e6)
         print(f"{'cistrack one-particle kernel (no lockstep)':44s} {1:7d} {min(cpu):9.2f} "

@@ -53,6 +53,9 @@ class Propagation:
         Index into ``Dynamics.bodies`` of the body hit, -1 for none.
     impact_time : (N,) float
         TU of the impact; +inf for particles that did not hit anything.
+    steps : (N,) float or None
+        Step size (TU) each particle's integrator proposes next, for models that can start a
+        later call with it (:attr:`Dynamics.carries_steps`); None otherwise.
     """
 
     times: np.ndarray
@@ -60,6 +63,7 @@ class Propagation:
     alive: np.ndarray
     impact_body: np.ndarray
     impact_time: np.ndarray
+    steps: np.ndarray | None = None
 
     @property
     def final(self) -> np.ndarray:
@@ -82,6 +86,10 @@ class Dynamics(Component):
     """
 
     kind = "dynamics"
+    carries_steps: bool = False
+    """True when :meth:`propagate` accepts ``steps=`` (each particle's first step size, (N,) TU)
+    and returns :attr:`Propagation.steps`, so that filters can carry step sizes between calls
+    (every :class:`~cistrack.propagation.CompiledDynamics` does)."""
 
     @property
     def primaries(self) -> tuple[Body, ...]:

@@ -27,7 +27,7 @@ def _lane_put(w, row, l, col):
 
 
 @njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad, h_init,
+def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad, steps,
                 out, impact_body, impact_time, status, w, tl, hl, iout, nsteps, rejected,
                 err_old, col, col2, col3, col4):
     """Load particle i into lane l; False if it needs no step (done at t0)."""
@@ -52,8 +52,8 @@ def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
     _lane_put(w, ROW_Y, l, col)
     _lane_put(w, ROW_K0, l, col2)
     span = abs(times[nt - 1] - t0)
-    if h_init > 0.0:
-        hl[l] = min(h_init, span)
+    if steps[i] > 0.0:  # the step this particle's previous integration proposed
+        hl[l] = min(steps[i], span)
     else:
         hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
     tl[l] = t0
@@ -66,7 +66,7 @@ def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, bo
 
 @njit(cache=CACHE, nogil=True, fastmath=FASTMATH)
 def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, body_rad,
-                           max_steps, h_init, out, impact_body, impact_time, status):
+                           max_steps, steps, out, impact_body, impact_time, status):
     nt = times.shape[0]
     direction = 1.0
     if times[nt - 1] < t0:
@@ -93,7 +93,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
             i = nxt
             nxt += 1
             if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
-                           h_init, out, impact_body, impact_time, status, w, tl, hl, iout,
+                           steps, out, impact_body, impact_time, status, w, tl, hl, iout,
                            nsteps, rejected, err_old, col, col2, col3, col4):
                 who[l] = i
                 active += 1
@@ -171,6 +171,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                         iout[l] = io
                         hl[l] = max(hl[l], hstep[l] * fac)
                         if io >= nt:
+                            steps[i] = hl[l]
                             done = True
                     else:
                         hl[l] = hstep[l] * fac
@@ -198,7 +199,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                     i = nxt
                     nxt += 1
                     if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos,
-                                   body_rad, h_init, out, impact_body, impact_time, status, w,
+                                   body_rad, steps, out, impact_body, impact_time, status, w,
                                    tl, hl, iout, nsteps, rejected, err_old, col, col2, col3, col4):
                         who[l] = i
                         active += 1

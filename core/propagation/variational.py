@@ -50,7 +50,7 @@ def propagate_variational(dynamics: CompiledDynamics, stm_rhs: Any, state: Any, 
     mod.propagate_kernel(0, 1, np.ascontiguousarray(y0), dynamics._params(), t0, np.ascontiguousarray(t_out),
                          float(dynamics.rtol if rtol is None else rtol),
                          float(dynamics.atol if atol is None else atol), pos, rad,
-                         int(dynamics.max_steps), 0.0, out, impact_body, impact_time, status)
+                         int(dynamics.max_steps), np.zeros(1), out, impact_body, impact_time, status)
     if status[0] >= 2:
         why = "the step limit max_steps" if status[0] == 2 else "a step-size underflow"
         raise PropagationError(f"{label}: the state and its transition matrix did not reach t={t_out[-1]:g} TU "

@@ -223,7 +223,8 @@ class EphemerisDynamics(CompiledDynamics):
 
     # -- Dynamics ---------------------------------------------------------------------------------
     def propagate(self, states: np.ndarray, t0: float, times: Any, *,
-                  rtol: float | None = None, atol: float | None = None) -> Propagation:
+                  rtol: float | None = None, atol: float | None = None,
+                  steps: np.ndarray | None = None) -> Propagation:
         """Propagate synodic ``states`` (N, 6) from ``t0`` to ``times`` (scalar or (K,), TU).
 
         As :meth:`cistrack.propagation.CompiledDynamics.propagate`, with states in the real
@@ -237,7 +238,7 @@ class EphemerisDynamics(CompiledDynamics):
         span = np.concatenate(([float(t0)], t_out))
         self._ensure_window(float(span.min()), float(span.max()))
         inertial = self.to_inertial(arr, float(t0)) if arr.shape[0] else arr
-        prop = CompiledDynamics.propagate(self, inertial, t0, t_out, rtol=rtol, atol=atol)
+        prop = CompiledDynamics.propagate(self, inertial, t0, t_out, rtol=rtol, atol=atol, steps=steps)
         out = np.empty_like(prop.states)
         for k, tk in enumerate(t_out):
             if arr.shape[0]:

@@ -48,7 +48,7 @@ class BatchEnKF(EnsembleKalmanFilter):
 
     def predict_batch(self, dynamics: Dynamics, t0: float, t1: float, who: str) -> int:
         """Propagate all members; drop those that hit a body. Returns the number dropped."""
-        final, alive = propagate_ensemble(dynamics, self.sigmas, t0, t1, who)
+        final, alive, _ = propagate_ensemble(dynamics, self.sigmas, t0, t1, who)
         lost = int(np.count_nonzero(~alive))
         if lost == self.sigmas.shape[0]:
             raise FilterError(f"filter '{who}': every ensemble member hit a body before t = {t1} TU")

@@ -27,7 +27,7 @@ from cistrack.model.measurement import Measurement
 from .particle_declarations import ParticleFilterDeclarations
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
-from .ensemble_propagation import propagate_particles
+from .ensemble_propagation import propagate_particles, steps_by_group
 from .initial_cloud import check_cloud, initial_particles
 from .component_spread import shrink_components
 from .component_update import ensemble_component_update, iterated_component_update
@@ -182,6 +182,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             self._fail("max_range_km", max_range_km, f"must exceed min_range_km = {min_range_km}")
         self._clusterer: Clusterer | None = None
         self._x: np.ndarray | None = None
+        self._h: np.ndarray | None = None  # each particle's next integration step (TU), carried
 
     # -- lifecycle --------------------------------------------------------------------------------
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
@@ -198,7 +199,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._lost_total = 0
         self._pruned_total = 0
         self._diag: dict[str, float] = {}
-        self._x = self._prune(x)
+        self._x, self._h = self._prune(x)
         self._invalidate()
         self._t_last_update, self._after_gap = None, False
         self._reanchor = None if self.reanchor == "off" else Reanchoring(
@@ -210,13 +211,13 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     def _predict_to(self, t: float) -> None:
         """Propagate every particle to ``t`` (TU); particles that hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
-        x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
-                                       self.velocity_noise_kms_per_sqrt_day, self._rng)
+        x, alive, h = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
+                                          self.velocity_noise_kms_per_sqrt_day, self._rng, self._h)
         lost = int(np.count_nonzero(~alive))
         self._lost_total += lost
         self._t = t
         pruned_before = self._pruned_total
-        self._x = self._prune(x)
+        self._x, self._h = self._prune(x, h)
         self._invalidate()
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": float(self._lost_total),
                       "particles_lost_step": float(lost),
@@ -280,6 +281,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                 raise FilterError(f"filter '{who}': the posterior transform produced non-finite particles")
         else:
             samples, slabels = self._sample_posterior(post, n_draw)
+        step = steps_by_group(self._h, labels, m)  # each drawn particle starts with its cluster's step
+        self._h = None if step is None else step[slabels]
         self._x, self._sample_labels = samples, slabels
         self._mixture = post
         self._labels = None  # the next update clusters afresh
@@ -317,7 +320,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         samples, slabels, log_evidence, w = kernel_update(
             x, labels, prior.covariances, np.bincount(labels, minlength=prior.n_components),
             meas.residuals_to_measurement, meas.R, n_draw, self._rng, who)
-        self._x, self._sample_labels = samples, slabels
+        self._x, self._sample_labels, self._h = samples, slabels, None
         self._mixture = None
         self._labels = self._prior = None
         self._diag.update({"log_likelihood": log_evidence, "likelihood_ess_fraction": float(sharpness),
@@ -330,7 +333,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if mix is None:
             return False
         x = self._reanchor.draw(self.n_particles, self._rng)
-        self._x = self._sample_posterior(mix, self.n_particles)[0] if x is None else self._prune(x)
+        self._x, self._h = (self._sample_posterior(mix, self.n_particles)[0], None) if x is None else self._prune(x)
         return True
 
     # -- belief -----------------------------------------------------------------------------------
@@ -384,15 +387,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag["clusters_merged"] = float(merged)
         self._diag["n_components"] = float(m)
 
-    def _prune(self, x: np.ndarray) -> np.ndarray:
+    def _prune(self, x: np.ndarray, h: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """The particles (N, 6) inside the state bounds, and their carried step sizes (N,) or None."""
         if not self._bounds.active:
-            return x
+            return x, h
         ok = self._bounds.admissible(x)
         n_bad = int(np.count_nonzero(~ok))
         if n_bad == x.shape[0]:
             raise FilterError(f"filter '{self._who()}': every particle lies outside the state bounds")
         self._pruned_total += n_bad
-        return x[ok]
+        return x[ok], (None if h is None else h[ok])
 
     def _sample_posterior(self, post: GaussianMixture, n: int) -> tuple[np.ndarray, np.ndarray]:
         x, lab = post.sample(n, self._rng)

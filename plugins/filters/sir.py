@@ -68,7 +68,7 @@ class SIRFilter(ParticleFilterDeclarations, FilterBase):
 
     def _predict_to(self, t: float) -> None:
         """Propagate every particle to ``t`` (TU); particles that hit a body are removed."""
-        x, alive = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
+        x, alive, _ = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
                                        self.velocity_noise_kms_per_sqrt_day, self._rng)
         lost = int(np.count_nonzero(~alive))
         self._x = x

@@ -58,7 +58,7 @@ class BatchUKF(UnscentedKalmanFilter):
 
     def compute_process_sigmas(self, dt, fx=None, **fx_args):
         sigmas = self.points_fn.sigma_points(self.x, self.P)
-        final, alive = propagate_ensemble(self.dynamics, sigmas, self.t0, self.t0 + dt, self.who)
+        final, alive, _ = propagate_ensemble(self.dynamics, sigmas, self.t0, self.t0 + dt, self.who)
         # a sigma point that hit a body keeps its impact state (the transform needs all points)
         self.n_lost_last = int(np.count_nonzero(~alive))
         self.sigmas_f = final

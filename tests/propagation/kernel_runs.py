@@ -12,7 +12,7 @@ def run_kernel(kernel, dyn, states, times, max_steps=5_000_000, rtol=None, atol=
     ib, it, st = np.full(n, -1), np.full(n, np.inf), np.zeros(n, dtype=np.int64)
     pos, rad = dyn._bodies_arrays()
     kernel(0, n, np.ascontiguousarray(states), dyn._params(), 0.0, times, dyn.rtol if rtol is None else rtol,
-           dyn.atol if atol is None else atol, pos, rad, max_steps, 0.0, out, ib, it, st)
+           dyn.atol if atol is None else atol, pos, rad, max_steps, np.zeros(n), out, ib, it, st)
     return out, ib, it, st
 
 
