@@ -70,9 +70,9 @@ def propagate_particles(dynamics: Dynamics, states: np.ndarray, t0: float, t1: f
     x, alive, h = propagate_ensemble(dynamics, states, t0, t1, who, steps)
     if not np.any(alive):
         raise FilterError(f"filter '{who}': every particle hit a body before t = {t1} TU")
-    x = x[alive]
-    if h is not None:
-        h = h[alive]
+    if not alive.all():  # no copy of the states (48 bytes a particle) when none was lost
+        x = x[alive]
+        h = None if h is None else h[alive]
     q = velocity_random_walk_covariance(velocity_noise_kms_per_sqrt_day, t1 - t0, x.shape[1])
     if np.any(q):
         x = x + rng.standard_normal(x.shape) * np.sqrt(np.diag(q))
