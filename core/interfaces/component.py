@@ -24,11 +24,12 @@ __all__ = [
 
 _EMPTY = inspect.Parameter.empty
 
-BYTES_PER_PARTICLE = 896
+BYTES_PER_PARTICLE = 936
 """Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
-Measured (issue 31): a whole one-period Example 1 run (IOD + PGM) peaked 779 MiB above the
-process's start at 1,000,000 particles, 816 bytes per particle
-(``benchmarks/bench_memory.py --sizes 1000000 --cases run``); rounded up by 10 %. The peak is in
+Measured (issue 31): a whole one-period Example 1 run (IOD + PGM) peaked 809 and 2,426 MiB above
+the process's start at 1,000,000 and 3,000,000 particles, 848 bytes per particle at both sizes
+(``benchmarks/bench_memory.py --sizes 1000000 3000000 --cases run``, session 11, with the carried
+integration steps; 816 at 1,000,000 in session 9); rounded up by 10 %. The peak is in
 the PGM's first updates after the IOD, which draw ``reacquire_factor`` (4) x ``n_particles``
 particles (:mod:`cistrack.plugins.filters.reacquisition_particles`). The former 512 was too
 low for that: the same run peaked 1,157 MiB above its start (1,214 bytes per particle) before
