@@ -62,7 +62,7 @@ def main(argv: list[str]) -> int:
     import numpy  # noqa: F401
 
     _mark("import numpy")
-    import cistrack.cli.main as cli
+    from cistrack.cli.main import main as cli_main
     import cistrack.propagation.compiled as compiled
     import cistrack.plugin.registry as registry
     import cistrack.runs.pipeline as run
@@ -70,7 +70,7 @@ def main(argv: list[str]) -> int:
     _mark("import cistrack (cli, run, registry)")
     _wrap(registry, "default_registry", None, "build the registry (import plugins)")
     _wrap(run, "prepare_run", "scenario, observers", "prepare: measurements, IOD")
-    _wrap(run, "_finish", "filter steps", "finish: write results")
+    _wrap(run, "finish_observers", "filter steps", "finish: observers write results")
     dense = compiled.CompiledDynamics.dense_trajectory
 
     def first_kernel(self, *a, **k):
@@ -91,7 +91,7 @@ def main(argv: list[str]) -> int:
         return out
 
     compiled.CompiledDynamics.dense_trajectory = first_kernel
-    code = cli.main(argv)
+    code = cli_main(argv)
     _mark("exit of main()")
     print(f"{'stage':<50}{'wall s':>8}{'cpu s':>8}", file=sys.stderr)
     print(f"{'interpreter start, site':<50}{'':>8}{_C0:8.3f}", file=sys.stderr)

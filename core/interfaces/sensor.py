@@ -1,6 +1,7 @@
 """Sensor: measurement model, noise, residuals, visibility and simulation."""
 from __future__ import annotations
 
+import functools
 from abc import abstractmethod
 
 import numpy as np
@@ -62,9 +63,8 @@ class Sensor(Component):
     def residual(self, z: np.ndarray, zhat: np.ndarray) -> np.ndarray:
         """z - zhat (..., m) with angular components wrapped into [-pi, pi)."""
         r = np.asarray(z, dtype=float) - np.asarray(zhat, dtype=float)
-        ang = np.asarray(self.angular, dtype=bool)
-        if ang.any():
-            r[..., ang] = (r[..., ang] + np.pi) % (2.0 * np.pi) - np.pi
+        for i in _angular_columns(tuple(self.angular)):  # a column at a time: no boolean-mask copies
+            r[..., i] = (r[..., i] + np.pi) % (2.0 * np.pi) - np.pi
         return r
 
     @abstractmethod
@@ -104,3 +104,9 @@ class Sensor(Component):
     @abstractmethod
     def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
         """Noisy measurements of a truth trajectory: states (K, 6) at times (K,) TU."""
+
+
+@functools.lru_cache(maxsize=64)
+def _angular_columns(angular: tuple) -> tuple[int, ...]:
+    """Indices of the True entries of a sensor's ``angular`` flags."""
+    return tuple(i for i, a in enumerate(angular) if bool(a))

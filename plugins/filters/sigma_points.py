@@ -47,7 +47,6 @@ class MerweSigmaPoints:
         U = cholesky((lam + n) * np.atleast_2d(P))
         sigmas = np.zeros((2 * n + 1, n))
         sigmas[0] = x
-        for k in range(n):
-            sigmas[k + 1] = np.subtract(x, -U[k])
-            sigmas[n + k + 1] = np.subtract(x, U[k])
+        sigmas[1:n + 1] = np.subtract(x, -U)  # rows x + U[k] and x - U[k]: filterpy's row
+        sigmas[n + 1:] = np.subtract(x, U)    # subtractions, done as two array operations
         return sigmas
