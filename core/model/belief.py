@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cistrack.lazy import lazy_njit
+from cistrack.threads import run_chunks
 
 __all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
 
@@ -51,23 +52,24 @@ def regularize_covariance(p: np.ndarray, rel: float = 1e-12) -> np.ndarray:
 _BLOCK = 256  # points per block of the compiled density: the block's work arrays stay in L1
 
 
-@lazy_njit(cache=True)
-def _whitened_logpdf(x, means, linv, const, logw, out):
-    """out[n, m] = const[m] + logw[m] - |linv[m] (x[n] - means[m])|^2 / 2 (linv lower triangular).
+@lazy_njit(cache=True, nogil=True)
+def _whitened_logpdf(i0, i1, x, means, linv, const, logw, out):
+    """out[n, m] = const[m] + logw[m] - |linv[m] (x[n] - means[m])|^2 / 2 (linv lower triangular),
+    for the rows n in [i0, i1) (several threads take disjoint ranges).
 
     x (N, d), means (M, d), linv (M, d, d), const and logw (M,), out (N, M). Points go in blocks
     of ``_BLOCK``; within a block each operation runs over the points in an inner loop, which
     the compiler turns into SIMD instructions. Every point sees the same operations in the same
     order as a plain per-point loop (``s = 0; s += linv[a, b] diff[b]`` for b = 0..a, then
-    ``maha += s^2`` for a = 0..d-1), so the numbers do not depend on the blocking.
+    ``maha += s^2`` for a = 0..d-1), so the numbers do not depend on the blocking or the ranges.
     """
-    n_pts, d = x.shape
+    d = x.shape[1]
     n_comp = means.shape[0]
     diff = np.empty((d, _BLOCK))
     s = np.empty(_BLOCK)
     maha = np.empty(_BLOCK)
-    for start in range(0, n_pts, _BLOCK):
-        nb = min(_BLOCK, n_pts - start)
+    for start in range(i0, i1, _BLOCK):
+        nb = min(_BLOCK, i1 - start)
         for m in range(n_comp):
             for b in range(d):
                 mb = means[m, b]
@@ -89,11 +91,12 @@ def _whitened_logpdf(x, means, linv, const, logw, out):
                 out[start + i, m] = c - 0.5 * maha[i]
 
 
-@lazy_njit(cache=True)
-def _row_logsumexp(a, out):
-    """out[n] = log sum_m exp(a[n, m]) for a (N, M), -inf rows giving -inf, NaN propagating."""
-    n_pts, n_comp = a.shape
-    for n in range(n_pts):
+@lazy_njit(cache=True, nogil=True)
+def _row_logsumexp(i0, i1, a, out):
+    """out[n] = log sum_m exp(a[n, m]) for the rows n in [i0, i1) of a (N, M), -inf rows giving
+    -inf, NaN propagating."""
+    n_comp = a.shape[1]
+    for n in range(i0, i1):
         mx = -np.inf
         nan = False
         for m in range(n_comp):
@@ -111,6 +114,19 @@ def _row_logsumexp(a, out):
         for m in range(n_comp):
             s += np.exp(a[n, m] - mx)
         out[n] = mx + np.log(s)
+
+
+_THREADED_ROWS = 8192
+"""Rows from which the densities run on the worker threads (:mod:`cistrack.threads`); below it
+handing out the work costs more than it saves."""
+
+
+def _by_rows(kernel, n: int, args: tuple) -> None:
+    """``kernel(i0, i1, *args)`` over the rows 0..n, on the worker threads when there are many."""
+    if n >= _THREADED_ROWS:
+        run_chunks(kernel, n, args, chunks_per_worker=1)
+    else:
+        kernel(0, n, *args)
 
 
 @dataclass
@@ -232,8 +248,8 @@ class GaussianMixture:
             raise ValueError(f"points must have shape (N, {self.dim}), got {x.shape}")
         linv, const = self._whitening()
         out = np.empty((x.shape[0], self.n_components))
-        _whitened_logpdf(x, np.ascontiguousarray(self.means), linv, const,
-                         np.ascontiguousarray(log_weights, dtype=float), out)
+        _by_rows(_whitened_logpdf, x.shape[0], (x, np.ascontiguousarray(self.means), linv, const,
+                                                np.ascontiguousarray(log_weights, dtype=float), out))
         return out
 
     def component_logpdf(self, x: np.ndarray) -> np.ndarray:
@@ -248,7 +264,7 @@ class GaussianMixture:
         if a.shape[1] == 1:
             return a[:, 0]
         out = np.empty(a.shape[0])
-        _row_logsumexp(a, out)
+        _by_rows(_row_logsumexp, a.shape[0], (a, out))
         return out
 
     def responsibilities(self, x: np.ndarray) -> np.ndarray:

@@ -107,8 +107,29 @@ def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n):
     linv = np.ascontiguousarray(np.tril(g.normal(size=(m, 6, 6))))
     const, logw = g.normal(size=m), g.normal(size=m)
     out = np.empty((n, m))
-    _whitened_logpdf(x, means, linv, const, logw, out)
+    _whitened_logpdf(0, n, x, means, linv, const, logw, out)
     assert np.array_equal(out, _per_point_logpdf(x, means, linv, const, logw))
+
+
+@pytest.mark.parametrize("threads", ["1", "2", "3"])
+def test_mixture_density_of_many_points_is_the_same_on_any_number_of_threads(monkeypatch, threads):
+    from cistrack.model.belief import _THREADED_ROWS, GaussianMixture
+
+    g = np.random.default_rng(11)
+    m, n = 4, _THREADED_ROWS + 1001
+    a = g.normal(size=(m, 6, 6))
+    mix = GaussianMixture(np.full(m, 0.25), g.normal(size=(m, 6)), a @ a.transpose(0, 2, 1) + np.eye(6))
+    x = g.normal(size=(n, 6)) * 2.0
+    monkeypatch.setenv("CISTRACK_NUM_THREADS", threads)
+    got = mix.logpdf(x)
+    table = np.empty((n, m))
+    linv, const = mix._whitening()
+    from cistrack.model.belief import _row_logsumexp, _whitened_logpdf
+
+    _whitened_logpdf(0, n, x, mix.means, linv, const, np.log(mix.weights), table)
+    want = np.empty(n)
+    _row_logsumexp(0, n, table, want)  # one thread, one range
+    assert np.array_equal(got, want)
 
 
 def test_position_marginal_of_a_mixture_has_the_position_blocks_and_the_closed_form_density():

@@ -9,8 +9,8 @@ _PROBE = ("import logging, numpy as np\n"
           "logging.basicConfig(level=logging.INFO, format='%(name)s: %(message)s')\n"
           "from cistrack.model.belief import _row_logsumexp\n"
           "out = np.empty(2)\n"
-          "_row_logsumexp(np.zeros((2, 3)), out)\n"
-          "_row_logsumexp(np.zeros((2, 3)), out)\n"
+          "_row_logsumexp(0, 2, np.zeros((2, 3)), out)\n"
+          "_row_logsumexp(0, 2, np.zeros((2, 3)), out)\n"
           "assert abs(out[0] - np.log(3.0)) < 1e-15\n")
 
 
