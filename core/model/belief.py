@@ -116,9 +116,10 @@ def _row_logsumexp(i0, i1, a, out):
         out[n] = mx + np.log(s)
 
 
-_THREADED_ROWS = 8192
+_THREADED_ROWS = 32_768
 """Rows from which the densities run on the worker threads (:mod:`cistrack.threads`); below it
-handing out the work costs more than it saves."""
+handing out the work costs more than it saves (6 components, 2 threads, this 2-core machine: 1.14
+against 1.05 ms at 10,000 rows, 3.4 against 4.3 ms at 40,000)."""
 
 
 def _by_rows(kernel, n: int, args: tuple) -> None:
