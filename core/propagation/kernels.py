@@ -39,8 +39,6 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-import numpy as np
-
 from cistrack.errors import ConfigError
 from cistrack.threads import num_threads, run_chunks  # noqa: F401  (kept importable from here)
 

@@ -113,7 +113,8 @@ def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n):
 
 @pytest.mark.parametrize("threads", ["1", "2", "3"])
 def test_mixture_density_of_many_points_is_the_same_on_any_number_of_threads(monkeypatch, threads):
-    from cistrack.model.belief import _THREADED_ROWS, GaussianMixture
+    from cistrack.model.belief import GaussianMixture
+    from cistrack.model.mixture_density import _THREADED_ROWS
 
     g = np.random.default_rng(11)
     m, n = 4, _THREADED_ROWS + 1001

@@ -7,7 +7,7 @@ import sys
 
 _PROBE = ("import logging, numpy as np\n"
           "logging.basicConfig(level=logging.INFO, format='%(name)s: %(message)s')\n"
-          "from cistrack.model.belief import _row_logsumexp\n"
+          "from cistrack.model.mixture_density import _row_logsumexp\n"
           "out = np.empty(2)\n"
           "_row_logsumexp(0, 2, np.zeros((2, 3)), out)\n"
           "_row_logsumexp(0, 2, np.zeros((2, 3)), out)\n"
@@ -23,5 +23,5 @@ def _stderr(cache_dir) -> str:
 
 def test_the_first_call_without_a_cache_says_it_compiles_and_the_next_process_loads_silently(tmp_path):
     first = _stderr(tmp_path)
-    assert first.count("cistrack.lazy: compiling cistrack.model.belief._row_logsumexp with numba") == 1
+    assert first.count("cistrack.lazy: compiling cistrack.model.mixture_density._row_logsumexp with numba") == 1
     assert "compiling" not in _stderr(tmp_path)
