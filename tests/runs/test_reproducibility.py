@@ -94,7 +94,7 @@ def test_generated_kernels_carry_no_fastmath_flags():
 @pytest.mark.parametrize("module", ["cistrack.plugins.dynamics.cr3bp", "cistrack.plugins.dynamics.twobody",
                                    "cistrack.plugins.dynamics.cr3bp_variational", "cistrack.plugins.dynamics.ephemeris_variational",
                                    "cistrack.plugins.clustering.em_numba",
-                                   "cistrack.model.belief", "cistrack.astro.ephemeris",
+                                   "cistrack.model.mixture_density", "cistrack.astro.ephemeris",
                                    "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.clustering.lloyd",
                                    "cistrack.plugins.clustering.points_and_labels"])
 def test_builtin_compiled_functions_carry_no_fastmath_flags(module):
