@@ -1,7 +1,7 @@
 """The worker threads that run compiled kernels on disjoint ranges of rows (GIL released).
 
 Shared by the ensemble propagation (:mod:`cistrack.propagation`) and the compiled mixture
-densities (:mod:`cistrack.model.belief`). Each row's numbers are computed by the same operations
+densities (:mod:`cistrack.model.mixture_density`). Each row's numbers are computed by the same operations
 whichever thread runs it, so the thread count never changes a result.
 """
 from __future__ import annotations
