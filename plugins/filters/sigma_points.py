@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["MerweSigmaPoints"]
+__all__ = ["MerweSigmaPoints", "merwe_points"]
 
 
 class MerweSigmaPoints:
@@ -44,9 +44,15 @@ class MerweSigmaPoints:
         n = self.n
         x = np.asarray(x, dtype=float).reshape(n)
         lam = self.alpha ** 2 * (n + self.kappa) - n
-        U = cholesky((lam + n) * np.atleast_2d(P))
-        sigmas = np.zeros((2 * n + 1, n))
-        sigmas[0] = x
-        sigmas[1:n + 1] = np.subtract(x, -U)  # rows x + U[k] and x - U[k]: filterpy's row
-        sigmas[n + 1:] = np.subtract(x, U)    # subtractions, done as two array operations
-        return sigmas
+        return merwe_points(x, cholesky((lam + n) * np.atleast_2d(P)))
+
+
+def merwe_points(x: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """The 2n+1 points (2n+1, n): ``x`` (n,), then x - (-U[k]) and x - U[k] for the rows of ``U``
+    (n, n): filterpy's row subtractions, done as two array operations (the same numbers)."""
+    n = U.shape[0]
+    sigmas = np.zeros((2 * n + 1, n))
+    sigmas[0] = x
+    sigmas[1:n + 1] = np.subtract(x, -U)
+    sigmas[n + 1:] = np.subtract(x, U)
+    return sigmas

@@ -18,6 +18,7 @@ from cistrack.interfaces import Dynamics
 from .ensemble_propagation import propagate_ensemble
 from .measured_components import MeasuredComponents
 from .posterior_linearization import posterior_linearization_update
+from .sigma_points import merwe_points
 
 __all__ = ["BatchUKF", "MerweScaledSigmaPoints", "robust_sqrt", "batch_unscented_transform"]
 
@@ -31,15 +32,8 @@ class MerweScaledSigmaPoints(_FilterpyMerwe):
     def sigma_points(self, x, P):
         if self.subtract is not np.subtract or np.isscalar(x) or np.isscalar(P) or self.n != np.size(x):
             return super().sigma_points(x, P)
-        n = self.n
-        x = np.asarray(x)
-        lambda_ = self.alpha ** 2 * (n + self.kappa) - n
-        U = self.sqrt((lambda_ + n) * np.atleast_2d(P))
-        sigmas = np.zeros((2 * n + 1, n))
-        sigmas[0] = x
-        sigmas[1:n + 1] = np.subtract(x, -U)
-        sigmas[n + 1:] = np.subtract(x, U)
-        return sigmas
+        lambda_ = self.alpha ** 2 * (self.n + self.kappa) - self.n
+        return merwe_points(np.asarray(x), self.sqrt((lambda_ + self.n) * np.atleast_2d(P)))
 
 
 def robust_sqrt(a: np.ndarray) -> np.ndarray:
