@@ -333,7 +333,10 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if mix is None:
             return False
         x = self._reanchor.draw(self.n_particles, self._rng)
-        self._x, self._h = (self._sample_posterior(mix, self.n_particles)[0], None) if x is None else self._prune(x)
+        if x is None:
+            self._x, self._h = self._sample_posterior(mix, self.n_particles)[0], None
+        else:
+            self._x, self._h = self._prune(x)
         return True
 
     # -- belief -----------------------------------------------------------------------------------
