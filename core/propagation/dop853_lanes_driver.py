@@ -6,62 +6,49 @@ controls each lane's step size, locates impacts, writes outputs and refills fini
 around one vectorised ``_lanes_step`` per step of all lanes. See :mod:`.dop853_lanes_source`.
 """
 
-__all__ = ["DRIVER"]
+__all__ = ["DRIVER", "driver_source"]
 
-DRIVER = '''
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lanes_step(w, params, rtol, atol):
-{STAGES}    _lanes_error(w, rtol, atol)
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_get(w, row, l, col):
-    for j in range(DIM):
-        col[j] = w[(row + j) * LANES + l]
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_put(w, row, l, col):
-    for j in range(DIM):
-        w[(row + j) * LANES + l] = col[j]
-
-
-@njit(cache=CACHE, fastmath=FASTMATH)
-def _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad, steps,
-                out, impact_body, impact_time, status, w, tl, hl, iout, nsteps, rejected,
-                err_old, col, col2, col3, col4):
-    """Load particle i into lane l; False if it needs no step (done at t0)."""
-    nt = times.shape[0]
-    for j in range(DIM):
-        col[j] = y0[i, j]
-    b = _inside(t0, col, params, body_pos, body_rad)
-    if b >= 0:
-        impact_body[i] = b
-        impact_time[i] = t0
-        status[i] = 1
-        _freeze(i, 0, col, out, nt)
-        return False
+# Loading particle i into lane l (sets ``started``: False when it needs no step, done at t0).
+# Written out where it is used, like the copies between a lane's rows below: a helper function
+# taking the kernel's arrays has numba count references to each of them on every call
+# (measured: 40 % of a one-step call went to reference counting, issue 31).
+_START = """started = False
+for j in range(DIM):
+    col[j] = y0[i, j]
+b = _inside(t0, col, params, body_pos, body_rad)
+if b >= 0:
+    impact_body[i] = b
+    impact_time[i] = t0
+    status[i] = 1
+    _freeze(i, 0, col, out, nt)
+else:
     io = 0
     while io < nt and times[io] == t0:
         for j in range(DIM):
             out[io, i, j] = col[j]
         io += 1
-    if io == nt:
-        return False
-    rhs(t0, col, params, col2)
-    _lane_put(w, ROW_Y, l, col)
-    _lane_put(w, ROW_K0, l, col2)
-    span = abs(times[nt - 1] - t0)
-    if steps[i] > 0.0:  # the step this particle's previous integration proposed
-        hl[l] = min(steps[i], span)
-    else:
-        hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
-    tl[l] = t0
-    iout[l] = io
-    nsteps[l] = 0
-    rejected[l] = False
-    err_old[l] = 1e-4
-    return True
+    if io < nt:
+        rhs(t0, col, params, col2)
+        for j in range(DIM):
+            w[(ROW_Y + j) * LANES + l] = col[j]
+            w[(ROW_K0 + j) * LANES + l] = col2[j]
+        span = abs(times[nt - 1] - t0)
+        if steps[i] > 0.0:  # the step this particle's previous integration proposed
+            hl[l] = min(steps[i], span)
+        else:
+            hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
+        tl[l] = t0
+        iout[l] = io
+        nsteps[l] = 0
+        rejected[l] = False
+        err_old[l] = 1e-4
+        started = True
+"""
+
+_TEMPLATE = '''
+@njit(cache=CACHE, fastmath=FASTMATH)
+def _lanes_step(w, params, rtol, atol):
+{STAGES}    _lanes_error(w, rtol, atol)
 
 
 @njit(cache=CACHE, nogil=True, fastmath=FASTMATH)
@@ -92,9 +79,8 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
         while nxt < i1:
             i = nxt
             nxt += 1
-            if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos, body_rad,
-                           steps, out, impact_body, impact_time, status, w, tl, hl, iout,
-                           nsteps, rejected, err_old, col, col2, col3, col4):
+{START:12}
+            if started:
                 who[l] = i
                 active += 1
                 break
@@ -107,10 +93,9 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 tl[l] = tl[src]
                 hl[l] = hl[src]
                 iout[l] = iout[src]
-                _lane_get(w, ROW_Y, src, col)
-                _lane_put(w, ROW_Y, l, col)
-                _lane_get(w, ROW_K0, src, col)
-                _lane_put(w, ROW_K0, l, col)
+                for j in range(DIM):
+                    w[(ROW_Y + j) * LANES + l] = w[(ROW_Y + j) * LANES + src]
+                    w[(ROW_K0 + j) * LANES + l] = w[(ROW_K0 + j) * LANES + src]
         for l in range(LANES):
             tout = times[iout[l]]
             remaining = abs(tout - tl[l])
@@ -141,11 +126,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 if rejected[l]:
                     fac = min(1.0, fac)
                 rejected[l] = False
-                _lane_get(w, ROW_YN, l, col)
+                for j in range(DIM):
+                    col[j] = w[(ROW_YN + j) * LANES + l]
                 b = _inside(tl[l] + hs, col, params, body_pos, body_rad)
                 if b >= 0:
-                    _lane_get(w, ROW_Y, l, col2)
-                    _lane_get(w, ROW_K0, l, col3)
+                    for j in range(DIM):
+                        col2[j] = w[(ROW_Y + j) * LANES + l]
+                    for j in range(DIM):
+                        col3[j] = w[(ROW_K0 + j) * LANES + l]
                     s = _locate_impact(tl[l], hs, col2, col3, params, col4, col, np.empty(DIM),
                                        body_pos, body_rad, b)
                     impact_body[i] = b
@@ -159,9 +147,9 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                         tl[l] = tout
                     else:
                         tl[l] = tl[l] + hs
-                    _lane_put(w, ROW_Y, l, col)
-                    _lane_get(w, ROW_F, l, col2)
-                    _lane_put(w, ROW_K0, l, col2)
+                    for j in range(DIM):
+                        w[(ROW_Y + j) * LANES + l] = col[j]
+                        w[(ROW_K0 + j) * LANES + l] = w[(ROW_F + j) * LANES + l]
                     if last[l]:
                         io = iout[l]
                         while io < nt and times[io] == tout:
@@ -184,12 +172,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 rejected[l] = True
                 if hl[l] < hmin:
                     status[i] = 3
-                    _lane_get(w, ROW_Y, l, col)
+                    for j in range(DIM):
+                        col[j] = w[(ROW_Y + j) * LANES + l]
                     _freeze(i, iout[l], col, out, nt)
                     done = True
             if not done and nsteps[l] >= max_steps and iout[l] < nt:
                 status[i] = 2
-                _lane_get(w, ROW_Y, l, col)
+                for j in range(DIM):
+                    col[j] = w[(ROW_Y + j) * LANES + l]
                 _freeze(i, iout[l], col, out, nt)
                 done = True
             if done:
@@ -198,10 +188,23 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 while nxt < i1:
                     i = nxt
                     nxt += 1
-                    if _lane_start(l, i, y0, params, t0, times, direction, rtol, atol, body_pos,
-                                   body_rad, steps, out, impact_body, impact_time, status, w,
-                                   tl, hl, iout, nsteps, rejected, err_old, col, col2, col3, col4):
+{START:20}
+                    if started:
                         who[l] = i
                         active += 1
                         break
 '''
+
+
+def driver_source(stages: str) -> str:
+    """The driver's text with ``stages`` (the calls of the stage functions) in ``_lanes_step``
+    and the lane-loading block written out at its two places."""
+    def block(indent: int) -> str:
+        return "\n".join(" " * indent + line for line in _START.splitlines())
+
+    return (_TEMPLATE.replace("{STAGES}", stages).replace("{START:12}", block(12))
+            .replace("{START:20}", block(20)))
+
+
+DRIVER = _TEMPLATE
+"""The template (placeholders ``{STAGES}`` and ``{START:n}``); :func:`driver_source` fills it."""

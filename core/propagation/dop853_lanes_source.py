@@ -22,7 +22,7 @@ particles left than lanes) repeat an active lane's state; their results are disc
 from __future__ import annotations
 
 from cistrack.propagation import dop853_tableau as _tab
-from cistrack.propagation.dop853_lanes_driver import DRIVER as _DRIVER
+from cistrack.propagation.dop853_lanes_driver import driver_source
 
 __all__ = ["lanes_source", "DEFAULT_LANES", "RESERVED"]
 
@@ -160,4 +160,4 @@ def lanes_source(dim: int, body, lanes: int = DEFAULT_LANES) -> str:
             f"ROW_T = {rows['T']}", f"ROW_H = {rows['H']}", f"ROW_ERR = {rows['ERR']}", "", ""]
     stages = "".join(_stage_function(s, body, dim, lanes) for s in range(1, n + 1))
     calls = "".join(f"    _lanes_stage{s}(w, params)\n" for s in range(1, n + 1))
-    return "\n".join(head) + stages + _error_function(dim, lanes) + _DRIVER.replace("{STAGES}", calls)
+    return "\n".join(head) + stages + _error_function(dim, lanes) + driver_source(calls)
