@@ -79,7 +79,7 @@ def dense_kernel(state, params, t1, rtol, atol, body_pos, body_rad, max_steps, r
         err = _rk_step_dense(t, hs, y, k0, params, ytmp, ynew, f, rtol, atol, coef)
         nsteps += 1
         if err <= 1.0:
-            if err == 0.0:
+            if err == 0.0 or err <= GROWTH_CAP_ERR:  # growth capped whatever pow gives
                 fac = MAX_GROWTH
             else:
                 fac = min(MAX_GROWTH, SAFETY * err ** -EXPO1 * err_old ** BETA)

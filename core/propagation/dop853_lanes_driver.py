@@ -118,7 +118,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
             hs = w[ROW_H * LANES + l]
             done = False
             if e <= 1.0:
-                if e == 0.0:
+                if e == 0.0 or e <= GROWTH_CAP_ERR:  # growth capped whatever pow gives
                     fac = MAX_GROWTH
                 else:
                     fac = min(MAX_GROWTH, SAFETY * e ** -EXPO1 * err_old[l] ** BETA)

@@ -34,7 +34,7 @@ divisions: 6.4 us), 32 lanes too (4.5 us, on a machine loaded enough that the tw
 its noise). Fewer particles than lanes go to the one-particle kernel."""
 
 RESERVED = {"np", "njit", "rhs", "body_position", "DIM", "CACHE", "SAFETY", "MAX_GROWTH", "MIN_SHRINK",
-            "BETA", "EXPO1", "FASTMATH", "LANES", "ROWS", "N_STAGES"}
+            "BETA", "EXPO1", "GROWTH_CAP_ERR", "FASTMATH", "LANES", "ROWS", "N_STAGES"}
 """Module-level names of a generated kernel module other than the underscored ones."""
 
 
