@@ -92,10 +92,9 @@ class PartWriter:
 def _table(rows: list[dict[str, Any]]) -> pa.Table:
     """Rows as a table with the union of their keys, in order of first appearance (a key missing
     from a row is null there), as if each row had been a part of its own and the parts merged."""
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    import pyarrow as pa
+    from cistrack.results.arrow_rows import table_from_rows  # from_pydict's table, without importing pandas
 
-    return pa.Table.from_pydict({k: [r.get(k) for r in rows] for k in keys})
+    return table_from_rows(rows)
 
 
 def read_parts(directory: str | Path) -> pa.Table | None:
