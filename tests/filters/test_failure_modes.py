@@ -136,3 +136,33 @@ def test_a_measurement_with_fewer_components_updates_on_those_only(name):
     m = filt.belief.mixture.mean
     assert m[1] == pytest.approx(0.5 * 1.0 / 1.01, abs=0.1)
     assert abs(m[0]) < 0.1
+
+
+class _NaNForOne(LinearDynamics):
+    """Free motion whose particle 1 comes back NaN, hit (a body stopped it) or not."""
+
+    def __init__(self, dead: bool):
+        super().__init__()
+        self.dead = dead
+
+    def propagate(self, states, t0, times):
+        prop = super().propagate(states, t0, times)
+        prop.states[:, 1] = np.nan
+        if self.dead:
+            prop.alive[1] = False
+        return prop
+
+
+def test_a_nan_state_of_a_live_particle_is_refused_by_name():
+    from cistrack.errors import FilterError
+    from cistrack.plugins.filters.ensemble_propagation import propagate_ensemble
+
+    with pytest.raises(FilterError, match="filter 'pgm': dynamics returned NaN"):
+        propagate_ensemble(_NaNForOne(dead=False), np.ones((4, 6)), 0.0, 1.0, "pgm")
+
+
+def test_a_nan_state_of_a_dead_particle_is_let_through():
+    from cistrack.plugins.filters.ensemble_propagation import propagate_ensemble
+
+    final, alive, _ = propagate_ensemble(_NaNForOne(dead=True), np.ones((4, 6)), 0.0, 1.0, "pgm")
+    assert not alive[1] and np.all(np.isfinite(final[alive]))
