@@ -12,6 +12,7 @@ left to ``from_pydict``, as before.
 """
 from __future__ import annotations
 
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -20,109 +21,90 @@ __all__ = ["table_from_rows"]
 
 _INT64_MIN, _INT64_MAX = -(2 ** 63), 2 ** 63 - 1
 _EXACT_IN_DOUBLE = 2 ** 53
+_NONE = type(None)
+_FLOATS = frozenset({float, np.float64})
+_INTS = frozenset({int, np.int64})
+_BOOLS = frozenset({bool, np.bool_})
+_LISTS = frozenset({list, tuple})
 
 
-def _kind(v: Any) -> str | None:
-    """None, "bool", "int", "float", "str", "list" or "other" (the kinds converted here)."""
-    if v is None:
-        return None
-    t = type(v)
-    if t is bool or t is np.bool_:
-        return "bool"
-    if t is int or t is np.int64:
-        return "int"
-    if t is float or t is np.float64:
-        return "float"
-    if t is str:
-        return "str"
-    if t is list or t is tuple:
-        return "list"
-    return "other"
-
-
-def _validity(valid: np.ndarray):
+def _validity(valid: np.ndarray | None):
     """Arrow validity bitmap (None when every value is present)."""
     import pyarrow as pa
 
-    return None if valid.all() else pa.py_buffer(np.packbits(valid, bitorder="little"))
+    return None if valid is None else pa.py_buffer(np.packbits(valid, bitorder="little"))
 
 
-def _numbers(values: list, valid: np.ndarray, kinds: set[str]):
-    """Values of kinds {"int"}, {"float"} or {"int", "float"} (None where not ``valid``): int64,
-    double or double; None when an int does not fit (int64, or exactly in a double when mixed)."""
-    import pyarrow as pa
-
-    present = [v for v in values if v is not None]
-    if "int" in kinds:
-        ints = [int(v) for v in present if type(v) is not float and type(v) is not np.float64]
-        if ints:
-            bound = _EXACT_IN_DOUBLE if "float" in kinds else None
-            lo, hi = min(ints), max(ints)
-            if lo < _INT64_MIN or hi > _INT64_MAX or (bound is not None and max(-lo, hi) > bound):
-                return None
-    dtype, atype = (np.int64, pa.int64()) if kinds == {"int"} else (np.float64, pa.float64())
-    data = np.zeros(len(values), dtype=dtype)
+def _spread(present: list, valid: np.ndarray | None, dtype) -> np.ndarray:
+    """The present values at their rows of a zero-filled array (all rows when ``valid`` is None)."""
+    if valid is None:
+        return np.array(present, dtype=dtype)
+    data = np.zeros(valid.size, dtype=dtype)
     data[valid] = np.array(present, dtype=dtype)
-    return pa.Array.from_buffers(atype, len(values), [_validity(valid), pa.py_buffer(data)])
+    return data
 
 
-def _booleans(values: list, valid: np.ndarray):
+def _numbers(present: list, valid: np.ndarray | None, n: int, types: set):
+    """Python/numpy ints and floats: int64 when all are ints, else double; None when an int does
+    not fit (int64, or exactly in a double when mixed with floats)."""
     import pyarrow as pa
 
-    bits = np.array([bool(v) if v is not None else False for v in values], dtype=bool)
-    return pa.Array.from_buffers(pa.bool_(), len(values),
-                                 [_validity(valid), pa.py_buffer(np.packbits(bits, bitorder="little"))])
+    ints = types & _INTS
+    if ints:
+        values = present if not types - _INTS else [v for v in present if type(v) in _INTS]
+        lo, hi = min(values), max(values)
+        bound = _EXACT_IN_DOUBLE if types - _INTS else _INT64_MAX
+        if lo < max(_INT64_MIN, -bound) or hi > bound:
+            return None
+    dtype, atype = (np.int64, pa.int64()) if types <= _INTS else (np.float64, pa.float64())
+    return pa.Array.from_buffers(atype, n, [_validity(valid), pa.py_buffer(_spread(present, valid, dtype))])
 
 
-def _strings(values: list, valid: np.ndarray):
-    import pyarrow as pa
-
-    encoded = [v.encode("utf-8") if v is not None else b"" for v in values]
-    offsets = np.zeros(len(values) + 1, dtype=np.int64)
-    np.cumsum([len(b) for b in encoded], out=offsets[1:])
-    if offsets[-1] > np.iinfo(np.int32).max:
-        return None
-    return pa.Array.from_buffers(pa.string(), len(values),
-                                 [_validity(valid), pa.py_buffer(offsets.astype(np.int32)),
-                                  pa.py_buffer(b"".join(encoded))])
-
-
-def _lists(values: list, valid: np.ndarray):
-    """Lists of numbers: list<double> (or list<int64> when every element is an int); None for
-    anything else (nulls or other kinds inside, or only empty lists: from_pydict types those)."""
-    import pyarrow as pa
-
-    flat = [x for v in values if v is not None for x in v]
-    inner = {_kind(x) for x in flat}
-    if not flat or not inner <= {"int", "float"}:
-        return None
-    child = _numbers(flat, np.ones(len(flat), dtype=bool), inner)
-    if child is None:
-        return None
-    offsets = np.zeros(len(values) + 1, dtype=np.int64)
-    np.cumsum([len(v) if v is not None else 0 for v in values], out=offsets[1:])
-    if offsets[-1] > np.iinfo(np.int32).max:
-        return None
-    return pa.Array.from_buffers(pa.list_(child.type), len(values),
-                                 [_validity(valid), pa.py_buffer(offsets.astype(np.int32))], children=[child])
+def _offsets(lengths: list) -> np.ndarray | None:
+    """Arrow int32 offsets (n + 1,) of items of ``lengths``; None beyond int32."""
+    offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+    np.cumsum(lengths, out=offsets[1:])
+    return None if offsets[-1] > np.iinfo(np.int32).max else offsets.astype(np.int32)
 
 
 def _column(values: list):
     """The Arrow array of one column, or None when it is left to ``from_pydict``."""
     import pyarrow as pa
 
-    kinds = {_kind(v) for v in values} - {None}
-    valid = np.array([v is not None for v in values], dtype=bool)
-    if not kinds:
-        return pa.nulls(len(values))
-    if kinds <= {"int", "float"}:
-        return _numbers(values, valid, kinds)
-    if kinds == {"bool"}:
-        return _booleans(values, valid)
-    if kinds == {"str"}:
-        return _strings(values, valid)
-    if kinds == {"list"}:
-        return _lists(values, valid)
+    n = len(values)
+    types = set(map(type, values))
+    valid = None
+    present = values
+    if _NONE in types:
+        types.discard(_NONE)
+        if not types:
+            return pa.nulls(n)
+        valid = np.array([v is not None for v in values], dtype=bool)
+        present = [v for v in values if v is not None]
+    if types <= _FLOATS | _INTS:
+        return _numbers(present, valid, n, types)
+    if types <= _BOOLS:
+        bits = _spread(present, valid, bool)
+        return pa.Array.from_buffers(pa.bool_(), n, [_validity(valid), pa.py_buffer(np.packbits(bits, bitorder="little"))])
+    if types == {str}:
+        encoded = [v.encode("utf-8") for v in present]
+        lengths = _spread(list(map(len, encoded)), valid, np.int64)
+        offsets = _offsets(lengths)
+        if offsets is None:
+            return None
+        return pa.Array.from_buffers(pa.string(), n, [_validity(valid), pa.py_buffer(offsets),
+                                                      pa.py_buffer(b"".join(encoded))])
+    if types <= _LISTS:  # lists of numbers: list<double>, or list<int64> when every item is an int
+        flat = list(chain.from_iterable(present))
+        inner = set(map(type, flat))
+        if not flat or not inner <= _FLOATS | _INTS:
+            return None  # empty lists only, nulls or other kinds inside: from_pydict types those
+        child = _numbers(flat, None, len(flat), inner)
+        offsets = _offsets(_spread(list(map(len, present)), valid, np.int64))
+        if child is None or offsets is None:
+            return None
+        return pa.Array.from_buffers(pa.list_(child.type), n, [_validity(valid), pa.py_buffer(offsets)],
+                                     children=[child])
     return None
 
 
