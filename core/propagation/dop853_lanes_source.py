@@ -100,8 +100,11 @@ def _stage_function(s: int, body, dim: int, lanes: int) -> str:
 
 def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` for a body with a :class:`~.lane_rhs.LaneUniform` key: a scalar pass computes
-    every lane's key; then, once per distinct key ``_K``, the lane loop runs with the key fixed to
-    ``_K`` (uniform loads: vectorised) and keeps the results of the lanes whose key is ``_K``."""
+    every lane's key; when all lanes have the same key (the usual case: the lanes step together,
+    and a 6-hour record holds several steps) one lane loop runs with it and stores every lane's
+    result; otherwise, once per distinct key ``_K``, the lane loop runs with the key fixed to
+    ``_K`` (uniform loads: vectorised) and keeps the results of the lanes whose key is ``_K``.
+    Each lane computes the same operations either way (same numbers)."""
     rows = _rows(dim, keyed=True)
     tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
     key, done = _w(rows["KEY"], lanes), _w(rows["DONE"], lanes)
@@ -111,12 +114,20 @@ def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += ["    " + line for line in body.key.invariant.splitlines()]
     L += ["    for _l in range(LANES):"] + time
     L += ["        " + line for line in body.key.prefix.splitlines()]
-    L += [f"        {key} = {body.key.expr}", f"        {done} = 0.0",
-          "    _first = 0", "    while _first < LANES:",
+    L += [f"        {key} = {body.key.expr}", f"        {done} = 0.0"]
+    # every lane in the same record (nearly always: lanes step together): one pass, no masks
+    out0 = rows["KS"] + (s - 1) * dim
+    L += [f"    _K = _w[{rows['KEY'] * lanes}]", "    _same = True", "    for _l in range(1, LANES):",
+          f"        if {key} != _K:", "            _same = False", "    if _same:"]
+    L += ["        " + line for line in body.key.per_key.splitlines()]
+    L += ["        for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "            ")
+    L += [f"            _uo{k} = {_w(out0 + k, lanes)}" for k in range(dim)]
+    L += ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
+    L += [f"            {_w(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
+    L += ["        return", "    _first = 0", "    while _first < LANES:",
           f"        _K = _w[{rows['KEY'] * lanes} + _first]"]
     L += ["        " + line for line in body.key.per_key.splitlines()]
     L += ["        for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "            ")
-    out0 = rows["KS"] + (s - 1) * dim
     L += [f"            _uo{k} = {_w(out0 + k, lanes)}" for k in range(dim)]
     L += ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
     L.append(f"            _m = {key} == _K")
