@@ -372,9 +372,9 @@ def growth_cap_error(safety: float, max_growth: float, beta: float) -> float:
     max_growth for err <= (safety / max_growth)^8 (2.56e-6 at the defaults). The bound returned
     is that value times (1 + 1e-9)^-8, so that safety * err^-1/8 exceeds max_growth by 1e-9
     relative there, far more than the rounding of ``pow`` and of the product: testing it first
-    skips ``pow`` (a fifth of a lockstep step's scalar work; clipped steps that land on an
-    output time mostly have such errors) and gives the factor ``min`` would have given, bit for
-    bit. -1.0 (never) with PI control (``beta`` not 0), whose factor also depends on the
+    skips ``pow`` (18 % of the lockstep kernel's CPU over a one-period propagation; clipped
+    steps that land on an output time mostly have such errors) and gives the factor ``min``
+    would have given, bit for bit. -1.0 (never) with PI control (``beta`` not 0), whose factor also depends on the
     previous step's error.
     """
     if beta != 0.0:
