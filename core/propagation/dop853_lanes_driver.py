@@ -1,9 +1,10 @@
 """Template of the SIMD-lockstep kernel's driver: ``propagate_lanes_kernel`` and its helpers.
 
-Part of the module text that :mod:`.dop853_lanes_source` generates (``{STAGES}`` is replaced by
-the calls of the stage functions): the per-lane scalar code that loads particles into lanes,
-controls each lane's step size, locates impacts, writes outputs and refills finished lanes,
-around one vectorised ``_lanes_step`` per step of all lanes. See :mod:`.dop853_lanes_source`.
+Part of the module text that :mod:`.dop853_lanes_source` generates (:func:`driver_source` fills
+``{STAGES}`` with the calls of the stage functions and ``{START:n}`` with the lane-loading block
+at indent n): the per-lane scalar code that loads particles into lanes, controls each lane's step
+size, locates impacts, writes outputs and refills finished lanes, around one vectorised
+``_lanes_step`` per step of all lanes. See :mod:`.dop853_lanes_source`.
 """
 
 __all__ = ["DRIVER", "driver_source"]
