@@ -107,3 +107,32 @@ def test_malformed_states_are_refused(frame):
         frame.synodic_to_gcrs(np.zeros((3, 6)), [0.0, 1.0])
     with pytest.raises(ValueError, match="finite"):
         frame.synodic_to_gcrs(np.full(6, np.nan), 0.0)
+
+
+def test_the_frame_at_one_time_is_kept_read_only_and_equals_a_fresh_evaluation():
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    first = frame.axes(1.25)
+    assert frame.axes(np.float64(1.25)) is first and frame.axes(np.array([1.25])) is first
+    fresh = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")._evaluate_axes(np.array([1.25]))
+    for name, arr in vars(first).items():
+        assert not arr.flags.writeable
+        assert np.array_equal(arr, getattr(fresh, name))
+    with pytest.raises(ValueError, match="read-only"):
+        first.rotation[0, 0, 0] = 0.0
+
+
+def test_at_most_axes_kept_times_are_kept_the_oldest_going_first(monkeypatch):
+    from cistrack.astro import earth_moon
+
+    monkeypatch.setattr(earth_moon, "AXES_KEPT", 3)
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    kept = [frame.axes(t) for t in (0.0, 0.1, 0.2, 0.3)]
+    assert frame.axes(0.3) is kept[3] and frame.axes(0.1) is kept[1]
+    assert frame.axes(0.0) is not kept[0]  # dropped when the fourth time came
+
+
+def test_several_times_at_once_are_evaluated_not_kept():
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    both = frame.axes(np.array([0.5, 0.6]))
+    assert both.rotation.shape == (2, 3, 3) and both.rotation.flags.writeable
+    assert frame.axes(0.5) is frame.axes(0.5)
