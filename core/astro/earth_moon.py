@@ -79,7 +79,7 @@ def _broadcast(states, t) -> tuple[np.ndarray, np.ndarray, bool]:
 
 
 AXES_KEPT = 4096
-"""Single times whose frame :meth:`EarthMoonFrame.axes` keeps (about 0.6 kB each)."""
+"""Single times whose frame :meth:`EarthMoonFrame.axes` keeps (about 1 kB each; not pickled)."""
 
 
 class EarthMoonFrame:
@@ -98,6 +98,11 @@ class EarthMoonFrame:
         self.ephemeris = ephemeris if ephemeris is not None else de421()
         self.mu = self.ephemeris.earth_share
         self._axes_at: dict[float, FrameAxes] = {}
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_axes_at"] = {}  # kept evaluations are rebuilt on use, not shipped to other processes
+        return state
 
     @classmethod
     def from_utc(cls, epoch: datetime | str, ephemeris: DE421 | None = None) -> "EarthMoonFrame":
@@ -129,7 +134,10 @@ class EarthMoonFrame:
                 for arr in vars(kept).values():
                     arr.setflags(write=False)
                 if len(self._axes_at) >= AXES_KEPT:
-                    self._axes_at.pop(next(iter(self._axes_at)))  # the oldest
+                    try:
+                        self._axes_at.pop(next(iter(self._axes_at)), None)  # the oldest
+                    except (RuntimeError, StopIteration):  # another thread changed it meanwhile
+                        pass
                 self._axes_at[key] = kept
             return kept
         return self._evaluate_axes(tt)

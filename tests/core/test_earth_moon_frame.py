@@ -136,3 +136,13 @@ def test_several_times_at_once_are_evaluated_not_kept():
     both = frame.axes(np.array([0.5, 0.6]))
     assert both.rotation.shape == (2, 3, 3) and both.rotation.flags.writeable
     assert frame.axes(0.5) is frame.axes(0.5)
+
+
+def test_a_pickled_frame_leaves_its_kept_axes_behind_and_gives_the_same_ones():
+    import pickle
+
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    before = frame.axes(2.0)
+    copy = pickle.loads(pickle.dumps(frame))
+    assert copy._axes_at == {}
+    assert all(np.array_equal(a, b) for a, b in zip(vars(copy.axes(2.0)).values(), vars(before).values()))
