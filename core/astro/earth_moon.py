@@ -36,6 +36,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.ephemeris import DAY_S, DE421, de421
+from cistrack.astro.kept_by_time import kept_or_evaluated
 
 __all__ = ["EarthMoonFrame", "FrameAxes"]
 
@@ -62,6 +63,12 @@ class FrameAxes:
     distance: np.ndarray
     distance_rate: np.ndarray
     angular_rate: np.ndarray
+
+
+def _read_only(ax: FrameAxes) -> FrameAxes:
+    for arr in vars(ax).values():
+        arr.setflags(write=False)
+    return ax
 
 
 def _broadcast(states, t) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -127,19 +134,7 @@ class EarthMoonFrame:
         few values differently from one time at a time: not mixed with the kept ones)."""
         tt = np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1)
         if tt.size == 1:
-            key = float(tt[0])
-            kept = self._axes_at.get(key)
-            if kept is None:
-                kept = self._evaluate_axes(tt)
-                for arr in vars(kept).values():
-                    arr.setflags(write=False)
-                if len(self._axes_at) >= AXES_KEPT:
-                    try:
-                        self._axes_at.pop(next(iter(self._axes_at)), None)  # the oldest
-                    except (RuntimeError, StopIteration):  # another thread changed it meanwhile
-                        pass
-                self._axes_at[key] = kept
-            return kept
+            return kept_or_evaluated(self._axes_at, float(tt[0]), AXES_KEPT, lambda: _read_only(self._evaluate_axes(tt)))
         return self._evaluate_axes(tt)
 
     def _evaluate_axes(self, t: np.ndarray) -> FrameAxes:

@@ -23,6 +23,7 @@ from datetime import datetime
 import erfa
 import numpy as np
 
+from cistrack.astro.kept_by_time import kept_or_evaluated
 from cistrack.astro.sites import Site
 from cistrack.units import parse_utc
 
@@ -102,14 +103,7 @@ class ObserverGeometry:
         """Observer state at ``seconds`` (scalar or (K,)) SI seconds after the epoch (K=1 for a scalar)."""
         s = np.atleast_1d(np.asarray(seconds, dtype=float)).reshape(-1)
         if s.size == 1:
-            key = float(s[0])
-            hit = self._cache.get(key)
-            if hit is None:
-                hit = self._evaluate(s)
-                if len(self._cache) >= self._CACHE_SIZE:
-                    self._cache.pop(next(iter(self._cache)))
-                self._cache[key] = hit
-            return hit
+            return kept_or_evaluated(self._cache, float(s[0]), self._CACHE_SIZE, lambda: self._evaluate(s))
         uniq, inv = np.unique(s, return_inverse=True)
         st = self._evaluate(uniq)
         return ObserverState(*(a[inv] for a in (st.position_km, st.velocity_kms, st.gcrs_to_itrs,
