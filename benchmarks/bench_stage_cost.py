@@ -28,7 +28,11 @@ from cistrack.propagation.lane_rhs import LaneUniform  # noqa: E402
 
 @lazy_njit(cache=False)
 def keyed_cr3bp_rhs(t, y, p, out):
-    """CR3BP plus a table entry (zero) read by the time's record: p = [mu, 1/width, table...]."""
+    """CR3BP plus a table entry (zero) read by the time's record: p = [mu, 1/width, table...].
+
+    cr3bp_rhs's lines written out again on purpose: calling it (passing ``y`` and ``out`` to
+    another function) would make the lane rewriter refuse this body, and the benchmark would then
+    time the one-particle kernel instead of the keyed lockstep stages it is for."""
     k: LaneUniform = min(max(int(np.floor(t * p[1])), 0), 1000)
     c0 = p[2 + k]
     mu = p[0]
