@@ -29,14 +29,19 @@ else:
             out[io, i, j] = col[j]
         io += 1
     if io < nt:
-        rhs(t0, col, params, col2)
         for j in range(DIM):
             w[(ROW_Y + j) * LANES + l] = col[j]
-            w[(ROW_K0 + j) * LANES + l] = col2[j]
         span = abs(times[nt - 1] - t0)
         if steps[i] > 0.0:  # the step this particle's previous integration proposed
             hl[l] = min(steps[i], span)
+            # k0 = rhs(t0, y): evaluated for all such lanes at once before the next step
+            w[ROW_T * LANES + l] = t0
+            pending[l] = True
+            npending += 1
         else:
+            rhs(t0, col, params, col2)
+            for j in range(DIM):
+                w[(ROW_K0 + j) * LANES + l] = col2[j]
             hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
         tl[l] = t0
         iout[l] = io
@@ -67,6 +72,8 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
     err_old = np.empty(LANES)
     last = np.zeros(LANES, dtype=np.bool_)
     rejected = np.zeros(LANES, dtype=np.bool_)
+    pending = np.zeros(LANES, dtype=np.bool_)
+    npending = 0
     iout = np.zeros(LANES, dtype=np.int64)
     nsteps = np.zeros(LANES, dtype=np.int64)
     who = np.full(LANES, -1, dtype=np.int64)
@@ -86,6 +93,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 active += 1
                 break
     while active > 0:
+        if npending > 0:  # started lanes' k0, vectorised (the same numbers as rhs per lane)
+            _lanes_stage0(w, params)
+            for l in range(LANES):
+                if pending[l]:
+                    for j in range(DIM):
+                        w[(ROW_K0 + j) * LANES + l] = w[(ROW_START_F + j) * LANES + l]
+                    pending[l] = False
+            npending = 0
         src = 0
         while who[src] < 0:
             src += 1

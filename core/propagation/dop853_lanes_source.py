@@ -70,7 +70,10 @@ def _stage_sum(coefs, j: int, rows: dict, dim: int, lanes: int) -> str:
 
 def _stage_point(s: int, rows: dict, dim: int, lanes: int, indent: str) -> list[str]:
     """Lines of stage ``s`` that set the lane's ``_h``, stage state ``_y0..`` (stored in YN at
-    stage 12) and stage time ``_t``."""
+    stage 12) and stage time ``_t``; ``s == 0`` is the step's start (the lane's state and time)."""
+    if s == 0:
+        return ([f"{indent}_y{j} = {_w(rows['Y'] + j, lanes)}" for j in range(dim)]
+                + [f"{indent}_t = {_w(rows['T'], lanes)}"])
     new = s == _tab.N_STAGES
     coefs = _tab.B if new else _tab.stage_matrix()[s, :s]
     tnode = "" if new else f"{float(_tab.C[s])!r} * "
@@ -83,16 +86,25 @@ def _stage_point(s: int, rows: dict, dim: int, lanes: int, indent: str) -> list[
     return L
 
 
+def _out_row(s: int, rows: dict, dim: int) -> int:
+    """First row stage ``s`` writes: k_s's rows; stage 0 (the derivative at a lane's start) writes
+    stage 1's rows, free between steps, from which the driver copies it to K0 for the lanes that
+    need it (the others keep the k0 their last step left, evaluated at t + h, not at the rounded
+    output time)."""
+    return rows["KS"] + (max(s, 1) - 1) * dim
+
+
 def _stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` (1..12): ytmp = y + h * sum(a_sm k_m), then k_s = rhs(t + c_s h, ytmp) per lane;
-    ``s == 12`` is the new state (weights B, stored in YN) and its derivative (next step's k0)."""
+    ``s == 12`` is the new state (weights B, stored in YN) and its derivative (next step's k0);
+    ``s == 0`` is rhs(t, y) of every lane (see :func:`_out_row`)."""
     if body.key is not None:
         return _keyed_stage_function(s, body, dim, lanes)
     rows = _rows(dim)
     L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
          f"def _lanes_stage{s}(_w, _p):",
          "    for _l in range(LANES):"] + _stage_point(s, rows, dim, lanes, "        ")
-    out0 = rows["KS"] + (s - 1) * dim
+    out0 = _out_row(s, rows, dim)
     text = body.render(lambda k: _w(out0 + k, lanes))
     L += ["        " + line for line in text.splitlines()]
     return "\n".join(L) + "\n\n\n"
@@ -106,9 +118,12 @@ def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     ``_K`` (uniform loads: vectorised) and keeps the results of the lanes whose key is ``_K``.
     Each lane computes the same operations either way (same numbers)."""
     rows = _rows(dim, keyed=True)
-    tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
     key, done = _w(rows["KEY"], lanes), _w(rows["DONE"], lanes)
-    time = [f"        _h = {_w(rows['H'], lanes)}", f"        _t = {_w(rows['T'], lanes)} + {tnode}_h"]
+    if s == 0:
+        time = [f"        _t = {_w(rows['T'], lanes)}"]
+    else:
+        tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
+        time = [f"        _h = {_w(rows['H'], lanes)}", f"        _t = {_w(rows['T'], lanes)} + {tnode}_h"]
     L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
          f"def _lanes_stage{s}(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
@@ -116,7 +131,7 @@ def _keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += ["        " + line for line in body.key.prefix.splitlines()]
     L += [f"        {key} = {body.key.expr}", f"        {done} = 0.0"]
     # every lane in the same record (nearly always: lanes step together): one pass, no masks
-    out0 = rows["KS"] + (s - 1) * dim
+    out0 = _out_row(s, rows, dim)
     L += [f"    _K = _w[{rows['KEY'] * lanes}]", "    _same = True", "    for _l in range(1, LANES):",
           f"        if {key} != _K:", "            _same = False", "    if _same:"]
     L += ["        " + line for line in body.key.per_key.splitlines()]
@@ -168,7 +183,8 @@ def lanes_source(dim: int, body, lanes: int = DEFAULT_LANES) -> str:
     n = _tab.N_STAGES
     head = [f"\n\nLANES = {int(lanes)}", f"ROWS = {rows['ROWS']}", f"ROW_Y = {rows['Y']}",
             f"ROW_K0 = {rows['K0']}", f"ROW_F = {rows['KS'] + (n - 1) * dim}", f"ROW_YN = {rows['YN']}",
-            f"ROW_T = {rows['T']}", f"ROW_H = {rows['H']}", f"ROW_ERR = {rows['ERR']}", "", ""]
-    stages = "".join(_stage_function(s, body, dim, lanes) for s in range(1, n + 1))
+            f"ROW_T = {rows['T']}", f"ROW_H = {rows['H']}", f"ROW_ERR = {rows['ERR']}",
+            f"ROW_START_F = {_out_row(0, rows, dim)}", "", ""]
+    stages = "".join(_stage_function(s, body, dim, lanes) for s in range(0, n + 1))
     calls = "".join(f"    _lanes_stage{s}(w, params)\n" for s in range(1, n + 1))
     return "\n".join(head) + stages + _error_function(dim, lanes) + driver_source(calls)
