@@ -107,7 +107,8 @@ def cmd_export_fit(args) -> int:
 
     params = {} if getattr(args, "step", None) is None else {"step": args.step}
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
-                     predict_days=getattr(args, "predict", None), **params)
+                     predict_days=getattr(args, "predict", None),
+                     covariance=getattr(args, "covariance", None) or "unscented", **params)
     print(f"wrote {out}")
     return 0
 
@@ -143,10 +144,14 @@ def add_fit_parser(sub, export_parser=None) -> None:
 
 
 def add_predict_option(export_parser) -> None:
-    """``--predict DAYS`` on ``cistrack export`` (fit directories)."""
+    """``--predict DAYS`` and ``--covariance`` on ``cistrack export`` (fit directories)."""
     export_parser.add_argument("--predict", type=_nonnegative_days, default=None, metavar="DAYS",
                                help="fit directories: also write the orbit this many days beyond the last "
                                     "observation, with its propagated covariance")
+    export_parser.add_argument("--covariance", choices=("unscented", "linear"), default=None,
+                               help="fit directories: how the fit covariance is carried over the grid: "
+                                    "unscented (default; sigma-point orbits through the dynamics, right at a "
+                                    "close perilune) or linear (state transition matrices)")
 
 
 def is_fit_export(args) -> bool:
@@ -159,5 +164,9 @@ def is_fit_export(args) -> bool:
         from cistrack.errors import ConfigError
         raise ConfigError(f"--predict: {args.run} is not a fit directory (no fit.json); --predict extends a "
                           f"fitted orbit: run 'cistrack fit FILE --out DIR' first")
+    if getattr(args, "covariance", None) is not None:
+        from cistrack.errors import ConfigError
+        raise ConfigError(f"--covariance: {args.run} is not a fit directory (no fit.json); a run's OEM "
+                          "writes the filter's own covariance at each step")
     return False
 

@@ -1,7 +1,8 @@
 """Exporting a fitted orbit: ``cistrack export FIT_DIR --format oem [--predict DAYS]``.
 
-The state and covariance of ``fit.json`` are propagated with :func:`cistrack.fit.predict`
-(linear covariance propagation with the dynamics' transition matrices) to a regular grid of
+The state and covariance of ``fit.json`` are propagated with :func:`cistrack.fit.prediction.predict_orbit`
+(the covariance by the unscented transform: 13 orbits through the nonlinear dynamics, or with
+``covariance='linear'`` by the dynamics' transition matrices) to a regular grid of
 :data:`GRID_MINUTES` over the arc (from the first observation, floored to a whole minute, to the
 first grid point at or after the last one) and, with ``predict_days``, on beyond the arc; they are
 carried into the sensor's inertial frame like a run's estimates and written by the registered
@@ -28,7 +29,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.fit.fit_record import read_fit_record
-from cistrack.fit.prediction import predict
+from cistrack.fit.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.fit.residual_table import residual_table
 from cistrack.fit.result import FitResult
 from cistrack.plugin.registry import Registry, default_registry
@@ -111,12 +112,15 @@ def _scenario(d: Path, reg: Registry):
 
 def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None = None, *,
                overwrite: bool = False, force: bool = False, predict_days: float | None = None,
-               registry: Registry | None = None, **params: Any) -> Path:
+               covariance: str = "unscented", registry: Registry | None = None, **params: Any) -> Path:
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
     (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path. ``predict_days`` (>= 0, at most
-    :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation. Refusals name the
-    option: an existing ``path`` without ``overwrite``, a fit that did not converge without
-    ``force``."""
+    :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation; ``covariance`` (one of
+    :data:`cistrack.fit.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
+    Refusals name the option: an existing ``path`` without ``overwrite``, a fit that did not
+    converge without ``force``, an unknown ``covariance``."""
+    if covariance not in COVARIANCE_METHODS:
+        raise ConfigError(f"--covariance {covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
     if path is not None and not overwrite and os.path.lexists(path):
         raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to replace it")
     days = 0.0 if predict_days is None else predict_days
@@ -143,7 +147,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         times, n_arc = np.array([result.epoch]), 1
     else:
         times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
-    states, covs = predict(result, scen.build("dynamics", reg), times)
+    pred = predict_orbit(result, scen.build("dynamics", reg), times, covariance=covariance)
+    states, covs = pred.states, pred.covariances
     k = len(times)
     kinds = np.array(["fit"] * n_arc + ["predict"] * (k - n_arc))
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
@@ -160,9 +165,18 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if covariance_scale(record) > 1.0:
         comments.append(f"covariance scaled by the noise scale squared ({covariance_scale(record):.4g}): the "
                         "post-fit residuals exceed the stated noise")
+    if covariance == "linear":
+        comments.append("covariance propagated linearly (state transition matrices)")
+    else:
+        comments.append("covariance propagated by the unscented transform (the fit state and 12 sigma points "
+                        "through the dynamics)")
+        if np.any(pred.linear):
+            first = int(np.flatnonzero(pred.linear)[0])
+            comments.append(f"WARNING: from {utc[first][:19]}Z on, {int(pred.linear.sum())} of {k} covariances are "
+                            "propagated linearly: a sigma-point orbit hit a body or could not be propagated")
     if k > n_arc:
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
-                        f"({days:g} days), covariance propagated linearly")
+                        f"({days:g} days)")
     if refusal is not None:
         comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
     meta = {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
