@@ -173,7 +173,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         if np.any(pred.linear):
             first = int(np.flatnonzero(pred.linear)[0])
             comments.append(f"WARNING: from {utc[first][:19]}Z on, {int(pred.linear.sum())} of {k} covariances are "
-                            "propagated linearly: a sigma-point orbit hit a body or could not be propagated")
+                            "propagated linearly: a sigma-point orbit hit a body or could not be propagated, "
+                            "or the fit covariance is not positive semi-definite")
     if k > n_arc:
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")

@@ -30,7 +30,8 @@ class Prediction(NamedTuple):
     """(K, 6, 6) [LU, VU]"""
     linear: np.ndarray
     """(K,) bool: where the covariance is the linear one (all of them for ``covariance='linear'``;
-    with ``unscented``, the times on and after a sigma-point orbit hit a body or failed)"""
+    with ``unscented``, the times on and after a sigma-point orbit hit a body or failed, or all of
+    them when the fit covariance gives no sigma points: not finite or not positive semi-definite)"""
 
 
 def predict_orbit(result: FitResult, dynamics: Dynamics, times: Any, *,
@@ -50,7 +51,10 @@ def predict_orbit(result: FitResult, dynamics: Dynamics, times: Any, *,
     cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
     linear = np.ones(tt.size, dtype=bool)
     if covariance == "unscented":
-        sigma, ok = unscented_covariances(dynamics, result.state, result.covariance, result.epoch, tt)
+        try:
+            sigma, ok = unscented_covariances(dynamics, result.state, result.covariance, result.epoch, tt)
+        except StateError:  # no sigma points (a covariance that is not positive semi-definite or not
+            return Prediction(states, cov, linear)  # finite, e.g. a forced export): the linear map
         cov[ok] = sigma[ok]
         linear = ~ok
     return Prediction(states, cov, linear)

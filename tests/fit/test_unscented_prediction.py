@@ -119,3 +119,13 @@ def test_times_after_a_sigma_point_orbit_hits_the_moon_keep_the_linear_covarianc
     assert list(pred.linear) == [False, True]
     linear = predict_orbit(Fit, dyn, np.array([0.01, 0.1]), covariance="linear")
     np.testing.assert_array_equal(pred.covariances[1], linear.covariances[1])
+
+
+def test_a_covariance_that_gives_no_sigma_points_keeps_the_linear_prediction():
+    class Fit:  # an indefinite covariance, as a forced export of a failed fit may hold
+        state, covariance, epoch = NRHO.state, np.diag([1e-8, 1e-8, -1e-8, 1e-8, 1e-8, 1e-8]), 0.0
+
+    pred = predict_orbit(Fit, CR3BP(), np.array([0.1, 0.2]))
+    linear = predict_orbit(Fit, CR3BP(), np.array([0.1, 0.2]), covariance="linear")
+    assert pred.linear.all()
+    np.testing.assert_array_equal(pred.covariances, linear.covariances)
