@@ -171,10 +171,10 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         comments.append("covariance propagated by the unscented transform (the fit state and 12 sigma points "
                         "through the dynamics)")
         if np.any(pred.linear):
-            first = int(np.flatnonzero(pred.linear)[0])
-            comments.append(f"WARNING: from {utc[first][:19]}Z on, {int(pred.linear.sum())} of {k} covariances are "
-                            "propagated linearly: a sigma-point orbit hit a body or could not be propagated, "
-                            "or the fit covariance is not positive semi-definite")
+            where = np.flatnonzero(pred.linear)
+            comments.append(f"WARNING: {where.size} of {k} covariances, between {utc[where[0]][:19]}Z and "
+                            f"{utc[where[-1]][:19]}Z, are propagated linearly: a sigma-point orbit hit a body or "
+                            "could not be propagated, or the fit covariance is not positive semi-definite")
     if k > n_arc:
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")

@@ -121,3 +121,17 @@ def test_covariance_on_a_run_that_is_not_a_fit_is_refused_naming_the_option(tmp_
     (tmp_path / "scenario.toml").write_text("")
     assert main(["export", str(tmp_path), "--covariance", "linear"]) == 2
     assert "--covariance" in capsys.readouterr().err
+
+
+def test_covariances_kept_linear_are_counted_and_dated_in_a_warning(fit_dir, tmp_path):
+    d = tmp_path / "indefinite"
+    shutil.copytree(fit_dir, d)
+    rec = json.loads((d / "fit.json").read_text())
+    cov = np.asarray(rec["covariance"])
+    cov[2, 2] = -cov[2, 2]  # no sigma points: every covariance falls back to the linear map
+    rec["covariance"] = cov.tolist()
+    (d / "fit.json").write_text(json.dumps(rec))
+    text = export_fit(d, "oem").read_text()
+    n = len(list(_read(d / "estimate.oem").states))
+    assert f"COMMENT WARNING: {n} of {n} covariances, between " in text
+    assert "are propagated linearly" in text
