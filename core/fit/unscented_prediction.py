@@ -79,19 +79,17 @@ def unscented_covariances(dynamics: Dynamics, state: np.ndarray, covariance: np.
         mask = tt > t0 if forward else tt < t0
         if not np.any(mask):
             continue
-        side = np.unique(tt[mask])
-        if not forward:
-            side = side[::-1]
+        side, k = np.unique(tt[mask], return_inverse=True)  # distinct times, increasing
+        if not forward:  # propagated backward: decreasing times
+            side, k = side[::-1], side.size - 1 - k
         try:
             states, alive = _side(dynamics, batch, t0, side)
         except PropagationError:
             continue  # a sigma point's integration failed (step limit): linear covariances there
         d = states[:, 1:, :] - states[:, :1, :]          # (K, 2n, n) about the propagated state
         c = np.einsum("kij,kil->kjl", d, d) / (2 * n)
-        pos = {float(t): k for k, t in enumerate(side)}
-        for i in np.flatnonzero(mask):
-            k = pos[float(tt[i])]
-            if alive[k]:
-                covs[i] = 0.5 * (c[k] + c[k].T)
-                valid[i] = True
+        ok = alive[k]
+        rows = np.flatnonzero(mask)[ok]
+        covs[rows] = 0.5 * (c[k[ok]] + np.transpose(c[k[ok]], (0, 2, 1)))
+        valid[rows] = True
     return covs, valid
