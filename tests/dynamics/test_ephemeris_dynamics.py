@@ -213,3 +213,21 @@ def test_records_needing_more_powers_than_the_kernel_evaluates_are_refused(dyn):
     with pytest.raises(ValueError, match=f"need 11 powers.*NCOEF = {NCOEF}"):
         pack_params(np.zeros(12), moon, sun, units.LU_KM, units.TU_S, record_s=86_400.0)
     assert pack_params(np.zeros(12), moon, sun, units.LU_KM, units.TU_S)[15] == NCOEF
+
+
+def test_a_sun_series_needing_more_powers_than_the_kernel_evaluates_is_refused(dyn):
+    from cistrack.plugins.dynamics.ephemeris_rhs import NSUN, pack_params
+
+    eph, origin = dyn.frame.ephemeris, dyn.frame.epoch_tdb
+    moon = eph.series("moon", origin, 0.0, 10 * DAY_S)
+    sun = eph.series("sun", origin, 0.0, 10 * DAY_S)
+    with pytest.raises(ValueError, match=f"Sun's series.*NSUN = {NSUN}"):
+        pack_params(np.zeros(12), moon, sun, units.LU_KM, units.TU_S, sun_drop_below_km=1e-12)
+
+
+def test_the_sun_series_of_the_default_records_has_no_power_beyond_the_evaluated_ones(dyn):
+    from cistrack.plugins.dynamics.ephemeris_rhs import HEADER_SIZE, NCOEF, NSUN, SERIES_HDR
+
+    p = dyn.params_vector()
+    joint = p[HEADER_SIZE:].reshape(int(p[SERIES_HDR + 2]), NCOEF, 6)
+    assert np.all(joint[:, NSUN:, 3:] == 0.0) and np.all(joint[:, NSUN - 1, 3:] != 0.0)
