@@ -103,8 +103,14 @@ class CompiledDynamics(Dynamics):
         return np.zeros(1)
 
     # -- helpers ----------------------------------------------------------------------------------
+    def _rhs(self) -> Any:
+        """The right-hand side this instance integrates: the class's ``rhs``. A model whose
+        configuration switches terms off may return a specialised function giving the same numbers,
+        so that its compiled stages carry no switched-off arithmetic (the ephemeris model does)."""
+        return type(self).rhs
+
     def _kernels(self) -> ModuleType:
-        rhs = type(self).rhs
+        rhs = self._rhs()
         if rhs is None or not hasattr(rhs, "py_func"):
             raise TypeError(f"{type(self).__name__}.rhs must be a numba @njit function")
         return kernels_for(rhs, self.dim, type(self).body_motion)

@@ -34,7 +34,7 @@ from cistrack.interfaces.dynamics import Body, Propagation
 from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
-from .ephemeris_rhs import ephemeris_body_position, ephemeris_rhs, pack_params
+from .ephemeris_rhs import ephemeris_body_position, ephemeris_point_mass_rhs, ephemeris_rhs, pack_params
 
 __all__ = ["EphemerisDynamics", "SOLAR_PRESSURE_N_M2"]
 
@@ -184,6 +184,12 @@ class EphemerisDynamics(CompiledDynamics):
         jd1, jd2 = self.frame.epoch_tdb
         x, y = erfa.bpn2xy(erfa.pnm06a(jd1, jd2))
         return np.array([x, y, math.sqrt(max(0.0, 1.0 - x * x - y * y))])
+
+    def _rhs(self) -> Any:
+        """:func:`.ephemeris_rhs.ephemeris_point_mass_rhs` when J2 and radiation pressure are off
+        (the same numbers, without their arithmetic in the compiled stages), else ``rhs``."""
+        srp = self.srp_reflectivity * self.srp_area_to_mass_m2_kg != 0.0  # p[P_SRP] != 0
+        return ephemeris_rhs if self.j2 or srp else ephemeris_point_mass_rhs
 
     def params_vector(self) -> np.ndarray:
         """The packed constants and DE421 records (see :mod:`.ephemeris_rhs`), (P,) float64."""

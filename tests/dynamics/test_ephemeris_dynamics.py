@@ -231,3 +231,30 @@ def test_the_sun_series_of_the_default_records_has_no_power_beyond_the_evaluated
     p = dyn.params_vector()
     joint = p[HEADER_SIZE:].reshape(int(p[SERIES_HDR + 2]), NCOEF, 6)
     assert np.all(joint[:, NSUN:, 3:] == 0.0) and np.all(joint[:, NSUN - 1, 3:] != 0.0)
+
+
+@pytest.mark.parametrize("sun", [True, False])
+def test_the_point_mass_right_hand_side_gives_the_general_ones_numbers_bit_for_bit(sun):
+    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_point_mass_rhs, ephemeris_rhs
+
+    model = EphemerisDynamics(epoch=EPOCH, sun=sun)
+    p = model.params_vector()
+    rng = np.random.default_rng(3)
+    states = model.to_inertial(_nrho_state(model) + rng.normal(size=(200, 6)) * 0.05, 0.0)
+    times = rng.uniform(-5.0, 5.0, size=200)
+    for t, y in zip(times, states):
+        a, b = np.empty(6), np.empty(6)
+        ephemeris_rhs(t, y, p, a)
+        ephemeris_point_mass_rhs(t, y, p, b)
+        assert np.array_equal(a, b)
+
+
+def test_the_model_integrates_the_point_mass_right_hand_side_unless_j2_or_radiation_pressure_is_on():
+    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_point_mass_rhs, ephemeris_rhs
+
+    assert EphemerisDynamics(epoch=EPOCH)._rhs() is ephemeris_point_mass_rhs
+    assert EphemerisDynamics(epoch=EPOCH, sun=False)._rhs() is ephemeris_point_mass_rhs
+    assert EphemerisDynamics(epoch=EPOCH, j2=True)._rhs() is ephemeris_rhs
+    assert EphemerisDynamics(epoch=EPOCH, srp_area_to_mass_m2_kg=0.01)._rhs() is ephemeris_rhs
+    assert EphemerisDynamics(epoch=EPOCH, srp_area_to_mass_m2_kg=0.01, srp_reflectivity=0.0)._rhs() \
+        is ephemeris_point_mass_rhs

@@ -117,9 +117,11 @@ def test_a_lane_uniform_key_that_may_differ_by_state_or_branch_is_refused(func, 
     assert body is None and reason in why
 
 
+@pytest.mark.parametrize("perturbed", [False, True], ids=["point-masses", "j2-srp"])
 @pytest.mark.parametrize("times", [np.array([0.9, 1.5121]), np.array([-0.8])], ids=["forward", "backward"])
-def test_ephemeris_lockstep_results_equal_the_one_particle_kernel_bit_for_bit(times):
-    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z", j2=True, srp_area_to_mass_m2_kg=0.01)
+def test_ephemeris_lockstep_results_equal_the_one_particle_kernel_bit_for_bit(times, perturbed):
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z", j2=perturbed,
+                            srp_area_to_mass_m2_kg=0.01 if perturbed else 0.0)
     nrho = ORBITS["nrho-9-2"]
     rng = np.random.default_rng(11)
     syn = nrho.state + rng.normal(size=(41, 6)) * np.r_[[3e-5] * 3, [1e-4] * 3]
