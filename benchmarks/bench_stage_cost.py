@@ -79,8 +79,9 @@ def literal_coefficients(directory: str, record: int):
     ``ephemeris_point_mass_rhs`` with its record fixed to ``record`` and every coefficient load
     ``p[j + c]`` replaced by a literal constant (one per column ``c``)."""
     from cistrack.plugins.dynamics import ephemeris_rhs as model
+    from cistrack.plugins.dynamics.ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
 
-    text = inspect.getsource(model.ephemeris_point_mass_rhs.py_func)
+    text = inspect.getsource(ephemeris_point_mass_rhs.py_func)
     if _KEY not in text:
         raise RuntimeError("bench_stage_cost: the record statement changed; update _KEY")
     text = text.replace("def ephemeris_point_mass_rhs", "def literal_coefficients_rhs")

@@ -5,16 +5,15 @@ States in and out are nondimensional synodic states of the *real* Earth-Moon rot
 momentum, constant LU/TU scaling), so filters, IOD and sensors use this model exactly like
 ``cr3bp``. Inside, each propagate call converts the states to geocentric GCRS (scaled to LU, VU,
 TU), integrates them with the compiled per-particle DOP853 of :mod:`cistrack.propagation`
-(right-hand side in :mod:`.ephemeris_rhs`: point-mass Earth, Moon and Sun, optional Earth J2 and
-cannonball solar radiation pressure, the ephemeris evaluated inside the kernel from DE421's own
-Chebyshev records over the run's window) and converts the outputs back.
+(right-hand sides in :mod:`.ephemeris_rhs` and :mod:`.ephemeris_point_mass_rhs`: point-mass
+Earth, Moon and Sun, optional Earth J2 and cannonball radiation pressure, the ephemeris evaluated
+in the kernel from DE421's records over the run's window) and converts the outputs back.
 
 Impacts: the Earth's surface (fixed at the geocentre) and the Moon's (moving with DE421) stop a
-particle as in ``cr3bp``; its state is frozen at the impact point, expressed in the rotating frame
-at the impact time.
+particle as in ``cr3bp``; it is frozen at the impact point, in the rotating frame at that time.
 
-Time: t = 0 is the scenario's UTC ``epoch`` (converted once to TDB by :mod:`cistrack.astro.timescales`);
-t advances at the TT rate.
+Time: t = 0 is the scenario's UTC ``epoch`` (converted once to TDB by
+:mod:`cistrack.astro.timescales`); t advances at the TT rate.
 """
 from __future__ import annotations
 
@@ -34,7 +33,8 @@ from cistrack.interfaces.dynamics import Body, Propagation
 from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
-from .ephemeris_rhs import ephemeris_body_position, ephemeris_point_mass_rhs, ephemeris_rhs, pack_params
+from .ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
+from .ephemeris_rhs import ephemeris_body_position, ephemeris_rhs, pack_params
 
 __all__ = ["EphemerisDynamics", "SOLAR_PRESSURE_N_M2"]
 
@@ -186,10 +186,9 @@ class EphemerisDynamics(CompiledDynamics):
         return np.array([x, y, math.sqrt(max(0.0, 1.0 - x * x - y * y))])
 
     def _rhs(self) -> Any:
-        """:func:`.ephemeris_rhs.ephemeris_point_mass_rhs` when J2 and radiation pressure are off
-        (the same numbers, without their arithmetic in the compiled stages), else ``rhs``."""
-        srp = self.srp_reflectivity * self.srp_area_to_mass_m2_kg != 0.0  # p[P_SRP] != 0
-        return ephemeris_rhs if self.j2 or srp else ephemeris_point_mass_rhs
+        """The point-mass right-hand side when J2 and radiation pressure are off (same numbers)."""
+        return ephemeris_rhs if self.j2 or self.srp_reflectivity * self.srp_area_to_mass_m2_kg \
+            else ephemeris_point_mass_rhs
 
     def params_vector(self) -> np.ndarray:
         """The packed constants and DE421 records (see :mod:`.ephemeris_rhs`), (P,) float64."""

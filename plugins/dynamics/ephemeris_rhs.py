@@ -34,7 +34,7 @@ from cistrack.astro.ephemeris import ChebyshevSeries
 from cistrack.lazy import lazy_njit
 from cistrack.propagation.lane_rhs import LaneUniform
 
-__all__ = ["ephemeris_rhs", "ephemeris_point_mass_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
+__all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
            "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN"]
 
 GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range(12)
@@ -53,7 +53,7 @@ started at the highest nonzero power gives the same numbers as started at the ze
 HEADER_SIZE = 17
 
 
-# The compiled functions below repeat the same Horner evaluation on purpose: they are
+# The compiled functions below (and :mod:`.ephemeris_point_mass_rhs`) repeat the same Horner evaluation on purpose: they are
 # compiled lazily (``import`` must not load numba) and compiled code cannot call a lazily compiled
 # helper. Each record holds power-basis coefficients in the record's normalised time u in [-1, 1],
 # interleaved as ``[a0 mx, my, mz, sx, sy, sz, a1 mx, ...]``; Horner's rule runs the six
@@ -181,86 +181,6 @@ def ephemeris_rhs(t, y, p, out):
         ax += c * (q * x + 2.0 * rk * kx)
         ay += c * (q * yy + 2.0 * rk * ky)
         az += c * (q * z + 2.0 * rk * kz)
-    out[0] = y[3]
-    out[1] = y[4]
-    out[2] = y[5]
-    out[3] = ax
-    out[4] = ay
-    out[5] = az
-
-
-@lazy_njit(cache=True)
-def ephemeris_point_mass_rhs(t, y, p, out):
-    """:func:`ephemeris_rhs` without Earth J2 and radiation pressure: the same numbers bit for bit
-    when those are off (``p[J2] == p[P_SRP] == 0``), and the right-hand side the model integrates
-    then. The Sun's terms are unconditional (with ``p[GM_S] == 0`` they add exactly zero), so the
-    lockstep kernel's stages carry no switched-off arithmetic: a lane-invariant ``if`` inside the
-    vectorised lane loop is if-converted by LLVM, which computes both sides (measured: J2's two
-    divisions in every stage of every model, ``benchmarks/bench_stage_cost.py``)."""
-    start = p[SERIES_HDR]
-    inv_length = p[SERIES_HDR + 1]
-    nrec = int(p[SERIES_HDR + 2])
-    off = int(p[SERIES_HDR + 4])
-    v = (t - start) * inv_length
-    # the record: lanes of the lockstep kernel in the same record share its coefficient loads
-    k: LaneUniform = min(max(int(np.floor(v)), 0), nrec - 1)
-    u = 2.0 * (v - k) - 1.0
-    j = off + (k * NCOEF + NCOEF - 1) * 6
-    mx = p[j]
-    my = p[j + 1]
-    mz = p[j + 2]
-    for _ in range(NCOEF - NSUN):
-        j -= 6
-        mx = mx * u + p[j]
-        my = my * u + p[j + 1]
-        mz = mz * u + p[j + 2]
-    sx = p[j + 3]
-    sy = p[j + 4]
-    sz = p[j + 5]
-    for _ in range(NSUN - 1):
-        j -= 6
-        mx = mx * u + p[j]
-        my = my * u + p[j + 1]
-        mz = mz * u + p[j + 2]
-        sx = sx * u + p[j + 3]
-        sy = sy * u + p[j + 4]
-        sz = sz * u + p[j + 5]
-    x = y[0]
-    yy = y[1]
-    z = y[2]
-    r2 = x * x + yy * yy + z * z
-    r = np.sqrt(r2)
-    ce = -p[GM_E] / (r2 * r)
-    ax = ce * x
-    ay = ce * yy
-    az = ce * z
-    # Moon: direct and indirect terms
-    dx = mx - x
-    dy = my - yy
-    dz = mz - z
-    d2 = dx * dx + dy * dy + dz * dz
-    cd = p[GM_M] / (d2 * np.sqrt(d2))
-    m2 = mx * mx + my * my + mz * mz
-    cm = p[GM_M] / (m2 * np.sqrt(m2))
-    ax += cd * dx - cm * mx
-    ay += cd * dy - cm * my
-    az += cd * dz - cm * mz
-    # Sun: direct and indirect terms
-    f = p[EARTH_SHARE]
-    sx += f * mx
-    sy += f * my
-    sz += f * mz
-    ux = sx - x
-    uy = sy - yy
-    uz = sz - z
-    u2 = ux * ux + uy * uy + uz * uz
-    u1 = np.sqrt(u2)
-    cu = p[GM_S] / (u2 * u1)
-    s2 = sx * sx + sy * sy + sz * sz
-    cs = p[GM_S] / (s2 * np.sqrt(s2))
-    ax += cu * ux - cs * sx
-    ay += cu * uy - cs * sy
-    az += cu * uz - cs * sz
     out[0] = y[3]
     out[1] = y[4]
     out[2] = y[5]

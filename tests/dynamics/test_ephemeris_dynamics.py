@@ -235,7 +235,8 @@ def test_the_sun_series_of_the_default_records_has_no_power_beyond_the_evaluated
 
 @pytest.mark.parametrize("sun", [True, False])
 def test_the_point_mass_right_hand_side_gives_the_general_ones_numbers_bit_for_bit(sun):
-    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_point_mass_rhs, ephemeris_rhs
+    from cistrack.plugins.dynamics.ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
+    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_rhs
 
     model = EphemerisDynamics(epoch=EPOCH, sun=sun)
     p = model.params_vector()
@@ -250,7 +251,8 @@ def test_the_point_mass_right_hand_side_gives_the_general_ones_numbers_bit_for_b
 
 
 def test_the_model_integrates_the_point_mass_right_hand_side_unless_j2_or_radiation_pressure_is_on():
-    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_point_mass_rhs, ephemeris_rhs
+    from cistrack.plugins.dynamics.ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
+    from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_rhs
 
     assert EphemerisDynamics(epoch=EPOCH)._rhs() is ephemeris_point_mass_rhs
     assert EphemerisDynamics(epoch=EPOCH, sun=False)._rhs() is ephemeris_point_mass_rhs

@@ -95,7 +95,8 @@ def test_generated_kernels_carry_no_fastmath_flags():
                                    "cistrack.plugins.dynamics.cr3bp_variational", "cistrack.plugins.dynamics.ephemeris_variational",
                                    "cistrack.plugins.clustering.em_numba",
                                    "cistrack.model.mixture_density", "cistrack.astro.ephemeris",
-                                   "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.clustering.lloyd",
+                                   "cistrack.plugins.dynamics.ephemeris_rhs", "cistrack.plugins.dynamics.ephemeris_point_mass_rhs",
+                                   "cistrack.plugins.clustering.lloyd",
                                    "cistrack.plugins.clustering.points_and_labels"])
 def test_builtin_compiled_functions_carry_no_fastmath_flags(module):
     mod = __import__(module, fromlist=["_"])
