@@ -69,8 +69,9 @@ from cistrack.propagation.kernels import kernels_for, num_threads, run_chunks
 __all__ = ["CompiledDynamics", "PropagationError", "StateError", "LOCKSTEP_MIN_PARTICLES"]
 
 LOCKSTEP_MIN_PARTICLES = 4
-"""Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel (16 lanes; idle
-lanes repeat an active one). A full batch costs a quarter to a third of what the one-particle
+"""Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel (16 lanes, 32 for
+a right-hand side with a table key such as the ephemeris model's; idle lanes repeat an active
+one). A full batch costs a quarter to a third of what the one-particle
 kernel costs for 16 particles (CR3BP: 5.7 against 24.1 us per particle-period on one thread here;
 7.1 against 22.9 in docs/performance.md), so a part-filled batch of 4-5 particles costs about
 what the one-particle kernel does; and a run then needs no one-particle kernel compiled (the

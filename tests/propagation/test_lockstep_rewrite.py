@@ -7,6 +7,7 @@ import pytest
 from numba import njit
 
 from cistrack import units
+from cistrack.plugins.dynamics.cr3bp import CR3BP
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_rhs
 from cistrack.plugins.dynamics.orbit_catalog import ORBITS
@@ -155,3 +156,11 @@ def test_a_keyed_stage_gives_each_lane_the_same_numbers_whether_or_not_all_lanes
     rows = slice((2 * dim + (stage - 1) * dim) * lanes, (2 * dim + stage * dim) * lanes)
     a, b = one_record[rows].reshape(dim, lanes), two_records[rows].reshape(dim, lanes)
     assert np.array_equal(a[:, 1:], b[:, 1:]) and not np.array_equal(a[:, 0], b[:, 0])
+
+
+def test_a_keyed_right_hand_side_gets_the_wider_batch_and_a_plain_one_the_default():
+    from cistrack.propagation.dop853_lanes_source import DEFAULT_LANES, KEYED_LANES
+
+    assert EphemerisDynamics(epoch="2026-01-01T00:00:00Z")._kernels().LANES == KEYED_LANES
+    assert Table(np.r_[0.25, np.zeros(N_TABLE)])._kernels().LANES == KEYED_LANES
+    assert CR3BP()._kernels().LANES == DEFAULT_LANES
