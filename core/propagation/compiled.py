@@ -120,12 +120,18 @@ class CompiledDynamics(Dynamics):
         return np.ascontiguousarray(self.params_vector(), dtype=np.float64).reshape(-1)
 
     def _bodies_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kernels' impact bodies: positions (B, 4), radii (B,). Columns 0-2 the position,
+        column 3 a bound on the body's speed (LU/TU) in the integration frame: 0 for bodies that
+        stay put, ``inf`` (unknown) for bodies moved by ``body_motion``. The lockstep kernel skips
+        evaluating a body's position when a particle is farther from where its lane last saw
+        the body than the radius plus this bound times the time since: the same decisions."""
         bodies = self.bodies
-        pos = np.zeros((max(len(bodies), 1), 3))
+        pos = np.zeros((max(len(bodies), 1), 4))
         rad = np.zeros(len(bodies))
         for i, b in enumerate(bodies):
-            pos[i] = np.asarray(b.position, dtype=float)
+            pos[i, :3] = np.asarray(b.position, dtype=float)
             rad[i] = float(b.radius)
+        pos[:, 3] = 0.0 if type(self).body_motion is None else np.inf
         return pos, rad
 
     def _check_states(self, states: Any) -> np.ndarray:

@@ -44,6 +44,8 @@ else:
                 w[(ROW_K0 + j) * LANES + l] = col2[j]
             hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
         tl[l] = t0
+        for bb in range(body_rad.shape[0]):
+            seen[l, bb, 3] = np.nan
         iout[l] = io
         nsteps[l] = 0
         rejected[l] = False
@@ -77,6 +79,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
     iout = np.zeros(LANES, dtype=np.int64)
     nsteps = np.zeros(LANES, dtype=np.int64)
     who = np.full(LANES, -1, dtype=np.int64)
+    seen = np.full((LANES, max(body_rad.shape[0], 1), 4), np.nan)  # per lane: body x, y, z, t
+    speed = np.full(max(body_rad.shape[0], 1), np.inf)  # bound on each body's speed, LU/TU
+    if body_pos.shape[1] > 3:
+        for bb in range(body_rad.shape[0]):
+            speed[bb] = body_pos[bb, 3]
+    anymoving = False
+    for bb in range(body_rad.shape[0]):
+        anymoving = anymoving or speed[bb] != 0.0
     col = np.empty(DIM)
     col2 = np.empty(DIM)
     col3 = np.empty(DIM)
@@ -144,17 +154,45 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 rejected[l] = False
                 for j in range(DIM):
                     col[j] = w[(ROW_YN + j) * LANES + l]
-                # _inside written out: called, it cost the ephemeris model 23 ns a step (11 %)
+                # _inside written out (called, it cost the ephemeris model 23 ns a step), with a
+                # pre-test for moving bodies: one that moves at most speed[bb] (LU/TU) from where
+                # this lane last saw it cannot have reached the particle if the particle is farther
+                # than its radius plus that reach (plus 1e-12 LU for rounding); its position is
+                # then not evaluated. The decision is the exact test's (the moving Moon's series
+                # cost the ephemeris model 35-43 ns a step).
                 b = -1
                 tb = tl[l] + hs
-                for bb in range(body_rad.shape[0]):
-                    bx, by, bz = body_position(tb, params, bb, body_pos)
-                    dx = col[0] - bx
-                    dy = col[1] - by
-                    dz = col[2] - bz
-                    if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
-                        b = bb
-                        break
+                if not anymoving:  # bodies at rest: the plain test
+                    for bb in range(body_rad.shape[0]):
+                        bx, by, bz = body_position(tb, params, bb, body_pos)
+                        dx = col[0] - bx
+                        dy = col[1] - by
+                        dz = col[2] - bz
+                        if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
+                            b = bb
+                            break
+                else:
+                    for bb in range(body_rad.shape[0]):
+                        moving = speed[bb] != 0.0
+                        if moving:
+                            gx = col[0] - seen[l, bb, 0]
+                            gy = col[1] - seen[l, bb, 1]
+                            gz = col[2] - seen[l, bb, 2]
+                            reach = body_rad[bb] + speed[bb] * abs(tb - seen[l, bb, 3]) + 1e-12
+                            if gx * gx + gy * gy + gz * gz > reach * reach:  # False for NaN: not yet seen
+                                continue
+                        bx, by, bz = body_position(tb, params, bb, body_pos)
+                        if moving:
+                            seen[l, bb, 0] = bx
+                            seen[l, bb, 1] = by
+                            seen[l, bb, 2] = bz
+                            seen[l, bb, 3] = tb
+                        dx = col[0] - bx
+                        dy = col[1] - by
+                        dz = col[2] - bz
+                        if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
+                            b = bb
+                            break
                 if b >= 0:
                     for j in range(DIM):
                         col2[j] = w[(ROW_Y + j) * LANES + l]

@@ -34,7 +34,7 @@ from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
 from .ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
-from .ephemeris_rhs import ephemeris_body_position, ephemeris_rhs, pack_params
+from .ephemeris_rhs import MOON_SPEED_BOUND_KMS, ephemeris_body_position, ephemeris_rhs, pack_params
 
 __all__ = ["EphemerisDynamics", "SOLAR_PRESSURE_N_M2"]
 
@@ -187,8 +187,7 @@ class EphemerisDynamics(CompiledDynamics):
 
     def _rhs(self) -> Any:
         """The point-mass right-hand side when J2 and radiation pressure are off (same numbers)."""
-        return ephemeris_rhs if self.j2 or self.srp_reflectivity * self.srp_area_to_mass_m2_kg \
-            else ephemeris_point_mass_rhs
+        return ephemeris_rhs if self.j2 or self.srp_reflectivity * self.srp_area_to_mass_m2_kg else ephemeris_point_mass_rhs
 
     def params_vector(self) -> np.ndarray:
         """The packed constants and DE421 records (see :mod:`.ephemeris_rhs`), (P,) float64."""
@@ -200,7 +199,6 @@ class EphemerisDynamics(CompiledDynamics):
     @property
     def primaries(self) -> tuple[Body, ...]:
         """Earth and Moon with DE421's mass fractions and radii in LU (radius 0: no impacts).
-
         ``position`` is the synodic position at t = 0; :meth:`Body.position_at` follows the
         real Earth-Moon distance (the bodies move along the x axis as it changes)."""
         mu = self.mu
@@ -212,15 +210,17 @@ class EphemerisDynamics(CompiledDynamics):
                            mu, 1.0 - mu, self.frame))
 
     def _bodies_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Kernel bodies: the Earth at the geocentre; the Moon's position comes from DE421."""
-        rad = np.array([float(units.km_to_lu(r)) for r in (self.earth_radius_km, self.moon_radius_km) if r > 0])
-        return np.zeros((max(rad.size, 1), 3)), rad
+        """Kernel bodies: the Earth at the geocentre (speed 0); the Moon's position comes from
+        DE421, its speed bound is :data:`MOON_SPEED_BOUND_KMS` (column 3, LU/TU)."""
+        rv = [(r, v) for r, v in ((self.earth_radius_km, 0.0), (self.moon_radius_km, MOON_SPEED_BOUND_KMS)) if r > 0]
+        pos = np.zeros((max(len(rv), 1), 4))
+        pos[:len(rv), 3] = [units.kms_to_vu(v) for _, v in rv]
+        return pos, np.array([float(units.km_to_lu(r)) for r, _ in rv])
 
     # -- conversions ------------------------------------------------------------------------------
     def to_inertial(self, states: np.ndarray, t) -> np.ndarray:
         """Synodic states (N, 6) [LU, VU] at ``t`` (TU) -> kernel states (N, 6): GCRS in LU, VU."""
-        g = self.frame.synodic_to_gcrs(states, t)
-        return units.state_from_km(g)
+        return units.state_from_km(self.frame.synodic_to_gcrs(states, t))
 
     def from_inertial(self, states: np.ndarray, t) -> np.ndarray:
         """Kernel states (N, 6) GCRS [LU, VU] at ``t`` (TU) -> synodic states (N, 6) [LU, VU]."""

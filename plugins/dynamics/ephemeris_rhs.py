@@ -35,7 +35,7 @@ from cistrack.lazy import lazy_njit
 from cistrack.propagation.lane_rhs import LaneUniform
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
-           "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN"]
+           "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN", "MOON_SPEED_BOUND_KMS"]
 
 GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range(12)
 SERIES_HDR = 12
@@ -51,6 +51,10 @@ dropped, needs 5 from 1950 to 2045 (measured at 1950, 1980, 2000, 2026 and 2045)
 started at the highest nonzero power gives the same numbers as started at the zero rows
 (``0 * u + a == a``), with 9 fewer loads and 18 fewer operations per evaluation."""
 HEADER_SIZE = 17
+MOON_SPEED_BOUND_KMS = 1.5
+"""Bound on the Moon's geocentric speed, km/s, for the lockstep kernel's impact pre-test
+(:meth:`cistrack.propagation.CompiledDynamics._bodies_arrays`); DE421 from 1900 to 2050, every
+1.75 days: 0.966 to 1.104 km/s."""
 
 
 # The compiled functions below (and :mod:`.ephemeris_point_mass_rhs`) repeat the same Horner evaluation on purpose: they are

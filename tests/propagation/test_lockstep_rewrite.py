@@ -164,3 +164,57 @@ def test_a_keyed_right_hand_side_gets_the_wider_batch_and_a_plain_one_the_defaul
     assert EphemerisDynamics(epoch="2026-01-01T00:00:00Z")._kernels().LANES == KEYED_LANES
     assert Table(np.r_[0.25, np.zeros(N_TABLE)])._kernels().LANES == KEYED_LANES
     assert CR3BP()._kernels().LANES == DEFAULT_LANES
+
+
+def _moon_bound_states(dyn, times):
+    nrho = ORBITS["nrho-9-2"]
+    rng = np.random.default_rng(12)
+    syn = nrho.state + rng.normal(size=(70, 6)) * np.r_[[3e-4] * 3, [1e-3] * 3]
+    dyn._ensure_window(min(0.0, times.min()), max(0.0, times.max()))
+    states = dyn.to_inertial(syn, 0.0)
+    moon, moon_v = dyn.frame.ephemeris.moon(*dyn.frame.epoch_tdb)  # GCRS km, km/s
+    for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4])):
+        down = np.array(aim) / np.linalg.norm(aim)
+        states[7 * i] = units.state_from_km(np.r_[moon + (dyn.moon_radius_km + 3000.0 * (i + 1)) * down,
+                                                  moon_v - (1.0 + i) * down])
+    return states
+
+
+def _lanes_with_bodies(dyn, states, times, pos):
+    n = states.shape[0]
+    out = np.empty((times.size, n, 6))
+    ib, it, st = np.full(n, -1), np.full(n, np.inf), np.zeros(n, dtype=np.int64)
+    _, rad = dyn._bodies_arrays()
+    dyn._kernels().propagate_lanes_kernel(0, n, np.ascontiguousarray(states), dyn._params(), 0.0, times, dyn.rtol,
+                                          dyn.atol, pos, rad, 5_000_000, np.zeros(n), out, ib, it, st)
+    return out, ib, it, st
+
+
+def test_the_moving_moons_speed_bound_skips_evaluations_without_changing_any_result():
+    """The lockstep driver skips the Moon's series when a particle is farther from where its lane
+    last saw the Moon than the radius plus the speed bound times the time since: with the bound
+    unknown (inf), or with no speed column at all, every step evaluates it; the results agree."""
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
+    times = np.array([0.2, 0.7, 1.5121])
+    states = _moon_bound_states(dyn, times)
+    pos, _ = dyn._bodies_arrays()
+    assert pos.shape[1] == 4 and pos[0, 3] == 0.0 and 1.0 < pos[1, 3] < 2.0  # Earth at rest, Moon ~1.5 km/s
+    bounded = _lanes_with_bodies(dyn, states, times, pos)
+    unknown = pos.copy()
+    unknown[:, 3] = np.inf
+    assert same_results(bounded, _lanes_with_bodies(dyn, states, times, unknown))
+    assert same_results(bounded, _lanes_with_bodies(dyn, states, times, np.ascontiguousarray(pos[:, :3])))
+    assert (bounded[1] == 1).sum() >= 3  # the aimed particles hit the moving Moon
+    too_slow = pos.copy()
+    too_slow[1, 3] = 1e-6  # a false bound: stale Moon positions, impacts missed or misplaced
+    assert not same_results(bounded, _lanes_with_bodies(dyn, states, times, too_slow))
+
+
+def test_bodies_at_rest_have_speed_zero_and_bodies_moved_by_the_model_an_unknown_speed():
+    pos, _ = CR3BP()._bodies_arrays()
+    assert pos.shape[1] == 4 and np.all(pos[:, 3] == 0.0)
+
+    class Moved(CR3BP):
+        body_motion = CR3BP.body_motion or (lambda *a: None)
+
+    assert np.all(np.isinf(Moved()._bodies_arrays()[0][:, 3]))
