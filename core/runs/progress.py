@@ -14,15 +14,21 @@ class ProgressBar:
     """
 
     def __init__(self, run_id: str, total: int, custody=None) -> None:
+        import sys
+
         from tqdm.auto import tqdm
 
         self.custody = custody
-        self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True)
+        # on a terminal the bar redraws at most every 0.1 s; into a file or a CI log, where every
+        # redraw is kept, at most every 10 s (and once at the end)
+        interactive = getattr(sys.stderr, "isatty", lambda: False)()
+        self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True, mininterval=0.1 if interactive else 10.0)
 
     def _advance(self, step) -> None:
         lost = self.custody is not None and step.truth is not None and not self.custody.verdict.kept
+        # refresh=False: the step count's update below redraws, as often as mininterval allows
         self.bar.set_postfix_str(f"t={float(units.tu_to_days(step.t)):.2f} d H={step.metrics.get('entropy', float('nan')):.1f}"
-                                 + (" custody LOST" if lost else ""))
+                                 + (" custody LOST" if lost else ""), refresh=False)
         self.bar.update(1)
 
     @hookimpl

@@ -1,0 +1,17 @@
+"""The run's progress bar on stderr: on a terminal it redraws often; into a file or a CI log, where
+every redraw is kept, only at its interval and at the end, with the final state shown."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def test_into_a_file_the_bar_redraws_at_its_interval_not_at_every_step(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(tmp_path / "run"),
+                           "--set", "filter.n_particles=300", "--set", "iod.n_particles=300"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    draws = [line for line in proc.stderr.replace("\r", "\n").split("\n") if "step" in line and "%|" in line]
+    total = int(draws[-1].split("|")[2].split("/")[1].split()[0])
+    assert total > 10 and len(draws) <= 4
+    assert f"{total}/{total}" in draws[-1] and "t=" in draws[-1] and "H=" in draws[-1]
