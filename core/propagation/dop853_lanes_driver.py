@@ -83,7 +83,8 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
     speed = np.full(max(body_rad.shape[0], 1), np.inf)  # bound on each body's speed, LU/TU
     if body_pos.shape[1] > 3:
         for bb in range(body_rad.shape[0]):
-            speed[bb] = body_pos[bb, 3]
+            if body_pos[bb, 3] >= 0.0:  # NaN or negative: unknown
+                speed[bb] = body_pos[bb, 3]
     anymoving = False
     for bb in range(body_rad.shape[0]):
         anymoving = anymoving or speed[bb] != 0.0

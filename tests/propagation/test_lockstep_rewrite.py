@@ -193,7 +193,8 @@ def _lanes_with_bodies(dyn, states, times, pos):
 def test_the_moving_moons_speed_bound_skips_evaluations_without_changing_any_result():
     """The lockstep driver skips the Moon's series when a particle is farther from where its lane
     last saw the Moon than the radius plus the speed bound times the time since: with the bound
-    unknown (inf), or with no speed column at all, every step evaluates it; the results agree."""
+    unknown (inf, negative, NaN), or with no speed column at all, every step evaluates it; the
+    results agree."""
     dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
     times = np.array([0.2, 0.7, 1.5121])
     states = _moon_bound_states(dyn, times)
@@ -204,6 +205,10 @@ def test_the_moving_moons_speed_bound_skips_evaluations_without_changing_any_res
     unknown[:, 3] = np.inf
     assert same_results(bounded, _lanes_with_bodies(dyn, states, times, unknown))
     assert same_results(bounded, _lanes_with_bodies(dyn, states, times, np.ascontiguousarray(pos[:, :3])))
+    for invalid in (-1.0, np.nan):  # read as unknown
+        odd = pos.copy()
+        odd[1, 3] = invalid
+        assert same_results(bounded, _lanes_with_bodies(dyn, states, times, odd))
     assert (bounded[1] == 1).sum() >= 3  # the aimed particles hit the moving Moon
     too_slow = pos.copy()
     too_slow[1, 3] = 1e-6  # a false bound: stale Moon positions, impacts missed or misplaced
