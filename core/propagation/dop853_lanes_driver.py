@@ -163,7 +163,9 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 # cost the ephemeris model 35-43 ns a step).
                 b = -1
                 tb = tl[l] + hs
-                if not anymoving:  # bodies at rest: the plain test
+                # bodies at rest (the CR3BP): the plain test, kept apart from the moving-body loop
+                # below (one loop with a per-body branch measured 2-5 % slower for the CR3BP)
+                if not anymoving:
                     for bb in range(body_rad.shape[0]):
                         bx, by, bz = body_position(tb, params, bb, body_pos)
                         dx = col[0] - bx
