@@ -118,19 +118,27 @@ def test_a_lane_uniform_key_that_may_differ_by_state_or_branch_is_refused(func, 
     assert body is None and reason in why
 
 
+def _nrho_cloud_with_moon_divers(dyn, times, n, seed, spread, divers):
+    """Kernel states (n, 6): the 9:2 NRHO with normal scatter ``spread`` (position, velocity; LU,
+    VU), and particles ``divers`` = [(index, direction, km above the surface, km/s toward the
+    Moon)] placed above the moving Moon at t = 0 and falling onto it."""
+    rng = np.random.default_rng(seed)
+    syn = ORBITS["nrho-9-2"].state + rng.normal(size=(n, 6)) * np.r_[[spread[0]] * 3, [spread[1]] * 3]
+    dyn._ensure_window(min(0.0, times.min()), max(0.0, times.max()))
+    states = dyn.to_inertial(syn, 0.0)
+    moon, moon_v = dyn.frame.ephemeris.moon(*dyn.frame.epoch_tdb)  # GCRS km, km/s
+    for i, aim, height, fall in divers:
+        down = np.array(aim) / np.linalg.norm(aim)
+        states[i] = units.state_from_km(np.r_[moon + (dyn.moon_radius_km + height) * down, moon_v - fall * down])
+    return states
+
+
 @pytest.mark.parametrize("perturbed", [False, True], ids=["point-masses", "j2-srp"])
 @pytest.mark.parametrize("times", [np.array([0.9, 1.5121]), np.array([-0.8])], ids=["forward", "backward"])
 def test_ephemeris_lockstep_results_equal_the_one_particle_kernel_bit_for_bit(times, perturbed):
     dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z", j2=perturbed,
                             srp_area_to_mass_m2_kg=0.01 if perturbed else 0.0)
-    nrho = ORBITS["nrho-9-2"]
-    rng = np.random.default_rng(11)
-    syn = nrho.state + rng.normal(size=(41, 6)) * np.r_[[3e-5] * 3, [1e-4] * 3]
-    dyn._ensure_window(min(0.0, times.min()), max(0.0, times.max()))
-    states = dyn.to_inertial(syn, 0.0)
-    moon, moon_v = dyn.frame.ephemeris.moon(*dyn.frame.epoch_tdb)  # GCRS km, km/s
-    down = np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81])
-    states[5] = units.state_from_km(np.r_[moon + (dyn.moon_radius_km + 2000.0) * down, moon_v - 2.0 * down])
+    states = _nrho_cloud_with_moon_divers(dyn, times, 41, 11, (3e-5, 1e-4), [(5, [0.3, -0.5, 0.81], 2000.0, 2.0)])
     mod = dyn._kernels()
     one = run_kernel(mod.propagate_kernel, dyn, states, times)
     lock = run_kernel(mod.propagate_lanes_kernel, dyn, states, times)
@@ -166,20 +174,6 @@ def test_a_keyed_right_hand_side_gets_the_wider_batch_and_a_plain_one_the_defaul
     assert CR3BP()._kernels().LANES == DEFAULT_LANES
 
 
-def _moon_bound_states(dyn, times):
-    nrho = ORBITS["nrho-9-2"]
-    rng = np.random.default_rng(12)
-    syn = nrho.state + rng.normal(size=(70, 6)) * np.r_[[3e-4] * 3, [1e-3] * 3]
-    dyn._ensure_window(min(0.0, times.min()), max(0.0, times.max()))
-    states = dyn.to_inertial(syn, 0.0)
-    moon, moon_v = dyn.frame.ephemeris.moon(*dyn.frame.epoch_tdb)  # GCRS km, km/s
-    for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4])):
-        down = np.array(aim) / np.linalg.norm(aim)
-        states[7 * i] = units.state_from_km(np.r_[moon + (dyn.moon_radius_km + 3000.0 * (i + 1)) * down,
-                                                  moon_v - (1.0 + i) * down])
-    return states
-
-
 def _lanes_with_bodies(dyn, states, times, pos):
     n = states.shape[0]
     out = np.empty((times.size, n, 6))
@@ -197,7 +191,9 @@ def test_the_moving_moons_speed_bound_skips_evaluations_without_changing_any_res
     results agree."""
     dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
     times = np.array([0.2, 0.7, 1.5121])
-    states = _moon_bound_states(dyn, times)
+    divers = [(7 * i, aim, 3000.0 * (i + 1), 1.0 + i)
+              for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4]))]
+    states = _nrho_cloud_with_moon_divers(dyn, times, 70, 12, (3e-4, 1e-3), divers)
     pos, _ = dyn._bodies_arrays()
     assert pos.shape[1] == 4 and pos[0, 3] == 0.0 and 1.0 < pos[1, 3] < 2.0  # Earth at rest, Moon ~1.5 km/s
     bounded = _lanes_with_bodies(dyn, states, times, pos)
