@@ -106,9 +106,10 @@ def cmd_export_fit(args) -> int:
     from cistrack.fit.fit_export import export_fit
 
     params = {} if getattr(args, "step", None) is None else {"step": args.step}
+    if getattr(args, "covariance", None) is not None:  # else export_fit's default
+        params["covariance"] = args.covariance
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
-                     predict_days=getattr(args, "predict", None),
-                     covariance=getattr(args, "covariance", None) or "unscented", **params)
+                     predict_days=getattr(args, "predict", None), **params)
     print(f"wrote {out}")
     return 0
 
