@@ -120,18 +120,20 @@ class CompiledDynamics(Dynamics):
         return np.ascontiguousarray(self.params_vector(), dtype=np.float64).reshape(-1)
 
     def _bodies_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """The kernels' impact bodies: positions (B, 4), radii (B,). Columns 0-2 the position,
-        column 3 a bound on the body's speed (LU/TU) in the integration frame: 0 for bodies that
-        stay put, ``inf`` (unknown) for bodies moved by ``body_motion``. The lockstep kernel skips
-        evaluating a body's position when a particle is farther from where its lane last saw
-        the body than the radius plus this bound times the time since: the same decisions."""
+        """The kernels' impact bodies: positions (B, 5), radii (B,). Columns 0-2 the position,
+        column 3 a bound on the body's speed (LU/TU) and column 4 on its acceleration (LU/TU^2)
+        in the integration frame: 0 for bodies that stay put, ``inf`` (unknown) for bodies moved
+        by ``body_motion``. The lockstep kernel skips evaluating a body's position when a
+        particle is farther from where its lane last saw the body than the radius plus the speed
+        bound times the time since, or farther from the line through the last two positions it
+        saw than the radius plus what the acceleration bound allows: the same decisions."""
         bodies = self.bodies
-        pos = np.zeros((max(len(bodies), 1), 4))
+        pos = np.zeros((max(len(bodies), 1), 5))
         rad = np.zeros(len(bodies))
         for i, b in enumerate(bodies):
             pos[i, :3] = np.asarray(b.position, dtype=float)
             rad[i] = float(b.radius)
-        pos[:, 3] = 0.0 if type(self).body_motion is None else np.inf
+        pos[:, 3:] = 0.0 if type(self).body_motion is None else np.inf
         return pos, rad
 
     def _check_states(self, states: Any) -> np.ndarray:

@@ -44,8 +44,6 @@ else:
                 w[(ROW_K0 + j) * LANES + l] = col2[j]
             hl[l] = _initial_step(t0, col, col2, direction, params, rtol, atol, col3, col4, span)
         tl[l] = t0
-        for bb in range(body_rad.shape[0]):
-            seen[l, bb, 3] = np.nan
         iout[l] = io
         nsteps[l] = 0
         rejected[l] = False
@@ -54,6 +52,11 @@ else:
 """
 
 _TEMPLATE = '''
+GRID_STEP = 0.005  # TU between the moving bodies' grid times (fewer than MAX_GRID of them)
+MAX_GRID = 4096
+HALF_SQRT3 = 0.8660254037844387
+GRID_SLACK = 1e-9  # LU (0.4 mm)
+
 @njit(cache=CACHE, fastmath=FASTMATH)
 def _lanes_step(w, params, rtol, atol):
 {STAGES}    _lanes_error(w, rtol, atol)
@@ -79,15 +82,45 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
     iout = np.zeros(LANES, dtype=np.int64)
     nsteps = np.zeros(LANES, dtype=np.int64)
     who = np.full(LANES, -1, dtype=np.int64)
-    seen = np.full((LANES, max(body_rad.shape[0], 1), 4), np.nan)  # per lane: body x, y, z, t
-    speed = np.full(max(body_rad.shape[0], 1), np.inf)  # bound on each body's speed, LU/TU
-    if body_pos.shape[1] > 3:
-        for bb in range(body_rad.shape[0]):
-            if body_pos[bb, 3] >= 0.0:  # NaN or negative: unknown
-                speed[bb] = body_pos[bb, 3]
+    nb = body_rad.shape[0]
+    speed = np.full(max(nb, 1), np.inf)  # bound on each body's speed, LU/TU
+    accel = np.full(max(nb, 1), np.inf)  # and on its acceleration, LU/TU^2
+    for bb in range(nb):
+        if body_pos.shape[1] > 3 and body_pos[bb, 3] >= 0.0:  # NaN or negative: unknown
+            speed[bb] = body_pos[bb, 3]
+        if body_pos.shape[1] > 4 and body_pos[bb, 4] >= 0.0:
+            accel[bb] = body_pos[bb, 4]
     anymoving = False
-    for bb in range(body_rad.shape[0]):
+    for bb in range(nb):
         anymoving = anymoving or speed[bb] != 0.0
+    # A body at rest (speed 0) is evaluated once. A moving body with a speed bound V or an
+    # acceleration bound A is evaluated at ngrid times from t0 to the last output, dgrid apart:
+    # between two of them it is within off[bb] (LU) of the straight line joining them, off =
+    # min(V dgrid / 2, sqrt(3) A dgrid^2 / 8) (the chord's error; Lagrange's remainder per axis)
+    # plus GRID_SLACK for rounding and the seams of a piecewise ephemeris. inf: no bound.
+    rest = np.zeros((max(nb, 1), 3))
+    off = np.full(max(nb, 1), np.inf)
+    ngrid = int(min(MAX_GRID - 2.0, abs(times[nt - 1] - t0) / GRID_STEP)) + 2
+    dgrid = abs(times[nt - 1] - t0) / (ngrid - 1)
+    for bb in range(nb):
+        if speed[bb] == 0.0:
+            rest[bb, 0], rest[bb, 1], rest[bb, 2] = body_position(t0, params, bb, body_pos)
+        else:
+            off[bb] = min(0.5 * speed[bb] * dgrid, HALF_SQRT3 * 0.25 * accel[bb] * dgrid * dgrid)
+    gridded = False
+    for bb in range(nb):
+        if off[bb] < np.inf and dgrid > 0.0:
+            off[bb] += GRID_SLACK
+            gridded = True
+        else:
+            off[bb] = np.inf
+    grid = np.empty((max(nb, 1), ngrid if gridded else 1, 3))
+    for bb in range(nb):
+        if off[bb] < np.inf:
+            for kg in range(ngrid):
+                grid[bb, kg, 0], grid[bb, kg, 1], grid[bb, kg, 2] = body_position(
+                    t0 + direction * (kg * dgrid), params, bb, body_pos)
+    inv_dgrid = 1.0 / dgrid if dgrid > 0.0 else 0.0
     col = np.empty(DIM)
     col2 = np.empty(DIM)
     col3 = np.empty(DIM)
@@ -155,18 +188,16 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 rejected[l] = False
                 for j in range(DIM):
                     col[j] = w[(ROW_YN + j) * LANES + l]
-                # _inside written out (called, it cost the ephemeris model 23 ns a step), with a
-                # pre-test for moving bodies: one that moves at most speed[bb] (LU/TU) from where
-                # this lane last saw it cannot have reached the particle if the particle is farther
-                # than its radius plus that reach (plus 1e-12 LU for rounding); its position is
-                # then not evaluated. The decision is the exact test's (the moving Moon's series
-                # cost the ephemeris model 35-43 ns a step).
+                # _inside written out (called, it cost the ephemeris model 23 ns a step), with
+                # bodies at rest read from `rest` and a pre-test for moving ones: a particle farther
+                # from the body's grid line than its radius plus off[bb] cannot be inside it, and
+                # its position is then not evaluated. The decision is the exact test's.
                 b = -1
                 tb = tl[l] + hs
-                # bodies at rest (the CR3BP): the plain test, kept apart from the moving-body loop
-                # below (one loop with a per-body branch measured 2-5 % slower for the CR3BP)
+                # bodies at rest only (the CR3BP): the plain test, kept apart from the loop below
+                # (one loop with a per-body branch measured 2-5 % slower for the CR3BP)
                 if not anymoving:
-                    for bb in range(body_rad.shape[0]):
+                    for bb in range(nb):
                         bx, by, bz = body_position(tb, params, bb, body_pos)
                         dx = col[0] - bx
                         dy = col[1] - by
@@ -175,21 +206,23 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                             b = bb
                             break
                 else:
-                    for bb in range(body_rad.shape[0]):
-                        moving = speed[bb] != 0.0
-                        if moving:
-                            gx = col[0] - seen[l, bb, 0]
-                            gy = col[1] - seen[l, bb, 1]
-                            gz = col[2] - seen[l, bb, 2]
-                            reach = body_rad[bb] + speed[bb] * abs(tb - seen[l, bb, 3]) + 1e-12
-                            if gx * gx + gy * gy + gz * gz > reach * reach:  # False for NaN: not yet seen
-                                continue
-                        bx, by, bz = body_position(tb, params, bb, body_pos)
-                        if moving:
-                            seen[l, bb, 0] = bx
-                            seen[l, bb, 1] = by
-                            seen[l, bb, 2] = bz
-                            seen[l, bb, 3] = tb
+                    for bb in range(nb):
+                        if speed[bb] == 0.0:
+                            bx = rest[bb, 0]
+                            by = rest[bb, 1]
+                            bz = rest[bb, 2]
+                        else:
+                            if off[bb] < np.inf:
+                                g = (tb - t0) * direction * inv_dgrid
+                                kg = min(max(int(g), 0), ngrid - 2)
+                                sg = min(max(g - kg, 0.0), 1.0)
+                                gx = col[0] - (grid[bb, kg, 0] + sg * (grid[bb, kg + 1, 0] - grid[bb, kg, 0]))
+                                gy = col[1] - (grid[bb, kg, 1] + sg * (grid[bb, kg + 1, 1] - grid[bb, kg, 1]))
+                                gz = col[2] - (grid[bb, kg, 2] + sg * (grid[bb, kg + 1, 2] - grid[bb, kg, 2]))
+                                reach = body_rad[bb] + off[bb]
+                                if gx * gx + gy * gy + gz * gz > reach * reach:
+                                    continue
+                            bx, by, bz = body_position(tb, params, bb, body_pos)
                         dx = col[0] - bx
                         dy = col[1] - by
                         dz = col[2] - bz

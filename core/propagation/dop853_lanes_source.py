@@ -49,7 +49,8 @@ def lanes_for(body) -> int:
     return KEYED_LANES if body.key is not None else DEFAULT_LANES
 
 RESERVED = {"np", "njit", "rhs", "body_position", "DIM", "CACHE", "SAFETY", "MAX_GROWTH", "MIN_SHRINK",
-            "BETA", "EXPO1", "GROWTH_CAP_ERR", "FASTMATH", "LANES", "ROWS", "N_STAGES"}
+            "BETA", "EXPO1", "GROWTH_CAP_ERR", "FASTMATH", "LANES", "ROWS", "N_STAGES",
+            "HALF_SQRT3", "GRID_STEP", "MAX_GRID", "GRID_SLACK"}
 """Module-level names of a generated kernel module other than the underscored ones."""
 
 

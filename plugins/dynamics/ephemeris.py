@@ -34,7 +34,7 @@ from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
 from .ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
-from .ephemeris_rhs import MOON_SPEED_BOUND_KMS, ephemeris_body_position, ephemeris_rhs, pack_params
+from .ephemeris_rhs import MOON_ACCELERATION_BOUND_KMS2, MOON_SPEED_BOUND_KMS, ephemeris_body_position, ephemeris_rhs, pack_params
 
 __all__ = ["EphemerisDynamics", "SOLAR_PRESSURE_N_M2"]
 
@@ -210,12 +210,15 @@ class EphemerisDynamics(CompiledDynamics):
                            mu, 1.0 - mu, self.frame))
 
     def _bodies_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Kernel bodies: the Earth at the geocentre (speed 0); the Moon's position comes from
-        DE421, its speed bound is :data:`MOON_SPEED_BOUND_KMS` (column 3, LU/TU)."""
-        rv = [(r, v) for r, v in ((self.earth_radius_km, 0.0), (self.moon_radius_km, MOON_SPEED_BOUND_KMS)) if r > 0]
-        pos = np.zeros((max(len(rv), 1), 4))
-        pos[:len(rv), 3] = [units.kms_to_vu(v) for _, v in rv]
-        return pos, np.array([float(units.km_to_lu(r)) for r, _ in rv])
+        """Kernel bodies: the Earth at the geocentre (speed and acceleration 0); the Moon's
+        position comes from DE421, its speed bound is :data:`MOON_SPEED_BOUND_KMS` (column 3,
+        LU/TU) and its acceleration bound :data:`MOON_ACCELERATION_BOUND_KMS2` (column 4, LU/TU^2)."""
+        moon = (MOON_SPEED_BOUND_KMS, MOON_ACCELERATION_BOUND_KMS2)
+        rva = [(r, va) for r, va in ((self.earth_radius_km, (0.0, 0.0)), (self.moon_radius_km, moon)) if r > 0]
+        pos = np.zeros((max(len(rva), 1), 5))
+        pos[:len(rva), 3] = [units.kms_to_vu(v) for _, (v, _) in rva]
+        pos[:len(rva), 4] = [a * units.TU_S ** 2 / units.LU_KM for _, (_, a) in rva]
+        return pos, np.array([float(units.km_to_lu(r)) for r, _ in rva])
 
     # -- conversions ------------------------------------------------------------------------------
     def to_inertial(self, states: np.ndarray, t) -> np.ndarray:

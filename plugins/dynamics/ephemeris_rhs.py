@@ -35,7 +35,8 @@ from cistrack.lazy import lazy_njit
 from cistrack.propagation.lane_rhs import LaneUniform
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
-           "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN", "MOON_SPEED_BOUND_KMS"]
+           "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN", "MOON_SPEED_BOUND_KMS",
+           "MOON_ACCELERATION_BOUND_KMS2"]
 
 GM_E, GM_M, GM_S, J2, R_E, KX, KY, KZ, P_SRP, AU, EARTH_SHARE, MOON_BODY = range(12)
 SERIES_HDR = 12
@@ -55,6 +56,11 @@ MOON_SPEED_BOUND_KMS = 1.5
 """Bound on the Moon's geocentric speed, km/s, for the lockstep kernel's impact pre-test
 (:meth:`cistrack.propagation.CompiledDynamics._bodies_arrays`); DE421 from 1900 to 2050, every
 1.75 days: 0.966 to 1.104 km/s."""
+MOON_ACCELERATION_BOUND_KMS2 = 4e-6
+"""Bound on the Moon's geocentric acceleration, km/s^2, for the same pre-test's second form (the
+line through the last two positions a lane saw); DE421's own second derivative from 1899-07-30
+to 2053-10-08, every 1.2 hours: 2.41e-6 to 3.15e-6 km/s^2 (the Earth's pull at perigee, 356,376
+km, is 3.18e-6)."""
 
 
 # The compiled functions below (and :mod:`.ephemeris_point_mass_rhs`) repeat the same Horner evaluation on purpose: they are

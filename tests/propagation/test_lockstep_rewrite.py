@@ -184,38 +184,96 @@ def _lanes_with_bodies(dyn, states, times, pos):
     return out, ib, it, st
 
 
-def test_the_moving_moons_speed_bound_skips_evaluations_without_changing_any_result():
-    """The lockstep driver skips the Moon's series when a particle is farther from where its lane
-    last saw the Moon than the radius plus the speed bound times the time since: with the bound
-    unknown (inf, negative, NaN), or with no speed column at all, every step evaluates it; the
-    results agree."""
+def _moon_divers_case():
     dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
     times = np.array([0.2, 0.7, 1.5121])
     divers = [(7 * i, aim, 3000.0 * (i + 1), 1.0 + i)
               for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4]))]
     states = _nrho_cloud_with_moon_divers(dyn, times, 70, 12, (3e-4, 1e-3), divers)
     pos, _ = dyn._bodies_arrays()
-    assert pos.shape[1] == 4 and pos[0, 3] == 0.0 and 1.0 < pos[1, 3] < 2.0  # Earth at rest, Moon ~1.5 km/s
+    return dyn, states, times, pos
+
+
+def test_the_ephemeris_declares_the_earth_at_rest_and_bounds_the_moons_speed_and_acceleration():
+    pos = _moon_divers_case()[3]
+    assert pos.shape[1] == 5 and np.all(pos[0, 3:] == 0.0)  # Earth at rest
+    assert 1.0 < pos[1, 3] < 2.0  # Moon ~1.5 km/s in VU
+    assert 1.0 < pos[1, 4] < 2.0  # and ~4e-6 km/s^2 in LU/TU^2
+
+
+def test_the_moving_moons_bounds_skip_evaluations_without_changing_any_result():
+    """The lockstep driver evaluates the moving Moon on a grid of times and skips its series when
+    a particle is farther from the grid's chord than the radius plus what the speed or
+    acceleration bound allows: with either bound alone, both unknown (inf, negative, NaN), or the
+    columns missing, the results agree bit for bit, the Moon impacts included."""
+    dyn, states, times, pos = _moon_divers_case()
+    bounded = _lanes_with_bodies(dyn, states, times, pos)
+    assert (bounded[1] == 1).sum() >= 3  # the aimed particles hit the moving Moon
+    variants = [np.ascontiguousarray(pos[:, :3]), np.ascontiguousarray(pos[:, :4])]
+    for column in (3, 4):
+        for unknown in (np.inf, -1.0, np.nan):
+            odd = pos.copy()
+            odd[1, column] = unknown
+            variants.append(odd)
+    both_unknown = pos.copy()
+    both_unknown[1, 3:] = np.inf
+    variants.append(both_unknown)
+    for other in variants:
+        assert same_results(bounded, _lanes_with_bodies(dyn, states, times, other))
+
+
+def test_the_moons_bounds_change_no_result_backwards_in_time():
+    """The same backwards (the grid runs from t0 down), with particles rising from the Moon at
+    t = 0, which backwards in time fall onto it."""
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
+    times = np.array([-0.2, -0.7])
+    risers = [(7 * i, aim, 3000.0 * (i + 1), -1.0 - i)
+              for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4]))]
+    states = _nrho_cloud_with_moon_divers(dyn, times, 70, 13, (3e-4, 1e-3), risers)
+    pos, _ = dyn._bodies_arrays()
     bounded = _lanes_with_bodies(dyn, states, times, pos)
     unknown = pos.copy()
-    unknown[:, 3] = np.inf
+    unknown[1, 3:] = np.inf
     assert same_results(bounded, _lanes_with_bodies(dyn, states, times, unknown))
-    assert same_results(bounded, _lanes_with_bodies(dyn, states, times, np.ascontiguousarray(pos[:, :3])))
-    for invalid in (-1.0, np.nan):  # read as unknown
-        odd = pos.copy()
-        odd[1, 3] = invalid
-        assert same_results(bounded, _lanes_with_bodies(dyn, states, times, odd))
-    assert (bounded[1] == 1).sum() >= 3  # the aimed particles hit the moving Moon
-    too_slow = pos.copy()
-    too_slow[1, 3] = 1e-6  # a false bound: stale Moon positions, impacts missed or misplaced
-    assert not same_results(bounded, _lanes_with_bodies(dyn, states, times, too_slow))
+    assert (bounded[1] == 1).sum() >= 3
+
+
+@pytest.mark.parametrize("column", [3, 4], ids=["speed", "acceleration"])
+def test_a_false_bound_on_the_moons_motion_changes_the_results(column):
+    """Over a long span the grid's times are far apart (0.24 TU here), and a chord of the Moon's
+    orbit is thousands of km off it: a speed or acceleration bound the Moon breaks (1e-6) then
+    passes particles inside the Moon as outside, so the bounds are what keeps the results."""
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
+    times = np.array([0.2, 1000.0])
+    divers = [(i, aim, 3000.0 * (i + 1), 1.0 + i)
+              for i, aim in enumerate(([0.3, -0.5, 0.81], [-0.7, 0.1, 0.2], [0.0, 0.9, -0.4]))]
+    states = _nrho_cloud_with_moon_divers(dyn, times, 3, 12, (0.0, 0.0), divers)
+    pos, _ = dyn._bodies_arrays()
+    bounded = _lanes_with_bodies(dyn, states, times, pos)
+    assert np.all(bounded[1] == 1)  # all three hit the Moon within the first day
+    wrong = pos.copy()
+    wrong[1, 3:] = np.inf
+    wrong[1, column] = 1e-6
+    assert not same_results(bounded, _lanes_with_bodies(dyn, states, times, wrong))
+
+
+def test_the_moons_acceleration_bound_holds_over_de421():
+    """MOON_ACCELERATION_BOUND_KMS2 against DE421's own second derivative of the geocentric
+    Moon, every 0.25 day over the whole ephemeris (1899-2053)."""
+    from cistrack.astro.ephemeris import de421
+    from cistrack.plugins.dynamics.ephemeris_rhs import MOON_ACCELERATION_BOUND_KMS2
+
+    d = de421()
+    jd = np.arange(d.first_jd + 1.0, d.last_jd - 1.0, 0.25)
+    peak = np.linalg.norm(d.moon_acceleration(jd), axis=1).max()
+    assert 3.0e-6 < peak < MOON_ACCELERATION_BOUND_KMS2
 
 
 def test_bodies_at_rest_have_speed_zero_and_bodies_moved_by_the_model_an_unknown_speed():
     pos, _ = CR3BP()._bodies_arrays()
-    assert pos.shape[1] == 4 and np.all(pos[:, 3] == 0.0)
+    assert pos.shape[1] == 5 and np.all(pos[:, 3:] == 0.0)
 
     class Moved(CR3BP):
         body_motion = CR3BP.body_motion or (lambda *a: None)
 
-    assert np.all(np.isinf(Moved()._bodies_arrays()[0][:, 3]))
+    assert np.all(np.isinf(Moved()._bodies_arrays()[0][:, 3:]))
