@@ -210,14 +210,11 @@ class EphemerisDynamics(CompiledDynamics):
                            mu, 1.0 - mu, self.frame))
 
     def _bodies_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Kernel bodies: the Earth at the geocentre (speed and acceleration 0); the Moon's
-        position comes from DE421, its speed bound is :data:`MOON_SPEED_BOUND_KMS` (column 3,
-        LU/TU) and its acceleration bound :data:`MOON_ACCELERATION_BOUND_KMS2` (column 4, LU/TU^2)."""
-        moon = (MOON_SPEED_BOUND_KMS, MOON_ACCELERATION_BOUND_KMS2)
+        """Kernel bodies: the Earth at rest; the Moon (DE421), its speed and acceleration bounded (MOON_*_BOUND_*)."""
+        moon = (units.kms_to_vu(MOON_SPEED_BOUND_KMS), MOON_ACCELERATION_BOUND_KMS2 * units.TU_S ** 2 / units.LU_KM)
         rva = [(r, va) for r, va in ((self.earth_radius_km, (0.0, 0.0)), (self.moon_radius_km, moon)) if r > 0]
         pos = np.zeros((max(len(rva), 1), 5))
-        pos[:len(rva), 3] = [units.kms_to_vu(v) for _, (v, _) in rva]
-        pos[:len(rva), 4] = [a * units.TU_S ** 2 / units.LU_KM for _, (_, a) in rva]
+        pos[:len(rva), 3:] = [va for _, va in rva]
         return pos, np.array([float(units.km_to_lu(r)) for r, _ in rva])
 
     # -- conversions ------------------------------------------------------------------------------
