@@ -214,7 +214,7 @@ class EphemerisDynamics(CompiledDynamics):
         moon = (units.kms_to_vu(MOON_SPEED_BOUND_KMS), MOON_ACCELERATION_BOUND_KMS2 * units.TU_S ** 2 / units.LU_KM)
         rva = [(r, va) for r, va in ((self.earth_radius_km, (0.0, 0.0)), (self.moon_radius_km, moon)) if r > 0]
         pos = np.zeros((max(len(rva), 1), 5))
-        pos[:len(rva), 3:] = [va for _, va in rva]
+        pos[:len(rva), 3:] = np.reshape([va for _, va in rva], (-1, 2))
         return pos, np.array([float(units.km_to_lu(r)) for r, _ in rva])
 
     # -- conversions ------------------------------------------------------------------------------
