@@ -201,6 +201,19 @@ def test_the_ephemeris_declares_the_earth_at_rest_and_bounds_the_moons_speed_and
     assert 1.0 < pos[1, 4] < 2.0  # and ~4e-6 km/s^2 in LU/TU^2
 
 
+@pytest.mark.parametrize("earth_km, moon_km", [(0.0, 0.0), (0.0, 1737.4), (6378.1, 0.0)])
+def test_the_ephemeris_bounds_block_follows_the_impact_bodies_it_has(earth_km, moon_km):
+    """No impact body (both radii 0) gives one empty row and no radii; one body, its own row."""
+    dyn = EphemerisDynamics(epoch="2026-01-01T00:00:00Z", earth_radius_km=earth_km, moon_radius_km=moon_km)
+    pos, rad = dyn._bodies_arrays()
+    assert pos.shape == (max(rad.size, 1), 5) and rad.size == (earth_km > 0) + (moon_km > 0)
+    if earth_km > 0:
+        assert np.all(pos[0, 3:] == 0.0)  # the Earth at rest
+    if moon_km > 0:
+        assert np.all(pos[-1, 3:] > 0.0)  # the Moon bounded
+    assert np.all(np.isfinite(dyn.propagate(ORBITS["nrho-9-2"].state[None], 0.0, 0.1).states))
+
+
 def test_the_moving_moons_bounds_skip_evaluations_without_changing_any_result():
     """The lockstep driver evaluates the moving Moon on a grid of times and skips its series when
     a particle is farther from the grid's chord than the radius plus what the speed or
