@@ -102,18 +102,15 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
     off = np.full(max(nb, 1), np.inf)
     ngrid = int(min(MAX_GRID - 2.0, abs(times[nt - 1] - t0) / GRID_STEP)) + 2
     dgrid = abs(times[nt - 1] - t0) / (ngrid - 1)
+    gridded = False
     for bb in range(nb):
         if speed[bb] == 0.0:
             rest[bb, 0], rest[bb, 1], rest[bb, 2] = body_position(t0, params, bb, body_pos)
-        else:
-            off[bb] = min(0.5 * speed[bb] * dgrid, HALF_SQRT3 * 0.25 * accel[bb] * dgrid * dgrid)
-    gridded = False
-    for bb in range(nb):
-        if off[bb] < np.inf and dgrid > 0.0:
-            off[bb] += GRID_SLACK
-            gridded = True
-        else:
-            off[bb] = np.inf
+        elif dgrid > 0.0:
+            e = min(0.5 * speed[bb] * dgrid, HALF_SQRT3 * 0.25 * accel[bb] * dgrid * dgrid)
+            if e < np.inf:  # False for NaN too
+                off[bb] = e + GRID_SLACK
+                gridded = True
     grid = np.empty((max(nb, 1), ngrid if gridded else 1, 3))
     for bb in range(nb):
         if off[bb] < np.inf:
