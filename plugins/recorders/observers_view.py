@@ -14,12 +14,19 @@ import numpy as np
 from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM
 
+from .scene import primary_positions, system_mu
+
 rr = LazyModule("rerun")
 
-__all__ = ["log_observers", "observers_of", "cone_rim", "CONE_LENGTH_LU"]
+__all__ = ["log_observers", "observers_of", "cone_rim", "CONE_LENGTH_LU", "LABEL_MIN_DISTANCE_LU"]
 
 CONE_LENGTH_LU = 0.15
 """Distance from the observer at which an exclusion cone's rim is drawn, LU (57,660 km)."""
+
+LABEL_MIN_DISTANCE_LU = 0.1
+"""An observer's name is drawn beside it only this far from the Earth's centre or farther, LU
+(38,440 km, about 60 pixels in the system view): a ground station's name would sit on the Earth's
+and hide it. Closer observers keep their name as the point's label, shown on hover."""
 
 _CONE_COLORS = {"sun": (255, 210, 40), "earth": (80, 140, 255), "moon": (200, 200, 200)}
 
@@ -45,14 +52,16 @@ def log_observers(rec, run, step, view, reach_to: np.ndarray) -> None:
     """Log every observer of ``run`` at ``step`` through ``view`` (the recorder's frame);
     ``reach_to`` (3,) synodic LU is where lines of sight should reach past (the estimate)."""
     t = float(step.t)
+    earth = primary_positions(system_mu(run.dynamics))[0]
     by_key: dict[str, list] = {}
     for m in step.group or ((step.measurement,) if step.measurement is not None else ()):
         by_key.setdefault(getattr(m, "site", "") or "observer", []).append(m)
     for key, sensor in observers_of(run.sensor).items():
         base = f"world/observers/{key}"
         obs = np.asarray(sensor.observer_position(t), dtype=float).reshape(3)
+        far = bool(np.linalg.norm(obs - earth) >= LABEL_MIN_DISTANCE_LU)
         rec.log(base, rr.Points3D(view.positions(obs, t) * LU_KM, colors=[(0, 230, 120)],
-                                  labels=[key], radii=rr.Radius.ui_points(5.0)))
+                                  labels=[key], show_labels=far, radii=rr.Radius.ui_points(5.0)))
         segs = []
         for m in by_key.get(key, ()):
             los = np.asarray(sensor.line_of_sight(np.asarray(m.z, dtype=float)[None, :2], t), dtype=float).reshape(3)

@@ -54,3 +54,12 @@ def test_exclusion_cone_rims_make_the_cone_angle_with_the_body_direction(network
         rim = np.asarray(row.components["LineStrips3D:strips"][0], dtype=float) - apex
         ang = np.arccos(np.clip(rim @ axis / np.linalg.norm(rim, axis=1), -1, 1))
         np.testing.assert_allclose(ang, half, atol=1e-5)
+
+
+def test_a_ground_observer_name_is_not_drawn_over_the_earth_but_a_space_observer_name_is(network_recording):
+    entities, res = network_recording
+    step = res.steps[-1]
+    shown = {key: bool(component(last_per_step(entities[f"/world/observers/{key}"])[step.index],
+                                 "Points3D:show_labels")[0])
+             for key in ("texas", "dro")}
+    assert shown == {"texas": False, "dro": True}
