@@ -81,11 +81,11 @@ def _press(pipe: _Pipe, session: str, chord: str) -> None:
 
 def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: int = 1600,
                 height: int = 1000, settle_s: float = 25.0, after_keys_s: float = 6.0,
-                chromium: str | None = None) -> list[Path]:
+                key_interval_s: float = 0.3, chromium: str | None = None) -> list[Path]:
     """Open ``url``, wait ``settle_s`` seconds for it to draw, then for each ``(png, keys)`` of
     ``shots`` press the key chords ``keys`` in order (e.g. ``["Ctrl+ArrowRight"]`` steps the
     viewer's time to the next logged time, ``["End"]`` to the end), wait ``after_keys_s`` seconds
-    when keys were pressed, and write a PNG to ``png``."""
+    when keys were pressed, and write a PNG to ``png``. Key chords are ``key_interval_s`` apart."""
     exe = chromium or find_chromium()
     if exe is None:
         raise FileNotFoundError("chromium is not installed (Debian: apt-get install -y chromium)")
@@ -116,7 +116,7 @@ def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: i
         for png, keys in shots:
             for chord in keys:
                 _press(pipe, session, chord)
-                time.sleep(0.3)
+                time.sleep(key_interval_s)
             if keys:
                 time.sleep(after_keys_s)
             data = pipe.call("Page.captureScreenshot", {"format": "png"}, session)["data"]

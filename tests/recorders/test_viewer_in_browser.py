@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from .headless_browser import find_chromium
-from .viewer_shots import SHOTS, cloud_mask, cloud_spread, raised_fraction, region, take
+from .viewer_shots import SHOTS, cloud_mask, cloud_spread, particle_pixels, raised_fraction, region, take
 
 pytestmark = pytest.mark.slow
 
@@ -63,6 +63,13 @@ def test_the_cloud_fills_the_run_view_at_the_start_middle_and_end(pictures, shot
     mask = cloud_mask(pictures[shot])
     assert mask.sum() > 800, f"{shot}: {mask.sum()} cloud pixels in the run view"
     assert cloud_spread(mask) > 0.3, f"{shot}: the cloud spans {cloud_spread(mask):.2f} of the run view"
+
+
+@pytest.mark.parametrize("shot", SHOTS)
+def test_particles_not_only_ellipsoids_are_drawn_at_the_start_middle_and_end(pictures, shot):
+    """The shots of a viewer that had stopped drawing the particles (rerun 0.41, stepped in a
+    fast burst) held 0 such pixels; shots with particles 31 to 1,192 (viewer_shots.KEY_INTERVAL_S)."""
+    assert particle_pixels(pictures[shot]) > 20, f"{shot}: no particle drawn in the run view"
 
 
 def test_the_position_series_is_not_flattened_onto_its_axis(pictures):
