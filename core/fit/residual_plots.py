@@ -16,7 +16,7 @@ import numpy as np
 
 from cistrack import units
 
-__all__ = ["plot_residuals", "site_file_stem"]
+__all__ = ["plot_residuals", "residual_figure", "site_file_stem"]
 
 
 def site_file_stem(site: str) -> str:
@@ -28,45 +28,54 @@ def site_file_stem(site: str) -> str:
 def plot_residuals(directory: str | Path, table, epoch: datetime, designation: str = "") -> list[Path]:
     """Write a PNG and an SVG per site of the :class:`~cistrack.fit.ResidualTable` ``table``
     (times TU since ``epoch``) into ``directory``; returns the files written."""
-    from matplotlib.figure import Figure
-
     d = Path(directory)
     if len(table) == 0:
         return []
-    t0 = float(np.min(table.times))
-    days = units.tu_to_days(np.asarray(table.times) - t0)
-    sigma = np.where(table.normalised != 0, np.abs(table.o_c / np.where(table.normalised == 0, 1, table.normalised)), np.nan)
-    labels = [c.replace("_arcsec", " (arcsec)").replace("_km", " (km)").replace("ra_cos_dec", "RA cos(Dec)")
-              .replace("declination", "Dec").replace("_", " ") for c in table.column_names()]
-    start = units.format_utc(units.tu_to_utc(epoch, t0))[:19] + "Z"
     written = []
     for site in dict.fromkeys(table.sites.tolist()):
-        rows = table.sites == site
-        fig = Figure(figsize=(8.0, 2.2 + 2.0 * len(labels)))
-        axes = fig.subplots(len(labels), 1, sharex=True, squeeze=False)[:, 0]
-        used, rej = rows & ~table.rejected, rows & table.rejected
-        for j, ax in enumerate(axes):
-            band = 3.0 * sigma[rows, j]
-            order = np.argsort(days[rows])
-            ax.fill_between(days[rows][order], -band[order], band[order], color="0.85", step="mid",
-                            label="3 sigma (stated noise)")
-            ax.axhline(0.0, color="0.4", lw=0.8)
-            ax.plot(days[used], table.o_c[used, j], "o", ms=3.5, color="tab:blue", label="used")
-            if np.any(rej):
-                ax.plot(days[rej], table.o_c[rej, j], "x", ms=6, color="tab:red", label="rejected")
-            rms = float(np.sqrt(np.mean(table.o_c[used, j] ** 2))) if np.any(used) else float("nan")
-            ax.set_ylabel(f"O-C {labels[j]}")
-            ax.set_title(f"RMS {rms:.3g} (used)", fontsize=8, loc="right")
-            ax.grid(alpha=0.3)
-        axes[0].legend(fontsize=7, loc="upper left")
-        axes[-1].set_xlabel(f"days since {start} (first observation of the arc)")
-        n_rej = int(np.sum(rej))
-        fig.suptitle(f"{designation + ': ' if designation else ''}post-fit residuals, site {site or '(sensor)'}: "
-                     f"{int(np.sum(rows))} observations, {n_rej} rejected", fontsize=10)
-        fig.tight_layout()
+        fig = residual_figure(table, site, epoch, designation)
         stem = site_file_stem(site)
         for suffix in (".png", ".svg"):
             p = d / f"{stem}{suffix}"
             fig.savefig(p, dpi=110)
             written.append(p)
     return written
+
+
+def residual_figure(table, site: str, epoch: datetime, designation: str = ""):
+    """The matplotlib Figure of one ``site``'s residuals in ``table`` (a non-empty
+    :class:`~cistrack.fit.ResidualTable`, times TU since ``epoch``). The legend sits above the top
+    panel, outside every panel, so that it hides no residual wherever the points fall."""
+    from matplotlib.figure import Figure
+
+    t0 = float(np.min(table.times))
+    days = units.tu_to_days(np.asarray(table.times) - t0)
+    sigma = np.where(table.normalised != 0, np.abs(table.o_c / np.where(table.normalised == 0, 1, table.normalised)), np.nan)
+    labels = [c.replace("_arcsec", " (arcsec)").replace("_km", " (km)").replace("ra_cos_dec", "RA cos(Dec)")
+              .replace("declination", "Dec").replace("_", " ") for c in table.column_names()]
+    start = units.format_utc(units.tu_to_utc(epoch, t0))[:19] + "Z"
+    rows = table.sites == site
+    fig = Figure(figsize=(8.0, 2.4 + 2.0 * len(labels)))
+    axes = fig.subplots(len(labels), 1, sharex=True, squeeze=False)[:, 0]
+    used, rej = rows & ~table.rejected, rows & table.rejected
+    for j, ax in enumerate(axes):
+        band = 3.0 * sigma[rows, j]
+        order = np.argsort(days[rows])
+        ax.fill_between(days[rows][order], -band[order], band[order], color="0.85", step="mid",
+                        label="3 sigma (stated noise)")
+        ax.axhline(0.0, color="0.4", lw=0.8)
+        ax.plot(days[used], table.o_c[used, j], "o", ms=3.5, color="tab:blue", label="used")
+        if np.any(rej):
+            ax.plot(days[rej], table.o_c[rej, j], "x", ms=6, color="tab:red", label="rejected")
+        rms = float(np.sqrt(np.mean(table.o_c[used, j] ** 2))) if np.any(used) else float("nan")
+        ax.set_ylabel(f"O-C {labels[j]}")
+        ax.set_title(f"RMS {rms:.3g} (used)", fontsize=8, loc="right")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=3, frameon=False,
+                   borderaxespad=0.2)
+    axes[-1].set_xlabel(f"days since {start} (first observation of the arc)")
+    n_rej = int(np.sum(rej))
+    fig.suptitle(f"{designation + ': ' if designation else ''}post-fit residuals, site {site or '(sensor)'}: "
+                 f"{int(np.sum(rows))} observations, {n_rej} rejected", fontsize=10)
+    fig.tight_layout()
+    return fig
