@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cistrack.model.mixture_density import _by_rows, _row_logsumexp, _whitened_logpdf  # noqa: F401
+from cistrack.model.mixture_density import _by_rows, _row_logsumexp, _whitened_logpdf, whitened_kernel  # noqa: F401
 
 __all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
 
@@ -167,7 +167,7 @@ class GaussianMixture:
             raise ValueError(f"points must have shape (N, {self.dim}), got {x.shape}")
         linv, const = self._whitening()
         out = np.empty((x.shape[0], self.n_components))
-        _by_rows(_whitened_logpdf, x.shape[0], (x, np.ascontiguousarray(self.means), linv, const,
+        _by_rows(whitened_kernel(self.dim), x.shape[0], (x, np.ascontiguousarray(self.means), linv, const,
                                                 np.ascontiguousarray(log_weights, dtype=float), out))
         return out
 

@@ -97,18 +97,64 @@ def _per_point_logpdf(x, means, linv, const, logw):
     return out
 
 
+@pytest.mark.parametrize("d", [3, 6, 7])  # 6: the state's own kernel (registers); others the general one
 @pytest.mark.parametrize("n", [1, 255, 256, 300, 513])  # around the kernel's block of 256 points
-def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n):
-    from cistrack.model.belief import _whitened_logpdf
+def test_blocked_density_kernel_equals_a_per_point_loop_bit_for_bit(n, d):
+    from cistrack.model.mixture_density import whitened_kernel
 
     g = np.random.default_rng(n)
     m = 3
-    x, means = g.normal(size=(n, 6)), g.normal(size=(m, 6))
-    linv = np.ascontiguousarray(np.tril(g.normal(size=(m, 6, 6))))
+    x, means = g.normal(size=(n, d)), g.normal(size=(m, d))
+    linv = np.ascontiguousarray(np.tril(g.normal(size=(m, d, d))))
     const, logw = g.normal(size=m), g.normal(size=m)
     out = np.empty((n, m))
-    _whitened_logpdf(0, n, x, means, linv, const, logw, out)
+    whitened_kernel(d)(0, n, x, means, linv, const, logw, out)
     assert np.array_equal(out, _per_point_logpdf(x, means, linv, const, logw))
+
+
+def test_the_general_density_kernel_gives_the_six_dimensional_kernels_numbers():
+    from cistrack.model.mixture_density import _whitened_logpdf, whitened_kernel
+
+    g = np.random.default_rng(12)
+    n, m = 700, 5
+    x, means = g.normal(size=(n, 6)) * 3.0, g.normal(size=(m, 6))
+    linv = np.ascontiguousarray(np.tril(g.normal(size=(m, 6, 6))))
+    const, logw = g.normal(size=m), g.normal(size=m)
+    a, b = np.empty((n, m)), np.empty((n, m))
+    _whitened_logpdf(0, n, x, means, linv, const, logw, a)
+    whitened_kernel(6)(0, n, x, means, linv, const, logw, b)
+    assert whitened_kernel(6) is not _whitened_logpdf and np.array_equal(a, b)
+
+
+def _plain_logsumexp(row):
+    """log sum exp by the textbook loop in Python floats: the max, then exp of every difference."""
+    if any(v != v for v in row):
+        return float("nan")
+    mx = max(row)
+    if not np.isfinite(mx):
+        mx = 0.0
+    s = 0.0
+    for v in row:
+        s += float(np.exp(v - mx))
+    return mx + float(np.log(s)) if s > 0 else -np.inf
+
+
+def test_row_logsumexp_equals_the_textbook_loop_bit_for_bit_with_ties_underflow_and_infinities():
+    from cistrack.model.mixture_density import _row_logsumexp
+
+    g = np.random.default_rng(13)
+    rows = [g.normal(size=6) * 5.0 for _ in range(200)]
+    rows += [np.array([1.5, 1.5, 0.2, 1.5, -3.0, 0.0]),            # the maximum three times
+             np.array([0.0, -745.0, -745.2, -749.9, -750.0, -1e4]),  # terms that underflow to 0 or not
+             np.array([-np.inf] * 6), np.array([-np.inf, 2.0, -np.inf, 1.0, -np.inf, 0.5]),
+             np.array([np.inf, 1.0, 0.0, -1.0, 2.0, 3.0]), np.array([1.0, np.nan, 0.0, 0.0, 0.0, 0.0]),
+             np.array([-0.0, 0.0, -1e-300, 1e-300, -5e-324, 5e-324])]
+    a = np.array(rows)
+    got = np.empty(a.shape[0])
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        _row_logsumexp(0, a.shape[0], a, got)
+        want = np.array([_plain_logsumexp([float(v) for v in r]) for r in rows])
+    assert np.array_equal(got, want, equal_nan=True)
 
 
 @pytest.mark.parametrize("threads", ["1", "2", "3"])
