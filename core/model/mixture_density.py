@@ -55,10 +55,11 @@ def _whitened_logpdf(i0, i1, x, means, linv, const, logw, out):
 
 @lazy_njit(cache=True, nogil=True)
 def _whitened_6(i0, i1, x, means, linv, const, logw, out):
-    """:func:`_whitened_logpdf` for d = 6 (the state; :func:`whitened_kernel` picks it), bit for bit: per point the same subtractions, products
-    and sums in the same order (``s = 0; s += linv[a, b] diff[b]`` for b = 0..a, then ``maha +=
-    s^2``), held in registers instead of block arrays, so that the inner loop over a block's
-    points loads each coordinate once (the general loop stored and reloaded ``s`` 21 times)."""
+    """:func:`_whitened_logpdf` for d = 6 (the state; :func:`whitened_kernel` picks it), bit for
+    bit: per point the same subtractions, products and sums in the same order (``s = 0; s +=
+    linv[a, b] diff[b]`` for b = 0..a, then ``maha += s^2``), held in registers instead of block
+    arrays, so that the inner loop over a block's points loads each coordinate once (the general
+    loop stored and reloaded ``s`` 21 times). Same arguments and shapes."""
     n_comp = means.shape[0]
     xt = np.empty((6, _BLOCK))
     row = np.empty(_BLOCK)
