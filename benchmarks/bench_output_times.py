@@ -14,6 +14,12 @@ period, the last at the period's end) it times, alternating within each round of
 and prints CPU microseconds per particle-period (medians) beside the one-output call, and whether
 the two ways give the same final states bit for bit. Example 1 makes about 100 filter
 propagations per period (``bench_call_cost.py``, table 2).
+
+A second table prices dense output on the one-particle kernel (the only one that has it, for
+``dense_trajectory``), for ``--dense-particles`` particles: the kernel to the period's end, to the
+largest K of ``--outputs`` by shortened steps, and the dense kernel to the end (three more stages
+and the 7th-order interpolant's coefficients at every step, which is what ~100 outputs in ~85
+steps would need: nearly every step passes an output).
 """
 from __future__ import annotations
 
@@ -52,11 +58,53 @@ def carried_calls(dyn, x: np.ndarray, times: np.ndarray) -> np.ndarray:
     return y
 
 
+def dense_table(dyn, x: np.ndarray, period: float, k: int, repeats: int) -> None:
+    """CPU us per particle-period of the one-particle kernel with 1 and ``k`` outputs, and of the
+    dense kernel over the period (kernels called directly, one range or one particle a call)."""
+    from cistrack.propagation.dop853_dense_source import CTL_SIZE
+    from cistrack.propagation.dop853_tableau import INTERPOLATOR_POWER
+
+    mod, params, (pos, rad) = dyn._kernels(), dyn._params(), dyn._bodies_arrays()
+    rtol, atol, n = float(dyn.rtol), float(dyn.atol), x.shape[0]
+
+    def shortened(m: int) -> None:
+        times = np.linspace(0.0, period, m + 1)[1:]
+        mod.propagate_kernel(0, n, x, params, 0.0, times, rtol, atol, pos, rad, 100_000, np.zeros(n),
+                             np.empty((m, n, x.shape[1])), np.full(n, -1, dtype=np.int64), np.full(n, np.inf),
+                             np.zeros(n, dtype=np.int64))
+
+    rec = (np.empty(256), np.empty(256), np.empty((256, x.shape[1])),
+           np.empty((256, INTERPOLATOR_POWER, x.shape[1])))
+
+    def dense() -> None:
+        for i in range(n):
+            ctl = np.zeros(CTL_SIZE)
+            mod.dense_kernel(x[i].copy(), params, period, rtol, atol, pos, rad, 100_000, *rec, ctl)
+
+    ways = {"1 output, shortened steps": lambda: shortened(1), f"{k} outputs, shortened steps": lambda: shortened(k),
+            "dense output at every step": dense}
+    cpu: dict = {}
+    for f in ways.values():
+        f()
+    for _ in range(repeats):
+        for name, f in ways.items():
+            c = time.process_time()
+            f()
+            cpu.setdefault(name, []).append((time.process_time() - c) / n * 1e6)
+    base = statistics.median(cpu["1 output, shortened steps"])
+    print(f"\none-particle kernel, {n} particles, one period, CPU us per particle-period, median of {repeats}")
+    print(f"{'':<30}{'us':>8}{'x 1 output':>12}")
+    for name in ways:
+        v = statistics.median(cpu[name])
+        print(f"{name:<30}{v:>8.2f}{v / base:>12.2f}")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--particles", type=int, default=10_000)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--outputs", type=int, nargs="+", default=[1, 13, 101])
+    ap.add_argument("--dense-particles", type=int, default=1000)
     args = ap.parse_args()
     for line in machine_lines():
         print(line)
@@ -88,6 +136,8 @@ def main() -> int:
             same = bool(np.array_equal(final[k, "one call"], final[k, "carried calls"]))
             row += f" {car:>14.2f} {car / base:>11.2f} {str(same):>12}"
         print(row)
+    if args.dense_particles > 0:
+        dense_table(dyn, x[:args.dense_particles], period, max(args.outputs), args.repeats)
     return 0
 
 
