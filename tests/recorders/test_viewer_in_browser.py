@@ -68,7 +68,8 @@ def test_the_cloud_fills_the_run_view_at_the_start_middle_and_end(pictures, shot
 @pytest.mark.parametrize("shot", SHOTS)
 def test_particles_not_only_ellipsoids_are_drawn_at_the_start_middle_and_end(pictures, shot):
     """The shots of a viewer that had stopped drawing the particles (rerun 0.41, stepped in a
-    fast burst) held 0 such pixels; shots with particles 31 to 1,192 (viewer_shots.KEY_INTERVAL_S)."""
+    fast burst) held 0 such pixels; shots of spread clouds with their particles 31 to 1,192
+    (viewer_shots.KEY_INTERVAL_S, viewer_shots.particle_pixels)."""
     assert particle_pixels(pictures[shot]) > 20, f"{shot}: no particle drawn in the run view"
 
 

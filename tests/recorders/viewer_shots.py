@@ -84,7 +84,9 @@ def cloud_mask(img: np.ndarray) -> np.ndarray:
 def particle_pixels(img: np.ndarray) -> int:
     """Pixels of the run view inside a drawn particle: in a cloud colour together with their eight
     neighbours. A particle is a dot about 4 pixels across; an ellipsoid's wireframe, in the same
-    colours, is a line too thin to have such pixels (0 in shots with ellipsoids and no particle)."""
+    colours, is a line too thin to have such pixels (0 in shots with ellipsoids and no particle).
+    A cloud seen as a needle one or two pixels wide (the first steps after an IOD, along the line
+    of sight) has almost none either (0-2 measured): this counts spread clouds' particles."""
     r = region(img, RUN_VIEW).astype(int)
     total = 0
     for colour in CLOUD_COLOURS:
