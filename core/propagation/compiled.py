@@ -123,10 +123,10 @@ class CompiledDynamics(Dynamics):
         """The kernels' impact bodies: positions (B, 5), radii (B,). Columns 0-2 the position,
         column 3 a bound on the body's speed (LU/TU) and column 4 on its acceleration (LU/TU^2)
         in the integration frame: 0 for bodies that stay put, ``inf`` (unknown) for bodies moved
-        by ``body_motion``. The lockstep kernel skips evaluating a body's position when a
-        particle is farther from where its lane last saw the body than the radius plus the speed
-        bound times the time since, or farther from the line through the last two positions it
-        saw than the radius plus what the acceleration bound allows: the same decisions."""
+        by ``body_motion``. The lockstep kernel reads a body at rest once per call, and evaluates
+        a moving body with a bound on a grid of times at the call's start; a particle farther
+        from the chord between two grid positions than the radius plus what the bounds allow
+        there is outside the body without evaluating its position: the same decisions."""
         bodies = self.bodies
         pos = np.zeros((max(len(bodies), 1), 5))
         rad = np.zeros(len(bodies))

@@ -57,8 +57,8 @@ MOON_SPEED_BOUND_KMS = 1.5
 (:meth:`cistrack.propagation.CompiledDynamics._bodies_arrays`); DE421 from 1900 to 2050, every
 1.75 days: 0.966 to 1.104 km/s."""
 MOON_ACCELERATION_BOUND_KMS2 = 4e-6
-"""Bound on the Moon's geocentric acceleration, km/s^2, for the same pre-test's second form (the
-line through the last two positions a lane saw); DE421's own second derivative from 1899-07-30
+"""Bound on the Moon's geocentric acceleration, km/s^2, for the same pre-test (how far the Moon
+strays from the chord between two grid positions); DE421's own second derivative from 1899-07-30
 to 2053-10-08, every 1.2 hours: 2.41e-6 to 3.15e-6 km/s^2 (the Earth's pull at perigee, 356,376
 km, is 3.18e-6)."""
 
