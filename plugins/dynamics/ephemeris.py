@@ -199,7 +199,6 @@ class EphemerisDynamics(CompiledDynamics):
     @property
     def primaries(self) -> tuple[Body, ...]:
         """Earth and Moon with DE421's mass fractions and radii in LU (radius 0: no impacts).
-
         ``position`` is the synodic position at t = 0; :meth:`Body.position_at` follows the
         real Earth-Moon distance (the bodies move along the x axis as it changes)."""
         mu = self.mu
