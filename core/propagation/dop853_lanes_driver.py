@@ -51,6 +51,16 @@ else:
         started = True
 """
 
+# Whether the lane's new position ``col`` lies inside body ``bb`` at (bx, by, bz): then ``b = bb``
+# and the loop over the bodies ends. Written out in both loops over the bodies (see _START).
+_HIT = """dx = col[0] - bx
+dy = col[1] - by
+dz = col[2] - bz
+if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
+    b = bb
+    break
+"""
+
 _TEMPLATE = '''
 GRID_STEP = 0.005  # TU between the moving bodies' grid times (fewer than MAX_GRID of them)
 MAX_GRID = 4096
@@ -196,12 +206,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 if not anymoving:
                     for bb in range(nb):
                         bx, by, bz = body_position(tb, params, bb, body_pos)
-                        dx = col[0] - bx
-                        dy = col[1] - by
-                        dz = col[2] - bz
-                        if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
-                            b = bb
-                            break
+{HIT:24}
                 else:
                     for bb in range(nb):
                         if speed[bb] == 0.0:
@@ -220,12 +225,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                                 if gx * gx + gy * gy + gz * gz > reach * reach:
                                     continue
                             bx, by, bz = body_position(tb, params, bb, body_pos)
-                        dx = col[0] - bx
-                        dy = col[1] - by
-                        dz = col[2] - bz
-                        if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
-                            b = bb
-                            break
+{HIT:24}
                 if b >= 0:
                     for j in range(DIM):
                         col2[j] = w[(ROW_Y + j) * LANES + l]
@@ -294,14 +294,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
 
 
 def driver_source(stages: str) -> str:
-    """The driver's text with ``stages`` (the calls of the stage functions) in ``_lanes_step``
-    and the lane-loading block written out at its two places."""
-    def block(indent: int) -> str:
-        return "\n".join(" " * indent + line for line in _START.splitlines())
+    """The driver's text with ``stages`` (the calls of the stage functions) in ``_lanes_step``,
+    and the lane-loading and inside-a-body blocks written out at their two places each."""
+    def block(text: str, indent: int) -> str:
+        return "\n".join(" " * indent + line for line in text.splitlines())
 
-    return (_TEMPLATE.replace("{STAGES}", stages).replace("{START:12}", block(12))
-            .replace("{START:20}", block(20)))
+    return (_TEMPLATE.replace("{STAGES}", stages).replace("{START:12}", block(_START, 12))
+            .replace("{START:20}", block(_START, 20)).replace("{HIT:24}", block(_HIT, 24)))
 
 
 DRIVER = _TEMPLATE
-"""The template (placeholders ``{STAGES}`` and ``{START:n}``); :func:`driver_source` fills it."""
+"""The template (placeholders ``{STAGES}``, ``{START:n}`` and ``{HIT:n}``); :func:`driver_source` fills it."""
