@@ -65,7 +65,11 @@ def versions(registry=None) -> dict[str, str]:
     except metadata.PackageNotFoundError:
         out["cistrack"] = "unknown"
     if registry is not None:
-        for dist, _ep, _mod in registry.plugins:
+        # once per distribution: every lookup scans sys.path (the built-ins are ~40 entry points
+        # of one distribution: 25 ms of Example 1's run)
+        for dist in dict.fromkeys(d for d, _ep, _mod in registry.plugins):
+            if dist in out:
+                continue
             try:
                 out[dist] = metadata.version(dist)
             except metadata.PackageNotFoundError:
