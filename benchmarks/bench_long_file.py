@@ -93,6 +93,8 @@ def main() -> int:
     if args.one:
         print(json.dumps(one(*args.one)))
         return 0
+    if args.file is None:
+        ap.error("the measurement file is required (write one with benchmarks/make_long_measurements.py)")
     work = Path(tempfile.mkdtemp(prefix="cistrack-long-"))
     csv = work / "rows.csv"
     rows, days = _prefix(Path(args.file), args.rows, csv)
