@@ -42,7 +42,6 @@ from cistrack.runs.truth import Truth
 __all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
 
 
-
 @dataclass
 class RunResult:
     """What :func:`run_scenario` returns: the context, the table rows (one per step, as written
@@ -273,22 +272,24 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
         pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
         step = step0 = None  # the observers are done with it: its particles need not outlive the step
         for k, (t, group) in enumerate(events, start=1):
-            step = None  # the previous step's belief (its particle arrays) is free before predict and update
+            step = prior = None  # the previous step's belief (its particle arrays) is free before predict and update
             tp = time.perf_counter()
             filt.predict(t)
+            prior = filt.belief  # timed with the prediction: the PGM clusters its particles here
             t_pred = time.perf_counter() - tp
             if not group:
-                step = _step(ctx, k, t, "predict", filt.belief)
+                step = _step(ctx, k, t, "predict", prior)
                 step.timings["predict"] = t_pred
                 pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step))
                 continue
             ms = tuple(_angles(ctx.measurements[i]) for i in group)
-            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", filt.belief, ms))
-            tu = time.perf_counter()
+            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", prior, ms))
+            tu, prior = time.perf_counter(), None  # the prior's particles need not outlive the hook
             for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
                 filt.update(m)  # several sites at one time: one stacked update, or one after another
+            posterior = filt.belief
             t_upd = time.perf_counter() - tu
-            step = _step(ctx, k, t, "update", filt.belief, ms)
+            step, posterior = _step(ctx, k, t, "update", posterior, ms), None
             step.timings.update({"predict": t_pred, "update": t_upd})
             pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
