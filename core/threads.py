@@ -7,6 +7,7 @@ whichever thread runs it, so the thread count never changes a result.
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -47,10 +48,13 @@ def _pool(workers: int) -> ThreadPoolExecutor:
 
 
 def run_chunks(kernel, n: int, args: tuple, chunks_per_worker: int = 8) -> None:
-    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the worker threads (GIL released).
+    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the calling thread and the worker
+    threads (GIL released).
 
     ``chunks_per_worker``: several chunks per worker balance uneven rows (particles near a close
-    approach take more steps); rows of equal cost need one."""
+    approach take more steps); rows of equal cost need one. The chunks are taken in turn by
+    whichever thread is free, the calling thread among them: it starts at once, where a sleeping
+    worker takes time to wake (on a virtual machine's idle core, as long as a short call itself)."""
     workers = min(num_threads(), n)
     if workers <= 1 or n < 32:
         kernel(0, n, *args)
@@ -59,7 +63,26 @@ def run_chunks(kernel, n: int, args: tuple, chunks_per_worker: int = 8) -> None:
         kernel(0, 0, *args)                       # empty range, or each worker thread would load it
     n_chunks = min(n, workers * chunks_per_worker)
     edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
-    futures = [_pool(workers).submit(kernel, int(a), int(b), *args)
-               for a, b in zip(edges[:-1], edges[1:]) if b > a]
-    for fut in futures:
-        fut.result()
+    chunks = iter([(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a])
+    lock = threading.Lock()
+
+    def drain() -> None:
+        while True:
+            with lock:
+                chunk = next(chunks, None)
+            if chunk is None:
+                return
+            try:
+                kernel(chunk[0], chunk[1], *args)
+            except BaseException:  # (Ctrl-C included) no thread takes a further chunk
+                with lock:
+                    for _ in chunks:
+                        pass
+                raise
+
+    helpers = [_pool(workers - 1).submit(drain) for _ in range(workers - 1)]
+    try:
+        drain()
+    finally:  # the helpers finish (or fail) before the caller's arrays are handed back
+        for fut in helpers:
+            fut.result()
