@@ -132,10 +132,11 @@ def _row_logsumexp(i0, i1, a, out):
         out[n] = mx + np.log(s)
 
 
-_THREADED_ROWS = 32_768
+_THREADED_ROWS = 16_384
 """Rows from which the densities run on the worker threads (:mod:`cistrack.threads`); below it
-handing out the work costs more than it saves (6 components, 2 threads, this 2-core machine: 1.14
-against 1.05 ms at 10,000 rows, 3.4 against 4.3 ms at 40,000)."""
+handing out the work costs about what it saves (6 components, 2 threads, the 2-core development
+machine, medians of 200, threaded against one thread: 0.42 against 0.28 ms at 5,000 rows, 0.56
+against 0.59 at 10,000, 0.89 against 1.28 at 20,000, 1.49 against 2.50 at 40,000)."""
 
 
 def _by_rows(kernel, n: int, args: tuple) -> None:
