@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cistrack.lazy import lazy_njit
 from cistrack.model.belief import regularize_covariance
 
 __all__ = ["GroupMoments", "group_moments", "KalmanGains", "kalman_gains", "gaussian_log_likelihood",
@@ -59,16 +60,41 @@ def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_gro
     edges = np.concatenate(([0], np.cumsum(counts)))
     means = np.zeros((n_groups, q))
     covs = np.zeros((n_groups, q, q))
+    _centre_groups(y, edges, means)  # means, and each group centred in place: y is this function's own
     for i in range(n_groups):  # loop over components (few), vectorised over their particles
-        if counts[i] == 0:
-            continue
-        yi = y[edges[i]:edges[i + 1]]
-        means[i] = yi.mean(axis=0)
-        if yi.shape[0] > 1:
-            yi -= means[i]  # centred in place: y is this function's own array
+        if counts[i] > 1:
+            yi = y[edges[i]:edges[i + 1]]
             covs[i] = (yi.T @ yi) / (yi.shape[0] - 1)
     return GroupMoments(counts, means[:, :nx], means[:, nx:], covs[:, :nx, :nx], covs[:, :nx, nx:],
                         covs[:, nx:, nx:])
+
+
+@lazy_njit(cache=True)
+def _centre_groups(y, edges, means):
+    """means[g] (q,) = the mean of rows edges[g]:edges[g+1] of y (R, q), and those rows centred in
+    place when there are two or more.
+
+    numpy's ``y[a:b].mean(axis=0)`` bit for bit: for a C-ordered block numpy adds the rows one
+    after the other into a zero sum (no pairwise summation across rows) and divides by the count;
+    these loops make the same additions in the same order. Compiled because numpy's call took 65
+    us per group of 1,700 rows, 6 groups per clustering, 126 times in Example 1."""
+    q = y.shape[1]
+    for g in range(edges.shape[0] - 1):
+        a = edges[g]
+        b = edges[g + 1]
+        if b <= a:
+            continue
+        for c in range(q):
+            means[g, c] = 0.0
+        for i in range(a, b):
+            for c in range(q):
+                means[g, c] += y[i, c]
+        for c in range(q):
+            means[g, c] = means[g, c] / (b - a)
+        if b - a > 1:
+            for i in range(a, b):
+                for c in range(q):
+                    y[i, c] -= means[g, c]
 
 
 @dataclass

@@ -57,6 +57,22 @@ def test_group_moments_equal_the_per_group_formulas(with_d):
     assert mom.counts[7] == 0 and not mom.pxx[7].any()
 
 
+def test_group_moments_of_groups_of_one_two_and_three_equal_the_formulas():
+    r = np.random.default_rng(21)
+    x = r.normal(size=(6, 6)) * 1e3
+    labels = np.array([2, 0, 2, 3, 2, 0])  # groups of 2, none, 3 and 1 particles
+    mom = group_moments(x, None, labels, 4)
+    for i, n in enumerate([2, 0, 3, 1]):
+        assert mom.counts[i] == n
+        if n == 0:
+            assert not mom.mean_x[i].any() and not mom.pxx[i].any()
+            continue
+        xi = x[labels == i]
+        assert np.array_equal(mom.mean_x[i], xi.mean(axis=0))
+        c = xi - xi.mean(axis=0)
+        assert np.array_equal(mom.pxx[i], (c.T @ c) / (n - 1) if n > 1 else np.zeros((6, 6)))
+
+
 def test_nearest_centres_in_blocks_equal_the_one_product_formula():
     from cistrack.plugins.clustering.lloyd import _ROWS_AT_ONCE, nearest_centres
 
