@@ -84,6 +84,8 @@ def n_distinct_at_least(x: np.ndarray, k: int) -> int:
     if k <= 1:
         return k
     head = x[: max(4 * k, 64)]
+    if np.unique(head[:, 0]).size >= k:  # rows that differ in one coordinate are distinct (10x cheaper)
+        return k
     n = np.unique(head, axis=0).shape[0]
     if n >= k:
         return k
