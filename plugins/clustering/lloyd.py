@@ -62,7 +62,7 @@ def _seed_centres(x: np.ndarray, k: int, sq_norms: np.ndarray, rs: np.random.Ran
     for c in range(1, k):
         targets = rs.uniform(size=trials) * potential
         ids = np.searchsorted(np.cumsum(weights * closest, dtype=np.float64), targets)
-        np.clip(ids, None, closest.size - 1, out=ids)
+        np.minimum(ids, closest.size - 1, out=ids)  # np.clip's upper bound without its checks (30 us)
         dist = _sq_distances(x[ids], x, sq_norms)
         np.minimum(closest, dist, out=dist)
         pots = dist @ weights.reshape(-1, 1)
