@@ -272,7 +272,7 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
         pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
         step = step0 = None  # the observers are done with it: its particles need not outlive the step
         for k, (t, group) in enumerate(events, start=1):
-            step = prior = None  # the previous step's belief (its particle arrays) is free before predict and update
+            step = prior = posterior = None  # the previous step's belief (its particle arrays) is free before predict and update
             tp = time.perf_counter()
             filt.predict(t)
             prior = filt.belief  # timed with the prediction: the PGM clusters its particles here
@@ -289,7 +289,7 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
                 filt.update(m)  # several sites at one time: one stacked update, or one after another
             posterior = filt.belief
             t_upd = time.perf_counter() - tu
-            step, posterior = _step(ctx, k, t, "update", posterior, ms), None
+            step = _step(ctx, k, t, "update", posterior, ms)
             step.timings.update({"predict": t_pred, "update": t_upd})
             pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
