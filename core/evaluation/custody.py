@@ -127,9 +127,11 @@ class CustodyObserver:
     def judge(self, step) -> Verdict | None:
         """The verdict after update ``step`` if custody is lost there, else None."""
         m = step.metrics
-        if m.get("truth_loglik", 0.0) < self.rule.loglik_threshold:
-            return Verdict("lost", f"truth log-likelihood {m['truth_loglik']:.1f} < "
-                           f"{self.rule.loglik_threshold:g}", step.index, float(units.tu_to_days(step.t)))
+        ll = m.get("truth_loglik", 0.0)
+        if ll < self.rule.loglik_threshold:  # a collapsed cloud gives about -1e38: 3 digits, not 40
+            shown = f"{ll:.1f}" if ll > -1e6 else f"{ll:.3g}"
+            return Verdict("lost", f"truth log-likelihood {shown} < {self.rule.loglik_threshold:g}",
+                           step.index, float(units.tu_to_days(step.t)))
         self._hdr_run = self._hdr_run + 1 if m.get("hdr_level", 0.0) > self.rule.hdr_threshold else 0
         if self._hdr_run >= self.rule.hdr_consecutive:
             return Verdict("lost", f"truth outside the {self.rule.hdr_threshold:g} highest-density region "

@@ -135,6 +135,13 @@ def test_custody_is_lost_on_low_likelihood_or_consecutive_hdr_excursions(seq, lo
         assert marks == [1.0] * (lost_at - 1) + [0.0] * (len(seq) - lost_at + 1)
 
 
+@pytest.mark.parametrize("loglik,shown", [(-116.04, "-116.0"), (-8.914951e38, "-8.91e+38")])
+def test_a_lost_custody_reason_shows_the_likelihood_in_a_few_digits(loglik, shown):
+    obs = CustodyObserver(CustodyRule(loglik_threshold=-100.0))
+    obs.cistrack_step_updated(run=None, step=_Step(1, loglik, 0.5))
+    assert obs.verdict.reason == f"truth log-likelihood {shown} < -100"
+
+
 def test_the_summary_round_trips_through_its_dict_and_reads_old_manifests():
     s = RunSummary("r", 3, verdict=Verdict("lost", "why", 7, 2.5), n_steps=9, final={"nees": 1.0})
     assert RunSummary.from_dict(s.to_dict()) == s
