@@ -201,11 +201,14 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 # its position is then not evaluated. The decision is the exact test's.
                 b = -1
                 tb = tl[l] + hs
-                # bodies at rest only (the CR3BP): the plain test, kept apart from the loop below
-                # (one loop with a per-body branch measured 2-5 % slower for the CR3BP)
+                # bodies at rest only (the CR3BP; the ephemeris model without the Moon): the plain
+                # test, kept apart from the loop below (one loop with a per-body branch measured
+                # 2-5 % slower for the CR3BP), positions read once per call
                 if not anymoving:
                     for bb in range(nb):
-                        bx, by, bz = body_position(tb, params, bb, body_pos)
+                        bx = rest[bb, 0]
+                        by = rest[bb, 1]
+                        bz = rest[bb, 2]
 {HIT:24}
                 else:
                     for bb in range(nb):

@@ -51,17 +51,23 @@ def invariant_expression(node: ast.AST, known: set[str]) -> bool:
 
 
 class _Loads(ast.NodeTransformer):
-    """Take ``_p[<invariant>]`` loads out into fresh names (appended to ``hoisted``)."""
+    """Take ``_p[<invariant>]`` loads out into fresh names (appended to ``hoisted``); a load at an
+    index already taken out (same text: its names are single-assignment or never reassigned)
+    reuses that name, so the loop reads each parameter once (the ephemeris model names GM_M and
+    GM_S twice each)."""
 
-    def __init__(self, known: set[str], hoisted: list[ast.stmt], fresh) -> None:
-        self.known, self.hoisted, self.fresh = known, hoisted, fresh
+    def __init__(self, known: set[str], hoisted: list[ast.stmt], fresh, seen: dict[str, str]) -> None:
+        self.known, self.hoisted, self.fresh, self.seen = known, hoisted, fresh, seen
 
     def visit_Subscript(self, node: ast.Subscript):
         node = self.generic_visit(node)
         if (isinstance(node.value, ast.Name) and node.value.id == "_p" and isinstance(node.ctx, ast.Load)
                 and invariant_expression(node.slice, self.known)):
-            name = self.fresh()
-            self.hoisted.append(ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=node))
+            text = ast.unparse(node.slice)
+            name = self.seen.get(text)
+            if name is None:
+                name = self.seen[text] = self.fresh()
+                self.hoisted.append(ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())], value=node))
             return ast.copy_location(ast.Name(id=name, ctx=ast.Load()), node)
         return node
 
@@ -71,9 +77,10 @@ class _Tests(ast.NodeTransformer):
     fresh names (a lane-invariant condition then branches the whole vector loop, instead of
     every lane computing both sides)."""
 
-    def __init__(self, known: set[str], consts: set[str], hoisted: list[ast.stmt], fresh) -> None:
+    def __init__(self, known: set[str], consts: set[str], hoisted: list[ast.stmt], fresh,
+                 loads: dict[str, str]) -> None:
         self.known, self.consts, self.hoisted, self.fresh = known, consts, hoisted, fresh
-        self.loads: dict[str, str] = {}
+        self.loads = loads  # shared with _Loads: one name per parameter index
 
     def _out(self, value: ast.expr, node: ast.AST) -> ast.Name:
         name = self.fresh()
@@ -116,6 +123,7 @@ def hoist_invariants(body: list[ast.stmt], invariant: set[str],
         return f"_uc{count[0] - 1}"
 
     current: dict[str, str] = {}
+    seen: dict[str, str] = {}
     known = set(invariant)
     before: list[ast.stmt] = []
     loop: list[ast.stmt] = []
@@ -134,7 +142,7 @@ def hoist_invariants(body: list[ast.stmt], invariant: set[str],
                 current[target] = name
                 known.add(name)
                 continue
-            value = _Loads(known, before, fresh).visit(value)
+            value = _Loads(known, before, fresh, seen).visit(value)
             current.pop(target, None)
             loop.append(ast.Assign(targets=[ast.Name(id=target, ctx=ast.Store())], value=value))
             continue
@@ -142,5 +150,5 @@ def hoist_invariants(body: list[ast.stmt], invariant: set[str],
         for name in sorted(assigned & set(current)):  # materialise what the statement may reassign
             loop.append(ast.Assign(targets=[ast.Name(id=name, ctx=ast.Store())],
                                    value=ast.Name(id=current.pop(name), ctx=ast.Load())))
-        loop.append(_Tests(known, constants, before, fresh).visit(_Names(current).visit(stmt)))
+        loop.append(_Tests(known, constants, before, fresh, seen).visit(_Names(current).visit(stmt)))
     return ([ast.fix_missing_locations(s) for s in before], [ast.fix_missing_locations(s) for s in loop])

@@ -100,6 +100,29 @@ def test_the_keyed_lane_loop_reads_no_parameter_inside_the_loop():
     assert "_p[" not in body.text and "_p[" in body.key.per_key
 
 
+def test_the_keyed_lane_loop_loads_a_parameter_named_twice_once():
+    """ephemeris_rhs reads p[GM_M] and p[GM_S] in two terms each: one load (and one scratch row)
+    per parameter."""
+    body, _ = lane_body(ephemeris_rhs, RESERVED)
+    loads = [line.split(" = ", 1)[1] for line in body.key.per_key.splitlines() if " = _p[" in line]
+    assert loads.count("_p[GM_M]") == 1 and loads.count("_p[GM_S]") == 1
+    assert len(loads) == len(set(loads))
+
+
+def test_the_scratch_rows_hold_the_loads_the_loop_reads_and_the_index_arithmetic_stays_scalar():
+    """Loads the lane loop reads come from scratch rows; what stays before the loop is the index
+    arithmetic and the loads that a lane-invariant test reads (J2's switch stays a branch)."""
+    from cistrack.propagation.dop853_lanes_keyed import scratch_plan
+
+    body, _ = lane_body(ephemeris_rhs, RESERVED)
+    replicated, kept = scratch_plan(body)
+    assert replicated and all(name in body.text for name in replicated)
+    kept_loads = [line.split(" = ", 1)[0] for line in kept if " = _p[" in line]
+    tests = [line for line in kept if " = _p[" not in line and "!= 0.0" in line]
+    assert tests and kept_loads
+    assert all(any(name in line for line in tests) for name in kept_loads)
+
+
 def _key_nested(t, y, p, out):
     if t > 0.0:
         k: LaneUniform = int(t)
