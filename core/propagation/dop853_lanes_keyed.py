@@ -25,7 +25,7 @@ import ast
 from cistrack.propagation import dop853_tableau as _tab
 from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_point, stage_time, w_at
 
-__all__ = ["scratch_plan", "keyed_stage_function", "keys_function"]
+__all__ = ["scratch_plan", "keyed_stage_function", "keys_function", "fill_function"]
 
 _HEAD = "@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')"
 
@@ -85,6 +85,23 @@ def keys_function(body, dim: int, lanes: int) -> str:
     return "\n".join(L) + "\n\n\n"
 
 
+def fill_function(body, dim: int, lanes: int) -> str:
+    """``_lanes_fill(_w, _p, _K)``: the per-key loads of key ``_K`` copied into the scratch rows,
+    each across the lanes, and the scratch key row set. One function that every stage calls (when
+    the key changed: every few steps), not a copy in each: the kernel compiles faster."""
+    replicated, _ = scratch_plan(body)
+    r = rows(dim, keyed=True, scratch=len(replicated))
+    scratch_key = r["SCRATCH_KEY"] * lanes
+    L = [_HEAD, "def _lanes_fill(_w, _p, _K):"]
+    L += ["    " + line for line in body.key.invariant.splitlines()]
+    L += ["    " + line for line in body.key.per_key.splitlines()]
+    if replicated:
+        L += ["    for _l in range(LANES):"]
+        L += [f"        {w_at(r['SCRATCH'] + i, lanes)} = {name}" for i, name in enumerate(replicated)]
+    L += [f"    _w[{scratch_key}] = 1.0", f"    _w[{scratch_key + 1}] = _K"]
+    return "\n".join(L) + "\n\n\n"
+
+
 def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` for a body with a :class:`~.lane_rhs.LaneUniform` key. The lanes' keys come
     from ``_lanes_keys`` when the whole step has one (stages 1-12), else from a pass of the
@@ -113,12 +130,8 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     out0 = out_row(s, r, dim)
     lane_body = body.render(lambda k: f"_uo{k}").splitlines()
     scratch_key = r["SCRATCH_KEY"] * lanes
-    L += ["    if _same:", f"        if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:"]
-    L += ["            " + line for line in body.key.per_key.splitlines()]
-    if replicated:
-        L += ["            for _l in range(LANES):"]
-        L += [f"                {w_at(r['SCRATCH'] + i, lanes)} = {name}" for i, name in enumerate(replicated)]
-    L += [f"            _w[{scratch_key}] = 1.0", f"            _w[{scratch_key + 1}] = _K"]
+    L += ["    if _same:", f"        if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:",
+          "            _lanes_fill(_w, _p, _K)"]
     L += ["        " + line for line in kept]
     L += ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
     L += [f"            {name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]

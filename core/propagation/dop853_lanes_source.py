@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from cistrack.propagation import dop853_tableau as _tab
 from cistrack.propagation.dop853_lanes_driver import driver_source
-from cistrack.propagation.dop853_lanes_keyed import keyed_stage_function, keys_function, scratch_plan
+from cistrack.propagation.dop853_lanes_keyed import fill_function, keyed_stage_function, keys_function, scratch_plan
 from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_point, stage_sum, w_at
 
 __all__ = ["lanes_source", "lanes_for", "DEFAULT_LANES", "KEYED_LANES", "RESERVED"]
@@ -108,7 +108,8 @@ def lanes_source(dim: int, body, lanes: int | None = None) -> str:
     if keyed:
         head += [f"ROW_{name} = {r[name]}" for name in ("KEY", "STEP_KEY", "SCRATCH_KEY", "SCRATCH")]
     head += ["", ""]
-    stages = "".join(_stage_function(s, body, dim, lanes) for s in range(0, n + 1))
+    stages = fill_function(body, dim, lanes) if keyed else ""
+    stages += "".join(_stage_function(s, body, dim, lanes) for s in range(0, n + 1))
     calls = "".join(f"    _lanes_stage{s}(w, params)\n" for s in range(1, n + 1))
     if body.key is not None:
         calls = "    _lanes_keys(w, params)\n" + calls
