@@ -43,7 +43,9 @@ thread, ephemeris model: 17.08 against 14.72 us per particle-period over one NRH
 (10,000 particles), 0.99 against 0.80 us per particle for a 0.05 TU call; calls of 5-40
 particles cost the same within 3 % (their time is the call's fixed cost), and so does the first
 compilation (41 s either way). The CR3BP (no key) stays at :data:`DEFAULT_LANES`: 32 lanes made
-Example 1's propagation 3-6 % slower."""
+Example 1's propagation 3-6 % slower. Since the record's loads are kept in scratch rows across
+stages (:mod:`.dop853_lanes_keyed`), 64 lanes are no faster (6.75-7.79 against 6.92-7.03 us,
+AMD EPYC Zen 5, session 18)."""
 
 
 def lanes_for(body) -> int:
