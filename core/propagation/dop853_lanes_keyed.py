@@ -108,8 +108,9 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     stage's own. When all lanes have the same key (the usual case: the lanes step together, and a
     6-hour record holds several steps) one lane loop runs with it, reading the key's loads from
     the scratch rows (filled first if they hold another key), and stores every lane's result;
-    otherwise, once per distinct key ``_K``, the lane loop runs with the key fixed to ``_K`` and
-    its loads hoisted before the loop, and keeps the results of the lanes whose key is ``_K``."""
+    otherwise ``_lanes_stage{s}_masked`` runs, once per distinct key ``_K``, the lane loop with
+    the key fixed to ``_K`` and its loads hoisted before the loop, and keeps the results of the
+    lanes whose key is ``_K``."""
     replicated, kept = scratch_plan(body)
     r = rows(dim, keyed=True, scratch=len(replicated))
     key, done = w_at(r["KEY"], lanes), w_at(r["DONE"], lanes)
@@ -138,8 +139,13 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += [f"            _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
     L += ["            " + line for line in lane_body]
     L += [f"            {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
-    L += ["        return", "    _first = 0", "    while _first < LANES:",
-          f"        _K = _w[{r['KEY'] * lanes} + _first]"]
+    L += ["        return", f"    _lanes_stage{s}_masked(_w, _p)"]
+    # lanes in different records: a function of its own, which the common case above never
+    # enters (in the same function its code made that case 8 % slower, bench_stage_cost.py)
+    M = [_HEAD, f"def _lanes_stage{s}_masked(_w, _p):"]
+    M += ["    " + line for line in body.key.invariant.splitlines()]
+    M += ["    _first = 0", "    while _first < LANES:", f"        _K = _w[{r['KEY'] * lanes} + _first]"]
+    L, M = M, L
     L += ["        " + line for line in body.key.per_key.splitlines()]
     L += ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
     L += [f"            _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
@@ -149,4 +155,4 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += ["        for _l in range(LANES):", f"            if {key} == _K:", f"                {done} = 1.0",
           f"        while _first < LANES and _w[{r['DONE'] * lanes} + _first] != 0.0:",
           "            _first += 1"]
-    return "\n".join(L) + "\n\n\n"
+    return "\n".join(L) + "\n\n\n" + "\n".join(M) + "\n\n\n"
