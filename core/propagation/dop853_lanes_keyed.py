@@ -3,8 +3,8 @@
 A right-hand side marked ``k: LaneUniform = ...`` (:mod:`.lane_rhs`) reads a table entry chosen by
 time, such as the ephemeris model's 6-hour Chebyshev record. Its lanes are evaluated together
 when they share the key, the key's loads (``_ucN = _p[...]``, :mod:`.lane_hoist`) done once for
-all lanes. Two things made that fixed work cost as much as a third of a stage on AVX-512
-(measured with ``benchmarks/bench_stage_cost.py``):
+all lanes. Three things made that fixed work cost about a quarter of the ephemeris model's stage
+on AVX-512 (69 against 50 ns per lane-step, ``benchmarks/bench_stage_cost.py``, session 18):
 
 - each stage computed every lane's key, stored it, and read one back to address its loads;
   ``_lanes_keys`` now computes every lane's key at every stage time once before the step's
@@ -13,7 +13,10 @@ all lanes. Two things made that fixed work cost as much as a third of a stage on
   32 registers, spilled them all to the stack at every stage call. The loads used in the lane
   loop are now copied once per key into scratch rows of the work array, replicated across the
   lanes (``w[(SCRATCH + r) * LANES + l]``), and the lane loop reads them there like any other
-  row: refilled when the key changes (every few steps), not at every stage.
+  row: refilled when the key changes (every few steps), not at every stage, by one
+  ``_lanes_fill`` that the stages call (a copy in each cost 6 s of first compilation);
+- the per-key passes for lanes in different records sat in the stage function and slowed the
+  common case by 3-8 %: they are ``_lanes_stage<s>_masked`` now, called only when needed.
 
 Every lane computes the same operations on the same operands in the same order either way:
 the results are bit for bit those of the one-particle kernel.

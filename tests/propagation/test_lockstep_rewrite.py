@@ -360,3 +360,37 @@ def test_bodies_at_rest_have_speed_zero_and_bodies_moved_by_the_model_an_unknown
         body_motion = CR3BP.body_motion or (lambda *a: None)
 
     assert np.all(np.isinf(Moved()._bodies_arrays()[0][:, 3:]))
+
+
+@pytest.mark.parametrize("model", ["cr3bp", "ephemeris"])
+def test_every_public_name_a_generated_kernel_module_defines_is_reserved(model):
+    """A model's right-hand side that read a module constant of the same name (``ROW_T``, say)
+    would be imported into the kernel module and then overwritten by the kernel's own: the
+    rewriter refuses a body that reads any name in RESERVED, so RESERVED must hold them all."""
+    import ast
+    from pathlib import Path
+
+    dyn = CR3BP() if model == "cr3bp" else EphemerisDynamics(epoch="2026-01-01T00:00:00Z")
+    tree = ast.parse(Path(dyn._kernels().__file__).read_text())
+    defined = set()
+    for node in tree.body:
+        if isinstance(node, ast.Assign):
+            defined |= {t.id for t in node.targets if isinstance(t, ast.Name)}
+        elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            defined.add(node.name)
+    public = {name for name in defined if not name.startswith("_")}
+    assert public - RESERVED == set()
+
+
+ROW_T = 2.0  # a model constant that shares its name with a row of the kernel's work array
+
+
+def _reads_row_t(t, y, p, out):
+    for i in range(3):
+        out[i] = y[i + 3]
+        out[i + 3] = -ROW_T * y[i]
+
+
+def test_a_body_reading_a_constant_named_like_a_kernel_row_is_refused():
+    body, why = lane_body(_reads_row_t, RESERVED)
+    assert body is None and "ROW_T" in why
