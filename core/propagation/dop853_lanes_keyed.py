@@ -131,31 +131,43 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += [f"{ind}    {key} = {body.key.expr}", f"{ind}    {done} = 0.0"]
     L += [f"{ind}_K = _w[{r['KEY'] * lanes}]", f"{ind}_same = True", f"{ind}for _l in range(1, LANES):",
           f"{ind}    if {key} != _K:", f"{ind}        _same = False"]
-    out0 = out_row(s, r, dim)
-    lane_body = body.render(lambda k: f"_uo{k}").splitlines()
     scratch_key = r["SCRATCH_KEY"] * lanes
     L += ["    if _same:", f"        if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:",
           "            _lanes_fill(_w, _p, _K)"]
     L += ["        " + line for line in kept]
-    L += ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
-    L += [f"            {name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
-    L += [f"            _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
-    L += ["            " + line for line in lane_body]
+    loads = [f"{name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
+    L += _lane_loop(s, body, r, dim, lanes, loads)
+    out0 = out_row(s, r, dim)
     L += [f"            {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
     L += ["        return", f"    _lanes_stage{s}_masked(_w, _p)"]
-    # lanes in different records: a function of its own, which the common case above never
-    # enters (in the same function its code made that case 8 % slower, bench_stage_cost.py)
-    M = [_HEAD, f"def _lanes_stage{s}_masked(_w, _p):"]
-    M += ["    " + line for line in body.key.invariant.splitlines()]
-    M += ["    _first = 0", "    while _first < LANES:", f"        _K = _w[{r['KEY'] * lanes} + _first]"]
-    L, M = M, L
-    L += ["        " + line for line in body.key.per_key.splitlines()]
-    L += ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
+    return _masked_function(s, body, r, dim, lanes) + "\n".join(L) + "\n\n\n"
+
+
+def _lane_loop(s: int, body, r: dict, dim: int, lanes: int, loads: list[str]) -> list[str]:
+    """The lane loop of stage ``s`` up to its outputs ``_uo0..``, at indent 8: the stage point,
+    ``loads`` (per-lane statements before the body), the previous outputs, the body."""
+    out0 = out_row(s, r, dim)
+    L = ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
+    L += ["            " + line for line in loads]
     L += [f"            _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
-    L += ["            " + line for line in lane_body]
+    return L + ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
+
+
+def _masked_function(s: int, body, r: dict, dim: int, lanes: int) -> str:
+    """``_lanes_stage<s>_masked``: lanes in different records, once per distinct key ``_K`` the
+    lane loop with the key's loads hoisted before it, keeping the results of the lanes whose key
+    is ``_K``. A function of its own, which the one-record case never enters (in the stage
+    function its code made that case 3-8 % slower, ``bench_stage_cost.py``)."""
+    key, done = w_at(r["KEY"], lanes), w_at(r["DONE"], lanes)
+    out0 = out_row(s, r, dim)
+    L = [_HEAD, f"def _lanes_stage{s}_masked(_w, _p):"]
+    L += ["    " + line for line in body.key.invariant.splitlines()]
+    L += ["    _first = 0", "    while _first < LANES:", f"        _K = _w[{r['KEY'] * lanes} + _first]"]
+    L += ["        " + line for line in body.key.per_key.splitlines()]
+    L += _lane_loop(s, body, r, dim, lanes, [])
     L.append(f"            _m = {key} == _K")
     L += [f"            {w_at(out0 + k, lanes)} = _uo{k} if _m else {w_at(out0 + k, lanes)}" for k in range(dim)]
     L += ["        for _l in range(LANES):", f"            if {key} == _K:", f"                {done} = 1.0",
           f"        while _first < LANES and _w[{r['DONE'] * lanes} + _first] != 0.0:",
           "            _first += 1"]
-    return "\n".join(L) + "\n\n\n" + "\n".join(M) + "\n\n\n"
+    return "\n".join(L) + "\n\n\n"

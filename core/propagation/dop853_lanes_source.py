@@ -112,10 +112,9 @@ def lanes_source(dim: int, body, lanes: int | None = None) -> str:
     if keyed:
         head += [f"ROW_{name} = {r[name]}" for name in ("KEY", "STEP_KEY", "SCRATCH_KEY", "SCRATCH")]
     head += ["", ""]
-    stages = fill_function(body, dim, lanes) if keyed else ""
-    stages += "".join(_stage_function(s, body, dim, lanes) for s in range(0, n + 1))
+    stages = "".join(_stage_function(s, body, dim, lanes) for s in range(0, n + 1))
     calls = "".join(f"    _lanes_stage{s}(w, params)\n" for s in range(1, n + 1))
-    if body.key is not None:
+    if keyed:
+        stages = fill_function(body, dim, lanes) + stages + keys_function(body, dim, lanes)
         calls = "    _lanes_keys(w, params)\n" + calls
-        stages += keys_function(body, dim, lanes)
     return "\n".join(head) + stages + _error_function(dim, lanes) + driver_source(calls)
