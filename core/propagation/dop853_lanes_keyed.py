@@ -16,7 +16,13 @@ on AVX-512 (69 against 50 ns per lane-step, ``benchmarks/bench_stage_cost.py``, 
   row: refilled when the key changes (every few steps), not at every stage, by one
   ``_lanes_fill`` that the stages call (a copy in each cost 6 s of first compilation);
 - the per-key passes for lanes in different records sat in the stage function and slowed the
-  common case by 3-8 %: they are ``_lanes_stage<s>_masked`` now, called only when needed.
+  common case by 3-8 %: they are ``_lanes_stage<s>_lanes`` now, called only when needed.
+
+Lanes in different records (session 19) are not run once per record: each lane's column of the
+scratch rows holds its own record's loads (refilled for a lane when its record changes), so one
+lane loop serves them all. In an NRHO period most steps have some lane cross into the next
+record in a later stage (about five in six at 10,000 particles); such a step cost 68 ns per
+lane with the passes, against 46 for a step in one record.
 
 Every lane computes the same operations on the same operands in the same order either way:
 the results are bit for bit those of the one-particle kernel.
@@ -69,78 +75,78 @@ def scratch_plan(body) -> tuple[list[str], list[str]]:
 
 def keys_function(body, dim: int, lanes: int) -> str:
     """``_lanes_keys``: before a step's stages, every lane's key at every stage time (the stage
-    functions' own expressions, so the same values); when all are equal, the step's key row holds
-    1.0 and the key, and stages 1-12 use it without a pass of their own."""
-    r = rows(dim, keyed=True)
-    key = w_at(r["KEY"], lanes)
+    functions' own expressions, so the same values); for each stage s, the step key rows hold
+    1.0 and the key when all lanes have the same (stage s then uses it without a pass of its
+    own), else 0.0 (stage s runs ``_lanes_stage<s>_lanes``)."""
+    r = rows(dim, keyed=True, lanes=lanes)
     step_key = r["STEP_KEY"] * lanes
     prefix = body.key.prefix.splitlines()
+    stages = range(1, _tab.N_STAGES + 1)
     L = [_HEAD, "def _lanes_keys(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
-    L += ["    for _l in range(LANES):", f"        _t = {stage_time(1, r, lanes, w_at(r['H'], lanes))}"]
-    L += ["        " + line for line in prefix] + [f"        {key} = {body.key.expr}"]
-    L += [f"    _K = _w[{r['KEY'] * lanes}]", "    _nd = 0", "    for _l in range(LANES):",
-          f"        _h = {w_at(r['H'], lanes)}", f"        _nd += {key} != _K"]
-    for s in range(2, _tab.N_STAGES + 1):
+    L += ["    _l = 0", f"    _h = {w_at(r['H'], lanes)}"]
+    for s in stages:
+        L += [f"    _t = {stage_time(s, r, lanes)}"] + ["    " + line for line in prefix]
+        L += [f"    _K{s} = {body.key.expr}", f"    _nd{s} = 0"]
+    L += ["    for _l in range(1, LANES):", f"        _h = {w_at(r['H'], lanes)}"]
+    for s in stages:
         L += [f"        _t = {stage_time(s, r, lanes)}"] + ["        " + line for line in prefix]
-        L += [f"        _nd += ({body.key.expr}) != _K"]
-    L += [f"    _w[{step_key}] = 1.0 if _nd == 0 else 0.0", f"    _w[{step_key + 1}] = _K"]
+        L += [f"        _nd{s} += ({body.key.expr}) != _K{s}"]
+    for s in stages:
+        L += [f"    _w[{step_key + 2 * s}] = 1.0 if _nd{s} == 0 else 0.0", f"    _w[{step_key + 2 * s + 1}] = _K{s}"]
     return "\n".join(L) + "\n\n\n"
 
 
 def fill_function(body, dim: int, lanes: int) -> str:
-    """``_lanes_fill(_w, _p, _K)``: the per-key loads of key ``_K`` copied into the scratch rows,
-    each across the lanes, and the scratch key row set. One function that every stage calls (when
-    the key changed: every few steps), not a copy in each: the kernel compiles faster."""
+    """``_lanes_fill(_w, _p, _K, _l0, _l1)``: the per-key loads of key ``_K`` copied into the
+    scratch rows' columns of lanes ``_l0`` to ``_l1 - 1`` that do not hold them yet, and those
+    lanes' HELD rows set; the scratch key row says 1.0 and ``_K`` after a fill of every lane, 0.0
+    after a fill of some. One function that every stage calls (when a key changed: every few
+    steps), not a copy in each: the kernel compiles faster."""
     replicated, _ = scratch_plan(body)
-    r = rows(dim, keyed=True, scratch=len(replicated))
+    r = rows(dim, keyed=True, scratch=len(replicated), lanes=lanes)
     scratch_key = r["SCRATCH_KEY"] * lanes
-    L = [_HEAD, "def _lanes_fill(_w, _p, _K):"]
+    held, held_ok = w_at(r["HELD"], lanes), w_at(r["HELD_OK"], lanes)
+    L = [_HEAD, "def _lanes_fill(_w, _p, _K, _l0, _l1):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
     L += ["    " + line for line in body.key.per_key.splitlines()]
-    if replicated:
-        L += ["    for _l in range(LANES):"]
-        L += [f"        {w_at(r['SCRATCH'] + i, lanes)} = {name}" for i, name in enumerate(replicated)]
-    L += [f"    _w[{scratch_key}] = 1.0", f"    _w[{scratch_key + 1}] = _K"]
+    L += ["    for _l in range(_l0, _l1):", f"        if {held_ok} == 0.0 or {held} != _K:"]
+    L += [f"            {w_at(r['SCRATCH'] + i, lanes)} = {name}" for i, name in enumerate(replicated)]
+    L += [f"            {held} = _K", f"            {held_ok} = 1.0"]
+    L += ["    if _l0 == 0 and _l1 == LANES:", f"        _w[{scratch_key}] = 1.0", f"        _w[{scratch_key + 1}] = _K",
+          "    else:", f"        _w[{scratch_key}] = 0.0"]
     return "\n".join(L) + "\n\n\n"
 
 
 def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
-    """Stage ``s`` for a body with a :class:`~.lane_rhs.LaneUniform` key. The lanes' keys come
-    from ``_lanes_keys`` when the whole step has one (stages 1-12), else from a pass of the
-    stage's own. When all lanes have the same key (the usual case: the lanes step together, and a
-    6-hour record holds several steps) one lane loop runs with it, reading the key's loads from
-    the scratch rows (filled first if they hold another key), and stores every lane's result;
-    otherwise ``_lanes_stage{s}_masked`` runs, once per distinct key ``_K``, the lane loop with
-    the key fixed to ``_K`` and its loads hoisted before the loop, and keeps the results of the
-    lanes whose key is ``_K``."""
+    """Stage ``s`` for a body with a :class:`~.lane_rhs.LaneUniform` key. Whether all lanes have
+    the same key at the stage comes from ``_lanes_keys`` (stages 1-12) or, for stage 0, from a pass
+    of its own. When they do (the lanes step together, and a 6-hour record holds several steps)
+    one lane loop runs with the key, reading its loads from the scratch rows (filled first where
+    they hold another key), and stores every lane's result; otherwise ``_lanes_stage{s}_lanes``
+    runs the lane loop with each lane's own key and loads."""
     replicated, kept = scratch_plan(body)
-    r = rows(dim, keyed=True, scratch=len(replicated))
-    key, done = w_at(r["KEY"], lanes), w_at(r["DONE"], lanes)
-    time = ([f"_h = {w_at(r['H'], lanes)}"] if s > 0 else []) + [f"_t = {stage_time(s, r, lanes)}"]
+    r = rows(dim, keyed=True, scratch=len(replicated), lanes=lanes)
+    key = w_at(r["KEY"], lanes)
     L = [_HEAD, f"def _lanes_stage{s}(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
-    ind = "    "
     if s > 0:
-        step_key = r["STEP_KEY"] * lanes
-        L += [f"    if _w[{step_key}] != 0.0:", f"        _K = _w[{step_key + 1}]", "        _same = True",
-              "    else:"]
-        ind = "        "
-    L += [ind + "for _l in range(LANES):"] + [ind + "    " + line for line in time]
-    L += [ind + "    " + line for line in body.key.prefix.splitlines()]
-    L += [f"{ind}    {key} = {body.key.expr}", f"{ind}    {done} = 0.0"]
-    L += [f"{ind}_K = _w[{r['KEY'] * lanes}]", f"{ind}_same = True", f"{ind}for _l in range(1, LANES):",
-          f"{ind}    if {key} != _K:", f"{ind}        _same = False"]
+        step_key = r["STEP_KEY"] * lanes + 2 * s
+        L += [f"    if _w[{step_key}] == 0.0:", f"        _lanes_stage{s}_lanes(_w, _p)", "        return",
+              f"    _K = _w[{step_key + 1}]"]
+    else:
+        L += ["    for _l in range(LANES):", f"        _t = {stage_time(0, r, lanes)}"]
+        L += ["        " + line for line in body.key.prefix.splitlines()] + [f"        {key} = {body.key.expr}"]
+        L += [f"    _K = _w[{r['KEY'] * lanes}]", "    for _l in range(1, LANES):", f"        if {key} != _K:",
+              "            _lanes_stage0_lanes(_w, _p)", "            return"]
     scratch_key = r["SCRATCH_KEY"] * lanes
-    L += ["    if _same:", f"        if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:",
-          "            _lanes_fill(_w, _p, _K)"]
-    L += ["        " + line for line in kept]
+    L += [f"    if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:", "        _lanes_fill(_w, _p, _K, 0, LANES)"]
+    L += ["    " + line for line in kept]
     loads = [f"{name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
-    L += _lane_loop(s, body, r, dim, lanes, loads)
+    L += [line[4:] for line in _lane_loop(s, body, r, dim, lanes, loads)]
     out0 = out_row(s, r, dim)
-    L += [f"            {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
-    L += ["        return", f"    _lanes_stage{s}_masked(_w, _p)"]
-    return _masked_function(s, body, r, dim, lanes) + "\n".join(L) + "\n\n\n"
+    L += [f"        {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
+    return _lanes_function(s, body, r, dim, lanes) + "\n".join(L) + "\n\n\n"
 
 
 def _lane_loop(s: int, body, r: dict, dim: int, lanes: int, loads: list[str]) -> list[str]:
@@ -153,21 +159,44 @@ def _lane_loop(s: int, body, r: dict, dim: int, lanes: int, loads: list[str]) ->
     return L + ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
 
 
-def _masked_function(s: int, body, r: dict, dim: int, lanes: int) -> str:
-    """``_lanes_stage<s>_masked``: lanes in different records, once per distinct key ``_K`` the
-    lane loop with the key's loads hoisted before it, keeping the results of the lanes whose key
-    is ``_K``. A function of its own, which the one-record case never enters (in the stage
-    function its code made that case 3-8 % slower, ``bench_stage_cost.py``)."""
-    key, done = w_at(r["KEY"], lanes), w_at(r["DONE"], lanes)
+def _key_dependent(kept: list[str]) -> tuple[list[str], list[str]]:
+    """``kept`` split in (statements that read ``_K``, directly or through an earlier one of them;
+    the others), each in order."""
+    tainted, inside, before = {"_K"}, [], []
+    for line in kept:
+        stmt = ast.parse(line).body[0]
+        if _read(stmt) & tainted:
+            inside.append(line)
+            tainted |= {n.id for n in ast.walk(stmt) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+        else:
+            before.append(line)
+    return inside, before
+
+
+def _lanes_function(s: int, body, r: dict, dim: int, lanes: int) -> str:
+    """``_lanes_stage<s>_lanes``: lanes in different records (their keys set in the KEY row). Each
+    lane's column of the scratch rows is refilled with its own key's loads where it holds
+    another's, then one lane loop runs in which each lane reads its key and the per-key values
+    from its own column: the same operations on the same operands as when all lanes share a key.
+    (Before, one masked pass ran per distinct key, each as dear as the whole stage; a step whose
+    last stages crossed into the next 6-hour record cost the ephemeris model 68 ns per lane
+    against 46, ``benchmarks/bench_stage_cost.py``.) A function of its own, which the one-record
+    case never enters."""
+    replicated, kept = scratch_plan(body)
+    key, held, held_ok = w_at(r["KEY"], lanes), w_at(r["HELD"], lanes), w_at(r["HELD_OK"], lanes)
+    inside, before = _key_dependent(kept)
     out0 = out_row(s, r, dim)
-    L = [_HEAD, f"def _lanes_stage{s}_masked(_w, _p):"]
+    time = ([f"_h = {w_at(r['H'], lanes)}"] if s > 0 else []) + [f"_t = {stage_time(s, r, lanes)}"]
+    L = [_HEAD, f"def _lanes_stage{s}_lanes(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
-    L += ["    _first = 0", "    while _first < LANES:", f"        _K = _w[{r['KEY'] * lanes} + _first]"]
-    L += ["        " + line for line in body.key.per_key.splitlines()]
-    L += _lane_loop(s, body, r, dim, lanes, [])
-    L.append(f"            _m = {key} == _K")
-    L += [f"            {w_at(out0 + k, lanes)} = _uo{k} if _m else {w_at(out0 + k, lanes)}" for k in range(dim)]
-    L += ["        for _l in range(LANES):", f"            if {key} == _K:", f"                {done} = 1.0",
-          f"        while _first < LANES and _w[{r['DONE'] * lanes} + _first] != 0.0:",
-          "            _first += 1"]
+    L += ["    _stale = 0", "    for _l in range(LANES):"] + ["        " + line for line in time]
+    L += ["        " + line for line in body.key.prefix.splitlines()] + [f"        {key} = {body.key.expr}"]
+    L += [f"        _stale += ({held_ok} == 0.0) + ({held} != {key})"]
+    L += ["    if _stale:  # lanes whose column holds another key's loads (a scalar loop: it calls the fill)",
+          "        for _l in range(LANES):", f"            if {held_ok} == 0.0 or {held} != {key}:",
+          f"                _lanes_fill(_w, _p, {key}, _l, _l + 1)"]
+    L += ["    " + line for line in before]
+    loads = [f"_K = {key}"] + inside + [f"{name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
+    L += [line[4:] for line in _lane_loop(s, body, r, dim, lanes, loads)]
+    L += [f"        {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
     return "\n".join(L) + "\n\n\n"

@@ -11,13 +11,14 @@ from cistrack.propagation import dop853_tableau as _tab
 __all__ = ["rows", "w_at", "stage_sum", "stage_point", "stage_time", "out_row"]
 
 
-def rows(dim: int, keyed: bool = False, scratch: int = 0) -> dict[str, int]:
+def rows(dim: int, keyed: bool = False, scratch: int = 0, lanes: int | None = None) -> dict[str, int]:
     """First row of each block: Y, K0, KS (stage s, 1..12, at KS + (s - 1) * dim; stage 12 is
     f(t + h, ynew)), YN, T, H, ERR, and ROWS the row count. With ``keyed`` (a right-hand side with
-    a :class:`~.lane_rhs.LaneUniform` key): KEY (each lane's key), DONE (whether its lane is done),
-    STEP_KEY (slot 0: 1.0 when every stage of every lane has the key in slot 1), SCRATCH_KEY
-    (slot 0: 1.0 when the ``scratch`` rows from SCRATCH hold the key in slot 1's per-key loads,
-    each replicated across the lanes)."""
+    a :class:`~.lane_rhs.LaneUniform` key): KEY (each lane's key), HELD and HELD_OK (the key whose
+    per-key loads each lane's column of the ``scratch`` rows from SCRATCH holds, and 1.0 where it
+    holds one), STEP_KEY (slots 2 s and 2 s + 1, over as many rows of ``lanes`` slots as that
+    takes: 1.0 when every lane has the same key at stage s of the step, and that key),
+    SCRATCH_KEY (slot 0: 1.0 when every lane's column holds the key in slot 1)."""
     n = _tab.N_STAGES
     r = {"Y": 0, "K0": dim}
     r["KS"] = 2 * dim
@@ -27,10 +28,13 @@ def rows(dim: int, keyed: bool = False, scratch: int = 0) -> dict[str, int]:
     r["ERR"] = r["H"] + 1
     r["ROWS"] = r["ERR"] + 1
     if keyed:
+        if lanes is None:
+            raise ValueError("rows: a keyed layout needs the lane count (its step key rows hold 26 slots)")
         r["KEY"] = r["ROWS"]
-        r["DONE"] = r["KEY"] + 1
-        r["STEP_KEY"] = r["DONE"] + 1
-        r["SCRATCH_KEY"] = r["STEP_KEY"] + 1
+        r["HELD"] = r["KEY"] + 1
+        r["HELD_OK"] = r["HELD"] + 1
+        r["STEP_KEY"] = r["HELD_OK"] + 1
+        r["SCRATCH_KEY"] = r["STEP_KEY"] + -(-2 * (n + 1) // int(lanes))
         r["SCRATCH"] = r["SCRATCH_KEY"] + 1
         r["ROWS"] = r["SCRATCH"] + int(scratch)
     return r

@@ -103,7 +103,7 @@ def lanes_source(dim: int, body, lanes: int | None = None) -> str:
     :func:`lanes_for` the body)."""
     lanes = lanes_for(body) if lanes is None else int(lanes)
     keyed = body.key is not None
-    r = rows(dim, keyed=keyed, scratch=len(scratch_plan(body)[0]) if keyed else 0)
+    r = rows(dim, keyed=keyed, scratch=len(scratch_plan(body)[0]) if keyed else 0, lanes=lanes)
     n = _tab.N_STAGES
     head = [f"\n\nLANES = {int(lanes)}", f"ROWS = {r['ROWS']}", f"ROW_Y = {r['Y']}",
             f"ROW_K0 = {r['K0']}", f"ROW_F = {r['KS'] + (n - 1) * dim}", f"ROW_YN = {r['YN']}",

@@ -11,14 +11,11 @@ from cistrack.plugins.dynamics.cr3bp import CR3BP
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.plugins.dynamics.ephemeris_rhs import ephemeris_rhs
 from cistrack.plugins.dynamics.orbit_catalog import ORBITS
-from cistrack.propagation import CompiledDynamics
 from cistrack.propagation.dop853_lanes_source import RESERVED
 from cistrack.propagation.lane_rhs import LaneUniform, lane_body
 
 from .kernel_runs import run_kernel, same_results
-
-N_TABLE = 40
-
+from .table_model import N_TABLE, Model, Table, stage_output, table_stage_case
 
 @njit
 def loop_rhs(t, y, p, out):
@@ -31,31 +28,8 @@ def loop_rhs(t, y, p, out):
         out[i + 3] = -c * y[i]
 
 
-@njit
-def table_rhs(t, y, p, out):
-    """Oscillator pushed by a force that is constant over each of N_TABLE intervals of time."""
-    width = p[0]
-    k: LaneUniform = min(max(int(np.floor(t / width)), 0), N_TABLE - 1)
-    f = p[1 + k]
-    for i in range(3):
-        out[i] = y[i + 3]
-        out[i + 3] = -y[i] + f * (i + 1)
-
-
-class _Model(CompiledDynamics):
-    def __init__(self, params, rtol: float = 1e-10, atol: float = 1e-12):
-        self.params, self.rtol, self.atol = np.asarray(params, dtype=float), rtol, atol
-
-    def params_vector(self):
-        return self.params
-
-
-class Loops(_Model):
+class Loops(Model):
     rhs = loop_rhs
-
-
-class Table(_Model):
-    rhs = table_rhs
 
 
 def _spread(n, seed=5):
@@ -170,36 +144,18 @@ def test_ephemeris_lockstep_results_equal_the_one_particle_kernel_bit_for_bit(ti
         assert (one[3] == 1).sum() >= 1  # an impact on the moving Moon was exercised
 
 
-def _table_stage_case(seed: int = 2):
-    """The Table model's kernels, parameters and a random work array whose lanes are all in
-    record 4 (times 1.05-1.06, steps of 1e-3)."""
-    table = Table(np.r_[0.25, np.random.default_rng(1).normal(size=N_TABLE)])
-    mod, p = table._kernels(), table._params()
-    lanes = mod.LANES
-    w = np.random.default_rng(seed).normal(size=mod.ROWS * lanes)
-    w[mod.ROW_T * lanes:(mod.ROW_T + 1) * lanes] = 1.05 + 0.01 * np.arange(lanes) / lanes  # record 4
-    w[mod.ROW_H * lanes:(mod.ROW_H + 1) * lanes] = 1e-3
-    return mod, p, w
-
-
-def _stage_output(mod, w, stage):
-    """Stage ``stage``'s derivatives in ``w``, (dim, lanes)."""
-    lanes, dim = mod.LANES, mod.DIM
-    return w[(2 * dim + (stage - 1) * dim) * lanes:(2 * dim + stage * dim) * lanes].reshape(dim, lanes)
-
-
 @pytest.mark.parametrize("stage", [1, 5, 12])
 def test_a_keyed_stage_gives_each_lane_the_same_numbers_whether_or_not_all_lanes_share_a_record(stage):
     """All lanes in one record take the stage's one-pass branch; one lane moved to another record
     sends the rest through the per-record passes: the other lanes' derivatives stay bit for bit.
     Each stage runs as in a step: after ``_lanes_keys``."""
-    mod, p, w = _table_stage_case()
+    mod, p, w = table_stage_case()
     one_record, two_records = w.copy(), w.copy()
     two_records[mod.ROW_T * mod.LANES] = 2.6  # lane 0 in record 10
     for work in (one_record, two_records):
         mod._lanes_keys(work, p)
         getattr(mod, f"_lanes_stage{stage}")(work, p)
-    a, b = _stage_output(mod, one_record, stage), _stage_output(mod, two_records, stage)
+    a, b = stage_output(mod, one_record, stage), stage_output(mod, two_records, stage)
     assert np.array_equal(a[:, 1:], b[:, 1:]) and not np.array_equal(a[:, 0], b[:, 0])
 
 
@@ -207,33 +163,33 @@ def test_a_keyed_stage_gives_each_lane_the_same_numbers_whether_or_not_all_lanes
 def test_a_keyed_stage_gives_the_same_numbers_with_the_steps_key_as_with_its_own_pass(stage):
     """``_lanes_keys`` found one key for the whole step (the stage skips its own pass), or it did
     not run (the stage computes every lane's key itself): the same derivatives bit for bit."""
-    mod, p, w = _table_stage_case()
+    mod, p, w = table_stage_case()
     with_step_key, own_pass = w.copy(), w.copy()
     mod._lanes_keys(with_step_key, p)
     own_pass[mod.ROW_KEY * mod.LANES:] = 0.0  # no step key, no scratch rows filled
     getattr(mod, f"_lanes_stage{stage}")(with_step_key, p)
     getattr(mod, f"_lanes_stage{stage}")(own_pass, p)
-    assert with_step_key[mod.ROW_STEP_KEY * mod.LANES] == 1.0  # the step had one key
-    assert np.array_equal(_stage_output(mod, with_step_key, stage), _stage_output(mod, own_pass, stage))
+    assert with_step_key[mod.ROW_STEP_KEY * mod.LANES + 2 * stage] == 1.0  # the stage had one key
+    assert np.array_equal(stage_output(mod, with_step_key, stage), stage_output(mod, own_pass, stage))
 
 
 def test_a_keyed_stage_refills_its_scratch_rows_when_the_record_changes():
     """The per-record loads are kept in scratch rows between stage calls: a stage in record 10
     after one in record 4 gives the numbers of a fresh work array in record 10."""
-    mod, p, w = _table_stage_case()
+    mod, p, w = table_stage_case()
     lanes = mod.LANES
     reused, fresh = w.copy(), w.copy()
     fresh[mod.ROW_KEY * lanes:] = 0.0
     mod._lanes_keys(reused, p)
     mod._lanes_stage5(reused, p)  # fills the scratch rows with record 4's loads
-    record4 = _stage_output(mod, reused, 5).copy()
+    record4 = stage_output(mod, reused, 5).copy()
     assert reused[mod.ROW_SCRATCH_KEY * lanes:mod.ROW_SCRATCH_KEY * lanes + 2].tolist() == [1.0, 4.0]
     for work in (reused, fresh):
         work[mod.ROW_T * lanes:(mod.ROW_T + 1) * lanes] += 1.5  # every lane in record 10
         mod._lanes_keys(work, p)
         mod._lanes_stage5(work, p)
-    assert np.array_equal(_stage_output(mod, reused, 5), _stage_output(mod, fresh, 5))
-    assert not np.array_equal(_stage_output(mod, reused, 5), record4)  # record 10's force, not 4's
+    assert np.array_equal(stage_output(mod, reused, 5), stage_output(mod, fresh, 5))
+    assert not np.array_equal(stage_output(mod, reused, 5), record4)  # record 10's force, not 4's
 
 
 def test_a_keyed_right_hand_side_gets_the_wider_batch_and_a_plain_one_the_default():
