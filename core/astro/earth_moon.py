@@ -36,6 +36,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.ephemeris import DAY_S, DE421, de421
+from cistrack.astro.frame_kernels import gcrs_to_synodic_into, synodic_to_gcrs_into
 from cistrack.astro.kept_by_time import kept_or_evaluated
 
 __all__ = ["EarthMoonFrame", "FrameAxes"]
@@ -162,26 +163,28 @@ class EarthMoonFrame:
 
         A (6,) state gives a (6,) result.
         """
+        return self._synodic_to_gcrs(states, t, 1.0, 1.0)
+
+    def _synodic_to_gcrs(self, states, t, div_r: float, div_v: float) -> np.ndarray:
+        """:meth:`synodic_to_gcrs` with the result divided by ``div_r`` and ``div_v``."""
         s, tt, single = _broadcast(states, t)
         ax = self.axes(tt)
-        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
-        rho = np.einsum("nij,nj->ni", rot, s[:, :3] * units.LU_KM)
-        rhod = np.einsum("nij,nj->ni", rot, s[:, 3:] * units.VU_KMS)
         out = np.empty_like(s)
-        out[:, :3] = ax.origin + rho
-        out[:, 3:] = ax.origin_velocity + rhod + np.cross(ax.omega, rho)
+        synodic_to_gcrs_into(s, ax.rotation, ax.origin, ax.origin_velocity, ax.omega, units.LU_KM, units.VU_KMS,
+                             float(div_r), float(div_v), out)
         return out[0] if single else out
 
     def gcrs_to_synodic(self, states_km, t) -> np.ndarray:
         """GCRS states (N, 6) km, km/s at ``t`` (scalar or (N,) TU) -> synodic (N, 6) [LU, VU]."""
-        s, tt, single = _broadcast(states_km, t)
+        return self._gcrs_to_synodic(states_km, t, 1.0, 1.0)
+
+    def _gcrs_to_synodic(self, states, t, mul_r: float, mul_v: float) -> np.ndarray:
+        """:meth:`gcrs_to_synodic` of ``states`` times ``mul_r`` and ``mul_v`` (km, km/s)."""
+        s, tt, single = _broadcast(states, t)
         ax = self.axes(tt)
-        rot = np.broadcast_to(ax.rotation, (s.shape[0], 3, 3))
-        rel = s[:, :3] - ax.origin
-        relv = s[:, 3:] - ax.origin_velocity - np.cross(ax.omega, rel)
         out = np.empty_like(s)
-        out[:, :3] = np.einsum("nji,nj->ni", rot, rel) / units.LU_KM
-        out[:, 3:] = np.einsum("nji,nj->ni", rot, relv) / units.VU_KMS
+        gcrs_to_synodic_into(s, float(mul_r), float(mul_v), ax.rotation, ax.origin, ax.origin_velocity, ax.omega,
+                             units.LU_KM, units.VU_KMS, out)
         return out[0] if single else out
 
     # -- pulsating states (CR3BP-like: Earth and Moon fixed) ----------------------------------
