@@ -20,9 +20,11 @@ on AVX-512 (69 against 50 ns per lane-step, ``benchmarks/bench_stage_cost.py``, 
 
 Lanes in different records (session 19) are not run once per record: each lane's column of the
 scratch rows holds its own record's loads (refilled for a lane when its record changes), so one
-lane loop serves them all. In an NRHO period most steps have some lane cross into the next
-record in a later stage (about five in six at 10,000 particles); such a step cost 68 ns per
-lane with the passes, against 46 for a step in one record.
+lane loop serves them all; and ``_lanes_keys`` says for each stage whether its lanes share a
+record. A tight cloud propagated to one output keeps its lanes in step (98 % of the stage calls
+had one record, 10,000 particles over an NRHO period); with 49 output times 5 % had, with a
+1000-km cloud none, and one masked pass per record made the ephemeris model 12-17 times as dear
+as the CR3BP (docs/ephemeris.md, Speed).
 
 Every lane computes the same operations on the same operands in the same order either way:
 the results are bit for bit those of the one-particle kernel.
@@ -143,20 +145,19 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     L += [f"    if _w[{scratch_key}] == 0.0 or _w[{scratch_key + 1}] != _K:", "        _lanes_fill(_w, _p, _K, 0, LANES)"]
     L += ["    " + line for line in kept]
     loads = [f"{name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
-    L += [line[4:] for line in _lane_loop(s, body, r, dim, lanes, loads)]
-    out0 = out_row(s, r, dim)
-    L += [f"        {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
+    L += _lane_loop(s, body, r, dim, lanes, loads)
     return _lanes_function(s, body, r, dim, lanes) + "\n".join(L) + "\n\n\n"
 
 
 def _lane_loop(s: int, body, r: dict, dim: int, lanes: int, loads: list[str]) -> list[str]:
-    """The lane loop of stage ``s`` up to its outputs ``_uo0..``, at indent 8: the stage point,
-    ``loads`` (per-lane statements before the body), the previous outputs, the body."""
+    """The lane loop of stage ``s``, at indent 4: the stage point, ``loads`` (per-lane statements
+    before the body), the previous outputs ``_uo0..``, the body, the outputs stored."""
     out0 = out_row(s, r, dim)
-    L = ["        for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "            ")
-    L += ["            " + line for line in loads]
-    L += [f"            _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
-    return L + ["            " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
+    L = ["    for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "        ")
+    L += ["        " + line for line in loads]
+    L += [f"        _uo{k} = {w_at(out0 + k, lanes)}" for k in range(dim)]
+    L += ["        " + line for line in body.render(lambda k: f"_uo{k}").splitlines()]
+    return L + [f"        {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
 
 
 def _key_dependent(kept: list[str]) -> tuple[list[str], list[str]]:
@@ -178,14 +179,13 @@ def _lanes_function(s: int, body, r: dict, dim: int, lanes: int) -> str:
     lane's column of the scratch rows is refilled with its own key's loads where it holds
     another's, then one lane loop runs in which each lane reads its key and the per-key values
     from its own column: the same operations on the same operands as when all lanes share a key.
-    (Before, one masked pass ran per distinct key, each as dear as the whole stage; a step whose
-    last stages crossed into the next 6-hour record cost the ephemeris model 68 ns per lane
-    against 46, ``benchmarks/bench_stage_cost.py``.) A function of its own, which the one-record
-    case never enters."""
+    (Before, one masked pass ran per distinct key, each as dear as the whole stage: the ephemeris
+    model's step cost 141-150 ns per lane with its 32 lanes in two records and 254-269 in four,
+    against 46-52 in one; now 63-64.) A function of its own, which the one-record case never
+    enters."""
     replicated, kept = scratch_plan(body)
     key, held, held_ok = w_at(r["KEY"], lanes), w_at(r["HELD"], lanes), w_at(r["HELD_OK"], lanes)
     inside, before = _key_dependent(kept)
-    out0 = out_row(s, r, dim)
     time = ([f"_h = {w_at(r['H'], lanes)}"] if s > 0 else []) + [f"_t = {stage_time(s, r, lanes)}"]
     L = [_HEAD, f"def _lanes_stage{s}_lanes(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
@@ -197,6 +197,5 @@ def _lanes_function(s: int, body, r: dict, dim: int, lanes: int) -> str:
           f"                _lanes_fill(_w, _p, {key}, _l, _l + 1)"]
     L += ["    " + line for line in before]
     loads = [f"_K = {key}"] + inside + [f"{name} = {w_at(r['SCRATCH'] + i, lanes)}" for i, name in enumerate(replicated)]
-    L += [line[4:] for line in _lane_loop(s, body, r, dim, lanes, loads)]
-    L += [f"        {w_at(out0 + k, lanes)} = _uo{k}" for k in range(dim)]
+    L += _lane_loop(s, body, r, dim, lanes, loads)
     return "\n".join(L) + "\n\n\n"
