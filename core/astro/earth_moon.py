@@ -86,6 +86,15 @@ def _broadcast(states, t) -> tuple[np.ndarray, np.ndarray, bool]:
     return s, np.broadcast_to(tt, (s.shape[0],)) if tt.size > 1 else tt, single
 
 
+def _unit_scales(unit: str) -> tuple[float, float]:
+    """(position, velocity) km per unit of GCRS states given in ``unit`` ("km" or "lu")."""
+    if unit == "km":
+        return 1.0, 1.0
+    if unit == "lu":
+        return float(units.LU_KM), float(units.VU_KMS)
+    raise ValueError(f"unit must be 'km' or 'lu' (GCRS states in km and km/s, or in LU and VU), got {unit!r}")
+
+
 AXES_KEPT = 4096
 """Single times whose frame :meth:`EarthMoonFrame.axes` keeps (about 1 kB each; not pickled)."""
 
@@ -158,32 +167,29 @@ class EarthMoonFrame:
                          distance=d, distance_rate=np.sum(r * v, axis=1) / d, angular_rate=rate)
 
     # -- constant-unit synodic states (what cistrack carries) ---------------------------------
-    def synodic_to_gcrs(self, states, t) -> np.ndarray:
-        """Synodic states (N, 6) [LU, VU] at ``t`` (scalar or (N,) TU) -> GCRS (N, 6) km, km/s.
+    def synodic_to_gcrs(self, states, t, *, unit: str = "km") -> np.ndarray:
+        """Synodic states (N, 6) [LU, VU] at ``t`` (scalar or (N,) TU) -> GCRS (N, 6) in km and
+        km/s (``unit="km"``) or in LU and VU (``unit="lu"``: the ephemeris model's kernel states,
+        the km result divided by LU_KM and VU_KMS).
 
         A (6,) state gives a (6,) result.
         """
-        return self._synodic_to_gcrs(states, t, 1.0, 1.0)
-
-    def _synodic_to_gcrs(self, states, t, div_r: float, div_v: float) -> np.ndarray:
-        """:meth:`synodic_to_gcrs` with the result divided by ``div_r`` and ``div_v``."""
+        scale_r, scale_v = _unit_scales(unit)
         s, tt, single = _broadcast(states, t)
         ax = self.axes(tt)
         out = np.empty_like(s)
         synodic_to_gcrs_into(s, ax.rotation, ax.origin, ax.origin_velocity, ax.omega, units.LU_KM, units.VU_KMS,
-                             float(div_r), float(div_v), out)
+                             scale_r, scale_v, out)
         return out[0] if single else out
 
-    def gcrs_to_synodic(self, states_km, t) -> np.ndarray:
-        """GCRS states (N, 6) km, km/s at ``t`` (scalar or (N,) TU) -> synodic (N, 6) [LU, VU]."""
-        return self._gcrs_to_synodic(states_km, t, 1.0, 1.0)
-
-    def _gcrs_to_synodic(self, states, t, mul_r: float, mul_v: float) -> np.ndarray:
-        """:meth:`gcrs_to_synodic` of ``states`` times ``mul_r`` and ``mul_v`` (km, km/s)."""
-        s, tt, single = _broadcast(states, t)
+    def gcrs_to_synodic(self, states_km, t, *, unit: str = "km") -> np.ndarray:
+        """GCRS states (N, 6) at ``t`` (scalar or (N,) TU), in km and km/s (``unit="km"``) or in
+        LU and VU (``unit="lu"``) -> synodic (N, 6) [LU, VU]."""
+        scale_r, scale_v = _unit_scales(unit)
+        s, tt, single = _broadcast(states_km, t)
         ax = self.axes(tt)
         out = np.empty_like(s)
-        gcrs_to_synodic_into(s, float(mul_r), float(mul_v), ax.rotation, ax.origin, ax.origin_velocity, ax.omega,
+        gcrs_to_synodic_into(s, scale_r, scale_v, ax.rotation, ax.origin, ax.origin_velocity, ax.omega,
                              units.LU_KM, units.VU_KMS, out)
         return out[0] if single else out
 

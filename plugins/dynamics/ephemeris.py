@@ -220,11 +220,11 @@ class EphemerisDynamics(CompiledDynamics):
     # -- conversions ------------------------------------------------------------------------------
     def to_inertial(self, states: np.ndarray, t) -> np.ndarray:
         """Synodic states (N, 6) [LU, VU] at ``t`` (TU) -> kernel states (N, 6): GCRS in LU, VU."""
-        return self.frame._synodic_to_gcrs(states, t, units.LU_KM, units.VU_KMS)  # = state_from_km(synodic_to_gcrs)
+        return self.frame.synodic_to_gcrs(states, t, unit="lu")
 
     def from_inertial(self, states: np.ndarray, t) -> np.ndarray:
         """Kernel states (N, 6) GCRS [LU, VU] at ``t`` (TU) -> synodic states (N, 6) [LU, VU]."""
-        return self.frame._gcrs_to_synodic(states, t, units.LU_KM, units.VU_KMS)  # = gcrs_to_synodic(state_to_km)
+        return self.frame.gcrs_to_synodic(states, t, unit="lu")
 
     # -- Dynamics ---------------------------------------------------------------------------------
     def propagate(self, states: np.ndarray, t0: float, times: Any, *,

@@ -71,3 +71,8 @@ def test_a_single_state_gives_a_single_state(frame):
     s = np.array([1.0, 0.1, -0.2, 0.01, 0.3, 0.0])
     out = frame.synodic_to_gcrs(s, 0.5)
     assert out.shape == (6,) and np.array_equal(frame.synodic_to_gcrs(s[None], 0.5)[0], out)
+
+
+def test_an_unknown_unit_is_refused_with_the_allowed_ones(frame):
+    with pytest.raises(ValueError, match="unit must be 'km' or 'lu'.*'au'"):
+        frame.synodic_to_gcrs(np.zeros(6), 0.0, unit="au")
