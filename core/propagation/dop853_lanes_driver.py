@@ -62,6 +62,8 @@ if dx * dx + dy * dy + dz * dz < body_rad[bb] * body_rad[bb]:
 """
 
 _TEMPLATE = '''
+from cistrack.propagation.borrowed_view import borrowed_view
+
 GRID_STEP = 0.005  # TU between the moving bodies' grid times (fewer than MAX_GRID of them)
 MAX_GRID = 4096
 HALF_SQRT3 = 0.8660254037844387
@@ -81,6 +83,9 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
         direction = -1.0
     hmin = 1e-14 * max(1.0, abs(t0), abs(times[nt - 1]))
     w = np.zeros(ROWS * LANES)
+    # the stage functions get views without reference counts (w and params outlive them)
+    wv = borrowed_view(w)
+    pv = borrowed_view(params)
     tl = np.empty(LANES)
     hl = np.empty(LANES)
     hstep = np.empty(LANES)
@@ -145,7 +150,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                 break
     while active > 0:
         if npending > 0:  # started lanes' k0, vectorised (the same numbers as rhs per lane)
-            _lanes_stage0(w, params)
+            _lanes_stage0(wv, pv)
             for l in range(LANES):
                 if pending[l]:
                     for j in range(DIM):
@@ -175,7 +180,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
             last[l] = lst
             w[ROW_T * LANES + l] = tl[l]
             w[ROW_H * LANES + l] = direction * hst
-        _lanes_step(w, params, rtol, atol)
+        _lanes_step(wv, pv, rtol, atol)
         for l in range(LANES):
             i = who[l]
             if i < 0:

@@ -56,7 +56,7 @@ RESERVED = {"np", "njit", "rhs", "body_position", "DIM", "CACHE", "SAFETY", "MAX
             "BETA", "EXPO1", "GROWTH_CAP_ERR", "FASTMATH", "LANES", "ROWS", "N_STAGES",
             "HALF_SQRT3", "GRID_STEP", "MAX_GRID", "GRID_SLACK", "ROW_Y", "ROW_K0", "ROW_F", "ROW_YN",
             "ROW_T", "ROW_H", "ROW_ERR", "ROW_START_F", "ROW_KEY", "ROW_STEP_KEY", "ROW_SCRATCH_KEY",
-            "ROW_SCRATCH", "propagate_kernel", "propagate_lanes_kernel", "derivatives_kernel", "dense_kernel"}
+            "ROW_SCRATCH", "borrowed_view", "propagate_kernel", "propagate_lanes_kernel", "derivatives_kernel", "dense_kernel"}
 """Module-level names of a generated kernel module other than the underscored ones."""
 
 
