@@ -45,8 +45,9 @@ known when the kernel is generated (literals, module constants, the variable of 
 ``for i in range(<constants>)`` loop, which is unrolled); other loops and branches are fine. A
 right-hand side that reads a table by time (``params[j]`` with ``j`` computed from ``t``) marks
 the table index ``k: LaneUniform = <int expression of t and params>`` (see
-:class:`~cistrack.propagation.lane_rhs.LaneUniform`), as the ephemeris model does; otherwise it
-still runs in lockstep, without SIMD. Anything else falls back to the one-particle kernel (the
+:class:`~cistrack.propagation.lane_rhs.LaneUniform`), or ``k: LaneRecord = ...`` when the index
+never goes back as ``t`` grows (a record on a time grid, as in the ephemeris model: cheaper);
+otherwise it still runs in lockstep, without SIMD. Anything else falls back to the one-particle kernel (the
 reason is logged at debug level). The numbers are the same bit for bit in every case.
 
 How the speed is obtained (generated kernels, their on-disk cache, worker threads) is described

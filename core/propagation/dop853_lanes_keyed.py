@@ -79,13 +79,16 @@ def keys_function(body, dim: int, lanes: int) -> str:
     """``_lanes_keys``: before a step's stages, every lane's key at every stage time (the stage
     functions' own expressions, so the same values); for each stage s, the step key rows hold
     1.0 and the key when all lanes have the same (stage s then uses it without a pass of its
-    own), else 0.0 (stage s runs ``_lanes_stage<s>_lanes``)."""
+    own), else 0.0 (stage s runs ``_lanes_stage<s>_lanes``). For a :class:`~.lane_rhs.LaneRecord`
+    key, :func:`_one_key_exit` first."""
     r = rows(dim, keyed=True, lanes=lanes)
     step_key = r["STEP_KEY"] * lanes
     prefix = body.key.prefix.splitlines()
     stages = range(1, _tab.N_STAGES + 1)
     L = [_HEAD, "def _lanes_keys(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
+    if body.key.monotonic:
+        L += _one_key_exit(body, r, lanes)
     L += ["    _l = 0", f"    _h = {w_at(r['H'], lanes)}"]
     for s in stages:
         L += [f"    _t = {stage_time(s, r, lanes)}"] + ["    " + line for line in prefix]
@@ -97,6 +100,33 @@ def keys_function(body, dim: int, lanes: int) -> str:
     for s in stages:
         L += [f"    _w[{step_key + 2 * s}] = 1.0 if _nd{s} == 0 else 0.0", f"    _w[{step_key + 2 * s + 1}] = _K{s}"]
     return "\n".join(L) + "\n\n\n"
+
+
+def _stage_c(s: int) -> float:
+    """Stage ``s``'s time is t + c h; the last stage's is t + h."""
+    return 1.0 if s == _tab.N_STAGES else float(_tab.C[s])
+
+
+def _one_key_exit(body, r: dict, lanes: int) -> list[str]:
+    """Lines of ``_lanes_keys`` for a monotonic key: every lane's key at its earliest and its
+    latest stage time; when they are all one key, every stage's flag is set and the function
+    returns (two key evaluations per lane instead of twelve; measured 2-4 % of an ephemeris
+    propagation). Sound because the stage times t + c h, rounded, are monotonic in c for a given
+    t and h, so each lies between the two, and so does a monotonic key of it."""
+    stages = range(1, _tab.N_STAGES + 1)
+    first, last = min(stages, key=_stage_c), max(stages, key=_stage_c)
+    prefix = body.key.prefix.splitlines()
+    step_key = r["STEP_KEY"] * lanes
+    L = ["    _l = 0", f"    _h = {w_at(r['H'], lanes)}", f"    _t = {stage_time(first, r, lanes)}"]
+    L += ["    " + line for line in prefix] + [f"    _K = {body.key.expr}", "    _nd = 0"]
+    L += ["    for _l in range(LANES):", f"        _h = {w_at(r['H'], lanes)}"]
+    for s in (first, last):
+        L += [f"        _t = {stage_time(s, r, lanes)}"] + ["        " + line for line in prefix]
+        L += [f"        _nd += ({body.key.expr}) != _K"]
+    L += ["    if _nd == 0:"]
+    for s in stages:
+        L += [f"        _w[{step_key + 2 * s}] = 1.0", f"        _w[{step_key + 2 * s + 1}] = _K"]
+    return L + ["        return"]
 
 
 def fill_function(body, dim: int, lanes: int) -> str:

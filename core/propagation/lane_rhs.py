@@ -37,7 +37,7 @@ from typing import Any
 from cistrack.propagation.lane_hoist import hoist_invariants, invariant_expression
 from cistrack.propagation.lane_unroll import MAX_UNROLL, Unroll, const_int
 
-__all__ = ["LaneBody", "LaneKey", "LaneUniform", "lane_body", "MAX_UNROLL", "LANE_LOCALS"]
+__all__ = ["LaneBody", "LaneKey", "LaneUniform", "LaneRecord", "lane_body", "MAX_UNROLL", "LANE_LOCALS"]
 
 LANE_LOCALS = frozenset({"_l", "_h", "_t", "_p", "_w", "_m", "_K", "_first"})
 """Local names of the generated lane loops (with ``_yK``, ``_uo K`` and the ``_u`` renames)."""
@@ -56,16 +56,31 @@ class LaneUniform:
     """
 
 
+class LaneRecord(LaneUniform):
+    """A :class:`LaneUniform` index that is monotonic in ``t``: ``k: LaneRecord = <int expression>``.
+
+    For a record index on a time grid, such as the ephemeris model's 6-hour record
+    ``min(max(int(np.floor((t - start) / length)), 0), nrec - 1)``. The lockstep kernel then
+    decides whether a batch's lanes share one record over a whole step from the first and the last
+    of its stage times (every other stage time lies between them, and so does its index): two
+    index evaluations per lane instead of twelve. An index that can go up and then down as ``t``
+    grows (a periodic table, say) must use :class:`LaneUniform`: under this annotation its lanes
+    would read the wrong entries at the stages between.
+    """
+
+
 class LaneKey:
     """The ``k: LaneUniform = expr`` statement of a body, in the rewritten names: ``name``, the
     statements before it that are the same in every lane (``invariant``: they read only constants,
     ``params`` at fixed indices and each other, and assign a name assigned nowhere else), the other
-    statements before it (``prefix``), the ``expr`` text, and ``per_key``: what the lane loop with
-    the key fixed computes once before the loop (:func:`.lane_hoist.hoist_invariants`)."""
+    statements before it (``prefix``), the ``expr`` text, ``per_key``: what the lane loop with
+    the key fixed computes once before the loop (:func:`.lane_hoist.hoist_invariants`), and
+    ``monotonic``: marked :class:`LaneRecord`."""
 
-    def __init__(self, name: str, invariant: str, prefix: str, per_key: str, expr: str) -> None:
+    def __init__(self, name: str, invariant: str, prefix: str, per_key: str, expr: str,
+                 monotonic: bool = False) -> None:
         self.name, self.invariant, self.prefix, self.expr = name, invariant, prefix, expr
-        self.per_key = per_key
+        self.per_key, self.monotonic = per_key, monotonic
 
 
 class LaneBody:
@@ -185,7 +200,7 @@ def lane_body(rhs: Any, reserved: set[str]) -> tuple[LaneBody | None, str]:
     stored |= {n.id for s in unrolled for n in ast.walk(s)
                if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
     renamed = {n: f"_u{n}" for n in stored if n.startswith("_")}
-    at, why = _key_statement(unrolled, func)
+    at, why, monotonic = _key_statement(unrolled, func)
     if why:
         return None, why
     rw = _Rewrite(t, y, p, out, consts, renamed)
@@ -208,7 +223,7 @@ def lane_body(rhs: Any, reserved: set[str]) -> tuple[LaneBody | None, str]:
         per_key, new = hoist_invariants(varying + ast.parse(f"{name} = int(_K)").body + new[at + 1:],
                                         free | {"_p", "_K"} | {s.targets[0].id for s in fixed}, set(consts))
         key = LaneKey(name, *("\n".join(ast.unparse(s) for s in part) for part in (fixed, varying, per_key)),
-                      ast.unparse(head[-1].value))
+                      ast.unparse(head[-1].value), monotonic=monotonic)
     text = "\n".join(ast.unparse(s) for s in new)
     return LaneBody(text, free, func.__module__, key), ""
 
@@ -232,23 +247,24 @@ def _split_invariant(prefix: list[ast.stmt], body: list[ast.stmt], free: set[str
     return fixed, varying
 
 
-def _key_statement(body: list[ast.stmt], func: Any) -> tuple[int | None, str]:
-    """(index of the top-level ``name: LaneUniform = expr`` in ``body`` or None, problem or "");
-    the annotated statement is turned into a plain assignment in place."""
+def _key_statement(body: list[ast.stmt], func: Any) -> tuple[int | None, str, bool]:
+    """(index of the top-level ``name: LaneUniform = expr`` (or :class:`LaneRecord`) in ``body``
+    or None, problem or "", whether it is a LaneRecord); the annotated statement is turned into a
+    plain assignment in place."""
     glob = getattr(func, "__globals__", {})
 
     def marked(node) -> bool:
         return (isinstance(node, ast.AnnAssign) and isinstance(node.annotation, ast.Name)
-                and glob.get(node.annotation.id) is LaneUniform)
+                and glob.get(node.annotation.id) in (LaneUniform, LaneRecord))
 
     found = [i for i, s in enumerate(body) if marked(s)]
     nested = sum(1 for s in body for n in ast.walk(s) if marked(n)) - len(found)
     if nested or len(found) > 1:
-        return None, "LaneUniform must mark one statement at the top level of the body"
+        return None, "LaneUniform must mark one statement at the top level of the body", False
     if not found:
-        return None, ""
+        return None, "", False
     node = body[found[0]]
     if not isinstance(node.target, ast.Name) or node.value is None:
-        return None, "LaneUniform must annotate an assignment to a plain name"
+        return None, "LaneUniform must annotate an assignment to a plain name", False
     body[found[0]] = ast.copy_location(ast.Assign(targets=[node.target], value=node.value), node)
-    return found[0], ""
+    return found[0], "", glob.get(node.annotation.id) is LaneRecord

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.lazy import lazy_njit
-from cistrack.propagation.lane_rhs import LaneUniform
+from cistrack.propagation.lane_rhs import LaneRecord
 
 from .ephemeris_rhs import EARTH_SHARE, GM_E, GM_M, GM_S, NCOEF, NSUN, SERIES_HDR
 
@@ -31,7 +31,7 @@ def ephemeris_point_mass_rhs(t, y, p, out):
     off = int(p[SERIES_HDR + 4])
     v = (t - start) * inv_length
     # the record: lanes of the lockstep kernel in the same record share its coefficient loads
-    k: LaneUniform = min(max(int(np.floor(v)), 0), nrec - 1)
+    k: LaneRecord = min(max(int(np.floor(v)), 0), nrec - 1)
     u = 2.0 * (v - k) - 1.0
     j = off + (k * NCOEF + NCOEF - 1) * 6
     mx = p[j]

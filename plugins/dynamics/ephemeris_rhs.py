@@ -32,7 +32,7 @@ import numpy as np
 
 from cistrack.astro.ephemeris import ChebyshevSeries
 from cistrack.lazy import lazy_njit
-from cistrack.propagation.lane_rhs import LaneUniform
+from cistrack.propagation.lane_rhs import LaneRecord
 
 __all__ = ["ephemeris_rhs", "ephemeris_body_position", "pack_params", "bodies_position",
            "resample_power_basis", "HEADER_SIZE", "SERIES_HDR", "NCOEF", "NSUN", "MOON_SPEED_BOUND_KMS",
@@ -116,7 +116,7 @@ def ephemeris_rhs(t, y, p, out):
     off = int(p[SERIES_HDR + 4])
     v = (t - start) * inv_length
     # the record: lanes of the lockstep kernel in the same record share its coefficient loads
-    k: LaneUniform = min(max(int(np.floor(v)), 0), nrec - 1)
+    k: LaneRecord = min(max(int(np.floor(v)), 0), nrec - 1)
     u = 2.0 * (v - k) - 1.0
     j = off + (k * NCOEF + NCOEF - 1) * 6
     mx = p[j]

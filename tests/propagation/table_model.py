@@ -1,12 +1,13 @@
-"""A model whose right-hand side reads a table by time (``k: LaneUniform``), and work arrays of
-its SIMD-lockstep kernel for tests of the keyed stages."""
+"""Models whose right-hand side reads a table by time: a record on a time grid (``k: LaneRecord``)
+and a periodic table (``k: LaneUniform``, an index that goes back as time grows); and work
+arrays of their SIMD-lockstep kernels for tests of the keyed stages."""
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
 from cistrack.propagation import CompiledDynamics
-from cistrack.propagation.lane_rhs import LaneUniform
+from cistrack.propagation.lane_rhs import LaneRecord, LaneUniform
 
 N_TABLE = 40
 
@@ -17,8 +18,20 @@ def table_rhs(t, y, p, out):
     from each interval's start (which reads the key itself in the lane loop, as the ephemeris
     model's record time does)."""
     width = p[0]
-    k: LaneUniform = min(max(int(np.floor(t / width)), 0), N_TABLE - 1)
+    k: LaneRecord = min(max(int(np.floor(t / width)), 0), N_TABLE - 1)
     f = p[1 + k] + 0.01 * (t / width - k)
+    for i in range(3):
+        out[i] = y[i + 3]
+        out[i + 3] = -y[i] + f * (i + 1)
+
+
+@njit
+def parity_rhs(t, y, p, out):
+    """The same oscillator pushed by one of two forces, alternating every p[0] of time: its
+    table index is periodic in ``t``, not monotonic."""
+    width = p[0]
+    k: LaneUniform = int(np.floor(t / width)) % 2
+    f = p[1 + k]
     for i in range(3):
         out[i] = y[i + 3]
         out[i + 3] = -y[i] + f * (i + 1)
@@ -36,10 +49,14 @@ class Table(Model):
     rhs = table_rhs
 
 
-def table_stage_case(seed: int = 2):
-    """The Table model's kernels, parameters and a random work array whose lanes are all in
-    record 4 (times 1.05-1.06, steps of 1e-3)."""
-    table = Table(np.r_[0.25, np.random.default_rng(1).normal(size=N_TABLE)])
+class Parity(Model):
+    rhs = parity_rhs
+
+
+def table_stage_case(seed: int = 2, model=None):
+    """The kernels and parameters of ``model`` (default the Table model) and a random work array
+    whose lanes are all in record 4 (times 1.05-1.06, steps of 1e-3)."""
+    table = Table(np.r_[0.25, np.random.default_rng(1).normal(size=N_TABLE)]) if model is None else model
     mod, p = table._kernels(), table._params()
     lanes = mod.LANES
     w = np.random.default_rng(seed).normal(size=mod.ROWS * lanes)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .table_model import stage_output, table_stage_case
+from .table_model import Parity, stage_output, table_stage_case
 
 RECORD = 0.25  # the Table model's record length (its p[0])
 
@@ -83,3 +83,25 @@ def test_a_step_split_between_records_gives_the_numbers_of_stages_run_without_st
     getattr(mod, f"_lanes_stage{stage}")(keyed, p)
     getattr(mod, f"_lanes_stage{stage}")(own, p)
     assert np.array_equal(stage_output(mod, keyed, stage), stage_output(mod, own, stage))
+
+
+def test_a_record_key_shared_by_every_lane_over_the_whole_step_sets_every_stage_flag():
+    """The LaneRecord exit of ``_lanes_keys``: lanes whose first and last stage times are in
+    record 4 get every stage's flag and key, whatever the rows held before."""
+    mod, p, w = table_stage_case()
+    w[mod.ROW_STEP_KEY * mod.LANES:(mod.ROW_STEP_KEY + 1) * mod.LANES] = -7.0
+    mod._lanes_keys(w, p)
+    assert all(_step_key(mod, w, s) == (1.0, 4.0) for s in range(1, 13))
+
+
+def test_a_key_that_goes_back_within_a_step_is_taken_at_every_stage_time():
+    """A periodic index (LaneUniform, not LaneRecord) with the step's first and last stage times
+    in records 4 and 6 (index 0) and stages 8 and 9 (c = 0.65 and 0.6) in record 5 (index 1):
+    the first and last stage times alone would miss them."""
+    mod, p, w = table_stage_case(model=Parity(np.r_[RECORD, 1.0, -1.0]))
+    h = 2.0 * RECORD
+    w[mod.ROW_H * mod.LANES:(mod.ROW_H + 1) * mod.LANES] = h
+    _times(mod, w)[:] = 4 * RECORD
+    mod._lanes_keys(w, p)
+    assert _step_key(mod, w, 1) == (1.0, 0.0) and _step_key(mod, w, 12) == (1.0, 0.0)
+    assert _step_key(mod, w, 8) == (1.0, 1.0) and _step_key(mod, w, 9) == (1.0, 1.0)

@@ -15,7 +15,7 @@ from cistrack.propagation.dop853_lanes_source import RESERVED
 from cistrack.propagation.lane_rhs import LaneUniform, lane_body
 
 from .kernel_runs import run_kernel, same_results
-from .table_model import N_TABLE, Model, Table, stage_output, table_stage_case
+from .table_model import N_TABLE, Model, Parity, Table, stage_output, table_stage_case
 
 @njit
 def loop_rhs(t, y, p, out):
@@ -65,6 +65,19 @@ def test_a_time_table_keyed_by_lane_uniform_gives_the_one_particle_results_bit_f
     force = np.random.default_rng(1).normal(size=N_TABLE)
     table = Table(np.r_[0.25, force])
     assert _lockstep_equals_one_particle(table, _spread(45), times)
+
+
+@pytest.mark.parametrize("times", [np.array([1.3, 7.9]), np.array([-6.0])], ids=["forward", "backward"])
+def test_a_periodic_table_keyed_by_lane_uniform_gives_the_one_particle_results_bit_for_bit(times):
+    assert _lockstep_equals_one_particle(Parity(np.r_[0.25, 1.0, -1.0]), _spread(45), times)
+
+
+def test_a_record_index_is_marked_monotonic_and_a_lane_uniform_one_is_not():
+    from .table_model import parity_rhs, table_rhs
+
+    assert lane_body(table_rhs, RESERVED)[0].key.monotonic
+    assert not lane_body(parity_rhs, RESERVED)[0].key.monotonic
+    assert lane_body(ephemeris_rhs, RESERVED)[0].key.monotonic
 
 
 def test_the_keyed_lane_loop_reads_no_parameter_inside_the_loop():
