@@ -45,7 +45,11 @@ particles cost the same within 3 % (their time is the call's fixed cost), and so
 compilation (41 s either way). The CR3BP (no key) stays at :data:`DEFAULT_LANES`: 32 lanes made
 Example 1's propagation 3-6 % slower. Since the record's loads are kept in scratch rows across
 stages (:mod:`.dop853_lanes_keyed`), 64 lanes are no faster (6.75-7.79 against 6.92-7.03 us,
-AMD EPYC Zen 5, session 18)."""
+AMD EPYC Zen 5, session 18). Session 20, the two kernels alternating in one process
+(``benchmarks/bench_kernel_ab.py``): 64 lanes took 7.6 % less CPU on a tight cloud over one
+period, 2.3 % less on a 1000-km cloud, but 2 % more with 49 output times, 4.5 % more for 1,000
+particles over 0.5 TU and 47 % more for 13 particles over 0.05 TU (the UKF's sigma points: the
+idle lanes compute too); 32 stays."""
 
 
 def lanes_for(body) -> int:
