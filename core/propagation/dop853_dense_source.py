@@ -79,10 +79,10 @@ def dense_kernel(state, params, t1, rtol, atol, body_pos, body_rad, max_steps, r
         err = _rk_step_dense(t, hs, y, k0, params, ytmp, ynew, f, rtol, atol, coef)
         nsteps += 1
         if err <= 1.0:
-            if err == 0.0 or err <= GROWTH_CAP_ERR:  # growth capped whatever pow gives
+            if err == 0.0 or err <= GROWTH_CAP_ERR:  # growth capped whatever the factor rounds to
                 fac = MAX_GROWTH
             else:
-                fac = min(MAX_GROWTH, SAFETY * err ** -EXPO1 * err_old ** BETA)
+                fac = min(MAX_GROWTH, _step_factor(err, err_old))
             err_old = max(err, 1e-4)
             if rejected:
                 fac = min(1.0, fac)
@@ -125,7 +125,7 @@ def dense_kernel(state, params, t1, rtol, atol, body_pos, body_rad, max_steps, r
             h = hstep * fac
         else:
             if err > 0.0:
-                fac = max(MIN_SHRINK, SAFETY * err ** -EXPO1)
+                fac = max(MIN_SHRINK, _step_factor(err, 1.0))
             else:
                 fac = 0.2
             h = hstep * fac

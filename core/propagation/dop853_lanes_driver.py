@@ -190,10 +190,10 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
             hs = w[ROW_H * LANES + l]
             done = False
             if e <= 1.0:
-                if e == 0.0 or e <= GROWTH_CAP_ERR:  # growth capped whatever pow gives
+                if e == 0.0 or e <= GROWTH_CAP_ERR:  # growth capped whatever the factor rounds to
                     fac = MAX_GROWTH
                 else:
-                    fac = min(MAX_GROWTH, SAFETY * e ** -EXPO1 * err_old[l] ** BETA)
+                    fac = min(MAX_GROWTH, _step_factor(e, err_old[l]))
                 err_old[l] = max(e, 1e-4)
                 if rejected[l]:
                     fac = min(1.0, fac)
@@ -270,7 +270,7 @@ def propagate_lanes_kernel(i0, i1, y0, params, t0, times, rtol, atol, body_pos, 
                         hl[l] = hstep[l] * fac
             else:
                 if e > 0.0:
-                    fac = max(MIN_SHRINK, SAFETY * e ** -EXPO1)
+                    fac = max(MIN_SHRINK, _step_factor(e, 1.0))
                 else:
                     fac = 0.2
                 hl[l] = hstep[l] * fac
