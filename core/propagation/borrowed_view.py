@@ -15,15 +15,24 @@ using). Imported by generated kernel modules only (it loads numba).
 """
 from __future__ import annotations
 
-from numba import types
+from numba import njit, types
 from numba.extending import intrinsic
-from numba.np.arrayobj import make_array, populate_array
+
+try:  # numba's array internals (numba 0.49 to 0.68 at least)
+    from numba.np.arrayobj import make_array, populate_array
+except ImportError:  # pragma: no cover - a numba that moved them: plain arrays, counted as before
+    make_array = populate_array = None
 
 __all__ = ["borrowed_view"]
 
 
+def _counted(arr):
+    """The array itself (reference counted): the fallback when numba's internals moved."""
+    return arr
+
+
 @intrinsic
-def borrowed_view(typingctx, arr):
+def _borrowed_view(typingctx, arr):
     """``arr`` (any shape, any dtype) -> the same array without reference counting (compiled code only)."""
     if not isinstance(arr, types.Array):
         return None
@@ -37,3 +46,6 @@ def borrowed_view(typingctx, arr):
         return view._getvalue()
 
     return arr(arr), codegen
+
+
+borrowed_view = _borrowed_view if populate_array is not None else njit(inline="always")(_counted)

@@ -36,3 +36,18 @@ def test_a_borrowed_view_keeps_a_two_dimensional_shape_and_strides():
     a = np.arange(12.0).reshape(3, 4)
     sums, stride, shape = column_sums(a)
     assert np.array_equal(sums, a.sum(axis=0)) and stride == a.strides[0] and shape == (3, 4)
+
+
+def test_the_fallback_for_a_numba_without_those_internals_is_the_array_itself():
+    from cistrack.propagation.borrowed_view import _counted
+
+    counted = njit(inline="always")(_counted)
+
+    @njit
+    def through(a):
+        v = counted(a)
+        _scale_in_place(v, 3.0)
+        return v.ctypes.data
+
+    a = np.ones(4)
+    assert through(a) == a.ctypes.data and np.array_equal(a, np.full(4, 3.0))
