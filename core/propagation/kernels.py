@@ -121,6 +121,17 @@ def _source_digest(rhs: Any) -> str:
     return hashlib.sha256(text).hexdigest()
 
 
+HELPER_FILES = (Path(__file__).with_name("borrowed_view.py"),)
+"""Modules whose compiled code the generated kernels embed (numba's cache of a kernel module
+checks only that module's own file): their text is part of the kernel's digest."""
+
+
+def _helpers_digest(files=HELPER_FILES) -> str:
+    """Hash of the texts of ``files``: a changed helper gives the kernels new names, so no cached
+    kernel keeps its old code."""
+    return hashlib.sha256(b"".join(Path(f).read_bytes() for f in files)).hexdigest()
+
+
 def _load_file_module(name: str, path: Path) -> ModuleType:
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
@@ -166,8 +177,8 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
             extra = _source_digest(body_motion) if body_motion is not None else ""
             import numba  # imported here, not at module import: listing plugins needs no numba
 
-            digest = hashlib.sha256(
-                (src + _source_digest(rhs) + extra + numba.__version__ + sys.version).encode()).hexdigest()[:20]
+            digest = hashlib.sha256((src + _source_digest(rhs) + extra + _helpers_digest() + numba.__version__
+                                     + sys.version).encode()).hexdigest()[:20]
             name = f"cistrack_kernel_{where[1]}_{digest}"
             mod = None
             try:

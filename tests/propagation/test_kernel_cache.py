@@ -81,3 +81,12 @@ def test_invalid_thread_count_from_the_environment_is_refused(monkeypatch, value
     monkeypatch.setenv("CISTRACK_NUM_THREADS", value)
     with pytest.raises(ConfigError, match="CISTRACK_NUM_THREADS.*integer from 1 to 1024"):
         kernels.num_threads()
+
+
+def test_a_changed_kernel_helper_changes_the_kernel_digest(tmp_path):
+    helper = tmp_path / "helper.py"
+    helper.write_text("def view(a):\n    return a\n")
+    before = kernels._helpers_digest((helper,))
+    helper.write_text("def view(a):\n    return a[:]\n")
+    assert kernels._helpers_digest((helper,)) != before
+    assert any(path.name == "borrowed_view.py" and path.is_file() for path in kernels.HELPER_FILES)
