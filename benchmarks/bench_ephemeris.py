@@ -35,6 +35,12 @@ CASES = {"tight": (10.0, 1), "wide": (1000.0, 1), "outputs": (10.0, 49)}
 """Case: (position sigma km (velocity sigma 1e-6 of it, km/s), output times over the period)."""
 
 
+def placed_in_real_frame(model, x):
+    """CR3BP synodic states (N, 6) placed in ``model``'s real Earth-Moon frame at t = 0 with the
+    pulsating scaling (so that they fly the NRHO's perilune passage about the real Moon)."""
+    return model.frame.gcrs_to_synodic(model.frame.pulsating_to_gcrs(x, 0.0), 0.0)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000, 100000])
@@ -59,10 +65,7 @@ def main(argv=None) -> None:
                                                     srp_area_to_mass_m2_kg=0.01)}
     rng = np.random.default_rng(2026)
     def placed(name, x):
-        if name == "cr3bp":
-            return x
-        m = models[name]
-        return m.frame.gcrs_to_synodic(m.frame.pulsating_to_gcrs(x, 0.0), 0.0)
+        return x if name == "cr3bp" else placed_in_real_frame(models[name], x)
 
     for name, m in models.items():  # compile / load kernels
         m.propagate(placed(name, orbit.state[None]), 0.0, 0.01)

@@ -28,8 +28,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-CASES = {"tight": (10.0, 1), "wide": (1000.0, 1), "outputs": (10.0, 49)}
-"""Case: (position sigma km (velocity sigma 1e-6 of it, km/s), output times over the period)."""
+from bench_ephemeris import CASES, placed_in_real_frame  # noqa: E402
 
 
 def load_module(path: str):
@@ -94,7 +93,7 @@ def main(argv=None) -> int:
         sig = np.r_[[units.km_to_lu(sigma_km)] * 3, [units.kms_to_vu(1e-6 * sigma_km)] * 3]
         x = orbit.state + rng.normal(size=(n, 6)) * sig
         if args.model == "ephemeris":
-            x = model.to_inertial(model.frame.gcrs_to_synodic(model.frame.pulsating_to_gcrs(x, 0.0), 0.0), 0.0)
+            x = model.to_inertial(placed_in_real_frame(model, x), 0.0)
         times = np.linspace(0.0, period, outputs + 1)[1:]
         same = np.array_equal(run(mods["A"], x, times)[1], run(mods["B"], x, times)[1])
         cpu = {"A": [], "B": []}

@@ -34,7 +34,7 @@ from __future__ import annotations
 import ast
 
 from cistrack.propagation import dop853_tableau as _tab
-from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_point, stage_time, w_at
+from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_c, stage_point, stage_time, w_at
 
 __all__ = ["scratch_plan", "keyed_stage_function", "keys_function", "fill_function"]
 
@@ -102,11 +102,6 @@ def keys_function(body, dim: int, lanes: int) -> str:
     return "\n".join(L) + "\n\n\n"
 
 
-def _stage_c(s: int) -> float:
-    """Stage ``s``'s time is t + c h; the last stage's is t + h."""
-    return 1.0 if s == _tab.N_STAGES else float(_tab.C[s])
-
-
 def _one_key_exit(body, r: dict, lanes: int) -> list[str]:
     """Lines of ``_lanes_keys`` for a monotonic key: every lane's key at its earliest and its
     latest stage time; when they are all one key, every stage's flag is set and the function
@@ -114,7 +109,7 @@ def _one_key_exit(body, r: dict, lanes: int) -> list[str]:
     propagation). Sound because the stage times t + c h, rounded, are monotonic in c for a given
     t and h, so each lies between the two, and so does a monotonic key of it."""
     stages = range(1, _tab.N_STAGES + 1)
-    first, last = min(stages, key=_stage_c), max(stages, key=_stage_c)
+    first, last = min(stages, key=stage_c), max(stages, key=stage_c)
     prefix = body.key.prefix.splitlines()
     step_key = r["STEP_KEY"] * lanes
     L = ["    _l = 0", f"    _h = {w_at(r['H'], lanes)}", f"    _t = {stage_time(first, r, lanes)}"]

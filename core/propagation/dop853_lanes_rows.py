@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from cistrack.propagation import dop853_tableau as _tab
 
-__all__ = ["rows", "w_at", "stage_sum", "stage_point", "stage_time", "out_row"]
+__all__ = ["rows", "w_at", "stage_sum", "stage_point", "stage_c", "stage_time", "out_row"]
 
 
 def rows(dim: int, keyed: bool = False, scratch: int = 0, lanes: int | None = None) -> dict[str, int]:
@@ -73,11 +73,16 @@ def stage_point(s: int, r: dict, dim: int, lanes: int, indent: str) -> list[str]
     return L
 
 
+def stage_c(s: int) -> float:
+    """c_s of stage ``s`` (1..12): its time is t + c_s h; the last stage's is t + h (c = 1)."""
+    return 1.0 if s == _tab.N_STAGES else float(_tab.C[s])
+
+
 def stage_time(s: int, r: dict, lanes: int, h: str = "_h") -> str:
     """Text of stage ``s``'s time: t + c_s h (t + h at the last stage, t at stage 0)."""
     if s == 0:
         return w_at(r["T"], lanes)
-    tnode = "" if s == _tab.N_STAGES else f"{float(_tab.C[s])!r} * "
+    tnode = "" if s == _tab.N_STAGES else f"{stage_c(s)!r} * "
     return f"{w_at(r['T'], lanes)} + {tnode}{h}"
 
 
