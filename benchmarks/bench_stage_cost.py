@@ -71,7 +71,7 @@ class KeyedCR3BP(CR3BP):
         return np.concatenate([[self.mu, 4.0], np.zeros(1002)])
 
 
-_KEY = "    k: LaneUniform = min(max(int(np.floor(v)), 0), nrec - 1)\n"
+_KEY = "    k: LaneRecord = min(max(int(np.floor(v)), 0), nrec - 1)\n"
 
 
 def literal_coefficients(directory: str, record: int):
