@@ -15,8 +15,11 @@ times, as a filter asks: the lanes drift apart at the outputs). In the last two 
 one batch are at different times, mostly in different 6-hour records. Prints microseconds per
 particle-period, both wall-clock and CPU time of the process
 (best of the repeats; on a shared, loaded machine the CPU time is the figure to compare), the
-ratios ephemeris/cr3bp (acceptance of issue 13: <= 3; issue 31 aimed at <= 2 at 10,000), the integrator steps per period of the
-central particle in each model, and the machine.
+ratios ephemeris/cr3bp of those bests (acceptance of issue 13: <= 3; issue 31 aimed at <= 2 at
+10,000), the median over the repeats of each round's CPU ratio (the models run one after the
+other in a round, so a change of load between rounds cancels; the steadier figure when the
+bests come from different moments), the integrator steps per period of the central particle in
+each model, and the machine.
 The ephemeris figure includes its frame conversions at both ends of the call.
 """
 from __future__ import annotations
@@ -73,7 +76,8 @@ def main(argv=None) -> None:
     for line in machine_lines():
         print(f"# {line}")
     print(f"# threads: {os.environ.get('CISTRACK_NUM_THREADS', 'numba default')}")
-    print(f"{'case':<9}{'model':<18}{'N':>8}{'wall us/p-period':>18}{'ratio':>8}{'cpu us/p-period':>17}{'ratio':>8}")
+    print(f"{'case':<9}{'model':<18}{'N':>8}{'wall us/p-period':>18}{'ratio':>8}{'cpu us/p-period':>17}{'ratio':>8}"
+          f"{'median round ratio':>20}")
     for case, n in [(c, n) for c in args.cases for n in args.sizes]:
         sigma_km, outputs = CASES[case]
         sig = np.r_[[units.km_to_lu(sigma_km)] * 3, [units.kms_to_vu(1e-6 * sigma_km)] * 3]
@@ -82,6 +86,7 @@ def main(argv=None) -> None:
         xs = {name: placed(name, x) for name in models}
         best = {name: np.inf for name in models}
         best_cpu = {name: np.inf for name in models}
+        rounds = {name: [] for name in models}  # each repeat's CPU time
         for _ in range(args.repeats):  # the models alternate, so that a change of load hits all of them
             for name, m in models.items():
                 t = time.perf_counter()
@@ -89,13 +94,17 @@ def main(argv=None) -> None:
                 p = m.propagate(xs[name], 0.0, times)
                 best[name] = min(best[name], time.perf_counter() - t)
                 best_cpu[name] = min(best_cpu[name], time.process_time() - c)
+                rounds[name].append(time.process_time() - c)
                 if not np.all(p.alive):
                     print(f"# {name}: {int(np.sum(~p.alive))} particle(s) impacted")
         base = None
+        first = next(iter(models))
         for name in models:
             us, cpu = best[name] / n * 1e6, best_cpu[name] / n * 1e6
             base = (us, cpu) if base is None else base
-            print(f"{case:<9}{name:<18}{n:>8}{us:>18.2f}{us / base[0]:>8.2f}{cpu:>17.2f}{cpu / base[1]:>8.2f}")
+            per_round = np.median(np.array(rounds[name]) / np.array(rounds[first]))
+            print(f"{case:<9}{name:<18}{n:>8}{us:>18.2f}{us / base[0]:>8.2f}{cpu:>17.2f}{cpu / base[1]:>8.2f}"
+                  f"{per_round:>20.3f}")
     # steps per period of the central particle (max_steps search: fewest steps that still finish)
     for name, m in models.items():
         lo, hi = 1, 100_000
