@@ -102,6 +102,7 @@ def main() -> int:
         print(line)
     print(f"file {args.file}: first {rows} rows, {days:.2f} days; seed {args.seed}; results in {work}")
     print(f"{'filter':<16}{'status':<10}{'rows':>8}{'steps':>8}{'wall s':>9}{'rows/s':>9}{'parts':>7}{'peak MiB':>10}")
+    failed = []
     for name in args.filters.split(","):
         scen = work / f"{name}.toml"
         filt = FILTERS[name].format(n=args.pgm_particles)
@@ -110,11 +111,15 @@ def main() -> int:
                               capture_output=True, text=True)
         if proc.returncode != 0:
             print(f"{name:<16}error: {proc.stderr.strip().splitlines()[-1:]}")
+            failed.append(name)
             continue
         r = json.loads(proc.stdout.strip().splitlines()[-1])
         label = f"pgm {args.pgm_particles}" if name == "pgm" else name
         print(f"{label:<16}{r['status']:<10}{rows:>8}{r['steps']:>8}{r['wall_s']:>9.1f}{rows / r['wall_s']:>9.0f}"
               f"{r['n_parts']:>7}{r['peak_rss_mib']:>10.0f}", flush=True)
+    if failed:  # a table with a lost row is not a measurement: say so in the exit status too
+        print(f"{len(failed)} filter(s) failed: {', '.join(failed)}")
+        return 1
     return 0
 
 

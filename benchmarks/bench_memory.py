@@ -117,6 +117,7 @@ def main() -> int:
     print(f"{'case':<10}{'particles':>11}{'before MiB':>12}{'peak MiB':>10}{'above MiB':>11}"
           f"{'bytes/particle':>16}{'seconds':>9}")
     results: dict[str, list[dict]] = {}
+    failed = []
     # glibc raises its mmap threshold after each freed large block (up to 32 MB), keeping freed
     # arrays in the heap: the RSS before a case would then include memory the case reuses. A fixed
     # threshold returns every array above 64 KiB to the system when it is freed.
@@ -127,6 +128,7 @@ def main() -> int:
                                  capture_output=True, text=True, env=env)
             if out.returncode != 0:
                 print(f"{case:<10}{n:>11}  failed: {out.stderr.strip().splitlines()[-1:]}")
+                failed.append(f"{case} {n}")
                 continue
             r = json.loads(out.stdout.strip().splitlines()[-1])
             results.setdefault(case, []).append(r)
@@ -142,6 +144,9 @@ def main() -> int:
         at = b["peak"] + slope * (10_000_000 - b["n"])
         print(f"{case}: {slope:.0f} bytes per extra particle ({a['n']} -> {b['n']}); "
               f"10,000,000 particles: peak about {at / 1e9:.1f} GB ({at / 2**30:.1f} GiB)")
+    if failed:  # a lost row is not a measurement: say so in the exit status too
+        print(f"{len(failed)} case(s) failed: {', '.join(failed)}")
+        return 1
     return 0
 
 
