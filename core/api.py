@@ -23,6 +23,7 @@ DeprecationWarning for at least one release (:mod:`cistrack._moved`).
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -325,5 +326,21 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     _, specs, directory = plan_runs(study, out, items, first_seed, n_seeds)
     rows = study_rows(specs)
     runs = tuple(Run(RunSummary.from_dict(row["summary"]), Path(row["directory"])) for row in rows)
-    return StudyResult(str(res["name"]), Path(directory), runs, tuple(rows),
-                       tuple((str(a), str(b)) for a, b in res.get("problems") or ()))
+    problems = tuple((str(a), str(b)) for a, b in res.get("problems") or ())
+    if problems:
+        _say_lost_runs(str(res["name"]), Path(directory), len(specs), len(runs), problems)
+    return StudyResult(str(res["name"]), Path(directory), runs, tuple(rows), problems)
+
+
+def _say_lost_runs(name: str, directory: Path, total: int, done: int, problems: tuple[tuple[str, str], ...]) -> None:
+    """Runs of a study that did not finish are never passed over in silence: none finished raises
+    :class:`CistrackError`, some warns (RuntimeWarning) and the result lists them in ``problems``."""
+    from cistrack.studies.study import MAIN_GUARD_HINT
+
+    first = f"{problems[0][0]}: {problems[0][1]}"
+    hint = f"; {MAIN_GUARD_HINT}" if any("BrokenProcessPool" in why for _, why in problems) else ""
+    if done == 0:
+        raise CistrackError(f"study {name!r} ({directory}): none of its {total} runs finished; "
+                            f"the first: {first}{hint}")
+    warnings.warn(f"study {name!r} ({directory}): {len(problems)} of {total} runs did not finish "
+                  f"(StudyResult.problems lists them); the first: {first}{hint}", RuntimeWarning, stacklevel=3)
