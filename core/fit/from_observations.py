@@ -115,6 +115,8 @@ class ObjectFit:
     failure : str               why there is no fit, or "" (the fit's own messages are in ``result``)
     notes : list of str         the files and their weights
     lov : list of LovPoint      the line of variations (``--set fit.lov=N``), or empty
+    start : str                 "" when the least squares started from the filter's final
+                                estimate; else the earlier filter estimate it restarted from, and why
     """
 
     designation: str
@@ -126,6 +128,7 @@ class ObjectFit:
     notes: list[str] = field(default_factory=list)
     choices: FitChoices = field(default_factory=FitChoices)
     lov: list = field(default_factory=list)
+    start: str = ""
 
     @property
     def ok(self) -> bool:
@@ -181,19 +184,25 @@ def _fit_epoch(choice: str, times: np.ndarray) -> float:
     return float({"last": times[-1], "first": times[0], "middle": times[np.argmin(np.abs(times - 0.5 * (times[0] + times[-1])))]}[choice])
 
 
-def _least_squares(ctx, choices: FitChoices) -> FitResult:
-    """The least-squares fit started from the filter's final estimate (ctx: the run's context)."""
+def _least_squares(ctx, choices: FitChoices, restart=None) -> FitResult:
+    """The least-squares fit started from the filter's final estimate (ctx: the run's context), or
+    from ``restart`` (a :class:`cistrack.fit.restart.Restart`: an earlier estimate of the filter)."""
     belief = ctx.filter.belief
-    mean = np.asarray(belief.mixture.mean, dtype=float)
-    cov = np.asarray(belief.mixture.covariance, dtype=float)
+    what = "the filter's final estimate" if restart is None else f"the filter's estimate at {restart.utc}"
+    if restart is None:
+        mean = np.asarray(belief.mixture.mean, dtype=float)
+        cov = np.asarray(belief.mixture.covariance, dtype=float)
+        epoch = float(belief.epoch)
+    else:
+        mean, cov, epoch = restart.mean, restart.covariance, restart.t
     if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
-        raise FitError("the filter's final estimate is not finite; nothing to start the least squares from")
+        raise FitError(f"{what} is not finite; nothing to start the least squares from")
     ms = ctx.measurements
     t0 = _fit_epoch(choices.epoch, ms.times)
     try:
-        start, stm = arc_states_and_stms(ctx.dynamics, mean, float(belief.epoch), np.array([t0]))
+        start, stm = arc_states_and_stms(ctx.dynamics, mean, epoch, np.array([t0]))
     except PropagationError as exc:
-        raise FitError(f"the filter's final estimate cannot be propagated to the fit epoch: {exc}") from None
+        raise FitError(f"{what} cannot be propagated to the fit epoch: {exc}") from None
     prior = None
     if choices.prior == "filter":
         p = stm[0] @ cov @ stm[0].T
@@ -201,6 +210,31 @@ def _least_squares(ctx, choices: FitChoices) -> FitResult:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnobservableWarning)  # also in the result's messages
         return fit_orbit(ctx.dynamics, ctx.sensor, ms, start[0], t0, prior=prior, options=choices.options)
+
+
+def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResult | None, str, str]:
+    """(fit, failure, start): the least squares from the filter's final estimate; when that fails
+    or does not converge, from the filter's estimate before the updates it should not have taken
+    in (:func:`cistrack.fit.restart.restart_points`), latest first. ``start`` says which estimate
+    a restarted fit began from and why ("" for the final estimate)."""
+    from cistrack.fit.restart import restart_points
+
+    try:
+        result, failure = _least_squares(ctx, choices), ""
+    except (FitError, PropagationError) as exc:
+        result, failure = None, f"least squares: {exc}"
+    if result is not None and result.converged:
+        return result, "", ""
+    for point in restart_points(directory):
+        try:
+            again = _least_squares(ctx, choices, point)
+        except (FitError, PropagationError):
+            continue
+        if again.converged:
+            first = failure.removeprefix("least squares: ") or "the least squares did not converge"
+            return again, "", (f"the filter's estimate at {point.utc} (step {point.step}), {point.why}; "
+                               f"from the filter's final estimate: {first}")
+    return result, failure, ""
 
 
 def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
@@ -268,10 +302,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         except CistrackError as exc:
             one.failure = f"the filter run failed before its first step: {exc}"
         if one.run is not None:
-            try:
-                one.result = _least_squares(one.run.context, choices)
-            except (FitError, PropagationError) as exc:
-                one.failure = f"least squares: {exc}"
+            one.result, one.failure, one.start = _fit_from_filter(one.run.context, choices, d)
+            if one.start:
+                say(f"{obs.designation}: least squares restarted from {one.start}")
         if one.result is not None and one.result.converged and choices.lov > 0:
             say(f"{obs.designation}: line of variations to +-{choices.lov:g} sigma")
             one.lov = _line_of_variations(one.run.context, one.result, choices)
