@@ -15,7 +15,15 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK"]
+__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK"]
+
+EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
+"""Files that describe an earlier run or fit of a results directory and that a new run there does
+not itself replace: its exports (``cistrack export``'s default ``estimate.<format>``) and a fit's
+record, residuals, residual plots and line of variations. A run that starts in the directory
+removes them (:func:`clear_earlier_results`), so that an export or a check never mixes the new
+run with the old one's files (the fit's own files are written again when its fit ends)."""
 
 STUDY_RECORD = "study.json"
 """The record a study directory holds (written by ``cistrack study run``)."""
@@ -42,6 +50,19 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def clear_earlier_results(directory: str | Path) -> list[Path]:
+    """Remove the :data:`EARLIER_RESULTS` files of ``directory`` (a results directory a run is
+    starting in); returns the paths removed."""
+    d = Path(directory)
+    gone = []
+    for pattern in EARLIER_RESULTS:
+        for path in sorted(d.glob(pattern)):
+            if path.is_file() or path.is_symlink():
+                path.unlink()
+                gone.append(path)
+    return gone
 
 
 def check_writable_dir(directory: str | Path, where: str) -> Path:

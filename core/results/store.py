@@ -33,6 +33,7 @@ import pyarrow.parquet as pq
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
+from cistrack.results.output_paths import clear_earlier_results
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
 from cistrack.results.step_table import is_table_step, row_of
 
@@ -109,6 +110,7 @@ class ResultsWriter:
         self._parts.start()
         if (self.directory / STEPS).exists():
             (self.directory / STEPS).unlink()
+        clear_earlier_results(self.directory)  # an earlier run's exports and fit files
         self._t0 = time.perf_counter()
         scen = run.scenario
         self._manifest = {
