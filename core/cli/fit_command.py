@@ -112,7 +112,8 @@ def cmd_export_fit(args) -> int:
         params["covariance"] = args.covariance
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
                      predict_days=getattr(args, "predict", None), **params)
-    print(f"wrote {out}")
+    if not getattr(args, "quiet", False):
+        print(f"wrote {out}")
     return 0
 
 

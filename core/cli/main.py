@@ -60,7 +60,8 @@ def cmd_export(args) -> int:
         why = export_refusal(args.run)
         if why:
             _eprint(f"cistrack: warning: exported with --force: {why} (the file says so in a COMMENT)")
-    print(f"wrote {out}")
+    if not args.quiet:
+        print(f"wrote {out}")
     return 0
 
 
@@ -265,6 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
+    ex.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")
     ex.add_argument("--force", action="store_true", help="export a run that did not finish, was killed or diverged "
                     "(refused otherwise); the file then says so in a COMMENT")
     ex.set_defaults(func=cmd_export)

@@ -80,8 +80,17 @@ def main() -> int:
     a = ap.parse_args()
     from cistrack.fit.fit_export import _scenario, covariance_scale
 
+    if not (a.fit / "fit.json").is_file():
+        raise SystemExit(f"check_fit: {a.fit}: no fit.json; give the directory of a 'cistrack fit --out DIR'")
     rec = json.loads((a.fit / "fit.json").read_text())
+    if "state_km" not in rec:
+        raise SystemExit(f"check_fit: {a.fit}: the fit made no orbit ({rec.get('failure') or 'not converged'})")
     truth_csv = a.truth or Path(rec["files"][0]).parent / "truth.csv"
+    oem_path = a.oem or a.fit / "estimate.oem"
+    if not truth_csv.is_file():
+        raise SystemExit(f"check_fit: no truth file {truth_csv}; give --truth TRUTH.csv (make_observations.py writes one)")
+    if not oem_path.is_file():
+        raise SystemExit(f"check_fit: no {oem_path}; run 'cistrack export {a.fit} --format oem' first, or give --oem FILE")
     reg = default_registry()
     scen = _scenario(a.fit, reg)
     dyn = scen.build("dynamics", reg)
@@ -101,7 +110,7 @@ def main() -> int:
                 out[side] = res
         return out
 
-    epochs, states, covs = read_oem(a.oem or a.fit / "estimate.oem")
+    epochs, states, covs = read_oem(oem_path)
     t = np.array([(units.parse_utc(e + "Z") - scen.epoch).total_seconds() / units.TU_S for e in epochs])
     truth_i = frame.from_synodic(truth_at(t), t)
     m2 = np.array([float((truth_i[k] - states[k]) @ np.linalg.solve(covs[k], truth_i[k] - states[k]))

@@ -45,3 +45,10 @@ def test_the_restarted_fit_puts_the_truth_inside_its_covariance(gross_fit):
                             str(d / "campaign" / "truth.csv")], capture_output=True, text=True, timeout=300)
     assert check.returncode == 0, check.stdout[-1500:] + check.stderr[-1500:]
     assert "all bounds hold" in check.stdout
+
+
+def test_check_fit_names_what_is_missing_instead_of_a_traceback(tmp_path):
+    check = subprocess.run([sys.executable, str(EXAMPLES / "check_fit.py"), str(tmp_path)],
+                           capture_output=True, text=True, timeout=300)
+    assert check.returncode != 0 and "Traceback" not in check.stderr
+    assert "no fit.json" in check.stderr
