@@ -38,7 +38,7 @@ def test_a_run_in_an_earlier_fit_directory_removes_the_fit_so_export_writes_the_
 
 def test_export_quiet_prints_nothing_and_writes_the_file(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=1"]) == 0
+    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=2"]) == 0
     capsys.readouterr()
     assert main(["export", str(out), "--format", "oem", "--quiet"]) == 0
     assert capsys.readouterr().out == "" and (out / "estimate.oem").is_file()
