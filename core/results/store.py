@@ -129,7 +129,10 @@ class ResultsWriter:
             "measurement_model": _json_safe(getattr(run.measurements, "meta", None) or {}),
             "iod": {"epoch_tu": float(run.iod_cloud.epoch), "n_particles": len(run.iod_cloud),
                     **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
-                       if isinstance(v, (int, float, str, bool))}},
+                       if isinstance(v, (int, float, str, bool))},
+                    # first-pass gross outliers the IOD left out (plugins/iod/pass_screen.py), if any
+                    **({"screened_out": [dict(x) for x in run.iod_cloud.meta["screened_out"]]}
+                       if (getattr(run.iod_cloud, "meta", None) or {}).get("screened_out") else {})},
             "started_unix": time.time(),
             "process": {"host": socket.gethostname(), "pid": os.getpid()},  # see cistrack.results.run_status
         }

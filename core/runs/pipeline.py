@@ -326,5 +326,8 @@ def _iod_message(name: str, cloud, n_measurements: int) -> str:
     used = meta.get("fit_indices")
     if used is None:
         return f"IOD '{name}': {len(cloud)} particles from the {n_measurements} measurements it was given"
+    left = "".join(f"; left out of its fit: the measurement at t = {units.tu_to_days(x['t_tu']):.4f} d, "
+                   f"{x['offset_arcsec']:,.0f} arcsec off the pass's other measurements (a gross outlier)"
+                   for x in meta.get("screened_out") or ())
     return (f"IOD '{name}' on {len(used)} measurements of pass 1 (of {n_measurements} in all): "
-            f"{len(cloud)} particles at t = {units.tu_to_days(cloud.epoch):.3f} d")
+            f"{len(cloud)} particles at t = {units.tu_to_days(cloud.epoch):.3f} d{left}")

@@ -11,7 +11,8 @@ from cistrack.errors import IODError
 from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
 
-from .first_pass import select_fit_indices
+from .first_pass import first_pass_length, select_fit_indices
+from .pass_screen import screen_pass
 from .polyfit import evaluation_weights
 
 __all__ = ["FitInputs", "angle_names", "prepare_fit", "kinematic_states"]
@@ -23,7 +24,8 @@ class FitInputs:
     Attributes: ``indices`` (K,) into the measurement set, ``times`` (K,) TU, ``angles`` (K, 2)
     rad (azimuth, elevation; or the sensor's other angle pair, e.g. RA, Dec), ``angle_sigmas`` (K, 2) rad, ``ranges`` (K,) LU or None,
     ``observer`` (K, 3) LU synodic observer positions, ``weights`` (2, K) value/rate weights at
-    the last time (rate per TU).
+    the last time (rate per TU), ``screened``: the first pass's gross outliers left out, (index
+    into the measurement set, angle rad off the other measurements' curve) (:mod:`.pass_screen`).
     """
 
     def __init__(self, indices, times, angles, angle_sigmas, ranges, observer, weights):
@@ -35,6 +37,7 @@ class FitInputs:
         self.observer = observer
         self.weights = weights
         self.neu_to_synodic: np.ndarray | None = None
+        self.screened: list[tuple[int, float]] = []  # first-pass gross outliers left out (index, offset rad)
 
     @property
     def epoch(self) -> float:
@@ -65,12 +68,16 @@ def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pas
     """Select and validate the fitted measurements (raises IODError before any sampling)."""
     if not isinstance(measurements, MeasurementSet):
         raise IODError(f"{who}: expected a MeasurementSet, got {type(measurements).__name__}")
-    idx = select_fit_indices(measurements.times, pass_gap_hours=pass_gap_hours,
-                             fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
-                             order=order)
+    select = dict(pass_gap_hours=pass_gap_hours, fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
+                  order=order)
+    idx = select_fit_indices(measurements.times, **select)
     first, second = angle_names(sensor)
     ia = _column(measurements, first, who)
     ie = _column(measurements, second, who)
+    screened = _screened(measurements, sensor, ia, ie, pass_gap_hours, order, max(min_fit, order + 1))
+    if screened:  # the fit window chosen again without them (the same rule, the remaining times)
+        rest = np.setdiff1d(np.arange(len(measurements)), [i for i, _ in screened])
+        idx = rest[select_fit_indices(measurements.times[rest], **select)]
     times = measurements.times[idx]
     angles = measurements.values[idx][:, [ia, ie]]
     sig = measurements.sigmas[idx][:, [ia, ie]]
@@ -87,7 +94,21 @@ def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pas
     weights = evaluation_weights(times, order, float(times[-1]))
     fit = FitInputs(idx, times, angles, sig, ranges, observer, weights)
     fit.neu_to_synodic = _neu_to_synodic(sensor, times, angles)
+    fit.screened = screened
     return fit
+
+
+def _screened(ms: MeasurementSet, sensor: Sensor, ia: int, ie: int, pass_gap_hours: float, order: int,
+              need: int) -> list[tuple[int, float]]:
+    """Gross outliers of the first pass (:func:`.pass_screen.screen_pass`): (index, offset rad)."""
+    n = first_pass_length(ms.times, pass_gap_hours)
+    ang = ms.values[:n][:, [ia, ie]]
+    sig = ms.sigmas[:n][:, [ia, ie]]
+    los = np.asarray(sensor.line_of_sight(ang, ms.times[:n]), dtype=float).reshape(n, 3)
+    on_sky = np.maximum(sig[:, 0] * np.cos(ang[:, 1]), sig[:, 1])
+    if not (np.all(np.isfinite(los)) and np.all(on_sky > 0)):
+        return []
+    return screen_pass(ms.times[:n], los, on_sky, order, need)
 
 
 def _neu_to_synodic(sensor: Sensor, times: np.ndarray, angles: np.ndarray) -> np.ndarray | None:

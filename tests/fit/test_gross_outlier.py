@@ -52,3 +52,15 @@ def test_check_fit_names_what_is_missing_instead_of_a_traceback(tmp_path):
                            capture_output=True, text=True, timeout=300)
     assert check.returncode != 0 and "Traceback" not in check.stderr
     assert "no fit.json" in check.stderr
+
+
+def test_an_outlier_in_the_iods_own_pass_is_left_out_of_the_iod_and_the_fit_converges(tmp_path):
+    make(tmp_path / "campaign", seed=191, sites=("J04", "568"))
+    [row] = displace(tmp_path / "campaign" / "observations.psv", tmp_path / "gross.psv", fraction=0.014,
+                     lo=3000.0, hi=3600.0, seed=191)
+    assert main(["fit", str(tmp_path / "gross.psv"), "--out", str(tmp_path / "fit"), "--quiet"]) == 0
+    manifest = json.loads((tmp_path / "fit" / "manifest.json").read_text())
+    [left] = manifest["iod"]["screened_out"]
+    assert left["index"] == row and 3000.0 <= left["offset_arcsec"] <= 3600.0
+    rec = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert rec["converged"] and rec["least_squares_start"] == "the filter's final estimate"
