@@ -55,6 +55,15 @@ With RA/Dec the "topocentric" speed is that of the fitted ICRF-axes topocentric 
 inertial frame without the ~29 km/s of Earth rotation: as for ``speed_frame="synodic"``, the
 42 km/s bound is looser there.
 
+Gross outliers in the first pass
+--------------------------------
+An observation hundreds of sigma off the pass's other ones (a wrong object, a mistyped time)
+would bend every sample's polynomials. Before sampling, the pass is screened
+(:mod:`.pass_screen`): one or two such measurements are left out, the fit window is chosen again
+from the rest by the same rule, and the cloud's ``meta["screened_out"]`` (and the run's manifest)
+names them. Clean passes lose nothing, so runs without such an outlier give the numbers they gave
+before.
+
 When too few samples survive, more are drawn in batches of ``oversampling * n_particles`` until
 ``n_particles`` survive or ``max_oversampling * n_particles`` samples have been drawn; then an
 :class:`~cistrack.errors.IODError` says how many survived and what pruned the rest. The cloud's
