@@ -23,7 +23,6 @@ DeprecationWarning for at least one release (:mod:`cistrack._moved`).
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -315,8 +314,9 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     ``settings``: overrides of every run, as for :func:`load_scenario` (``--set``; the default
     folder then names their hash). ``out``: the study folder (default ``studies_out/<name>``);
     runs already done there are not run again. ``workers``: local processes (default: one per
-    core). ``progress``: a progress bar on stderr.
+    core). ``progress``: a progress bar on stderr. Lost runs raise (none finished) or warn.
     """
+    from cistrack.studies.lost_runs import say_lost_runs
     from cistrack.studies.study import plan_runs, run_study
     from cistrack.studies.study_table import study_rows
 
@@ -326,21 +326,5 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     _, specs, directory = plan_runs(study, out, items, first_seed, n_seeds)
     rows = study_rows(specs)
     runs = tuple(Run(RunSummary.from_dict(row["summary"]), Path(row["directory"])) for row in rows)
-    problems = tuple((str(a), str(b)) for a, b in res.get("problems") or ())
-    if problems:
-        _say_lost_runs(str(res["name"]), Path(directory), len(specs), len(runs), problems)
+    problems = say_lost_runs(str(res["name"]), Path(directory), len(specs), len(runs), res.get("problems"))
     return StudyResult(str(res["name"]), Path(directory), runs, tuple(rows), problems)
-
-
-def _say_lost_runs(name: str, directory: Path, total: int, done: int, problems: tuple[tuple[str, str], ...]) -> None:
-    """Runs of a study that did not finish are never passed over in silence: none finished raises
-    :class:`CistrackError`, some warns (RuntimeWarning) and the result lists them in ``problems``."""
-    from cistrack.studies.study import MAIN_GUARD_HINT
-
-    first = f"{problems[0][0]}: {problems[0][1]}"
-    hint = f"; {MAIN_GUARD_HINT}" if any("BrokenProcessPool" in why for _, why in problems) else ""
-    if done == 0:
-        raise CistrackError(f"study {name!r} ({directory}): none of its {total} runs finished; "
-                            f"the first: {first}{hint}")
-    warnings.warn(f"study {name!r} ({directory}): {len(problems)} of {total} runs did not finish "
-                  f"(StudyResult.problems lists them); the first: {first}{hint}", RuntimeWarning, stacklevel=3)

@@ -28,6 +28,7 @@ from cistrack.model.measurement import StackedMeasurement
 from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
+from cistrack.runs.iod_message import iod_message
 from cistrack.runs.observers import finish_observers, make_plugin_manager
 from cistrack.runs.run_context import RunContext, Step
 from cistrack.runs.run_id import scenario_run_id
@@ -109,7 +110,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         from cistrack.astro.site_network import one_per_time
         iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
     cloud = estimate_iod(scenario, iod, iod_measurements, iod_sensor, rngs["iod"], truth is not None)
-    say(_iod_message(scenario.components["iod"].name, cloud, len(measurements)))
+    say(iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or scenario_run_id(scenario, seed)
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
                      sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
@@ -318,16 +319,3 @@ def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id
 
 def _angles(m):
     return m.angles_only() if "range" in m.names else m
-
-
-def _iod_message(name: str, cloud, n_measurements: int) -> str:
-    """What the IOD used, counted: 'IOD 'x' on 8 measurements of pass 1 (of 39): 2000 particles'."""
-    meta = cloud.meta if isinstance(getattr(cloud, "meta", None), dict) else {}
-    used = meta.get("fit_indices")
-    if used is None:
-        return f"IOD '{name}': {len(cloud)} particles from the {n_measurements} measurements it was given"
-    left = "".join(f"; left out of its fit: the measurement at t = {units.tu_to_days(x['t_tu']):.4f} d, "
-                   f"{x['offset_arcsec']:,.0f} arcsec off the pass's other measurements (a gross outlier)"
-                   for x in meta.get("screened_out") or ())
-    return (f"IOD '{name}' on {len(used)} measurements of pass 1 (of {n_measurements} in all): "
-            f"{len(cloud)} particles at t = {units.tu_to_days(cloud.epoch):.3f} d{left}")

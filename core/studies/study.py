@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from cistrack.errors import CistrackError, ConfigError
+from cistrack.studies.lost_runs import refuse_in_a_starting_worker
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, study_source)
@@ -204,7 +205,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     from cistrack.studies.execution import run_all, run_problems, shutdown
     from cistrack.studies.study_lock import study_lock
 
-    _refuse_in_a_starting_worker()
+    refuse_in_a_starting_worker()
     if workers is not None:
         check_count(workers, "--workers", 1, 1024)
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
@@ -251,21 +252,6 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
             "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
             "problems": problems}
-
-
-MAIN_GUARD_HINT = ("a script that runs a study must call it under `if __name__ == \"__main__\":`: the "
-                   "study's worker processes import the script again, and unguarded, each one starts the "
-                   "study anew instead of its run")
-
-
-def _refuse_in_a_starting_worker() -> None:
-    """A study started while a spawned worker process imports the main script (a script that calls
-    ``cistrack.study`` without an ``if __name__ == "__main__":`` guard) is refused by name: it would
-    start the study again in every worker, find the study's lock taken and end the worker."""
-    import multiprocessing as mp
-
-    if getattr(mp.current_process(), "_inheriting", False):
-        raise CistrackError(f"study: started while a worker process was starting; {MAIN_GUARD_HINT}")
 
 
 def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:
