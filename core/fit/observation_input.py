@@ -128,7 +128,7 @@ def merge_sets(sets: list[MeasurementSet], files: list[str]) -> MeasurementSet:
     same = np.nonzero((np.diff(times) == 0) & (sites[1:] == sites[:-1]))[0]
     if same.size:
         i = int(same[0])
-        raise MeasurementError(f"site {sites[i]!r} observed at the same time in {origin[i]} and {origin[i + 1]} "
+        raise MeasurementError(f"site {str(sites[i])!r} observed at the same time in {origin[i]} and {origin[i + 1]} "
                                "(the same observation given twice?); give each observation once")
     one_kind = set(kinds.tolist())
     names = KIND_NAMES[kinds[0]] if len(one_kind) == 1 and kinds[0] in KIND_NAMES else ("angle_1", "angle_2")

@@ -62,7 +62,7 @@ def test_two_files_of_one_object_merge_in_time_order(tmp_path):
 
 
 def test_the_same_observation_in_two_files_is_refused_naming_both(tmp_path):
-    with pytest.raises(MeasurementError, match="observations.psv and .*observations.tdm"):
+    with pytest.raises(MeasurementError, match=r"site '(711|809)' observed at the same time in .*observations.psv and .*observations.tdm"):
         read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry())
 
 
