@@ -21,7 +21,8 @@ from pathlib import Path
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
-from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
+from cistrack.cli.export_command import cmd_export
+from cistrack.cli.fit_command import add_fit_parser
 from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
@@ -47,28 +48,11 @@ def _fmt(v, nd=3) -> str:
     return str(v)
 
 
-def cmd_export(args) -> int:
-    from cistrack.runs.export import export_run
-
-    if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
-        return cmd_export_fit(args)
-    params = {} if args.step is None else {"step": args.step}
-    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force, **params)
-    if args.force:
-        from cistrack.runs.export import export_refusal
-
-        why = export_refusal(args.run)
-        if why:
-            _eprint(f"cistrack: warning: exported with --force: {why} (the file says so in a COMMENT)")
-    if not args.quiet:
-        print(f"wrote {out}")
-    return 0
-
-
 def cmd_run(args) -> int:
     from cistrack.plugin.registry import default_registry
     from cistrack.runs.pipeline import run_scenario
     from cistrack.runs.run_id import scenario_run_id
+    from cistrack.runs.input_checks import check_run_inputs
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings
     from cistrack.evaluation.run_summary import count_lines
@@ -82,6 +66,7 @@ def cmd_run(args) -> int:
     seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
     run_id = scenario_run_id(scen, seed)
     out = Path(args.out) if args.out else Path("runs") / run_id
+    check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
     check_output_dir(out, "--out" if args.out else "the results directory")
     observers = []
     recorder = None

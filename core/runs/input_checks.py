@@ -1,0 +1,25 @@
+"""What a run reads or is told, checked before its results directory is made.
+
+``cistrack run`` creates its results directory before the run starts; an input that only fails
+inside the run (an observation file that is not there, a part size of 0) would leave that
+directory behind, empty. :func:`check_run_inputs` refuses those first, naming the file or flag.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from cistrack.errors import ConfigError
+from cistrack.scenario.limits import check_count
+
+__all__ = ["check_run_inputs"]
+
+
+def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
+    """Raise :class:`ConfigError` when ``scenario``'s ``[measurements] file`` is not a readable file
+    or ``rows_per_part`` (``--rows-per-part``) is not a count of at least 1."""
+    if rows_per_part is not None:
+        check_count(rows_per_part, "--rows-per-part", 1, 10 ** 9)
+    f = getattr(scenario, "measurements_file", None)
+    if f is not None and not Path(f).is_file():
+        raise ConfigError(f"{scenario.source}: [measurements] file = {f}: no such file; nothing was run")
