@@ -39,7 +39,7 @@ def summary_lines(one) -> list[str]:
         return lines
     ms = one.run.context.measurements
     epoch = units.format_utc(units.tu_to_utc(one.scenario.epoch, r.epoch))[:19] + "Z"
-    if getattr(one, "start", ""):
+    if one.start:
         lines.append(f"  least squares restarted from {one.start}")
     lines.append(f"  least squares at {epoch} ({one.choices.epoch} observation): {len(ms)} observations, "
                  f"{r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}, chi-square {r.chi2:.1f} "

@@ -71,7 +71,7 @@ def _fit_dict(one, obs) -> dict[str, Any]:
                                  if k != "sensor_steps"}},
         "converged": bool(r.converged) if r is not None else False,
         "failure": one.failure,
-        "least_squares_start": getattr(one, "start", "") or "the filter's final estimate",
+        "least_squares_start": one.start or "the filter's final estimate",
     }
     if ms is not None and len(ms):
         data["arc"] = {"first_utc": _utc(scen, ms.times[0]), "last_utc": _utc(scen, ms.times[-1]),

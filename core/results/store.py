@@ -113,6 +113,7 @@ class ResultsWriter:
         clear_earlier_results(self.directory)  # an earlier run's exports and fit files
         self._t0 = time.perf_counter()
         scen = run.scenario
+        iod_meta = getattr(run.iod_cloud, "meta", None) or {}
         self._manifest = {
             "run_id": run.run_id, "scenario": scen.name, "scenario_source": scen.source,
             "seed": int(run.seed), "status": "running", "epoch": run.epoch.isoformat(),
@@ -128,11 +129,10 @@ class ResultsWriter:
             # measurement kind, frame, site and applied corrections)
             "measurement_model": _json_safe(getattr(run.measurements, "meta", None) or {}),
             "iod": {"epoch_tu": float(run.iod_cloud.epoch), "n_particles": len(run.iod_cloud),
-                    **{k: v for k, v in (getattr(run.iod_cloud, "meta", None) or {}).items()
-                       if isinstance(v, (int, float, str, bool))},
+                    **{k: v for k, v in iod_meta.items() if isinstance(v, (int, float, str, bool))},
                     # first-pass gross outliers the IOD left out (plugins/iod/pass_screen.py), if any
-                    **({"screened_out": [dict(x) for x in run.iod_cloud.meta["screened_out"]]}
-                       if (getattr(run.iod_cloud, "meta", None) or {}).get("screened_out") else {})},
+                    **({"screened_out": [dict(x) for x in iod_meta["screened_out"]]}
+                       if iod_meta.get("screened_out") else {})},
             "started_unix": time.time(),
             "process": {"host": socket.gethostname(), "pid": os.getpid()},  # see cistrack.results.run_status
         }

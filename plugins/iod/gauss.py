@@ -29,7 +29,6 @@ from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet
-from cistrack.units import ARCSEC_RAD
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.astro.rotating_frame import eci_to_synodic, rot_z, synodic_to_eci
 
@@ -228,8 +227,7 @@ class GaussIOD(IODMethod):
         meta = {"method": "gauss", "fit_indices": fit.indices[pick].tolist(),
                 "fit_times": times.tolist(), "draws": drawn, "survivors": n_kept,
                 "survival_fraction": n_kept / drawn, "pruned": {"no_valid_root": drawn - n_kept},
-                "screened_out": [{"index": int(i), "t_tu": float(measurements.times[i]),
-                                  "offset_arcsec": float(off / ARCSEC_RAD)} for i, off in fit.screened]}
+                "screened_out": fit.screened_record(measurements)}
         return ParticleCloud(states, float(times[2]), meta=meta)
 
 

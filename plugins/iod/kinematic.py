@@ -84,7 +84,7 @@ from cistrack.errors import IODError
 from cistrack.interfaces import IODMethod, RangePrior, Sensor
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet
-from cistrack.units import ARCSEC_RAD, LU_KM, VU_KMS
+from cistrack.units import LU_KM, VU_KMS
 
 from .chunked_draws import CHUNK_SAMPLES, draw_in_chunks
 from .kinematic_fit import FitInputs, kinematic_states, prepare_fit
@@ -271,8 +271,7 @@ class KinematicFitIOD(IODMethod):
             "order": self.order,
             "fit_indices": fit.indices.tolist(),
             "fit_times": fit.times.tolist(),
-            "screened_out": [{"index": int(i), "t_tu": float(measurements.times[i]), "offset_arcsec": float(off / ARCSEC_RAD)}
-                             for i, off in fit.screened],
+            "screened_out": fit.screened_record(measurements),
             "draws": drawn,
             "batches": batches,
             "survivors": n_kept,

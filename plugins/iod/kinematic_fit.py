@@ -10,6 +10,7 @@ import numpy as np
 from cistrack.errors import IODError
 from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
+from cistrack.units import ARCSEC_RAD
 
 from .first_pass import first_pass_length, select_fit_indices
 from .pass_screen import screen_pass
@@ -42,6 +43,11 @@ class FitInputs:
     @property
     def epoch(self) -> float:
         return float(self.times[-1])
+
+    def screened_record(self, measurements: MeasurementSet) -> list[dict]:
+        """``screened`` as the cloud's ``meta["screened_out"]``: index, time (TU) and offset (arcsec)."""
+        return [{"index": int(i), "t_tu": float(measurements.times[i]), "offset_arcsec": float(off / ARCSEC_RAD)}
+                for i, off in self.screened]
 
 
 def _column(ms: MeasurementSet, name: str, who: str) -> int:
