@@ -46,7 +46,8 @@ def _fit_residuals(t: np.ndarray, u: np.ndarray, keep: np.ndarray, order: int) -
 
 def screen_pass(times: np.ndarray, los: np.ndarray, sigma: np.ndarray, order: int, need: int) -> list[tuple[int, float]]:
     """Measurements of a pass to leave out: (index, offset rad off the others' curve), by index
-    (see the module docstring). One measurement is tried first, then two: for each count, the
+    (see the module docstring). One measurement is tried first, and two only when leaving out one
+    does not make the rest consistent (the pair search is not run on a clean pass): the
     measurements whose leaving out fits the rest best are left out when the rest are consistent
     and each of them lies far enough off the rest's curve; else nothing is.
 
@@ -77,8 +78,7 @@ def screen_pass(times: np.ndarray, los: np.ndarray, sigma: np.ndarray, order: in
         keep[list(best)] = False
         spread = float(np.sqrt(np.mean(best_res[keep] ** 2)))
         if not all(best_res[i] >= MIN_OFFSET_SIGMA * s[i] and best_res[i] >= MIN_OFFSET_RMS * spread for i in best):
-            continue
+            return []  # the rest fit their curve and nothing lies far off it: a clean pass
         loo = max(_fit_residuals(t, u, keep & (np.arange(n) != j), p)[j] for j in np.nonzero(keep)[0])
-        if all(best_res[i] >= MIN_OFFSET_LOO * loo for i in best):
-            return [(int(i), float(best_res[i])) for i in best]
+        return [(int(i), float(best_res[i])) for i in best] if all(best_res[i] >= MIN_OFFSET_LOO * loo for i in best) else []
     return []
