@@ -3,8 +3,11 @@
 Each figure has one panel per fitted component (RA x cos(Dec) and Dec for RA/Dec), O - C in
 arcsec (km for a range) against the time in days since the first observation of the arc (all
 sites share the axis), the used observations as dots, the rejected ones as red crosses, and the
-band of three times each observation's stated noise. Drawn with matplotlib's object interface
-(no global backend is changed).
+band of three times each observation's stated noise. The vertical axis is set by the used
+observations and the band: a rejected observation beyond it (a gross outlier, thousands of arcsec
+off) is drawn as a red triangle at the panel's edge with its value written beside it, so that it
+does not flatten the used ones into a line. Drawn with matplotlib's object interface (no global
+backend is changed).
 """
 from __future__ import annotations
 
@@ -66,7 +69,7 @@ def residual_figure(table, site: str, epoch: datetime, designation: str = ""):
         ax.axhline(0.0, color="0.4", lw=0.8)
         ax.plot(days[used], table.o_c[used, j], "o", ms=3.5, color="tab:blue", label="used")
         if np.any(rej):
-            ax.plot(days[rej], table.o_c[rej, j], "x", ms=6, color="tab:red", label="rejected")
+            _rejected(ax, days[rej], table.o_c[rej, j], np.concatenate([band, np.abs(table.o_c[used, j])]))
         rms = float(np.sqrt(np.mean(table.o_c[used, j] ** 2))) if np.any(used) else float("nan")
         ax.set_ylabel(f"O-C {labels[j]}")
         ax.set_title(f"RMS {rms:.3g} (used)", fontsize=8, loc="right")
@@ -79,3 +82,19 @@ def residual_figure(table, site: str, epoch: datetime, designation: str = ""):
                  f"{int(np.sum(rows))} observations, {n_rej} rejected", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def _rejected(ax, days: np.ndarray, o_c: np.ndarray, kept: np.ndarray) -> None:
+    """Rejected residuals ``o_c`` at ``days`` on ``ax``: crosses within the axis that the used ones
+    and the band (``kept``, absolute values) set; beyond it, triangles at the edge with the value."""
+    lim = 1.15 * float(np.nanmax(kept)) if kept.size and np.isfinite(np.nanmax(kept)) and np.nanmax(kept) > 0 else None
+    inside = np.ones(o_c.shape, dtype=bool) if lim is None else np.abs(o_c) <= lim
+    ax.plot(days[inside], o_c[inside], "x", ms=6, color="tab:red", label="rejected")
+    if lim is None or np.all(inside):
+        return
+    ax.set_ylim(-1.08 * lim, 1.08 * lim)
+    for d, v in zip(days[~inside], o_c[~inside]):
+        edge = np.sign(v) * lim
+        ax.plot([d], [edge], "^" if v > 0 else "v", ms=7, color="tab:red")
+        ax.annotate(f"{v:,.0f}", (d, edge), textcoords="offset points", xytext=(5, -9 if v > 0 else 3),
+                    fontsize=7, color="tab:red")
