@@ -1,15 +1,22 @@
-"""Reader: an observation file format, read into a MeasurementSet and written back out."""
+"""Reader: an observation file format, read into a MeasurementSet and written back out; and what
+every format shares: the line-and-field error of a malformed file (:class:`FieldError`), the
+error of a file holding several objects (:class:`SeveralObjectsError`), reading a file's text
+lines (:func:`read_text_lines`) and quoting an offending field (:func:`show_field`)."""
 from __future__ import annotations
 
 from abc import abstractmethod
 from datetime import datetime
 from os import PathLike
+from pathlib import Path
 from typing import ClassVar
 
+from cistrack.errors import MeasurementError
 from cistrack.interfaces.component import Component
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["Reader"]
+__all__ = ["Reader", "FieldError", "SeveralObjectsError", "show_field", "field_error", "read_text_lines"]
+
+_SHOWN = 40
 
 
 class Reader(Component):
@@ -42,3 +49,54 @@ class Reader(Component):
     @abstractmethod
     def write(self, path: str | PathLike, measurements: MeasurementSet, epoch: str | datetime) -> None:
         """Write ``measurements`` (times TU since ``epoch``) to ``path``."""
+
+
+class FieldError(MeasurementError):
+    """A malformed field of an observation file: names the file, the line (from 1) and the field."""
+
+    def __init__(self, path: str | PathLike, line: int, fieldname: str, reason: str):
+        self.path, self.line, self.field, self.reason = str(path), int(line), fieldname, reason
+        super().__init__(f"{path}, line {line}, field {fieldname}: {reason}")
+
+
+class SeveralObjectsError(MeasurementError):
+    """An observation file names several objects (designations ``objects``, in file order) and
+    the reader was not told which one to read (reader parameter ``designation``)."""
+
+    def __init__(self, path: str | PathLike, objects: list[str]):
+        self.path, self.objects = str(path), list(objects)
+        shown = ", ".join(repr(o) for o in self.objects[:10]) + (", ..." if len(self.objects) > 10 else "")
+        super().__init__(f"{path}: holds observations of {len(self.objects)} objects ({shown}); read one at a "
+                         f"time with the reader parameter designation (e.g. [measurements] reader = {{ name = "
+                         f"..., designation = {self.objects[0]!r} }}), or give the file to 'cistrack fit', "
+                         f"which fits each object")
+
+
+def show_field(text: str) -> str:
+    """The offending field's text for a message, quoted and cut to 40 characters (never more
+    of the file than the field itself)."""
+    t = str(text)
+    return repr(t if len(t) <= _SHOWN else t[:_SHOWN] + "...")
+
+
+def field_error(path, line: int, fieldname: str, reason: str) -> FieldError:
+    return FieldError(path, line, fieldname, reason)
+
+
+def read_text_lines(path: str | PathLike) -> list[str]:
+    """The lines of a UTF-8 text file (a leading byte-order mark is dropped), with a
+    MeasurementError naming the file if unreadable."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise MeasurementError(f"cannot read observation file {p}: {exc.strerror or exc}") from exc
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise FieldError(p, line, "(encoding)", f"not UTF-8 text ({exc.reason})") from None
+    if "\x00" in text:
+        line = text[:text.index("\x00")].count("\n") + 1
+        raise FieldError(p, line, "(encoding)", "contains a NUL byte: not a text file")
+    return text.splitlines()

@@ -12,9 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, read_text_lines
+from cistrack.interfaces.reader import FieldError, read_text_lines
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch

@@ -24,7 +24,7 @@ from datetime import datetime
 
 from cistrack.errors import MeasurementError
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, show_field
+from cistrack.interfaces.reader import FieldError, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_positive
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Reader
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.sites import Site

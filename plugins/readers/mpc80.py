@@ -30,9 +30,9 @@ from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
+from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 from cistrack.units import ARCSEC_RAD, tu_to_utc
 
 from .decimal_units import decimal_in, to_rad

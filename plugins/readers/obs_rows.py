@@ -14,7 +14,7 @@ from datetime import datetime, timezone
 import numpy as np
 
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet
-from cistrack.runs.observation_files import FieldError, SeveralObjectsError, show_field
+from cistrack.interfaces.reader import FieldError, SeveralObjectsError, show_field
 from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
 

@@ -28,9 +28,9 @@ from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.observation_files import FieldError, read_text_lines, show_field
+from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
