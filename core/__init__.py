@@ -5,8 +5,8 @@ registry, scenario files, runs, metrics and studies. Dynamics, sensors, schedule
 methods, clusterers, filters and recorders are plugins (``cistrack.plugins``), found through
 the entry-point group ``cistrack`` exactly like third-party ones.
 
-``cistrack.run(...)``, ``cistrack.read_run(...)``, ``cistrack.load_scenario(...)`` and
-``cistrack.study(...)`` run scenarios and studies from Python; :mod:`cistrack.api` holds every
+``cistrack.run(...)``, ``cistrack.read_run(...)``, ``cistrack.load_scenario(...)``,
+``cistrack.study(...)`` and ``cistrack.fit(...)`` run scenarios, studies and orbit fits from Python; :mod:`cistrack.api` holds every
 public name (see docs/python-api.md).
 """
 import sys as _sys
@@ -30,18 +30,10 @@ _moved.install()  # old import paths of moved modules keep working, with a Depre
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
          "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
-         "study": "api", "StudyResult": "api"}
-# ``cistrack.fit`` is the package cistrack.fit, which is callable: ``cistrack.fit(files, ...)`` is
-# cistrack.api.fit. (As the function alone it hid the package: ``import cistrack.fit.least_squares
-# as m`` failed with "cannot import name 'least_squares' from 'fit'".)
-_SUBPACKAGES = ("fit",)
+         "study": "api", "StudyResult": "api", "fit": "api", "ObjectFit": "api"}
 
 
 def __getattr__(name: str):
-    if name in _SUBPACKAGES:
-        from importlib import import_module
-
-        return import_module(f".{name}", __name__)
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'cistrack' has no attribute {name!r}")
@@ -53,36 +45,26 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY) | set(_SUBPACKAGES))
+    return sorted(set(globals()) | set(_LAZY))
 
 
 class _Package(_types.ModuleType):
-    """``cistrack.run`` is the run function, and ``cistrack.run`` was also a module (now
-    :mod:`cistrack.runs.pipeline`), as was ``cistrack.study`` (now :mod:`cistrack.studies.study`):
-    importing the old module path must not replace the function with the module on this package
-    (the import system sets submodules as attributes)."""
+    """``cistrack.run``, ``cistrack.study`` and ``cistrack.fit`` are functions of :mod:`cistrack.api`
+    whose names were also modules or packages (now :mod:`cistrack.runs.pipeline`,
+    :mod:`cistrack.studies.study`, :mod:`cistrack.least_squares`): importing an old path must not
+    replace the function with the module on this package (the import system sets submodules as
+    attributes)."""
 
     def __setattr__(self, name: str, value) -> None:
         if isinstance(value, _types.ModuleType) and _LAZY.get(name) == "api":
             return
-        if name in _SUBPACKAGES and isinstance(value, _types.ModuleType):
-            value.__class__ = _CallableFit  # set here, however the package was imported
         super().__setattr__(name, value)
-
-
-class _CallableFit(_types.ModuleType):
-    """The package cistrack.fit, callable as :func:`cistrack.api.fit`."""
-
-    def __call__(self, *args, **kwargs):
-        from cistrack.api import fit
-
-        return fit(*args, **kwargs)
 
 
 _sys.modules[__name__].__class__ = _Package
 
 __all__ = [
-    "__version__", "run", "read_run", "load_scenario", "Run", "study", "StudyResult", "fit",
+    "__version__", "run", "read_run", "load_scenario", "Run", "study", "StudyResult", "fit", "ObjectFit",
     "Belief", "GaussianMixture", "ParticleCloud", "Measurement", "MeasurementSet",
     "hookimpl", "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError",
     "MeasurementError", "ParameterError", "UnknownComponentError",

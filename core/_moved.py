@@ -80,6 +80,39 @@ MOVED: dict[str, str] = {
     "cistrack.testing.results": "cistrack.testing.check_results",
     "cistrack.plugins.clustering.standardize": "cistrack.plugins.clustering.points_and_labels",
     "cistrack.plugins.filters.observation": "cistrack.plugins.filters.measured_components",
+    # Issue 48: the PGM became a package of components (cistrack.plugins.filters.pgm).
+    "cistrack.plugins.filters.cluster_merge": "cistrack.plugins.filters.pgm.cluster_merge",
+    "cistrack.plugins.filters.clusterer_choice": "cistrack.plugins.filters.pgm.clusterer_choice",
+    "cistrack.plugins.filters.component_spread": "cistrack.plugins.filters.pgm.component_spread",
+    "cistrack.plugins.filters.component_update": "cistrack.plugins.filters.pgm.component_update",
+    "cistrack.plugins.filters.kernel_update": "cistrack.plugins.filters.pgm.kernel_update",
+    "cistrack.plugins.filters.measurement_sharpness": "cistrack.plugins.filters.pgm.measurement_sharpness",
+    "cistrack.plugins.filters.posterior_transform": "cistrack.plugins.filters.pgm.posterior_transform",
+    "cistrack.plugins.filters.reanchoring": "cistrack.plugins.filters.pgm.reanchoring",
+    "cistrack.plugins.filters.reacquisition_particles": "cistrack.plugins.filters.pgm.reacquisition_particles",
+    "cistrack.plugins.filters.state_bounds": "cistrack.plugins.filters.pgm.state_bounds",
+    # Issue 48: cistrack.fit split into the mathematics and the `cistrack fit` workflow.
+    "cistrack.fit": "cistrack.least_squares",
+    "cistrack.fit.least_squares": "cistrack.least_squares.differential_correction",
+    "cistrack.fit.errors": "cistrack.least_squares.errors",
+    "cistrack.fit.line_of_variations": "cistrack.least_squares.line_of_variations",
+    "cistrack.fit.measurement_model": "cistrack.least_squares.measurement_model",
+    "cistrack.fit.observability": "cistrack.least_squares.observability",
+    "cistrack.fit.options": "cistrack.least_squares.options",
+    "cistrack.fit.outliers": "cistrack.least_squares.outliers",
+    "cistrack.fit.prediction": "cistrack.least_squares.prediction",
+    "cistrack.fit.residual_table": "cistrack.least_squares.residual_table",
+    "cistrack.fit.result": "cistrack.least_squares.result",
+    "cistrack.fit.trajectory": "cistrack.least_squares.trajectory",
+    "cistrack.fit.unscented_prediction": "cistrack.least_squares.unscented_prediction",
+    "cistrack.fit.fit_export": "cistrack.fitting.fit_export",
+    "cistrack.fit.fit_record": "cistrack.fitting.fit_record",
+    "cistrack.fit.from_observations": "cistrack.fitting.from_observations",
+    "cistrack.fit.observation_input": "cistrack.fitting.observation_input",
+    "cistrack.fit.residual_plots": "cistrack.fitting.residual_plots",
+    "cistrack.fit.restart": "cistrack.fitting.restart",
+    # Issue 48: cmd_export back in the command's module (it was split out only to fit a file-size cap).
+    "cistrack.cli.export_command": "cistrack.cli.main",
 }
 
 
@@ -111,8 +144,21 @@ class MovedModuleFinder(importlib.abc.MetaPathFinder):
         # stacklevel 2 is the importing line: the warnings module skips importlib's own frames.
         warnings.warn(moved_message(fullname, new), DeprecationWarning, stacklevel=2)
         module = importlib.import_module(new)
+        _set_on_function(fullname, module)
         return importlib.machinery.ModuleSpec(fullname, _ExistingModule(module),
                                               is_package=hasattr(module, "__path__"))
+
+
+def _set_on_function(fullname: str, module: ModuleType) -> None:
+    """``import cistrack.fit.least_squares as m`` reaches ``m`` by attributes: where a function now
+    holds the old package's name (``cistrack.fit`` is :func:`cistrack.api.fit`), the old submodule
+    is set as an attribute of that function."""
+    parent, _, child = fullname.rpartition(".")
+    holder, _, name = parent.rpartition(".")
+    if parent in MOVED and holder in sys.modules:
+        function = getattr(sys.modules[holder], name, None)
+        if callable(function) and not isinstance(function, ModuleType):
+            setattr(function, child, module)
 
 
 def install() -> None:

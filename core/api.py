@@ -11,10 +11,15 @@ Running::
     again = ct.read_run("runs/ex1-5")                  # the same run, read back from its folder
     fig = r.plot()                                     # error, sigma, NEES with its band, entropy
     s = ct.study("quick-comparison", n_seeds=2)        # a StudyResult: s.table, s.runs, s.plot()
+    [one] = ct.fit("observations.psv")                 # an ObjectFit per object: one.ok, one.result
 
 Writing a plugin (see docs/plugins.md)::
 
     from cistrack.api import Clusterer, Component, check_int, hookimpl, ParticleCloud
+
+Importing this module is cheap enough for a plugin module to do it: the names only running needs
+(:class:`Scenario`, :class:`RunSummary`, :class:`Verdict`, :class:`ObjectFit`) load on first
+access, and the functions import the pipeline when called.
 
 Every name here is a promise: it stays importable from ``cistrack.api`` (and the run functions
 from ``cistrack``) across releases; a name that moves keeps working from its old path with a
@@ -23,15 +28,13 @@ DeprecationWarning for at least one release (:mod:`cistrack._moved`).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
                              MeasurementError, ParameterError, UnknownComponentError)
-from cistrack.evaluation.custody import Verdict
-from cistrack.evaluation.run_summary import RunSummary
 from cistrack.interfaces import (KINDS, Body, Clusterer, Dynamics, Exporter, Filter, IODMethod, Pass,
                                  Propagation, RangePrior, Reader, ReferenceOrbit, Schedule, Sensor)
 from cistrack.interfaces.component import (Component, check_choice, check_int, check_nonnegative,
@@ -41,16 +44,21 @@ from cistrack.model.measurement import Measurement, MeasurementSet
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.plugin.registry import Registry, default_registry, load_registry
 from cistrack.propagation import CompiledDynamics
-from cistrack.scenario.loading import Scenario
 
 if TYPE_CHECKING:
     import pandas
     import pyarrow
     from matplotlib.figure import Figure
 
+    from cistrack.evaluation.custody import Verdict
+    from cistrack.evaluation.run_summary import RunSummary
+    from cistrack.fitting.from_observations import ObjectFit
+    from cistrack.scenario.loading import Scenario
+
 __all__ = [
     # running scenarios
     "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict", "study", "StudyResult", "fit",
+    "ObjectFit",
     # the registry
     "Registry", "default_registry", "load_registry", "KINDS",
     # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
@@ -62,6 +70,28 @@ __all__ = [
     "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError", "MeasurementError",
     "ParameterError", "UnknownComponentError",
 ]
+
+#: Names that only running needs, loaded on first access (PEP 562): plugin modules import from
+#: this module, and the results, evaluation, scenario and fit workflow packages behind these
+#: names are not theirs to pay for (nor to import back while they load).
+_LAZY = {"RunSummary": "cistrack.evaluation.run_summary", "Verdict": "cistrack.evaluation.custody",
+         "Scenario": "cistrack.scenario.loading", "ObjectFit": "cistrack.fitting.from_observations"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'cistrack.api' has no attribute {name!r}")
+    from importlib import import_module
+
+    value = getattr(import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 #: The scenario :func:`run` runs when given none: the paper's Example 1 with the PGM filter.
 DEFAULT_SCENARIO = "example-1"
@@ -183,6 +213,7 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
     dicts) or ``["filter.n_particles=2000"]``; a wrong key or value raises :class:`ConfigError`
     naming the table and key.
     """
+    from cistrack.scenario.loading import Scenario
     from cistrack.scenario.loading import load_scenario as _load
     from cistrack.scenario.settings import apply_settings
 
@@ -193,7 +224,7 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
 
 def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,
         settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
-        progress: bool = False, log: Any = None, observers: Iterable[Any] = (),
+        progress: bool = False, log: Callable[[str], None] | None = None, observers: Iterable[Any] = (),
         registry: Registry | None = None) -> Run:
     """Run one scenario end to end, as ``cistrack run`` does, and return its :class:`Run`.
 
@@ -231,18 +262,28 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     return Run(res.summary, directory, tuple(res.rows))
 
 
-def fit(files: str | Path | Iterable[str | Path], *, out: str | Path | None = None, settings: Mapping[str, Any]
-        | Iterable[str] | None = None, progress: bool = False, log: Any = None, registry: Registry | None = None) -> list:
+def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any] | Iterable[str] | None = None,
+        out: str | Path | None = None, progress: bool = False, log: Callable[[str], None] | None = None,
+        registry: Registry | None = None) -> list[ObjectFit]:
     """Fit an orbit to each object in observation ``files`` (one path or several), as ``cistrack fit``
-    does (docs/real-data.md); ``settings`` as for :func:`run`, plus ``fit.*`` and ``measurements.reader.*``.
-    Returns a :class:`cistrack.fit.from_observations.ObjectFit` per object (``.result``, ``.ok``, ``.directory``)."""
-    from cistrack.fit.from_observations import fit_files
+    does (docs/real-data.md), and return one :class:`ObjectFit` per object, in order of first
+    appearance (``.designation``, ``.ok``, ``.result``: the :class:`cistrack.least_squares.FitResult`
+    with the state (6,) and covariance (6, 6) at the fit epoch, synodic LU and VU; ``.directory``).
+
+    ``settings``: as for :func:`run`, plus ``fit.*`` and ``measurements.reader.*``. ``out``: the
+    results folder (default ``runs/fit-<designation>``; with several objects, one folder each
+    under it). ``progress``: the filter's progress bar on stderr. ``log``: receives one line per
+    stage. ``registry``: the components to use (default: the installed plugins).
+    """
+    from cistrack.fitting.from_observations import fit_files
+
     paths = [files] if isinstance(files, (str, Path)) else list(files)
     return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress)
 
 
 def read_run(directory: str | Path) -> Run:
     """A finished (or interrupted) run read back from its results folder."""
+    from cistrack.evaluation.run_summary import RunSummary
     from cistrack.results.store import read_manifest
 
     d = Path(directory)
@@ -306,7 +347,7 @@ class StudyResult:
 
 def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | None = None,
           settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
-          workers: int | None = None, progress: bool = False) -> StudyResult:
+          workers: int | None = None, progress: bool = False, log: Callable[[str], None] | None = None) -> StudyResult:
     """Run every missing run of a study, as ``cistrack study run`` does, and return its :class:`StudyResult`.
 
     ``study``: a built-in study name (``cistrack scenarios``), a study TOML file or a study folder.
@@ -314,17 +355,23 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     ``settings``: overrides of every run, as for :func:`load_scenario` (``--set``; the default
     folder then names their hash). ``out``: the study folder (default ``studies_out/<name>``);
     runs already done there are not run again. ``workers``: local processes (default: one per
-    core). ``progress``: a progress bar on stderr. Lost runs raise (none finished) or warn.
+    core). ``progress``: a progress bar on stderr. ``log``: receives the line ``cistrack study run``
+    prints when the study ends (runs completed, already done, failed; the folder). Lost runs
+    raise (none finished) or warn.
     """
+    from cistrack.evaluation.run_summary import RunSummary
     from cistrack.studies.lost_runs import say_lost_runs
-    from cistrack.studies.study import plan_runs, run_study
+    from cistrack.studies.study import run_study
     from cistrack.studies.study_table import study_rows
 
     items = _setting_items(settings) or None
     res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
                     first_seed=first_seed, n_seeds=n_seeds)
-    _, specs, directory = plan_runs(study, out, items, first_seed, n_seeds)
+    if log is not None:
+        log(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
+            f"{res['failed']} failed -> {res['out_dir']}")
+    specs, directory = res["specs"], Path(res["out_dir"])
     rows = study_rows(specs)
     runs = tuple(Run(RunSummary.from_dict(row["summary"]), Path(row["directory"])) for row in rows)
-    problems = say_lost_runs(str(res["name"]), Path(directory), len(specs), len(runs), res.get("problems"))
-    return StudyResult(str(res["name"]), Path(directory), runs, tuple(rows), problems)
+    problems = say_lost_runs(str(res["name"]), directory, len(specs), len(runs), res.get("problems"))
+    return StudyResult(str(res["name"]), directory, runs, tuple(rows), problems)

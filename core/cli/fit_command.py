@@ -1,7 +1,7 @@
 """``cistrack fit FILE [FILE ...] [--out DIR] [--set TABLE.KEY=VALUE ...] [--quiet]`` and the
 export of a fit directory (``cistrack export FIT_DIR [--predict DAYS]``).
 
-The work is :func:`cistrack.fit.from_observations.fit_files`; this module parses the options and
+The work is :func:`cistrack.fitting.from_observations.fit_files`; this module parses the options and
 prints, per object: the filter run's outcome, the least-squares RMS and chi-square, the assumed
 and estimated noise, the rejected count, the position and velocity sigmas at the fit epoch, and
 every warning. Exit status: 0 when every object's fit converged, 3 otherwise, 2 for an input
@@ -20,9 +20,9 @@ def _eprint(*a) -> None:
 
 
 def summary_lines(one) -> list[str]:
-    """The printed summary of one :class:`~cistrack.fit.from_observations.ObjectFit`."""
+    """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
     from cistrack import units
-    from cistrack.fit.fit_record import noise_summary
+    from cistrack.fitting.fit_record import noise_summary
 
     lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED") + f"  (results in {one.directory})"]
     if one.run is not None:
@@ -59,7 +59,7 @@ def summary_lines(one) -> list[str]:
     for m in r.messages[1:]:
         lines.append(f"  note: {m}")
     if one.lov:
-        from cistrack.fit.line_of_variations import line_summary
+        from cistrack.least_squares.line_of_variations import line_summary
 
         lv = line_summary(one.lov, r)
         lo, hi = lv["sigma_range"]
@@ -68,7 +68,7 @@ def summary_lines(one) -> list[str]:
                      f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2")
         if not lv["linear"]:
             lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
-                         "understates the uncertainty; sample the line (lov.csv, cistrack.fit.line_of_variations)")
+                         "understates the uncertainty; sample the line (lov.csv, cistrack.least_squares.line_of_variations)")
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
     if not r.converged:
@@ -81,7 +81,7 @@ def summary_lines(one) -> list[str]:
 
 
 def cmd_fit(args) -> int:
-    from cistrack.fit.from_observations import fit_files
+    from cistrack.fitting.from_observations import fit_files
     from cistrack.plugin.registry import default_registry
 
     quiet = bool(args.quiet)
@@ -104,8 +104,8 @@ def cmd_fit(args) -> int:
 
 
 def cmd_export_fit(args) -> int:
-    """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fit.fit_export`)."""
-    from cistrack.fit.fit_export import export_fit
+    """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fitting.fit_export`)."""
+    from cistrack.fitting.fit_export import export_fit
 
     params = {} if getattr(args, "step", None) is None else {"step": args.step}
     if getattr(args, "covariance", None) is not None:  # else export_fit's default
@@ -160,7 +160,7 @@ def add_predict_option(export_parser) -> None:
 
 def is_fit_export(args) -> bool:
     """Whether ``cistrack export`` was given a fit directory (or --predict, which needs one)."""
-    from cistrack.fit.fit_export import is_fit_directory
+    from cistrack.fitting.fit_export import is_fit_directory
 
     if is_fit_directory(args.run):
         return True

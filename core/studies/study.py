@@ -189,8 +189,9 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
               dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
               rerun_dir: str | Path | None = None, settings: list[str] | None = None,
               first_seed: int | None = None, n_seeds: int | None = None) -> dict:
-    """Run every missing run of a study. Returns counts, the study directory and the runs that are
-    not done on disk afterwards (``problems``: (run id, why) pairs; ``failed`` counts them).
+    """Run every missing run of a study. Returns counts, the study directory, the runs that are
+    not done on disk afterwards (``problems``: (run id, why) pairs; ``failed`` counts them) and the
+    plan it ran (``specs``: every :class:`RunSpec` of the study, done before or now, in plan order).
 
     The study directory must be new, empty or this study's own
     (:func:`cistrack.results.output_paths.check_study_dir`), and only one study process at a time
@@ -251,7 +252,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     bad = {rid for rid, _ in problems}
     return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
             "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
-            "problems": problems}
+            "problems": problems, "specs": specs}
 
 
 def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:

@@ -7,6 +7,7 @@ import pytest
 
 import cistrack as ct
 from cistrack.api import Run, StudyResult
+from cistrack.studies.study import plan_runs, run_study
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +38,28 @@ def test_the_settings_reach_every_run(small_study):
 def test_running_the_study_again_reads_the_same_runs_back(small_study):
     again = ct.study("quick-comparison", n_seeds=1, settings={"duration_days": 2}, out=small_study.directory)
     assert [r.summary for r in again.runs] == [r.summary for r in small_study.runs]
+
+
+def test_the_runs_are_those_of_the_study_plan_in_its_order(small_study):
+    _, specs, directory = plan_runs("quick-comparison", small_study.directory, ["duration_days=2"], n_seeds=1)
+    assert [r.run_id for r in small_study.runs] == [s.run_id for s in specs]
+    assert small_study.directory == directory
+
+
+def test_planning_a_study_twice_gives_the_same_plan(small_study):
+    assert plan_runs(small_study.directory) == plan_runs(small_study.directory)
+
+
+def test_run_study_returns_the_plan_it_ran(small_study):
+    res = run_study(small_study.directory, workers=1, progress=False)
+    assert res["specs"] == plan_runs(small_study.directory)[1]
+    assert (res["skipped"], res["total"]) == (2, 2)
+
+
+def test_the_log_receives_the_line_the_command_line_prints(small_study):
+    lines: list[str] = []
+    ct.study(small_study.directory, log=lines.append)
+    assert lines == [f"study 'quick-comparison': 0 runs completed, 2 already done, 0 failed -> {small_study.directory}"]
 
 
 def test_the_study_figure_has_a_median_per_filter_and_the_nees_band(small_study):

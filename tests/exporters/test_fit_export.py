@@ -11,8 +11,8 @@ import pytest
 
 from cistrack.cli.main import main
 from cistrack.errors import CistrackError
-from cistrack.fit.fit_export import GRID_MINUTES, export_fit
-from cistrack.fit.from_observations import fit_files
+from cistrack.fitting.fit_export import GRID_MINUTES, export_fit
+from cistrack.fitting.from_observations import fit_files
 from cistrack.scenario.loading import builtin_scenario_path
 from cistrack.units import TU_S
 

@@ -18,7 +18,7 @@ pytestmark = pytest.mark.slow
 def _truth_in_oem_frame(fit_dir, epochs):
     """The shipped truth at the OEM's epochs (UTC text), in the OEM's frame (km, km/s)."""
     from cistrack import units
-    from cistrack.fit.fit_export import _scenario
+    from cistrack.fitting.fit_export import _scenario
     from cistrack.plugin.registry import default_registry
 
     reg = default_registry()

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from cistrack.errors import ConfigError
-from cistrack.fit.from_observations import fit_choices
+from cistrack.fitting.from_observations import fit_choices
 
 
 def test_defaults_are_the_last_observation_and_no_prior():

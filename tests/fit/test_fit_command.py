@@ -71,7 +71,7 @@ def test_fit_json_holds_state_covariance_epoch_and_statistics(fitted):
 def test_fit_recovers_the_truth_within_its_covariance_at_the_fit_epoch(fitted):
     """The truth of the shipped example (truth.csv) lies inside the fitted covariance."""
     from cistrack import units
-    from cistrack.fit.fit_export import _scenario
+    from cistrack.fitting.fit_export import _scenario
     from cistrack.plugin.registry import default_registry
 
     out = fitted[0]

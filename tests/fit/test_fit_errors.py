@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cistrack.errors import MeasurementError, ParameterError, StateError
-from cistrack.fit import FitError, FitOptions, UnobservableWarning, fit_orbit
+from cistrack.least_squares import FitError, FitOptions, UnobservableWarning, fit_orbit
 from cistrack.model.measurement import MeasurementSet
 
 from .arcs import GUESS_OFFSET, cr3bp_arc

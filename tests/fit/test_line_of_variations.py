@@ -1,4 +1,4 @@
-"""The line of variations (cistrack.fit.line_of_variations): points of least squares along the
+"""The line of variations (cistrack.least_squares.line_of_variations): points of least squares along the
 weakest direction of a fit, each on its hyperplane v^T N (x - x*) = sigma.
 
 Checked against quantities computed independently of the module: the chi-square of a state from
@@ -12,8 +12,8 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from cistrack.fit import FitOptions, fit_orbit
-from cistrack.fit.line_of_variations import line_of_variations, line_summary, line_weights, sample_line, weakest_direction
+from cistrack.least_squares import FitOptions, fit_orbit
+from cistrack.least_squares.line_of_variations import line_of_variations, line_summary, line_weights, sample_line, weakest_direction
 from cistrack.model.measurement import MeasurementSet
 
 from .arcs import GUESS_OFFSET, cr3bp_arc

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.fit.measurement_model import MeasurementModel
+from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.model.measurement import MeasurementSet
 
 from .arcs import cr3bp_arc

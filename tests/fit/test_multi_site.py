@@ -7,7 +7,7 @@ import numpy as np
 
 from cistrack.astro.site_network import SiteNetwork, merge_sites
 from cistrack.astro.sites import Site
-from cistrack.fit import fit_orbit
+from cistrack.least_squares import fit_orbit
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import default_registry
 from cistrack.units import LU_KM, hours_to_tu

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.fit import fit_orbit
+from cistrack.least_squares import fit_orbit
 from cistrack.model.measurement import MeasurementSet
 
 from .arcs import GUESS_OFFSET, cr3bp_arc, ephemeris_arc

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cistrack.errors import MeasurementError
-from cistrack.fit.observation_input import read_object_observations
+from cistrack.fitting.observation_input import read_object_observations
 from cistrack.plugin.registry import default_registry
 from cistrack.runs.observation_files import SeveralObjectsError, read_observations
 from cistrack.scenario.loading import builtin_scenario_path

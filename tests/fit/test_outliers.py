@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.fit import FitOptions, fit_orbit
-from cistrack.fit.outliers import rejection_threshold, update_rejections
+from cistrack.least_squares import FitOptions, fit_orbit
+from cistrack.least_squares.outliers import rejection_threshold, update_rejections
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import ARCSEC_RAD
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.fit import fit_orbit, predict
+from cistrack.least_squares import fit_orbit, predict
 
 from .arcs import GUESS_OFFSET, cr3bp_arc
 from .linear_components import FreeParticle, LinearSensor, free_particle_stm

@@ -5,8 +5,8 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from cistrack.fit.residual_plots import plot_residuals, residual_figure
-from cistrack.fit.residual_table import residual_table
+from cistrack.fitting.residual_plots import plot_residuals, residual_figure
+from cistrack.least_squares.residual_table import residual_table
 from cistrack.units import ARCSEC_RAD
 
 

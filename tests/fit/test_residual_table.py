@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.fit import fit_orbit
-from cistrack.fit.residual_table import residual_table
+from cistrack.least_squares import fit_orbit
+from cistrack.least_squares.residual_table import residual_table
 from cistrack.units import ARCSEC_RAD
 
 from .arcs import GUESS_OFFSET, cr3bp_arc

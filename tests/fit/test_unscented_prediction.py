@@ -8,9 +8,9 @@ import pytest
 
 from cistrack import units
 from cistrack.errors import ConfigError, StateError
-from cistrack.fit import fit_orbit, predict
-from cistrack.fit.prediction import predict_orbit
-from cistrack.fit.unscented_prediction import sigma_points, unscented_covariances
+from cistrack.least_squares import fit_orbit, predict
+from cistrack.least_squares.prediction import predict_orbit
+from cistrack.least_squares.unscented_prediction import sigma_points, unscented_covariances
 from cistrack.plugins.dynamics.cr3bp import CR3BP
 from cistrack.plugins.dynamics.orbit_catalog import ORBITS
 

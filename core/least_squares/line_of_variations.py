@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.errors import MeasurementError, PropagationError
-from cistrack.fit.least_squares import _one_pass, _Problem
-from cistrack.fit.measurement_model import MeasurementModel
-from cistrack.fit.options import FitOptions
-from cistrack.fit.result import FitResult
+from cistrack.least_squares.differential_correction import _one_pass, _Problem
+from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.result import FitResult
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
@@ -88,7 +88,7 @@ def _conditional_covariance(prob: _Problem, x: np.ndarray, w: np.ndarray) -> np.
 def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult, *,
                        step: float = 0.5, max_sigma: float = 4.0, max_delta_chi2: float = 16.0,
                        options: FitOptions | None = None) -> list[LovPoint]:
-    """Points of the line of variations of ``fit`` (a converged :func:`cistrack.fit.fit_orbit` result
+    """Points of the line of variations of ``fit`` (a converged :func:`cistrack.least_squares.fit_orbit` result
     over ``measurements``, all of them used), ordered by sigma, the nominal solution included.
 
     Parameters
@@ -201,7 +201,7 @@ def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
     ``sigma_range`` [lowest, highest], ``max_departure_sigma``, ``max_departure_km``,
     ``max_chi2_excess`` (largest |delta chi2 - sigma^2|) and ``linear`` (departure below 1
     sigma and chi-square within 1 of sigma^2 everywhere: the covariance describes the solutions)."""
-    from cistrack.fit.observability import to_km
+    from cistrack.least_squares.observability import to_km
 
     v = weakest_direction(fit.covariance)
     n = np.linalg.inv(fit.covariance)

@@ -5,8 +5,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cistrack.fit.observability import to_km
-from cistrack.fit.residual_table import ResidualTable
+from cistrack.least_squares.observability import to_km
+from cistrack.least_squares.residual_table import ResidualTable
 
 __all__ = ["FitResult"]
 

@@ -7,8 +7,8 @@
 - ``residuals.csv``: one row per observation: time UTC, site, O - C (RA x cos(Dec) and Dec in
   arcsec for RA/Dec), normalised residuals, chi-square, rejected;
 - ``residuals-<site>.png`` / ``.svg``: the residual plot of each site
-  (:mod:`cistrack.fit.residual_plots`);
-- ``lov.csv`` with ``--set fit.lov=N``: the line of variations (:mod:`cistrack.fit.line_of_variations`),
+  (:mod:`cistrack.fitting.residual_plots`);
+- ``lov.csv`` with ``--set fit.lov=N``: the line of variations (:mod:`cistrack.least_squares.line_of_variations`),
   one row per point: sigma, chi-square and its rise, the state (km, km/s, synodic), its
   distance from the fitted state and its departure from the straight line x* + sigma v (km); its
   summary is ``line_of_variations`` in ``fit.json``.
@@ -100,15 +100,15 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "noise_arcsec": noise_summary(ms, r), "messages": list(r.messages),
     })
     if one.lov:
-        from cistrack.fit.line_of_variations import line_summary
+        from cistrack.least_squares.line_of_variations import line_summary
 
         data["line_of_variations"] = {**line_summary(one.lov, r), "points": len(one.lov), "file": LOV}
     return data
 
 
 def _lov_csv(points, fit) -> str:
-    from cistrack.fit.line_of_variations import weakest_direction
-    from cistrack.fit.observability import to_km
+    from cistrack.least_squares.line_of_variations import weakest_direction
+    from cistrack.least_squares.observability import to_km
 
     v = weakest_direction(fit.covariance)
     buf = io.StringIO()
@@ -147,7 +147,7 @@ def _json_default(v: Any) -> Any:
 def write_fit_outputs(one, obs) -> list[Path]:
     """Write ``fit.json`` (always, also for a failed fit), and with a fit ``residuals.csv`` and the
     residual plots into ``one.directory``; returns the paths written."""
-    from cistrack.fit.residual_plots import plot_residuals
+    from cistrack.fitting.residual_plots import plot_residuals
 
     d = Path(one.directory)
     text = json.dumps(_fit_dict(one, obs), indent=1, default=_json_default, allow_nan=True)

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from cistrack.evaluation.consistency import chi2_ppf
+from cistrack.least_squares.chi_square import chi2_ppf
 
 __all__ = ["rejection_threshold", "update_rejections"]
 

@@ -1,6 +1,6 @@
 """Exporting a fitted orbit: ``cistrack export FIT_DIR --format oem [--predict DAYS]``.
 
-The state and covariance of ``fit.json`` are propagated with :func:`cistrack.fit.prediction.predict_orbit`
+The state and covariance of ``fit.json`` are propagated with :func:`cistrack.least_squares.prediction.predict_orbit`
 (the covariance by the unscented transform: 13 orbits through the nonlinear dynamics, or with
 ``covariance='linear'`` by the dynamics' transition matrices) to a regular grid of
 :data:`GRID_MINUTES` over the arc (from the first observation, floored to a whole minute, to the
@@ -28,10 +28,10 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
-from cistrack.fit.fit_record import read_fit_record
-from cistrack.fit.prediction import COVARIANCE_METHODS, predict_orbit
-from cistrack.fit.residual_table import residual_table
-from cistrack.fit.result import FitResult
+from cistrack.fitting.fit_record import read_fit_record
+from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
+from cistrack.least_squares.residual_table import residual_table
+from cistrack.least_squares.result import FitResult
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.atomic_files import atomic_target
 from cistrack.results.estimates import KM_SCALE, Estimates
@@ -116,7 +116,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
     (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path. ``predict_days`` (>= 0, at most
     :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation; ``covariance`` (one of
-    :data:`cistrack.fit.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
+    :data:`cistrack.least_squares.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
     Refusals name the option: an existing ``path`` without ``overwrite``, a fit that did not
     converge without ``force``, an unknown ``covariance``."""
     if covariance not in COVARIANCE_METHODS:

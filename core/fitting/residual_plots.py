@@ -29,7 +29,7 @@ def site_file_stem(site: str) -> str:
 
 
 def plot_residuals(directory: str | Path, table, epoch: datetime, designation: str = "") -> list[Path]:
-    """Write a PNG and an SVG per site of the :class:`~cistrack.fit.ResidualTable` ``table``
+    """Write a PNG and an SVG per site of the :class:`~cistrack.least_squares.ResidualTable` ``table``
     (times TU since ``epoch``) into ``directory``; returns the files written."""
     d = Path(directory)
     if len(table) == 0:
@@ -47,7 +47,7 @@ def plot_residuals(directory: str | Path, table, epoch: datetime, designation: s
 
 def residual_figure(table, site: str, epoch: datetime, designation: str = ""):
     """The matplotlib Figure of one ``site``'s residuals in ``table`` (a non-empty
-    :class:`~cistrack.fit.ResidualTable`, times TU since ``epoch``). The legend sits above the top
+    :class:`~cistrack.least_squares.ResidualTable`, times TU since ``epoch``). The legend sits above the top
     panel, outside every panel, so that it hides no residual wherever the points fall."""
     from matplotlib.figure import Figure
 

@@ -1,6 +1,6 @@
 """``cistrack fit``: observation files in, a least-squares orbit per object out.
 
-For each object in the files (:mod:`cistrack.fit.observation_input`):
+For each object in the files (:mod:`cistrack.fitting.observation_input`):
 
 1. a scenario is built in memory from the template ``cistrack/scenarios/fit-defaults.toml``
    (ephemeris dynamics, ``real-telescope`` RA/Dec, the speed-bounded uniform-range IOD, the
@@ -10,11 +10,11 @@ For each object in the files (:mod:`cistrack.fit.observation_input`):
    ``--set`` items; it runs through :func:`cistrack.runs.pipeline.run_scenario`, which writes
    the usual results files;
 2. the filter's final estimate (at the last observation) is propagated to the fit epoch and
-   refined by :func:`cistrack.fit.fit_orbit` over the whole arc, without a prior by default
+   refined by :func:`cistrack.least_squares.fit_orbit` over the whole arc, without a prior by default
    (the filter's covariance comes from the same observations: as a prior it would count them
    twice); ``--set fit.prior=filter`` uses it anyway;
 3. ``fit.json``, ``residuals.csv`` and a residual plot per site are written
-   (:mod:`cistrack.fit.fit_record`, :mod:`cistrack.fit.residual_plots`).
+   (:mod:`cistrack.fitting.fit_record`, :mod:`cistrack.fitting.residual_plots`).
 
 The fit epoch is the last observation by default (``--set fit.epoch=middle|first``): measured on
 the shipped example (65 observations, 6 days, ephemeris dynamics) the unit-diagonal normal matrix
@@ -35,13 +35,13 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError
-from cistrack.fit.errors import FitError, UnobservableWarning
-from cistrack.fit.least_squares import fit_orbit
-from cistrack.fit.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
+from cistrack.least_squares.errors import FitError, UnobservableWarning
+from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
                                             write_merged)
-from cistrack.fit.options import FitOptions
-from cistrack.fit.result import FitResult
-from cistrack.fit.trajectory import arc_states_and_stms
+from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.output_paths import check_output_dir
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
@@ -186,7 +186,7 @@ def _fit_epoch(choice: str, times: np.ndarray) -> float:
 
 def _least_squares(ctx, choices: FitChoices, restart=None) -> FitResult:
     """The least-squares fit started from the filter's final estimate (ctx: the run's context), or
-    from ``restart`` (a :class:`cistrack.fit.restart.Restart`: an earlier estimate of the filter)."""
+    from ``restart`` (a :class:`cistrack.fitting.restart.Restart`: an earlier estimate of the filter)."""
     belief = ctx.filter.belief
     what = "the filter's final estimate" if restart is None else f"the filter's estimate at {restart.utc}"
     if restart is None:
@@ -215,9 +215,9 @@ def _least_squares(ctx, choices: FitChoices, restart=None) -> FitResult:
 def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResult | None, str, str]:
     """(fit, failure, start): the least squares from the filter's final estimate; when that fails
     or does not converge, from the filter's estimate before the updates it should not have taken
-    in (:func:`cistrack.fit.restart.restart_points`), latest first. ``start`` says which estimate
+    in (:func:`cistrack.fitting.restart.restart_points`), latest first. ``start`` says which estimate
     a restarted fit began from and why ("" for the final estimate)."""
-    from cistrack.fit.restart import restart_points
+    from cistrack.fitting.restart import restart_points
 
     try:
         result, failure = _least_squares(ctx, choices), ""
@@ -239,11 +239,11 @@ def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResu
 
 def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
     """The fit's line of variations over the observations it used (see
-    :mod:`cistrack.fit.line_of_variations`), every half sigma to +-``choices.lov`` (each point's
+    :mod:`cistrack.least_squares.line_of_variations`), every half sigma to +-``choices.lov`` (each point's
     Levenberg-Marquardt gets at least 300 iterations: the constraint's stiff penalty slows it)."""
     from dataclasses import replace
 
-    from cistrack.fit.line_of_variations import line_of_variations
+    from cistrack.least_squares.line_of_variations import line_of_variations
 
     used = ctx.measurements.subset(~np.asarray(result.residuals.rejected, dtype=bool))
     return line_of_variations(ctx.dynamics, ctx.sensor, used, result, step=0.5, max_sigma=choices.lov,
@@ -271,7 +271,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     (files, settings, output directory) raise before any run; a run or fit that fails is reported
     in its ObjectFit (``failure``, ``result.converged``).
     """
-    from cistrack.fit.fit_record import write_fit_outputs
+    from cistrack.fitting.fit_record import write_fit_outputs
     from cistrack.runs.pipeline import run_scenario
 
     reg = registry or default_registry()

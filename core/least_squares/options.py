@@ -13,7 +13,7 @@ __all__ = ["FitOptions"]
 
 @dataclass(frozen=True)
 class FitOptions:
-    """Settings of :func:`cistrack.fit.fit_orbit`.
+    """Settings of :func:`cistrack.least_squares.fit_orbit`.
 
     Attributes
     ----------
@@ -34,7 +34,7 @@ class FitOptions:
         Initial Levenberg-Marquardt damping (relative to the normal matrix's diagonal), its
         factor after a rejected / accepted step, and the damping at which the iteration stops.
     reject_outliers : bool
-        Chi-square outlier rejection with readmission (:mod:`cistrack.fit.outliers`).
+        Chi-square outlier rejection with readmission (:mod:`cistrack.least_squares.outliers`).
     reject_sigma : float
         Rejection threshold as a Gaussian sigma level (3: chi-square 11.83 for two components).
     robust_threshold : bool
@@ -47,7 +47,7 @@ class FitOptions:
         Fit components named "range" too (default: angles only; range is an IOD aid).
     max_condition : float
         Condition number (unit-diagonal normal matrix) above which the arc is declared to leave a
-        direction unobservable (an :class:`cistrack.fit.UnobservableWarning` and a message).
+        direction unobservable (an :class:`cistrack.least_squares.UnobservableWarning` and a message).
         Measured on the 9:2 NRHO seen from one site every 40 min: 1e7-2e8 for arcs of 2-5 hours,
         1e5 for 20 hours over two nights, 1e3-1e4 for three days.
     max_weak_sigma_km : float

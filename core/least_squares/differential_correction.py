@@ -11,7 +11,7 @@ normal equations
 when the cost sum_i r_i^T W r_i + (x - x0)^T P0^-1 (x - x0) decreases. Convergence: the
 Gauss-Newton step is below ``step_tolerance`` sigma, or an accepted step changes the weighted RMS
 by less than ``rms_tolerance``. Outliers are rejected and readmitted between passes
-(:mod:`cistrack.fit.outliers`). The covariance is N^-1 at the estimate.
+(:mod:`cistrack.least_squares.outliers`). The covariance is N^-1 at the estimate.
 
 Residuals are computed from the dynamics' ``propagate`` (the same propagation that simulates
 measurements), Jacobians from its ``propagate_with_stm``; an approximate STM only slows the
@@ -25,14 +25,14 @@ from typing import Any
 import numpy as np
 
 from cistrack.errors import MeasurementError, PropagationError, StateError
-from cistrack.fit.errors import FitError, UnobservableWarning
-from cistrack.fit.measurement_model import MeasurementModel
-from cistrack.fit.observability import observability
-from cistrack.fit.options import FitOptions
-from cistrack.fit.outliers import update_rejections
-from cistrack.fit.residual_table import residual_table
-from cistrack.fit.result import FitResult
-from cistrack.fit.trajectory import arc_states, arc_states_and_stms
+from cistrack.least_squares.errors import FitError, UnobservableWarning
+from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.observability import observability
+from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.outliers import update_rejections
+from cistrack.least_squares.residual_table import residual_table
+from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
@@ -207,11 +207,11 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
 
     Returns
     -------
-    FitResult. Raises :class:`cistrack.fit.FitError` when there are fewer measurement components
+    FitResult. Raises :class:`cistrack.least_squares.FitError` when there are fewer measurement components
     than unknowns (without a prior), when the normal matrix at the estimate is not positive
     definite, or when the orbit cannot be propagated over the arc; :class:`cistrack.errors.StateError`
     and :class:`cistrack.errors.MeasurementError` for malformed input. Warns
-    :class:`cistrack.fit.UnobservableWarning` when the condition number exceeds
+    :class:`cistrack.least_squares.UnobservableWarning` when the condition number exceeds
     ``options.max_condition`` or the weakest direction's one sigma ``options.max_weak_sigma_km``.
     """
     opts = FitOptions() if options is None else options

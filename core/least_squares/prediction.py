@@ -8,9 +8,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cistrack.errors import ConfigError, StateError
-from cistrack.fit.result import FitResult
-from cistrack.fit.trajectory import arc_states_and_stms
-from cistrack.fit.unscented_prediction import unscented_covariances
+from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.trajectory import arc_states_and_stms
+from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.interfaces.dynamics import Dynamics
 
 __all__ = ["predict", "predict_orbit", "Prediction", "COVARIANCE_METHODS"]
