@@ -14,21 +14,29 @@ recorder       any object with lifecycle hookimpls         ``"recorder"``
 reader         :class:`Reader` (observation file format)   ``"reader"``
 exporter       :class:`Exporter` (estimate file format)    ``"exporter"``
 range prior    :class:`RangePrior` (IOD range model)        ``"range-prior"``
+PGM steps      :class:`ComponentUpdate`, :class:`PosteriorDraw`, ``"pgm-update"``, ``"pgm-draw"``,
+               :class:`Reanchor` (:mod:`.pgm_steps`)          ``"pgm-reanchor"``
 =============  ==========================================  ==========================
+
+A preset (:func:`~cistrack.interfaces.preset.preset`) registers a component with other defaults.
 """
 from cistrack.interfaces.clustering import Clusterer
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 from cistrack.interfaces.filter import Filter
 from cistrack.interfaces.iod import IODMethod
 from cistrack.interfaces.orbit import ReferenceOrbit
+from cistrack.interfaces.pgm_steps import ComponentUpdate, PosteriorDraw, Reanchor
+from cistrack.interfaces.preset import preset
 from cistrack.interfaces.exporter import Exporter
 from cistrack.interfaces.range_prior import RangePrior
 from cistrack.interfaces.reader import Reader
 from cistrack.interfaces.schedule import Pass, Schedule
 from cistrack.interfaces.sensor import Sensor
 
-KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior")
+KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior",
+                         "pgm-update", "pgm-draw", "pgm-reanchor")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
-__all__ = ["Body", "Clusterer", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "Pass", "Propagation",
-           "RangePrior", "Reader", "ReferenceOrbit", "Schedule", "Sensor"]
+__all__ = ["Body", "Clusterer", "ComponentUpdate", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "Pass",
+           "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
+           "preset"]

@@ -6,7 +6,7 @@ import pytest
 
 from cistrack.model.belief import GaussianMixture, ParticleCloud
 from cistrack.errors import ParameterError
-from cistrack.plugins.filters.component_spread import shrink_components
+from cistrack.plugins.filters.pgm.component_spread import shrink_components
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 
 from .linear_models import LinearDynamics, LinearSensor, filter_beside_kalman

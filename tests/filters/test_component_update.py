@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from cistrack.errors import ParameterError
-from cistrack.plugins.filters.component_update import ensemble_component_update, iterated_component_update
+from cistrack.plugins.filters.pgm.component_update import ensemble_component_update, iterated_component_update
 from cistrack.plugins.filters.kalman_update import group_moments
 from cistrack.plugins.filters.pgm import PGMFilter
 

@@ -8,7 +8,7 @@ import pytest
 from cistrack.model.belief import ParticleCloud
 from cistrack.errors import FilterError, MeasurementError
 from cistrack.model.measurement import Measurement
-from cistrack.plugins.filters.cluster_merge import merge_small_clusters
+from cistrack.plugins.filters.pgm.cluster_merge import merge_small_clusters
 from cistrack.plugins.filters.enkf import EnKFFilter
 from cistrack.plugins.filters.pgm import PGMFilter
 from cistrack.plugins.filters.sir import SIRFilter

@@ -6,7 +6,7 @@ import pytest
 
 from cistrack.model.belief import ParticleCloud
 from cistrack.errors import ParameterError
-from cistrack.plugins.filters.measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
+from cistrack.plugins.filters.pgm.measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 
 from .linear_models import LinearDynamics, LinearSensor

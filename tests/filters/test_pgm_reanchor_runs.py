@@ -1,4 +1,4 @@
-"""The PGM's re-anchoring in whole runs (plugins/filters/reanchoring.py through pgm.py): the belief
+"""The PGM's re-anchoring in whole runs (plugins/filters/pgm/reanchoring.py through pgm/filter.py): the belief
 after a re-anchoring is as sharp as the information bound says the data allow, and still holds
 the truth. Real scenarios, real components; the slow cases are the paper's examples."""
 from __future__ import annotations
@@ -71,15 +71,14 @@ def test_kernel_updates_wait_for_a_pass_after_a_gap():
 
 
 def test_the_pass_after_a_gap_ends_at_the_next_pause():
-    from cistrack.plugins.filters.pgm import PGMFilter
+    from cistrack.plugins.filters.pgm.kernel_update import PassAfterGap
     from cistrack.units import days_to_tu, hours_to_tu
 
-    f = PGMFilter(reanchor_gap_days=5.0, reanchor_pause_hours=3.0)
-    f._t_last_update, f._after_gap = None, False
+    passes = PassAfterGap(gap_days=5.0, pause_hours=3.0)
     t = [0.0, float(hours_to_tu(0.7))]
     t += [t[-1] + float(days_to_tu(10.0)), t[-1] + float(days_to_tu(10.0) + hours_to_tu(0.7))]
     t += [t[-1] + float(hours_to_tu(5.0))]
-    assert [f._pass_after_gap(x) for x in t] == [False, False, True, True, False]
+    assert [passes.at(x) for x in t] == [False, False, True, True, False]
 
 
 @pytest.mark.slow

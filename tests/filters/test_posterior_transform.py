@@ -8,7 +8,7 @@ from scipy.stats import skew
 from cistrack.model.belief import GaussianMixture, ParticleCloud
 from cistrack.errors import ParameterError
 from cistrack.plugins.filters.pgm import PGMFilter
-from cistrack.plugins.filters.posterior_transform import moment_map, transform_clusters
+from cistrack.plugins.filters.pgm.posterior_transform import moment_map, transform_clusters
 
 from .linear_models import LinearDynamics, LinearSensor, filter_beside_kalman
 

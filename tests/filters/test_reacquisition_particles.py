@@ -1,5 +1,5 @@
 """The PGM resamples more particles while its cloud is reacquiring: its predicted measurements
-spread wider than a threshold in noise units (plugins/filters/reacquisition_particles.py).
+spread wider than a threshold in noise units (plugins/filters/pgm/reacquisition_particles.py).
 The count grows and shrinks as the rule says and stays deterministic with the seed."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import Measurement
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
-from cistrack.plugins.filters.reacquisition_particles import measurement_spread_sigma, particles_to_draw
+from cistrack.plugins.filters.pgm.reacquisition_particles import measurement_spread_sigma, particles_to_draw
 
 from .linear_models import LinearDynamics, LinearSensor
 

@@ -1,4 +1,4 @@
-"""Re-anchoring (plugins/filters/reanchoring.py): when it is due, and what it returns.
+"""Re-anchoring (plugins/filters/pgm/reanchoring.py): when it is due, and what it returns.
 
 Two nights of az/el measurements of the 9:2 NRHO from the ground (1.5 arcsec, every 40 minutes
 while visible), ten days apart, simulated with the real ``ground-telescope`` and ``cr3bp``
@@ -14,7 +14,7 @@ import pytest
 from cistrack.errors import ParameterError
 from cistrack.model.measurement import Measurement
 from cistrack.plugin.registry import default_registry
-from cistrack.plugins.filters.reanchoring import Reanchoring
+from cistrack.plugins.filters.pgm.reanchoring import Reanchoring
 from cistrack.plugins.filters.pgm import PaperPGMFilter, PGMFilter
 from cistrack.units import days_to_tu, hours_to_tu, km_to_lu, kms_to_vu
 
@@ -222,7 +222,7 @@ def test_pgm_refuses_a_kernel_threshold_outside_0_1_naming_it():
 
 def test_continued_fits_across_the_gap_reach_the_direct_fits_solution():
     from cistrack.fit import FitOptions
-    from cistrack.plugins.filters.reanchoring import _DifferencedDynamics
+    from cistrack.plugins.filters.pgm.reanchoring import _DifferencedDynamics
 
     dyn, sen, _, truth, _, _ = _two_nights()
     ms = _measurements(3)

@@ -1,4 +1,4 @@
-"""Per-component measurement updates of a Gaussian mixture prior (used by the PGM filter).
+"""Per-component measurement updates of a Gaussian mixture prior: the PGM's ``pgm-update`` step.
 
 Two ways to condition each component N(mu_i, P_i) of a clustered prior on a measurement z:
 
@@ -13,7 +13,8 @@ Two ways to condition each component N(mu_i, P_i) of a clustered prior on a meas
   agree with z, with a covariance too small there; the iterated update does not.
 
 Both return the posterior means (M, d), covariances (M, d, d) and each component's predictive
-log-likelihood log p(z | component) (M,), which reweights the components.
+log-likelihood log p(z | component) (M,), which reweights the components. :class:`IteratedUpdate`
+and :class:`EnsembleUpdate` are the two as registered components (kind ``pgm-update``).
 """
 from __future__ import annotations
 
@@ -21,13 +22,19 @@ from typing import Callable
 
 import numpy as np
 
+from cistrack.interfaces.component import check_choice, check_int
+from cistrack.interfaces.pgm_steps import ComponentUpdate
 from cistrack.model.belief import regularize_covariance
 
-from .kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
-from .posterior_linearization import posterior_linearization_update
-from .sigma_points import MerweSigmaPoints
+from ..kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
+from ..posterior_linearization import posterior_linearization_update
+from ..sigma_points import MerweSigmaPoints
 
-__all__ = ["ensemble_component_update", "iterated_component_update"]
+__all__ = ["ensemble_component_update", "iterated_component_update", "EnsembleUpdate", "IteratedUpdate",
+           "COMPONENT_LIKELIHOODS"]
+
+COMPONENT_LIKELIHOODS = ("posterior", "prior")
+"""Where the iterated update linearises h for the components' likelihoods."""
 
 
 def ensemble_component_update(moments: GroupMoments, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -65,3 +72,40 @@ def iterated_component_update(means: np.ndarray, covs: np.ndarray,
             Ss.append(res.S)
     loglik = gaussian_log_likelihood(np.array(nus), np.array(Ss))
     return out_m, regularize_covariance(out_p, 1e-12), loglik
+
+
+class IteratedUpdate(ComponentUpdate):
+    """Iterated posterior linearisation of each component's Gaussian, re-linearised until its mean
+    stops moving (the PGM's default update).
+
+    Parameters
+    ----------
+    update_iterations : int
+        Most posterior linearisations per component and measurement.
+    component_likelihood : str
+        What reweights the components: "posterior" (the measurement likelihood with h linearised
+        over the component's posterior) or "prior" (over its prior).
+    """
+
+    def __init__(self, update_iterations: int = 10, component_likelihood: str = "posterior"):
+        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
+        self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
+                                                 COMPONENT_LIKELIHOODS)
+
+    def update(self, moments: GroupMoments, residuals: Callable[[np.ndarray], np.ndarray],
+               R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Means (M, d), covariances (M, d, d), log-likelihoods (M,) of the components ``moments``."""
+        return iterated_component_update(moments.mean_x, moments.pxx, residuals, R,
+                                         max_iterations=self.update_iterations, likelihood=self.component_likelihood)
+
+
+class EnsembleUpdate(ComponentUpdate):
+    """The paper's Kalman update of each component from its particles' sample cross-covariances
+    with their predicted measurements."""
+
+    uses_particles = True
+
+    def update(self, moments: GroupMoments, residuals: Callable[[np.ndarray], np.ndarray],
+               R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Means (M, d), covariances (M, d, d), log-likelihoods (M,) from ``moments`` with measurement columns."""
+        return ensemble_component_update(moments, R)

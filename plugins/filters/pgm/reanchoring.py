@@ -51,10 +51,11 @@ import numpy as np
 
 from cistrack.errors import CistrackError
 from cistrack.interfaces import Dynamics, Sensor
+from cistrack.interfaces.pgm_steps import ReanchorRun
 from cistrack.model.belief import GaussianMixture
 from cistrack.model.measurement import Measurement, MeasurementSet
 
-from .measured_components import MeasuredComponents
+from ..measured_components import MeasuredComponents
 from .measurement_sharpness import measurement_quadratic
 
 __all__ = ["Reanchoring", "REANCHOR_MODES"]
@@ -125,8 +126,9 @@ def _chi2_limit(dof: int) -> float:
     return float(2.0 * gammaincinv(0.5 * max(dof, 1), 0.999))
 
 
-class Reanchoring:
-    """The re-anchoring state of one filter run (see the module docstring).
+class Reanchoring(ReanchorRun):
+    """The re-anchoring state of one filter run (see the module docstring); made by the ``arcs``
+    and ``across-gaps`` components (:mod:`.reanchor_modes`).
 
     Parameters
     ----------

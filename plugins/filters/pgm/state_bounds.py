@@ -5,9 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.interfaces import Dynamics
+from cistrack.model.belief import GaussianMixture
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["StateBounds", "earth_position"]
+__all__ = ["StateBounds", "earth_position", "sample_inside"]
+
+_REDRAWS = 10  # attempts to replace drawn particles that fall outside the state bounds
 
 
 def earth_position(dynamics: Dynamics) -> np.ndarray:
@@ -44,3 +47,26 @@ class StateBounds:
         if self.max_v is not None:
             ok &= np.linalg.norm(states[:, 3:6], axis=1) <= self.max_v
         return ok
+
+
+def sample_inside(post: GaussianMixture, n: int, rng: np.random.Generator,
+                  bounds: StateBounds) -> tuple[np.ndarray, np.ndarray, int]:
+    """Up to ``n`` draws (n', 6) from ``post`` inside ``bounds``, their components (n',), and how
+    many draws fell outside. Draws outside are replaced by further draws (at most 10 rounds, each
+    drawing twice the shortfall plus 8 to cover the rejection rate); n' < n only when they all fail."""
+    x, lab = post.sample(n, rng)
+    if not bounds.active:
+        return x, lab, 0
+    ok = bounds.admissible(x)
+    x, lab = x[ok], lab[ok]
+    pruned = n - x.shape[0]
+    for _ in range(_REDRAWS):
+        short = n - x.shape[0]
+        if short == 0:
+            break
+        extra, elab = post.sample(short * 2 + 8, rng)
+        ok = bounds.admissible(extra)
+        pruned += int(np.count_nonzero(~ok))
+        x = np.concatenate([x, extra[ok][:short]])
+        lab = np.concatenate([lab, elab[ok][:short]])
+    return x, lab, pruned

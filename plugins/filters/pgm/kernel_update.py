@@ -36,10 +36,11 @@ from collections.abc import Callable
 import numpy as np
 
 from cistrack.errors import FilterError
+from cistrack.interfaces.pgm_steps import ClusteredParticles
 
-from .resampling import normalize_log_weights, systematic_resample
+from ..resampling import normalize_log_weights, systematic_resample
 
-__all__ = ["silverman_factor", "kernel_update", "KERNEL_JACOBIAN_STEPS"]
+__all__ = ["silverman_factor", "kernel_update", "KERNEL_JACOBIAN_STEPS", "PassAfterGap"]
 
 KERNEL_JACOBIAN_STEPS: np.ndarray = np.array([1e-7, 1e-7, 1e-7, 1e-5, 1e-5, 1e-5])
 """Central-difference steps (LU, VU) of the measurement Jacobian at each kernel's linearisation point."""
@@ -66,18 +67,15 @@ def _jacobians(residuals: Callable[[np.ndarray], np.ndarray], x: np.ndarray) -> 
     return np.stack(cols, axis=-1)
 
 
-def kernel_update(x: np.ndarray, labels: np.ndarray, cluster_covs: np.ndarray, counts: np.ndarray,
-                  residuals: Callable[[np.ndarray], np.ndarray], R: np.ndarray, n_draw: int,
-                  rng: np.random.Generator, who: str, iterations: int = 3,
+def kernel_update(prior: ClusteredParticles, residuals: Callable[[np.ndarray], np.ndarray], R: np.ndarray,
+                  n_draw: int, rng: np.random.Generator, who: str, iterations: int = 3,
                   bandwidth: float | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """Condition every particle's kernel on one measurement and draw ``n_draw`` posterior particles.
 
     Parameters
     ----------
-    x : (N, d) float                 prior particles (equally weighted), LU and VU
-    labels : (N,) int                each particle's cluster, in [0, M)
-    cluster_covs : (M, d, d) float   the clusters' sample covariances
-    counts : (M,) int                the clusters' sizes (for the bandwidth)
+    prior : ClusteredParticles       prior particles (N, d) (equally weighted, LU and VU), their
+                                     clusters (N,) in [0, M) and the clusters' covariances (M, d, d)
     residuals : callable             (K, d) states -> (K, m) predicted minus measured (angles wrapped)
     R : (m, m) float                 measurement noise covariance
     n_draw : int                     posterior particles to draw
@@ -91,10 +89,27 @@ def kernel_update(x: np.ndarray, labels: np.ndarray, cluster_covs: np.ndarray, c
     samples (n_draw, d), their kernels' cluster labels (n_draw,), the log evidence
     log p(z) under the kernel mixture, and the kernel weights (N,) after the update.
     """
-    x = np.asarray(x, dtype=float)
+    x, labels = np.asarray(prior.states, dtype=float), prior.labels
     n, d = x.shape
+    counts = np.bincount(labels, minlength=len(prior.covariances))
     beta2 = silverman_factor(counts, d) if bandwidth is None else np.full(len(counts), float(bandwidth))
-    B = beta2[labels][:, None, None] * cluster_covs[labels]  # (N, d, d)
+    B = beta2[labels][:, None, None] * prior.covariances[labels]  # (N, d, d)
+    xi, post_cov, loglik = _condition_kernels(x, B, residuals, R, iterations, who)
+    logw, log_evidence = normalize_log_weights(loglik - np.log(n), who)
+    w = np.exp(logw)
+    pick = systematic_resample(w, n_draw, rng)
+    # one draw from each chosen kernel's posterior; eigen-factorisation tolerates tiny negative parts
+    vals, vecs = np.linalg.eigh(post_cov[pick])
+    root = vecs * np.sqrt(np.clip(vals, 0.0, None))[:, None, :]
+    eps = rng.standard_normal((n_draw, d))
+    samples = xi[pick] + np.einsum("nij,nj->ni", root, eps)
+    return samples, labels[pick], float(log_evidence), w
+
+
+def _condition_kernels(x: np.ndarray, B: np.ndarray, residuals: Callable[[np.ndarray], np.ndarray],
+                       R: np.ndarray, iterations: int, who: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Iterated extended Kalman update of the kernels N(x (N, d), B (N, d, d)): posterior means
+    (N, d), covariances (N, d, d) and the log-likelihoods (N,) of the measurement under them."""
     m_rows = R.shape[0]
     xi = x.copy()
     for _ in range(iterations):
@@ -117,12 +132,26 @@ def kernel_update(x: np.ndarray, labels: np.ndarray, cluster_covs: np.ndarray, c
     loglik = -0.5 * (maha + logdet + m_rows * _LOG_2PI)
     if not (np.all(sign > 0) and np.all(np.isfinite(loglik)) and np.all(np.isfinite(xi))):
         raise FilterError(f"filter '{who}': the kernel update produced a non-finite likelihood or mean")
-    logw, log_evidence = normalize_log_weights(loglik - np.log(n), who)
-    w = np.exp(logw)
-    pick = systematic_resample(w, n_draw, rng)
-    # one draw from each chosen kernel's posterior; eigen-factorisation tolerates tiny negative parts
-    vals, vecs = np.linalg.eigh(post_cov[pick])
-    root = vecs * np.sqrt(np.clip(vals, 0.0, None))[:, None, :]
-    eps = rng.standard_normal((n_draw, d))
-    samples = xi[pick] + np.einsum("nij,nj->ni", root, eps)
-    return samples, labels[pick], float(log_evidence), w
+    return xi, post_cov, loglik
+
+
+class PassAfterGap:
+    """Whether the updates are in the first pass after a gap: a gap of ``gap_days`` or more between
+    updates starts such a pass, a pause of ``pause_hours`` or more ends it."""
+
+    def __init__(self, gap_days: float, pause_hours: float) -> None:
+        from cistrack import units
+
+        self.gap_tu = float(units.days_to_tu(gap_days))
+        self.pause_tu = float(units.hours_to_tu(pause_hours))
+        self.t_last: float | None = None
+        self.after_gap = False
+
+    def at(self, t: float) -> bool:
+        """True when an update at ``t`` (TU) is in a pass after a gap; records ``t`` as the latest update."""
+        last, self.t_last = self.t_last, t
+        if last is not None and t - last >= self.gap_tu:
+            self.after_gap = True
+        elif last is not None and t - last >= self.pause_tu:
+            self.after_gap = False
+        return self.after_gap

@@ -1,48 +1,46 @@
-"""The particle Gaussian mixture (PGM) filter (Raihan & Chakravorty 2018; paper section 3).
+"""The particle Gaussian mixture (PGM) filter (Raihan & Chakravorty 2018; paper section 3),
+composed of swappable steps.
 
 Particles are only propagated between measurements. At a measurement the particles are
-clustered into components (weight N_i/N, sample mean and covariance), each component gets a
-Kalman update from its particles' cross-covariances with their predicted measurements, the
+clustered into components (weight N_i/N, sample mean and covariance; a ``clustering``
+component), each component is conditioned on the measurement (a ``pgm-update`` component), the
 component weights are multiplied by the components' measurement likelihoods (log domain), and the
-N posterior particles are each cluster's own, mapped onto its component's posterior
-(:mod:`.posterior_transform`; the paper drew them from the posterior mixture). At a measurement
-far sharper than the cloud the particles are clustered into more components first
-(:mod:`.measurement_sharpness`).
-
-(Above 300 lines: the parameters are documented with their measurements, and the paper's
-plain PGM restates the constructor for its defaults.)
+N posterior particles are drawn (a ``pgm-draw`` component). Two hooks change that course: at the
+prediction that ends a pass the belief may be replaced by least-squares fits of the arc (a
+``pgm-reanchor`` component), and in the first pass after a gap a measurement far sharper than the
+cloud conditions every particle as its own kernel (:mod:`.kernel_update`, ``kernel_ess``). At a
+measurement far sharper than the cloud the particles may be clustered into more components first
+(:mod:`.measurement_sharpness`). The steps' interfaces: :mod:`cistrack.interfaces.pgm_steps`.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
-from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range)
 from cistrack.errors import FilterError
-from cistrack.plugin.hookspecs import hookimpl
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.interfaces.filter import FilterBase
+from cistrack.interfaces.pgm_steps import ClusteredParticles, ComponentUpdate, PosteriorDraw, Reanchor
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 from cistrack.model.measurement import Measurement
 
-from .particle_declarations import ParticleFilterDeclarations
+from ..ensemble_propagation import propagate_particles, steps_by_group
+from ..initial_cloud import check_cloud, initial_particles
+from ..kalman_update import group_moments
+from ..measured_components import MeasuredComponents, check_epoch
+from ..particle_declarations import ParticleFilterDeclarations
+from ..resampling import normalize_log_weights
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
-from .ensemble_propagation import propagate_particles, steps_by_group
-from .initial_cloud import check_cloud, initial_particles
 from .component_spread import shrink_components
-from .component_update import ensemble_component_update, iterated_component_update
-from .kalman_update import group_moments
-from .measured_components import MeasuredComponents, check_epoch
+from .component_update import COMPONENT_LIKELIHOODS
+from .kernel_update import PassAfterGap, kernel_update
 from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
-from .posterior_transform import transform_clusters
-from .reanchoring import REANCHOR_MODES, Reanchoring
 from .reacquisition_particles import measurement_spread_sigma, particles_to_draw
-from .resampling import normalize_log_weights
-from .state_bounds import StateBounds, earth_position
+from .step_choice import check_step, resolve_step
+from .state_bounds import StateBounds, earth_position, sample_inside
 
-__all__ = ["PGMFilter", "PaperPGMFilter", "resolve_clusterer"]
-
-_REDRAWS = 10  # attempts to replace resampled particles that fall outside the state bounds
+__all__ = ["PGMFilter", "resolve_clusterer"]
 
 
 class PGMFilter(ParticleFilterDeclarations, FilterBase):
@@ -65,12 +63,14 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         Optional process noise: velocity random walk, km/s after one day (0 = off).
     min_range_km, max_range_km, max_speed_kms : float or None
         Optional cislunar pruning bounds (Earth distance, synodic speed); None = not applied.
-    component_update : str
-        How each component is conditioned on a measurement: "iterated" (posterior-linearised
-        update of the component's Gaussian, re-linearised until its mean stops moving) or
-        "ensemble" (the paper's Kalman update from the particles' sample cross-covariances).
+    component_update : ComponentUpdate or str
+        How each component is conditioned on a measurement (a pgm-update component or its name):
+        "iterated" (posterior-linearised update of the component's Gaussian, re-linearised until
+        its mean stops moving) or "ensemble" (the paper's Kalman update from the particles'
+        sample cross-covariances).
     update_iterations : int
-        Most posterior linearisations per component and measurement (iterated update only).
+        Most posterior linearisations per component and measurement (iterated update only; handed
+        to the component_update that takes it).
     component_likelihood : str
         What reweights the components under the iterated update: "posterior" (the measurement
         likelihood with h linearised over the component's posterior) or "prior" (over its prior).
@@ -96,15 +96,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         Components are shrunk (``kept_spread``) only while the prior's predicted measurements
         spread over at most this many noise standard deviations; above it the components are
         separate hypotheses of a cloud reacquiring after a gap, not cells of one cloud.
-    reanchor : str
-        "arcs" (default): at the end of every pass, batch least squares over the arc's
-        measurements, started from the posterior particles that fit them best, replaces the
-        belief when a fit is accepted (:mod:`.reanchoring`; on Example 1 it brings the RMS error
-        at the ends of passes 3-6 from 2.5-4.8 to 0.9 times the information bound). "across-gaps":
-        the fits also span gaps, and after a gap the belief is the fit's line of variations
-        (Examples 2 and 3). "off": the PGM alone (the paper's).
+    reanchor : Reanchor or str
+        A pgm-reanchor component or its name. "arcs" (default): at the end of every pass, batch
+        least squares over the arc's measurements, started from the posterior particles that fit
+        them best, replaces the belief when a fit is accepted (:mod:`.reanchoring`; why:
+        docs/pgm-parameters.md). "across-gaps": the fits also span gaps, and after a gap the
+        belief is the fit's line of variations (Examples 2 and 3). "off": the PGM alone (the
+        paper's).
     reanchor_gap_days : float
-        A gap between updates at least this long ends an arc.
+        A gap between updates at least this long ends an arc (and starts a pass after a gap, for
+        kernel_ess).
     reanchor_pause_hours : float
         A pause between updates at least this long ends a pass (the attempt is made at the
         prediction that crosses it).
@@ -120,11 +121,12 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         gap of months the first measurements cut a slab a few km thick out of a filament millions
         of km long, where a cluster's Gaussian is far from the cloud's shape. 0 = off (default);
         1 = every update of that pass (Example 3).
-    posterior_draw : str
-        Where the posterior particles come from. "transform" (default): each cluster's own
-        particles, mapped affinely onto its component's posterior, so the cloud keeps its
-        non-Gaussian shape; "gaussian" (the paper's): N draws from the posterior mixture. While
-        reacquiring (more particles drawn) or with state bounds the draws are Gaussian either way.
+    posterior_draw : PosteriorDraw or str
+        Where the posterior particles come from (a pgm-draw component or its name). "transform"
+        (default): each cluster's own particles, mapped affinely onto its component's posterior,
+        so the cloud keeps its non-Gaussian shape; "gaussian" (the paper's): N draws from the
+        posterior mixture. While reacquiring (more particles drawn) or with state bounds the
+        draws are Gaussian either way.
 
     How the defaults were chosen, with the seeds and figures: docs/pgm-parameters.md.
     """
@@ -133,26 +135,30 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
 
     default_name = "pgm"
     stacked_updates = True  # reads measurements only through MeasuredComponents
-    nested_params = {"clusterer": ("n_components",)}  # a scenario's clusterer is built with them
+    nested_params = {  # a scenario builds these components with the PGM's values of these parameters
+        "clusterer": ("n_components",),
+        "component_update": ("update_iterations", "component_likelihood"),
+        "reanchor": ("reanchor_gap_days", "reanchor_pause_hours", "reanchor_measurements", "reanchor_starts"),
+    }
 
     def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
                  clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
                  velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
                  max_range_km: float | None = None, max_speed_kms: float | None = None,
-                 component_update: str = "iterated", update_iterations: int = 10,
+                 component_update: ComponentUpdate | str = "iterated", update_iterations: int = 10,
                  component_likelihood: str = "posterior", split_components: int | None = None,
                  split_ess: float = 0.02, kept_spread: float = 0.7, reacquire_factor: float = 4.0,
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
-                 posterior_draw: str = "transform", reanchor: str = "arcs", reanchor_gap_days: float = 5.0,
-                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8,
-                 kernel_ess: float = 0.0):
+                 posterior_draw: PosteriorDraw | str = "transform", reanchor: Reanchor | str = "arcs",
+                 reanchor_gap_days: float = 5.0, reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6,
+                 reanchor_starts: int = 8, kernel_ess: float = 0.0):
         self.kernel_ess = check_range(self, "kernel_ess", kernel_ess, 0.0, 1.0)
-        self.reanchor = check_choice(self, "reanchor", reanchor, REANCHOR_MODES)
+        self.reanchor = check_step(self, "reanchor", reanchor, Reanchor, ("off", "arcs", "across-gaps"))
         self.reanchor_gap_days = check_positive(self, "reanchor_gap_days", reanchor_gap_days)
         self.reanchor_pause_hours = check_positive(self, "reanchor_pause_hours", reanchor_pause_hours)
         self.reanchor_measurements = check_int(self, "reanchor_measurements", reanchor_measurements, minimum=1)
         self.reanchor_starts = check_int(self, "reanchor_starts", reanchor_starts, minimum=1)
-        self.posterior_draw = check_choice(self, "posterior_draw", posterior_draw, ("gaussian", "transform"))
+        self.posterior_draw = check_step(self, "posterior_draw", posterior_draw, PosteriorDraw, ("gaussian", "transform"))
         self.kept_spread = check_range(self, "kept_spread", kept_spread, 0.0, 1.0)
         self.shrink_spread_sigma = check_positive(self, "shrink_spread_sigma", shrink_spread_sigma)
         self.split_components = None if not split_components else check_int(
@@ -160,11 +166,11 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.split_ess = check_range(self, "split_ess", split_ess, 0.0, 1.0)
         self.reacquire_factor = check_positive(self, "reacquire_factor", reacquire_factor)
         self.reacquire_spread_sigma = check_positive(self, "reacquire_spread_sigma", reacquire_spread_sigma)
-        self.component_update = check_choice(self, "component_update", component_update,
-                                             ("iterated", "ensemble"))
+        self.component_update = check_step(self, "component_update", component_update, ComponentUpdate,
+                                           ("iterated", "ensemble"))
         self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
         self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
-                                                 ("posterior", "prior"))
+                                                 COMPONENT_LIKELIHOODS)
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
         self.n_components = None if n_components is None else check_int(self, "n_components", n_components,
                                                                          minimum=1)
@@ -180,18 +186,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.max_speed_kms = None if max_speed_kms is None else check_positive(self, "max_speed_kms", max_speed_kms)
         if self.min_range_km is not None and self.max_range_km is not None and self.min_range_km >= self.max_range_km:
             self._fail("max_range_km", max_range_km, f"must exceed min_range_km = {min_range_km}")
-        self._clusterer: Clusterer | None = None
         self._x: np.ndarray | None = None
         self._h: np.ndarray | None = None  # each particle's next integration step (TU), carried
 
     # -- lifecycle --------------------------------------------------------------------------------
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
-        """Start from ``cloud`` (N, 6) at ``cloud.epoch``; resolves the clusterer."""
+        """Start from ``cloud`` (N, 6) at ``cloud.epoch``; builds the clusterer and the steps."""
         who = self._who()
         check_cloud(cloud, who)
-        self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
-        self._split_clusterer = split_clusterer(self.clusterer, self._clusterer, self.split_components)
+        self._build_steps(who)
         self._dyn, self._sensor, self._rng = dynamics, sensor, rng
         self._bounds = StateBounds(self.min_range_km, self.max_range_km, self.max_speed_kms, earth_position(dynamics))
         self._t = float(cloud.epoch)
@@ -201,15 +205,25 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag: dict[str, float] = {}
         self._x, self._h = self._prune(x)
         self._invalidate()
-        self._t_last_update, self._after_gap = None, False
-        self._reanchor = None if self.reanchor == "off" else Reanchoring(
-            self.reanchor, self.reanchor_gap_days, self.reanchor_pause_hours, self.reanchor_measurements,
-            self.reanchor_starts)
+        self._gap_pass = PassAfterGap(self.reanchor_gap_days, self.reanchor_pause_hours)
+        self._reanchor = self._reanchor_step.start()
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": 0.0,
                       "particles_lost_step": 0.0, "particles_pruned": float(self._pruned_total)}
 
+    def _build_steps(self, who: str) -> None:
+        """The clusterers and the update, draw and re-anchoring steps, from names or components."""
+        self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
+        self._split_clusterer = split_clusterer(self.clusterer, self._clusterer, self.split_components)
+        self._update = resolve_step("pgm-update", self.component_update, {
+            "update_iterations": self.update_iterations, "component_likelihood": self.component_likelihood}, who)
+        self._draw = resolve_step("pgm-draw", self.posterior_draw, {}, who)
+        self._reanchor_step = resolve_step("pgm-reanchor", self.reanchor, {
+            "reanchor_gap_days": self.reanchor_gap_days, "reanchor_pause_hours": self.reanchor_pause_hours,
+            "reanchor_measurements": self.reanchor_measurements, "reanchor_starts": self.reanchor_starts}, who)
+
     def _predict_to(self, t: float) -> None:
-        """Propagate every particle to ``t`` (TU); particles that hit a body are removed and counted."""
+        """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that
+        hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
         x, alive, h = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
                                           self.velocity_noise_kms_per_sqrt_day, self._rng, self._h)
@@ -226,7 +240,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             self._diag["reanchored"] = 1.0
 
     def update(self, measurement: Measurement) -> None:
-        """Cluster, update each component with the measurement, reweight, resample."""
+        """Cluster, update each component with the measurement, reweight, draw the posterior particles."""
         self._require_init()
         who = self._who()
         check_epoch(self._t, measurement, who)
@@ -236,52 +250,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         dres = meas.residuals_to_measurement(self._x)
         if not np.all(np.isfinite(dres)):
             raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
-        sharpness = 1.0
-        if self._split_clusterer is not None:  # a measurement far sharper than the cloud: smaller clusters
-            sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
-            if sharpness < self.split_ess:
-                self._labels = self._prior = None
-                self._ensure_clustered(self._split_clusterer)
-        self._ensure_clustered()
-        x, labels, m = self._x, self._labels, self._prior.n_components
-        if self.kernel_ess > 0 and self._pass_after_gap(float(measurement.t)):
+        sharpness = self._cluster_for(meas, dres)
+        if self.kernel_ess > 0 and self._gap_pass.at(float(measurement.t)):
             if self._split_clusterer is None:
                 sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
             if sharpness < self.kernel_ess:  # after a gap, and far sharper than the cloud
                 self._kernel_update(meas, dres, sharpness, who)
                 return
-        mom = group_moments(x, dres, labels, m)
-        mom.pxx = regularize_covariance(mom.pxx, 1e-12)
-        raw_mean, raw_cov = mom.mean_x.copy(), mom.pxx.copy()
-        spread = measurement_spread_sigma(dres, meas.R)
-        shrink = (self.kept_spread < 1.0 and m > 1 and self.component_update == "iterated"
-                  and spread <= self.shrink_spread_sigma)  # not while reacquiring (component_spread.py)
-        if shrink:
-            mom.mean_x, mom.pxx = shrink_components(mom.counts, mom.mean_x, mom.pxx, self.kept_spread)
-        if self.component_update == "ensemble":
-            means, covs, loglik = ensemble_component_update(mom, meas.R)
-        else:
-            means, covs, loglik = iterated_component_update(
-                mom.mean_x, mom.pxx, meas.residuals_to_measurement, meas.R,
-                max_iterations=self.update_iterations, likelihood=self.component_likelihood)
-        logw, log_evidence = normalize_log_weights(np.log(mom.counts / mom.counts.sum()) + loglik, who)
-        w = np.exp(logw)
-        if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
-            raise FilterError(f"filter '{who}': the component update produced non-finite moments")
-        post = GaussianMixture(w, means, covs)
-        n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
-        if self.posterior_draw == "transform" and n_draw == self.n_particles and not self._bounds.active:
-            try:
-                samples, slabels = transform_clusters(x, labels, raw_mean, raw_cov, post, n_draw, self._rng)
-            except np.linalg.LinAlgError as exc:
-                raise FilterError(f"filter '{who}': a cluster's covariance could not be factorised "
-                                  f"for the posterior transform ({exc}); posterior_draw = 'gaussian' "
-                                  "avoids it") from None
-            if not np.all(np.isfinite(samples)):
-                raise FilterError(f"filter '{who}': the posterior transform produced non-finite particles")
-        else:
-            samples, slabels = self._sample_posterior(post, n_draw)
-        step = steps_by_group(self._h, labels, m)  # each drawn particle starts with its cluster's step
+        post, w, prior, spread, shrink, log_evidence = self._condition(meas, dres, who)
+        samples, slabels = self._draw_posterior(prior, post, spread, who)
+        step = steps_by_group(self._h, prior.labels, post.n_components)  # drawn particles start with their cluster's step
         self._h = None if step is None else step[slabels]
         self._x, self._sample_labels = samples, slabels
         self._mixture = post
@@ -297,29 +275,63 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "components_shrunk": float(shrink),
         })
 
-    def _pass_after_gap(self, t: float) -> bool:
-        """True while the updates are in the first pass after a gap of ``reanchor_gap_days`` or more
-        (a pause of ``reanchor_pause_hours`` ends a pass); records ``t`` (TU) as the latest update."""
-        from cistrack import units
+    def _cluster_for(self, meas: MeasuredComponents, dres: np.ndarray) -> float:
+        """Cluster the prior particles for this measurement (into ``split_components`` when it is
+        sharp); returns its sharpness (likelihood ESS fraction; 1.0 when not computed)."""
+        sharpness = 1.0
+        if self._split_clusterer is not None:  # a measurement far sharper than the cloud: smaller clusters
+            sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
+            if sharpness < self.split_ess:
+                self._labels = self._prior = None
+                self._ensure_clustered(self._split_clusterer)
+        self._ensure_clustered()
+        return sharpness
 
-        last, self._t_last_update = self._t_last_update, t
-        if last is not None and t - last >= float(units.days_to_tu(self.reanchor_gap_days)):
-            self._after_gap = True
-        elif last is not None and t - last >= float(units.hours_to_tu(self.reanchor_pause_hours)):
-            self._after_gap = False
-        return self._after_gap
+    def _condition(self, meas: MeasuredComponents, dres: np.ndarray, who: str
+                   ) -> tuple[GaussianMixture, np.ndarray, ClusteredParticles, float, bool, float]:
+        """The posterior mixture after the component update and reweighting, its weights (M,) as
+        computed; the clustered prior, the prior's measurement spread (noise sigmas), whether the
+        components were shrunk, and the log evidence."""
+        x, labels, m = self._x, self._labels, self._prior.n_components
+        mom = group_moments(x, dres, labels, m)
+        mom.pxx = regularize_covariance(mom.pxx, 1e-12)
+        prior = ClusteredParticles(x, labels, mom.mean_x.copy(), mom.pxx.copy())
+        spread = measurement_spread_sigma(dres, meas.R)
+        shrink = (self.kept_spread < 1.0 and m > 1 and not self._update.uses_particles
+                  and spread <= self.shrink_spread_sigma)  # not while reacquiring (component_spread.py)
+        if shrink:
+            mom.mean_x, mom.pxx = shrink_components(mom.counts, mom.mean_x, mom.pxx, self.kept_spread)
+        means, covs, loglik = self._update.update(mom, meas.residuals_to_measurement, meas.R)
+        logw, log_evidence = normalize_log_weights(np.log(mom.counts / mom.counts.sum()) + loglik, who)
+        w = np.exp(logw)
+        if not (np.all(np.isfinite(means)) and np.all(np.isfinite(covs))):
+            raise FilterError(f"filter '{who}': the component update produced non-finite moments")
+        return GaussianMixture(w, means, covs), w, prior, spread, shrink, log_evidence
+
+    def _draw_posterior(self, prior: ClusteredParticles, post: GaussianMixture, spread: float,
+                        who: str) -> tuple[np.ndarray, np.ndarray]:
+        """The posterior particles and their components: the draw step's, except while
+        reacquiring (more particles drawn) or with state bounds (Gaussian draws inside them)."""
+        n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
+        if n_draw != self.n_particles or self._bounds.active:
+            return self._sample_posterior(post, n_draw)
+        try:
+            samples, slabels = self._draw.draw(prior, post, n_draw, self._rng)
+        except np.linalg.LinAlgError as exc:
+            raise FilterError(f"filter '{who}': a cluster's covariance could not be factorised "
+                              f"for the posterior draw ({exc}); posterior_draw = 'gaussian' avoids it") from None
+        if not np.all(np.isfinite(samples)):
+            raise FilterError(f"filter '{who}': the posterior draw produced non-finite particles")
+        return samples, slabels
 
     def _kernel_update(self, meas: MeasuredComponents, dres: np.ndarray, sharpness: float, who: str) -> None:
         """Every particle its own kernel (kernel_update.py): the clustered prior gives each cluster's
         covariance and size, ``dres`` (N, m) are the particles' residuals to the measurement."""
-        from .kernel_update import kernel_update
-
-        x, labels, prior = self._x, self._labels, self._prior
+        prior = ClusteredParticles(self._x, self._labels, self._prior.means, self._prior.covariances)
         spread = measurement_spread_sigma(dres, meas.R)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
-        samples, slabels, log_evidence, w = kernel_update(
-            x, labels, prior.covariances, np.bincount(labels, minlength=prior.n_components),
-            meas.residuals_to_measurement, meas.R, n_draw, self._rng, who)
+        samples, slabels, log_evidence, w = kernel_update(prior, meas.residuals_to_measurement, meas.R, n_draw,
+                                                          self._rng, who)
         self._x, self._sample_labels, self._h = samples, slabels, None
         self._mixture = None
         self._labels = self._prior = None
@@ -402,59 +414,12 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         return x[ok], (None if h is None else h[ok])
 
     def _sample_posterior(self, post: GaussianMixture, n: int) -> tuple[np.ndarray, np.ndarray]:
-        x, lab = post.sample(n, self._rng)
+        """``n`` draws from ``post`` inside the state bounds, and their components; counts the pruned."""
+        x, lab, pruned = sample_inside(post, n, self._rng, self._bounds)
         if not self._bounds.active:
             return x, lab
-        ok = self._bounds.admissible(x)
-        x, lab = x[ok], lab[ok]
-        pruned = n - x.shape[0]
-        for _ in range(_REDRAWS):
-            short = n - x.shape[0]
-            if short == 0:
-                break
-            # draw extra to cover the rejection rate seen so far
-            extra, elab = post.sample(short * 2 + 8, self._rng)
-            ok = self._bounds.admissible(extra)
-            pruned += int(np.count_nonzero(~ok))
-            x = np.concatenate([x, extra[ok][:short]])
-            lab = np.concatenate([lab, elab[ok][:short]])
         self._pruned_total += pruned
         self._diag["particles_pruned"] = self._diag.get("particles_pruned", 0.0) + float(pruned)
         if x.shape[0] == 0:
             raise FilterError(f"filter '{self._who()}': the posterior lies entirely outside the state bounds")
         return x, lab
-
-
-class PaperPGMFilter(PGMFilter):
-    """The paper's plain PGM, kept by name for comparisons: k-means clusters and the ensemble
-    (particle cross-covariance) Kalman update of each component. Same parameters as ``pgm``;
-    only the defaults of ``clusterer``, ``component_update``, ``split_components`` (None: no
-    splitting), ``kept_spread`` (1: no shrinkage), ``reacquire_factor`` (1: off),
-    ``posterior_draw`` ("gaussian": draws from the mixture), ``reanchor`` ("off") and
-    ``min_cluster_size`` (None = 2 x dimension) differ."""
-
-    _min_cluster_fraction = 0.0
-
-    def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
-                 clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
-                 velocity_noise_kms_per_sqrt_day: float = 0.0, min_range_km: float | None = None,
-                 max_range_km: float | None = None, max_speed_kms: float | None = None,
-                 component_update: str = "ensemble", update_iterations: int = 10,
-                 component_likelihood: str = "posterior", split_components: int | None = None,
-                 split_ess: float = 0.02, kept_spread: float = 1.0, reacquire_factor: float = 1.0,
-                 reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
-                 posterior_draw: str = "gaussian", reanchor: str = "off", reanchor_gap_days: float = 5.0,
-                 reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6, reanchor_starts: int = 8,
-                 kernel_ess: float = 0.0):
-        super().__init__(n_particles, n_components, clusterer, min_cluster_size,
-                         velocity_noise_kms_per_sqrt_day, min_range_km, max_range_km, max_speed_kms,
-                         component_update, update_iterations, component_likelihood, split_components,
-                         split_ess, kept_spread, reacquire_factor, reacquire_spread_sigma,
-                         shrink_spread_sigma, posterior_draw, reanchor, reanchor_gap_days, reanchor_pause_hours,
-                         reanchor_measurements, reanchor_starts, kernel_ess)
-
-
-@hookimpl
-def cistrack_register(registry):
-    registry.add("filter", "pgm", PGMFilter)
-    registry.add("filter", "pgm-paper", PaperPGMFilter)

@@ -1,0 +1,125 @@
+"""The swappable steps of the particle Gaussian mixture (PGM) filter, each a registry kind.
+
+At a measurement the PGM clusters its particles (a ``clustering`` component), conditions each
+cluster's Gaussian on the measurement (a :class:`ComponentUpdate`), reweights the components by
+their likelihoods and draws the posterior particles (a :class:`PosteriorDraw`); at the end of a
+pass it may replace its belief by least-squares fits of the arc (a :class:`Reanchor`). A scenario
+chooses each step by name (``component_update = "ensemble"``), and a third party registers its
+own under the step's kind exactly as it registers a filter.
+
+=============  ==========================  ==================================
+kind           interface                   built-in names
+=============  ==========================  ==================================
+pgm-update     :class:`ComponentUpdate`    ``iterated``, ``ensemble``
+pgm-draw       :class:`PosteriorDraw`      ``transform``, ``gaussian``
+pgm-reanchor   :class:`Reanchor`           ``arcs``, ``across-gaps``, ``off``
+=============  ==========================  ==================================
+
+States are nondimensional synodic (LU, VU), times TU; ``d`` is the state dimension (6), ``m`` the
+number of measured components, ``M`` the number of clusters.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any, Callable, ClassVar
+
+import numpy as np
+
+from cistrack.interfaces.component import Component
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.interfaces.sensor import Sensor
+from cistrack.model.belief import GaussianMixture
+from cistrack.model.measurement import Measurement
+
+__all__ = ["ClusteredParticles", "ComponentUpdate", "PosteriorDraw", "Reanchor", "ReanchorRun",
+           "PGM_STEP_KINDS"]
+
+PGM_STEP_KINDS: tuple[str, ...] = ("pgm-update", "pgm-draw", "pgm-reanchor")
+"""The registry kinds of the PGM's steps, in the order of a PGM update."""
+
+
+@dataclass(frozen=True)
+class ClusteredParticles:
+    """The prior particles of one update and their clusters' sample moments (before the PGM
+    reshapes the components with ``kept_spread``).
+
+    states (N, d) LU and VU; labels (N,) int in [0, M); means (M, d); covariances (M, d, d).
+    """
+
+    states: np.ndarray
+    labels: np.ndarray
+    means: np.ndarray
+    covariances: np.ndarray
+
+
+class ComponentUpdate(Component):
+    """How each clustered component N(mean_i, P_i) is conditioned on one measurement."""
+
+    kind = "pgm-update"
+    uses_particles: ClassVar[bool] = False
+    """True when the update reads the particles' cross-covariances with their predicted
+    measurements (``moments.pxd``, ``moments.pdd``): the PGM then conditions the clusters as they
+    are, without first reshaping their Gaussians (``kept_spread``)."""
+
+    @abstractmethod
+    def update(self, moments: Any, residuals: Callable[[np.ndarray], np.ndarray],
+               R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Condition the M components on the measurement.
+
+        ``moments``: the clusters' sample moments, with attributes counts (M,) int, mean_x (M, d),
+        pxx (M, d, d) (the components' Gaussians) and, of the residuals h(x) - z of their
+        particles, mean_d (M, m), pxd (M, d, m), pdd (M, m, m). ``residuals``: states (K, d) ->
+        h(states) - z (K, m), angles wrapped to [-pi, pi). ``R``: noise covariance (m, m).
+
+        Returns posterior means (M, d), covariances (M, d, d) and each component's predictive
+        log-likelihood log p(z | component) (M,), which reweights the components.
+        """
+
+
+class PosteriorDraw(Component):
+    """Where the PGM's posterior particles come from, once the posterior mixture is known."""
+
+    kind = "pgm-draw"
+
+    @abstractmethod
+    def draw(self, prior: ClusteredParticles, posterior: GaussianMixture, n: int,
+             rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """``n`` posterior particles (n, d) and the posterior component of each (n,) int in [0, M).
+
+        ``posterior`` has one component per cluster of ``prior``, in the same order. Use only
+        ``rng``. (While the filter reacquires a cloud, drawing more particles than it carries, or
+        prunes particles outside state bounds, it draws from the mixture itself.)
+        """
+
+
+class ReanchorRun(ABC):
+    """The re-anchoring state of one filter run (made by :meth:`Reanchor.start`)."""
+
+    @abstractmethod
+    def observe(self, measurement: Measurement) -> None:
+        """Record a measurement the filter is about to condition on."""
+
+    @abstractmethod
+    def due(self, t: float) -> bool:
+        """Whether the prediction to ``t`` (TU) ends an arc worth fitting."""
+
+    @abstractmethod
+    def attempt(self, x: np.ndarray, t: float, dynamics: Dynamics, sensor: Sensor) -> GaussianMixture | None:
+        """Fit the recorded measurements from the posterior particles ``x`` (N, 6) at the last
+        update ``t`` (TU): the mixture of accepted solutions there, or None (the belief carries on)."""
+
+    @abstractmethod
+    def draw(self, n: int, rng: np.random.Generator) -> np.ndarray | None:
+        """Particles (n, 6) for the latest accepted solutions, or None to draw them from the
+        mixture :meth:`attempt` returned."""
+
+
+class Reanchor(Component):
+    """Whether and how the PGM replaces its belief by least-squares fits of whole arcs."""
+
+    kind = "pgm-reanchor"
+
+    @abstractmethod
+    def start(self) -> ReanchorRun | None:
+        """A fresh re-anchoring state for one run; None when this component never re-anchors."""
