@@ -91,17 +91,6 @@ MOVED: dict[str, str] = {
     "cistrack.plugins.filters.reanchoring": "cistrack.plugins.filters.pgm.reanchoring",
     "cistrack.plugins.filters.reacquisition_particles": "cistrack.plugins.filters.pgm.reacquisition_particles",
     "cistrack.plugins.filters.state_bounds": "cistrack.plugins.filters.pgm.state_bounds",
-    # Issue 48: the PGM became a package of components (cistrack.plugins.filters.pgm).
-    "cistrack.plugins.filters.cluster_merge": "cistrack.plugins.filters.pgm.cluster_merge",
-    "cistrack.plugins.filters.clusterer_choice": "cistrack.plugins.filters.pgm.clusterer_choice",
-    "cistrack.plugins.filters.component_spread": "cistrack.plugins.filters.pgm.component_spread",
-    "cistrack.plugins.filters.component_update": "cistrack.plugins.filters.pgm.component_update",
-    "cistrack.plugins.filters.kernel_update": "cistrack.plugins.filters.pgm.kernel_update",
-    "cistrack.plugins.filters.measurement_sharpness": "cistrack.plugins.filters.pgm.measurement_sharpness",
-    "cistrack.plugins.filters.posterior_transform": "cistrack.plugins.filters.pgm.posterior_transform",
-    "cistrack.plugins.filters.reanchoring": "cistrack.plugins.filters.pgm.reanchoring",
-    "cistrack.plugins.filters.reacquisition_particles": "cistrack.plugins.filters.pgm.reacquisition_particles",
-    "cistrack.plugins.filters.state_bounds": "cistrack.plugins.filters.pgm.state_bounds",
     # Issue 48: cistrack.fit split into the mathematics and the `cistrack fit` workflow.
     "cistrack.fit": "cistrack.least_squares",
     "cistrack.fit.least_squares": "cistrack.least_squares.differential_correction",
