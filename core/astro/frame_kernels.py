@@ -1,14 +1,12 @@
 """Compiled loops of the synodic <-> GCRS state conversions of :class:`.earth_moon.EarthMoonFrame`.
 
 The ephemeris model converts every particle at both ends of each propagation call and at every
-output time. Written with numpy (scale, rotate with ``einsum``, cross product, shift, scale back)
-it made about ten passes over the states: 75 ns per state, 3.7 us of a 10,000-particle NRHO
-period with 49 outputs (``benchmarks/bench_ephemeris.py``, case ``outputs``). These loops do
-the same operations in one pass, each product and sum the numpy code's, in its order. The
-rotation's three-term sums are written in the order numpy's ``einsum`` took on the development
-machine (AVX-512 Zen 5, numpy 2.4): (0 + 2) + 1 for ``"nij,nj->ni"``, whose terms are contiguous
-(its vector loop pairs them), (0 + 1) + 2 for ``"nji,nj->ni"``; so the numbers there are
-unchanged, and they no longer depend on which vector loops another machine's numpy picks.
+output time. These loops do, in one pass over the states, the operations of the numpy
+formulation (scale, rotate with ``einsum``, cross product, shift, scale back), each product and
+sum in its order. The rotation's three-term sums are in the order numpy's ``einsum`` takes on
+AVX-512 (numpy 2.4): (0 + 2) + 1 for ``"nij,nj->ni"``, whose terms are contiguous (its vector
+loop pairs them), (0 + 1) + 2 for ``"nji,nj->ni"``; so the numbers do not depend on which vector
+loops a machine's numpy picks.
 
 ``rot`` (M, 3, 3), ``origin``, ``origin_v`` and ``omega`` (M, 3) hold the frame at one time
 (M = 1, shared by every state) or at each state's time (M = N): :class:`.earth_moon.FrameAxes`.

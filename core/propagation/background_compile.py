@@ -1,8 +1,8 @@
 """Compiling a model's lockstep propagation kernel in a second process while this one works.
 
 On the first run on a machine (empty kernel cache) numba compiles what a run needs one function
-after the other, under its process-wide compiler lock: the truth's dense-output kernel (measured
-5.9 s of CPU on the 2-core development machine), then the filter's SIMD-lockstep kernel (8.2 s).
+after the other, under its process-wide compiler lock: the truth's dense-output kernel, then the
+filter's SIMD-lockstep kernel (their costs: :data:`COMPILE_CPU_SECONDS`).
 With a second core, :func:`start` launches ``python -m cistrack.propagation.background_compile``,
 which builds the same generated kernel module and propagates ``LANES`` copies of one state for a
 moment, so that numba compiles the lockstep kernel there and writes it to its on-disk cache;
@@ -47,10 +47,8 @@ def _cpus() -> int:
 
 def idle_core() -> bool:
     """Whether a second process would find a core free: at least 2 usable CPUs and a 1-minute
-    load average below their number. Measured on the 2-core development machine (example-1,
-    benchmarks/bench_first_run.py): at load 1.2 the first run's extra time fell from 18.4 to 9.5 s
-    with the second process; at load 5.9 it rose from 19.1 to 21.5 s (the two processes share
-    the busy cores and compile the helpers both kernels use twice).
+    load average below their number (on busy cores the two processes share them and compile
+    the helpers both kernels use twice, which costs more than it saves).
     ``CISTRACK_BACKGROUND_COMPILE=0`` says no, ``=1`` yes whatever the load."""
     env = os.environ.get("CISTRACK_BACKGROUND_COMPILE", "").strip()
     if env in ("0", "1"):

@@ -4,8 +4,7 @@ numba counts references to every array a compiled function receives: the callee 
 array's count on entry and decrements it on return, two atomic (``lock``-prefixed) operations
 each. The SIMD-lockstep kernel calls 14 or more functions with its work array and parameter
 vector per step of a batch (``_lanes_step``, ``_lanes_keys``, one per stage, the error estimate),
-and those atomics cost 14 % of an ephemeris propagation's CPU (``perf`` on the development AMD
-EPYC, 10,000 particles over one NRHO period; issue 31). :func:`borrowed_view` gives the same
+and those atomics are a sizeable share of a propagation's CPU. :func:`borrowed_view` gives the same
 data, shape and strides with no memory-info pointer: numba's increments and decrements then test
 a null pointer and return. The arithmetic is untouched, so results are the same bit for bit.
 

@@ -64,7 +64,7 @@ from cistrack.errors import PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics, Propagation
 
 from cistrack.propagation import background_compile
-from cistrack.propagation.dense import DenseTrajectory, integrate_dense
+from cistrack.propagation.dense import DenseTrajectory, KernelInputs, integrate_dense
 from cistrack.propagation.kernels import kernels_for, num_threads, run_chunks
 
 __all__ = ["CompiledDynamics", "PropagationError", "StateError", "LOCKSTEP_MIN_PARTICLES"]
@@ -73,9 +73,8 @@ LOCKSTEP_MIN_PARTICLES = 4
 """Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel (16 lanes, 32 for
 a right-hand side with a table key such as the ephemeris model's; idle lanes repeat an active
 one). A full batch costs a quarter to a third of what the one-particle
-kernel costs for 16 particles (CR3BP: 5.7 against 24.1 us per particle-period on one thread here;
-7.1 against 22.9 in docs/performance.md), so a part-filled batch of 4-5 particles costs about
-what the one-particle kernel does; and a run then needs no one-particle kernel compiled (the
+kernel costs for 16 particles (docs/performance.md), so a part-filled batch of 4-5 particles
+costs about what the one-particle kernel does; and a run then needs no one-particle kernel compiled (the
 information bound's central differences propagate 12 particles)."""
 
 
@@ -194,15 +193,7 @@ class CompiledDynamics(Dynamics):
         exhausts ``max_steps`` or its step size underflows.
         """
         arr = self._check_states(states)
-        t0 = float(t0)
-        t_out = np.atleast_1d(np.asarray(times, dtype=np.float64)).reshape(-1)
-        if t_out.size == 0:
-            raise StateError(f"{self._label()}: no output times given")
-        if not (np.isfinite(t0) and np.all(np.isfinite(t_out))):
-            raise StateError(f"{self._label()}: t0 and times must be finite")
-        d = np.diff(np.concatenate(([t0], t_out)))
-        if not (np.all(d >= 0) or np.all(d <= 0)):
-            raise StateError(f"{self._label()}: times must be monotonic in one direction from t0={t0}")
+        t0, t_out = self._check_output_times(t0, times)
         rtol = float(self.rtol if rtol is None else rtol)
         atol = float(self.atol if atol is None else atol)
         n = arr.shape[0]
@@ -213,17 +204,39 @@ class CompiledDynamics(Dynamics):
         status = np.zeros(n, dtype=np.int64)
         pos, rad = self._bodies_arrays()
         if n:
-            mod = self._kernels()
-            # the SIMD-lockstep kernel when the model has one and enough lanes are filled (same numbers)
-            lockstep = getattr(mod, "propagate_lanes_kernel", None)
-            if lockstep is not None and n >= LOCKSTEP_MIN_PARTICLES:
-                background_compile.wait_for(mod)
-                kernel = lockstep
-            else:
-                kernel = mod.propagate_kernel
-            run_chunks(kernel, n,
-                        (arr, self._params(), t0, np.ascontiguousarray(t_out), rtol, atol, pos, rad,
-                         int(self.max_steps), h, out, impact_body, impact_time, status))
+            run_chunks(self._propagate_kernel(n), n,
+                       (arr, self._params(), t0, np.ascontiguousarray(t_out), rtol, atol, pos, rad,
+                        int(self.max_steps), h, out, impact_body, impact_time, status))
+        self._raise_failed(status, n, t_out)
+        h[impact_body >= 0] = 0.0
+        return Propagation(times=t_out, states=out, alive=impact_body < 0,
+                           impact_body=impact_body, impact_time=impact_time, steps=h)
+
+    def _check_output_times(self, t0: float, times: Any) -> tuple[float, np.ndarray]:
+        """``t0`` as a float and ``times`` as (K,) float64: finite, at least one, monotonic away from t0."""
+        t0 = float(t0)
+        t_out = np.atleast_1d(np.asarray(times, dtype=np.float64)).reshape(-1)
+        if t_out.size == 0:
+            raise StateError(f"{self._label()}: no output times given")
+        if not (np.isfinite(t0) and np.all(np.isfinite(t_out))):
+            raise StateError(f"{self._label()}: t0 and times must be finite")
+        d = np.diff(np.concatenate(([t0], t_out)))
+        if not (np.all(d >= 0) or np.all(d <= 0)):
+            raise StateError(f"{self._label()}: times must be monotonic in one direction from t0={t0}")
+        return t0, t_out
+
+    def _propagate_kernel(self, n: int) -> Any:
+        """The SIMD-lockstep kernel when the model has one and ``n`` particles fill enough lanes
+        (the same numbers), else the per-particle kernel."""
+        mod = self._kernels()
+        lockstep = getattr(mod, "propagate_lanes_kernel", None)
+        if lockstep is not None and n >= LOCKSTEP_MIN_PARTICLES:
+            background_compile.wait_for(mod)
+            return lockstep
+        return mod.propagate_kernel
+
+    def _raise_failed(self, status: np.ndarray, n: int, t_out: np.ndarray) -> None:
+        """PropagationError when a particle hit the step limit (status 2) or underflowed (3)."""
         failed = status >= 2
         if np.any(failed):
             limit = int(np.sum(status == 2))
@@ -231,9 +244,6 @@ class CompiledDynamics(Dynamics):
             raise PropagationError(
                 f"{self._label()}: {int(failed.sum())} of {n} particle(s) did not reach t={t_out[-1]:g} TU "
                 f"({limit} hit the step limit max_steps={self.max_steps}, {under} had step-size underflow)")
-        h[impact_body >= 0] = 0.0
-        return Propagation(times=t_out, states=out, alive=impact_body < 0,
-                           impact_body=impact_body, impact_time=impact_time, steps=h)
 
     def dense_trajectory(self, state: np.ndarray, t0: float, t1: float, *,
                          rtol: float | None = None, atol: float | None = None) -> DenseTrajectory:
@@ -254,7 +264,6 @@ class CompiledDynamics(Dynamics):
             raise StateError(f"{self._label()}: t0 and t1 must be finite")
         num_threads()  # one particle runs on one thread, but a bad CISTRACK_NUM_THREADS is refused here too
         pos, rad = self._bodies_arrays()
-        return integrate_dense(self._kernels(), arr[0], t0, t1, self._params(),
-                               float(self.rtol if rtol is None else rtol),
-                               float(self.atol if atol is None else atol), pos, rad,
-                               int(self.max_steps), self._label())
+        inputs = KernelInputs(self._params(), float(self.rtol if rtol is None else rtol),
+                              float(self.atol if atol is None else atol), pos, rad, int(self.max_steps))
+        return integrate_dense(self._kernels(), arr[0], t0, t1, inputs, self._label())

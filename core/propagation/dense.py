@@ -11,7 +11,9 @@ tests/propagation/test_dense_output.py).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from types import ModuleType
+from typing import NamedTuple
 
 import numpy as np
 
@@ -20,7 +22,36 @@ from cistrack.errors import PropagationError, StateError
 from cistrack.propagation.dop853_dense_source import CTL_SIZE
 from cistrack.propagation.dop853_tableau import INTERPOLATOR_POWER
 
-__all__ = ["DenseTrajectory", "integrate_dense"]
+__all__ = ["DenseTrajectory", "DenseSteps", "KernelInputs", "integrate_dense"]
+
+
+class DenseSteps(NamedTuple):
+    """The step records of a dense integration, one entry per step (S steps, state size dim)."""
+
+    start: np.ndarray
+    """(S,) start time of each step, TU."""
+    size: np.ndarray
+    """(S,) signed size of each step, TU."""
+    state: np.ndarray
+    """(S, dim) state at each step's start."""
+    coefficients: np.ndarray
+    """(S, 7, dim) the interpolant's coefficients F0..F6 per step."""
+
+
+@dataclass(frozen=True)
+class KernelInputs:
+    """What a generated integrator kernel takes besides the state and the times."""
+
+    params: np.ndarray
+    """(P,) the model's parameters, as its right-hand side reads them."""
+    rtol: float
+    atol: float
+    body_pos: np.ndarray
+    """(B, 5) impact bodies: position and bounds on speed and acceleration (see
+    ``CompiledDynamics._bodies_arrays``)."""
+    body_rad: np.ndarray
+    """(B,) their radii, LU."""
+    max_steps: int
 
 
 class DenseTrajectory:
@@ -41,13 +72,12 @@ class DenseTrajectory:
         model integrating in another frame converts back to its public one here).
     """
 
-    def __init__(self, t0: float, t1: float, step_start: np.ndarray, step_size: np.ndarray,
-                 step_state: np.ndarray, coefficients: np.ndarray, end_state: np.ndarray,
+    def __init__(self, t0: float, t1: float, steps: DenseSteps, end_state: np.ndarray,
                  impact_body: int = -1, impact_time: float = np.inf,
                  transform: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> None:
         self.t0, self.t1 = float(t0), float(t1)
-        self.step_start, self.step_size = step_start, step_size
-        self.step_state, self.coefficients = step_state, coefficients
+        self.step_start, self.step_size = steps.start, steps.size
+        self.step_state, self.coefficients = steps.state, steps.coefficients
         self.end_state = end_state
         self.impact_body, self.impact_time = int(impact_body), float(impact_time)
         self.transform = transform
@@ -96,12 +126,11 @@ class DenseTrajectory:
         return raw if self.transform is None else self.transform(raw, ts)
 
 
-def integrate_dense(kernels: ModuleType, state: np.ndarray, t0: float, t1: float, params: np.ndarray,
-                    rtol: float, atol: float, body_pos: np.ndarray, body_rad: np.ndarray,
-                    max_steps: int, label: str) -> DenseTrajectory:
+def integrate_dense(kernels: ModuleType, state: np.ndarray, t0: float, t1: float, inputs: KernelInputs,
+                    label: str) -> DenseTrajectory:
     """Integrate one state (dim,) from ``t0`` to ``t1`` (TU) with ``kernels.dense_kernel``,
     growing the step records as needed. Raises :class:`PropagationError` on the step limit or a
-    step-size underflow."""
+    step-size underflow; ``label`` names the model in the message."""
     dim = state.size
     y = np.array(state, dtype=np.float64).reshape(-1)
     ctl = np.zeros(CTL_SIZE)
@@ -111,8 +140,8 @@ def integrate_dense(kernels: ModuleType, state: np.ndarray, t0: float, t1: float
     while True:
         rec = (np.empty(cap), np.empty(cap), np.empty((cap, dim)), np.empty((cap, INTERPOLATOR_POWER, dim)))
         ctl[6] = 0.0
-        kernels.dense_kernel(y, params, float(t1), float(rtol), float(atol), body_pos, body_rad,
-                             int(max_steps), *rec, ctl)
+        kernels.dense_kernel(y, inputs.params, float(t1), float(inputs.rtol), float(inputs.atol), inputs.body_pos,
+                             inputs.body_rad, int(inputs.max_steps), *rec, ctl)
         n = int(ctl[6])
         parts.append(tuple(a[:n] for a in rec))
         status = int(ctl[5])
@@ -120,11 +149,11 @@ def integrate_dense(kernels: ModuleType, state: np.ndarray, t0: float, t1: float
             break
         cap = min(cap * 4, 1 << 20)
     if status in (2, 3):
-        why = f"the step limit max_steps={max_steps}" if status == 2 else "a step-size underflow"
+        why = f"the step limit max_steps={inputs.max_steps}" if status == 2 else "a step-size underflow"
         raise PropagationError(f"{label}: the dense integration from t={t0:g} stopped at t={ctl[0]:g} TU "
                                f"before t={t1:g} ({why})")
-    t_s, h_s, y_s, c_s = (np.concatenate([p[i] for p in parts]) for i in range(4))
+    steps = DenseSteps(*(np.concatenate([p[i] for p in parts]) for i in range(4)))
     hit = status == 1
-    return DenseTrajectory(t0, float(ctl[0]) if hit else float(t1), t_s, h_s, y_s, c_s, y.copy(),
+    return DenseTrajectory(t0, float(ctl[0]) if hit else float(t1), steps, y.copy(),
                            impact_body=int(ctl[7]) if hit else -1,
                            impact_time=float(ctl[8]) if hit else np.inf)

@@ -3,28 +3,20 @@
 A right-hand side marked ``k: LaneUniform = ...`` (:mod:`.lane_rhs`) reads a table entry chosen by
 time, such as the ephemeris model's 6-hour Chebyshev record. Its lanes are evaluated together
 when they share the key, the key's loads (``_ucN = _p[...]``, :mod:`.lane_hoist`) done once for
-all lanes. Three things made that fixed work cost about a quarter of the ephemeris model's stage
-on AVX-512 (69 against 50 ns per lane-step, ``benchmarks/bench_stage_cost.py``, session 18):
+all lanes:
 
-- each stage computed every lane's key, stored it, and read one back to address its loads;
-  ``_lanes_keys`` now computes every lane's key at every stage time once before the step's
-  stages, and when all are equal the stages skip their own pass;
-- LLVM broadcast each hoisted load to a full vector register and, with some fifty of them and
-  32 registers, spilled them all to the stack at every stage call. The loads used in the lane
-  loop are now copied once per key into scratch rows of the work array, replicated across the
-  lanes (``w[(SCRATCH + r) * LANES + l]``), and the lane loop reads them there like any other
-  row: refilled when the key changes (every few steps), not at every stage, by one
-  ``_lanes_fill`` that the stages call (a copy in each cost 6 s of first compilation);
-- the per-key passes for lanes in different records sat in the stage function and slowed the
-  common case by 3-8 %: they are ``_lanes_stage<s>_lanes`` now, called only when needed.
-
-Lanes in different records (session 19) are not run once per record: each lane's column of the
-scratch rows holds its own record's loads (refilled for a lane when its record changes), so one
-lane loop serves them all; and ``_lanes_keys`` says for each stage whether its lanes share a
-record. A tight cloud propagated to one output keeps its lanes in step (98 % of the stage calls
-had one record, 10,000 particles over an NRHO period); with 49 output times 5 % had, with a
-1000-km cloud none, and one masked pass per record made the ephemeris model 12-17 times as dear
-as the CR3BP (docs/ephemeris.md, Speed).
+- ``_lanes_keys`` computes every lane's key at every stage time once before the step's stages,
+  and when all are equal the stages skip their own pass;
+- the loads used in the lane loop are copied once per key into scratch rows of the work array,
+  replicated across the lanes (``w[(SCRATCH + r) * LANES + l]``), and the lane loop reads them
+  there like any other row (a hoisted load held in a vector register would be spilled to the
+  stack at every stage call): refilled when the key changes (every few steps), not at every
+  stage, by one ``_lanes_fill`` that the stages call;
+- the passes for lanes in different records are ``_lanes_stage<s>_lanes``, called only when
+  needed. They are not run once per record: each lane's column of the scratch rows holds its own
+  record's loads (refilled for a lane when its record changes), so one lane loop serves them
+  all; and ``_lanes_keys`` says for each stage whether its lanes share a record (a tight cloud
+  propagated to one output keeps its lanes in step; many output times or a wide cloud do not).
 
 Every lane computes the same operations on the same operands in the same order either way:
 the results are bit for bit those of the one-particle kernel.
@@ -105,8 +97,7 @@ def keys_function(body, dim: int, lanes: int) -> str:
 def _one_key_exit(body, r: dict, lanes: int) -> list[str]:
     """Lines of ``_lanes_keys`` for a monotonic key: every lane's key at its earliest and its
     latest stage time; when they are all one key, every stage's flag is set and the function
-    returns (two key evaluations per lane instead of twelve; measured 2-4 % of an ephemeris
-    propagation). Sound because the stage times t + c h, rounded, are monotonic in c for a given
+    returns (two key evaluations per lane instead of twelve). Sound because the stage times t + c h, rounded, are monotonic in c for a given
     t and h, so each lies between the two, and so does a monotonic key of it."""
     stages = range(1, _tab.N_STAGES + 1)
     first, last = min(stages, key=stage_c), max(stages, key=stage_c)

@@ -1,4 +1,4 @@
-"""Source generator of the SIMD-lockstep DOP853 ensemble integrator (issue 15).
+"""Source generator of the SIMD-lockstep DOP853 ensemble integrator.
 
 ``propagate_lanes_kernel`` takes the arguments of ``propagate_kernel`` (:mod:`.dop853_source`)
 and gives its results bit for bit, but integrates ``LANES`` particles side by side (the idea of
@@ -29,27 +29,17 @@ from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_point, s
 __all__ = ["lanes_source", "lanes_for", "DEFAULT_LANES", "KEYED_LANES", "RESERVED"]
 
 DEFAULT_LANES = 16
-"""Particles per batch. Measured on an AMD EPYC (AVX-512), 9:2 NRHO at rtol 1e-10 / atol 1e-9:
-8 lanes are not vectorised by LLVM (the constant 8-trip loop stays scalar: 14.6 us CPU per
-particle-period, against 19.7 for the one-particle kernel), 16 lanes are (packed square roots and
-divisions: 6.4 us), 32 lanes too (4.5 us, on a machine loaded enough that the two differ within
-its noise). Fewer particles than lanes go to the one-particle kernel."""
+"""Particles per batch: the fewest that LLVM vectorises (a constant 8-trip loop stays scalar; 16
+lanes give packed square roots and divisions). Fewer particles than lanes go to the one-particle
+kernel (see :data:`~.compiled.LOCKSTEP_MIN_PARTICLES`)."""
 
 KEYED_LANES = 32
 """Particles per batch for a right-hand side with a :class:`~.lane_rhs.LaneUniform` key: each
 keyed stage call computes every lane's record and loads the record's coefficients once for all
-lanes, so a wider batch shares that work. Measured 2026-11-26 on the development AMD EPYC, one
-thread, ephemeris model: 17.08 against 14.72 us per particle-period over one NRHO period
-(10,000 particles), 0.99 against 0.80 us per particle for a 0.05 TU call; calls of 5-40
-particles cost the same within 3 % (their time is the call's fixed cost), and so does the first
-compilation (41 s either way). The CR3BP (no key) stays at :data:`DEFAULT_LANES`: 32 lanes made
-Example 1's propagation 3-6 % slower. Since the record's loads are kept in scratch rows across
-stages (:mod:`.dop853_lanes_keyed`), 64 lanes are no faster (6.75-7.79 against 6.92-7.03 us,
-AMD EPYC Zen 5, session 18). Session 20, the two kernels alternating in one process
-(``benchmarks/bench_kernel_ab.py``): 64 lanes took 7.6 % less CPU on a tight cloud over one
-period, 2.3 % less on a 1000-km cloud, but 2 % more with 49 output times, 4.5 % more for 1,000
-particles over 0.5 TU and 47 % more for 13 particles over 0.05 TU (the UKF's sigma points: the
-idle lanes compute too); 32 stays."""
+lanes, so a wider batch shares that work; wider still (64) gains on large clouds but loses on
+calls of few particles, whose idle lanes compute too (the UKF's sigma points). The CR3BP (no
+key) stays at :data:`DEFAULT_LANES`, where 32 lanes are slower. Comparisons:
+docs/history/propagation.md."""
 
 
 def lanes_for(body) -> int:

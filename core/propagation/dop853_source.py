@@ -1,8 +1,5 @@
 """Source generator for the per-particle DOP853 ensemble integrator.
 
-(Above 300 lines because most of it is the template of the generated module, one piece of
-straight-line numba code that reads best whole.)
-
 The Dormand–Prince 8(5,3) pair (Hairer, Nørsett & Wanner, *Solving ODEs I*, sec. II.10) is
 written out as straight-line code with only the non-zero Butcher coefficients, for one state
 dimension known at compile time, around a model's right-hand side ``rhs(t, y, params, out)``.
@@ -41,13 +38,16 @@ steps, out, impact_body, impact_time, status)``
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 
 from cistrack.propagation import dop853_tableau as _tab
 from cistrack.propagation.dop853_dense_source import DENSE_BODY
 from cistrack.propagation.dop853_lanes_source import lanes_source
 
-__all__ = ["N_STAGES", "ERROR_EXPONENT", "TABLEAU", "generate_source", "DEFAULT_FASTMATH"]
+__all__ = ["N_STAGES", "ERROR_EXPONENT", "TABLEAU", "generate_source", "StepControl", "LaneKernel", "DEFAULT_FASTMATH"]
 
 N_STAGES = _tab.N_STAGES
 """Stages per step; the 13th evaluation (at the new point) is reused as the next step's first."""
@@ -66,15 +66,13 @@ TABLEAU = {
 DEFAULT_FASTMATH = False
 """No LLVM fast-math flags in the generated kernels: results must not depend on how they were built.
 
-With value-changing flags (measured: ``reassoc`` with ``nsz``, as in the former default
-``{"contract", "arcp", "nsz", "reassoc"}``) LLVM may re-associate arithmetic differently
+With value-changing flags (``reassoc`` with ``nsz``) LLVM may re-associate arithmetic differently
 depending on the optimisation context, and that context differs between a kernel compiled in the
 running process (its callees linked from separately compiled libraries) and the same kernel
-loaded from numba's on-disk cache (one self-contained object). The 9:2 NRHO ensemble then
-differed in the last bits between a cold and a warm cache, and the filter amplified that to a
-different result (Example 1 seed 1: 5.62 km / NEES 5.33 compiled, 4.16 km / NEES 4.16 cached).
+loaded from numba's on-disk cache (one self-contained object): states then differ in the last
+bits between a cold and a warm cache, and a filter amplifies that to a different result.
 Without the flags both paths give bit-identical states, at the same speed (straight-line scalar
-code has nothing to vectorise: 80 vs 53-78 us per particle-period measured on one thread).
+code has nothing to vectorise).
 """
 
 
@@ -371,9 +369,8 @@ def step_factor_source(beta: float) -> str:
 
     With I control (``beta`` 0, the default) err^-1/8 is ``1 / sqrt(sqrt(sqrt(err)))``: three
     square roots and a division, each rounded correctly by IEEE 754, so the factor is the same on
-    every machine (libm's ``pow``, used before, is not specified to the last bit and differed in
-    speed: 15 % of an ephemeris propagation's CPU and 25 % of the CR3BP's; issue 31, a named
-    change of results). With PI control it stays ``pow``."""
+    every machine (libm's ``pow`` is not specified to the last bit, and is slower). With PI
+    control it stays ``pow``."""
     if float(beta) == 0.0:
         expr = "SAFETY / np.sqrt(np.sqrt(np.sqrt(err)))"
     else:
@@ -390,20 +387,42 @@ def growth_cap_error(safety: float, max_growth: float, beta: float) -> float:
     max_growth for err <= (safety / max_growth)^8 (2.56e-6 at the defaults). The bound returned
     is that value times (1 + 1e-9)^-8, so that safety * err^-1/8 exceeds max_growth by 1e-9
     relative there, far more than the rounding of the factor (:func:`step_factor_source`):
-    testing it first skips the factor (``pow``, when it was, cost 18 % of the lockstep kernel's
-    CPU over a one-period propagation; clipped steps that land on an output time mostly have
-    such errors) and gives the factor ``min`` would have given, bit for bit. -1.0 (never) with PI control (``beta`` not 0), whose factor also depends on the
-    previous step's error.
+    testing it first skips the factor (a ``pow``; clipped steps that land on an output time
+    mostly have such errors) and gives the factor ``min`` would have given, bit for bit. -1.0
+    (never) with PI control (``beta`` not 0), whose factor also depends on the previous step's
+    error.
     """
     if beta != 0.0:
         return -1.0
     return (float(safety) / (float(max_growth) * (1.0 + 1e-9))) ** (1.0 / 0.125)
 
 
-def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: float = 0.8,
-                    max_growth: float = 4.0, min_shrink: float = 0.2, beta: float = 0.0,
+@dataclass(frozen=True)
+class StepControl:
+    """The step-size controller: h_new = h * clip(safety * err^-(1/8 - beta/5) * err_prev^beta,
+    min_shrink, max_growth) (Hairer's DOP853 PI control; beta = 0 is I control, the default:
+    larger values took more steps on the 9:2 NRHO)."""
+
+    safety: float = 0.8
+    max_growth: float = 4.0
+    min_shrink: float = 0.2
+    beta: float = 0.0
+
+
+@dataclass(frozen=True)
+class LaneKernel:
+    """The SIMD-lockstep kernel to add: the right-hand side rewritten for lanes
+    (:func:`.lane_rhs.lane_body`), a line binding the global names its body reads, and the
+    particles per batch (None: :func:`.dop853_lanes_source.lanes_for` the body)."""
+
+    body: Any
+    import_line: str = ""
+    lanes: int | None = None
+
+
+def generate_source(rhs_import: str, dim: int, *, cache: bool = True, control: StepControl = StepControl(),
                     fastmath=DEFAULT_FASTMATH, title: str = "", motion_import: str | None = None,
-                    lanes_body=None, lanes_import: str = "", lanes: int | None = None) -> str:
+                    lanes: LaneKernel | None = None) -> str:
     """Text of a module holding the DOP853 ensemble kernels for one right-hand side.
 
     Parameters
@@ -415,26 +434,23 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
         State dimension (6 for position and velocity).
     cache : bool
         numba ``cache=`` of the generated functions.
-    safety, max_growth, min_shrink, beta : float
-        Step-size controller: h_new = h * clip(safety * err^-(1/8 - beta/5) * err_prev^beta,
-        min_shrink, max_growth) (Hairer's DOP853 PI control; beta = 0 is I control). Measured on
-        the 9:2 NRHO at the default tolerance: beta 0.04 takes 96 steps per period against 85 for
-        beta 0, beta 0.08 167, so the default stays 0.
+    control : StepControl
+        The step-size controller (safety, max_growth, min_shrink, beta).
     fastmath : set of str or bool
         numba ``fastmath=`` flags of the kernels, also applied to the inlined right-hand side
         (whatever its own flags). The default (none) keeps results independent of whether the
         kernels were compiled or loaded from the cache; see :data:`DEFAULT_FASTMATH`.
+    title : str
+        Named in the generated module's docstring.
     motion_import : str, optional
         A line that binds ``body_position`` (``""`` when the caller injects it): an ``@njit``
         function ``body_position(t, params, b, body_pos) -> (x, y, z)`` giving body ``b``'s
         position at ``t`` for models whose bodies move (e.g. the Moon in an inertial frame).
         ``None`` (default): bodies sit at the fixed ``body_pos[b]``.
-    lanes_body : LaneBody, optional
-        The right-hand side rewritten for SIMD lanes (:func:`.lane_rhs.lane_body`): adds the
-        lockstep kernel ``propagate_lanes_kernel`` (:mod:`.dop853_lanes_source`) with ``lanes``
-        particles per batch (default: :func:`.dop853_lanes_source.lanes_for` the body);
-        ``lanes_import`` binds the global names its body reads.
+    lanes : LaneKernel, optional
+        Adds the lockstep kernel ``propagate_lanes_kernel`` (:mod:`.dop853_lanes_source`).
     """
+    safety, max_growth, min_shrink, beta = control.safety, control.max_growth, control.min_shrink, control.beta
     fm = ("{" + ", ".join(repr(f) for f in sorted(fastmath)) + "}") if not isinstance(fastmath, bool) else repr(fastmath)
     header = (f'"""Generated by cistrack.propagation.dop853_source {title}: do not edit."""\n'
               "import numpy as np\n"
@@ -456,4 +472,4 @@ def generate_source(rhs_import: str, dim: int, *, cache: bool = True, safety: fl
               f"FASTMATH = {fm}\n\n\n" + step_factor_source(beta))
     return (header + _rk_step_source(dim) + _BODY + "\n\n" + _rk_step_source(dim, dense=True)
             + DENSE_BODY
-            + ("" if lanes_body is None else "\n\n" + lanes_import + lanes_source(dim, lanes_body, lanes)))
+            + ("" if lanes is None else "\n\n" + lanes.import_line + lanes_source(dim, lanes.body, lanes.lanes)))

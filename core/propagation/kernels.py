@@ -173,7 +173,7 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
             lanes_import = f"from {where[0]} import {', '.join(names)}\n" if names else ""
             src = dop853_source.generate_source(
                 f"from {where[0]} import {where[1]} as rhs", dim, title=title, motion_import=motion_import,
-                lanes_body=body, lanes_import=lanes_import)
+                lanes=None if body is None else dop853_source.LaneKernel(body, lanes_import))
             extra = _source_digest(body_motion) if body_motion is not None else ""
             import numba  # imported here, not at module import: listing plugins needs no numba
 
@@ -197,7 +197,7 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
             body, names = _lanes_body(rhs)
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",
                                                 motion_import=None if body_motion is None else "",
-                                                lanes_body=body)
+                                                lanes=None if body is None else dop853_source.LaneKernel(body))
             _announce_compile(repr(rhs))
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
