@@ -111,12 +111,7 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
             raise ConfigError(f"{source}: {where}: {kind} {name!r} takes no parameters")
         return ComponentSpec(kind, name, {}, f"{source}: {where}")
     specs = param_specs(factory)
-    if kind in ("sensor", "dynamics") and "epoch" in specs:
-        if "epoch" in params:
-            raise ConfigError(f"{source}: {where}: key 'epoch' is set by the scenario's top-level 'epoch'; "
-                              f"remove it from {where}")
-        if epoch_text is not None:
-            params["epoch"] = units.format_utc(units.parse_utc(epoch_text))
+    _set_scenario_epoch(params, kind, specs, epoch_text, source, where)
     out: dict[str, Any] = {}
     if kind == "sensor" and "dynamics" in specs and _union_component_kind(specs["dynamics"].annotation) == "dynamics":
         # A sensor that moves under the run's dynamics (a space telescope) gets the scenario's
@@ -129,12 +124,7 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
     # nested components last, so that the values handed on to them are checked and converted first
     for key, value in sorted(params.items(), key=lambda kv: kv[0] in shared):
         if key not in specs:
-            allowed = ", ".join(specs) or "(none)"
-            msg = f"{source}: {where}: unknown parameter {key!r} for {kind} {name!r}; allowed: {allowed}"
-            close = difflib.get_close_matches(key, list(specs), n=1)
-            if close:
-                msg += f". Did you mean {close[0]!r}?"
-            raise ConfigError(msg)
+            _unknown_parameter(key, specs, f"{source}: {where}: unknown parameter {key!r} for {kind} {name!r}")
         value = _hand_on(value, shared.get(key, ()), out, specs, specs[key].annotation, reg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
     for key, ps in specs.items():
@@ -146,6 +136,27 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
     spec = ComponentSpec(kind, name, out, f"{source}: {where}")
     spec._validated = (reg, _build(spec, reg))  # value checks before anything runs; kept for the run
     return spec
+
+
+def _set_scenario_epoch(params: dict, kind: str, specs: dict, epoch_text: Any, source: str, where: str) -> None:
+    """A sensor or dynamics model with an ``epoch`` parameter gets the scenario's epoch (UTC
+    text); its table may not set it."""
+    if kind in ("sensor", "dynamics") and "epoch" in specs:
+        if "epoch" in params:
+            raise ConfigError(f"{source}: {where}: key 'epoch' is set by the scenario's top-level 'epoch'; "
+                              f"remove it from {where}")
+        if epoch_text is not None:
+            params["epoch"] = units.format_utc(units.parse_utc(epoch_text))
+
+
+def _unknown_parameter(key: str, specs: dict, what: str) -> None:
+    """Raise the error for a key that is not a constructor parameter: the allowed ones, and the
+    closest name."""
+    msg = f"{what}; allowed: {', '.join(specs) or '(none)'}"
+    close = difflib.get_close_matches(key, list(specs), n=1)
+    if close:
+        msg += f". Did you mean {close[0]!r}?"
+    raise ConfigError(msg)
 
 
 def _hand_on(table: Any, names: tuple[str, ...], out: dict, specs: dict, ann: Any, reg: Registry) -> Any:
@@ -195,58 +206,20 @@ def _component_kind(ann: Any) -> str | None:
 
 def _coerce(value: Any, ann: Any, source: str, where: str, key: str, reg: Registry) -> Any:
     """Check ``value`` (from TOML) against the type annotation ``ann``; convert where lossless."""
-    loc = f"{source}: {where}: key {key!r}"
     if ann is Any or ann is inspect.Parameter.empty:
         return value
     origin = typing.get_origin(ann)
     args = typing.get_args(ann)
     if origin in (typing.Union, types.UnionType):
-        # component-typed parameter (e.g. Clusterer | str): a name string or a table with 'name'
-        comp_kinds = [k for k in (_component_kind(a) for a in args) if k]
-        if comp_kinds and (isinstance(value, dict) or isinstance(value, str)):
-            return component_spec(value, comp_kinds[0], f"{where}.{key}" if not where.endswith("]")
-                                   else f"{where[:-1]}.{key}]", source, reg)
-        errors = []
-        for a in args:
-            if a is type(None):
-                continue
-            try:
-                return _coerce(value, a, source, where, key, reg)
-            except ConfigError as exc:
-                errors.append(str(exc))
-        expected = " or ".join(_type_name(a) for a in args if a is not type(None))
-        raise ConfigError(f"{loc} = {value!r}: expected {expected}")
+        return _coerce_union(value, args, source, where, key, reg)
     kind = _component_kind(ann)
     if kind:
         return component_spec(value, kind, f"{where[:-1]}.{key}]" if where.endswith("]") else where, source, reg)
-    if ann is float:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
-        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected a number")
-    if ann is int:
-        if isinstance(value, int) and not isinstance(value, bool):
-            return value
-        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected an integer")
-    if ann is bool:
-        if isinstance(value, bool):
-            return value
-        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected true or false")
-    if ann is str:
-        if isinstance(value, str):
-            return value
-        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected a string")
+    loc = f"{source}: {where}: key {key!r}"
+    if any(ann is t for t in _SCALARS):
+        return _coerce_scalar(value, ann, loc)
     if origin in (list, tuple, typing.Sequence) or ann in (list, tuple):
-        if not isinstance(value, list):
-            raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected an array")
-        if args and not (origin is tuple and len(args) == 2 and args[1] is Ellipsis):
-            if origin is tuple:
-                if len(args) != len(value):
-                    raise ConfigError(f"{loc}: expected {len(args)} values, got {len(value)}")
-                return tuple(_coerce(v, a, source, where, f"{key}[{i}]", reg) for i, (v, a) in enumerate(zip(value, args)))
-            return [_coerce(v, args[0], source, where, f"{key}[{i}]", reg) for i, v in enumerate(value)]
-        if origin is tuple and args:
-            return tuple(_coerce(v, args[0], source, where, f"{key}[{i}]", reg) for i, v in enumerate(value))
-        return list(value)
+        return _coerce_sequence(value, origin, args, source, where, key, reg)
     if origin is dict or ann is dict:
         if not isinstance(value, dict):
             raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected a table")
@@ -256,6 +229,54 @@ def _coerce(value: Any, ann: Any, source: str, where: str, key: str, reg: Regist
             raise ConfigError(f"{loc} = {value!r}; allowed: {', '.join(map(repr, args))}")
         return value
     return value
+
+
+def _coerce_union(value: Any, args: tuple, source: str, where: str, key: str, reg: Registry) -> Any:
+    """A union: a component-typed parameter (e.g. ``Clusterer | str``) takes a name string or a
+    table with 'name'; otherwise the first member type the value passes."""
+    comp_kinds = [k for k in (_component_kind(a) for a in args) if k]
+    if comp_kinds and (isinstance(value, dict) or isinstance(value, str)):
+        return component_spec(value, comp_kinds[0], f"{where}.{key}" if not where.endswith("]")
+                              else f"{where[:-1]}.{key}]", source, reg)
+    for a in args:
+        if a is type(None):
+            continue
+        try:
+            return _coerce(value, a, source, where, key, reg)
+        except ConfigError:
+            pass
+    expected = " or ".join(_type_name(a) for a in args if a is not type(None))
+    raise ConfigError(f"{source}: {where}: key {key!r} = {value!r}: expected {expected}")
+
+
+_SCALARS: dict[type, str] = {float: "a number", int: "an integer", bool: "true or false", str: "a string"}
+"""Scalar annotation -> what the message says is expected."""
+
+
+def _coerce_scalar(value: Any, ann: type, loc: str) -> Any:
+    """A float (an int converted), an int, a bool or a str; a bool is never a number."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    ok = {float: number, int: isinstance(value, int) and not isinstance(value, bool),
+          bool: isinstance(value, bool), str: isinstance(value, str)}[ann]
+    if not ok:
+        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected {_SCALARS[ann]}")
+    return float(value) if ann is float else value
+
+
+def _coerce_sequence(value: Any, origin: Any, args: tuple, source: str, where: str, key: str, reg: Registry) -> Any:
+    """An array: a list (``list[T]``, ``Sequence[T]``), a tuple of fixed length (``tuple[A, B]``)
+    or of any length (``tuple[T, ...]``), each element coerced to its type."""
+    if not isinstance(value, list):
+        raise ConfigError(f"{source}: {where}: key {key!r} = {value!r} has type {type(value).__name__}; expected an array")
+    if args and not (origin is tuple and len(args) == 2 and args[1] is Ellipsis):
+        if origin is tuple:
+            if len(args) != len(value):
+                raise ConfigError(f"{source}: {where}: key {key!r}: expected {len(args)} values, got {len(value)}")
+            return tuple(_coerce(v, a, source, where, f"{key}[{i}]", reg) for i, (v, a) in enumerate(zip(value, args)))
+        return [_coerce(v, args[0], source, where, f"{key}[{i}]", reg) for i, v in enumerate(value)]
+    if origin is tuple and args:
+        return tuple(_coerce(v, args[0], source, where, f"{key}[{i}]", reg) for i, v in enumerate(value))
+    return list(value)
 
 
 def _type_name(a: Any) -> str:

@@ -177,6 +177,29 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
 def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | None = None) -> Scenario:
     """Validate a scenario given as a dict (as read from TOML)."""
     reg = registry or default_registry()
+    _check_tables(data, source, reg)
+    top, epoch_text = _top_level(data, source)
+    truth = data.get("truth", {})
+    if not isinstance(truth, dict):
+        raise ConfigError(f"{source}: 'truth' must be a table")
+    components, observers = _components(data, truth, source, reg, epoch_text)
+    check_keys(truth, _TRUTH_KEYS, source, "[truth]")
+    measurements_file, measurements_reader = _measurements(data, source, reg)
+    truth_orbit, truth_state = _truth_start(truth, source, reg, measurements_file)
+    truth_dyn = None
+    if "dynamics" in truth:
+        truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
+                                   epoch_text=epoch_text)
+    custody = custody_rule(data.get("custody", {}), source)
+    run = _run_options(data, source, components, top, observers)
+    return Scenario(**top, components=components, truth_orbit=truth_orbit, truth_state=truth_state,
+                    truth_dynamics=truth_dyn, custody=custody, **run,
+                    measurements_file=measurements_file, measurements_reader=measurements_reader,
+                    observers=observers, source=source, raw=copy.deepcopy(data))
+
+
+def _check_tables(data: Any, source: str, reg: Registry) -> None:
+    """A table, not too deep, with known keys and the required component tables."""
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: a scenario must be a TOML table")
     toml_input.check_depth(data, source)
@@ -185,6 +208,11 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         if table not in data:
             raise ConfigError(f"{source}: missing table [{table}] (it names the {table} component, "
                               f"e.g. name = {example_name(reg, COMPONENT_TABLES[table])!r})")
+
+
+def _top_level(data: dict, source: str) -> tuple[dict[str, Any], Any]:
+    """The top-level keys as Scenario fields (name, description, epoch, seed, duration_days), and
+    the epoch as written (components that take an epoch are given it)."""
     name = check_path_component(typed(data.get("name", Path(source).stem), str, source, "top level", "name"),
                                 f"{source}: top level: key 'name'")
     description = typed(data.get("description", ""), str, source, "top level", "description")
@@ -200,10 +228,13 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     duration = float(typed(data.get("duration_days", 7.0), (int, float), source, "top level", "duration_days"))
     if not np.isfinite(duration) or duration <= 0:
         raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
+    return dict(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration), epoch_text
 
-    truth = data.get("truth", {})
-    if not isinstance(truth, dict):
-        raise ConfigError(f"{source}: 'truth' must be a table")
+
+def _components(data: dict, truth: dict, source: str, reg: Registry,
+                epoch_text: Any) -> tuple[dict[str, ComponentSpec], dict]:
+    """The component tables' specs (the first observer of [sensors] is the sensor), and the
+    observers by name."""
     moving = truth.get("dynamics", data.get("dynamics"))   # what moves an observer in space
     components: dict[str, ComponentSpec] = {}
     for table, kind in COMPONENT_TABLES.items():
@@ -213,10 +244,11 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     observers = observer_specs(data, source, reg, epoch_text, moving)
     if observers:
         components["sensor"] = next(iter(observers.values()))
+    return components, observers
 
-    check_keys(truth, _TRUTH_KEYS, source, "[truth]")
-    truth_orbit = truth.get("orbit")
-    truth_state = None
+
+def _measurements(data: dict, source: str, reg: Registry) -> tuple[Path | None, ComponentSpec | None]:
+    """[measurements]: the observation file (as written) and its reader's spec, or None."""
     meas = data.get("measurements", {})
     if not isinstance(meas, dict):
         raise ConfigError(f"{source}: 'measurements' must be a table")
@@ -227,6 +259,14 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
         if measurements_file is None:
             raise ConfigError(f"{source}: [measurements]: key 'reader' needs 'file'")
         measurements_reader = component_spec(meas["reader"], "reader", "[measurements.reader]", source, reg)
+    return measurements_file, measurements_reader
+
+
+def _truth_start(truth: dict, source: str, reg: Registry,
+                 measurements_file: Path | None) -> tuple[str | None, np.ndarray | None]:
+    """[truth]: the registered orbit's name, or the start state (nondimensional synodic, (6,))
+    from ``state_km``; neither only with an observation file."""
+    truth_orbit = truth.get("orbit")
     if truth_orbit is not None and "state_km" in truth:
         raise ConfigError(f"{source}: [truth]: give either 'orbit' or 'state_km', not both")
     if truth_orbit is not None:
@@ -237,23 +277,24 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
             raise ConfigError(f"{source}: [truth]: key 'orbit': {exc}") from None
         if not isinstance(obj, ReferenceOrbit):
             raise ConfigError(f"{source}: [truth]: orbit {truth_orbit!r} is not a ReferenceOrbit")
-    elif "state_km" in truth:
+        return truth_orbit, None
+    if "state_km" in truth:
         st = truth["state_km"]
         if (not isinstance(st, list) or len(st) != 6
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in st)
                 or not np.all(np.isfinite(np.asarray(st, dtype=float)))):
             raise ConfigError(f"{source}: [truth]: key 'state_km' must be 6 finite numbers "
                               f"[x, y, z (km), vx, vy, vz (km/s)] in the synodic barycentric frame")
-        truth_state = units.state_from_km(np.asarray(st, dtype=float))
-    elif measurements_file is None:
+        return None, units.state_from_km(np.asarray(st, dtype=float))
+    if measurements_file is None:
         raise ConfigError(f"{source}: [truth] needs 'orbit' (one of: {', '.join(reg.names('orbit')) or 'none registered'})"
                           f" or 'state_km', unless [measurements] file = ... gives real observations")
-    truth_dyn = None
-    if "dynamics" in truth:
-        truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
-                                   epoch_text=epoch_text)
+    return None, None
 
-    custody = custody_rule(data.get("custody", {}), source)
+
+def _run_options(data: dict, source: str, components: dict[str, ComponentSpec], top: dict[str, Any],
+                 observers: dict) -> dict[str, Any]:
+    """[run] as Scenario fields, after refusing sizes that cannot fit or take too long."""
     run = data.get("run", {})
     if not isinstance(run, dict):
         raise ConfigError(f"{source}: 'run' must be a table")
@@ -265,8 +306,9 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if not (np.isfinite(pe) and pe >= 0):
         raise ConfigError(f"{source}: [run]: key 'predict_every_hours' = {pe} must be a finite number >= 0 "
                           "(0: only at measurements)")
+    duration = top["duration_days"]
     _check_sizes(components, duration, grid, source)
-    check_epoch_span(epoch, duration, f"{source}: top level: key 'epoch'")
+    check_epoch_span(top["epoch"], duration, f"{source}: top level: key 'epoch'")
     if pe > 0:
         check_steps(duration * 24.0 / pe, f"{source}: [run]: key 'predict_every_hours' = {pe:g}",
                     f"a prediction every {pe:g} h over duration_days = {duration:g}")
@@ -279,12 +321,8 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if rframe not in ("synodic", "inertial"):
         raise ConfigError(f"{source}: [run]: key 'recording_frame' = {rframe!r} must be 'synodic' (the rotating "
                           "frame) or 'inertial' (the sensor's Earth-centred inertial frame)")
-    return Scenario(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration,
-                    components=components, truth_orbit=truth_orbit, truth_state=truth_state,
-                    truth_dynamics=truth_dyn, custody=custody, truth_grid_minutes=grid,
-                    predict_every_hours=pe, end_with_prediction=ewp, recording_frame=rframe,
-                    measurements_file=measurements_file, measurements_reader=measurements_reader,
-                    observers=observers, iod_observer=iod_obs, source=source, raw=copy.deepcopy(data))
+    return dict(truth_grid_minutes=grid, predict_every_hours=pe, end_with_prediction=ewp,
+                recording_frame=rframe, iod_observer=iod_obs)
 
 
 # -- validation helpers --------------------------------------------------------------------------
