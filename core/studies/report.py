@@ -33,13 +33,17 @@ __all__ = ["report_study"]
 _COUNTED = ("tracking", "not-converged", "lost", "diverged")
 """Verdict kinds counted per filter x IOD in the report's ``verdicts`` column, in this order."""
 _COUNTED_TRUTHLESS = ("no-truth", "diverged")
+"""The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
+_FINALS = ("sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
+           "pos_err_km", "vel_err_ms", "entropy")
+"""Final-state figures of each run, reported as the group's median."""
 
 
 def _count_column(kind: str) -> str:
     """The summary.csv column counting the runs of a verdict kind: 'not-converged' -> 'not_converged_runs'."""
     return kind.replace("-", "_") + "_runs"
 
-"""The same for a study without a truth (filter-failed runs are counted as ``failed``)."""
+
 _TRUTH_COLUMNS = {"bound_pos_km", "efficiency_final", "efficiency_by_pass", "custody_kept", "custody_rate", "median_lost_day", "pos_err_km_p5", "pos_err_km_p95",
                   "anees_every_update", "anees_every_update_n", "custody_ci_lo", "custody_ci_hi", "final_anees",
                   "final_anees_runs", "final_anees_lo", "final_anees_hi", "final_anees_within", "hdr_ks", "hdr_ks_p",
@@ -159,18 +163,18 @@ def _calibration_line(r: dict) -> str:
             f"HDR KS {cells[2]}; HDR > 0.99 {cells[3]}; diverged {cells[4]}")
 
 
-def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
-                 settings: list[str] | None = None, first_seed: int | None = None,
-                 n_seeds: int | None = None) -> dict:
-    """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
-    :mod:`cistrack.studies.report_plots`) in <out>/report/.
-
-    Raises ConfigError (and writes nothing) when no run of the study has finished.
-    """
+def _plan(path_or_name, out_dir, settings, first_seed, n_seeds):
+    """The study's data, run specs and output directory; a directory that 'study run' wrote is
+    reported with the seeds it recorded, not the study file's full list."""
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
     if first_seed is None and n_seeds is None and not Path(path_or_name).is_dir() and (out / "study.json").is_file():
-        # report what 'study run' produced there (its recorded seeds), not the study file's full list
         data, specs, out = plan_runs(out, out, settings)
+    return data, specs, out
+
+
+def _finished_runs(specs) -> tuple[dict, dict, list[str]]:
+    """(scenario, iod, filter) -> the finished runs' summaries, and -> their step tables; and the
+    ids of the runs not finished."""
     groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
     missing_ids: list[str] = []
@@ -181,66 +185,68 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         man = read_manifest(s.out_dir)
         groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
         tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
-    if not groups:
-        name = data.get("name", out.name)
-        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
-                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
-                          + (f" --out {out_dir}" if out_dir else ""))
-    rep_dir = out / "report"
-    rep_dir.mkdir(parents=True, exist_ok=True)
-    study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
-    counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
-    finals = ["sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
-              "pos_err_km", "vel_err_ms", "entropy"]
-    arch = architectures_of(specs)
+    return groups, tables, missing_ids
+
+
+def _summary_columns(counted: tuple[str, ...], study_has_truth: bool) -> list[str]:
+    """The columns of summary.csv, in order (a study without a truth names no truth column)."""
     cols = ["scenario", "architecture", "iod", "filter", "runs", "custody_kept", "custody_rate", "median_lost_day",
-            "failed_runs", "verdicts", *finals, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
+            "failed_runs", "verdicts", *_FINALS, "pos_err_km_p5", "pos_err_km_p95", "anees_every_update",
             "anees_every_update_n", "wall_time_s", "wall_time_s_p5", "wall_time_s_p95", *_CALIBRATION, *_CONSISTENCY,
             "bound_pos_km", "efficiency_final", "efficiency_by_pass"]
     cols[cols.index("verdicts") + 1:cols.index("verdicts") + 1] = [_count_column(k) for k in counted
                                                                   if _count_column(k) not in cols]
     if not study_has_truth:  # no truth anywhere: the CSV names no custody, NEES or HDR column
         cols = [c for c in cols if c not in _TRUTH_COLUMNS]
-    rows = []
-    for (sc, iod, flt), sums in sorted(groups.items()):
-        kept = sum(1 for x in sums if x.custody_kept)
-        truthless = not any(x.has_truth for x in sums)    # no custody to speak of
-        row = {"scenario": sc, "architecture": arch.get(sc), "iod": iod, "filter": flt, "runs": len(sums),
-               "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
-               "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
-                                                                  if not x.custody_kept]),
-               "failed_runs": sum(1 for x in sums if x.status != "finished"),
-               "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted),
-               **{_count_column(k): sum(1 for x in sums if x.verdict.kind == k) for k in counted}}
-        for k in finals:
-            row[k] = _median([x.final.get(k) for x in sums])
-        row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
-        row["anees_every_update"], row["anees_every_update_n"] = _anees(tables[(sc, iod, flt)])
-        row["wall_time_s"] = _median([x.wall_time_s for x in sums])
-        row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
-        row.update(_calibration_columns(sums))
-        row.update(_consistency_columns(sums, tables[(sc, iod, flt)]))
-        eff = group_efficiency(sums)
-        row.update({"bound_pos_km": eff.bound_km, "efficiency_final": eff.final,
-                    "efficiency_by_pass": " ".join(f"{p}:{r:.4g}" for p, r in eff.by_pass.items()) or None,
-                    "efficiency_text": efficiency_text(eff)})
-        rows.append(row)
-    with atomic_target(rep_dir / "summary.csv") as tmp, open(tmp, "w", newline="") as fh:
+    return cols
+
+
+def _group_row(key: tuple[str, str, str], sums: list[RunSummary], tables: list, architecture,
+               counted: tuple[str, ...]) -> dict:
+    """One row of the summary: a scenario x IOD x filter group of finished runs."""
+    sc, iod, flt = key
+    kept = sum(1 for x in sums if x.custody_kept)
+    truthless = not any(x.has_truth for x in sums)    # no custody to speak of
+    row = {"scenario": sc, "architecture": architecture, "iod": iod, "filter": flt, "runs": len(sums),
+           "custody_kept": None if truthless else kept, "custody_rate": None if truthless else kept / len(sums),
+           "median_lost_day": None if truthless else _median([x.custody_lost_t_days for x in sums
+                                                              if not x.custody_kept]),
+           "failed_runs": sum(1 for x in sums if x.status != "finished"),
+           "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted),
+           **{_count_column(k): sum(1 for x in sums if x.verdict.kind == k) for k in counted}}
+    for k in _FINALS:
+        row[k] = _median([x.final.get(k) for x in sums])
+    row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
+    row["anees_every_update"], row["anees_every_update_n"] = _anees(tables)
+    row["wall_time_s"] = _median([x.wall_time_s for x in sums])
+    row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])
+    row.update(_calibration_columns(sums))
+    row.update(_consistency_columns(sums, tables))
+    eff = group_efficiency(sums)
+    row.update({"bound_pos_km": eff.bound_km, "efficiency_final": eff.final,
+                "efficiency_by_pass": " ".join(f"{p}:{r:.4g}" for p, r in eff.by_pass.items()) or None,
+                "efficiency_text": efficiency_text(eff)})
+    return row
+
+
+def _write_summary_csv(rows: list[dict], cols: list[str], path: Path) -> Path:
+    with atomic_target(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    files = [rep_dir / "summary.csv", write_runs_csv(groups, rep_dir / "runs.csv")]
-    by_filter = write_custody_by_filter(rows, rep_dir / "custody_by_filter.csv")
-    files += [by_filter] if by_filter else []
+    return path
 
-    def fmt(v):
-        if v is None:
-            return "-"
-        if isinstance(v, float):
-            return f"{v:.3g}"
-        return str(v)
 
-    has_truth = any(r["custody_kept"] is not None for r in rows)
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    return str(v)
+
+
+def _summary_table(rows: list[dict], has_truth: bool, counted: tuple[str, ...]) -> list[str]:
+    """The Markdown table of the groups, one row each."""
     header = ["scenario", "iod", "filter", "custody" if has_truth else "truth",
               *(["lost at (d, median)"] if has_truth else []), "failed", "verdicts: " + " / ".join(counted),
               "sigma pos x/y/z km", "sigma vel x/y/z cm/s",
@@ -250,34 +256,47 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     for r in rows:
         lines.append([r["scenario"], r["iod"], r["filter"],
                       "no truth" if r["custody_kept"] is None else f"{r['custody_kept']}/{r['runs']}",
-                      *([fmt(r["median_lost_day"])] if has_truth else []), str(r["failed_runs"]), r["verdicts"],
-                      "/".join(fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
-                      "/".join(fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
-                      *([f"{fmt(r['pos_err_km'])} [{fmt(r['pos_err_km_p5'])}-{fmt(r['pos_err_km_p95'])}]",
-                         f"{fmt(r['anees_every_update'])} ({r['anees_every_update_n']} updates)"] if has_truth else []),
-                      fmt(r["entropy"]), f"{fmt(r['wall_time_s'])} [{fmt(r['wall_time_s_p5'])}-{fmt(r['wall_time_s_p95'])}]"])
+                      *([_fmt(r["median_lost_day"])] if has_truth else []), str(r["failed_runs"]), r["verdicts"],
+                      "/".join(_fmt(r[k]) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km")),
+                      "/".join(_fmt(r[k]) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")),
+                      *([f"{_fmt(r['pos_err_km'])} [{_fmt(r['pos_err_km_p5'])}-{_fmt(r['pos_err_km_p95'])}]",
+                         f"{_fmt(r['anees_every_update'])} ({r['anees_every_update_n']} updates)"] if has_truth else []),
+                      _fmt(r["entropy"]), f"{_fmt(r['wall_time_s'])} [{_fmt(r['wall_time_s_p5'])}-{_fmt(r['wall_time_s_p95'])}]"])
     md = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    md += ["| " + " | ".join(cells) + " |" for cells in lines]
-    verdicts = []
-    for r in rows:
-        if r["custody_kept"] is None:
-            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: no truth, measurement "
-                            f"consistency: {_consistency_text(r)}.")
-        elif r["custody_kept"] < r["runs"]:
-            failed = r["runs"] - r["custody_kept"] - r[_count_column("lost")] - r[_count_column("diverged")]
-            why = ", ".join([f"{r[_count_column(k)]} {k}" for k in ("lost", "diverged") if r[_count_column(k)]]
-                            + ([f"{failed} filter-failed"] if failed else []))
-            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} did not keep custody in "
-                            f"{r['runs'] - r['custody_kept']} of {r['runs']} runs ({why}; median day "
-                            f"{fmt(r['median_lost_day'])}).")
-        else:
-            verdicts.append(f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs.")
-    flagged = [flagged_line(f) for f in flagged_runs(groups)]
+    return md + ["| " + " | ".join(cells) + " |" for cells in lines]
+
+
+def _verdict_line(r: dict) -> str:
+    """One group's custody (or, without a truth, measurement consistency) as a list item."""
+    if r["custody_kept"] is None:
+        return (f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: no truth, measurement "
+                f"consistency: {_consistency_text(r)}.")
+    if r["custody_kept"] < r["runs"]:
+        failed = r["runs"] - r["custody_kept"] - r[_count_column("lost")] - r[_count_column("diverged")]
+        why = ", ".join([f"{r[_count_column(k)]} {k}" for k in ("lost", "diverged") if r[_count_column(k)]]
+                        + ([f"{failed} filter-failed"] if failed else []))
+        return (f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} did not keep custody in "
+                f"{r['runs'] - r['custody_kept']} of {r['runs']} runs ({why}; median day "
+                f"{_fmt(r['median_lost_day'])}).")
+    return f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs."
+
+
+def _title(name: str, n_runs: int, missing_ids: list[str]) -> str:
     missing = len(missing_ids)
-    title = f"Study '{data.get('name', out.name)}': {len(specs) - missing} of {len(specs)} runs complete"
+    title = f"Study '{name}': {n_runs - missing} of {n_runs} runs complete"
     if missing:
         shown = ", ".join(missing_ids[:8]) + (f", ... ({missing - 8} more)" if missing > 8 else "")
         title += f" (not finished: {shown}; 'cistrack study run' with the same options runs them)"
+    return title
+
+
+def _flagged_title(has_truth: bool) -> str:
+    return "Runs that did not track" if has_truth else "Diverged and failed runs"
+
+
+def _summary_markdown(title: str, rows: list[dict], has_truth: bool, counted: tuple[str, ...], architectures: dict,
+                      verdicts: list[str], flagged: list[str]) -> str:
+    """summary.md: the table, observers, custody, calibration, efficiency and flagged runs."""
     custody = (["## Custody", "", *verdicts, "",
                 "Custody rule: lost at the first update where the truth's log-likelihood (km, km/s) "
                 "is below the scenario's threshold, or the truth is outside the 99.7% highest-density "
@@ -285,25 +304,27 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                ["## Measurement consistency (no truth)", "", *verdicts])
     calibration = _calibration_markdown(rows) if has_truth else [
         "## Calibration", "", "None of these runs has a truth: calibration (NEES, HDR level) needs one."]
-    flagged_title = "Runs that did not track" if has_truth else "Diverged and failed runs"
     explain = (_VERDICTS_EXPLAINED if has_truth else
                "Verdicts without a truth (see cistrack.evaluation.verdicts): no-truth = judged by measurement consistency "
                "only; diverged = a particle filter's weights degenerated, the belief collapsed or its mean left "
                "cislunar space.")
-    diverged = ["", f"## {flagged_title} (verdict and reason; every run in runs.csv)", "", *(flagged or ["None."]),
-                "", explain]
+    diverged = ["", f"## {_flagged_title(has_truth)} (verdict and reason; every run in runs.csv)", "",
+                *(flagged or ["None."]), "", explain]
     efficiency = (["", "## Efficiency against the information bound", "",
                    "RMS position error across runs / RMS of the posterior Cramer-Rao bound along the truth "
                    "(1 = the best the data allow; cistrack.evaluation.information_bound):", "",
                    *[f"- {r['filter']} with {r['iod']} IOD on {r['scenario']}: {r['efficiency_text']}" for r in rows]]
                   if has_truth else [])
-    observers = ["## Observers", "", *[f"- {sc}: {a}" for sc, a in arch.items()], ""]
-    md_text = "\n".join([f"# {title}", "", *md, "", *observers, *custody_markdown(rows), *calibration, *efficiency, "", *custody,
-                         *diverged])
-    write_text_atomic(rep_dir / "summary.md", md_text + "\n")
-    files.append(rep_dir / "summary.md")
+    observers = ["## Observers", "", *[f"- {sc}: {a}" for sc, a in architectures.items()], ""]
+    return "\n".join([f"# {title}", "", *_summary_table(rows, has_truth, counted), "", *observers,
+                      *custody_markdown(rows), *calibration, *efficiency, "", *custody, *diverged])
+
+
+def _terminal_text(title: str, rows: list[dict], has_truth: bool, counted: tuple[str, ...], verdicts: list[str],
+                   flagged: list[str], runs_csv: Path) -> str:
+    """The report as printed: the terminal table, custody, calibration, efficiency, flagged runs."""
     by_filter_text = custody_text(rows)
-    text = "\n".join(wrap_lines([title, *terminal_table(rows, has_truth, counted), "(every column: summary.md, summary.csv)"]
+    return "\n".join(wrap_lines([title, *terminal_table(rows, has_truth, counted), "(every column: summary.md, summary.csv)"]
                      + [""] + verdicts
                      + ((["", "Custody by filter (kept/runs = rate [Wilson 95 %], runs tracking):"] + by_filter_text)
                         if len(custody_by_filter(rows)[0]) > 1 else [])
@@ -313,14 +334,53 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                      + (["", "Efficiency (RMS position error / RMS information bound; 1 = the best the data allow):"]
                         + [f"- {r['filter']} / {r['iod']} / {r['scenario']}: {r['efficiency_text']}" for r in rows]
                         if has_truth else [])
-                     + ["", f"{flagged_title} (verdict and reason; every run in {rep_dir / 'runs.csv'}):"]
+                     + ["", f"{_flagged_title(has_truth)} (verdict and reason; every run in {runs_csv}):"]
                      + (flagged or ["None."])))
-    from cistrack.studies.report_plots import plot_study
 
-    figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
-    files += plot_study(figures, rep_dir, str(data.get("name", out.name)))
+
+def _figures(groups: dict, tables: dict, rows: list[dict], rep_dir: Path, name: str) -> list[Path]:
+    """The report's figures: per scenario and IOD (report_plots) and the HDR histograms."""
+    from cistrack.studies.report_plots import plot_study
     from cistrack.studies.calibration_plots import plot_hdr_histograms
 
-    files += plot_hdr_histograms({k: v["summaries"] for k, v in figures.items()}, rep_dir,
-                                 {(r["scenario"], r["iod"], r["filter"]): r for r in rows})
-    return {"text": text, "rows": rows, "files": files, "missing": missing}
+    figures = {key: {"tables": tables[key], "summaries": [x.to_dict() for x in groups[key]]} for key in groups}
+    files = plot_study(figures, rep_dir, name)
+    return files + plot_hdr_histograms({k: v["summaries"] for k, v in figures.items()}, rep_dir,
+                                       {(r["scenario"], r["iod"], r["filter"]): r for r in rows})
+
+
+def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
+                 settings: list[str] | None = None, first_seed: int | None = None,
+                 n_seeds: int | None = None) -> dict:
+    """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
+    :mod:`cistrack.studies.report_plots`) in <out>/report/.
+
+    Raises ConfigError (and writes nothing) when no run of the study has finished.
+    """
+    data, specs, out = _plan(path_or_name, out_dir, settings, first_seed, n_seeds)
+    groups, tables, missing_ids = _finished_runs(specs)
+    name = data.get("name", out.name)
+    if not groups:
+        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
+                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
+                          + (f" --out {out_dir}" if out_dir else ""))
+    rep_dir = out / "report"
+    rep_dir.mkdir(parents=True, exist_ok=True)
+    study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
+    counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
+    arch = architectures_of(specs)
+    rows = [_group_row(key, sums, tables[key], arch.get(key[0]), counted) for key, sums in sorted(groups.items())]
+    files = [_write_summary_csv(rows, _summary_columns(counted, study_has_truth), rep_dir / "summary.csv"),
+             write_runs_csv(groups, rep_dir / "runs.csv")]
+    by_filter = write_custody_by_filter(rows, rep_dir / "custody_by_filter.csv")
+    files += [by_filter] if by_filter else []
+    has_truth = any(r["custody_kept"] is not None for r in rows)
+    verdicts = [_verdict_line(r) for r in rows]
+    flagged = [flagged_line(f) for f in flagged_runs(groups)]
+    title = _title(name, len(specs), missing_ids)
+    write_text_atomic(rep_dir / "summary.md",
+                      _summary_markdown(title, rows, has_truth, counted, arch, verdicts, flagged) + "\n")
+    files.append(rep_dir / "summary.md")
+    text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv")
+    files += _figures(groups, tables, rows, rep_dir, str(name))
+    return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids)}

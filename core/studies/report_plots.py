@@ -17,11 +17,11 @@ so the passes on both sides stay legible.
 
 A filter that diverged or failed in most of its runs never sets the axes: the limits come from the
 other filters, and it is drawn as a thin dashed median (no band), clipped at the edge, its legend
-entry saying so. (In filter-comparison the bootstrap SIR's collapse, NEES ~1e38 and sigma ~1e-9 km,
-otherwise squashed every working filter into a line.)
+entry saying so.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -168,6 +168,190 @@ def _wrapped_title(text: str, width: int = 78) -> str:
     return "\n".join(textwrap.wrap(text, width)) or text
 
 
+@dataclass
+class _Figure:
+    """One figure being drawn: a (scenario, IOD) case's panels on the shared time axis."""
+
+    fig: Any
+    axes: list
+    panels: list[tuple[str, str, str]]
+    tax: GapAxis
+    grid: np.ndarray
+    """Common sampling times (days, (G,)); ``xg`` the same on the drawn (gap-shrunk) axis."""
+    xg: np.ndarray
+    shown: dict[str, list[np.ndarray]] = field(default_factory=dict)
+    """Per panel key, the values that set its axis."""
+    late: list[tuple[Any, str, np.ndarray, dict[str, Any]]] = field(default_factory=list)
+    """Off-scale medians, drawn once the axes are set."""
+
+    @property
+    def keys(self) -> list[str]:
+        return [k for k, _, _ in self.panels]
+
+    @property
+    def nees_ax(self) -> Any:
+        """The NEES panel, or None (no truth: no NEES, nor error)."""
+        return self.axes[self.keys.index("nees")] if "nees" in self.keys else None
+
+
+def _time_grid(filters: dict[str, dict[str, Any]]) -> tuple[GapAxis, np.ndarray, np.ndarray] | None:
+    """The case's time axis (long gaps shrunk: the passes around them stay legible), its sampling
+    grid (days) and the grid on the drawn axis; None when no table has times."""
+    all_t = [x for g in filters.values() for t in g["tables"] for x in [_column(t, "t_days")] if x is not None and x.size]
+    if not all_t:
+        return None
+    t_lo, t_hi = min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t)
+    days_all = np.unique(np.concatenate([_measurement_days(t) for g in filters.values() for t in g["tables"][:1]]
+                                        or [np.zeros(0)]))
+    tax = GapAxis.from_times(days_all, t_lo, t_hi)
+    grid = tax.inverse(np.linspace(float(tax.forward(t_lo)), float(tax.forward(t_hi)), _GRID))
+    return tax, grid, tax.forward(grid)
+
+
+def _draw_bands(f: _Figure, ci: int, flt: str, g: dict[str, Any], thin: bool) -> None:
+    """A filter's median and 5-95 % band on each panel (an off-scale filter: its median, later)."""
+    color = f"C{ci}"
+    off, n_bad = _off_scale(g["summaries"])
+    for ax, (key, _, _) in zip(f.axes, f.panels):
+        series = _series(g["tables"], key)
+        if not series:
+            continue
+        p5, p50, p95 = band_over_seeds(series, f.grid)
+        if off:  # drawn once the axes are set, clipped, never setting them
+            f.late.append((ax, key, p50, dict(color=color, lw=1.0, ls="--", drawstyle="steps-post",
+                                              label=f"{flt}: diverged {n_bad} of {len(g['summaries'])} "
+                                                    "runs, median (clipped)")))
+            continue
+        f.shown[key] += [p5, p50, p95]
+        ax.fill_between(f.xg, p5, p95, color=color, alpha=0.10 if thin else 0.18, lw=0, step="post")
+        ax.plot(f.xg, p50, color=color, lw=1.6, drawstyle="steps-post",
+                label=f"{flt}: median of {len(series)} seed{'s' if len(series) != 1 else ''}, band 5-95 %")
+
+
+def _draw_marks(f: _Figure, ci: int, flt: str, g: dict[str, Any]) -> None:
+    """Triangles at the top at each custody loss; for the first filter, ticks at the bottom at the
+    measurement times of its first seed."""
+    color = f"C{ci}"
+    lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
+    lost = [x for x in lost if x is not None]
+    for ax in f.axes:
+        if lost:
+            ax.plot(f.tax.forward(np.asarray(lost)), [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label=f"{flt}: custody lost ({len(lost)} of {len(g['summaries'])} runs)")
+    first = g["tables"][0] if g["tables"] else None
+    if first is not None and ci == 0:
+        days = _measurement_days(first)
+        for ax in f.axes:
+            ax.plot(f.tax.forward(days), np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label="measurement times (first seed)" if ax is f.axes[0] else None)
+
+
+def _draw_references(f: _Figure, filters: dict[str, dict[str, Any]], chi: tuple[float, float]) -> None:
+    """The information bound in the error and sigma panels, the chi-square band and median in NEES."""
+    keys = f.keys
+    bound = [sr for g in filters.values() for sr in [_series(g["tables"], "bound_pos_km")] if sr]
+    if bound:  # the information bound along the truth: the same for every filter from one IOD
+        b50 = band_over_seeds(bound[0], f.grid)[1]
+        for key in ("pos_err_km", "sigma_pos_km"):
+            if key in keys:
+                f.axes[keys.index(key)].plot(f.xg, b50, color="k", lw=1.2, ls=":", drawstyle="steps-post",
+                                             label="information bound (posterior CRB along the truth), median")
+                f.shown[key].append(b50)
+    nees_ax = f.nees_ax
+    if nees_ax is not None:
+        nees_ax.axhspan(*chi, color="0.5", alpha=0.15, lw=0, label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
+        nees_ax.axhline(nees_median(), color="0.4", lw=0.8, ls="--",
+                        label=f"chi-square({CHI2_DOF}) median {nees_median():.2f} (beside the plotted medians)")
+
+
+def _set_y_axes(f: _Figure, filters: dict[str, dict[str, Any]], chi: tuple[float, float]) -> None:
+    """Each panel's label, scale, limits and ticks, set by the filters on scale; then the off-scale
+    medians, clipped to the limits."""
+    import matplotlib.ticker
+
+    if not any(f.shown[k] for k in f.shown):  # every filter diverged: then they set the axes after all
+        for flt, g in filters.items():
+            for key, _, _ in f.panels:
+                f.shown[key] += [band_over_seeds(sr, f.grid)[1] for sr in [_series(g["tables"], key)] if sr]
+    nees_ax = f.nees_ax
+    for ax, (key, label, scale) in zip(f.axes, f.panels):
+        ax.set_ylabel(label)
+        ax.set_yscale(scale)
+        lim = _limits(f.shown[key], scale, chi if ax is nees_ax else ())
+        if lim is not None:
+            ax.set_ylim(*lim)
+        if ax is nees_ax:  # plain numbers (6, 20), not 2 x 10^1
+            ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+            ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            ax.yaxis.set_major_locator(_nees_locator(*ax.get_ylim()))
+        elif scale == "linear":
+            ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=6))
+        ax.grid(True, which="major", alpha=0.3)
+    for ax, key, y, style in f.late:  # off-scale medians: only where inside the axes (no jumps across)
+        lo, hi = ax.get_ylim()
+        ax.plot(f.xg, np.where((y >= lo) & (y <= hi), y, np.nan), **style)
+
+
+def _set_time_axis(f: _Figure) -> None:
+    """The time label; shrunk gaps drawn hatched, their length named, ticks in days."""
+    import matplotlib.ticker
+
+    tax, axes = f.tax, f.axes
+    axes[-1].set_xlabel("time since epoch (days)" + ("; gaps without measurements shrunk" if tax.shrinks else ""))
+    if not tax.shrinks:
+        return
+    axes[-1].xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=10))
+    axes[-1].xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(
+        lambda v, _: f"{float(tax.inverse(np.asarray(v))):.4g}"))
+    for a, b in tax.gaps:
+        xa, xb = float(tax.forward(a)), float(tax.forward(b))
+        for ax in axes:
+            ax.axvspan(xa, xb, facecolor="none", edgecolor="0.55", hatch="//", lw=0)
+        axes[0].text(0.5 * (xa + xb), 0.5, f"{b - a:.0f} d\nwithout\nmeasurements", ha="center",
+                     va="center", fontsize=7, color="0.3", transform=axes[0].get_xaxis_transform())
+
+
+def _legend_and_title(f: _Figure, title: str) -> None:
+    """One legend below the panels (each label once) and the wrapped title."""
+    handles, labels = [], []
+    for ax in f.axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    f.fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    f.fig.suptitle(_wrapped_title(title), fontsize=11)
+    f.fig.tight_layout(rect=(0, 0.015 + 0.016 * ((len(labels) + 1) // 2), 1, 0.98))
+
+
+def _plot_case(sc: str, iod: str, filters: dict[str, dict[str, Any]], rep_dir: Path, study_name: str,
+               chi: tuple[float, float]) -> list[Path]:
+    """The figure of one scenario and IOD variant, its filters side by side; the files written
+    (none when no table has anything to draw)."""
+    import matplotlib.pyplot as plt
+
+    axis = _time_grid(filters)
+    if axis is None:
+        return []
+    panels = [p for p in PANELS if any(_series(g["tables"], p[0]) for g in filters.values())]
+    if not panels:
+        return []
+    fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 2.0 + 2.125 * len(panels)), sharex=True, squeeze=False)
+    f = _Figure(fig, list(axes[:, 0]), panels, *axis, shown={key: [] for key, _, _ in panels})
+    thin = len(filters) > 3  # several filters: lighter bands, so they stay legible
+    for ci, (flt, g) in enumerate(sorted(filters.items())):
+        _draw_bands(f, ci, flt, g, thin)
+        _draw_marks(f, ci, flt, g)
+    _draw_references(f, filters, chi)
+    _set_y_axes(f, filters, chi)
+    _set_time_axis(f)
+    names = " vs ".join(sorted(filters))
+    _legend_and_title(f, f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else ""))
+    return save_figure(fig, rep_dir / f"{sc}__{iod}")
+
+
 def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path,
                study_name: str = "") -> list[Path]:
     """Write the figures; ``groups[(scenario, iod, filter)]`` holds ``tables`` (per-seed step
@@ -175,121 +359,12 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import matplotlib.ticker  # noqa: F401  (matplotlib.ticker.* below)
 
     by_case: dict[tuple[str, str], dict[str, dict[str, Any]]] = {}
     for (sc, iod, flt), g in groups.items():
         by_case.setdefault((sc, iod), {})[flt] = g
-    lo_chi, hi_chi = nees_band()
+    chi = nees_band()
     files: list[Path] = []
     for (sc, iod), filters in sorted(by_case.items()):
-        all_t = [x for g in filters.values() for t in g["tables"] for x in [_column(t, "t_days")] if x is not None and x.size]
-        if not all_t:
-            continue
-        t_lo, t_hi = min(float(np.nanmin(x)) for x in all_t), max(float(np.nanmax(x)) for x in all_t)
-        days_all = np.unique(np.concatenate([_measurement_days(t) for g in filters.values() for t in g["tables"][:1]]
-                                            or [np.zeros(0)]))
-        tax = GapAxis.from_times(days_all, t_lo, t_hi)  # long gaps shrunk: the passes around them stay legible
-        grid = tax.inverse(np.linspace(float(tax.forward(t_lo)), float(tax.forward(t_hi)), _GRID))
-        xg = tax.forward(grid)
-        panels = [p for p in PANELS if any(_series(g["tables"], p[0]) for g in filters.values())]
-        if not panels:
-            continue
-        fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, 2.0 + 2.125 * len(panels)), sharex=True, squeeze=False)
-        axes = list(axes[:, 0])
-        n_seeds = []
-        shown: dict[str, list[np.ndarray]] = {key: [] for key, _, _ in panels}  # what sets each axis
-        thin = len(filters) > 3  # several filters: lighter bands, so they stay legible
-        late: list[tuple[Any, str, np.ndarray, dict[str, Any]]] = []  # off-scale medians
-        for ci, (flt, g) in enumerate(sorted(filters.items())):
-            color = f"C{ci}"
-            n_seeds.append(len(g["tables"]))
-            off, n_bad = _off_scale(g["summaries"])
-            for ax, (key, _, _) in zip(axes, panels):
-                series = _series(g["tables"], key)
-                if not series:
-                    continue
-                p5, p50, p95 = band_over_seeds(series, grid)
-                if off:  # drawn once the axes are set, clipped, never setting them
-                    late.append((ax, key, p50, dict(color=color, lw=1.0, ls="--", drawstyle="steps-post",
-                                                    label=f"{flt}: diverged {n_bad} of {len(g['summaries'])} "
-                                                          "runs, median (clipped)")))
-                    continue
-                shown[key] += [p5, p50, p95]
-                ax.fill_between(xg, p5, p95, color=color, alpha=0.10 if thin else 0.18, lw=0, step="post")
-                ax.plot(xg, p50, color=color, lw=1.6, drawstyle="steps-post",
-                        label=f"{flt}: median of {len(series)} seed{'s' if len(series) != 1 else ''}, band 5-95 %")
-            lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
-            lost = [x for x in lost if x is not None]
-            for ax in axes:
-                if lost:
-                    ax.plot(tax.forward(np.asarray(lost)), [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
-                            transform=ax.get_xaxis_transform(), clip_on=False,
-                            label=f"{flt}: custody lost ({len(lost)} of {len(g['summaries'])} runs)")
-            first = g["tables"][0] if g["tables"] else None
-            if first is not None and ci == 0:
-                days = _measurement_days(first)
-                for ax in axes:
-                    ax.plot(tax.forward(days), np.full_like(days, 0.03), marker="|", ls="none", color="0.2", ms=10, mew=1.5,
-                            transform=ax.get_xaxis_transform(), clip_on=False,
-                            label="measurement times (first seed)" if ax is axes[0] else None)
-        keys = [k for k, _, _ in panels]
-        bound = [sr for g in filters.values() for sr in [_series(g["tables"], "bound_pos_km")] if sr]
-        if bound:  # the information bound along the truth: the same for every filter from one IOD
-            b50 = band_over_seeds(bound[0], grid)[1]
-            for key in ("pos_err_km", "sigma_pos_km"):
-                if key in keys:
-                    axes[keys.index(key)].plot(xg, b50, color="k", lw=1.2, ls=":", drawstyle="steps-post",
-                                               label="information bound (posterior CRB along the truth), median")
-                    shown[key].append(b50)
-        nees_ax = axes[keys.index("nees")] if "nees" in keys else None   # no truth: no NEES (nor error)
-        if nees_ax is not None:
-            nees_ax.axhspan(lo_chi, hi_chi, color="0.5", alpha=0.15, lw=0,
-                            label=f"consistent filter: chi-square({CHI2_DOF}) 5-95 %")
-            nees_ax.axhline(nees_median(), color="0.4", lw=0.8, ls="--",
-                            label=f"chi-square({CHI2_DOF}) median {nees_median():.2f} (beside the plotted medians)")
-        if not any(shown[k] for k in shown):  # every filter diverged: then they set the axes after all
-            for flt, g in filters.items():
-                for key, _, _ in panels:
-                    shown[key] += [band_over_seeds(sr, grid)[1] for sr in [_series(g["tables"], key)] if sr]
-        for ax, (key, label, scale) in zip(axes, panels):
-            ax.set_ylabel(label)
-            ax.set_yscale(scale)
-            lim = _limits(shown[key], scale, (lo_chi, hi_chi) if ax is nees_ax else ())
-            if lim is not None:
-                ax.set_ylim(*lim)
-            if ax is nees_ax:  # plain numbers (6, 20), not 2 x 10^1
-                ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
-                ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-                ax.yaxis.set_major_locator(_nees_locator(*ax.get_ylim()))
-            elif scale == "linear":
-                ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=6))
-            ax.grid(True, which="major", alpha=0.3)
-        for ax, key, y, style in late:  # off-scale medians: only where inside the axes (no jumps across)
-            lo, hi = ax.get_ylim()
-            ax.plot(xg, np.where((y >= lo) & (y <= hi), y, np.nan), **style)
-        axes[-1].set_xlabel("time since epoch (days)" + ("; gaps without measurements shrunk" if tax.shrinks else ""))
-        if tax.shrinks:
-            axes[-1].xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=10))
-            axes[-1].xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(
-                lambda v, _: f"{float(tax.inverse(np.asarray(v))):.4g}"))
-            for a, b in tax.gaps:
-                xa, xb = float(tax.forward(a)), float(tax.forward(b))
-                for ax in axes:
-                    ax.axvspan(xa, xb, facecolor="none", edgecolor="0.55", hatch="//", lw=0)
-                axes[0].text(0.5 * (xa + xb), 0.5, f"{b - a:.0f} d\nwithout\nmeasurements", ha="center",
-                             va="center", fontsize=7, color="0.3", transform=axes[0].get_xaxis_transform())
-        handles, labels = [], []
-        for ax in axes:
-            for h, lab in zip(*ax.get_legend_handles_labels()):
-                if lab not in labels:
-                    handles.append(h)
-                    labels.append(lab)
-        fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
-        names = " vs ".join(sorted(filters))
-        fig.suptitle(_wrapped_title(f"{names} on {sc}, IOD {iod}" + (f" (study {study_name})" if study_name else "")),
-                     fontsize=11)
-        fig.tight_layout(rect=(0, 0.015 + 0.016 * ((len(labels) + 1) // 2), 1, 0.98))
-        files.extend(save_figure(fig, rep_dir / f"{sc}__{iod}"))
+        files.extend(_plot_case(sc, iod, filters, rep_dir, study_name, chi))
     return files
