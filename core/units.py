@@ -21,9 +21,11 @@ VU_KMS: float = LU_KM / TU_S
 DAY_S: float = 86_400.0
 TU_DAYS: float = TU_S / DAY_S
 ARCSEC_RAD: float = np.pi / (180.0 * 3600.0)
+KM_SCALE: np.ndarray = np.array([LU_KM, LU_KM, LU_KM, VU_KMS, VU_KMS, VU_KMS])
+"""Nondimensional synodic state -> km, km/s, per component (6,): ``state_km = state * KM_SCALE``."""
 
 __all__ = [
-    "LU_KM", "TU_S", "VU_KMS", "DAY_S", "TU_DAYS", "ARCSEC_RAD",
+    "LU_KM", "TU_S", "VU_KMS", "DAY_S", "TU_DAYS", "ARCSEC_RAD", "KM_SCALE",
     "km_to_lu", "lu_to_km", "kms_to_vu", "vu_to_kms", "days_to_tu", "tu_to_days",
     "hours_to_tu", "tu_to_hours", "seconds_to_tu", "tu_to_seconds",
     "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc",

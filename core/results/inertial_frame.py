@@ -1,42 +1,20 @@
-"""An Earth-centred inertial frame in which a run's synodic estimates can be exported.
+"""A run's estimates carried into an Earth-centred inertial frame, for export.
 
-A sensor says how its synodic frame sits in inertial space through
-:meth:`cistrack.interfaces.Sensor.inertial_frame`, returning an :class:`InertialFrame`: a CCSDS
-``REF_FRAME`` label (or an honest non-CCSDS one), a one-line description, and the affine map
-from nondimensional synodic states at TU times to Earth-centred inertial km, km/s. Covariances
-are carried through the exact Jacobian of that map (an affine map has a constant Jacobian per
-time, computed here by unit differences).
+The frame (:class:`~cistrack.astro.inertial_frame.InertialFrame`, re-exported here) is the one a
+sensor names through :meth:`cistrack.interfaces.Sensor.inertial_frame`; :func:`to_inertial`
+maps the moment-matched means through it and the covariances through its exact Jacobian.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
-from cistrack.results.estimates import KM_SCALE, Estimates
+from cistrack.astro.inertial_frame import InertialFrame
+from cistrack.results.estimates import Estimates
+from cistrack.units import KM_SCALE
 
 __all__ = ["InertialFrame", "InertialEstimates", "to_inertial"]
-
-
-@dataclass(frozen=True)
-class InertialFrame:
-    """``from_synodic(states (N, 6) nondimensional synodic, t (N,) TU) -> (N, 6) km, km/s``
-    (Earth-centred inertial). ``name`` is the REF_FRAME written to CCSDS files; ``ccsds`` says
-    whether it is a CCSDS-registered frame; ``center`` the CENTER_NAME."""
-
-    name: str
-    description: str
-    from_synodic: Callable[[np.ndarray, np.ndarray], np.ndarray]
-    ccsds: bool = False
-    center: str = "EARTH"
-
-    def jacobian(self, state: np.ndarray, t: float) -> np.ndarray:
-        """d(inertial km, km/s)/d(synodic km, km/s) at ``state`` (6,) nondimensional: (6, 6)."""
-        base = np.asarray(state, dtype=float)[None]
-        pts = base + np.vstack([np.zeros(6), np.diag(1.0 / KM_SCALE)])
-        out = self.from_synodic(pts, np.full(7, float(t)))
-        return (out[1:] - out[0]).T
 
 
 @dataclass

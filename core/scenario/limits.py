@@ -13,16 +13,13 @@ import unicodedata
 from typing import Any
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.limits import PORT_MAX, PORT_MIN, check_port  # defined where components reach them
 
 __all__ = ["SEED_MAX", "PORT_MIN", "PORT_MAX", "check_seed", "check_path_component", "check_count",
            "check_port", "available_memory_bytes", "check_memory", "format_bytes"]
 
 SEED_MAX = 2 ** 63 - 1
 """Largest seed: seeds are stored as signed 64-bit integers (manifests, step tables)."""
-
-PORT_MIN, PORT_MAX = 1, 65535
-"""TCP port numbers a server may be asked to listen on (0 means "any free port" to the operating
-system, so it is never a port the user can be sent to)."""
 
 
 def check_seed(value: Any, where: str) -> int:
@@ -42,15 +39,6 @@ def check_count(value: Any, where: str, minimum: int = 1, maximum: int | None = 
     if value < minimum or (maximum is not None and value > maximum):
         raise ConfigError(f"{where}: {value} is out of range: allowed {minimum} to "
                           f"{maximum if maximum is not None else 'any larger integer'}")
-    return int(value)
-
-
-def check_port(value: Any, where: str) -> int:
-    """``value`` as a TCP port to listen on: an integer in [1, 65535]."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ConfigError(f"{where}: port {value!r} must be an integer from {PORT_MIN} to {PORT_MAX}")
-    if not PORT_MIN <= value <= PORT_MAX:
-        raise ConfigError(f"{where}: port {value} is out of range: allowed {PORT_MIN} to {PORT_MAX}")
     return int(value)
 
 

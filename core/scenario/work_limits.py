@@ -16,13 +16,9 @@ import math
 from datetime import datetime, timedelta, timezone
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.limits import MAX_STEPS  # defined where schedules reach it
 
 __all__ = ["MAX_STEPS", "EPOCH_MIN", "EPOCH_MAX", "check_steps", "check_epoch_span", "span_text"]
-
-MAX_STEPS = 1_000_000
-"""Most filter steps one run may take. A step costs about 1-25 ms (UKF to a 2,000-particle PGM)
-and keeps a results row in memory until the run ends, so a million steps is already hours of
-work; the long observation files runs are meant for (400,000 rows) fit well within it."""
 
 EPOCH_MIN = datetime(1800, 1, 1, tzinfo=timezone.utc)
 EPOCH_MAX = datetime(2200, 1, 1, tzinfo=timezone.utc)
