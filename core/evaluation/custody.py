@@ -1,13 +1,14 @@
-"""Custody: whether the filter still holds the target, decided by an observer of the run.
+"""Custody: whether the filter still holds the target, judged in the run's metric stage.
 
-:class:`CustodyObserver` is registered on a run's lifecycle hooks like any other observer (as
-pytest's terminal reporter is a plugin of pytest). It judges each update step against a
-:class:`CustodyRule`, writes the ``custody`` metric (1 kept, 0 lost) into the step before the
-results writer sees it (``tryfirst``), and hands the run's :class:`Verdict` to the summary.
+:class:`CustodyMetric` is the metric stage ``custody`` (:mod:`cistrack.evaluation.metric_stage`;
+it needs the ``belief`` stage's truth log-likelihood and HDR level). It judges each update step
+against a :class:`CustodyRule`, adds the ``custody`` metric (1 kept, 0 lost) to every table step
+of a run with a truth, and hands the run's :class:`Verdict` to the summary. It also observes
+``cistrack_run_failed`` (the filter raised: "filter-failed").
 
 Extending: a verdict has a ``kind`` and a ``reason``. Further judges (consistency without a
-truth, divergence, ...) can subclass :class:`CustodyObserver` (override :meth:`judge`) or be
-observers of their own that produce a :class:`Verdict`.
+truth, divergence, ...) can subclass :class:`CustodyMetric` (override :meth:`judge`) or be
+metric stages or observers of their own that produce a :class:`Verdict`.
 """
 from __future__ import annotations
 
@@ -18,9 +19,10 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
+from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.plugin.hookspecs import hookimpl
 
-__all__ = ["CustodyRule", "Verdict", "CustodyObserver", "KEPT_KINDS", "VERDICT_KINDS"]
+__all__ = ["CustodyRule", "Verdict", "CustodyMetric", "KEPT_KINDS", "VERDICT_KINDS"]
 
 KEPT_KINDS: tuple[str, ...] = ("kept", "tracking", "not-converged")
 """Verdict kinds under which custody is kept (``custody_kept`` is True)."""
@@ -114,8 +116,11 @@ class Verdict:
 _EARTH = np.array([-MU_EARTH_MOON, 0.0, 0.0])  # Earth in the synodic frame (LU)
 
 
-class CustodyObserver:
+class CustodyMetric(StepMetric):
     """Judges custody on every update step of a run with a truth (see the module docstring)."""
+
+    name = "custody"
+    needs = ("belief",)
 
     def __init__(self, rule: CustodyRule | None = None) -> None:
         self.rule = rule or CustodyRule()
@@ -138,10 +143,6 @@ class CustodyObserver:
                            f"on {self._hdr_run} consecutive updates", step.index, float(units.tu_to_days(step.t)))
         return None
 
-    def _mark(self, run, step) -> None:
-        if step.truth is not None:  # a run without a truth has no custody column at all
-            step.metrics["custody"] = 1.0 if self.verdict.kept else 0.0
-
     def _track_mean(self, step) -> None:
         belief = getattr(step, "belief", None)
         if belief is None:
@@ -149,22 +150,30 @@ class CustodyObserver:
         mean = np.asarray(belief.mixture.mean, dtype=float)
         self.earth_distance_km = float(np.linalg.norm(mean[:3] - _EARTH) * units.LU_KM)
 
-    @hookimpl(tryfirst=True)
-    def cistrack_step_predicted(self, run, step) -> None:
-        if step.kind in ("initial", "predict"):
-            self._mark(run, step)
-            self._track_mean(step)
-
-    @hookimpl(tryfirst=True)
-    def cistrack_step_updated(self, run, step) -> None:
-        if self.verdict.kept and step.truth is not None:
-            lost = self.judge(step)
-            if lost is not None:
-                self.verdict = lost
-        self._mark(run, step)
+    def compute(self, run, step, event: str) -> dict[str, float]:
+        """``{"custody": 1.0 or 0.0}`` on every table step of a run with a truth (none without):
+        the verdict after judging ``step`` when it is a posterior; the prior of an update is not judged."""
+        if event == "updated":
+            if self.verdict.kept and step.truth is not None:
+                lost = self.judge(step)
+                if lost is not None:
+                    self.verdict = lost
+        elif step.kind not in ("initial", "predict"):
+            return {}
         self._track_mean(step)
+        return {} if step.truth is None else {"custody": 1.0 if self.verdict.kept else 0.0}
 
     @hookimpl
     def cistrack_run_failed(self, run, step_index, error) -> None:
         if self.verdict.kept:
             self.verdict = Verdict("filter-failed", str(error), step_index, None)
+
+
+def __getattr__(name: str):
+    if name == "CustodyObserver":  # the old name, kept working for one release
+        import warnings
+
+        warnings.warn("cistrack.evaluation.custody.CustodyObserver is now CustodyMetric, a metric stage",
+                      DeprecationWarning, stacklevel=2)
+        return CustodyMetric
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -21,7 +21,8 @@ model is the one the filters use (the scenario's ``[dynamics]``), so the bound i
 estimator built on it; the truth model (``[truth] dynamics``) only supplies the trajectory, and is
 still propagated once per run.
 
-:class:`InformationBoundObserver` writes, into every step's metrics (so into ``steps.parquet``):
+:class:`InformationBoundMetric` (the metric stage ``information_bound``) adds to every step's
+metrics (so to ``steps.parquet``):
 ``bound_sigma_{x,y,z}_km`` and ``bound_sigma_{vx,vy,vz}_cms``, the bound's per-axis sigma, and
 ``bound_pos_km`` = sqrt(trace of its position block), the bound on the RMS position error. A
 filter's error (``pos_err_km``) and sigma sit beside them: ``pos_err_km / bound_pos_km`` over
@@ -33,20 +34,20 @@ from typing import Any
 
 import numpy as np
 
+from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.interfaces.transition_matrix import stm_by_central_differences
 from cistrack.model.belief import sample_covariance
-from cistrack.plugin.hookspecs import hookimpl
 from cistrack.units import LU_KM, VU_KMS
 
 __all__ = ["JACOBIAN_STEPS", "measurement_jacobian", "bound_predict", "bound_update", "bound_metrics",
-           "BOUND_KEYS", "InformationBoundObserver"]
+           "BOUND_KEYS", "InformationBoundMetric"]
 
 JACOBIAN_STEPS = np.array([1e-6, 1e-6, 1e-6, 1e-7, 1e-7, 1e-7])
 """Central-difference steps of the measurement Jacobian: position LU (384 m), velocity VU (0.1 mm/s)."""
 
 BOUND_KEYS = ("bound_sigma_x_km", "bound_sigma_y_km", "bound_sigma_z_km",
               "bound_sigma_vx_cms", "bound_sigma_vy_cms", "bound_sigma_vz_cms", "bound_pos_km")
-"""The metrics the observer writes."""
+"""The metrics the stage writes."""
 
 _CMS = VU_KMS * 1e5  # VU in cm/s
 
@@ -95,10 +96,13 @@ def bound_metrics(p: np.ndarray) -> dict[str, float]:
             "bound_sigma_vz_cms": float(vel[2]), "bound_pos_km": float(np.sqrt(np.sum(pos ** 2)))}
 
 
-class InformationBoundObserver:
-    """Lifecycle observer writing the bound (:data:`BOUND_KEYS`) into every step of a run with a
-    truth. A step where the bound cannot be evaluated (the truth hits a body, a singular
-    innovation) leaves it out from there on, and the reason is kept in :attr:`stopped`."""
+class InformationBoundMetric(StepMetric):
+    """Metric stage ``information_bound``: the bound (:data:`BOUND_KEYS`) of every step of a run
+    with a truth, priors of updates included (the bound is predicted there). A step where the
+    bound cannot be evaluated (the truth hits a body, a singular innovation) leaves it out from
+    there on, and the reason is kept in :attr:`stopped`."""
+
+    name = "information_bound"
 
     def __init__(self) -> None:
         self._p: np.ndarray | None = None
@@ -108,8 +112,7 @@ class InformationBoundObserver:
         self._filter: Any = None
         self.stopped = ""
 
-    @hookimpl
-    def cistrack_run_started(self, run) -> None:
+    def start(self, run) -> None:
         if run.truth is None:
             return
         self._dynamics = run.dynamics  # the filters' model, along the true trajectory
@@ -142,33 +145,33 @@ class InformationBoundObserver:
         self._p = bound_predict(self._p, f, q)
         self._t, self._x = t, x
 
-    def _guarded(self, step, action) -> None:
+    def _update(self, run, step) -> None:
+        """The bound after every measurement of update ``step`` (at the truth)."""
+        assert self._p is not None and self._x is not None
+        for m in (step.group or (step.measurement,)):
+            own = run.sensor.for_measurement(m) if hasattr(run.sensor, "for_measurement") else run.sensor
+            h = measurement_jacobian(own, self._x, float(m.t), tuple(m.names))
+            self._p = bound_update(self._p, h, np.asarray(m.covariance, dtype=float))
+
+    def compute(self, run, step, event: str) -> dict[str, float]:
         if self._p is None or step.truth is None or self.stopped:
-            return
+            return {}
         try:
-            action()
-        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
-            self.stopped = f"step {step.index}: {type(exc).__name__}: {exc}"
-            self._p = None
-            return
-        except Exception as exc:  # the truth model refused (an impact): no bound from here on
-            self.stopped = f"step {step.index}: {type(exc).__name__}: {exc}"
-            self._p = None
-            return
-        if self._p is not None and np.all(np.isfinite(self._p)):
-            step.metrics.update(bound_metrics(self._p))
-
-    @hookimpl(tryfirst=True)  # with the other metric writers, before any row is built
-    def cistrack_step_predicted(self, run, step) -> None:
-        self._guarded(step, lambda: self._advance(step))
-
-    @hookimpl(tryfirst=True)
-    def cistrack_step_updated(self, run, step) -> None:
-        def update() -> None:
             self._advance(step)
-            assert self._p is not None and self._x is not None
-            for m in (step.group or (step.measurement,)):
-                own = run.sensor.for_measurement(m) if hasattr(run.sensor, "for_measurement") else run.sensor
-                h = measurement_jacobian(own, self._x, float(m.t), tuple(m.names))
-                self._p = bound_update(self._p, h, np.asarray(m.covariance, dtype=float))
-        self._guarded(step, update)
+            if event == "updated":
+                self._update(run, step)
+        except Exception as exc:  # singular, non-finite, or the truth model refused (an impact): no bound from here on
+            self.stopped = f"step {step.index}: {type(exc).__name__}: {exc}"
+            self._p = None
+            return {}
+        return bound_metrics(self._p) if np.all(np.isfinite(self._p)) else {}
+
+
+def __getattr__(name: str):
+    if name == "InformationBoundObserver":  # the old name, kept working for one release
+        import warnings
+
+        warnings.warn("cistrack.evaluation.information_bound.InformationBoundObserver is now "
+                      "InformationBoundMetric, a metric stage", DeprecationWarning, stacklevel=2)
+        return InformationBoundMetric
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -5,12 +5,16 @@ the state in km and km/s (entropy and log-likelihood in nats of that density).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
+from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.model.belief import Belief
+from cistrack.results.step_table import is_table_step
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["step_metrics", "entropy", "nees", "LOG_JACOBIAN_KM"]
+__all__ = ["step_metrics", "entropy", "nees", "LOG_JACOBIAN_KM", "BeliefMetric", "PassIndexMetric", "pass_index"]
 
 LOG_JACOBIAN_KM: float = 3.0 * np.log(LU_KM) + 3.0 * np.log(VU_KMS)
 """log |d(state_km)/d(state_nd)|: log p_km(x) = log p_nd(x) - LOG_JACOBIAN_KM."""
@@ -75,3 +79,32 @@ def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
         above = (lp_samples > lp_truth).astype(float)
         out["hdr_level"] = float(above.mean() if w is None else w @ above)
     return out
+
+
+class BeliefMetric(StepMetric):
+    """The metric stage ``belief``: :func:`step_metrics` of every table step (not the prior of
+    an update, which has no row)."""
+
+    name = "belief"
+
+    def compute(self, run: Any, step: Any, event: str) -> dict[str, float]:
+        return step_metrics(step.belief, step.truth) if is_table_step(event, step) else {}
+
+
+def pass_index(passes: list, t: float) -> int:
+    """1 + the index of the pass of ``passes`` (each with ``start``, ``end`` TU) holding time
+    ``t`` (TU), or 0 outside every pass."""
+    for i, p in enumerate(passes):
+        if p.start - 1e-9 <= t <= p.end + 1e-9:
+            return i + 1
+    return 0
+
+
+class PassIndexMetric(StepMetric):
+    """The metric stage ``pass_index``: ``pass_index`` (:func:`pass_index`, as a float) of every
+    table step."""
+
+    name = "pass_index"
+
+    def compute(self, run: Any, step: Any, event: str) -> dict[str, float]:
+        return {"pass_index": float(pass_index(run.passes, step.t))} if is_table_step(event, step) else {}

@@ -1,9 +1,10 @@
 """Per-measurement residuals and NIS, the consistency a run reports with or without a truth.
 
-:class:`ResidualObserver` is an observer of every run (like the custody observer). Before each
-update the prior belief predicts the measurement (:func:`cistrack.evaluation.consistency.innovation`);
-after the update it writes into the step's metrics, so that each update row of ``steps.parquet``
-holds, for every measured component NAME (the sensor's names: azimuth/elevation, ra/dec):
+:class:`ResidualMetric` is the metric stage ``residuals`` of every run. At the prior of each
+update the belief predicts the measurement (:func:`cistrack.evaluation.consistency.innovation`);
+at the posterior the stage adds the columns to the step's metrics, so that each update row of
+``steps.parquet`` holds, for every measured component NAME (the sensor's names: azimuth/elevation,
+ra/dec):
 
     res_NAME_arcsec   z - z_hat, the residual of the observation against the prior's predicted
                       measurement (arcsec; azimuth wrapped at ±180 deg); a component whose name
@@ -26,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.units import LU_KM
 
-__all__ = ["ResidualObserver", "residual_columns", "ResidualSummary", "residual_summary", "ARCSEC_PER_RAD",
+__all__ = ["ResidualMetric", "residual_columns", "ResidualSummary", "residual_summary", "ARCSEC_PER_RAD",
            "CONSISTENCY_KEYS", "consistency_summary", "pool_consistency", "consistency_text"]
 
 ARCSEC_PER_RAD = 180.0 / np.pi * 3600.0
@@ -60,16 +61,21 @@ def residual_columns(inn) -> dict[str, float]:
     return out
 
 
-class ResidualObserver:
-    """Lifecycle observer adding the residual columns to each update step's metrics."""
+class ResidualMetric(StepMetric):
+    """Metric stage ``residuals``: the residual columns of each update step (see the module docstring)."""
+
+    name = "residuals"
 
     def __init__(self) -> None:
         self._pending: dict[int, dict[str, float]] = {}
 
-    @hookimpl
-    def cistrack_step_predicted(self, run, step) -> None:
+    def compute(self, run, step, event: str) -> dict[str, float]:
+        """Nothing at the prior of an update (the innovation is kept for the posterior), the
+        columns at its posterior; nothing for other steps."""
         if step.kind != "update" or step.measurement is None:
-            return
+            return {}
+        if event == "updated":
+            return self._pending.pop(step.index, None) or {}
         from cistrack.evaluation.consistency import innovation
 
         try:
@@ -77,12 +83,7 @@ class ResidualObserver:
                                                                     run.sensor))
         except (np.linalg.LinAlgError, ValueError):
             self._pending.pop(step.index, None)
-
-    @hookimpl(tryfirst=True)
-    def cistrack_step_updated(self, run, step) -> None:
-        cols = self._pending.pop(step.index, None)
-        if cols is not None:
-            step.metrics.update(cols)
+        return {}
 
 
 @dataclass(frozen=True)
@@ -190,3 +191,13 @@ def consistency_text(c: dict[str, Any]) -> str:
             f"bounds [{c['nis_lower']:.3g}, {c['nis_upper']:.3g}]: {ok}; "
             + ("-" if share is None else f"{100 * share:.0f} %") + " of measurements outside their 95 % NIS "
             "bounds (5 % if consistent); largest |residual| " + ("-" if res is None else f"{res:.3g}") + " arcsec")
+
+
+def __getattr__(name: str):
+    if name == "ResidualObserver":  # the old name, kept working for one release
+        import warnings
+
+        warnings.warn("cistrack.evaluation.residuals.ResidualObserver is now ResidualMetric, a metric stage",
+                      DeprecationWarning, stacklevel=2)
+        return ResidualMetric
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,6 +1,6 @@
 """The final verdict of a run, decided once at its end from the last step's metrics.
 
-During a run :class:`~cistrack.evaluation.custody.CustodyObserver` only knows "kept", "lost" and
+During a run :class:`~cistrack.evaluation.custody.CustodyMetric` only knows "kept", "lost" and
 "filter-failed". At the end :func:`final_verdict` makes it honest, with the thresholds of the
 scenario's :class:`~cistrack.evaluation.custody.CustodyRule`:
 

@@ -78,14 +78,14 @@ class EstimateWriter:
         if (self.directory / ESTIMATES).exists():
             (self.directory / ESTIMATES).unlink()
 
-    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
+    @hookimpl
     def cistrack_step_predicted(self, run, step) -> None:
         if step.kind in ("predict", "initial"):
             self._write(step)
 
-    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
+    @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
-        # the NIS under the prior, put into the step's metrics by cistrack.evaluation.residuals.ResidualObserver
+        # the NIS under the prior, a metric of the run's residuals stage (cistrack.evaluation.residuals)
         self._write(step, float(step.metrics.get("nis", float("nan"))), int(step.metrics.get("nis_dof", 0)))
 
     def _write(self, step, nis: float = float("nan"), dof: int = 0) -> None:

@@ -41,21 +41,23 @@ def step_row(run, step) -> dict[str, Any]:
 def row_of(run, step) -> dict[str, Any]:
     """The step's row, built on the first call and kept on the step: every observer that writes
     rows (the in-memory collector, the results writer) hands on the same dict. A step's row is
-    asked for only once its metrics, diagnostics and timings are final (in the step hooks)."""
+    asked for only once its metrics, diagnostics and timings are final (in the step hooks, which
+    follow the run's metric stage)."""
     if step.row is None:
         step.row = step_row(run, step)
     return step.row
 
 
 def is_table_step(hook: str, step) -> bool:
-    """Whether the event ``hook`` of ``step`` is a row of the table: every update (posterior),
-    the initial cloud and prediction-only steps (not the prior of an update)."""
+    """Whether the event ``hook`` ("predicted" or "updated") of ``step`` is a row of the table:
+    every update (posterior), the initial cloud and prediction-only steps (not the prior of an update)."""
     return hook == "updated" or step.kind in ("predict", "initial")
 
 
 class RowCollector:
     """Observer that keeps every table row of a run in memory (``rows``) and, optionally, the
-    steps themselves (``steps``)."""
+    steps themselves (``steps``). The run's metric stage has completed each step's metrics
+    before any observer sees it (:mod:`cistrack.evaluation.metric_stage`), so no hook order is needed."""
 
     def __init__(self, keep_steps: bool = False) -> None:
         self.rows: list[dict[str, Any]] = []
@@ -67,11 +69,11 @@ class RowCollector:
         if self.keep_steps:
             self.steps.append(step)
 
-    @hookimpl(trylast=True)
+    @hookimpl
     def cistrack_step_predicted(self, run, step) -> None:
         if is_table_step("predicted", step):
             self._add(run, step)
 
-    @hookimpl(trylast=True)
+    @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
         self._add(run, step)

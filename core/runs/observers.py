@@ -1,5 +1,6 @@
-"""The observers of one run: the plugin manager that calls their lifecycle hooks, and the end of
-the run, where each observer's ``cistrack_run_finished`` is called on its own."""
+"""The observers and metric stages of one run: the observers a run always has, the plugin manager
+that calls their lifecycle hooks, the run's metric stage (built-in stages and the plugins'), and
+the end of the run, where each observer's ``cistrack_run_finished`` is called on its own."""
 from __future__ import annotations
 
 import dataclasses
@@ -7,15 +8,52 @@ from typing import Any, Iterable
 
 import pluggy
 
+from cistrack.evaluation.custody import CustodyMetric
+from cistrack.evaluation.information_bound import InformationBoundMetric
+from cistrack.evaluation.metric_stage import MetricStage, StepMetric
+from cistrack.evaluation.metrics import BeliefMetric, PassIndexMetric
+from cistrack.evaluation.residuals import ResidualMetric
 from cistrack.evaluation.run_summary import RunSummary
 from cistrack.plugin import hookspecs
 from cistrack.plugin.registry import Registry
-from cistrack.runs.run_context import RunContext
+from cistrack.runs.run_context import RunContext, RunOptions
+from cistrack.scenario.limits import check_count
 
-__all__ = ["make_plugin_manager", "finish_observers"]
+__all__ = ["make_plugin_manager", "finish_observers", "run_observers", "builtin_metrics", "metric_stage"]
 
 _LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
-              "cistrack_run_failed", "cistrack_run_finished")
+              "cistrack_run_failed", "cistrack_run_finished", "cistrack_metric_stages")
+
+
+def run_observers(first: list[Any], options: RunOptions, registry: Registry) -> list[Any]:
+    """The observers of a run, in registration order: ``first`` (the run's own: custody, the row
+    collector), with ``options.output_dir`` the results and estimates writers, then
+    ``options.observers``."""
+    obs = list(first)
+    if options.output_dir is not None:
+        from cistrack.results.estimates import EstimateWriter
+        from cistrack.results.part_files import ROWS_PER_PART
+        from cistrack.results.store import ResultsWriter
+
+        n = (ROWS_PER_PART if options.rows_per_part is None
+             else check_count(options.rows_per_part, "rows_per_part (--rows-per-part)", 1, 10 ** 9))
+        obs += [ResultsWriter(options.output_dir, registry, rows_per_part=n),
+                EstimateWriter(options.output_dir, rows_per_part=n)]
+    return obs + list(options.observers)
+
+
+def builtin_metrics(custody: CustodyMetric) -> list[StepMetric]:
+    """The built-in metric stages of every run, in their order, with the run's ``custody`` stage:
+    the belief against the truth, the pass index, the information bound, the residuals, custody."""
+    return [BeliefMetric(), PassIndexMetric(), InformationBoundMetric(), ResidualMetric(), custody]
+
+
+def metric_stage(pm: pluggy.PluginManager, scenario: Any, builtins: list[StepMetric]) -> MetricStage:
+    """The run's :class:`MetricStage`: ``builtins``, then the stages that plugins and observers return
+    from ``cistrack_metric_stages`` (in registration order), each after the stages it needs.
+    Raises ConfigError when a stage needs one that is missing, or names repeat."""
+    found = pm.hook.cistrack_metric_stages(scenario=scenario)  # pluggy's call order: last registered first
+    return MetricStage([*builtins, *(s for stages in reversed(found) for s in (stages or ()))])
 
 
 def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:

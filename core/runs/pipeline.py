@@ -13,34 +13,34 @@ every filter and IOD variant sees the same measurements.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
+import pluggy
 
 from cistrack import units
-from cistrack.evaluation.custody import CustodyObserver
+from cistrack.evaluation.custody import CustodyMetric
+from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
-from cistrack.scenario.limits import check_count, check_seed
+from cistrack.scenario.limits import check_seed
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.model.measurement import StackedMeasurement
-from cistrack.evaluation.metrics import step_metrics
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
 from cistrack.runs.iod_message import iod_message
-from cistrack.runs.observers import finish_observers, make_plugin_manager
-from cistrack.runs.run_context import RunContext, Step
+from cistrack.runs.observers import builtin_metrics, finish_observers, make_plugin_manager, metric_stage, run_observers
+from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
-from cistrack.evaluation.information_bound import InformationBoundObserver
-from cistrack.evaluation.residuals import ResidualObserver
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
-from cistrack.results.step_table import RowCollector
+from cistrack.results.step_table import RowCollector, is_table_step
 from cistrack.runs.truth import Truth
 
-__all__ = ["run_scenario", "RunResult", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
+__all__ = ["run_scenario", "RunResult", "RunOptions", "RunContext", "Step", "make_plugin_manager", "prepare_run"]
 
 
 @dataclass
@@ -137,13 +137,6 @@ def _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say)
     return sensor.simulate(truth.states_at(times), times, rngs["measurements"]), passes
 
 
-def _pass_index(passes, t: float) -> int:
-    for i, p in enumerate(passes):
-        if p.start - 1e-9 <= t <= p.end + 1e-9:
-            return i + 1
-    return 0
-
-
 def _compile_ahead(dynamics, state) -> None:
     """On a first run (kernel not in the cache) start compiling the filter's lockstep propagation
     kernel in a second process while the truth and the IOD run here (see
@@ -156,13 +149,15 @@ def _compile_ahead(dynamics, state) -> None:
         background_compile.start(dynamics, np.asarray(state, dtype=float).reshape(-1)[:dynamics.dim])
 
 
-def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Registry | None = None,
-                 observers: Iterable[Any] = (), output_dir: str | Path | None = None,
-                 progress: bool = False, run_id: str | None = None, keep_steps: bool = False,
-                 log=None, blas_threads: int | None = 1, rows_per_part: int | None = None) -> RunResult:
+def run_scenario(scenario: Scenario, *, options: RunOptions | None = None, **keywords: Any) -> RunResult:
     """Run one scenario end to end and return its metrics and summary.
 
-    ``observers`` receive the lifecycle hooks; when ``output_dir`` is given a
+    ``options`` (a :class:`RunOptions`), each field of which may also be given as a keyword
+    (a keyword wins): ``seed``, ``registry``, ``observers``, ``output_dir``, ``progress``,
+    ``run_id``, ``keep_steps``, ``log``, ``blas_threads``, ``rows_per_part``.
+
+    ``observers`` receive the lifecycle hooks (and may add metric stages through
+    ``cistrack_metric_stages``); when ``output_dir`` is given a
     :class:`cistrack.results.store.ResultsWriter` writing there is added. ``progress`` shows a progress
     bar on stderr; ``log`` (a callable taking a string) receives stage messages.
 
@@ -174,12 +169,12 @@ def run_scenario(scenario: Scenario, *, seed: int | None = None, registry: Regis
     :data:`cistrack.results.part_files.ROWS_PER_PART`; a part is also written every
     :data:`~cistrack.results.part_files.SECONDS_PER_PART` seconds); the merged tables do not depend on it.
     """
-    args = (scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log, rows_per_part)
-    if blas_threads is None:
-        return _run(*args)
+    opts = (options or RunOptions()).with_keywords(keywords)
+    if opts.blas_threads is None:
+        return _run(scenario, opts)
     from threadpoolctl import threadpool_limits
-    with threadpool_limits(limits=blas_threads, user_api="blas"):
-        return _run(*args)
+    with threadpool_limits(limits=opts.blas_threads, user_api="blas"):
+        return _run(scenario, opts)
 
 
 def _events(scenario: Scenario, ctx: RunContext) -> list[tuple[float, tuple[int, ...]]]:
@@ -212,109 +207,115 @@ def _step(ctx: RunContext, index: int, t: float, kind: str, belief, group: tuple
                 group=tuple(group))
 
 
-def _measure(ctx: RunContext, step: Step) -> Step:
-    """Fill the step's metrics, pass index and the filter's diagnostics (before observers see it)."""
-    tm = time.perf_counter()
-    step.metrics = step_metrics(step.belief, step.truth)
-    step.metrics["pass_index"] = float(_pass_index(ctx.passes, step.t))
-    step.diagnostics = dict(ctx.filter.diagnostics)
-    step.timings["metrics"] = time.perf_counter() - tm
-    return step
-
-
-def _run(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
-         rows_per_part=None) -> RunResult:
+def _run(scenario: Scenario, opts: RunOptions) -> RunResult:
     """:func:`_run_timed` with numba's compilation timed apart (:class:`CompileClock`)."""
     clock = CompileClock()
     with clock:
-        return _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
-                          rows_per_part, clock)
+        return _run_timed(scenario, opts, clock)
 
 
-def _run_timed(scenario, seed, registry, observers, output_dir, progress, run_id, keep_steps, log,
-               rows_per_part, clock: CompileClock) -> RunResult:
-    """Build once, then one way through: truth, measurements, IOD, filter steps; everything else
-    (custody, rows, results files, progress, recordings) is an observer of the hooks."""
-    from cistrack.runs.progress import ProgressBar
-    from cistrack.results.store import ResultsWriter
-
-    reg = registry or default_registry()
-    out = Path(output_dir) if output_dir is not None else None
-    custody = CustodyObserver(scenario.custody)
-    collector = RowCollector(keep_steps=keep_steps)
-    obs: list[Any] = [custody, ResidualObserver(), InformationBoundObserver(), collector]
-    if out is not None:
-        from cistrack.results.estimates import EstimateWriter
-        from cistrack.results.part_files import ROWS_PER_PART
-        n = check_count(rows_per_part, "rows_per_part (--rows-per-part)", 1, 10 ** 9) if rows_per_part is not None else ROWS_PER_PART
-        obs += [ResultsWriter(out, reg, rows_per_part=n), EstimateWriter(out, rows_per_part=n)]
-    obs.extend(observers)
+def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> RunResult:
+    """Build once, then one way through: truth, measurements, IOD, filter steps. Each step's
+    metrics come from the metric stage (:mod:`cistrack.evaluation.metric_stage`); everything else
+    (rows, results files, progress, recordings) is an observer of the hooks."""
+    reg = opts.registry or default_registry()
+    custody = CustodyMetric(scenario.custody)
+    collector = RowCollector(keep_steps=opts.keep_steps)
+    pm = make_plugin_manager(run_observers([custody, collector], opts, reg), reg)
+    metrics = metric_stage(pm, scenario, builtin_metrics(custody))  # a bad stage is refused before any work
     t_start = time.perf_counter()
-    ctx, rngs = prepare_run(scenario, seed, reg, run_id, out, log)
-    t_prepare = time.perf_counter() - t_start
-    compiled_in_prepare = clock.seconds
+    ctx, rngs = prepare_run(scenario, opts.seed, reg, opts.run_id, opts.output_dir, opts.log)
+    t_prepare = time.perf_counter() - t_start - clock.seconds
     events = _events(scenario, ctx)
     if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
         ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
-    if progress:
-        obs.append(ProgressBar(ctx.run_id, len(events), custody))
-    pm = make_plugin_manager(obs, reg)
-    filt = ctx.filter
-
-    t0 = time.perf_counter()
-    filt.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rngs["filter"])
-    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", filt.belief)
-    step0.timings["initialize"] = time.perf_counter() - t0
-
-    status, failure = "finished", ""
-    abort: BaseException | None = None
-    try:
-        pm.hook.cistrack_run_started(run=ctx)
-        pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step0))
-        step = step0 = None  # the observers are done with it: its particles need not outlive the step
-        for k, (t, group) in enumerate(events, start=1):
-            step = prior = posterior = None  # the previous step's belief (its particle arrays) is free before predict and update
-            tp = time.perf_counter()
-            filt.predict(t)
-            prior = filt.belief  # timed with the prediction: the PGM clusters its particles here
-            t_pred = time.perf_counter() - tp
-            if not group:
-                step = _step(ctx, k, t, "predict", prior)
-                step.timings["predict"] = t_pred
-                pm.hook.cistrack_step_predicted(run=ctx, step=_measure(ctx, step))
-                continue
-            ms = tuple(_angles(ctx.measurements[i]) for i in group)
-            pm.hook.cistrack_step_predicted(run=ctx, step=_step(ctx, k, t, "update", prior, ms))
-            tu, prior = time.perf_counter(), None  # the prior's particles need not outlive the hook
-            for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
-                filt.update(m)  # several sites at one time: one stacked update, or one after another
-            posterior = filt.belief
-            t_upd = time.perf_counter() - tu
-            step = _step(ctx, k, t, "update", posterior, ms)
-            step.timings.update({"predict": t_pred, "update": t_upd})
-            pm.hook.cistrack_step_updated(run=ctx, step=_measure(ctx, step))
-    except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
-        status = "filter-failed"
-        failure = f"{type(exc).__name__}: {exc}"
-        try:
-            pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
-        except Exception as obs_exc:  # an observer failing on the failure: still finish the run
-            status, failure = "failed", f"{failure}; then {type(obs_exc).__name__}: {obs_exc}"
-    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
-        status, abort = "interrupted", exc
-        failure = f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)"
-    except Exception as exc:  # an observer (recorder, results writer: full disk) or anything else
-        status, failure = "failed", f"{type(exc).__name__}: {exc}"
-
+    if opts.progress:
+        from cistrack.runs.progress import ProgressBar
+        pm.register(ProgressBar(ctx.run_id, len(events), custody), name="observer-progress-ProgressBar")
+    pending = [_initial_step(ctx, rngs["filter"])]  # handed on, not kept here: its particles go with its hooks
+    status, failure, abort = _guarded(pm, ctx, collector, lambda: _steps(ctx, pm, metrics, events, pending))
     verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
                             custody.earth_distance_km) if status in ("finished", "filter-failed") \
         else custody.verdict
     summary = summarize(ctx, collector.rows, verdict, status, failure,
-                        time.perf_counter() - t_start - clock.seconds, t_prepare - compiled_in_prepare, clock.seconds)
+                        time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
     summary = finish_observers(pm, ctx, summary)
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
+    """The filter initialised with the IOD cloud, as step 0 (its time in ``timings["initialize"]``)."""
+    t0 = time.perf_counter()
+    ctx.filter.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rng)
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", ctx.filter.belief)
+    step0.timings["initialize"] = time.perf_counter() - t0
+    return step0
+
+
+def _guarded(pm: pluggy.PluginManager, ctx: RunContext, collector: RowCollector,
+             steps: Callable[[], None]) -> tuple[str, str, BaseException | None]:
+    """Run ``steps``; (status, failure, the interrupt to raise again once the run is finished)."""
+    try:
+        steps()
+    except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        failure = f"{type(exc).__name__}: {exc}"
+        try:
+            pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
+        except Exception as obs_exc:  # an observer failing on the failure: still finish the run
+            return "failed", f"{failure}; then {type(obs_exc).__name__}: {obs_exc}", None
+        return "filter-failed", failure, None
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
+        return "interrupted", f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)", exc
+    except Exception as exc:  # an observer (recorder, results writer: full disk), a metric stage, or anything else
+        return "failed", f"{type(exc).__name__}: {exc}", None
+    return "finished", "", None
+
+
+def _steps(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, events: list, pending: list) -> None:
+    """The run from its start: the metric stages and observers told, the initial step (taken from
+    ``pending``), then one step per event."""
+    metrics.start(ctx)
+    pm.hook.cistrack_run_started(run=ctx)
+    _observe(ctx, pm, metrics, pending.pop(), "predicted")
+    for k, (t, group) in enumerate(events, start=1):
+        _event(ctx, pm, metrics, k, t, group)  # no step outlives its call: its belief is free before the next predict
+
+
+def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: int, t: float, group: tuple) -> None:
+    """Step ``k``: predict to ``t``; with measurements (indices ``group``) hand on the prior, then update."""
+    filt = ctx.filter
+    tp = time.perf_counter()
+    filt.predict(t)
+    prior = filt.belief  # timed with the prediction: the PGM clusters its particles here
+    t_pred = time.perf_counter() - tp
+    if not group:
+        step = _step(ctx, k, t, "predict", prior)
+        step.timings["predict"] = t_pred
+        _observe(ctx, pm, metrics, step, "predicted")
+        return
+    ms = tuple(_angles(ctx.measurements[i]) for i in group)
+    _observe(ctx, pm, metrics, _step(ctx, k, t, "update", prior, ms), "predicted")
+    tu, prior = time.perf_counter(), None  # the prior's particles need not outlive the hook
+    for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
+        filt.update(m)  # several sites at one time: one stacked update, or one after another
+    step = _step(ctx, k, t, "update", filt.belief, ms)
+    step.timings.update({"predict": t_pred, "update": time.perf_counter() - tu})
+    _observe(ctx, pm, metrics, step, "updated")
+
+
+def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, step: Step, event: str) -> None:
+    """The metric stage, then the observers' hook of ``event``. A table step (see
+    :func:`~cistrack.results.step_table.is_table_step`) also gets the filter's diagnostics and the
+    metrics' time; the prior of an update only what the stages compute for it."""
+    if is_table_step(event, step):
+        step.diagnostics = dict(ctx.filter.diagnostics)
+        metrics.timed(ctx, step, event)
+    else:
+        metrics.measure(ctx, step, event)
+    hook = pm.hook.cistrack_step_updated if event == "updated" else pm.hook.cistrack_step_predicted
+    hook(run=ctx, step=step)
 
 
 def _angles(m):

@@ -10,7 +10,7 @@ __all__ = ["ProgressBar"]
 class ProgressBar:
     """tqdm bar over a run's ``total`` filter steps, showing time, entropy and custody.
 
-    ``custody`` is the run's :class:`~cistrack.evaluation.custody.CustodyObserver` (its verdict is shown).
+    ``custody`` is the run's :class:`~cistrack.evaluation.custody.CustodyMetric` (its verdict is shown).
     """
 
     def __init__(self, run_id: str, total: int, custody=None) -> None:

@@ -1,11 +1,13 @@
-"""What a run hands its observers: the run context and one step.
+"""What a run is given and what it hands its observers: the run's options, its context and one step.
 
 Observers (hook implementations of ``cistrack_run_started``, ``cistrack_step_predicted``,
 ``cistrack_step_updated``, ``cistrack_run_finished``) receive these objects and must treat them
-as read-only.
+as read-only (a step's metrics are a read-only mapping by the time they see it).
 """
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -18,7 +20,52 @@ from cistrack.interfaces import Dynamics, Filter, IODMethod, Pass, Schedule, Sen
 from cistrack.model.measurement import Measurement, MeasurementSet
 from cistrack.runs.truth import Truth
 
-__all__ = ["RunContext", "Step"]
+__all__ = ["RunOptions", "RunContext", "Step"]
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How :func:`cistrack.runs.pipeline.run_scenario` runs a scenario; the fields are its keywords.
+
+    Attributes
+    ----------
+    seed : int or None              the scenario's seed when None
+    registry : Registry or None     the default registry (installed plugins) when None
+    observers : tuple               objects with lifecycle hooks (and ``cistrack_metric_stages``)
+    output_dir : Path or None       where a results writer writes the run (none when None)
+    progress : bool                 a progress bar on stderr
+    run_id : str or None            the scenario's run id when None
+    keep_steps : bool               keep the steps themselves in the result
+    log : callable or None          receives stage messages (a string each)
+    blas_threads : int or None      BLAS threads during the run; None leaves BLAS alone
+    rows_per_part : int or None     steps per results part file (the default when None)
+    """
+
+    seed: int | None = None
+    registry: Any = None
+    observers: tuple[Any, ...] = ()
+    output_dir: Path | None = None
+    progress: bool = False
+    run_id: str | None = None
+    keep_steps: bool = False
+    log: Callable[[str], None] | None = None
+    blas_threads: int | None = 1
+    rows_per_part: int | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "observers", tuple(self.observers))
+        if self.output_dir is not None:
+            object.__setattr__(self, "output_dir", Path(self.output_dir))
+
+    def with_keywords(self, keywords: dict[str, Any]) -> "RunOptions":
+        """These options with ``keywords`` (field name -> value) replaced; an unknown name is a
+        TypeError that lists the known ones."""
+        known = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(keywords) - known)
+        if unknown:
+            raise TypeError(f"run_scenario() got unexpected keyword argument(s) {', '.join(map(repr, unknown))}; "
+                            f"known: {', '.join(sorted(known))}")
+        return dataclasses.replace(self, **keywords)
 
 
 @dataclass
@@ -85,8 +132,9 @@ class Step:
                                  the first of ``group`` when several share the step's time
     group : tuple of Measurement every measurement of an "update" step (several sites measuring
                                  at one time make one step; the filter takes them in order)
-    metrics : dict               metric name -> float (km, m/s, cm/s, nats); filled before
-                                 cistrack_step_updated
+    metrics : dict               metric name -> float (km, m/s, cm/s, nats), computed by the
+                                 run's metric stages (:mod:`cistrack.evaluation.metric_stage`)
+                                 before the step hooks; read-only when observers see it
     diagnostics : dict           the filter's diagnostics after this step
     timings : dict               stage -> seconds (propagation, update, metrics)
     row : dict or None           its results-table row, once an observer asked for it

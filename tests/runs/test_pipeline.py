@@ -1,5 +1,5 @@
 """One way through a run: the truth is propagated once (dense output), every
-component is constructed once, custody is an observer, one row builder, a typed summary."""
+component is constructed once, custody is a metric stage, one row builder, a typed summary."""
 from __future__ import annotations
 
 from collections import Counter
@@ -7,7 +7,7 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from cistrack.evaluation.custody import CustodyObserver, CustodyRule, Verdict
+from cistrack.evaluation.custody import CustodyMetric, CustodyRule, Verdict
 from cistrack.plugins.dynamics.cr3bp import CR3BP
 from cistrack.plugin.registry import Registry, load_registry
 from cistrack.runs.pipeline import run_scenario
@@ -121,12 +121,10 @@ class _Step:
                                          ([(5.0, 0.999), (5.0, 0.5), (5.0, 0.999), (5.0, 0.999)], 4),
                                          ([(5.0, 0.999), (5.0, 0.5), (5.0, 0.999)], None)])
 def test_custody_is_lost_on_low_likelihood_or_consecutive_hdr_excursions(seq, lost_at):
-    obs = CustodyObserver(CustodyRule(loglik_threshold=-100.0, hdr_threshold=0.997, hdr_consecutive=2))
+    obs = CustodyMetric(CustodyRule(loglik_threshold=-100.0, hdr_threshold=0.997, hdr_consecutive=2))
     marks = []
     for i, (ll, hdr) in enumerate(seq, start=1):
-        step = _Step(i, ll, hdr)
-        obs.cistrack_step_updated(run=None, step=step)
-        marks.append(step.metrics["custody"])
+        marks.append(obs.compute(None, _Step(i, ll, hdr), "updated")["custody"])
     assert obs.verdict.step == lost_at
     if lost_at is None:
         assert obs.verdict.kept and marks == [1.0] * len(seq)
@@ -137,8 +135,8 @@ def test_custody_is_lost_on_low_likelihood_or_consecutive_hdr_excursions(seq, lo
 
 @pytest.mark.parametrize("loglik,shown", [(-116.04, "-116.0"), (-8.914951e38, "-8.91e+38")])
 def test_a_lost_custody_reason_shows_the_likelihood_in_a_few_digits(loglik, shown):
-    obs = CustodyObserver(CustodyRule(loglik_threshold=-100.0))
-    obs.cistrack_step_updated(run=None, step=_Step(1, loglik, 0.5))
+    obs = CustodyMetric(CustodyRule(loglik_threshold=-100.0))
+    obs.compute(None, _Step(1, loglik, 0.5), "updated")
     assert obs.verdict.reason == f"truth log-likelihood {shown} < -100"
 
 
