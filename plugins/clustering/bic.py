@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.interfaces.component import check_int, check_positive
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .gmm import fit_gmm_labels

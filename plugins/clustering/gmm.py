@@ -7,7 +7,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_int, check_positive
 from cistrack.errors import ParameterError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .thread_limits import limited_threads

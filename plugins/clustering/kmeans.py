@@ -6,7 +6,7 @@ import warnings
 import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_int
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Clusterer
 
 from .lloyd import kmeans_fit, nearest_centres

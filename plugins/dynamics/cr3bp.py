@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.interfaces.component import check_int, check_positive, check_range
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
 from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM, MU_EARTH_MOON, earth_moon_primaries

@@ -28,7 +28,7 @@ from cistrack.interfaces.component import check_int, check_range
 from cistrack.astro.ephemeris import DAY_S, ChebyshevSeries
 from cistrack.errors import StateError
 from cistrack.astro.earth_moon import EarthMoonFrame
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces.dynamics import Body, Propagation
 from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces.orbit import ReferenceOrbit
 
 from cistrack.astro.primaries import MU_EARTH_MOON

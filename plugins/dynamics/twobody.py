@@ -14,7 +14,7 @@ import numpy as np
 from cistrack import units
 from cistrack.interfaces.component import check_int, check_positive, check_range
 from cistrack.errors import CistrackError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.lazy import lazy_njit
 from cistrack.interfaces.dynamics import Body
 from cistrack.astro.primaries import EARTH_RADIUS_KM

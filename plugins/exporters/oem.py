@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from cistrack.errors import CistrackError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Exporter
 
 from .ccsds_text import ccsds_epoch, comment_lines, lower_triangle, num

@@ -12,7 +12,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_int
 from cistrack.errors import CistrackError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Exporter
 
 from .ccsds_text import COV_KEYS, ccsds_epoch, comment_lines, num

@@ -25,7 +25,7 @@ import numpy as np
 from cistrack.model.belief import ParticleCloud
 from cistrack.interfaces.component import check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
 from cistrack.errors import IODError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import IODMethod, Sensor
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet

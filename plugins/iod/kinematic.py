@@ -181,7 +181,7 @@ class KinematicFitIOD(IODMethod):
         """The range prior (a name given in Python is created from the installed plugins; in a
         scenario the prior arrives built through the run's registry)."""
         if isinstance(self.range_prior, str):
-            from cistrack.plugin.registry import default_registry
+            from cistrack.api import default_registry
             return default_registry().create("range-prior", self.range_prior)
         return self.range_prior
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.interfaces.component import check_positive, check_range
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import RangePrior
 from cistrack.units import km_to_lu
 

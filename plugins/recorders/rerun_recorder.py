@@ -56,7 +56,7 @@ import numpy as np
 
 from cistrack.interfaces.component import Component, check_int, check_positive
 from cistrack.errors import ParameterError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.errors import ParameterError
-from cistrack.results.estimates import KM_SCALE
+from cistrack.units import KM_SCALE
 
 __all__ = ["VIEW_FRAMES", "ViewFrame"]
 

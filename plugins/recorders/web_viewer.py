@@ -19,7 +19,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 from cistrack.errors import CistrackError
-from cistrack.scenario.limits import check_port
+from cistrack.interfaces.limits import check_port
 
 from .ports import LOOPBACK, PortInUseError, ensure_port_free, in_use_message
 from .recording_server import RecordingServer

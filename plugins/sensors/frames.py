@@ -218,7 +218,7 @@ class EquatorialFrameModel(FrameModel):
         return np.concatenate([eci[:, :3] @ rot.T * LU_KM, eci[:, 3:] @ rot.T * (LU_KM / TU_S)], axis=1)
 
     def inertial_frame(self):
-        from cistrack.results.inertial_frame import InertialFrame
+        from cistrack.astro.inertial_frame import InertialFrame
         return InertialFrame(
             name=IDEAL_FRAME_NAME, ccsds=False, from_synodic=self.states_to_eci_km,
             description="cistrack's idealised equatorial model (the paper's CR3BP geometry): "

@@ -14,7 +14,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_positive, check_range
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Pass, Sensor
 from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.model.measurement import MeasurementSet

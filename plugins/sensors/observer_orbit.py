@@ -127,7 +127,7 @@ def observer_start(orbit: str, phase: float, state_km, state_epoch: str, epoch, 
         return state_from_km(np.asarray(s, dtype=float)), t0, ""
     if state_epoch:
         fail("state_epoch", state_epoch, "goes with 'state_km' (a catalog orbit uses 'phase')")
-    from cistrack.plugin.registry import default_registry
+    from cistrack.api import default_registry
     reg = default_registry()
     names = reg.names("orbit")
     if orbit not in names:

@@ -11,7 +11,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
 from cistrack.interfaces import Pass, Schedule
-from cistrack.scenario.work_limits import MAX_STEPS
+from cistrack.interfaces.limits import MAX_STEPS
 from cistrack.units import TU_S
 
 __all__ = ["PhasedSchedule", "RULES"]
@@ -141,7 +141,7 @@ class PhasedSchedule(Schedule):
 
     def _check_count(self, spans, origin: float) -> None:
         """Refuse, before building them, more measurement times than a run may take as filter
-        steps (:data:`~cistrack.scenario.work_limits.MAX_STEPS`), naming the parameter of the
+        steps (:data:`~cistrack.interfaces.limits.MAX_STEPS`), naming the parameter of the
         phase that makes the most."""
         counts = []
         for ph in self._phases:

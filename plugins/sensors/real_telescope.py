@@ -24,7 +24,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_positive, check_range
 from cistrack.errors import MeasurementError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.observer import ObserverGeometry, neu_basis
@@ -169,7 +169,7 @@ class RealTelescope(Sensor):
     def inertial_frame(self):
         """GCRS (CCSDS ``GCRF``): the real Earth-Moon frame's synodic -> GCRS map (DE421), used
         to export estimates (``cistrack export``)."""
-        from cistrack.results.inertial_frame import InertialFrame
+        from cistrack.astro.inertial_frame import InertialFrame
         return InertialFrame(name="GCRF", ccsds=True, from_synodic=self._frame.synodic_to_gcrs,
                              description="GCRS: Earth-centred, ICRF-aligned axes; from the real "
                                          "Earth-Moon rotating frame (DE421)")

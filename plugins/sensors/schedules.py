@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 
 from .phased_schedule import RULES, PhasedSchedule
 

@@ -25,7 +25,7 @@ from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.interfaces.component import check_positive, check_range
 from cistrack.model.measurement import MeasurementSet
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
 from .frames import noisy_measurements
@@ -123,7 +123,7 @@ class SpaceTelescope(Sensor):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         self.epoch = epoch
         if dynamics is None:                    # outside a scenario: the registered Earth-Moon CR3BP
-            from cistrack.plugin.registry import default_registry
+            from cistrack.api import default_registry
             dynamics = default_registry().create("dynamics", "cr3bp")
         if not isinstance(dynamics, Dynamics):
             self._fail("dynamics", dynamics, "must be a dynamics model (a scenario hands the run's own)")
@@ -269,7 +269,7 @@ class SpaceTelescope(Sensor):
     def inertial_frame(self):
         """The frame RA/Dec are measured in, for exports: GCRF (ephemeris) or the idealised
         equatorial frame (CR3BP)."""
-        from cistrack.results.inertial_frame import InertialFrame
+        from cistrack.astro.inertial_frame import InertialFrame
         from .frames import EquatorialFrameModel
         if isinstance(self._sky, RealSky):
             frame = self._sky.frame
