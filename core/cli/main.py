@@ -21,8 +21,7 @@ from pathlib import Path
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
-from cistrack.cli.export_command import cmd_export
-from cistrack.cli.fit_command import add_fit_parser
+from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
 from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
@@ -55,9 +54,6 @@ def cmd_run(args) -> int:
     from cistrack.runs.input_checks import check_run_inputs
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings
-    from cistrack.evaluation.run_summary import count_lines
-    from cistrack.evaluation.verdicts import verdict_lines
-    from cistrack.results.store import results_line
 
     reg = default_registry()
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
@@ -68,21 +64,41 @@ def cmd_run(args) -> int:
     out = Path(args.out) if args.out else Path("runs") / run_id
     check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
     check_output_dir(out, "--out" if args.out else "the results directory")
-    observers = []
-    recorder = None
-    if args.rerun or args.rerun_serve or args.rerun_spawn:
-        recorder = reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
-                              spawn=args.rerun_spawn, max_points=args.max_points,
-                              frame=scen.recording_frame, overwrite=args.overwrite)
-        observers.append(recorder)
+    recorder = _rerun_recorder(args, reg, scen)
+    observers = [recorder] if recorder is not None else []
     say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
     say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
         f"{scen.duration_days:g} days; results -> {out}")
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out, progress=not args.quiet,
                        log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part)
     s = res.summary
+    _print_outcome(s, out, args.quiet, out_)
+    if args.rerun:
+        out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
+    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
+        _serve_until_interrupted(recorder, out_)
+    if recorder is None:
+        allow_quick_exit()  # results written and closed; no recorder to flush at exit
+    return 0 if s.status == "finished" else 3
+
+
+def _rerun_recorder(args, reg, scen):
+    """The rerun recorder the options ask for (a file, a server, a viewer), or None."""
+    if not (args.rerun or args.rerun_serve or args.rerun_spawn):
+        return None
+    return reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
+                      spawn=args.rerun_spawn, max_points=args.max_points,
+                      frame=scen.recording_frame, overwrite=args.overwrite)
+
+
+def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
+    """The run's status, verdict, counts, final sigmas and errors, and its result files."""
+    from cistrack.evaluation.run_summary import count_lines
+    from cistrack.evaluation.verdicts import verdict_lines
+    from cistrack.results.store import results_line
+
     out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
-    if args.quiet and s.status != "finished":
+    if quiet and s.status != "finished":
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     ended = s.status in ("finished", "filter-failed")  # a failed run has no verdict to give
     for line in (verdict_lines(s, out, _fmt) if ended else ["  verdict: none (the run did not finish; see its status above)"]):
@@ -92,29 +108,27 @@ def cmd_run(args) -> int:
     f = s.final
     if f:
         out_("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
-              + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
+             + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
         if "pos_err_km" in f:
             out_(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
-                  f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
+                 f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
     out_(results_line(out))  # only files that exist (a full disk may have kept some from being written)
-    if args.rerun:
-        out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
-    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
-        uri = getattr(recorder, "server_uri", None)
-        if uri:
-            out_(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
-        out_("  the viewer stays available until you press Ctrl-C", flush=True)
-        try:
-            import time
-            while True:
-                time.sleep(3600)
-        except KeyboardInterrupt:
-            pass
-        finally:
-            recorder.close()
-    if recorder is None:
-        allow_quick_exit()  # results written and closed; no recorder to flush at exit
-    return 0 if s.status == "finished" else 3
+
+
+def _serve_until_interrupted(recorder, out_) -> None:
+    """Keep the rerun server or viewer up until Ctrl-C, then close the recorder."""
+    uri = getattr(recorder, "server_uri", None)
+    if uri:
+        out_(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
+    out_("  the viewer stays available until you press Ctrl-C", flush=True)
+    try:
+        import time
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        recorder.close()
 
 
 def cmd_plugins(args) -> int:
@@ -180,6 +194,23 @@ def _port_option(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a port: give an integer from {PORT_MIN} "
                                          f"to {PORT_MAX} (default 9090)")
     return int(text)
+
+
+def cmd_export(args) -> int:
+    """``cistrack export``: a run's orbit estimate, or a fit's fitted orbit, as CCSDS OEM or OPM."""
+    from cistrack.runs.export import export_refusal, export_run
+
+    if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
+        return cmd_export_fit(args)
+    params = {} if args.step is None else {"step": args.step}
+    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force, **params)
+    if args.force:
+        why = export_refusal(args.run)
+        if why:
+            _eprint(f"cistrack: warning: exported with --force: {why} (the file says so in a COMMENT)")
+    if not args.quiet:
+        print(f"wrote {out}")
+    return 0
 
 
 def cmd_view(args) -> int:
