@@ -62,6 +62,9 @@ class ComponentUpdate(Component):
     measurements (``moments.pxd``, ``moments.pdd``): the PGM then conditions the clusters as they
     are, without first reshaping their Gaussians (``kept_spread``)."""
 
+    def __init__(self) -> None:
+        """No parameters (a subclass with settings declares them, as every component does)."""
+
     @abstractmethod
     def update(self, moments: Any, residuals: Callable[[np.ndarray], np.ndarray],
                R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -81,6 +84,9 @@ class PosteriorDraw(Component):
     """Where the PGM's posterior particles come from, once the posterior mixture is known."""
 
     kind = "pgm-draw"
+
+    def __init__(self) -> None:
+        """No parameters (a subclass with settings declares them, as every component does)."""
 
     @abstractmethod
     def draw(self, prior: ClusteredParticles, posterior: GaussianMixture, n: int,
@@ -119,6 +125,9 @@ class Reanchor(Component):
     """Whether and how the PGM replaces its belief by least-squares fits of whole arcs."""
 
     kind = "pgm-reanchor"
+
+    def __init__(self) -> None:
+        """No parameters (a subclass with settings declares them, as every component does)."""
 
     @abstractmethod
     def start(self) -> ReanchorRun | None:

@@ -99,8 +99,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     reanchor : Reanchor or str
         A pgm-reanchor component or its name. "arcs" (default): at the end of every pass, batch
         least squares over the arc's measurements, started from the posterior particles that fit
-        them best, replaces the belief when a fit is accepted (:mod:`.reanchoring`; why:
-        docs/pgm-parameters.md). "across-gaps": the fits also span gaps, and after a gap the
+        them best, replaces the belief when a fit is accepted (why: docs/pgm-parameters.md). "across-gaps": the fits also span gaps, and after a gap the
         belief is the fit's line of variations (Examples 2 and 3). "off": the PGM alone (the
         paper's).
     reanchor_gap_days : float
