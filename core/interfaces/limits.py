@@ -29,6 +29,7 @@ def check_port(value: Any, where: str) -> int:
     :class:`~cistrack.errors.ConfigError` naming ``where`` (a file and key, or a flag) otherwise."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ConfigError(f"{where}: port {value!r} must be an integer from {PORT_MIN} to {PORT_MAX}")
-    if not PORT_MIN <= value <= PORT_MAX:
+    port = int(value)
+    if not PORT_MIN <= port <= PORT_MAX:
         raise ConfigError(f"{where}: port {value} is out of range: allowed {PORT_MIN} to {PORT_MAX}")
-    return int(value)
+    return port
