@@ -3,9 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.interfaces.component import check_int
-from cistrack.errors import ParameterError
-from cistrack.interfaces import Clusterer
+from cistrack.api import Clusterer, ParameterError, check_int
 
 __all__ = ["BisectingClusterer"]
 

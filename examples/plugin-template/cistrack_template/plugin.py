@@ -3,7 +3,7 @@
 The names are what scenario files use (``[dynamics] name = "template-cr3bp-srp"``). They must be
 unique per kind across every installed plugin, so give yours a prefix of your own.
 """
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack.api import hookimpl
 
 from .bisecting import BisectingClusterer
 from .srp import CR3BPSolarPressure

@@ -16,10 +16,8 @@ import numpy as np
 from numba import njit
 
 from cistrack import units
-from cistrack.interfaces.component import check_nonnegative, check_range
-from cistrack.interfaces.dynamics import Body
+from cistrack.api import Body, CompiledDynamics, check_nonnegative, check_range
 from cistrack.astro.primaries import MU_EARTH_MOON, earth_moon_primaries
-from cistrack.propagation import CompiledDynamics
 
 __all__ = ["CR3BPSolarPressure", "srp_acceleration_lu_tu2", "SOLAR_PRESSURE_N_M2", "SUN_RATE"]
 

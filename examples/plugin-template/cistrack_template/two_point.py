@@ -4,11 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack import units
-from cistrack.model.belief import ParticleCloud
-from cistrack.interfaces.component import check_int, check_positive
-from cistrack.errors import IODError
-from cistrack.interfaces import IODMethod, Sensor
-from cistrack.model.measurement import MeasurementSet
+from cistrack.api import IODError, IODMethod, MeasurementSet, ParticleCloud, Sensor, check_int, check_positive
 
 __all__ = ["TwoPointIOD"]
 

@@ -3,8 +3,7 @@ import numpy as np
 import pytest
 
 from cistrack import units
-from cistrack.errors import ParameterError
-from cistrack.plugin.registry import load_registry
+from cistrack.api import ParameterError, load_registry
 from cistrack.testing import NRHO_9_2_APOLUNE, ReferenceCR3BP
 
 from cistrack_template import BisectingClusterer, CR3BPSolarPressure
