@@ -120,9 +120,7 @@ def fill_function(body, dim: int, lanes: int) -> str:
     rows' column of lane ``_lane``, or (``_lane`` < 0) of every lane that does not hold them yet,
     and the HELD rows set; the scratch key row says 1.0 and ``_K`` after a fill of every lane,
     0.0 after a fill of one. The loop over every lane has the constant trip count ``LANES``, and
-    one lane is filled without a loop: with the bounds given at run time, as before, the model's
-    propagation to 49 output times cost 6 % more CPU (one process, the two kernels alternating).
-    One function that every stage calls (when a key changed: every few steps), not a copy in
+    one lane is filled without a loop (bounds given at run time cost CPU). One function that every stage calls (when a key changed: every few steps), not a copy in
     each: the kernel compiles faster."""
     replicated, _ = scratch_plan(body)
     r = rows(dim, keyed=True, scratch=len(replicated), lanes=lanes)
