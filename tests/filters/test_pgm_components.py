@@ -117,7 +117,16 @@ def test_the_pgms_own_settings_reach_the_step_built_for_a_scenario(reg):
 def test_a_steps_own_table_in_a_scenario_keeps_its_values(reg):
     scen = load_scenario("quick", reg, overrides={"filter": {"component_update": {"name": "iterated",
                                                                                   "update_iterations": 4}}})
-    assert scen.build("filter", reg).component_update.update_iterations == 4
+    pgm = scen.build("filter", reg)
+    _linear_run(pgm)
+    assert pgm._update.update_iterations == 4
+
+
+def test_a_setting_made_differently_in_the_pgm_and_in_its_steps_table_is_refused(reg):
+    scen = load_scenario("quick", reg, overrides={"filter": {"update_iterations": 3, "component_update": {
+        "name": "iterated", "update_iterations": 4}}})
+    with pytest.raises(ParameterError, match="update_iterations = 3 conflicts"):
+        _linear_run(scen.build("filter", reg))
 
 
 def test_an_unknown_step_name_is_refused_naming_the_parameter_and_the_choices():
@@ -134,10 +143,11 @@ def test_a_step_given_as_a_component_is_used_as_given():
     np.testing.assert_array_equal(a.samples.states, b.samples.states)
 
 
-def test_a_step_with_its_own_different_setting_is_refused():
-    filt = PGMFilter(n_particles=3000, n_components=2, component_update=IteratedUpdate(update_iterations=3))
-    with pytest.raises(ParameterError, match="update_iterations"):
-        _linear_run(filt)
+def test_a_step_left_at_its_defaults_takes_the_pgms_settings():
+    filt = PGMFilter(n_particles=3000, n_components=2, update_iterations=3, component_update=IteratedUpdate())
+    _linear_run(filt)
+    assert filt._update.update_iterations == 3
+    assert filt.component_update.update_iterations == 10, "the caller's step is not modified"
 
 
 def test_pgm_paper_is_the_pgm_with_the_papers_settings():

@@ -18,7 +18,8 @@ import numpy as np
 
 from cistrack.errors import FilterError
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
-from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
+from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range,
+                                           param_specs)
 from cistrack.interfaces.filter import FilterBase
 from cistrack.interfaces.pgm_steps import ClusteredParticles, ComponentUpdate, PosteriorDraw, Reanchor
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
@@ -213,12 +214,15 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         """The clusterers and the update, draw and re-anchoring steps, from names or components."""
         self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
         self._split_clusterer = split_clusterer(self.clusterer, self._clusterer, self.split_components)
+        defaults = {k: spec.default for k, spec in param_specs(type(self)).items()}
         self._update = resolve_step("pgm-update", self.component_update, {
-            "update_iterations": self.update_iterations, "component_likelihood": self.component_likelihood}, who)
-        self._draw = resolve_step("pgm-draw", self.posterior_draw, {}, who)
+            "update_iterations": self.update_iterations, "component_likelihood": self.component_likelihood},
+            who, defaults)
+        self._draw = resolve_step("pgm-draw", self.posterior_draw, {}, who, defaults)
         self._reanchor_step = resolve_step("pgm-reanchor", self.reanchor, {
             "reanchor_gap_days": self.reanchor_gap_days, "reanchor_pause_hours": self.reanchor_pause_hours,
-            "reanchor_measurements": self.reanchor_measurements, "reanchor_starts": self.reanchor_starts}, who)
+            "reanchor_measurements": self.reanchor_measurements, "reanchor_starts": self.reanchor_starts},
+            who, defaults)
 
     def _predict_to(self, t: float) -> None:
         """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that

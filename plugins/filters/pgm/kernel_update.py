@@ -20,14 +20,8 @@ resampling of the kernels, then one Gaussian draw from each chosen kernel's post
 Cost: 12 extra sensor evaluations per iteration over all particles and (N, 6, 6) linear algebra;
 no propagation (Example 3: about 1-2 s more per run).
 
-Why (PGM parameter ``kernel_ess``; Example 3 uses the kernels at every update of the first pass
-after its gap): after Example 3's 150-day gap the custody rule fired in the first 2-5 updates in 1
-of 30 seen runs and 2 and 4 of 30 on two unseen sets, before the re-anchoring's fit at the end of
-the pass could help; with the kernels through that pass those seeds kept custody. In the first
-pass after the IOD the clusters' Gaussians do better (kernels there lost seed 3498 at day 1.06),
-so the PGM uses the kernels only in a pass that follows a gap (docs/information-bound.md). Tried
-first (session 9) to sharpen the final error on seed 4 without re-anchoring, where it did not help
-(84 km against 55.7).
+The PGM uses the kernels only in a pass that follows a gap (parameter ``kernel_ess``); why:
+docs/history/pgm.md.
 """
 from __future__ import annotations
 

@@ -2,13 +2,8 @@
 
 The plain PGM draws its N posterior particles from the Gaussian mixture. Each component then
 forgets the shape its cluster had: a curved or heavy-tailed cloud becomes a set of Gaussians with
-Gaussian tails. Early in a track this matters. After the first half of a pass the IOD cloud is
-tens of thousands of km long in range, and its radial velocity is uncertain by km/s. Propagated
-over the rest of the pass it curves, and the exact posterior is far from Gaussian. Example 1,
-noisy range, the 8 seeds of 10000-10999 on which the plain draw lost custody in pass 1: a batch
-least-squares fit of the rest of pass 1, with the IOD cloud's moments as prior and the
-scenario's own dynamics, puts the truth 11-27 below the posterior mode in -2 log p, but on two
-of them its Laplace (Gaussian) approximation puts the truth at NEES 164 and 337.
+Gaussian tails. Early in a track, when the cloud is long in range and curved, the exact posterior is far from
+Gaussian (docs/history/pgm.md).
 
 Here every cluster's particles are carried into the posterior instead. Cluster i, with sample
 mean m_i and covariance S_i = L L^T, is mapped affinely onto its component's posterior
@@ -27,11 +22,7 @@ A component that keeps fewer than its cluster holds keeps a random subset. One t
 gets the rest as Gaussian draws from its posterior, so no particle is ever duplicated: duplicates
 would stay duplicates under deterministic propagation.
 
-Measured (docs/calibration.md, "Shape-keeping posterior particles"): Example 1, noisy range.
-- Seen seeds 10000-10999, runs cut at day 2.1: custody lost in 5 runs, against 12 with the
-  Gaussian draw.
-- Unseen seeds 11000-11499: custody kept in 495 of 500 (EnKF 494, iterated UKF 434), ANEES 5.90,
-  inside its band.
+Measurements: docs/history/pgm.md and docs/calibration.md.
 """
 from __future__ import annotations
 

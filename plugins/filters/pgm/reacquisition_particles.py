@@ -1,17 +1,11 @@
 """How many particles the PGM draws from a posterior: more while the cloud is reacquiring.
 
-Model. After a long gap (Example 3: 150 days) the prior cloud is spread over the whole orbit
-and beyond. Its predicted angles spread over about 1e5 noise standard deviations (Example 3
-seeds 4 and 5: 2.4e5 to 2.7e5 in azimuth). One pass of measurements has to choose between
+Model. After a long gap the prior cloud is spread over the whole orbit and beyond, its predicted
+angles over about 1e5 noise standard deviations. One pass of measurements has to choose between
 several hypotheses, the parts of the cloud that the line of sight crosses, and a single
-measurement cannot tell them apart. On Example 3 seed 5 the component that holds the truth gets
-13% of the weight at the first update after the gap, and a component whose nearest particle is
-2,900 noise sigmas from the measurement gets 44%. After each update the PGM resamples
-``n_particles`` from the posterior and clusters them afresh. A hypothesis of a few percent then
-holds a few hundred particles, about one minimum-size cluster (300). It is merged into a
-neighbour or lost to sampling noise before the angle rates of later measurements can favour it.
-On tuning seeds 1-20 the default PGM lost 7 of 20 Example 3 runs this way or by converging,
-overconfident, on the wrong part of the cloud.
+measurement cannot tell them apart. Resampled to ``n_particles``, a hypothesis of a few percent
+holds about one minimum-size cluster and is merged into a neighbour or lost to sampling noise
+before later measurements can favour it (docs/history/pgm.md has the runs).
 
 The rule. While the prior's predicted measurements at an update spread wider than
 ``reacquire_spread_sigma`` noise standard deviations, the posterior is resampled with
@@ -21,24 +15,7 @@ back under the threshold, the count returns to ``n_particles`` at the next updat
 the predicted-measurement residuals in noise units, sqrt(largest eigenvalue of
 R^-1/2 cov(h(x) - z) R^-1/2).
 
-Measured with the default factor 4 and threshold 1,000 sigma, chosen on the tuning seeds
-without a sweep, and before the PGM's component shrinkage (``kept_spread``) was added. Custody
-kept / runs:
-
-- Example 3, tuning seeds 1-20: 18/20, against 13/20 without the rule.
-- Example 3, unseen seeds 3000-3029: 22/30.
-- Example 2, tuning seeds 1-20: 17/20, against 12/20 without the rule.
-- Example 2, unseen seeds 3000-3029: 22/30.
-- Example 1, seeds 1-10: 10/10 with and without the rule. The rule acts there on the first two
-  updates after the IOD and the first update of pass 2 (spreads of 1,100 to 45,000 sigma).
-
-Most of the remaining Example 3 losses begin in the first two updates after the gap. Four of
-the eight unseen-seed losses still end within 10 km of the truth: custody was declared lost
-during a pass (seed 3027 in the first pass, before the gap) and the filter recovered.
-
-Bounding the cloud to cislunar space instead made things worse: 12/20 on the tuning seeds. That
-bound is ``max_range_km = 550000``, which drops the 83-98% of Example 3's particles that escape
-during the gap.
+Measurements behind the default factor 4 and threshold 1,000 sigma: docs/history/pgm.md.
 """
 from __future__ import annotations
 

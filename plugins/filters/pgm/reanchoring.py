@@ -2,9 +2,9 @@
 posterior particles that fit them best, at the end of a pass.
 
 The PGM's components are kept wider than the data require (the shrinkage that keeps its NEES
-honest), and sequential Gaussian updates of clusters do not use everything a whole arc says: on
-Example 1 its RMS error at the ends of passes 3-6 was 2.5-4.8 times the information bound (seen
-seeds 11600-11629). A least-squares fit of one trajectory to every measurement of the arc reaches
+honest), and sequential Gaussian updates of clusters do not use everything a whole arc says: their
+error at the ends of passes stays several times the information bound (docs/history/pgm.md). A
+least-squares fit of one trajectory to every measurement of the arc reaches
 the bound, if it starts in the right basin; the posterior particles are the starts:
 
 1. At the end of a pass (the first prediction ``pause_hours`` or more after the last update) that
@@ -24,21 +24,15 @@ the bound, if it starts in the right basin; the posterior particles are the star
 
 An arc ends at a gap of ``gap_days`` or more between updates. In mode "arcs" the next arc starts
 afresh (fits never span a gap) and is not fitted before its second pass: a single pass of angles
-leaves the range ambiguous (on Example 3, fits to the one night after the gap alone put 3 of 22
-runs on a wrong solution ~950 km away). In mode "across-gaps" the fit spans the gap, attempted
-when the first pass after it is over. After a gap the chi-square valley is long and bent: on
-Example 3 (150-day gap, seed 3007) the least-squares solution lay 20 km from the truth with a
-chi-square only 11.8 below the truth's, 80 sigmas off along the fit's sharpest direction, so its
-linearised covariance (or one at the arc's start, drawn and propagated, as first built) called
-the run lost. The belief after a gap is therefore each solution's line of variations
+leaves the range ambiguous. In mode "across-gaps" the fit spans the gap, attempted
+when the first pass after it is over. After a gap the chi-square valley is long and bent, so
+the solution's linearised covariance can miss the truth far along the fit's sharpest direction.
+The belief after a gap is therefore each solution's line of variations
 (:mod:`cistrack.fit.line_of_variations`): least-squares points every half sigma along the weakest
 direction out to 4 sigma, each with its covariance on its hyperplane and weighted by its Laplace
 evidence; the particles are drawn along the line (:meth:`Reanchoring.draw`), following the bend.
-On seed 3007 it passes 1.3 km from the truth.
 Across a gap the fits' transition matrices use difference steps of 1e-8 (see
-:class:`_DifferencedDynamics`). Measured on seen seeds 3000-3029: Example 3 29/30 tracking, median
-final error 5.6 km, NEES p90 10.8 (26 tracking, 63.8 km without re-anchoring); Example 2 30/30,
-largest error 27.0 km (docs/information-bound.md, docs/calibration.md for unseen seeds).
+:class:`_DifferencedDynamics`). Measurements: docs/history/pgm.md, docs/information-bound.md.
 
 The IOD's own measurements are not refitted (the filter never sees them); their information
 reaches the fit through the particles that start it.

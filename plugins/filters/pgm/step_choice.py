@@ -3,9 +3,10 @@
 A step parameter (``component_update``, ``posterior_draw``, ``reanchor``) holds a component of its
 kind (:mod:`cistrack.interfaces.pgm_steps`) or a registered name of that kind. In a scenario the
 name arrives built, through the run's registry, with the PGM's own settings that the step takes
-(``PGMFilter.nested_params``); a name given in Python is built here. The rule for those settings
-is the clusterer's (:mod:`.clusterer_choice`): a step left at its class default takes the PGM's
-value (on a copy), one set to a different value is refused (set it in one place).
+(``PGMFilter.nested_params``); a name given in Python is built here. The rule for those settings:
+a step left at its class default takes the PGM's value (on a copy); a step's own value stands
+while the PGM's is at the PGM's default (a step table in a scenario sets its own values); set
+differently in both places, it is refused (set it in one place).
 """
 from __future__ import annotations
 
@@ -33,9 +34,11 @@ def check_step(owner: Component, name: str, value: Any, interface: type, builtin
     owner._fail(name, value, f"must be a {interface.__name__} ({kind} component) or a registered {kind} name")
 
 
-def resolve_step(kind: str, value: Component | str, handed: dict[str, Any], who: str, registry=None) -> Component:
+def resolve_step(kind: str, value: Component | str, handed: dict[str, Any], who: str,
+                 owner_defaults: dict[str, Any] | None = None, registry=None) -> Component:
     """The step ``value`` as a component, with the PGM's settings ``handed`` (name -> value) where
-    it takes them. A name is created through ``registry`` (default: the installed plugins)."""
+    it takes them (``owner_defaults``: the PGM's defaults of those settings). A name is created
+    through ``registry`` (default: the installed plugins)."""
     if isinstance(value, str):
         if registry is None:
             from cistrack.plugin.registry import default_registry
@@ -47,11 +50,15 @@ def resolve_step(kind: str, value: Component | str, handed: dict[str, Any], who:
         return registry.create(kind, value, **{k: v for k, v in handed.items() if k in takes})
     specs = param_specs(type(value))
     own = value.get_params()
-    changed = {k: v for k, v in handed.items() if k in specs and own[k] != v}
-    for k, v in changed.items():
-        if own[k] != specs[k].default:
+    defaults = owner_defaults or {}
+    changed = {}
+    for k, v in handed.items():
+        if k not in specs or own[k] == v:
+            continue
+        if own[k] == specs[k].default:
+            changed[k] = v
+        elif k not in defaults or v != defaults[k]:
             raise ParameterError(
                 f"filter '{who}': {k} = {v!r} conflicts with the {kind} step "
-                f"'{type(value).registry_name or type(value).__name__}' {k} = {own[k]!r}; set it in one place "
-                "(a step left at its default takes the filter's value)")
+                f"'{type(value).registry_name or type(value).__name__}' {k} = {own[k]!r}; set it in one place")
     return type(value)(**{**own, **changed}) if changed else value
