@@ -209,6 +209,8 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, worke
     refuse_in_a_starting_worker()
     if workers is not None:
         check_count(workers, "--workers", 1, 1024)
+    if settings is None:  # a study folder run again keeps (and records) the settings it was run with
+        settings = recorded_settings(path_or_name)
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
     source = study_source(path_or_name)
     name = str(data.get("name") or Path(source).stem)

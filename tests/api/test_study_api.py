@@ -56,6 +56,12 @@ def test_run_study_returns_the_plan_it_ran(small_study):
     assert (res["skipped"], res["total"]) == (2, 2)
 
 
+def test_running_the_study_folder_again_keeps_the_settings_it_was_run_with(small_study):
+    ct.study(small_study.directory)
+    _, specs, _ = plan_runs("quick-comparison", small_study.directory, ["duration_days=2"], n_seeds=1)
+    assert plan_runs(small_study.directory)[1] == specs
+
+
 def test_the_log_receives_the_line_the_command_line_prints(small_study):
     lines: list[str] = []
     ct.study(small_study.directory, log=lines.append)
