@@ -14,8 +14,11 @@ recorder       any object with lifecycle hookimpls         ``"recorder"``
 reader         :class:`Reader` (observation file format)   ``"reader"``
 exporter       :class:`Exporter` (estimate file format)    ``"exporter"``
 range prior    :class:`RangePrior` (IOD range model)        ``"range-prior"``
-PGM steps      :class:`ComponentUpdate`, :class:`PosteriorDraw`, ``"pgm-update"``, ``"pgm-draw"``,
-               :class:`Reanchor` (:mod:`.pgm_steps`)          ``"pgm-reanchor"``
+PGM steps      :class:`ParticlePrediction`,                ``"pgm-prediction"``,
+               :class:`ComponentUpdate`,                   ``"pgm-update"``,
+               :class:`PosteriorDraw`,                     ``"pgm-draw"``,
+               :class:`KernelUpdate`,                      ``"pgm-kernel"``,
+               :class:`Reanchor` (:mod:`.pgm_steps`)       ``"pgm-reanchor"``
 =============  ==========================================  ==========================
 
 A preset (:func:`~cistrack.interfaces.preset.preset`) registers a component with other defaults.
@@ -25,7 +28,7 @@ from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 from cistrack.interfaces.filter import Filter
 from cistrack.interfaces.iod import IODMethod
 from cistrack.interfaces.orbit import ReferenceOrbit
-from cistrack.interfaces.pgm_steps import ComponentUpdate, PosteriorDraw, Reanchor
+from cistrack.interfaces.pgm_steps import ComponentUpdate, KernelUpdate, ParticlePrediction, PosteriorDraw, Reanchor
 from cistrack.interfaces.preset import preset
 from cistrack.interfaces.exporter import Exporter
 from cistrack.interfaces.range_prior import RangePrior
@@ -34,9 +37,9 @@ from cistrack.interfaces.schedule import Pass, Schedule
 from cistrack.interfaces.sensor import Sensor
 
 KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior",
-                         "pgm-update", "pgm-draw", "pgm-reanchor")
+                         "pgm-prediction", "pgm-update", "pgm-draw", "pgm-kernel", "pgm-reanchor")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
-__all__ = ["Body", "Clusterer", "ComponentUpdate", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "Pass",
-           "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
+__all__ = ["Body", "Clusterer", "ComponentUpdate", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS",
+           "KernelUpdate", "ParticlePrediction", "Pass", "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
            "preset"]

@@ -1,19 +1,23 @@
 """The swappable steps of the particle Gaussian mixture (PGM) filter, each a registry kind.
 
-At a measurement the PGM clusters its particles (a ``clustering`` component), conditions each
-cluster's Gaussian on the measurement (a :class:`ComponentUpdate`), reweights the components by
-their likelihoods and draws the posterior particles (a :class:`PosteriorDraw`); at the end of a
-pass it may replace its belief by least-squares fits of the arc (a :class:`Reanchor`). A scenario
+Between measurements the PGM propagates its particles (a :class:`ParticlePrediction`). At a
+measurement it clusters them (a ``clustering`` component), conditions each cluster's Gaussian on
+the measurement (a :class:`ComponentUpdate`), reweights the components by their likelihoods and
+draws the posterior particles (a :class:`PosteriorDraw`). Two hooks change that course: a
+:class:`KernelUpdate` may condition every particle as its own kernel instead (after a gap), and
+at the end of a pass a :class:`Reanchor` may replace the belief by least-squares fits of the arc. A scenario
 chooses each step by name (``component_update = "ensemble"``), and a third party registers its
 own under the step's kind exactly as it registers a filter.
 
-=============  ==========================  ==================================
-kind           interface                   built-in names
-=============  ==========================  ==================================
-pgm-update     :class:`ComponentUpdate`    ``iterated``, ``ensemble``
-pgm-draw       :class:`PosteriorDraw`      ``transform``, ``gaussian``
-pgm-reanchor   :class:`Reanchor`           ``arcs``, ``across-gaps``, ``off``
-=============  ==========================  ==================================
+==============  ==========================  ==================================
+kind            interface                   built-in names
+==============  ==========================  ==================================
+pgm-prediction  :class:`ParticlePrediction` ``propagate``
+pgm-update      :class:`ComponentUpdate`    ``iterated``, ``ensemble``
+pgm-draw        :class:`PosteriorDraw`      ``transform``, ``gaussian``
+pgm-kernel      :class:`KernelUpdate`       ``after-gap``, ``off``
+pgm-reanchor    :class:`Reanchor`           ``arcs``, ``across-gaps``, ``off``
+==============  ==========================  ==================================
 
 States are nondimensional synodic (LU, VU), times TU; ``d`` is the state dimension (6), ``m`` the
 number of measured components, ``M`` the number of clusters.
@@ -32,10 +36,10 @@ from cistrack.interfaces.sensor import Sensor
 from cistrack.model.belief import GaussianMixture
 from cistrack.model.measurement import Measurement
 
-__all__ = ["ClusteredParticles", "ComponentUpdate", "PosteriorDraw", "Reanchor", "ReanchorRun",
-           "PGM_STEP_KINDS"]
+__all__ = ["ClusteredParticles", "ComponentUpdate", "KernelRun", "KernelUpdate", "ParticlePrediction",
+           "PosteriorDraw", "Reanchor", "ReanchorRun", "PGM_STEP_KINDS"]
 
-PGM_STEP_KINDS: tuple[str, ...] = ("pgm-update", "pgm-draw", "pgm-reanchor")
+PGM_STEP_KINDS: tuple[str, ...] = ("pgm-prediction", "pgm-update", "pgm-draw", "pgm-kernel", "pgm-reanchor")
 """The registry kinds of the PGM's steps, in the order of a PGM update."""
 
 
@@ -51,6 +55,27 @@ class ClusteredParticles:
     labels: np.ndarray
     means: np.ndarray
     covariances: np.ndarray
+
+
+class ParticlePrediction(Component):
+    """How the PGM's particles are carried from one time to the next."""
+
+    kind = "pgm-prediction"
+
+    def __init__(self) -> None:
+        """No parameters (a subclass with settings declares them, as every component does)."""
+
+    @abstractmethod
+    def predict(self, dynamics: Dynamics, states: np.ndarray, t0: float, t1: float, rng: np.random.Generator,
+                steps: np.ndarray | None, who: str) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Move the particles ``states`` (N, 6) from ``t0`` to ``t1`` (TU).
+
+        ``steps`` (N,) TU: each particle's first integration step, carried from the previous call
+        (None: the integrator chooses); ``who`` names the filter in errors. Returns the particles
+        that survive (M, 6) (those that hit a body are dropped), ``alive`` (N,) bool, and the
+        survivors' next steps (M,) or None. Raise :class:`~cistrack.errors.FilterError` when none
+        survives.
+        """
 
 
 class ComponentUpdate(Component):
@@ -97,6 +122,36 @@ class PosteriorDraw(Component):
         ``rng``. (While the filter reacquires a cloud, drawing more particles than it carries, or
         prunes particles outside state bounds, it draws from the mixture itself.)
         """
+
+
+class KernelRun(ABC):
+    """The kernel update's state in one filter run (made by :meth:`KernelUpdate.start`)."""
+
+    @abstractmethod
+    def due(self, t: float, sharpness: Callable[[], float]) -> bool:
+        """Whether the update at ``t`` (TU) conditions kernels instead of the clusters' Gaussians.
+        Called at every update, in time order; ``sharpness()`` gives the measurement's likelihood
+        ESS as a fraction of the particles (computed on the first call only: call it only when
+        needed)."""
+
+    @abstractmethod
+    def update(self, prior: ClusteredParticles, residuals: Callable[[np.ndarray], np.ndarray], R: np.ndarray,
+               n: int, rng: np.random.Generator, who: str) -> tuple[np.ndarray, np.ndarray, float]:
+        """``n`` posterior particles (n, d), their clusters (n,) and the log evidence log p(z);
+        ``residuals`` and ``R`` as for :meth:`ComponentUpdate.update`."""
+
+
+class KernelUpdate(Component):
+    """Whether and when the PGM conditions every particle as its own Gaussian kernel."""
+
+    kind = "pgm-kernel"
+
+    def __init__(self) -> None:
+        """No parameters (a subclass with settings declares them, as every component does)."""
+
+    @abstractmethod
+    def start(self) -> KernelRun | None:
+        """A fresh state for one run; None when this component never conditions kernels."""
 
 
 class ReanchorRun(ABC):

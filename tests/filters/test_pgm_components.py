@@ -10,20 +10,21 @@ import pytest
 
 from cistrack.cli.main import main
 from cistrack.errors import ParameterError
-from cistrack.interfaces import ComponentUpdate, KINDS, PosteriorDraw, Reanchor
+from cistrack.interfaces import ComponentUpdate, KINDS, KernelUpdate, ParticlePrediction, PosteriorDraw, Reanchor
 from cistrack.interfaces.preset import preset, preset_defaults
 from cistrack.model.belief import ParticleCloud
 from cistrack.plugin.param_docs import param_docs
 from cistrack.plugin.registry import load_registry
-from cistrack.plugins.filters.pgm import (AcrossGapsReanchor, EnsembleUpdate, GaussianDraw, IteratedUpdate,
-                                          NoReanchor, PaperPGMFilter, PGMFilter, TransformDraw)
+from cistrack.plugins.filters.pgm import (AcrossGapsReanchor, AfterGapKernels, EnsembleUpdate, GaussianDraw,
+                                          IteratedUpdate, NoKernels, NoReanchor, PaperPGMFilter, PGMFilter,
+                                          PropagateParticles, TransformDraw)
 from cistrack.plugins.filters.pgm.component_update import ensemble_component_update
 from cistrack.scenario.loading import load_scenario
 
 from .linear_models import LinearDynamics, LinearSensor, transition
 
-STEPS = {"pgm-update": ["ensemble", "iterated"], "pgm-draw": ["gaussian", "transform"],
-         "pgm-reanchor": ["across-gaps", "arcs", "off"]}
+STEPS = {"pgm-prediction": ["propagate"], "pgm-update": ["ensemble", "iterated"], "pgm-draw": ["gaussian", "transform"],
+         "pgm-kernel": ["after-gap", "off"], "pgm-reanchor": ["across-gaps", "arcs", "off"]}
 
 
 class CountingUpdate(ComponentUpdate):
@@ -95,6 +96,7 @@ def test_a_scenario_left_at_the_defaults_builds_the_default_steps(reg):
     assert isinstance(pgm.component_update, IteratedUpdate)
     assert isinstance(pgm.posterior_draw, TransformDraw)
     assert type(pgm.reanchor).registry_name == "arcs"
+    assert isinstance(pgm.prediction, PropagateParticles) and isinstance(pgm.kernel_update, AfterGapKernels)
 
 
 def test_a_scenario_swaps_in_a_third_partys_step_by_name(reg):
@@ -108,10 +110,13 @@ def test_a_scenario_swaps_in_a_third_partys_step_by_name(reg):
 
 def test_the_pgms_own_settings_reach_the_step_built_for_a_scenario(reg):
     scen = load_scenario("quick", reg, overrides={"filter": {"update_iterations": 3, "component_likelihood": "prior",
-                                                             "reanchor": "across-gaps", "reanchor_starts": 2}})
+                                                             "reanchor": "across-gaps", "reanchor_starts": 2,
+                                                             "kernel_ess": 0.5, "velocity_noise_kms_per_sqrt_day": 1e-6}})
     pgm = scen.build("filter", reg)
     assert (pgm.component_update.update_iterations, pgm.component_update.component_likelihood) == (3, "prior")
     assert isinstance(pgm.reanchor, AcrossGapsReanchor) and pgm.reanchor.reanchor_starts == 2
+    assert isinstance(pgm.kernel_update, AfterGapKernels) and pgm.kernel_update.kernel_ess == 0.5
+    assert isinstance(pgm.prediction, PropagateParticles) and pgm.prediction.velocity_noise_kms_per_sqrt_day == 1e-6
 
 
 def test_a_steps_own_table_in_a_scenario_keeps_its_values(reg):
@@ -181,7 +186,14 @@ def test_a_preset_of_an_unknown_parameter_is_refused():
         preset(PGMFilter, "Bad", "A bad preset.", n_particle=10)
 
 
+def test_kernels_off_leave_the_clusters_gaussians_at_every_update():
+    assert AfterGapKernels(kernel_ess=0.0).start() is None and NoKernels().start() is None
+    assert AfterGapKernels(kernel_ess=1.0).start() is not None
+
+
 @pytest.mark.parametrize("cls, interface", [(IteratedUpdate, ComponentUpdate), (EnsembleUpdate, ComponentUpdate),
+                                            (PropagateParticles, ParticlePrediction), (AfterGapKernels, KernelUpdate),
+                                            (NoKernels, KernelUpdate),
                                             (TransformDraw, PosteriorDraw), (GaussianDraw, PosteriorDraw),
                                             (AcrossGapsReanchor, Reanchor), (NoReanchor, Reanchor)])
 def test_each_builtin_step_implements_its_interface_and_rebuilds_from_its_params(cls, interface):

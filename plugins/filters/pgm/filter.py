@@ -21,11 +21,12 @@ from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range,
                                            param_specs)
 from cistrack.interfaces.filter import FilterBase
-from cistrack.interfaces.pgm_steps import ClusteredParticles, ComponentUpdate, PosteriorDraw, Reanchor
+from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
+                                           PosteriorDraw, Reanchor)
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 from cistrack.model.measurement import Measurement
 
-from ..ensemble_propagation import propagate_particles, steps_by_group
+from ..ensemble_propagation import steps_by_group
 from ..initial_cloud import check_cloud, initial_particles
 from ..kalman_update import group_moments
 from ..measured_components import MeasuredComponents, check_epoch
@@ -35,7 +36,6 @@ from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .component_spread import shrink_components
 from .component_update import COMPONENT_LIKELIHOODS
-from .kernel_update import PassAfterGap, kernel_update
 from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
 from .reacquisition_particles import measurement_spread_sigma, particles_to_draw
 from .step_choice import check_step, resolve_step
@@ -61,7 +61,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         2 x dimension and 3% of ``n_particles`` (300 of 10,000): smaller clusters give
         overconfident components.
     velocity_noise_kms_per_sqrt_day : float
-        Optional process noise: velocity random walk, km/s after one day (0 = off).
+        Optional process noise: velocity random walk, km/s after one day (0 = off; handed to the
+        prediction that takes it).
     min_range_km, max_range_km, max_speed_kms : float or None
         Optional cislunar pruning bounds (Earth distance, synodic speed); None = not applied.
     component_update : ComponentUpdate or str
@@ -127,6 +128,12 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         so the cloud keeps its non-Gaussian shape; "gaussian" (the paper's): N draws from the
         posterior mixture. While reacquiring (more particles drawn) or with state bounds the
         draws are Gaussian either way.
+    prediction : ParticlePrediction or str
+        How the particles move between measurements (a pgm-prediction component or its name):
+        "propagate" (default), the dynamics plus the velocity random walk above.
+    kernel_update : KernelUpdate or str
+        When every particle is conditioned as its own kernel (a pgm-kernel component or its
+        name): "after-gap" (default; as kernel_ess says) or "off".
 
     How the defaults were chosen, with the seeds and figures: docs/pgm-parameters.md.
     """
@@ -139,7 +146,11 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         "clusterer": ("n_components",),
         "component_update": ("update_iterations", "component_likelihood"),
         "reanchor": ("reanchor_gap_days", "reanchor_pause_hours", "reanchor_measurements", "reanchor_starts"),
+        "prediction": ("velocity_noise_kms_per_sqrt_day",),
+        "kernel_update": ("kernel_ess", "reanchor_gap_days", "reanchor_pause_hours"),
     }
+    _steps = (("prediction", "pgm-prediction"), ("component_update", "pgm-update"), ("posterior_draw", "pgm-draw"),
+              ("kernel_update", "pgm-kernel"), ("reanchor", "pgm-reanchor"))  # step parameter, registry kind
 
     def __init__(self, n_particles: int = 10000, n_components: int | None = 6,
                  clusterer: Clusterer | str = "kmeans", min_cluster_size: int | None = None,
@@ -151,7 +162,10 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                  reacquire_spread_sigma: float = 1000.0, shrink_spread_sigma: float = 1000.0,
                  posterior_draw: PosteriorDraw | str = "transform", reanchor: Reanchor | str = "arcs",
                  reanchor_gap_days: float = 5.0, reanchor_pause_hours: float = 3.0, reanchor_measurements: int = 6,
-                 reanchor_starts: int = 8, kernel_ess: float = 0.0):
+                 reanchor_starts: int = 8, kernel_ess: float = 0.0, prediction: ParticlePrediction | str = "propagate",
+                 kernel_update: KernelUpdate | str = "after-gap"):
+        self.prediction = check_step(self, "prediction", prediction, ParticlePrediction, ("propagate",))
+        self.kernel_update = check_step(self, "kernel_update", kernel_update, KernelUpdate, ("after-gap", "off"))
         self.kernel_ess = check_range(self, "kernel_ess", kernel_ess, 0.0, 1.0)
         self.reanchor = check_step(self, "reanchor", reanchor, Reanchor, ("off", "arcs", "across-gaps"))
         self.reanchor_gap_days = check_positive(self, "reanchor_gap_days", reanchor_gap_days)
@@ -205,31 +219,28 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag: dict[str, float] = {}
         self._x, self._h = self._prune(x)
         self._invalidate()
-        self._gap_pass = PassAfterGap(self.reanchor_gap_days, self.reanchor_pause_hours)
+        self._kernels = self._kernel_step.start()
         self._reanchor = self._reanchor_step.start()
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": 0.0,
                       "particles_lost_step": 0.0, "particles_pruned": float(self._pruned_total)}
 
     def _build_steps(self, who: str) -> None:
-        """The clusterers and the update, draw and re-anchoring steps, from names or components."""
+        """The clusterers and the steps (``_steps``) as components, each with the PGM's settings it
+        takes (``nested_params``)."""
         self._clusterer = resolve_clusterer(self.clusterer, self.n_components)
         self._split_clusterer = split_clusterer(self.clusterer, self._clusterer, self.split_components)
         defaults = {k: spec.default for k, spec in param_specs(type(self)).items()}
-        self._update = resolve_step("pgm-update", self.component_update, {
-            "update_iterations": self.update_iterations, "component_likelihood": self.component_likelihood},
-            who, defaults)
-        self._draw = resolve_step("pgm-draw", self.posterior_draw, {}, who, defaults)
-        self._reanchor_step = resolve_step("pgm-reanchor", self.reanchor, {
-            "reanchor_gap_days": self.reanchor_gap_days, "reanchor_pause_hours": self.reanchor_pause_hours,
-            "reanchor_measurements": self.reanchor_measurements, "reanchor_starts": self.reanchor_starts},
-            who, defaults)
+        built = {param: resolve_step(kind, getattr(self, param),
+                                     {k: getattr(self, k) for k in self.nested_params.get(param, ())}, who, defaults)
+                 for param, kind in self._steps}
+        self._predictor, self._update, self._draw = built["prediction"], built["component_update"], built["posterior_draw"]
+        self._kernel_step, self._reanchor_step = built["kernel_update"], built["reanchor"]
 
     def _predict_to(self, t: float) -> None:
         """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that
         hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
-        x, alive, h = propagate_particles(self._dyn, self._x, self._t, t, self._who(),
-                                          self.velocity_noise_kms_per_sqrt_day, self._rng, self._h)
+        x, alive, h = self._predictor.predict(self._dyn, self._x, self._t, t, self._rng, self._h, self._who())
         lost = int(np.count_nonzero(~alive))
         self._lost_total += lost
         self._t = t
@@ -253,13 +264,10 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         dres = meas.residuals_to_measurement(self._x)
         if not np.all(np.isfinite(dres)):
             raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
-        sharpness = self._cluster_for(meas, dres)
-        if self.kernel_ess > 0 and self._gap_pass.at(float(measurement.t)):
-            if self._split_clusterer is None:
-                sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
-            if sharpness < self.kernel_ess:  # after a gap, and far sharper than the cloud
-                self._kernel_update(meas, dres, sharpness, who)
-                return
+        sharpness = _Sharpness(self._cluster_for(meas, dres), dres, meas.R)
+        if self._kernels is not None and self._kernels.due(float(measurement.t), sharpness):
+            self._kernel_update(meas, dres, sharpness.value, who)
+            return
         post, w, prior, spread, shrink, log_evidence = self._condition(meas, dres, who)
         samples, slabels = self._draw_posterior(prior, post, spread, who)
         step = steps_by_group(self._h, prior.labels, post.n_components)  # drawn particles start with their cluster's step
@@ -272,16 +280,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "effective_components": float(1.0 / np.sum(w * w)),
             "log_likelihood": float(log_evidence),
             "max_component_weight": float(w.max()),
-            "likelihood_ess_fraction": float(sharpness),
+            "likelihood_ess_fraction": float(sharpness.value),
             "n_particles": float(samples.shape[0]),
             "prior_spread_sigma": spread,
             "components_shrunk": float(shrink),
         })
 
-    def _cluster_for(self, meas: MeasuredComponents, dres: np.ndarray) -> float:
+    def _cluster_for(self, meas: MeasuredComponents, dres: np.ndarray) -> float | None:
         """Cluster the prior particles for this measurement (into ``split_components`` when it is
-        sharp); returns its sharpness (likelihood ESS fraction; 1.0 when not computed)."""
-        sharpness = 1.0
+        sharp); returns its sharpness (likelihood ESS fraction; None when not computed)."""
+        sharpness = None
         if self._split_clusterer is not None:  # a measurement far sharper than the cloud: smaller clusters
             sharpness = likelihood_ess_fraction(measurement_quadratic(dres, meas.R))
             if sharpness < self.split_ess:
@@ -333,8 +341,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         prior = ClusteredParticles(self._x, self._labels, self._prior.means, self._prior.covariances)
         spread = measurement_spread_sigma(dres, meas.R)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
-        samples, slabels, log_evidence, w = kernel_update(prior, meas.residuals_to_measurement, meas.R, n_draw,
-                                                          self._rng, who)
+        samples, slabels, log_evidence = self._kernels.update(prior, meas.residuals_to_measurement, meas.R, n_draw,
+                                                              self._rng, who)
         self._x, self._sample_labels, self._h = samples, slabels, None
         self._mixture = None
         self._labels = self._prior = None
@@ -426,3 +434,20 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if x.shape[0] == 0:
             raise FilterError(f"filter '{self._who()}': the posterior lies entirely outside the state bounds")
         return x, lab
+
+
+class _Sharpness:
+    """A measurement's likelihood ESS fraction (``measurement_sharpness.py``), computed once when
+    first asked for; ``value`` is 1.0 while it has not been."""
+
+    def __init__(self, known: float | None, residuals: np.ndarray, R: np.ndarray) -> None:
+        self._known, self._residuals, self._R = known, residuals, R
+
+    def __call__(self) -> float:
+        if self._known is None:
+            self._known = likelihood_ess_fraction(measurement_quadratic(self._residuals, self._R))
+        return self._known
+
+    @property
+    def value(self) -> float:
+        return 1.0 if self._known is None else self._known
