@@ -33,6 +33,9 @@ def test_every_alias_points_at_a_module_that_exists(old):
     ("from cistrack.scenario import load_scenario", "load_scenario"),
     ("from cistrack.results import read_steps", "read_steps"),
     ("from cistrack.frames.earth_moon import EarthMoonFrame", "EarthMoonFrame"),
+    ("from cistrack.fit import FitOptions", "FitOptions"),
+    ("from cistrack.fit.least_squares import fit_orbit", "fit_orbit"),
+    ("from cistrack.fit.from_observations import ObjectFit", "ObjectFit"),
 ])
 def test_old_from_import_in_a_fresh_process_warns_at_the_importing_line(statement, name):
     code = f"import warnings\nwarnings.simplefilter('always')\n{statement}\nprint({name}.__module__)"
