@@ -6,8 +6,8 @@ methods, clusterers, filters and recorders are plugins (``cistrack.plugins``), f
 the entry-point group ``cistrack`` exactly like third-party ones.
 
 ``cistrack.run(...)``, ``cistrack.read_run(...)``, ``cistrack.load_scenario(...)``,
-``cistrack.study(...)`` and ``cistrack.fit(...)`` run scenarios, studies and orbit fits from Python; :mod:`cistrack.api` holds every
-public name (see docs/python-api.md).
+``cistrack.study(...)`` and ``cistrack.fit(...)`` run scenarios, studies and orbit fits from
+Python; :mod:`cistrack.api` holds every public name (see docs/python-api.md).
 """
 import sys as _sys
 import types as _types
