@@ -65,8 +65,9 @@ class ReadOnlyMetrics(dict):
         raise TypeError("step.metrics is read-only: observers must not modify the step; compute a "
                         "metric in a StepMetric stage (the cistrack_metric_stages hook) instead")
 
-    __setitem__ = __delitem__ = __ior__ = _refuse
-    update = pop = popitem = setdefault = clear = _refuse
+    # every method of dict that changes it (their signatures differ; each refuses whatever it is given)
+    __setitem__ = __delitem__ = __ior__ = _refuse  # type: ignore[assignment]
+    update = pop = popitem = setdefault = clear = _refuse  # type: ignore[assignment]
 
     def __reduce__(self) -> tuple:
         return (ReadOnlyMetrics, (dict(self),))

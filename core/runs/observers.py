@@ -58,7 +58,8 @@ def metric_stage(pm: pluggy.PluginManager, scenario: Any, builtins: list[StepMet
 
 def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:
     """A plugin manager for one run: the given observers plus installed plugins that implement
-    lifecycle hooks (third-party observers declared under the ``cistrack`` entry points)."""
+    lifecycle hooks or ``cistrack_metric_stages`` (third-party observers and metrics declared
+    under the ``cistrack`` entry points)."""
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs.CistrackSpecs)
     for dist, ep, module in registry.plugins:

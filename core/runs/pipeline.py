@@ -297,7 +297,8 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
         return
     ms = tuple(_angles(ctx.measurements[i]) for i in group)
     _observe(ctx, pm, metrics, _step(ctx, k, t, "update", prior, ms), "predicted")
-    tu, prior = time.perf_counter(), None  # the prior's particles need not outlive the hook
+    del prior  # the prior's particles need not outlive its hook
+    tu = time.perf_counter()
     for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
         filt.update(m)  # several sites at one time: one stacked update, or one after another
     step = _step(ctx, k, t, "update", filt.belief, ms)

@@ -116,6 +116,44 @@ def test_the_built_in_stages_keep_their_order_and_third_party_stages_follow():
                                               "error-over-sigma", "squared-error-over-sigma"]
 
 
+PLUGIN_MODULE = """
+from cistrack.api import hookimpl
+from cistrack.evaluation.metric_stage import StepMetric
+
+
+class UpdateCount(StepMetric):
+    name = "update-count"
+
+    def __init__(self):
+        self.n = 0
+
+    def compute(self, run, step, event):
+        self.n += event == "updated"
+        return {"updates_so_far": float(self.n)}
+
+
+@hookimpl
+def cistrack_metric_stages(scenario):
+    return [UpdateCount()]
+"""
+
+
+def test_an_installed_plugin_module_adds_a_metric_column(tmp_path):
+    import importlib.util
+
+    from cistrack.plugin.registry import load_registry
+
+    (tmp_path / "count_plugin.py").write_text(PLUGIN_MODULE)
+    spec = importlib.util.spec_from_file_location("count_plugin", tmp_path / "count_plugin.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    reg = load_registry()
+    reg.plugins.append(("count-dist", "update-count", module))  # as the entry point "update-count" would add it
+    res = run_scenario(_small(), seed=3, registry=reg)
+    counts = [row["updates_so_far"] for row in res.rows]
+    assert counts == [float(sum(r["kind"] == "update" for r in res.rows[:i + 1])) for i in range(len(res.rows))]
+
+
 class ChangesMetrics:
     """An observer that breaks the rule: it writes into the step's metrics."""
 

@@ -41,9 +41,9 @@ def test_loading_and_running_a_scenario_constructs_each_component_once():
                                                                 "clusterer": {"name": "kmeans"}}))
     run_scenario(scen, seed=1, registry=reg)
     built = {k: v for k, v in reg.created.items() if k[0] != "orbit"}
-    assert built == {("dynamics", "cr3bp"): 1, ("sensor", "ground-telescope"): 1,
-                     ("schedule", "paper-example-1"): 1, ("iod", "noisy-range"): 1,
-                     ("filter", "pgm"): 1, ("clustering", "kmeans"): 1}
+    assert set(built.values()) == {1}  # the scenario's components and the parts they are composed of
+    assert {("dynamics", "cr3bp"), ("sensor", "ground-telescope"), ("schedule", "paper-example-1"),
+            ("iod", "noisy-range"), ("filter", "pgm"), ("clustering", "kmeans")} <= set(built)
 
 
 def test_a_second_run_of_the_same_scenario_gets_fresh_components():
