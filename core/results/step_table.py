@@ -22,7 +22,7 @@ def step_row(run, step) -> dict[str, Any]:
     index (-1 for none), metrics (km, m/s, cm/s, nats), numeric diagnostics as ``diag_*`` and
     stage timings as ``time_*_s`` (wall seconds: ``time_predict_s`` the prediction and forming the
     predicted belief, the PGM's clustering included; ``time_update_s`` the update and forming the
-    posterior; ``time_metrics_s``; ``time_initialize_s`` on the first row)."""
+    posterior; ``time_metrics_s`` every metric stage of the step; ``time_initialize_s`` on the first row)."""
     row: dict[str, Any] = {
         "run_id": run.run_id, "seed": int(run.seed), "step": int(step.index), "kind": step.kind,
         "t_tu": float(step.t), "t_days": float(units.tu_to_days(step.t)), "utc": step.utc,
