@@ -27,57 +27,67 @@ def _escape(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
+class _OpticalCollector:
+    """expat handlers that collect every <optical> element as (line, {field: (text, line)})."""
+
+    def __init__(self, path, parser) -> None:
+        self.path, self.parser = path, parser
+        self.out: list[tuple[int, dict]] = []
+        self.root: str | None = None
+        self.rec: dict | None = None  # the <optical> being read
+        self.line = 0  # its line
+        self.field: str | None = None  # the field element being read, its text pieces and line
+        self.buf: list[str] = []
+        self.fline = 0
+
+    def start(self, name, attrs) -> None:
+        line = self.parser.CurrentLineNumber
+        if self.root is None:
+            self.root = name
+            if name != "ades":
+                raise FieldError(self.path, line, "<ades>", f"the root element is <{name[:40]}>, not <ades>")
+        if name == "optical":
+            if self.rec is not None:
+                raise FieldError(self.path, line, "<optical>", "an <optical> element inside another")
+            self.rec, self.line = {}, line
+        elif self.rec is not None:
+            if self.field is not None:
+                raise FieldError(self.path, line, self.field, f"contains an element <{name[:40]}>; ADES fields are text")
+            self.field, self.buf, self.fline = name, [], line
+
+    def end(self, name) -> None:
+        if name == "optical":
+            self.out.append((self.line, self.rec))
+            self.rec = None
+        elif self.rec is not None and self.field == name:
+            if name in self.rec:
+                raise FieldError(self.path, self.fline, name, "field given twice in one observation")
+            self.rec[name] = ("".join(self.buf), self.fline)
+            self.field = None
+
+    def chars(self, data) -> None:
+        if self.field is not None:
+            self.buf.append(data)
+
+    def no_entities(self, *_args) -> None:
+        raise FieldError(self.path, self.parser.CurrentLineNumber, "(DOCTYPE)",
+                         "DTDs and entity declarations are not allowed")
+
+
 def _records(path, text: str) -> list[tuple[int, dict]]:
     """(line, {field: (text, line)}) of every <optical> element."""
     parser = expat.ParserCreate()
-    out: list[tuple[int, dict]] = []
-    stack: list[str] = []
-    state = {"rec": None, "line": 0, "field": None, "buf": [], "fline": 0, "root": None}
-
-    def start(name, attrs):
-        line = parser.CurrentLineNumber
-        if state["root"] is None:
-            state["root"] = name
-            if name != "ades":
-                raise FieldError(path, line, "<ades>", f"the root element is <{name[:40]}>, not <ades>")
-        stack.append(name)
-        if name == "optical":
-            if state["rec"] is not None:
-                raise FieldError(path, line, "<optical>", "an <optical> element inside another")
-            state["rec"], state["line"] = {}, line
-        elif state["rec"] is not None:
-            if state["field"] is not None:
-                raise FieldError(path, line, state["field"], f"contains an element <{name[:40]}>; ADES fields are text")
-            state["field"], state["buf"], state["fline"] = name, [], line
-
-    def end(name):
-        stack.pop()
-        if name == "optical":
-            out.append((state["line"], state["rec"]))
-            state["rec"] = None
-        elif state["rec"] is not None and state["field"] == name:
-            if name in state["rec"]:
-                raise FieldError(path, state["fline"], name, "field given twice in one observation")
-            state["rec"][name] = ("".join(state["buf"]), state["fline"])
-            state["field"] = None
-
-    def chars(data):
-        if state["field"] is not None:
-            state["buf"].append(data)
-
-    def no_entities(*_args):
-        raise FieldError(path, parser.CurrentLineNumber, "(DOCTYPE)", "DTDs and entity declarations are not allowed")
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.CharacterDataHandler = chars
-    parser.StartDoctypeDeclHandler = no_entities
-    parser.EntityDeclHandler = no_entities
+    collector = _OpticalCollector(path, parser)
+    parser.StartElementHandler = collector.start
+    parser.EndElementHandler = collector.end
+    parser.CharacterDataHandler = collector.chars
+    parser.StartDoctypeDeclHandler = collector.no_entities
+    parser.EntityDeclHandler = collector.no_entities
     try:
         parser.Parse(text, True)
     except expat.ExpatError as exc:
         raise FieldError(path, exc.lineno, "(XML)", f"not well-formed XML: {expat.ErrorString(exc.code)}") from None
-    return out
+    return collector.out
 
 
 class AdesXmlReader(SiteReader):

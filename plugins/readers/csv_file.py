@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import dataclass, field
 from datetime import datetime
 from os import PathLike
 from pathlib import Path
@@ -51,6 +52,178 @@ def _number(text: str, column: str) -> float:
     return v
 
 
+def _parse_epoch(p: Path, epoch: str | datetime) -> datetime:
+    try:
+        return parse_utc(epoch)
+    except ValueError as exc:
+        raise MeasurementError(f"{p}: epoch {epoch!r} is not an ISO-8601 UTC time") from exc
+
+
+def _data_lines(p: Path) -> list[tuple[int, str]]:
+    """The file's non-blank, non-comment lines as (1-based line number, text)."""
+    try:
+        lines = p.read_text(encoding="utf-8-sig").splitlines()  # a leading byte-order mark is dropped
+    except OSError as exc:
+        raise MeasurementError(f"cannot read measurement file {p}: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise MeasurementError(f"{p}: not a UTF-8 text file ({exc.reason})") from exc
+    return [(i + 1, line) for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
+
+
+def _header_problems(header: list[str]) -> list[str]:
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+    dupes = sorted({c for c in header if header.count(c) > 1})
+    parts = []
+    if missing:
+        parts.append(f"missing column(s) {missing}")
+    if unknown:
+        parts.append(f"unknown column(s) {unknown}")
+    if dupes:
+        parts.append(f"repeated column(s) {dupes}")
+    return parts
+
+
+def _header_columns(p: Path, rows: list[tuple[int, str]]) -> dict[str, int]:
+    """Column name -> index from the header row (the first of ``rows``); raises on a bad header."""
+    if not rows:
+        raise MeasurementError(f"{p}: no header row (expected columns {', '.join(REQUIRED_COLUMNS)})")
+    header_line, header_text = rows[0]
+    header = [h.strip() for h in next(csv.reader([header_text]))]
+    parts = _header_problems(header)
+    if parts:
+        raise MeasurementError(
+            f"{p}, line {header_line}: bad header: {'; '.join(parts)}; allowed columns: "
+            f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)}")
+    if "sigma_range_km" in header and "range_km" not in header:
+        raise MeasurementError(f"{p}, line {header_line}: sigma_range_km given without range_km")
+    return {name: header.index(name) for name in header}
+
+
+@dataclass
+class _RowParser:
+    """Turns the cells of one data row into (t [TU], values, sigmas) in rad/LU; collects sites."""
+
+    col: dict[str, int]
+    epoch: datetime
+    sigma_arcsec: float
+    range_alpha: float
+    sites: dict[str, Site]
+    site_table: dict[str, Site] = field(default_factory=dict)
+
+    def cell(self, cells: list[str], name: str) -> str:
+        return cells[self.col[name]] if name in self.col else ""
+
+    def parse(self, cells: list[str]) -> tuple[float, list[float], list[float]]:
+        """Raises ValueError naming the first bad cell."""
+        t = self._time(cells[self.col["time_utc"]])
+        values, sigmas = self._angles(cells)
+        if "range_km" in self.col:
+            rng, srng = self._range(cells)
+            values.append(rng / LU_KM)
+            sigmas.append(srng / LU_KM)
+        if "site" in self.col:
+            self._resolve_site(cells[self.col["site"]])
+        return t, values, sigmas
+
+    def _time(self, text: str) -> float:
+        try:
+            t_utc = parse_utc(text)
+        except ValueError:
+            raise ValueError(f"time_utc {text!r} is not an ISO-8601 UTC time") from None
+        return (t_utc - self.epoch).total_seconds() / TU_S
+
+    def _angles(self, cells: list[str]) -> tuple[list[float], list[float]]:
+        az_text, el_text = cells[self.col["azimuth_deg"]], cells[self.col["elevation_deg"]]
+        az = _number(az_text, "azimuth_deg")
+        el = _number(el_text, "elevation_deg")
+        if not 0.0 <= az < 360.0:
+            raise ValueError(f"azimuth_deg {az} is outside [0, 360)")
+        if not -90.0 <= el <= 90.0:
+            raise ValueError(f"elevation_deg {el} is outside [-90, 90]")
+        sigmas = [self._angle_sigma(self.cell(cells, name), name)
+                  for name in ("sigma_azimuth_arcsec", "sigma_elevation_arcsec")]
+        return [to_rad(az_text, "deg"), to_rad(el_text, "deg")], sigmas
+
+    def _angle_sigma(self, cell: str, name: str) -> float:
+        s = _number(cell, name) if cell else self.sigma_arcsec
+        if s <= 0:
+            raise ValueError(f"{name} {s} must be > 0")
+        return to_rad(cell, "arcsec") if cell else s * ARCSEC_RAD
+
+    def _range(self, cells: list[str]) -> tuple[float, float]:
+        """Range and its sigma in km."""
+        rng = _number(cells[self.col["range_km"]], "range_km")
+        if rng <= 0:
+            raise ValueError(f"range_km {rng} must be > 0")
+        cell = self.cell(cells, "sigma_range_km")
+        srng = _number(cell, "sigma_range_km") if cell else self.range_alpha * rng
+        if srng <= 0:
+            raise ValueError(f"sigma_range_km {srng} must be > 0")
+        return rng, srng
+
+    def _resolve_site(self, key: str) -> None:
+        if key not in self.site_table:
+            try:
+                self.site_table[key] = resolve_site(key, self.sites)
+            except MeasurementError as exc:
+                raise ValueError(f"site: {exc}") from None
+
+
+@dataclass
+class _TimeOrder:
+    """Checks that times increase; rows at one time must name different sites."""
+
+    last_t: float = -math.inf
+    last_line: int = 0
+    sites_at_t: set = field(default_factory=set)  # sites of the rows at last_t
+
+    def problem(self, t: float, site_key: str | None, line_no: int, time_text: str) -> str | None:
+        """The error for a row out of order (and leaves the state as it was), else None (and
+        records the row)."""
+        if t < self.last_t or (t == self.last_t and (site_key is None or site_key in self.sites_at_t)):
+            why = "is not after" if site_key is None or t < self.last_t else f"repeats site {site_key!r} at the time of"
+            return f"line {line_no}: time_utc {time_text!r} {why} line {self.last_line}"
+        self.sites_at_t = self.sites_at_t | {site_key} if t == self.last_t else {site_key}
+        self.last_t, self.last_line = t, line_no
+        return None
+
+
+def _raise_row_errors(p: Path, errors: list[str]) -> None:
+    if errors:
+        shown = "\n  ".join(errors[:_MAX_REPORTED])
+        more = f"\n  ... and {len(errors) - _MAX_REPORTED} more" if len(errors) > _MAX_REPORTED else ""
+        raise MeasurementError(f"{p}: {len(errors)} invalid row(s):\n  {shown}{more}")
+
+
+def _parse_rows(rows: list[tuple[int, str]], parser: _RowParser, errors: list[str]):
+    """Parse the data rows; bad ones go to ``errors``. Returns times, values, sigmas, row sites."""
+    n_columns = len(parser.col)
+    times, values, sigmas, row_sites = [], [], [], []
+    order = _TimeOrder()
+    for line_no, text in rows:
+        cells = [c.strip() for c in next(csv.reader([text]))]
+        if len(cells) != n_columns:
+            errors.append(f"line {line_no}: {len(cells)} fields (columns), the header has {n_columns}")
+            continue
+        try:
+            t, row_val, row_sig = parser.parse(cells)
+        except ValueError as exc:
+            errors.append(f"line {line_no}: {exc}")
+            continue
+        site_key = cells[parser.col["site"]] if "site" in parser.col else None
+        problem = order.problem(t, site_key, line_no, cells[parser.col["time_utc"]])
+        if problem:
+            errors.append(problem)
+            continue
+        times.append(t)
+        values.append(row_val)
+        sigmas.append(row_sig)
+        if site_key is not None:
+            row_sites.append(site_key)
+    return times, values, sigmas, row_sites
+
+
 def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcsec: float = 1.5,
                       range_alpha: float = 0.05, include_range: bool = True,
                       sites: dict[str, Site] | None = None) -> MeasurementSet:
@@ -70,118 +243,24 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     sigmas likewise. Raises MeasurementError naming the file and every bad line.
     """
     p = Path(path)
-    try:
-        ep = parse_utc(epoch)
-    except ValueError as exc:
-        raise MeasurementError(f"{p}: epoch {epoch!r} is not an ISO-8601 UTC time") from exc
+    ep = _parse_epoch(p, epoch)
     if not (sigma_arcsec > 0 and range_alpha > 0):
         raise MeasurementError(f"{p}: default sigma_arcsec and range_alpha must be > 0")
-    try:
-        lines = p.read_text(encoding="utf-8-sig").splitlines()  # a leading byte-order mark is dropped
-    except OSError as exc:
-        raise MeasurementError(f"cannot read measurement file {p}: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise MeasurementError(f"{p}: not a UTF-8 text file ({exc.reason})") from exc
-
-    rows = [(i + 1, line) for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
-    if not rows:
-        raise MeasurementError(f"{p}: no header row (expected columns {', '.join(REQUIRED_COLUMNS)})")
-    header_line, header_text = rows[0]
-    header = [h.strip() for h in next(csv.reader([header_text]))]
-    missing = [c for c in REQUIRED_COLUMNS if c not in header]
-    unknown = [c for c in header if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
-    dupes = sorted({c for c in header if header.count(c) > 1})
-    if missing or unknown or dupes:
-        parts = []
-        if missing:
-            parts.append(f"missing column(s) {missing}")
-        if unknown:
-            parts.append(f"unknown column(s) {unknown}")
-        if dupes:
-            parts.append(f"repeated column(s) {dupes}")
-        raise MeasurementError(
-            f"{p}, line {header_line}: bad header: {'; '.join(parts)}; allowed columns: "
-            f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)}")
-    if "sigma_range_km" in header and "range_km" not in header:
-        raise MeasurementError(f"{p}, line {header_line}: sigma_range_km given without range_km")
-    col = {name: header.index(name) for name in header}
-    has_range = "range_km" in col
-
+    rows = _data_lines(p)
+    col = _header_columns(p, rows)
+    parser = _RowParser(col, ep, sigma_arcsec, range_alpha, sites or {})
     errors: list[str] = []
-    times, values, sigmas, row_sites = [], [], [], []
-    site_table: dict[str, Site] = {}
-    last_t, last_line = -math.inf, 0
-    sites_at_t: set = set()  # sites of the rows at last_t: one time, several sites, one row each
-    for line_no, text in rows[1:]:
-        cells = [c.strip() for c in next(csv.reader([text]))]
-        if len(cells) != len(header):
-            errors.append(f"line {line_no}: {len(cells)} fields (columns), the header has {len(header)}")
-            continue
-        try:
-            try:
-                t_utc = parse_utc(cells[col["time_utc"]])
-            except ValueError:
-                raise ValueError(f"time_utc {cells[col['time_utc']]!r} is not an ISO-8601 UTC time") from None
-            t = (t_utc - ep).total_seconds() / TU_S
-            az = _number(cells[col["azimuth_deg"]], "azimuth_deg")
-            el = _number(cells[col["elevation_deg"]], "elevation_deg")
-            if not 0.0 <= az < 360.0:
-                raise ValueError(f"azimuth_deg {az} is outside [0, 360)")
-            if not -90.0 <= el <= 90.0:
-                raise ValueError(f"elevation_deg {el} is outside [-90, 90]")
-            row_sig = []
-            for name in ("sigma_azimuth_arcsec", "sigma_elevation_arcsec"):
-                cell = cells[col[name]] if name in col else ""
-                s = _number(cell, name) if cell else sigma_arcsec
-                if s <= 0:
-                    raise ValueError(f"{name} {s} must be > 0")
-                row_sig.append(to_rad(cell, "arcsec") if cell else s * ARCSEC_RAD)
-            row_val = [to_rad(cells[col["azimuth_deg"]], "deg"), to_rad(cells[col["elevation_deg"]], "deg")]
-            if has_range:
-                rng = _number(cells[col["range_km"]], "range_km")
-                if rng <= 0:
-                    raise ValueError(f"range_km {rng} must be > 0")
-                cell = cells[col["sigma_range_km"]] if "sigma_range_km" in col else ""
-                srng = _number(cell, "sigma_range_km") if cell else range_alpha * rng
-                if srng <= 0:
-                    raise ValueError(f"sigma_range_km {srng} must be > 0")
-                row_val.append(rng / LU_KM)
-                row_sig.append(srng / LU_KM)
-            if "site" in col:
-                key = cells[col["site"]]
-                if key not in site_table:
-                    try:
-                        site_table[key] = resolve_site(key, sites or {})
-                    except MeasurementError as exc:
-                        raise ValueError(f"site: {exc}") from None
-        except ValueError as exc:
-            errors.append(f"line {line_no}: {exc}")
-            continue
-        site_key = cells[col["site"]] if "site" in col else None
-        if t < last_t or (t == last_t and (site_key is None or site_key in sites_at_t)):
-            why = "is not after" if site_key is None or t < last_t else f"repeats site {site_key!r} at the time of"
-            errors.append(f"line {line_no}: time_utc {cells[col['time_utc']]!r} {why} line {last_line}")
-            continue
-        sites_at_t = sites_at_t | {site_key} if t == last_t else {site_key}
-        last_t, last_line = t, line_no
-        times.append(t)
-        values.append(row_val)
-        sigmas.append(row_sig)
-        if "site" in col:
-            row_sites.append(cells[col["site"]])
-
-    if errors:
-        shown = "\n  ".join(errors[:_MAX_REPORTED])
-        more = f"\n  ... and {len(errors) - _MAX_REPORTED} more" if len(errors) > _MAX_REPORTED else ""
-        raise MeasurementError(f"{p}: {len(errors)} invalid row(s):\n  {shown}{more}")
+    times, values, sigmas, row_sites = _parse_rows(rows[1:], parser, errors)
+    _raise_row_errors(p, errors)
     if not times:
         raise MeasurementError(f"{p}: the file has a header but no measurements")
 
+    has_range = "range_km" in col
     names = ("azimuth", "elevation", "range") if has_range else ("azimuth", "elevation")
     mset = MeasurementSet(np.array(times), np.array(values), np.array(sigmas), names,
                           {"source": str(p), "epoch": format_utc(ep)},
                           sites=np.array(row_sites) if "site" in col else None,
-                          kinds=np.full(len(times), "azel"), site_table=site_table)
+                          kinds=np.full(len(times), "azel"), site_table=parser.site_table)
     if has_range and not include_range:
         mset = mset.without("range")
     return mset

@@ -59,8 +59,8 @@ def _seconds(text: str, path, line: int, fieldname: str) -> Decimal:
     return Decimal(t)
 
 
-def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
-    s = line_text.rstrip("\n")
+def _check_line(s: str, path, ln: int) -> None:
+    """Length 80, an optical observation type (note 2, column 15), a designation."""
     if len(s) != 80:
         raise FieldError(path, ln, "(line length)", f"{len(s)} characters; an MPC observation line has 80")
     note2 = s[14]
@@ -71,7 +71,10 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
         raise FieldError(path, ln, "note 2 (column 15)", f"{note2!r} is not an MPC observation type")
     if not s[0:12].strip():
         raise FieldError(path, ln, "designation (columns 1-12)", "blank: the observation names no object")
-    date = s[15:32]
+
+
+def _date(date: str, path, ln: int) -> datetime:
+    """UTC time of columns 16-32 ('YYYY MM DD.dddddd'), rounded to the microsecond."""
     y, mo, d = date[0:4], date[5:7], date[8:]
     if date[4] != " " or date[7] != " ":
         raise FieldError(path, ln, "date (columns 16-32)", f"{show_field(date)} is not 'YYYY MM DD.dddddd'")
@@ -88,8 +91,11 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     except ValueError as exc:
         raise FieldError(path, ln, "date (columns 16-32)", f"{show_field(date)}: {exc}") from None
     micro = ((day - int(day)) * Decimal(86_400_000_000)).to_integral_value(ROUND_HALF_EVEN)
-    t = base + timedelta(microseconds=int(micro))
-    ra_t, dec_t = s[32:44], s[44:56]
+    return base + timedelta(microseconds=int(micro))
+
+
+def _ra(ra_t: str, path, ln: int) -> float:
+    """Right ascension (rad) of columns 33-44 ('HH MM SS.sss')."""
     if ra_t[2] != " " or ra_t[5] != " ":
         raise FieldError(path, ln, "RA (columns 33-44)", f"{show_field(ra_t)} is not 'HH MM SS.sss'")
     hh = _digits(ra_t[0:2], path, ln, "RA hours (columns 33-34)", 2)
@@ -97,6 +103,11 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     ss = _seconds(ra_t[6:], path, ln, "RA seconds (columns 39-44)")
     if hh >= 24 or mm >= 60 or ss >= 60:
         raise FieldError(path, ln, "RA (columns 33-44)", f"{show_field(ra_t)} is outside 00 00 00 - 23 59 59.999")
+    return to_rad(str((hh * 3600 + mm * 60) * 15 + ss * 15), "arcsec")
+
+
+def _dec(dec_t: str, path, ln: int) -> float:
+    """Declination (rad) of columns 45-56 ('sDD MM SS.ss')."""
     sign = dec_t[0]
     if sign not in "+-" or dec_t[3] != " " or dec_t[6] != " ":
         raise FieldError(path, ln, "Dec (columns 45-56)", f"{show_field(dec_t)} is not 'sDD MM SS.ss'")
@@ -105,10 +116,12 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     ds = _seconds(dec_t[7:], path, ln, "Dec seconds (columns 52-56)")
     if dm >= 60 or ds >= 60 or dd > 90 or (dd == 90 and (dm or ds)):
         raise FieldError(path, ln, "Dec (columns 45-56)", f"{show_field(dec_t)} is outside -90 00 00 - +90 00 00")
-    ra = to_rad(str((hh * 3600 + mm * 60) * 15 + ss * 15), "arcsec")
     dec_abs = to_rad(str(dd * 3600 + dm * 60 + ds), "arcsec")
-    dec = -dec_abs if sign == "-" else dec_abs
-    code = s[77:80]
+    return -dec_abs if sign == "-" else dec_abs
+
+
+def _site_code(code: str, path, ln: int, explicit, table) -> str:
+    """The observatory code of columns 78-80, its site entered in ``table``."""
     if not code.strip() or " " in code:
         raise FieldError(path, ln, "observatory code (columns 78-80)", f"{show_field(code)} is not a 3-character code")
     if code not in table:
@@ -116,6 +129,16 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
             table[code] = resolve_site(code, explicit)
         except MeasurementError as exc:
             raise FieldError(path, ln, "observatory code (columns 78-80)", str(exc)) from None
+    return code
+
+
+def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
+    s = line_text.rstrip("\n")
+    _check_line(s, path, ln)
+    t = _date(s[15:32], path, ln)
+    ra = _ra(s[32:44], path, ln)
+    dec = _dec(s[44:56], path, ln)
+    code = _site_code(s[77:80], path, ln, explicit, table)
     return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)", s[0:12].strip())
 
 

@@ -107,6 +107,208 @@ def _reads_back(texts: tuple[str, str], ms, k: int, kind: str) -> bool:
             and to_rad(texts[1], "arcsec") == float(ms.sigmas[k, 1]))
 
 
+def _check_angle(path, ln: int, k: str, text: str, val: float) -> None:
+    """Refuse an ANGLE_1 outside [0, 2 pi) or an ANGLE_2 outside [-pi/2, pi/2] (``val`` in rad)."""
+    if k == "ANGLE_1" and not 0.0 <= val < 2.0 * math.pi:
+        raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [0, 360) degrees")
+    if k == "ANGLE_2" and not -0.5 * math.pi <= val <= 0.5 * math.pi:
+        raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [-90, 90] degrees")
+
+
+def _segment_kind(path, seg: _Segment, ln: int) -> str:
+    """The segment's measurement kind, "azel" or "radec", after checking its required metadata."""
+    meta = seg.meta
+    for key in ("TIME_SYSTEM", "PARTICIPANT_1", "ANGLE_TYPE"):
+        if key not in meta:
+            raise FieldError(path, ln, key, f"missing from the metadata block starting at line {seg.line}")
+    ts, tl = meta["TIME_SYSTEM"]
+    if ts != "UTC":
+        raise FieldError(path, tl, "TIME_SYSTEM", f"{show_field(ts)}: only UTC is read")
+    at, al = meta["ANGLE_TYPE"]
+    if at not in ("AZEL", "RADEC"):
+        raise FieldError(path, al, "ANGLE_TYPE", f"{show_field(at)}: AZEL and RADEC are read")
+    kind = at.lower()
+    if kind == "radec":
+        rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
+        if rf not in _RADEC_FRAMES:
+            raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
+                                                          f"{', '.join(sorted(_RADEC_FRAMES))}")
+    return kind
+
+
+def _declared_site(path, m: re.Match, cl: int) -> Site:
+    """The site of a ``COMMENT cistrack site KEY latitude_deg=.. longitude_deg=.. height_m=..``."""
+    try:
+        lat, lon, height = (plain_float(m.group(i)) for i in (2, 3, 4))
+        return Site(lat, lon, height, name=m.group(1))
+    except (ValueError, MeasurementError) as exc:
+        raise FieldError(path, cl, "COMMENT cistrack site", str(exc)[:120]) from None
+
+
+def _comment_sigmas(path, m: re.Match, cl: int) -> tuple[tuple[float, float], str]:
+    """The (ANGLE_1, ANGLE_2) sigmas (rad) of a ``COMMENT cistrack sigma_arcsec ..`` and ANGLE_1's text."""
+    try:
+        sig = (to_rad(m.group(1), "arcsec"), to_rad(m.group(2), "arcsec"))
+    except ValueError:
+        raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas are not numbers") from None
+    if not (sig[0] > 0 and sig[1] > 0):
+        raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas must be > 0")
+    return sig, m.group(1)
+
+
+def _segment_comments(path, seg: _Segment) -> tuple[dict[str, Site], tuple, str]:
+    """Sites declared in the segment's cistrack comments, and its sigmas (rad; (None, None) when
+    absent) with ANGLE_1's sigma text."""
+    declared: dict[str, Site] = {}
+    sig, sig_text = (None, None), ""
+    for text, cl in seg.comments:
+        m = _SITE_RE.match(text)
+        if m:
+            declared[m.group(1)] = _declared_site(path, m, cl)
+            continue
+        m = _SIGMA_RE.match(text)
+        if m:
+            sig, sig_text = _comment_sigmas(path, m, cl)
+    return declared, sig, sig_text
+
+
+def _participant_site(path, seg: _Segment, declared: dict, table: dict, sites: dict) -> str:
+    """PARTICIPANT_1's name, its site entered in ``table`` (declared in the segment, else a key of
+    ``sites`` or an MPC code)."""
+    name, nl = seg.meta["PARTICIPANT_1"]
+    if name in declared:
+        site = declared[name]
+    else:
+        try:
+            site = resolve_site(name, sites)
+        except MeasurementError as exc:
+            raise FieldError(path, nl, "PARTICIPANT_1", str(exc)) from None
+    if name in table and table[name] != site:
+        raise FieldError(path, nl, "PARTICIPANT_1", f"{show_field(name)} was declared with another position earlier")
+    table[name] = site
+    return name
+
+
+def _segment_context(path, seg: _Segment, ln: int, table: dict, sites: dict) -> dict:
+    """What the data lines of a segment need: kind, site name, sigmas, object (PARTICIPANT_2)."""
+    kind = _segment_kind(path, seg, ln)
+    declared, sig, sig_text = _segment_comments(path, seg)
+    name = _participant_site(path, seg, declared, table, sites)
+    return {"kind": kind, "site": name, "sig": sig, "sig_text": sig_text,
+            "object": seg.meta.get("PARTICIPANT_2", ("", ln))[0]}
+
+
+class _TdmParse:
+    """One pass over a TDM file's lines, block by block (header, then META and DATA segments):
+    collects the observations as :class:`ObsRow` (angles in rad) and the sites by name."""
+
+    _ENDS = {"header": "META_START", "meta": "META_STOP", "between": "DATA_START", "data": "DATA_STOP"}
+
+    def __init__(self, path, sites: dict) -> None:
+        self.path, self.sites = path, sites
+        self.state, self.seg = "header", None
+        self.seen_version = False
+        self.rows: list[ObsRow] = []
+        self.table: dict[str, Site] = {}
+        self.pending: dict[datetime, tuple[str, float, int]] = {}  # epoch -> (keyword, angle, line)
+        self.ctx: dict = {}
+
+    def run(self, lines: list[str]) -> None:
+        handlers = {"header": self._header, "meta": self._meta, "between": self._between,
+                    "data": self._data, "after": self._after}
+        for ln, raw in enumerate(lines, start=1):
+            text = raw.strip()
+            if not text:
+                continue
+            word = text.split()[0]
+            if word == "COMMENT":
+                if self.seg is not None and self.state == "meta":
+                    self.seg.comments.append((text[7:].strip(), ln))
+                continue
+            handlers[self.state](word, text, ln)
+        if self.state != "after":
+            where = self._ENDS[self.state]
+            raise FieldError(self.path, max(1, len(lines)), where, f"the file ends without {where}")
+
+    def _header(self, word: str, text: str, ln: int) -> None:
+        if word == "META_START":
+            if not self.seen_version:
+                raise FieldError(self.path, ln, "CCSDS_TDM_VERS", "the header must start with CCSDS_TDM_VERS")
+            self.state, self.seg = "meta", _Segment(ln)
+            return
+        k, v = _kv(text, self.path, ln)
+        if k not in _HEADER_KEYS:
+            raise FieldError(self.path, ln, k[:40], f"unknown header keyword; expected {', '.join(sorted(_HEADER_KEYS))} then META_START")
+        if k == "CCSDS_TDM_VERS":
+            if v not in ("1.0", "2.0"):
+                raise FieldError(self.path, ln, k, f"{show_field(v)}: versions 1.0 and 2.0 are read")
+            self.seen_version = True
+
+    def _meta(self, word: str, text: str, ln: int) -> None:
+        if word == "META_STOP":
+            self.ctx = _segment_context(self.path, self.seg, ln, self.table, self.sites)
+            self.state = "between"
+            return
+        k, v = _kv(text, self.path, ln)
+        if k not in _META_KEYS:
+            raise FieldError(self.path, ln, k[:40], "unknown metadata keyword")
+        self.seg.meta[k] = (v, ln)
+
+    def _between(self, word: str, text: str, ln: int) -> None:
+        if word != "DATA_START":
+            raise FieldError(self.path, ln, word[:40], "expected DATA_START after META_STOP")
+        self.state = "data"
+
+    def _after(self, word: str, text: str, ln: int) -> None:
+        if word != "META_START":
+            raise FieldError(self.path, ln, word[:40], "expected META_START (a new segment) after DATA_STOP")
+        self.state, self.seg = "meta", _Segment(ln)
+
+    def _data(self, word: str, text: str, ln: int) -> None:
+        if word == "DATA_STOP":
+            if self.pending:
+                t0, (name, _v, pl) = next(iter(self.pending.items()))
+                other = "ANGLE_2" if name == "ANGLE_1" else "ANGLE_1"
+                raise FieldError(self.path, pl, other, f"{name} at {format_utc(t0)} has no {other} at the same epoch")
+            self.state, self.seg = "after", None
+            return
+        k, t, val = self._data_line(text, ln)
+        self._pair(k, t, val, ln)
+
+    def _data_line(self, text: str, ln: int) -> tuple[str, datetime, float]:
+        """Keyword, epoch and angle (rad) of ``ANGLE_n = <epoch> <value>``."""
+        path = self.path
+        k, v = _kv(text, path, ln)
+        if k not in ("ANGLE_1", "ANGLE_2"):
+            raise FieldError(path, ln, k[:40], "only ANGLE_1 and ANGLE_2 data are read")
+        parts = v.split()
+        if len(parts) != 2:
+            raise FieldError(path, ln, k, "expected '<epoch> <value>'")
+        try:
+            t = _parse_time(parts[0])
+        except ValueError as exc:
+            raise FieldError(path, ln, f"{k} epoch", f"{show_field(parts[0])} {exc}") from None
+        try:
+            val = to_rad(parts[1], "deg")
+        except ValueError as exc:
+            raise FieldError(path, ln, f"{k} value", f"{show_field(parts[1])} is {exc}") from None
+        _check_angle(path, ln, k, parts[1], val)
+        return k, t, val
+
+    def _pair(self, k: str, t: datetime, val: float, ln: int) -> None:
+        """Hold an angle until the other one at its epoch arrives, then add the observation."""
+        if t not in self.pending:
+            self.pending[t] = (k, val, ln)
+            return
+        name, other_v, pl = self.pending.pop(t)
+        if name == k:
+            raise FieldError(self.path, ln, k, f"a second {k} at {format_utc(t)} (line {pl} has the first)")
+        a, b = (other_v, val) if name == "ANGLE_1" else (val, other_v)
+        ctx = self.ctx
+        self.rows.append(ObsRow(t, a, b, _first_sigma(ctx, b), ctx["sig"][1], ctx["site"], ctx["kind"],
+                                min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
+
+
 class TdmReader(SiteReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
@@ -126,150 +328,9 @@ class TdmReader(SiteReader):
     # -- reading ---------------------------------------------------------------------------------
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)
-        lines = read_text_lines(path)
-        state, seg = "header", None
-        seen_version = False
-        rows: list[ObsRow] = []
-        table: dict[str, Site] = {}
-        pending: dict[datetime, tuple[str, float, int]] = {}
-        ctx: dict = {}
-        for ln, raw in enumerate(lines, start=1):
-            text = raw.strip()
-            if not text:
-                continue
-            word = text.split()[0]
-            if word == "COMMENT":
-                if seg is not None and state == "meta":
-                    seg.comments.append((text[7:].strip(), ln))
-                continue
-            if state == "header":
-                if word == "META_START":
-                    if not seen_version:
-                        raise FieldError(path, ln, "CCSDS_TDM_VERS", "the header must start with CCSDS_TDM_VERS")
-                    state, seg = "meta", _Segment(ln)
-                    continue
-                k, v = _kv(text, path, ln)
-                if k not in _HEADER_KEYS:
-                    raise FieldError(path, ln, k[:40], f"unknown header keyword; expected {', '.join(sorted(_HEADER_KEYS))} then META_START")
-                if k == "CCSDS_TDM_VERS":
-                    if v not in ("1.0", "2.0"):
-                        raise FieldError(path, ln, k, f"{show_field(v)}: versions 1.0 and 2.0 are read")
-                    seen_version = True
-                continue
-            if state == "meta":
-                if word == "META_STOP":
-                    ctx = self._segment_context(path, seg, ln, table)
-                    state = "between"
-                    continue
-                k, v = _kv(text, path, ln)
-                if k not in _META_KEYS:
-                    raise FieldError(path, ln, k[:40], "unknown metadata keyword")
-                seg.meta[k] = (v, ln)
-                continue
-            if state == "between":
-                if word != "DATA_START":
-                    raise FieldError(path, ln, word[:40], "expected DATA_START after META_STOP")
-                state = "data"
-                continue
-            if state == "data":
-                if word == "DATA_STOP":
-                    if pending:
-                        t0, (name, _v, pl) = next(iter(pending.items()))
-                        other = "ANGLE_2" if name == "ANGLE_1" else "ANGLE_1"
-                        raise FieldError(path, pl, other, f"{name} at {format_utc(t0)} has no {other} at the same epoch")
-                    state, seg = "after", None
-                    continue
-                k, v = _kv(text, path, ln)
-                if k not in ("ANGLE_1", "ANGLE_2"):
-                    raise FieldError(path, ln, k[:40], "only ANGLE_1 and ANGLE_2 data are read")
-                parts = v.split()
-                if len(parts) != 2:
-                    raise FieldError(path, ln, k, "expected '<epoch> <value>'")
-                try:
-                    t = _parse_time(parts[0])
-                except ValueError as exc:
-                    raise FieldError(path, ln, f"{k} epoch", f"{show_field(parts[0])} {exc}") from None
-                try:
-                    val = to_rad(parts[1], "deg")
-                except ValueError as exc:
-                    raise FieldError(path, ln, f"{k} value", f"{show_field(parts[1])} is {exc}") from None
-                self._check_angle(path, ln, k, parts[1], val, ctx["kind"])
-                if t in pending:
-                    name, other_v, pl = pending.pop(t)
-                    if name == k:
-                        raise FieldError(path, ln, k, f"a second {k} at {format_utc(t)} (line {pl} has the first)")
-                    a, b = (other_v, val) if name == "ANGLE_1" else (val, other_v)
-                    rows.append(ObsRow(t, a, b, _first_sigma(ctx, b), ctx["sig"][1], ctx["site"], ctx["kind"],
-                                       min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
-                else:
-                    pending[t] = (k, val, ln)
-                continue
-            if state == "after":
-                if word != "META_START":
-                    raise FieldError(path, ln, word[:40], "expected META_START (a new segment) after DATA_STOP")
-                state, seg = "meta", _Segment(ln)
-                continue
-        if state != "after":
-            where = {"header": "META_START", "meta": "META_STOP", "between": "DATA_START", "data": "DATA_STOP"}[state]
-            raise FieldError(path, max(1, len(lines)), where, f"the file ends without {where}")
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
-
-    def _check_angle(self, path, ln, k, text, val, kind) -> None:
-        if k == "ANGLE_1" and not 0.0 <= val < 2.0 * math.pi:
-            raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [0, 360) degrees")
-        if k == "ANGLE_2" and not -0.5 * math.pi <= val <= 0.5 * math.pi:
-            raise FieldError(path, ln, f"{k} value", f"{show_field(text)} is outside [-90, 90] degrees")
-
-    def _segment_context(self, path, seg: _Segment, ln: int, table: dict) -> dict:
-        meta = seg.meta
-        for key in ("TIME_SYSTEM", "PARTICIPANT_1", "ANGLE_TYPE"):
-            if key not in meta:
-                raise FieldError(path, ln, key, f"missing from the metadata block starting at line {seg.line}")
-        ts, tl = meta["TIME_SYSTEM"]
-        if ts != "UTC":
-            raise FieldError(path, tl, "TIME_SYSTEM", f"{show_field(ts)}: only UTC is read")
-        at, al = meta["ANGLE_TYPE"]
-        if at not in ("AZEL", "RADEC"):
-            raise FieldError(path, al, "ANGLE_TYPE", f"{show_field(at)}: AZEL and RADEC are read")
-        kind = at.lower()
-        if kind == "radec":
-            rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
-            if rf not in _RADEC_FRAMES:
-                raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
-                                                              f"{', '.join(sorted(_RADEC_FRAMES))}")
-        name, nl = meta["PARTICIPANT_1"]
-        declared = {}
-        sig, sig_text = (None, None), ""
-        for text, cl in seg.comments:
-            m = _SITE_RE.match(text)
-            if m:
-                try:
-                    lat, lon, height = (plain_float(m.group(i)) for i in (2, 3, 4))
-                    declared[m.group(1)] = Site(lat, lon, height, name=m.group(1))
-                except (ValueError, MeasurementError) as exc:
-                    raise FieldError(path, cl, "COMMENT cistrack site", str(exc)[:120]) from None
-                continue
-            m = _SIGMA_RE.match(text)
-            if m:
-                try:
-                    sig = (to_rad(m.group(1), "arcsec"), to_rad(m.group(2), "arcsec"))
-                    sig_text = m.group(1)
-                except ValueError:
-                    raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas are not numbers") from None
-                if not (sig[0] > 0 and sig[1] > 0):
-                    raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas must be > 0")
-        if name in declared:
-            site = declared[name]
-        else:
-            try:
-                site = resolve_site(name, self._sites)
-            except MeasurementError as exc:
-                raise FieldError(path, nl, "PARTICIPANT_1", str(exc)) from None
-        if name in table and table[name] != site:
-            raise FieldError(path, nl, "PARTICIPANT_1", f"{show_field(name)} was declared with another position earlier")
-        table[name] = site
-        return {"kind": kind, "site": name, "sig": sig, "sig_text": sig_text,
-                "object": meta.get("PARTICIPANT_2", ("", ln))[0]}
+        parse = _TdmParse(path, self._sites)
+        parse.run(read_text_lines(path))
+        return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
 
     # -- writing ---------------------------------------------------------------------------------
     def write(self, path, measurements, epoch) -> None:

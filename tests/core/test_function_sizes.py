@@ -45,8 +45,6 @@ EXCEPTIONS: dict[str, str] = {
     "plugins/dynamics/twobody.py::kepler_propagate": TEMPORARY,
     "plugins/iod/gauss.py::gauss_angles_only": TEMPORARY,
     "plugins/iod/kinematic_fit.py::prepare_fit": TEMPORARY,
-    "plugins/readers/csv_file.py::read_measurements": TEMPORARY,
-    "plugins/readers/tdm.py::TdmReader.read": TEMPORARY,
     "plugins/recorders/rerun_recorder.py::RerunRecorder._log_step": TEMPORARY,
     "plugins/sensors/phased_schedule.py::_Phase.__init__": TEMPORARY,
     "plugins/sensors/real_telescope.py::RealTelescope.__init__": TEMPORARY,
