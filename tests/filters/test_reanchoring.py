@@ -221,7 +221,7 @@ def test_pgm_refuses_a_kernel_threshold_outside_0_1_naming_it():
 
 
 def test_continued_fits_across_the_gap_reach_the_direct_fits_solution():
-    from cistrack.fit import FitOptions
+    from cistrack.least_squares import FitOptions
     from cistrack.plugins.filters.pgm.reanchoring import _DifferencedDynamics
 
     dyn, sen, _, truth, _, _ = _two_nights()

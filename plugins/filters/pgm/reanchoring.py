@@ -12,7 +12,7 @@ the bound, if it starts in the right basin; the posterior particles are the star
    since the latest gap, the posterior particles are
    scored by the chi-square of the arc's measurements (one backward propagation of at most 1,000
    of them, every k-th; after a gap in "across-gaps" mode all of them).
-2. The ``starts`` best particles each start a Levenberg-Marquardt fit (:func:`cistrack.fit.fit_orbit`)
+2. The ``starts`` best particles each start a Levenberg-Marquardt fit (:func:`cistrack.least_squares.fit_orbit`)
    of the state at the last update; the starts stop once a solution has been found twice.
 3. A fit is accepted when it converged, its chi-square is at most the 99.9 % point of chi-square
    with (measured components - 6) degrees of freedom, and its weakest direction is determined to
@@ -28,7 +28,7 @@ leaves the range ambiguous. In mode "across-gaps" the fit spans the gap, attempt
 when the first pass after it is over. After a gap the chi-square valley is long and bent, so
 the solution's linearised covariance can miss the truth far along the fit's sharpest direction.
 The belief after a gap is therefore each solution's line of variations
-(:mod:`cistrack.fit.line_of_variations`): least-squares points every half sigma along the weakest
+(:mod:`cistrack.least_squares.line_of_variations`): least-squares points every half sigma along the weakest
 direction out to 4 sigma, each with its covariance on its hyperplane and weighted by its Laplace
 evidence; the particles are drawn along the line (:meth:`Reanchoring.draw`), following the bend.
 Across a gap the fits' transition matrices use difference steps of 1e-8 (see
@@ -67,7 +67,7 @@ _LOV_MAX_SIGMA = 4.0
 
 def _valley(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit, opts) -> tuple[list, np.ndarray]:
     """A solution's line of variations: its points and the weakest direction they follow."""
-    from cistrack.fit.line_of_variations import line_of_variations, weakest_direction
+    from cistrack.least_squares.line_of_variations import line_of_variations, weakest_direction
 
     pts = line_of_variations(dynamics, sensor, ms, fit, step=_LOV_STEP, max_sigma=_LOV_MAX_SIGMA, options=opts)
     return pts, weakest_direction(fit.covariance)
@@ -76,7 +76,7 @@ def _valley(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit, opts) -
 def _valley_mixture(pts: list, v: np.ndarray) -> GaussianMixture:
     """The line as a Gaussian mixture: a component at every point, its covariance on the point's
     hyperplane widened along the line by the spacing, weighted by its Laplace evidence."""
-    from cistrack.fit.line_of_variations import line_weights
+    from cistrack.least_squares.line_of_variations import line_weights
 
     along = (_LOV_STEP ** 2) * np.outer(v, v)
     return GaussianMixture(line_weights(pts, _LOV_STEP, v), np.array([p.state for p in pts]),
@@ -206,8 +206,8 @@ class Reanchoring(ReanchorRun):
     def attempt(self, x: np.ndarray, t: float, dynamics: Dynamics, sensor: Sensor) -> GaussianMixture | None:
         """Fit from the best of the posterior particles ``x`` (N, 6) at the last update ``t`` (TU);
         the mixture of accepted solutions at ``t`` (LU, VU), or None when no fit is accepted."""
-        from cistrack.fit.least_squares import fit_orbit
-        from cistrack.fit.options import FitOptions
+        from cistrack.least_squares.differential_correction import fit_orbit
+        from cistrack.least_squares.options import FitOptions
 
         after_gap, self._gap_open = self._gap_open, False
         dynamics = _DifferencedDynamics(dynamics, _GAP_STM_STEP if after_gap else None)
@@ -266,7 +266,7 @@ class Reanchoring(ReanchorRun):
         well conditioned); each later one moves the solution a little along the valley the
         pre-gap measurements cut, which a direct fit from a particle tens of km off does not
         reach in its iterations."""
-        from cistrack.fit.least_squares import fit_orbit
+        from cistrack.least_squares.differential_correction import fit_orbit
 
         before = np.arange(len(ms)) < self._before_gap
         for i in order[: _CONTINUATION_STARTS]:
@@ -288,9 +288,9 @@ class Reanchoring(ReanchorRun):
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray | None:
         """Particles (n, 6) along the lines of variations of the latest accepted solutions after a
-        gap (:func:`cistrack.fit.line_of_variations.sample_line`: they follow the bend, which the
+        gap (:func:`cistrack.least_squares.line_of_variations.sample_line`: they follow the bend, which the
         mixture's straight components do not); None when the latest attempt was within an arc."""
-        from cistrack.fit.line_of_variations import sample_line
+        from cistrack.least_squares.line_of_variations import sample_line
 
         if self._valleys is None:
             return None
