@@ -31,7 +31,7 @@ import numpy as np
 
 from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.errors import FilterError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack import hookimpl
 from cistrack.model.measurement import Measurement
 
 from .measured_components import MeasuredComponents, check_epoch

@@ -23,7 +23,7 @@ import numpy as np
 from cistrack.model.belief import Belief, ParticleCloud, regularize_covariance
 from cistrack.interfaces.component import check_int, check_nonnegative, check_positive, check_range
 from cistrack.errors import FilterError
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.filter import FilterBase
 from cistrack.model.measurement import Measurement

@@ -28,7 +28,7 @@ how the defaults were chosen and how to swap a step.
 """
 from __future__ import annotations
 
-from cistrack.plugin.hookspecs import hookimpl
+from cistrack import hookimpl
 
 from .clusterer_choice import resolve_clusterer
 from .component_update import EnsembleUpdate, IteratedUpdate

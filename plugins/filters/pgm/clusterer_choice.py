@@ -19,7 +19,7 @@ def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, regi
     """
     if isinstance(clusterer, str):
         if registry is None:
-            from cistrack.plugin.registry import default_registry
+            from cistrack.api import default_registry
             registry = default_registry()
         cls = registry.get("clustering", clusterer).factory
         takes_m = n_components is not None and "n_components" in _params_of(cls)

@@ -25,7 +25,7 @@ def check_step(owner: Component, name: str, value: Any, interface: type, builtin
         return value
     kind = interface.kind
     if isinstance(value, str):
-        from cistrack.plugin.registry import default_registry
+        from cistrack.api import default_registry
 
         if (kind, value) in default_registry():
             return value
@@ -41,7 +41,7 @@ def resolve_step(kind: str, value: Component | str, handed: dict[str, Any], who:
     through ``registry`` (default: the installed plugins)."""
     if isinstance(value, str):
         if registry is None:
-            from cistrack.plugin.registry import default_registry
+            from cistrack.api import default_registry
             registry = default_registry()
         try:
             takes = param_specs(registry.get(kind, value).factory)
