@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -13,35 +14,67 @@ from cistrack.interfaces import Clusterer
 from .thread_limits import limited_threads
 from .points_and_labels import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
 
-__all__ = ["GMMClusterer", "fit_gmm_labels", "fit_gmm_labels_numba"]
+__all__ = ["GMMClusterer", "EMSettings", "fit_gmm_labels", "fit_gmm_labels_numba"]
 
 
-def fit_gmm_labels(z: np.ndarray, k: int, rng: np.random.Generator, max_iter: int, reg_covar: float,
-                   max_fit_samples: int, n_threads: int = 1, tol: float = 1e-3,
-                   init: str = "kmeans") -> tuple[np.ndarray, float]:
+@dataclass(frozen=True)
+class EMSettings:
+    """The EM settings both engines share.
+
+    max_iter : EM iterations at most.
+    reg_covar : added to the diagonal of each (standardised) covariance.
+    max_fit_samples : EM runs on a random subset of at most this many points.
+    n_threads : OpenMP threads for scikit-learn (0 = all cores).
+    tol : EM stops when the mean log-likelihood per point improves by less than this.
+    init : initial responsibilities ("kmeans", "kmeans-numba", "k-means++", ...).
+    """
+
+    max_iter: int
+    reg_covar: float
+    max_fit_samples: int
+    n_threads: int = 1
+    tol: float = 1e-3
+    init: str = "kmeans"
+
+
+def _em_settings(settings: tuple, named: dict) -> EMSettings:
+    """One EMSettings passed alone, or its fields in order and/or by name."""
+    if len(settings) == 1 and not named and isinstance(settings[0], EMSettings):
+        return settings[0]
+    return EMSettings(*settings, **named)
+
+
+def _fit_subset(z: np.ndarray, rng: np.random.Generator, max_fit_samples: int) -> np.ndarray:
+    """``z`` (N, d), or at most ``max_fit_samples`` of its rows drawn without replacement."""
+    if z.shape[0] > max_fit_samples:
+        return z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
+    return z
+
+
+def fit_gmm_labels(z: np.ndarray, k: int, rng: np.random.Generator, *settings,
+                   **named) -> tuple[np.ndarray, float]:
     """Fit a k-component full-covariance mixture to standardised points ``z`` (N, d).
 
+    ``settings`` / ``named``: an :class:`EMSettings`, or its fields in order or by name
+    (max_iter, reg_covar, max_fit_samples[, n_threads=1, tol=1e-3, init="kmeans"]).
     EM runs on at most ``max_fit_samples`` randomly chosen points; every point is then labelled
     by its most probable component. Returns (labels (N,), BIC of the fit on the fitted points).
     """
-    fit = z
-    if z.shape[0] > max_fit_samples:
-        fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
+    em = _em_settings(settings, named)
+    fit = _fit_subset(z, rng, em.max_fit_samples)
     # scikit-learn and numba are imported on use: listing the registry must not load them.
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.mixture import GaussianMixture as SkGaussianMixture
 
-    gm = SkGaussianMixture(n_components=k, covariance_type="full", max_iter=max_iter, tol=tol,
-                           reg_covar=reg_covar, init_params=init, random_state=sklearn_seed(rng))
-    with warnings.catch_warnings(), limited_threads(n_threads):
+    gm = SkGaussianMixture(n_components=k, covariance_type="full", max_iter=em.max_iter, tol=em.tol,
+                           reg_covar=em.reg_covar, init_params=em.init, random_state=sklearn_seed(rng))
+    with warnings.catch_warnings(), limited_threads(em.n_threads):
         warnings.simplefilter("ignore", ConvergenceWarning)
         gm.fit(fit)
     return gm.predict(z), float(gm.bic(fit))
 
 
-def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, max_iter: int, reg_covar: float,
-                         max_fit_samples: int, n_threads: int = 1, tol: float = 1e-3,
-                         init: str = "kmeans") -> np.ndarray:
+def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, *settings, **named) -> np.ndarray:
     """As :func:`fit_gmm_labels`, EM compiled with numba (plugins/clustering/em_numba.py); labels (N,).
 
     ``init="kmeans"`` starts from scikit-learn's ``KMeans(n_init=1)`` with the seed the
@@ -52,19 +85,18 @@ def fit_gmm_labels_numba(z: np.ndarray, k: int, rng: np.random.Generator, max_it
     the mean log-likelihood per point changes by less than ``tol``; every point of ``z`` is
     labelled by its most probable component.
     """
-    fit = z
-    if z.shape[0] > max_fit_samples:
-        fit = z[rng.choice(z.shape[0], size=max_fit_samples, replace=False)]
+    em = _em_settings(settings, named)
+    fit = _fit_subset(z, rng, em.max_fit_samples)
     from . import em_numba, kmeans_numba  # compiled code: imported on use, not when the registry lists plugins
 
-    if init == "kmeans-numba":
+    if em.init == "kmeans-numba":
         start = kmeans_numba.kmeans_labels(fit, k, rng)
     else:
         from sklearn.cluster import KMeans
 
-        with limited_threads(n_threads):
+        with limited_threads(em.n_threads):
             start = KMeans(n_clusters=k, n_init=1, random_state=sklearn_seed(rng)).fit(fit).labels_
-    result = em_numba.em_fit(fit, em_numba.one_hot(start, k), reg_covar, tol, max_iter)
+    result = em_numba.em_fit(fit, em_numba.one_hot(start, k), em.reg_covar, em.tol, em.max_iter)
     return em_numba.predict_labels(z, result)
 
 
@@ -126,12 +158,11 @@ class GMMClusterer(Clusterer):
         k = n_distinct_at_least(x, self.n_components)
         if k <= 1:
             return np.zeros(x.shape[0], dtype=np.intp)
+        em = EMSettings(self.max_iter, self.reg_covar, self.max_fit_samples, self.n_threads, self.tol, self.init)
         if self.engine == "numba":
-            labels = fit_gmm_labels_numba(standardize(x), k, rng, self.max_iter, self.reg_covar,
-                                          self.max_fit_samples, self.n_threads, self.tol, self.init)
+            labels = fit_gmm_labels_numba(standardize(x), k, rng, em)
         else:
-            labels, _ = fit_gmm_labels(standardize(x), k, rng, self.max_iter, self.reg_covar,
-                                       self.max_fit_samples, self.n_threads, self.tol, self.init)
+            labels, _ = fit_gmm_labels(standardize(x), k, rng, em)
         return compact_labels(labels)
 
 

@@ -32,7 +32,7 @@ from .cr3bp import cr3bp_rhs as _lazy_cr3bp_rhs
 
 cr3bp_rhs = _lazy_cr3bp_rhs.dispatcher  # compiled code below calls the numba function itself
 
-__all__ = ["CorrectionError", "CorrectedOrbit", "correct_symmetric_orbit", "propagate_with_stm",
+__all__ = ["CorrectionError", "CorrectedOrbit", "CorrectorSettings", "correct_symmetric_orbit", "propagate_with_stm",
            "cr3bp_stm_rhs"]
 
 
@@ -115,10 +115,56 @@ def _crossing(x0: np.ndarray, mu: float, half_guess: float | None, crossing: int
     return times[i], ys[i]
 
 
+@dataclass(frozen=True)
+class CorrectorSettings:
+    """Numerical settings of :func:`correct_symmetric_orbit`.
+
+    tol : float        convergence threshold on max(|vx|, |vz|) at the crossing, VU
+    max_iter : int     Newton iterations at most
+    rtol, atol : float DOP853 tolerances of the state + STM integration
+    """
+
+    tol: float = 1e-12
+    max_iter: int = 30
+    rtol: float = 1e-13
+    atol: float = 1e-14
+
+
+def _symmetric_start(guess) -> np.ndarray:
+    """The guess (6,) as a float copy with y0, vx0 and vz0 set to 0."""
+    x = np.array(guess, dtype=float).reshape(-1)
+    if x.shape != (6,) or not np.all(np.isfinite(x)):
+        raise CorrectionError(f"differential corrector: guess must be 6 finite numbers, got {guess!r}")
+    x[[1, 3, 5]] = 0.0
+    return x
+
+
+def _free_and_targets(planar: bool, fixed: str) -> tuple[list[int], list[int]]:
+    """Indices of the corrected initial coordinates and of the velocities driven to 0."""
+    if fixed not in ("x", "z", "vy"):
+        raise CorrectionError(f"differential corrector: fixed must be 'x', 'z' or 'vy', got {fixed!r}")
+    if planar and fixed == "z":
+        raise CorrectionError("differential corrector: a planar guess (z0 = 0) needs fixed='x' or 'vy'")
+    coord = {"x": 0, "z": 2, "vy": 4}
+    candidates = [0, 4] if planar else [0, 2, 4]
+    free = [i for i in candidates if i != coord[fixed]]
+    targets = [3] if planar else [3, 5]
+    return free, targets
+
+
+def _newton_step(tc: float, yc: np.ndarray, mu: float, free: list[int], targets: list[int]) -> np.ndarray:
+    """Change of the free initial coordinates that zeroes the target velocities at the crossing
+    (state + STM ``yc`` (42,) at time ``tc``), the crossing's time shift included."""
+    phi = yc[6:].reshape(6, 6)
+    fdot = np.empty(6)
+    cr3bp_rhs(tc, np.ascontiguousarray(yc[:6]), np.array([mu]), fdot)
+    jac = phi[np.ix_(targets, free)] - np.outer(fdot[targets] / yc[4], phi[1, free])
+    return np.linalg.lstsq(jac, -yc[targets], rcond=None)[0]
+
+
 def correct_symmetric_orbit(guess, mu: float = MU_EARTH_MOON, *, fixed: str = "x",
                             period_guess: float | None = None, crossing: int | None = None,
-                            tol: float = 1e-12, max_iter: int = 30, rtol: float = 1e-13,
-                            atol: float = 1e-14) -> CorrectedOrbit:
+                            **settings) -> CorrectedOrbit:
     """Correct a guess of a periodic orbit symmetric about the xz-plane.
 
     Parameters
@@ -134,46 +180,31 @@ def correct_symmetric_orbit(guess, mu: float = MU_EARTH_MOON, *, fixed: str = "x
         Approximate period (TU): the y = 0 crossing nearest half of it is targeted.
     crossing : int, optional
         Target the n-th crossing of y = 0 instead (1 = the first after t = 0).
-    tol : float
-        Convergence threshold on max(|vx|, |vz|) at the crossing (VU).
+    **settings
+        Fields of :class:`CorrectorSettings`: tol (1e-12, convergence threshold on
+        max(|vx|, |vz|) at the crossing, VU), max_iter (30), rtol (1e-13), atol (1e-14).
 
     Returns
     -------
     CorrectedOrbit. Raises :class:`CorrectionError` if Newton's method does not reach ``tol``
     within ``max_iter`` iterations or the trajectory never crosses y = 0.
     """
-    x = np.array(guess, dtype=float).reshape(-1)
-    if x.shape != (6,) or not np.all(np.isfinite(x)):
-        raise CorrectionError(f"differential corrector: guess must be 6 finite numbers, got {guess!r}")
-    x[[1, 3, 5]] = 0.0
-    planar = x[2] == 0.0
-    if fixed not in ("x", "z", "vy"):
-        raise CorrectionError(f"differential corrector: fixed must be 'x', 'z' or 'vy', got {fixed!r}")
-    if planar and fixed == "z":
-        raise CorrectionError("differential corrector: a planar guess (z0 = 0) needs fixed='x' or 'vy'")
-    coord = {"x": 0, "z": 2, "vy": 4}
-    candidates = [0, 4] if planar else [0, 2, 4]
-    free = [i for i in candidates if i != coord[fixed]]
-    targets = [3] if planar else [3, 5]
+    opts = CorrectorSettings(**settings)
+    x = _symmetric_start(guess)
+    free, targets = _free_and_targets(x[2] == 0.0, fixed)
     half = None if period_guess is None else 0.5 * float(period_guess)
     residual = np.inf
-    for it in range(max_iter + 1):
-        tc, yc = _crossing(x, mu, half, crossing, rtol, atol)
-        g = yc[targets]
-        residual = float(np.max(np.abs(g)))
-        if residual <= tol:
+    for it in range(opts.max_iter + 1):
+        tc, yc = _crossing(x, mu, half, crossing, opts.rtol, opts.atol)
+        residual = float(np.max(np.abs(yc[targets])))
+        if residual <= opts.tol:
             return CorrectedOrbit(state=x.copy(), period=2.0 * tc, iterations=it, residual=residual)
-        if it == max_iter:
+        if it == opts.max_iter:
             break
-        phi = yc[6:].reshape(6, 6)
-        fdot = np.empty(6)
-        cr3bp_rhs(tc, np.ascontiguousarray(yc[:6]), np.array([mu]), fdot)
-        jac = phi[np.ix_(targets, free)] - np.outer(fdot[targets] / yc[4], phi[1, free])
-        dx = np.linalg.lstsq(jac, -g, rcond=None)[0]
-        x[free] += dx
+        x[free] += _newton_step(tc, yc, mu, free, targets)
         if not np.all(np.isfinite(x)):
             break
         half = tc  # follow the crossing we are converging on
     raise CorrectionError(f"differential corrector did not converge: residual {residual:.3e} VU after "
-                          f"{max_iter} iterations (tol {tol:g}); try a better guess, another 'fixed' "
+                          f"{opts.max_iter} iterations (tol {opts.tol:g}); try a better guess, another 'fixed' "
                           "coordinate, or period_guess/crossing to target the right crossing")

@@ -9,6 +9,8 @@ the universal anomaly), vectorised over states; it serves tests and the Gauss IO
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from cistrack import units
@@ -75,6 +77,124 @@ def _stumpff(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return c, s
 
 
+@dataclass(frozen=True)
+class _UniversalProblem:
+    """Per-state data of the universal-variable Kepler problem: r0v, v0v (N, 3) position and
+    velocity; r0, rdotv, alpha (1/a) and dt (N,) (elliptic dt reduced below half a period);
+    sqmu = sqrt(gm), gm in the states' units."""
+
+    r0v: np.ndarray
+    v0v: np.ndarray
+    r0: np.ndarray
+    rdotv: np.ndarray
+    alpha: np.ndarray
+    dt: np.ndarray
+    gm: float
+    sqmu: float
+
+
+def _within_half_period(dt: np.ndarray, alpha: np.ndarray, gm: float) -> np.ndarray:
+    """``dt`` (N,) less the whole periods of the elliptic states: whole revolutions change nothing."""
+    ell = alpha > 1e-12
+    period = np.full(dt.shape[0], np.inf)
+    period[ell] = 2.0 * np.pi / np.sqrt(gm * alpha[ell] ** 3)
+    dt = dt.copy()
+    dt[ell] = dt[ell] - np.round(dt[ell] / period[ell]) * period[ell]
+    return dt
+
+
+def _universal_problem(s: np.ndarray, dt, gm: float) -> _UniversalProblem:
+    """The problem for states ``s`` (N, 6) and times of flight ``dt`` (scalar or (N,))."""
+    dt = np.broadcast_to(np.asarray(dt, dtype=float), (s.shape[0],)).astype(float)
+    r0v, v0v = s[:, :3], s[:, 3:]
+    r0 = np.linalg.norm(r0v, axis=1)
+    if np.any(r0 <= 0) or not np.all(np.isfinite(s)):
+        raise CistrackError("kepler_propagate: states must be finite with nonzero position")
+    rdotv = np.sum(r0v * v0v, axis=1)
+    alpha = 2.0 / r0 - np.sum(v0v * v0v, axis=1) / gm  # 1/a
+    return _UniversalProblem(r0v, v0v, r0, rdotv, alpha, _within_half_period(dt, alpha, gm), gm, np.sqrt(gm))
+
+
+def _anomaly_guess(p: _UniversalProblem) -> np.ndarray:
+    """Initial universal anomaly (N,): elliptic from the mean motion, hyperbolic Vallado's log
+    form, parabolic sqrt(gm) dt / r0."""
+    sqmu, alpha, dt, r0 = p.sqmu, p.alpha, p.dt, p.r0
+    chi = sqmu * alpha * dt
+    hyp = alpha < -1e-12
+    if np.any(hyp):
+        a = 1.0 / alpha[hyp]
+        sg = np.sign(dt[hyp])
+        num = -2.0 * p.gm * alpha[hyp] * dt[hyp]
+        den = p.rdotv[hyp] + sg * np.sqrt(-p.gm * a) * (1.0 - r0[hyp] * alpha[hyp])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            guess = sg * np.sqrt(-a) * np.log(np.abs(num / den))
+        chi[hyp] = np.where(np.isfinite(guess), guess, sqmu * dt[hyp] / r0[hyp])
+    par = np.abs(alpha) <= 1e-12
+    chi[par] = sqmu * dt[par] / r0[par]
+    return chi
+
+
+def _time_residual(p: _UniversalProblem, chi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Time-of-flight residual F(chi) (times sqrt(gm)) and its derivative F' = r, both (N,)."""
+    z = p.alpha * chi * chi
+    c, sz = _stumpff(z)
+    chi2 = chi * chi
+    f = (p.rdotv / p.sqmu) * chi2 * c + (1.0 - p.alpha * p.r0) * chi2 * chi * sz + p.r0 * chi - p.sqmu * p.dt
+    fp = (p.rdotv / p.sqmu) * chi * (1.0 - z * sz) + (1.0 - p.alpha * p.r0) * chi2 * c + p.r0
+    return f, fp
+
+
+def _bracket_fallback(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Where Newton leaves the bracket: its midpoint, or a step beyond its one finite end."""
+    both = np.isfinite(lo) & np.isfinite(hi)
+    return np.where(both, 0.5 * (lo + hi),
+                    np.where(np.isfinite(lo), lo + 2.0 * np.maximum(np.abs(lo), 1.0),
+                             hi - 2.0 * np.maximum(np.abs(hi), 1.0)))
+
+
+def _solve_anomaly(p: _UniversalProblem, tol: float, max_iter: int) -> np.ndarray:
+    """Universal anomaly (N,) solving F(chi) = 0. F increases monotonically (F' = r > 0): Newton's
+    method, safeguarded by the bracket of signs seen so far."""
+    chi = _anomaly_guess(p)
+    n = chi.shape[0]
+    lo = np.full(n, -np.inf)
+    hi = np.full(n, np.inf)
+    converged = np.zeros(n, dtype=bool)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for _ in range(max_iter):
+            f, fp = _time_residual(p, chi)
+            bad = ~np.isfinite(f)
+            hi = np.where((f > 0) | (bad & (chi > 0)), np.minimum(hi, chi), hi)
+            lo = np.where((f < 0) | (bad & (chi < 0)), np.maximum(lo, chi), lo)
+            new = chi - f / fp
+            outside = ~np.isfinite(new) | (new <= lo) | (new >= hi)
+            new = np.where(outside, _bracket_fallback(lo, hi), new)
+            step = new - chi
+            chi = new
+            converged = (np.abs(step) <= tol * np.maximum(1.0, np.abs(chi))) | (f == 0)
+            if np.all(converged):
+                break
+    if not np.all(converged):
+        raise CistrackError(f"kepler_propagate: universal-anomaly iteration did not converge for "
+                            f"{int(np.sum(~converged))} state(s)")
+    return chi
+
+
+def _lagrange_states(p: _UniversalProblem, chi: np.ndarray) -> np.ndarray:
+    """States (N, 6) after dt from the Lagrange coefficients f, g, fdot, gdot at anomaly ``chi``."""
+    z = p.alpha * chi * chi
+    c, sz = _stumpff(z)
+    chi2 = chi * chi
+    f = 1.0 - chi2 / p.r0 * c
+    g = p.dt - chi2 * chi / p.sqmu * sz
+    r = f[:, None] * p.r0v + g[:, None] * p.v0v
+    rn = np.linalg.norm(r, axis=1)
+    fdot = p.sqmu / (rn * p.r0) * (p.alpha * chi2 * chi * sz - chi)
+    gdot = 1.0 - chi2 / rn * c
+    v = fdot[:, None] * p.r0v + gdot[:, None] * p.v0v
+    return np.concatenate([r, v], axis=1)
+
+
 def kepler_propagate(states: np.ndarray, dt, gm: float, *, tol: float = 1e-14,
                      max_iter: int = 100) -> np.ndarray:
     """Closed-form Kepler propagation by universal variables.
@@ -87,6 +207,10 @@ def kepler_propagate(states: np.ndarray, dt, gm: float, *, tol: float = 1e-14,
         Time of flight, same time unit as gm's (may be negative).
     gm : float
         Gravitational parameter in the states' units (LU^3/TU^2 for nondimensional states).
+    tol : float
+        Newton stops when the anomaly's step is below tol x max(1, |chi|).
+    max_iter : int
+        Newton iterations at most.
 
     Returns
     -------
@@ -95,78 +219,8 @@ def kepler_propagate(states: np.ndarray, dt, gm: float, *, tol: float = 1e-14,
     """
     s = np.asarray(states, dtype=float)
     one = s.ndim == 1
-    s = s.reshape(-1, 6)
-    n = s.shape[0]
-    dt = np.broadcast_to(np.asarray(dt, dtype=float), (n,)).astype(float)
-    r0v, v0v = s[:, :3], s[:, 3:]
-    r0 = np.linalg.norm(r0v, axis=1)
-    if np.any(r0 <= 0) or not np.all(np.isfinite(s)):
-        raise CistrackError("kepler_propagate: states must be finite with nonzero position")
-    sqmu = np.sqrt(gm)
-    rdotv = np.sum(r0v * v0v, axis=1)
-    alpha = 2.0 / r0 - np.sum(v0v * v0v, axis=1) / gm  # 1/a
-    # Whole revolutions of an ellipse change nothing: keep |dt| below half a period.
-    ell = alpha > 1e-12
-    period = np.full(n, np.inf)
-    period[ell] = 2.0 * np.pi / np.sqrt(gm * alpha[ell] ** 3)
-    dt = dt.copy()
-    dt[ell] = dt[ell] - np.round(dt[ell] / period[ell]) * period[ell]
-    # Initial guess of the universal anomaly (elliptic: mean motion; hyperbolic: Vallado's log form).
-    chi = sqmu * alpha * dt
-    hyp = alpha < -1e-12
-    if np.any(hyp):
-        a = 1.0 / alpha[hyp]
-        sg = np.sign(dt[hyp])
-        num = -2.0 * gm * alpha[hyp] * dt[hyp]
-        den = rdotv[hyp] + sg * np.sqrt(-gm * a) * (1.0 - r0[hyp] * alpha[hyp])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            guess = sg * np.sqrt(-a) * np.log(np.abs(num / den))
-        chi[hyp] = np.where(np.isfinite(guess), guess, sqmu * dt[hyp] / r0[hyp])
-    par = np.abs(alpha) <= 1e-12
-    chi[par] = sqmu * dt[par] / r0[par]
-    # F(chi) (time-of-flight residual) increases monotonically (F' = r > 0): Newton's method,
-    # safeguarded by the bracket of signs seen so far.
-    lo = np.full(n, -np.inf)
-    hi = np.full(n, np.inf)
-    converged = np.zeros(n, dtype=bool)
-    with np.errstate(over="ignore", invalid="ignore"):
-        for _ in range(max_iter):
-            z = alpha * chi * chi
-            c, sz = _stumpff(z)
-            chi2 = chi * chi
-            f = (rdotv / sqmu) * chi2 * c + (1.0 - alpha * r0) * chi2 * chi * sz + r0 * chi - sqmu * dt
-            fp = (rdotv / sqmu) * chi * (1.0 - z * sz) + (1.0 - alpha * r0) * chi2 * c + r0
-            bad = ~np.isfinite(f)
-            above = (f > 0) | (bad & (chi > 0))
-            below = (f < 0) | (bad & (chi < 0))
-            hi = np.where(above, np.minimum(hi, chi), hi)
-            lo = np.where(below, np.maximum(lo, chi), lo)
-            new = chi - f / fp
-            outside = ~np.isfinite(new) | (new <= lo) | (new >= hi)
-            both = np.isfinite(lo) & np.isfinite(hi)
-            fallback = np.where(both, 0.5 * (lo + hi),
-                                np.where(np.isfinite(lo), lo + 2.0 * np.maximum(np.abs(lo), 1.0),
-                                         hi - 2.0 * np.maximum(np.abs(hi), 1.0)))
-            new = np.where(outside, fallback, new)
-            step = new - chi
-            chi = new
-            converged = (np.abs(step) <= tol * np.maximum(1.0, np.abs(chi))) | (f == 0)
-            if np.all(converged):
-                break
-    if not np.all(converged):
-        raise CistrackError(f"kepler_propagate: universal-anomaly iteration did not converge for "
-                            f"{int(np.sum(~converged))} state(s)")
-    z = alpha * chi * chi
-    c, sz = _stumpff(z)
-    chi2 = chi * chi
-    f = 1.0 - chi2 / r0 * c
-    g = dt - chi2 * chi / sqmu * sz
-    r = f[:, None] * r0v + g[:, None] * v0v
-    rn = np.linalg.norm(r, axis=1)
-    fdot = sqmu / (rn * r0) * (alpha * chi2 * chi * sz - chi)
-    gdot = 1.0 - chi2 / rn * c
-    v = fdot[:, None] * r0v + gdot[:, None] * v0v
-    out = np.concatenate([r, v], axis=1)
+    p = _universal_problem(s.reshape(-1, 6), dt, gm)
+    out = _lagrange_states(p, _solve_anomaly(p, tol, max_iter))
     return out[0] if one else out
 
 
