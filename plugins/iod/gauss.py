@@ -81,6 +81,87 @@ def _real_positive_root(a: np.ndarray, b: np.ndarray, c: np.ndarray, rho2_of) ->
     return np.where(np.isfinite(best), best, np.nan)
 
 
+@dataclass(frozen=True)
+class _Intervals:
+    """Time intervals of Gauss's method: tau1 = t1 - t2, tau3 = t3 - t2, tau = t3 - t1."""
+
+    tau1: float
+    tau3: float
+    tau: float
+
+
+def _intervals(times) -> _Intervals:
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if t.shape != (3,) or not (t[0] < t[1] < t[2]):
+        raise IODError(f"Gauss's method needs three strictly increasing times, got {t}")
+    tau1, tau3 = t[0] - t[1], t[2] - t[1]
+    return _Intervals(tau1, tau3, tau3 - tau1)
+
+
+def _observer_and_los(observer, los) -> tuple[np.ndarray, np.ndarray]:
+    """Observer positions and lines of sight as broadcast (N, 3, 3) stacks."""
+    R = np.asarray(observer, dtype=float)
+    L = np.asarray(los, dtype=float)
+    if R.ndim == 2:
+        R = R[None]
+    if L.ndim == 2:
+        L = L[None]
+    R, L = np.broadcast_arrays(R, L)
+    return R, L
+
+
+def _scalar_triples(R: np.ndarray, L: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """D0 = l1 . (l2 x l3) (N,) and D[i, j] = R_i . p_j (N, 3, 3), p = (l2 x l3, l1 x l3, l1 x l2)."""
+    l1, l2, l3 = L[:, 0], L[:, 1], L[:, 2]
+    p1 = np.cross(l2, l3)
+    p2 = np.cross(l1, l3)
+    p3 = np.cross(l1, l2)
+    d0 = np.einsum("ni,ni->n", l1, p1)
+    p = np.stack([p1, p2, p3], axis=1)                       # (N, 3, 3): p_j rows
+    return d0, np.einsum("nik,njk->nij", R, p)               # D[i, j] = R_i . p_j
+
+
+def _central_radius(A, B, E, R2sq, mu: float) -> np.ndarray:
+    """r2 (N,): the largest positive real root of x^8 + a x^6 + b x^3 + c = 0 with a positive
+    middle slant range A + mu B / x^3; NaN where none."""
+    a = -(A ** 2 + 2.0 * A * E + R2sq)
+    b = -2.0 * mu * B * (A + E)
+    c = -(mu * B) ** 2
+    finite = np.isfinite(a) & np.isfinite(b) & np.isfinite(c)
+    x = np.full(a.shape, np.nan)
+    if finite.any():
+        x[finite] = _real_positive_root(
+            a[finite], b[finite], c[finite],
+            lambda r: A[finite][:, None] + mu * B[finite][:, None] / r ** 3)
+    return x
+
+
+def _outer_ranges(D: np.ndarray, d0: np.ndarray, x3: np.ndarray, mu: float, iv: _Intervals):
+    """Slant ranges rho1, rho3 (N,) given r2^3 = ``x3``."""
+    tau1, tau3, tau = iv.tau1, iv.tau3, iv.tau
+    rho1 = ((6.0 * (D[:, 2, 0] * tau1 / tau3 + D[:, 1, 0] * tau / tau3) * x3
+             + mu * D[:, 2, 0] * (tau ** 2 - tau1 ** 2) * tau1 / tau3)
+            / (6.0 * x3 + mu * (tau ** 2 - tau3 ** 2)) - D[:, 0, 0]) / d0
+    rho3 = ((6.0 * (D[:, 0, 2] * tau3 / tau1 - D[:, 1, 2] * tau / tau1) * x3
+             + mu * D[:, 0, 2] * (tau ** 2 - tau3 ** 2) * tau3 / tau1)
+            / (6.0 * x3 + mu * (tau ** 2 - tau1 ** 2)) - D[:, 2, 2]) / d0
+    return rho1, rho3
+
+
+def _velocities(r: np.ndarray, x3: np.ndarray, mu: float, iv: _Intervals) -> tuple[np.ndarray, np.ndarray]:
+    """v2 (N, 3) from the truncated f and g of the outer positions, and v3 (N, 3) carried from
+    t2 by the derivatives of the same series."""
+    tau1, tau3 = iv.tau1, iv.tau3
+    f1 = 1.0 - 0.5 * mu * tau1 ** 2 / x3
+    f3 = 1.0 - 0.5 * mu * tau3 ** 2 / x3
+    g1 = tau1 - mu * tau1 ** 3 / (6.0 * x3)
+    g3 = tau3 - mu * tau3 ** 3 / (6.0 * x3)
+    v2 = (-f3[:, None] * r[:, 0] + f1[:, None] * r[:, 2]) / (f1 * g3 - f3 * g1)[:, None]
+    fd3 = -mu * tau3 / x3
+    gd3 = 1.0 - 0.5 * mu * tau3 ** 2 / x3
+    return v2, fd3[:, None] * r[:, 1] + gd3[:, None] * v2
+
+
 def gauss_angles_only(observer: np.ndarray, los: np.ndarray, times: np.ndarray,
                       mu: float) -> GaussSolution:
     """Gauss's method without iterative improvement, vectorised over samples.
@@ -101,60 +182,22 @@ def gauss_angles_only(observer: np.ndarray, los: np.ndarray, times: np.ndarray,
     -------
     GaussSolution (r, v2, v3 in the input units; invalid samples are NaN).
     """
-    R = np.asarray(observer, dtype=float)
-    L = np.asarray(los, dtype=float)
-    if R.ndim == 2:
-        R = R[None]
-    if L.ndim == 2:
-        L = L[None]
-    R, L = np.broadcast_arrays(R, L)
-    t = np.asarray(times, dtype=float).reshape(-1)
-    if t.shape != (3,) or not (t[0] < t[1] < t[2]):
-        raise IODError(f"Gauss's method needs three strictly increasing times, got {t}")
-    tau1, tau3 = t[0] - t[1], t[2] - t[1]
-    tau = tau3 - tau1
-    l1, l2, l3 = L[:, 0], L[:, 1], L[:, 2]
-    p1 = np.cross(l2, l3)
-    p2 = np.cross(l1, l3)
-    p3 = np.cross(l1, l2)
-    d0 = np.einsum("ni,ni->n", l1, p1)
-    p = np.stack([p1, p2, p3], axis=1)                       # (N, 3, 3): p_j rows
-    D = np.einsum("nik,njk->nij", R, p)                      # D[i, j] = R_i . p_j
-    E = np.einsum("ni,ni->n", R[:, 1], l2)
+    R, L = _observer_and_los(observer, los)
+    iv = _intervals(times)
+    tau1, tau3, tau = iv.tau1, iv.tau3, iv.tau
+    d0, D = _scalar_triples(R, L)
+    E = np.einsum("ni,ni->n", R[:, 1], L[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         A = (-D[:, 0, 1] * tau3 / tau + D[:, 1, 1] + D[:, 2, 1] * tau1 / tau) / d0
         B = (D[:, 0, 1] * (tau3 ** 2 - tau ** 2) * tau3 / tau
              + D[:, 2, 1] * (tau ** 2 - tau1 ** 2) * tau1 / tau) / (6.0 * d0)
-    R2sq = np.einsum("ni,ni->n", R[:, 1], R[:, 1])
-    a = -(A ** 2 + 2.0 * A * E + R2sq)
-    b = -2.0 * mu * B * (A + E)
-    c = -(mu * B) ** 2
-    finite = np.isfinite(a) & np.isfinite(b) & np.isfinite(c)
-    x = np.full(a.shape, np.nan)
-    if finite.any():
-        x[finite] = _real_positive_root(
-            a[finite], b[finite], c[finite],
-            lambda r: A[finite][:, None] + mu * B[finite][:, None] / r ** 3)
+    x = _central_radius(A, B, E, np.einsum("ni,ni->n", R[:, 1], R[:, 1]), mu)
     x3 = x ** 3
     with np.errstate(divide="ignore", invalid="ignore"):
-        rho2 = A + mu * B / x3
-        rho1 = ((6.0 * (D[:, 2, 0] * tau1 / tau3 + D[:, 1, 0] * tau / tau3) * x3
-                 + mu * D[:, 2, 0] * (tau ** 2 - tau1 ** 2) * tau1 / tau3)
-                / (6.0 * x3 + mu * (tau ** 2 - tau3 ** 2)) - D[:, 0, 0]) / d0
-        rho3 = ((6.0 * (D[:, 0, 2] * tau3 / tau1 - D[:, 1, 2] * tau / tau1) * x3
-                 + mu * D[:, 0, 2] * (tau ** 2 - tau3 ** 2) * tau3 / tau1)
-                / (6.0 * x3 + mu * (tau ** 2 - tau1 ** 2)) - D[:, 2, 2]) / d0
-        rho = np.stack([rho1, rho2, rho3], axis=1)
+        rho1, rho3 = _outer_ranges(D, d0, x3, mu, iv)
+        rho = np.stack([rho1, A + mu * B / x3, rho3], axis=1)
         r = R + rho[..., None] * L
-        f1 = 1.0 - 0.5 * mu * tau1 ** 2 / x3
-        f3 = 1.0 - 0.5 * mu * tau3 ** 2 / x3
-        g1 = tau1 - mu * tau1 ** 3 / (6.0 * x3)
-        g3 = tau3 - mu * tau3 ** 3 / (6.0 * x3)
-        v2 = (-f3[:, None] * r[:, 0] + f1[:, None] * r[:, 2]) / (f1 * g3 - f3 * g1)[:, None]
-        # derivatives of the same truncated series carry v2 to t3
-        fd3 = -mu * tau3 / x3
-        gd3 = 1.0 - 0.5 * mu * tau3 ** 2 / x3
-        v3 = fd3[:, None] * r[:, 1] + gd3[:, None] * v2
+        v2, v3 = _velocities(r, x3, mu, iv)
     valid = (np.isfinite(x) & np.all(rho > 0, axis=1) & np.all(np.isfinite(v2), axis=1))
     nan = ~valid
     r[nan] = np.nan

@@ -5,6 +5,8 @@ Gauss's method (:mod:`.gauss`) reuses the same fit window.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from cistrack.errors import IODError
@@ -16,7 +18,7 @@ from .first_pass import first_pass_length, select_fit_indices
 from .pass_screen import screen_pass
 from .polyfit import evaluation_weights
 
-__all__ = ["FitInputs", "angle_names", "prepare_fit", "kinematic_states"]
+__all__ = ["FitInputs", "FitWindow", "angle_names", "prepare_fit", "kinematic_states"]
 
 
 class FitInputs:
@@ -68,36 +70,64 @@ def angle_names(sensor: Sensor) -> tuple[str, str]:
     return (names[0], names[1]) if len(names) >= 2 else ("azimuth", "elevation")
 
 
-def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, order: int, pass_gap_hours: float,
-                fit_fraction: float, min_fit: int, max_fit: int, need_range: bool,
-                who: str = "kinematic IOD") -> FitInputs:
-    """Select and validate the fitted measurements (raises IODError before any sampling)."""
+@dataclass(frozen=True)
+class FitWindow:
+    """How the fitted measurements are chosen (:func:`.first_pass.select_fit_indices`).
+
+    order : polynomial order of the fit; pass_gap_hours : a gap this long (hours) ends the first
+    pass; fit_fraction : fraction of the first pass fitted; min_fit, max_fit : bounds on the
+    number of fitted measurements.
+    """
+
+    order: int
+    pass_gap_hours: float
+    fit_fraction: float
+    min_fit: int
+    max_fit: int
+
+    def select(self, times: np.ndarray) -> np.ndarray:
+        """Indices into ``times`` (TU) of the fitted measurements."""
+        return select_fit_indices(times, pass_gap_hours=self.pass_gap_hours, fit_fraction=self.fit_fraction,
+                                  min_fit=self.min_fit, max_fit=self.max_fit, order=self.order)
+
+
+def _measured_ranges(measurements: MeasurementSet, idx: np.ndarray, who: str) -> np.ndarray:
+    """The measured ranges (K,) LU at ``idx``; raises IODError when there are none or one is <= 0."""
+    if "range" not in measurements.names:
+        raise IODError(f"{who}: the noisy-range model needs a measured 'range' component, "
+                       f"but the measurements only have {', '.join(measurements.names)}; let "
+                       f"the sensor measure range for IOD or use 'uniform-range'")
+    ranges = measurements.values[idx][:, measurements.names.index("range")]
+    if np.any(ranges <= 0):
+        raise IODError(f"{who}: measured ranges must be > 0")
+    return ranges
+
+
+def prepare_fit(measurements: MeasurementSet, sensor: Sensor, *, need_range: bool,
+                who: str = "kinematic IOD", **window) -> FitInputs:
+    """Select and validate the fitted measurements (raises IODError before any sampling).
+
+    ``window``: the fields of :class:`FitWindow` by name (order, pass_gap_hours, fit_fraction,
+    min_fit, max_fit). ``need_range``: also take the measured ranges (LU).
+    """
     if not isinstance(measurements, MeasurementSet):
         raise IODError(f"{who}: expected a MeasurementSet, got {type(measurements).__name__}")
-    select = dict(pass_gap_hours=pass_gap_hours, fit_fraction=fit_fraction, min_fit=min_fit, max_fit=max_fit,
-                  order=order)
-    idx = select_fit_indices(measurements.times, **select)
+    win = FitWindow(**window)
+    idx = win.select(measurements.times)
     first, second = angle_names(sensor)
     ia = _column(measurements, first, who)
     ie = _column(measurements, second, who)
-    screened = _screened(measurements, sensor, ia, ie, pass_gap_hours, order, max(min_fit, order + 1))
+    screened = _screened(measurements, sensor, ia, ie, win.pass_gap_hours, win.order,
+                         max(win.min_fit, win.order + 1))
     if screened:  # the fit window chosen again without them (the same rule, the remaining times)
         rest = np.setdiff1d(np.arange(len(measurements)), [i for i, _ in screened])
-        idx = rest[select_fit_indices(measurements.times[rest], **select)]
+        idx = rest[win.select(measurements.times[rest])]
     times = measurements.times[idx]
     angles = measurements.values[idx][:, [ia, ie]]
     sig = measurements.sigmas[idx][:, [ia, ie]]
-    ranges = None
-    if need_range:
-        if "range" not in measurements.names:
-            raise IODError(f"{who}: the noisy-range model needs a measured 'range' component, "
-                           f"but the measurements only have {', '.join(measurements.names)}; let "
-                           f"the sensor measure range for IOD or use 'uniform-range'")
-        ranges = measurements.values[idx][:, measurements.names.index("range")]
-        if np.any(ranges <= 0):
-            raise IODError(f"{who}: measured ranges must be > 0")
+    ranges = _measured_ranges(measurements, idx, who) if need_range else None
     observer = np.asarray(sensor.observer_position(times), dtype=float).reshape(len(idx), 3)
-    weights = evaluation_weights(times, order, float(times[-1]))
+    weights = evaluation_weights(times, win.order, float(times[-1]))
     fit = FitInputs(idx, times, angles, sig, ranges, observer, weights)
     fit.neu_to_synodic = _neu_to_synodic(sensor, times, angles)
     fit.screened = screened
