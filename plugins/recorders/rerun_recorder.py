@@ -391,15 +391,39 @@ class RerunRecorder(Component):
         self._set_time(rec, step.index, step.t)
         belief = step.belief
         mix = belief.mixture
-        view = self._view
         t = float(step.t)
         cloud_km = self._log_cloud(rec, belief.samples.states, belief.samples.labels, mix, t)
-        if not view.is_synodic:
-            moon = run.dynamics.primary("Moon")
-            if moon is not None:
-                rec.log("world/moon", rr.Ellipsoids3D(
-                    centers=view.positions(moon.position_at(t), t) * LU_KM, radii=[MOON_RADIUS_KM],
-                    colors=[(170, 170, 170)], labels=["Moon"], fill_mode=rr.components.FillMode.Solid))
+        self._log_moon(rec, run, t)
+        self._log_components(rec, mix, t)
+        frame = self._log_estimate(rec, mix, cloud_km, t)
+        if step.truth is not None:
+            rec.log("world/truth/position", rr.Points3D(self._view.states(step.truth, t)[:, :3] * LU_KM,
+                                                        colors=[(255, 255, 255)],
+                                                        radii=rr.Radius.ui_points(6.0)))
+        obs = np.asarray(run.sensor.observer_position(float(step.t)), dtype=float).reshape(3)
+        rec.log("world/observer", rr.Points3D(self._view.positions(obs, t) * LU_KM, colors=[(0, 230, 120)],
+                                              radii=rr.Radius.ui_points(5.0)))
+        self._log_line_of_sight(rec, run.sensor, step, obs, frame)
+        log_observers(rec, run, step, self._view, np.asarray(mix.mean[:3], dtype=float))  # every observer, its cones
+        if step.metrics:  # one metrics row per results-table row (priors of updates have none)
+            _log_numbers(rec, "metrics", step.metrics)
+            _log_numbers(rec, "diagnostics", step.diagnostics)
+            rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
+            self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
+
+    def _log_moon(self, rec: rr.RecordingStream, run, t: float) -> None:
+        """The Moon as a solid sphere (km) in views where it moves (not the synodic one)."""
+        if self._view.is_synodic:
+            return
+        moon = run.dynamics.primary("Moon")
+        if moon is not None:
+            rec.log("world/moon", rr.Ellipsoids3D(
+                centers=self._view.positions(moon.position_at(t), t) * LU_KM, radii=[MOON_RADIUS_KM],
+                colors=[(170, 170, 170)], labels=["Moon"], fill_mode=rr.components.FillMode.Solid))
+
+    def _log_components(self, rec: rr.RecordingStream, mix, t: float) -> None:
+        """Each mixture component's position ellipsoid (km, ``ellipsoid_sigma``) with its weight."""
+        view = self._view
         means = view.states(mix.means, t)
         centers, half, quat = position_ellipsoids(means, view.covariances(mix.means, mix.covariances, t),
                                                   self.ellipsoid_sigma)
@@ -408,6 +432,11 @@ class RerunRecorder(Component):
             centers=centers, half_sizes=half, quaternions=quat, class_ids=np.arange(m, dtype=np.uint16),
             labels=[f"w={w:.3f}" for w in mix.weights], show_labels=False,
             fill_mode=rr.components.FillMode.MajorWireframe))
+
+    def _log_estimate(self, rec: rr.RecordingStream, mix, cloud_km: np.ndarray, t: float) -> tuple:
+        """The mixture mean (km) and its local frame; returns (mean (3,) km, axes, units) of
+        :func:`log_estimate_frame`."""
+        view = self._view
         mean_state = view.states(mix.mean, t)[0]
         mean = mean_state[:3] * LU_KM
         cov = view.covariances(mix.mean[None], mix.covariance[None], t)[0][:3, :3] * LU_KM**2
@@ -415,38 +444,31 @@ class RerunRecorder(Component):
         axes, units = log_estimate_frame(rec, mean, mean_state[3:], cloud_km, cov, earth)
         rec.log("world/estimate", rr.Points3D(mean[None], colors=[(255, 60, 60)],
                                               radii=rr.Radius.ui_points(5.0)))
-        truth = step.truth
-        if truth is not None:
-            rec.log("world/truth/position", rr.Points3D(view.states(truth, t)[:, :3] * LU_KM,
-                                                        colors=[(255, 255, 255)],
-                                                        radii=rr.Radius.ui_points(6.0)))
-        sensor = run.sensor
-        obs = np.asarray(sensor.observer_position(float(step.t)), dtype=float).reshape(3)
-        rec.log("world/observer", rr.Points3D(view.positions(obs, t) * LU_KM, colors=[(0, 230, 120)],
-                                              radii=rr.Radius.ui_points(5.0)))
-        if step.measurement is not None:
-            meas = step.measurement.angles_only()
-            los = np.asarray(sensor.line_of_sight(np.asarray(meas.z, dtype=float)[None, :2],
-                                                  float(step.t)), dtype=float).reshape(3)
-            reach = np.linalg.norm(mix.mean[:3] - obs)
-            if truth is not None:
-                reach = max(reach, float(np.linalg.norm(np.asarray(truth)[:3] - obs)))
-            end = obs + 1.2 * reach * los
-            seg = view.positions(np.stack([obs, end]), t) * LU_KM
-            rec.log("world/line_of_sight", rr.LineStrips3D([seg], colors=[(0, 230, 120)],
-                                                           radii=rr.Radius.ui_points(1.0)))
-            rec.log("world/estimate_frame/line_of_sight", rr.LineStrips3D(
-                [line_through_frame(seg[0], seg[1], mean, axes, units)], colors=[(0, 230, 120)],
-                radii=rr.Radius.ui_points(1.0)))
-        else:
+        return mean, axes, units
+
+    def _log_line_of_sight(self, rec: rr.RecordingStream, sensor, step, obs: np.ndarray, frame: tuple) -> None:
+        """The measured line of sight from the observer ``obs`` (3,) LU, 1.2 times as long as the
+        farther of the estimate and the truth, in the world and in the estimate's frame; cleared
+        at steps without a measurement."""
+        if step.measurement is None:
             rec.log("world/line_of_sight", rr.Clear(recursive=False))
             rec.log("world/estimate_frame/line_of_sight", rr.Clear(recursive=False))
-        log_observers(rec, run, step, view, np.asarray(mix.mean[:3], dtype=float))  # every observer, its cones
-        if step.metrics:  # one metrics row per results-table row (priors of updates have none)
-            _log_numbers(rec, "metrics", step.metrics)
-            _log_numbers(rec, "diagnostics", step.diagnostics)
-            rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
-            self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
+            return
+        t = float(step.t)
+        meas = step.measurement.angles_only()
+        los = np.asarray(sensor.line_of_sight(np.asarray(meas.z, dtype=float)[None, :2],
+                                              float(step.t)), dtype=float).reshape(3)
+        reach = np.linalg.norm(step.belief.mixture.mean[:3] - obs)
+        if step.truth is not None:
+            reach = max(reach, float(np.linalg.norm(np.asarray(step.truth)[:3] - obs)))
+        end = obs + 1.2 * reach * los
+        seg = self._view.positions(np.stack([obs, end]), t) * LU_KM
+        rec.log("world/line_of_sight", rr.LineStrips3D([seg], colors=[(0, 230, 120)],
+                                                       radii=rr.Radius.ui_points(1.0)))
+        mean, axes, units = frame
+        rec.log("world/estimate_frame/line_of_sight", rr.LineStrips3D(
+            [line_through_frame(seg[0], seg[1], mean, axes, units)], colors=[(0, 230, 120)],
+            radii=rr.Radius.ui_points(1.0)))
 
 
 def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:

@@ -39,7 +39,6 @@ EXCEPTIONS: dict[str, str] = {
     "core/least_squares/differential_correction.py::fit_orbit": TEMPORARY,
     "core/studies/study.py::plan_runs": TEMPORARY,
     "core/studies/study.py::run_study": TEMPORARY,
-    "plugins/recorders/rerun_recorder.py::RerunRecorder._log_step": TEMPORARY,
     "plugins/sensors/phased_schedule.py::_Phase.__init__": TEMPORARY,
     "plugins/sensors/real_telescope.py::RealTelescope.__init__": TEMPORARY,
     "plugins/sensors/space_telescope.py::SpaceTelescope.__init__": TEMPORARY,
