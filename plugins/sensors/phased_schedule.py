@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -25,16 +26,24 @@ _ALLOWED_KEYS = {"rule", "start_hours", "start_days", "end_hours", "end_days", "
 _EPS = 1e-12
 
 
+@dataclass
 class _Phase:
-    """A validated phase in TU (internal). ``names`` are the parameters that set its spacing
-    and its count, for messages."""
+    """A validated phase (internal): ``rule``; window ``start``/``end`` TU from the origin; passes
+    ``from_pass`` to ``to_pass`` (exclusive; None: all); spacing ``dt_min``..``dt_max`` TU;
+    ``align`` ("pass" or "clock"); ``count`` for random-consecutive. ``names`` are the parameters
+    that set its spacing and its count, for messages; ``values`` their given values."""
 
-    def __init__(self, rule, start, end, from_pass, to_pass, dt_min, dt_max, align, count):
-        self.rule, self.start, self.end = rule, start, end
-        self.from_pass, self.to_pass = from_pass, to_pass
-        self.dt_min, self.dt_max, self.align, self.count = dt_min, dt_max, align, count
-        self.names: tuple[str, str] = ("interval_minutes", "count")
-        self.values: tuple[Any, Any] = (None, None)
+    rule: str
+    start: float
+    end: float
+    from_pass: int
+    to_pass: int | None
+    dt_min: float
+    dt_max: float
+    align: str
+    count: int
+    names: tuple[str, str] = ("interval_minutes", "count")
+    values: tuple[Any, Any] = (None, None)
 
     def spacings(self, n: int, rng: np.random.Generator) -> np.ndarray:
         if self.dt_max > self.dt_min:

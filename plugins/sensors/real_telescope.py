@@ -110,12 +110,29 @@ class RealTelescope(Sensor):
         self.range_alpha = check_positive(self, "range_alpha", range_alpha)
         self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
                                               -90.0, 90.0, hi_open=True)
+        self._set_epoch(epoch)
+        self._set_corrections(light_time, annual_aberration, diurnal_aberration, refraction, polar_motion, ut1)
+        self.pressure_hpa = check_range(self, "pressure_hpa", pressure_hpa, -1.0, 2000.0)
+        self.temperature_c = check_range(self, "temperature_c", temperature_c, -150.0, 200.0)
+        self.relative_humidity = check_range(self, "relative_humidity", relative_humidity, 0.0, 1.0)
+        self.wavelength_um = check_range(self, "wavelength_um", wavelength_um, 0.1, 1e6, lo_open=True)
+        self._derive()
+        self.visibility, self._rules = visibility, sky_rules(self, visibility)
+        self._build()
+
+    def _set_epoch(self, epoch: str) -> None:
+        """``epoch`` (ISO-8601 UTC, within DE421) as given and parsed (``_epoch``)."""
         try:
             self._epoch = parse_utc(epoch)
         except (ValueError, TypeError):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         check_de421_epoch(self, epoch, self._epoch.year)  # the Moon and Sun come from DE421
         self.epoch = epoch
+
+    def _set_corrections(self, light_time, annual_aberration, diurnal_aberration, refraction, polar_motion,
+                         ut1) -> None:
+        """The correction switches; aberration defaults to on for "azel", and "radec" refuses
+        aberration and refraction."""
         azel = self.measurement == "azel"
         self.light_time = self._bool("light_time", light_time)
         self.annual_aberration = self._bool("annual_aberration",
@@ -131,14 +148,13 @@ class RealTelescope(Sensor):
                     self._fail(name, True, "must be false for measurement = 'radec': astrometric "
                                            "RA/Dec has no aberration or refraction (use 'azel' "
                                            "for apparent places)")
-        self.pressure_hpa = check_range(self, "pressure_hpa", pressure_hpa, -1.0, 2000.0)
-        self.temperature_c = check_range(self, "temperature_c", temperature_c, -150.0, 200.0)
-        self.relative_humidity = check_range(self, "relative_humidity", relative_humidity, 0.0, 1.0)
-        self.wavelength_um = check_range(self, "wavelength_um", wavelength_um, 0.1, 1e6, lo_open=True)
 
+    def _derive(self) -> None:
+        """What the validated settings imply: component names, the SkyCorrections, the
+        line-of-sight tolerance (LU), the site and its NEU basis, sigma and mask in rad."""
         base = _NAMES[self.measurement]
-        self.names = base + ("range",) if measure_range else base
-        self.angular = (True, False, False) if measure_range else (True, False)
+        self.names = base + ("range",) if self.measure_range else base
+        self.angular = (True, False, False) if self.measure_range else (True, False)
         self.corrections = SkyCorrections(
             light_time=self.light_time, annual_aberration=self.annual_aberration,
             diurnal_aberration=self.diurnal_aberration, refraction=self.refraction,
@@ -152,8 +168,6 @@ class RealTelescope(Sensor):
         self._neu = neu_basis(self._site)
         self._sigma_rad = self.sigma_arcsec * ARCSEC_RAD
         self._mask_rad = np.radians(self.elevation_mask_deg)
-        self.visibility, self._rules = visibility, sky_rules(self, visibility)
-        self._build()
 
     def _bool(self, name: str, value) -> bool:
         if not isinstance(value, (bool, np.bool_)):

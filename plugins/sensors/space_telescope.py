@@ -94,6 +94,24 @@ class SpaceTelescope(Sensor):
                  first_window_hours: float = 1.0) -> None:
         self.phase = check_range(self, "phase", phase, 0.0, 1.0, hi_open=True)
         self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self._set_measured(measure_range, measure_range_rate, light_time, range_alpha, range_rate_sigma_kms)
+        for name, value in (("sun_exclusion_deg", sun_exclusion_deg), ("earth_exclusion_deg", earth_exclusion_deg),
+                            ("moon_exclusion_deg", moon_exclusion_deg)):
+            setattr(self, name, check_range(self, name, value, -1.0, 180.0))
+        self._set_photometry(diameter_m, albedo, limiting_magnitude, max_range_km)
+        self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
+        self._set_tasking(revisit_hours, window_hours, first_window_hours)
+        self._set_epoch(epoch)
+        self.dynamics = self._checked_dynamics(dynamics)
+        self.orbit, self.state_km, self.state_epoch = orbit, state_km, state_epoch
+        x0, t0 = self._start()
+        self._orbit = ObserverOrbit(self.dynamics, x0, t0, "space-telescope")
+        self._sky = sky_for(self.dynamics, self._epoch, self.moon_phase_deg)
+        self._set_names()
+
+    def _set_measured(self, measure_range, measure_range_rate, light_time, range_alpha,
+                      range_rate_sigma_kms) -> None:
+        """The measured components' switches and the range (fraction) and range-rate (km/s) noise."""
         for name, value in (("measure_range", measure_range), ("measure_range_rate", measure_range_rate),
                             ("light_time", light_time)):
             if not isinstance(value, (bool, np.bool_)):
@@ -102,26 +120,35 @@ class SpaceTelescope(Sensor):
         self.light_time = bool(light_time)
         self.range_alpha = check_positive(self, "range_alpha", range_alpha)
         self.range_rate_sigma_kms = check_positive(self, "range_rate_sigma_kms", range_rate_sigma_kms)
-        for name, value in (("sun_exclusion_deg", sun_exclusion_deg), ("earth_exclusion_deg", earth_exclusion_deg),
-                            ("moon_exclusion_deg", moon_exclusion_deg)):
-            setattr(self, name, check_range(self, name, value, -1.0, 180.0))
+
+    def _set_photometry(self, diameter_m, albedo, limiting_magnitude, max_range_km) -> None:
+        """The detection model's settings, and the sky rules with the exclusion angles set before."""
         self.diameter_m = check_positive(self, "diameter_m", diameter_m)
         self.albedo = check_range(self, "albedo", albedo, 0.0, 1.0, lo_open=True)
         self.limiting_magnitude = check_range(self, "limiting_magnitude", limiting_magnitude, -30.0, 40.0)
         self.max_range_km = check_range(self, "max_range_km", max_range_km, -1.0, 1e9)
         self._rules = SkyRules(ExclusionRules(self.sun_exclusion_deg, self.earth_exclusion_deg, self.moon_exclusion_deg),
                                Photometry(self.diameter_m, self.albedo, self.limiting_magnitude, self.max_range_km))
-        self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)
+
+    def _set_tasking(self, revisit_hours, window_hours, first_window_hours) -> None:
+        """Revisit period, window length and first window opening, hours."""
         self.revisit_hours = check_range(self, "revisit_hours", revisit_hours, 0.0, 1e5)
         self.window_hours = check_positive(self, "window_hours", window_hours)
         self.first_window_hours = check_range(self, "first_window_hours", first_window_hours, 0.0, 1e5)
         if 0 < self.revisit_hours < self.window_hours:
             self._fail("window_hours", window_hours, f"must not exceed revisit_hours = {self.revisit_hours:g}")
+
+    def _set_epoch(self, epoch: str) -> None:
+        """``epoch`` (ISO-8601 UTC) as given and parsed (``_epoch``)."""
         try:
             self._epoch = parse_utc(epoch)
         except (ValueError, TypeError):
             self._fail("epoch", epoch, "must be an ISO-8601 UTC time such as '2026-01-01T00:00:00Z'")
         self.epoch = epoch
+
+    def _checked_dynamics(self, dynamics) -> Dynamics:
+        """The dynamics that moves the observer (None: the registered Earth-Moon CR3BP); its own
+        epoch, if it has one, must be the sensor's."""
         if dynamics is None:                    # outside a scenario: the registered Earth-Moon CR3BP
             from cistrack.api import default_registry
             dynamics = default_registry().create("dynamics", "cr3bp")
@@ -129,12 +156,11 @@ class SpaceTelescope(Sensor):
             self._fail("dynamics", dynamics, "must be a dynamics model (a scenario hands the run's own)")
         own = getattr(dynamics, "epoch", None)
         if isinstance(own, str) and parse_utc(own) != self._epoch:
-            self._fail("dynamics", dynamics, f"its epoch {own} must be the sensor's epoch {epoch}")
-        self.dynamics = dynamics
-        self.orbit, self.state_km, self.state_epoch = orbit, state_km, state_epoch
-        x0, t0 = self._start()
-        self._orbit = ObserverOrbit(dynamics, x0, t0, "space-telescope")
-        self._sky = sky_for(dynamics, self._epoch, self.moon_phase_deg)
+            self._fail("dynamics", dynamics, f"its epoch {own} must be the sensor's epoch {self.epoch}")
+        return dynamics
+
+    def _set_names(self) -> None:
+        """Component names and angular flags, the line-of-sight tolerance (LU) and sigma (rad)."""
         names = ["right_ascension", "declination"]
         names += ["range"] if self.measure_range else []
         names += ["range_rate"] if self.measure_range_rate else []
