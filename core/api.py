@@ -39,6 +39,9 @@ from cistrack.interfaces import (KINDS, Body, Clusterer, Dynamics, Exporter, Fil
                                  Propagation, RangePrior, Reader, ReferenceOrbit, Schedule, Sensor)
 from cistrack.interfaces.component import (Component, check_choice, check_int, check_nonnegative,
                                            check_positive, check_range)
+from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
+                                           PosteriorDraw, Reanchor)
+from cistrack.interfaces.preset import preset
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
 from cistrack.model.measurement import Measurement, MeasurementSet
 from cistrack.plugin.hookspecs import hookimpl
@@ -64,7 +67,9 @@ __all__ = [
     # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
     "Component", "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
     "Dynamics", "Body", "Propagation", "Sensor", "Schedule", "Pass", "IODMethod", "RangePrior", "Clusterer",
-    "Filter", "Reader", "Exporter", "ReferenceOrbit", "hookimpl", "CompiledDynamics",
+    "Filter", "Reader", "Exporter", "ReferenceOrbit", "hookimpl", "CompiledDynamics", "preset",
+    # the PGM's swappable steps (kinds pgm-prediction, pgm-update, pgm-draw, pgm-kernel, pgm-reanchor)
+    "ParticlePrediction", "ComponentUpdate", "PosteriorDraw", "KernelUpdate", "Reanchor", "ClusteredParticles",
     "Belief", "ParticleCloud", "GaussianMixture", "Measurement", "MeasurementSet",
     # errors
     "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError", "MeasurementError",

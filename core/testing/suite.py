@@ -13,6 +13,7 @@ from cistrack.testing.checks_dynamics import DYNAMICS_CHECKS
 from cistrack.testing.checks_filter import FILTER_CHECKS
 from cistrack.testing.checks_iod import IOD_CHECKS
 from cistrack.testing.checks_orbit import ORBIT_CHECKS
+from cistrack.testing.checks_pgm_steps import PGM_STEP_CHECKS
 from cistrack.testing.checks_params import PARAMETER_CHECKS, check_parameters_declared
 from cistrack.testing.checks_exporter import EXPORTER_CHECKS
 from cistrack.testing.checks_range_prior import RANGE_PRIOR_CHECKS
@@ -37,6 +38,7 @@ KIND_CHECKS: dict[str, list[tuple[str, Callable[[Any], None]]]] = {
     "reader": READER_CHECKS,
     "exporter": EXPORTER_CHECKS,
     "range-prior": RANGE_PRIOR_CHECKS,
+    **PGM_STEP_CHECKS,
 }
 """The kind-specific checks, run after the parameter checks (which every class-based kind gets)."""
 
