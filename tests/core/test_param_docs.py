@@ -79,7 +79,7 @@ def test_plugins_with_an_unknown_name_suggests_the_closest(capsys):
 
 
 def test_components_document_is_up_to_date():
-    """Regenerate with: python -m cistrack.plugin.param_docs > docs/components.md"""
+    """Regenerate with: python -m cistrack.plugin.components_doc > docs/components.md"""
     assert (ROOT / "docs" / "components.md").read_text() == components_markdown(REG)
 
 
