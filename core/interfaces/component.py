@@ -31,7 +31,7 @@ the process's start at 1,000,000 and 3,000,000 particles, 848 bytes per particle
 (``benchmarks/bench_memory.py --sizes 1000000 3000000 --cases run``, session 11, with the carried
 integration steps; 816 at 1,000,000 in session 9); rounded up by 10 %. The peak is in
 the PGM's first updates after the IOD, which draw ``reacquire_factor`` (4) x ``n_particles``
-particles (:mod:`cistrack.plugins.filters.reacquisition_particles`). The former 512 was too
+particles (:mod:`cistrack.plugins.filters.pgm.reacquisition_particles`). The former 512 was too
 low for that: the same run peaked 1,157 MiB above its start (1,214 bytes per particle) before
 issue 31's changes. The IOD fits its oversampled samples in chunks of fixed size
 (:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""

@@ -90,7 +90,7 @@ class Sensor(Component):
 
     def inertial_frame(self):
         """The Earth-centred inertial frame the sensor's synodic frame is placed in, as a
-        :class:`cistrack.results.inertial_frame.InertialFrame` (used to export estimates), or None when
+        :class:`cistrack.astro.inertial_frame.InertialFrame` (used to export estimates), or None when
         the sensor has no such placement."""
         return None
 

@@ -78,7 +78,7 @@ def main() -> int:
     ap.add_argument("--max-error-km", type=float, default=None,
                     help="also require the position error at the fit epoch to be at most this (km)")
     a = ap.parse_args()
-    from cistrack.fit.fit_export import _scenario, covariance_scale
+    from cistrack.fitting.fit_export import _scenario, covariance_scale
 
     if not (a.fit / "fit.json").is_file():
         raise SystemExit(f"check_fit: {a.fit}: no fit.json; give the directory of a 'cistrack fit --out DIR'")

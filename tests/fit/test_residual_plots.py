@@ -1,4 +1,4 @@
-"""The post-fit residual figure (core/fit/residual_plots.py): its legend hides no residual."""
+"""The post-fit residual figure (core/fitting/residual_plots.py): its legend hides no residual."""
 from __future__ import annotations
 
 from datetime import datetime, timezone
