@@ -19,8 +19,10 @@ and then the file says why in a COMMENT.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,7 +39,7 @@ from cistrack.results.atomic_files import atomic_target
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
-__all__ = ["export_fit", "fit_refusal", "fit_grid", "covariance_scale", "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
+__all__ = ["export_fit", "FitExportOptions", "fit_refusal", "fit_grid", "covariance_scale", "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -110,84 +112,170 @@ def _scenario(d: Path, reg: Registry):
         raise ConfigError(f"{d}: not a fit directory (no scenario.toml); run 'cistrack fit FILE --out DIR' first") from None
 
 
+@dataclass(frozen=True)
+class FitExportOptions:
+    """How :func:`export_fit` exports a fitted orbit; each field is also one of its keywords.
+
+    Attributes
+    ----------
+    overwrite : bool            replace an existing ``path``
+    force : bool                export a fit that did not converge (the file says why in a COMMENT)
+    predict_days : float|None   days of grid beyond the last observation, 0 to
+                                :data:`MAX_PREDICT_DAYS` (0 when None)
+    covariance : str            how the covariance is carried, one of
+                                :data:`cistrack.least_squares.prediction.COVARIANCE_METHODS`
+    """
+
+    overwrite: bool = False
+    force: bool = False
+    predict_days: float | None = None
+    covariance: str = "unscented"
+
+
 def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None = None, *,
-               overwrite: bool = False, force: bool = False, predict_days: float | None = None,
-               covariance: str = "unscented", registry: Registry | None = None, **params: Any) -> Path:
+               options: FitExportOptions | None = None, registry: Registry | None = None,
+               **params: Any) -> Path:
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
-    (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path. ``predict_days`` (>= 0, at most
-    :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation; ``covariance`` (one of
+    (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path.
+
+    ``options`` (a :class:`FitExportOptions`), each field of which may also be given as a keyword
+    (a keyword wins): ``overwrite``, ``force``, ``predict_days`` (>= 0, at most
+    :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation, ``covariance`` (one of
     :data:`cistrack.least_squares.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
-    Refusals name the option: an existing ``path`` without ``overwrite``, a fit that did not
-    converge without ``force``, an unknown ``covariance``."""
-    if covariance not in COVARIANCE_METHODS:
-        raise ConfigError(f"--covariance {covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
-    if path is not None and not overwrite and os.path.lexists(path):
-        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to replace it")
-    days = 0.0 if predict_days is None else predict_days
-    if not (isinstance(days, (int, float)) and math.isfinite(days) and 0.0 <= days <= MAX_PREDICT_DAYS):
-        raise ConfigError(f"--predict {predict_days!r}: must be a number of days from 0 to {MAX_PREDICT_DAYS:g}")
+    The other keywords ``params`` go to the exporter. Refusals name the option: an existing
+    ``path`` without ``overwrite``, a fit that did not converge without ``force``, an unknown
+    ``covariance``."""
+    opts, params = _split_keywords(options, params)
+    days = _checked_request(opts, path)
     d = Path(run_dir)
     record = read_fit_record(d)
-    refusal = fit_refusal(record)
-    if refusal is not None and not force:
-        raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or add "
-                            "--force to export it anyway (the file then says this in a COMMENT)")
-    if "state" not in record:
-        raise CistrackError(f"{d}: nothing to export: {refusal}")
+    refusal = _refusal(d, record, opts.force)
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
     scen = _scenario(d, reg)
-    frame = scen.build("sensor", reg).inertial_frame()
-    if frame is None:
-        raise CistrackError(f"{d}: sensor '{scen.components['sensor'].name}' does not place its synodic frame in an "
-                            "inertial frame; cannot export")
+    frame = _inertial_frame(d, scen, reg)
     result = _result(record)
     arc = record["arc"]
     if format == "opm":
         times, n_arc = np.array([result.epoch]), 1
     else:
         times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
-    pred = predict_orbit(result, scen.build("dynamics", reg), times, covariance=covariance)
+    pred = predict_orbit(result, scen.build("dynamics", reg), times, covariance=opts.covariance)
+    utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
+    ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
+    name = str(record.get("designation") or scen.name)
+    comments = _comments(record, name, opts, pred, utc, n_arc, refusal)
+    out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
+    _write(exporter, out, ie, _metadata(name, comments), format, path is not None)
+    return out
+
+
+def _split_keywords(options: FitExportOptions | None, params: dict[str, Any]
+                    ) -> tuple[FitExportOptions, dict[str, Any]]:
+    """(``options`` with the keywords that name its fields replaced, the other keywords)."""
+    names = {f.name for f in dataclasses.fields(FitExportOptions)}
+    mine = {k: v for k, v in params.items() if k in names}
+    rest = {k: v for k, v in params.items() if k not in names}
+    return dataclasses.replace(options or FitExportOptions(), **mine), rest
+
+
+def _checked_request(opts: FitExportOptions, path: str | Path | None) -> float:
+    """The prediction span, days (0 when ``predict_days`` is None), once the covariance method,
+    the output path and the span are valid; raises ConfigError naming the option."""
+    if opts.covariance not in COVARIANCE_METHODS:
+        raise ConfigError(f"--covariance {opts.covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
+    if path is not None and not opts.overwrite and os.path.lexists(path):
+        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to replace it")
+    days = 0.0 if opts.predict_days is None else opts.predict_days
+    if not (isinstance(days, (int, float)) and math.isfinite(days) and 0.0 <= days <= MAX_PREDICT_DAYS):
+        raise ConfigError(f"--predict {opts.predict_days!r}: must be a number of days from 0 to {MAX_PREDICT_DAYS:g}")
+    return days
+
+
+def _refusal(d: Path, record: dict[str, Any], force: bool) -> str | None:
+    """Why the fit should not be exported (None when it may be); raises CistrackError unless
+    ``force``, and when there is no orbit at all."""
+    refusal = fit_refusal(record)
+    if refusal is not None and not force:
+        raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or add "
+                            "--force to export it anyway (the file then says this in a COMMENT)")
+    if "state" not in record:
+        raise CistrackError(f"{d}: nothing to export: {refusal}")
+    return refusal
+
+
+def _inertial_frame(d: Path, scen, reg: Registry):
+    """The inertial frame the scenario's sensor places its synodic frame in; raises CistrackError
+    when it has none."""
+    frame = scen.build("sensor", reg).inertial_frame()
+    if frame is None:
+        raise CistrackError(f"{d}: sensor '{scen.components['sensor'].name}' does not place its synodic frame in an "
+                            "inertial frame; cannot export")
+    return frame
+
+
+def _estimates(times: np.ndarray, n_arc: int, utc: np.ndarray, pred) -> Estimates:
+    """The predicted states (K, 6) and covariances (K, 6, 6) at ``times`` (K,) TU as one-component
+    estimates in km and km/s, kind "fit" over the arc's first ``n_arc`` points and "predict" after."""
     states, covs = pred.states, pred.covariances
     k = len(times)
     kinds = np.array(["fit"] * n_arc + ["predict"] * (k - n_arc))
-    utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
-    est = Estimates(step=np.arange(k), kind=kinds, t_tu=times, utc=utc, mean_km=states * KM_SCALE,
-                    covariance_km=covs * np.multiply.outer(KM_SCALE, KM_SCALE), weights=[np.ones(1)] * k,
-                    means_km=[(states[i] * KM_SCALE)[None] for i in range(k)],
-                    covariances_km=[(covs[i] * np.multiply.outer(KM_SCALE, KM_SCALE))[None] for i in range(k)])
-    ie = to_inertial(est, frame)
-    name = str(record.get("designation") or scen.name)
+    return Estimates(step=np.arange(k), kind=kinds, t_tu=times, utc=utc, mean_km=states * KM_SCALE,
+                     covariance_km=covs * np.multiply.outer(KM_SCALE, KM_SCALE), weights=[np.ones(1)] * k,
+                     means_km=[(states[i] * KM_SCALE)[None] for i in range(k)],
+                     covariances_km=[(covs[i] * np.multiply.outer(KM_SCALE, KM_SCALE))[None] for i in range(k)])
+
+
+def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, utc: np.ndarray, n_arc: int,
+              refusal: str | None) -> list[str]:
+    """The file's COMMENT lines: the arc and fit, the covariance's scale and propagation, the
+    prediction span, and first, when forced, why the fit is not a converged orbit."""
+    arc = record["arc"]
     comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
                 f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
                 f"weighted RMS {record['rms']:.4g}, noise scale {record['noise_scale']:.4g}, "
                 f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
+    comments += _covariance_comments(record, opts.covariance, pred.linear, utc)
+    if len(utc) > n_arc:
+        days = 0.0 if opts.predict_days is None else opts.predict_days
+        comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
+                        f"({days:g} days)")
+    if refusal is not None:
+        comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
+    return comments
+
+
+def _covariance_comments(record: dict[str, Any], covariance: str, linear: np.ndarray, utc: np.ndarray) -> list[str]:
+    """How the covariance was scaled and propagated; a warning naming the span of the ``linear``
+    (K,) bool points when the unscented transform fell back to transition matrices there."""
+    comments = []
     if covariance_scale(record) > 1.0:
         comments.append(f"covariance scaled by the noise scale squared ({covariance_scale(record):.4g}): the "
                         "post-fit residuals exceed the stated noise")
     if covariance == "linear":
         comments.append("covariance propagated linearly (state transition matrices)")
-    else:
-        comments.append("covariance propagated by the unscented transform (the fit state and 12 sigma points "
-                        "through the dynamics)")
-        if np.any(pred.linear):
-            where = np.flatnonzero(pred.linear)
-            comments.append(f"WARNING: {where.size} of {k} covariances, between {utc[where[0]][:19]}Z and "
-                            f"{utc[where[-1]][:19]}Z, are propagated linearly: a sigma-point orbit hit a body or "
-                            "could not be propagated, or the fit covariance is not positive semi-definite")
-    if k > n_arc:
-        comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
-                        f"({days:g} days)")
-    if refusal is not None:
-        comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
-    meta = {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
+        return comments
+    comments.append("covariance propagated by the unscented transform (the fit state and 12 sigma points "
+                    "through the dynamics)")
+    if np.any(linear):
+        where = np.flatnonzero(linear)
+        comments.append(f"WARNING: {where.size} of {len(utc)} covariances, between {utc[where[0]][:19]}Z and "
+                        f"{utc[where[-1]][:19]}Z, are propagated linearly: a sigma-point orbit hit a body or "
+                        "could not be propagated, or the fit covariance is not positive semi-definite")
+    return comments
+
+
+def _metadata(name: str, comments: list[str]) -> dict[str, Any]:
+    return {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
             "interpolation": "LAGRANGE", "interpolation_degree": INTERPOLATION_DEGREE,
             "data_comment": f"least-squares state and covariance propagated every {GRID_MINUTES:g} min, km and km/s"}
-    out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
+
+
+def _write(exporter, out: Path, ie, meta: dict[str, Any], format: str, named: bool) -> None:
+    """Write the file atomically; ``named``: ``out`` was given as ``--out`` (the error says so)."""
     try:
         with atomic_target(out) as tmp:
             exporter.write(tmp, ie, meta)
     except OSError as exc:
-        raise CistrackError(("--out " if path is not None else "") + f"{out}: cannot write the {format} file "
+        raise CistrackError(("--out " if named else "") + f"{out}: cannot write the {format} file "
                             f"({exc.strerror or exc}); nothing was written there") from None
-    return out

@@ -20,6 +20,7 @@ convergence, the fixed point is the least-squares solution of the model ``propag
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -185,6 +186,169 @@ def _one_pass(prob: _Problem, x: np.ndarray, used: np.ndarray, opts: FitOptions,
     return x, its, False
 
 
+@dataclass
+class _Passes:
+    """Where the fit-then-reject passes ended: the state (6,) LU, VU, the rejected rows (K,) bool,
+    the last chi-square threshold, the iterations of all passes and whether they converged."""
+
+    x: np.ndarray
+    rejected: np.ndarray
+    threshold: float = float("inf")
+    iterations: int = 0
+    converged: bool = False
+
+
+def _checked_inputs(state: Any, t0: Any, prior: Any, options: Any
+                    ) -> tuple[FitOptions, np.ndarray, float, tuple[np.ndarray, np.ndarray] | None]:
+    """(options, state (6,), epoch TU, (prior mean (6,), inverse prior covariance (6, 6)) or None),
+    checked in that order; raises StateError."""
+    opts = FitOptions() if options is None else options
+    if not isinstance(opts, FitOptions):
+        raise StateError(f"fit: options must be a FitOptions, got {type(opts).__name__}")
+    x = _check_state(state, "the initial state")
+    try:
+        t0 = float(t0)
+    except (TypeError, ValueError):
+        raise StateError(f"fit: the epoch t0 must be a number (TU), got {t0!r}") from None
+    if not np.isfinite(t0):
+        raise StateError(f"fit: the epoch t0 must be finite, got {t0}")
+    return opts, x, t0, _check_prior(prior)
+
+
+def _problem(dynamics: Dynamics, model: MeasurementModel, x: np.ndarray, t0: float,
+             prior: tuple[np.ndarray, np.ndarray] | None) -> _Problem:
+    """The fit's problem, once there are enough numbers for the unknowns and the initial state
+    ``x`` (6,) propagates over the arc; raises FitError."""
+    k, m = len(model.times), model.m
+    if prior is None and k * m < 6:
+        raise FitError(f"fit: {k} observation(s) of {m} component(s) give {k * m} numbers for 6 unknowns; "
+                       "add observations or a prior")
+    prob = _Problem(dynamics, model, t0, prior)
+    try:
+        prob.evaluate(x)
+    except PropagationError as exc:
+        raise FitError(f"fit: the initial state cannot be propagated over the arc: {exc}") from exc
+    return prob
+
+
+def _say_pass(say: list[str], n_pass: int, new: np.ndarray, rejected: np.ndarray, threshold: float) -> None:
+    back = int(np.sum(rejected & ~new))
+    say.append(f"pass {n_pass}: {int(np.sum(new & ~rejected))} observation(s) rejected"
+               + (f", {back} readmitted" if back else "") + f" (chi-square threshold {threshold:.4g})")
+
+
+def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str]) -> _Passes:
+    """Fit, reject outliers, refit, until the rejected set settles (at most ``opts.max_passes``)."""
+    k, m = len(prob.model.times), prob.model.m
+    p = _Passes(x, np.zeros(k, dtype=bool))
+    seen: list[np.ndarray] = []
+    min_rows = 0 if prob.prior is not None else int(np.ceil(6 / m))
+    for _ in range(opts.max_passes):
+        p.x, its, p.converged = _one_pass(prob, p.x, ~p.rejected, opts, say)
+        p.iterations += its
+        if not opts.reject_outliers:
+            break
+        w, _ = prob.evaluate(p.x)
+        new, p.threshold = update_rejections(np.sum(w ** 2, axis=1), m, p.rejected, opts.reject_sigma,
+                                             opts.robust_threshold, opts.max_reject_fraction)
+        if k - int(new.sum()) < min_rows:
+            say.append("rejection would leave fewer components than unknowns: the rejected set is kept")
+            break
+        if np.array_equal(new, p.rejected):
+            break
+        _say_pass(say, len(seen) + 1, new, p.rejected, p.threshold)
+        if any(np.array_equal(new, s) for s in seen):
+            say.append("the rejected set cycles between passes: stopped at the last one")
+            p.converged = False
+            p.rejected = new
+            p.x, its, _ = _one_pass(prob, p.x, ~p.rejected, opts, say)
+            p.iterations += its
+            break
+        seen.append(p.rejected.copy())
+        p.rejected = new
+    else:
+        p.converged = False
+        say.append(f"the rejected set did not settle within {opts.max_passes} passes")
+    return p
+
+
+def _at_estimate(prob: _Problem, x: np.ndarray, used: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(weighted residuals (K, m), states (K, 6), normal matrix (6, 6)) at the estimate ``x``."""
+    try:
+        w, states = prob.evaluate(x)
+        a = prob.jacobian(x)
+    except PropagationError as exc:
+        raise FitError(f"fit: the estimate cannot be propagated over the arc: {exc}") from exc
+    n, _ = prob.normal(a, w, x, used)
+    return w, states, n
+
+
+def _covariance(n: np.ndarray, obs: Any) -> np.ndarray:
+    """N^-1 (6, 6), LU and VU, inverted in unit-diagonal scaling; raises FitError when N is not
+    positive definite or the inverse is not finite."""
+    try:
+        d = _diagonal_scale(n)
+        cov = np.linalg.inv(np.linalg.cholesky(n / np.outer(d, d)))
+        cov = (cov.T @ cov) / np.outer(d, d)
+    except (np.linalg.LinAlgError, FloatingPointError):
+        raise FitError(f"fit: the normal matrix is not positive definite (condition number "
+                       f"{obs.condition:.3g}); the arc does not determine the direction "
+                       f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s): "
+                       "add observations over a longer arc or a prior") from None
+    cov = 0.5 * (cov + cov.T)
+    if not np.all(np.isfinite(cov)):
+        raise FitError("fit: the covariance is not finite")
+    return cov
+
+
+def _unobservable_text(obs: Any, opts: FitOptions) -> str | None:
+    """Why the arc leaves a direction nearly unobservable, or None when it does not."""
+    weak_km = float(np.linalg.norm(obs.weakest_direction_km[:3]))
+    if not (obs.condition > opts.max_condition or weak_km > opts.max_weak_sigma_km):
+        return None
+    return (f"the arc leaves a direction nearly unobservable: condition number {obs.condition:.3g} "
+            f"(limit {opts.max_condition:.3g}), one sigma along the weakest direction "
+            f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s), {weak_km:.4g} km in "
+            f"position (limit {opts.max_weak_sigma_km:.4g} km); observe over a longer arc or add a prior")
+
+
+def _table(model: MeasurementModel, measurements: MeasurementSet, states: np.ndarray, rejected: np.ndarray):
+    """The post-fit residual table of every observation (rad, range LU), rejected ones marked."""
+    k = len(measurements)
+    return residual_table(model.times, np.array([measurements.site_at(i) for i in range(k)]),
+                          np.array([measurements.kind_at(i) for i in range(k)]), model.names,
+                          model.values, model.residuals(states), model.sigmas, rejected)
+
+
+def _goodness(w: np.ndarray, used: np.ndarray, say: list[str]) -> tuple[float, float, float]:
+    """(chi-square, weighted RMS, noise scale) of the used rows of the weighted residuals ``w``
+    (K, m): the RMS over the used components, the noise scale sqrt(chi2 / (components - 6))."""
+    n_comp = int(used.sum()) * w.shape[1]
+    chi2 = float(np.sum(w[used] ** 2))
+    rms = float(np.sqrt(chi2 / n_comp)) if n_comp else float("inf")
+    if n_comp > 6:
+        return chi2, rms, float(np.sqrt(chi2 / (n_comp - 6)))
+    say.append("no redundancy (as many components as unknowns): noise scale undefined")
+    return chi2, rms, float("nan")
+
+
+def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: list[str]) -> bool:
+    """Whether the fit converged to an orbit that fits (weighted RMS at most ``opts.max_rms``);
+    adds the closing messages and puts the summary first."""
+    converged = p.converged
+    if converged and rms > opts.max_rms:
+        converged = False
+        say.append(f"the orbit does not fit the observations: weighted RMS {rms:.4g} > {opts.max_rms:g} "
+                   "(a wrong local minimum from a poor start, or a wrong model or sensor); start closer "
+                   "to the truth or check the data")
+    if int(p.rejected.sum()):
+        say.append(f"{int(p.rejected.sum())} of {len(p.rejected)} observations rejected "
+                   f"(chi-square > {p.threshold:.4g})")
+    say.insert(0, ("converged" if converged else "NOT converged") + f" after {p.iterations} iterations; "
+               f"weighted RMS {rms:.4g}, noise scale {noise_scale:.4g}")
+    return converged
+
+
 def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state: Any, t0: float, *,
               prior: tuple[Any, Any] | None = None, options: FitOptions | None = None) -> FitResult:
     """Least-squares orbit from ``measurements``, starting at ``state`` (6,) at epoch ``t0``.
@@ -214,116 +378,24 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     :class:`cistrack.least_squares.UnobservableWarning` when the condition number exceeds
     ``options.max_condition`` or the weakest direction's one sigma ``options.max_weak_sigma_km``.
     """
-    opts = FitOptions() if options is None else options
-    if not isinstance(opts, FitOptions):
-        raise StateError(f"fit: options must be a FitOptions, got {type(opts).__name__}")
-    x = _check_state(state, "the initial state")
-    try:
-        t0 = float(t0)
-    except (TypeError, ValueError):
-        raise StateError(f"fit: the epoch t0 must be a number (TU), got {t0!r}") from None
-    if not np.isfinite(t0):
-        raise StateError(f"fit: the epoch t0 must be finite, got {t0}")
-    pri = _check_prior(prior)
+    opts, x, t0, pri = _checked_inputs(state, t0, prior, options)
     model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
-    k, m = len(measurements), model.m
-    if pri is None and k * m < 6:
-        raise FitError(f"fit: {k} observation(s) of {m} component(s) give {k * m} numbers for 6 unknowns; "
-                       "add observations or a prior")
-    prob = _Problem(dynamics, model, t0, pri)
+    prob = _problem(dynamics, model, x, t0, pri)
     say: list[str] = []
-    try:
-        prob.evaluate(x)
-    except PropagationError as exc:
-        raise FitError(f"fit: the initial state cannot be propagated over the arc: {exc}") from exc
-
-    rejected = np.zeros(k, dtype=bool)
-    threshold = float("inf")
-    iterations = 0
-    converged = False
-    seen: list[np.ndarray] = []
-    min_rows = 0 if pri is not None else int(np.ceil(6 / m))
-    for _ in range(opts.max_passes):
-        x, its, converged = _one_pass(prob, x, ~rejected, opts, say)
-        iterations += its
-        if not opts.reject_outliers:
-            break
-        w, _ = prob.evaluate(x)
-        new, threshold = update_rejections(np.sum(w ** 2, axis=1), m, rejected, opts.reject_sigma,
-                                           opts.robust_threshold, opts.max_reject_fraction)
-        if k - int(new.sum()) < min_rows:
-            say.append("rejection would leave fewer components than unknowns: the rejected set is kept")
-            break
-        if np.array_equal(new, rejected):
-            break
-        back = int(np.sum(rejected & ~new))
-        say.append(f"pass {len(seen) + 1}: {int(np.sum(new & ~rejected))} observation(s) rejected"
-                   + (f", {back} readmitted" if back else "") + f" (chi-square threshold {threshold:.4g})")
-        if any(np.array_equal(new, s) for s in seen):
-            say.append("the rejected set cycles between passes: stopped at the last one")
-            converged = False
-            rejected = new
-            x, its, _ = _one_pass(prob, x, ~rejected, opts, say)
-            iterations += its
-            break
-        seen.append(rejected.copy())
-        rejected = new
-    else:
-        converged = False
-        say.append(f"the rejected set did not settle within {opts.max_passes} passes")
-
-    used = ~rejected
-    try:
-        w, states = prob.evaluate(x)
-        a = prob.jacobian(x)
-    except PropagationError as exc:
-        raise FitError(f"fit: the estimate cannot be propagated over the arc: {exc}") from exc
-    n, _ = prob.normal(a, w, x, used)
+    p = _fit_passes(prob, x, opts, say)
+    used = ~p.rejected
+    w, states, n = _at_estimate(prob, p.x, used)
     obs = observability(n)
-    try:
-        d = _diagonal_scale(n)
-        cov = np.linalg.inv(np.linalg.cholesky(n / np.outer(d, d)))
-        cov = (cov.T @ cov) / np.outer(d, d)
-    except (np.linalg.LinAlgError, FloatingPointError):
-        raise FitError(f"fit: the normal matrix is not positive definite (condition number "
-                       f"{obs.condition:.3g}); the arc does not determine the direction "
-                       f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s): "
-                       "add observations over a longer arc or a prior") from None
-    cov = 0.5 * (cov + cov.T)
-    if not np.all(np.isfinite(cov)):
-        raise FitError("fit: the covariance is not finite")
-    weak_km = float(np.linalg.norm(obs.weakest_direction_km[:3]))
-    unobservable = obs.condition > opts.max_condition or weak_km > opts.max_weak_sigma_km
-    if unobservable:
-        text = (f"the arc leaves a direction nearly unobservable: condition number {obs.condition:.3g} "
-                f"(limit {opts.max_condition:.3g}), one sigma along the weakest direction "
-                f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s), {weak_km:.4g} km in "
-                f"position (limit {opts.max_weak_sigma_km:.4g} km); observe over a longer arc or add a prior")
-        say.append(text)
-        warnings.warn(f"fit: {text}", UnobservableWarning, stacklevel=2)
-    resid = model.residuals(states)
-    table = residual_table(model.times, np.array([measurements.site_at(i) for i in range(k)]),
-                           np.array([measurements.kind_at(i) for i in range(k)]), model.names,
-                           model.values, resid, model.sigmas, rejected)
-    n_comp = int(used.sum()) * m
-    chi2 = float(np.sum(w[used] ** 2))
-    rms = float(np.sqrt(chi2 / n_comp)) if n_comp else float("inf")
-    if n_comp > 6:
-        noise_scale = float(np.sqrt(chi2 / (n_comp - 6)))
-    else:
-        noise_scale = float("nan")
-        say.append("no redundancy (as many components as unknowns): noise scale undefined")
-    if converged and rms > opts.max_rms:
-        converged = False
-        say.append(f"the orbit does not fit the observations: weighted RMS {rms:.4g} > {opts.max_rms:g} "
-                   "(a wrong local minimum from a poor start, or a wrong model or sensor); start closer "
-                   "to the truth or check the data")
-    if int(rejected.sum()):
-        say.append(f"{int(rejected.sum())} of {k} observations rejected (chi-square > {threshold:.4g})")
-    say.insert(0, ("converged" if converged else "NOT converged") + f" after {iterations} iterations; "
-               f"weighted RMS {rms:.4g}, noise scale {noise_scale:.4g}")
-    return FitResult(state=x, covariance=cov, epoch=t0, residuals=table, rms=rms, chi2=chi2,
-                     n_used=int(used.sum()), n_rejected=int(rejected.sum()), iterations=iterations,
+    cov = _covariance(n, obs)
+    unobservable = _unobservable_text(obs, opts)
+    if unobservable is not None:
+        say.append(unobservable)
+        warnings.warn(f"fit: {unobservable}", UnobservableWarning, stacklevel=2)
+    table = _table(model, measurements, states, p.rejected)
+    chi2, rms, noise_scale = _goodness(w, used, say)
+    converged = _verdict(p, rms, noise_scale, opts, say)
+    return FitResult(state=p.x, covariance=cov, epoch=t0, residuals=table, rms=rms, chi2=chi2,
+                     n_used=int(used.sum()), n_rejected=int(p.rejected.sum()), iterations=p.iterations,
                      converged=bool(converged), condition_number=obs.condition,
                      weakest_direction_km=obs.weakest_direction_km, noise_scale=noise_scale,
-                     rejection_threshold=threshold, unobservable=bool(unobservable), messages=tuple(say))
+                     rejection_threshold=p.threshold, unobservable=unobservable is not None, messages=tuple(say))

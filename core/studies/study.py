@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import copy
+import dataclasses
 import json
 import os
 import sys
@@ -38,7 +39,7 @@ from cistrack.studies.workers import execute_run, init_worker, run_spec
 from cistrack.runs.run_id import run_id
 
 
-__all__ = ["RunSpec", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
+__all__ = ["RunSpec", "StudyOptions", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
            "builtin_studies", "make_executor"]
 
 
@@ -83,8 +84,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     so runs with other values are never mixed with these.
     """
     from cistrack.plugin.registry import default_registry
-    from cistrack.scenario.loading import load_scenario
-    from cistrack.scenario.settings import merge_settings, parse_settings
+    from cistrack.scenario.settings import parse_settings
 
     data, p = load_study(path_or_name)
     recorded = recorded_settings(path_or_name)  # a study results directory: its own runs, in place
@@ -95,45 +95,92 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     extra = parse_settings(settings)
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
     seeds = _study_seeds(data, p, first_seed, n_seeds)
-    filters = [_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])]
-    iods = [_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])]
+    grid = _Grid(filters=[_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])],
+                 iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
+                 overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out)
     reg = default_registry()
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
-        sp = Path(sc)
-        if not sp.is_absolute() and (p.parent / sp).exists():
-            sp = p.parent / sp
-        base = load_scenario(sp if sp.exists() else sc, reg)
-        scen_path = str(Path(base.source).resolve())
-        for flabel, ftable in filters:
-            for ilabel, itable in iods:
-                ov = copy.deepcopy(data.get("overrides", {}))
-                if ftable:
-                    ov["filter"] = ftable
-                if itable:
-                    ov["iod"] = itable
-                if extra:
-                    ov = merge_settings(ov, extra)
-                    for table, value in extra.items():  # keys of the scenario's own table
-                        if isinstance(value, dict) and isinstance(base.raw.get(table), dict) \
-                                and table not in ((("filter",) if ftable else ()) + (("iod",) if itable else ())):
-                            ov[table] = merge_settings(base.raw[table], ov[table])
-                try:
-                    variant = base.with_overrides(ov, reg)   # validates this combination now
-                except ConfigError as exc:
-                    if extra:
-                        raise ConfigError(f"{exc} (with {' '.join('--set ' + i for i in settings)})") from None
-                    raise
-                fl = flabel or variant.components["filter"].name
-                il = ilabel or variant.components["iod"].name
-                for seed in seeds:
-                    rid = run_id(base.name, fl, il, seed)
-                    specs.append(RunSpec(rid, scen_path, int(seed), ov, str(out / "runs" / rid),
-                                         base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
+        specs += _scenario_runs(sc, p, grid, reg)
     ids = [s.run_id for s in specs]
     if len(set(ids)) != len(ids):
         raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
     return data, specs, out
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """What each scenario of a study is crossed with: the (label, table or None) filter and IOD
+    variants, the study's overrides, the parsed ``--set`` items (``extra``) and their text
+    (``settings``), the seeds, and the study directory the runs go into."""
+
+    filters: list[tuple[str, dict | None]]
+    iods: list[tuple[str, dict | None]]
+    overrides: dict
+    extra: dict
+    settings: list[str] | None
+    seeds: list[int]
+    out: Path
+
+
+def _scenario_source(sc: str, p: Path) -> str | Path:
+    """A study's scenario entry as load_scenario takes it: a path relative to the study file
+    ``p`` when one exists there, else the entry's own path when it exists, else a built-in name."""
+    sp = Path(sc)
+    if not sp.is_absolute() and (p.parent / sp).exists():
+        sp = p.parent / sp
+    return sp if sp.exists() else sc
+
+
+def _scenario_runs(sc: str, p: Path, grid: _Grid, reg) -> list[RunSpec]:
+    """The runs of scenario entry ``sc``: filters x IOD variants x seeds, each variant validated."""
+    from cistrack.scenario.loading import load_scenario
+
+    base = load_scenario(_scenario_source(sc, p), reg)
+    scen_path = str(Path(base.source).resolve())
+    specs: list[RunSpec] = []
+    for flabel, ftable in grid.filters:
+        for ilabel, itable in grid.iods:
+            ov = _variant_overrides(grid, base, ftable, itable)
+            variant = _validated_variant(base, ov, grid, reg)
+            fl = flabel or variant.components["filter"].name
+            il = ilabel or variant.components["iod"].name
+            for seed in grid.seeds:
+                rid = run_id(base.name, fl, il, seed)
+                specs.append(RunSpec(rid, scen_path, int(seed), ov, str(grid.out / "runs" / rid),
+                                     base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
+    return specs
+
+
+def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | None) -> dict:
+    """The study's overrides with the variant's filter and IOD tables, then the ``--set`` items;
+    a ``--set`` table that the variant does not replace is merged into the scenario's own table."""
+    from cistrack.scenario.settings import merge_settings
+
+    ov = copy.deepcopy(grid.overrides)
+    if ftable:
+        ov["filter"] = ftable
+    if itable:
+        ov["iod"] = itable
+    if not grid.extra:
+        return ov
+    ov = merge_settings(ov, grid.extra)
+    replaced = (("filter",) if ftable else ()) + (("iod",) if itable else ())
+    for table, value in grid.extra.items():  # keys of the scenario's own table
+        if isinstance(value, dict) and isinstance(base.raw.get(table), dict) and table not in replaced:
+            ov[table] = merge_settings(base.raw[table], ov[table])
+    return ov
+
+
+def _validated_variant(base, ov: dict, grid: _Grid, reg):
+    """The scenario ``base`` with the overrides ``ov``, validated now; a ConfigError names the
+    ``--set`` items when there are any."""
+    try:
+        return base.with_overrides(ov, reg)
+    except ConfigError as exc:
+        if grid.extra:
+            raise ConfigError(f"{exc} (with {' '.join('--set ' + i for i in grid.settings)})") from None
+        raise
 
 
 def _settings_suffix(settings: list[str] | None) -> str:
@@ -185,76 +232,140 @@ def close_dask_client(ex) -> None:
             cluster.close()
 
 
-def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, workers: int | None = None,
-              dask: str | None = None, executor: cf.Executor | None = None, progress: bool = True,
-              rerun_dir: str | Path | None = None, settings: list[str] | None = None,
-              first_seed: int | None = None, n_seeds: int | None = None) -> dict:
+@dataclass(frozen=True)
+class StudyOptions:
+    """How :func:`run_study` runs a study; each field is also one of its keywords, and they may be
+    given positionally after ``out_dir`` in this order.
+
+    Attributes
+    ----------
+    workers : int or None               worker processes (the CPU count when None)
+    dask : str or None                  a Dask cluster instead: 'local' or a scheduler address
+    executor : Executor or None         run on this executor (neither made nor shut down here)
+    progress : bool                     a progress bar on stderr
+    rerun_dir : str, Path or None       write one rerun recording per run there, ``<run id>.rrd``
+    settings : list of str or None      ``--set`` items applied to every run (see :func:`plan_runs`)
+    first_seed, n_seeds : int or None   other seeds than the study file's (see :func:`plan_runs`)
+    """
+
+    workers: int | None = None
+    dask: str | None = None
+    executor: cf.Executor | None = None
+    progress: bool = True
+    rerun_dir: str | Path | None = None
+    settings: list[str] | None = None
+    first_seed: int | None = None
+    n_seeds: int | None = None
+
+
+def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args: Any,
+              options: StudyOptions | None = None, **keywords: Any) -> dict:
     """Run every missing run of a study. Returns counts, the study directory, the runs that are
     not done on disk afterwards (``problems``: (run id, why) pairs; ``failed`` counts them) and the
     plan it ran (``specs``: every :class:`RunSpec` of the study, done before or now, in plan order).
 
+    ``options`` (a :class:`StudyOptions`), each field of which may also be given as a keyword
+    (a keyword wins) or positionally after ``out_dir``: ``workers``, ``dask``, ``executor``,
+    ``progress``, ``rerun_dir``, ``settings``, ``first_seed``, ``n_seeds``.
+
     The study directory must be new, empty or this study's own
     (:func:`cistrack.results.output_paths.check_study_dir`), and only one study process at a time
     may write there (:func:`cistrack.studies.study_lock.study_lock`).
-    ``rerun_dir``: write one rerun recording per run there, named ``<run id>.rrd``.
-    ``settings``: ``--set`` items applied to every run (see :func:`plan_runs`).
-    ``first_seed``, ``n_seeds``: other seeds than the study file's (see :func:`plan_runs`).
     """
-    import dataclasses
-
-    from cistrack.results.output_paths import STUDY_RECORD, check_study_dir
-    from cistrack.studies.execution import run_all, run_problems, shutdown
+    from cistrack.results.output_paths import check_study_dir
+    from cistrack.studies.execution import run_problems
     from cistrack.studies.study_lock import study_lock
 
+    opts = _study_options(args, options, keywords)
     refuse_in_a_starting_worker()
-    if workers is not None:
-        check_count(workers, "--workers", 1, 1024)
+    if opts.workers is not None:
+        check_count(opts.workers, "--workers", 1, 1024)
+    settings = opts.settings
     if settings is None:  # a study folder run again keeps (and records) the settings it was run with
         settings = recorded_settings(path_or_name)
-    data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
+    data, specs, out = plan_runs(path_or_name, out_dir, settings, opts.first_seed, opts.n_seeds)
     source = study_source(path_or_name)
     name = str(data.get("name") or Path(source).stem)
     where = "--out" if out_dir is not None else "the study directory"
     check_study_dir(out, name, source, where)
-    if rerun_dir is not None:
-        from cistrack.results.output_paths import check_writable_dir
-
-        check_writable_dir(rerun_dir, "--rerun")
-        specs = [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
+    specs = _with_rerun_paths(specs, opts.rerun_dir)
     with study_lock(out, where):
-        record = {"source": source, **data, "name": name, "settings": list(settings or []),
-                  "run_seeds": sorted({sp.seed for sp in specs})}
-        try:
-            write_text_atomic(out / STUDY_RECORD, json.dumps(record, indent=2, default=str))
-        except OSError as exc:
-            raise CistrackError(f"{where} {out}: cannot write {STUDY_RECORD} ({exc.strerror or exc}); "
-                                f"nothing was run") from None
+        _write_study_record(out, where, {"source": source, **data, "name": name, "settings": list(settings or []),
+                                         "run_seeds": sorted({sp.seed for sp in specs})})
         states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
         todo = [s for s in specs if states[s.run_id] != "done"]
         _say_rerun(specs, states)
-        own = executor is None
-        ex = executor or (make_executor(workers, dask) if todo else None)
-        bar = None
-        if progress and todo:
-            from tqdm.auto import tqdm
-            bar = tqdm(total=len(todo), desc=f"study {name}", unit="run")
-        said: dict[str, str] = {}
-        ended = False
-        try:
-            if todo:
-                said = run_all(ex, todo, run_spec, bar)
-            ended = True
-        finally:
-            if bar is not None:
-                bar.close()
-            if own and ex is not None:
-                shutdown(ex, cancel=not ended)
-                close_dask_client(ex)
+        said = _run_todo(todo, opts, name)
         problems = run_problems(specs, said)  # from disk, not from what the workers said
     bad = {rid for rid, _ in problems}
     return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
             "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
             "problems": problems, "specs": specs}
+
+
+def _study_options(args: tuple, options: StudyOptions | None, keywords: dict[str, Any]) -> StudyOptions:
+    """``options`` with the fields given positionally (``args``, in field order) or as keywords
+    replaced; a TypeError like Python's for too many, repeated or unknown arguments."""
+    names = [f.name for f in dataclasses.fields(StudyOptions)]
+    if len(args) > len(names):
+        raise TypeError(f"run_study() takes from 1 to {2 + len(names)} positional arguments "
+                        f"but {2 + len(args)} were given")
+    given = dict(zip(names, args))
+    twice = [k for k in keywords if k in given]
+    if twice:
+        raise TypeError(f"run_study() got multiple values for argument {twice[0]!r}")
+    unknown = [k for k in keywords if k not in names]
+    if unknown:
+        raise TypeError(f"run_study() got an unexpected keyword argument {unknown[0]!r}")
+    return dataclasses.replace(options or StudyOptions(), **given, **keywords)
+
+
+def _with_rerun_paths(specs: list[RunSpec], rerun_dir: str | Path | None) -> list[RunSpec]:
+    """The runs, each recording to ``<rerun_dir>/<run id>.rrd`` when ``rerun_dir`` is given (checked
+    writable)."""
+    if rerun_dir is None:
+        return specs
+    from cistrack.results.output_paths import check_writable_dir
+
+    check_writable_dir(rerun_dir, "--rerun")
+    return [dataclasses.replace(s, rerun_path=str(Path(rerun_dir) / f"{s.run_id}.rrd")) for s in specs]
+
+
+def _write_study_record(out: Path, where: str, record: dict) -> None:
+    """Write the study record (:data:`cistrack.results.output_paths.STUDY_RECORD`) into ``out``."""
+    from cistrack.results.output_paths import STUDY_RECORD
+
+    try:
+        write_text_atomic(out / STUDY_RECORD, json.dumps(record, indent=2, default=str))
+    except OSError as exc:
+        raise CistrackError(f"{where} {out}: cannot write {STUDY_RECORD} ({exc.strerror or exc}); "
+                            f"nothing was run") from None
+
+
+def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, str]:
+    """Run ``todo`` on the given executor, or on one made here and shut down afterwards (its
+    pending runs cancelled when interrupted); returns what the workers said per run id."""
+    from cistrack.studies.execution import run_all, shutdown
+
+    own = opts.executor is None
+    ex = opts.executor or (make_executor(opts.workers, opts.dask) if todo else None)
+    bar = None
+    if opts.progress and todo:
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run")
+    said: dict[str, str] = {}
+    ended = False
+    try:
+        if todo:
+            said = run_all(ex, todo, run_spec, bar)
+        ended = True
+    finally:
+        if bar is not None:
+            bar.close()
+        if own and ex is not None:
+            shutdown(ex, cancel=not ended)
+            close_dask_client(ex)
+    return said
 
 
 def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:

@@ -35,10 +35,6 @@ TEMPORARY = "owner refactoring (issue 48)"
 #: function whose owner is refactoring it now; the others are real reasons and must stay needed.
 EXCEPTIONS: dict[str, str] = {
     # -- temporary: owners refactoring them (issue 48); the integrator prunes these ---------------
-    "core/fitting/fit_export.py::export_fit": TEMPORARY,
-    "core/least_squares/differential_correction.py::fit_orbit": TEMPORARY,
-    "core/studies/study.py::plan_runs": TEMPORARY,
-    "core/studies/study.py::run_study": TEMPORARY,
 }
 
 
