@@ -41,6 +41,7 @@ from cistrack.interfaces.component import (Component, check_choice, check_int, c
                                            check_positive, check_range)
 from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
                                            PosteriorDraw, Reanchor)
+from cistrack.interfaces.metric import StepMetric
 from cistrack.interfaces.preset import preset
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
 from cistrack.model.measurement import Measurement, MeasurementSet
@@ -70,6 +71,8 @@ __all__ = [
     "Filter", "Reader", "Exporter", "ReferenceOrbit", "hookimpl", "CompiledDynamics", "preset",
     # the PGM's swappable steps (kinds pgm-prediction, pgm-update, pgm-draw, pgm-kernel, pgm-reanchor)
     "ParticlePrediction", "ComponentUpdate", "PosteriorDraw", "KernelUpdate", "Reanchor", "ClusteredParticles",
+    # a metric of every step (hook cistrack_metric_stages)
+    "StepMetric",
     "Belief", "ParticleCloud", "GaussianMixture", "Measurement", "MeasurementSet",
     # errors
     "CistrackError", "ConfigError", "DuplicateComponentError", "FilterError", "IODError", "MeasurementError",

@@ -19,43 +19,13 @@ step: ``step.kind == "update"``) and ``"updated"`` (the posterior of an update s
 from __future__ import annotations
 
 import time
-from abc import ABC, abstractmethod
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.metric import EVENTS, StepMetric
 
 __all__ = ["StepMetric", "ReadOnlyMetrics", "MetricStage", "order_metrics", "EVENTS"]
-
-EVENTS: tuple[str, ...] = ("predicted", "updated")
-"""The step events a metric is computed for (named as the lifecycle hooks that follow them; see
-:func:`cistrack.results.step_table.is_table_step` for the events that are rows of the table)."""
-
-
-class StepMetric(ABC):
-    """One stage of a step's metrics.
-
-    Attributes
-    ----------
-    name : str              unique among a run's stages, e.g. "custody"
-    needs : tuple of str    names of the stages whose metrics ``compute`` reads from ``step.metrics``;
-                            they run before this one
-    """
-
-    name: str = ""
-    needs: tuple[str, ...] = ()
-
-    def start(self, run: Any) -> None:
-        """Called once per run, before the first step; ``run`` is the
-        :class:`cistrack.runs.run_context.RunContext`. Nothing by default."""
-
-    @abstractmethod
-    def compute(self, run: Any, step: Any, event: str) -> Mapping[str, float]:
-        """The metrics this stage adds to ``step`` (a :class:`cistrack.runs.run_context.Step`) at
-        ``event`` (one of :data:`EVENTS`): metric name -> float in the table's units (km, m/s,
-        cm/s, nats, arcsec), or an empty dict. ``step.metrics`` holds what the earlier stages
-        computed (read-only)."""
-
 
 class ReadOnlyMetrics(dict):
     """A step's metrics as observers see them: a dict whose contents cannot change. It copies,

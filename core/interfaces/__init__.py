@@ -27,6 +27,7 @@ from cistrack.interfaces.clustering import Clusterer
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 from cistrack.interfaces.filter import Filter
 from cistrack.interfaces.iod import IODMethod
+from cistrack.interfaces.metric import StepMetric
 from cistrack.interfaces.orbit import ReferenceOrbit
 from cistrack.interfaces.pgm_steps import ComponentUpdate, KernelUpdate, ParticlePrediction, PosteriorDraw, Reanchor
 from cistrack.interfaces.preset import preset
@@ -40,6 +41,6 @@ KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering",
                          "pgm-prediction", "pgm-update", "pgm-draw", "pgm-kernel", "pgm-reanchor")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
-__all__ = ["Body", "Clusterer", "ComponentUpdate", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS",
+__all__ = ["Body", "Clusterer", "ComponentUpdate", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "StepMetric",
            "KernelUpdate", "ParticlePrediction", "Pass", "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
            "preset"]
