@@ -145,11 +145,11 @@ class ResultsWriter:
             write_text_atomic(self.directory / "scenario.toml", text)
         write_json_atomic(self.directory / MANIFEST, self._manifest)
 
-    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
+    @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
         self._write_part(run, step)
 
-    @hookimpl(trylast=True)  # after every observer that adds metrics to the step
+    @hookimpl
     def cistrack_step_predicted(self, run, step) -> None:
         if is_table_step("predicted", step):  # a prediction-only step is a row of its own
             self._write_part(run, step)
