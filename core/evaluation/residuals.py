@@ -43,7 +43,7 @@ def _unit(name: str) -> tuple[str, float]:
 def residual_columns(inn) -> dict[str, float]:
     """The step-table columns (see the module docstring) of a
     :class:`cistrack.evaluation.consistency.Innovation`."""
-    from cistrack.evaluation.consistency import chi2_ppf  # scipy.stats.chi2.ppf's value without importing scipy.stats
+    from cistrack.least_squares.chi_square import chi2_ppf  # scipy.stats.chi2.ppf's value without importing scipy.stats
 
     m = len(inn.names)
     nis = inn.nis
@@ -156,7 +156,7 @@ def pool_consistency(summaries: list[dict[str, Any]]) -> dict[str, Any]:
     """The :func:`consistency_summary` of several runs' updates together (a study's group), from
     the runs' own summaries: the mean NIS over all their updates, tested against chi-square with
     the summed dof; the share outside weighted by updates; the largest residual of all."""
-    from cistrack.evaluation.consistency import chi2_ppf
+    from cistrack.least_squares.chi_square import chi2_ppf
 
     parts = [c for c in summaries if c and c.get("nis_updates")]
     level = parts[0].get("level", 0.95) if parts else 0.95
