@@ -1,0 +1,285 @@
+"""Impacts and closest approaches of a fitted orbit, with their 1-sigma by linear mapping.
+
+An **impact** is the dynamics' own: :meth:`Dynamics.propagate` stops a particle on a body's
+surface and reports the body and the time (:class:`cistrack.interfaces.dynamics.Propagation`);
+the impact point is the state it is frozen at. A **closest approach** is a local minimum of the
+distance to the Moon's or the Earth's centre before the span's end (or an impact): the distance
+is sampled every ``step_minutes``, each interior minimum is refined on a grid of at most 10 s
+(its time where the radial velocity changes sign, linearly interpolated; its position by cubic
+Hermite interpolation).
+
+Each event carries: the time (TU since the dynamics' epoch, and UTC), the body, the latitude and
+longitude of the point (impact point or sub-orbit point at the approach): selenographic in the
+Moon's mean-Earth frame (DE421 librations, :mod:`.body_fixed`) or geodetic (WGS84), the altitude
+above the body's impact sphere (km; 0 at an impact) and the speed relative to the body's centre
+(km/s, inertial; the Moon's surface turns at 4.6 m/s, the Earth's at up to 0.47 km/s). Positions
+relative to the bodies come from the dynamics' real Earth-Moon frame (``dynamics.frame``, the
+``ephemeris`` model); for a model without one (``cr3bp``) they are taken in the synodic frame with
+the bodies where :meth:`Body.position_at` puts them, and there are no latitudes and longitudes.
+
+The 1-sigma of each quantity is the linear map of the covariance: the event recomputed for the
+12 states ``x0 +- eps s_i`` (``s_i`` the columns of a square root of the covariance,
+``eps = EPS_SIGMA``), central differences ``g_i`` per unit sigma, and
+``cov(event) = sum_i g_i g_i^T``. tests/fit/test_orbit_events.py checks it against 200 states
+drawn from the covariance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import StateError
+from cistrack.interfaces.dynamics import Dynamics
+
+__all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "EVENT_FIELDS", "EPS_SIGMA"]
+
+EVENT_FIELDS = ("t_tu", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")
+"""The columns of :func:`event_values`."""
+EPS_SIGMA = 0.05
+"""Step of the central differences of the linear mapping, in sigmas of the covariance."""
+_FINE_S = 10.0
+
+
+@dataclass(frozen=True)
+class OrbitEvent:
+    """One impact or closest approach (see the module docstring).
+
+    ``sigma`` holds the 1-sigma of ``time_s`` (s), ``latitude_deg``, ``longitude_deg``,
+    ``altitude_km`` and ``speed_kms``; NaN where the mapping could not be made (a neighbouring
+    orbit of the covariance has no such event)."""
+
+    kind: str
+    body: str
+    t_tu: float
+    utc: str
+    latitude_deg: float
+    longitude_deg: float
+    altitude_km: float
+    speed_kms: float
+    coordinates: str
+    sigma: dict[str, float] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (NaN as None)."""
+        def clean(v):
+            return None if isinstance(v, float) and not np.isfinite(v) else v
+        out = {k: clean(getattr(self, k)) for k in ("kind", "body", "t_tu", "utc", "latitude_deg", "longitude_deg",
+                                                    "altitude_km", "speed_kms", "coordinates")}
+        out["sigma"] = {k: clean(float(v)) for k, v in self.sigma.items()}
+        return out
+
+    def line(self) -> str:
+        """One printed line: what, where, when, how fast, with 1-sigma."""
+        s = self.sigma
+        where = ""
+        if np.isfinite(self.latitude_deg):
+            where = (f" at {self.coordinates} latitude {self.latitude_deg:.3f} +- {s.get('latitude_deg', np.nan):.2g}, "
+                     f"longitude {self.longitude_deg:.3f} +- {s.get('longitude_deg', np.nan):.2g} deg")
+        alt = "" if self.kind == "impact" else (f", altitude {self.altitude_km:.1f} +- "
+                                                f"{s.get('altitude_km', np.nan):.2g} km")
+        return (f"{self.kind} {self.body}: {self.utc[:19]}Z +- {s.get('time_s', np.nan):.3g} s{where}{alt}, "
+                f"speed {self.speed_kms:.4f} +- {s.get('speed_kms', np.nan):.2g} km/s")
+
+
+def _epoch_of(dynamics: Dynamics, epoch: datetime | str | None) -> datetime | None:
+    if epoch is not None:
+        return units.parse_utc(epoch)
+    e = getattr(dynamics, "epoch", None)
+    return units.parse_utc(e) if isinstance(e, str) else None
+
+
+def _body_index(dynamics: Dynamics, body: str) -> int:
+    names = [b.name.lower() for b in dynamics.bodies]
+    if body.lower() not in names:
+        raise StateError(f"events: the dynamics have no impact body {body!r}; bodies: "
+                         + (", ".join(b.name for b in dynamics.bodies) or "none"))
+    return names.index(body.lower())
+
+
+def _relative(dynamics: Dynamics, x: np.ndarray, t: np.ndarray, body: str):
+    """Body-centred positions (N, 3) km, velocities (N, 3) km/s (GCRS axes where the dynamics
+    have a real Earth-Moon frame, else synodic) and the TDB dates (jd1, jd2) (or None)."""
+    frame = getattr(dynamics, "frame", None)
+    if frame is None or not hasattr(frame, "synodic_to_gcrs"):
+        b = dynamics.bodies[_body_index(dynamics, body)]
+        centre = np.array([b.position_at(ti) for ti in t]).reshape(-1, 3)
+        return (x[:, :3] - centre) * units.LU_KM, x[:, 3:] * units.VU_KMS, None
+    g = frame.synodic_to_gcrs(x, t, unit="km")
+    jd = (np.full(t.size, frame.epoch_tdb[0]), frame.epoch_tdb[1] + frame.tdb_days(t))
+    if body.lower() == "earth":
+        return g[:, :3], g[:, 3:], jd
+    r, v = frame.ephemeris.moon(*jd)
+    return g[:, :3] - r, g[:, 3:] - v, jd
+
+
+def _describe(dynamics: Dynamics, x: np.ndarray, t: np.ndarray, body: str, epoch: datetime | None) -> np.ndarray:
+    """(N, 5) event values (:data:`EVENT_FIELDS`) of the states ``x`` (N, 6) at ``t`` (N,) TU."""
+    from cistrack.least_squares.body_fixed import geodetic, selenographic
+
+    out = np.full((x.shape[0], 5), np.nan)
+    if x.shape[0] == 0:
+        return out
+    r, v, jd = _relative(dynamics, x, t, body)
+    radius = dynamics.bodies[_body_index(dynamics, body)].radius * units.LU_KM
+    out[:, 0] = t
+    out[:, 3] = np.linalg.norm(r, axis=1) - radius
+    out[:, 4] = np.linalg.norm(v, axis=1)
+    if jd is not None and body.lower() == "moon":
+        out[:, 1], out[:, 2] = selenographic(r, *jd)
+    elif jd is not None and epoch is not None:
+        out[:, 1], out[:, 2], _ = geodetic(r, epoch, t * units.TU_S)
+    return out
+
+
+def _impact_values(dynamics: Dynamics, x: np.ndarray, t0: float, t_end: float, body: str,
+                   epoch: datetime | None) -> np.ndarray:
+    prop = dynamics.propagate(x, t0, np.array([t_end]))
+    hit = (~np.asarray(prop.alive)) & (np.asarray(prop.impact_body) == _body_index(dynamics, body))
+    out = np.full((x.shape[0], 5), np.nan)
+    t = np.asarray(prop.impact_time, dtype=float)[hit]
+    out[hit] = _describe(dynamics, np.asarray(prop.states)[-1][hit], t, body, epoch)
+    out[hit, 3] = 0.0
+    return out
+
+
+def _distances(dynamics: Dynamics, states: np.ndarray, grid: np.ndarray, body: str):
+    """Body-centred (K, N, 3) positions km and velocities km/s of ``states`` (K, N, 6) on ``grid`` (K,)."""
+    k, n = states.shape[:2]
+    r, v, _ = _relative(dynamics, states.reshape(-1, 6), np.repeat(grid, n), body)
+    return r.reshape(k, n, 3), v.reshape(k, n, 3)
+
+
+def _approach_values(dynamics: Dynamics, x: np.ndarray, t0: float, window: tuple[float, float], body: str,
+                     epoch: datetime | None) -> np.ndarray:
+    """(N, 5) values of the closest approach of each state ``x`` (N, 6) to ``body`` within
+    ``window`` (TU, after ``t0``); NaN rows where the distance has no interior minimum there."""
+    lo, hi = window
+    n_fine = int(min(4000, max(50, np.ceil((hi - lo) * units.TU_S / _FINE_S))))
+    grid = np.linspace(lo, hi, n_fine)
+    prop = dynamics.propagate(x, t0, grid)
+    states = np.asarray(prop.states, dtype=float)
+    r, v = _distances(dynamics, states, grid, body)
+    radial = np.sum(r * v, axis=2)                                   # (K, N): d/dt |r|^2 / 2
+    alive = grid[:, None] < np.asarray(prop.impact_time, dtype=float)[None, :]
+    out = np.full((x.shape[0], 5), np.nan)
+    for j in range(x.shape[0]):                                      # a few particles; arrays inside
+        ok = np.flatnonzero((radial[:-1, j] < 0) & (radial[1:, j] >= 0) & alive[1:, j])
+        if ok.size == 0:
+            continue
+        k = ok[np.argmin(np.linalg.norm(r[ok, j], axis=1))]
+        f = radial[k, j] / (radial[k, j] - radial[k + 1, j])
+        out[j] = _interpolated(dynamics, states[k:k + 2, j], grid[k:k + 2], f, body, epoch)
+    return out
+
+
+def _interpolated(dynamics: Dynamics, pair: np.ndarray, tt: np.ndarray, f: float, body: str,
+                  epoch: datetime | None) -> np.ndarray:
+    """Event values at the fraction ``f`` between two states ``pair`` (2, 6) at ``tt`` (2,): the
+    position by cubic Hermite interpolation (synodic, with its velocities), the velocity linearly."""
+    h = (tt[1] - tt[0])
+    h00, h10, h01, h11 = 2 * f ** 3 - 3 * f ** 2 + 1, f ** 3 - 2 * f ** 2 + f, -2 * f ** 3 + 3 * f ** 2, f ** 3 - f ** 2
+    x = np.empty(6)
+    x[:3] = h00 * pair[0, :3] + h10 * h * pair[0, 3:] + h01 * pair[1, :3] + h11 * h * pair[1, 3:]
+    x[3:] = (1 - f) * pair[0, 3:] + f * pair[1, 3:]
+    t = tt[0] + f * h
+    return _describe(dynamics, x[None], np.array([t]), body, epoch)[0]
+
+
+def event_values(dynamics: Dynamics, states: np.ndarray, t0: float, kind: str, body: str,
+                 window: tuple[float, float], *, epoch: datetime | str | None = None) -> np.ndarray:
+    """The event ``kind`` ("impact" or "closest approach") on ``body`` ("Moon", "Earth") of each
+    of ``states`` (N, 6) [LU, VU] at ``t0`` (TU): (N, 5) values :data:`EVENT_FIELDS` (time TU,
+    latitude and longitude deg, altitude km, speed km/s); NaN rows where there is none. An impact
+    is looked for from ``t0`` to ``window[1]``; an approach within ``window`` (TU)."""
+    x = np.atleast_2d(np.asarray(states, dtype=float))
+    when = _epoch_of(dynamics, epoch)
+    if kind == "impact":
+        return _impact_values(dynamics, x, t0, window[1], body, when)
+    if kind == "closest approach":
+        return _approach_values(dynamics, x, t0, window, body, when)
+    raise StateError(f"events: kind {kind!r} must be 'impact' or 'closest approach'")
+
+
+def _root(covariance: np.ndarray) -> np.ndarray:
+    p = np.asarray(covariance, dtype=float)
+    w, vecs = np.linalg.eigh(0.5 * (p + p.T))
+    return vecs * np.sqrt(np.clip(w, 0.0, None))                    # columns s_i, root @ root.T == p
+
+
+def _linear_sigma(dynamics, state, covariance, t0, kind, body, window, epoch) -> dict[str, float]:
+    """1-sigma of the event's values by central differences along the covariance's square root."""
+    root = _root(covariance)
+    delta = EPS_SIGMA * root.T
+    pts = np.vstack([state + delta, state - delta])
+    vals = event_values(dynamics, pts, t0, kind, body, window, epoch=epoch)
+    diff = vals[:6] - vals[6:]
+    diff[:, 2] = (diff[:, 2] + 180.0) % 360.0 - 180.0                # longitudes wrap
+    g = diff / (2.0 * EPS_SIGMA)                                     # (6 directions, 5 values) per sigma
+    sig = np.sqrt(np.sum(g * g, axis=0))
+    sig[0] *= units.TU_S
+    return dict(zip(("time_s", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms"), map(float, sig)))
+
+
+def first_impact(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float) -> tuple[float, str] | None:
+    """(time TU, body name) of the first impact of ``state`` (6,) between ``t0`` and ``t_end``
+    (TU, either direction), or None."""
+    prop = dynamics.propagate(np.asarray(state, dtype=float).reshape(1, 6), t0, np.array([t_end]))
+    if bool(np.asarray(prop.alive)[0]):
+        return None
+    return float(np.asarray(prop.impact_time)[0]), dynamics.bodies[int(np.asarray(prop.impact_body)[0])].name
+
+
+def _approach_windows(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float, body: str,
+                      step_tu: float) -> list[tuple[float, float]]:
+    """Windows (TU) of +-2 coarse steps about each interior minimum of the nominal orbit's
+    distance to ``body`` on a grid of ``step_tu``."""
+    n = max(3, int(np.ceil(abs(t_end - t0) / step_tu)) + 1)
+    grid = np.linspace(t0, t_end, n)
+    prop = dynamics.propagate(state[None], t0, grid[1:])
+    states = np.concatenate([state[None, None], np.asarray(prop.states, dtype=float)])
+    r, _ = _distances(dynamics, states, grid, body)
+    d = np.linalg.norm(r[:, 0], axis=1)
+    d[grid >= float(np.asarray(prop.impact_time)[0])] = np.inf
+    k = np.flatnonzero((d[1:-1] < d[:-2]) & (d[1:-1] <= d[2:])) + 1
+    step = grid[1] - grid[0]
+    return [(max(t0 + 1e-12, grid[i] - 2 * step), min(t_end, grid[i] + 2 * step)) for i in k]
+
+
+def _event(dynamics, state, covariance, t0, kind, body, window, epoch) -> OrbitEvent | None:
+    vals = event_values(dynamics, state[None], t0, kind, body, window, epoch=epoch)[0]
+    if not np.isfinite(vals[0]):
+        return None
+    sigma = _linear_sigma(dynamics, state, covariance, t0, kind, body, window, epoch) if covariance is not None else {}
+    utc = units.format_utc(units.tu_to_utc(epoch, vals[0])) if epoch is not None else ""
+    coords = "" if not np.isfinite(vals[1]) else ("selenographic (mean-Earth, DE421)" if body.lower() == "moon"
+                                                  else "geodetic (WGS84)")
+    return OrbitEvent(kind, dynamics.bodies[_body_index(dynamics, body)].name, float(vals[0]), utc, float(vals[1]),
+                      float(vals[2]), float(vals[3]), float(vals[4]), coords, sigma)
+
+
+def orbit_events(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray | None, t0: float, t_end: float, *,
+                 epoch: datetime | str | None = None, step_minutes: float = 10.0,
+                 approaches: bool = True) -> list[OrbitEvent]:
+    """The impact (at most one: it ends the orbit) and the closest approaches to every impact body
+    of the orbit ``state`` (6,) [LU, VU] at ``t0`` (TU) up to ``t_end`` (TU, > t0), in time order,
+    each with its 1-sigma from ``covariance`` (6, 6) [LU, VU] (None: no sigmas). ``epoch``: the
+    UTC of t = 0 (default the dynamics' own ``epoch``) for the UTC times and geodetic coordinates;
+    ``step_minutes``: the coarse grid on which distance minima are looked for."""
+    x = np.asarray(state, dtype=float).reshape(6)
+    if not (np.isfinite(t0) and np.isfinite(t_end) and t_end > t0):
+        raise StateError(f"events: need finite times with t_end > t0 (TU), got {t0!r} and {t_end!r}")
+    when = _epoch_of(dynamics, epoch)
+    hit = first_impact(dynamics, x, t0, t_end)
+    end = t_end if hit is None else hit[0]
+    events = []
+    if hit is not None:
+        events.append(_event(dynamics, x, covariance, t0, "impact", hit[1], (t0, t_end), when))
+    step = step_minutes * 60.0 / units.TU_S
+    for body in ([b.name for b in dynamics.bodies] if approaches else []):
+        for window in _approach_windows(dynamics, x, t0, end, body, step):
+            events.append(_event(dynamics, x, covariance, t0, "closest approach", body, window, when))
+    return sorted((e for e in events if e is not None), key=lambda e: e.t_tu)

@@ -1,0 +1,105 @@
+"""Impacts and closest approaches (cistrack.least_squares.events): the impact time against an
+independent tighter integration with its own surface-crossing event, the 1-sigma of every value
+against 200 orbits drawn from the covariance, the lunar frame against the Moon's libration."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from cistrack import units
+from cistrack.astro.ephemeris import de421
+from cistrack.least_squares.body_fixed import selenographic
+from cistrack.least_squares.events import event_values, orbit_events
+from cistrack.plugin.registry import default_registry
+
+KM = np.r_[[units.LU_KM] * 3, [units.VU_KMS] * 3]
+
+
+@pytest.fixture(scope="module")
+def dyn():
+    return default_registry().create("dynamics", "ephemeris", epoch="2026-03-01T00:00:00Z")
+
+
+def _towards_moon(dyn, offset_km, rel_v_kms):
+    """Synodic state at t = 0 of a point ``offset_km`` from the Moon moving at ``rel_v_kms`` relative to it."""
+    fr = dyn.frame
+    m, mv = fr.ephemeris.moon(*fr.epoch_tdb)
+    return fr.gcrs_to_synodic(np.concatenate([m + offset_km, mv + rel_v_kms]), 0.0)
+
+
+def _cov(pos_km, vel_kms):
+    return np.diag(np.r_[[pos_km ** 2] * 3, [vel_kms ** 2] * 3]) / KM ** 2
+
+
+@pytest.fixture(scope="module")
+def impact_case(dyn):
+    off = np.array([20000.0, 5000.0, 3000.0])
+    x = _towards_moon(dyn, off, -off / np.linalg.norm(off) + np.array([0.0, 0.05, 0.0]))
+    return x, _cov(1.0, 1e-3)
+
+
+def test_the_impact_time_agrees_with_a_tighter_independent_integration(dyn, impact_case):
+    x, _ = impact_case
+    [ev] = [e for e in orbit_events(dyn, x, None, 0.0, units.days_to_tu(2.0)) if e.kind == "impact"]
+    radius = dyn.primary("Moon").radius
+
+    def surface(t, y):
+        return np.linalg.norm(y[:3] - dyn.frame.moon_synodic(t)[0]) - radius
+    surface.terminal = True
+    sol = solve_ivp(lambda t, y: dyn.derivatives(t, y[None])[0], (0.0, 1.0), x, method="DOP853", rtol=1e-13,
+                    atol=1e-15, events=surface)
+    assert abs(sol.t_events[0][0] - ev.t_tu) * units.TU_S < 1e-3          # seconds
+    assert ev.altitude_km == 0.0 and ev.body == "Moon" and ev.utc.startswith("2026-03-01T04")
+
+
+def _sampled_std(dyn, x, cov, kind, window, n=200, seed=4901):
+    draws = np.random.default_rng(seed).multivariate_normal(x, cov, size=n)
+    vals = event_values(dyn, draws, 0.0, kind, "Moon", window)
+    assert np.all(np.isfinite(vals[:, 0]))
+    vals[:, 0] *= units.TU_S
+    return np.std(vals, axis=0, ddof=1)
+
+
+def test_the_impact_sigma_matches_sampling_the_covariance(dyn, impact_case):
+    x, cov = impact_case
+    [ev] = orbit_events(dyn, x, cov, 0.0, units.days_to_tu(2.0), approaches=False)
+    std = _sampled_std(dyn, x, cov, "impact", (0.0, units.days_to_tu(2.0)))
+    lin = [ev.sigma[k] for k in ("time_s", "latitude_deg", "longitude_deg")] + [ev.sigma["speed_kms"]]
+    np.testing.assert_allclose(lin, std[[0, 1, 2, 4]], rtol=0.15)           # 200 draws: ~5 % scatter
+
+
+def test_a_flyby_is_a_closest_approach_with_sampled_sigma(dyn):
+    off = np.array([20000.0, 0.0, 0.0])
+    x = _towards_moon(dyn, off, np.array([-1.0, 0.25, 0.1]))
+    cov = _cov(0.5, 2e-4)
+    evs = [e for e in orbit_events(dyn, x, cov, 0.0, units.days_to_tu(1.0)) if e.body == "Moon"]
+    [ev] = evs
+    assert ev.kind == "closest approach" and 100.0 < ev.altitude_km < 20000.0
+    window = (ev.t_tu - units.hours_to_tu(1.0), ev.t_tu + units.hours_to_tu(1.0))
+    std = _sampled_std(dyn, x, cov, "closest approach", window)
+    lin = [ev.sigma[k] for k in ("time_s", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")]
+    np.testing.assert_allclose(lin, std, rtol=0.15)
+
+
+def test_the_approach_is_the_minimum_of_a_finely_sampled_distance(dyn):
+    x = _towards_moon(dyn, np.array([20000.0, 0.0, 0.0]), np.array([-1.0, 0.25, 0.1]))
+    [ev] = [e for e in orbit_events(dyn, x, None, 0.0, units.days_to_tu(1.0)) if e.body == "Moon"]
+    t = ev.t_tu + np.linspace(-60.0, 60.0, 241) / units.TU_S               # every 0.5 s
+    s = dyn.propagate(x[None], 0.0, t).states[:, 0]
+    d = np.linalg.norm(s[:, :3] - dyn.frame.moon_synodic(t), axis=1) * units.LU_KM - 1737.4
+    assert abs(t[np.argmin(d)] - ev.t_tu) * units.TU_S <= 0.5
+    assert abs(d.min() - ev.altitude_km) < 1e-3
+
+
+def test_the_sub_earth_point_stays_within_the_moons_optical_libration():
+    jd = 2461100.5 + np.arange(0.0, 60.0, 0.5)
+    moon, _ = de421().moon(jd)
+    lat, lon = selenographic(-moon, jd)
+    assert np.max(np.abs(lat)) < 7.0 and np.max(np.abs(lon)) < 8.5          # libration +-6.7, +-7.9 deg
+    assert np.max(np.abs(lat)) > 5.0 and np.max(np.abs(lon)) > 4.0
+    assert abs(np.mean(lat)) < 1.0 and abs(np.mean(lon)) < 1.5
+
+
+def test_bad_times_are_refused(dyn, impact_case):
+    from cistrack.errors import StateError
+    with pytest.raises(StateError, match="t_end > t0"):
+        orbit_events(dyn, impact_case[0], None, 1.0, 0.5)
