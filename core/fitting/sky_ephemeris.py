@@ -1,0 +1,198 @@
+"""Where to point: a fitted orbit's topocentric RA/Dec from a ground site, with its uncertainty
+ellipse on the sky (``cistrack predict DIR --site CODE ...``, docs/sky-predictions.md).
+
+For each time the orbit (state and covariance at its epoch) is propagated with the dynamics it was
+fitted with: the state by the dynamics, the covariance by the unscented transform (the fit state
+and 12 sigma points through the nonlinear dynamics, :mod:`cistrack.least_squares.unscented_prediction`;
+linearly where a sigma-point orbit hit a body). The ``real-telescope`` sensor at the site gives the
+topocentric astrometric ICRF RA/Dec (light time, no aberration: as MPC and ADES report them) and
+the range; its azel twin the elevation (apparent, no refraction). The sky-plane covariance of
+(RA cos(Dec), Dec) is the state covariance mapped by the measurement's Jacobian (central
+differences); its ellipse: 1-sigma semi-axes (arcsec) and the position angle of the major axis
+(degrees from North through East); 3-sigma is three times those (the 2-D 3-sigma region holds
+98.9 % of a Gaussian). Rates are central differences over +-30 s; solar elongation and lunar
+distance are the angles from the site between the target and the Sun's and the Moon's centres
+(DE421), degrees.
+
+Needs dynamics in the real Earth-Moon frame (``ephemeris``): a CR3BP orbit has no place on the
+real sky.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from cistrack import units
+from cistrack.astro.sites import Site
+from cistrack.errors import ConfigError, StateError
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
+from cistrack.least_squares.unscented_prediction import unscented_covariances
+from cistrack.plugin.registry import Registry, default_registry
+
+__all__ = ["SkyEphemeris", "sky_ephemeris", "predicted_orbit", "CSV_COLUMNS", "RATE_SECONDS"]
+
+RATE_SECONDS = 30.0
+"""Half-width of the central differences of the rates, seconds."""
+CSV_COLUMNS = ("utc", "ra_deg", "dec_deg", "ra_rate_arcsec_min", "dec_rate_arcsec_min", "range_km", "elevation_deg",
+               "solar_elongation_deg", "lunar_distance_deg", "sigma_ra_arcsec", "sigma_dec_arcsec",
+               "semi_major_1sigma_arcsec", "semi_minor_1sigma_arcsec", "position_angle_deg",
+               "semi_major_3sigma_arcsec", "semi_minor_3sigma_arcsec", "linear_covariance")
+_ARCSEC = 180.0 * 3600.0 / math.pi
+
+
+@dataclass(frozen=True)
+class SkyEphemeris:
+    """Sky predictions at K times (arrays (K,) unless said): see the module docstring.
+
+    ``ra_rate`` is the rate of RA cos(Dec); ``covariance_arcsec2`` (K, 2, 2) is that of
+    (RA cos(Dec), Dec); ``linear`` marks the times whose state covariance is the linear one."""
+
+    utc: list[str]
+    t_tu: np.ndarray
+    ra_deg: np.ndarray
+    dec_deg: np.ndarray
+    ra_rate_arcsec_min: np.ndarray
+    dec_rate_arcsec_min: np.ndarray
+    range_km: np.ndarray
+    elevation_deg: np.ndarray
+    solar_elongation_deg: np.ndarray
+    lunar_distance_deg: np.ndarray
+    covariance_arcsec2: np.ndarray
+    linear: np.ndarray
+    site: Site
+
+    def ellipse(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """1-sigma semi-major and semi-minor axes (K,) arcsec and the major axis' position angle
+        (K,) degrees, North through East, in [0, 180)."""
+        w, v = np.linalg.eigh(self.covariance_arcsec2)
+        major = v[:, :, 1]                                           # (east, north) components
+        pa = np.degrees(np.arctan2(major[:, 0], major[:, 1])) % 180.0
+        return np.sqrt(np.clip(w[:, 1], 0, None)), np.sqrt(np.clip(w[:, 0], 0, None)), pa
+
+    def mahalanobis2(self, ra_deg, dec_deg) -> np.ndarray:
+        """Squared Mahalanobis distance (K,) of positions ``ra_deg``, ``dec_deg`` (K,) from the
+        predicted ones under the sky covariance (inside the 3-sigma ellipse: <= 9; the 98.9 %
+        region of a 2-D Gaussian is <= 11.83)."""
+        dra = (np.asarray(ra_deg) - self.ra_deg + 180.0) % 360.0 - 180.0
+        d = np.stack([dra * np.cos(np.radians(self.dec_deg)), np.asarray(dec_deg) - self.dec_deg], 1) * 3600.0
+        return np.einsum("ki,kij,kj->k", d, np.linalg.inv(self.covariance_arcsec2), d)
+
+    def rows(self) -> list[dict]:
+        """One dict per time with :data:`CSV_COLUMNS`."""
+        a, b, pa = self.ellipse()
+        sig = np.sqrt(np.diagonal(self.covariance_arcsec2, axis1=1, axis2=2))
+        cols = (self.ra_deg, self.dec_deg, self.ra_rate_arcsec_min, self.dec_rate_arcsec_min, self.range_km,
+                self.elevation_deg, self.solar_elongation_deg, self.lunar_distance_deg, sig[:, 0], sig[:, 1], a, b, pa,
+                3 * a, 3 * b)
+        return [dict(zip(CSV_COLUMNS, [self.utc[k]] + [float(c[k]) for c in cols] + [bool(self.linear[k])]))
+                for k in range(len(self.utc))]
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write :meth:`rows` to ``path`` (CSV with a header of :data:`CSV_COLUMNS`)."""
+        p = Path(path)
+        with p.open("w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
+            w.writeheader()
+            for row in self.rows():
+                w.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in row.items()})
+        return p
+
+
+def predicted_orbit(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray, t0: float,
+                    times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """States (K, 6), covariances (K, 6, 6) [LU, VU] at ``times`` (K,) TU, and (K,) bool where the
+    covariance is linear (Phi P Phi^T) because the unscented one could not be made."""
+    states, stms = arc_states_and_stms(dynamics, state, t0, times)
+    cov = np.einsum("kij,jl,kml->kim", stms, covariance, stms)
+    linear = np.ones(times.size, dtype=bool)
+    try:
+        sigma, ok = unscented_covariances(dynamics, state, covariance, t0, times)
+        cov[ok], linear = sigma[ok], ~ok
+    except StateError:
+        pass
+    return states, 0.5 * (cov + np.transpose(cov, (0, 2, 1))), linear
+
+
+def _sensors(site: Site, epoch: datetime, registry: Registry):
+    common = {"latitude_deg": site.latitude_deg, "longitude_deg": site.longitude_deg, "height_m": site.height_m,
+              "epoch": units.format_utc(epoch), "elevation_mask_deg": -90.0}
+    return (registry.create("sensor", "real-telescope", measurement="radec", measure_range=True, **common),
+            registry.create("sensor", "real-telescope", measurement="azel", **common))
+
+
+def _sky_jacobian(radec, states: np.ndarray, times: np.ndarray, dec: np.ndarray) -> np.ndarray:
+    """d(RA cos(Dec), Dec)/d(state) (K, 2, 6) rad per LU/VU, central differences."""
+    h = np.r_[[1e-8] * 3, [1e-7] * 3]
+    pts = np.concatenate([states[:, None, :] + np.diag(h)[None], states[:, None, :] - np.diag(h)[None]], 1)
+    z = radec.measure(pts.reshape(-1, 6), np.repeat(times, 12))[:, :2].reshape(-1, 12, 2)
+    d = z[:, :6] - z[:, 6:]
+    d[:, :, 0] = (d[:, :, 0] + math.pi) % (2 * math.pi) - math.pi
+    d[:, :, 0] *= np.cos(dec)[:, None]
+    return np.transpose(d / (2 * h)[None, :, None], (0, 2, 1))
+
+
+def _rates(dynamics, radec, state, t0, times, dec) -> tuple[np.ndarray, np.ndarray]:
+    """(RA cos(Dec), Dec) rates (K,) each, arcsec/min."""
+    dt = units.seconds_to_tu(RATE_SECONDS)
+    both = np.concatenate([times - dt, times + dt])
+    z = radec.measure(arc_states(dynamics, state, t0, both), both)[:, :2]
+    k = times.size
+    dra = (z[k:, 0] - z[:k, 0] + math.pi) % (2 * math.pi) - math.pi
+    scale = _ARCSEC * 60.0 / (2 * RATE_SECONDS)
+    return dra * np.cos(dec) * scale, (z[k:, 1] - z[:k, 1]) * scale
+
+
+def _angles_to_sun_and_moon(site: Site, epoch: datetime, times: np.ndarray, ra: np.ndarray,
+                            dec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Angles (K,) degrees from the target's direction to the Sun's and the Moon's seen from the site."""
+    from cistrack.astro.earth_moon import EarthMoonFrame
+    from cistrack.astro.ephemeris import de421
+    from cistrack.astro.observer import ObserverGeometry
+
+    frame = EarthMoonFrame.from_utc(epoch)
+    jd = (np.full(times.size, frame.epoch_tdb[0]), frame.epoch_tdb[1] + frame.tdb_days(times))
+    obs = ObserverGeometry(site, epoch).state(times * units.TU_S).position_km
+    u = np.stack([np.cos(dec) * np.cos(ra), np.cos(dec) * np.sin(ra), np.sin(dec)], 1)
+    out = []
+    for body in (de421().sun(*jd)[0], de421().moon(*jd)[0]):
+        b = body - obs
+        cosang = np.sum(u * b, 1) / np.linalg.norm(b, axis=1)
+        out.append(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))))
+    return out[0], out[1]
+
+
+def _checked(dynamics: Dynamics, times) -> np.ndarray:
+    if getattr(dynamics, "frame", None) is None:
+        raise ConfigError(f"sky predictions need dynamics in the real Earth-Moon frame ('ephemeris'); these are "
+                          f"'{getattr(dynamics, 'name', type(dynamics).__name__)}', whose orbit has no place on the real sky")
+    tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
+    if tt.size == 0 or not np.all(np.isfinite(tt)):
+        raise StateError("sky predictions: times must be one or more finite numbers (TU)")
+    return tt
+
+
+def sky_ephemeris(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray, t0: float, times,
+                  site: Site, epoch: datetime | str, registry: Registry | None = None) -> SkyEphemeris:
+    """Sky predictions (see the module docstring) of the orbit ``state`` (6,) and ``covariance``
+    (6, 6) [LU, VU] at ``t0`` (TU) at ``times`` (K,) TU from ``site``; ``epoch``: the UTC of t = 0
+    (the dynamics' and scenario's)."""
+    tt = _checked(dynamics, times)
+    when = units.parse_utc(epoch)
+    radec, azel = _sensors(site, when, registry or default_registry())
+    states, covs, linear = predicted_orbit(dynamics, np.asarray(state, float), np.asarray(covariance, float), t0, tt)
+    z = radec.measure(states, tt)
+    ra, dec = z[:, 0], z[:, 1]
+    jac = _sky_jacobian(radec, states, tt, dec)
+    sky = np.einsum("kij,kjl,kml->kim", jac, covs, jac) * _ARCSEC ** 2
+    ra_rate, dec_rate = _rates(dynamics, radec, np.asarray(state, float), t0, tt, dec)
+    sun, moon = _angles_to_sun_and_moon(site, when, tt, ra, dec)
+    utc = [units.format_utc(units.tu_to_utc(when, float(t)))[:19] + "Z" for t in tt]
+    return SkyEphemeris(utc, tt, np.degrees(ra), np.degrees(dec), ra_rate, dec_rate, z[:, 2] * units.LU_KM,
+                        np.degrees(azel.measure(states, tt)[:, 1]), sun, moon, 0.5 * (sky + np.transpose(sky, (0, 2, 1))),
+                        linear, site)
