@@ -30,8 +30,9 @@ before perigee: its first night is near 80,000 km, below the IOD's default range
 ``real-data`` scenario does) and then follow the ephemeris model.
 
 Every random draw comes from ``numpy.random.default_rng(seed)`` (one stream per set, split
-per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds used while
-building: 1-4 (docs in README.md beside this script); seeds 101-104 kept unseen for the final check.
+per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds looked at while
+building: 1-3 (tests/fit/test_survey_sets.py uses 1 and 2); seeds 101-110 are kept unseen for
+the final check. ``check_survey_fit.py`` fits the sets and tabulates the results.
 """
 from __future__ import annotations
 

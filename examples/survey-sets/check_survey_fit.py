@@ -1,0 +1,179 @@
+"""Fit survey-cadence sets with `cistrack fit` (no option) and tabulate how the fits did.
+
+    .venv/bin/python examples/survey-sets/check_survey_fit.py SET_DIR [SET_DIR ...] [--out DIR]
+
+Each SET_DIR holds ``observations.psv`` and ``truth.csv`` (``make_survey_sets.py``; its
+``set.json`` names the injected outliers, if any). For each: ``cistrack fit SET_DIR/observations.psv
+--out OUT/<name>`` and ``cistrack export OUT/<name> --format oem``, then one row:
+
+- format (of the observation file), method (the IOD and filter ``fit.json`` names), outcome;
+- position error at the fit epoch (the last observation), km;
+- largest Mahalanobis distance squared of the truth under the exported OEM covariance over the
+  OEM's epochs inside the arc (bound 22.5: chi-square, 6 degrees of freedom, 99.9 %);
+- post-fit weighted RMS (arcsec, both angles), outliers rejected / injected (rejected of the
+  injected, and all rejected), and the wall time of the fit (s).
+
+The truth is the first row of ``truth.csv`` propagated with the fit's own dynamics and mapped
+into the OEM's frame with the export's transform, as ``examples/real-data/check_fit.py`` does.
+Exit status 0 when every set converged with Mahalanobis^2 <= 22.5 at every arc epoch and all
+injected outliers rejected, 1 otherwise.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib.util
+import json
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cistrack import units
+
+MAHALANOBIS2_BOUND = 22.5  # chi-square, 6 degrees of freedom, 99.9 % (22.46)
+_HERE = Path(__file__).resolve().parent
+
+
+def _read_oem():
+    """``read_oem`` of examples/real-data/check_fit.py (one OEM reader for both checkers)."""
+    spec = importlib.util.spec_from_file_location("check_fit", _HERE.parent / "real-data" / "check_fit.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.read_oem
+
+
+@dataclass
+class Row:
+    """One data set's line of the table."""
+
+    name: str
+    format: str = ""
+    method: str = ""
+    outcome: str = ""
+    error_km: float = float("nan")
+    max_m2: float = float("nan")
+    rms_arcsec: float = float("nan")
+    rejected_injected: int = 0
+    injected: int = 0
+    rejected: int = 0
+    seconds: float = float("nan")
+    failure: str = ""
+    m2: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return (self.outcome == "converged" and self.max_m2 <= MAHALANOBIS2_BOUND
+                and self.rejected_injected == self.injected)
+
+
+def run_cli(*args: str) -> tuple[int, float, str]:
+    """``cistrack ARGS`` in a subprocess: (exit status, wall seconds, output)."""
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", *args], capture_output=True, text=True)
+    return proc.returncode, time.perf_counter() - t0, proc.stdout + proc.stderr
+
+
+def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tuple[np.ndarray, np.ndarray, object]:
+    """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function)."""
+    from cistrack.fitting.fit_export import _scenario
+    from cistrack.plugin.registry import default_registry
+
+    reg = default_registry()
+    scen = _scenario(fit_dir, reg)
+    dyn = scen.build("dynamics", reg)
+    frame = scen.build("sensor", reg).inertial_frame()
+    rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
+    t0 = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
+    x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
+
+    def truth_at(t: np.ndarray) -> np.ndarray:
+        out = np.empty((len(t), 6))
+        for side in (t >= t0, t < t0):
+            if np.any(side):
+                ts = t[side]
+                order = np.argsort(ts) if ts[0] >= t0 else np.argsort(-ts)
+                res = np.empty((len(ts), 6))
+                res[order] = dyn.propagate(x0[None], t0, ts[order]).states[:, 0, :]
+                out[side] = res
+        return out
+
+    t = np.array([(units.parse_utc(e + "Z") - scen.epoch).total_seconds() / units.TU_S for e in epochs])
+    return t, frame.from_synodic(truth_at(t), t), truth_at
+
+
+def _score(row: Row, fit_dir: Path, truth_csv: Path, outliers: list[dict]) -> None:
+    """Fill the row's error, Mahalanobis, RMS and rejections from a converged, exported fit."""
+    rec = json.loads((fit_dir / "fit.json").read_text())
+    epochs, states, covs = _read_oem()(fit_dir / "estimate.oem")
+    t, truth, truth_at = _truth_in_oem_frame(fit_dir, truth_csv, epochs)
+    m2 = np.array([float((truth[k] - states[k]) @ np.linalg.solve(covs[k], truth[k] - states[k]))
+                   for k in range(len(t))])
+    arc = t <= rec["arc"]["last_tu"] + 600.0 / units.TU_S
+    row.m2 = m2[arc].tolist()
+    row.max_m2 = float(m2[arc].max())
+    e = units.state_to_km(truth_at(np.array([rec["epoch_tu"]]))[0]) - np.asarray(rec["state_km"])
+    row.error_km = float(np.linalg.norm(e[:3]))
+    with (fit_dir / "residuals.csv").open() as fh:
+        res = list(csv.DictReader(fh))
+    used = [r for r in res if r["rejected"] == "false"]
+    both = np.array([float(r[k]) for r in used for k in ("ra_cos_dec_arcsec", "dec_arcsec")])
+    row.rms_arcsec = float(np.sqrt(np.mean(both ** 2)))
+    rejected = {(r["utc"][:19], r["site"]) for r in res if r["rejected"] == "true"}
+    row.rejected = len(rejected)
+    row.rejected_injected = sum((o["utc"][:19], o["site"]) in rejected for o in outliers)
+
+
+def check_set(set_dir: Path, out: Path) -> Row:
+    """Fit, export and score one set; the row says what happened."""
+    row = Row(set_dir.name, format="ADES PSV")
+    info = json.loads((set_dir / "set.json").read_text()) if (set_dir / "set.json").is_file() else {}
+    outliers = info.get("outliers", [])
+    row.injected = len(outliers)
+    fit_dir = out / set_dir.name
+    rc, row.seconds, text = run_cli("fit", str(set_dir / "observations.psv"), "--out", str(fit_dir))
+    rec = json.loads((fit_dir / "fit.json").read_text()) if (fit_dir / "fit.json").is_file() else {}
+    filt = rec.get("filter") or {}
+    row.method = (f"{filt['iod']} + {filt.get('name', '?')} + least squares" if filt.get("iod")
+                  else "none (refused before the IOD)")
+    if rc != 0 or not rec.get("converged"):
+        row.outcome = "failed"
+        lines = text.strip().splitlines()
+        row.failure = rec.get("failure") or (lines[-1] if lines else f"exit {rc}")
+        return row
+    row.outcome = "converged"
+    rc, _s, text = run_cli("export", str(fit_dir), "--format", "oem")
+    if rc != 0:
+        row.outcome, row.failure = "export failed", text.strip()[-300:]
+        return row
+    _score(row, fit_dir, set_dir / "truth.csv", outliers)
+    return row
+
+
+def table(rows: list[Row]) -> str:
+    """Markdown table of the rows (failures listed below it)."""
+    out = ["| data set | format | method | outcome | error at last obs. (km) | max M^2 (<= 22.5) | RMS (\") "
+           "| outliers rejected / injected (all rejected) | time (s) |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| {r.name} | {r.format} | {r.method} | {r.outcome} | {r.error_km:.2f} | {r.max_m2:.2f} | "
+                   f"{r.rms_arcsec:.3f} | {r.rejected_injected} / {r.injected} ({r.rejected}) | {r.seconds:.1f} |")
+    out += [f"- {r.name}: {r.failure}" for r in rows if r.failure]
+    return "\n".join(out)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("sets", type=Path, nargs="+")
+    ap.add_argument("--out", type=Path, default=Path("runs/survey-fits"))
+    a = ap.parse_args()
+    rows = [check_set(s, a.out) for s in a.sets]
+    print(table(rows))
+    return 0 if all(r.ok for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
