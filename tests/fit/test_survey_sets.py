@@ -1,0 +1,76 @@
+"""Survey-cadence sets (examples/survey-sets): the generator keeps the cadence it promises, and
+`cistrack fit` with no option recovers each orbit family from them (slow).
+
+The fits need an IOD that starts from the first night's lone tracklet of 3-5 exposures; the
+kinematic-fit IOD of today needs at least 8 measurements in the first pass and refuses, so the
+fit cases are expected to fail until the tracklet IOD lands (xfail, not strict).
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cistrack.astro.sites import observatory
+from cistrack.runs.observation_files import read_observations
+from cistrack import units
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "survey-sets"
+sys.path.insert(0, str(EXAMPLES))
+from check_survey_fit import MAHALANOBIS2_BOUND, check_set  # noqa: E402
+from make_survey_sets import FAMILIES, make  # noqa: E402
+
+_EPOCH = "2000-01-01T00:00:00Z"
+_TRACKLET_IOD = ("the first night is one tracklet of 3-5 exposures; the IOD of 2026-11-28 needs 8 in the "
+                 "first pass and refuses (the tracklet IOD is being built)")
+
+
+def _tracklets(times_s: np.ndarray, sites: np.ndarray) -> list[tuple[float, float, int, str]]:
+    """(start s, span s, exposures, site) of runs of one site's exposures less than 40 min apart."""
+    out: list[list] = []
+    for t, s in zip(times_s, sites):
+        if out and out[-1][3] == s and t - out[-1][4] < 2400.0:
+            out[-1][1], out[-1][2], out[-1][4] = t - out[-1][0], out[-1][2] + 1, t
+        else:
+            out.append([t, 0.0, 1, s, t])
+    return [(a, b, c, d) for a, b, c, d, _e in out]
+
+
+@pytest.mark.parametrize("family", ["heo", "dro"])
+def test_generator_keeps_the_survey_cadence(tmp_path, family):
+    info = make(tmp_path / family, family, seed=2)
+    ms = read_observations(tmp_path / family / "observations.psv", _EPOCH)
+    t = ms.times * units.TU_S
+    tracks = _tracklets(t, ms.sites)
+    assert all(3 <= n <= 5 for _a, _b, n, _s in tracks), tracks
+    assert all(span <= 31 * 60 for _a, span, _n, _s in tracks), tracks
+    first = tracks[0]
+    assert first[2] == info["first_night_exposures"] and 9 * 60 <= first[1] <= 31 * 60
+    assert tracks[1][0] - first[0] > 12 * 3600.0, "the first night holds one lone tracklet"
+    lats = [observatory(s).latitude_deg for s in info["sites"]]
+    assert min(lats) < 0 < max(lats) and 2 <= len(lats) <= 3
+    assert 7 <= (t[-1] - t[0]) / 86400.0 <= 22
+    assert len(info["outliers"]) == max(1, round(0.03 * len(ms)))
+    np.testing.assert_allclose(ms.sigmas[:, 1] / units.ARCSEC_RAD, info["sigma_arcsec"], rtol=1e-9)
+    assert 0.5 <= info["sigma_arcsec"] <= 1.0
+    if family == "heo":
+        assert 60_000.0 < info["range_km_first"] < 84_328.0  # below the IOD's default range floor
+    again = make(tmp_path / "again", family, seed=2)
+    assert again == info
+    assert (tmp_path / "again" / "observations.psv").read_bytes() == (tmp_path / family / "observations.psv").read_bytes()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("family", [pytest.param(f, marks=pytest.mark.xfail(strict=False, reason=_TRACKLET_IOD))
+                                    for f in FAMILIES])
+def test_fit_recovers_each_family(tmp_path, family):
+    set_dir = tmp_path / f"{family}-s1"
+    info = make(set_dir, family, seed=1)
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    assert row.rejected_injected == row.injected == len(info["outliers"])
+    assert json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["converged"]
