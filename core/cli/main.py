@@ -9,6 +9,7 @@
     cistrack study report STUDY [--out DIR] [--first-seed N] [--n-seeds N]
     cistrack export RUN_DIR [--format oem|opm] [--out FILE [--overwrite]] [--step N]
     cistrack fit FILE [FILE ...] [--out DIR] [--set TABLE.KEY=VALUE ...] [--quiet]
+    cistrack predict DIR --site CODE [--start UTC] [--stop UTC] [--step MINUTES] [--out PREFIX]
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
 from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
+from cistrack.cli.predict_command import add_predict_parser
 from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
@@ -296,6 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_study_parser(sub)
     add_init_parser(sub)
     add_fit_parser(sub, export_parser=ex)
+    add_predict_parser(sub)
     return p
 
 

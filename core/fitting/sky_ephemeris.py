@@ -35,7 +35,8 @@ from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
 from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.plugin.registry import Registry, default_registry
 
-__all__ = ["SkyEphemeris", "sky_ephemeris", "predicted_orbit", "CSV_COLUMNS", "RATE_SECONDS"]
+__all__ = ["SkyEphemeris", "sky_ephemeris", "predicted_orbit", "DirectoryOrbit", "orbit_of_directory", "CSV_COLUMNS",
+           "RATE_SECONDS"]
 
 RATE_SECONDS = 30.0
 """Half-width of the central differences of the rates, seconds."""
@@ -196,3 +197,57 @@ def sky_ephemeris(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray,
     return SkyEphemeris(utc, tt, np.degrees(ra), np.degrees(dec), ra_rate, dec_rate, z[:, 2] * units.LU_KM,
                         np.degrees(azel.measure(states, tt)[:, 1]), sun, moon, 0.5 * (sky + np.transpose(sky, (0, 2, 1))),
                         linear, site)
+
+
+@dataclass(frozen=True)
+class DirectoryOrbit:
+    """The orbit a results directory holds: ``state`` (6,) and ``covariance`` (6, 6) [LU, VU] at
+    ``t0`` (TU since ``epoch``, a UTC datetime), the ``dynamics`` it was made with, its ``name``
+    and ``source`` (what the state is: the least-squares fit or the filter's last estimate)."""
+
+    state: np.ndarray
+    covariance: np.ndarray
+    t0: float
+    epoch: datetime
+    dynamics: Dynamics
+    name: str
+    source: str
+
+
+def orbit_of_directory(directory: str | Path, registry: Registry | None = None) -> DirectoryOrbit:
+    """The orbit of a ``cistrack fit`` directory (``fit.json``: the least-squares state and its
+    covariance as exported, times the noise scale squared when above 1) or of a ``cistrack run``
+    directory (the filter's estimate at its last step); ConfigError naming the directory otherwise."""
+    from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
+    from cistrack.fitting.fit_record import read_fit_record
+    from cistrack.runs.export import scenario_of
+
+    d = Path(directory)
+    if not d.is_dir():
+        raise ConfigError(f"{d}: no such directory; give the --out directory of 'cistrack fit' or 'cistrack run'")
+    reg = registry or default_registry()
+    scen = scenario_of(d, reg)
+    dyn = scen.build("dynamics", reg)
+    if is_fit_directory(d):
+        rec = read_fit_record(d)
+        why = fit_refusal(rec)
+        if why is not None:
+            raise ConfigError(f"{d}: no orbit to predict from: {why}")
+        cov = np.asarray(rec["covariance"], dtype=float) * covariance_scale(rec)
+        return DirectoryOrbit(np.asarray(rec["state"], dtype=float), cov, float(rec["epoch_tu"]), scen.epoch, dyn,
+                              str(rec.get("designation") or scen.name), "least-squares fit")
+    return _run_orbit(d, scen, dyn)
+
+
+def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:
+    from cistrack.results.estimates import KM_SCALE, read_estimates
+
+    try:
+        est = read_estimates(d)
+    except FileNotFoundError:
+        raise ConfigError(f"{d}: neither fit.json nor estimates.parquet; give the --out directory of 'cistrack fit' "
+                          "or 'cistrack run'") from None
+    mean = np.asarray(est.mean_km[-1], dtype=float) / KM_SCALE
+    cov = np.asarray(est.covariance_km[-1], dtype=float) / np.multiply.outer(KM_SCALE, KM_SCALE)
+    return DirectoryOrbit(mean, cov, float(est.t_tu[-1]), scen.epoch, dyn, scen.name,
+                          f"filter estimate at step {int(est.step[-1])}")

@@ -32,7 +32,13 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["export_run", "export_refusal", "run_inertial_estimates"]
+__all__ = ["export_run", "export_refusal", "run_inertial_estimates", "scenario_of"]
+
+
+def scenario_of(run_dir: str | Path, reg: Registry | None = None):
+    """The scenario a run or fit directory ran (its ``scenario.toml``, or ``scenario.json``),
+    parsed; ConfigError when the directory has neither."""
+    return _scenario_of(Path(run_dir), reg or default_registry())
 
 
 def _scenario_of(run_dir: Path, reg: Registry):

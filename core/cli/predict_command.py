@@ -1,0 +1,131 @@
+"""``cistrack predict DIR --site CODE [--start UTC] [--stop UTC] [--step MINUTES] [--out PREFIX]``:
+where to point a telescope at MPC site CODE, with the uncertainty ellipse on the sky.
+
+The work is :func:`cistrack.fitting.sky_ephemeris.sky_ephemeris` on the orbit of a fit or run
+directory (:func:`cistrack.fitting.sky_ephemeris.orbit_of_directory`); this module checks the
+options, prints the table (at most 120 columns), and writes ``PREFIX.csv`` and ``PREFIX.png``
+(default ``DIR/sky-<CODE>``). docs/sky-predictions.md.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from datetime import timedelta
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["add_predict_parser", "cmd_predict", "table_lines", "MAX_TIMES"]
+
+MAX_TIMES = 20_000
+"""Most prediction times one command computes."""
+_HEADER = (f"{'UTC':<20}{'RA deg':>11}{'Dec deg':>10}{'RA rate':>9}{'Dec rate':>9}{'range km':>10}{'elev':>7}"
+           f"{'Sun':>7}{'Moon':>7}{'3sig a':>9}{'3sig b':>9}{'PA':>6}")
+_UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min'.rjust(9) + "".rjust(10)
+          + "deg".rjust(7) * 3 + "arcsec".rjust(9) * 2 + "deg".rjust(6))
+
+
+def _eprint(*a) -> None:
+    print(*a, file=sys.stderr, flush=True)
+
+
+def _minutes(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of minutes") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number of minutes > 0")
+    return v
+
+
+def _utc(text: str):
+    from cistrack import units
+
+    try:
+        return units.parse_utc(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an ISO-8601 UTC time such as 2026-03-08T00:00:00Z") from None
+
+
+def add_predict_parser(sub) -> None:
+    """Add ``cistrack predict`` to the sub-command parsers ``sub``."""
+    p = sub.add_parser("predict", help="where to point: RA/Dec, rates and the 1/3-sigma sky ellipse from an MPC site",
+                       description="Sky predictions of the orbit of a 'cistrack fit' directory (the least-squares "
+                                   "fit) or a 'cistrack run' directory (the filter's last estimate), seen from an "
+                                   "MPC observatory: docs/sky-predictions.md.")
+    p.add_argument("run", metavar="DIR", help="a fit or run results directory")
+    p.add_argument("--site", required=True, metavar="CODE", help="MPC observatory code, e.g. 568, 711, J04")
+    p.add_argument("--start", type=_utc, default=None, metavar="UTC", help="first time (default: the orbit's epoch)")
+    p.add_argument("--stop", type=_utc, default=None, metavar="UTC", help="last time (default: one day after --start)")
+    p.add_argument("--step", type=_minutes, default=60.0, metavar="MINUTES", help="spacing, minutes (default 60)")
+    p.add_argument("--out", default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
+                   "(default DIR/sky-<CODE>)")
+    p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
+    p.set_defaults(func=cmd_predict)
+
+
+def _times(args, orbit) -> np.ndarray:
+    """Prediction times (K,) TU since the orbit's epoch from --start, --stop and --step."""
+    from cistrack import units
+    from cistrack.errors import ConfigError
+
+    start = args.start or units.tu_to_utc(orbit.epoch, orbit.t0)
+    stop = args.stop or start + timedelta(days=1)
+    if stop < start:
+        raise ConfigError(f"--stop {units.format_utc(stop)[:19]}Z is before --start {units.format_utc(start)[:19]}Z")
+    n = int(math.floor((stop - start).total_seconds() / (60.0 * args.step) + 1e-9)) + 1
+    if n > MAX_TIMES:
+        raise ConfigError(f"--step {args.step:g}: {n} times between --start and --stop; at most {MAX_TIMES} "
+                          "(give a longer --step or a shorter span)")
+    first = (start - orbit.epoch).total_seconds()
+    return units.seconds_to_tu(first + 60.0 * args.step * np.arange(n))
+
+
+def table_lines(sky) -> list[str]:
+    """The printed table of a :class:`~cistrack.fitting.sky_ephemeris.SkyEphemeris` (<= 120 columns)."""
+    a, b, pa = sky.ellipse()
+    lines = [_HEADER, _UNITS]
+    for k, utc in enumerate(sky.utc):
+        lines.append(f"{utc[:19]:<20}{sky.ra_deg[k]:>11.5f}{sky.dec_deg[k]:>10.5f}{sky.ra_rate_arcsec_min[k]:>9.2f}"
+                     f"{sky.dec_rate_arcsec_min[k]:>9.2f}{sky.range_km[k]:>10.0f}{sky.elevation_deg[k]:>7.1f}"
+                     f"{sky.solar_elongation_deg[k]:>7.1f}{sky.lunar_distance_deg[k]:>7.1f}{3 * a[k]:>9.3g}"
+                     f"{3 * b[k]:>9.3g}{pa[k]:>6.0f}")
+    return lines
+
+
+def _site(code: str):
+    from cistrack.astro.sites import observatory
+    from cistrack.errors import ConfigError, MeasurementError
+
+    try:
+        return observatory(code)
+    except MeasurementError as exc:
+        raise ConfigError(f"--site {code}: {exc}") from None
+
+
+def cmd_predict(args) -> int:
+    """``cistrack predict``: see the module docstring."""
+    from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris
+    from cistrack.fitting.sky_plot import plot_sky
+    from cistrack.plugin.registry import default_registry
+
+    site = _site(args.site)
+    reg = default_registry()
+    orbit = orbit_of_directory(args.run, reg)
+    times = _times(args, orbit)
+    if not args.quiet:
+        _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
+                f"({site.name or 'site'}) ...")
+    sky = sky_ephemeris(orbit.dynamics, orbit.state, orbit.covariance, orbit.t0, times, site, orbit.epoch, reg)
+    prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
+    csv_path = sky.write_csv(prefix.with_name(prefix.name + ".csv"))
+    png = plot_sky(sky, prefix.with_name(prefix.name + ".png"),
+                   f"{orbit.name} from {args.site} {site.name}: {orbit.source}")
+    if not args.quiet:
+        print("\n".join(table_lines(sky)))
+        if np.any(sky.linear):
+            print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
+        print(f"wrote {csv_path} and {png}")
+    return 0
