@@ -81,13 +81,17 @@ def _scaled(fit) -> Any:
 
 def _misses(model: MeasurementModel, sub: MeasurementSet, states: np.ndarray,
             covs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(miss on the sky (K,) arcsec, d_i (K,), predicted 1-sigma on the sky (K,) rad)."""
+    """(miss on the sky (K,) arcsec, d_i (K,), predicted 1-sigma on the sky (K,) rad: the largest
+    axis of H P H^T, right ascension times cos(Dec))."""
     r = model.residuals(states)
     h = model.jacobian(states)
     hph = np.einsum("kmi,kij,knj->kmn", h, covs, h)
     s = hph + np.einsum("km,mn->kmn", model.sigmas ** 2, np.eye(model.m))
     d2 = np.einsum("km,km->k", r, np.linalg.solve(s, r[..., None])[..., 0])
-    sky = np.sqrt(np.maximum(np.linalg.eigvalsh(hph)[:, -1], 0.0))
+    scale = np.ones_like(r)
+    radec = np.array([sub.kind_at(i) == "radec" for i in range(len(sub))])
+    scale[radec, 0] = np.cos(model.values[radec, 1])                   # RA on the sky: times cos(Dec)
+    sky = np.sqrt(np.maximum(np.linalg.eigvalsh(hph * scale[:, :, None] * scale[:, None, :])[:, -1], 0.0))
     table = residual_table(model.times, np.array([sub.site_at(i) for i in range(len(sub))]),
                            np.array([sub.kind_at(i) for i in range(len(sub))]), model.names, model.values,
                            r, model.sigmas, np.zeros(len(sub), dtype=bool))
