@@ -9,6 +9,7 @@ from cistrack.api import hookimpl, preset
 
 from .kinematic import KinematicFitIOD
 from .range_priors import NoisyRange, UniformRange
+from .tracklet_ranging import TrackletRangingIOD
 
 __all__ = ["NoisyRangeIOD", "UniformRangeIOD", "UniformRangeVelocityBoundIOD"]
 
@@ -35,8 +36,11 @@ UniformRangeVelocityBoundIOD = preset(
 @hookimpl
 def cistrack_register(registry) -> None:
     """The composed component and its three presets, in this order (this module is the entry point
-    ``kinematic-fit``: registering here keeps kinematic.py free of an import of its presets)."""
+    ``kinematic-fit``: registering here keeps kinematic.py free of an import of its presets), then
+    "tracklet-ranging" (:mod:`.tracklet_ranging`, the fallback of ``cistrack fit`` for short
+    first passes; registered here so that no new entry point has to be installed)."""
     registry.add("iod", "kinematic-fit", KinematicFitIOD)
     registry.add("iod", "noisy-range", NoisyRangeIOD)
     registry.add("iod", "uniform-range", UniformRangeIOD)
     registry.add("iod", "uniform-range-velocity-bound", UniformRangeVelocityBoundIOD)
+    registry.add("iod", "tracklet-ranging", TrackletRangingIOD)

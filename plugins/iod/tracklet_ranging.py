@@ -1,0 +1,199 @@
+"""IOD from what telescopes deliver: tracklets of 3 or more observations, on one or several nights,
+from one or several sites (registered as iod "tracklet-ranging").
+
+1. The observations are split into tracklets (:func:`.tracklets.split_tracklets`: a gap of more
+   than ``gap_hours``, a site change, or ``MAX_SPAN_HOURS``), and each tracklet is reduced to its
+   attributable (line of sight and rate at its mean time).
+2. A **seed** tracklet (the first with ``min_tracklet`` observations that lie on their curve; the
+   next ones if that fails) spans its admissible region: a grid of ``n_range`` ranges, log-spaced
+   over ``range_min_km``-``range_max_km`` (3,000 km to 3 million km by default: the bounds do not
+   prune a cislunar object), times ``n_rate`` range rates within the energy bound ``max_c3``
+   (:mod:`.ranging_search`).
+3. Every grid state is propagated at once with the dynamics to the observations of the next
+   ``score_tracklets`` tracklets and scored there; the least squares is started from the best few
+   and the best converged fit is kept (outlier rejection on).
+4. With ``arc = "all"`` (what ``cistrack fit`` asks for) the fit is extended over the whole arc,
+   doubling its span each time; the cloud is then at the last observation and a filter after it
+   has nothing left to do. With ``arc = "seed"`` (default, for ``cistrack run`` scenarios) the
+   cloud is at the last observation of the seed and scoring tracklets and the filter goes on.
+
+The cloud is ``n_particles`` draws from the fit's Gaussian at its epoch (seeded Generator). A file
+of one tracklet leaves the range undetermined: the cloud is then the admissible region itself
+(drawn from the grid) and ``meta["why"]`` says so. ``meta`` records the method, the tracklets
+(their first times, sites, sizes, consistency), which were the seed and which scored it, the fits
+tried and why the seed was chosen.
+
+The IOD propagates with ``dynamics``: a registered dynamics name (built with the sensor's epoch
+when the model takes one, e.g. ``ephemeris``) or, from Python, a Dynamics instance.
+"""
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+import numpy as np
+
+from cistrack.errors import IODError
+from cistrack.interfaces import Dynamics, IODMethod, Sensor
+from cistrack.interfaces.component import check_choice, check_int, check_positive
+from cistrack.interfaces.iod import check_iod_particles
+from cistrack.least_squares import FitOptions, FitResult
+from cistrack.least_squares.trajectory import arc_states_and_stms
+from cistrack.model.belief import ParticleCloud
+from cistrack.model.measurement import MeasurementSet
+
+from .ranging_search import ScoredGrid, admissible_states, refine, score_states
+from .ranging_arc import extend_arc, tracklet_record
+from .tracklets import Attributable, attributable, split_tracklets
+
+__all__ = ["TrackletRangingIOD", "ARCS"]
+
+ARCS = ("seed", "all")
+_SEED_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30)
+
+
+class TrackletRangingIOD(IODMethod):
+    """Systematic ranging over a tracklet's admissible region (see the module docstring).
+
+    Parameters
+    ----------
+    n_particles : int          particles in the cloud
+    dynamics : str or Dynamics  the model that propagates the grid and the fits (default "cr3bp")
+    arc : str                  "seed" (cloud after the seed and scoring tracklets) or "all"
+    gap_hours : float          a longer gap starts a new tracklet, hours
+    min_tracklet : int         observations a seed tracklet needs (>= 2)
+    score_tracklets : int      tracklets after the seed that score the grid
+    n_range, n_rate : int      grid size: ranges and range rates per range
+    range_min_km, range_max_km : float  range bounds of the grid, km
+    max_c3 : float             energy bound, geocentric C3 in km^2/s^2 (0: bound to the Earth)
+    tries : int                least-squares fits started per seed (best grid states apart in range)
+    seeds : int                seed tracklets tried before giving up
+    """
+
+    def __init__(self, *, n_particles: int = 2000, dynamics: Any = "cr3bp", arc: str = "seed",
+                 gap_hours: float = 1.5, min_tracklet: int = 3, score_tracklets: int = 3,
+                 n_range: int = 160, n_rate: int = 64, range_min_km: float = 3000.0,
+                 range_max_km: float = 3.0e6, max_c3: float = 1.0, tries: int = 6, seeds: int = 4) -> None:
+        self.n_particles = check_iod_particles(self, n_particles)
+        if not isinstance(dynamics, (str, Dynamics)):
+            self._fail("dynamics", dynamics, "must be a registered dynamics name or a Dynamics")
+        self.dynamics = dynamics
+        self.arc = check_choice(self, "arc", arc, ARCS)
+        self.gap_hours = check_positive(self, "gap_hours", gap_hours)
+        self.min_tracklet = check_int(self, "min_tracklet", min_tracklet, minimum=2)
+        self.score_tracklets = check_int(self, "score_tracklets", score_tracklets, minimum=1)
+        self.n_range = check_int(self, "n_range", n_range, minimum=10)
+        self.n_rate = check_int(self, "n_rate", n_rate, minimum=4)
+        self.range_min_km = check_positive(self, "range_min_km", range_min_km)
+        self.range_max_km = check_positive(self, "range_max_km", range_max_km)
+        if self.range_max_km <= self.range_min_km:
+            self._fail("range_max_km", range_max_km, f"must exceed range_min_km ({range_min_km})")
+        self.max_c3 = float(max_c3)
+        self.tries = check_int(self, "tries", tries, minimum=1)
+        self.seeds = check_int(self, "seeds", seeds, minimum=1)
+
+    def _model(self, sensor: Sensor) -> Dynamics:
+        """The dynamics: the instance given, or the registered model built with the sensor's epoch."""
+        if isinstance(self.dynamics, Dynamics):
+            return self.dynamics
+        from cistrack.api import default_registry
+
+        reg = default_registry()
+        factory = reg.get("dynamics", self.dynamics).factory
+        takes_epoch = isinstance(factory, type) and "epoch" in inspect.signature(factory).parameters
+        epoch = _sensor_epoch(sensor)
+        return reg.create("dynamics", self.dynamics, **({"epoch": epoch} if takes_epoch and epoch else {}))
+
+    def _grid(self, att: Attributable) -> tuple[np.ndarray, np.ndarray]:
+        return admissible_states(att, n_range=self.n_range, n_rate=self.n_rate, range_min_km=self.range_min_km,
+                                 range_max_km=self.range_max_km, max_c3=self.max_c3)
+
+    def _seed_fit(self, dyn: Dynamics, sensor: Sensor, ms: MeasurementSet, atts: list[Attributable],
+                  k: int) -> tuple[FitResult | None, np.ndarray, dict]:
+        """(fit, rows, record) of the ranging from tracklet ``k`` scored on the next tracklets."""
+        others = [j for j in range(len(atts)) if j != k]
+        others.sort(key=lambda j: (atts[j].t < atts[k].t, abs(atts[j].t - atts[k].t)))
+        score_with = others[:self.score_tracklets]
+        rows = np.sort(np.concatenate([atts[j].indices for j in [k, *score_with]]))
+        states, rho = self._grid(atts[k])
+        score = score_states(dyn, sensor, ms, np.setdiff1d(rows, atts[k].indices), states, atts[k].t)
+        grid = ScoredGrid(states, rho, score, atts[k].t)
+        fit, best, tried = refine(dyn, sensor, ms, rows, grid, tries=self.tries, options=_SEED_OPTIONS)
+        rec = {"seed": k, "scored_on": score_with, "grid_states": int(len(states)), "fits_tried": tried,
+               "start_range_km": float(rho[best]) if best >= 0 else None,
+               "converged": bool(fit is not None and fit.converged)}
+        return fit, rows, rec
+
+    def estimate(self, measurements: MeasurementSet, sensor: Sensor, rng: np.random.Generator) -> ParticleCloud:
+        """Particle cloud (n_particles, 6), synodic, at the last observation the fit used (see the
+        module docstring); IODError when no tracklet has ``min_tracklet`` observations or no seed
+        gives a fit."""
+        ms = measurements
+        who = f"iod '{type(self).registry_name or 'tracklet-ranging'}'"
+        if not isinstance(ms, MeasurementSet) or len(ms) < self.min_tracklet:
+            raise IODError(f"{who}: needs a MeasurementSet with at least {self.min_tracklet} observations")
+        sites = np.array([ms.site_at(i) for i in range(len(ms))])
+        groups = [g for g in split_tracklets(ms.times, sites, self.gap_hours) if g.size >= 2]
+        atts = [attributable(ms, sensor, g) for g in groups]
+        order = [k for k in sorted(range(len(atts)), key=lambda k: (not atts[k].consistent, atts[k].t))
+                 if atts[k].indices.size >= self.min_tracklet]
+        if not order:
+            raise IODError(f"{who}: no tracklet has {self.min_tracklet} observations (tracklets: "
+                           f"{[int(a.indices.size) for a in atts]}; a gap over {self.gap_hours:g} h or a site "
+                           "change ends one); lower min_tracklet or observe longer")
+        dyn = self._model(sensor)
+        if len(atts) == 1:
+            return self._lone(atts[0], rng, who)
+        return self._ranged(dyn, sensor, ms, atts, order, rng, who)
+
+    def _ranged(self, dyn, sensor, ms, atts, order, rng, who) -> ParticleCloud:
+        records = []
+        for k in order[:self.seeds]:
+            fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k)
+            records.append(rec)
+            if fit is not None and fit.converged:
+                break
+        else:
+            raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} "
+                           f"tried: {records}); check the observations or widen range_min_km/range_max_km")
+        why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"
+               + ("" if k == order[0] else "; earlier seeds gave no fit") + "), scored on tracklets "
+               + ", ".join(str(j + 1) for j in rec["scored_on"]))
+        info = {"why": why, "tracklets": tracklet_record(atts), "seeds_tried": records,
+                "seed_rows": [int(i) for i in rows], "extension": []}
+        if self.arc == "all":
+            fit, rows, info["extension"] = extend_arc(dyn, sensor, ms, fit, rows)
+        return self._cloud(dyn, fit, ms, rows, info, rng)
+
+    def _cloud(self, dyn, fit: FitResult, ms, rows, info: dict, rng) -> ParticleCloud:
+        """``n_particles`` draws from the fit's Gaussian at the last of ``rows``; ``info``: the
+        meta the caller adds (why, tracklets, seeds tried, seed rows, extension steps)."""
+        t_last = float(ms.times[rows].max())
+        states, stms = arc_states_and_stms(dyn, fit.state, fit.epoch, np.array([t_last]))
+        cov = stms[0] @ fit.covariance @ stms[0].T
+        cov = 0.5 * (cov + cov.T) * max(1.0, float(fit.noise_scale)) ** 2
+        draws = rng.multivariate_normal(states[0], cov, size=self.n_particles, method="eigh")
+        meta = {"method": "tracklet-ranging", "arc": self.arc, **info, "rows_used": [int(i) for i in rows],
+                "fit_rms": float(fit.rms), "noise_scale": float(fit.noise_scale), "n_rejected": int(fit.n_rejected),
+                "best_state": [float(v) for v in states[0]], "best_covariance": cov.tolist()}
+        return ParticleCloud(draws, t_last, meta=meta)
+
+    def _lone(self, att: Attributable, rng: np.random.Generator, who: str) -> ParticleCloud:
+        """One tracklet: the admissible region itself (range undetermined)."""
+        states, rho = self._grid(att)
+        pick = rng.choice(len(states), size=self.n_particles, replace=len(states) < self.n_particles)
+        why = (f"one tracklet only ({att.indices.size} observations): the range is not determined; the cloud "
+               f"is the admissible region, ranges {rho.min():,.0f}-{rho.max():,.0f} km")
+        meta = {"method": "tracklet-ranging", "why": why, "arc": "lone tracklet",
+                "tracklets": tracklet_record([att]), "rows_used": [int(i) for i in att.indices],
+                "seed_rows": [int(i) for i in att.indices]}
+        return ParticleCloud(states[pick], float(att.t), meta=meta)
+
+
+def _sensor_epoch(sensor: Sensor) -> str | None:
+    """The epoch (UTC text) of the sensor or of the first member of a site network, or None."""
+    for s in [sensor, *getattr(sensor, "members", {}).values()]:
+        e = getattr(s, "epoch", None)
+        if isinstance(e, str):
+            return e
+    return None

@@ -1,0 +1,120 @@
+"""The tracklet IOD (plugins/iod/tracklets.py, ranging_search.py, tracklet_ranging.py): the split
+into tracklets, the attributable, the admissible region and a small ranging case in the CR3BP
+(a 2:1 DRO seen from College Station, three tracklets of 4 exposures on three nights)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack.api import default_registry
+from cistrack.errors import IODError
+from cistrack.plugins.iod.ranging_search import EARTH, MU_EARTH, admissible_states
+from cistrack.plugins.iod.tracklets import attributable, split_tracklets, states_from_ranges
+from cistrack.units import LU_KM, VU_KMS, hours_to_tu
+
+H = float(hours_to_tu(1.0))
+
+
+def test_split_by_gap_site_and_span():
+    t = np.array([0.0, 0.1, 0.2, 3.0, 3.1, 3.2, 3.25, 9.0, 9.5, 10.0, 10.5, 11.0, 11.5]) * H
+    sites = np.array(["A"] * 7 + ["B"] * 6)
+    groups = split_tracklets(t, sites, gap_hours=1.5, max_span_hours=2.0)
+    assert [g.tolist() for g in groups] == [[0, 1, 2], [3, 4, 5, 6], [7, 8, 9, 10, 11], [12]]
+
+
+def test_interleaved_sites_give_one_tracklet_each():
+    t = np.array([0.0, 0.05, 0.1, 0.15, 0.2, 0.25]) * H
+    groups = split_tracklets(t, np.array(["A", "B"] * 3))
+    assert [g.tolist() for g in groups] == [[0, 2, 4], [1, 3, 5]]
+
+
+def test_split_refuses_mismatched_sites():
+    with pytest.raises(IODError, match="3 times but 2 sites"):
+        split_tracklets(np.arange(3.0), np.array(["A", "B"]))
+
+
+@pytest.fixture(scope="module")
+def dro():
+    """(dynamics, sensor, truth state at t = 0, measurement set of 3 tracklets, their times)."""
+    reg = default_registry()
+    dyn = reg.create("dynamics", "cr3bp")
+    x0 = np.asarray(reg.create("orbit", "dro-2-1").state, dtype=float)
+    sensor = reg.create("sensor", "ground-telescope", sigma_arcsec=1.0, elevation_mask_deg=-90.0)
+    starts = np.array([2.0, 26.5, 75.0])                     # hours: three nights
+    times = (starts[:, None] + np.array([0.0, 1 / 12, 1 / 6, 1 / 4])[None]).reshape(-1) * H
+    truth = dyn.propagate(x0[None], 0.0, times).states[:, 0]
+    ms = sensor.simulate(truth, times, np.random.default_rng(7))
+    return dyn, sensor, x0, ms, times
+
+
+def _truth_at(dyn, x0, t):
+    return dyn.propagate(x0[None], 0.0, np.array([t])).states[0, 0]
+
+
+def test_attributable_gives_the_truth_at_its_range_and_rate(dro):
+    dyn, sensor, x0, ms, times = dro
+    att = attributable(ms, sensor, np.arange(4))
+    truth = _truth_at(dyn, x0, att.t)
+    d = truth[:3] - att.observer
+    rho = np.linalg.norm(d)
+    rho_dot = float((truth[3:] - att.observer_dot) @ (d / rho))
+    state = states_from_ranges(att, [rho], [rho_dot])[0]
+    assert att.consistent and att.misfit < 5.0
+    assert np.linalg.norm(state[:3] - truth[:3]) * LU_KM < 20.0          # 1" over 15 min at ~300,000 km
+    assert np.linalg.norm(state[3:] - truth[3:]) * VU_KMS < 0.05          # km/s
+
+
+def test_admissible_region_respects_the_energy_bound(dro):
+    _, sensor, _, ms, _ = dro
+    att = attributable(ms, sensor, np.arange(4))
+    states, rho = admissible_states(att, n_range=40, n_rate=10, range_min_km=3000.0, range_max_km=3e6, max_c3=0.0)
+    r = states[:, :3] - EARTH
+    v = states[:, 3:] + np.stack([-r[:, 1], r[:, 0], np.zeros(len(r))], axis=1)
+    energy = 0.5 * np.sum(v * v, axis=1) - MU_EARTH / np.linalg.norm(r, axis=1)
+    assert len(states) > 100 and np.all(energy <= 1e-12)
+    assert rho.min() >= 3000.0 and rho.max() <= 3e6
+
+
+def test_outlier_marks_a_tracklet_inconsistent(dro):
+    _, sensor, _, ms, _ = dro
+    bad = ms.subset(np.arange(len(ms)))
+    bad.values[1, 1] += np.radians(0.05)                      # 180" on one exposure of four
+    assert not attributable(bad, sensor, np.arange(4)).consistent
+
+
+def test_small_ranging_case_finds_the_dro(dro):
+    dyn, sensor, x0, ms, times = dro
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, arc="all", n_particles=200,
+                                    n_range=80, n_rate=24)
+    cloud = iod.estimate(ms, sensor, np.random.default_rng(3))
+    truth = _truth_at(dyn, x0, times[-1])
+    best = np.asarray(cloud.meta["best_state"])
+    cov = np.asarray(cloud.meta["best_covariance"])
+    e = best - truth
+    assert cloud.epoch == pytest.approx(times[-1])
+    assert np.linalg.norm(e[:3]) * LU_KM < 200.0
+    assert float(e @ np.linalg.solve(cov, e)) < 22.5
+    assert cloud.meta["method"] == "tracklet-ranging" and "ranging from tracklet 1" in cloud.meta["why"]
+    assert cloud.states.shape == (200, 6)
+
+
+def test_one_tracklet_gives_the_admissible_region(dro):
+    dyn, sensor, _, ms, _ = dro
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, n_particles=150, n_range=30, n_rate=8)
+    cloud = iod.estimate(ms.subset(np.arange(4)), sensor, np.random.default_rng(1))
+    assert "range is not determined" in cloud.meta["why"] and cloud.states.shape == (150, 6)
+
+
+def test_too_short_tracklets_are_refused(dro):
+    dyn, sensor, _, ms, _ = dro
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, min_tracklet=5)
+    with pytest.raises(IODError, match="no tracklet has 5 observations"):
+        iod.estimate(ms, sensor, np.random.default_rng(1))
+
+
+def test_parameters_are_checked():
+    reg = default_registry()
+    with pytest.raises(Exception, match="arc"):
+        reg.create("iod", "tracklet-ranging", arc="everything")
+    with pytest.raises(Exception, match="range_max_km"):
+        reg.create("iod", "tracklet-ranging", range_min_km=5e5, range_max_km=1e5)
