@@ -35,13 +35,19 @@ from cistrack import units
 from cistrack.errors import StateError
 from cistrack.interfaces.dynamics import Dynamics
 
-__all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "EVENT_FIELDS", "EPS_SIGMA"]
+__all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "times_until_impact", "EVENT_FIELDS",
+           "EPS_SIGMA", "IMPACT_MARGIN_S", "fit_events", "FIT_EVENT_DAYS"]
 
 EVENT_FIELDS = ("t_tu", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")
 """The columns of :func:`event_values`."""
 EPS_SIGMA = 0.05
 """Step of the central differences of the linear mapping, in sigmas of the covariance."""
 _FINE_S = 10.0
+FIT_EVENT_DAYS = 14.0
+"""Days after a fit's epoch over which :func:`fit_events` looks for impacts and closest approaches."""
+IMPACT_MARGIN_S = 1e-3
+"""A prediction that ends at an impact ends this long before it, seconds (the state at the impact
+time itself is on the surface, where the dynamics stop it)."""
 
 
 @dataclass(frozen=True)
@@ -72,17 +78,16 @@ class OrbitEvent:
         out["sigma"] = {k: clean(float(v)) for k, v in self.sigma.items()}
         return out
 
-    def line(self) -> str:
-        """One printed line: what, where, when, how fast, with 1-sigma."""
+    def lines(self) -> list[str]:
+        """Printed lines (each under 120 columns): what, when, how high and how fast; then where."""
         s = self.sigma
-        where = ""
+        alt = "" if self.kind == "impact" else f", altitude {self.altitude_km:.6g} +- {s.get('altitude_km', np.nan):.2g} km"
+        out = [f"{self.kind} ({self.body}) {self.utc[:19]}Z +- {s.get('time_s', np.nan):.3g} s{alt}, speed {self.speed_kms:.4f} +- "
+               f"{s.get('speed_kms', np.nan):.2g} km/s"]
         if np.isfinite(self.latitude_deg):
-            where = (f" at {self.coordinates} latitude {self.latitude_deg:.3f} +- {s.get('latitude_deg', np.nan):.2g}, "
-                     f"longitude {self.longitude_deg:.3f} +- {s.get('longitude_deg', np.nan):.2g} deg")
-        alt = "" if self.kind == "impact" else (f", altitude {self.altitude_km:.1f} +- "
-                                                f"{s.get('altitude_km', np.nan):.2g} km")
-        return (f"{self.kind} {self.body}: {self.utc[:19]}Z +- {s.get('time_s', np.nan):.3g} s{where}{alt}, "
-                f"speed {self.speed_kms:.4f} +- {s.get('speed_kms', np.nan):.2g} km/s")
+            out.append(f"  {self.coordinates} latitude {self.latitude_deg:.3f} +- {s.get('latitude_deg', np.nan):.2g} "
+                       f"deg, longitude {self.longitude_deg:.3f} +- {s.get('longitude_deg', np.nan):.2g} deg (1-sigma)")
+        return out
 
 
 def _epoch_of(dynamics: Dynamics, epoch: datetime | str | None) -> datetime | None:
@@ -283,3 +288,30 @@ def orbit_events(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray |
         for window in _approach_windows(dynamics, x, t0, end, body, step):
             events.append(_event(dynamics, x, covariance, t0, "closest approach", body, window, when))
     return sorted((e for e in events if e is not None), key=lambda e: e.t_tu)
+
+
+def times_until_impact(dynamics: Dynamics, state: np.ndarray, t0: float,
+                       times: np.ndarray) -> tuple[np.ndarray, tuple[float, str] | None]:
+    """The ``times`` (K,) TU (increasing, after ``t0``) at which the orbit ``state`` (6,) at ``t0``
+    still flies, ending with the impact (:data:`IMPACT_MARGIN_S` before it) when it hits a body
+    before the last of them; and (impact time TU, body name) or None. Times at or before ``t0``
+    are kept as they are."""
+    tt = np.asarray(times, dtype=float).reshape(-1)
+    if tt.size == 0 or tt[-1] <= t0:
+        return tt, None
+    hit = first_impact(dynamics, state, t0, float(tt[-1]))
+    if hit is None:
+        return tt, None
+    end = hit[0] - units.seconds_to_tu(IMPACT_MARGIN_S)
+    return np.append(tt[tt < end], end), hit
+
+
+def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
+               epoch: datetime | str | None = None) -> list[OrbitEvent]:
+    """:func:`orbit_events` of a least-squares fit (a :class:`cistrack.least_squares.FitResult`)
+    over ``days`` after its epoch, the covariance scaled as it is exported (by the noise scale
+    squared when that exceeds 1). ``epoch``: the UTC of t = 0 (default the dynamics' own)."""
+    scale = max(1.0, float(result.noise_scale)) ** 2 if np.isfinite(result.noise_scale) else 1.0
+    t0 = float(result.epoch)
+    return orbit_events(dynamics, result.state, result.covariance * scale, t0, t0 + float(units.days_to_tu(days)),
+                        epoch=epoch)

@@ -103,3 +103,18 @@ def test_bad_times_are_refused(dyn, impact_case):
     from cistrack.errors import StateError
     with pytest.raises(StateError, match="t_end > t0"):
         orbit_events(dyn, impact_case[0], None, 1.0, 0.5)
+
+
+def test_a_prediction_across_the_impact_ends_there(dyn, impact_case):
+    from cistrack.least_squares.events import times_until_impact
+    from cistrack.least_squares.trajectory import arc_states
+
+    x, _ = impact_case
+    grid = units.hours_to_tu(np.arange(0.0, 24.0, 1.0 / 6.0))
+    kept, hit = times_until_impact(dyn, x, 0.0, grid)
+    assert hit is not None and hit[1] == "Moon" and kept[-1] < hit[0] and kept.size < grid.size
+    assert (hit[0] - kept[-1]) * units.TU_S < 0.01 and np.all(kept[:-1] == grid[:kept.size - 1])
+    end = arc_states(dyn, x, 0.0, kept)[-1]                               # propagates without a hit
+    altitude = np.linalg.norm(end[:3] - dyn.frame.moon_synodic(kept[-1])[0]) * units.LU_KM - 1737.4
+    assert 0.0 < altitude < 0.01                                          # km: within metres of the surface
+    assert times_until_impact(dyn, x, 0.0, grid[:6]) == (pytest.approx(grid[:6]), None)
