@@ -1,0 +1,76 @@
+"""Determination in words: one night from one site is poorly determined and says why; two weeks
+from three sites is well determined. The range and its sigma are checked against the geocentric
+distance of the truth and the covariance along the geocentric line of sight (independent of the
+angles' Jacobian), the reacquisition horizon against the truth's next perilune."""
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from cistrack.fitting.determination import HORIZON_STEP_DAYS, POOR_RANGE_FRACTION, determination
+from cistrack.least_squares import fit_orbit
+from cistrack.units import LU_KM, days_to_tu
+
+from .arc_campaigns import one_night, two_weeks
+
+
+@lru_cache(maxsize=2)
+def _fit(which: str):
+    c = {"night": one_night, "weeks": two_weeks}[which]()
+    ms = c.measurements
+    fit = fit_orbit(c.dynamics, c.sensor, ms, c.truth_at(ms.times[-1:])[0], ms.times[-1])
+    return c, fit, determination(fit, c.dynamics, c.sensor, ms)
+
+
+def test_one_night_from_one_site_is_poorly_determined_and_says_why():
+    c, fit, d = _fit("night")
+    assert fit.converged and not fit.unobservable          # the fit's own limits do not flag it
+    assert not d.well and d.sessions == 1 and d.sites == 1 and d.arc_days < 0.5
+    assert d.sentence.startswith("poorly determined: one night (")
+    assert "from one site" in d.sentence and "the range is weakly constrained (1-sigma" in d.sentence
+    assert "observe again within" in d.sentence
+    assert d.range_sigma_km / d.range_km > POOR_RANGE_FRACTION
+    assert json.loads(json.dumps(d.as_dict()))["well"] is False
+
+
+def test_two_weeks_from_three_sites_is_well_determined():
+    _c, fit, d = _fit("weeks")
+    assert fit.converged and d.well and d.sites == 3 and d.sessions >= 10 and d.arc_days > 13
+    assert d.sentence.startswith("well determined: ") and "from 3 sites" in d.sentence
+    assert d.range_sigma_km < 5.0
+    assert "hits the Moon" in d.horizon_note        # this NRHO hits the Moon on day 16
+
+
+@pytest.mark.parametrize("which", ["night", "weeks"])
+def test_range_and_its_sigma_agree_with_the_geocentric_line_of_sight(which):
+    """Topocentric and geocentric lines of sight differ by at most R_E / range (1.7 %)."""
+    c, fit, d = _fit(which)
+    i = int(np.argmin(np.abs(c.measurements.times - fit.epoch)))
+    t = float(c.measurements.times[i])
+    earth = c.dynamics.primary("Earth").position_at(t)
+    los = c.truth_at(np.array([t]))[0, :3] - earth
+    assert d.range_km == pytest.approx(np.linalg.norm(los) * LU_KM, rel=0.02)
+    u = los / np.linalg.norm(los)
+    scale = max(fit.noise_scale, 1.0)
+    sigma = np.sqrt(u @ fit.covariance[:3, :3] @ u) * scale * LU_KM
+    assert d.range_sigma_km == pytest.approx(sigma, rel=0.05)
+
+
+def test_one_night_is_lost_at_the_perilune_where_the_orbits_it_allows_hit_the_moon():
+    """The truth's next perilune (its closest approach to the Moon on a 15-minute grid) is 100-230
+    km above the surface; the one-night fit's range sigma is larger, so orbits it allows hit the
+    Moon there: the horizon ends within a grid step of it."""
+    c, _fit_night, d = _fit("night")
+    t_last = float(c.measurements.times[-1])
+    grid = t_last + days_to_tu(np.arange(1, 5 * 96) / 96.0)
+    truth = c.truth_at(grid)
+    moon = np.array([c.dynamics.primary("Moon").position_at(t) for t in grid])
+    dist = np.linalg.norm(truth[:, :3] - moon, axis=1) * LU_KM
+    k = int(np.argmax((dist[1:-1] < dist[:-2]) & (dist[1:-1] < dist[2:]))) + 1      # first perilune
+    assert dist[k] < 1737.4 + d.range_sigma_km
+    perilune_days = (k + 1) / 96.0
+    assert d.horizon_days == pytest.approx(perilune_days, abs=HORIZON_STEP_DAYS)
+    assert "hit the Moon" in d.horizon_note and "observe again within 1.8 days" in d.sentence
