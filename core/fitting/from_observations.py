@@ -16,6 +16,15 @@ For each object in the files (:mod:`cistrack.fitting.observation_input`):
 3. ``fit.json``, ``residuals.csv`` and a residual plot per site are written
    (:mod:`cistrack.fitting.fit_record`, :mod:`cistrack.fitting.residual_plots`).
 
+When that cannot start (the first pass is too short for the template's kinematic IOD: a lone
+tracklet of 3-5 exposures) or its least squares fails, the fit falls back on the IOD
+:data:`RANGING_IOD` (systematic ranging over a tracklet's admissible region, scored on the next
+tracklets, the least squares extended over the whole arc: ``cistrack.plugins.iod.tracklet_ranging``)
+with ``arc = "all"``: its cloud lies at the last observation, the filter has nothing left to do, and
+the least squares starts from the IOD's orbit. The fit's messages say which observations seeded it,
+by which method and why (:func:`seeding_text`); a fit of less than a day of observations says in
+words that the orbit is poorly determined.
+
 The fit epoch is the last observation by default (``--set fit.epoch=middle|first``): measured on
 the shipped example (65 observations, 6 days, ephemeris dynamics) the unit-diagonal normal matrix
 has condition number 446 there, 2,815 in the middle of the arc and 836 at its start, and the
@@ -49,7 +58,7 @@ from cistrack.scenario.loading import Scenario, load_scenario, parse_scenario
 from cistrack.scenario.settings import merge_settings, parse_settings
 
 __all__ = ["fit_files", "ObjectFit", "FitChoices", "fit_choices", "TEMPLATE", "EPOCH_LEAD_MINUTES",
-           "SPAN_MARGIN_HOURS"]
+           "SPAN_MARGIN_HOURS", "RANGING_IOD", "SHORT_ARC_HOURS", "seeding_text"]
 
 TEMPLATE = "fit-defaults"
 """The built-in scenario whose tables are the defaults of ``cistrack fit``."""
@@ -57,6 +66,10 @@ EPOCH_LEAD_MINUTES = 30
 """The scenario epoch is the whole minute at least this long before the first observation."""
 SPAN_MARGIN_HOURS = 2.0
 """The scenario's span ends this long after the last observation."""
+RANGING_IOD = "tracklet-ranging"
+"""The IOD the fit falls back on when the template's cannot start or its fit fails."""
+SHORT_ARC_HOURS = 24.0
+"""A fit over observations spanning less than this says that the orbit is poorly determined."""
 _EPOCHS = ("last", "middle", "first")
 _PRIORS = ("none", "filter")
 
@@ -117,6 +130,9 @@ class ObjectFit:
     lov : list of LovPoint      the line of variations (``--set fit.lov=N``), or empty
     start : str                 "" when the least squares started from the filter's final
                                 estimate; else the earlier filter estimate it restarted from, and why
+    seeding : dict              which observations seeded the fit, by which method and why:
+                                "method" (the IOD), "rows" (indices into the observations, time
+                                order), "why" (str); empty when no IOD ran
     """
 
     designation: str
@@ -129,6 +145,7 @@ class ObjectFit:
     choices: FitChoices = field(default_factory=FitChoices)
     lov: list = field(default_factory=list)
     start: str = ""
+    seeding: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -176,8 +193,27 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
                 "description": f"cistrack fit of {obs.designation} from {', '.join(Path(f).name for f in obs.files)}",
                 "measurements": {"file": str(obs_file.resolve())}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
-    raw = merge_settings(raw, settings)
+    raw = _ranging_defaults(merge_settings(raw, settings))
     return parse_scenario(raw, f"cistrack fit ({builtin_scenario_path(TEMPLATE).name} with --set)", registry)
+
+
+def _ranging_defaults(raw: dict[str, Any]) -> dict[str, Any]:
+    """``raw`` with the ranging IOD (when it is the scenario's) propagating with the scenario's
+    dynamics and fitting the whole arc, unless the ``[iod]`` table says otherwise."""
+    iod = raw.get("iod")
+    if not (isinstance(iod, dict) and iod.get("name") == RANGING_IOD):
+        return raw
+    dyn = raw.get("dynamics", {})
+    name = dyn.get("name") if isinstance(dyn, dict) else dyn
+    return {**raw, "iod": {"dynamics": name, "arc": "all", **iod}}
+
+
+def _ranging_scenario(scen: Scenario, registry: Registry) -> Scenario:
+    """``scen`` with the IOD :data:`RANGING_IOD` (its defaults for a fit: :func:`_ranging_defaults`),
+    as many particles as the template's IOD."""
+    n = scen.raw.get("iod", {}).get("n_particles", 4000) if isinstance(scen.raw.get("iod"), dict) else 4000
+    raw = _ranging_defaults({**scen.raw, "iod": {"name": RANGING_IOD, "n_particles": n}})
+    return parse_scenario(raw, f"{scen.source} (IOD {RANGING_IOD})", registry)
 
 
 def _fit_epoch(choice: str, times: np.ndarray) -> float:
@@ -237,6 +273,100 @@ def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResu
     return result, failure, ""
 
 
+def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Registry, progress: bool,
+             log: Callable[[str], None] | None) -> tuple[Any, FitResult | None, str, str]:
+    """(run or None, fit or None, failure, start): the scenario run into ``directory``, then the
+    least squares from the filter (:func:`_fit_from_filter`)."""
+    from cistrack.runs.pipeline import run_scenario
+
+    try:
+        run = run_scenario(scen, registry=registry, output_dir=directory, progress=progress,
+                           log=(lambda m: log(f"  {m}")) if log else None)
+    except CistrackError as exc:
+        return None, None, f"the filter run failed before its first step: {exc}", ""
+    return (run, *_fit_from_filter(run.context, choices, directory))
+
+
+def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callable[[str], None] | None) -> None:
+    """Fill ``one`` (run, result, failure, start, seeding): the template's way first; when it gives
+    no converged fit, the ranging IOD (:data:`RANGING_IOD`), whose run replaces the first in the
+    results directory (the first's failure is kept in the seeding's ``why``)."""
+    say = log or (lambda m: None)
+    one.run, one.result, one.failure, one.start = _attempt(one.scenario, one.choices, one.directory, registry,
+                                                           progress, log)
+    first = ""
+    if not one.ok and one.scenario.components["iod"].name != RANGING_IOD:
+        first = one.failure or (one.result.messages[0] if one.result is not None else "no fit")
+        say(f"{one.designation}: {first}; falling back on the IOD '{RANGING_IOD}'")
+        one.scenario = _ranging_scenario(one.scenario, registry)
+        one.run, one.result, one.failure, one.start = _attempt(one.scenario, one.choices, one.directory,
+                                                               registry, progress, log)
+        if one.failure:
+            one.failure += f" (before it, with the template's IOD: {first})"
+    if one.start:
+        say(f"{one.designation}: least squares restarted from {one.start}")
+    if one.run is not None:
+        one.seeding = _seeding(one, first)
+    if one.result is not None:
+        one.result = _with_messages(one.result, [seeding_text(one), _short_arc_text(one)])
+
+
+def _seeding(one: ObjectFit, fallback_from: str) -> dict[str, Any]:
+    """``one.seeding`` from the run's IOD cloud (method, rows, why)."""
+    meta = dict(getattr(one.run.context.iod_cloud, "meta", None) or {})
+    name = one.scenario.components["iod"].name
+    rows = meta.get("seed_rows", meta.get("fit_indices", []))
+    if name == RANGING_IOD:
+        why = str(meta.get("why", ""))
+        if fallback_from:
+            why += f"; used because the template's IOD gave no fit: {fallback_from}"
+        extension = list(meta.get("extension", []))
+    else:
+        why, extension = (f"the kinematic fit of the first {len(rows)} observations of the first pass (the "
+                          "template's IOD), then the filter over the rest"), []
+    return {"method": name, "rows": [int(i) for i in rows], "why": why, "extension": extension}
+
+
+def seeding_text(one: ObjectFit) -> str:
+    """One line: which observations seeded ``one``'s fit, by which method and why ("" for none)."""
+    s = one.seeding
+    if not s:
+        return ""
+    ms = one.run.context.measurements
+    rows = s["rows"]
+    where = ""
+    if rows:
+        utc = [units.format_utc(units.tu_to_utc(one.scenario.epoch, float(ms.times[i])))[:16] for i in (rows[0], rows[-1])]
+        sites = sorted({ms.site_at(int(i)) for i in rows} - {""})
+        where = f" on {len(rows)} observations from {utc[0]} to {utc[1]}Z" + (f" ({', '.join(sites)})" if sites else "")
+    steps = f"; least squares extended in {len(s['extension'])} step(s)" if s.get("extension") else ""
+    return f"seeded by the IOD '{s['method']}'{where}: {s['why']}{steps}"
+
+
+def _short_arc_text(one: ObjectFit) -> str:
+    """Why the orbit is poorly determined when the observations span less than
+    :data:`SHORT_ARC_HOURS` ("" otherwise)."""
+    ms = one.run.context.measurements if one.run is not None else None
+    if ms is None or len(ms) == 0:
+        return ""
+    hours = units.tu_to_hours(float(ms.times[-1] - ms.times[0]))
+    if hours >= SHORT_ARC_HOURS:
+        return ""
+    r = one.result
+    sigma = float(np.sqrt(np.trace(r.covariance_km[:3, :3])))
+    return (f"the observations span only {hours:.1f} h: the orbit is poorly determined (1-sigma position "
+            f"{sigma:,.0f} km, mostly along the line of sight: the distance is barely constrained); observe on "
+            "more nights before trusting predictions")
+
+
+def _with_messages(result: FitResult, lines: list[str]) -> FitResult:
+    """``result`` with the non-empty ``lines`` added to its messages."""
+    from dataclasses import replace
+
+    add = tuple(line for line in lines if line)
+    return replace(result, messages=tuple(result.messages) + add) if add else result
+
+
 def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
     """The fit's line of variations over the observations it used (see
     :mod:`cistrack.least_squares.line_of_variations`), every half sigma to +-``choices.lov`` (each point's
@@ -272,7 +402,6 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     in its ObjectFit (``failure``, ``result.converged``).
     """
     from cistrack.fitting.fit_record import write_fit_outputs
-    from cistrack.runs.pipeline import run_scenario
 
     reg = registry or default_registry()
     say = log or (lambda m: None)
@@ -296,15 +425,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             f"after IOD '{scen.components['iod'].name}', epoch {units.format_utc(scen.epoch)[:19]}Z, "
             f"{scen.duration_days:g} days; results -> {d}")
         one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=choices)
-        try:
-            one.run = run_scenario(scen, registry=reg, output_dir=d, progress=progress,
-                                   log=(lambda m: say(f"  {m}")) if log else None)
-        except CistrackError as exc:
-            one.failure = f"the filter run failed before its first step: {exc}"
-        if one.run is not None:
-            one.result, one.failure, one.start = _fit_from_filter(one.run.context, choices, d)
-            if one.start:
-                say(f"{obs.designation}: least squares restarted from {one.start}")
+        _fit_object(one, reg, progress, say if log else None)
         if one.result is not None and one.result.converged and choices.lov > 0:
             say(f"{obs.designation}: line of variations to +-{choices.lov:g} sigma")
             one.lov = _line_of_variations(one.run.context, one.result, choices)
