@@ -24,16 +24,18 @@ predicts from; the others are reported as a residual ladder), ``each`` (every ar
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any, Callable
 
 import numpy as np
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.model.measurement import MeasurementSet
-from cistrack.units import tu_to_days
+from cistrack.units import seconds_to_tu, tu_to_days
 
-__all__ = ["ArcSpan", "LinkedArc", "observation_groups", "long_gap_arcs", "link_latest_arc", "arc_choice",
-           "arc_sets", "ARC_CHOICES", "LONG_GAP_DAYS", "LINK_GAP_DAYS"]
+__all__ = ["ArcSpan", "LinkedArc", "ArcSettings", "observation_groups", "long_gap_arcs", "link_latest_arc",
+           "arc_choice", "arc_settings", "arc_sets", "in_time_base", "ARC_CHOICES", "ARC_KEYS", "LONG_GAP_DAYS",
+           "LINK_GAP_DAYS"]
 
 LONG_GAP_DAYS = 20.0
 """Observations farther apart than this (days) are always different arcs (module docstring)."""
@@ -41,6 +43,8 @@ LINK_GAP_DAYS = 3.0
 """Groups farther apart than this (days) are joined only when one orbit explains both."""
 ARC_CHOICES = ("latest", "each", "all")
 """Values of ``fit.arcs``: fit the latest arc, each arc on its own, or all observations at once."""
+ARC_KEYS = ("arcs", "arc_gap_days", "link_gap_days")
+"""The ``fit.*`` keys :func:`arc_settings` takes."""
 
 
 @dataclass(frozen=True)
@@ -160,9 +164,46 @@ def arc_choice(value: Any) -> str:
 def arc_sets(measurements: MeasurementSet, choice: str,
              long_gap_days: float = LONG_GAP_DAYS) -> list[MeasurementSet]:
     """The measurement sets to fit for ``fit.arcs=choice``: the latest long-gap arc, every one
-    (oldest first) or all rows at once."""
+    (oldest first) or all rows at once (each a subset of ``measurements``, same time base)."""
     if arc_choice(choice) == "all":
         return [measurements]
     arcs = long_gap_arcs(measurements.times, long_gap_days)
     chosen = arcs[-1:] if choice == "latest" else arcs
     return [measurements.subset(a.rows) for a in chosen]
+
+
+@dataclass(frozen=True)
+class ArcSettings:
+    """``fit.arcs`` (one of :data:`ARC_CHOICES`), ``fit.arc_gap_days`` (rule 1, days) and
+    ``fit.link_gap_days`` (rule 2, days; at most ``arc_gap_days``)."""
+
+    arcs: str = "latest"
+    arc_gap_days: float = LONG_GAP_DAYS
+    link_gap_days: float = LINK_GAP_DAYS
+
+
+def _days_key(table: dict, key: str, default: float) -> float:
+    v = table.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < float("inf"):
+        raise ConfigError(f"--set fit.{key}={v!r}: must be a positive number of days")
+    return float(v)
+
+
+def arc_settings(table: dict[str, Any]) -> tuple[ArcSettings, dict[str, Any]]:
+    """(the arc settings, the other keys) of a ``fit.*`` table; ConfigError naming the key."""
+    rest = {k: v for k, v in table.items() if k not in ARC_KEYS}
+    arcs = arc_choice(table.get("arcs", "latest"))
+    long_gap = _days_key(table, "arc_gap_days", LONG_GAP_DAYS)
+    link_gap = _days_key(table, "link_gap_days", LINK_GAP_DAYS)
+    if link_gap > long_gap:
+        raise ConfigError(f"--set fit.link_gap_days={link_gap:g}: must not exceed fit.arc_gap_days ({long_gap:g})")
+    return ArcSettings(arcs, long_gap, link_gap), rest
+
+
+def in_time_base(measurements: MeasurementSet, epoch: datetime, new_epoch: datetime) -> MeasurementSet:
+    """``measurements`` with times (TU since ``epoch``) counted from ``new_epoch`` instead (earlier
+    arcs get negative times in a scenario that starts at the latest)."""
+    shift = float(seconds_to_tu((new_epoch - epoch).total_seconds()))
+    ms = measurements
+    return MeasurementSet(ms.times - shift, ms.values, ms.sigmas, ms.names, dict(ms.meta), ms.sites, ms.kinds,
+                          dict(ms.site_table))

@@ -28,6 +28,7 @@ from cistrack import units
 from cistrack.astro.site_network import build_site_network
 from cistrack.astro.site_simulation import simulate_sites
 from cistrack.astro.sites import observatory
+from cistrack.fitting.arcs import in_time_base
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import default_registry
 from cistrack.scenario.loading import load_scenario
@@ -119,3 +120,19 @@ def two_arcs(gap_days: float, dv_mps: float = 0.0, seed: int = 23, arc_days: flo
         return camp_b.truth_at(np.asarray(times, dtype=float) - t_b)
 
     return _finish(_joined(ms_a, ms_b, t_b), scen_a, truth_at)
+
+
+def rebased(c: Campaign, new_epoch) -> Campaign:
+    """``c`` with t = 0 at ``new_epoch`` (a datetime): its measurements' times, dynamics, sensor
+    and truth counted from there, as ``cistrack fit`` counts them in a scenario that starts at the
+    latest arc."""
+    reg = default_registry()
+    scen = load_scenario("real-data").with_overrides({"epoch": units.format_utc(new_epoch)})
+    ms = in_time_base(c.measurements, c.epoch, new_epoch)
+    shift = float(units.seconds_to_tu((new_epoch - c.epoch).total_seconds()))
+
+    def truth_at(times):
+        return c.truth_at(np.asarray(times, dtype=float) + shift)
+
+    return Campaign(ms, scen.build("dynamics", reg), build_site_network(scen.components["sensor"], reg, ms),
+                    truth_at, new_epoch)
