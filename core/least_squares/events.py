@@ -36,7 +36,8 @@ from cistrack.errors import StateError
 from cistrack.interfaces.dynamics import Dynamics
 
 __all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "times_until_impact", "EVENT_FIELDS",
-           "EPS_SIGMA", "IMPACT_MARGIN_S", "fit_events", "FIT_EVENT_DAYS"]
+           "EPS_SIGMA", "IMPACT_MARGIN_S", "fit_events", "FIT_EVENT_DAYS",
+           "prediction_end"]
 
 EVENT_FIELDS = ("t_tu", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")
 """The columns of :func:`event_values`."""
@@ -78,15 +79,21 @@ class OrbitEvent:
         out["sigma"] = {k: clean(float(v)) for k, v in self.sigma.items()}
         return out
 
+    def _pm(self, key: str, fmt: str) -> str:
+        """`` +- sigma`` of ``key`` in format ``fmt``, or "" without sigmas."""
+        v = self.sigma.get(key)
+        return "" if v is None else f" +- {v:{fmt}}"
+
     def lines(self) -> list[str]:
         """Printed lines (each under 120 columns): what, when, how high and how fast; then where."""
-        s = self.sigma
-        alt = "" if self.kind == "impact" else f", altitude {self.altitude_km:.6g} +- {s.get('altitude_km', np.nan):.2g} km"
-        out = [f"{self.kind} ({self.body}) {self.utc[:19]}Z +- {s.get('time_s', np.nan):.3g} s{alt}, speed {self.speed_kms:.4f} +- "
-               f"{s.get('speed_kms', np.nan):.2g} km/s"]
+        alt = "" if self.kind == "impact" else f", altitude {self.altitude_km:.6g}{self._pm('altitude_km', '.2g')} km"
+        when = f"{self.utc[:19]}Z" + (f"{self._pm('time_s', '.3g')} s" if self.sigma else "")
+        out = [f"{self.kind} ({self.body}) {when}{alt}, speed "
+               f"{self.speed_kms:.4f}{self._pm('speed_kms', '.2g')} km/s"]
         if np.isfinite(self.latitude_deg):
-            out.append(f"  {self.coordinates} latitude {self.latitude_deg:.3f} +- {s.get('latitude_deg', np.nan):.2g} "
-                       f"deg, longitude {self.longitude_deg:.3f} +- {s.get('longitude_deg', np.nan):.2g} deg (1-sigma)")
+            out.append(f"  {self.coordinates} latitude {self.latitude_deg:.3f}{self._pm('latitude_deg', '.2g')} deg, "
+                       f"longitude {self.longitude_deg:.3f}{self._pm('longitude_deg', '.2g')} deg"
+                       + (" (1-sigma)" if self.sigma else ""))
         return out
 
 
@@ -315,3 +322,17 @@ def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
     t0 = float(result.epoch)
     return orbit_events(dynamics, result.state, result.covariance * scale, t0, t0 + float(units.days_to_tu(days)),
                         epoch=epoch)
+
+
+def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *,
+                   epoch: datetime | str | None = None) -> tuple[np.ndarray, OrbitEvent | None]:
+    """:func:`times_until_impact` for a fit ``result`` (its state, covariance and epoch) over
+    ``times`` (K,) TU, and the impact as an :class:`OrbitEvent` with its 1-sigma (None when the
+    orbit flies through): what an export writes up to, and says where it ends."""
+    kept, hit = times_until_impact(dynamics, result.state, float(result.epoch), times)
+    if hit is None:
+        return kept, None
+    t0 = float(result.epoch)
+    event = _event(dynamics, np.asarray(result.state, dtype=float), result.covariance, t0, "impact", hit[1],
+                   (t0, float(np.max(times))), _epoch_of(dynamics, epoch))
+    return kept, event
