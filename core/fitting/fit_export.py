@@ -160,14 +160,52 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         times, n_arc = np.array([result.epoch]), 1
     else:
         times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
-    pred = predict_orbit(result, scen.build("dynamics", reg), times, covariance=opts.covariance)
+    pred = predict_orbit(result, _dynamics(scen, reg, record), times, covariance=opts.covariance)
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
     comments = _comments(record, name, opts, pred, utc, n_arc, refusal)
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
-    _write(exporter, out, ie, _metadata(name, comments), format, path is not None)
+    meta = _metadata(name, comments)
+    meta.update(_area_to_mass_user_defined(record))
+    _write(exporter, out, ie, meta, format, path is not None)
     return out
+
+
+def _estimated_area_to_mass(record: dict[str, Any]) -> dict[str, Any] | None:
+    """``fit.json``'s ``area_to_mass`` when the fit estimated it, else None."""
+    amr = record.get("area_to_mass")
+    return amr if isinstance(amr, dict) and amr.get("estimated") else None
+
+
+def _dynamics(scen, reg: Registry, record: dict[str, Any]):
+    """The scenario's dynamics, with the C_R A/m the fit estimated when it estimated one."""
+    dyn = scen.build("dynamics", reg)
+    amr = _estimated_area_to_mass(record)
+    return dyn if amr is None else dyn.with_parameters(area_to_mass_m2_kg=float(amr["value_m2_kg"]))
+
+
+def _area_to_mass_comments(record: dict[str, Any]) -> list[str]:
+    """COMMENT lines on the estimated C_R A/m (none when it was not estimated)."""
+    amr = _estimated_area_to_mass(record)
+    if amr is None:
+        return []
+    corr = ", ".join(f"{c:.3f}" for c in amr["correlations_with_state"])
+    return [f"solar radiation pressure C_R A/m estimated with the orbit: {amr['value_m2_kg']:.6g} +- "
+            f"{amr['sigma_scaled_m2_kg']:.3g} m^2/kg (1 sigma, times the noise scale when above 1); its "
+            f"correlations with X, Y, Z, X_DOT, Y_DOT, Z_DOT at the fit epoch (synodic): {corr}",
+            "states predicted with that C_R A/m; the covariance is the state's at the fit epoch (the "
+            "ratio's uncertainty included there), carried with the ratio held at its estimate"]
+
+
+def _area_to_mass_user_defined(record: dict[str, Any]) -> dict[str, Any]:
+    """``user_defined`` metadata (an exporter that writes USER_DEFINED_ keywords may use it):
+    the estimated C_R A/m and its sigma, m^2/kg; empty when not estimated."""
+    amr = _estimated_area_to_mass(record)
+    if amr is None:
+        return {}
+    return {"user_defined": {"AREA_TO_MASS_M2_KG": float(amr["value_m2_kg"]),
+                             "AREA_TO_MASS_SIGMA_M2_KG": float(amr["sigma_scaled_m2_kg"])}}
 
 
 def _split_keywords(options: FitExportOptions | None, params: dict[str, Any]
@@ -236,6 +274,7 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
                 f"weighted RMS {record['rms']:.4g}, noise scale {record['noise_scale']:.4g}, "
                 f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
     comments += _covariance_comments(record, opts.covariance, pred.linear, utc)
+    comments += _area_to_mass_comments(record)
     if len(utc) > n_arc:
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "

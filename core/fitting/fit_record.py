@@ -3,7 +3,9 @@
 - ``fit.json``: the fitted state and covariance at the fit epoch (synodic frame of the
   scenario's dynamics: exact nondimensional values and km, km/s), the epoch in UTC and TU, the
   arc, RMS, chi-square, assumed and estimated noise, counts, condition number, messages, the
-  filter run it started from and the settings;
+  filter run it started from and the settings; with ``--set fit.area_to_mass=solve|auto`` also
+  ``area_to_mass``: the radiation pressure's C_R A/m (m^2/kg), its sigma, its correlations with
+  the state and the 7x7 covariance, or why "auto" did not estimate it;
 - ``residuals.csv``: one row per observation: time UTC, site, O - C (RA x cos(Dec) and Dec in
   arcsec for RA/Dec), normalised residuals, chi-square, rejected;
 - ``residuals-<site>.png`` / ``.svg``: the residual plot of each site
@@ -29,7 +31,8 @@ from cistrack import units
 from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 
-__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary"]
+__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
+           "area_to_mass_record", "area_to_mass_summary"]
 
 FIT_RECORD = "fit.json"
 RESIDUALS = "residuals.csv"
@@ -59,6 +62,49 @@ def noise_summary(measurements, result) -> dict[str, dict[str, float]]:
     return out
 
 
+def _options_record(options) -> dict[str, Any]:
+    """The fit options as recorded: all but ``sensor_steps``, and ``area_to_mass`` only when it
+    is not "off" (so that a fit without it writes the same record as before the option existed)."""
+    return {k: getattr(options, k) for k in options.__dataclass_fields__
+            if k != "sensor_steps" and not (k == "area_to_mass" and getattr(options, k) == "off")}
+
+
+def area_to_mass_record(result) -> dict[str, Any] | None:
+    """``fit.json``'s ``area_to_mass``: the estimate of C_R A/m (m^2/kg), its one sigma (of the
+    stated weights, and times the noise scale when that exceeds 1), its correlations with the
+    state (x, y, z, vx, vy, vz) and how "auto" decided; None when it was neither estimated nor
+    decided on."""
+    from cistrack.least_squares.options import AREA_TO_MASS
+
+    est = result.parameter(AREA_TO_MASS)
+    if est is None and not result.area_to_mass_decision:
+        return None
+    out: dict[str, Any] = {"estimated": est is not None, "decision": result.area_to_mass_decision,
+                           "parameter": "C_R A/m of the cannonball radiation pressure, m^2/kg"}
+    if est is not None:
+        j = result.parameter_names.index(AREA_TO_MASS)
+        scale = float(result.noise_scale) if np.isfinite(result.noise_scale) and result.noise_scale > 1 else 1.0
+        out.update({"value_m2_kg": est[0], "sigma_m2_kg": est[1], "sigma_scaled_m2_kg": est[1] * scale,
+                    "correlations_with_state": [float(c) for c in result.parameter_correlations[j]],
+                    "full_covariance": np.asarray(result.full_covariance).tolist()})
+    return out
+
+
+def area_to_mass_summary(result) -> list[str]:
+    """The summary lines on the area-to-mass ratio of a fit: its estimate, sigma and correlations
+    with the state, or why "auto" did not estimate it; none when it was not asked for."""
+    amr = area_to_mass_record(result)
+    if amr is None:
+        return []
+    if not amr["estimated"]:
+        return [f"  area-to-mass ratio (C_R A/m): {amr['decision']}"]
+    corr = " / ".join(f"{c:+.2f}" for c in amr["correlations_with_state"])
+    how = f" ({amr['decision']})" if amr["decision"] else ""
+    return [f"  area-to-mass ratio (C_R A/m): {amr['value_m2_kg']:.4g} +- {amr['sigma_scaled_m2_kg']:.2g} m^2/kg "
+            f"(1 sigma, times the noise scale when above 1){how}",
+            f"    its correlations with x / y / z / vx / vy / vz at the fit epoch: {corr}"]
+
+
 def _fit_dict(one, obs) -> dict[str, Any]:
     scen, r = one.scenario, one.result
     ms = one.run.context.measurements if one.run is not None else None
@@ -67,8 +113,7 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "files": [str(f) for f in obs.files], "weights": list(one.notes),
         "scenario_epoch_utc": units.format_utc(scen.epoch) if scen is not None else None,
         "settings": {"epoch": one.choices.epoch, "prior": one.choices.prior, "lov": one.choices.lov,
-                     "options": {k: getattr(one.choices.options, k) for k in one.choices.options.__dataclass_fields__
-                                 if k != "sensor_steps"}},
+                     "options": _options_record(one.choices.options)},
         "converged": bool(r.converged) if r is not None else False,
         "failure": one.failure,
         "least_squares_start": one.start or "the filter's final estimate",
@@ -99,6 +144,9 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "unobservable": bool(r.unobservable), "rejection_threshold": float(r.rejection_threshold),
         "noise_arcsec": noise_summary(ms, r), "messages": list(r.messages),
     })
+    amr = area_to_mass_record(r)
+    if amr is not None:
+        data["area_to_mass"] = amr
     if one.lov:
         from cistrack.least_squares.line_of_variations import line_summary
 

@@ -33,6 +33,8 @@ from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.outliers import update_rejections
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.solve_for_parameters import SolveFor, solve_for as _solve_for
+from cistrack.least_squares.options import AREA_TO_MASS
 from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
@@ -74,38 +76,56 @@ def _check_prior(prior: Any) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 class _Problem:
-    """Residuals, cost and normal equations of one fit."""
+    """Residuals, cost and normal equations of one fit. The unknowns x are the state (6,) and,
+    with ``solve_for``, its parameters after it (6 + P,)."""
 
     def __init__(self, dynamics: Dynamics, model: MeasurementModel, t0: float,
-                 prior: tuple[np.ndarray, np.ndarray] | None) -> None:
+                 prior: tuple[np.ndarray, np.ndarray] | None, solve_for: SolveFor | None = None) -> None:
         self.dynamics, self.model, self.t0, self.prior = dynamics, model, t0, prior
+        self.solve_for = solve_for
+        self.n = 6 + (0 if solve_for is None else solve_for.size)
+
+    def _dynamics(self, x: np.ndarray) -> Dynamics:
+        return self.dynamics if self.solve_for is None else self.solve_for.dynamics(x[6:])
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(weighted residuals (K, m), states (K, 6)) at the epoch state x."""
-        states = arc_states(self.dynamics, x, self.t0, self.model.times)
+        """(weighted residuals (K, m), states (K, 6)) at the unknowns x."""
+        states = arc_states(self._dynamics(x), x[:6], self.t0, self.model.times)
         return self.model.residuals(states) / self.model.sigmas, states
 
     def cost(self, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> float:
         c = float(np.sum(w[used] ** 2))
         if self.prior is not None:
-            e = x - self.prior[0]
+            e = x[:6] - self.prior[0]
             c += float(e @ self.prior[1] @ e)
         return c
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """Weighted d r / d x0 (K, m, 6): H(x(t_i)) Phi(t_i, t0) / sigma."""
-        states, stms = arc_states_and_stms(self.dynamics, x, self.t0, self.model.times)
+        """Weighted d r / d x (K, m, 6 + P): H(x(t_i)) Phi(t_i, t0) / sigma, then the parameters'
+        central differences (:mod:`cistrack.least_squares.solve_for_parameters`) / sigma."""
+        states, stms = arc_states_and_stms(self._dynamics(x), x[:6], self.t0, self.model.times)
         h = self.model.jacobian(states)
-        return np.einsum("kmj,kjl->kml", h, stms) / self.model.sigmas[:, :, None]
+        a = np.einsum("kmj,kjl->kml", h, stms) / self.model.sigmas[:, :, None]
+        if self.solve_for is None:
+            return a
+
+        def predicted(dyn: Dynamics) -> np.ndarray:  # minus the residuals: wrapped like them
+            return -self.model.residuals(arc_states(dyn, x[:6], self.t0, self.model.times))
+
+        dp = self.solve_for.partials(predicted, x[6:]) / self.model.sigmas[:, :, None]
+        return np.concatenate([a, dp], axis=2)
 
     def normal(self, a: np.ndarray, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Normal matrix (6, 6) and right-hand side (6,) over the used rows."""
-        au = a[used].reshape(-1, 6)
+        """Normal matrix (6 + P, 6 + P) and right-hand side (6 + P,) over the used rows."""
+        au = a[used].reshape(-1, self.n)
         n = au.T @ au
         g = au.T @ w[used].reshape(-1)
-        if self.prior is not None:
+        if self.prior is not None and self.n == 6:
             n = n + self.prior[1]
             g = g + self.prior[1] @ (self.prior[0] - x)
+        elif self.prior is not None:  # the prior bounds the state only
+            n[:6, :6] += self.prior[1]
+            g[:6] += self.prior[1] @ (self.prior[0] - x[:6])
         return 0.5 * (n + n.T), g
 
 
@@ -118,7 +138,7 @@ def _diagonal_scale(n: np.ndarray) -> np.ndarray:
 def _solve(n: np.ndarray, g: np.ndarray, lam: float) -> np.ndarray:
     """(N + lam diag N)^-1 g, in unit-diagonal scaling; raises LinAlgError when singular."""
     d = _diagonal_scale(n)
-    ns = n / np.outer(d, d) + lam * np.eye(6)
+    ns = n / np.outer(d, d) + lam * np.eye(n.shape[0])
     return np.linalg.solve(ns, g / d) / d
 
 
@@ -216,14 +236,15 @@ def _checked_inputs(state: Any, t0: Any, prior: Any, options: Any
 
 
 def _problem(dynamics: Dynamics, model: MeasurementModel, x: np.ndarray, t0: float,
-             prior: tuple[np.ndarray, np.ndarray] | None) -> _Problem:
-    """The fit's problem, once there are enough numbers for the unknowns and the initial state
-    ``x`` (6,) propagates over the arc; raises FitError."""
+             prior: tuple[np.ndarray, np.ndarray] | None, params: SolveFor | None = None) -> _Problem:
+    """The fit's problem, once there are enough numbers for the unknowns and the initial unknowns
+    ``x`` (6 + P,) propagate over the arc; raises FitError."""
     k, m = len(model.times), model.m
-    if prior is None and k * m < 6:
-        raise FitError(f"fit: {k} observation(s) of {m} component(s) give {k * m} numbers for 6 unknowns; "
-                       "add observations or a prior")
-    prob = _Problem(dynamics, model, t0, prior)
+    unknowns = 6 + (0 if params is None else params.size)
+    if prior is None and k * m < unknowns:
+        raise FitError(f"fit: {k} observation(s) of {m} component(s) give {k * m} numbers for {unknowns} "
+                       "unknowns; add observations or a prior")
+    prob = _Problem(dynamics, model, t0, prior, params)
     try:
         prob.evaluate(x)
     except PropagationError as exc:
@@ -242,7 +263,7 @@ def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str])
     k, m = len(prob.model.times), prob.model.m
     p = _Passes(x, np.zeros(k, dtype=bool))
     seen: list[np.ndarray] = []
-    min_rows = 0 if prob.prior is not None else int(np.ceil(6 / m))
+    min_rows = 0 if prob.prior is not None else int(np.ceil(prob.n / m))
     for _ in range(opts.max_passes):
         p.x, its, p.converged = _one_pass(prob, p.x, ~p.rejected, opts, say)
         p.iterations += its
@@ -320,14 +341,14 @@ def _table(model: MeasurementModel, measurements: MeasurementSet, states: np.nda
                           model.values, model.residuals(states), model.sigmas, rejected)
 
 
-def _goodness(w: np.ndarray, used: np.ndarray, say: list[str]) -> tuple[float, float, float]:
+def _goodness(w: np.ndarray, used: np.ndarray, say: list[str], unknowns: int = 6) -> tuple[float, float, float]:
     """(chi-square, weighted RMS, noise scale) of the used rows of the weighted residuals ``w``
-    (K, m): the RMS over the used components, the noise scale sqrt(chi2 / (components - 6))."""
+    (K, m): the RMS over the used components, the noise scale sqrt(chi2 / (components - unknowns))."""
     n_comp = int(used.sum()) * w.shape[1]
     chi2 = float(np.sum(w[used] ** 2))
     rms = float(np.sqrt(chi2 / n_comp)) if n_comp else float("inf")
-    if n_comp > 6:
-        return chi2, rms, float(np.sqrt(chi2 / (n_comp - 6)))
+    if n_comp > unknowns:
+        return chi2, rms, float(np.sqrt(chi2 / (n_comp - unknowns)))
     say.append("no redundancy (as many components as unknowns): noise scale undefined")
     return chi2, rms, float("nan")
 
@@ -349,8 +370,21 @@ def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: 
     return converged
 
 
+def _state_information(n: np.ndarray) -> np.ndarray:
+    """The state's information (6, 6) with the parameters marginalised: the Schur complement
+    N_xx - N_xp N_pp^-1 N_px of the normal matrix (6 + P, 6 + P) (N itself when P = 0)."""
+    if n.shape[0] == 6:
+        return n
+    try:
+        s = n[:6, :6] - n[:6, 6:] @ np.linalg.solve(n[6:, 6:], n[6:, :6])
+    except np.linalg.LinAlgError:
+        s = n[:6, :6]
+    return 0.5 * (s + s.T)
+
+
 def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state: Any, t0: float, *,
-              prior: tuple[Any, Any] | None = None, options: FitOptions | None = None) -> FitResult:
+              prior: tuple[Any, Any] | None = None, options: FitOptions | None = None,
+              solve_for: Any = None) -> FitResult:
     """Least-squares orbit from ``measurements``, starting at ``state`` (6,) at epoch ``t0``.
 
     Parameters
@@ -368,6 +402,11 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     prior : (mean (6,), covariance (6, 6)), optional
         Gaussian prior on the state at ``t0`` (LU, VU), added to the normal equations.
     options : FitOptions, optional
+        ``options.area_to_mass`` "solve" estimates the radiation pressure's C_R A/m (m^2/kg) too,
+        "auto" where the arc supports it (:mod:`cistrack.least_squares.area_to_mass`).
+    solve_for : str or tuple of str, optional
+        Names of dynamics parameters estimated with the state, started at the dynamics' own
+        values (:mod:`cistrack.least_squares.solve_for_parameters`); adds to ``area_to_mass``.
 
     Returns
     -------
@@ -379,23 +418,42 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     ``options.max_condition`` or the weakest direction's one sigma ``options.max_weak_sigma_km``.
     """
     opts, x, t0, pri = _checked_inputs(state, t0, prior, options)
+    names = () if solve_for is None else ((solve_for,) if isinstance(solve_for, str) else tuple(solve_for))
+    if opts.area_to_mass == "auto":
+        from cistrack.least_squares.area_to_mass import fit_area_to_mass_auto
+
+        return fit_area_to_mass_auto(dynamics, sensor, measurements, x, t0, prior=prior, options=opts,
+                                     solve_for=names)
+    if opts.area_to_mass == "solve" and AREA_TO_MASS not in names:
+        names = names + (AREA_TO_MASS,)
+    return _fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names))
+
+
+def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, x: np.ndarray, t0: float,
+         pri: tuple[np.ndarray, np.ndarray] | None, opts: FitOptions, params: SolveFor | None) -> FitResult:
+    """:func:`fit_orbit` on checked inputs: the unknowns are the state ``x`` (6,) and ``params``."""
     model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
-    prob = _problem(dynamics, model, x, t0, pri)
+    if params is not None:
+        x = np.concatenate([x, params.initial()])
+    prob = _problem(dynamics, model, x, t0, pri, params)
     say: list[str] = []
     p = _fit_passes(prob, x, opts, say)
     used = ~p.rejected
     w, states, n = _at_estimate(prob, p.x, used)
-    obs = observability(n)
+    obs = observability(_state_information(n))
     cov = _covariance(n, obs)
     unobservable = _unobservable_text(obs, opts)
     if unobservable is not None:
         say.append(unobservable)
-        warnings.warn(f"fit: {unobservable}", UnobservableWarning, stacklevel=2)
+        warnings.warn(f"fit: {unobservable}", UnobservableWarning, stacklevel=3)
     table = _table(model, measurements, states, p.rejected)
-    chi2, rms, noise_scale = _goodness(w, used, say)
+    chi2, rms, noise_scale = _goodness(w, used, say, prob.n)
     converged = _verdict(p, rms, noise_scale, opts, say)
-    return FitResult(state=p.x, covariance=cov, epoch=t0, residuals=table, rms=rms, chi2=chi2,
+    extra = {} if params is None else {"parameter_names": params.names, "parameters": p.x[6:].copy(),
+                                        "full_covariance": cov}
+    return FitResult(state=p.x[:6], covariance=cov[:6, :6], epoch=t0, residuals=table, rms=rms, chi2=chi2,
                      n_used=int(used.sum()), n_rejected=int(p.rejected.sum()), iterations=p.iterations,
                      converged=bool(converged), condition_number=obs.condition,
                      weakest_direction_km=obs.weakest_direction_km, noise_scale=noise_scale,
-                     rejection_threshold=p.threshold, unobservable=unobservable is not None, messages=tuple(say))
+                     rejection_threshold=p.threshold, unobservable=unobservable is not None, messages=tuple(say),
+                     **extra)

@@ -8,7 +8,11 @@ import numpy as np
 
 from cistrack.errors import ParameterError
 
-__all__ = ["FitOptions"]
+__all__ = ["FitOptions", "AREA_TO_MASS", "AREA_TO_MASS_MODES"]
+
+AREA_TO_MASS = "area_to_mass_m2_kg"
+"""The dynamics parameter the ``area_to_mass`` option estimates: C_R A/m, m^2/kg."""
+AREA_TO_MASS_MODES = ("off", "solve", "auto")
 
 
 @dataclass(frozen=True)
@@ -60,6 +64,11 @@ class FitOptions:
         off, settles at weighted RMS 3,300, 96,000 km from the truth.
     sensor_steps : (6,) float or None
         Central-difference steps of the measurement Jacobian (LU, VU); None: the default.
+    area_to_mass : str
+        The radiation pressure's C_R A/m (m^2/kg) as a seventh unknown: "off" (default: not
+        estimated; the fit is the 6-parameter one, bit for bit), "solve" (always estimated) or
+        "auto" (estimated where the arc supports it: :mod:`cistrack.least_squares.area_to_mass`).
+        Needs dynamics that offer the parameter (``ephemeris``).
     """
 
     max_iterations: int = 30
@@ -79,6 +88,7 @@ class FitOptions:
     max_weak_sigma_km: float = 1000.0
     max_rms: float = 100.0
     sensor_steps: Any = None
+    area_to_mass: str = "off"
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> None:
@@ -100,6 +110,9 @@ class FitOptions:
         for name in ("reject_outliers", "robust_threshold", "use_range"):
             if not isinstance(getattr(self, name), bool):
                 bad(name, "must be true or false")
+        if self.area_to_mass not in AREA_TO_MASS_MODES:
+            bad("area_to_mass", "must be one of " + ", ".join(AREA_TO_MASS_MODES)
+                + " (estimate the radiation pressure's area-to-mass ratio: never, always, where the arc supports it)")
         if self.sensor_steps is not None:
             s = np.asarray(self.sensor_steps, dtype=float).reshape(-1)
             if s.shape != (6,) or not np.all(np.isfinite(s) & (s > 0)):

@@ -36,6 +36,13 @@ class FitResult:
     unobservable : bool           the condition number or the weakest direction's sigma exceeded
                                   the fit's limits (a warning was given)
     messages : tuple of str       what happened, in words (convergence, rejections, warnings)
+    parameter_names : tuple of str   dynamics parameters estimated with the state (solve-for
+                                  parameters, e.g. "area_to_mass_m2_kg"); empty when none
+    parameters : (P,) float       their estimates, each in its own unit (m^2/kg for the area-to-mass ratio)
+    full_covariance : (6 + P, 6 + P) float or None  the inverse normal matrix of state and
+                                  parameters (``covariance`` is its state block); None when P = 0
+    area_to_mass_decision : str   with ``area_to_mass="auto"``: why the ratio was or was not
+                                  estimated; "" otherwise
     """
 
     state: np.ndarray
@@ -54,6 +61,34 @@ class FitResult:
     rejection_threshold: float = float("inf")
     unobservable: bool = False
     messages: tuple[str, ...] = field(default_factory=tuple)
+    parameter_names: tuple[str, ...] = ()
+    parameters: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    full_covariance: np.ndarray | None = None
+    area_to_mass_decision: str = ""
+
+    @property
+    def parameter_sigmas(self) -> np.ndarray:
+        """One-sigma uncertainty (P,) of each solve-for parameter, in its own unit."""
+        if self.full_covariance is None:
+            return np.zeros(0)
+        return np.sqrt(np.diag(self.full_covariance)[6:])
+
+    @property
+    def parameter_correlations(self) -> np.ndarray:
+        """Correlation coefficients (P, 6) of each solve-for parameter with the state's
+        coordinates (x, y, z, vx, vy, vz; units cancel)."""
+        if self.full_covariance is None:
+            return np.zeros((0, 6))
+        c = self.full_covariance
+        s = np.sqrt(np.diag(c))
+        return c[6:, :6] / np.outer(s[6:], s[:6])
+
+    def parameter(self, name: str) -> tuple[float, float] | None:
+        """(estimate, one sigma) of solve-for parameter ``name``, or None when it was not estimated."""
+        if name not in self.parameter_names:
+            return None
+        j = self.parameter_names.index(name)
+        return float(self.parameters[j]), float(self.parameter_sigmas[j])
 
     @property
     def state_km(self) -> np.ndarray:

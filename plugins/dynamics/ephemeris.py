@@ -34,7 +34,8 @@ from cistrack.astro.primaries import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.propagation import CompiledDynamics
 
 from .ephemeris_point_mass_rhs import ephemeris_point_mass_rhs
-from .ephemeris_rhs import MOON_ACCELERATION_BOUND_KMS2, MOON_SPEED_BOUND_KMS, ephemeris_body_position, ephemeris_rhs, pack_params
+from .ephemeris_rhs import (MOON_ACCELERATION_BOUND_KMS2, MOON_SPEED_BOUND_KMS, P_SRP, ephemeris_body_position, ephemeris_rhs,
+                           pack_params)
 
 __all__ = ["EphemerisDynamics", "SOLAR_PRESSURE_N_M2"]
 
@@ -71,6 +72,11 @@ class EphemerisDynamics(CompiledDynamics):
         Cannonball solar radiation pressure: area / mass, m^2/kg (0 disables; no eclipses).
     srp_reflectivity : float
         Radiation pressure coefficient C_R (1 absorber, 2 mirror).
+    area_to_mass_m2_kg : float
+        Cannonball radiation pressure given as the product C_R A/m, m^2/kg, added to
+        ``srp_reflectivity * srp_area_to_mass_m2_kg``; the parameter a fit estimates
+        (:meth:`with_parameters`). Negative values are unphysical but accepted, so that a
+        least-squares estimate near zero is not biased by a bound. 0 (default): none.
     rtol, atol : float
         Per-particle integration tolerances (nondimensional, inertial LU/VU).
     earth_radius_km, moon_radius_km : float
@@ -87,7 +93,7 @@ class EphemerisDynamics(CompiledDynamics):
 
     def __init__(self, epoch: str = "2026-01-01T00:00:00Z", sun: bool = True, j2: bool = False,
                  srp_area_to_mass_m2_kg: float = 0.0, srp_reflectivity: float = 1.3,
-                 rtol: float = 1e-12, atol: float = 2e-11, earth_radius_km: float = EARTH_RADIUS_KM,
+                 area_to_mass_m2_kg: float = 0.0, rtol: float = 1e-12, atol: float = 2e-11, earth_radius_km: float = EARTH_RADIUS_KM,
                  moon_radius_km: float = MOON_RADIUS_KM, window_days: float = 40.0,
                  max_steps: int = 5_000_000):
         try:
@@ -104,6 +110,7 @@ class EphemerisDynamics(CompiledDynamics):
         self.j2 = j2
         self.srp_area_to_mass_m2_kg = check_range(self, "srp_area_to_mass_m2_kg", srp_area_to_mass_m2_kg, 0.0, 1e3)
         self.srp_reflectivity = check_range(self, "srp_reflectivity", srp_reflectivity, 0.0, 2.0)
+        self.area_to_mass_m2_kg = check_range(self, "area_to_mass_m2_kg", area_to_mass_m2_kg, -1e3, 1e3)
         self.rtol = check_range(self, "rtol", rtol, 1e-15, 1e-2)
         self.atol = check_range(self, "atol", atol, 1e-18, 1e-2)
         self.earth_radius_km = check_range(self, "earth_radius_km", earth_radius_km, 0.0, 1e5)
@@ -163,7 +170,7 @@ class EphemerisDynamics(CompiledDynamics):
         lu, tu = units.LU_KM, units.TU_S
         gm = lu ** 3 / tu ** 2
         pole = self._pole()
-        srp_kms2 = self.srp_reflectivity * self.srp_area_to_mass_m2_kg * SOLAR_PRESSURE_N_M2 / 1000.0
+        srp_kms2 = self._radiation_coefficient() * SOLAR_PRESSURE_N_M2 / 1000.0
         moon_body = -1
         if self.moon_radius_km > 0:
             moon_body = 1 if self.earth_radius_km > 0 else 0
@@ -185,9 +192,47 @@ class EphemerisDynamics(CompiledDynamics):
         x, y = erfa.bpn2xy(erfa.pnm06a(jd1, jd2))
         return np.array([x, y, math.sqrt(max(0.0, 1.0 - x * x - y * y))])
 
+    def _radiation_coefficient(self) -> float:
+        """C_R A/m, m^2/kg: ``srp_reflectivity * srp_area_to_mass_m2_kg``, plus ``area_to_mass_m2_kg``
+        when that is not 0 (a branch, so that the product alone keeps its exact value)."""
+        c = self.srp_reflectivity * self.srp_area_to_mass_m2_kg
+        return c + self.area_to_mass_m2_kg if self.area_to_mass_m2_kg != 0.0 else c
+
     def _rhs(self) -> Any:
         """The point-mass right-hand side when J2 and radiation pressure are off (same numbers)."""
-        return ephemeris_rhs if self.j2 or self.srp_reflectivity * self.srp_area_to_mass_m2_kg else ephemeris_point_mass_rhs
+        return ephemeris_rhs if self.j2 or self._radiation_coefficient() else ephemeris_point_mass_rhs
+
+    # -- solve-for parameters ---------------------------------------------------------------------
+    solve_for_parameters = ("area_to_mass_m2_kg",)
+    """Names a least-squares fit may estimate (:func:`cistrack.least_squares.fit_orbit`)."""
+
+    def parameter(self, name: str) -> float:
+        """The current value of solve-for parameter ``name``: ``area_to_mass_m2_kg`` is the total
+        C_R A/m (m^2/kg) of the radiation pressure, however it was given."""
+        if name not in self.solve_for_parameters:
+            raise StateError(f"{self._label()}: no solve-for parameter {name!r}; known: "
+                             + ", ".join(self.solve_for_parameters))
+        return float(self._radiation_coefficient())
+
+    def with_parameters(self, **values: float) -> "EphemerisDynamics":
+        """A copy whose solve-for parameters take ``values`` (``area_to_mass_m2_kg``: the total
+        C_R A/m, m^2/kg, replacing ``srp_reflectivity * srp_area_to_mass_m2_kg``); it shares this
+        model's frame and ephemeris records, with its own constants."""
+        import copy
+
+        for name, v in values.items():
+            self.parameter(name)
+            if not np.isfinite(v) or abs(v) > 1e3:
+                self._fail(name, v, "must be a finite number in [-1000, 1000]")
+        new = copy.copy(self)
+        if "area_to_mass_m2_kg" in values:
+            new.srp_area_to_mass_m2_kg = 0.0
+            new.area_to_mass_m2_kg = float(values["area_to_mass_m2_kg"])
+        if self._params_cache is not None:
+            new._params_cache = self._params_cache.copy()
+            srp = new._radiation_coefficient() * SOLAR_PRESSURE_N_M2 / 1000.0
+            new._params_cache[P_SRP] = srp * units.TU_S ** 2 / units.LU_KM
+        return new
 
     def params_vector(self) -> np.ndarray:
         """The packed constants and DE421 records (see :mod:`.ephemeris_rhs`), (P,) float64."""
