@@ -2,12 +2,14 @@
 
 Two rules, applied in this order:
 
-1. **Long gaps.** Observations more than :data:`LONG_GAP_DAYS` (20 days) apart belong to different
-   arcs, always. A cislunar orbit has periods of 1-4 weeks (the 9:2 NRHO 6.6 days, a 2:1 DRO 14.8
-   days, translunar orbits up to the Moon's 27.3 days): across 20 days it passes at least one
-   perigee or perilune, where a close lunar approach can change it beyond what any fit of the
-   later arc predicts, and the bright Moon interrupts optical tracking for about 10 days, so a
-   campaign interrupted only by the full Moon stays one arc.
+1. **Long gaps.** Observations more than :data:`LONG_GAP_DAYS` (30 days) apart belong to
+   different arcs, always. Such a gap misses a whole lunation (the synodic month is 29.5 days):
+   a cislunar orbit (periods of 1-4 weeks: the 9:2 NRHO 6.6 days, a 2:1 DRO 14.8 days,
+   translunar orbits up to the Moon's 27.3 days) has passed at least one perigee or perilune, and
+   refitting across it is what the issue calls "one fit over all of it". Shorter pauses, such as
+   the bright Moon's (a week or more for an object that stays near the Moon in the sky), are left
+   to rule 2, which tests them: in the public astrometry of 2025-010D (development subset)
+   2026-04 and 2026-05 are 22.5 days apart, and one orbit explains both.
 2. **Broken links.** Inside such an arc, observation groups more than :data:`LINK_GAP_DAYS`
    (3 days: more than a missed night or two) apart are joined one at a time, latest first, when
    the fit of what is joined so far predicts the earlier group within its predicted covariance
@@ -19,7 +21,7 @@ Two rules, applied in this order:
 
 ``fit.arcs`` (:func:`arc_choice`) chooses what is fitted: ``latest`` (default: the arc a user
 predicts from; the others are reported as a residual ladder), ``each`` (every arc on its own) or
-``all`` (one fit over every observation, as before arcs were found).
+``all`` (one fit over every observation).
 """
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ __all__ = ["ArcSpan", "LinkedArc", "ArcSettings", "observation_groups", "long_ga
            "arc_choice", "arc_settings", "arc_sets", "in_time_base", "ARC_CHOICES", "ARC_KEYS", "LONG_GAP_DAYS",
            "LINK_GAP_DAYS"]
 
-LONG_GAP_DAYS = 20.0
+LONG_GAP_DAYS = 30.0
 """Observations farther apart than this (days) are always different arcs (module docstring)."""
 LINK_GAP_DAYS = 3.0
 """Groups farther apart than this (days) are joined only when one orbit explains both."""

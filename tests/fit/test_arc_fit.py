@@ -35,7 +35,7 @@ def test_a_long_gap_leaves_the_earlier_arc_to_the_ladder():
     np.testing.assert_array_equal(out.rows, arcs[-1].rows)
     assert [s.n for s in out.earlier] == [arcs[0].n]
     assert [g.verdict for g in out.ladder] == ["consistent"] and ladder_verdicts(out.ladder) == "1 consistent"
-    assert "2 arcs more than 20 days apart" in out.notes[0]
+    assert "2 arcs more than 30 days apart" in out.notes[0]
 
 
 def test_one_orbit_across_a_short_gap_keeps_the_arcs_fit():

@@ -20,7 +20,7 @@ def _days(*d):
 
 
 def test_groups_split_only_where_the_gap_exceeds_the_threshold():
-    t = _days(0, 0.3, 1.0, 4.5, 4.6, 30.0, 30.1)
+    t = _days(0, 0.3, 1.0, 4.5, 4.6, 40.0, 40.1)
     groups = observation_groups(t, 3.0)
     assert [g.rows.tolist() for g in groups] == [[0, 1, 2], [3, 4], [5, 6]]
     assert groups[0].gap_before_days == np.inf
