@@ -18,16 +18,20 @@ darkness (Sun below -12 deg) above 20 deg elevation. The cadence of a survey:
 - the first night: one lone tracklet of 3-5 exposures over 10-30 minutes from one site;
 - then uneven nights over 1-3 weeks (each day observed with probability 0.55), one site a night,
   1-3 tracklets a night (3-5 exposures over 10-30 minutes each, at least 45 minutes apart);
+- at least 4 nights in all (an epoch and sites are drawn again, at most 20 times, until they give
+  that: the object near the Moon is out of dark skies for about a week a month);
 - noise 0.5-1.0 arcsec on the sky (one value per set, stated in the file);
 - 3 % gross outliers (at least one), each moved 30-300 arcsec in a random direction, never in the
   first night's tracklet.
 
 Families (``FAMILIES``): ``dro`` (2:1 distant retrograde orbit), ``halo`` (L1 northern halo,
-z amplitude about 8,600 km, corrected in the CR3BP), ``nrho`` (9:2 L2 southern NRHO), ``heo`` (an
-Earth orbit of about 70,000 x 600,000 km inclined 20 deg to the Earth-Moon plane, starting 40 deg
-before perigee: its first night is near 80,000 km, below the IOD's default range floor of
-84,328 km). The CR3BP states are placed in the real Earth-Moon frame as they are (as the
-``real-data`` scenario does) and then follow the ephemeris model.
+z amplitude about 8,600 km, corrected in the CR3BP, then made continuous in the ephemeris model by
+multiple shooting), ``nrho`` (9:2 L2 southern NRHO), ``heo`` (an Earth orbit of about 70,000 x
+600,000 km, Keplerian at the start, inclined 20 deg to the Earth-Moon plane, starting 55 deg
+before perigee; its first night is the first dark pass while the object is within 84,000 km of
+the Earth, below the IOD's default range floor of 84,328 km). The DRO and NRHO states of the
+CR3BP catalog are placed in the real Earth-Moon frame as they are (as the ``real-data`` scenario
+does) and then follow the ephemeris model.
 
 Every random draw comes from ``numpy.random.default_rng(seed)`` (one stream per set, split
 per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds looked at while
@@ -61,9 +65,12 @@ FAMILIES = ("dro", "halo", "nrho", "heo")
 OUTLIER_FRACTION = 0.03
 SUN_MAX_ELEVATION_DEG = -12.0
 ELEVATION_MASK_DEG = 20.0
+MIN_NIGHTS = 4
+MAX_DRAWS = 20
+HEO_FIRST_NIGHT_MAX_KM = 84_000.0
 
 
-def heo_state_km(perigee_km=70_000.0, apogee_km=600_000.0, anomaly_deg=-40.0, incl_deg=20.0,
+def heo_state_km(perigee_km=70_000.0, apogee_km=600_000.0, anomaly_deg=-55.0, incl_deg=20.0,
                  perigee_angle_deg=180.0) -> list[float]:
     """Synodic state (km, km/s) of a geocentric Keplerian orbit at true anomaly ``anomaly_deg``.
 
@@ -162,15 +169,17 @@ def _passes(scen, reg, sites: tuple[str, ...], grid: np.ndarray, truth: np.ndarr
     return sorted(out, key=lambda cp: cp[1].start)
 
 
-def plan(rng: np.random.Generator, passes, span_days: float) -> dict[str, list[np.ndarray]]:
+def plan(rng: np.random.Generator, passes, span_days: float, first_ok=None) -> dict[str, list[np.ndarray]] | None:
     """Tracklet times per site: the first night's lone tracklet, then uneven nights.
 
     ``passes``: (site, pass) by start time (TU); ``span_days``: the campaign's length after the
-    first night. The first night is the first pass of at least 40 minutes."""
+    first night. The first night is the first pass of at least 40 minutes (for which
+    ``first_ok(pass)`` holds, if given). None when there is no such pass."""
     long_enough = [(c, p) for c, p in passes if (p.end - p.start) * units.TU_S >= 2400.0]
-    if not long_enough:
-        raise SystemExit("make_survey_sets: no site sees the object for 40 minutes in darkness")
-    site0, p0 = long_enough[0]
+    firsts = [(c, p) for c, p in long_enough if first_ok is None or first_ok(p)]
+    if not firsts:
+        return None
+    site0, p0 = firsts[0]
     start = p0.start + rng.uniform(0.0, 0.5) * (p0.end - p0.start - 1800.0 / units.TU_S)
     out: dict[str, list[np.ndarray]] = {site0: [_tracklet(rng, start)]}
     day = 86400.0 / units.TU_S
@@ -178,7 +187,7 @@ def plan(rng: np.random.Generator, passes, span_days: float) -> dict[str, list[n
         if rng.uniform() > 0.55:
             continue
         lo, hi = p0.start + (k - 0.25) * day, p0.start + (k + 0.75) * day
-        tonight = [(c, p) for c, p in long_enough if lo <= p.start < hi]
+        tonight = [(c, p) for c, p in long_enough if lo <= p.start < hi and p.start > p0.end]
         if not tonight:
             continue
         code, pas = tonight[int(rng.integers(len(tonight)))]
@@ -212,21 +221,54 @@ def _choose(rng: np.random.Generator, family: str, seed: int) -> dict:
             "span_days": round(float(rng.uniform(7.0, 21.0)), 2)}
 
 
-def make(out: Path, family: str, seed: int) -> dict:
-    """Simulate one set into ``out``; returns its description (also written as set.json)."""
-    streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(4)
-    choose_rng, plan_rng, noise_rng, outlier_rng = (np.random.default_rng(s) for s in streams)
-    info = _choose(choose_rng, family, seed)
-    reg = default_registry()
-    scen = _scenario(family, info["epoch"], info["span_days"] + 8.0, info["sigma_arcsec"])
+def _truth(scen, reg):
+    """(dynamics, x0, 10-minute grid, truth on it) of a scenario; None if the truth hits a body."""
     dyn = scen.build("dynamics", reg)
     grid = np.arange(0.0, scen.duration, 600.0 / units.TU_S)
     x0 = scen.initial_truth(reg)
     prop = dyn.propagate(x0[None], 0.0, grid[1:])
     if not prop.alive[0]:
-        raise SystemExit(f"make_survey_sets: the {family} truth hits a body within {scen.duration_days:g} days")
-    truth = np.concatenate([x0[None], prop.states[:, 0, :]])
-    times = plan(plan_rng, _passes(scen, reg, tuple(info["sites"]), grid, truth), info["span_days"])
+        return None
+    return dyn, x0, grid, np.concatenate([x0[None], prop.states[:, 0, :]])
+
+
+def _first_night_rule(family: str, grid: np.ndarray, truth: np.ndarray):
+    """For the high Earth orbit: the first night starts inside the IOD's default range floor."""
+    if family != "heo":
+        return None
+    r_km = np.linalg.norm(truth[:, :3] - np.array([-MU_EARTH_MOON, 0.0, 0.0]), axis=1) * units.LU_KM
+    return lambda p: float(np.interp(p.start, grid, r_km)) < HEO_FIRST_NIGHT_MAX_KM
+
+
+def _draw(family: str, seed: int, rngs, reg):
+    """Draw epochs, sites and schedules until one gives at least ``MIN_NIGHTS`` nights (and, for
+    the HEO, a first night inside the range floor); at most ``MAX_DRAWS`` draws."""
+    choose_rng, plan_rng = rngs
+    for _k in range(MAX_DRAWS):
+        info = _choose(choose_rng, family, seed)
+        scen = _scenario(family, info["epoch"], info["span_days"] + 8.0, info["sigma_arcsec"])
+        made = _truth(scen, reg)
+        if made is None:
+            continue
+        dyn, x0, grid, truth = made
+        times = plan(plan_rng, _passes(scen, reg, tuple(info["sites"]), grid, truth), info["span_days"],
+                     _first_night_rule(family, grid, truth))
+        if times is not None and len(_nights(times)) >= MIN_NIGHTS:
+            return info, scen, dyn, x0, times
+    raise SystemExit(f"make_survey_sets: no acceptable {family} campaign in {MAX_DRAWS} draws for seed {seed}")
+
+
+def _nights(times: dict[str, list[np.ndarray]]) -> set[int]:
+    starts = np.sort([tr[0] for trs in times.values() for tr in trs])
+    return set(np.floor((starts - starts[0]) * units.TU_S / 86400.0 + 0.5).astype(int).tolist())
+
+
+def make(out: Path, family: str, seed: int) -> dict:
+    """Simulate one set into ``out``; returns its description (also written as set.json)."""
+    streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(4)
+    choose_rng, plan_rng, noise_rng, outlier_rng = (np.random.default_rng(s) for s in streams)
+    reg = default_registry()
+    info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg)
     parts = []
     for code, tracklets in times.items():
         t = np.sort(np.concatenate(tracklets))
@@ -241,8 +283,8 @@ def make(out: Path, family: str, seed: int) -> dict:
     write_observations(out / "observations.psv", ms, scen.epoch, format="ades-psv")
     _write_truth(out / "truth.csv", dyn, x0, float(ms.times[0]), float(ms.times[-1]), scen.epoch, family)
     utc = [units.format_utc(units.tu_to_utc(scen.epoch, ms.times[i])) for i in range(len(ms))]
-    info.update(n_observations=len(ms), first_night_exposures=first,
-                nights=len({u[:10] for u in utc}), tracklets=sum(len(v) for v in times.values()),
+    info.update(epoch=units.format_utc(scen.epoch), n_observations=len(ms), first_night_exposures=first,
+                nights=len(_nights(times)), tracklets=sum(len(v) for v in times.values()),
                 first_utc=utc[0], last_utc=utc[-1],
                 outliers=[{"utc": utc[i], "site": str(ms.sites[i])} for i in rows],
                 range_km_first=float(_range_km(scen, reg, ms, x0, dyn)))
