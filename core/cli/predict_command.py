@@ -127,5 +127,5 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        print(f"wrote {csv_path} and {png}")
+        print(f"wrote {csv_path}\nwrote {png}")
     return 0
