@@ -118,3 +118,26 @@ def test_a_prediction_across_the_impact_ends_there(dyn, impact_case):
     altitude = np.linalg.norm(end[:3] - dyn.frame.moon_synodic(kept[-1])[0]) * units.LU_KM - 1737.4
     assert 0.0 < altitude < 0.01                                          # km: within metres of the surface
     assert times_until_impact(dyn, x, 0.0, grid[:6]) == (pytest.approx(grid[:6]), None)
+
+
+def test_geodetic_coordinates_agree_with_astropy():
+    import warnings
+
+    from astropy import units as u
+    from astropy.coordinates import GCRS, ITRS, CartesianRepresentation
+    from astropy.time import Time, TimeDelta
+
+    from cistrack.least_squares.body_fixed import geodetic
+
+    r = np.random.default_rng(4902).normal(size=(5, 3))
+    r = 6378.137 * r / np.linalg.norm(r, axis=1)[:, None]
+    seconds = np.linspace(0.0, 86400.0 * 3, 5)
+    lat, lon, h = geodetic(r, units.parse_utc("2026-03-01T00:00:00Z"), seconds)
+    t = Time("2026-03-01T00:00:00", scale="utc") + TimeDelta(seconds, format="sec")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        itrs = GCRS(CartesianRepresentation(r.T * u.km), obstime=t).transform_to(ITRS(obstime=t))
+        loc = itrs.earth_location.to_geodetic("WGS84")
+    np.testing.assert_allclose(lat, loc.lat.deg, atol=1e-6)
+    np.testing.assert_allclose(lon, loc.lon.deg, atol=1e-6)
+    np.testing.assert_allclose(h, loc.height.to_value(u.km), atol=1e-4)
