@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.errors import MeasurementError, PropagationError
+from cistrack.least_squares.solve_for_parameters import fitted_dynamics
 from cistrack.least_squares.differential_correction import _one_pass, _Problem
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.options import FitOptions
@@ -94,7 +95,8 @@ def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: Measure
     Parameters
     ----------
     dynamics, sensor, measurements
-        As given to the fit.
+        As given to the fit (parameters the fit estimated, e.g. the area-to-mass ratio, are held at
+        their estimates: :func:`cistrack.least_squares.solve_for_parameters.fitted_dynamics`).
     fit : FitResult
         The nominal solution x* and its covariance P at ``fit.epoch``.
     step : float
@@ -112,6 +114,7 @@ def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: Measure
     sigma = 0); just the nominal one when ``step`` or ``max_sigma`` leave no other point.
     """
     opts = FitOptions(reject_outliers=False) if options is None else options
+    dynamics = fitted_dynamics(dynamics, fit)  # solve-for parameters held at the fit's estimates
     model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
     x0 = np.asarray(fit.state, dtype=float)
     v = weakest_direction(fit.covariance)

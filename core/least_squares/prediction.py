@@ -9,6 +9,7 @@ import numpy as np
 
 from cistrack.errors import ConfigError, StateError
 from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.solve_for_parameters import fitted_dynamics
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.interfaces.dynamics import Dynamics
@@ -40,12 +41,15 @@ def predict_orbit(result: FitResult, dynamics: Dynamics, times: Any, *,
     dynamics' ``propagate_with_stm`` and covariances by ``covariance`` (one of
     :data:`COVARIANCE_METHODS`). Raises :class:`cistrack.errors.StateError` for non-finite times,
     :class:`cistrack.errors.ConfigError` for an unknown method and
-    :class:`cistrack.errors.PropagationError` when the fitted orbit hits a body."""
+    :class:`cistrack.errors.PropagationError` when the fitted orbit hits a body. Solve-for
+    parameters the fit estimated (``result.parameter_names``, e.g. the area-to-mass ratio) are
+    applied to ``dynamics`` and held at their estimates; the covariance is the state's."""
     if covariance not in COVARIANCE_METHODS:
         raise ConfigError(f"covariance={covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
     tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
     if tt.size == 0 or not np.all(np.isfinite(tt)):
         raise StateError("fit prediction: times must be one or more finite numbers (TU)")
+    dynamics = fitted_dynamics(dynamics, result)  # with the parameters the fit estimated
     states, stms = arc_states_and_stms(dynamics, result.state, result.epoch, tt)
     cov = np.einsum("kij,jl,kml->kim", stms, result.covariance, stms)
     cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
