@@ -92,12 +92,11 @@ def split_tracklets(times, sites, gap_hours: float = 1.5,
 
 
 def _line_of_sight(ms: MeasurementSet, sensor: Sensor, idx: np.ndarray) -> np.ndarray:
-    """Synodic unit lines of sight (k, 3) of the rows ``idx`` (the first two components: the angles)."""
-    rows = [ms[int(i)] for i in idx]
-    out = np.empty((idx.size, 3))
-    for j, m in enumerate(rows):
-        s = sensor.for_measurement(m)
-        out[j] = np.asarray(s.line_of_sight(np.asarray(m.z[:2], dtype=float)[None], float(m.t))).reshape(3)
+    """Synodic unit lines of sight (k, 3) of the rows ``idx`` of one site (the first two
+    components: the angles), in one call of that site's sensor."""
+    s = sensor.for_measurement(ms[int(idx[0])])
+    out = np.asarray(s.line_of_sight(np.asarray(ms.values[idx, :2], dtype=float), ms.times[idx]),
+                     dtype=float).reshape(idx.size, 3)
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
