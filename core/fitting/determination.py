@@ -36,6 +36,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cistrack import units
+from cistrack.fitting.residual_ladder import fitted_dynamics
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
@@ -192,10 +193,12 @@ def determination(fit, dynamics, sensor, measurements: MeasurementSet,
 
     ``measurements`` are the observations it was fitted to (times TU; its rejected rows, as the
     fit's residual table marks them, are left out), ``sensor`` predicts them (a site network for
-    several sites), ``dynamics`` propagates the orbit and ``rng`` draws the orbits of the horizon
+    several sites), ``dynamics`` propagates the orbit (with the fit's solve-for parameters) and
+    ``rng`` draws the orbits of the horizon
     (default: a generator seeded with :data:`DRAW_SEED`).
     """
     fit = _scaled(fit)
+    dynamics = fitted_dynamics(dynamics, fit)
     rng = np.random.default_rng(DRAW_SEED) if rng is None else rng
     used = measurements.subset(~np.asarray(fit.residuals.rejected, dtype=bool))
     sessions, sites = _sessions(used.times), len(used.site_keys())

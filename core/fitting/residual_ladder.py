@@ -34,7 +34,7 @@ from cistrack.least_squares.prediction import predict_orbit
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["Rung", "ladder_rung", "residual_ladder", "ladder_table", "ladder_json", "LINK_TAIL", "LOST_SKY_RAD"]
+__all__ = ["Rung", "fitted_dynamics", "ladder_rung", "residual_ladder", "ladder_table", "ladder_json", "LINK_TAIL", "LOST_SKY_RAD"]
 
 LINK_TAIL = 1e-3
 """Largest chance that a right prediction is called a broken link (see the module docstring)."""
@@ -74,6 +74,15 @@ class Rung:
         return replace(self, verdict="broken", why=why)
 
 
+def fitted_dynamics(dynamics, fit) -> Any:
+    """``dynamics`` with the fit's solve-for parameters (e.g. the area-to-mass ratio) when it
+    estimated any; else ``dynamics`` itself."""
+    names = tuple(getattr(fit, "parameter_names", ()))
+    if not names:
+        return dynamics
+    return dynamics.with_parameters(**{n: float(v) for n, v in zip(names, fit.parameters)})
+
+
 def _scaled(fit) -> Any:
     s = float(fit.noise_scale)
     return replace(fit, covariance=fit.covariance * s * s) if np.isfinite(s) and s > 1 else fit
@@ -100,9 +109,11 @@ def _misses(model: MeasurementModel, sub: MeasurementSet, states: np.ndarray,
 
 def ladder_rung(fit, dynamics, sensor, measurements: MeasurementSet, span) -> Rung:
     """The :class:`Rung` of the rows ``span.rows`` (an :class:`cistrack.fitting.arcs.ArcSpan`) of
-    ``measurements`` (times TU) against ``fit`` (a FitResult) propagated by ``dynamics``;
-    ``sensor`` predicts each row (a site network for several sites)."""
+    ``measurements`` (times TU) against ``fit`` (a FitResult) propagated by ``dynamics`` (with
+    the fit's solve-for parameters); ``sensor`` predicts each row (a site network for several
+    sites)."""
     sub = measurements.subset(span.rows)
+    dynamics = fitted_dynamics(dynamics, fit)
     base = dict(start=float(sub.times[0]), end=float(sub.times[-1]), n=len(sub), sites=tuple(sub.site_keys()))
     try:
         pred = predict_orbit(_scaled(fit), dynamics, sub.times)

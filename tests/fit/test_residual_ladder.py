@@ -8,13 +8,14 @@ covariance 0.52 times.)"""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
 import pytest
 
 from cistrack.fitting.arcs import ArcSpan, long_gap_arcs, observation_groups
-from cistrack.fitting.residual_ladder import ladder_json, ladder_rung, ladder_table, residual_ladder
+from cistrack.fitting.residual_ladder import fitted_dynamics, ladder_json, ladder_rung, ladder_table, residual_ladder
 from cistrack.least_squares import fit_orbit
 from cistrack.units import ARCSEC_RAD, hours_to_tu
 
@@ -100,3 +101,10 @@ def test_links_hold_for_one_orbit_and_break_after_two_metres_per_second():
             groups = observation_groups(ms.times)
             rung = ladder_rung(_fit(c, ms.subset(groups[-1].rows)), c.dynamics, c.sensor, ms, groups[0])
             assert rung.verdict == verdict, (dv, seed, rung.sigmas)
+
+
+def test_the_ladder_predicts_with_the_fits_solve_for_parameters():
+    c, _arcs, fit = _dro_two_months()
+    assert fitted_dynamics(c.dynamics, fit) is c.dynamics
+    with_amr = replace(fit, parameter_names=("area_to_mass_m2_kg",), parameters=np.array([0.02]))
+    assert fitted_dynamics(c.dynamics, with_amr).parameter("area_to_mass_m2_kg") == pytest.approx(0.02)
