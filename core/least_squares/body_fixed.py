@@ -7,9 +7,10 @@ mean-Earth/polar-axis (ME) frame, geodetic latitude and longitude on WGS84.
   rotation R1(-0.30") R2(-78.56") R3(-67.92") (Williams, Boggs & Folkner 2008, "DE421 lunar
   orbit, physical librations, and surface coordinates"; the same angles as NAIF's
   ``moon_080317.tf`` frame MOON_ME_DE421). The ME frame is the one lunar maps and the IAU use
-  (x towards the mean Earth direction, z along the mean rotation axis); PA and ME differ by about
-  0.9 km on the surface, so a mistake there would be seen at that size. DE421's librations are
-  good to centimetres-metres at the surface, far below any orbit's uncertainty here.
+  (x towards the mean Earth direction, z along the mean rotation axis). Over 2026 it agrees with
+  the IAU WGCCRE rotation model of the Moon (Archinal et al. 2011, itself an approximation of ME)
+  to 12" (105 m on the surface), while the PA frame differs from both by about 100" (0.9 km) and
+  the PA -> ME rotation with the opposite sign by 210" (tests/fit/test_orbit_events.py).
 - **Earth**: GCRS -> ITRS by ERFA's IAU 2006/2000A ``c2t06a`` with the bundled IERS UT1-UTC and
   polar motion (:mod:`cistrack.astro.timescales`), then WGS84 geodetic coordinates (``gc2gd``).
 

@@ -141,3 +141,42 @@ def test_geodetic_coordinates_agree_with_astropy():
     np.testing.assert_allclose(lat, loc.lat.deg, atol=1e-6)
     np.testing.assert_allclose(lon, loc.lon.deg, atol=1e-6)
     np.testing.assert_allclose(h, loc.height.to_value(u.km), atol=1e-4)
+
+
+def _iau_moon(jd):
+    """ICRF -> Moon body-fixed rotation of the IAU WGCCRE model (Archinal et al. 2011), an
+    approximation of the mean-Earth frame: an independent check of the librations' convention and
+    of the principal-axis -> mean-Earth rotation's sign."""
+    def r1(a):
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[1, 0, 0], [0, c, s], [0, -s, c]])
+
+    def r3(a):
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+    d = jd - 2451545.0
+    t = d / 36525.0
+    e = np.radians(np.array([125.045 - 0.0529921 * d, 250.089 - 0.1059842 * d, 260.008 + 13.0120009 * d,
+                             176.625 + 13.3407154 * d, 357.529 + 0.9856003 * d, 311.589 + 26.4057084 * d,
+                             134.963 + 13.0649930 * d, 276.617 + 0.3287146 * d, 34.226 + 1.7484877 * d,
+                             15.134 - 0.1589763 * d, 119.743 + 0.0036096 * d, 239.961 + 0.1643573 * d,
+                             25.053 + 12.9590088 * d]))
+    s, c = np.sin(e), np.cos(e)
+    a0 = (269.9949 + 0.0031 * t - 3.8787 * s[0] - 0.1204 * s[1] + 0.0700 * s[2] - 0.0172 * s[3] + 0.0072 * s[5]
+          - 0.0052 * s[9] + 0.0043 * s[12])
+    d0 = (66.5392 + 0.0130 * t + 1.5419 * c[0] + 0.0239 * c[1] - 0.0278 * c[2] + 0.0068 * c[3] - 0.0029 * c[5]
+          + 0.0009 * c[6] + 0.0008 * c[9] - 0.0009 * c[12])
+    w = (38.3213 + 13.17635815 * d - 1.4e-12 * d * d + 3.5610 * s[0] + 0.1208 * s[1] - 0.0642 * s[2] + 0.0158 * s[3]
+         + 0.0252 * s[4] - 0.0066 * s[5] - 0.0047 * s[6] - 0.0046 * s[7] + 0.0028 * s[8] + 0.0052 * s[9]
+         + 0.0040 * s[10] + 0.0019 * s[11] - 0.0044 * s[12])
+    return r3(np.radians(w)) @ r1(np.radians(90 - d0)) @ r3(np.radians(90 + a0))
+
+
+def test_the_mean_earth_frame_agrees_with_the_iau_moon_model_and_not_with_the_principal_axes():
+    from cistrack.least_squares.body_fixed import moon_me_rotation
+
+    jd = 2461100.5 + np.linspace(0.0, 365.0, 40)
+    m = moon_me_rotation(jd)
+    off = [np.degrees(np.arccos((np.trace(m[k] @ _iau_moon(jd[k]).T) - 1) / 2)) * 3600 for k in range(jd.size)]
+    assert max(off) < 20.0                                                 # arcsec: 170 m on the surface
+    assert min(off) > 0.1                                                  # two different models
