@@ -4,9 +4,11 @@ An **impact** is the dynamics' own: :meth:`Dynamics.propagate` stops a particle 
 surface and reports the body and the time (:class:`cistrack.interfaces.dynamics.Propagation`);
 the impact point is the state it is frozen at. A **closest approach** is a local minimum of the
 distance to the Moon's or the Earth's centre before the span's end (or an impact): the distance
-is sampled every ``step_minutes``, each interior minimum is refined on a grid of at most 10 s
-(its time where the radial velocity changes sign, linearly interpolated; its position by cubic
-Hermite interpolation).
+is sampled every :data:`APPROACH_STEP_MINUTES`, each interior minimum is refined on a grid of at most 10 s
+(its time where the radial velocity changes sign, linearly interpolated; its state by cubic
+Hermite interpolation). A **descent through an altitude** (``altitude=("Moon", 100.0)``, kind
+"altitude 100 km") is the first time the distance to the body's centre falls to its impact radius
+plus that altitude: found on a 10-minute grid, refined on one of at most 10 s, interpolated.
 
 Each event carries: the time (TU since the dynamics' epoch, and UTC), the body, the latitude and
 longitude of the point (impact point or sub-orbit point at the approach): selenographic in the
@@ -37,13 +39,15 @@ from cistrack.interfaces.dynamics import Dynamics
 
 __all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "times_until_impact", "EVENT_FIELDS",
            "EPS_SIGMA", "IMPACT_MARGIN_S", "fit_events", "FIT_EVENT_DAYS",
-           "prediction_end"]
+           "prediction_end", "altitude_kind"]
 
 EVENT_FIELDS = ("t_tu", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")
 """The columns of :func:`event_values`."""
 EPS_SIGMA = 0.05
 """Step of the central differences of the linear mapping, in sigmas of the covariance."""
 _FINE_S = 10.0
+APPROACH_STEP_MINUTES = 10.0
+"""Spacing of the grid on which distance minima (closest approaches) are first looked for."""
 FIT_EVENT_DAYS = 14.0
 """Days after a fit's epoch over which :func:`fit_events` looks for impacts and closest approaches."""
 IMPACT_MARGIN_S = 1e-3
@@ -191,29 +195,80 @@ def _approach_values(dynamics: Dynamics, x: np.ndarray, t0: float, window: tuple
 def _interpolated(dynamics: Dynamics, pair: np.ndarray, tt: np.ndarray, f: float, body: str,
                   epoch: datetime | None) -> np.ndarray:
     """Event values at the fraction ``f`` between two states ``pair`` (2, 6) at ``tt`` (2,): the
-    position by cubic Hermite interpolation (synodic, with its velocities), the velocity linearly."""
+    position and the velocity by cubic Hermite interpolation (synodic; with the velocities and
+    the dynamics' accelerations)."""
     h = (tt[1] - tt[0])
     h00, h10, h01, h11 = 2 * f ** 3 - 3 * f ** 2 + 1, f ** 3 - 2 * f ** 2 + f, -2 * f ** 3 + 3 * f ** 2, f ** 3 - f ** 2
+    acc = np.array([dynamics.derivatives(float(tt[i]), pair[i:i + 1])[0, 3:] for i in (0, 1)])
     x = np.empty(6)
     x[:3] = h00 * pair[0, :3] + h10 * h * pair[0, 3:] + h01 * pair[1, :3] + h11 * h * pair[1, 3:]
-    x[3:] = (1 - f) * pair[0, 3:] + f * pair[1, 3:]
+    x[3:] = h00 * pair[0, 3:] + h10 * h * acc[0] + h01 * pair[1, 3:] + h11 * h * acc[1]
     t = tt[0] + f * h
     return _describe(dynamics, x[None], np.array([t]), body, epoch)[0]
 
 
+def altitude_kind(altitude_km: float) -> str:
+    """The event kind of a descent through ``altitude_km`` (> 0) above a body's impact sphere."""
+    if not (isinstance(altitude_km, (int, float)) and np.isfinite(altitude_km) and altitude_km > 0):
+        raise StateError(f"events: altitude {altitude_km!r} km must be a number > 0 (above the impact sphere)")
+    return f"altitude {float(altitude_km):g} km"
+
+
+def _first_below(distance: np.ndarray) -> np.ndarray:
+    """Index (N,) of the first sample (of K, axis 0) at or below 0 after one above it, -1 for none."""
+    below = distance <= 0
+    first = np.where(below.any(axis=0), np.argmax(below, axis=0), -1)
+    return np.where(first > 0, first, -1)
+
+
+def _crossing_values(dynamics: Dynamics, x: np.ndarray, t0: float, window: tuple[float, float], body: str,
+                     altitude_km: float, epoch: datetime | None) -> np.ndarray:
+    """(N, 5) values where each state ``x`` (N, 6) first descends through ``altitude_km`` above
+    ``body``'s impact sphere within ``window`` (TU): found on a 10-minute grid, refined on one of
+    at most 10 s, interpolated; NaN rows where it does not."""
+    out = np.full((x.shape[0], 5), np.nan)
+    lo, hi = max(window[0], t0 + 1e-12), window[1]
+    grid = np.linspace(lo, hi, max(3, int(np.ceil((hi - lo) * units.TU_S / 600.0)) + 1))
+    for fine in (False, True):
+        prop = dynamics.propagate(x, t0, grid)
+        states = np.asarray(prop.states, dtype=float)
+        r, _v = _distances(dynamics, states, grid, body)
+        radius = dynamics.bodies[_body_index(dynamics, body)].radius * units.LU_KM
+        d = np.linalg.norm(r, axis=2) - radius - altitude_km
+        k = _first_below(d)                                         # an orbit stopped on the surface is below
+        if not np.any(k > 0):
+            return out
+        if fine:
+            break
+        lo, hi = grid[np.min(k[k > 0]) - 1], grid[np.max(k[k > 0])]
+        grid = np.linspace(lo, hi, int(min(4000, max(50, np.ceil((hi - lo) * units.TU_S / _FINE_S)))))
+    for j in np.flatnonzero(k > 0):
+        i = k[j]
+        slope = d[i - 1, j] - d[i, j]                               # km per unit fraction of the interval
+        f = d[i - 1, j] / slope
+        for _ in range(3):                                          # the interpolated altitude onto the level
+            out[j] = _interpolated(dynamics, states[i - 1:i + 1, j], grid[i - 1:i + 1], f, body, epoch)
+            f += (out[j, 3] - altitude_km) / slope
+    return out
+
+
 def event_values(dynamics: Dynamics, states: np.ndarray, t0: float, kind: str, body: str,
                  window: tuple[float, float], *, epoch: datetime | str | None = None) -> np.ndarray:
-    """The event ``kind`` ("impact" or "closest approach") on ``body`` ("Moon", "Earth") of each
+    """The event ``kind`` ("impact", "closest approach" or :func:`altitude_kind`) on ``body``
+    ("Moon", "Earth") of each
     of ``states`` (N, 6) [LU, VU] at ``t0`` (TU): (N, 5) values :data:`EVENT_FIELDS` (time TU,
     latitude and longitude deg, altitude km, speed km/s); NaN rows where there is none. An impact
-    is looked for from ``t0`` to ``window[1]``; an approach within ``window`` (TU)."""
+    is looked for from ``t0`` to ``window[1]``; an approach or a descent through an altitude within
+    ``window`` (TU)."""
     x = np.atleast_2d(np.asarray(states, dtype=float))
     when = _epoch_of(dynamics, epoch)
     if kind == "impact":
         return _impact_values(dynamics, x, t0, window[1], body, when)
     if kind == "closest approach":
         return _approach_values(dynamics, x, t0, window, body, when)
-    raise StateError(f"events: kind {kind!r} must be 'impact' or 'closest approach'")
+    if kind.startswith("altitude ") and kind.endswith(" km"):
+        return _crossing_values(dynamics, x, t0, window, body, float(kind.split()[1]), when)
+    raise StateError(f"events: kind {kind!r} must be 'impact', 'closest approach' or altitude_kind(km)")
 
 
 def _root(covariance: np.ndarray) -> np.ndarray:
@@ -274,13 +329,15 @@ def _event(dynamics, state, covariance, t0, kind, body, window, epoch) -> OrbitE
 
 
 def orbit_events(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray | None, t0: float, t_end: float, *,
-                 epoch: datetime | str | None = None, step_minutes: float = 10.0,
-                 approaches: bool = True) -> list[OrbitEvent]:
+                 epoch: datetime | str | None = None, approaches: bool = True,
+                 altitude: tuple[str, float] | None = None) -> list[OrbitEvent]:
     """The impact (at most one: it ends the orbit) and the closest approaches to every impact body
     of the orbit ``state`` (6,) [LU, VU] at ``t0`` (TU) up to ``t_end`` (TU, > t0), in time order,
     each with its 1-sigma from ``covariance`` (6, 6) [LU, VU] (None: no sigmas). ``epoch``: the
     UTC of t = 0 (default the dynamics' own ``epoch``) for the UTC times and geodetic coordinates;
-    ``step_minutes``: the coarse grid on which distance minima are looked for."""
+    ``approaches``: look for closest approaches (on a grid of :data:`APPROACH_STEP_MINUTES`);
+    ``altitude``: (body name, km above its impact sphere) adds the first descent through that
+    altitude."""
     x = np.asarray(state, dtype=float).reshape(6)
     if not (np.isfinite(t0) and np.isfinite(t_end) and t_end > t0):
         raise StateError(f"events: need finite times with t_end > t0 (TU), got {t0!r} and {t_end!r}")
@@ -290,10 +347,12 @@ def orbit_events(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray |
     events = []
     if hit is not None:
         events.append(_event(dynamics, x, covariance, t0, "impact", hit[1], (t0, t_end), when))
-    step = step_minutes * 60.0 / units.TU_S
+    step = APPROACH_STEP_MINUTES * 60.0 / units.TU_S
     for body in ([b.name for b in dynamics.bodies] if approaches else []):
         for window in _approach_windows(dynamics, x, t0, end, body, step):
             events.append(_event(dynamics, x, covariance, t0, "closest approach", body, window, when))
+    if altitude is not None:
+        events.append(_event(dynamics, x, covariance, t0, altitude_kind(altitude[1]), altitude[0], (t0, end), when))
     return sorted((e for e in events if e is not None), key=lambda e: e.t_tu)
 
 
@@ -324,15 +383,20 @@ def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
                         epoch=epoch)
 
 
-def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *,
-                   epoch: datetime | str | None = None) -> tuple[np.ndarray, OrbitEvent | None]:
+def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *, epoch: datetime | str | None = None,
+                   altitude: tuple[str, float] | None = None) -> tuple[np.ndarray, OrbitEvent | None]:
     """:func:`times_until_impact` for a fit ``result`` (its state, covariance and epoch) over
     ``times`` (K,) TU, and the impact as an :class:`OrbitEvent` with its 1-sigma (None when the
-    orbit flies through): what an export writes up to, and says where it ends."""
-    kept, hit = times_until_impact(dynamics, result.state, float(result.epoch), times)
+    orbit flies through): what an export writes up to, and says where it ends. With ``altitude``
+    (body name, km above its impact sphere) the orbit ends where it first descends through that
+    altitude instead (the last time is that of the crossing)."""
+    t0, x, when = float(result.epoch), np.asarray(result.state, dtype=float), _epoch_of(dynamics, epoch)
+    kept, hit = times_until_impact(dynamics, x, t0, times)
+    window = (t0, float(np.max(times)) if hit is None else hit[0])
+    if altitude is not None and window[1] > t0:
+        event = _event(dynamics, x, result.covariance, t0, altitude_kind(altitude[1]), altitude[0], window, when)
+        if event is not None:
+            return np.append(kept[kept < event.t_tu], event.t_tu), event
     if hit is None:
         return kept, None
-    t0 = float(result.epoch)
-    event = _event(dynamics, np.asarray(result.state, dtype=float), result.covariance, t0, "impact", hit[1],
-                   (t0, float(np.max(times))), _epoch_of(dynamics, epoch))
-    return kept, event
+    return kept, _event(dynamics, x, result.covariance, t0, "impact", hit[1], (t0, float(np.max(times))), when)

@@ -51,6 +51,23 @@ def test_the_impact_time_agrees_with_a_tighter_independent_integration(dyn, impa
     assert ev.altitude_km == 0.0 and ev.body == "Moon" and ev.utc.startswith("2026-03-01T04")
 
 
+def test_the_descent_through_an_altitude_agrees_with_a_tighter_integration_and_sampling(dyn, impact_case):
+    x, cov = impact_case
+    evs = orbit_events(dyn, x, cov, 0.0, units.days_to_tu(2.0), approaches=False, altitude=("Moon", 100.0))
+    [ev] = [e for e in evs if e.kind == "altitude 100 km"]
+    radius = dyn.primary("Moon").radius + 100.0 / units.LU_KM
+
+    def level(t, y):
+        return np.linalg.norm(y[:3] - dyn.frame.moon_synodic(t)[0]) - radius
+    level.terminal = True
+    sol = solve_ivp(lambda t, y: dyn.derivatives(t, y[None])[0], (0.0, 1.0), x, method="DOP853", rtol=1e-13,
+                    atol=1e-15, events=level)
+    assert abs(sol.t_events[0][0] - ev.t_tu) * units.TU_S < 1e-3 and abs(ev.altitude_km - 100.0) < 1e-4
+    std = _sampled_std(dyn, x, cov, "altitude 100 km", (0.0, units.days_to_tu(2.0)))
+    lin = [ev.sigma[k] for k in ("time_s", "latitude_deg", "longitude_deg")] + [ev.sigma["speed_kms"]]
+    np.testing.assert_allclose(lin, std[[0, 1, 2, 4]], rtol=0.15)
+
+
 def _sampled_std(dyn, x, cov, kind, window, n=200, seed=4901):
     draws = np.random.default_rng(seed).multivariate_normal(x, cov, size=n)
     vals = event_values(dyn, draws, 0.0, kind, "Moon", window)
@@ -118,6 +135,20 @@ def test_a_prediction_across_the_impact_ends_there(dyn, impact_case):
     altitude = np.linalg.norm(end[:3] - dyn.frame.moon_synodic(kept[-1])[0]) * units.LU_KM - 1737.4
     assert 0.0 < altitude < 0.01                                          # km: within metres of the surface
     assert times_until_impact(dyn, x, 0.0, grid[:6]) == (pytest.approx(grid[:6]), None)
+
+
+def test_a_prediction_can_end_at_a_chosen_altitude(dyn, impact_case):
+    from types import SimpleNamespace
+
+    from cistrack.least_squares.events import prediction_end
+
+    x, cov = impact_case
+    fit = SimpleNamespace(state=x, covariance=cov, epoch=0.0)                # what prediction_end reads of a fit
+    grid = units.hours_to_tu(np.arange(0.0, 24.0, 1.0 / 6.0))
+    kept, ev = prediction_end(dyn, fit, grid, altitude=("Moon", 500.0))
+    assert ev.kind == "altitude 500 km" and kept[-1] == ev.t_tu and np.all(np.diff(kept) > 0)
+    kept2, impact = prediction_end(dyn, fit, grid)
+    assert impact.kind == "impact" and kept2[-1] > kept[-1]
 
 
 def test_geodetic_coordinates_agree_with_astropy():
