@@ -44,3 +44,19 @@ def test_predict_prints_writes_csv_and_plot_for_a_fit(tmp_path, capsys):
     assert (tmp_path / "fit" / "sky-568.png").stat().st_size > 10_000
     assert main(["predict", d, "--site", "568", "--start", "2026-03-08T00:00:00Z", "--stop", "2026-03-07T00:00:00Z"]) == 2
     assert "--stop" in capsys.readouterr().err
+
+
+def test_a_cr3bp_run_is_refused_naming_the_dynamics(tmp_path, capsys):
+    assert main(["run", "quick", "--out", str(tmp_path / "q"), "--quiet"]) == 0
+    assert main(["predict", str(tmp_path / "q"), "--site", "809"]) == 2
+    assert "real Earth-Moon frame" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_predict_takes_a_runs_last_filter_estimate(tmp_path, capsys):
+    assert main(["run", "real-data", "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    assert main(["predict", str(tmp_path / "r"), "--site", "809", "--start", "2026-03-07T00:00:00Z", "--stop",
+                 "2026-03-07T06:00:00Z", "--step", "120"]) == 0
+    captured = capsys.readouterr()
+    assert "filter estimate at step" in captured.err
+    assert len([line for line in captured.out.splitlines() if line.startswith("2026-03-07T")]) == 4
