@@ -39,7 +39,7 @@ from cistrack.interfaces.dynamics import Dynamics
 
 __all__ = ["OrbitEvent", "orbit_events", "event_values", "first_impact", "times_until_impact", "EVENT_FIELDS",
            "EPS_SIGMA", "IMPACT_MARGIN_S", "fit_events", "FIT_EVENT_DAYS",
-           "prediction_end", "altitude_kind"]
+           "prediction_end", "altitude_kind", "event_lines"]
 
 EVENT_FIELDS = ("t_tu", "latitude_deg", "longitude_deg", "altitude_km", "speed_kms")
 """The columns of :func:`event_values`."""
@@ -400,3 +400,12 @@ def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *, epoch: date
     if hit is None:
         return kept, None
     return kept, _event(dynamics, x, result.covariance, t0, "impact", hit[1], (t0, float(np.max(times))), when)
+
+
+def event_lines(events: list[OrbitEvent], days: float = FIT_EVENT_DAYS) -> list[str]:
+    """The lines a fit summary prints for ``events`` found over ``days`` after the fit epoch
+    (indented two spaces, each under 120 columns)."""
+    if not events:
+        return [f"  no impact and no closest approach within {days:g} days of the fit epoch"]
+    head = f"  impacts and closest approaches within {days:g} days of the fit epoch (1-sigma by linear mapping):"
+    return [head] + ["  " + line for e in events for line in e.lines()]

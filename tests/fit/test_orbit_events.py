@@ -211,3 +211,16 @@ def test_the_mean_earth_frame_agrees_with_the_iau_moon_model_and_not_with_the_pr
     off = [np.degrees(np.arccos((np.trace(m[k] @ _iau_moon(jd[k]).T) - 1) / 2)) * 3600 for k in range(jd.size)]
     assert max(off) < 20.0                                                 # arcsec: 170 m on the surface
     assert min(off) > 0.1                                                  # two different models
+
+
+def test_event_lines_fit_in_120_columns_and_json(dyn, impact_case):
+    import json
+
+    from cistrack.least_squares.events import event_lines
+
+    x, cov = impact_case
+    evs = orbit_events(dyn, x, cov, 0.0, units.days_to_tu(2.0))
+    lines = event_lines(evs, 2.0)
+    assert all(len(line) <= 120 for line in lines) and "impact (Moon)" in "\n".join(lines)
+    assert json.loads(json.dumps([e.as_dict() for e in evs]))[-1]["sigma"]["time_s"] > 0
+    assert event_lines([], 2.0) == ["  no impact and no closest approach within 2 days of the fit epoch"]
