@@ -4,8 +4,12 @@ A fit over a few tracklets predicts the observations a little beyond them well, 
 them poorly; started there, the least squares converges. :func:`extend_arc` therefore doubles the
 fitted time span (about its middle) each time, takes every observation inside, and fits again from
 the last solution (the state stays at the seed's epoch), until every observation is in. When a
-doubled span fails, the next tracklet on each side is tried alone; when that fails too, the fit
-stays over the span it has and the steps say so.
+doubled span fails, the next observation on each side is tried alone; when that fails too (a
+tracklet days away, where the last fit's weak directions have grown), the fit is **bridged**: a
+grid over the fit's two least determined directions (out to :data:`BRIDGE_SIGMAS` sigma) is
+propagated at once, scored on the observations to be added (:func:`.ranging_search.score_states`)
+and the least squares started from the best few. When that fails too, the fit stays over the span
+it has and the steps say so.
 """
 from __future__ import annotations
 
@@ -16,10 +20,14 @@ from cistrack.least_squares import FitOptions, FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import tu_to_hours
 
-from .ranging_search import _one_fit
+from .ranging_search import _one_fit, score_states
 from .tracklets import Attributable
 
-__all__ = ["extend_arc", "tracklet_record"]
+__all__ = ["extend_arc", "tracklet_record", "BRIDGE_SIGMAS"]
+
+BRIDGE_SIGMAS = 30.0
+"""Half-width of the bridging grid along each of the two weakest directions, in their sigmas."""
+_BRIDGE_STEPS = (61, 31)   # grid points along the weakest and the second weakest direction
 
 _OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30)
 
@@ -38,6 +46,28 @@ def _next_span(times: np.ndarray, rows: np.ndarray, grow: float) -> np.ndarray:
     return np.nonzero(inside | np.isin(np.arange(times.size), rows))[0]
 
 
+def _bridge(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit: FitResult, rows: np.ndarray,
+            added: np.ndarray, options: FitOptions) -> FitResult | None:
+    """The least squares over ``rows`` started from the best-scored states of a grid over the two
+    least determined directions of ``fit``, scored on the rows ``added`` (see the module
+    docstring); None when none of the best four converges."""
+    w, v = np.linalg.eigh(0.5 * (fit.covariance + fit.covariance.T))
+    axes = [v[:, -1] * np.sqrt(max(w[-1], 0.0)), v[:, -2] * np.sqrt(max(w[-2], 0.0))]
+    a = np.linspace(-BRIDGE_SIGMAS, BRIDGE_SIGMAS, _BRIDGE_STEPS[0])
+    b = np.linspace(-BRIDGE_SIGMAS, BRIDGE_SIGMAS, _BRIDGE_STEPS[1])
+    grid = fit.state[None] + np.add.outer(a, np.zeros_like(b)).reshape(-1, 1) * axes[0] \
+        + np.add.outer(np.zeros_like(a), b).reshape(-1, 1) * axes[1]
+    score = score_states(dynamics, sensor, ms, added, grid, fit.epoch)
+    sub = ms.subset(rows)
+    for i in np.argsort(score, kind="stable")[:4]:
+        if not np.isfinite(score[i]):
+            break
+        out = _one_fit(dynamics, sensor, sub, grid[i], fit.epoch, options)
+        if out is not None and out.converged:
+            return out
+    return None
+
+
 def extend_arc(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit: FitResult, rows: np.ndarray,
                options: FitOptions = _OPTIONS) -> tuple[FitResult, np.ndarray, list[str]]:
     """(fit, rows it used (sorted), one line per step) of ``fit`` (over ``rows``) extended over
@@ -51,9 +81,13 @@ def extend_arc(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, fit: FitR
             if new is not None and new.converged:
                 break
         else:
-            steps.append(f"stopped at {rows.size} of {len(ms)} observations: the fit over {more.size} did not "
-                         "converge")
-            break
+            new = _bridge(dynamics, sensor, ms, fit, more, np.setdiff1d(more, rows), options)
+            if new is None:
+                steps.append(f"stopped at {rows.size} of {len(ms)} observations: the fit over {more.size} did not "
+                             "converge, bridged or not")
+                break
+            steps.append(f"bridged over the gap to {more.size} observations (a grid over the fit's two weakest "
+                         "directions)")
         span_h = tu_to_hours(float(ms.times[more].max() - ms.times[more].min()))
         steps.append(f"{more.size} observations over {span_h / 24.0:.2f} days: weighted RMS {new.rms:.3g}, "
                      f"{new.n_rejected} rejected")

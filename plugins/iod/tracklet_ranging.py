@@ -41,6 +41,7 @@ from cistrack.least_squares import FitOptions, FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
+from cistrack.units import TU_S
 
 from .ranging_search import ScoredGrid, admissible_states, refine, score_states
 from .ranging_arc import extend_arc, tracklet_record
@@ -49,6 +50,8 @@ from .tracklets import Attributable, attributable, split_tracklets
 __all__ = ["TrackletRangingIOD", "ARCS"]
 
 ARCS = ("seed", "all")
+NEAR_DAYS = 6.0
+"""A seed whose scoring tracklets all lie within this many days is tried before one whose do not."""
 _SEED_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30)
 
 
@@ -104,6 +107,14 @@ class TrackletRangingIOD(IODMethod):
         epoch = _sensor_epoch(sensor)
         return reg.create("dynamics", self.dynamics, **({"epoch": epoch} if takes_epoch and epoch else {}))
 
+    def _seed_rank(self, atts: list[Attributable], k: int) -> tuple[bool, bool, float]:
+        """Sort key of tracklet ``k`` as a seed: consistent ones first, then those whose
+        ``score_tracklets`` nearest tracklets lie within :data:`NEAR_DAYS` (a grid propagated
+        further resolves the orbit too coarsely), then the earliest."""
+        gaps = np.sort([abs(a.t - atts[k].t) for j, a in enumerate(atts) if j != k])
+        far = gaps.size == 0 or gaps[min(self.score_tracklets, gaps.size) - 1] > NEAR_DAYS * 86400.0 / TU_S
+        return (not atts[k].consistent, bool(far), float(atts[k].t))
+
     def _grid(self, att: Attributable) -> tuple[np.ndarray, np.ndarray]:
         return admissible_states(att, n_range=self.n_range, n_rate=self.n_rate, range_min_km=self.range_min_km,
                                  range_max_km=self.range_max_km, max_c3=self.max_c3)
@@ -135,7 +146,7 @@ class TrackletRangingIOD(IODMethod):
         sites = np.array([ms.site_at(i) for i in range(len(ms))])
         groups = [g for g in split_tracklets(ms.times, sites, self.gap_hours) if g.size >= 2]
         atts = [attributable(ms, sensor, g) for g in groups]
-        order = [k for k in sorted(range(len(atts)), key=lambda k: (not atts[k].consistent, atts[k].t))
+        order = [k for k in sorted(range(len(atts)), key=lambda k: self._seed_rank(atts, k))
                  if atts[k].indices.size >= self.min_tracklet]
         if not order:
             raise IODError(f"{who}: no tracklet has {self.min_tracklet} observations (tracklets: "
@@ -157,7 +168,9 @@ class TrackletRangingIOD(IODMethod):
             raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} "
                            f"tried: {records}); check the observations or widen range_min_km/range_max_km")
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"
-               + ("" if k == order[0] else "; earlier seeds gave no fit") + "), scored on tracklets "
+               + ("" if k == order[0] else "; earlier seeds gave no fit")
+               + ("" if order[0] == min(order) else f"; earlier tracklets have no {self.score_tracklets} others "
+                  f"within {NEAR_DAYS:g} days") + "), scored on tracklets "
                + ", ".join(str(j + 1) for j in rec["scored_on"]))
         info = {"why": why, "tracklets": tracklet_record(atts), "seeds_tried": records,
                 "seed_rows": [int(i) for i in rows], "extension": []}
