@@ -216,7 +216,8 @@ class DirectoryOrbit:
 
 def orbit_of_directory(directory: str | Path, registry: Registry | None = None) -> DirectoryOrbit:
     """The orbit of a ``cistrack fit`` directory (``fit.json``: the least-squares state and its
-    covariance as exported, times the noise scale squared when above 1) or of a ``cistrack run``
+    covariance as exported, times the noise scale squared when above 1, and the dynamics with the
+    area-to-mass ratio it estimated, if it did) or of a ``cistrack run``
     directory (the filter's estimate at its last step); ConfigError naming the directory otherwise."""
     from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
@@ -234,6 +235,9 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
         if why is not None:
             raise ConfigError(f"{d}: no orbit to predict from: {why}")
         cov = np.asarray(rec["covariance"], dtype=float) * covariance_scale(rec)
+        amr = rec.get("area_to_mass")
+        if isinstance(amr, dict) and amr.get("estimated"):                # predict with the fitted C_R A/m
+            dyn = dyn.with_parameters(area_to_mass_m2_kg=float(amr["value_m2_kg"]))
         return DirectoryOrbit(np.asarray(rec["state"], dtype=float), cov, float(rec["epoch_tu"]), scen.epoch, dyn,
                               str(rec.get("designation") or scen.name), "least-squares fit")
     return _run_orbit(d, scen, dyn)

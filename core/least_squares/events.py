@@ -376,11 +376,14 @@ def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
                epoch: datetime | str | None = None) -> list[OrbitEvent]:
     """:func:`orbit_events` of a least-squares fit (a :class:`cistrack.least_squares.FitResult`)
     over ``days`` after its epoch, the covariance scaled as it is exported (by the noise scale
-    squared when that exceeds 1). ``epoch``: the UTC of t = 0 (default the dynamics' own)."""
+    squared when that exceeds 1), with the solve-for parameters it estimated (the area-to-mass
+    ratio) set in ``dynamics``. ``epoch``: the UTC of t = 0 (default the dynamics' own)."""
+    from cistrack.least_squares.solve_for_parameters import fitted_dynamics
+
     scale = max(1.0, float(result.noise_scale)) ** 2 if np.isfinite(result.noise_scale) else 1.0
     t0 = float(result.epoch)
-    return orbit_events(dynamics, result.state, result.covariance * scale, t0, t0 + float(units.days_to_tu(days)),
-                        epoch=epoch)
+    return orbit_events(fitted_dynamics(dynamics, result), result.state, result.covariance * scale, t0,
+                        t0 + float(units.days_to_tu(days)), epoch=epoch)
 
 
 def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *, epoch: datetime | str | None = None,
