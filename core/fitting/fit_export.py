@@ -31,6 +31,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.fitting.fit_record import read_fit_record
+from cistrack.least_squares.events import prediction_end
 from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
@@ -160,11 +161,16 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         times, n_arc = np.array([result.epoch]), 1
     else:
         times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
-    pred = predict_orbit(result, _dynamics(scen, reg, record), times, covariance=opts.covariance)
+    dynamics = _dynamics(scen, reg, record)
+    times, impact = prediction_end(dynamics, result, times, epoch=scen.epoch)  # an impact ends the file
+    n_arc = min(n_arc, times.size)
+    pred = predict_orbit(result, dynamics, times, covariance=opts.covariance)
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
     comments = _comments(record, name, opts, pred, utc, n_arc, refusal)
+    if impact is not None:
+        comments += ["WARNING: the orbit ends on the surface; the last state is 1 ms before the impact:"] + impact.lines()
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments)
     meta.update(_area_to_mass_user_defined(record))

@@ -63,6 +63,9 @@ class OpmExporter(Exporter):
         c = est.covariance_km[k]
         pairs = [(i, j) for i in range(6) for j in range(i + 1)]
         out += [f"{key} = {num(c[i, j])}" for key, (i, j) in zip(COV_KEYS, pairs)]
+        user = meta.get("user_defined") or {}
+        if user:  # CCSDS OPM's user-defined parameters, e.g. a fitted area-to-mass ratio
+            out += ["", *(f"USER_DEFINED_{k} = {num(v)}" for k, v in user.items())]
         Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
 
 

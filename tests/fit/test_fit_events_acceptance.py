@@ -35,3 +35,21 @@ def test_the_fitted_orbit_reports_the_truths_lunar_impact(tmp_path):
     assert abs(hit.latitude_deg - truth.latitude_deg) < 3 * hit.sigma["latitude_deg"]
     assert abs(hit.longitude_deg - truth.longitude_deg) < 3 * hit.sigma["longitude_deg"]
     assert abs(hit.speed_kms - truth.speed_kms) < 1e-3
+
+
+@pytest.mark.slow
+def test_an_export_past_the_impact_ends_at_it_and_names_it_in_utc(tmp_path):
+    import re
+
+    from cistrack.fitting.fit_export import export_fit
+
+    obs = builtin_scenario_path("real-data").parent / "real_data" / "observations.psv"
+    [one] = fit_files([obs], out=tmp_path / "fit")
+    out = export_fit(one.directory, "oem", tmp_path / "past.oem", predict_days=20.0)
+    text = out.read_text()
+    assert "impact (Moon) 2026-03-17T" in text
+    assert not re.search(r"\d TU\b", text)  # never an internal time
+    last = [ln.split()[0] for ln in text.splitlines() if ln[:4].isdigit()][-1]
+    [hit] = [e for e in fit_events(one.run.context.dynamics, one.result, days=20.0, epoch=one.scenario.epoch)
+             if e.kind == "impact"]
+    assert 0 <= (units.parse_utc(hit.utc) - units.parse_utc(last + "Z")).total_seconds() < 600
