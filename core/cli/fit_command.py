@@ -19,12 +19,32 @@ def _eprint(*a) -> None:
     print(*a, file=sys.stderr, flush=True)
 
 
+def _arcs_and_events(one) -> list[str]:
+    """The residual ladder of the earlier arcs and the orbit's events (impacts, closest approaches)."""
+    lines: list[str] = []
+    arcs = getattr(one, "arcs", None)
+    if arcs is not None and arcs.ladder:
+        from cistrack.fitting.arc_fit import ladder_verdicts
+        from cistrack.fitting.residual_ladder import ladder_table
+
+        lines.append("  earlier arcs against this fit (residual ladder):")
+        lines += ["    " + ln for ln in ladder_table(arcs.ladder, one.scenario.epoch).splitlines()]
+        lines.append("  " + ladder_verdicts(arcs.ladder))
+    if one.ok and getattr(one, "events", None) is not None:
+        from cistrack.least_squares.events import event_lines
+
+        lines += event_lines(one.events)
+    return lines
+
+
 def summary_lines(one) -> list[str]:
     """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
     from cistrack import units
-    from cistrack.fitting.fit_record import noise_summary
+    from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
 
-    lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED") + f"  (results in {one.directory})"]
+    det = getattr(one, "determination", None)
+    verdict = "FAILED" if not one.ok else "converged" + (f"; {det.sentence}" if det is not None else "")
+    lines = [f"fit {one.designation}: {verdict}", f"  results in {one.directory}"]
     if one.run is not None:
         s = one.run.summary
         lines.append(f"  filter {one.scenario.components['filter'].name} after IOD "
@@ -43,7 +63,7 @@ def summary_lines(one) -> list[str]:
         lines.append(f"  least squares restarted from {one.start}")
     lines.append(f"  least squares at {epoch} ({one.choices.epoch} observation): {len(ms)} observations, "
                  f"{r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}, chi-square {r.chi2:.1f} "
-                 f"for {2 * r.n_used - 6} degrees of freedom")
+                 f"for {2 * r.n_used - 6 - len(r.parameter_names)} degrees of freedom")
     for name, v in noise_summary(ms, r).items():
         unit = "km" if name.endswith("_km") else "arcsec"
         label = name.rsplit("_", 1)[0].replace("ra_cos_dec", "RA cos(Dec)").replace("declination", "Dec")
@@ -53,6 +73,7 @@ def summary_lines(one) -> list[str]:
     lines.append("  1-sigma at the fit epoch (synodic): position " + " / ".join(f"{v:.3g}" for v in sig[:3])
                  + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; condition number "
                  f"{r.condition_number:.3g}")
+    lines += area_to_mass_summary(r)
     if r.noise_scale > 1.0:
         lines.append(f"  the exported covariance is this one times the noise scale squared ({r.noise_scale ** 2:.3g}): "
                      "the residuals exceed the stated noise")
@@ -69,6 +90,7 @@ def summary_lines(one) -> list[str]:
         if not lv["linear"]:
             lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
                          "understates the uncertainty; sample the line (lov.csv, cistrack.least_squares.line_of_variations)")
+    lines += _arcs_and_events(one)
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
     if not r.converged:

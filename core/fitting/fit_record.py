@@ -151,7 +151,27 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         from cistrack.least_squares.line_of_variations import line_summary
 
         data["line_of_variations"] = {**line_summary(one.lov, r), "points": len(one.lov), "file": LOV}
+    data.update(_context_record(one))
     return data
+
+
+def _context_record(one) -> dict[str, Any]:
+    """How well the orbit is determined, the earlier arcs against it and its events, where known."""
+    out: dict[str, Any] = {}
+    det = getattr(one, "determination", None)
+    if det is not None:
+        out["determination"] = det.as_dict()
+    arcs = getattr(one, "arcs", None)
+    if arcs is not None:
+        from cistrack.fitting.residual_ladder import ladder_json
+
+        out["arcs"] = ladder_json(arcs.ladder, one.scenario.epoch)
+    events = getattr(one, "events", None)
+    if events is not None:
+        from cistrack.least_squares.events import FIT_EVENT_DAYS
+
+        out["events"] = {"days": FIT_EVENT_DAYS, "list": [e.as_dict() for e in events]}
+    return out
 
 
 def _lov_csv(points, fit) -> str:
