@@ -115,6 +115,18 @@ class TrackletRangingIOD(IODMethod):
         far = gaps.size == 0 or gaps[min(self.score_tracklets, gaps.size) - 1] > NEAR_DAYS * 86400.0 / TU_S
         return (not atts[k].consistent, bool(far), float(atts[k].t))
 
+    def _why_not_first(self, atts: list[Attributable], order: list[int], k: int) -> str:
+        """Why the seed ``k`` is not the earliest tracklet that has enough observations ("" when it is)."""
+        first = min(order)
+        if k == first:
+            return ""
+        if not atts[first].consistent:
+            return (f"; tracklet {first + 1} misses its own curve by {atts[first].misfit:.0f} sigma: it holds a "
+                    "gross outlier")
+        if order.index(first) < order.index(k):
+            return f"; tracklet {first + 1} gave no fit"
+        return f"; tracklet {first + 1} has no {self.score_tracklets} others within {NEAR_DAYS:g} days"
+
     def _grid(self, att: Attributable) -> tuple[np.ndarray, np.ndarray]:
         return admissible_states(att, n_range=self.n_range, n_rate=self.n_rate, range_min_km=self.range_min_km,
                                  range_max_km=self.range_max_km, max_c3=self.max_c3)
@@ -168,9 +180,7 @@ class TrackletRangingIOD(IODMethod):
             raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} "
                            f"tried: {records}); check the observations or widen range_min_km/range_max_km")
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"
-               + ("" if k == order[0] else "; earlier seeds gave no fit")
-               + ("" if order[0] == min(order) else f"; earlier tracklets have no {self.score_tracklets} others "
-                  f"within {NEAR_DAYS:g} days") + "), scored on tracklets "
+               + self._why_not_first(atts, order, k) + "), scored on tracklets "
                + ", ".join(str(j + 1) for j in rec["scored_on"]))
         info = {"why": why, "tracklets": tracklet_record(atts), "seeds_tried": records,
                 "seed_rows": [int(i) for i in rows], "extension": []}

@@ -118,3 +118,15 @@ def test_parameters_are_checked():
         reg.create("iod", "tracklet-ranging", arc="everything")
     with pytest.raises(Exception, match="range_max_km"):
         reg.create("iod", "tracklet-ranging", range_min_km=5e5, range_max_km=1e5)
+
+
+def test_a_seed_with_an_outlier_gives_way_to_the_next(dro):
+    dyn, sensor, x0, ms, times = dro
+    bad = ms.subset(np.arange(len(ms)))
+    bad.values[1, 1] += np.radians(0.05)                      # 180" on one exposure of the first tracklet
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, arc="all", n_particles=200,
+                                    n_range=80, n_rate=24)
+    cloud = iod.estimate(bad, sensor, np.random.default_rng(3))
+    assert "ranging from tracklet 2" in cloud.meta["why"] and "gross outlier" in cloud.meta["why"]
+    e = np.asarray(cloud.meta["best_state"]) - _truth_at(dyn, x0, times[-1])
+    assert np.linalg.norm(e[:3]) * LU_KM < 200.0 and cloud.meta["n_rejected"] >= 1
