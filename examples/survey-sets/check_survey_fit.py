@@ -146,6 +146,7 @@ def check_set(set_dir: Path, out: Path) -> Row:
     info = json.loads((set_dir / "set.json").read_text()) if (set_dir / "set.json").is_file() else {}
     outliers = info.get("outliers", [])
     row.injected = len(outliers)
+    row.n_observations = int(info.get("n_observations", 0))
     fit_dir = out / set_dir.name
     rc, row.seconds, text = run_cli("fit", str(set_dir / "observations.psv"), "--out", str(fit_dir))
     rec = json.loads((fit_dir / "fit.json").read_text()) if (fit_dir / "fit.json").is_file() else {}
@@ -155,7 +156,7 @@ def check_set(set_dir: Path, out: Path) -> Row:
     if rc != 0 or not rec.get("converged"):
         row.outcome = "failed"
         lines = text.strip().splitlines()
-        row.failure = rec.get("failure") or (lines[-1] if lines else f"exit {rc}")
+        row.failure = rec.get("failure") or "; ".join(rec.get("messages", [])[:1]) or (lines[-1] if lines else f"exit {rc}")
         return row
     row.outcome = "converged"
     rc, _s, text = run_cli("export", str(fit_dir), "--format", "oem")
