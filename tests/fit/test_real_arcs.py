@@ -1,6 +1,7 @@
 """The real-data development set of 2025-010D (public-domain astrometry compiled by Project
 Pluto; credits in its header and docs/data-credits.md): it reads, its sites are all MPC codes
-of the bundled list, and it holds nothing of the reserved final arc (2026-07-23 on)."""
+of the bundled list, it holds nothing of the reserved final arc (2026-07-23 on), and (slow)
+`cistrack fit` with no option fits it without throwing away whole arcs."""
 from __future__ import annotations
 
 import json
@@ -58,11 +59,20 @@ def test_dev_set_credits_observers_and_compiler():
         assert name in text
 
 
+_REJECTS_ARCS = ("measured 2026-11-28 (commit 422c74d): 'converged' after the tracklet-ranging IOD (seeded on "
+                 "P13's 2025-12..2026-04 tracklets) with 99 of 327 observations rejected: everything but "
+                 "2026-04-17 (P13), 2026-05-19 (718) and 2026-05-21/22 (Y82), i.e. the discovery tracklet, the "
+                 "2025-12 nights, 2026-04-11/14 and the 65-exposure Y82 night of 2026-05-10; condition number "
+                 "4.3e7, 200 iterations without convergence in a pass; 12 min on 2 shared cores")
+
+
 @pytest.mark.slow
-def test_fit_of_dev_set_ends_cleanly(tmp_path):
-    """No option: a fit or a refusal that says why (today: the 4-exposure discovery tracklet is
-    too few for the IOD), never a crash."""
+@pytest.mark.xfail(strict=False, reason=_REJECTS_ARCS)
+def test_fit_of_dev_set_keeps_its_arcs(tmp_path):
+    """No option: the whole development set (2025-01 to 2026-05) fits with at most 5 % of its
+    observations rejected. A fit of real data has no truth; what it must do is agree with the
+    observations it was given, across the arcs."""
     code = main(["fit", str(DEV), "--out", str(tmp_path / "fit"), "--quiet"])
     rec = json.loads((tmp_path / "fit" / "fit.json").read_text())
-    assert code in (0, 3)
-    assert rec["converged"] or rec["failure"]
+    assert code == 0 and rec["converged"], rec.get("failure")
+    assert rec["n_rejected"] <= 0.05 * (rec["n_used"] + rec["n_rejected"]), rec["n_rejected"]
