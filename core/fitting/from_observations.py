@@ -71,6 +71,9 @@ RANGING_IOD = "tracklet-ranging"
 SEEDED_ITERATIONS = 200
 """Levenberg-Marquardt iterations per pass, at least, of the least squares started from the ranging
 IOD's orbit."""
+SEEDED_REJECT_FRACTION = 0.1
+"""At most this share of the observations is rejected by the least squares started from the ranging
+IOD's orbit (the ``--set fit.max_reject_fraction`` when smaller)."""
 SHORT_ARC_HOURS = 24.0
 """A fit over observations spanning less than this says that the orbit is poorly determined."""
 _EPOCHS = ("last", "middle", "first")
@@ -306,10 +309,13 @@ def _fit_from_iod(ctx, choices: FitChoices) -> FitResult | None:
                     np.asarray(meta["best_covariance"], dtype=float), "the ranging IOD's orbit")
     from dataclasses import replace
 
-    # From the IOD's orbit the first pass still holds the outliers the IOD rejected, and with one
-    # of them in, Levenberg-Marquardt can crawl (178 iterations measured on a 17-observation NRHO
-    # set): at least SEEDED_ITERATIONS per pass.
-    opts = replace(choices.options, max_iterations=max(choices.options.max_iterations, SEEDED_ITERATIONS))
+    # From the IOD's orbit the first pass still holds the outliers the IOD rejected. With one of
+    # them in, Levenberg-Marquardt can crawl (178 iterations measured on a 17-observation NRHO set):
+    # at least SEEDED_ITERATIONS per pass; and on a weakly determined arc it pulls the first pass so
+    # far that the robust threshold let whole clean tracklets go (10 of 23, 55 km off): at most
+    # SEEDED_REJECT_FRACTION rejected.
+    opts = replace(choices.options, max_iterations=max(choices.options.max_iterations, SEEDED_ITERATIONS),
+                   max_reject_fraction=min(choices.options.max_reject_fraction, SEEDED_REJECT_FRACTION))
     try:
         result = _least_squares(ctx, replace(choices, options=opts), start)
     except (FitError, PropagationError):

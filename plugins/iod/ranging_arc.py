@@ -29,7 +29,8 @@ BRIDGE_SIGMAS = 30.0
 """Half-width of the bridging grid along each of the two weakest directions, in their sigmas."""
 _BRIDGE_STEPS = (61, 31)   # grid points along the weakest and the second weakest direction
 
-_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30)
+_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30, max_reject_fraction=0.1)
+"""As the seed's fit (:mod:`.tracklet_ranging`): at most 10 % rejected."""
 
 
 def _next_span(times: np.ndarray, rows: np.ndarray, grow: float) -> np.ndarray:

@@ -52,7 +52,11 @@ __all__ = ["TrackletRangingIOD", "ARCS"]
 ARCS = ("seed", "all")
 NEAR_DAYS = 6.0
 """A seed whose scoring tracklets all lie within this many days is tried before one whose do not."""
-_SEED_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30)
+_SEED_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma_km=1e30, max_reject_fraction=0.1)
+"""The seed's least squares: warnings off (a short arc is weakly determined by nature) and at most
+10 % rejected: from a grid point the first pass can settle where whole tracklets disagree, and the
+fit's default cap (half) let it reject them and keep a wrong orbit (9 of 22 clean observations
+rejected, 55 km off, on one 9:2 NRHO set)."""
 
 
 class TrackletRangingIOD(IODMethod):
