@@ -59,11 +59,11 @@ def test_dev_set_credits_observers_and_compiler():
         assert name in text
 
 
-_REJECTS_ARCS = ("measured 2026-11-28 (commit 422c74d): 'converged' after the tracklet-ranging IOD (seeded on "
-                 "P13's 2025-12..2026-04 tracklets) with 99 of 327 observations rejected: everything but "
-                 "2026-04-17 (P13), 2026-05-19 (718) and 2026-05-21/22 (Y82), i.e. the discovery tracklet, the "
-                 "2025-12 nights, 2026-04-11/14 and the 65-exposure Y82 night of 2026-05-10; condition number "
-                 "4.3e7, 200 iterations without convergence in a pass; 12 min on 2 shared cores")
+_REJECTS_ARCS = ("measured 2026-11-28 (commit f4c3d47): 'converged' after the tracklet-ranging IOD (seeded on "
+                 "P13's 2025-12..2026-04 tracklets) with 28 of 327 observations rejected, whole nights: the "
+                 "2025-01-20 discovery tracklet, both 2025-12 nights, 2026-04-11 and 2026-04-17 (P13); the "
+                 "2026-04-14 night and all of May fit (RMS 0.46\" at the reader's 1\"); 48 s. (At commit "
+                 "422c74d: 99 rejected, every night but 04-17, 05-19 and 05-21/22.)")
 
 
 @pytest.mark.slow
