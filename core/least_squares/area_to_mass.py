@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -83,15 +83,13 @@ def _decided(result: FitResult, why: str) -> FitResult:
     return dataclasses.replace(result, area_to_mass_decision=why)
 
 
-def fit_area_to_mass_auto(dynamics: Any, sensor: Any, measurements: Any, state: np.ndarray, t0: float, *,
-                          prior: Any = None, options: FitOptions, solve_for: tuple[str, ...] = ()) -> FitResult:
+def fit_area_to_mass_auto(fit: Callable[[np.ndarray, FitOptions], FitResult], dynamics: Any, measurements: Any,
+                          state: np.ndarray, *, options: FitOptions) -> FitResult:
     """:func:`cistrack.least_squares.fit_orbit` with ``area_to_mass="auto"`` (module docstring):
-    the fit without the ratio, or with it where the arc supports it; ``state`` (6,) LU, VU at
-    ``t0`` TU. The returned result's ``area_to_mass_decision`` says which and why."""
-    from cistrack.least_squares.differential_correction import fit_orbit
-
-    six = fit_orbit(dynamics, sensor, measurements, state, t0, prior=prior,
-                    options=dataclasses.replace(options, area_to_mass="off"), solve_for=solve_for or None)
+    the fit without the ratio, or with it where the arc supports it; ``state`` (6,) LU, VU at the
+    fit epoch; ``fit(start, options)`` is fit_orbit of ``measurements`` with ``dynamics`` from
+    ``start``. The returned result's ``area_to_mass_decision`` says which and why."""
+    six = fit(state, dataclasses.replace(options, area_to_mass="off"))
     if AREA_TO_MASS not in tuple(getattr(dynamics, "solve_for_parameters", ())):
         return _decided(six, "not estimated: the dynamics has no radiation-pressure parameter (use 'ephemeris')")
     days = _arc_days(measurements)
@@ -100,8 +98,7 @@ def fit_area_to_mass_auto(dynamics: Any, sensor: Any, measurements: Any, state: 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            seven = fit_orbit(dynamics, sensor, measurements, six.state, t0, prior=prior,
-                              options=dataclasses.replace(options, area_to_mass="solve"), solve_for=solve_for or None)
+            seven = fit(six.state, dataclasses.replace(options, area_to_mass="solve"))
     except (FitError, PropagationError, MeasurementError) as exc:
         return _decided(six, f"not estimated: the fit with it failed ({exc})")
     why = area_to_mass_verdict(six, seven)

@@ -422,8 +422,11 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     if opts.area_to_mass == "auto":
         from cistrack.least_squares.area_to_mass import fit_area_to_mass_auto
 
-        return fit_area_to_mass_auto(dynamics, sensor, measurements, x, t0, prior=prior, options=opts,
-                                     solve_for=names)
+        def fit(start: np.ndarray, options: FitOptions) -> FitResult:
+            return fit_orbit(dynamics, sensor, measurements, start, t0, prior=prior, options=options,
+                             solve_for=names or None)
+
+        return fit_area_to_mass_auto(fit, dynamics, measurements, x, options=opts)
     if opts.area_to_mass == "solve" and AREA_TO_MASS not in names:
         names = names + (AREA_TO_MASS,)
     return _fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names))
