@@ -37,14 +37,15 @@ def _arcs_and_events(one) -> list[str]:
     return lines
 
 
-def summary_lines(one) -> list[str]:
-    """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
-    from cistrack import units
-    from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
-
+def _header_lines(one) -> list[str]:
+    """The verdict (with how well the orbit is determined), the results folder, the filter run."""
     det = getattr(one, "determination", None)
-    verdict = "FAILED" if not one.ok else "converged" + (f"; {det.sentence}" if det is not None else "")
-    lines = [f"fit {one.designation}: {verdict}", f"  results in {one.directory}"]
+    if det is None or not one.ok:
+        lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED")]
+    else:  # never a bare "converged": how well the orbit is determined, and why, on the next line
+        kind, _, why = det.sentence.partition(": ")
+        lines = [f"fit {one.designation}: converged; {kind}", f"  {why}"]
+    lines.append(f"  results in {one.directory}")
     if one.run is not None:
         s = one.run.summary
         lines.append(f"  filter {one.scenario.components['filter'].name} after IOD "
@@ -53,6 +54,15 @@ def summary_lines(one) -> list[str]:
                      + (f"; verdict {s.verdict.kind}" if getattr(s.verdict, "kind", None) else ""))
     if one.failure:
         lines.append(f"  error: {one.failure}")
+    return lines
+
+
+def summary_lines(one) -> list[str]:
+    """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
+    from cistrack import units
+    from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
+
+    lines = _header_lines(one)
     r = one.result
     if r is None:
         lines.append("  no orbit: see docs/real-data.md, 'When a fit fails'")

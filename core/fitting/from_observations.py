@@ -46,6 +46,7 @@ from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.fitting.arcs import ArcSettings, arc_settings
 from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
                                             write_merged)
 from cistrack.least_squares.options import FitOptions
@@ -90,13 +91,15 @@ class FitChoices:
     prior: str = "none"
     options: FitOptions = field(default_factory=FitOptions)
     lov: float = 0.0
+    arcs: ArcSettings = field(default_factory=ArcSettings)
 
 
 def fit_choices(table: dict[str, Any]) -> FitChoices:
     """The ``fit.*`` settings (``--set fit.KEY=VALUE``) checked; ConfigError naming the key."""
     if not isinstance(table, dict):
         raise ConfigError("--set fit=...: 'fit' is a table; set its keys, e.g. --set fit.epoch=middle")
-    opts = dict(table)
+    arcs, opts = arc_settings(dict(table))
+    opts.setdefault("area_to_mass", "auto")  # C_R A/m where the arc supports it (cistrack.least_squares.area_to_mass)
     epoch = opts.pop("epoch", "last")
     prior = opts.pop("prior", "none")
     lov = opts.pop("lov", 0.0)
@@ -112,10 +115,10 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     known = set(FitOptions.__dataclass_fields__)
     unknown = sorted(set(opts) - known)
     if unknown:
-        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, "
+        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, arcs, arc_gap_days, link_gap_days, "
                           + ", ".join(sorted(known)))
     try:
-        return FitChoices(epoch, prior, FitOptions(**opts), float(lov))
+        return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs)
     except (TypeError, ValueError, CistrackError) as exc:
         raise ConfigError(f"--set fit.*: {exc}") from None
 
@@ -139,6 +142,9 @@ class ObjectFit:
     seeding : dict              which observations seeded the fit, by which method and why:
                                 "method" (the IOD), "rows" (indices into the observations, time
                                 order), "why" (str); empty when no IOD ran
+    arcs : ArcFit or None       the arcs left out and their residual ladder (:mod:`.fit_findings`)
+    determination : Determination or None  how well the orbit is determined, in words
+    events : list of OrbitEvent or None    impacts and closest approaches after the fit epoch
     """
 
     designation: str
@@ -152,6 +158,9 @@ class ObjectFit:
     lov: list = field(default_factory=list)
     start: str = ""
     seeding: dict = field(default_factory=dict)
+    arcs: Any = None
+    determination: Any = None
+    events: Any = None
 
     @property
     def ok(self) -> bool:
@@ -437,8 +446,6 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     (files, settings, output directory) raise before any run; a run or fit that fails is reported
     in its ObjectFit (``failure``, ``result.converged``).
     """
-    from cistrack.fitting.fit_record import write_fit_outputs
-
     reg = registry or default_registry()
     say = log or (lambda m: None)
     scen_settings, fit_table, reader_params = _split_settings(settings)
@@ -455,16 +462,85 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     results = []
     for obs, d in plans:
         check_output_dir(d, "--out" if out is not None else "the results directory")
-        suffix = write_merged(d / "observations", obs.measurements, obs.designation, reg)
-        scen = _scenario(obs, d / f"observations{suffix}", scen_settings, reg)
-        say(f"{obs.designation}: {len(obs.measurements)} observations; filter '{scen.components['filter'].name}' "
+        results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
+    return results
+
+
+@dataclass(frozen=True)
+class _Job:
+    """What every object's fit shares: scenario settings, fit choices, registry, progress, log."""
+
+    settings: dict
+    choices: FitChoices
+    registry: Registry
+    progress: bool
+    log: Callable[[str], None] | None
+
+    def say(self, message: str) -> None:
+        if self.log is not None:
+            self.log(message)
+
+
+def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
+    """The fits of one object: its latest arc (default), each arc in ``d/arc-<first date>``, or all
+    of it at once (``fit.arcs``); each written to its directory."""
+    from cistrack.fitting.fit_findings import arcs_to_fit
+
+    arcs = job.choices.arcs
+    sets = arcs_to_fit(obs, arcs.arcs, arcs.arc_gap_days)
+    if arcs.arcs != "each":
+        return [_finish(_fit_latest(obs, sets[0], d, job), sets[0], job)]
+    out = []
+    for part in sets:
+        first = units.tu_to_utc(units.parse_utc(READ_EPOCH), float(part.measurements.times[0]))
+        sub = d / f"arc-{first:%Y-%m-%d}"
+        check_output_dir(sub, "the arc's results directory")
+        out.append(_finish(_fit_run(part, sub, job), part, job))
+    return out
+
+
+def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
+    """The IOD, filter and least squares of ``obs`` into the directory ``d``."""
+    suffix = write_merged(d / "observations", obs.measurements, obs.designation, job.registry)
+    scen = _scenario(obs, d / f"observations{suffix}", job.settings, job.registry)
+    job.say(f"{obs.designation}: {len(obs.measurements)} observations; filter '{scen.components['filter'].name}' "
             f"after IOD '{scen.components['iod'].name}', epoch {units.format_utc(scen.epoch)[:19]}Z, "
             f"{scen.duration_days:g} days; results -> {d}")
-        one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=choices)
-        _fit_object(one, reg, progress, say if log else None)
-        if one.result is not None and one.result.converged and choices.lov > 0:
-            say(f"{obs.designation}: line of variations to +-{choices.lov:g} sigma")
-            one.lov = _line_of_variations(one.run.context, one.result, choices)
-        write_fit_outputs(one, obs)
-        results.append(one)
-    return results
+    one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=job.choices)
+    _fit_object(one, job.registry, job.progress, job.say if job.log else None)
+    return one
+
+
+def _fit_latest(obs: ObjectObservations, latest: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
+    """The fit of the latest arc; when its earlier groups do not link to its latest ones, the fit
+    again of those that do (:mod:`.fit_findings`), with the residual ladder of the rest."""
+    from cistrack.fitting.fit_findings import arc_report, kept_observations
+
+    one = _fit_run(latest, d, job)
+    if job.choices.arcs.arcs != "latest":
+        return one
+    report = arc_report(one, obs, job.choices.arcs, job.registry)
+    if report is None:
+        return one
+    if len(report.rows) < len(latest.measurements):
+        job.say(f"{obs.designation}: {report.notes[-1]}; fitting again without them")
+        one = _fit_run(kept_observations(obs, report), d, job)
+        if not one.ok:
+            return one
+    one.arcs = report
+    if report.notes:
+        one.result = _with_messages(one.result, list(report.notes))
+    return one
+
+
+def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
+    """Determination, events and the line of variations of a converged fit; the results files."""
+    from cistrack.fitting.fit_findings import add_findings
+    from cistrack.fitting.fit_record import write_fit_outputs
+
+    add_findings(one, job.registry, job.say)
+    if one.ok and job.choices.lov > 0:
+        job.say(f"{obs.designation}: line of variations to +-{job.choices.lov:g} sigma")
+        one.lov = _line_of_variations(one.run.context, one.result, job.choices)
+    write_fit_outputs(one, obs)
+    return one

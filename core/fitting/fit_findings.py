@@ -1,0 +1,68 @@
+"""What ``cistrack fit`` adds to a converged fit: which arc it fitted and how the others fare
+against it (:mod:`.arcs`, :mod:`.arc_fit`, :mod:`.residual_ladder`), how well the orbit is
+determined, in words (:mod:`.determination`), and the orbit's impacts and closest approaches
+(:mod:`cistrack.least_squares.events`).
+
+An object's observations are split into arcs by long gaps (``fit.arc_gap_days``); by default
+(``fit.arcs = "latest"``) the workflow fits the latest, tests whether the earlier groups of that
+arc link to it (``fit.link_gap_days``), and, when a link is broken, fits again on the groups that
+link, so that the residuals, plots and exports all describe the observations the orbit explains.
+The arcs left out are reported as a residual ladder (how far the fit's prediction misses each).
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable
+
+import numpy as np
+
+from cistrack import units
+from cistrack.astro.site_network import build_site_network
+from cistrack.fitting.arc_fit import ArcFit, latest_arc_fit
+from cistrack.fitting.arcs import arc_sets, in_time_base
+from cistrack.fitting.determination import determination
+from cistrack.fitting.observation_input import READ_EPOCH, ObjectObservations
+from cistrack.least_squares.events import fit_events
+from cistrack.plugin.registry import Registry
+
+__all__ = ["arcs_to_fit", "arc_report", "kept_observations", "add_findings"]
+
+
+def arcs_to_fit(obs: ObjectObservations, choice: str, arc_gap_days: float) -> list[ObjectObservations]:
+    """The observation sets to fit for ``fit.arcs = choice`` ("latest": one, "each": every arc,
+    oldest first, "all": everything at once), each as an :class:`ObjectObservations`."""
+    return [dataclasses.replace(obs, measurements=ms) for ms in arc_sets(obs.measurements, choice, arc_gap_days)]
+
+
+def _everything(one, obs: ObjectObservations, registry: Registry):
+    """All of the object's observations in the fit's time base, and a sensor that knows every site."""
+    full = in_time_base(obs.measurements, units.parse_utc(READ_EPOCH), one.scenario.epoch)
+    return full, build_site_network(one.scenario.components["sensor"], registry, full)
+
+
+def arc_report(one, obs: ObjectObservations, arcs: Any, registry: Registry) -> ArcFit | None:
+    """The latest arc's links and the residual ladder of the others for the converged fit ``one``
+    (an :class:`~cistrack.fitting.from_observations.ObjectFit` of the latest arc); ``arcs`` are the
+    arc settings (:class:`cistrack.fitting.arcs.ArcSettings`). None when there is no fit."""
+    if not one.ok or one.run is None:
+        return None
+    full, sensor = _everything(one, obs, registry)
+    return latest_arc_fit(one.run.context.dynamics, sensor, full, one.result, one.choices.options,
+                          arcs.arc_gap_days, arcs.link_gap_days)
+
+
+def kept_observations(obs: ObjectObservations, report: ArcFit) -> ObjectObservations:
+    """``obs`` reduced to the rows the arc report's fit kept (rows in time order)."""
+    keep = np.zeros(len(obs.measurements), dtype=bool)
+    keep[np.asarray(report.rows, dtype=int)] = True
+    return dataclasses.replace(obs, measurements=obs.measurements.subset(keep))
+
+
+def add_findings(one, registry: Registry, say: Callable[[str], None]) -> None:
+    """``one.determination`` and ``one.events`` of a converged fit (nothing otherwise)."""
+    if not one.ok or one.run is None:
+        return
+    ctx = one.run.context
+    say(f"{one.designation}: how well the orbit is determined; impacts and closest approaches")
+    one.determination = determination(one.result, ctx.dynamics, ctx.sensor, ctx.measurements)
+    one.events = fit_events(ctx.dynamics, one.result, epoch=one.scenario.epoch)
