@@ -10,6 +10,8 @@ Each SET_DIR holds ``observations.psv`` and ``truth.csv`` (``make_survey_sets.py
 - position error at the fit epoch (the last observation), km;
 - largest Mahalanobis distance squared of the truth under the exported OEM covariance over the
   OEM's epochs inside the arc (bound 22.5: chi-square, 6 degrees of freedom, 99.9 %);
+- observations in the fit (used or rejected: ``residuals.csv``) of those in the file (a fit of
+  the latest arc only leaves the others out);
 - post-fit RMS (arcsec, both angles, observations used), outliers rejected / injected, clean
   observations rejected (the rest of the rejections), and the wall time of the fit (s).
 
@@ -18,7 +20,7 @@ into the OEM's frame with the export's transform, as ``examples/real-data/check_
 Exit status 0 when every set converged with Mahalanobis^2 <= 22.5 at every arc epoch, all
 injected outliers rejected and at most ``max_clean_rejected`` clean observations rejected (one,
 or 5 % of them if more: at the 3-sigma chi-square threshold a clean observation is rejected with
-probability 0.3 %), 1 otherwise.
+probability 0.3 %) and every observation of the file in the fit, 1 otherwise.
 """
 from __future__ import annotations
 
@@ -67,6 +69,7 @@ class Row:
     m2: list = field(default_factory=list)
 
     n_observations: int = 0
+    n_fitted: int = 0
 
     @property
     def clean_rejected(self) -> int:
@@ -79,7 +82,8 @@ class Row:
     @property
     def ok(self) -> bool:
         return (self.outcome == "converged" and self.max_m2 <= MAHALANOBIS2_BOUND
-                and self.rejected_injected == self.injected and self.clean_rejected <= self.max_clean_rejected)
+                and self.rejected_injected == self.injected and self.clean_rejected <= self.max_clean_rejected
+                and self.n_fitted == self.n_observations)
 
 
 def run_cli(*args: str) -> tuple[int, float, str]:
@@ -136,7 +140,7 @@ def _score(row: Row, fit_dir: Path, truth_csv: Path, outliers: list[dict]) -> No
     row.rms_arcsec = float(np.sqrt(np.mean(both ** 2)))
     rejected = {(r["utc"][:19], r["site"]) for r in res if r["rejected"] == "true"}
     row.rejected = len(rejected)
-    row.n_observations = len(res)
+    row.n_fitted = len(res)
     row.rejected_injected = sum((o["utc"][:19], o["site"]) in rejected for o in outliers)
 
 
@@ -169,11 +173,11 @@ def check_set(set_dir: Path, out: Path) -> Row:
 
 def table(rows: list[Row]) -> str:
     """Markdown table of the rows (failures listed below it)."""
-    out = ["| data set | obs. | format | method | outcome | error at last obs. (km) | max M^2 (<= 22.5) "
+    out = ["| data set | obs. fitted / in file | format | method | outcome | error at last obs. (km) | max M^2 (<= 22.5) "
            "| RMS (\") | outliers rejected / injected | clean rejected | time (s) |",
            "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        out.append(f"| {r.name} | {r.n_observations} | {r.format} | {r.method} | {r.outcome} | {r.error_km:.2f} | "
+        out.append(f"| {r.name} | {r.n_fitted} / {r.n_observations} | {r.format} | {r.method} | {r.outcome} | {r.error_km:.2f} | "
                    f"{r.max_m2:.2f} | {r.rms_arcsec:.3f} | {r.rejected_injected} / {r.injected} | {r.clean_rejected} | "
                    f"{r.seconds:.1f} |")
     out += [f"- {r.name}: {r.failure}" for r in rows if r.failure]

@@ -1,7 +1,8 @@
 """Survey-cadence sets (examples/survey-sets): the generator keeps the cadence it promises, and
 `cistrack fit` with no option recovers each orbit family from them (slow): converged, the truth
 inside the exported covariance at every OEM epoch of the arc (Mahalanobis^2 <= 22.5), every
-injected outlier rejected and at most one clean observation (or 5 %) rejected with them.
+injected outlier rejected and at most one clean observation (or 5 %) rejected with them, and
+no observation left out (the arc is one orbit).
 
 The first night is one tracklet of 3-5 exposures: the kinematic-fit IOD needs 8 in the first
 pass, so these fits start from the tracklet-ranging IOD that `cistrack fit` falls back on
@@ -63,19 +64,14 @@ def test_generator_keeps_the_survey_cadence(tmp_path, family):
     assert (tmp_path / "again" / "observations.psv").read_bytes() == (tmp_path / family / "observations.psv").read_bytes()
 
 
-_CLEAN_REJECTED = ("measured 2026-11-28: the fit rejects whole clean tracklets (dro seed 1: a 3-exposure "
-                   "T08 tracklet 5-6\" off the fit; nrho seed 1: two W68 nights, 9 of 22 clean observations, "
-                   "17-24\" off; error 55 km) although the truth fits them all at the noise (0.6\")")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("family", [pytest.param(f, marks=pytest.mark.xfail(strict=False, reason=_CLEAN_REJECTED))
-                                    if f in ("dro", "nrho") else f for f in FAMILIES])
+@pytest.mark.parametrize("family", FAMILIES)
 def test_fit_recovers_each_family(tmp_path, family):
     set_dir = tmp_path / f"{family}-s1"
     info = make(set_dir, family, seed=1)
     row = check_set(set_dir, tmp_path / "fits")
     assert row.outcome == "converged", row.failure
+    assert row.n_fitted == row.n_observations == info["n_observations"], "observations left out of the fit"
     assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
     assert row.rejected_injected == row.injected == len(info["outliers"])
     assert row.clean_rejected <= row.max_clean_rejected, f"{row.clean_rejected} clean observations rejected"
