@@ -37,6 +37,17 @@ def _arcs_and_events(one) -> list[str]:
     return lines
 
 
+def _wrapped(lines: list[str], width: int = 118) -> list[str]:
+    """``lines`` folded to ``width`` columns, continuations indented two more spaces."""
+    import textwrap
+
+    out: list[str] = []
+    for line in lines:
+        lead = " " * (len(line) - len(line.lstrip(" ")))
+        out += textwrap.wrap(line, width, subsequent_indent=lead + "  ", break_on_hyphens=False) or [line]
+    return out
+
+
 def _header_lines(one) -> list[str]:
     """The verdict (with how well the orbit is determined), the results folder, the filter run."""
     det = getattr(one, "determination", None)
@@ -109,7 +120,7 @@ def summary_lines(one) -> list[str]:
     if r.noise_scale > 1.5:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
                      "(--set measurements.reader.sigma_arcsec=...) or the data")
-    return lines
+    return _wrapped(lines)
 
 
 def cmd_fit(args) -> int:
