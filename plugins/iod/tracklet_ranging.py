@@ -29,13 +29,12 @@ when the model takes one, e.g. ``ephemeris``) or, from Python, a Dynamics instan
 from __future__ import annotations
 
 import inspect
-from typing import Any
 
 import numpy as np
 
 from cistrack.errors import IODError
 from cistrack.interfaces import Dynamics, IODMethod, Sensor
-from cistrack.interfaces.component import check_choice, check_int, check_positive
+from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.least_squares import FitOptions, FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
@@ -64,20 +63,35 @@ class TrackletRangingIOD(IODMethod):
 
     Parameters
     ----------
-    n_particles : int          particles in the cloud
-    dynamics : str or Dynamics  the model that propagates the grid and the fits (default "cr3bp")
-    arc : str                  "seed" (cloud after the seed and scoring tracklets) or "all"
-    gap_hours : float          a longer gap starts a new tracklet, hours
-    min_tracklet : int         observations a seed tracklet needs (>= 2)
-    score_tracklets : int      tracklets after the seed that score the grid
-    n_range, n_rate : int      grid size: ranges and range rates per range
-    range_min_km, range_max_km : float  range bounds of the grid, km
-    max_c3 : float             energy bound, geocentric C3 in km^2/s^2 (0: bound to the Earth)
-    tries : int                least-squares fits started per seed (best grid states apart in range)
-    seeds : int                seed tracklets tried before giving up
+    n_particles : int
+        Particles in the cloud.
+    dynamics : str or Dynamics
+        The model that propagates the grid and the fits (a registered name or an instance).
+    arc : str
+        "seed": the cloud after the seed and scoring tracklets; "all": after the whole arc.
+    gap_hours : float
+        A gap longer than this (hours) starts a new tracklet.
+    min_tracklet : int
+        Observations a seed tracklet needs (at least 2).
+    score_tracklets : int
+        Tracklets after the seed whose observations score the grid.
+    n_range : int
+        Ranges of the grid (log-spaced between the range bounds).
+    n_rate : int
+        Range rates of the grid per range (inside the energy bound).
+    range_min_km : float
+        Smallest topocentric range of the grid, km.
+    range_max_km : float
+        Largest topocentric range of the grid, km.
+    max_c3 : float
+        Energy bound of the grid: geocentric C3 at most this, km^2/s^2 (0: bound to the Earth).
+    tries : int
+        Least-squares fits started per seed (the best grid states apart in range).
+    seeds : int
+        Seed tracklets tried before giving up.
     """
 
-    def __init__(self, *, n_particles: int = 2000, dynamics: Any = "cr3bp", arc: str = "seed",
+    def __init__(self, *, n_particles: int = 2000, dynamics: Dynamics | str = "cr3bp", arc: str = "seed",
                  gap_hours: float = 1.5, min_tracklet: int = 3, score_tracklets: int = 3,
                  n_range: int = 160, n_rate: int = 64, range_min_km: float = 3000.0,
                  range_max_km: float = 3.0e6, max_c3: float = 1.0, tries: int = 6, seeds: int = 4) -> None:
@@ -95,7 +109,7 @@ class TrackletRangingIOD(IODMethod):
         self.range_max_km = check_positive(self, "range_max_km", range_max_km)
         if self.range_max_km <= self.range_min_km:
             self._fail("range_max_km", range_max_km, f"must exceed range_min_km ({range_min_km})")
-        self.max_c3 = float(max_c3)
+        self.max_c3 = check_range(self, "max_c3", max_c3, -1.0e3, 1.0e3)
         self.tries = check_int(self, "tries", tries, minimum=1)
         self.seeds = check_int(self, "seeds", seeds, minimum=1)
 
