@@ -4,10 +4,14 @@ determined, in words (:mod:`.determination`), and the orbit's impacts and closes
 (:mod:`cistrack.least_squares.events`).
 
 An object's observations are split into arcs by long gaps (``fit.arc_gap_days``); by default
-(``fit.arcs = "latest"``) the workflow fits the latest, tests whether the earlier groups of that
-arc link to it (``fit.link_gap_days``), and, when a link is broken, fits again on the groups that
-link, so that the residuals, plots and exports all describe the observations the orbit explains.
-The arcs left out are reported as a residual ladder (how far the fit's prediction misses each).
+(``fit.arcs = "latest"``) the workflow fits the latest. When that fit explains its arc (it
+rejects at most :data:`EXPLAINED_REJECTED` of it), the arc is one orbit. When it explains it only
+by rejecting more, the workflow tests whether the earlier groups of the arc link to its latest
+(``fit.link_gap_days``), and, when a link is broken, fits again on the groups that link, so that
+the residuals, plots and exports all describe the observations the orbit explains. (Testing the
+links of an arc that one orbit already explains would judge them by the fit of the latest group
+alone, whose prediction is too weakly determined on survey cadences: a few tracklets.) The arcs
+left out are reported as a residual ladder (how far the fit's prediction misses each).
 """
 from __future__ import annotations
 
@@ -25,7 +29,11 @@ from cistrack.fitting.observation_input import READ_EPOCH, ObjectObservations
 from cistrack.least_squares.events import fit_events
 from cistrack.plugin.registry import Registry
 
-__all__ = ["arcs_to_fit", "arc_report", "kept_observations", "add_findings"]
+__all__ = ["arcs_to_fit", "arc_report", "kept_observations", "add_findings", "EXPLAINED_REJECTED"]
+
+EXPLAINED_REJECTED = 0.1
+"""A fit that rejects at most this share of its arc's observations explains the arc: its links
+are not tested (the least squares' own rejection of gross outliers stays well below it)."""
 
 
 def arcs_to_fit(obs: ObjectObservations, choice: str, arc_gap_days: float) -> list[ObjectObservations]:
@@ -47,8 +55,10 @@ def arc_report(one, obs: ObjectObservations, arcs: Any, registry: Registry) -> A
     if not one.ok or one.run is None:
         return None
     full, sensor = _everything(one, obs, registry)
-    return latest_arc_fit(one.run.context.dynamics, sensor, full, one.result, one.choices.options,
-                          arcs.arc_gap_days, arcs.link_gap_days)
+    r = one.result
+    explained = r.n_rejected <= EXPLAINED_REJECTED * (r.n_used + r.n_rejected)
+    link_gap = arcs.arc_gap_days if explained else arcs.link_gap_days
+    return latest_arc_fit(one.run.context.dynamics, sensor, full, r, one.choices.options, arcs.arc_gap_days, link_gap)
 
 
 def kept_observations(obs: ObjectObservations, report: ArcFit) -> ObjectObservations:

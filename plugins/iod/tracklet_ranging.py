@@ -65,8 +65,9 @@ class TrackletRangingIOD(IODMethod):
     ----------
     n_particles : int
         Particles in the cloud.
-    dynamics : str or Dynamics
-        The model that propagates the grid and the fits (a registered name or an instance).
+    dynamics : str
+        The registered model that propagates the grid and the fits, built with the sensor's epoch
+        (a Dynamics instance is taken as it is, from Python).
     arc : str
         "seed": the cloud after the seed and scoring tracklets; "all": after the whole arc.
     gap_hours : float
@@ -91,7 +92,7 @@ class TrackletRangingIOD(IODMethod):
         Seed tracklets tried before giving up.
     """
 
-    def __init__(self, *, n_particles: int = 2000, dynamics: Dynamics | str = "cr3bp", arc: str = "seed",
+    def __init__(self, *, n_particles: int = 2000, dynamics: str = "cr3bp", arc: str = "seed",
                  gap_hours: float = 1.5, min_tracklet: int = 3, score_tracklets: int = 3,
                  n_range: int = 160, n_rate: int = 64, range_min_km: float = 3000.0,
                  range_max_km: float = 3.0e6, max_c3: float = 1.0, tries: int = 6, seeds: int = 4) -> None:
