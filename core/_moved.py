@@ -17,6 +17,7 @@ import importlib.machinery
 import sys
 import warnings
 from types import ModuleType
+from typing import Any
 
 #: old module path -> new module path. Moved in 0.2 (the regrouping of core into packages)
 #: unless marked otherwise; remove an entry no earlier than the release after the one that moved it.
@@ -159,6 +160,20 @@ def _set_on_function(fullname: str, module: ModuleType) -> None:
         function = getattr(sys.modules[holder], name, None)
         if callable(function) and not isinstance(function, ModuleType):
             setattr(function, child, module)
+
+
+def renamed_names(module: str, renames: dict[str, tuple[str, Any]]):
+    """A module ``__getattr__`` that answers each old name in ``renames`` (old -> (new name, the
+    object)) with the object and a DeprecationWarning naming the new one, for at least one release."""
+    def __getattr__(name: str) -> Any:
+        if name in renames:
+            new, obj = renames[name]
+            warnings.warn(f"{module}.{name} is now {new}; import it by that name (the old one keeps working, "
+                          "with this warning, until the next release)", DeprecationWarning, stacklevel=2)
+            return obj
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+
+    return __getattr__
 
 
 def install() -> None:

@@ -123,14 +123,20 @@ def _serve_until_interrupted(recorder, out_) -> None:
     if uri:
         out_(f"  rerun server (127.0.0.1 only): connect a viewer with: rerun {uri}")
     out_("  the viewer stays available until you press Ctrl-C", flush=True)
+    _wait_for_ctrl_c(recorder.close)
+
+
+def _wait_for_ctrl_c(close) -> None:
+    """Sleep until Ctrl-C, then call ``close()`` (also when anything else ends the wait)."""
+    import time
+
     try:
-        import time
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
         pass
     finally:
-        recorder.close()
+        close()
 
 
 def cmd_plugins(args) -> int:
@@ -217,8 +223,6 @@ def cmd_export(args) -> int:
 
 def cmd_view(args) -> int:
     """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
-    import time
-
     from cistrack.plugin.registry import default_registry
 
     # the recorder that wrote the file serves it (core never imports a plugin)
@@ -226,13 +230,7 @@ def cmd_view(args) -> int:
     served = recorder.serve_file(args.recording, web_port=args.port, option="--port")
     print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
     print("serving until you press Ctrl-C", flush=True)
-    try:
-        while True:
-            time.sleep(3600)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        served.close()
+    _wait_for_ctrl_c(served.close)
     return 0
 
 

@@ -21,6 +21,7 @@ from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.plugin.hookspecs import hookimpl
+from cistrack._moved import renamed_names
 
 __all__ = ["CustodyRule", "Verdict", "CustodyMetric", "KEPT_KINDS", "VERDICT_KINDS"]
 
@@ -169,11 +170,4 @@ class CustodyMetric(StepMetric):
             self.verdict = Verdict("filter-failed", str(error), step_index, None)
 
 
-def __getattr__(name: str):
-    if name == "CustodyObserver":  # the old name, kept working for one release
-        import warnings
-
-        warnings.warn("cistrack.evaluation.custody.CustodyObserver is now CustodyMetric, a metric stage",
-                      DeprecationWarning, stacklevel=2)
-        return CustodyMetric
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = renamed_names(__name__, {"CustodyObserver": ("CustodyMetric", CustodyMetric)})  # the old name, for one release

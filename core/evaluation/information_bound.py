@@ -38,6 +38,7 @@ from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.interfaces.transition_matrix import stm_by_central_differences
 from cistrack.model.belief import sample_covariance
 from cistrack.units import LU_KM, VU_KMS
+from cistrack._moved import renamed_names
 
 __all__ = ["JACOBIAN_STEPS", "measurement_jacobian", "bound_predict", "bound_update", "bound_metrics",
            "BOUND_KEYS", "InformationBoundMetric"]
@@ -167,11 +168,4 @@ class InformationBoundMetric(StepMetric):
         return bound_metrics(self._p) if np.all(np.isfinite(self._p)) else {}
 
 
-def __getattr__(name: str):
-    if name == "InformationBoundObserver":  # the old name, kept working for one release
-        import warnings
-
-        warnings.warn("cistrack.evaluation.information_bound.InformationBoundObserver is now "
-                      "InformationBoundMetric, a metric stage", DeprecationWarning, stacklevel=2)
-        return InformationBoundMetric
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = renamed_names(__name__, {"InformationBoundObserver": ("InformationBoundMetric", InformationBoundMetric)})  # the old name, for one release

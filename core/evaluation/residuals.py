@@ -29,6 +29,7 @@ import numpy as np
 
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.units import LU_KM
+from cistrack._moved import renamed_names
 
 __all__ = ["ResidualMetric", "residual_columns", "ResidualSummary", "residual_summary", "ARCSEC_PER_RAD",
            "CONSISTENCY_KEYS", "consistency_summary", "pool_consistency", "consistency_text"]
@@ -193,11 +194,4 @@ def consistency_text(c: dict[str, Any]) -> str:
             "bounds (5 % if consistent); largest |residual| " + ("-" if res is None else f"{res:.3g}") + " arcsec")
 
 
-def __getattr__(name: str):
-    if name == "ResidualObserver":  # the old name, kept working for one release
-        import warnings
-
-        warnings.warn("cistrack.evaluation.residuals.ResidualObserver is now ResidualMetric, a metric stage",
-                      DeprecationWarning, stacklevel=2)
-        return ResidualMetric
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = renamed_names(__name__, {"ResidualObserver": ("ResidualMetric", ResidualMetric)})  # the old name, for one release
