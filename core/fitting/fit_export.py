@@ -75,14 +75,25 @@ def _result(record: dict[str, Any]) -> FitResult:
     epoch: what prediction needs."""
     empty = residual_table(np.zeros(0), np.zeros(0, dtype=str), np.zeros(0, dtype=str), ("a", "b"),
                            np.zeros((0, 2)), np.zeros((0, 2)), np.ones((0, 2)), np.zeros(0, dtype=bool))
-    cov = np.asarray(record["covariance"], dtype=float) * covariance_scale(record)
-    return FitResult(state=np.asarray(record["state"], dtype=float), covariance=cov,
+    scale = covariance_scale(record)
+    cov = np.asarray(record["covariance"], dtype=float) * scale
+    return FitResult(state=np.asarray(record["state"], dtype=float), covariance=cov, **_solve_for_fields(record, scale),
                      epoch=float(record["epoch_tu"]), residuals=empty, rms=float(record["rms"]), chi2=float(record["chi2"]),
                      n_used=int(record["n_used"]), n_rejected=int(record["n_rejected"]),
                      iterations=int(record["iterations"]), converged=bool(record["converged"]),
                      condition_number=float(record["condition_number"]),
                      weakest_direction_km=np.asarray(record["weakest_direction_km"], dtype=float),
                      noise_scale=float(record["noise_scale"]))
+
+
+def _solve_for_fields(record: dict[str, Any], scale: float) -> dict[str, Any]:
+    """The FitResult fields of the parameters the fit estimated with the state (the area-to-mass
+    ratio): names, values and the joint covariance (times ``scale``); none when it estimated none."""
+    amr = _estimated_area_to_mass(record)
+    if amr is None or "full_covariance" not in amr:
+        return {}
+    return {"parameter_names": ("area_to_mass_m2_kg",), "parameters": np.array([float(amr["value_m2_kg"])]),
+            "full_covariance": np.asarray(amr["full_covariance"], dtype=float) * scale}
 
 
 def fit_grid(first_tu: float, last_tu: float, epoch, predict_days: float = 0.0,

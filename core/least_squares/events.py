@@ -271,19 +271,46 @@ def event_values(dynamics: Dynamics, states: np.ndarray, t0: float, kind: str, b
     raise StateError(f"events: kind {kind!r} must be 'impact', 'closest approach' or altitude_kind(km)")
 
 
+@dataclass(frozen=True)
+class ParameterSpread:
+    """The joint covariance of a state and the dynamics' solve-for parameters (such as the
+    area-to-mass ratio): ``covariance`` (6 + P, 6 + P) [LU, VU, the parameters' units], ``names``
+    (P,) and ``values`` (P,) of the parameters (the model the events are found with holds
+    ``values``). The events' sigmas then carry the parameters' uncertainty too."""
+
+    covariance: np.ndarray
+    names: tuple
+    values: np.ndarray
+
+
 def _root(covariance: np.ndarray) -> np.ndarray:
     p = np.asarray(covariance, dtype=float)
     w, vecs = np.linalg.eigh(0.5 * (p + p.T))
     return vecs * np.sqrt(np.clip(w, 0.0, None))                    # columns s_i, root @ root.T == p
 
 
+def _spread_values(dynamics, state, spread: ParameterSpread, t0, kind, body, window, epoch) -> np.ndarray:
+    """The event's values (2 (6 + P), 5) at the states and parameters +- EPS_SIGMA along each
+    column of the square root of the joint covariance (+ rows first): one model per point."""
+    root = _root(spread.covariance)
+    out = []
+    for sign in (1.0, -1.0):
+        for col in (sign * EPS_SIGMA * root).T:
+            dyn = dynamics.with_parameters(**{n: float(v + d) for n, v, d in zip(spread.names, spread.values, col[6:])})
+            out.append(event_values(dyn, (state + col[:6])[None], t0, kind, body, window, epoch=epoch)[0])
+    return np.array(out)
+
+
 def _linear_sigma(dynamics, state, covariance, t0, kind, body, window, epoch) -> dict[str, float]:
-    """1-sigma of the event's values by central differences along the covariance's square root."""
-    root = _root(covariance)
-    delta = EPS_SIGMA * root.T
-    pts = np.vstack([state + delta, state - delta])
-    vals = event_values(dynamics, pts, t0, kind, body, window, epoch=epoch)
-    diff = vals[:6] - vals[6:]
+    """1-sigma of the event's values by central differences along the covariance's square root
+    (``covariance`` (6, 6), or a :class:`ParameterSpread` of the state and parameters)."""
+    if isinstance(covariance, ParameterSpread):
+        vals = _spread_values(dynamics, state, covariance, t0, kind, body, window, epoch)
+    else:
+        delta = EPS_SIGMA * _root(covariance).T
+        vals = event_values(dynamics, np.vstack([state + delta, state - delta]), t0, kind, body, window, epoch=epoch)
+    n = vals.shape[0] // 2
+    diff = vals[:n] - vals[n:]
     diff[:, 2] = (diff[:, 2] + 180.0) % 360.0 - 180.0                # longitudes wrap
     g = diff / (2.0 * EPS_SIGMA)                                     # (6 directions, 5 values) per sigma
     sig = np.sqrt(np.sum(g * g, axis=0))
@@ -382,8 +409,18 @@ def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
 
     scale = max(1.0, float(result.noise_scale)) ** 2 if np.isfinite(result.noise_scale) else 1.0
     t0 = float(result.epoch)
-    return orbit_events(fitted_dynamics(dynamics, result), result.state, result.covariance * scale, t0,
+    return orbit_events(fitted_dynamics(dynamics, result), result.state, _spread_of(result, scale), t0,
                         t0 + float(units.days_to_tu(days)), epoch=epoch)
+
+
+def _spread_of(result, scale: float = 1.0):
+    """The covariance the events of a fit ``result`` map: its state's (6, 6), or with solve-for
+    parameters a :class:`ParameterSpread` of state and parameters; times ``scale``."""
+    names = tuple(getattr(result, "parameter_names", ()))
+    full = getattr(result, "full_covariance", None)
+    if not names or full is None:
+        return result.covariance * scale
+    return ParameterSpread(np.asarray(full, dtype=float) * scale, names, np.asarray(result.parameters, dtype=float))
 
 
 def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *, epoch: datetime | str | None = None,
@@ -397,12 +434,12 @@ def prediction_end(dynamics: Dynamics, result, times: np.ndarray, *, epoch: date
     kept, hit = times_until_impact(dynamics, x, t0, times)
     window = (t0, float(np.max(times)) if hit is None else hit[0])
     if altitude is not None and window[1] > t0:
-        event = _event(dynamics, x, result.covariance, t0, altitude_kind(altitude[1]), altitude[0], window, when)
+        event = _event(dynamics, x, _spread_of(result), t0, altitude_kind(altitude[1]), altitude[0], window, when)
         if event is not None:
             return np.append(kept[kept < event.t_tu], event.t_tu), event
     if hit is None:
         return kept, None
-    return kept, _event(dynamics, x, result.covariance, t0, "impact", hit[1], (t0, float(np.max(times))), when)
+    return kept, _event(dynamics, x, _spread_of(result), t0, "impact", hit[1], (t0, float(np.max(times))), when)
 
 
 def event_lines(events: list[OrbitEvent], days: float = FIT_EVENT_DAYS) -> list[str]:
