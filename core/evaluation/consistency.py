@@ -8,6 +8,9 @@ S = P_zz + R and the innovation nu = z - z_hat (angles wrapped),
 
 Over K updates the sum is chi^2(mK): :func:`nis_test` gives the two-sided bounds on the mean
 NIS, (chi2.ppf(a/2, mK) / K, chi2.ppf(1 - a/2, mK) / K), and whether the run lies within them.
+
+:class:`Innovation` and :func:`innovation` live in :mod:`cistrack.model.innovation` (plugins use
+them); this module re-exports the same objects.
 """
 from __future__ import annotations
 
@@ -16,77 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.least_squares.chi_square import chi2_ppf  # re-exported: the quantile lives with the least squares
+from cistrack.model.innovation import MAX_NIS_SAMPLES, Innovation, _block_diagonal, innovation  # noqa: F401  (moved to the model so plugins can use it)
 
 __all__ = ["Innovation", "innovation", "innovation_nis", "nis_test", "NisTest", "MAX_NIS_SAMPLES", "run_nis_test",
            "chi2_ppf"]
-
-MAX_NIS_SAMPLES = 4000
-"""At most this many prior particles (an evenly strided subset) predict the measurement."""
-
-
-@dataclass(frozen=True)
-class Innovation:
-    """The innovation of one measurement under a prior belief.
-
-    Attributes
-    ----------
-    names : (m,) str          measured components (the sensor's names)
-    nu : (m,) float           z - z_hat, angles wrapped into [-pi, pi) (rad; ranges LU)
-    s : (m, m) float          P_zz + R, the predicted covariance of z
-    r : (m, m) float          the measurement noise covariance R
-    """
-
-    names: tuple[str, ...]
-    nu: np.ndarray
-    s: np.ndarray
-    r: np.ndarray
-
-    @property
-    def nis(self) -> float:
-        """nu^T S^-1 nu, chi^2(m) for a consistent filter."""
-        return float(self.nu @ np.linalg.solve(self.s, self.nu))
-
-
-def innovation(prior, measurement, sensor) -> Innovation:
-    """The :class:`Innovation` of ``measurement`` (a :class:`cistrack.model.measurement.Measurement`,
-    or a sequence of them taken at one time by several sites: stacked, with a block-diagonal
-    noise covariance, ``names`` repeating per measurement) under the ``prior`` belief, each
-    measurement predicted by ``sensor.for_measurement(measurement)``."""
-    group = list(measurement) if isinstance(measurement, (list, tuple)) else [measurement]
-    x = np.asarray(prior.samples.states, dtype=float)
-    w = prior.samples.weights
-    if x.shape[0] > MAX_NIS_SAMPLES:
-        step = int(np.ceil(x.shape[0] / MAX_NIS_SAMPLES))
-        x = x[::step]
-        w = None if w is None else w[::step] / w[::step].sum()
-    w = np.full(x.shape[0], 1.0 / x.shape[0]) if w is None else np.asarray(w, dtype=float)
-    rs, noises, used = [], [], []
-    for m in group:
-        own = sensor.for_measurement(m) if hasattr(sensor, "for_measurement") else sensor
-        names = tuple(own.names)
-        cols = np.array([names.index(n) for n in m.names], dtype=np.intp)
-        full_z = np.zeros(len(names))
-        full_z[cols] = m.z
-        zs = np.asarray(own.measure(x, m.t), dtype=float)
-        rs.append(np.asarray(own.residual(zs, full_z[None, :]), dtype=float)[:, cols])  # zs - z, wrapped
-        noises.append(np.asarray(m.covariance, dtype=float))
-        used += [names[c] for c in cols]
-    r = rs[0] if len(rs) == 1 else np.concatenate(rs, axis=1)
-    mean_r = w @ r
-    d = r - mean_r
-    pzz = (d * w[:, None]).T @ d
-    noise = noises[0] if len(noises) == 1 else _block_diagonal(noises)
-    return Innovation(tuple(used), -mean_r, pzz + noise, noise)  # nu = z - z_hat
-
-
-def _block_diagonal(blocks) -> np.ndarray:
-    n = sum(b.shape[0] for b in blocks)
-    out = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        out[i:i + b.shape[0], i:i + b.shape[0]] = b
-        i += b.shape[0]
-    return out
 
 
 def innovation_nis(prior, measurement, sensor) -> tuple[float, int]:
