@@ -1,0 +1,144 @@
+"""The windowed sequential test both built-in maneuver detectors share.
+
+Each update gives one chi-square-distributed contribution ``c`` with ``dof`` degrees of freedom
+when the filter is consistent (the NIS with m dof; or -2 ln p, with 2 dof, of a tail
+probability p). The test sums the contributions of the last ``window`` updates (a sum of
+independent chi-squares is chi-square with the summed dof) and also tests the newest one alone;
+each is expressed as a surprise, -log10 of its tail probability, and compared with
+-log10(false_alarm). A detection further needs the last ``min_consecutive`` updates each
+individually surprising at ``update_level``, so that one gross outlier among good measurements
+does not fire by itself. ``warmup`` updates after :meth:`reset` are judged but never fire and do
+not enter the window (the filter settles after its IOD). After a detection the window is
+cleared: the next test starts on new evidence only.
+"""
+from __future__ import annotations
+
+import math
+from abc import abstractmethod
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cistrack.errors import MeasurementError, ParameterError
+from cistrack.interfaces.component import check_int, check_range
+from cistrack.interfaces.maneuvers import Detection, ManeuverDetector
+from cistrack.model.measurement import Measurement, StackedMeasurement
+
+__all__ = ["SequentialDetector", "chi2_log10_sf", "measurement_group"]
+
+_LN10 = math.log(10.0)
+
+
+def chi2_log10_sf(x: float, dof: float) -> float:
+    """log10 of the chi-square tail probability P(X >= x), X ~ chi2(dof), finite even where the
+    probability underflows (then from the leading term of the upper incomplete gamma function,
+    Gamma(s, y) ~ y^(s-1) e^-y)."""
+    from scipy.special import gammaincc, gammaln  # imported on use: scipy.special is slow to import
+
+    if not x > 0:
+        return 0.0
+    s, y = 0.5 * dof, 0.5 * x
+    p = float(gammaincc(s, y))
+    if p > 1e-290:
+        return math.log10(p)
+    return (-y + (s - 1.0) * math.log(y) - float(gammaln(s))) / _LN10
+
+
+def chi2_upper_quantile(alpha: float, dof: float) -> float:
+    """x with P(chi2(dof) >= x) = alpha, accurate for tiny alpha (no 1 - alpha rounding)."""
+    from scipy.special import gammainccinv
+
+    return float(2.0 * gammainccinv(0.5 * dof, alpha))
+
+
+def measurement_group(measurements) -> list[Measurement]:
+    """The measurements of one update as a list: a sequence of :class:`Measurement`, one
+    :class:`Measurement`, or a :class:`StackedMeasurement` (its parts)."""
+    if isinstance(measurements, StackedMeasurement):
+        return list(measurements.parts)
+    if isinstance(measurements, Measurement):
+        return [measurements]
+    group = list(measurements)
+    if not group:
+        raise MeasurementError("a maneuver detector needs at least one measurement per update, got none")
+    return group
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """One update in the window."""
+
+    t: float
+    t_before: float     # the previous update's time (t itself for the first update after reset)
+    c: float            # chi-square contribution
+    dof: float
+    surprising: bool    # tail probability below update_level
+
+
+class SequentialDetector(ManeuverDetector):
+    """Base of the built-in detectors: the windowed test of the module docstring. A subclass
+    validates its parameters with :meth:`_init_test` and gives each update's contribution in
+    :meth:`_contribution`."""
+
+    window: int
+    false_alarm: float
+    warmup: int
+    min_consecutive: int
+    update_level: float
+
+    def _init_test(self, window: int, false_alarm: float, warmup: int, min_consecutive: int,
+                   update_level: float) -> None:
+        self.window = check_int(self, "window", window, minimum=1, maximum=1000)
+        self.false_alarm = check_range(self, "false_alarm", false_alarm, 0.0, 0.5, lo_open=True)
+        self.warmup = check_int(self, "warmup", warmup, minimum=0)
+        self.min_consecutive = check_int(self, "min_consecutive", min_consecutive, minimum=1)
+        if self.min_consecutive > self.window:
+            raise ParameterError(f"{self._label()}: parameter 'min_consecutive' = {min_consecutive!r} is invalid: "
+                                 f"must be <= window ({self.window}); the consecutive updates lie in the window")
+        self.update_level = check_range(self, "update_level", update_level, 0.0, 1.0, lo_open=True)
+        if self.update_level < self.false_alarm:
+            raise ParameterError(f"{self._label()}: parameter 'update_level' = {update_level!r} is invalid: must be "
+                                 f">= false_alarm ({self.false_alarm}); it is the looser per-update level")
+        self.reset()
+
+    def reset(self) -> None:
+        self._entries: deque[_Entry] = deque(maxlen=self.window)
+        self._seen = 0
+        self._last_t: float | None = None
+
+    @abstractmethod
+    def _contribution(self, t: float, prior, group: list[Measurement], sensor) -> tuple[float, float, dict]:
+        """(c, dof, extra): a chi2(dof) contribution for a consistent filter, and values for
+        :attr:`Detection.extra`."""
+
+    @property
+    def threshold(self) -> float:
+        """The statistic's threshold, -log10(false_alarm)."""
+        return -math.log10(self.false_alarm)
+
+    def observe(self, t: float, prior, measurements: Sequence[Measurement], sensor) -> tuple[float, Detection | None]:
+        t = float(t)
+        if not math.isfinite(t) or (self._last_t is not None and t < self._last_t):
+            raise MeasurementError(f"{self._label()}: updates must come in time order with finite times; got t = {t!r} "
+                                   f"after {self._last_t!r} (call reset() for a new run)")
+        c, dof, extra = self._contribution(t, prior, measurement_group(measurements), sensor)
+        single = -chi2_log10_sf(c, dof)
+        before = t if self._last_t is None else self._last_t
+        self._last_t = t
+        self._seen += 1
+        if self._seen <= self.warmup:
+            return single, None
+        self._entries.append(_Entry(t, before, c, dof, single > -math.log10(self.update_level)))
+        total_c = sum(e.c for e in self._entries)
+        total_dof = sum(e.dof for e in self._entries)
+        statistic = max(single, -chi2_log10_sf(total_c, total_dof))
+        recent = list(self._entries)[-self.min_consecutive:]
+        if statistic < self.threshold or len(recent) < self.min_consecutive or not all(e.surprising for e in recent):
+            return statistic, None
+        first = next(e for e in self._entries if e.surprising)
+        extra = dict(extra, window_sum=total_c, window_dof=total_dof, window_updates=len(self._entries),
+                     update_surprise=single)
+        det = Detection(t=t, statistic=statistic, threshold=self.threshold, detector=self.registry_name or type(self).__name__,
+                        t_burn_bounds=(first.t_before, t), extra=extra)
+        self._entries.clear()
+        return statistic, det
