@@ -35,10 +35,10 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import ConfigError, StateError
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
-from cistrack.interfaces.maneuvers import Impulse
+from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.interfaces.transition_matrix import check_stm_request
 
-__all__ = ["ImpulsiveDynamics", "ImpulsiveTrajectory", "delta_v_parameter_names"]
+__all__ = ["ImpulsiveDynamics", "ImpulsiveTrajectory", "delta_v_parameter_names", "fly_plan", "describe_impulse"]
 
 MS_PER_VU = units.VU_KMS * 1000.0
 """Metres per second in one velocity unit."""
@@ -406,3 +406,41 @@ class ImpulsiveTrajectory:
             sel = which == p
             out[sel] = self.pieces[int(p)].states(ts[sel])
         return out
+
+
+def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: float, t_end: float,
+             say: Any = None, where: str = "maneuver plan") -> tuple[Dynamics, list[Impulse]]:
+    """The truth model that flies ``plan``'s burns from ``x0`` (6,) at ``t0`` over ``(t0, t_end]``
+    (TU), and the impulses: ``dynamics`` wrapped in :class:`ImpulsiveDynamics`, or ``dynamics``
+    itself (and no impulse) when there is no plan or it makes no burn there. ``say`` (a callable)
+    gets one line per burn (:func:`describe_impulse`). Raises ConfigError, prefixed by ``where``,
+    when the plan fails or returns anything but impulses inside the span."""
+    if plan is None:
+        return dynamics, []
+    try:
+        impulses = list(plan.impulses(dynamics, np.asarray(x0, dtype=float).reshape(6), float(t0), float(t_end)))
+        for imp in impulses:
+            if not isinstance(imp, Impulse):
+                raise ConfigError(f"the plan returned a {type(imp).__name__}, not an Impulse")
+            if not t0 < imp.t <= t_end:
+                raise ConfigError(f"impulse {imp.label!r} at t = {imp.t:g} TU lies outside the run's span "
+                                  f"({t0:g}, {t_end:g}] TU")
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+    flown = ImpulsiveDynamics(dynamics, impulses) if impulses else dynamics
+    impulses = list(flown.impulses) if impulses else []
+    for k, imp in enumerate(impulses, 1):
+        (say or (lambda line: None))(describe_impulse(imp, k))
+    if not impulses and say is not None:
+        say(f"{where}: no burn inside the run ({float(units.tu_to_days(t_end - t0)):g} days); the truth is ballistic")
+    return flown, impulses
+
+
+def describe_impulse(impulse: Impulse, k: int) -> str:
+    """One line on impulse ``k`` (1-based) for a run's log: time in days, size in m/s, its label
+    and its synodic direction."""
+    size = float(np.linalg.norm(impulse.dv))
+    unit = impulse.dv / size if size > 0 else np.zeros(3)
+    label = f", {impulse.label}" if impulse.label else ""
+    return (f"truth burn {k} at {float(units.tu_to_days(impulse.t)):.4f} days: |dv| = {size * MS_PER_VU:.4g} m/s{label}; "
+            f"synodic direction ({unit[0]:+.3f}, {unit[1]:+.3f}, {unit[2]:+.3f})")

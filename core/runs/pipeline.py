@@ -81,11 +81,14 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
         measurements, sensor = read_scenario_observations(scenario, sensor, reg, say)
         grid = np.zeros(0)
         grid_states = np.zeros((0, 6))
-        truth = None
+        truth, truth_impulses = None, []
         passes = []
     else:
         initial = scenario.initial_truth(reg)
         _compile_ahead(dynamics, initial)
+        from cistrack.propagation.impulses import fly_plan
+        plan = scenario.truth_maneuvers.build(reg) if scenario.truth_maneuvers else None  # the truth's burns only
+        truth_dyn, truth_impulses = fly_plan(plan, truth_dyn, initial, 0, duration, say, f"{scenario.source}: [truth.maneuvers]")
         truth = Truth(truth_dyn, initial, t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
@@ -115,7 +118,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
                      sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
                      truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
-                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth)
+                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth, truth_impulses=truth_impulses)
     return ctx, rngs
 
 

@@ -83,6 +83,8 @@ class RunContext:
     truth_states : (K, 6) float       truth on that grid, nondimensional synodic (empty when the
                                       measurements came from a file and truth is unknown)
     truth : Truth or None             every truth state of the run, each propagated once
+    truth_impulses : list of Impulse  the burns the truth flies ([truth.maneuvers]; time TU, dv synodic
+                                      VU), empty for a ballistic truth; the filter's model knows none
     passes : list of Pass             visibility passes of the truth
     measurements : MeasurementSet     all measurements, including any IOD-only range
     iod_cloud : ParticleCloud         the IOD result (epoch = last fitted measurement)
@@ -106,6 +108,7 @@ class RunContext:
     output_dir: Path | None = None
     truth_dynamics: Dynamics | None = None
     truth: Truth | None = field(default=None, repr=False)
+    truth_impulses: list = field(default_factory=list)
 
     @property
     def has_truth(self) -> bool:

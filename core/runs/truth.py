@@ -39,6 +39,8 @@ class Truth:
     t0 : float            TU since the scenario epoch
     t_end : float or None TU: the span propagated at the first request (the scenario's duration);
                           None: up to the latest time asked for
+    impulses : list       the burns the truth flies (``dynamics.impulses`` of an
+                          :class:`~cistrack.propagation.impulses.ImpulsiveDynamics`), else empty
     propagations : int    number of propagations made so far (one per run when ``t_end`` covers
                           every time asked for)
     """
@@ -49,6 +51,7 @@ class Truth:
         self.t0 = float(t0)
         self.t_end = None if t_end is None else float(t_end)
         self.propagations = 0
+        self.impulses = list(getattr(dynamics, "impulses", None) or [])
         self._states: dict[float, np.ndarray] = {self.t0: self.x0.copy()}
         self._dense = None
         self._known: set[float] = {self.t0}

@@ -72,7 +72,7 @@ COMPONENT_TABLES: dict[str, str] = {
 _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "custody", "run",
              "measurements", "sensors", *COMPONENT_TABLES}
 _REQUIRED_TABLES = ("dynamics", "iod", "filter")
-_TRUTH_KEYS = {"orbit", "state_km", "dynamics"}
+_TRUTH_KEYS = {"orbit", "state_km", "dynamics", "maneuvers"}
 _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame",
              "iod_observer"}
 _MEAS_KEYS = {"file", "reader"}
@@ -93,6 +93,8 @@ class Scenario:
     truth_state: np.ndarray | None
     truth_dynamics: ComponentSpec | None
     custody: CustodyRule
+    truth_maneuvers: ComponentSpec | None = None
+    """[truth.maneuvers]: the truth's burn plan (a "maneuver-plan" component), None for a ballistic truth."""
     truth_grid_minutes: float = 5.0
     predict_every_hours: float = 0.0
     end_with_prediction: bool = True
@@ -190,10 +192,11 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     if "dynamics" in truth:
         truth_dyn = component_spec(truth["dynamics"], "dynamics", "[truth.dynamics]", source, reg,
                                    epoch_text=epoch_text)
+    truth_maneuvers = _truth_maneuvers(truth, source, reg, measurements_file)
     custody = custody_rule(data.get("custody", {}), source)
     run = _run_options(data, source, components, top, observers)
     return Scenario(**top, components=components, truth_orbit=truth_orbit, truth_state=truth_state,
-                    truth_dynamics=truth_dyn, custody=custody, **run,
+                    truth_dynamics=truth_dyn, truth_maneuvers=truth_maneuvers, custody=custody, **run,
                     measurements_file=measurements_file, measurements_reader=measurements_reader,
                     observers=observers, source=source, raw=copy.deepcopy(data))
 
@@ -290,6 +293,17 @@ def _truth_start(truth: dict, source: str, reg: Registry,
         raise ConfigError(f"{source}: [truth] needs 'orbit' (one of: {', '.join(reg.names('orbit')) or 'none registered'})"
                           f" or 'state_km', unless [measurements] file = ... gives real observations")
     return None, None
+
+
+def _truth_maneuvers(truth: dict, source: str, reg: Registry, measurements_file: Path | None) -> ComponentSpec | None:
+    """[truth.maneuvers]: the burns the simulated truth flies (a maneuver-plan component table,
+    docs/maneuvers.md), or None. Refused with observations from a file: there is no simulated truth."""
+    if "maneuvers" not in truth:
+        return None
+    if measurements_file is not None:
+        raise ConfigError(f"{source}: [truth.maneuvers] plans burns of a simulated truth, but [measurements] "
+                          "file = ... gives real observations (no truth is simulated); remove one of the two")
+    return component_spec(truth["maneuvers"], "maneuver-plan", "[truth.maneuvers]", source, reg)
 
 
 def _run_options(data: dict, source: str, components: dict[str, ComponentSpec], top: dict[str, Any],

@@ -1,9 +1,274 @@
-"""Work in progress."""
+"""Burn plans of a truth trajectory: maneuver plans ``impulse``, ``burns`` and ``station-keeping``.
+
+A scenario's ``[truth.maneuvers]`` table names one (docs/maneuvers.md)::
+
+    [truth.maneuvers]
+    name = "impulse"
+    t_days = 3.5                 # days since the scenario epoch
+    delta_v_ms = 1.0             # m/s
+    direction = "in-track"       # or anti-in-track, radial, anti-radial, cross-track, anti-cross-track
+    frame = "rtn-moon"           # or rtn-earth, vnb, synodic (see local_frames)
+
+Each plan turns its burns into :class:`~cistrack.interfaces.maneuvers.Impulse` objects (synodic
+VU) along the truth: a burn given in a local frame is resolved at its time on the trajectory
+flown with the earlier burns (the base model wrapped in
+:class:`~cistrack.propagation.impulses.ImpulsiveDynamics`), at the pre-burn state. Burns outside
+the run's span ``(t0, t_end]`` are not flown.
+"""
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
+
+from cistrack import units
 from cistrack.api import hookimpl
+from cistrack.errors import ConfigError, ParameterError
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
+from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
+from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics
+
+from .local_frames import DIRECTIONS, FRAMES, body_position, direction_vector, frame_axes
+
+__all__ = ["ImpulsePlan", "BurnsPlan", "StationKeepingPlan", "BurnSpec", "resolve_burns"]
+
+_BURN_KEYS = ("t_days", "delta_v_ms", "direction", "frame", "vector_ms", "label")
+
+
+class BurnSpec:
+    """One burn as a plan describes it: time (TU), components (3,) m/s in ``frame``, a label."""
+
+    def __init__(self, t: float, vector_ms: np.ndarray, frame: str, label: str) -> None:
+        self.t, self.vector_ms, self.frame, self.label = float(t), np.asarray(vector_ms, dtype=float), frame, label
+
+
+def _flown(dynamics, earlier: list[Impulse]):
+    """``dynamics`` with the impulses already planned (itself when there are none)."""
+    return ImpulsiveDynamics(dynamics, earlier) if earlier else dynamics
+
+
+def _pre_burn_state(dynamics, earlier: list[Impulse], x0: np.ndarray, t0: float, t: float) -> np.ndarray:
+    prop = _flown(dynamics, earlier).propagate(np.asarray(x0, dtype=float)[None], t0, t)
+    if not prop.alive[0]:
+        raise ConfigError(f"the truth hits a body at t = {units.tu_to_days(prop.impact_time[0]):.3f} days, "
+                          f"before the burn at {units.tu_to_days(t):.3f} days")
+    return prop.final[0]
+
+
+def resolve_burns(dynamics, x0: np.ndarray, t0: float, t_end: float, burns: list[BurnSpec]) -> list[Impulse]:
+    """The impulses (synodic VU, sorted by time) of ``burns`` inside ``(t0, t_end]``, each resolved
+    in its frame at the pre-burn state of the truth flown with the earlier ones."""
+    out: list[Impulse] = []
+    for b in sorted(burns, key=lambda b: b.t):
+        if not t0 < b.t <= t_end:
+            continue
+        x_b = _pre_burn_state(dynamics, out, x0, t0, b.t)
+        dv = frame_axes(b.frame, x_b, b.t, dynamics) @ b.vector_ms / MS_PER_VU
+        out.append(Impulse(b.t, dv, b.label))
+    return out
+
+
+def _check_vector(owner, value: Any) -> list[float]:
+    """``vector_ms``: None or an empty list (unset), or 3 finite numbers."""
+    if value is None:
+        return []
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) not in (0, 3) or not all(
+            isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool) and np.isfinite(v)
+            for v in value):
+        owner._fail("vector_ms", value, "must be 3 finite numbers (m/s, the burn's components in its frame) "
+                                        "or an empty list (use delta_v_ms and direction)")
+    return [float(v) for v in value]
+
+
+def _check_burn_frame(owner, frame: Any, vector_ms: list[float], direction: Any) -> None:
+    check_choice(owner, "frame", frame, FRAMES)
+    check_choice(owner, "direction", direction, DIRECTIONS)
+    if frame == "synodic" and not vector_ms:
+        owner._fail("frame", frame, "a burn in the synodic frame is given by vector_ms (x, y, z in m/s); "
+                                    "or use a local frame: " + ", ".join(f for f in FRAMES if f != "synodic"))
+
+
+def _describe(vector_ms: list[float], delta_v_ms: float, direction: str, frame: str) -> str:
+    if vector_ms:
+        return f"[{', '.join(f'{v:g}' for v in vector_ms)}] m/s ({frame})"
+    return f"{delta_v_ms:g} m/s {direction} ({frame})"
+
+
+class ImpulsePlan(ManeuverPlan):
+    """One impulsive burn at a given time, along a direction of a local frame of the truth.
+
+    Parameters
+    ----------
+    t_days : float
+        Time of the burn, days since the scenario epoch (> 0; a burn after the run's end is not flown).
+    delta_v_ms : float
+        Size of the burn, m/s (>= 0).
+    direction : str
+        Direction of the burn in its frame: one of in-track, anti-in-track, radial, anti-radial,
+        cross-track, anti-cross-track.
+    frame : str
+        The local frame: rtn-moon (radial, in-track, cross-track about the Moon, in the synodic
+        frame), rtn-earth (the same about the Earth), vnb (velocity, normal, binormal of the
+        synodic velocity) or synodic (needs vector_ms).
+    vector_ms : list of float
+        The burn as 3 components in m/s along the frame's axes (R, T, N; V, N, B; or x, y, z),
+        overriding delta_v_ms and direction; empty (the default) to use them.
+    label : str
+        A name for reports (default: burn).
+    """
+
+    def __init__(self, t_days: float = 1.0, delta_v_ms: float = 1.0, direction: str = "in-track",
+                 frame: str = "rtn-moon", vector_ms: list[float] | None = None, label: str = "") -> None:
+        self.t_days = check_positive(self, "t_days", t_days)
+        self.delta_v_ms = check_nonnegative(self, "delta_v_ms", delta_v_ms)
+        self.vector_ms = _check_vector(self, vector_ms)
+        _check_burn_frame(self, frame, self.vector_ms, direction)
+        self.direction, self.frame = direction, frame
+        if not isinstance(label, str):
+            self._fail("label", label, "must be a string")
+        self.label = label
+
+    def burn(self, default_label: str = "burn") -> BurnSpec:
+        """This burn as a :class:`BurnSpec` (time TU, components m/s in its frame)."""
+        vec = (np.array(self.vector_ms) if self.vector_ms
+               else direction_vector(self.frame, self.direction, self.delta_v_ms))
+        what = _describe(self.vector_ms, self.delta_v_ms, self.direction, self.frame)
+        return BurnSpec(float(units.days_to_tu(self.t_days)), vec, self.frame, f"{self.label or default_label}: {what}")
+
+    def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
+        return resolve_burns(dynamics, x0, t0, t_end, [self.burn()])
+
+
+class BurnsPlan(ManeuverPlan):
+    """A list of impulsive burns, each given as the impulse plan's one burn.
+
+    Parameters
+    ----------
+    burns : list of tables
+        One table per burn with the keys t_days (required), delta_v_ms, direction, frame,
+        vector_ms and label, as for the impulse plan (the same defaults). Empty: no burn.
+    """
+
+    def __init__(self, burns: list[dict[str, Any]] | None = None) -> None:
+        self.burns = [] if burns is None else burns
+        if not isinstance(self.burns, (list, tuple)):
+            self._fail("burns", burns, "must be a list of tables (t_days, delta_v_ms, direction, frame, vector_ms, label)")
+        self._plans = [self._one(i, table) for i, table in enumerate(self.burns)]
+
+    def _one(self, i: int, table: Any) -> ImpulsePlan:
+        where = f"burns[{i}]"
+        if not isinstance(table, dict):
+            self._fail(where, table, "must be a table with t_days and the impulse plan's keys")
+        unknown = sorted(set(table) - set(_BURN_KEYS))
+        if unknown or "t_days" not in table:
+            self._fail(where, table, (f"unknown key(s) {', '.join(unknown)}; " if unknown else "missing key t_days; ")
+                       + f"allowed keys: {', '.join(_BURN_KEYS)}")
+        try:
+            return ImpulsePlan(**table)
+        except ParameterError as exc:
+            raise ParameterError(f"{self._label()}: parameter '{where}': {str(exc).split(': ', 1)[-1]}") from None
+
+    def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
+        specs = [p.burn(f"burn {i + 1}") for i, p in enumerate(self._plans)]
+        return resolve_burns(dynamics, x0, t0, t_end, specs)
+
+
+class StationKeepingPlan(ManeuverPlan):
+    """Small burns at successive apolune passages (once per revolution), as station-keeping makes.
+
+    Each burn is at a local maximum of the distance to the Moon along the truth flown with the
+    earlier burns, the first after first_after_days; those that fall inside the run are flown.
+
+    Parameters
+    ----------
+    delta_v_ms : float
+        Size of each burn, m/s (>= 0).
+    first_after_days : float
+        The first burn is at the first apolune after this time, days since the scenario epoch (>= 0).
+    n_burns : int
+        Number of burns, one per apolune passage (>= 1).
+    direction : str
+        Direction of each burn in its frame: one of in-track, anti-in-track, radial, anti-radial,
+        cross-track, anti-cross-track.
+    frame : str
+        The local frame: rtn-moon (radial, in-track, cross-track about the Moon, in the synodic
+        frame), rtn-earth (the same about the Earth) or vnb (velocity, normal, binormal of the
+        synodic velocity).
+    """
+
+    search_step_tu = 0.005
+    """Grid on which the distance to the Moon is scanned for its maxima, TU (31 minutes)."""
+
+    def __init__(self, delta_v_ms: float = 0.1, first_after_days: float = 0.0, n_burns: int = 2,
+                 direction: str = "in-track", frame: str = "rtn-moon") -> None:
+        self.delta_v_ms = check_nonnegative(self, "delta_v_ms", delta_v_ms)
+        self.first_after_days = check_nonnegative(self, "first_after_days", first_after_days)
+        self.n_burns = check_int(self, "n_burns", n_burns, minimum=1, maximum=10_000)
+        check_choice(self, "frame", frame, [f for f in FRAMES if f != "synodic"])
+        check_choice(self, "direction", direction, DIRECTIONS)
+        self.direction, self.frame = direction, frame
+
+    def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
+        vec = direction_vector(self.frame, self.direction, self.delta_v_ms)
+        what = _describe([], self.delta_v_ms, self.direction, self.frame)
+        out: list[Impulse] = []
+        t_from = max(t0, t0 + float(units.days_to_tu(self.first_after_days)))
+        for k in range(self.n_burns):
+            t_b = next_apolune(_flown(dynamics, out), x0, t0, t_from, t_end, self.search_step_tu)
+            if t_b is None:
+                break
+            out += resolve_burns(_flown(dynamics, out), x0, t0, t_end,
+                                 [BurnSpec(t_b, vec, self.frame, f"station-keeping {k + 1}: {what}")])
+            t_from = t_b + self.search_step_tu
+        return out
+
+
+def _evaluator(dynamics, x0: np.ndarray, t0: float, t_end: float):
+    """``states(ts) -> (K, 6)`` along the trajectory from ``x0`` at ``t0``: one dense integration
+    over ``[t0, t_end]`` when the model has it, else a propagation per call."""
+    x0 = np.asarray(x0, dtype=float)
+    dense = getattr(dynamics, "dense_trajectory", None)
+    if callable(dense):
+        traj = dense(x0, t0, t_end)
+        if not traj.alive:
+            raise ConfigError(f"the truth hits a body at t = {units.tu_to_days(traj.impact_time):.3f} days")
+        return traj.states
+
+    def states(ts):
+        ts = np.atleast_1d(np.asarray(ts, dtype=float))
+        return dynamics.propagate(x0[None], t0, ts).states[:, 0]
+
+    return states
+
+
+def next_apolune(dynamics, x0: np.ndarray, t0: float, t_from: float, t_end: float, step: float) -> float | None:
+    """The first local maximum (TU) of the distance to the Moon in ``(t_from, t_end)`` along the
+    trajectory of ``x0`` (6,) from ``t0`` under ``dynamics``, or None: scanned on a grid of
+    ``step`` TU and refined to 1e-10 TU."""
+    from scipy.optimize import minimize_scalar
+
+    if t_end - t_from < 2 * step:
+        return None
+    states = _evaluator(dynamics, x0, t0, t_end)
+    grid = np.append(np.arange(t_from, t_end, step), t_end)
+
+    def dist(ts):
+        ts = np.atleast_1d(ts)
+        moon = np.stack([body_position(dynamics, "Moon", float(t)) for t in ts])
+        return np.linalg.norm(states(ts)[:, :3] - moon, axis=1)
+
+    d = dist(grid)
+    peaks = np.flatnonzero((d[1:-1] > d[:-2]) & (d[1:-1] >= d[2:])) + 1
+    if peaks.size == 0:
+        return None
+    i = int(peaks[0])
+    res = minimize_scalar(lambda t: -dist(t)[0], bounds=(grid[i - 1], grid[i + 1]), method="bounded",
+                          options={"xatol": 1e-10})
+    return float(res.x)
 
 
 @hookimpl
 def cistrack_register(registry):
-    """Nothing registered yet."""
+    registry.add("maneuver-plan", "impulse", ImpulsePlan)
+    registry.add("maneuver-plan", "burns", BurnsPlan)
+    registry.add("maneuver-plan", "station-keeping", StationKeepingPlan)

@@ -1,0 +1,172 @@
+"""Maneuver plans ``impulse``, ``burns`` and ``station-keeping``: local frames, resolution along
+the truth flown with the earlier burns, apolune search and parameter validation."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack import units
+from cistrack.errors import ConfigError, ParameterError
+from cistrack.interfaces.maneuvers import Impulse
+from cistrack.plugins.maneuvers.local_frames import frame_axes
+from cistrack.plugins.maneuvers.plans import BurnsPlan, ImpulsePlan, StationKeepingPlan
+from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics, describe_impulse, fly_plan
+
+NRHO = np.array([1.0221, 0.0, -0.1821508, 0.0, -0.10342725, 0.0])
+NRHO_PERIOD = 1.5121455320848902      # TU
+SPAN = 2.2                            # TU
+
+
+@pytest.fixture(scope="module")
+def cr3bp(registry):
+    return registry.create("dynamics", "cr3bp")
+
+
+def _state_at(dyn, t, earlier=()):
+    d = ImpulsiveDynamics(dyn, list(earlier)) if earlier else dyn
+    return d.propagate(NRHO, 0.0, t).final[0]
+
+
+def test_the_plans_are_registered(registry):
+    assert {"impulse", "burns", "station-keeping"} <= set(registry.names("maneuver-plan"))
+
+
+@pytest.mark.parametrize("frame", ["rtn-moon", "rtn-earth", "vnb"])
+def test_local_frames_are_orthonormal_and_right_handed(cr3bp, frame):
+    m = frame_axes(frame, NRHO + np.array([0.01, 0.02, 0.0, 0.03, 0.0, 0.05]), 0.0, cr3bp)
+    np.testing.assert_allclose(m.T @ m, np.eye(3), atol=1e-14)
+    assert np.linalg.det(m) == pytest.approx(1.0)
+
+
+def test_rtn_and_vnb_axes_by_their_definitions(cr3bp):
+    x = NRHO + np.array([0.0, 0.01, 0.0, 0.02, 0.0, 0.0])
+    moon = np.array([1 - cr3bp.mu, 0.0, 0.0])
+    r, v = x[:3] - moon, x[3:]
+    rtn = frame_axes("rtn-moon", x, 0.0, cr3bp)
+    np.testing.assert_allclose(rtn[:, 0], r / np.linalg.norm(r), atol=1e-15)
+    h = np.cross(r, v)
+    np.testing.assert_allclose(rtn[:, 2], h / np.linalg.norm(h), atol=1e-15)
+    assert rtn[:, 1] @ v > 0 and abs(rtn[:, 1] @ r) < 1e-15           # in-track: along the motion, normal to r
+    vnb = frame_axes("vnb", x, 0.0, cr3bp)
+    np.testing.assert_allclose(vnb[:, 0], v / np.linalg.norm(v), atol=1e-15)
+    earth = frame_axes("rtn-earth", x, 0.0, cr3bp)[:, 0]
+    re = x[:3] - np.array([-cr3bp.mu, 0.0, 0.0])
+    np.testing.assert_allclose(earth, re / np.linalg.norm(re), atol=1e-15)
+
+
+@pytest.mark.parametrize("direction, column, sign", [("in-track", 1, 1), ("anti-in-track", 1, -1), ("radial", 0, 1),
+                                                     ("anti-radial", 0, -1), ("cross-track", 2, 1),
+                                                     ("anti-cross-track", 2, -1)])
+def test_an_impulse_along_each_direction_of_rtn_moon(cr3bp, direction, column, sign):
+    t_days = 3.0
+    [imp] = ImpulsePlan(t_days=t_days, delta_v_ms=2.0, direction=direction).impulses(cr3bp, NRHO, 0.0, SPAN)
+    t = float(units.days_to_tu(t_days))
+    assert imp.t == pytest.approx(t)
+    axes = frame_axes("rtn-moon", _state_at(cr3bp, t), t, cr3bp)
+    np.testing.assert_allclose(imp.dv, sign * axes[:, column] * 2.0 / MS_PER_VU, atol=1e-15)
+    assert direction in imp.label
+
+
+def test_a_vector_in_a_frame_and_in_the_synodic_frame(cr3bp):
+    t = float(units.days_to_tu(2.0))
+    [imp] = ImpulsePlan(t_days=2.0, vector_ms=[0.3, -0.4, 1.2], frame="vnb").impulses(cr3bp, NRHO, 0.0, SPAN)
+    axes = frame_axes("vnb", _state_at(cr3bp, t), t, cr3bp)
+    np.testing.assert_allclose(imp.dv * MS_PER_VU, axes @ [0.3, -0.4, 1.2], atol=1e-12)
+    [syn] = ImpulsePlan(t_days=2.0, vector_ms=[0.3, -0.4, 1.2], frame="synodic").impulses(cr3bp, NRHO, 0.0, SPAN)
+    np.testing.assert_allclose(syn.dv * MS_PER_VU, [0.3, -0.4, 1.2], atol=1e-12)
+
+
+def test_a_burn_outside_the_span_is_not_flown(cr3bp):
+    assert ImpulsePlan(t_days=20.0).impulses(cr3bp, NRHO, 0.0, SPAN) == []
+    dyn, imps = fly_plan(ImpulsePlan(t_days=20.0), cr3bp, NRHO, 0.0, SPAN)
+    assert dyn is cr3bp and imps == []
+
+
+def test_burns_are_resolved_along_the_truth_with_the_earlier_burns(cr3bp):
+    plan = BurnsPlan(burns=[{"t_days": 6.0, "delta_v_ms": 0.5, "direction": "radial", "label": "late"},
+                            {"t_days": 2.0, "delta_v_ms": 3.0}])
+    first, second = plan.impulses(cr3bp, NRHO, 0.0, SPAN + 1)
+    assert first.t < second.t and first.label.startswith("burn 2") and second.label.startswith("late")
+    t2 = second.t
+    axes_with = frame_axes("rtn-moon", _state_at(cr3bp, t2, [first]), t2, cr3bp)
+    np.testing.assert_allclose(second.dv, axes_with[:, 0] * 0.5 / MS_PER_VU, atol=1e-15)
+    axes_without = frame_axes("rtn-moon", _state_at(cr3bp, t2), t2, cr3bp)
+    assert np.abs(axes_with - axes_without).max() > 1e-4           # the first burn moved the second's frame
+
+
+def test_station_keeping_burns_at_successive_apolunes(cr3bp):
+    t_end = float(units.days_to_tu(13.2))
+    imps = StationKeepingPlan(delta_v_ms=0.1, n_burns=3).impulses(cr3bp, NRHO, 0.0, t_end)
+    assert len(imps) == 2                                    # a third apolune lies after 13.2 days
+    np.testing.assert_allclose([i.t for i in imps], [NRHO_PERIOD, 2 * NRHO_PERIOD], rtol=2e-3)
+    flown = ImpulsiveDynamics(cr3bp, imps)
+    moon = np.array([1 - cr3bp.mu, 0.0, 0.0])
+    for imp in imps:
+        assert np.linalg.norm(imp.dv) * MS_PER_VU == pytest.approx(0.1)
+        x = flown.propagate(NRHO, 0.0, [imp.t - 1e-3, imp.t, imp.t + 1e-3]).states[:, 0]
+        d = np.linalg.norm(x[:, :3] - moon, axis=1)
+        assert d[1] >= d[0] and d[1] >= d[2]                 # a maximum of the distance to the Moon
+        r, v = x[1, :3] - moon, x[1, 3:]
+        assert abs(r @ v) / (np.linalg.norm(r) * np.linalg.norm(v)) < 1e-6
+    later = StationKeepingPlan(first_after_days=7.0, n_burns=1).impulses(cr3bp, NRHO, 0.0, t_end)
+    # the ballistic truth's second apolune: near the burned one (0.1 m/s moved it by ~0.5 h)
+    assert len(later) == 1 and later[0].t == pytest.approx(imps[1].t, abs=1e-3) and later[0].t != imps[1].t
+
+
+def test_fly_plan_wraps_the_truth_and_says_one_line_per_burn(cr3bp):
+    lines = []
+    plan = BurnsPlan(burns=[{"t_days": 1.0, "delta_v_ms": 1.0}, {"t_days": 2.0, "delta_v_ms": 0.5}])
+    dyn, imps = fly_plan(plan, cr3bp, NRHO, 0.0, SPAN, lines.append)
+    assert isinstance(dyn, ImpulsiveDynamics) and dyn.base is cr3bp and len(imps) == 2
+    assert len(lines) == 2 and "1.0000 days" in lines[0] and "|dv| = 1 m/s" in lines[0] and "in-track" in lines[0]
+    assert describe_impulse(Impulse(1.0, np.zeros(3)), 1).startswith("truth burn 1")
+
+
+def test_fly_plan_refuses_a_plan_that_returns_burns_outside_the_span(cr3bp):
+    class Bad(ImpulsePlan):
+        def impulses(self, dynamics, x0, t0, t_end):
+            return [Impulse(t_end + 1.0, np.ones(3) * 1e-4, "late")]
+
+    with pytest.raises(ConfigError, match=r"\[truth.maneuvers\].*outside the run's span"):
+        fly_plan(Bad(), cr3bp, NRHO, 0.0, SPAN, where="[truth.maneuvers]")
+
+
+@pytest.mark.parametrize("cls, params, name", [
+    (ImpulsePlan, {"t_days": 0.0}, "t_days"),
+    (ImpulsePlan, {"delta_v_ms": -1.0}, "delta_v_ms"),
+    (ImpulsePlan, {"direction": "prograde"}, "direction"),
+    (ImpulsePlan, {"frame": "lvlh"}, "frame"),
+    (ImpulsePlan, {"frame": "synodic"}, "frame"),
+    (ImpulsePlan, {"vector_ms": [1.0, 2.0]}, "vector_ms"),
+    (ImpulsePlan, {"vector_ms": [1.0, 2.0, float("nan")]}, "vector_ms"),
+    (StationKeepingPlan, {"n_burns": 0}, "n_burns"),
+    (StationKeepingPlan, {"frame": "synodic"}, "frame"),
+    (StationKeepingPlan, {"first_after_days": -1.0}, "first_after_days"),
+    (BurnsPlan, {"burns": [{"delta_v_ms": 1.0}]}, "burns[0]"),
+    (BurnsPlan, {"burns": [{"t_days": 1.0, "dv": 1.0}]}, "burns[0]"),
+    (BurnsPlan, {"burns": [{"t_days": 1.0}, {"t_days": 2.0, "direction": "up"}]}, "burns[1]"),
+    (BurnsPlan, {"burns": ["not a table"]}, "burns[0]"),
+])
+def test_bad_parameters_are_refused_naming_the_parameter_and_what_is_allowed(cls, params, name):
+    with pytest.raises(ParameterError) as err:
+        cls(**params)
+    assert f"'{name}'" in str(err.value)
+    if name in ("direction", "frame"):
+        assert "rtn-moon" in str(err.value) or "in-track" in str(err.value)
+
+
+@pytest.mark.parametrize("cls", [ImpulsePlan, BurnsPlan, StationKeepingPlan])
+def test_the_plans_follow_the_parameter_conventions_and_document_every_parameter(cls):
+    """The conformance suite's parameter checks (the suite has no maneuver-plan kind yet) and the
+    documentation `cistrack plugins NAME` prints."""
+    import re
+
+    from cistrack.plugin.param_docs import param_docs, summary_of
+    from cistrack.testing.checks_params import PARAMETER_CHECKS
+
+    plan = cls()
+    for _, check in PARAMETER_CHECKS:
+        check(plan)
+    for p in param_docs(cls):
+        assert p.meaning and p.meaning.endswith((".", ")")) and not re.search(r"`", p.meaning), p.name
+    assert summary_of(cls).endswith(".") and "`" not in summary_of(cls)
