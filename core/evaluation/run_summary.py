@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from cistrack.evaluation.custody import Verdict
 
 __all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines"]
@@ -47,6 +49,10 @@ class RunSummary:
                                  measurements, IOD), compilation excluded
     compile_time_s : float       seconds numba spent compiling during the run (0 with a warm kernel
                                  cache; ~1 min for a model's first run on a new machine)
+    maneuvers : list of dict     each maneuver detected (:mod:`cistrack.runs.maneuver_watch`):
+                                 t_days, t_burn_days, delta_v_ms, delta_v_sigma_ms, confirmed, ...
+    truth_maneuvers : list of dict   the truth's burns: t_days, delta_v_ms (magnitude, m/s),
+                                 delta_v_vector_ms (synodic components), label
     """
 
     run_id: str
@@ -67,6 +73,8 @@ class RunSummary:
     wall_time_s: float = 0.0
     prepare_time_s: float = 0.0
     compile_time_s: float = 0.0
+    maneuvers: list[dict[str, Any]] = field(default_factory=list)
+    truth_maneuvers: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def custody_kept(self) -> bool:
@@ -94,6 +102,7 @@ class RunSummary:
             "consistency": dict(self.consistency), "final": dict(self.final), "pass_end": dict(self.pass_end),
             "wall_time_s": self.wall_time_s, "prepare_time_s": self.prepare_time_s,
             "compile_time_s": self.compile_time_s,
+            "maneuvers": [dict(m) for m in self.maneuvers], "truth_maneuvers": [dict(m) for m in self.truth_maneuvers],
         }
 
     @classmethod
@@ -109,7 +118,7 @@ class RunSummary:
                               data.get("custody_lost_step"), data.get("custody_lost_t_days"))
         names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed",
                  "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s", "compile_time_s",
-                 "status", "failure")
+                 "status", "failure", "maneuvers", "truth_maneuvers")
         has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
         return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
                    **{k: data[k] for k in names if k in data})
@@ -136,7 +145,17 @@ def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, fa
         n_measurements=len(run.measurements), n_passes=len(run.passes), n_passes_observed=observed,
         n_measurements_before_iod=before_iod,
         consistency=consistency_summary(rows), final={k: last[k] for k in FINAL_KEYS if k in last},
-        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s, compile_time_s=compile_time_s)
+        pass_end=pass_end, wall_time_s=wall_time_s, prepare_time_s=prepare_time_s, compile_time_s=compile_time_s,
+        truth_maneuvers=[_truth_burn(i) for i in getattr(run, "truth_impulses", None) or ()])
+
+
+def _truth_burn(impulse) -> dict[str, Any]:
+    """A truth impulse (:class:`cistrack.interfaces.maneuvers.Impulse`) as a ``truth_maneuvers`` entry."""
+    from cistrack import units
+
+    dv = np.asarray(impulse.dv, dtype=float) * float(units.vu_to_kms(1.0)) * 1000.0
+    return {"t_days": float(units.tu_to_days(impulse.t)), "delta_v_ms": float(np.linalg.norm(dv)),
+            "delta_v_vector_ms": [float(v) for v in dv], "label": impulse.label}
 
 
 def count_lines(s: RunSummary) -> list[str]:

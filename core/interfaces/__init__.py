@@ -21,6 +21,7 @@ PGM steps      :class:`ParticlePrediction`,                ``"pgm-prediction"``,
                :class:`Reanchor` (:mod:`.pgm_steps`)       ``"pgm-reanchor"``
 maneuver plan  :class:`ManeuverPlan` (:mod:`.maneuvers`)   ``"maneuver-plan"``
 detector       :class:`ManeuverDetector`                   ``"maneuver-detector"``
+response       :class:`ManeuverResponse`                   ``"maneuver-response"``
 =============  ==========================================  ==========================
 
 A preset (:func:`~cistrack.interfaces.preset.preset`) registers a component with other defaults.
@@ -29,7 +30,7 @@ from cistrack.interfaces.clustering import Clusterer
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
 from cistrack.interfaces.filter import Filter
 from cistrack.interfaces.iod import IODMethod
-from cistrack.interfaces.maneuvers import Detection, Impulse, ManeuverDetector, ManeuverPlan
+from cistrack.interfaces.maneuvers import Detection, Impulse, ManeuverDetector, ManeuverPlan, ManeuverResponse
 from cistrack.interfaces.metric import StepMetric
 from cistrack.interfaces.orbit import ReferenceOrbit
 from cistrack.interfaces.pgm_steps import ComponentUpdate, KernelUpdate, ParticlePrediction, PosteriorDraw, Reanchor
@@ -42,9 +43,9 @@ from cistrack.interfaces.sensor import Sensor
 
 KINDS: tuple[str, ...] = ("dynamics", "sensor", "schedule", "iod", "clustering", "filter", "orbit", "recorder", "reader", "exporter", "range-prior",
                          "pgm-prediction", "pgm-update", "pgm-draw", "pgm-kernel", "pgm-reanchor",
-                         "maneuver-plan", "maneuver-detector")
+                         "maneuver-plan", "maneuver-detector", "maneuver-response")
 """Every registry kind, in the order `cistrack plugins` lists them."""
 
 __all__ = ["Body", "Clusterer", "ComponentUpdate", "Detection", "Dynamics", "Exporter", "Filter", "IODMethod", "KINDS", "StepMetric",
-           "Impulse", "KernelUpdate", "ManeuverDetector", "ManeuverPlan", "ParticlePrediction", "Pass", "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
+           "Impulse", "KernelUpdate", "ManeuverDetector", "ManeuverPlan", "ManeuverResponse", "ParticlePrediction", "Pass", "PosteriorDraw", "Propagation", "RangePrior", "Reader", "Reanchor", "ReferenceOrbit", "Schedule", "Sensor",
            "preset"]

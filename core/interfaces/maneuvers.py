@@ -9,6 +9,10 @@ into impulses along the ballistic truth.
 A :class:`ManeuverDetector` watches a filter's innovations, one update at a time: given the prior
 belief, the measurements taken at one time and the sensor, it returns a :class:`Detection` when
 the measurements are unlikely under the prior in a way a burn explains, else None.
+
+A :class:`ManeuverResponse` is what a run does about a detection before the filter takes the
+measurements that raised it: a new cloud of particles at the detection time (the prior widened
+by the burns it may have made), from which the filter starts again; or nothing.
 """
 from __future__ import annotations
 
@@ -21,10 +25,10 @@ import numpy as np
 from cistrack.interfaces.component import Component
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
-from cistrack.model.belief import Belief
+from cistrack.model.belief import Belief, ParticleCloud
 from cistrack.model.measurement import Measurement
 
-__all__ = ["Impulse", "ManeuverPlan", "Detection", "ManeuverDetector"]
+__all__ = ["Impulse", "ManeuverPlan", "Detection", "ManeuverDetector", "ManeuverResponse"]
 
 
 @dataclass(frozen=True)
@@ -112,3 +116,19 @@ class ManeuverDetector(Component):
         """Judge the ``measurements`` (taken at ``t`` TU, one or several sites) against the
         ``prior`` belief, each predicted by ``sensor.for_measurement(m)`` where the sensor has it.
         Returns (the test statistic after this update, a :class:`Detection` or None)."""
+
+
+class ManeuverResponse(Component):
+    """What a run does when a maneuver is detected (registry kind ``"maneuver-response"``).
+
+    Called once per detection, before the filter's update with the measurements that raised it.
+    """
+
+    kind = "maneuver-response"
+
+    @abstractmethod
+    def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics,
+                rng: np.random.Generator) -> ParticleCloud | None:
+        """A cloud (N, 6) at ``detection.t`` (TU) from which the filter starts again, or None to
+        leave the filter as it is. ``prior`` is the filter's belief at ``detection.t`` before the
+        update; ``dynamics`` the filter's model; every random draw comes from ``rng``."""

@@ -31,6 +31,7 @@ from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
 from cistrack.runs.iod_message import iod_message
+from cistrack.runs.maneuver_watch import ManeuverMetric, ManeuverWatch
 from cistrack.runs.observers import builtin_metrics, finish_observers, make_plugin_manager, metric_stage, run_observers
 from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
@@ -56,7 +57,7 @@ class RunResult:
 
 
 def _streams(seed: int) -> dict[str, np.random.Generator]:
-    names = ("measurements", "schedule", "iod", "filter")
+    names = ("measurements", "schedule", "iod", "filter", "maneuvers")  # spawn keys by index: adding one changes none
     children = np.random.SeedSequence(seed).spawn(len(names))
     return {n: np.random.default_rng(c) for n, c in zip(names, children)}
 
@@ -225,9 +226,14 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
     custody = CustodyMetric(scenario.custody)
     collector = RowCollector(keep_steps=opts.keep_steps)
     pm = make_plugin_manager(run_observers([custody, collector], opts, reg), reg)
-    metrics = metric_stage(pm, scenario, builtin_metrics(custody))  # a bad stage is refused before any work
+    watch = _maneuver_watch(scenario, reg)
+    stages = builtin_metrics(custody) + ([ManeuverMetric(watch)] if watch is not None else [])
+    metrics = metric_stage(pm, scenario, stages)  # a bad stage is refused before any work
     t_start = time.perf_counter()
     ctx, rngs = prepare_run(scenario, opts.seed, reg, opts.run_id, opts.output_dir, opts.log)
+    if watch is not None:
+        watch.rng, watch.filter_rng, watch.say = rngs["maneuvers"], rngs["filter"], opts.log or (lambda m: None)
+        ctx.maneuvers = watch
     t_prepare = time.perf_counter() - t_start - clock.seconds
     events = _events(scenario, ctx)
     if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
@@ -242,6 +248,8 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
         else custody.verdict
     summary = summarize(ctx, collector.rows, verdict, status, failure,
                         time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
+    if watch is not None:
+        summary.maneuvers = watch.records(ctx)
     summary = finish_observers(pm, ctx, summary)
     if abort is not None:
         raise abort
@@ -300,11 +308,15 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
         return
     ms = tuple(_angles(ctx.measurements[i]) for i in group)
     _observe(ctx, pm, metrics, _step(ctx, k, t, "update", prior, ms), "predicted")
+    if ctx.maneuvers is not None:
+        _watch(ctx, t, prior, ms)
     del prior  # the prior's particles need not outlive its hook
     tu = time.perf_counter()
     for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
         filt.update(m)  # several sites at one time: one stacked update, or one after another
     step = _step(ctx, k, t, "update", filt.belief, ms)
+    if ctx.maneuvers is not None:
+        ctx.maneuvers.after_update(t, step.belief)
     step.timings.update({"predict": t_pred, "update": time.perf_counter() - tu})
     _observe(ctx, pm, metrics, step, "updated")
 
@@ -320,6 +332,25 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
         metrics.measure(ctx, step, event)
     hook = pm.hook.cistrack_step_updated if event == "updated" else pm.hook.cistrack_step_predicted
     hook(run=ctx, step=step)
+
+
+def _maneuver_watch(scenario: Scenario, reg: Registry) -> ManeuverWatch | None:
+    """The run's :class:`ManeuverWatch` from ``[maneuvers]`` (None without a detector)."""
+    settings = scenario.maneuvers
+    if settings.detector is None:
+        return None
+    response = settings.response.build(reg) if settings.response is not None else None
+    return ManeuverWatch(settings.detector.build(reg), response, settings.estimate)
+
+
+def _watch(ctx: RunContext, t: float, prior, ms: tuple) -> None:
+    """The maneuver watch's look at the measurements ``ms`` at ``t`` under ``prior``; when its response
+    hands back a cloud, the filter starts again from it (before it takes ``ms``)."""
+    cloud = ctx.maneuvers.before_update(ctx, t, prior, ms)
+    if cloud is not None:
+        ctx.maneuvers.say(f"maneuver detected at {units.tu_to_days(t):.3f} d; the filter starts again from the "
+                f"response's cloud ({len(cloud)} particles)")
+        ctx.filter.initialize(cloud, ctx.dynamics, ctx.sensor, ctx.maneuvers.filter_rng)
 
 
 def _angles(m):

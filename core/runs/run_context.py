@@ -109,6 +109,7 @@ class RunContext:
     truth_dynamics: Dynamics | None = None
     truth: Truth | None = field(default=None, repr=False)
     truth_impulses: list = field(default_factory=list)
+    maneuvers: Any = field(default=None, repr=False)
 
     @property
     def has_truth(self) -> bool:

@@ -48,6 +48,7 @@ from cistrack.scenario.builtin_scenarios import builtin_scenario_path, builtin_s
 from cistrack.plugin.component_tables import ComponentSpec, check_keys, component_spec, example_name, typed
 from cistrack.evaluation.custody import CustodyRule
 from cistrack.scenario.custody_table import custody_rule
+from cistrack.scenario.maneuver_table import ManeuverSettings, maneuver_settings
 from cistrack.scenario.observer_tables import observer_specs
 from cistrack.scenario.limits import check_memory, check_path_component, check_seed
 from cistrack.scenario import toml_input
@@ -70,7 +71,7 @@ COMPONENT_TABLES: dict[str, str] = {
 """Scenario table -> registry kind of the component it builds."""
 
 _TOP_KEYS = {"name", "description", "epoch", "seed", "duration_days", "truth", "custody", "run",
-             "measurements", "sensors", *COMPONENT_TABLES}
+             "measurements", "sensors", "maneuvers", *COMPONENT_TABLES}
 _REQUIRED_TABLES = ("dynamics", "iod", "filter")
 _TRUTH_KEYS = {"orbit", "state_km", "dynamics", "maneuvers"}
 _RUN_KEYS = {"truth_grid_minutes", "predict_every_hours", "end_with_prediction", "recording_frame",
@@ -103,6 +104,7 @@ class Scenario:
     measurements_reader: ComponentSpec | None = None
     observers: dict[str, ComponentSpec] = field(default_factory=dict)
     iod_observer: str = ""
+    maneuvers: ManeuverSettings = field(default_factory=ManeuverSettings)
     source: str = "<memory>"
     raw: dict = field(default_factory=dict, repr=False)
 
@@ -195,8 +197,9 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     truth_maneuvers = _truth_maneuvers(truth, source, reg, measurements_file)
     custody = custody_rule(data.get("custody", {}), source)
     run = _run_options(data, source, components, top, observers)
+    maneuvers = maneuver_settings(data, components["filter"].name, source, reg)
     return Scenario(**top, components=components, truth_orbit=truth_orbit, truth_state=truth_state,
-                    truth_dynamics=truth_dyn, truth_maneuvers=truth_maneuvers, custody=custody, **run,
+                    truth_dynamics=truth_dyn, truth_maneuvers=truth_maneuvers, custody=custody, **run, maneuvers=maneuvers,
                     measurements_file=measurements_file, measurements_reader=measurements_reader,
                     observers=observers, source=source, raw=copy.deepcopy(data))
 

@@ -1,0 +1,209 @@
+"""Maneuvers in ``cistrack fit``: a fit that an impulsive burn explains is never a clean "converged".
+
+A ballistic fit of an object that maneuvered shows it in one of three ways: it rejects a
+contiguous block of observations (those on one side of the burn), its residuals are far larger
+than the noise (weighted RMS), or it does not converge. :func:`suspicion` names which. Then
+:func:`search_maneuvers` looks for burns in the gaps between the observations (a burn between
+nights, or between tracklets of one night):
+
+1. every gap longer than :data:`MIN_GAP_HOURS` is a candidate; a linearised screen about the
+   current fit (:func:`cistrack.least_squares.impulse_fit.screen_burn_times`) ranks them;
+2. in the best :data:`GAPS_TRIED` gaps the screen's profile over the gap gives the burn time and its
+   uncertainty (:func:`cistrack.least_squares.impulse_fit.burn_time_profile`: measured on a 0.3 m/s
+   burn, the linearised profile follows the full fits' to a few per cent), and the arc is fitted in
+   full with the burn there and its delta-v as solve-for parameters
+   (:func:`cistrack.least_squares.impulse_fit.fit_impulse`);
+3. the best burn is kept when it passes the test against the fit without it
+   (:func:`cistrack.least_squares.impulse_fit.burn_evidence`, false alarm :data:`FALSE_ALARM`);
+   then the search goes on for another burn (at most :data:`MAX_BURNS`), all delta-v refitted jointly.
+
+Each burn kept becomes an entry of ``fit.json``'s ``maneuvers`` (:func:`maneuver_record`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import PropagationError
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.interfaces.maneuvers import Impulse
+from cistrack.interfaces.sensor import Sensor
+from cistrack.least_squares.errors import FitError
+from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnEstimate, ImpulseFit, burn_evidence,
+                                                burn_time_profile, fit_impulse, screen_burn_times,
+                                                with_time_uncertainty)
+from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.result import FitResult
+from cistrack.model.measurement import MeasurementSet
+from cistrack.propagation.impulses import ImpulsiveDynamics
+
+__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "maneuver_record", "MIN_GAP_HOURS", "MAX_BURNS",
+           "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS"]
+
+MIN_GAP_HOURS = 1.0
+"""Gaps between observations at least this long are candidate burn intervals."""
+MAX_BURNS = 3
+"""At most this many burns are searched for in one arc."""
+FALSE_ALARM = 1e-4
+"""The false-alarm probability of each burn's test against the fit without it."""
+GAPS_TRIED = 2
+"""Gaps fitted in full per burn, the best of the linearised screen."""
+GAP_POINTS = 6
+"""Burn times per gap in the linearised screen that ranks the gaps."""
+BLOCK_SHARE = 0.05
+"""A contiguous block of rejected observations this large a share of the arc (and at least
+:data:`BLOCK_MIN` observations) makes a fit suspect."""
+BLOCK_MIN = 4
+MAX_RMS = 1.5
+"""A fit whose weighted RMS exceeds this is suspect (1 when the noise is as stated)."""
+
+
+def _longest_block(rejected: np.ndarray) -> int:
+    best = run = 0
+    for r in rejected:
+        run = run + 1 if r else 0
+        best = max(best, run)
+    return best
+
+
+def suspicion(result: FitResult) -> str:
+    """Why the ballistic ``result`` looks like an object that maneuvered, in words ("" when it
+    does not): a contiguous block of rejections, a large RMS, or no convergence."""
+    order = np.argsort(result.residuals.times, kind="stable")
+    rejected = np.asarray(result.residuals.rejected, dtype=bool)[order]
+    block = _longest_block(rejected)
+    if block >= max(BLOCK_MIN, BLOCK_SHARE * rejected.size):
+        return (f"it rejects a contiguous block of {block} of {rejected.size} observations "
+                f"({100.0 * block / rejected.size:.0f} %)")
+    if result.rms > MAX_RMS:
+        return f"its weighted RMS is {result.rms:.2f} (1 when the residuals are noise)"
+    if not result.converged:
+        return "it did not converge"
+    return ""
+
+
+@dataclass
+class ManeuverSearch:
+    """What :func:`search_maneuvers` found.
+
+    Attributes
+    ----------
+    result : FitResult             the fit with every burn kept (the ballistic fit when none is)
+    dynamics : Dynamics            the model that flies ``result`` (with the burns' impulses)
+    burns : list of BurnEstimate   the burns kept, in time order
+    windows : list of (float, float)   TU, the gap each burn lies in
+    notes : list of str            what the search did, in words
+    """
+
+    result: FitResult
+    dynamics: Dynamics
+    burns: list[BurnEstimate] = field(default_factory=list)
+    windows: list[tuple[float, float]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    t = np.unique(np.asarray(times, dtype=float))
+    dt = units.hours_to_tu(MIN_GAP_HOURS)
+    return [(float(a), float(b)) for a, b in zip(t[:-1], t[1:]) if b - a >= dt and (float(a), float(b)) not in done]
+
+
+def _flown(dynamics: Dynamics, burns: list[BurnEstimate]) -> Dynamics:
+    if not burns:
+        return dynamics
+    return ImpulsiveDynamics(dynamics, [Impulse(b.t, b.delta_v_ms / MS_PER_VU, f"burn {k + 1}")
+                                        for k, b in enumerate(burns)])
+
+
+def _screen_gaps(found: ManeuverSearch, sensor: Sensor, ms: MeasurementSet, gaps: list, use_range: bool) -> np.ndarray:
+    """The linearised capped cost (G,) of a burn in each gap: the best of :data:`GAP_POINTS` times."""
+    fr = (np.arange(GAP_POINTS) + 0.5) / GAP_POINTS
+    ts = np.array([a + f * (b - a) for a, b in gaps for f in fr])
+    costs = screen_burn_times(found.dynamics, sensor, ms, found.result, ts, use_range=use_range)
+    return costs.reshape(len(gaps), GAP_POINTS).min(axis=1)
+
+
+def _next_burn(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, found: ManeuverSearch,
+               options: FitOptions) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+    """The best fit with one more burn, its gap and its time's one sigma (TU); None when no gap
+    gives a fit. The gaps are ranked, and the time in a gap chosen, by the linearised screen; the
+    best :data:`GAPS_TRIED` are fitted in full."""
+    gaps = _gaps(ms.times, found.windows)
+    if not gaps:
+        return None
+    ranked = np.argsort(_screen_gaps(found, sensor, ms, gaps, options.use_range), kind="stable")
+    best = None
+    known = [x.t for x in found.burns]
+    for g in ranked[:GAPS_TRIED]:
+        a, b = gaps[int(g)]
+        tb, t_sigma = burn_time_profile(found.dynamics, sensor, ms, found.result, a, b, use_range=options.use_range)
+        try:
+            fit = fit_impulse(dynamics, sensor, ms, found.result.state, found.result.epoch, [tb], known=known,
+                              options=options)
+        except (FitError, PropagationError):
+            continue
+        if best is None or fit.costs.min() < best[0].costs.min():
+            best = (fit, (a, b), t_sigma)
+    return best
+
+
+def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, ballistic: FitResult,
+                     options: FitOptions, say: Callable[[str], None] = lambda m: None) -> ManeuverSearch:
+    """Burns that explain the arc ``ms`` better than the ``ballistic`` fit (module docstring).
+    ``options`` are the fit's; the area-to-mass ratio is estimated with the burns only when the
+    ballistic fit estimated it."""
+    opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
+    found = ManeuverSearch(ballistic, dynamics)
+    for _ in range(MAX_BURNS):
+        step = _next_burn(dynamics, sensor, ms, found, opts)
+        if step is None:
+            break
+        fit, window, t_sigma = step
+        ev = burn_evidence(found.result, fit, FALSE_ALARM)
+        b = fit.searched
+        say(f"burn tried in the gap {_utc_days(window[0]):.3f}-{_utc_days(window[1]):.3f} d: |dv| = "
+            f"{b.magnitude_ms:.4f} +- {b.magnitude_sigma_ms:.4f} m/s, cost drop {ev.cost_drop:.1f} "
+            f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted else "not kept"))
+        if not ev.accepted:
+            break
+        fit = _timed(dynamics, sensor, ms, fit, t_sigma, found, opts)
+        windows = found.windows + [window]
+        order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
+        found = ManeuverSearch(fit.fit, _flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
+                               found.notes)
+    return found
+
+
+def _timed(dynamics, sensor, ms, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,
+           options: FitOptions) -> ImpulseFit:
+    """``fit`` with the burn time's uncertainty in its delta-v covariance (as it is when that fails)."""
+    try:
+        return with_time_uncertainty(dynamics, sensor, ms, fit, t_sigma, known=[x.t for x in found.burns],
+                                     options=options)
+    except (FitError, PropagationError):
+        return fit
+
+
+def _utc_days(t: float) -> float:
+    return float(units.tu_to_days(t))
+
+
+def maneuver_record(burn: BurnEstimate, window: tuple[float, float], first_after: float, epoch) -> dict:
+    """One ``maneuvers`` entry of ``fit.json``: ``t_days`` (the first observation that shows the
+    burn), ``t_burn_days`` (the estimated burn time), ``t_burn_window_days`` (the gap it lies in),
+    all days since the scenario epoch, with their UTC; ``delta_v_ms`` and ``delta_v_sigma_ms``
+    (magnitude, m/s), ``delta_v_vector_ms`` and its ``delta_v_covariance_ms2`` (synodic components)."""
+    return {
+        "t_days": _utc_days(first_after), "t_burn_days": _utc_days(burn.t),
+        "t_burn_window_days": [_utc_days(window[0]), _utc_days(window[1])],
+        "t_burn_utc": units.format_utc(units.tu_to_utc(epoch, burn.t)),
+        "t_burn_window_utc": [units.format_utc(units.tu_to_utc(epoch, w)) for w in window],
+        "t_burn_sigma_days": _utc_days(burn.t_sigma),
+        "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,
+        "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "frame": "synodic",
+        "delta_v_covariance_ms2": np.asarray(burn.covariance_ms2, dtype=float).tolist(),
+        "significance_chi2": burn.significance,
+    }

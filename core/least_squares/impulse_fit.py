@@ -1,0 +1,307 @@
+"""An impulsive burn as a solve-for parameter: least squares over an arc that spans a maneuver.
+
+The unknowns are the state x (6,) at ``t0`` and the velocity change dv (3,) of each impulse at its
+burn time t_b (synodic components, m/s): the orbit is flown by
+:class:`~cistrack.propagation.impulses.ImpulsiveDynamics` with the impulse as its solve-for
+parameters, so the differential correction (:func:`~cistrack.least_squares.fit_orbit`) estimates
+them with the state. The burn time is not a smooth unknown when the burn falls in a gap between
+passes (the data constrain only a combination of t_b and dv there), so :func:`fit_impulse` fits
+each of a set of candidate times and keeps the one with the smallest cost; :func:`screen_burn_times`
+ranks many candidate times cheaply, linearised about the ballistic fit.
+
+Whether the burn is real is a test against the ballistic fit of the same arc
+(:func:`burn_evidence`): the cost of each fit counts each observation's chi-square capped at the
+rejection threshold (so that a fit which rejects a contiguous block is charged for it), and the
+burn is accepted when the drop in cost exceeds the chi-square quantile of 4 degrees of freedom
+(dv and t_b) at ``false_alarm`` and the estimated dv differs from zero at the same level.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import PropagationError
+from cistrack.interfaces.dynamics import Dynamics
+from cistrack.interfaces.maneuvers import Impulse
+from cistrack.interfaces.sensor import Sensor
+from cistrack.least_squares.chi_square import chi2_ppf
+from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.least_squares.errors import FitError
+from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.result import FitResult
+from cistrack.model.measurement import MeasurementSet
+from cistrack.propagation.impulses import ImpulsiveDynamics
+
+__all__ = ["BurnEstimate", "ImpulseFit", "BurnEvidence", "fit_impulse", "fit_impulses", "burn_evidence",
+           "capped_cost", "dv_names", "MS_PER_VU", "screen_burn_times", "burn_time_profile", "with_time_uncertainty"]
+
+MS_PER_VU = float(units.vu_to_kms(1.0)) * 1000.0
+
+
+def dv_names(k: int) -> tuple[str, str, str]:
+    """The solve-for parameters of impulse ``k`` (0-based, in time order): synodic components, m/s."""
+    return (f"delta_v_{k}_x_ms", f"delta_v_{k}_y_ms", f"delta_v_{k}_z_ms")
+
+
+@dataclass(frozen=True)
+class BurnEstimate:
+    """One estimated impulsive burn.
+
+    Attributes
+    ----------
+    t : float                      TU, the burn time (the minimum of the cost's profile over candidate
+                                   times, not an unknown of the least squares)
+    delta_v_ms : (3,) float        the velocity change, synodic components, m/s
+    covariance_ms2 : (3, 3) float  its covariance, (m/s)^2 (with the burn time's uncertainty mapped in
+                                   by :func:`with_time_uncertainty`)
+    t_sigma : float                TU, one sigma of the burn time (0 when not assessed)
+    """
+
+    t: float
+    delta_v_ms: np.ndarray
+    covariance_ms2: np.ndarray
+    t_sigma: float = 0.0
+
+    @property
+    def magnitude_ms(self) -> float:
+        """|dv|, m/s."""
+        return float(np.linalg.norm(self.delta_v_ms))
+
+    @property
+    def magnitude_sigma_ms(self) -> float:
+        """One sigma of |dv| by linear mapping along dv's direction, m/s (the largest axis sigma
+        when dv is zero)."""
+        n = self.magnitude_ms
+        if n == 0.0:
+            return float(np.sqrt(np.max(np.diag(self.covariance_ms2))))
+        u = self.delta_v_ms / n
+        return float(np.sqrt(max(u @ self.covariance_ms2 @ u, 0.0)))
+
+    @property
+    def significance(self) -> float:
+        """dv^T C^-1 dv: chi-square with 3 degrees of freedom when there is no burn."""
+        try:
+            return float(self.delta_v_ms @ np.linalg.solve(self.covariance_ms2, self.delta_v_ms))
+        except np.linalg.LinAlgError:
+            return 0.0
+
+
+@dataclass(frozen=True)
+class ImpulseFit:
+    """The fit of an arc with impulsive burns at given times.
+
+    Attributes
+    ----------
+    burns : list of BurnEstimate   in time order
+    fit : FitResult                the least-squares fit (state at its epoch, every dv as its parameters)
+    new : int                      index in ``burns`` of the burn whose time was searched
+    costs : (C,) float             the capped cost (:func:`capped_cost`) of each candidate time
+    candidates : (C,) float        the candidate times of the searched burn, TU
+    """
+
+    burns: list[BurnEstimate]
+    fit: FitResult
+    new: int = 0
+    costs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    candidates: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def searched(self) -> BurnEstimate:
+        """The burn whose time was searched."""
+        return self.burns[self.new]
+
+
+def capped_cost(fit: FitResult) -> float:
+    """Sum over every observation (used or rejected) of its chi-square, capped at the fit's
+    rejection threshold (at 11.83, the 3-sigma level of two components, when it rejected none)."""
+    chi = np.asarray(fit.residuals.chi2, dtype=float)
+    cap = fit.rejection_threshold if np.isfinite(fit.rejection_threshold) else chi2_ppf(0.9973, 2)
+    return float(np.sum(np.minimum(np.where(np.isfinite(chi), chi, cap), cap)))
+
+
+def fit_impulses(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
+                 times: Sequence[float], *, options: FitOptions | None = None) -> ImpulseFit:
+    """The orbit and one impulsive burn at each of ``times`` (TU) fitted jointly to ``measurements``
+    from ``state`` (6,) at ``t0`` (TU; before, between or after the burns). Raises
+    :class:`FitError` when the fit cannot be made."""
+    ts = sorted(float(t) for t in times)
+    if not ts or not all(np.isfinite(ts)):
+        raise FitError(f"fit_impulses: burn times must be finite numbers (TU), got {list(times)}")
+    impulsive = ImpulsiveDynamics(dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
+    names = tuple(n for k in range(len(ts)) for n in dv_names(k))
+    fit = fit_orbit(impulsive, sensor, measurements, np.asarray(state, dtype=float), t0, options=options,
+                    solve_for=names)
+    cov = np.asarray(fit.full_covariance, dtype=float)
+    burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
+                          cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
+    return ImpulseFit(burns, fit)
+
+
+def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
+                candidates: Sequence[float], *, known: Sequence[float] = (),
+                options: FitOptions | None = None) -> ImpulseFit:
+    """The orbit and one more impulsive burn fitted to ``measurements``: each of the ``candidates``
+    (TU) is tried as its time (with burns at the ``known`` times too, all dv estimated jointly)
+    and the fit of the smallest capped cost kept.
+
+    Parameters
+    ----------
+    dynamics : Dynamics        the ballistic model
+    sensor : Sensor            predicts the measurements
+    measurements : MeasurementSet   the arc (TU, rad)
+    state : (6,) float         start of the state at ``t0`` (synodic LU, VU): the ballistic estimate
+    t0 : float                 TU, the epoch of the estimated state
+    candidates : (C,) float    times tried for the new burn, TU
+    known : (B,) float         times of burns already found, TU
+    options : FitOptions       of each fit
+
+    Raises :class:`FitError` when no candidate can be fitted.
+    """
+    ts = np.asarray(sorted(float(t) for t in candidates), dtype=float)
+    if ts.size == 0 or not np.all(np.isfinite(ts)):
+        raise FitError(f"fit_impulse: candidate burn times must be finite numbers (TU), got {ts}")
+    best: tuple[float, float, ImpulseFit] | None = None
+    costs = np.full(ts.size, np.inf)
+    for k, tb in enumerate(ts):
+        try:
+            one = fit_impulses(dynamics, sensor, measurements, state, t0, [*known, tb], options=options)
+        except (FitError, PropagationError):
+            continue
+        costs[k] = capped_cost(one.fit)
+        if best is None or costs[k] < best[0]:
+            best = (costs[k], tb, one)
+    if best is None:
+        raise FitError(f"fit_impulse: no candidate burn time in [{ts[0]:.4f}, {ts[-1]:.4f}] TU gave a fit")
+    _, tb, one = best
+    new = next(k for k, b in enumerate(one.burns) if b.t == tb)
+    return ImpulseFit(one.burns, one.fit, new, costs, ts)
+
+
+@dataclass(frozen=True)
+class BurnEvidence:
+    """The test of a burn against the ballistic fit of the same arc.
+
+    Attributes
+    ----------
+    accepted : bool          the burn explains the arc better than chance allows
+    cost_drop : float        capped cost of the ballistic fit minus that of the burn fit
+    cost_threshold : float   chi-square quantile of 4 dof at the false-alarm level
+    significance : float     dv^T C^-1 dv of the burn fit
+    significance_threshold : float   chi-square quantile of 3 dof at the false-alarm level
+    """
+
+    accepted: bool
+    cost_drop: float
+    cost_threshold: float
+    significance: float
+    significance_threshold: float
+
+
+def burn_evidence(ballistic: FitResult, burn: ImpulseFit, false_alarm: float = 1e-4) -> BurnEvidence:
+    """Whether ``burn`` is a real maneuver rather than noise (module docstring)."""
+    drop = capped_cost(ballistic) - capped_cost(burn.fit)
+    c_lim, s_lim = chi2_ppf(1.0 - false_alarm, 4), chi2_ppf(1.0 - false_alarm, 3)
+    sig = burn.searched.significance
+    return BurnEvidence(bool(drop > c_lim and sig > s_lim and burn.fit.converged), drop, c_lim, sig, s_lim)
+
+
+def _dv_partials(stm_obs: np.ndarray, stm_burn: np.ndarray, h: np.ndarray, times: np.ndarray,
+                 t0: float, tb: float) -> np.ndarray:
+    """d h / d dv (K, m, 3) of a burn at ``tb``: Phi(t_i, t_b) = Phi(t_i, t0) Phi(t_b, t0)^-1 maps
+    the velocity change to observations on the far side of the burn from ``t0`` (with a minus sign
+    behind ``t0``: going backward the burn is taken off)."""
+    phi = stm_obs @ np.linalg.inv(stm_burn)  # (K, 6, 6)
+    far = (times > tb) if tb >= t0 else (times <= tb)
+    sign = 1.0 if tb >= t0 else -1.0
+    return sign * np.einsum("kmj,kjl->kml", h, phi[:, :, 3:6]) * far[:, None, None]
+
+
+def _capped_linear_cost(a: np.ndarray, w: np.ndarray, cap: float, rounds: int = 3) -> float:
+    """Capped cost after a linear least-squares correction of ``w`` (K, m) along ``a`` (K, m, P),
+    observations whose chi-square exceeds ``cap`` left out of the correction (``rounds`` times)."""
+    keep = np.ones(w.shape[0], dtype=bool)
+    r = w
+    for _ in range(rounds):
+        ak, wk = a[keep].reshape(-1, a.shape[2]), w[keep].reshape(-1)
+        if wk.size < a.shape[2]:
+            break
+        delta = np.linalg.lstsq(ak, wk, rcond=None)[0]
+        r = w - a @ delta
+        keep = np.sum(r * r, axis=1) <= cap
+    return float(np.sum(np.minimum(np.sum(r * r, axis=1), cap)))
+
+
+def screen_burn_times(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
+                      candidates: Sequence[float], *, use_range: bool = False) -> np.ndarray:
+    """The capped cost (K,) of the ballistic ``fit`` corrected, linearly, by its state and by a burn
+    at each of the ``candidates`` (TU): a cheap ranking of burn times before the nonlinear
+    :func:`fit_impulse`. One propagation with transition matrices serves every candidate."""
+    from cistrack.least_squares.measurement_model import MeasurementModel
+    from cistrack.least_squares.trajectory import arc_states_and_stms
+
+    ts = np.asarray(candidates, dtype=float)
+    model = MeasurementModel(sensor, measurements, use_range=use_range)
+    times = np.asarray(model.times, dtype=float)
+    states, stms = arc_states_and_stms(dynamics, np.asarray(fit.state, dtype=float), float(fit.epoch),
+                                       np.concatenate([times, ts]))
+    st_obs, stm_obs, stm_burn = states[:times.size], stms[:times.size], stms[times.size:]
+    w = model.residuals(st_obs) / model.sigmas
+    h = model.jacobian(st_obs) / model.sigmas[:, :, None]
+    a_state = np.einsum("kmj,kjl->kml", h, stm_obs)
+    cap = fit.rejection_threshold if np.isfinite(fit.rejection_threshold) else chi2_ppf(0.9973, 2)
+    return np.array([_capped_linear_cost(np.concatenate(
+        [a_state, _dv_partials(stm_obs, stm_burn[k], h, times, float(fit.epoch), float(tb))], axis=2), w, cap)
+        for k, tb in enumerate(ts)])
+
+
+def _profile_sigma(ts: np.ndarray, costs: np.ndarray, k: int, width: float) -> float:
+    """One sigma of the burn time from the cost's curvature at its minimum ``k`` (Delta cost = 1),
+    the parabola through the minimum and its neighbours; ``width`` / sqrt(12) (a uniform spread over
+    the interval) when the profile is flat or the minimum lies at its edge."""
+    flat = width / np.sqrt(12.0)
+    if k == 0 or k == ts.size - 1:
+        return flat
+    (t0, t1, t2), (c0, c1, c2) = ts[k - 1:k + 2], costs[k - 1:k + 2]
+    curv = 2.0 * ((c2 - c1) / (t2 - t1) - (c1 - c0) / (t1 - t0)) / (t2 - t0)  # second derivative
+    return float(min(flat, 1.0 / np.sqrt(0.5 * curv))) if curv > 0 else flat
+
+
+def burn_time_profile(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
+                      lo: float, hi: float, n: int = 16, *, use_range: bool = False) -> tuple[float, float]:
+    """The burn time (TU) in ``[lo, hi]`` that minimises the linearised capped cost
+    (:func:`screen_burn_times` about ``fit``), on a grid of ``n`` then ``n`` more around the best,
+    and its one sigma (TU) from the profile's curvature."""
+    ts = lo + (np.arange(n) + 0.5) / n * (hi - lo)
+    costs = screen_burn_times(dynamics, sensor, measurements, fit, ts, use_range=use_range)
+    k = int(np.argmin(costs))
+    a, b = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
+    fine = np.linspace(a, b, n)
+    fine_costs = screen_burn_times(dynamics, sensor, measurements, fit, fine, use_range=use_range)
+    j = int(np.argmin(fine_costs))
+    allt, first = np.unique(np.concatenate([ts, fine]), return_index=True)  # sorted, each time once
+    allc = np.concatenate([costs, fine_costs])[first]
+    m = int(np.argmin(allc))
+    return float(fine[j]), _profile_sigma(allt, allc, m, hi - lo)
+
+
+def with_time_uncertainty(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, burn: ImpulseFit,
+                          t_sigma: float, *, known: Sequence[float] = (),
+                          options: FitOptions | None = None) -> ImpulseFit:
+    """``burn`` with its searched burn's delta-v covariance widened by the burn time's uncertainty:
+    C + g g^T t_sigma^2, g = d dv / d t_b by central differences of two more fits at t_b +- h
+    (h = t_sigma, or a minute when that is smaller)."""
+    b = burn.searched
+    h = max(float(t_sigma), float(units.seconds_to_tu(60.0)))
+    fits = []
+    for tb in (b.t - h, b.t + h):
+        one = fit_impulses(dynamics, sensor, measurements, burn.fit.state, burn.fit.epoch, [*known, tb],
+                           options=options)
+        fits.append(next(x for x in one.burns if x.t == tb).delta_v_ms)
+    g = (fits[1] - fits[0]) / (2.0 * h)
+    cov = b.covariance_ms2 + np.outer(g, g) * float(t_sigma) ** 2
+    burns = list(burn.burns)
+    burns[burn.new] = BurnEstimate(b.t, b.delta_v_ms, cov, float(t_sigma))
+    return ImpulseFit(burns, burn.fit, burn.new, burn.costs, burn.candidates)

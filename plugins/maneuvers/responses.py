@@ -1,0 +1,125 @@
+"""Responses to a detected maneuver (kind ``maneuver-response``): ``inflate`` and ``impulse-samples``.
+
+Both widen the filter's prior at the detection time t by what an unknown impulsive burn in the
+suspect interval [t_a, t] (the detection's ``t_burn_bounds``) can have done: a burn dv at t_b
+moves the state at t by Phi(t, t_b)[:, 3:6] dv, with Phi the transition matrix along the prior's
+mean (one propagation with transition matrices to :data:`BURN_TIMES` times across the interval).
+With dv ~ N(0, sigma^2 I) per axis and t_b uniform over the interval:
+
+- ``inflate`` adds Gaussian process noise of covariance Q = mean over t_b of
+  Phi_v sigma^2 Phi_v^T to every particle (process-noise inflation over the suspect interval);
+- ``impulse-samples`` gives every particle its own burn: a t_b and a dv drawn, so the cloud carries
+  the maneuver hypothesis itself (not Gaussian: a fan of trajectories the PGM's clusters follow).
+
+The filter then starts again from the widened cloud and takes the measurements that raised the
+detection.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cistrack import units
+from cistrack.api import hookimpl
+from cistrack.errors import ParameterError
+from cistrack.interfaces import Dynamics, ManeuverResponse
+from cistrack.interfaces.maneuvers import Detection
+from cistrack.model.belief import Belief, ParticleCloud
+
+__all__ = ["InflateResponse", "ImpulseSamplesResponse", "BURN_TIMES", "burn_maps"]
+
+BURN_TIMES = 8
+"""Burn times across the suspect interval at which the transition matrix is evaluated."""
+
+
+def _check_sigma(value: float, who: str) -> float:
+    v = float(value)
+    if not np.isfinite(v) or v <= 0:
+        raise ParameterError(f"maneuver-response {who!r}: delta_v_sigma_ms = {value!r} must be a finite number > 0 (m/s)")
+    return v
+
+
+def burn_maps(detection: Detection, prior: Belief, dynamics: Dynamics) -> np.ndarray:
+    """Phi(t, t_b)[:, 3:6] (B, 6, 3) for :data:`BURN_TIMES` burn times t_b spread over the
+    detection's suspect interval (its centres), along the prior's mean; (1, 6, 3) of zeros-free
+    identity velocity block when the interval is empty."""
+    t = float(detection.t)
+    lo, hi = detection.t_burn_bounds
+    lo = t if not np.isfinite(lo) else min(float(lo), t)
+    if t - lo <= 0:
+        out = np.zeros((1, 6, 3))
+        out[0, 3:6, :] = np.eye(3)
+        return out
+    tbs = lo + (np.arange(BURN_TIMES) + 0.5) / BURN_TIMES * (t - lo)
+    mean = np.asarray(prior.mixture.mean, dtype=float)
+    _, back = dynamics.propagate_with_stm(mean, t, tbs[::-1])  # Phi(t_b, t), latest first
+    fwd = np.linalg.inv(np.asarray(back, dtype=float)[::-1])    # Phi(t, t_b), in tbs order
+    return fwd[:, :, 3:6]
+
+
+class _Widen(ManeuverResponse):
+    """Shared: parameters and the cloud."""
+
+    default_name = "inflate"
+
+    def __init__(self, delta_v_sigma_ms: float = 1.0) -> None:
+        self.delta_v_sigma_ms = _check_sigma(delta_v_sigma_ms, self.registry_name or self.default_name)
+
+    def _sigma_vu(self) -> float:
+        return float(units.kms_to_vu(self.delta_v_sigma_ms / 1000.0))
+
+    def _cloud(self, detection: Detection, prior: Belief, kicks: np.ndarray) -> ParticleCloud:
+        x = np.asarray(prior.samples.states, dtype=float)
+        w = prior.samples.weights
+        return ParticleCloud(states=x + kicks, epoch=float(detection.t),
+                             weights=None if w is None else np.asarray(w, dtype=float).copy())
+
+
+class InflateResponse(_Widen):
+    """Process-noise inflation over the suspect interval: Gaussian noise of the covariance an
+    unknown burn in it adds (module docstring).
+
+    Parameters
+    ----------
+    delta_v_sigma_ms : float
+        One sigma per axis of the unknown burn's delta-v, m/s (> 0; default 1.0).
+    """
+
+    default_name = "inflate"
+
+    def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics,
+                rng: np.random.Generator) -> ParticleCloud:
+        maps = burn_maps(detection, prior, dynamics)
+        s2 = self._sigma_vu() ** 2
+        q = s2 * np.mean(maps @ np.swapaxes(maps, 1, 2), axis=0)
+        n = np.asarray(prior.samples.states).shape[0]
+        kicks = rng.multivariate_normal(np.zeros(6), 0.5 * (q + q.T), size=n, method="eigh")
+        return self._cloud(detection, prior, kicks)
+
+
+class ImpulseSamplesResponse(_Widen):
+    """A maneuver hypothesis carried by the particles: each draws its own burn time in the suspect
+    interval and its own delta-v (module docstring).
+
+    Parameters
+    ----------
+    delta_v_sigma_ms : float
+        One sigma per axis of the drawn delta-v, m/s (> 0; default 1.0).
+    """
+
+    default_name = "impulse-samples"
+
+    def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics,
+                rng: np.random.Generator) -> ParticleCloud:
+        maps = burn_maps(detection, prior, dynamics)
+        n = np.asarray(prior.samples.states).shape[0]
+        which = rng.integers(0, maps.shape[0], size=n)
+        dv = rng.standard_normal((n, 3)) * self._sigma_vu()
+        kicks = np.einsum("nij,nj->ni", maps[which], dv)
+        return self._cloud(detection, prior, kicks)
+
+
+@hookimpl
+def cistrack_register(registry):
+    """The responses ``inflate`` and ``impulse-samples``."""
+    registry.add("maneuver-response", "inflate", InflateResponse)
+    registry.add("maneuver-response", "impulse-samples", ImpulseSamplesResponse)
