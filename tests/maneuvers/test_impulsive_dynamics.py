@@ -293,3 +293,19 @@ def test_no_dense_trajectory_without_the_base_one(base):
     assert getattr(dyn, "dense_trajectory", None) is None
     np.testing.assert_allclose(dyn.propagate(NRHO, 0.0, 1.0).final,
                                ImpulsiveDynamics(base, [Impulse(T_B, DV)]).propagate(NRHO, 0.0, 1.0).final, atol=1e-12)
+
+
+def test_the_fit_machinery_takes_the_burn_components_as_solve_for_parameters(base):
+    """cistrack.least_squares' SolveFor: initial values, a model per value, partials by its steps."""
+    import pickle
+
+    from cistrack.least_squares.solve_for_parameters import solve_for
+
+    dyn = ImpulsiveDynamics(base, [Impulse(T_B, DV, "b")])
+    sf = solve_for(dyn, ("delta_v_0_x_ms", "delta_v_0_z_ms"))
+    np.testing.assert_allclose(sf.initial(), [DV[0] * MS_PER_VU, DV[2] * MS_PER_VU])
+    jac = sf.partials(lambda d: d.propagate(NRHO, 0.0, [0.9, 1.2]).states[:, 0, :3], sf.initial())
+    _, phi = base.propagate_with_stm(_kick(dyn.propagate(NRHO, 0.0, T_B).final[0], DV), T_B, [0.9, 1.2])
+    np.testing.assert_allclose(jac, phi[:, :3, [3, 5]] / MS_PER_VU, rtol=1e-4, atol=1e-12)
+    again = pickle.loads(pickle.dumps(dyn))
+    assert np.array_equal(again.propagate(NRHO, 0.0, 1.0).final, dyn.propagate(NRHO, 0.0, 1.0).final)
