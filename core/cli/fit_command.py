@@ -4,8 +4,10 @@ export of a fit directory (``cistrack export FIT_DIR [--predict DAYS]``).
 The work is :func:`cistrack.fitting.from_observations.fit_files`; this module parses the options and
 prints, per object: the filter run's outcome, the least-squares RMS and chi-square, the assumed
 and estimated noise, the rejected count, the position and velocity sigmas at the fit epoch, and
-every warning. Exit status: 0 when every object's fit converged, 3 otherwise, 2 for an input
-error (before anything runs).
+every warning. Exit status: 0 when every object's fit converged, 3 otherwise (a fit that failed
+or did not converge, or observations that determine no orbit: one lone tracklet, whose summary
+says so in words with the tracklet's motion and admissible region), 2 for an input error (before
+anything runs).
 """
 from __future__ import annotations
 
@@ -48,6 +50,32 @@ def _wrapped(lines: list[str], width: int = 118) -> list[str]:
     return out
 
 
+def _undetermined_lines(one) -> list[str]:
+    """The summary of observations that determine no orbit (one lone tracklet): why, where the
+    tracklet is and how it moves on the sky, and the admissible region's ranges."""
+    u = one.undetermined
+    sky, region = u["tracklet"], u["admissible_region"]
+    lines = [f"fit {one.designation}: UNDETERMINED: one tracklet does not determine an orbit",
+             f"  results in {one.directory}",
+             f"  tracklet: {sky['n_observations']} observations from {sky['first_utc'][:19]}Z to "
+             f"{sky['last_utc'][11:19]}Z ({sky['span_minutes']:.0f} min), site {sky['site'] or '(the sensor)'}; "
+             f"RA {sky['ra_deg']:.4f} deg, Dec {sky['dec_deg']:+.4f} deg at its mean time",
+             f"  motion: RA cos(Dec) {sky['ra_cos_dec_rate_arcsec_min']:+.3g} \"/min, Dec {sky['dec_rate_arcsec_min']:+.3g} "
+             f"\"/min ({sky['rate_arcsec_min']:.3g} \"/min = {sky['rate_deg_day']:.3g} deg/day, position angle "
+             f"{sky['position_angle_deg']:.1f} deg)"]
+    if "range_km" in region:
+        lo, hi = region["range_km"]
+        rlo, rhi = region["range_rate_kms"]
+        lines.append(f"  admissible region (geocentric C3 <= {region['max_c3_km2_s2']:g} km^2/s^2): range {lo:,.0f} to "
+                     f"{hi:,.0f} km, range rate {rlo:+.3g} to {rhi:+.3g} km/s: the orbit may lie anywhere in it")
+    else:
+        lines.append(f"  admissible region: {region.get('why_none', 'not computed')}")
+    lines.append("  two angles and their rates leave the range and the range rate free: observe the object again on "
+                 "another night (or from another site) and fit all the observations together")
+    lines.append("  no orbit, nothing to export (exit status 3); see docs/real-data.md, 'When a fit fails'")
+    return _wrapped(lines)
+
+
 def _header_lines(one) -> list[str]:
     """The verdict (with how well the orbit is determined), the results folder, the filter run."""
     det = getattr(one, "determination", None)
@@ -73,6 +101,8 @@ def summary_lines(one) -> list[str]:
     from cistrack import units
     from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
 
+    if getattr(one, "undetermined", None):
+        return _undetermined_lines(one)
     lines = _header_lines(one)
     r = one.result
     if r is None:
@@ -137,7 +167,8 @@ def cmd_fit(args) -> int:
                 print(f"  weights: {note}")
             for line in summary_lines(one):
                 print(line)
-            print(f"  next: cistrack export {one.directory} --format oem [--predict DAYS]")
+            if not one.undetermined:
+                print(f"  next: cistrack export {one.directory} --format oem [--predict DAYS]")
     else:
         for one in results:
             if not one.ok:

@@ -43,7 +43,8 @@ from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["Determination", "determination", "SESSION_GAP_HOURS", "FIELD_RADIUS_DEG", "HORIZON_DAYS",
            "HORIZON_STEP_DAYS", "N_DRAWS", "LOST_SHARE", "POOR_HORIZON_DAYS", "POOR_RANGE_FRACTION",
-           "UNCONSTRAINED_RANGE_FRACTION", "DRAW_SEED"]
+           "UNCONSTRAINED_RANGE_FRACTION", "DRAW_SEED", "LONE_TRACKLET_HOURS", "is_lone_tracklet", "sky_motion",
+           "lone_tracklet_report"]
 
 SESSION_GAP_HOURS = 3.0
 FIELD_RADIUS_DEG = 0.5
@@ -213,3 +214,63 @@ def determination(fit, dynamics, sensor, measurements: MeasurementSet,
     sentence = ("poorly determined: " if poor else "well determined: ") + "; ".join(parts)
     return Determination(not poor, sentence, sessions, sites, arc_days, rng_km, sigma, days, note,
                          float(fit.condition_number))
+
+
+LONE_TRACKLET_HOURS = 2.0
+"""Angles of one site spanning at most this long (hours; the ranging IOD's longest tracklet) are one
+tracklet: its two angles and their rates leave the range and the range rate free (the admissible
+region), so no orbit is determined and ``cistrack fit`` makes none."""
+
+
+def is_lone_tracklet(measurements: MeasurementSet) -> bool:
+    """Whether ``measurements`` are one tracklet: RA/Dec of one site spanning at most
+    :data:`LONE_TRACKLET_HOURS` (two sites the same night see a parallax: not one tracklet)."""
+    ms = measurements
+    if len(ms) == 0 or len(set(ms.site_at(i) for i in range(len(ms)))) > 1:
+        return False
+    if any(ms.kind_at(i) != "radec" for i in range(len(ms))):
+        return False
+    return float(units.tu_to_hours(float(ms.times[-1] - ms.times[0]))) <= LONE_TRACKLET_HOURS
+
+
+def sky_motion(measurements: MeasurementSet, epoch) -> dict:
+    """The tracklet's place and motion on the sky: its first and last UTC, site, count and span,
+    RA and Dec (deg) at its mean time and their rates (a straight line in time through the
+    observations, RA unwrapped): RA x cos(Dec) and Dec in arcsec per minute, the total rate (arcsec
+    per minute and deg per day) and its position angle (deg, east of north)."""
+    ms = measurements
+    t = np.asarray(ms.times, dtype=float)
+    minutes = float(units.tu_to_hours(1.0)) * 60.0 * (t - t.mean())
+    ra, dec = np.unwrap(ms.values[:, 0]), ms.values[:, 1]
+    if len(ms) >= 2 and np.ptp(minutes) > 0:
+        (ra_rate, ra0), (dec_rate, dec0) = np.polyfit(minutes, ra, 1), np.polyfit(minutes, dec, 1)
+    else:
+        ra_rate, ra0, dec_rate, dec0 = 0.0, float(ra.mean()), 0.0, float(dec.mean())
+    east = float(ra_rate * np.cos(dec0)) / units.ARCSEC_RAD
+    north = float(dec_rate) / units.ARCSEC_RAD
+    total = float(np.hypot(east, north))
+    utc = [units.format_utc(units.tu_to_utc(epoch, float(v))) for v in (t[0], t[-1])]
+    return {"first_utc": utc[0], "last_utc": utc[1], "site": ms.site_at(0), "n_observations": int(len(ms)),
+            "span_minutes": float(np.ptp(minutes)), "ra_deg": float(np.degrees(ra0) % 360.0),
+            "dec_deg": float(np.degrees(dec0)), "ra_cos_dec_rate_arcsec_min": east, "dec_rate_arcsec_min": north,
+            "rate_arcsec_min": total, "rate_deg_day": total * 1440.0 / 3600.0,
+            "position_angle_deg": float(np.degrees(np.arctan2(east, north)) % 360.0)}
+
+
+def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch) -> dict:
+    """What one tracklet gives when it cannot determine an orbit: ``sentence`` (why, in words),
+    ``tracklet`` (:func:`sky_motion`) and ``admissible_region`` (``region``: the ranging IOD's
+    ``range_km``, ``range_rate_kms``, ``max_c3_km2_s2``; or ``why_none``)."""
+    sky = sky_motion(measurements, epoch)
+    where = ""
+    if "range_km" in region:
+        lo, hi = region["range_km"]
+        rlo, rhi = region["range_rate_kms"]
+        floor = " (the search's lower bound)" if lo <= region.get("range_bounds_km", [0.0])[0] * (1 + 1e-9) else ""
+        where = (f"; the admissible region (geocentric C3 <= {region['max_c3_km2_s2']:g} km^2/s^2) allows ranges "
+                 f"from {lo:,.0f}{floor} to {hi:,.0f} km and range rates from {rlo:+.3g} to {rhi:+.3g} km/s")
+    sentence = (f"one tracklet does not determine an orbit: {sky['n_observations']} observations over "
+                f"{sky['span_minutes']:.0f} min from site {sky['site'] or '(the sensor)'} give two angles and their "
+                f"rates, not the range and the range rate{where}; observe the object again on another night (or "
+                "from another site) and fit all the observations together")
+    return {"sentence": sentence, "tracklet": sky, "admissible_region": dict(region)}

@@ -15,6 +15,10 @@
   distance from the fitted state and its departure from the straight line x* + sigma v (km); its
   summary is ``line_of_variations`` in ``fit.json``.
 
+Observations that determine no orbit (one lone tracklet) get a ``fit.json`` without a state:
+``converged`` false, ``failure`` the reason in words, and ``undetermined``: the same sentence, the
+tracklet's place and rates on the sky and the admissible region's ranges and range rates.
+
 Each file is written whole or not at all (temporary file, then rename).
 """
 from __future__ import annotations
@@ -116,7 +120,8 @@ def _fit_dict(one, obs) -> dict[str, Any]:
                      "options": _options_record(one.choices.options)},
         "converged": bool(r.converged) if r is not None else False,
         "failure": one.failure,
-        "least_squares_start": one.start or "the filter's final estimate",
+        "least_squares_start": one.start or ("none: no orbit" if getattr(one, "undetermined", None)
+                                             else "the filter's final estimate"),
     }
     if ms is not None and len(ms):
         data["arc"] = {"first_utc": _utc(scen, ms.times[0]), "last_utc": _utc(scen, ms.times[-1]),
@@ -129,6 +134,8 @@ def _fit_dict(one, obs) -> dict[str, Any]:
                           "status": s.status, "failure": s.failure,
                           "verdict": getattr(s.verdict, "kind", None), "verdict_reason": getattr(s.verdict, "reason", None),
                           "final_epoch_utc": _utc(scen, belief.epoch)}
+    if getattr(one, "undetermined", None):
+        data["undetermined"] = one.undetermined
     if r is None:
         return data
     data.update({

@@ -145,6 +145,11 @@ class ObjectFit:
     arcs : ArcFit or None       the arcs left out and their residual ladder (:mod:`.fit_findings`)
     determination : Determination or None  how well the orbit is determined, in words
     events : list of OrbitEvent or None    impacts and closest approaches after the fit epoch
+    undetermined : dict         for observations that cannot determine an orbit (one lone
+                                tracklet): why, in words, and what they give (the tracklet's place
+                                and rates on the sky, the admissible region's ranges and range
+                                rates; :func:`cistrack.fitting.determination.lone_tracklet_report`);
+                                empty otherwise
     """
 
     designation: str
@@ -161,6 +166,7 @@ class ObjectFit:
     arcs: Any = None
     determination: Any = None
     events: Any = None
+    undetermined: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -507,8 +513,35 @@ def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
             f"after IOD '{scen.components['iod'].name}', epoch {units.format_utc(scen.epoch)[:19]}Z, "
             f"{scen.duration_days:g} days; results -> {d}")
     one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=job.choices)
-    _fit_object(one, job.registry, job.progress, job.say if job.log else None)
+    if not _lone_tracklet(one, obs, job):
+        _fit_object(one, job.registry, job.progress, job.say if job.log else None)
     return one
+
+
+def _lone_tracklet(one: ObjectFit, obs: ObjectObservations, job: _Job) -> bool:
+    """When ``obs`` are one lone tracklet (:func:`cistrack.fitting.determination.is_lone_tracklet`):
+    ``one.undetermined`` and ``one.failure`` say that it determines no orbit, and what it gives
+    (its sky motion; the admissible region of the ranging IOD :data:`RANGING_IOD`, with the
+    scenario's own ranging settings when its IOD is that one); nothing runs. False otherwise."""
+    from cistrack.astro.site_network import build_site_network
+    from cistrack.fitting.arcs import in_time_base
+    from cistrack.fitting.determination import is_lone_tracklet, lone_tracklet_report
+
+    if not is_lone_tracklet(obs.measurements):
+        return False
+    scen = one.scenario
+    ms = in_time_base(obs.measurements, units.parse_utc(READ_EPOCH), scen.epoch)
+    try:
+        ranging = scen if scen.components["iod"].name == RANGING_IOD else _ranging_scenario(scen, job.registry)
+        sensor = build_site_network(scen.components["sensor"], job.registry, ms)
+        cloud = ranging.build("iod", job.registry).estimate(ms, sensor, np.random.default_rng(0))
+        region = dict(cloud.meta.get("admissible_region", {}))
+    except CistrackError as exc:
+        region = {"why_none": f"no admissible region: {exc}"}
+    one.undetermined = lone_tracklet_report(ms, region, scen.epoch)
+    one.failure = one.undetermined["sentence"]
+    job.say(f"{one.designation}: {one.failure}")
+    return True
 
 
 def _fit_latest(obs: ObjectObservations, latest: ObjectObservations, d: Path, job: _Job) -> ObjectFit:

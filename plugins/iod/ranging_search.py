@@ -31,7 +31,7 @@ from cistrack.units import LU_KM, VU_KMS
 
 from .tracklets import Attributable, states_from_ranges
 
-__all__ = ["admissible_states", "score_states", "refine", "ScoredGrid", "SCORE_SCALE", "MU_EARTH", "EARTH"]
+__all__ = ["admissible_states", "admissible_extent", "score_states", "refine", "ScoredGrid", "SCORE_SCALE", "MU_EARTH", "EARTH"]
 
 SCORE_SCALE = 25.0
 """chi2 of one observation at which its score term is log 2 (5 sigma)."""
@@ -47,12 +47,10 @@ def _inertial_velocity_offset(r: np.ndarray) -> np.ndarray:
     return np.stack([-d[:, 1], d[:, 0], np.zeros(len(d))], axis=1)
 
 
-def admissible_states(att: Attributable, *, n_range: int, n_rate: int, range_min_km: float,
-                      range_max_km: float, max_c3: float) -> tuple[np.ndarray, np.ndarray]:
-    """(states (N, 6) LU, VU synodic at ``att.t``, ranges (N,) km): the grid over the admissible
-    region (see the module docstring); N <= n_range * n_rate (ranges whose energy bound leaves
-    no rate, and positions inside the Earth, are left out)."""
-    rho = np.geomspace(range_min_km, range_max_km, n_range) / LU_KM
+def _rate_bounds(att: Attributable, rho: np.ndarray, max_c3: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(admissible (N,) bool, middle and half-width of the range rates (N,) VU) at the ranges ``rho`` (N,) LU:
+    the roots of the energy bound (module docstring); a range is admissible when the bound leaves
+    a rate there and the position lies 100 km above the Earth."""
     zero = states_from_ranges(att, rho, np.zeros_like(rho))
     w = zero[:, 3:] + _inertial_velocity_offset(zero[:, :3])     # inertial velocity at rho_dot = 0
     r = np.linalg.norm(zero[:, :3] - EARTH, axis=1)
@@ -60,11 +58,35 @@ def admissible_states(att: Attributable, *, n_range: int, n_rate: int, range_min
     uw = w @ att.u
     disc = uw * uw - np.sum(w * w, axis=1) + v2_max
     ok = (disc > 0) & (r * LU_KM > 6378.137 + 100.0)
+    return ok, -uw, np.sqrt(np.where(ok, disc, 0.0))
+
+
+def admissible_states(att: Attributable, *, n_range: int, n_rate: int, range_min_km: float,
+                      range_max_km: float, max_c3: float) -> tuple[np.ndarray, np.ndarray]:
+    """(states (N, 6) LU, VU synodic at ``att.t``, ranges (N,) km): the grid over the admissible
+    region (see the module docstring); N <= n_range * n_rate (ranges whose energy bound leaves
+    no rate, and positions inside the Earth, are left out)."""
+    rho = np.geomspace(range_min_km, range_max_km, n_range) / LU_KM
+    ok, mid, half = _rate_bounds(att, rho, max_c3)
     frac = (np.arange(n_rate) + 0.5) / n_rate                       # midpoints of n_rate equal cells
-    half = np.sqrt(np.where(ok, disc, 0.0))
-    rates = (-uw - half)[:, None] + (2.0 * half)[:, None] * frac[None]
+    rates = (mid - half)[:, None] + (2.0 * half)[:, None] * frac[None]
     rr = np.repeat(rho[ok], n_rate)
     return states_from_ranges(att, rr, rates[ok].reshape(-1)), rr * LU_KM
+
+
+def admissible_extent(att: Attributable, *, range_min_km: float, range_max_km: float, max_c3: float,
+                      n_range: int = 20000) -> dict:
+    """The admissible region of one tracklet in numbers: the admissible ranges (km; lowest and
+    highest of ``n_range`` log-spaced from ``range_min_km`` to ``range_max_km``, a step of 0.035 %
+    by default), the range rates (km/s) the energy bound allows over them, and the bound itself;
+    empty when no range is admissible."""
+    rho = np.geomspace(range_min_km, range_max_km, n_range) / LU_KM
+    ok, mid, half = _rate_bounds(att, rho, max_c3)
+    if not np.any(ok):
+        return {}
+    return {"range_km": [float(rho[ok].min() * LU_KM), float(rho[ok].max() * LU_KM)],
+            "range_rate_kms": [float((mid - half)[ok].min() * VU_KMS), float((mid + half)[ok].max() * VU_KMS)],
+            "max_c3_km2_s2": float(max_c3), "range_bounds_km": [float(range_min_km), float(range_max_km)]}
 
 
 def _propagate(dynamics: Dynamics, states: np.ndarray, t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -42,7 +42,7 @@ from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import TU_S
 
-from .ranging_search import ScoredGrid, admissible_states, refine, score_states
+from .ranging_search import ScoredGrid, admissible_extent, admissible_states, refine, score_states
 from .ranging_arc import extend_arc, tracklet_record
 from .tracklets import Attributable, attributable, split_tracklets
 
@@ -183,10 +183,9 @@ class TrackletRangingIOD(IODMethod):
             raise IODError(f"{who}: no tracklet has {self.min_tracklet} observations (tracklets: "
                            f"{[int(a.indices.size) for a in atts]}; a gap over {self.gap_hours:g} h or a site "
                            "change ends one); lower min_tracklet or observe longer")
-        dyn = self._model(sensor)
         if len(atts) == 1:
-            return self._lone(atts[0], rng, who)
-        return self._ranged(dyn, sensor, ms, atts, order, rng, who)
+            return self._lone(atts[0], rng)
+        return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
 
     def _ranged(self, dyn, sensor, ms, atts, order, rng, who) -> ParticleCloud:
         records = []
@@ -220,15 +219,19 @@ class TrackletRangingIOD(IODMethod):
                 "best_state": [float(v) for v in states[0]], "best_covariance": cov.tolist()}
         return ParticleCloud(draws, t_last, meta=meta)
 
-    def _lone(self, att: Attributable, rng: np.random.Generator, who: str) -> ParticleCloud:
-        """One tracklet: the admissible region itself (range undetermined)."""
+    def _lone(self, att: Attributable, rng: np.random.Generator) -> ParticleCloud:
+        """One tracklet: the admissible region itself (range undetermined); ``meta["admissible_region"]``
+        gives its extent (:func:`.ranging_search.admissible_extent`)."""
         states, rho = self._grid(att)
         pick = rng.choice(len(states), size=self.n_particles, replace=len(states) < self.n_particles)
+        region = admissible_extent(att, range_min_km=self.range_min_km, range_max_km=self.range_max_km,
+                                   max_c3=self.max_c3)
+        lo, hi = region.get("range_km", [rho.min(), rho.max()])
         why = (f"one tracklet only ({att.indices.size} observations): the range is not determined; the cloud "
-               f"is the admissible region, ranges {rho.min():,.0f}-{rho.max():,.0f} km")
+               f"is the admissible region, ranges {lo:,.0f}-{hi:,.0f} km")
         meta = {"method": "tracklet-ranging", "why": why, "arc": "lone tracklet",
                 "tracklets": tracklet_record([att]), "rows_used": [int(i) for i in att.indices],
-                "seed_rows": [int(i) for i in att.indices]}
+                "seed_rows": [int(i) for i in att.indices], "admissible_region": region}
         return ParticleCloud(states[pick], float(att.t), meta=meta)
 
 
