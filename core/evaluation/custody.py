@@ -34,11 +34,12 @@ VERDICT_KINDS: tuple[str, ...] = ("tracking", "not-converged", "lost", "diverged
 
 @dataclass(frozen=True)
 class CustodyRule:
-    """When custody is lost (sticky: once lost, lost for the rest of the run).
+    """When custody is lost, and whether it can be regained.
 
     Custody is lost at the first update step where the truth's log-likelihood under the belief's
     mixture (state in km and km/s) is below ``loglik_threshold``, or where the truth lies outside
     the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps.
+    A loss is final unless ``regain_updates`` > 0.
     """
 
     loglik_threshold: float = -100.0
@@ -71,6 +72,12 @@ class CustodyRule:
     time where it started). A consistent filter's NIS is chi-square with 2 to 6 degrees of
     freedom, above 40 with probability < 1e-6; 1e6 is a residual a thousand predicted sigmas away,
     beyond any outlier a real data set holds (100 arcsec at 0.5 arcsec is an NIS of 4e4)."""
+    regain_updates: int = 0
+    """After a loss, custody is regained once this many consecutive update steps find the truth
+    inside the belief again (neither loss condition holds); 0 (the default): a loss is final. A
+    target that maneuvers leaves any belief that does not know of the burn until the burn is
+    detected and the filter widened (:mod:`cistrack.runs.maneuver_watch`): the maneuver scenarios
+    judge custody through the burn by whether it is regained."""
     diverged_nis: float = 1e3
     diverged_nis_updates: int = 3
     """Without a truth: a median NIS above ``diverged_nis`` over the last ``diverged_nis_updates``
@@ -127,6 +134,9 @@ class CustodyMetric(StepMetric):
         self.rule = rule or CustodyRule()
         self.verdict = Verdict()
         self._hdr_run = 0
+        self._inside_run = 0
+        self.losses: list[tuple[Verdict, int, float]] = []
+        """Each loss that was regained: (the loss's verdict, the step and time (days) it was regained)."""
         self.earth_distance_km: float | None = None
         """Distance of the last posterior mean from Earth (km), for the final verdict."""
 
@@ -154,15 +164,28 @@ class CustodyMetric(StepMetric):
     def compute(self, run, step, event: str) -> dict[str, float]:
         """``{"custody": 1.0 or 0.0}`` on every table step of a run with a truth (none without):
         the verdict after judging ``step`` when it is a posterior; the prior of an update is not judged."""
-        if event == "updated":
-            if self.verdict.kept and step.truth is not None:
+        if event == "updated" and step.truth is not None:
+            if self.verdict.kept:
                 lost = self.judge(step)
                 if lost is not None:
-                    self.verdict = lost
+                    self.verdict, self._inside_run = lost, 0
+            elif self.verdict.kind == "lost" and self.rule.regain_updates > 0:
+                self._regain(step)
         elif step.kind not in ("initial", "predict"):
             return {}
         self._track_mean(step)
         return {} if step.truth is None else {"custody": 1.0 if self.verdict.kept else 0.0}
+
+    def _regain(self, step) -> None:
+        """Count ``step`` towards regaining custody; regained after ``rule.regain_updates`` in a row."""
+        self._inside_run = self._inside_run + 1 if self.judge(step) is None else 0
+        if self._inside_run < self.rule.regain_updates:
+            return
+        t = float(units.tu_to_days(step.t))
+        self.losses.append((self.verdict, step.index, t))
+        said = "; ".join(f"custody lost at step {v.step} (t = {v.t_days:.3f} d: {v.reason}) and regained at step "
+                         f"{k} (t = {tk:.3f} d)" for v, k, tk in self.losses)
+        self.verdict, self._inside_run, self._hdr_run = Verdict("kept", said), 0, 0
 
     @hookimpl
     def cistrack_run_failed(self, run, step_index, error) -> None:

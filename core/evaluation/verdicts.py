@@ -118,7 +118,7 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
         return verdict
     final = _final_verdict(verdict, rows, rule, has_truth, earth_distance_km)
     if final.kept:  # custody kept: no loss time (the verdict was judged on the last update)
-        return Verdict(final.kind, final.reason)
+        return Verdict(final.kind, final.reason + (f"; {verdict.reason}" if verdict.reason else ""))
     if verdict.kind == "lost" and verdict.step is not None and final.kind == "diverged" \
             and (final.step is None or verdict.step <= final.step):
         # lost first, then diverged: the loss time stays the time the custody rule fired

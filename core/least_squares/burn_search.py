@@ -1,4 +1,4 @@
-"""Maneuvers in ``cistrack fit``: a fit that an impulsive burn explains is never a clean "converged".
+"""Burns found in an arc of observations: the search that ``cistrack fit`` and a run's maneuver watch share.
 
 A ballistic fit of an object that maneuvered shows it in one of three ways: it rejects a
 contiguous block of observations (those on one side of the burn), its residuals are far larger
@@ -17,7 +17,9 @@ nights, or between tracklets of one night):
    (:func:`cistrack.least_squares.impulse_fit.burn_evidence`, false alarm :data:`FALSE_ALARM`);
    then the search goes on for another burn (at most :data:`MAX_BURNS`), all delta-v refitted jointly.
 
-Each burn kept becomes an entry of ``fit.json``'s ``maneuvers`` (:func:`maneuver_record`).
+``cistrack fit`` records each burn kept in ``fit.json``'s ``maneuvers``
+(:mod:`cistrack.fitting.maneuver_search`); a run's maneuver watch in ``summary.maneuvers``
+(:mod:`cistrack.runs.maneuver_watch`).
 """
 from __future__ import annotations
 
@@ -40,7 +42,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "maneuver_record", "MIN_GAP_HOURS", "MAX_BURNS",
+__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "MIN_GAP_HOURS", "MAX_BURNS",
            "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS"]
 
 MIN_GAP_HOURS = 1.0
@@ -189,21 +191,3 @@ def _timed(dynamics, sensor, ms, fit: ImpulseFit, t_sigma: float, found: Maneuve
 
 def _utc_days(t: float) -> float:
     return float(units.tu_to_days(t))
-
-
-def maneuver_record(burn: BurnEstimate, window: tuple[float, float], first_after: float, epoch) -> dict:
-    """One ``maneuvers`` entry of ``fit.json``: ``t_days`` (the first observation that shows the
-    burn), ``t_burn_days`` (the estimated burn time), ``t_burn_window_days`` (the gap it lies in),
-    all days since the scenario epoch, with their UTC; ``delta_v_ms`` and ``delta_v_sigma_ms``
-    (magnitude, m/s), ``delta_v_vector_ms`` and its ``delta_v_covariance_ms2`` (synodic components)."""
-    return {
-        "t_days": _utc_days(first_after), "t_burn_days": _utc_days(burn.t),
-        "t_burn_window_days": [_utc_days(window[0]), _utc_days(window[1])],
-        "t_burn_utc": units.format_utc(units.tu_to_utc(epoch, burn.t)),
-        "t_burn_window_utc": [units.format_utc(units.tu_to_utc(epoch, w)) for w in window],
-        "t_burn_sigma_days": _utc_days(burn.t_sigma),
-        "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,
-        "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "frame": "synodic",
-        "delta_v_covariance_ms2": np.asarray(burn.covariance_ms2, dtype=float).tolist(),
-        "significance_chi2": burn.significance,
-    }

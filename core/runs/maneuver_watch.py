@@ -5,12 +5,13 @@ them (:meth:`ManeuverWatch.before_update`). The scenario's detector (``[maneuver
 judges them; on a detection the response (``[maneuvers] response``, default none) may hand back a
 widened cloud, from which the filter starts again before it takes the measurements. The watch keeps
 each update's posterior mean (:meth:`after_update`), so that at the end of the run
-(:meth:`records`) each detection's burn is estimated by least squares: the measurements of
-:data:`PRE_DAYS` before the suspect interval and :data:`POST_DAYS` after the detection, the state
-at the interval's start (from the posterior there) and an impulsive delta-v at one of
-:data:`CANDIDATES` times across the interval as unknowns
-(:func:`cistrack.least_squares.impulse_fit.fit_impulse`), tested against the same arc without a
-burn (:func:`~cistrack.least_squares.impulse_fit.burn_evidence`): ``confirmed``.
+(:meth:`records`) each detection's burn is estimated by least squares over the measurements from
+:data:`PRE_DAYS` before the detection to :data:`POST_DAYS` after it (not beyond the neighbouring
+detections), started from the filter's posterior at the arc's start: a ballistic fit, then the
+burn search of :mod:`cistrack.least_squares.burn_search` (the gaps screened, the burn time's
+profile, the delta-v as solve-for parameters, tested against the ballistic fit). The latest burn
+kept before the detection is its estimate (``confirmed``); a detection for which the search keeps
+none is reported unconfirmed, without a delta-v.
 
 The metric stage ``maneuvers`` (:class:`ManeuverMetric`) writes each update's test statistic
 (``maneuver_statistic``) and whether it raised a detection (``maneuver_detected``).
@@ -29,14 +30,12 @@ from cistrack.interfaces.metric import StepMetric
 from cistrack.least_squares.errors import FitError
 from cistrack.least_squares.options import FitOptions
 
-__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "CANDIDATES"]
+__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS"]
 
-PRE_DAYS = 2.0
-"""Days of measurements before the suspect interval in the delta-v estimate."""
+PRE_DAYS = 3.0
+"""Days of measurements before the detection in the delta-v estimate."""
 POST_DAYS = 2.0
 """Days of measurements after the detection in the delta-v estimate."""
-CANDIDATES = 5
-"""Burn times tried across the suspect interval."""
 
 
 @dataclass
@@ -90,43 +89,42 @@ class ManeuverWatch:
         say = self.say or (lambda m: None)
         out = []
         for k, d in enumerate(self.detections):
-            nxt = self.detections[k + 1].t_burn_bounds[0] if k + 1 < len(self.detections) else np.inf
-            fit = self._estimate(ctx, d, nxt, say) if self.estimate else None
-            out.append(_record(d, fit))
+            before = self.detections[k - 1].t if k > 0 else -np.inf
+            after = self.detections[k + 1].t if k + 1 < len(self.detections) else np.inf
+            burn = self._estimate(ctx, d, before, after, say) if self.estimate else None
+            out.append(_record(d, burn))
         return out
 
     def _start_state(self, t_lo: float) -> _Posterior | None:
         before = [p for p in self.posteriors if p.t <= t_lo + 1e-12]
-        return before[-1] if before else None
+        return before[-1] if before else (self.posteriors[0] if self.posteriors else None)
 
-    def _estimate(self, ctx: Any, d: Detection, t_next: float, say) -> Any:
-        from cistrack.least_squares.impulse_fit import burn_evidence, fit_impulse
+    def _estimate(self, ctx: Any, d: Detection, before: float, after: float, say) -> Any:
+        """The burn nearest before the detection ``d`` found in the arc around it (module
+        docstring), or None."""
+        from cistrack.least_squares.burn_search import search_maneuvers
         from cistrack.least_squares.differential_correction import fit_orbit
 
-        lo = float(d.t_burn_bounds[0]) if np.isfinite(d.t_burn_bounds[0]) else float(d.t)
-        start = self._start_state(lo)
+        start = self._start_state(max(d.t - float(units.days_to_tu(PRE_DAYS)), before))
         if start is None:
             return None
-        ms = ctx.measurements
-        t = np.asarray(ms.times, dtype=float)
-        keep = (t >= start.t - units.days_to_tu(PRE_DAYS)) & (t <= min(d.t + units.days_to_tu(POST_DAYS), t_next))
-        arc = ms.subset(keep)
-        after = t[keep & (t > start.t)]
-        if after.size < 2 or np.sum(keep & (t <= start.t)) < 3:
+        t = np.asarray(ctx.measurements.times, dtype=float)
+        keep = (t >= start.t) & (t <= min(d.t + float(units.days_to_tu(POST_DAYS)), after - 1e-12))
+        if np.sum(keep & (t > d.t - 1e-12)) < 2 or np.sum(keep & (t < d.t)) < 3:
             return None
-        first = float(after[0])
-        cands = start.t + (np.arange(CANDIDATES) + 0.5) / CANDIDATES * (first - start.t)
+        arc = ctx.measurements.subset(keep)
         opts = FitOptions(area_to_mass="off")
         try:
             ballistic = fit_orbit(ctx.dynamics, ctx.sensor, arc, start.mean, start.t, options=opts)
-            burn = fit_impulse(ctx.dynamics, ctx.sensor, arc, ballistic.state, start.t, cands, options=opts)
+            found = search_maneuvers(ctx.dynamics, ctx.sensor, arc, ballistic, opts)
         except (FitError, PropagationError, np.linalg.LinAlgError) as exc:
-            say(f"maneuver at {units.tu_to_days(d.t):.3f} d: no delta-v estimate ({exc})")
+            say(f"maneuver detected at {units.tu_to_days(d.t):.3f} d: no delta-v estimate ({exc})")
             return None
-        return burn, burn_evidence(ballistic, burn)
+        burns = [b for b in found.burns if b.t <= d.t]
+        return burns[-1] if burns else None
 
 
-def _record(d: Detection, fit: Any) -> dict[str, Any]:
+def _record(d: Detection, burn: Any) -> dict[str, Any]:
     """One ``summary.maneuvers`` entry: ``t_days`` (the detection), ``t_burn_days`` (the burn time
     estimated by least squares, else the detector's, else NaN), ``t_burn_window_days``,
     ``delta_v_ms`` and ``delta_v_sigma_ms`` (magnitude, m/s; NaN without an estimate),
@@ -139,13 +137,10 @@ def _record(d: Detection, fit: Any) -> dict[str, Any]:
                            "t_burn_days": float(units.tu_to_days(d.t_burn)) if d.t_burn is not None else float("nan"),
                            "delta_v_ms": float("nan"), "delta_v_sigma_ms": float("nan"),
                            "delta_v_vector_ms": [float("nan")] * 3, "confirmed": False}
-    if fit is not None:
-        burn, ev = fit
-        b = burn.searched
-        rec.update({"t_burn_days": float(units.tu_to_days(b.t)), "delta_v_ms": b.magnitude_ms,
-                    "delta_v_sigma_ms": b.magnitude_sigma_ms,
-                    "delta_v_vector_ms": [float(v) for v in b.delta_v_ms], "confirmed": bool(ev.accepted),
-                    "cost_drop": float(ev.cost_drop)})
+    if burn is not None:
+        rec.update({"t_burn_days": float(units.tu_to_days(burn.t)), "t_burn_sigma_days": float(units.tu_to_days(burn.t_sigma)),
+                    "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,
+                    "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "confirmed": True})
     return {k: _json(v) for k, v in rec.items()}
 
 

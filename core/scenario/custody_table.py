@@ -16,6 +16,8 @@ what is allowed)::
     blowup_nis_updates = 3         # ... on this many consecutive updates: diverged there (inf: off)
     diverged_nis = 1e3             # without a truth: a median NIS above this ...
     diverged_nis_updates = 3       # ... over the last this many updates: diverged (inf: off)
+    regain_updates = 0             # after a loss, this many consecutive updates with the truth inside
+                                   # regain custody (0: a loss is final)
 
 The rules that need no truth (degenerate weights, collapse, leaving cislunar space, the NIS
 blow-up, and the NIS rule that only runs without a truth use) judge runs on measurement files too
@@ -48,7 +50,7 @@ _CHECKS: dict[str, tuple[str, Any]] = {
     "blowup_nis": ("a number > 0 (inf turns the rule off)", lambda v: v > 0),
 }
 _COUNTS = ("hdr_consecutive", "diverged_nis_updates", "blowup_nis_updates")
-CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, *_COUNTS})
+CUSTODY_KEYS: frozenset[str] = frozenset({*_CHECKS, *_COUNTS, "regain_updates"})
 """Keys allowed in a scenario's ``[custody]`` table (the fields of CustodyRule)."""
 
 
@@ -72,4 +74,10 @@ def custody_rule(table: Any, source: str) -> CustodyRule:
             if n < 1:
                 raise ConfigError(f"{source}: {_WHERE}: key {key!r} = {n} must be an integer >= 1")
             values[key] = n
+    if "regain_updates" in table:
+        n = typed(table["regain_updates"], int, source, _WHERE, "regain_updates")
+        if n < 0:
+            raise ConfigError(f"{source}: {_WHERE}: key 'regain_updates' = {n} must be an integer >= 0 "
+                              "(0: a loss is final)")
+        values["regain_updates"] = n
     return CustodyRule(**values)

@@ -12,6 +12,7 @@ from cistrack.testing.checks_clustering import CLUSTERING_CHECKS
 from cistrack.testing.checks_dynamics import DYNAMICS_CHECKS
 from cistrack.testing.checks_filter import FILTER_CHECKS
 from cistrack.testing.checks_iod import IOD_CHECKS
+from cistrack.testing.checks_maneuvers import MANEUVER_PLAN_CHECKS, MANEUVER_RESPONSE_CHECKS
 from cistrack.testing.checks_maneuver_detectors import MANEUVER_DETECTOR_CHECKS
 from cistrack.testing.checks_orbit import ORBIT_CHECKS
 from cistrack.testing.checks_pgm_steps import PGM_STEP_CHECKS
@@ -40,6 +41,8 @@ KIND_CHECKS: dict[str, list[tuple[str, Callable[[Any], None]]]] = {
     "exporter": EXPORTER_CHECKS,
     "range-prior": RANGE_PRIOR_CHECKS,
     "maneuver-detector": MANEUVER_DETECTOR_CHECKS,
+    "maneuver-plan": MANEUVER_PLAN_CHECKS,
+    "maneuver-response": MANEUVER_RESPONSE_CHECKS,
     **PGM_STEP_CHECKS,
 }
 """The kind-specific checks, run after the parameter checks (which every class-based kind gets)."""

@@ -20,8 +20,8 @@ import numpy as np
 
 from cistrack import units
 from cistrack.api import hookimpl
-from cistrack.errors import ParameterError
 from cistrack.interfaces import Dynamics, ManeuverResponse
+from cistrack.interfaces.component import check_positive
 from cistrack.interfaces.maneuvers import Detection
 from cistrack.model.belief import Belief, ParticleCloud
 
@@ -29,13 +29,6 @@ __all__ = ["InflateResponse", "ImpulseSamplesResponse", "BURN_TIMES", "burn_maps
 
 BURN_TIMES = 8
 """Burn times across the suspect interval at which the transition matrix is evaluated."""
-
-
-def _check_sigma(value: float, who: str) -> float:
-    v = float(value)
-    if not np.isfinite(v) or v <= 0:
-        raise ParameterError(f"maneuver-response {who!r}: delta_v_sigma_ms = {value!r} must be a finite number > 0 (m/s)")
-    return v
 
 
 def burn_maps(detection: Detection, prior: Belief, dynamics: Dynamics) -> np.ndarray:
@@ -62,7 +55,7 @@ class _Widen(ManeuverResponse):
     default_name = "inflate"
 
     def __init__(self, delta_v_sigma_ms: float = 1.0) -> None:
-        self.delta_v_sigma_ms = _check_sigma(delta_v_sigma_ms, self.registry_name or self.default_name)
+        self.delta_v_sigma_ms = check_positive(self, "delta_v_sigma_ms", delta_v_sigma_ms)
 
     def _sigma_vu(self) -> float:
         return float(units.kms_to_vu(self.delta_v_sigma_ms / 1000.0))

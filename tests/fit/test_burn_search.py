@@ -1,0 +1,73 @@
+"""The burn search of cistrack.least_squares.burn_search on an arc with an impulsive burn between
+nights: found in the right gap, its delta-v within 3 sigma, nothing found without a burn."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from .burn_campaigns import burned, truth_state
+from cistrack import units
+from cistrack.least_squares.burn_search import search_maneuvers, suspicion
+from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.least_squares.options import FitOptions
+
+OPTS = FitOptions(area_to_mass="off")
+
+
+def _ballistic(b):
+    t0 = float(b.measurements.times[-1])
+    return fit_orbit(b.dynamics, b.sensor, b.measurements, truth_state(b, t0), t0, options=OPTS)
+
+
+@pytest.fixture(scope="module")
+def burn_03():
+    b = burned(0.3)
+    ballistic = _ballistic(b)
+    return b, ballistic, search_maneuvers(b.dynamics, b.sensor, b.measurements, ballistic, OPTS)
+
+
+def test_a_burn_between_nights_makes_the_ballistic_fit_suspect(burn_03):
+    _, ballistic, _ = burn_03
+    assert "contiguous block" in suspicion(ballistic)
+
+
+def test_the_search_keeps_one_burn_in_the_gap_that_holds_it(burn_03):
+    b, _, found = burn_03
+    assert len(found.burns) == 1
+    lo, hi = found.windows[0]
+    assert lo < b.t_burn < hi
+
+
+def test_the_burn_time_is_within_three_sigma(burn_03):
+    b, _, found = burn_03
+    est = found.burns[0]
+    assert abs(est.t - b.t_burn) <= 3 * est.t_sigma
+
+
+def test_the_delta_v_is_within_three_sigma_of_the_truth(burn_03):
+    b, _, found = burn_03
+    est = found.burns[0]
+    assert abs(est.magnitude_ms - np.linalg.norm(b.dv_ms)) <= 3 * est.magnitude_sigma_ms
+    assert est.magnitude_sigma_ms < 0.5 * np.linalg.norm(b.dv_ms)  # and the data determine it
+
+
+def test_the_fit_with_the_burn_uses_every_observation(burn_03):
+    _, _, found = burn_03
+    assert found.result.converged and found.result.n_rejected <= 2
+    assert 0.8 < found.result.rms < 1.2
+
+
+def test_the_state_after_the_burn_lies_inside_the_covariance(burn_03):
+    b, _, found = burn_03
+    r = found.result
+    e = r.state - truth_state(b, float(r.epoch))
+    assert e @ np.linalg.solve(r.covariance, e) <= 22.5
+
+
+@pytest.mark.slow
+def test_no_burn_is_kept_for_an_object_that_did_not_maneuver():
+    b = burned(0.0)
+    ballistic = _ballistic(b)
+    assert suspicion(ballistic) == ""
+    found = search_maneuvers(b.dynamics, b.sensor, b.measurements, ballistic, OPTS)
+    assert found.burns == []
