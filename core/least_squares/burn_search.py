@@ -24,7 +24,7 @@ nights, or between tracklets of one night):
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -98,6 +98,8 @@ class ManeuverSearch:
     burns : list of BurnEstimate   the burns kept, in time order
     windows : list of (float, float)   TU, the gap each burn lies in
     notes : list of str            what the search did, in words
+    prior : (mean (6,), covariance (6, 6)) or None   the prior on the state at the fit's epoch
+                                   every fit of the search was made with
     """
 
     result: FitResult
@@ -105,6 +107,7 @@ class ManeuverSearch:
     burns: list[BurnEstimate] = field(default_factory=list)
     windows: list[tuple[float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    prior: Any = None
 
 
 def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -124,7 +127,7 @@ def _screen_gaps(found: ManeuverSearch, sensor: Sensor, ms: MeasurementSet, gaps
     """The linearised capped cost (G,) of a burn in each gap: the best of :data:`GAP_POINTS` times."""
     fr = (np.arange(GAP_POINTS) + 0.5) / GAP_POINTS
     ts = np.array([a + f * (b - a) for a, b in gaps for f in fr])
-    costs = screen_burn_times(found.dynamics, sensor, ms, found.result, ts, use_range=use_range)
+    costs = screen_burn_times(found.dynamics, sensor, ms, found.result, ts, use_range=use_range, prior=found.prior)
     return costs.reshape(len(gaps), GAP_POINTS).min(axis=1)
 
 
@@ -141,10 +144,11 @@ def _next_burn(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, found: Ma
     known = [x.t for x in found.burns]
     for g in ranked[:GAPS_TRIED]:
         a, b = gaps[int(g)]
-        tb, t_sigma = burn_time_profile(found.dynamics, sensor, ms, found.result, a, b, use_range=options.use_range)
+        tb, t_sigma = burn_time_profile(found.dynamics, sensor, ms, found.result, a, b, use_range=options.use_range,
+                                        prior=found.prior)
         try:
             fit = fit_impulse(dynamics, sensor, ms, found.result.state, found.result.epoch, [tb], known=known,
-                              options=options)
+                              options=options, prior=found.prior)
         except (FitError, PropagationError):
             continue
         if best is None or fit.costs.min() < best[0].costs.min():
@@ -153,18 +157,20 @@ def _next_burn(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, found: Ma
 
 
 def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, ballistic: FitResult,
-                     options: FitOptions, say: Callable[[str], None] = lambda m: None) -> ManeuverSearch:
+                     options: FitOptions, say: Callable[[str], None] = lambda m: None,
+                     prior: Any = None) -> ManeuverSearch:
     """Burns that explain the arc ``ms`` better than the ``ballistic`` fit (module docstring).
     ``options`` are the fit's; the area-to-mass ratio is estimated with the burns only when the
-    ballistic fit estimated it."""
+    ballistic fit estimated it. ``prior``: (mean (6,), covariance (6, 6)) on the state at the
+    ballistic fit's epoch, the one that fit was made with (None: none)."""
     opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
-    found = ManeuverSearch(ballistic, dynamics)
+    found = ManeuverSearch(ballistic, dynamics, prior=prior)
     for _ in range(MAX_BURNS):
         step = _next_burn(dynamics, sensor, ms, found, opts)
         if step is None:
             break
         fit, window, t_sigma = step
-        ev = burn_evidence(found.result, fit, FALSE_ALARM)
+        ev = burn_evidence(found.result, fit, FALSE_ALARM, found.prior)
         b = fit.searched
         say(f"burn tried in the gap {_utc_days(window[0]):.3f}-{_utc_days(window[1]):.3f} d: |dv| = "
             f"{b.magnitude_ms:.4f} +- {b.magnitude_sigma_ms:.4f} m/s, cost drop {ev.cost_drop:.1f} "
@@ -175,7 +181,7 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
         windows = found.windows + [window]
         order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
         found = ManeuverSearch(fit.fit, _flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
-                               found.notes)
+                               found.notes, found.prior)
     return found
 
 
@@ -184,7 +190,7 @@ def _timed(dynamics, sensor, ms, fit: ImpulseFit, t_sigma: float, found: Maneuve
     """``fit`` with the burn time's uncertainty in its delta-v covariance (as it is when that fails)."""
     try:
         return with_time_uncertainty(dynamics, sensor, ms, fit, t_sigma, known=[x.t for x in found.burns],
-                                     options=options)
+                                     options=options, prior=found.prior)
     except (FitError, PropagationError):
         return fit
 

@@ -114,26 +114,38 @@ class ImpulseFit:
         return self.burns[self.new]
 
 
-def capped_cost(fit: FitResult) -> float:
+Prior = tuple[np.ndarray, np.ndarray] | None
+"""A Gaussian prior on the state at the fit's epoch: (mean (6,), covariance (6, 6)), LU, VU."""
+
+
+def _prior_cost(fit: FitResult, prior: Prior) -> float:
+    if prior is None:
+        return 0.0
+    e = np.asarray(fit.state, dtype=float) - np.asarray(prior[0], dtype=float)
+    return float(e @ np.linalg.solve(np.asarray(prior[1], dtype=float), e))
+
+
+def capped_cost(fit: FitResult, prior: Prior = None) -> float:
     """Sum over every observation (used or rejected) of its chi-square, capped at the fit's
-    rejection threshold (at 11.83, the 3-sigma level of two components, when it rejected none)."""
+    rejection threshold (at 11.83, the 3-sigma level of two components, when it rejected none),
+    plus the state's squared Mahalanobis distance from the ``prior`` when there is one."""
     chi = np.asarray(fit.residuals.chi2, dtype=float)
     cap = fit.rejection_threshold if np.isfinite(fit.rejection_threshold) else chi2_ppf(0.9973, 2)
-    return float(np.sum(np.minimum(np.where(np.isfinite(chi), chi, cap), cap)))
+    return float(np.sum(np.minimum(np.where(np.isfinite(chi), chi, cap), cap))) + _prior_cost(fit, prior)
 
 
 def fit_impulses(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
-                 times: Sequence[float], *, options: FitOptions | None = None) -> ImpulseFit:
+                 times: Sequence[float], *, options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
     """The orbit and one impulsive burn at each of ``times`` (TU) fitted jointly to ``measurements``
-    from ``state`` (6,) at ``t0`` (TU; before, between or after the burns). Raises
-    :class:`FitError` when the fit cannot be made."""
+    from ``state`` (6,) at ``t0`` (TU; before, between or after the burns), with the state's
+    ``prior`` at ``t0`` when given. Raises :class:`FitError` when the fit cannot be made."""
     ts = sorted(float(t) for t in times)
     if not ts or not all(np.isfinite(ts)):
         raise FitError(f"fit_impulses: burn times must be finite numbers (TU), got {list(times)}")
     impulsive = ImpulsiveDynamics(dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
     names = tuple(n for k in range(len(ts)) for n in dv_names(k))
     fit = fit_orbit(impulsive, sensor, measurements, np.asarray(state, dtype=float), t0, options=options,
-                    solve_for=names)
+                    solve_for=names, prior=prior)
     cov = np.asarray(fit.full_covariance, dtype=float)
     burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
                           cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
@@ -142,7 +154,7 @@ def fit_impulses(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSe
 
 def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
                 candidates: Sequence[float], *, known: Sequence[float] = (),
-                options: FitOptions | None = None) -> ImpulseFit:
+                options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
     """The orbit and one more impulsive burn fitted to ``measurements``: each of the ``candidates``
     (TU) is tried as its time (with burns at the ``known`` times too, all dv estimated jointly)
     and the fit of the smallest capped cost kept.
@@ -157,6 +169,7 @@ def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet
     candidates : (C,) float    times tried for the new burn, TU
     known : (B,) float         times of burns already found, TU
     options : FitOptions       of each fit
+    prior : (mean (6,), covariance (6, 6)) or None   on the state at ``t0``
 
     Raises :class:`FitError` when no candidate can be fitted.
     """
@@ -167,10 +180,10 @@ def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet
     costs = np.full(ts.size, np.inf)
     for k, tb in enumerate(ts):
         try:
-            one = fit_impulses(dynamics, sensor, measurements, state, t0, [*known, tb], options=options)
+            one = fit_impulses(dynamics, sensor, measurements, state, t0, [*known, tb], options=options, prior=prior)
         except (FitError, PropagationError):
             continue
-        costs[k] = capped_cost(one.fit)
+        costs[k] = capped_cost(one.fit, prior)
         if best is None or costs[k] < best[0]:
             best = (costs[k], tb, one)
     if best is None:
@@ -200,9 +213,11 @@ class BurnEvidence:
     significance_threshold: float
 
 
-def burn_evidence(ballistic: FitResult, burn: ImpulseFit, false_alarm: float = 1e-4) -> BurnEvidence:
-    """Whether ``burn`` is a real maneuver rather than noise (module docstring)."""
-    drop = capped_cost(ballistic) - capped_cost(burn.fit)
+def burn_evidence(ballistic: FitResult, burn: ImpulseFit, false_alarm: float = 1e-4,
+                  prior: Prior = None) -> BurnEvidence:
+    """Whether ``burn`` is a real maneuver rather than noise (module docstring); both fits made
+    with the same ``prior``, whose term counts in their costs."""
+    drop = capped_cost(ballistic, prior) - capped_cost(burn.fit, prior)
     c_lim, s_lim = chi2_ppf(1.0 - false_alarm, 4), chi2_ppf(1.0 - false_alarm, 3)
     sig = burn.searched.significance
     return BurnEvidence(bool(drop > c_lim and sig > s_lim and burn.fit.converged), drop, c_lim, sig, s_lim)
@@ -219,23 +234,37 @@ def _dv_partials(stm_obs: np.ndarray, stm_burn: np.ndarray, h: np.ndarray, times
     return sign * np.einsum("kmj,kjl->kml", h, phi[:, :, 3:6]) * far[:, None, None]
 
 
-def _capped_linear_cost(a: np.ndarray, w: np.ndarray, cap: float, rounds: int = 3) -> float:
+def _capped_linear_cost(a: np.ndarray, w: np.ndarray, cap: float, extra: tuple[np.ndarray, np.ndarray] | None,
+                        rounds: int = 3) -> float:
     """Capped cost after a linear least-squares correction of ``w`` (K, m) along ``a`` (K, m, P),
-    observations whose chi-square exceeds ``cap`` left out of the correction (``rounds`` times)."""
+    observations whose chi-square exceeds ``cap`` left out of the correction (``rounds`` times);
+    ``extra`` rows (A (J, P), r (J,)), a prior's, always in and never capped."""
     keep = np.ones(w.shape[0], dtype=bool)
-    r = w
+    r, rest = w, 0.0
+    ea, er = extra if extra is not None else (np.zeros((0, a.shape[2])), np.zeros(0))
     for _ in range(rounds):
-        ak, wk = a[keep].reshape(-1, a.shape[2]), w[keep].reshape(-1)
+        ak, wk = np.vstack([a[keep].reshape(-1, a.shape[2]), ea]), np.concatenate([w[keep].reshape(-1), er])
         if wk.size < a.shape[2]:
             break
         delta = np.linalg.lstsq(ak, wk, rcond=None)[0]
         r = w - a @ delta
+        rest = float(np.sum((er - ea @ delta) ** 2))
         keep = np.sum(r * r, axis=1) <= cap
-    return float(np.sum(np.minimum(np.sum(r * r, axis=1), cap)))
+    return float(np.sum(np.minimum(np.sum(r * r, axis=1), cap))) + rest
+
+
+def _prior_rows(fit: FitResult, prior: Prior, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The prior as whitened rows of the linear correction of (state, dv): (6, n) and (6,)."""
+    if prior is None:
+        return None
+    winv = np.linalg.cholesky(np.linalg.inv(np.asarray(prior[1], dtype=float))).T  # W^T W = P^-1
+    a = np.zeros((6, n))
+    a[:, :6] = winv
+    return a, winv @ (np.asarray(prior[0], dtype=float) - np.asarray(fit.state, dtype=float))
 
 
 def screen_burn_times(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
-                      candidates: Sequence[float], *, use_range: bool = False) -> np.ndarray:
+                      candidates: Sequence[float], *, use_range: bool = False, prior: Prior = None) -> np.ndarray:
     """The capped cost (K,) of the ballistic ``fit`` corrected, linearly, by its state and by a burn
     at each of the ``candidates`` (TU): a cheap ranking of burn times before the nonlinear
     :func:`fit_impulse`. One propagation with transition matrices serves every candidate."""
@@ -252,8 +281,9 @@ def screen_burn_times(dynamics: Dynamics, sensor: Sensor, measurements: Measurem
     h = model.jacobian(st_obs) / model.sigmas[:, :, None]
     a_state = np.einsum("kmj,kjl->kml", h, stm_obs)
     cap = fit.rejection_threshold if np.isfinite(fit.rejection_threshold) else chi2_ppf(0.9973, 2)
+    extra = _prior_rows(fit, prior, 9)
     return np.array([_capped_linear_cost(np.concatenate(
-        [a_state, _dv_partials(stm_obs, stm_burn[k], h, times, float(fit.epoch), float(tb))], axis=2), w, cap)
+        [a_state, _dv_partials(stm_obs, stm_burn[k], h, times, float(fit.epoch), float(tb))], axis=2), w, cap, extra)
         for k, tb in enumerate(ts)])
 
 
@@ -270,16 +300,17 @@ def _profile_sigma(ts: np.ndarray, costs: np.ndarray, k: int, width: float) -> f
 
 
 def burn_time_profile(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
-                      lo: float, hi: float, n: int = 16, *, use_range: bool = False) -> tuple[float, float]:
+                      lo: float, hi: float, n: int = 16, *, use_range: bool = False,
+                      prior: Prior = None) -> tuple[float, float]:
     """The burn time (TU) in ``[lo, hi]`` that minimises the linearised capped cost
     (:func:`screen_burn_times` about ``fit``), on a grid of ``n`` then ``n`` more around the best,
     and its one sigma (TU) from the profile's curvature."""
     ts = lo + (np.arange(n) + 0.5) / n * (hi - lo)
-    costs = screen_burn_times(dynamics, sensor, measurements, fit, ts, use_range=use_range)
+    costs = screen_burn_times(dynamics, sensor, measurements, fit, ts, use_range=use_range, prior=prior)
     k = int(np.argmin(costs))
     a, b = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
     fine = np.linspace(a, b, n)
-    fine_costs = screen_burn_times(dynamics, sensor, measurements, fit, fine, use_range=use_range)
+    fine_costs = screen_burn_times(dynamics, sensor, measurements, fit, fine, use_range=use_range, prior=prior)
     j = int(np.argmin(fine_costs))
     allt, first = np.unique(np.concatenate([ts, fine]), return_index=True)  # sorted, each time once
     allc = np.concatenate([costs, fine_costs])[first]
@@ -289,7 +320,7 @@ def burn_time_profile(dynamics: Dynamics, sensor: Sensor, measurements: Measurem
 
 def with_time_uncertainty(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, burn: ImpulseFit,
                           t_sigma: float, *, known: Sequence[float] = (),
-                          options: FitOptions | None = None) -> ImpulseFit:
+                          options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
     """``burn`` with its searched burn's delta-v covariance widened by the burn time's uncertainty:
     C + g g^T t_sigma^2, g = d dv / d t_b by central differences of two more fits at t_b +- h
     (h = t_sigma, or a minute when that is smaller)."""
@@ -298,7 +329,7 @@ def with_time_uncertainty(dynamics: Dynamics, sensor: Sensor, measurements: Meas
     fits = []
     for tb in (b.t - h, b.t + h):
         one = fit_impulses(dynamics, sensor, measurements, burn.fit.state, burn.fit.epoch, [*known, tb],
-                           options=options)
+                           options=options, prior=prior)
         fits.append(next(x for x in one.burns if x.t == tb).delta_v_ms)
     g = (fits[1] - fits[0]) / (2.0 * h)
     cov = b.covariance_ms2 + np.outer(g, g) * float(t_sigma) ** 2

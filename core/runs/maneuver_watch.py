@@ -5,10 +5,13 @@ them (:meth:`ManeuverWatch.before_update`). The scenario's detector (``[maneuver
 judges them; on a detection the response (``[maneuvers] response``, default none) may hand back a
 widened cloud, from which the filter starts again before it takes the measurements. The watch keeps
 each update's posterior mean (:meth:`after_update`), so that at the end of the run
-(:meth:`records`) each detection's burn is estimated by least squares over the measurements from
-:data:`PRE_DAYS` before the detection to :data:`POST_DAYS` after it (not beyond the neighbouring
-detections), started from the filter's posterior at the arc's start: a ballistic fit, then the
-burn search of :mod:`cistrack.least_squares.burn_search` (the gaps screened, the burn time's
+(:meth:`records`) the detections are grouped in episodes (:func:`episodes`: a filter that does not
+recover from a burn raises detection after detection) and each episode's burn is estimated by least
+squares over the measurements from :data:`PRE_DAYS` before its first detection (not before the
+previous episode's) to :data:`POST_DAYS` after it, started from the filter's posterior at the
+arc's start, which is also the state's prior there (what the filter learned before the arc: without
+it a few days of one site's angles absorb a small burn into another ballistic orbit): a ballistic
+fit, then the burn search of :mod:`cistrack.least_squares.burn_search` (the gaps screened, the burn time's
 profile, the delta-v as solve-for parameters, tested against the ballistic fit). The latest burn
 kept before the detection is its estimate (``confirmed``); a detection for which the search keeps
 none is reported unconfirmed, without a delta-v.
@@ -30,18 +33,22 @@ from cistrack.interfaces.metric import StepMetric
 from cistrack.least_squares.errors import FitError
 from cistrack.least_squares.options import FitOptions
 
-__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS"]
+__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "EPISODE_DAYS", "episodes"]
 
 PRE_DAYS = 3.0
 """Days of measurements before the detection in the delta-v estimate."""
 POST_DAYS = 2.0
 """Days of measurements after the detection in the delta-v estimate."""
+EPISODE_DAYS = 1.5
+"""A detection this close (days) after the one before it belongs to the same maneuver (about one
+pass and the gap after it in the examples)."""
 
 
 @dataclass
 class _Posterior:
     t: float
     mean: np.ndarray
+    covariance: np.ndarray
 
 
 @dataclass
@@ -79,27 +86,29 @@ class ManeuverWatch:
         return self.response.respond(detection, prior, ctx.dynamics, self.rng)
 
     def after_update(self, t: float, belief: Any) -> None:
-        """Keep the posterior mean (6,) at ``t`` (TU)."""
+        """Keep the posterior mean (6,) and covariance (6, 6) at ``t`` (TU)."""
         mean = np.asarray(belief.mixture.mean, dtype=float)
-        if np.all(np.isfinite(mean)):
-            self.posteriors.append(_Posterior(float(t), mean.copy()))
+        cov = np.asarray(belief.mixture.covariance, dtype=float)
+        if np.all(np.isfinite(mean)) and np.all(np.isfinite(cov)):
+            self.posteriors.append(_Posterior(float(t), mean.copy(), cov.copy()))
 
     def records(self, ctx: Any) -> list[dict[str, Any]]:
-        """``summary.maneuvers``: one entry per detection (:func:`_record`)."""
+        """``summary.maneuvers``: one entry per episode of detections (:func:`episodes`), with the
+        burn estimated around its first detection (:func:`_record`)."""
         say = self.say or (lambda m: None)
+        groups = episodes(self.detections)
         out = []
-        for k, d in enumerate(self.detections):
-            before = self.detections[k - 1].t if k > 0 else -np.inf
-            after = self.detections[k + 1].t if k + 1 < len(self.detections) else np.inf
-            burn = self._estimate(ctx, d, before, after, say) if self.estimate else None
-            out.append(_record(d, burn))
+        for k, group in enumerate(groups):
+            before = groups[k - 1][0].t if k > 0 else -np.inf
+            burn = self._estimate(ctx, group[0], before, say) if self.estimate else None
+            out.append(_record(group, burn))
         return out
 
     def _start_state(self, t_lo: float) -> _Posterior | None:
         before = [p for p in self.posteriors if p.t <= t_lo + 1e-12]
         return before[-1] if before else (self.posteriors[0] if self.posteriors else None)
 
-    def _estimate(self, ctx: Any, d: Detection, before: float, after: float, say) -> Any:
+    def _estimate(self, ctx: Any, d: Detection, before: float, say) -> Any:
         """The burn nearest before the detection ``d`` found in the arc around it (module
         docstring), or None."""
         from cistrack.least_squares.burn_search import search_maneuvers
@@ -109,14 +118,15 @@ class ManeuverWatch:
         if start is None:
             return None
         t = np.asarray(ctx.measurements.times, dtype=float)
-        keep = (t >= start.t) & (t <= min(d.t + float(units.days_to_tu(POST_DAYS)), after - 1e-12))
+        keep = (t >= start.t) & (t <= d.t + float(units.days_to_tu(POST_DAYS)))
         if np.sum(keep & (t > d.t - 1e-12)) < 2 or np.sum(keep & (t < d.t)) < 3:
             return None
         arc = ctx.measurements.subset(keep)
         opts = FitOptions(area_to_mass="off")
+        prior = (start.mean, start.covariance)
         try:
-            ballistic = fit_orbit(ctx.dynamics, ctx.sensor, arc, start.mean, start.t, options=opts)
-            found = search_maneuvers(ctx.dynamics, ctx.sensor, arc, ballistic, opts)
+            ballistic = fit_orbit(ctx.dynamics, ctx.sensor, arc, start.mean, start.t, options=opts, prior=prior)
+            found = search_maneuvers(ctx.dynamics, ctx.sensor, arc, ballistic, opts, prior=prior)
         except (FitError, PropagationError, np.linalg.LinAlgError) as exc:
             say(f"maneuver detected at {units.tu_to_days(d.t):.3f} d: no delta-v estimate ({exc})")
             return None
@@ -124,14 +134,29 @@ class ManeuverWatch:
         return burns[-1] if burns else None
 
 
-def _record(d: Detection, burn: Any) -> dict[str, Any]:
-    """One ``summary.maneuvers`` entry: ``t_days`` (the detection), ``t_burn_days`` (the burn time
+def episodes(detections: list[Detection]) -> list[list[Detection]]:
+    """The detections in episodes: a detection within :data:`EPISODE_DAYS` of the one before it
+    continues that one's episode (a filter that does not recover from a burn keeps raising
+    detections of it); each episode is one maneuver reported."""
+    out: list[list[Detection]] = []
+    for d in detections:
+        if out and d.t - out[-1][-1].t <= float(units.days_to_tu(EPISODE_DAYS)):
+            out[-1].append(d)
+        else:
+            out.append([d])
+    return out
+
+
+def _record(group: list[Detection], burn: Any) -> dict[str, Any]:
+    """One ``summary.maneuvers`` entry for an episode of detections (its first ``d``):
+    ``t_days`` (the first detection), ``detections`` (how many in the episode), ``t_burn_days`` (the burn time
     estimated by least squares, else the detector's, else NaN), ``t_burn_window_days``,
     ``delta_v_ms`` and ``delta_v_sigma_ms`` (magnitude, m/s; NaN without an estimate),
     ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test), the
     detector's name, statistic and threshold."""
+    d = group[0]
     lo, hi = d.t_burn_bounds
-    rec: dict[str, Any] = {"t_days": float(units.tu_to_days(d.t)), "detector": d.detector,
+    rec: dict[str, Any] = {"t_days": float(units.tu_to_days(d.t)), "detector": d.detector, "detections": len(group),
                            "statistic": float(d.statistic), "threshold": float(d.threshold),
                            "t_burn_window_days": [float(units.tu_to_days(lo)), float(units.tu_to_days(hi))],
                            "t_burn_days": float(units.tu_to_days(d.t_burn)) if d.t_burn is not None else float("nan"),

@@ -5,8 +5,9 @@
     response = "inflate"           # a maneuver-response component, or "none" (the default)
     estimate = true                # delta-v of each detection by least squares at the end of the run
 
-Without the table (or with ``detector = "auto"``) every run watches for maneuvers with the
-detector suited to its filter: ``mixture-likelihood`` for a PGM (a Gaussian mixture belief),
+Without the table (or with ``detector = "auto"``, or a detector table without a ``name``: the
+parameters of the automatic choice) every run watches for maneuvers with the detector suited to its
+filter: ``mixture-likelihood`` for a PGM (a Gaussian mixture belief),
 ``nis-window`` otherwise (where the registry has them); no response, and the estimate.
 """
 from __future__ import annotations
@@ -34,11 +35,12 @@ class ManeuverSettings:
     estimate: bool = True
 
 
-def _auto(filter_name: str, reg: Registry, source: str) -> ComponentSpec | None:
+def _auto(filter_name: str, reg: Registry, source: str, params: dict | None = None) -> ComponentSpec | None:
     name = AUTO_DETECTOR["mixture" if filter_name.startswith("pgm") else "gaussian"]
     if name not in reg.names("maneuver-detector"):
         return None
-    return component_spec({"name": name}, "maneuver-detector", "[maneuvers] detector (auto)", source, reg)
+    return component_spec({"name": name, **(params or {})}, "maneuver-detector",
+                          f"[maneuvers] detector (auto: {name!r})", source, reg)
 
 
 def _component(value: Any, kind: str, where: str, source: str, reg: Registry) -> ComponentSpec | None:
@@ -54,8 +56,11 @@ def maneuver_settings(data: dict, filter_name: str, source: str, reg: Registry) 
         raise ConfigError(f"{source}: 'maneuvers' must be a table (keys: {', '.join(sorted(_KEYS))})")
     check_keys(table, _KEYS, source, "[maneuvers]")
     det = table.get("detector", "auto")
-    detector = (_auto(filter_name, reg, source) if det == "auto"
-                else _component(det, "maneuver-detector", "[maneuvers] detector", source, reg))
+    if det == "auto" or (isinstance(det, dict) and det.get("name", "auto") == "auto"):
+        params = {k: v for k, v in det.items() if k != "name"} if isinstance(det, dict) else {}
+        detector = _auto(filter_name, reg, source, params)
+    else:
+        detector = _component(det, "maneuver-detector", "[maneuvers] detector", source, reg)
     response = _component(table.get("response", "none"), "maneuver-response", "[maneuvers] response", source, reg)
     if response is not None and detector is None:
         raise ConfigError(f"{source}: [maneuvers]: a response ({response.name!r}) needs a detector; "
