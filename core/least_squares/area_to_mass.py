@@ -35,7 +35,7 @@ from cistrack.least_squares.options import AREA_TO_MASS, FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.units import TU_S
 
-__all__ = ["fit_area_to_mass_auto", "area_to_mass_verdict", "MIN_ARC_DAYS", "MIN_SIGNIFICANCE",
+__all__ = ["fit_area_to_mass_auto", "area_to_mass_verdict", "joint_covariances", "MIN_ARC_DAYS", "MIN_SIGNIFICANCE",
            "MIN_CHI2_DROP", "MAX_AREA_TO_MASS"]
 
 MIN_ARC_DAYS = 10.0
@@ -107,3 +107,126 @@ def fit_area_to_mass_auto(fit: Callable[[np.ndarray, FitOptions], FitResult], dy
     value, sigma = seven.parameter(AREA_TO_MASS)
     return _decided(seven, f"estimated ({value:.4g} +- {sigma:.2g} m^2/kg over {days:.3g} days, "
                            f"chi-square lower by {_chi2_drop(six, seven):.3g})")
+
+
+def _one_orbit(dynamics: Any, state: np.ndarray, t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(states (K, 6), alive (K,) bool) of one orbit: :func:`_batch` of one state."""
+    states, ok = _batch(dynamics, np.asarray(state, dtype=float)[None], t0, times)
+    return states[:, 0], ok
+
+
+def _with_values(dynamics: Any, names: tuple, values: np.ndarray) -> Any:
+    return dynamics.with_parameters(**{n: float(v) for n, v in zip(names, values)})
+
+
+def _parameter_partials(dynamics: Any, result: FitResult, times: np.ndarray) -> np.ndarray:
+    """d x(t) / d p (K, 6, P) at ``times`` with the epoch state held: central differences with the
+    steps of :mod:`.solve_for_parameters` (the trajectory is nearly linear in the area-to-mass
+    ratio: its acceleration is exactly linear in it)."""
+    from cistrack.least_squares.solve_for_parameters import STEPS, DEFAULT_STEP
+
+    names, p = tuple(result.parameter_names), np.asarray(result.parameters, dtype=float)
+    cols = []
+    for j, name in enumerate(names):
+        step = np.zeros(p.size)
+        step[j] = STEPS.get(name, DEFAULT_STEP)
+        up, _ = _one_orbit(_with_values(dynamics, names, p + step), result.state, result.epoch, times)
+        down, _ = _one_orbit(_with_values(dynamics, names, p - step), result.state, result.epoch, times)
+        cols.append((up - down) / (2.0 * step[j]))
+    return np.stack(cols, axis=-1)
+
+
+def _joint_linear(dynamics: Any, result: FitResult, times: np.ndarray) -> np.ndarray:
+    """[Phi(t), dx(t)/dp] P_joint [Phi(t), dx(t)/dp]^T (K, 6, 6) at ``times``."""
+    from cistrack.least_squares.trajectory import arc_states_and_stms
+
+    names, p = tuple(result.parameter_names), np.asarray(result.parameters, dtype=float)
+    _, stms = arc_states_and_stms(_with_values(dynamics, names, p), result.state, result.epoch, times)
+    jac = np.concatenate([stms, _parameter_partials(dynamics, result, times)], axis=2)   # (K, 6, 6 + P)
+    cov = np.einsum("kij,jl,kml->kim", jac, np.asarray(result.full_covariance, dtype=float), jac)
+    return 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
+
+
+def _joint_points(x: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """The 2n sigma points (2n, n) of ``x`` (n,) and its joint ``cov`` (n, n), ``x +- sqrt(n) s_j``
+    with ``s_j`` the columns of a Cholesky factor taken with the parameters first: all but 2P of the
+    points then hold the parameters at their estimates (one model integrates them together).
+    Any square root gives a valid unscented transform; the symmetric one
+    (:func:`.unscented_prediction.sigma_points`) when the factor does not exist."""
+    from cistrack.least_squares.unscented_prediction import sigma_points
+
+    n = x.size
+    order = np.r_[np.arange(6, n), np.arange(6)]
+    c = 0.5 * (cov + cov.T)[np.ix_(order, order)]
+    d = np.sqrt(np.clip(np.diag(c), 1e-300, None))
+    try:
+        low = np.linalg.cholesky(c / np.outer(d, d)) * d[:, None]
+    except np.linalg.LinAlgError:
+        return sigma_points(x, cov)
+    root = np.empty_like(low)
+    root[order] = low
+    return np.vstack([x + np.sqrt(n) * root.T, x - np.sqrt(n) * root.T])
+
+
+def _batch(dynamics: Any, states: np.ndarray, t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(states (K, N, 6), all alive (K,) bool) of ``states`` (N, 6) from ``t0`` at ``times`` (K,) TU
+    in any order, forward and backward separately; not alive on and after a hit or a failure."""
+    out, ok = np.full((times.size, states.shape[0], 6), np.nan), np.zeros(times.size, dtype=bool)
+    for forward in (True, False):
+        rows = np.flatnonzero(times >= t0 if forward else times < t0)
+        if rows.size == 0:
+            continue
+        rows = rows[np.argsort(times[rows] if forward else -times[rows], kind="stable")]
+        try:
+            prop = dynamics.propagate(states, t0, times[rows])
+        except PropagationError:
+            continue
+        out[rows] = np.asarray(prop.states, dtype=float)
+        hit = np.asarray(prop.impact_time, dtype=float)[~np.asarray(prop.alive, dtype=bool)]
+        ok[rows] = True if hit.size == 0 else ((times[rows] < hit.min()) if forward else (times[rows] > hit.max()))
+    return out, ok
+
+
+def _joint_unscented(dynamics: Any, result: FitResult, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(covariances (K, 6, 6), valid (K,)) by the unscented transform of the joint covariance of
+    state and parameters (:func:`_joint_points`), each point's orbit integrated with its own
+    parameter values, the points that share them in one call; not valid where an orbit hit a body
+    or failed."""
+    names, p = tuple(result.parameter_names), np.asarray(result.parameters, dtype=float)
+    x = np.concatenate([np.asarray(result.state, dtype=float), p])
+    points = _joint_points(x, np.asarray(result.full_covariance, dtype=float))
+    everything = np.vstack([x[None], points])
+    states = np.empty((times.size, everything.shape[0], 6))
+    ok = np.ones(times.size, dtype=bool)
+    values, group = np.unique(everything[:, 6:], axis=0, return_inverse=True)
+    for g, v in enumerate(values):
+        members = np.flatnonzero(group.reshape(-1) == g)
+        states[:, members], alive = _batch(_with_values(dynamics, names, v), everything[members, :6],
+                                           result.epoch, times)
+        ok &= alive
+    d = states[:, 1:] - states[:, :1]
+    spread = np.einsum("kni,knj->kij", d, d) / len(points)
+    return 0.5 * (spread + np.transpose(spread, (0, 2, 1))), ok
+
+
+def joint_covariances(dynamics: Any, result: FitResult, times: Any, covariance: str = "unscented"
+                      ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The state covariance (K, 6, 6) [LU, VU] of a fit with solve-for parameters (the area-to-mass
+    ratio) at ``times`` (K,) TU, carried from the **joint** covariance of state and parameters
+    (``result.full_covariance``), so that the parameters' uncertainty widens it away from the fit
+    epoch (there it is the state block). ``covariance`` "unscented": the sigma points of the joint
+    covariance, each orbit with its own parameter values (as the events' mapping,
+    :mod:`.events`, moves the model with each point); "linear": the transition matrices with the
+    parameters' partials. Returns (covariances, linear (K,) bool: where a sigma-point orbit hit a
+    body or failed, so the linear map stands in), or None when the fit estimated no parameter.
+    ``dynamics`` is the model without or with the estimated values (they are set here)."""
+    names = tuple(getattr(result, "parameter_names", ()))
+    if not names or getattr(result, "full_covariance", None) is None:
+        return None
+    tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
+    if covariance == "linear":
+        return _joint_linear(dynamics, result, tt), np.ones(tt.size, dtype=bool)
+    cov, ok = _joint_unscented(dynamics, result, tt)
+    if not np.all(ok):
+        cov[~ok] = _joint_linear(dynamics, result, tt[~ok])
+    return cov, ~ok
