@@ -9,8 +9,18 @@ A study file (TOML)::
     iod = ["noisy-range", "uniform-range"]     # the same; omit to keep each scenario's own
     seeds = [1, 2, 3]                          # or n_seeds = 10 (seeds 1..10), with first_seed = 500
                                                # seeds 500..509
+    sweep = {"truth.maneuvers.delta_v_ms" = [0.1, 1.0], "maneuvers.response" = ["none", "inflate"]}
     [overrides]                                # applied to every scenario first
     duration_days = 6.6
+
+A ``sweep`` crosses every scenario entry with every combination of its values, each applied as a
+``--set`` item after the study's overrides (and before the command line's ``--set``); every
+combination is validated before any run. A swept run's scenario label, hence its id and its report
+group, names the combination: ``example-1-burn[dv=0.3,resp=inflate]`` (:func:`sweep_label`). A
+scenario entry given as a table ``{name = "example-1", sweep = false}`` is not swept (``sweep =
+["maneuvers.response"]``: only those settings); a setting that does not apply to a scenario it is
+swept over is refused, naming the study file, the key and the scenario. A study without a sweep
+names its runs as before.
 
 Each run is written to ``<out>/runs/<run id>/`` as it finishes (see :mod:`cistrack.results.store`);
 running the study again runs only what is missing (reports: :mod:`cistrack.studies.report`). Runs are pure functions of (scenario, seed):
@@ -32,7 +42,8 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.studies.lost_runs import refuse_in_a_starting_worker
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
-from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, study_source)
+from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, scenario_entry,
+                                         study_source, study_sweep)
 from cistrack.studies.resume import run_state
 from cistrack.scenario.limits import check_count, check_path_component
 from cistrack.studies.workers import execute_run, init_worker, run_spec
@@ -40,7 +51,7 @@ from cistrack.runs.run_id import run_id
 
 
 __all__ = ["RunSpec", "StudyOptions", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
-           "builtin_studies", "make_executor"]
+           "builtin_studies", "make_executor", "sweep_label", "sweep_item", "base_scenario_name"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +68,7 @@ class RunSpec:
     iod_label: str
     rerun_path: str | None = None
     fingerprint: str = ""  # of the resolved scenario and seed (cistrack.results.fingerprint)
+    sweep: tuple = ()      # the sweep combination: ((dotted setting, value), ...); () without a sweep
 
 
 def _label_and_table(item: Any, key: str, p: Path) -> tuple[str, dict | None]:
@@ -97,7 +109,8 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     seeds = _study_seeds(data, p, first_seed, n_seeds)
     grid = _Grid(filters=[_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])],
                  iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
-                 overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out)
+                 overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out,
+                 sweep=tuple((k, tuple(v)) for k, v in study_sweep(data, p)), study=p)
     reg = default_registry()
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
@@ -121,6 +134,10 @@ class _Grid:
     settings: list[str] | None
     seeds: list[int]
     out: Path
+    sweep: tuple = ()
+    """The study's sweep: ((dotted setting, (values...)), ...)."""
+    study: Path = Path()
+    """The study file (named in errors)."""
 
 
 def _scenario_source(sc: str, p: Path) -> str | Path:
@@ -132,29 +149,108 @@ def _scenario_source(sc: str, p: Path) -> str | Path:
     return sp if sp.exists() else sc
 
 
-def _scenario_runs(sc: str, p: Path, grid: _Grid, reg) -> list[RunSpec]:
-    """The runs of scenario entry ``sc``: filters x IOD variants x seeds, each variant validated."""
+_SHORT_NAMES = {"delta_v_ms": "dv", "response": "resp", "t_days": "t", "detector": "det", "n_particles": "np",
+                "duration_days": "days", "n_components": "nc", "direction": "dir"}
+"""Short names of common sweep settings (by their last part) in run labels; others keep their last part."""
+
+
+def _sweep_value_text(v: Any) -> str:
+    """A sweep value as a label shows it: 0.3, 1 (for 1.0), inflate, true."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        text = repr(v)
+        return text[:-2] if text.endswith(".0") else text
+    return str(v)
+
+
+def sweep_names(keys: list[str]) -> dict[str, str]:
+    """Dotted sweep setting -> its name in labels: a short name (:data:`_SHORT_NAMES`) or its last
+    part, the whole dotted setting where two settings would share a name."""
+    short = {k: _SHORT_NAMES.get(k.rsplit(".", 1)[-1], k.rsplit(".", 1)[-1]) for k in keys}
+    seen = [n for n in short.values()]
+    return {k: (n if seen.count(n) == 1 else k) for k, n in short.items()}
+
+
+def sweep_label(scenario: str, combo: tuple, names: dict[str, str] | None = None) -> str:
+    """``sweep_label("example-1-burn", (("truth.maneuvers.delta_v_ms", 0.3), ("maneuvers.response",
+    "inflate"))) == "example-1-burn[dv=0.3,resp=inflate]"``; the scenario's own name without a
+    combination. Stable (the settings in the study file's order) and one path component."""
+    if not combo:
+        return scenario
+    names = names or sweep_names([k for k, _ in combo])
+    return f"{scenario}[{','.join(f'{names[k]}={_sweep_value_text(v)}' for k, v in combo)}]"
+
+
+def base_scenario_name(label: str, combo: tuple = ()) -> str:
+    """The scenario's own name of a (possibly swept) scenario label."""
+    return label[:label.index("[")] if combo and "[" in label else label
+
+
+def sweep_item(key: str, value: Any) -> str:
+    """A sweep setting and value as the ``--set`` item it amounts to (``maneuvers.response="none"``)."""
+    return f"{key}={json.dumps(value)}"
+
+
+def _combinations(sweep: tuple, keys: list[str]) -> list[tuple]:
+    """Every combination ((setting, value), ...) of the sweep settings ``keys`` ([()] for none)."""
+    import itertools
+
+    chosen = [(k, values) for k, values in sweep if k in keys]
+    return [tuple(zip([k for k, _ in chosen], vals)) for vals in itertools.product(*[v for _, v in chosen])]
+
+
+def _scenario_runs(entry: Any, p: Path, grid: _Grid, reg) -> list[RunSpec]:
+    """The runs of scenario entry ``entry``: sweep combinations x filters x IOD variants x seeds,
+    each variant validated."""
     from cistrack.scenario.loading import load_scenario
 
+    sc, keys = scenario_entry(entry, p, [k for k, _ in grid.sweep])
     base = load_scenario(_scenario_source(sc, p), reg)
-    scen_path = str(Path(base.source).resolve())
+    names = sweep_names([k for k, _ in grid.sweep])
     specs: list[RunSpec] = []
-    for flabel, ftable in grid.filters:
-        for ilabel, itable in grid.iods:
-            ov = _variant_overrides(grid, base, ftable, itable)
-            variant = _validated_variant(base, ov, grid, reg)
-            fl = flabel or variant.components["filter"].name
-            il = ilabel or variant.components["iod"].name
-            for seed in grid.seeds:
-                rid = run_id(base.name, fl, il, seed)
-                specs.append(RunSpec(rid, scen_path, int(seed), ov, str(grid.out / "runs" / rid),
-                                     base.name, fl, il, fingerprint=scenario_fingerprint(variant, seed)))
+    for combo in _combinations(grid.sweep, keys):
+        label = check_path_component(sweep_label(base.name, combo, names), f"{p}: key 'sweep': the run label")
+        for flabel, ftable in grid.filters:
+            for ilabel, itable in grid.iods:
+                specs += _variant_runs(base, label, combo, (flabel, ftable, ilabel, itable), grid, reg)
     return specs
 
 
-def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | None) -> dict:
-    """The study's overrides with the variant's filter and IOD tables, then the ``--set`` items;
-    a ``--set`` table that the variant does not replace is merged into the scenario's own table."""
+def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _Grid, reg) -> list[RunSpec]:
+    """The runs (one per seed) of scenario ``base`` under the sweep combination ``combo`` (its label
+    ``label``) with one filter and IOD variant ``(filter label, table, IOD label, table)``."""
+    flabel, ftable, ilabel, itable = variant_tables
+    ov = _variant_overrides(grid, base, ftable, itable, combo)
+    variant = _validated_variant(base, ov, grid, reg, combo)
+    fl = flabel or variant.components["filter"].name
+    il = ilabel or variant.components["iod"].name
+    scen_path = str(Path(base.source).resolve())
+    specs = []
+    for seed in grid.seeds:
+        rid = run_id(label, fl, il, seed)
+        specs.append(RunSpec(rid, scen_path, int(seed), ov, str(grid.out / "runs" / rid), label, fl, il,
+                             fingerprint=scenario_fingerprint(variant, seed), sweep=combo))
+    return specs
+
+
+def _sweep_settings(combo: tuple) -> dict:
+    """A sweep combination as parsed ``--set`` items (nested tables)."""
+    from cistrack.scenario.settings import merge_settings
+
+    out: dict = {}
+    for key, value in combo:
+        node: Any = value
+        for part in reversed(key.split(".")):
+            node = {part.strip(): node}
+        out = merge_settings(out, node)
+    return out
+
+
+def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | None, combo: tuple = ()) -> dict:
+    """The study's overrides with the variant's filter and IOD tables, then the sweep combination,
+    then the ``--set`` items; a table they set that the variant does not replace is merged into the
+    scenario's own table."""
     from cistrack.scenario.settings import merge_settings
 
     ov = copy.deepcopy(grid.overrides)
@@ -162,25 +258,33 @@ def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | No
         ov["filter"] = ftable
     if itable:
         ov["iod"] = itable
-    if not grid.extra:
-        return ov
-    ov = merge_settings(ov, grid.extra)
     replaced = (("filter",) if ftable else ()) + (("iod",) if itable else ())
-    for table, value in grid.extra.items():  # keys of the scenario's own table
-        if isinstance(value, dict) and isinstance(base.raw.get(table), dict) and table not in replaced:
-            ov[table] = merge_settings(base.raw[table], ov[table])
+    for extra in (_sweep_settings(combo), grid.extra):
+        if not extra:
+            continue
+        ov = merge_settings(ov, extra)
+        for table, value in extra.items():  # keys of the scenario's own table
+            if isinstance(value, dict) and isinstance(base.raw.get(table), dict) and table not in replaced:
+                ov[table] = merge_settings(base.raw[table], ov[table])
     return ov
 
 
-def _validated_variant(base, ov: dict, grid: _Grid, reg):
+def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = ()):
     """The scenario ``base`` with the overrides ``ov``, validated now; a ConfigError names the
-    ``--set`` items when there are any."""
+    sweep combination (with the study file and its key) and the ``--set`` items when there are any."""
     try:
         return base.with_overrides(ov, reg)
     except ConfigError as exc:
+        msg = str(exc)
+        if combo:
+            msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
+                    f"{base.name!r}; where a setting does not apply to a scenario, give the entry as a table "
+                    f"{{name = \"{base.name}\", sweep = false}} or sweep = [the settings that apply])")
         if grid.extra:
-            raise ConfigError(f"{exc} (with {' '.join('--set ' + i for i in grid.settings)})") from None
-        raise
+            msg += f" (with {' '.join('--set ' + i for i in grid.settings)})"
+        if msg == str(exc):
+            raise
+        raise ConfigError(msg) from None
 
 
 def _settings_suffix(settings: list[str] | None) -> str:

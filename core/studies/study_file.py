@@ -18,9 +18,11 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS"]
+__all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS", "study_sweep",
+           "scenario_entry"]
 
-STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides"}
+STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides",
+              "sweep"}
 """Keys allowed at the top of a study file."""
 _STUDY_KEYS = STUDY_KEYS
 
@@ -108,7 +110,76 @@ def _checked(data: dict, p: Path) -> dict:
         raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
     if "seeds" in data and ("n_seeds" in data or "first_seed" in data):
         raise ConfigError(f"{p}: give 'seeds', or 'n_seeds' (and optionally 'first_seed'), not both")
+    keys = [k for k, _ in study_sweep(data, p)]
+    for sc in data["scenarios"]:
+        scenario_entry(sc, p, keys)
     return data
+
+
+_SWEEP_VALUE = (bool, int, float, str)
+
+
+def _flat(table: dict, prefix: str = "") -> list[tuple[str, object]]:
+    """A sweep table's (dotted key, values) pairs; nested tables (``[sweep.truth.maneuvers]``) flattened."""
+    out: list[tuple[str, object]] = []
+    for k, v in table.items():
+        key = f"{prefix}{k}"
+        out += _flat(v, key + ".") if isinstance(v, dict) else [(key, v)]
+    return out
+
+
+def study_sweep(data: dict, p: Path) -> list[tuple[str, list]]:
+    """The study's ``sweep``: (dotted setting, its values) pairs in file order; [] without one.
+
+    Each key is a setting in ``--set`` syntax (``truth.maneuvers.delta_v_ms``), each value a
+    non-empty list of distinct numbers, strings or booleans; a ConfigError names the file and key."""
+    table = data.get("sweep")
+    if table is None:
+        return []
+    if not isinstance(table, dict) or not table:
+        raise ConfigError(f"{p}: key 'sweep' must be a table of settings to lists of values, e.g. "
+                          'sweep = {"truth.maneuvers.delta_v_ms" = [0.1, 1.0]}')
+    out = []
+    for key, values in _flat(table):
+        where = f"{p}: key 'sweep', setting {key!r}"
+        if not all(part.strip() for part in key.split(".")):
+            raise ConfigError(f"{where}: not a dotted setting TABLE.KEY (as --set takes)")
+        if not isinstance(values, list) or not values:
+            raise ConfigError(f"{where}: must be a non-empty list of values, got {values!r}")
+        bad = [v for v in values if not isinstance(v, _SWEEP_VALUE)]
+        if bad:
+            raise ConfigError(f"{where}: values must be numbers, strings or booleans, got {bad[0]!r} (filters "
+                              "and IOD variants are the keys 'filters' and 'iod')")
+        if len({(type(v), v) for v in values}) != len(values):
+            raise ConfigError(f"{where}: repeats a value; each value must appear once (it names runs)")
+        out.append((key, list(values)))
+    return out
+
+
+def scenario_entry(entry: object, p: Path, sweep_keys: list[str]) -> tuple[str, list[str]]:
+    """A ``scenarios`` entry: (the scenario's name or path, the sweep settings that apply to it).
+
+    An entry is a name or path (every sweep setting applies), or a table ``{name = ..., sweep = ...}``
+    where ``sweep`` is true (every setting), false (none) or a list of the study's sweep settings."""
+    if isinstance(entry, str):
+        return entry, list(sweep_keys)
+    if not isinstance(entry, dict) or not isinstance(entry.get("name"), str):
+        raise ConfigError(f"{p}: entries of 'scenarios' must be names, paths or tables "
+                          f"{{name = ..., sweep = ...}}, got {entry!r}")
+    unknown = sorted(set(entry) - {"name", "sweep"})
+    if unknown:
+        raise ConfigError(f"{p}: scenario entry {entry['name']!r}: unknown key {unknown[0]!r}; allowed: name, sweep")
+    which = entry.get("sweep", True)
+    if isinstance(which, bool):
+        return entry["name"], list(sweep_keys) if which else []
+    if not isinstance(which, list) or not all(isinstance(k, str) for k in which):
+        raise ConfigError(f"{p}: scenario entry {entry['name']!r}: key 'sweep' must be true, false or a list "
+                          f"of the study's sweep settings, got {which!r}")
+    other = [k for k in which if k not in sweep_keys]
+    if other:
+        raise ConfigError(f"{p}: scenario entry {entry['name']!r}: key 'sweep' names {other[0]!r}, which is not "
+                          f"a setting of the study's 'sweep' ({', '.join(sweep_keys) or 'none'})")
+    return entry["name"], [k for k in sweep_keys if k in which]
 
 
 def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: int | None = None) -> list[int]:
