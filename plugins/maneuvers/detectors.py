@@ -15,11 +15,22 @@ mixture detector's per-update p is below 0.05 at 6.8 % and below 0.01 at 1.0 % o
 first three updates after the IOD have NIS below 0.1 (the prior is still far wider than the
 noise), later ones look like the rest. With ``false_alarm = 1e-4`` per test (two tests per
 update: 300 updates give at most 6 % of maneuver-free runs an alarm by the union bound) and two
-consecutive updates each below ``update_level = 0.01`` required, 300-update runs resampled from
-those updates raise an alarm in 0.75 % (nis-window) and 0.35 % (mixture-likelihood) of runs
-(0.1 % and 0 % resampling blocks of 10 consecutive updates); on the runs themselves neither
-fires, the largest statistic being 3.7 against the threshold 4. ``warmup = 5`` skips the
-collapsing first updates with a margin of two.
+of the window's updates each below ``update_level = 0.01`` required, neither detector fires on
+those runs (largest statistic 3.7, threshold 4), and 300-update runs resampled from their
+updates raise an alarm in 1.2 % (nis-window) and 0.9 % (mixture-likelihood) of runs (0.1 %
+resampling blocks of 10 consecutive updates); one gross outlier (NIS 400) among them fires in
+2-3 % of cases. With ``min_surprising = 1`` those become 4.4 % and 1.5 % of runs, and every
+gross outlier fires. ``warmup = 5`` skips the collapsing first updates with a margin of two.
+
+On a 1 m/s in-track burn in the gap before a pass (``example-1-burn``, same seeds) the first
+update after it has NIS 26-62 in four runs of five, and the PGM, whose prior is wide after the
+gap, absorbs much of the burn at once: the next updates may look consistent. Both detectors fire
+at the first pass after the burn in two runs, at the next pass (1.5-1.6 days after) in three;
+``t_burn_bounds`` holds the burn in four (the look-back of :mod:`.sequential`). With
+``min_surprising = 1`` four of five fire at the first update after the burn. A 10 cm/s
+station-keeping burn (``example-1-maneuver``) is detected 1.7-2.7 days after it, when the
+error has grown; the bounds then start after the burn (no update near it was surprising), so a
+burn estimate should search before ``t_burn_bounds[0]`` too.
 """
 from __future__ import annotations
 
@@ -40,8 +51,8 @@ class NisWindowDetector(SequentialDetector):
     nu and S from the prior's particles pushed through the sensor
     (:func:`cistrack.model.innovation.innovation`). The sum over the last ``window`` updates is
     tested against chi2(summed dof) and the newest alone against chi2(m), each at
-    ``false_alarm``; a detection also needs the last ``min_consecutive`` updates each beyond
-    their own ``update_level`` quantile.
+    ``false_alarm``; a detection also needs ``min_surprising`` of the window's updates each
+    beyond their own ``update_level`` quantile.
 
     Parameters
     ----------
@@ -51,29 +62,29 @@ class NisWindowDetector(SequentialDetector):
     false_alarm : float
         Per-test false-alarm probability of the window and single-update tests, in (0, 0.5].
         1e-4: a run of 150-300 updates makes 300-600 tests, so at most 3 % to 6 % of
-        maneuver-free runs cross it by the union bound, before ``min_consecutive`` removes most
-        of those (chance rarely makes two surprising updates in a row): below 1 % of runs,
-        measured (module docstring).
+        maneuver-free runs cross it by the union bound, before ``min_surprising`` removes most
+        of those (chance rarely makes two surprising updates in one window): about 1 % of
+        runs, measured (module docstring).
     warmup : int
         Updates after :meth:`reset` that are judged but never fire nor enter the window: the
         first updates after the IOD, while the particle cloud still collapses onto the
         measurements (their NIS is near 0 and says nothing about a burn). Call :meth:`reset`
         when the filter restarts from a new cloud, to skip its first updates again.
-    min_consecutive : int
-        A detection needs this many of the latest updates each individually surprising at
+    min_surprising : int
+        A detection needs this many of the window's updates each individually surprising at
         ``update_level``; 2 keeps one gross outlier among good measurements from firing by
-        itself (a burn biases every later update), at the cost of one update's delay for a
-        large burn. 1 fires on the first gross update. At most ``window``.
+        itself (a burn biases later updates too), at the cost of at least one update's delay,
+        and of a pass or more where the filter absorbs the burn at its first update after it
+        (module docstring). 1 fires on the first gross update. At most ``window``.
     update_level : float
         Per-update tail probability below which an update counts as surprising for
-        ``min_consecutive``, in [false_alarm, 1]. 0.01: two chance updates in a row below it
-        have probability 1e-4, while a burn that the window test sees makes most updates after it
-        surprising.
+        ``min_surprising``, in [false_alarm, 1]. 0.01: two chance updates of one window below it
+        have probability ~3e-4.
     """
 
-    def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_consecutive: int = 2,
+    def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
                  update_level: float = 0.01) -> None:
-        self._init_test(window, false_alarm, warmup, min_consecutive, update_level)
+        self._init_test(window, false_alarm, warmup, min_surprising, update_level)
 
     def _contribution(self, t, prior, group, sensor):
         inn = innovation(prior, group, sensor)
@@ -104,9 +115,9 @@ class MixtureLikelihoodDetector(SequentialDetector):
     warmup : int
         Updates after :meth:`reset` that are judged but never fire nor enter the window (see
         ``nis-window``).
-    min_consecutive : int
-        A detection needs this many of the latest updates each with p < ``update_level``
-        (at most ``window``).
+    min_surprising : int
+        A detection needs this many of the window's updates each with p < ``update_level``
+        (at most ``window``; see ``nis-window``).
     update_level : float
         Per-update p below which an update counts as surprising, in [false_alarm, 1].
     n_draws : int
@@ -117,11 +128,11 @@ class MixtureLikelihoodDetector(SequentialDetector):
         any process and do not depend on the order of runs.
     """
 
-    def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_consecutive: int = 2,
+    def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
                  update_level: float = 0.01, n_draws: int = 2000, seed: int = 52) -> None:
         self.n_draws = check_int(self, "n_draws", n_draws, minimum=0, maximum=10_000_000)
         self.seed = check_int(self, "seed", seed, minimum=0)
-        self._init_test(window, false_alarm, warmup, min_consecutive, update_level)
+        self._init_test(window, false_alarm, warmup, min_surprising, update_level)
 
     def _contribution(self, t, prior, group, sensor):
         weights, means, covs = predictive_mixture(prior, group, sensor)

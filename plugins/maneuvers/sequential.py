@@ -5,11 +5,19 @@ when the filter is consistent (the NIS with m dof; or -2 ln p, with 2 dof, of a 
 probability p). The test sums the contributions of the last ``window`` updates (a sum of
 independent chi-squares is chi-square with the summed dof) and also tests the newest one alone;
 each is expressed as a surprise, -log10 of its tail probability, and compared with
--log10(false_alarm). A detection further needs the last ``min_consecutive`` updates each
-individually surprising at ``update_level``, so that one gross outlier among good measurements
-does not fire by itself. ``warmup`` updates after :meth:`reset` are judged but never fire and do
-not enter the window (the filter settles after its IOD). After a detection the window is
-cleared: the next test starts on new evidence only.
+-log10(false_alarm). A detection further needs at least ``min_surprising`` of the window's
+updates each individually surprising (tail probability below ``update_level``), so that one
+gross outlier among good measurements does not fire by itself. ``warmup`` updates after
+:meth:`reset` are judged but never fire and do not enter the window (the filter settles after
+its IOD). After a detection the window is cleared: the next test starts on new evidence only.
+
+The burn's interval, ``Detection.t_burn_bounds = (t_lo, t)``: ``t_lo`` is the time of the update
+before the window's first surprising one, or before an earlier *gross* update (tail probability
+below ``false_alarm``) among the last ``LOOKBACK_WINDOWS`` windows' worth of updates since the
+previous detection, whichever is earlier. A filter whose prior is wide (after a gap between
+passes) absorbs much of a burn at the first update after it: that update is gross, the next
+ones may look consistent until the error grows again, and the detection comes passes later;
+the look-back keeps the burn inside the bounds then.
 """
 from __future__ import annotations
 
@@ -24,9 +32,12 @@ from cistrack.interfaces.component import check_int, check_range
 from cistrack.interfaces.maneuvers import Detection, ManeuverDetector
 from cistrack.model.measurement import Measurement, StackedMeasurement
 
-__all__ = ["SequentialDetector", "chi2_log10_sf", "measurement_group"]
+__all__ = ["SequentialDetector", "chi2_log10_sf", "measurement_group", "LOOKBACK_WINDOWS"]
 
 _LN10 = math.log(10.0)
+
+LOOKBACK_WINDOWS = 5
+"""How many windows' worth of past updates a gross update may widen ``t_burn_bounds`` over."""
 
 
 def chi2_log10_sf(x: float, dof: float) -> float:
@@ -73,6 +84,7 @@ class _Entry:
     c: float            # chi-square contribution
     dof: float
     surprising: bool    # tail probability below update_level
+    gross: bool         # tail probability below false_alarm
 
 
 class SequentialDetector(ManeuverDetector):
@@ -83,18 +95,18 @@ class SequentialDetector(ManeuverDetector):
     window: int
     false_alarm: float
     warmup: int
-    min_consecutive: int
+    min_surprising: int
     update_level: float
 
-    def _init_test(self, window: int, false_alarm: float, warmup: int, min_consecutive: int,
+    def _init_test(self, window: int, false_alarm: float, warmup: int, min_surprising: int,
                    update_level: float) -> None:
         self.window = check_int(self, "window", window, minimum=1, maximum=1000)
         self.false_alarm = check_range(self, "false_alarm", false_alarm, 0.0, 0.5, lo_open=True)
         self.warmup = check_int(self, "warmup", warmup, minimum=0)
-        self.min_consecutive = check_int(self, "min_consecutive", min_consecutive, minimum=1)
-        if self.min_consecutive > self.window:
-            raise ParameterError(f"{self._label()}: parameter 'min_consecutive' = {min_consecutive!r} is invalid: "
-                                 f"must be <= window ({self.window}); the consecutive updates lie in the window")
+        self.min_surprising = check_int(self, "min_surprising", min_surprising, minimum=1)
+        if self.min_surprising > self.window:
+            raise ParameterError(f"{self._label()}: parameter 'min_surprising' = {min_surprising!r} is invalid: "
+                                 f"must be <= window ({self.window}); the surprising updates are counted in the window")
         self.update_level = check_range(self, "update_level", update_level, 0.0, 1.0, lo_open=True)
         if self.update_level < self.false_alarm:
             raise ParameterError(f"{self._label()}: parameter 'update_level' = {update_level!r} is invalid: must be "
@@ -103,6 +115,7 @@ class SequentialDetector(ManeuverDetector):
 
     def reset(self) -> None:
         self._entries: deque[_Entry] = deque(maxlen=self.window)
+        self._recent: deque[_Entry] = deque(maxlen=LOOKBACK_WINDOWS * self.window)
         self._seen = 0
         self._last_t: float | None = None
 
@@ -128,17 +141,20 @@ class SequentialDetector(ManeuverDetector):
         self._seen += 1
         if self._seen <= self.warmup:
             return single, None
-        self._entries.append(_Entry(t, before, c, dof, single > -math.log10(self.update_level)))
+        entry = _Entry(t, before, c, dof, single > -math.log10(self.update_level), single > self.threshold)
+        self._entries.append(entry)
+        self._recent.append(entry)
         total_c = sum(e.c for e in self._entries)
         total_dof = sum(e.dof for e in self._entries)
         statistic = max(single, -chi2_log10_sf(total_c, total_dof))
-        recent = list(self._entries)[-self.min_consecutive:]
-        if statistic < self.threshold or len(recent) < self.min_consecutive or not all(e.surprising for e in recent):
+        if statistic < self.threshold or sum(e.surprising for e in self._entries) < self.min_surprising:
             return statistic, None
         first = next(e for e in self._entries if e.surprising)
+        t_lo = min([first.t_before] + [e.t_before for e in self._recent if e.gross])
         extra = dict(extra, window_sum=total_c, window_dof=total_dof, window_updates=len(self._entries),
                      update_surprise=single)
         det = Detection(t=t, statistic=statistic, threshold=self.threshold, detector=self.registry_name or type(self).__name__,
-                        t_burn_bounds=(first.t_before, t), extra=extra)
+                        t_burn_bounds=(t_lo, t), extra=extra)
         self._entries.clear()
+        self._recent.clear()
         return statistic, det
