@@ -56,6 +56,11 @@ _SEED_OPTIONS = FitOptions(max_iterations=60, max_condition=1e30, max_weak_sigma
 10 % rejected: from a grid point the first pass can settle where whole tracklets disagree, and the
 fit's default cap (half) let it reject them and keep a wrong orbit (9 of 22 clean observations
 rejected, 55 km off, on one 9:2 NRHO set)."""
+_PATIENT_OPTIONS = FitOptions(max_iterations=300, max_condition=1e30, max_weak_sigma_km=1e30, max_reject_fraction=0.1)
+"""The seed's least squares again, with more iterations, when no seed converged within
+:data:`_SEED_OPTIONS`' (only then: the fits that converge within them stay as they were). Two
+tracklets of one site four days apart (2025-010D on 2025-12-21 and 25, 7 and 5 exposures) leave
+the orbit weakly determined, and Levenberg-Marquardt needed 84 iterations from the best grid state."""
 
 
 class TrackletRangingIOD(IODMethod):
@@ -151,7 +156,7 @@ class TrackletRangingIOD(IODMethod):
                                  range_max_km=self.range_max_km, max_c3=self.max_c3)
 
     def _seed_fit(self, dyn: Dynamics, sensor: Sensor, ms: MeasurementSet, atts: list[Attributable],
-                  k: int) -> tuple[FitResult | None, np.ndarray, dict]:
+                  k: int, options: FitOptions = _SEED_OPTIONS) -> tuple[FitResult | None, np.ndarray, dict]:
         """(fit, rows, record) of the ranging from tracklet ``k`` scored on the next tracklets."""
         others = [j for j in range(len(atts)) if j != k]
         others.sort(key=lambda j: (atts[j].t < atts[k].t, abs(atts[j].t - atts[k].t)))
@@ -160,7 +165,7 @@ class TrackletRangingIOD(IODMethod):
         states, rho = self._grid(atts[k])
         score = score_states(dyn, sensor, ms, np.setdiff1d(rows, atts[k].indices), states, atts[k].t)
         grid = ScoredGrid(states, rho, score, atts[k].t)
-        fit, best, tried = refine(dyn, sensor, ms, rows, grid, tries=self.tries, options=_SEED_OPTIONS)
+        fit, best, tried = refine(dyn, sensor, ms, rows, grid, tries=self.tries, options=options)
         rec = {"seed": k, "scored_on": score_with, "grid_states": int(len(states)), "fits_tried": tried,
                "start_range_km": float(rho[best]) if best >= 0 else None,
                "converged": bool(fit is not None and fit.converged)}
@@ -187,19 +192,31 @@ class TrackletRangingIOD(IODMethod):
             return self._lone(atts[0], rng)
         return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
 
+    def _first_seed(self, dyn, sensor, ms, atts, order) -> tuple[int, FitResult | None, np.ndarray, dict, list]:
+        """(seed, fit, rows, its record, every record) of the first seed tracklet whose ranging gives a
+        converged fit: with :data:`_SEED_OPTIONS`, then, when none does, again with
+        :data:`_PATIENT_OPTIONS` (fit None when none does then either)."""
+        records: list[dict] = []
+        for options in (_SEED_OPTIONS, _PATIENT_OPTIONS):
+            for k in order[:self.seeds]:
+                fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k, options)
+                if options is _PATIENT_OPTIONS:
+                    rec["max_iterations"] = options.max_iterations
+                records.append(rec)
+                if fit is not None and fit.converged:
+                    return k, fit, rows, rec, records
+        return -1, None, np.zeros(0, dtype=int), {}, records
+
     def _ranged(self, dyn, sensor, ms, atts, order, rng, who) -> ParticleCloud:
-        records = []
-        for k in order[:self.seeds]:
-            fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k)
-            records.append(rec)
-            if fit is not None and fit.converged:
-                break
-        else:
+        k, fit, rows, rec, records = self._first_seed(dyn, sensor, ms, atts, order)
+        if fit is None:
             raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} "
                            f"tried: {records}); check the observations or widen range_min_km/range_max_km")
+        patient = (f"; its least squares needed more than {_SEED_OPTIONS.max_iterations} iterations (given "
+                   f"{_PATIENT_OPTIONS.max_iterations})") if "max_iterations" in rec else ""
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"
                + self._why_not_first(atts, order, k) + "), scored on tracklets "
-               + ", ".join(str(j + 1) for j in rec["scored_on"]))
+               + ", ".join(str(j + 1) for j in rec["scored_on"]) + patient)
         info = {"why": why, "tracklets": tracklet_record(atts), "seeds_tried": records,
                 "seed_rows": [int(i) for i in rows], "extension": []}
         if self.arc == "all":
