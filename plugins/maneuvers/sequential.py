@@ -27,7 +27,7 @@ from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from cistrack.errors import MeasurementError, ParameterError
+from cistrack.errors import FilterError, MeasurementError, ParameterError
 from cistrack.interfaces.component import check_int, check_range
 from cistrack.interfaces.maneuvers import Detection, ManeuverDetector
 from cistrack.model.measurement import Measurement, StackedMeasurement
@@ -35,6 +35,9 @@ from cistrack.model.measurement import Measurement, StackedMeasurement
 __all__ = ["SequentialDetector", "chi2_log10_sf", "measurement_group", "LOOKBACK_WINDOWS"]
 
 _LN10 = math.log(10.0)
+
+_MAX_CONTRIBUTION = 1e12
+"""Contributions are capped here (NIS 1e12: a surprise of ~2e11), so the statistic stays finite."""
 
 LOOKBACK_WINDOWS = 5
 """How many windows' worth of past updates a gross update may widen ``t_burn_bounds`` over."""
@@ -135,13 +138,17 @@ class SequentialDetector(ManeuverDetector):
             raise MeasurementError(f"{self._label()}: updates must come in time order with finite times; got t = {t!r} "
                                    f"after {self._last_t!r} (call reset() for a new run)")
         c, dof, extra = self._contribution(t, prior, measurement_group(measurements), sensor)
+        if not c >= 0.0:
+            raise FilterError(f"{self._label()}: the update at t = {t!r} gives the test contribution {c!r}; the prior "
+                              "or the measurements are not finite, or the predicted covariance is not positive definite")
+        c = min(float(c), _MAX_CONTRIBUTION)
         single = -chi2_log10_sf(c, dof)
         before = t if self._last_t is None else self._last_t
         self._last_t = t
         self._seen += 1
         if self._seen <= self.warmup:
             return single, None
-        entry = _Entry(t, before, c, dof, single > -math.log10(self.update_level), single > self.threshold)
+        entry = _Entry(t, before, c, dof, single > -math.log10(self.update_level), single >= self.threshold)
         self._entries.append(entry)
         self._recent.append(entry)
         total_c = sum(e.c for e in self._entries)

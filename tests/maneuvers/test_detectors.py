@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2
 
-from cistrack.errors import MeasurementError, ParameterError
+from cistrack.errors import FilterError, MeasurementError, ParameterError
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
 from cistrack.model.innovation import innovation
 from cistrack.model.measurement import Measurement, StackedMeasurement
@@ -275,3 +275,11 @@ def test_t_burn_bounds_reach_back_to_a_recent_gross_update_the_filter_absorbed(c
     seq = _with_gross_update(linear_gaussian_updates(40, seed=15, step_at=26), 8)
     det = next(d for _, d in _run(cls(), seq) if d is not None)
     assert det.t_burn_bounds == (seq.times[25], det.t)
+
+
+def test_a_prior_without_finite_numbers_is_refused_by_name():
+    seq = linear_gaussian_updates(1, seed=16)
+    p = seq.priors[0]
+    bad = Belief(p.epoch, p.mixture, ParticleCloud(np.full_like(p.samples.states, np.nan), p.epoch))
+    with pytest.raises(FilterError, match="nis-window|NisWindowDetector"):
+        NisWindowDetector().observe(seq.times[0], bad, seq.groups[0], seq.sensor)
