@@ -82,6 +82,8 @@ class NisWindowDetector(SequentialDetector):
         have probability ~3e-4.
     """
 
+    registry_name = "nis-window"  # also when built without the registry: Detection.detector names it
+
     def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
                  update_level: float = 0.01) -> None:
         self._init_test(window, false_alarm, warmup, min_surprising, update_level)
@@ -127,6 +129,8 @@ class MixtureLikelihoodDetector(SequentialDetector):
         Seeds the Monte Carlo generator together with the update's time, so results repeat in
         any process and do not depend on the order of runs.
     """
+
+    registry_name = "mixture-likelihood"
 
     def __init__(self, window: int = 3, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
                  update_level: float = 0.01, n_draws: int = 2000, seed: int = 52) -> None:
