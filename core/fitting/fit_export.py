@@ -202,9 +202,11 @@ def _prediction(result: FitResult, dynamics, times: np.ndarray, covariance: str)
     """The fit at ``times``: :func:`predict_orbit`, and with an estimated area-to-mass ratio the
     covariances of the joint covariance of state and ratio
     (:func:`cistrack.least_squares.area_to_mass.joint_covariances`)."""
-    pred = predict_orbit(result, dynamics, times, covariance=covariance)
     joint = joint_covariances(dynamics, result, times, covariance)
-    return pred if joint is None else pred._replace(covariances=joint[0], linear=joint[1])
+    if joint is None:
+        return predict_orbit(result, dynamics, times, covariance=covariance)
+    pred = predict_orbit(result, dynamics, times, covariance="linear")  # its states; not its covariances
+    return pred._replace(covariances=joint[0], linear=joint[1])
 
 
 def _estimated_area_to_mass(record: dict[str, Any]) -> dict[str, Any] | None:
@@ -330,7 +332,8 @@ def _covariance_comments(record: dict[str, Any], covariance: str, linear: np.nda
     if covariance == "linear":
         comments.append("covariance propagated linearly (state transition matrices)")
         return comments
-    comments.append("covariance propagated by the unscented transform (the fit state and 12 sigma points "
+    points = "14 sigma points of state and C_R A/m" if _estimated_area_to_mass(record) else "12 sigma points"
+    comments.append(f"covariance propagated by the unscented transform (the fit state and {points} "
                     "through the dynamics)")
     if np.any(linear):
         where = np.flatnonzero(linear)
