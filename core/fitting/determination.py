@@ -28,6 +28,10 @@ about 9 km of drift a day), or when the fit itself flagged a direction as nearly
 otherwise **well determined**. The range is called unconstrained above
 :data:`UNCONSTRAINED_RANGE_FRACTION` (1e-2). Measured on simulated 9:2 NRHO campaigns (1.0
 arcsec): one night from one site gives 390 km (1e-3); two weeks from three sites 0.8 km (2e-6).
+
+One **lone tracklet** (RA/Dec of one site within :data:`LONE_TRACKLET_HOURS`) determines no orbit
+at all: :func:`is_lone_tracklet` says so, :func:`sky_motion` gives its place and rates on the sky
+and :func:`lone_tracklet_report` the words ``cistrack fit`` prints instead of a fit.
 """
 from __future__ import annotations
 

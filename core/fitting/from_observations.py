@@ -23,7 +23,9 @@ tracklets, the least squares extended over the whole arc: ``cistrack.plugins.iod
 with ``arc = "all"``: its cloud lies at the last observation, the filter has nothing left to do, and
 the least squares starts from the IOD's orbit. The fit's messages say which observations seeded it,
 by which method and why (:func:`seeding_text`); a fit of less than a day of observations says in
-words that the orbit is poorly determined.
+words that the orbit is poorly determined. Observations that are one lone tracklet (one site, at
+most two hours) determine no orbit: nothing runs, and ``ObjectFit.undetermined`` says so with the
+tracklet's sky motion and admissible region (:func:`cistrack.fitting.determination.lone_tracklet_report`).
 
 The fit epoch is the last observation by default (``--set fit.epoch=middle|first``): measured on
 the shipped example (65 observations, 6 days, ephemeris dynamics) the unit-diagonal normal matrix
