@@ -261,11 +261,14 @@ def sky_motion(measurements: MeasurementSet, epoch) -> dict:
             "position_angle_deg": float(np.degrees(np.arctan2(east, north)) % 360.0)}
 
 
-def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch) -> dict:
+def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch, curve: dict | None = None) -> dict:
     """What one tracklet gives when it cannot determine an orbit: ``sentence`` (why, in words),
-    ``tracklet`` (:func:`sky_motion`) and ``admissible_region`` (``region``: the ranging IOD's
-    ``range_km``, ``range_rate_kms``, ``max_c3_km2_s2``; or ``why_none``)."""
+    ``tracklet`` (:func:`sky_motion`, with the ranging IOD's ``misfit_sigma`` and ``consistent`` of
+    its exposures about their own curve when ``curve`` gives them) and ``admissible_region``
+    (``region``: the ranging IOD's ``range_km``, ``range_rate_kms``, ``max_c3_km2_s2``; or
+    ``why_none``)."""
     sky = sky_motion(measurements, epoch)
+    sky.update({k: curve[k] for k in ("misfit_sigma", "consistent") if curve and k in curve})
     where = ""
     if "range_km" in region:
         lo, hi = region["range_km"]
@@ -277,4 +280,7 @@ def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch) -> d
                 f"{sky['span_minutes']:.0f} min from site {sky['site'] or '(the sensor)'} give two angles and their "
                 f"rates, not the range and the range rate{where}; observe the object again on another night (or "
                 "from another site) and fit all the observations together")
+    if sky.get("consistent") is False:
+        sentence += (f"; its exposures miss their own curve by {sky['misfit_sigma']:.0f} sigma (a gross outlier "
+                     "among them?)")
     return {"sentence": sentence, "tracklet": sky, "admissible_region": dict(region)}

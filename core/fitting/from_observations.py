@@ -538,9 +538,10 @@ def _lone_tracklet(one: ObjectFit, obs: ObjectObservations, job: _Job) -> bool:
         sensor = build_site_network(scen.components["sensor"], job.registry, ms)
         cloud = ranging.build("iod", job.registry).estimate(ms, sensor, np.random.default_rng(0))
         region = dict(cloud.meta.get("admissible_region", {}))
+        curve = (cloud.meta.get("tracklets") or [{}])[0]
     except CistrackError as exc:
-        region = {"why_none": f"no admissible region: {exc}"}
-    one.undetermined = lone_tracklet_report(ms, region, scen.epoch)
+        region, curve = {"why_none": f"no admissible region: {exc}"}, {}
+    one.undetermined = lone_tracklet_report(ms, region, scen.epoch, curve)
     one.failure = one.undetermined["sentence"]
     job.say(f"{one.designation}: {one.failure}")
     return True

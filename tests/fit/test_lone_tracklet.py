@@ -114,3 +114,18 @@ def test_sky_motion_of_a_straight_track():
     assert sky["ra_cos_dec_rate_arcsec_min"] == pytest.approx(rad_per_min * np.cos(0.30025) / units.ARCSEC_RAD, rel=1e-3)
     assert sky["dec_rate_arcsec_min"] == pytest.approx(0.0005 / 30.0 / units.ARCSEC_RAD, rel=1e-9)
     assert sky["span_minutes"] == pytest.approx(30.0) and sky["n_observations"] == 3
+
+
+def test_a_gross_outlier_in_the_tracklet_is_named(tmp_path):
+    """The ranging IOD's curve through the exposures (a parabola for 4 or more) flags one 180" off."""
+    rows = [r.split("|") for r in ROWS]
+    rows[2][5] = repr(float(rows[2][5]) + 0.05)
+    rc, out, rec = _fit(tmp_path, ["|".join(r) for r in rows])
+    assert rc == 3 and rec["undetermined"]["tracklet"]["consistent"] is False
+    assert "miss their own curve" in rec["failure"]
+
+
+def test_a_clean_tracklet_lies_on_its_curve(tmp_path):
+    _rc, _out, rec = _fit(tmp_path, ROWS)
+    assert rec["undetermined"]["tracklet"]["consistent"] is True
+    assert rec["undetermined"]["tracklet"]["misfit_sigma"] < 5.0
