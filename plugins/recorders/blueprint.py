@@ -16,7 +16,9 @@ import numpy as np
 
 from cistrack.lazy import LazyModule
 
-from .run_series import NEES_BAND, NEES_BAND_ENTITIES, SERIES
+from .maneuver_marks import (DETECTIONS, ESTIMATED_BURNS, NEES_BURNS, NEES_DETECTIONS, STATISTIC,
+                             STATISTIC_BURNS, THRESHOLD)
+from .run_series import NEES_BAND, NEES_BAND_ENTITIES, SERIES, nees_y_range
 
 rrb = LazyModule("rerun.blueprint")  # loads with the first recording, not with the registry
 
@@ -128,15 +130,58 @@ def _eye(eye: tuple[np.ndarray, np.ndarray] | None):
                              eye_up=(0.0, 0.0, 1.0))
 
 
+def _log_columns():
+    """The maneuver log's one column: the text, which says what each entry is and its time in days
+    (a ``utc`` column this narrow shows "2..." only)."""
+    from rerun.blueprint.archetypes import TextLogColumns
+    from rerun.blueprint.encodings import TextLogColumn, TimelineColumn
+
+    return TextLogColumns(timeline_columns=[TimelineColumn(t, visible=False) for t in TIMELINES],
+                          text_log_columns=[TextLogColumn("body")])
+
+
+def _series_column(r: tuple[float, float] | None, watching: bool, burns: bool):
+    """The right column: the time series (:func:`default_blueprint`), with the maneuver detector's
+    panel when the run ``watching`` for maneuvers and the maneuvers' text log when it has truth
+    ``burns``."""
+    nees_title = f"log10 NEES; grey: chi-square 90 % band ({NEES_BAND[0]:.1f} to {NEES_BAND[1]:.1f})"
+    if burns:
+        nees_title = (f"log10 NEES, grey: 90 % band ({NEES_BAND[0]:.1f} to {NEES_BAND[1]:.1f}); "
+                      "detections red, burns orange")
+    nees_extra = ([NEES_DETECTIONS] if watching else []) + ([f"{NEES_BURNS}/**"] if burns else [])
+    panels = [
+        _series("Position, log10 km: error red; 1-sigma x blue, y green, z orange",
+                [s.entity for s in SERIES if s.panel == "position"], r),
+        _series("Velocity, log10 m/s: error red; 1-sigma x blue, y green, z orange",
+                [s.entity for s in SERIES if s.panel == "velocity"], r),
+        _series("Entropy, nats", ["metrics/entropy"], r),
+        _series(nees_title, ["series/nees/nees", *NEES_BAND_ENTITIES, *nees_extra], r, y_range=nees_y_range()),
+    ]
+    if watching:
+        panels.append(_series(
+            "Maneuver test -log10 p blue, threshold grey; detections red, "
+            + ("burns: truth orange, fit green" if burns else "fitted burns green"),
+            [STATISTIC, THRESHOLD, DETECTIONS, ESTIMATED_BURNS, *([f"{STATISTIC_BURNS}/**"] if burns else [])], r))
+    panels.append(_series("Component weights, largest first (brightest)", ["components/ranked/**"], r,
+                          y_range=(0.0, 1.05)))
+    if not burns:
+        return rrb.Vertical(*panels)
+    log = rrb.TextLogView(origin="/maneuvers", name="Maneuvers: truth burns, detections, estimates",
+                          columns=_log_columns())
+    return rrb.Vertical(*panels, log, row_shares=[1.0] * len(panels) + [1.4])
+
+
 def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[float, float] | None = None,
-                      live: bool = False) -> rrb.Blueprint:
+                      live: bool = False, watching: bool = False, burns: bool = False) -> rrb.Blueprint:
     """What the viewer shows at first open.
 
     ``system_km`` (N, 3): points the system view frames from above (Earth, Moon, L1, L2 and the
     truth trajectory); ``utc_range_s``: the run's first and last time on the ``utc`` timeline,
     unix seconds, which set the series' x axes and the playback speed (:func:`playback_speed`);
     ``live``: the run streams to a viewer (follow the newest data instead of opening paused at the
-    start).
+    start); ``watching``: the run's updates carry the maneuver detector's statistic (its panel
+    beside the NEES); ``burns``: the truth has burns (their lines on both panels and a text log of
+    the maneuvers, see :mod:`.maneuver_marks`).
     """
     r = utc_range_s
     run_view = rrb.Spatial3DView(
@@ -148,22 +193,10 @@ def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[fl
                                eye_controls=_eye(camera_for(system_km, direction=(0.0, -0.35, 1.0),
                                                             distance=0.78)),
                                background=rrb.BackgroundKind.GradientDark)
-    lo, hi = (float(np.log10(b)) for b in NEES_BAND)
-    series = rrb.Vertical(
-        _series("Position, log10 km: error red; 1-sigma x blue, y green, z orange",
-                [s.entity for s in SERIES if s.panel == "position"], r),
-        _series("Velocity, log10 m/s: error red; 1-sigma x blue, y green, z orange",
-                [s.entity for s in SERIES if s.panel == "velocity"], r),
-        _series("Entropy, nats", ["metrics/entropy"], r),
-        _series(f"log10 NEES; grey: chi-square 90 % band ({NEES_BAND[0]:.1f} to {NEES_BAND[1]:.1f})",
-                ["series/nees/nees", *NEES_BAND_ENTITIES], r, y_range=(lo - 1.0, hi + 1.0)),
-        _series("Component weights, largest first (brightest)", ["components/ranked/**"], r,
-                y_range=(0.0, 1.05)),
-    )
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(run_view, system, row_shares=[3, 2]),
-            series,
+            _series_column(r, watching, burns),
             column_shares=[3, 2],
         ),
         rrb.TimePanel(timeline="utc", state="collapsed", playback_speed=playback_speed(r),

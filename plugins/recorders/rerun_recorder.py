@@ -31,6 +31,8 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 ``components/ranked/<k>``       the k-th largest weight (0 beyond the components there are)
 ``series/<panel>/<name>``       log10 of errors and sigmas, NEES and its chi-square band (:mod:`.run_series`)
 ``run/info``, ``run/summary``   text: run id, components, seed; the run's summary
+``maneuvers/...``, ...          truth burns, the detector's statistic, detections, estimated burns
+                                (:mod:`.maneuver_marks`)
 =============================  ==========================================================
 
 Timelines: ``step`` (step index), ``utc`` (simulation time) and ``event`` (one tick per hook
@@ -62,8 +64,10 @@ from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .blueprint import default_blueprint
 from .estimate_frame import line_through_frame
+from .maneuver_marks import ManeuverMarks
 from .observers_view import log_observers
 from .run_extents import system_points_km, utc_range_s
+from .run_series import log10_series
 from .run_view_log import log_estimate_frame, log_run_view_styles, log_series
 from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
                              start_viewer)
@@ -174,6 +178,7 @@ class RerunRecorder(Component):
             self._fail("frame", frame, f"must be one of {', '.join(map(repr, VIEW_FRAMES))}")
         self.frame = frame
         self._view: ViewFrame | None = None
+        self._marks: ManeuverMarks | None = None
         if self.path is None and not self.serve and not self.spawn:
             raise ParameterError(f"{self._label()}: nothing to record to; give a path, serve=True "
                                  "or spawn=True")
@@ -206,6 +211,7 @@ class RerunRecorder(Component):
         state = self.__dict__.copy()
         state["_rec"] = None
         state["_viewer"] = None
+        state["_marks"] = None  # holds the run's maneuver watch
         return state
 
     # -- what a caller may ask after run_started --------------------------------------------------
@@ -243,11 +249,13 @@ class RerunRecorder(Component):
         self.close()
         self._view = ViewFrame(self.frame, run)
         self._epoch = parse_utc(run.epoch)
+        self._marks = ManeuverMarks(run, self._view, self._epoch)
         self._rec = self._open(run)
         self._event = 0
         self._n_ranks = 0
         self._mu = system_mu(run.dynamics)
         self._log_scene(self._rec, run)
+        self._marks.log_start(self._rec, run)
 
     @hookimpl
     def cistrack_step_predicted(self, run, step) -> None:
@@ -270,6 +278,8 @@ class RerunRecorder(Component):
         lines = [f"- **{k}**: {v}" for k, v in data.items()]
         rec.log("run/summary", rr.TextDocument("\n".join(lines) or "(no summary)",
                                                media_type=rr.MediaType.MARKDOWN), static=True)
+        if self._marks is not None:
+            self._marks.log_finish(rec, summary)
         rec.flush()
         rr.bindings.finalize_deferred_sinks(recording=rec.to_native())
         if not (self.serve or self.spawn):
@@ -311,9 +321,10 @@ class RerunRecorder(Component):
             sinks.append(rr.GrpcServerSink(bind_ip=LOOPBACK, port=self.serve_port))
         if self.spawn:
             sinks.append(rr.GrpcSink(self._start_viewer()))
-        rec.set_sinks(*sinks, default_blueprint=default_blueprint(system_points_km(run, self._view),
-                                                                  utc_range_s(run, self._epoch),
-                                                                  live=self.serve or self.spawn))
+        marks = self._marks
+        rec.set_sinks(*sinks, default_blueprint=default_blueprint(
+            system_points_km(run, self._view), utc_range_s(run, self._epoch), live=self.serve or self.spawn,
+            watching=marks is not None and marks.watching, burns=marks is not None and bool(marks.burns)))
         rec.send_recording_name(str(run.run_id))
         return rec
 
@@ -410,6 +421,8 @@ class RerunRecorder(Component):
             _log_numbers(rec, "diagnostics", step.diagnostics)
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
             self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
+            if self._marks is not None:
+                self._marks.log_step(rec, step, log10_series(step.metrics).get("series/nees/nees"))
 
     def _log_moon(self, rec: rr.RecordingStream, run, t: float) -> None:
         """The Moon as a solid sphere (km) in views where it moves (not the synodic one)."""

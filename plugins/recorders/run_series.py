@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 __all__ = ["NEES_BAND", "NEES_BAND_ENTITIES", "SERIES", "Series", "log10_series", "nees_band_series",
-           "ranked_weights", "rank_entity"]
+           "nees_y_range", "ranked_weights", "rank_entity"]
 
 NEES_BAND = (1.6354, 12.5916)
 """5 % and 95 % points of chi-square with 6 degrees of freedom: 90 % of a consistent filter's
@@ -65,6 +65,12 @@ def log10_series(metrics: dict) -> dict[str, float]:
 def nees_band_series() -> dict[str, float]:
     """The chi-square band's two edges in log10, logged beside every NEES value."""
     return {e: math.log10(b) for e, b in zip(NEES_BAND_ENTITIES, NEES_BAND)}
+
+
+def nees_y_range() -> tuple[float, float]:
+    """The NEES panel's y range, log10: a decade either side of the chi-square band."""
+    lo, hi = (math.log10(b) for b in NEES_BAND)
+    return lo - 1.0, hi + 1.0
 
 
 def ranked_weights(weights: np.ndarray, n_ranks: int) -> np.ndarray:
