@@ -6,7 +6,10 @@ variant and filter. Files: ``summary.csv`` (one row per group), ``summary.md``, 
 run's verdict and reason) and ``custody_by_filter.csv`` (:mod:`cistrack.studies.report_verdicts`); the
 plots are drawn by :mod:`cistrack.studies.report_plots` and :mod:`cistrack.studies.calibration_plots`. Two ANEES
 figures are reported and named apart: over every update of every run (``anees_every_update``)
-and over the runs' final states (``final_anees``, with its chi-square bounds).
+and over the runs' final states (``final_anees``, with its chi-square bounds). When any run has a
+truth burn or a detected maneuver, a "Maneuvers" table (``maneuvers.csv``, summary.md, terminal;
+:mod:`cistrack.studies.maneuver_scores`) and two figures (``maneuver_detection``,
+``maneuver_false_alarms``) are added.
 """
 from __future__ import annotations
 
@@ -349,6 +352,34 @@ def _figures(groups: dict, tables: dict, rows: list[dict], rep_dir: Path, name: 
                                        {(r["scenario"], r["iod"], r["filter"]): r for r in rows})
 
 
+def _maneuver_rows(specs, groups: dict, tables: dict) -> list[dict]:
+    """The "Maneuvers" rows (:mod:`cistrack.studies.maneuver_scores`), one per group; none when no
+    run has a truth burn or a detection."""
+    from cistrack.studies.maneuver_scores import GroupRuns, has_maneuvers, maneuver_rows
+
+    sums = {k: [x.to_dict() for x in v] for k, v in groups.items()}
+    if not has_maneuvers([s for v in sums.values() for s in v]):
+        return []
+    first = {}
+    for s in specs:
+        first.setdefault((s.scenario_name, s.iod_label, s.filter_label), s)
+    return maneuver_rows({k: GroupRuns(sums[k], tables[k], first[k].sweep, first[k].out_dir) for k in groups})
+
+
+def _maneuver_report(man_rows: list[dict], rep_dir: Path, name: str) -> tuple[str, str, list[Path]]:
+    """The maneuvers section of summary.md and of the terminal text, and its CSV and figures ("" and
+    no file without maneuvers)."""
+    if not man_rows:
+        return "", "", []
+    from cistrack.studies.maneuver_scores import maneuver_markdown, maneuver_text, write_maneuvers_csv
+    from cistrack.studies.report_plots import plot_false_alarms, plot_maneuver_detection
+
+    files = [write_maneuvers_csv(man_rows, rep_dir / "maneuvers.csv")]
+    files += plot_maneuver_detection(man_rows, rep_dir, name) + plot_false_alarms(man_rows, rep_dir, name)
+    return ("\n\n" + "\n".join(maneuver_markdown(man_rows)), "\n\n" + "\n".join(maneuver_text(man_rows)),
+            files)
+
+
 def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                  settings: list[str] | None = None, first_seed: int | None = None,
                  n_seeds: int | None = None) -> dict:
@@ -378,9 +409,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     verdicts = [_verdict_line(r) for r in rows]
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
     title = _title(name, len(specs), missing_ids)
+    man_rows = _maneuver_rows(specs, groups, tables)
+    man_md, man_text, man_files = _maneuver_report(man_rows, rep_dir, str(name))
     write_text_atomic(rep_dir / "summary.md",
-                      _summary_markdown(title, rows, has_truth, counted, arch, verdicts, flagged) + "\n")
+                      _summary_markdown(title, rows, has_truth, counted, arch, verdicts, flagged) + man_md + "\n")
     files.append(rep_dir / "summary.md")
-    text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv")
-    files += _figures(groups, tables, rows, rep_dir, str(name))
-    return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids)}
+    text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv") + man_text
+    files += _figures(groups, tables, rows, rep_dir, str(name)) + man_files
+    return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids), "maneuver_rows": man_rows}

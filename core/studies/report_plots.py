@@ -11,6 +11,10 @@ fired), and a dotted black line the information bound's RMS position sigma
 (:mod:`cistrack.evaluation.information_bound`) in the error and sigma panels. Written as PNG, SVG
 and PDF.
 
+A study whose runs have truth burns or detections also gets two maneuver figures
+(:func:`plot_maneuver_detection`, :func:`plot_false_alarms`) from the rows of
+:func:`cistrack.studies.maneuver_scores.maneuver_rows`.
+
 A gap without measurements longer than 10 days and a fifth of the span (Example 3's 150-day
 shutoff) is shrunk to a hatched band that names its length (:mod:`cistrack.studies.time_axis`),
 so the passes on both sides stay legible.
@@ -32,7 +36,7 @@ from cistrack.studies.time_axis import GapAxis
 from cistrack.results.atomic_files import atomic_target
 
 __all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "nees_median", "plot_study", "save_figure",
-           "FORMATS"]
+           "FORMATS", "plot_maneuver_detection", "plot_false_alarms", "detection_lines"]
 
 CHI2_DOF = 6
 FORMATS = ("png", "svg", "pdf")
@@ -125,14 +129,16 @@ def _measurement_days(table: Any) -> np.ndarray:
 
 def save_figure(fig: Any, stem: Path) -> list[Path]:
     """Write ``fig`` as ``stem``.png/.svg/.pdf (text stays text in SVG and PDF: editable,
-    searchable, TrueType fonts as journals ask), close it and return the paths written."""
+    searchable, TrueType fonts as journals ask), close it and return the paths written. The
+    extension is appended: a stem with a dot (a swept label, ``example-1-burn[dv=0.3]__noisy-range``)
+    keeps its whole name."""
     import matplotlib
     import matplotlib.pyplot as plt
 
     files = []
     with matplotlib.rc_context({"svg.fonttype": "none", "pdf.fonttype": 42}):
         for ext in FORMATS:
-            f = stem.with_suffix(f".{ext}")
+            f = stem.with_name(f"{stem.name}.{ext}")
             with atomic_target(f) as tmp:  # never a partial figure (a full disk)
                 fig.savefig(tmp, dpi=130, format=ext)
             files.append(f)
@@ -368,3 +374,130 @@ def plot_study(groups: dict[tuple[str, str, str], dict[str, Any]], rep_dir: Path
     for (sc, iod), filters in sorted(by_case.items()):
         files.extend(_plot_case(sc, iod, filters, rep_dir, study_name, chi))
     return files
+
+
+_DV_SETTING = "truth.maneuvers.delta_v_ms"
+_RESPONSE_SETTING = "maneuvers.response"
+_LINESTYLES = ("-", "--", ":", "-.")
+_MARKERS = ("o", "s", "^", "D", "v", "P")
+
+
+def detection_lines(rows: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
+    """The detection curve's lines: label -> the rows on it (groups with burns and a burn size), in
+    delta-v order. A line is a filter and response (and the other swept settings; the IOD and the
+    scenario when the rows have several)."""
+    pts = [r for r in rows if r.get("burns") and r.get("delta_v_ms")]
+    iods, bases = {r["iod"] for r in pts}, {r.get("_base", r["scenario"]) for r in pts}
+    lines: dict[str, list[dict[str, Any]]] = {}
+    for r in pts:
+        other = [f"{k.rsplit('.', 1)[-1]}={v:g}" if isinstance(v, float) else f"{k.rsplit('.', 1)[-1]}={v}"
+                 for k, v in (r.get("_sweep") or {}).items() if k not in (_DV_SETTING, _RESPONSE_SETTING)]
+        parts = [r["filter"], f"response {r.get('response') or '?'}", *other,
+                 *([r["iod"]] if len(iods) > 1 else []), *([r.get("_base", r["scenario"])] if len(bases) > 1 else [])]
+        lines.setdefault(", ".join(parts), []).append(r)
+    return {k: sorted(v, key=lambda r: r["delta_v_ms"]) for k, v in sorted(lines.items())}
+
+
+def _line_style(label: str, rows: list[dict[str, Any]], styles: dict[str, dict]) -> dict[str, Any]:
+    """Colour by filter, line style by response, marker by the rest of the line's label."""
+    r = rows[0]
+    filters, responses, rest = styles["filters"], styles["responses"], styles["rest"]
+    other = label.split(", ", 2)[2:] or [""]
+    return {"color": f"C{filters.index(r['filter']) % 10}",
+            "ls": _LINESTYLES[responses.index(r.get("response")) % len(_LINESTYLES)],
+            "marker": _MARKERS[rest.index(other[0]) % len(_MARKERS)]}
+
+
+def _burns_per_point(pts: list[dict[str, Any]]) -> str:
+    n = sorted({int(r["burns"]) for r in pts})
+    return (f"{n[0]}" if len(n) == 1 else f"{n[0]}-{n[-1]}") + (" burn" if n == [1] else " burns") + " per point"
+
+
+def _draw_detection(axes: list, lines: dict[str, list[dict[str, Any]]]) -> None:
+    """P(detect) and P(within the next pass) with their Wilson intervals, each line dodged a little
+    along the log axis so that the intervals stay apart."""
+    every = [r for v in lines.values() for r in v]
+    styles = {"filters": sorted({r["filter"] for r in every}),
+              "responses": sorted({r.get("response") for r in every}, key=str),
+              "rest": sorted({(k.split(", ", 2)[2:] or [""])[0] for k in lines})}
+    n = len(lines)
+    for j, (label, pts) in enumerate(lines.items()):
+        dodge = 10 ** (0.015 * (j - (n - 1) / 2))
+        x = np.array([r["delta_v_ms"] for r in pts]) * dodge
+        style = _line_style(label, pts, styles)
+        for ax, key in zip(axes, ("p_detect", "p_next_pass")):
+            p = np.array([r[key] for r in pts], dtype=float)
+            err = np.clip([p - np.array([r[f"{key}_lo"] for r in pts], dtype=float),
+                           np.array([r[f"{key}_hi"] for r in pts], dtype=float) - p], 0.0, None)  # no -1e-17
+            ax.errorbar(x, p, yerr=err, capsize=3, lw=1.4, ms=5, label=f"{label} ({_burns_per_point(pts)})"
+                        if ax is axes[0] else None, **style)
+
+
+def plot_maneuver_detection(rows: list[dict[str, Any]], rep_dir: Path, study_name: str = "") -> list[Path]:
+    """``maneuver_detection``: P(detect) and P(detect within the next pass) against the burn's
+    delta-v (log axis, ticks at the swept values), one line per filter and response, with 95 %
+    Wilson intervals. No figure (``[]``) when no group has burns of one known size."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    lines = detection_lines(rows)
+    if not lines:
+        return []
+    legend_in = 0.35 + 0.19 * ((len(lines) + 1) // 2)  # the legend's height below the panels (inches)
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2 + legend_in), sharey=True)
+    _draw_detection(list(axes), lines)
+    dvs = sorted({r["delta_v_ms"] for v in lines.values() for r in v})
+    for ax, title in zip(axes, ("P(detect): an episode after the burn", "P(detect within the next pass)")):
+        ax.set_xscale("log")
+        ax.set_xticks(dvs)
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        ax.set_xlim(dvs[0] / 1.6, dvs[-1] * 1.6)
+        ax.set_ylim(-0.03, 1.03)
+        ax.set_xlabel("burn delta-v (m/s)")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, alpha=0.3)
+    axes[0].set_ylabel("share of burns (Wilson 95 %)")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    fig.suptitle(_wrapped_title("Maneuver detection against delta-v" + (f" (study {study_name})" if study_name else ""),
+                                100), fontsize=11)
+    fig.tight_layout(rect=(0, legend_in / (4.2 + legend_in), 1, 0.97))
+    return save_figure(fig, rep_dir / "maneuver_detection")
+
+
+def plot_false_alarms(rows: list[dict[str, Any]], rep_dir: Path, study_name: str = "") -> list[Path]:
+    """``maneuver_false_alarms``: per group the share of runs with a false alarm (an episode matched
+    to no truth burn), with its 95 % Wilson interval, as horizontal bars coloured by filter."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in rows if r.get("runs") and r.get("false_alarm_rate") is not None]
+    if not rows:
+        return []
+    several_iods = len({r["iod"] for r in rows}) > 1
+    filters = sorted({r["filter"] for r in rows})
+    fig, ax = plt.subplots(figsize=(9.0, max(2.6, 1.2 + 0.26 * len(rows))))
+    y = np.arange(len(rows))[::-1]
+    rate = np.array([r["false_alarm_rate"] for r in rows], dtype=float)
+    err = np.clip([rate - np.array([r["false_alarm_lo"] for r in rows], dtype=float),
+                   np.array([r["false_alarm_hi"] for r in rows], dtype=float) - rate], 0.0, None)
+    ax.barh(y, rate, xerr=err, capsize=2, color=[f"C{filters.index(r['filter']) % 10}" for r in rows], alpha=0.8,
+            error_kw={"lw": 1.0})
+    for yi, r in zip(y, rows):
+        ax.text(1.02, yi, f"{r['false_alarm_runs']}/{r['runs']}", va="center", fontsize=7)
+    ax.set_yticks(y)
+    ax.set_yticklabels([f"{r['filter']} · {r['scenario']}" + (f" ({r['iod']})" if several_iods else "") for r in rows],
+                       fontsize=7)
+    ax.set_xlim(0, 1.12)
+    ax.set_xlabel("runs with a false alarm / runs (Wilson 95 %)")
+    ax.grid(True, axis="x", alpha=0.3)
+    ax.set_title(_wrapped_title("False alarms: runs with an episode matched to no truth burn"
+                                + (f" (study {study_name})" if study_name else ""), 90), fontsize=10)
+    fig.tight_layout()
+    return save_figure(fig, rep_dir / "maneuver_false_alarms")
