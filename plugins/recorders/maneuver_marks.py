@@ -62,6 +62,11 @@ BURN_COLOUR = (255, 140, 0)
 (orange reads on the viewer's dark and light themes; white would vanish on the light one)."""
 ESTIMATE_COLOUR = (40, 180, 80)
 
+_POINT_STYLES = {DETECTIONS: (DETECTION_COLOUR, "detection", "diamond"),
+                 NEES_DETECTIONS: (DETECTION_COLOUR, "detection", "diamond"),
+                 ESTIMATED_BURNS: (ESTIMATE_COLOUR, "estimated burn", "up")}
+"""Colour, legend name and marker of each point series."""
+
 BURN_ARROW_KM = 30_000.0
 """Length of a truth burn's arrow in the 3-D scene (the system view spans about 450,000 km)."""
 
@@ -110,6 +115,7 @@ class ManeuverMarks:
         self.view, self.epoch = view, epoch
         self.threshold = _finite(getattr(getattr(self.watch, "detector", None), "threshold", None))
         self.top = 2.0 * self.threshold if self.threshold is not None else 1.0
+        self._styled: set[str] = set()
 
     @property
     def watching(self) -> bool:
@@ -127,10 +133,6 @@ class ManeuverMarks:
                     static=True)
             rec.log(THRESHOLD, rr.SeriesLines(colors=[THRESHOLD_COLOUR], names=["threshold"], widths=[1.5]),
                     static=True)
-            _points_style(rec, DETECTIONS, DETECTION_COLOUR, "detection", "diamond")
-            _points_style(rec, ESTIMATED_BURNS, ESTIMATE_COLOUR, "estimated burn", "up")
-        if run.has_truth and self.watching:
-            _points_style(rec, NEES_DETECTIONS, DETECTION_COLOUR, "detection", "diamond")
         if not self.burns:
             return
         self._log_arrows(rec, run)
@@ -186,9 +188,9 @@ class ManeuverMarks:
             rec.log(THRESHOLD, rr.Scalars(self.threshold))
         if _finite(metrics.get("maneuver_detected")) != 1.0:
             return
-        rec.log(DETECTIONS, rr.Scalars(stat))
+        self._point(rec, DETECTIONS, stat)
         if nees_log10 is not None:
-            rec.log(NEES_DETECTIONS, rr.Scalars(nees_log10))
+            self._point(rec, NEES_DETECTIONS, nees_log10)
         rec.log(DETECTION_LOG, rr.TextLog(self._detection_text(step, stat), level="WARN",
                                           color=DETECTION_COLOUR))
 
@@ -208,6 +210,16 @@ class ManeuverMarks:
                      f"{float(units.tu_to_days(hi)):.3f} d")
         return text + (f" ({d.detector})" if d.detector else "")
 
+    def _point(self, rec, entity: str, value: float) -> None:
+        """A marker of the point series ``entity`` (a detection or an estimated burn), its style
+        logged with its first point: a run without any has no such entity."""
+        if entity not in self._styled:
+            self._styled.add(entity)
+            colour, name, marker = _POINT_STYLES[entity]
+            rec.log(entity, rr.SeriesPoints(colors=[colour], names=[name], markers=[marker], marker_sizes=[6.0]),
+                    static=True)
+        rec.log(entity, rr.Scalars(float(value)))
+
     # -- run end ----------------------------------------------------------------------------------
     def log_finish(self, rec, summary) -> None:
         """Each estimated burn (``summary.maneuvers``): its text and its marker at its time; the
@@ -223,16 +235,10 @@ class ManeuverMarks:
             rec.log(ESTIMATE_LOG, rr.TextLog(estimate_text(m), level="INFO" if m.get("confirmed") else "WARN",
                                              color=ESTIMATE_COLOUR))
             if self.watching and m.get("confirmed"):
-                rec.log(ESTIMATED_BURNS, rr.Scalars(self.threshold if self.threshold is not None else 0.0))
+                self._point(rec, ESTIMATED_BURNS, self.threshold if self.threshold is not None else 0.0)
         if self.watching:
             for k, imp in enumerate(self.burns, start=1):
                 rec.reset_time()
                 rec.set_time("utc", timestamp=self._utc(imp.t))
                 rec.log(f"{STATISTIC_BURNS}/{k}", rr.Scalars(float(self.top)))
         rec.reset_time()
-
-
-def _points_style(rec, entity: str, colour: tuple[int, int, int], name: str, marker: str) -> None:
-    """A point series' style (no line between its values)."""
-    rec.log(entity, rr.SeriesPoints(colors=[colour], names=[name], markers=[marker], marker_sizes=[6.0]),
-            static=True)
