@@ -224,7 +224,8 @@ class ManeuverMarks:
     def log_finish(self, rec, summary) -> None:
         """Each estimated burn (``summary.maneuvers``): its text and its marker at its time; the
         statistic panel's burn lines stretched to the largest statistic."""
-        estimates = list(getattr(summary, "maneuvers", None) or ())
+        found = summary.get("maneuvers") if isinstance(summary, dict) else getattr(summary, "maneuvers", None)
+        estimates = [m for m in found or () if isinstance(m, dict)]
         for m in estimates:
             t_days = _finite(m.get("t_burn_days"))
             t_days = t_days if t_days is not None else _finite(m.get("t_days"))
