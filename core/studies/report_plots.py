@@ -399,11 +399,13 @@ def detection_lines(rows: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]
 
 
 def _line_style(label: str, rows: list[dict[str, Any]], styles: dict[str, dict]) -> dict[str, Any]:
-    """Colour by filter, line style by response, marker by the rest of the line's label."""
+    """Colour by filter (by line with one filter), line style by response, marker by the rest of
+    the line's label."""
     r = rows[0]
     filters, responses, rest = styles["filters"], styles["responses"], styles["rest"]
     other = label.split(", ", 2)[2:] or [""]
-    return {"color": f"C{filters.index(r['filter']) % 10}",
+    colour = filters.index(r["filter"]) if len(filters) > 1 else styles["labels"].index(label)
+    return {"color": f"C{colour % 10}",
             "ls": _LINESTYLES[responses.index(r.get("response")) % len(_LINESTYLES)],
             "marker": _MARKERS[rest.index(other[0]) % len(_MARKERS)]}
 
@@ -419,10 +421,10 @@ def _draw_detection(axes: list, lines: dict[str, list[dict[str, Any]]]) -> None:
     every = [r for v in lines.values() for r in v]
     styles = {"filters": sorted({r["filter"] for r in every}),
               "responses": sorted({r.get("response") for r in every}, key=str),
-              "rest": sorted({(k.split(", ", 2)[2:] or [""])[0] for k in lines})}
+              "rest": sorted({(k.split(", ", 2)[2:] or [""])[0] for k in lines}), "labels": list(lines)}
     n = len(lines)
     for j, (label, pts) in enumerate(lines.items()):
-        dodge = 10 ** (0.015 * (j - (n - 1) / 2))
+        dodge = 10 ** (0.025 * (j - (n - 1) / 2))
         x = np.array([r["delta_v_ms"] for r in pts]) * dodge
         style = _line_style(label, pts, styles)
         for ax, key in zip(axes, ("p_detect", "p_next_pass")):
