@@ -222,12 +222,19 @@ def _group_delta_v(g: GroupRuns) -> float | None:
     return dvs.pop() if len(dvs) == 1 else None
 
 
+def _group_order(item: tuple) -> tuple:
+    """Groups by scenario, then by their swept values as values (0.3 before 1 before 10), IOD, filter."""
+    (sc, iod, flt), g = item
+    base = sc[:sc.index("[")] if g.sweep and "[" in sc else sc
+    return base, [(k, isinstance(v, str), v if not isinstance(v, str) else 0, str(v)) for k, v in g.sweep], iod, flt
+
+
 def maneuver_rows(groups: dict[tuple[str, str, str], GroupRuns]) -> list[dict]:
     """One row per group ((scenario label, iod, filter) -> :class:`GroupRuns`), in key order: the
     group's names, its burn size and response and :func:`group_maneuver_scores`; ``_sweep`` (the
     combination as a dict) and ``_base`` (the scenario's own name) for the figures."""
     rows = []
-    for (sc, iod, flt), g in sorted(groups.items()):
+    for (sc, iod, flt), g in sorted(groups.items(), key=_group_order):
         scores = [score_run(s, update_rows(t)) for s, t in zip(g.summaries, g.tables)]
         sweep = dict(g.sweep)
         resp = sweep.get(RESPONSE_SETTING)

@@ -107,10 +107,12 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     extra = parse_settings(settings)
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
     seeds = _study_seeds(data, p, first_seed, n_seeds)
+    sweep = tuple((k, tuple(v)) for k, v in study_sweep(data, p))
+    _check_settings_against_sweep(settings, sweep, p)
     grid = _Grid(filters=[_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])],
                  iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
                  overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out,
-                 sweep=tuple((k, tuple(v)) for k, v in study_sweep(data, p)), study=p)
+                 sweep=sweep, study=p)
     reg = default_registry()
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
@@ -190,6 +192,17 @@ def base_scenario_name(label: str, combo: tuple = ()) -> str:
 def sweep_item(key: str, value: Any) -> str:
     """A sweep setting and value as the ``--set`` item it amounts to (``maneuvers.response="none"``)."""
     return f"{key}={json.dumps(value)}"
+
+
+def _check_settings_against_sweep(settings: list[str] | None, sweep: tuple, p: Path) -> None:
+    """Refuse a ``--set`` item that sets a swept setting (or a table holding one): it would give
+    every combination the same value under different labels."""
+    for item in settings or []:
+        key = ".".join(part.strip() for part in item.partition("=")[0].split("."))
+        hit = [k for k, _ in sweep if k == key or k.startswith(key + ".")]
+        if hit:
+            raise ConfigError(f"--set {item}: {p}: key 'sweep' already varies {hit[0]!r}; change the study's "
+                              "sweep (or use a study file without it) instead of setting it for every run")
 
 
 def _combinations(sweep: tuple, keys: list[str]) -> list[tuple]:

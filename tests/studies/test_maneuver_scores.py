@@ -130,6 +130,14 @@ def test_maneuver_rows_name_the_groups_burn_size_and_response_and_render_as_tabl
     assert all(len(line) <= 120 for line in text) and "scenario example-1-burn[dv=0.3,resp=inflate]:" in text
 
 
+def test_rows_come_in_the_order_of_the_swept_values_not_of_their_text():
+    groups = {(f"b[dv={dv:g}]", "u", "pgm"): GroupRuns([_summary(burns=((3.62, dv),))], [UPDATES],
+                                                         (("truth.maneuvers.delta_v_ms", dv),))
+              for dv in (10.0, 0.3, 1.0, 3.0)}
+    groups[("a", "u", "pgm")] = GroupRuns([_summary(burns=())], [UPDATES])
+    assert [r["scenario"] for r in maneuver_rows(groups)] == ["a", "b[dv=0.3]", "b[dv=1]", "b[dv=3]", "b[dv=10]"]
+
+
 def test_the_detection_curve_has_a_line_per_filter_and_response_on_a_log_axis_of_the_swept_values(tmp_path):
     import matplotlib
 

@@ -142,3 +142,10 @@ def test_a_study_directory_plans_the_same_swept_runs_it_recorded(tmp_path):
                                                 "run_seeds": sorted({s.seed for s in specs})}))
     _, again, _ = plan_runs(out)
     assert [(s.run_id, s.sweep, s.fingerprint) for s in again] == [(s.run_id, s.sweep, s.fingerprint) for s in specs]
+
+
+def test_a_set_item_on_a_swept_setting_is_refused(tmp_path):
+    p = _study(tmp_path, '["example-1-burn"]')
+    for item in ("truth.maneuvers.delta_v_ms=0.5", 'truth.maneuvers={name="impulse", t_days=2.0}'):
+        with pytest.raises(ConfigError, match="key 'sweep' already varies 'truth.maneuvers.delta_v_ms'"):
+            plan_runs(p, tmp_path / "out", settings=[item])
