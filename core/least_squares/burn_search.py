@@ -34,7 +34,7 @@ from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.maneuvers import Impulse
 from cistrack.interfaces.sensor import Sensor
 from cistrack.least_squares.errors import FitError
-from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnEstimate, ImpulseFit, burn_evidence,
+from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnArc, BurnEstimate, ImpulseFit, burn_evidence,
                                                 burn_time_profile, fit_impulse, screen_burn_times,
                                                 with_time_uncertainty)
 from cistrack.least_squares.options import FitOptions
@@ -123,32 +123,30 @@ def _flown(dynamics: Dynamics, burns: list[BurnEstimate]) -> Dynamics:
                                         for k, b in enumerate(burns)])
 
 
-def _screen_gaps(found: ManeuverSearch, sensor: Sensor, ms: MeasurementSet, gaps: list, use_range: bool) -> np.ndarray:
+def _screen_gaps(flown: BurnArc, found: ManeuverSearch, gaps: list) -> np.ndarray:
     """The linearised capped cost (G,) of a burn in each gap: the best of :data:`GAP_POINTS` times."""
     fr = (np.arange(GAP_POINTS) + 0.5) / GAP_POINTS
     ts = np.array([a + f * (b - a) for a, b in gaps for f in fr])
-    costs = screen_burn_times(found.dynamics, sensor, ms, found.result, ts, use_range=use_range, prior=found.prior)
+    costs = screen_burn_times(flown, found.result, ts)
     return costs.reshape(len(gaps), GAP_POINTS).min(axis=1)
 
 
-def _next_burn(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, found: ManeuverSearch,
-               options: FitOptions) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+def _next_burn(arc: BurnArc, found: ManeuverSearch) -> tuple[ImpulseFit, tuple[float, float], float] | None:
     """The best fit with one more burn, its gap and its time's one sigma (TU); None when no gap
     gives a fit. The gaps are ranked, and the time in a gap chosen, by the linearised screen; the
     best :data:`GAPS_TRIED` are fitted in full."""
-    gaps = _gaps(ms.times, found.windows)
+    gaps = _gaps(arc.measurements.times, found.windows)
     if not gaps:
         return None
-    ranked = np.argsort(_screen_gaps(found, sensor, ms, gaps, options.use_range), kind="stable")
+    flown = replace(arc, dynamics=found.dynamics)  # the burns found so far flown
+    ranked = np.argsort(_screen_gaps(flown, found, gaps), kind="stable")
     best = None
     known = [x.t for x in found.burns]
     for g in ranked[:GAPS_TRIED]:
         a, b = gaps[int(g)]
-        tb, t_sigma = burn_time_profile(found.dynamics, sensor, ms, found.result, a, b, use_range=options.use_range,
-                                        prior=found.prior)
+        tb, t_sigma = burn_time_profile(flown, found.result, a, b)
         try:
-            fit = fit_impulse(dynamics, sensor, ms, found.result.state, found.result.epoch, [tb], known=known,
-                              options=options, prior=found.prior)
+            fit = fit_impulse(arc, found.result.state, found.result.epoch, [tb], known=known)
         except (FitError, PropagationError):
             continue
         if best is None or fit.costs.min() < best[0].costs.min():
@@ -164,9 +162,10 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
     ballistic fit estimated it. ``prior``: (mean (6,), covariance (6, 6)) on the state at the
     ballistic fit's epoch, the one that fit was made with (None: none)."""
     opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
+    arc = BurnArc(dynamics, sensor, ms, opts, prior)
     found = ManeuverSearch(ballistic, dynamics, prior=prior)
     for _ in range(MAX_BURNS):
-        step = _next_burn(dynamics, sensor, ms, found, opts)
+        step = _next_burn(arc, found)
         if step is None:
             break
         fit, window, t_sigma = step
@@ -177,7 +176,7 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
             f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted else "not kept"))
         if not ev.accepted:
             break
-        fit = _timed(dynamics, sensor, ms, fit, t_sigma, found, opts)
+        fit = _timed(arc, fit, t_sigma, found)
         windows = found.windows + [window]
         order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
         found = ManeuverSearch(fit.fit, _flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
@@ -185,12 +184,10 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
     return found
 
 
-def _timed(dynamics, sensor, ms, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,
-           options: FitOptions) -> ImpulseFit:
+def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch) -> ImpulseFit:
     """``fit`` with the burn time's uncertainty in its delta-v covariance (as it is when that fails)."""
     try:
-        return with_time_uncertainty(dynamics, sensor, ms, fit, t_sigma, known=[x.t for x in found.burns],
-                                     options=options, prior=found.prior)
+        return with_time_uncertainty(arc, fit, t_sigma, known=[x.t for x in found.burns])
     except (FitError, PropagationError):
         return fit
 

@@ -35,7 +35,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["BurnEstimate", "ImpulseFit", "BurnEvidence", "fit_impulse", "fit_impulses", "burn_evidence",
+__all__ = ["BurnArc", "BurnEstimate", "ImpulseFit", "BurnEvidence", "fit_impulse", "fit_impulses", "burn_evidence",
            "capped_cost", "dv_names", "MS_PER_VU", "screen_burn_times", "burn_time_profile", "with_time_uncertainty"]
 
 MS_PER_VU = float(units.vu_to_kms(1.0)) * 1000.0
@@ -118,6 +118,31 @@ Prior = tuple[np.ndarray, np.ndarray] | None
 """A Gaussian prior on the state at the fit's epoch: (mean (6,), covariance (6, 6)), LU, VU."""
 
 
+@dataclass(frozen=True)
+class BurnArc:
+    """The problem every fit of a burn search shares.
+
+    Attributes
+    ----------
+    dynamics : Dynamics            the model (ballistic, or with the burns already found)
+    sensor : Sensor                predicts the measurements
+    measurements : MeasurementSet  the arc (TU, rad)
+    options : FitOptions or None   of each least-squares fit
+    prior : (mean (6,), covariance (6, 6)) or None   Gaussian prior on the state at the fits'
+                                   epoch, LU, VU
+    """
+
+    dynamics: Dynamics
+    sensor: Sensor
+    measurements: MeasurementSet
+    options: FitOptions | None = None
+    prior: Prior = None
+
+    @property
+    def use_range(self) -> bool:
+        return bool(self.options is not None and self.options.use_range)
+
+
 def _prior_cost(fit: FitResult, prior: Prior) -> float:
     if prior is None:
         return 0.0
@@ -134,42 +159,36 @@ def capped_cost(fit: FitResult, prior: Prior = None) -> float:
     return float(np.sum(np.minimum(np.where(np.isfinite(chi), chi, cap), cap))) + _prior_cost(fit, prior)
 
 
-def fit_impulses(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
-                 times: Sequence[float], *, options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
-    """The orbit and one impulsive burn at each of ``times`` (TU) fitted jointly to ``measurements``
-    from ``state`` (6,) at ``t0`` (TU; before, between or after the burns), with the state's
-    ``prior`` at ``t0`` when given. Raises :class:`FitError` when the fit cannot be made."""
+def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float]) -> ImpulseFit:
+    """The orbit and one impulsive burn at each of ``times`` (TU) fitted jointly to the arc's
+    measurements from ``state`` (6,) at ``t0`` (TU; before, between or after the burns), with the
+    arc's prior on the state at ``t0``. Raises :class:`FitError` when the fit cannot be made."""
     ts = sorted(float(t) for t in times)
     if not ts or not all(np.isfinite(ts)):
         raise FitError(f"fit_impulses: burn times must be finite numbers (TU), got {list(times)}")
-    impulsive = ImpulsiveDynamics(dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
+    impulsive = ImpulsiveDynamics(arc.dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
     names = tuple(n for k in range(len(ts)) for n in dv_names(k))
-    fit = fit_orbit(impulsive, sensor, measurements, np.asarray(state, dtype=float), t0, options=options,
-                    solve_for=names, prior=prior)
+    fit = fit_orbit(impulsive, arc.sensor, arc.measurements, np.asarray(state, dtype=float), t0, options=arc.options,
+                    solve_for=names, prior=arc.prior)
     cov = np.asarray(fit.full_covariance, dtype=float)
     burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
                           cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
     return ImpulseFit(burns, fit)
 
 
-def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state, t0: float,
-                candidates: Sequence[float], *, known: Sequence[float] = (),
-                options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
-    """The orbit and one more impulsive burn fitted to ``measurements``: each of the ``candidates``
-    (TU) is tried as its time (with burns at the ``known`` times too, all dv estimated jointly)
-    and the fit of the smallest capped cost kept.
+def fit_impulse(arc: BurnArc, state, t0: float, candidates: Sequence[float], *,
+                known: Sequence[float] = ()) -> ImpulseFit:
+    """The orbit and one more impulsive burn fitted to the arc: each of the ``candidates`` (TU) is
+    tried as its time (with burns at the ``known`` times too, all dv estimated jointly) and the fit
+    of the smallest capped cost kept.
 
     Parameters
     ----------
-    dynamics : Dynamics        the ballistic model
-    sensor : Sensor            predicts the measurements
-    measurements : MeasurementSet   the arc (TU, rad)
+    arc : BurnArc              the ballistic model, sensor, measurements, options and prior
     state : (6,) float         start of the state at ``t0`` (synodic LU, VU): the ballistic estimate
     t0 : float                 TU, the epoch of the estimated state
     candidates : (C,) float    times tried for the new burn, TU
     known : (B,) float         times of burns already found, TU
-    options : FitOptions       of each fit
-    prior : (mean (6,), covariance (6, 6)) or None   on the state at ``t0``
 
     Raises :class:`FitError` when no candidate can be fitted.
     """
@@ -180,10 +199,10 @@ def fit_impulse(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet
     costs = np.full(ts.size, np.inf)
     for k, tb in enumerate(ts):
         try:
-            one = fit_impulses(dynamics, sensor, measurements, state, t0, [*known, tb], options=options, prior=prior)
+            one = fit_impulses(arc, state, t0, [*known, tb])
         except (FitError, PropagationError):
             continue
-        costs[k] = capped_cost(one.fit, prior)
+        costs[k] = capped_cost(one.fit, arc.prior)
         if best is None or costs[k] < best[0]:
             best = (costs[k], tb, one)
     if best is None:
@@ -263,25 +282,25 @@ def _prior_rows(fit: FitResult, prior: Prior, n: int) -> tuple[np.ndarray, np.nd
     return a, winv @ (np.asarray(prior[0], dtype=float) - np.asarray(fit.state, dtype=float))
 
 
-def screen_burn_times(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
-                      candidates: Sequence[float], *, use_range: bool = False, prior: Prior = None) -> np.ndarray:
-    """The capped cost (K,) of the ballistic ``fit`` corrected, linearly, by its state and by a burn
-    at each of the ``candidates`` (TU): a cheap ranking of burn times before the nonlinear
-    :func:`fit_impulse`. One propagation with transition matrices serves every candidate."""
+def screen_burn_times(arc: BurnArc, fit: FitResult, candidates: Sequence[float]) -> np.ndarray:
+    """The capped cost (K,) of ``fit`` (made with ``arc.dynamics``) corrected, linearly, by its
+    state and by a burn at each of the ``candidates`` (TU): a cheap ranking of burn times before
+    the nonlinear :func:`fit_impulse`. One propagation with transition matrices serves every
+    candidate."""
     from cistrack.least_squares.measurement_model import MeasurementModel
     from cistrack.least_squares.trajectory import arc_states_and_stms
 
     ts = np.asarray(candidates, dtype=float)
-    model = MeasurementModel(sensor, measurements, use_range=use_range)
+    model = MeasurementModel(arc.sensor, arc.measurements, use_range=arc.use_range)
     times = np.asarray(model.times, dtype=float)
-    states, stms = arc_states_and_stms(dynamics, np.asarray(fit.state, dtype=float), float(fit.epoch),
+    states, stms = arc_states_and_stms(arc.dynamics, np.asarray(fit.state, dtype=float), float(fit.epoch),
                                        np.concatenate([times, ts]))
     st_obs, stm_obs, stm_burn = states[:times.size], stms[:times.size], stms[times.size:]
     w = model.residuals(st_obs) / model.sigmas
     h = model.jacobian(st_obs) / model.sigmas[:, :, None]
     a_state = np.einsum("kmj,kjl->kml", h, stm_obs)
     cap = fit.rejection_threshold if np.isfinite(fit.rejection_threshold) else chi2_ppf(0.9973, 2)
-    extra = _prior_rows(fit, prior, 9)
+    extra = _prior_rows(fit, arc.prior, 9)
     return np.array([_capped_linear_cost(np.concatenate(
         [a_state, _dv_partials(stm_obs, stm_burn[k], h, times, float(fit.epoch), float(tb))], axis=2), w, cap, extra)
         for k, tb in enumerate(ts)])
@@ -299,18 +318,16 @@ def _profile_sigma(ts: np.ndarray, costs: np.ndarray, k: int, width: float) -> f
     return float(min(flat, 1.0 / np.sqrt(0.5 * curv))) if curv > 0 else flat
 
 
-def burn_time_profile(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, fit: FitResult,
-                      lo: float, hi: float, n: int = 16, *, use_range: bool = False,
-                      prior: Prior = None) -> tuple[float, float]:
+def burn_time_profile(arc: BurnArc, fit: FitResult, lo: float, hi: float, n: int = 16) -> tuple[float, float]:
     """The burn time (TU) in ``[lo, hi]`` that minimises the linearised capped cost
     (:func:`screen_burn_times` about ``fit``), on a grid of ``n`` then ``n`` more around the best,
     and its one sigma (TU) from the profile's curvature."""
     ts = lo + (np.arange(n) + 0.5) / n * (hi - lo)
-    costs = screen_burn_times(dynamics, sensor, measurements, fit, ts, use_range=use_range, prior=prior)
+    costs = screen_burn_times(arc, fit, ts)
     k = int(np.argmin(costs))
     a, b = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
     fine = np.linspace(a, b, n)
-    fine_costs = screen_burn_times(dynamics, sensor, measurements, fit, fine, use_range=use_range, prior=prior)
+    fine_costs = screen_burn_times(arc, fit, fine)
     j = int(np.argmin(fine_costs))
     allt, first = np.unique(np.concatenate([ts, fine]), return_index=True)  # sorted, each time once
     allc = np.concatenate([costs, fine_costs])[first]
@@ -318,9 +335,7 @@ def burn_time_profile(dynamics: Dynamics, sensor: Sensor, measurements: Measurem
     return float(fine[j]), _profile_sigma(allt, allc, m, hi - lo)
 
 
-def with_time_uncertainty(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, burn: ImpulseFit,
-                          t_sigma: float, *, known: Sequence[float] = (),
-                          options: FitOptions | None = None, prior: Prior = None) -> ImpulseFit:
+def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, known: Sequence[float] = ()) -> ImpulseFit:
     """``burn`` with its searched burn's delta-v covariance widened by the burn time's uncertainty:
     C + g g^T t_sigma^2, g = d dv / d t_b by central differences of two more fits at t_b +- h
     (h = t_sigma, or a minute when that is smaller)."""
@@ -328,8 +343,7 @@ def with_time_uncertainty(dynamics: Dynamics, sensor: Sensor, measurements: Meas
     h = max(float(t_sigma), float(units.seconds_to_tu(60.0)))
     fits = []
     for tb in (b.t - h, b.t + h):
-        one = fit_impulses(dynamics, sensor, measurements, burn.fit.state, burn.fit.epoch, [*known, tb],
-                           options=options, prior=prior)
+        one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb])
         fits.append(next(x for x in one.burns if x.t == tb).delta_v_ms)
     g = (fits[1] - fits[0]) / (2.0 * h)
     cov = b.covariance_ms2 + np.outer(g, g) * float(t_sigma) ** 2

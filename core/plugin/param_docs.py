@@ -25,6 +25,7 @@ UNITS: tuple[tuple[str, str], ...] = (
     ("_km3s2", "km^3/s^2"),
     ("_kms", "km/s"),
     ("_cms", "cm/s"),
+    ("_ms", "m/s"),
     ("_km", "km"),
     ("_m", "m"),
     ("_deg", "deg"),

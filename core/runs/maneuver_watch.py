@@ -7,9 +7,9 @@ widened cloud, from which the filter starts again before it takes the measuremen
 each update's posterior mean (:meth:`after_update`), so that at the end of the run
 (:meth:`records`) the detections are grouped in episodes (:func:`episodes`: a filter that does not
 recover from a burn raises detection after detection) and each episode's burn is estimated by least
-squares over the measurements from :data:`PRE_DAYS` before its first detection (not before the
-previous episode's) to :data:`POST_DAYS` after it, started from the filter's posterior at the
-arc's start, which is also the state's prior there (what the filter learned before the arc: without
+squares over the measurements from :data:`PRE_DAYS` before its first detection's suspect interval
+(not before the previous episode's, and from a settled posterior: :data:`SETTLED_KM`) to
+:data:`POST_DAYS` after the detection, started from the filter's posterior at the arc's start, which is also the state's prior there (what the filter learned before the arc: without
 it a few days of one site's angles absorb a small burn into another ballistic orbit): a ballistic
 fit, then the burn search of :mod:`cistrack.least_squares.burn_search` (the gaps screened, the burn time's
 profile, the delta-v as solve-for parameters, tested against the ballistic fit). The latest burn
@@ -33,10 +33,14 @@ from cistrack.interfaces.metric import StepMetric
 from cistrack.least_squares.errors import FitError
 from cistrack.least_squares.options import FitOptions
 
-__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "EPISODE_DAYS", "episodes"]
+__all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "EPISODE_DAYS", "SETTLED_KM", "episodes"]
 
-PRE_DAYS = 3.0
-"""Days of measurements before the detection in the delta-v estimate."""
+PRE_DAYS = 1.0
+"""The burn's arc starts this many days before the detection's suspect interval (about one pass
+earlier: a small burn is often detected a pass late, its interval starting after the burn)."""
+SETTLED_KM = 1000.0
+"""The arc starts from a posterior whose largest position sigma is below this (km): one the filter
+has settled, not the IOD's cloud."""
 POST_DAYS = 2.0
 """Days of measurements after the detection in the delta-v estimate."""
 EPISODE_DAYS = 1.5
@@ -104,9 +108,17 @@ class ManeuverWatch:
             out.append(_record(group, burn))
         return out
 
-    def _start_state(self, t_lo: float) -> _Posterior | None:
-        before = [p for p in self.posteriors if p.t <= t_lo + 1e-12]
-        return before[-1] if before else (self.posteriors[0] if self.posteriors else None)
+    def _start_state(self, target: float, latest: float) -> _Posterior | None:
+        """The posterior the burn's arc starts from: the latest settled one (position sigma below
+        :data:`SETTLED_KM`) at or before ``target`` (TU), else the earliest settled one before
+        ``latest``; None when there is none."""
+        settled = [p for p in self.posteriors
+                   if np.sqrt(np.max(np.diag(p.covariance)[:3])) * units.LU_KM < SETTLED_KM]
+        before = [p for p in settled if p.t <= target + 1e-12]
+        if before:
+            return before[-1]
+        early = [p for p in settled if p.t < latest]
+        return early[0] if early else None
 
     def _estimate(self, ctx: Any, d: Detection, before: float, say) -> Any:
         """The burn nearest before the detection ``d`` found in the arc around it (module
@@ -114,7 +126,8 @@ class ManeuverWatch:
         from cistrack.least_squares.burn_search import search_maneuvers
         from cistrack.least_squares.differential_correction import fit_orbit
 
-        start = self._start_state(max(d.t - float(units.days_to_tu(PRE_DAYS)), before))
+        lo = float(d.t_burn_bounds[0]) if np.isfinite(d.t_burn_bounds[0]) else float(d.t)
+        start = self._start_state(max(lo - float(units.days_to_tu(PRE_DAYS)), before), lo)
         if start is None:
             return None
         t = np.asarray(ctx.measurements.times, dtype=float)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from .burn_campaigns import burned, truth_state
-from cistrack import units
 from cistrack.least_squares.burn_search import search_maneuvers, suspicion
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.options import FitOptions

@@ -28,7 +28,7 @@ def test_the_built_in_burn_scenarios_load_with_their_plans():
     assert burn.params == {"t_days": 3.62, "delta_v_ms": 1.0, "direction": "in-track", "frame": "rtn-moon"}
     sk = load_scenario("example-1-maneuver")
     assert sk.truth_maneuvers.name == "station-keeping" and sk.truth_maneuvers.params["n_burns"] == 2
-    assert sk.duration_days == pytest.approx(2 * NRHO_PERIOD_DAYS, abs=0.1)
+    assert 2 * NRHO_PERIOD_DAYS < sk.duration_days < 3 * NRHO_PERIOD_DAYS  # two revolutions, and days to see the second burn
     assert load_scenario("example-1").truth_maneuvers is None
 
 

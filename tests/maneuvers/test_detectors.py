@@ -41,7 +41,7 @@ def test_both_are_registered_as_maneuver_detectors():
 @pytest.mark.parametrize("cls", DETECTORS)
 @pytest.mark.parametrize(("params", "named"), [
     ({"window": 0}, "window"), ({"false_alarm": 0.0}, "false_alarm"), ({"false_alarm": 0.7}, "false_alarm"),
-    ({"warmup": -1}, "warmup"), ({"min_surprising": 4}, "min_surprising"),
+    ({"warmup": -1}, "warmup"), ({"min_surprising": 6}, "min_surprising"),
     ({"update_level": 1e-6}, "update_level"), ({"window": 2.5}, "window")])
 def test_bad_parameters_name_the_parameter_and_what_is_allowed(cls, params, named):
     with pytest.raises(ParameterError, match=f"'{named}'.*must"):
@@ -193,7 +193,7 @@ def test_default_false_alarms_are_rare_on_consistent_data(cls):
 
 @pytest.mark.parametrize("cls", DETECTORS)
 def test_detection_delay_shrinks_with_the_step_size(cls):
-    """Defaults (window 3, two surprising updates in it): a step of 50 or 20 innovation
+    """Defaults (window 5, two surprising updates in it): a step of 50 or 20 innovation
     sigmas is detected at the second update after it, 8 sigmas within three, 4 within six."""
     delays = {}
     for size, most in ((50.0, 1), (20.0, 1), (8.0, 2), (4.0, 5)):
@@ -272,9 +272,9 @@ def test_t_burn_bounds_reach_back_to_a_recent_gross_update_the_filter_absorbed(c
     seq = _with_gross_update(linear_gaussian_updates(40, seed=15, step_at=26), 20)
     det = next(d for _, d in _run(cls(), seq) if d is not None)
     assert det.t == seq.times[27] and det.t_burn_bounds == (seq.times[19], det.t)
-    seq = _with_gross_update(linear_gaussian_updates(40, seed=15, step_at=26), 8)
+    seq = _with_gross_update(linear_gaussian_updates(50, seed=15, step_at=36), 8)  # 28 updates back: > 5 windows
     det = next(d for _, d in _run(cls(), seq) if d is not None)
-    assert det.t_burn_bounds == (seq.times[25], det.t)
+    assert det.t_burn_bounds == (seq.times[35], det.t)
 
 
 def test_a_prior_without_finite_numbers_is_refused_by_name():
