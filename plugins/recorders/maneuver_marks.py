@@ -93,7 +93,7 @@ def estimate_text(m: dict) -> str:
     when = f"estimated burn at {t_burn:.3f} d" if t_burn is not None else "burn time not estimated"
     sig_t = _finite(m.get("t_burn_sigma_days"))
     if t_burn is not None and sig_t is not None:
-        when += f" ± {sig_t:.3f} d"
+        when += f" ± {24.0 * sig_t:.2g} h"  # a burn pinned between two updates: minutes, not 0.000 d
     detected = f" (detected at {t_det:.3f} d)" if t_det is not None else ""
     size = "no delta-v estimate"
     if dv is not None:

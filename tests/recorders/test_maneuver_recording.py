@@ -173,3 +173,9 @@ def test_the_estimate_text_says_when_there_is_no_delta_v():
     text = mm.estimate_text({"t_days": 5.1, "t_burn_days": None, "delta_v_ms": None, "delta_v_sigma_ms": None,
                              "confirmed": False})
     assert text == "burn time not estimated (detected at 5.100 d): no delta-v estimate, unconfirmed"
+
+
+def test_the_estimate_text_gives_the_burn_time_its_sigma_and_the_delta_v():
+    text = mm.estimate_text({"t_days": 5.112, "t_burn_days": 3.692, "t_burn_sigma_days": 0.081, "delta_v_ms": 1.02,
+                             "delta_v_sigma_ms": 0.095, "confirmed": True})
+    assert text == "estimated burn at 3.692 d ± 1.9 h (detected at 5.112 d): delta-v 1.02 ± 0.095 m/s, confirmed"
