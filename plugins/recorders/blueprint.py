@@ -159,8 +159,8 @@ def _series_column(r: tuple[float, float] | None, watching: bool, burns: bool):
     ]
     if watching:
         panels.append(_series(
-            "Maneuver test -log10 p blue, threshold grey; detections red, "
-            + ("burns: truth orange, fit green" if burns else "fitted burns green"),
+            "Maneuver test -log10 p blue, threshold grey; "  # at most ~82 characters: longer ones are cut
+            + ("detected red; burn orange, fit green" if burns else "detections red, fitted burns green"),
             [STATISTIC, THRESHOLD, DETECTIONS, ESTIMATED_BURNS, *([f"{STATISTIC_BURNS}/**"] if burns else [])], r))
     panels.append(_series("Component weights, largest first (brightest)", ["components/ranked/**"], r,
                           y_range=(0.0, 1.05)))
