@@ -360,9 +360,10 @@ def _maneuver_rows(specs, groups: dict, tables: dict) -> list[dict]:
     sums = {k: [x.to_dict() for x in v] for k, v in groups.items()}
     if not has_maneuvers([s for v in sums.values() for s in v]):
         return []
-    first = {}
+    first = {}  # a finished run of each group: its sweep, and its directory for the response it ran
     for s in specs:
-        first.setdefault((s.scenario_name, s.iod_label, s.filter_label), s)
+        if (s.scenario_name, s.iod_label, s.filter_label) not in first and is_done(s.out_dir):
+            first[(s.scenario_name, s.iod_label, s.filter_label)] = s
     return maneuver_rows({k: GroupRuns(sums[k], tables[k], first[k].sweep, first[k].out_dir) for k in groups})
 
 
