@@ -58,7 +58,8 @@ def arc_report(one, obs: ObjectObservations, arcs: Any, registry: Registry) -> A
     r = one.result
     explained = r.n_rejected <= EXPLAINED_REJECTED * (r.n_used + r.n_rejected)
     link_gap = arcs.arc_gap_days if explained else arcs.link_gap_days
-    return latest_arc_fit(one.run.context.dynamics, sensor, full, r, one.choices.options, arcs.arc_gap_days, link_gap)
+    dynamics = getattr(one, "dynamics", None) or one.run.context.dynamics  # with the burns the fit found
+    return latest_arc_fit(dynamics, sensor, full, r, one.choices.options, arcs.arc_gap_days, link_gap)
 
 
 def kept_observations(obs: ObjectObservations, report: ArcFit) -> ObjectObservations:
@@ -73,6 +74,7 @@ def add_findings(one, registry: Registry, say: Callable[[str], None]) -> None:
     if not one.ok or one.run is None:
         return
     ctx = one.run.context
+    dynamics = getattr(one, "dynamics", None) or ctx.dynamics  # with the burns the fit found
     say(f"{one.designation}: how well the orbit is determined; impacts and closest approaches")
-    one.determination = determination(one.result, ctx.dynamics, ctx.sensor, ctx.measurements)
-    one.events = fit_events(ctx.dynamics, one.result, epoch=one.scenario.epoch)
+    one.determination = determination(one.result, dynamics, ctx.sensor, ctx.measurements)
+    one.events = fit_events(dynamics, one.result, epoch=one.scenario.epoch)

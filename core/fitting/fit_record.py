@@ -163,8 +163,9 @@ def _fit_dict(one, obs) -> dict[str, Any]:
 
 
 def _context_record(one) -> dict[str, Any]:
-    """How well the orbit is determined, the earlier arcs against it and its events, where known."""
-    out: dict[str, Any] = {}
+    """How well the orbit is determined, the earlier arcs against it, its events and its burns,
+    where known."""
+    out: dict[str, Any] = {"maneuvers": list(getattr(one, "maneuvers", None) or [])}
     det = getattr(one, "determination", None)
     if det is not None:
         out["determination"] = det.as_dict()

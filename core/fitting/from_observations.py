@@ -48,6 +48,7 @@ from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.fitting.maneuver_search import add_maneuvers
 from cistrack.fitting.arcs import ArcSettings, arc_settings
 from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
                                             write_merged)
@@ -517,6 +518,7 @@ def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
     one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=job.choices)
     if not _lone_tracklet(one, obs, job):
         _fit_object(one, job.registry, job.progress, job.say if job.log else None)
+        add_maneuvers(one, job.say)
     return one
 
 

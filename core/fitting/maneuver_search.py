@@ -7,6 +7,8 @@ of ``fit.json``'s ``maneuvers`` (:func:`maneuver_record`) and the fit the one wi
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from cistrack import units
@@ -38,13 +40,15 @@ def maneuver_record(burn: BurnEstimate, window: tuple[float, float], first_after
 
 
 def add_maneuvers(one, say) -> None:
-    """Search the converged or suspect fit of ``one`` (an
-    :class:`~cistrack.fitting.from_observations.ObjectFit`) for burns when it looks like an object
-    that maneuvered; with burns kept, ``one.result`` becomes the fit with them, ``one.dynamics`` the
-    model that flies it and ``one.maneuvers`` their records; the fit's messages say what was found
-    (or that nothing explains a suspect fit)."""
-    from dataclasses import replace
+    """Search the fit of ``one`` (an :class:`~cistrack.fitting.from_observations.ObjectFit`) for burns
+    when it looks like an object that maneuvered (:func:`~cistrack.least_squares.burn_search.suspicion`).
 
+    With burns kept, ``one.result`` becomes the fit with them, its state at an epoch after the last
+    burn (:func:`_after_burns`) and its covariance the state's marginal one (the burns' uncertainty
+    in it, their delta-v no longer among its parameters: every later step predicts forward of the
+    burns with the run's ballistic model); ``one.dynamics`` is the model with the burns (for the
+    residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
+    explains is not reported as converged: its messages say why."""
     from cistrack.least_squares.burn_search import search_maneuvers, suspicion
 
     r = one.result
@@ -57,16 +61,69 @@ def add_maneuvers(one, say) -> None:
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
     found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, one.choices.options, say)
     if not found.burns:
-        one.result = replace(r, messages=tuple(r.messages) + (
-            f"the fit looks like an object that maneuvered ({why}), but no impulsive burn in the gaps "
-            "between the observations explains it",))
+        one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+            f"not a clean fit: it looks like an object that maneuvered ({why}), and no impulsive burn in "
+            "the gaps between the observations explains it",))
         return
     times = np.asarray(ctx.measurements.times, dtype=float)
+    fit, burns = _after_burns(ctx, found)
     one.maneuvers = [maneuver_record(b, w, float(times[times > b.t][0]), one.scenario.epoch)
-                     for b, w in zip(found.burns, found.windows)]
-    one.dynamics = found.dynamics
+                     for b, w in zip(burns, found.windows)]
+    one.dynamics = _flown(ctx.dynamics, burns)
     text = "; ".join(f"a burn of {m['delta_v_ms']:.3f} +- {m['delta_v_sigma_ms']:.3f} m/s at {m['t_burn_utc'][:16]}"
                      for m in one.maneuvers)
-    one.result = replace(found.result, messages=tuple(found.result.messages) + (
-        f"the ballistic fit looked like a maneuver ({why}); fitted with {len(found.burns)} impulsive "
-        f"burn(s): {text}",))
+    one.result = replace(_without_burns(fit), messages=tuple(fit.messages) + (
+        f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}",))
+
+
+def _after_burns(ctx, found):
+    """(fit, burns): the search's fit, refitted with its state at the last observation when its
+    epoch lies before a burn (so that predictions forward of the epoch fly no burn), and the burns
+    with the covariances of that fit (the burn times' uncertainty kept)."""
+    from cistrack.least_squares.impulse_fit import BurnArc, fit_impulses
+    from cistrack.least_squares.trajectory import arc_states
+
+    fit = found.result
+    t_last = float(np.max(ctx.measurements.times))
+    if fit.epoch >= max(b.t for b in found.burns):
+        return fit, found.burns
+    x = arc_states(found.dynamics, fit.state, fit.epoch, np.array([t_last]))[0]
+    again = fit_impulses(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit)), x, t_last,
+                         [b.t for b in found.burns])
+    burns = [replace(b, covariance_ms2=b.covariance_ms2 + (n.covariance_ms2 - _plain(found, k)))
+             for k, (b, n) in enumerate(zip(found.burns, again.burns))]
+    return again.fit, burns
+
+
+def _plain(found, k: int) -> np.ndarray:
+    """Burn ``k``'s covariance from the search's fit itself (without the burn time's part)."""
+    cov = np.asarray(found.result.full_covariance, dtype=float)
+    off = 6 + 3 * k  # the burns' delta-v come first among the parameters (the ratio, if any, last)
+    return cov[off:off + 3, off:off + 3]
+
+
+def fit_options(fit):
+    """FitOptions for a refit of ``fit``: the area-to-mass ratio estimated when ``fit`` estimated it."""
+    from cistrack.least_squares.options import FitOptions
+
+    return FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off")
+
+
+def _flown(dynamics, burns):
+    from cistrack.least_squares.burn_search import _flown as flown
+
+    return flown(dynamics, burns)
+
+
+def _without_burns(fit):
+    """``fit`` with the burns' delta-v taken out of its parameters (the state's covariance keeps
+    their uncertainty: it is the marginal block of the joint one)."""
+    names = list(fit.parameter_names)
+    keep = [i for i, n in enumerate(names) if not n.startswith("delta_v_")]
+    if len(keep) == len(names):
+        return fit
+    full = np.asarray(fit.full_covariance, dtype=float)
+    idx = list(range(6)) + [6 + i for i in keep]
+    return replace(fit, parameter_names=tuple(names[i] for i in keep),
+                   parameters=np.asarray(fit.parameters, dtype=float)[keep],
+                   full_covariance=full[np.ix_(idx, idx)] if keep else None)

@@ -176,7 +176,7 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
             f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted else "not kept"))
         if not ev.accepted:
             break
-        fit = _timed(arc, fit, t_sigma, found)
+        fit = _timed(arc, fit, t_sigma, found, window)
         windows = found.windows + [window]
         order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
         found = ManeuverSearch(fit.fit, _flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
@@ -184,10 +184,12 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
     return found
 
 
-def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch) -> ImpulseFit:
-    """``fit`` with the burn time's uncertainty in its delta-v covariance (as it is when that fails)."""
+def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,
+           window: tuple[float, float]) -> ImpulseFit:
+    """``fit`` with the burn time refined in its gap and its uncertainty in the delta-v covariance
+    (as it is when that fails)."""
     try:
-        return with_time_uncertainty(arc, fit, t_sigma, known=[x.t for x in found.burns])
+        return with_time_uncertainty(arc, fit, t_sigma, known=[x.t for x in found.burns], bounds=window)
     except (FitError, PropagationError):
         return fit
 

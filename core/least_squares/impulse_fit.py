@@ -308,11 +308,13 @@ def screen_burn_times(arc: BurnArc, fit: FitResult, candidates: Sequence[float])
 
 def _profile_sigma(ts: np.ndarray, costs: np.ndarray, k: int, width: float) -> float:
     """One sigma of the burn time from the cost's curvature at its minimum ``k`` (Delta cost = 1),
-    the parabola through the minimum and its neighbours; ``width`` / sqrt(12) (a uniform spread over
-    the interval) when the profile is flat or the minimum lies at its edge."""
+    the parabola through the minimum and its neighbours (the first or last three points when the
+    minimum lies at an end of the interval: a burn just after the last observation before the gap is
+    as sharp); ``width`` / sqrt(12) (a uniform spread over the interval) when the profile is flat."""
     flat = width / np.sqrt(12.0)
-    if k == 0 or k == ts.size - 1:
+    if ts.size < 3:
         return flat
+    k = min(max(k, 1), ts.size - 2)
     (t0, t1, t2), (c0, c1, c2) = ts[k - 1:k + 2], costs[k - 1:k + 2]
     curv = 2.0 * ((c2 - c1) / (t2 - t1) - (c1 - c0) / (t1 - t0)) / (t2 - t0)  # second derivative
     return float(min(flat, 1.0 / np.sqrt(0.5 * curv))) if curv > 0 else flat
@@ -322,7 +324,7 @@ def burn_time_profile(arc: BurnArc, fit: FitResult, lo: float, hi: float, n: int
     """The burn time (TU) in ``[lo, hi]`` that minimises the linearised capped cost
     (:func:`screen_burn_times` about ``fit``), on a grid of ``n`` then ``n`` more around the best,
     and its one sigma (TU) from the profile's curvature."""
-    ts = lo + (np.arange(n) + 0.5) / n * (hi - lo)
+    ts = np.linspace(lo, hi, n)  # the ends too: a burn just after the last observation before the gap
     costs = screen_burn_times(arc, fit, ts)
     k = int(np.argmin(costs))
     a, b = ts[max(k - 1, 0)], ts[min(k + 1, n - 1)]
@@ -335,18 +337,60 @@ def burn_time_profile(arc: BurnArc, fit: FitResult, lo: float, hi: float, n: int
     return float(fine[j]), _profile_sigma(allt, allc, m, hi - lo)
 
 
-def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, known: Sequence[float] = ()) -> ImpulseFit:
-    """``burn`` with its searched burn's delta-v covariance widened by the burn time's uncertainty:
-    C + g g^T t_sigma^2, g = d dv / d t_b by central differences of two more fits at t_b +- h
-    (h = t_sigma, or a minute when that is smaller)."""
+def _fit_at(arc: BurnArc, burn: ImpulseFit, tb: float, known: Sequence[float]) -> tuple[float, ImpulseFit]:
+    """(capped cost, fit) of the arc with the searched burn moved to ``tb``."""
+    one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb])
+    new = next(k for k, x in enumerate(one.burns) if x.t == tb)
+    return capped_cost(one.fit, arc.prior), ImpulseFit(one.burns, one.fit, new, burn.costs, burn.candidates)
+
+
+def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, known: Sequence[float] = (),
+                          bounds: tuple[float, float] | None = None) -> ImpulseFit:
+    """``burn`` with its burn time refined and that time's uncertainty in its delta-v covariance.
+
+    Two more fits at t_b +- h (h = ``t_sigma``, the screen's estimate, at least a minute; inside
+    ``bounds`` (TU), the gap) give the full fits' cost profile: the parabola through the three
+    costs moves the burn time to its vertex when that lies a half step or more away (one more fit
+    there) and gives its one sigma (Delta cost = 1; ``t_sigma`` when the profile is not convex);
+    their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2."""
     b = burn.searched
+    lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     h = max(float(t_sigma), float(units.seconds_to_tu(60.0)))
-    fits = []
-    for tb in (b.t - h, b.t + h):
-        one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb])
-        fits.append(next(x for x in one.burns if x.t == tb).delta_v_ms)
-    g = (fits[1] - fits[0]) / (2.0 * h)
-    cov = b.covariance_ms2 + np.outer(g, g) * float(t_sigma) ** 2
-    burns = list(burn.burns)
-    burns[burn.new] = BurnEstimate(b.t, b.delta_v_ms, cov, float(t_sigma))
-    return ImpulseFit(burns, burn.fit, burn.new, burn.costs, burn.candidates)
+    ts = _two_sides(b.t, h, lo, hi)
+    if ts is None:
+        return burn
+    (c_a, f_a), (c_b, f_b) = (_fit_at(arc, burn, float(t), known) for t in ts)
+    c0 = capped_cost(burn.fit, arc.prior)
+    pts = sorted([(ts[0], c_a), (b.t, c0), (ts[1], c_b)])
+    sigma, vertex = _parabola(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), float(t_sigma))
+    best = burn
+    if abs(vertex - b.t) >= 0.5 * h and lo <= vertex <= hi:
+        c_v, f_v = _fit_at(arc, burn, vertex, known)
+        best = f_v if c_v < c0 else burn
+    g = (f_b.searched.delta_v_ms - f_a.searched.delta_v_ms) / (ts[1] - ts[0])
+    nb = best.searched
+    burns = list(best.burns)
+    burns[best.new] = BurnEstimate(nb.t, nb.delta_v_ms, nb.covariance_ms2 + np.outer(g, g) * sigma ** 2, sigma)
+    return ImpulseFit(burns, best.fit, best.new, burn.costs, burn.candidates)
+
+
+def _two_sides(t: float, h: float, lo: float, hi: float) -> tuple[float, float] | None:
+    """Two more times (TU) inside [lo, hi] for the profile around ``t``: t - h and t + h, or, at an
+    end of the interval, two steps into it; None when the interval is too short."""
+    if t - h >= lo and t + h <= hi:
+        return t - h, t + h
+    if t + 2 * h <= hi:
+        return t + h, t + 2 * h
+    if t - 2 * h >= lo:
+        return t - 2 * h, t - h
+    return None
+
+
+def _parabola(t: np.ndarray, c: np.ndarray, fallback: float) -> tuple[float, float]:
+    """(one sigma (Delta cost = 1), vertex) of the parabola through three (t, cost) points;
+    (``fallback``, the middle point) when it is not convex."""
+    f01, f12 = (c[1] - c[0]) / (t[1] - t[0]), (c[2] - c[1]) / (t[2] - t[1])
+    a = (f12 - f01) / (t[2] - t[0])  # Newton's form: c0 + f01 (t - t0) + a (t - t0)(t - t1)
+    if not a > 0:
+        return fallback, float(t[1])
+    return float(1.0 / np.sqrt(a)), float(0.5 * (t[0] + t[1]) - f01 / (2.0 * a))

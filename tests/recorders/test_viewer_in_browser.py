@@ -25,7 +25,7 @@ from .viewer_shots import SHOTS, cloud_mask, cloud_spread, particle_pixels, rais
 
 pytestmark = pytest.mark.slow
 
-N_SERIES_PANELS = 5  # position, velocity, entropy, NEES, component weights
+N_SERIES_PANELS = 6  # position, velocity, entropy, NEES, component weights, maneuver detector
 
 
 @pytest.fixture(scope="module")
