@@ -21,6 +21,7 @@ The metric stage ``maneuvers`` (:class:`ManeuverMetric`) writes each update's te
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,7 +31,7 @@ from cistrack import units
 from cistrack.errors import PropagationError
 from cistrack.interfaces.maneuvers import Detection, ManeuverDetector, ManeuverResponse
 from cistrack.interfaces.metric import StepMetric
-from cistrack.least_squares.errors import FitError
+from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.options import FitOptions
 
 __all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "EPISODE_DAYS", "SETTLED_KM", "episodes"]
@@ -138,8 +139,10 @@ class ManeuverWatch:
         opts = FitOptions(area_to_mass="off")
         prior = (start.mean, start.covariance)
         try:
-            ballistic = fit_orbit(ctx.dynamics, ctx.sensor, arc, start.mean, start.t, options=opts, prior=prior)
-            found = search_maneuvers(ctx.dynamics, ctx.sensor, arc, ballistic, opts, prior=prior)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UnobservableWarning)  # a short arc: the prior carries it
+                ballistic = fit_orbit(ctx.dynamics, ctx.sensor, arc, start.mean, start.t, options=opts, prior=prior)
+                found = search_maneuvers(ctx.dynamics, ctx.sensor, arc, ballistic, opts, prior=prior)
         except (FitError, PropagationError, np.linalg.LinAlgError) as exc:
             say(f"maneuver detected at {units.tu_to_days(d.t):.3f} d: no delta-v estimate ({exc})")
             return None
