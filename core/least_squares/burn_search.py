@@ -45,8 +45,9 @@ from cistrack.propagation.impulses import ImpulsiveDynamics
 __all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "MIN_GAP_HOURS", "MAX_BURNS",
            "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS"]
 
-MIN_GAP_HOURS = 1.0
-"""Gaps between observations at least this long are candidate burn intervals."""
+MIN_GAP_HOURS = 0.2
+"""Gaps between observations at least this long (12 minutes) are candidate burn intervals: between
+nights, and between the tracklets or exposures of one night."""
 MAX_BURNS = 3
 """At most this many burns are searched for in one arc."""
 FALSE_ALARM = 1e-4
