@@ -17,6 +17,7 @@ burn is accepted when the drop in cost exceeds the chi-square quantile of 4 degr
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -29,7 +30,7 @@ from cistrack.interfaces.maneuvers import Impulse
 from cistrack.interfaces.sensor import Sensor
 from cistrack.least_squares.chi_square import chi2_ppf
 from cistrack.least_squares.differential_correction import fit_orbit
-from cistrack.least_squares.errors import FitError
+from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
@@ -168,8 +169,10 @@ def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float]) -> Impu
         raise FitError(f"fit_impulses: burn times must be finite numbers (TU), got {list(times)}")
     impulsive = ImpulsiveDynamics(arc.dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
     names = tuple(n for k in range(len(ts)) for n in dv_names(k))
-    fit = fit_orbit(impulsive, arc.sensor, arc.measurements, np.asarray(state, dtype=float), t0, options=arc.options,
-                    solve_for=names, prior=arc.prior)
+    with warnings.catch_warnings():  # a trial burn time may leave a direction weak: its fit's messages say so
+        warnings.simplefilter("ignore", UnobservableWarning)
+        fit = fit_orbit(impulsive, arc.sensor, arc.measurements, np.asarray(state, dtype=float), t0,
+                        options=arc.options, solve_for=names, prior=arc.prior)
     cov = np.asarray(fit.full_covariance, dtype=float)
     burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
                           cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
