@@ -3,12 +3,34 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from cistrack.interfaces.component import Component
 
-__all__ = ["Body", "Dynamics", "Propagation"]
+__all__ = ["Body", "Dynamics", "Propagation", "check_output_times"]
+
+
+def check_output_times(label: str, t0: Any, times: Any) -> tuple[float, np.ndarray]:
+    """``t0`` as a float and ``times`` as (K,) float64 (TU): numbers, finite, at least one,
+    monotonic in one direction from ``t0``; a :class:`~cistrack.errors.StateError` naming ``label``
+    (the model) otherwise."""
+    from cistrack.errors import StateError
+
+    try:
+        t0 = float(t0)
+        t_out = np.atleast_1d(np.asarray(times, dtype=np.float64)).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise StateError(f"{label}: t0 and times must be numbers (TU): {exc}") from None
+    if t_out.size == 0:
+        raise StateError(f"{label}: no output times given")
+    if not (np.isfinite(t0) and np.all(np.isfinite(t_out))):
+        raise StateError(f"{label}: t0 and times must be finite")
+    d = np.diff(np.concatenate(([t0], t_out)))
+    if not (np.all(d >= 0) or np.all(d <= 0)):
+        raise StateError(f"{label}: times must be monotonic in one direction from t0={t0}")
+    return t0, t_out
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Innovation", "innovation", "MAX_NIS_SAMPLES"]
+__all__ = ["Innovation", "innovation", "MAX_NIS_SAMPLES", "block_diagonal"]
 
 MAX_NIS_SAMPLES = 4000
 """At most this many prior particles (an evenly strided subset) predict the measurement."""
@@ -73,11 +73,12 @@ def innovation(prior, measurement, sensor) -> Innovation:
     mean_r = w @ r
     d = r - mean_r
     pzz = (d * w[:, None]).T @ d
-    noise = noises[0] if len(noises) == 1 else _block_diagonal(noises)
+    noise = noises[0] if len(noises) == 1 else block_diagonal(noises)
     return Innovation(tuple(used), -mean_r, pzz + noise, noise)  # nu = z - z_hat
 
 
-def _block_diagonal(blocks) -> np.ndarray:
+def block_diagonal(blocks) -> np.ndarray:
+    """The block-diagonal matrix of the square ``blocks`` (each (m_i, m_i)): (sum m_i, sum m_i)."""
     n = sum(b.shape[0] for b in blocks)
     out = np.zeros((n, n))
     i = 0
@@ -85,3 +86,6 @@ def _block_diagonal(blocks) -> np.ndarray:
         out[i:i + b.shape[0], i:i + b.shape[0]] = b
         i += b.shape[0]
     return out
+
+
+_block_diagonal = block_diagonal  # the name cistrack.evaluation.consistency re-exports

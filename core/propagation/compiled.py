@@ -61,7 +61,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cistrack.errors import PropagationError, StateError
-from cistrack.interfaces.dynamics import Dynamics, Propagation
+from cistrack.interfaces.dynamics import Dynamics, Propagation, check_output_times
 
 from cistrack.propagation import background_compile
 from cistrack.propagation.dense import DenseTrajectory, KernelInputs, integrate_dense
@@ -214,16 +214,7 @@ class CompiledDynamics(Dynamics):
 
     def _check_output_times(self, t0: float, times: Any) -> tuple[float, np.ndarray]:
         """``t0`` as a float and ``times`` as (K,) float64: finite, at least one, monotonic away from t0."""
-        t0 = float(t0)
-        t_out = np.atleast_1d(np.asarray(times, dtype=np.float64)).reshape(-1)
-        if t_out.size == 0:
-            raise StateError(f"{self._label()}: no output times given")
-        if not (np.isfinite(t0) and np.all(np.isfinite(t_out))):
-            raise StateError(f"{self._label()}: t0 and times must be finite")
-        d = np.diff(np.concatenate(([t0], t_out)))
-        if not (np.all(d >= 0) or np.all(d <= 0)):
-            raise StateError(f"{self._label()}: times must be monotonic in one direction from t0={t0}")
-        return t0, t_out
+        return check_output_times(self._label(), t0, times)
 
     def _propagate_kernel(self, n: int) -> Any:
         """The SIMD-lockstep kernel when the model has one and ``n`` particles fill enough lanes

@@ -34,7 +34,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import ConfigError, StateError
-from cistrack.interfaces.dynamics import Body, Dynamics, Propagation
+from cistrack.interfaces.dynamics import Body, Dynamics, Propagation, check_output_times
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.interfaces.transition_matrix import check_stm_request
 
@@ -157,19 +157,7 @@ class ImpulsiveDynamics(Dynamics):
         return segs
 
     def _check_times(self, t0: Any, times: Any) -> tuple[float, np.ndarray]:
-        try:
-            t0 = float(t0)
-            t_out = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
-        except (TypeError, ValueError) as exc:
-            raise StateError(f"{self._label()}: t0 and times must be numbers (TU): {exc}") from None
-        if t_out.size == 0:
-            raise StateError(f"{self._label()}: no output times given")
-        if not (np.isfinite(t0) and np.all(np.isfinite(t_out))):
-            raise StateError(f"{self._label()}: t0 and times must be finite")
-        d = np.diff(np.concatenate(([t0], t_out)))
-        if not (np.all(d >= 0) or np.all(d <= 0)):
-            raise StateError(f"{self._label()}: times must be monotonic in one direction from t0={t0}")
-        return t0, t_out
+        return check_output_times(self._label(), t0, times)
 
     def _check_states(self, states: Any) -> np.ndarray:
         try:

@@ -30,6 +30,7 @@ import numpy as np
 
 from cistrack.least_squares.unscented_prediction import sigma_points
 from cistrack.model.belief import GaussianMixture, regularize_covariance
+from cistrack.model.innovation import block_diagonal
 
 __all__ = ["predictive_mixture", "tail_probability", "state_mixture"]
 
@@ -47,16 +48,6 @@ def state_mixture(prior) -> GaussianMixture:
     return prior.samples.moment_match()
 
 
-def _block_diagonal(blocks: list[np.ndarray]) -> np.ndarray:
-    n = sum(b.shape[0] for b in blocks)
-    out = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        out[i:i + b.shape[0], i:i + b.shape[0]] = b
-        i += b.shape[0]
-    return out
-
-
 def _measured_residuals(points: np.ndarray, group, sensor) -> tuple[np.ndarray, np.ndarray]:
     """``zhat - z`` (wrapped) of every point for the stacked measurements (P, sum m), and R."""
     cols_out, noises = [], []
@@ -69,7 +60,7 @@ def _measured_residuals(points: np.ndarray, group, sensor) -> tuple[np.ndarray, 
         zs = np.asarray(own.measure(points, m.t), dtype=float)
         cols_out.append(np.asarray(own.residual(zs, full_z[None, :]), dtype=float)[:, cols])
         noises.append(np.atleast_2d(np.asarray(m.covariance, dtype=float)))
-    return np.concatenate(cols_out, axis=1), _block_diagonal(noises)
+    return np.concatenate(cols_out, axis=1), block_diagonal(noises)
 
 
 def predictive_mixture(prior, group, sensor) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
