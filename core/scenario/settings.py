@@ -22,7 +22,19 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["parse_settings", "merge_settings", "apply_settings", "describe_settings"]
+__all__ = ["parse_settings", "merge_settings", "apply_settings", "describe_settings", "settings_suffix"]
+
+
+def settings_suffix(settings: Iterable[str] | None) -> str:
+    """The part of a default results directory's name that tells ``--set`` items apart:
+    ``"__set-"`` and 8 hex digits of the sha256 of the items (one a line, as given), or "" for
+    none; ``cistrack run`` and ``cistrack study run`` both name their default directories so."""
+    items = list(settings or [])
+    if not items:
+        return ""
+    import hashlib
+
+    return "__set-" + hashlib.sha256("\n".join(items).encode()).hexdigest()[:8]
 
 
 def _value(text: str, item: str) -> Any:

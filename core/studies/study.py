@@ -46,6 +46,7 @@ from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_stu
                                          study_source, study_sweep)
 from cistrack.studies.resume import run_state
 from cistrack.scenario.limits import check_count, check_path_component
+from cistrack.scenario.settings import settings_suffix as _settings_suffix  # the name it had here
 from cistrack.studies.workers import execute_run, init_worker, run_spec
 from cistrack.runs.run_id import run_id
 
@@ -298,14 +299,6 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = ()):
         if msg == str(exc):
             raise
         raise ConfigError(msg) from None
-
-
-def _settings_suffix(settings: list[str] | None) -> str:
-    if not settings:
-        return ""
-    import hashlib
-
-    return "__set-" + hashlib.sha256("\n".join(settings).encode()).hexdigest()[:8]
 
 
 def make_executor(workers: int | None = None, dask: str | None = None):
