@@ -16,7 +16,7 @@ from pathlib import Path
 from cistrack.errors import ConfigError
 
 __all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
-           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK"]
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
 """Files that describe an earlier run or fit of a results directory and that a new run there does
@@ -31,6 +31,9 @@ STUDY_LOCK = ".study.lock"
 """The lock file of a study directory (see :mod:`cistrack.studies.study_lock`); not content."""
 STUDY_RUNS_LOCK = ".study-runs.lock"
 """The lock file its runs share while they write (see :mod:`cistrack.studies.study_lock`); not content."""
+RUN_LOCK = ".run.lock"
+"""The lock file of a results directory that ``cistrack run`` holds while it writes there (see
+:mod:`cistrack.results.dir_lock`); not content."""
 
 
 def check_output_dir(directory: str | Path, where: str) -> Path:
@@ -44,7 +47,7 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
         if d.exists() and not d.is_dir():
             raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
                               "earlier results directory")
-        if d.is_dir() and any(d.iterdir()) and not (d / "manifest.json").is_file():
+        if d.is_dir() and any(e.name != RUN_LOCK for e in d.iterdir()) and not (d / "manifest.json").is_file():
             raise ConfigError(f"{where} {d}: is not empty and holds no cistrack manifest.json; results go "
                               "to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:

@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-import socket
 import sys
 import time
 from pathlib import Path
 from typing import Iterator
 
 from cistrack.errors import CistrackError
+from cistrack.results.dir_lock import lock_holder, note_holder, open_lock, try_lock
 from cistrack.results.output_paths import STUDY_LOCK, STUDY_RUNS_LOCK
 
 __all__ = ["StudyBusy", "study_lock", "hold_runs_lock", "RUNS_LOCK"]
@@ -38,37 +38,7 @@ class StudyBusy(CistrackError):
     """Another study process (or its runs) is writing into the study directory."""
 
 
-def _try_lock(fd: int, shared: bool = False) -> bool:
-    """Take an advisory lock on ``fd`` without waiting; False if another process holds it."""
-    if sys.platform == "win32":  # pragma: no cover (no shared locks there: exclusive on one byte)
-        import msvcrt
-        try:
-            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
-            return True
-        except OSError:
-            return False
-    import fcntl
-    try:
-        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
-        return True
-    except BlockingIOError:
-        return False
-
-
-def _open(path: Path, where: str) -> int:
-    try:
-        return os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError as exc:
-        raise CistrackError(f"{where} {path.parent}: cannot create the lock file {path.name} "
-                            f"({exc.strerror or exc})") from None
-
-
-def _holder(fd: int) -> str:
-    try:
-        text = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
-    except (OSError, AttributeError):
-        text = ""
-    return f" (process {text})" if text else ""
+_try_lock, _open, _holder = try_lock, open_lock, lock_holder  # the names this module had
 
 
 @contextlib.contextmanager
@@ -82,9 +52,7 @@ def study_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
         if not _try_lock(fd):
             raise StudyBusy(f"{where} {d}: another 'cistrack study run'{_holder(fd)} is running a study in "
                             f"this directory; wait for it to end, or give another {where}")
-        with contextlib.suppress(OSError):  # who holds it, for the refusal above (a full disk: no name)
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()} on {socket.gethostname()}\n".encode(), 0)
+        note_holder(fd)  # who holds it, for the refusal above
         _wait_for_runs(d, where)
         yield
     finally:

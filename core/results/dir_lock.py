@@ -1,0 +1,85 @@
+"""Advisory locks on results directories: one writer at a time.
+
+An exclusive ``flock`` on a lock file in the directory, which the operating system releases when
+the process ends in any way (``kill -9`` included), so a killed process never leaves the directory
+locked. The lock file itself stays (empty but for the holder's process id and host, which a
+refusal names). ``cistrack run`` holds :data:`RUN_LOCK` of its results directory for the whole run
+(:func:`run_lock`); a study holds its own lock files (:mod:`cistrack.studies.study_lock`, built on
+the functions here).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import socket
+import sys
+from pathlib import Path
+from typing import Iterator
+
+from cistrack.errors import CistrackError
+from cistrack.results.output_paths import RUN_LOCK
+
+__all__ = ["RunBusy", "run_lock", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
+
+
+class RunBusy(CistrackError):
+    """Another process is writing a run into the results directory."""
+
+
+def try_lock(fd: int, shared: bool = False) -> bool:
+    """Take an advisory lock on ``fd`` without waiting; False if another process holds it."""
+    if sys.platform == "win32":  # pragma: no cover (no shared locks there: exclusive on one byte)
+        import msvcrt
+        try:
+            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+            return True
+        except OSError:
+            return False
+    import fcntl
+    try:
+        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
+        return True
+    except BlockingIOError:
+        return False
+
+
+def open_lock(path: Path, where: str) -> int:
+    """Open (create) the lock file ``path``; a :class:`CistrackError` naming ``where`` if it cannot."""
+    try:
+        return os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise CistrackError(f"{where} {path.parent}: cannot create the lock file {path.name} "
+                            f"({exc.strerror or exc})") from None
+
+
+def lock_holder(fd: int) -> str:
+    """`` (process PID on HOST)`` as the holder wrote it into the lock file, or "" if unknown."""
+    try:
+        text = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
+    except (OSError, AttributeError):
+        text = ""
+    return f" (process {text})" if text else ""
+
+
+def note_holder(fd: int) -> None:
+    """Write this process's id and host into the locked file (for the refusal of the next one)."""
+    with contextlib.suppress(OSError, AttributeError):  # a full disk: no name, the lock still holds
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()} on {socket.gethostname()}\n".encode(), 0)
+
+
+@contextlib.contextmanager
+def run_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
+    """Hold the run lock of the results directory ``directory`` for the block; raise
+    :class:`RunBusy` naming ``where``, the directory and the other process at once if another
+    process holds it."""
+    d = Path(directory)
+    fd = open_lock(d / RUN_LOCK, where)
+    try:
+        if not try_lock(fd):
+            raise RunBusy(f"{where} {d}: another 'cistrack run'{lock_holder(fd)} is writing its results in "
+                          f"this directory; wait for it to end, or give another --out")
+        note_holder(fd)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
