@@ -1,6 +1,6 @@
 """The ``cistrack`` command.
 
-    cistrack run [SCENARIO] [--seed N] [--out DIR] [--rerun FILE.rrd [--overwrite]] [--rerun-serve] [--rerun-spawn]
+    cistrack run [SCENARIO] [--seed N] [--out DIR] [--set K=V ...] [--overwrite] [--rerun FILE.rrd] [--rerun-serve]
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
@@ -51,37 +51,54 @@ def _fmt(v, nd=3) -> str:
 
 def cmd_run(args) -> int:
     from cistrack.plugin.registry import default_registry
-    from cistrack.runs.pipeline import run_scenario
+    from cistrack.results.dir_lock import run_lock
+    from cistrack.results.earlier_run import check_recording_path, check_replacing
     from cistrack.runs.run_id import scenario_run_id
     from cistrack.runs.input_checks import check_run_inputs
     from cistrack.scenario.loading import load_scenario
-    from cistrack.scenario.settings import apply_settings
+    from cistrack.scenario.settings import apply_settings, settings_suffix
 
     reg = default_registry()
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
+    seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
+    # the default directory of a run with --set items names them, so it never replaces the plain run's
+    out = Path(args.out) if args.out else Path("runs") / (scenario_run_id(scen, seed) + settings_suffix(args.set))
+    where = "--out" if args.out else "the results directory"
+    check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
+    if args.rerun:
+        check_recording_path(args.rerun, out)
+    check_output_dir(out, where)
+    with run_lock(out, where):  # one run at a time in a results directory
+        replaced = check_replacing(out, scen, seed, where, overwrite=args.overwrite)
+        res, recorder = _run_into(args, reg, scen, seed, out, replaced)
+    out_ = (lambda *a, **k: None) if args.quiet else print
+    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
+        _serve_until_interrupted(recorder, out_)
+    if recorder is None:
+        allow_quick_exit()  # results written and closed; no recorder to flush at exit
+    return 0 if res.summary.status == "finished" else 3
+
+
+def _run_into(args, reg, scen, seed: int, out: Path, replaced: str):
+    """Run ``scen`` with ``seed`` into ``out`` (its lock held) and print the outcome; returns the
+    run's result and its rerun recorder (None without one)."""
+    from cistrack.runs.pipeline import run_scenario
+
     say = (lambda *a, **k: None) if args.quiet else _eprint
     out_ = (lambda *a, **k: None) if args.quiet else print
-    seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
-    run_id = scenario_run_id(scen, seed)
-    out = Path(args.out) if args.out else Path("runs") / run_id
-    check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
-    check_output_dir(out, "--out" if args.out else "the results directory")
     recorder = _rerun_recorder(args, reg, scen)
     observers = [recorder] if recorder is not None else []
     say(f"cistrack: scenario '{scen.name}' ({scen.source}), seed {seed}")
     say(f"  filter {scen.components['filter'].name}, IOD {scen.components['iod'].name}, "
         f"{scen.duration_days:g} days; results -> {out}")
+    if replaced:
+        say(f"  --overwrite: replacing the results in {out} ({replaced})")
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out, progress=not args.quiet,
                        log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part)
-    s = res.summary
-    _print_outcome(s, out, args.quiet, out_)
+    _print_outcome(res.summary, out, args.quiet, out_)
     if args.rerun:
         out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
-    if recorder is not None and (args.rerun_serve or args.rerun_spawn):
-        _serve_until_interrupted(recorder, out_)
-    if recorder is None:
-        allow_quick_exit()  # results written and closed; no recorder to flush at exit
-    return 0 if s.status == "finished" else 3
+    return res, recorder
 
 
 def _rerun_recorder(args, reg, scen):
@@ -256,9 +273,12 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
     r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")
     r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
-    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>; must be new, empty or an earlier results directory)")
+    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>, with __set-<hash> "
+                   "after it for --set items; must be new, empty or an earlier results directory; one "
+                   "holding another scenario's, settings' or seed's results is refused without --overwrite)")
     r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
-    r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file (refused otherwise)")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file, and the results of another scenario, "
+                   "other settings or another seed in --out (both refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
     r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")

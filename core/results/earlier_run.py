@@ -1,0 +1,149 @@
+"""What a new run may replace in its results directory, checked before anything is computed.
+
+``cistrack run`` replaces an earlier run of the same scenario, settings and seed in its results
+directory (the same fingerprint, :mod:`cistrack.results.fingerprint`: running it again is how a
+killed or changed run is redone), but never, unless told to (``--overwrite``), the results of
+another scenario, other settings or another seed: :func:`check_replacing` refuses, naming the
+directory, what is there and how the two differ. :func:`check_recording_path` refuses a
+recording (``--rerun FILE``) that would be written over one of the run's own result files.
+"""
+from __future__ import annotations
+
+import fnmatch
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from cistrack.errors import ConfigError
+from cistrack.results.estimates import _PARTS as ESTIMATE_PARTS
+from cistrack.results.estimates import ESTIMATES
+from cistrack.results.fingerprint import scenario_fingerprint
+from cistrack.results.output_paths import EARLIER_RESULTS, RUN_LOCK
+from cistrack.results.store import MANIFEST, PARTS, STEPS
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["check_replacing", "check_recording_path", "RESULT_FILES", "RESULT_FOLDERS"]
+
+RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
+"""The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
+RESULT_FOLDERS = (PARTS, ESTIMATE_PARTS)
+"""The folders of part files a run writes in its results directory."""
+_SHOWN = 4
+"""Differences named in a refusal (the rest are counted)."""
+
+
+def _has_results(d: Path) -> bool:
+    """Whether ``d`` holds a step table: merged, or the parts of a run that did not merge them."""
+    return (d / STEPS).is_file() or any((d / PARTS).glob("part-*.parquet"))
+
+
+def _flat(tables: Any, prefix: str = "") -> dict[str, Any]:
+    """``{"filter": {"n_particles": 5}}`` -> ``{"filter.n_particles": 5}``."""
+    if not isinstance(tables, dict):
+        return {prefix: tables}
+    out: dict[str, Any] = {}
+    for key, value in tables.items():
+        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def _recorded_tables(d: Path) -> dict | None:
+    """The scenario tables an earlier run recorded (scenario.toml or .json), or None."""
+    try:
+        if (d / "scenario.toml").is_file():
+            return tomllib.loads((d / "scenario.toml").read_text())
+        if (d / "scenario.json").is_file():
+            return json.loads((d / "scenario.json").read_text())
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def _differences(old: dict | None, new: dict) -> list[str]:
+    """``key: there -> now`` for each scenario value that differs (``old`` None: none known)."""
+    if old is None:
+        return []
+    a, b = _flat(old), _flat(json.loads(json.dumps(new, default=str)))
+    keys = sorted(k for k in set(a) | set(b) if str(a.get(k, "-")) != str(b.get(k, "-")))
+    return [f"{k}: {a.get(k, '(not set)')!r} there, {b.get(k, '(not set)')!r} now" for k in keys]
+
+
+def _describe(man: dict, d: Path, scenario: Any, seed: int) -> str:
+    """What the earlier run in ``d`` was and how this one differs, for a refusal."""
+    there = (f"a {man.get('status', 'unknown')} run of scenario '{man.get('scenario', '?')}', seed "
+             f"{man.get('seed', '?')}, filter {_component(man, 'filter')}, IOD {_component(man, 'iod')}")
+    diffs = _differences(_recorded_tables(d), getattr(scenario, "raw", {}) or {})
+    if man.get("seed") != int(seed):
+        diffs.insert(0, f"seed: {man.get('seed')!r} there, {int(seed)} now")
+    if not diffs:
+        diffs = ["its scenario, seed or measurement file (the fingerprint differs)"]
+    more = f" and {len(diffs) - _SHOWN} more" if len(diffs) > _SHOWN else ""
+    return f"{there}; this run differs in " + "; ".join(diffs[:_SHOWN]) + more
+
+
+def _component(man: dict, kind: str) -> str:
+    comp = (man.get("components") or {}).get(kind)
+    return str(comp.get("name", "?")) if isinstance(comp, dict) else "?"
+
+
+def check_replacing(directory: str | Path, scenario: Any, seed: int, where: str = "--out",
+                    overwrite: bool = False) -> str:
+    """Refuse (:class:`ConfigError` naming ``where`` and the directory) a run of ``scenario`` and
+    ``seed`` in ``directory`` that holds the step table of a run with another fingerprint (or an
+    unreadable manifest), unless ``overwrite``. Returns a description of the results that will be
+    replaced (for a note when ``overwrite`` allowed it), or "" when nothing of another run is there."""
+    d = Path(directory)
+    if not (d / MANIFEST).is_file() or not _has_results(d):
+        return ""
+    try:
+        man = json.loads((d / MANIFEST).read_text())
+        if not isinstance(man, dict):
+            raise ValueError("not a JSON object")
+    except (OSError, ValueError) as exc:
+        man, what = None, f"the results of a run whose {MANIFEST} cannot be read ({exc})"
+    if man is not None:
+        if man.get("fingerprint") == scenario_fingerprint(scenario, seed):
+            return ""  # the same run again: it replaces its own results
+        what = _describe(man, d, scenario, seed)
+    if overwrite:
+        return what
+    raise ConfigError(f"{where} {d}: holds {what}. A run never replaces the results of another scenario, "
+                      f"other settings or another seed: give another --out, remove {d}, or add --overwrite "
+                      "to replace them")
+
+
+def check_recording_path(recording: str | Path, directory: str | Path, where: str = "--rerun") -> None:
+    """Refuse (:class:`ConfigError` naming both paths) a recording path that is the results
+    directory, one of the run's result files (or their temporary files), a file a run removes as it
+    starts (:data:`~cistrack.results.output_paths.EARLIER_RESULTS`), or a path inside its part
+    folders: writing the recording there would replace the run's results, or the run the recording."""
+    r, d = Path(os.path.abspath(recording)).resolve(), Path(os.path.abspath(directory)).resolve()
+    why = ""
+    if r == d:
+        why = f"is the results directory {directory} itself"
+    elif any(r.is_relative_to(d / f) for f in RESULT_FOLDERS):
+        why = f"is inside a folder of part files of the results directory {directory}"
+    elif r.parent == d and any(r.name == n or r.name.startswith(n + ".") for n in RESULT_FILES):
+        why = f"is one of the run's own result files in the results directory {directory}"
+    elif r.parent == d and any(fnmatch.fnmatch(r.name, p) for p in EARLIER_RESULTS):
+        why = (f"is a file that the run removes as it starts in the results directory {directory} "
+               "(an earlier run's export or fit file)")
+    elif r.exists() and any(_same(r, d / n) for n in RESULT_FILES):
+        why = f"is the same file as one of the run's result files in the results directory {directory}"
+    if why:
+        raise ConfigError(f"{where} {recording}: {why}; the recording would replace the run's results. Give a "
+                          f"recording path outside {Path(directory) / PARTS} and {Path(directory) / ESTIMATE_PARTS}, "
+                          f"not named like a result file (e.g. {Path(directory) / 'recording.rrd'})")
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
