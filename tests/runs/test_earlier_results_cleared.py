@@ -16,7 +16,7 @@ def test_a_run_again_in_its_directory_leaves_no_export_of_the_earlier_run(tmp_pa
     assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=2"]) == 0
     assert main(["export", str(out), "--format", "oem"]) == 0
     assert (out / "estimate.oem").is_file()
-    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=1.5"]) == 0
+    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=1.5", "--overwrite"]) == 0
     assert not (out / "estimate.oem").exists()
     assert main(["export", str(out), "--format", "oem"]) == 0
     assert "2026-01-02T12:00" in (out / "estimate.oem").read_text()
@@ -28,7 +28,7 @@ def test_a_run_in_an_earlier_fit_directory_removes_the_fit_so_export_writes_the_
                  "--set", "iod.n_particles=1000", "--set", "filter.n_particles=1000"]) == 0
     assert (out / "fit.json").is_file() and (out / "residuals.csv").is_file()
     assert list(out.glob("residuals-*.png"))
-    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=2"]) == 0
+    assert main(["run", "quick", "--out", str(out), "--quiet", "--set", "duration_days=2", "--overwrite"]) == 0
     assert not (out / "fit.json").exists() and not (out / "residuals.csv").exists()
     assert not list(out.glob("residuals-*.png")) and not list(out.glob("residuals-*.svg"))
     assert main(["export", str(out), "--format", "oem"]) == 0

@@ -122,7 +122,7 @@ def test_default_results_directory_names_filter_and_iod(tmp_path):
                               + (["--set", "filter.n_components=2"] if f == "pgm" else []),
                               capture_output=True, text=True, cwd=tmp_path)
         assert proc.returncode in (0, 3), proc.stderr
-    names = sorted(p.name for p in (tmp_path / "runs").iterdir())
+    names = sorted(p.name.partition("__set-")[0] for p in (tmp_path / "runs").iterdir())  # --set: a suffix
     assert names == ["quick__enkf__noisy-range__seed1", "quick__pgm__noisy-range__seed1"]
 
 
