@@ -233,7 +233,7 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
 def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,
         settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
         progress: bool = False, log: Callable[[str], None] | None = None, observers: Iterable[Any] = (),
-        registry: Registry | None = None) -> Run:
+        registry: Registry | None = None, overwrite: bool = False) -> Run:
     """Run one scenario end to end, as ``cistrack run`` does, and return its :class:`Run`.
 
     Parameters
@@ -246,13 +246,18 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
         Overrides, as for :func:`load_scenario`.
     out : path, optional
         Write the results folder here (a new or empty folder, as ``cistrack run --out``); by default
-        the run is kept in memory only.
+        the run is kept in memory only. As for ``cistrack run``, the folder is locked while the run
+        writes (another process writing there raises at once), and a folder holding the results
+        of another scenario, other settings or another seed is refused (ConfigError naming what is
+        there) unless ``overwrite``; the same run again replaces its own results.
     progress : bool
         Show a progress bar on stderr.
     log : callable, optional
         Receives one string per stage of the run ("reading measurements ...", "IOD ...").
     observers : iterable
         Extra lifecycle-hook observers (for example a rerun recorder from the registry).
+    overwrite : bool
+        Replace the results of another run in ``out`` (see ``out``).
     """
     from cistrack.results.output_paths import check_output_dir
     from cistrack.runs.pipeline import run_scenario
@@ -261,12 +266,18 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
-    directory = None
-    if out is not None:
-        directory = Path(out)
-        check_output_dir(directory, "out")
-    res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
-                       progress=progress, log=log)
+    if out is None:
+        res = run_scenario(scen, seed=seed, registry=reg, observers=observers, progress=progress, log=log)
+        return Run(res.summary, None, tuple(res.rows))
+    from cistrack.results.dir_lock import run_lock
+    from cistrack.results.earlier_run import check_replacing
+
+    directory = Path(out)
+    check_output_dir(directory, "out")
+    with run_lock(directory, "out"):  # one run at a time in a results directory, as cistrack run
+        check_replacing(directory, scen, seed, "out", overwrite=overwrite)
+        res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
+                           progress=progress, log=log)
     return Run(res.summary, directory, tuple(res.rows))
 
 
