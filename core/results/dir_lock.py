@@ -14,12 +14,12 @@ import os
 import socket
 import sys
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 from cistrack.errors import CistrackError
 from cistrack.results.output_paths import RUN_LOCK
 
-__all__ = ["RunBusy", "run_lock", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
+__all__ = ["RunBusy", "run_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
 
 
 class RunBusy(CistrackError):
@@ -69,17 +69,26 @@ def note_holder(fd: int) -> None:
 
 
 @contextlib.contextmanager
+def holding(path: Path, where: str, refusal: Callable[[str], Exception]) -> Iterator[None]:
+    """Hold the exclusive lock of the lock file ``path`` for the block; at once raise
+    ``refusal(holder)`` (``holder``: :func:`lock_holder`'s words) if another process holds it."""
+    fd = open_lock(path, where)
+    try:
+        if not try_lock(fd):
+            raise refusal(lock_holder(fd))
+        note_holder(fd)  # who holds it, for the next refusal
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+@contextlib.contextmanager
 def run_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
     """Hold the run lock of the results directory ``directory`` for the block; raise
     :class:`RunBusy` naming ``where``, the directory and the other process at once if another
     process holds it."""
     d = Path(directory)
-    fd = open_lock(d / RUN_LOCK, where)
-    try:
-        if not try_lock(fd):
-            raise RunBusy(f"{where} {d}: another 'cistrack run'{lock_holder(fd)} is writing its results in "
-                          f"this directory; wait for it to end, or give another --out")
-        note_holder(fd)
+    with holding(d / RUN_LOCK, where, lambda holder: RunBusy(
+            f"{where} {d}: another 'cistrack run'{holder} is writing its results in this directory; "
+            "wait for it to end, or give another --out")):
         yield
-    finally:
-        os.close(fd)  # releases the lock

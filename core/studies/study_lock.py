@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Iterator
 
 from cistrack.errors import CistrackError
-from cistrack.results.dir_lock import lock_holder, note_holder, open_lock, try_lock
+from cistrack.results.dir_lock import holding, lock_holder, open_lock, try_lock
 from cistrack.results.output_paths import STUDY_LOCK, STUDY_RUNS_LOCK
 
 __all__ = ["StudyBusy", "study_lock", "hold_runs_lock", "RUNS_LOCK"]
@@ -47,16 +47,11 @@ def study_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
     at once if another process holds it, and after :data:`WAIT_FOR_RUNS_S` s if runs of an ended
     study process are still writing there."""
     d = Path(directory)
-    fd = _open(d / STUDY_LOCK, where)
-    try:
-        if not _try_lock(fd):
-            raise StudyBusy(f"{where} {d}: another 'cistrack study run'{_holder(fd)} is running a study in "
-                            f"this directory; wait for it to end, or give another {where}")
-        note_holder(fd)  # who holds it, for the refusal above
+    with holding(d / STUDY_LOCK, where, lambda holder: StudyBusy(
+            f"{where} {d}: another 'cistrack study run'{holder} is running a study in this directory; "
+            f"wait for it to end, or give another {where}")):
         _wait_for_runs(d, where)
         yield
-    finally:
-        os.close(fd)  # releases the lock
 
 
 def _wait_for_runs(d: Path, where: str) -> None:
