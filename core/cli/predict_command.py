@@ -118,7 +118,8 @@ def cmd_predict(args) -> int:
     if not args.quiet:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
-    sky = sky_ephemeris(orbit.dynamics, orbit.state, orbit.covariance, orbit.t0, times, site, orbit.epoch, reg)
+    sky = sky_ephemeris(orbit.dynamics, orbit.state, orbit.covariance, orbit.t0, times, site, orbit.epoch, reg,
+                        fit=orbit.fit)
     prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
     csv_path = sky.write_csv(prefix.with_name(prefix.name + ".csv"))
     png = plot_sky(sky, prefix.with_name(prefix.name + ".png"),

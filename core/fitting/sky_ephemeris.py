@@ -22,6 +22,7 @@ from __future__ import annotations
 import csv
 import math
 from dataclasses import dataclass
+from typing import Any
 from datetime import datetime
 from pathlib import Path
 
@@ -120,6 +121,18 @@ def predicted_orbit(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarra
     return states, 0.5 * (cov + np.transpose(cov, (0, 2, 1))), linear
 
 
+def _orbit_at(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray, t0: float, tt: np.ndarray,
+              fit: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`predicted_orbit`, or with a ``fit`` that estimated parameters its states and the joint
+    covariances."""
+    from cistrack.least_squares.area_to_mass import joint_covariances
+
+    joint = joint_covariances(dynamics, fit, tt) if fit is not None else None
+    if joint is None:
+        return predicted_orbit(dynamics, state, covariance, t0, tt)
+    return arc_states(dynamics, state, t0, tt), joint[0], joint[1]
+
+
 def _sensors(site: Site, epoch: datetime, registry: Registry):
     common = {"latitude_deg": site.latitude_deg, "longitude_deg": site.longitude_deg, "height_m": site.height_m,
               "epoch": units.format_utc(epoch), "elevation_mask_deg": -90.0}
@@ -179,14 +192,19 @@ def _checked(dynamics: Dynamics, times) -> np.ndarray:
 
 
 def sky_ephemeris(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray, t0: float, times,
-                  site: Site, epoch: datetime | str, registry: Registry | None = None) -> SkyEphemeris:
+                  site: Site, epoch: datetime | str, registry: Registry | None = None, *,
+                  fit: Any = None) -> SkyEphemeris:
     """Sky predictions (see the module docstring) of the orbit ``state`` (6,) and ``covariance``
     (6, 6) [LU, VU] at ``t0`` (TU) at ``times`` (K,) TU from ``site``; ``epoch``: the UTC of t = 0
-    (the dynamics' and scenario's)."""
+    (the dynamics' and scenario's). ``fit``: the least-squares result the orbit comes from, when it
+    estimated solve-for parameters (the area-to-mass ratio): the state covariances are then carried
+    from the joint covariance of state and parameters
+    (:func:`cistrack.least_squares.area_to_mass.joint_covariances`), so that the parameters'
+    uncertainty widens the ellipses away from the fit epoch, as in the export."""
     tt = _checked(dynamics, times)
     when = units.parse_utc(epoch)
     radec, azel = _sensors(site, when, registry or default_registry())
-    states, covs, linear = predicted_orbit(dynamics, np.asarray(state, float), np.asarray(covariance, float), t0, tt)
+    states, covs, linear = _orbit_at(dynamics, np.asarray(state, float), np.asarray(covariance, float), t0, tt, fit)
     z = radec.measure(states, tt)
     ra, dec = z[:, 0], z[:, 1]
     jac = _sky_jacobian(radec, states, tt, dec)
@@ -212,6 +230,9 @@ class DirectoryOrbit:
     dynamics: Dynamics
     name: str
     source: str
+    fit: Any = None
+    """The fit record as a FitResult when the fit estimated solve-for parameters (for
+    :func:`sky_ephemeris`'s ``fit``), else None."""
 
 
 def orbit_of_directory(directory: str | Path, registry: Registry | None = None) -> DirectoryOrbit:
@@ -219,6 +240,7 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     covariance as exported, times the noise scale squared when above 1, and the dynamics with the
     area-to-mass ratio it estimated, if it did) or of a ``cistrack run``
     directory (the filter's estimate at its last step); ConfigError naming the directory otherwise."""
+    from cistrack.fitting.fit_export import _result as fit_result
     from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
     from cistrack.runs.export import scenario_of
@@ -236,10 +258,12 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
             raise ConfigError(f"{d}: no orbit to predict from: {why}")
         cov = np.asarray(rec["covariance"], dtype=float) * covariance_scale(rec)
         amr = rec.get("area_to_mass")
+        fit = None
         if isinstance(amr, dict) and amr.get("estimated"):                # predict with the fitted C_R A/m
             dyn = dyn.with_parameters(area_to_mass_m2_kg=float(amr["value_m2_kg"]))
+            fit = fit_result(rec)                                         # and its uncertainty
         return DirectoryOrbit(np.asarray(rec["state"], dtype=float), cov, float(rec["epoch_tu"]), scen.epoch, dyn,
-                              str(rec.get("designation") or scen.name), "least-squares fit")
+                              str(rec.get("designation") or scen.name), "least-squares fit", fit)
     return _run_orbit(d, scen, dyn)
 
 
