@@ -1,7 +1,7 @@
 """``cistrack predict DIR --site CODE [--start UTC] [--stop UTC] [--step MINUTES] [--out PREFIX]``:
 where to point a telescope at MPC site CODE, with the uncertainty ellipse on the sky.
 
-The work is :func:`cistrack.fitting.sky_ephemeris.sky_ephemeris` on the orbit of a fit or run
+The work is :func:`cistrack.fitting.sky_ephemeris.sky_ephemeris_of` on the orbit of a fit or run
 directory (:func:`cistrack.fitting.sky_ephemeris.orbit_of_directory`); this module checks the
 options, prints the table (at most 120 columns), and writes ``PREFIX.csv`` and ``PREFIX.png``
 (default ``DIR/sky-<CODE>``). docs/sky-predictions.md.
@@ -107,7 +107,7 @@ def _site(code: str):
 
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
-    from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris
+    from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
     from cistrack.fitting.sky_plot import plot_sky
     from cistrack.plugin.registry import default_registry
 
@@ -118,8 +118,7 @@ def cmd_predict(args) -> int:
     if not args.quiet:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
-    sky = sky_ephemeris(orbit.dynamics, orbit.state, orbit.covariance, orbit.t0, times, site, orbit.epoch, reg,
-                        fit=orbit.fit)
+    sky = sky_ephemeris_of(orbit, times, site, reg)
     prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
     csv_path = sky.write_csv(prefix.with_name(prefix.name + ".csv"))
     png = plot_sky(sky, prefix.with_name(prefix.name + ".png"),

@@ -36,7 +36,7 @@ from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
 from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.plugin.registry import Registry, default_registry
 
-__all__ = ["SkyEphemeris", "sky_ephemeris", "predicted_orbit", "DirectoryOrbit", "orbit_of_directory", "CSV_COLUMNS",
+__all__ = ["SkyEphemeris", "sky_ephemeris", "sky_ephemeris_of", "predicted_orbit", "DirectoryOrbit", "orbit_of_directory", "CSV_COLUMNS",
            "RATE_SECONDS"]
 
 RATE_SECONDS = 30.0
@@ -192,19 +192,36 @@ def _checked(dynamics: Dynamics, times) -> np.ndarray:
 
 
 def sky_ephemeris(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray, t0: float, times,
-                  site: Site, epoch: datetime | str, registry: Registry | None = None, *,
-                  fit: Any = None) -> SkyEphemeris:
+                  site: Site, epoch: datetime | str, registry: Registry | None = None) -> SkyEphemeris:
     """Sky predictions (see the module docstring) of the orbit ``state`` (6,) and ``covariance``
     (6, 6) [LU, VU] at ``t0`` (TU) at ``times`` (K,) TU from ``site``; ``epoch``: the UTC of t = 0
-    (the dynamics' and scenario's). ``fit``: the least-squares result the orbit comes from, when it
-    estimated solve-for parameters (the area-to-mass ratio): the state covariances are then carried
-    from the joint covariance of state and parameters
+    (the dynamics' and scenario's)."""
+    tt = _checked(dynamics, times)
+    x = np.asarray(state, float)
+    return _sky(dynamics, (x, t0), predicted_orbit(dynamics, x, np.asarray(covariance, float), t0, tt), tt, site,
+                epoch, registry)
+
+
+def sky_ephemeris_of(orbit: "DirectoryOrbit", times, site: Site, registry: Registry | None = None) -> SkyEphemeris:
+    """:func:`sky_ephemeris` of a results directory's orbit (:func:`orbit_of_directory`). When the
+    orbit's fit estimated solve-for parameters (the area-to-mass ratio) the state covariances are
+    carried from the joint covariance of state and parameters
     (:func:`cistrack.least_squares.area_to_mass.joint_covariances`), so that the parameters'
     uncertainty widens the ellipses away from the fit epoch, as in the export."""
-    tt = _checked(dynamics, times)
+    tt = _checked(orbit.dynamics, times)
+    x = np.asarray(orbit.state, float)
+    predicted = _orbit_at(orbit.dynamics, x, np.asarray(orbit.covariance, float), orbit.t0, tt, orbit.fit)
+    return _sky(orbit.dynamics, (x, orbit.t0), predicted, tt, site, orbit.epoch, registry)
+
+
+def _sky(dynamics: Dynamics, start: tuple, predicted: tuple, tt: np.ndarray, site: Site, epoch: datetime | str,
+         registry: Registry | None) -> SkyEphemeris:
+    """The sky predictions of the orbit ``start`` = (state (6,), t0) whose states, covariances and
+    linear flags at ``tt`` are ``predicted``."""
+    state, t0 = start
+    states, covs, linear = predicted
     when = units.parse_utc(epoch)
     radec, azel = _sensors(site, when, registry or default_registry())
-    states, covs, linear = _orbit_at(dynamics, np.asarray(state, float), np.asarray(covariance, float), t0, tt, fit)
     z = radec.measure(states, tt)
     ra, dec = z[:, 0], z[:, 1]
     jac = _sky_jacobian(radec, states, tt, dec)

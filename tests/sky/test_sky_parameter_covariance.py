@@ -7,7 +7,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.sites import observatory
-from cistrack.fitting.sky_ephemeris import sky_ephemeris
+from cistrack.fitting.sky_ephemeris import DirectoryOrbit, sky_ephemeris, sky_ephemeris_of
 from cistrack.least_squares.area_to_mass import joint_covariances
 from cistrack.least_squares.trajectory import arc_states
 
@@ -21,7 +21,8 @@ def _skies():
     own = dyn.with_parameters(**{AMR: float(res.parameters[0])})
     times = res.epoch + units.days_to_tu(np.array([5.0, 20.0]))
     held = sky_ephemeris(own, res.state, res.covariance, res.epoch, times, observatory("711"), EPOCH)
-    joint = sky_ephemeris(own, res.state, res.covariance, res.epoch, times, observatory("711"), EPOCH, fit=res)
+    orbit = DirectoryOrbit(res.state, res.covariance, res.epoch, units.parse_utc(EPOCH), own, "dro", "fit", res)
+    joint = sky_ephemeris_of(orbit, times, observatory("711"))
     return own, res, times, held, joint
 
 
