@@ -49,7 +49,7 @@ def add_maneuvers(one, say) -> None:
     burns with the run's ballistic model); ``one.dynamics`` is the model with the burns (for the
     residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
     explains is not reported as converged: its messages say why."""
-    from cistrack.least_squares.burn_search import search_maneuvers, suspicion
+    from cistrack.least_squares.burn_search import flown, search_maneuvers, suspicion
 
     r = one.result
     if r is None or one.run is None:
@@ -69,7 +69,7 @@ def add_maneuvers(one, say) -> None:
     fit, burns = _after_burns(ctx, found)
     one.maneuvers = [maneuver_record(b, w, float(times[times > b.t][0]), one.scenario.epoch)
                      for b, w in zip(burns, found.windows)]
-    one.dynamics = _flown(ctx.dynamics, burns)
+    one.dynamics = flown(ctx.dynamics, burns)
     text = "; ".join(f"a burn of {m['delta_v_ms']:.3f} +- {m['delta_v_sigma_ms']:.3f} m/s at {m['t_burn_utc'][:16]}"
                      for m in one.maneuvers)
     one.result = replace(_without_burns(fit), messages=tuple(fit.messages) + (
@@ -107,12 +107,6 @@ def fit_options(fit):
     from cistrack.least_squares.options import FitOptions
 
     return FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off")
-
-
-def _flown(dynamics, burns):
-    from cistrack.least_squares.burn_search import _flown as flown
-
-    return flown(dynamics, burns)
 
 
 def _without_burns(fit):

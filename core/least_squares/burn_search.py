@@ -42,7 +42,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "MIN_GAP_HOURS", "MAX_BURNS",
+__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "flown", "MIN_GAP_HOURS", "MAX_BURNS",
            "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS"]
 
 MIN_GAP_HOURS = 0.2
@@ -117,7 +117,8 @@ def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[floa
     return [(float(a), float(b)) for a, b in zip(t[:-1], t[1:]) if b - a >= dt and (float(a), float(b)) not in done]
 
 
-def _flown(dynamics: Dynamics, burns: list[BurnEstimate]) -> Dynamics:
+def flown(dynamics: Dynamics, burns: list[BurnEstimate]) -> Dynamics:
+    """``dynamics`` flying the estimated ``burns`` (itself when there are none)."""
     if not burns:
         return dynamics
     return ImpulsiveDynamics(dynamics, [Impulse(b.t, b.delta_v_ms / MS_PER_VU, f"burn {k + 1}")
@@ -180,7 +181,7 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
         fit = _timed(arc, fit, t_sigma, found, window)
         windows = found.windows + [window]
         order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
-        found = ManeuverSearch(fit.fit, _flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
+        found = ManeuverSearch(fit.fit, flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
                                found.notes, found.prior)
     return found
 
