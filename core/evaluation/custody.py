@@ -121,6 +121,9 @@ class Verdict:
         return cls(**{k: data.get(k) for k in ("kind", "reason", "step", "t_days")})
 
 
+BACK_INSIDE_UPDATES: int = 2
+"""Updates in a row with the truth inside the belief after a final loss before the verdict says so."""
+
 _EARTH = np.array([-MU_EARTH_MOON, 0.0, 0.0])  # Earth in the synodic frame (LU)
 
 
@@ -135,6 +138,8 @@ class CustodyMetric(StepMetric):
         self.verdict = Verdict()
         self._hdr_run = 0
         self._inside_run = 0
+        self._lost_reason: str | None = None
+        self._back_from: tuple[int, float] = (0, 0.0)
         self.losses: list[tuple[Verdict, int, float]] = []
         """Each loss that was regained: (the loss's verdict, the step and time (days) it was regained)."""
         self.earth_distance_km: float | None = None
@@ -171,6 +176,8 @@ class CustodyMetric(StepMetric):
                     self.verdict, self._inside_run = lost, 0
             elif self.verdict.kind == "lost" and self.rule.regain_updates > 0:
                 self._regain(step)
+            elif self.verdict.kind == "lost":
+                self._watch_back(step)
         elif step.kind not in ("initial", "predict"):
             return {}
         self._track_mean(step)
@@ -186,6 +193,22 @@ class CustodyMetric(StepMetric):
         said = "; ".join(f"custody lost at step {v.step} (t = {v.t_days:.3f} d: {v.reason}) and regained at step "
                          f"{k} (t = {tk:.3f} d)" for v, k, tk in self.losses)
         self.verdict, self._inside_run, self._hdr_run = Verdict("kept", said), 0, 0
+
+    def _watch_back(self, step) -> None:
+        """After a final loss, say in the verdict when the truth has been back inside the belief on
+        every update since some step (the loss stands: ``rule.regain_updates`` is 0)."""
+        if self._lost_reason is None:
+            self._lost_reason = self.verdict.reason
+        inside = self.judge(step) is None
+        self._inside_run = self._inside_run + 1 if inside else 0
+        if self._inside_run == 1:
+            self._back_from = (step.index, float(units.tu_to_days(step.t)))
+        note = ""
+        if self._inside_run >= BACK_INSIDE_UPDATES:
+            k, t = self._back_from
+            note = (f"; the truth is back inside the belief on every update since step {k} (t = {t:.3f} d, "
+                    f"{self._inside_run} updates), but a loss is final with [custody] regain_updates = 0")
+        self.verdict = Verdict("lost", self._lost_reason + note, self.verdict.step, self.verdict.t_days)
 
     @hookimpl
     def cistrack_run_failed(self, run, step_index, error) -> None:

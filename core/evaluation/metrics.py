@@ -8,13 +8,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.special import gammainc
 
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.model.belief import Belief
 from cistrack.results.step_table import is_table_step
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["step_metrics", "entropy", "nees", "LOG_JACOBIAN_KM", "BeliefMetric", "PassIndexMetric", "pass_index"]
+__all__ = ["step_metrics", "entropy", "nees", "hdr_level", "LOG_JACOBIAN_KM", "BeliefMetric", "PassIndexMetric", "pass_index"]
 
 LOG_JACOBIAN_KM: float = 3.0 * np.log(LU_KM) + 3.0 * np.log(VU_KMS)
 """log |d(state_km)/d(state_nd)|: log p_km(x) = log p_nd(x) - LOG_JACOBIAN_KM."""
@@ -52,7 +53,7 @@ def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
     mixture); with truth also pos_err_km, vel_err_ms (error of the mixture mean), nees (of the
     moment-matched mean and covariance), truth_loglik (log density of the truth, km/km/s) and
     hdr_level (probability mass of the highest-density region whose boundary passes through the
-    truth, estimated from the samples: 0 at the mode, 1 far outside).
+    truth: 0 at the mode, 1 far outside; :func:`hdr_level`).
     """
     mix = belief.mixture
     mean = mix.mean
@@ -75,10 +76,27 @@ def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:
         out["nees"] = nees(e, cov)
         lp_truth = float(mix.logpdf(np.asarray(truth, dtype=float)[None])[0])
         out["truth_loglik"] = lp_truth - LOG_JACOBIAN_KM
-        w = belief.samples.weights
-        above = (lp_samples > lp_truth).astype(float)
-        out["hdr_level"] = float(above.mean() if w is None else w @ above)
+        out["hdr_level"] = hdr_level(belief, lp_truth, lp_samples, out["nees"])
     return out
+
+
+def hdr_level(belief: Belief, lp_truth: float, lp_samples: np.ndarray, nees_truth: float) -> float:
+    """Probability mass, under the belief's own density, of the highest-density region whose
+    boundary passes through the truth (0 at the mode, 1 far outside).
+
+    A single Gaussian (UKF, EnKF, a particle filter's moment-matched summary) is scored exactly:
+    its level is the chi-square(d) distribution function of the truth's NEES. Its samples need
+    not follow it (an EnKF's ensemble is heavy-tailed about its Gaussian), so ranking them by its
+    density would place a truth far outside the Gaussian inside the region. A mixture of several
+    components is scored by its samples, the fraction (weighted) whose density exceeds the
+    truth's: the PGM's samples at an update are draws of its posterior mixture.
+    ``lp_truth`` and ``lp_samples`` (N,) are log densities under ``belief.mixture``."""
+    mix = belief.mixture
+    if mix.n_components == 1:
+        return float(gammainc(0.5 * mix.dim, 0.5 * max(nees_truth, 0.0)))
+    w = belief.samples.weights
+    above = (lp_samples > lp_truth).astype(float)
+    return float(above.mean() if w is None else w @ above)
 
 
 class BeliefMetric(StepMetric):

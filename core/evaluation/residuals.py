@@ -97,12 +97,19 @@ class ResidualSummary:
     n : int                                    updates with a finite NIS
     share_outside_95 : float                   share of them outside the per-measurement 95 % bounds
     max_abs_residual_arcsec : float            largest |residual| of an angle (arcsec; NaN if none)
+    max_abs_residual_sd_arcsec : float         the predicted standard deviation of that residual (arcsec):
+                                               a large residual is no fault where the belief predicted it
+    max_abs_residual_t_days : float            its time (days since the epoch)
+    max_residual_sigma : float                 largest |residual| / predicted standard deviation of any angle
     """
 
     nis_test: Any
     n: int
     share_outside_95: float
     max_abs_residual_arcsec: float
+    max_abs_residual_sd_arcsec: float = float("nan")
+    max_abs_residual_t_days: float = float("nan")
+    max_residual_sigma: float = float("nan")
 
 
 def residual_summary(rows: list[dict[str, Any]], level: float = 0.95) -> ResidualSummary:
@@ -113,15 +120,22 @@ def residual_summary(rows: list[dict[str, Any]], level: float = 0.95) -> Residua
     ups = [r for r in rows if r.get("kind") == "update" and r.get("nis") is not None
            and np.isfinite(r["nis"]) and (r.get("nis_dof") or 0) > 0]
     test = nis_test([r["nis"] for r in ups], [int(r["nis_dof"]) for r in ups], level)
-    res = [abs(v) for r in ups for k, v in r.items()
+    res = [(abs(v), _finite(r.get("sd_" + k[4:])), _finite(r.get("t_days"))) for r in ups for k, v in r.items()
            if k.startswith("res_") and k.endswith("_arcsec") and v is not None and np.isfinite(v)]
+    largest = max(res, default=(float("nan"),) * 3)
+    normalised = [a / sd for a, sd, _ in res if sd > 0]
     return ResidualSummary(test, len(ups), float(np.mean([r["nis_outside_95"] for r in ups])) if ups else float("nan"),
-                           max(res) if res else float("nan"))
+                           *largest, max(normalised, default=float("nan")))
+
+
+def _finite(v) -> float:
+    return float(v) if v is not None and np.isfinite(v) else float("nan")
 
 
 CONSISTENCY_KEYS: tuple[str, ...] = (
     "nis_mean", "nis_updates", "nis_dof", "nis_dof_total", "nis_lower", "nis_upper", "level", "nis_within",
-    "share_outside_95", "max_abs_residual_arcsec")
+    "share_outside_95", "max_abs_residual_arcsec", "max_abs_residual_sd_arcsec", "max_abs_residual_t_days",
+    "max_residual_sigma")
 """Keys of :func:`consistency_summary` (the manifest's ``summary.consistency``)."""
 
 
@@ -139,6 +153,9 @@ def consistency_summary(rows: list[dict[str, Any]], level: float = 0.95) -> dict
     nis_within                     whether the mean lies within them (None without an update)
     share_outside_95               share of updates whose NIS is outside its own 95 % bounds
     max_abs_residual_arcsec        largest |angle residual| (arcsec)
+    max_abs_residual_sd_arcsec     the predicted standard deviation of that residual (arcsec)
+    max_abs_residual_t_days        its time (days since the epoch)
+    max_residual_sigma             largest |angle residual| / its predicted standard deviation
 
     NaN is stored as None."""
     rs = residual_summary(rows, level)
@@ -150,7 +167,10 @@ def consistency_summary(rows: list[dict[str, Any]], level: float = 0.95) -> dict
             "nis_lower": _finite_or_none(nt.lower), "nis_upper": _finite_or_none(nt.upper), "level": level,
             "nis_within": bool(nt.within) if nt.n else None,
             "share_outside_95": _finite_or_none(rs.share_outside_95),
-            "max_abs_residual_arcsec": _finite_or_none(rs.max_abs_residual_arcsec)}
+            "max_abs_residual_arcsec": _finite_or_none(rs.max_abs_residual_arcsec),
+            "max_abs_residual_sd_arcsec": _finite_or_none(rs.max_abs_residual_sd_arcsec),
+            "max_abs_residual_t_days": _finite_or_none(rs.max_abs_residual_t_days),
+            "max_residual_sigma": _finite_or_none(rs.max_residual_sigma)}
 
 
 def pool_consistency(summaries: list[dict[str, Any]]) -> dict[str, Any]:
@@ -170,13 +190,17 @@ def pool_consistency(summaries: list[dict[str, Any]]) -> dict[str, Any]:
     lo, hi = chi2_ppf(a / 2, total) / k, chi2_ppf(1 - a / 2, total) / k
     dofs = {c["nis_dof"] for c in parts}
     shares = [(c["share_outside_95"], c["nis_updates"]) for c in parts if c.get("share_outside_95") is not None]
-    res = [c["max_abs_residual_arcsec"] for c in parts if c.get("max_abs_residual_arcsec") is not None]
+    res = [c for c in parts if c.get("max_abs_residual_arcsec") is not None]
+    worst = max(res, key=lambda c: c["max_abs_residual_arcsec"], default={})
+    sigmas = [c["max_residual_sigma"] for c in parts if c.get("max_residual_sigma") is not None]
     return {"nis_mean": mean, "nis_updates": k,
             "nis_dof": dofs.pop() if len(dofs) == 1 and isinstance(next(iter(dofs)), int) else total / k,
             "nis_dof_total": total, "nis_lower": lo, "nis_upper": hi, "level": level,
             "nis_within": bool(lo <= mean <= hi),
             "share_outside_95": sum(s * n for s, n in shares) / sum(n for _, n in shares) if shares else None,
-            "max_abs_residual_arcsec": max(res) if res else None}
+            "max_abs_residual_arcsec": worst.get("max_abs_residual_arcsec"),
+            "max_abs_residual_sd_arcsec": worst.get("max_abs_residual_sd_arcsec"),
+            "max_abs_residual_t_days": worst.get("max_abs_residual_t_days"), "max_residual_sigma": max(sigmas, default=None)}
 
 
 def consistency_text(c: dict[str, Any]) -> str:
@@ -187,11 +211,21 @@ def consistency_text(c: dict[str, Any]) -> str:
     each = f"{dof} components each" if isinstance(dof, int) else f"{dof:.3g} components on average"
     ok = "consistent" if c["nis_within"] else "INCONSISTENT"
     share = c.get("share_outside_95")
-    res = c.get("max_abs_residual_arcsec")
     return (f"mean NIS {c['nis_mean']:.3g} over {c['nis_updates']} updates ({each}), {c['level']:.0%} chi-square "
             f"bounds [{c['nis_lower']:.3g}, {c['nis_upper']:.3g}]: {ok}; "
             + ("-" if share is None else f"{100 * share:.0f} %") + " of measurements outside their 95 % NIS "
-            "bounds (5 % if consistent); largest |residual| " + ("-" if res is None else f"{res:.3g}") + " arcsec")
+            "bounds (5 % if consistent); " + _largest_residual_text(c))
+
+
+def _largest_residual_text(c: dict[str, Any]) -> str:
+    """The largest residual beside the spread the belief predicted for it, and the largest in sigmas:
+    an early residual of degrees under a wide IOD cloud is no inconsistency."""
+    res, sd, t = (c.get(k) for k in ("max_abs_residual_arcsec", "max_abs_residual_sd_arcsec", "max_abs_residual_t_days"))
+    text = "largest |residual| " + ("-" if res is None else f"{res:.3g}") + " arcsec"
+    if res is not None and sd is not None:
+        text += f" (predicted sigma {sd:.3g} arcsec there" + ("" if t is None else f", t = {t:.3g} d") + ")"
+    sigma = c.get("max_residual_sigma")
+    return text + ("" if sigma is None else f"; largest |residual| / predicted sigma {sigma:.3g}")
 
 
 __getattr__ = renamed_names(__name__, {"ResidualObserver": ("ResidualMetric", ResidualMetric)})  # the old name, for one release

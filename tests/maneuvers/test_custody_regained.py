@@ -46,3 +46,15 @@ def test_regain_updates_must_be_a_count():
     with pytest.raises(ConfigError, match="regain_updates"):
         custody_rule({"regain_updates": -1}, "s.toml")
     assert custody_rule({"regain_updates": 2}, "s.toml").regain_updates == 2
+
+
+def test_a_final_loss_says_when_the_truth_is_back_inside_the_belief_to_the_end():
+    c = _judged(CustodyRule(), OUT_THEN_BACK)
+    assert c.verdict.kind == "lost" and c.verdict.step == 3
+    assert "back inside the belief on every update since step 5" in c.verdict.reason
+    assert "4 updates" in c.verdict.reason and "regain_updates = 0" in c.verdict.reason
+
+
+def test_a_final_loss_with_the_truth_outside_at_the_end_says_nothing_of_a_return():
+    c = _judged(CustodyRule(), OUT_THEN_BACK + [-900.0])
+    assert c.verdict.kind == "lost" and "back inside" not in c.verdict.reason

@@ -93,6 +93,16 @@ def test_residual_summary_counts_measurements_outside_their_bounds_and_the_large
     assert s.max_abs_residual_arcsec == pytest.approx(max(np.abs(_pair(r, "res")).max() for r in rows))
 
 
+def test_the_largest_residual_is_reported_beside_the_spread_predicted_for_it(truthless):
+    _, rows, _, _ = truthless
+    s = residual_summary(rows)
+    row = max(rows, key=lambda r: np.abs(_pair(r, "res")).max())
+    axis = int(np.argmax(np.abs(_pair(row, "res"))))
+    assert s.max_abs_residual_sd_arcsec == pytest.approx(_pair(row, "sd")[axis])
+    assert s.max_abs_residual_t_days == pytest.approx(row["t_days"])
+    assert s.max_residual_sigma == pytest.approx(max((np.abs(_pair(r, "res")) / _pair(r, "sd")).max() for r in rows))
+
+
 def test_the_cli_summarises_residuals_of_a_truthless_run_without_speaking_of_custody(truthless, tmp_path):
     _, _, _, obs = truthless
     out = tmp_path / "cli"
