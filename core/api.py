@@ -263,6 +263,9 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.runs.pipeline import run_scenario
     from cistrack.scenario.limits import check_seed
 
+    from cistrack.runs.observers import checked_observers
+
+    observers = checked_observers(observers, "observers")
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
@@ -277,12 +280,12 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     with run_lock(directory, "out"):  # one run at a time in a results directory, as cistrack run
         check_replacing(directory, scen, seed, "out", overwrite=overwrite)
         res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
-                           progress=progress, log=log)
+                           progress=progress, log=log, residual_figure=True)
     return Run(res.summary, directory, tuple(res.rows))
 
 
 def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any] | Iterable[str] | None = None,
-        out: str | Path | None = None, progress: bool = False, log: Callable[[str], None] | None = None,
+        out: str | Path | None = None, progress: bool = True, log: Callable[[str], None] | None = None,
         registry: Registry | None = None) -> list[ObjectFit]:
     """Fit an orbit to each object in observation ``files`` (one path or several), as ``cistrack fit``
     does (docs/real-data.md), and return one :class:`ObjectFit` per object, in order of first
@@ -291,8 +294,9 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
 
     ``settings``: as for :func:`run`, plus ``fit.*`` and ``measurements.reader.*``. ``out``: the
     results folder (default ``runs/fit-<designation>``; with several objects, one folder each
-    under it). ``progress``: the filter's progress bar on stderr. ``log``: receives one line per
-    stage. ``registry``: the components to use (default: the installed plugins).
+    under it). ``progress``: progress on stderr (default), as ``cistrack fit`` shows it: a line per
+    stage and the filter's progress bar; False is silent, as ``--quiet``. ``log``: receives the
+    stage lines instead of stderr. ``registry``: the components to use (default: the installed plugins).
     """
     from cistrack.fitting.from_observations import fit_files
 

@@ -27,12 +27,12 @@ import csv
 import io
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import ConfigError
+from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 
 __all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
@@ -221,22 +221,53 @@ def _json_default(v: Any) -> Any:
 
 
 def write_fit_outputs(one, obs) -> list[Path]:
-    """Write ``fit.json`` (always, also for a failed fit), and with a fit ``residuals.csv`` and the
-    residual plots into ``one.directory``; returns the paths written."""
+    """Write ``fit.json`` (always, also for a failed fit), and with a fit ``residuals.csv``, the
+    residual plots and ``lov.csv`` into ``one.directory``; returns the paths written.
+
+    ``fit.json`` is written last, so that it exists only beside every other file of the fit. When a
+    file cannot be written (a full disk) the files of this fit written so far are removed and
+    CistrackError names the file: the directory then holds no ``fit.json``, so nothing reads it
+    as a finished fit."""
+    d = Path(one.directory)
+    (d / FIT_RECORD).unlink(missing_ok=True)  # an older fit's record never describes these files
+    written: list[Path] = []
+    target = d / FIT_RECORD
+    try:
+        for target, write in _artefacts(one, obs, d):
+            written += write(target)
+    except OSError as exc:
+        for p in written:
+            p.unlink(missing_ok=True)
+        raise CistrackError(f"{exc.filename or target}: cannot write the fit's results ({exc.strerror or exc}); no {FIT_RECORD} "
+                            f"was written, so {d} does not hold a finished fit: make room and run "
+                            "'cistrack fit' again") from None
+    return written
+
+
+def _artefacts(one, obs, d: Path) -> list[tuple[Path, Callable[[Path], list[Path]]]]:
+    """(path, writer) of each file of the fit, ``fit.json`` last; a writer returns the files it wrote
+    (the residual plots: every site's, named by an OSError's filename when one fails)."""
     from cistrack.fitting.residual_plots import plot_residuals
 
-    d = Path(one.directory)
-    text = json.dumps(_fit_dict(one, obs), indent=1, default=_json_default, allow_nan=True)
-    write_text_atomic(d / FIT_RECORD, text + "\n")
-    written = [d / FIT_RECORD]
+    out = []
     if one.result is not None:
-        write_text_atomic(d / RESIDUALS, _residuals_csv(one.scenario, one.result.residuals))
-        written.append(d / RESIDUALS)
-        written += plot_residuals(d, one.result.residuals, one.scenario.epoch, one.designation)
+        out.append((d / RESIDUALS, _text_file(_residuals_csv(one.scenario, one.result.residuals))))
+        out.append((d, lambda _d: plot_residuals(d, one.result.residuals, one.scenario.epoch, one.designation)))
     if one.result is not None and one.lov:
-        write_text_atomic(d / LOV, _lov_csv(one.lov, one.result))
-        written.append(d / LOV)
-    return written
+        out.append((d / LOV, _text_file(_lov_csv(one.lov, one.result))))
+    record = json.dumps(_fit_dict(one, obs), indent=1, default=_json_default, allow_nan=True)
+    return out + [(d / FIT_RECORD, _text_file(record + "\n"))]
+
+
+def _text_file(text: str) -> Callable[[Path], list[Path]]:
+    """A writer of ``text`` to its path, whole or not at all; its OSError names that path."""
+    def write(path: Path) -> list[Path]:
+        try:
+            write_text_atomic(path, text)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
+        return [path]
+    return write
 
 
 def read_fit_record(run_dir: str | Path) -> dict[str, Any]:

@@ -176,6 +176,20 @@ class ObjectFit:
         """A fit was made and converged."""
         return self.result is not None and self.result.converged
 
+    def __repr__(self) -> str:
+        """A few lines: the object, its outcome, the method, the observations used and rejected,
+        the weighted RMS and the fit epoch (:meth:`report` for the full summary)."""
+        from cistrack.fitting.fit_summary import short_lines
+
+        return "\n".join(short_lines(self))
+
+    def report(self) -> str:
+        """The full summary, as ``cistrack fit`` prints it: outcome, how well the orbit is
+        determined, noise, sigmas at the fit epoch, the line of variations, events, every warning."""
+        from cistrack.fitting.fit_summary import summary_lines
+
+        return "\n".join(summary_lines(self))
+
 
 def _slug(designation: str) -> str:
     s = re.sub(r"[^A-Za-z0-9_.-]+", "_", designation.strip()).strip("._") or "object"
@@ -308,6 +322,8 @@ def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Reg
                            log=(lambda m: log(f"  {m}")) if log else None)
     except CistrackError as exc:
         return None, None, f"the filter run failed before its first step: {exc}", ""
+    if log:
+        log(f"  least squares over the {len(run.context.measurements)} observations")
     seeded = _fit_from_iod(run.context, choices)
     return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
 
@@ -449,13 +465,17 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     settings : ``TABLE.KEY=VALUE`` items as ``--set`` takes them: scenario tables of the template,
         ``measurements.reader.KEY`` (reader parameters, e.g. ``sigma_arcsec``) and ``fit.KEY``
         (:func:`fit_choices`)
-    log : receives one line per stage; ``progress``: the filter's progress bar on stderr
+    log : receives one line per stage; ``progress``: progress on stderr, the filter's progress bar
+        and, without ``log``, the stage lines (:func:`cistrack.runs.progress.stage_log`)
 
     Returns one :class:`ObjectFit` per object, in order of first appearance. Errors in the input
     (files, settings, output directory) raise before any run; a run or fit that fails is reported
     in its ObjectFit (``failure``, ``result.converged``).
     """
     reg = registry or default_registry()
+    if progress and log is None:
+        from cistrack.runs.progress import stage_log
+        log = stage_log()
     say = log or (lambda m: None)
     scen_settings, fit_table, reader_params = _split_settings(settings)
     choices = fit_choices(fit_table)
@@ -580,5 +600,6 @@ def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     if one.ok and job.choices.lov > 0:
         job.say(f"{obs.designation}: line of variations to +-{job.choices.lov:g} sigma")
         one.lov = _line_of_variations(one.run.context, one.result, job.choices)
+    job.say(f"{obs.designation}: writing fit.json, residuals.csv and the residual plots to {one.directory}")
     write_fit_outputs(one, obs)
     return one

@@ -4,20 +4,26 @@ Each file is read by the registered reader its name's suffix names (``.psv``, ``
 ...); a file whose suffix no reader claims is offered to every registered reader in turn and taken by the
 first that reads it. A file naming several objects (ADES permID / provID / trkSub, the MPC 80-column
 designation, TDM ``PARTICIPANT_2``) is read once per object. The sets of one object from all the
-files are merged in time order, each observation keeping its site; an observation given twice
-(the same site and time in two files) is refused naming both files.
+files are merged in time order, each observation keeping its site. An observation given in two
+files (the same site and type, times within the coarser file's time resolution, e.g. 0.0864 s for
+MPC 80-column, positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
+time resolution, and the files' notes say how many copies were dropped; two such observations
+whose positions differ more are refused naming both files.
 
 Times are TU since a working epoch (:data:`READ_EPOCH`): the fit moves them to its own epoch by
 writing the merged set into the results directory (:func:`write_merged`).
 """
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
+from cistrack import units
 from cistrack.errors import ConfigError, MeasurementError
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
 from cistrack.plugin.registry import Registry
@@ -25,13 +31,25 @@ from cistrack.runs.observation_files import SeveralObjectsError, reader_for, wri
 from cistrack.runs.run_inputs import weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
-           "READ_EPOCH", "UNNAMED"]
+           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC",
+           "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes"]
 
 READ_EPOCH = "2000-01-01T00:00:00Z"
 """UTC epoch the files are read against (times TU since it) before the fit's own epoch is known."""
 
 UNNAMED = "object"
 """Designation of observations whose file names no object."""
+
+MAX_FILE_MB = 50.0
+"""Default largest observation file read, MB (10^6 bytes): some 300,000 ADES PSV lines."""
+
+MAX_FILE_MB_ENV = "CISTRACK_MAX_FILE_MB"
+"""Environment variable that replaces :data:`MAX_FILE_MB` (``cistrack fit --max-file-mb`` sets it)."""
+
+DUPLICATE_ARCSEC = 5.0
+"""Largest angle (arcsec) between two observations of one site at (nearly) the same time in two
+files for them to be the same observation given twice: well above the 0.015 arcsec rounding of
+MPC 80-column angles and the motion of a cislunar object in a rounded time (0.04 s)."""
 
 
 @dataclass
@@ -74,20 +92,52 @@ def _reader(path: Path, params: dict[str, Any], registry: Registry) -> tuple[Any
                            + "; ".join(tried) + ")") from None
 
 
+def max_file_mb() -> float:
+    """The largest observation file read, MB (10^6 bytes): :data:`MAX_FILE_MB_ENV` when set, else
+    :data:`MAX_FILE_MB`. ConfigError naming the variable when it is not a positive number."""
+    text = os.environ.get(MAX_FILE_MB_ENV, "").strip()
+    if not text:
+        return MAX_FILE_MB
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and math.isfinite(value)):
+        raise ConfigError(f"environment variable {MAX_FILE_MB_ENV}={text!r}: must be a positive number of MB "
+                          f"(default {MAX_FILE_MB:g})")
+    return value
+
+
+def check_file_sizes(paths: list[str | Path]) -> None:
+    """Refuse, before reading any, an observation file larger than :func:`max_file_mb` (ConfigError
+    naming the file, its size, the limit and how to raise it). Missing files are left to the readers."""
+    limit = max_file_mb()
+    for p in paths:
+        try:
+            size = Path(p).stat().st_size if Path(p).is_file() else 0
+        except OSError:
+            continue
+        if size > limit * 1e6:
+            raise ConfigError(f"observation file {p}: {size / 1e6:.1f} MB is larger than the {limit:g} MB limit on "
+                              f"an observation file; split it, or raise the limit (cistrack fit --max-file-mb MB, "
+                              f"or the environment variable {MAX_FILE_MB_ENV})")
+
+
 def _params(params: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k != "name"}
 
 
-def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> list[MeasurementSet]:
-    """The sets of one file, one per object named in it."""
+def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> tuple[list[MeasurementSet], float]:
+    """The sets of one file, one per object named in it, and the time resolution (s) of its format."""
     if not path.is_file():
         raise ConfigError(f"observation file {path}: " + ("is a directory, not a file" if path.is_dir()
                                                            else "no such file"))
     reader, done = _reader(path, params, registry)
+    resolution = float(getattr(reader, "time_resolution_s", 0.0))
     if done is not None:
-        return done
+        return done, resolution
     try:
-        return [reader.read(path, READ_EPOCH)]
+        return [reader.read(path, READ_EPOCH)], resolution
     except SeveralObjectsError as exc:
         name = params.get("name") or type(reader).__name__
         out = []
@@ -95,7 +145,18 @@ def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> list[M
             one = registry.create("reader", _registered_name(reader, registry, name), **{**_params(params),
                                                                                          "designation": obj})
             out.append(one.read(path, READ_EPOCH))
-        return out
+        return out, resolution
+
+
+def _require_sites(path: Path, sets: list[MeasurementSet]) -> None:
+    """Refuse observations that name no observing site (a CSV without a ``site`` column): a fit
+    places every observation at its site."""
+    if any(ms.sites is None for ms in sets):
+        raise MeasurementError(
+            f"observation file {path}: no column 'site', so its observations name no observing site; cistrack fit "
+            "needs the site of every observation: add a column 'site' holding, per row, an MPC observatory code "
+            "(e.g. 809) or a key declared in the reader's sites parameter (--set 'measurements.reader.sites="
+            "{KEY = {latitude_deg = .., longitude_deg = .., height_m = ..}}')")
 
 
 def _registered_name(reader: Any, registry: Registry, fallback: str) -> str:
@@ -105,11 +166,8 @@ def _registered_name(reader: Any, registry: Registry, fallback: str) -> str:
     return fallback
 
 
-def merge_sets(sets: list[MeasurementSet], files: list[str]) -> MeasurementSet:
-    """One set of the observations of ``sets`` (same epoch), in time order; refuses a site and
-    time given twice (naming the two files) and a site key given two positions."""
-    if len(sets) == 1:
-        return sets[0]
+def _site_table(sets: list[MeasurementSet], files: list[str]) -> dict[str, Any]:
+    """The sites of all ``sets`` by key; refuses a key given two positions (naming the file)."""
     table: dict[str, Any] = {}
     for ms, f in zip(sets, files):
         for key, site in ms.site_table.items():
@@ -117,25 +175,127 @@ def merge_sets(sets: list[MeasurementSet], files: list[str]) -> MeasurementSet:
                 raise MeasurementError(f"{f}: site {key!r} has another position than in an earlier file; "
                                        "give each observatory one position")
             table[key] = site
-    times = np.concatenate([ms.times for ms in sets])
-    values = np.concatenate([ms.values[:, :2] for ms in sets])
-    sigmas = np.concatenate([ms.sigmas[:, :2] for ms in sets])
-    kinds = np.concatenate([[ms.kind_at(i) for i in range(len(ms))] for ms in sets]).astype(str)
-    sites = np.concatenate([[ms.site_at(i) for i in range(len(ms))] for ms in sets]).astype(str)
-    origin = np.concatenate([[f] * len(ms) for ms, f in zip(sets, files)])
-    order = np.lexsort((sites, times))
-    times, values, sigmas, kinds, sites, origin = (a[order] for a in (times, values, sigmas, kinds, sites, origin))
-    same = np.nonzero((np.diff(times) == 0) & (sites[1:] == sites[:-1]))[0]
-    if same.size:
-        i = int(same[0])
-        raise MeasurementError(f"site {str(sites[i])!r} observed at the same time in {origin[i]} and {origin[i + 1]} "
-                               "(the same observation given twice?); give each observation once")
-    one_kind = set(kinds.tolist())
-    names = KIND_NAMES[kinds[0]] if len(one_kind) == 1 and kinds[0] in KIND_NAMES else ("angle_1", "angle_2")
+    return table
+
+
+@dataclass
+class _Rows:
+    """The observations of several sets side by side: times (TU), angles (n, 2) rad, sigmas (n, 2)
+    rad, kinds, sites, and per row the index of its set."""
+
+    times: np.ndarray
+    values: np.ndarray
+    sigmas: np.ndarray
+    kinds: np.ndarray
+    sites: np.ndarray
+    source: np.ndarray
+
+    @classmethod
+    def of(cls, sets: list[MeasurementSet]) -> "_Rows":
+        return cls(np.concatenate([ms.times for ms in sets]),
+                   np.concatenate([ms.values[:, :2] for ms in sets]),
+                   np.concatenate([ms.sigmas[:, :2] for ms in sets]),
+                   np.concatenate([[ms.kind_at(i) for i in range(len(ms))] for ms in sets]).astype(str),
+                   np.concatenate([[ms.site_at(i) for i in range(len(ms))] for ms in sets]).astype(str),
+                   np.concatenate([[k] * len(ms) for k, ms in enumerate(sets)]).astype(int))
+
+    def take(self, index: np.ndarray) -> "_Rows":
+        return _Rows(*(a[index] for a in (self.times, self.values, self.sigmas, self.kinds, self.sites, self.source)))
+
+
+def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
+    """Pairs (i, j) of rows from different sets with the same site and type whose times differ by
+    at most the coarser of their sets' time resolutions ``tol_s`` (s, per set)."""
+    secs = units.tu_to_seconds(rows.times)
+    order = np.lexsort((secs, rows.sites))
+    widest = float(tol_s.max()) * (1 + 1e-9) + 1e-9
+    pairs: list[tuple[int, int]] = []
+    for shift in range(1, len(order)):
+        a, b = order[:-shift], order[shift:]
+        dt = secs[b] - secs[a]
+        near = (rows.sites[a] == rows.sites[b]) & (dt <= widest)
+        if not near.any():
+            break
+        tol = np.maximum(tol_s[rows.source[a]], tol_s[rows.source[b]]) * (1 + 1e-9) + 1e-9
+        hit = near & (dt <= tol) & (rows.kinds[a] == rows.kinds[b]) & (rows.source[a] != rows.source[b])
+        pairs += [(int(i), int(j)) for i, j in zip(a[hit], b[hit])]
+    return pairs
+
+
+def _separation_arcsec(rows: _Rows, i: int, j: int) -> float:
+    """Angle between rows i and j on the sky (or the az/el sphere), arcsec."""
+    (a1, b1), (a2, b2) = rows.values[i], rows.values[j]
+    d1 = (a1 - a2 + np.pi) % (2 * np.pi) - np.pi
+    return float(np.hypot(d1 * np.cos(0.5 * (b1 + b2)), b1 - b2) / units.ARCSEC_RAD)
+
+
+def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
+    """Per row, the set index of the copy kept in its place, -1 for a row kept: of each observation
+    given in two files (:func:`_close_pairs`, positions within :data:`DUPLICATE_ARCSEC`) the copy
+    from the file of coarser time resolution (the later file when equal) is dropped.
+    MeasurementError naming both files when the positions differ more."""
+    drop = np.full(len(rows.times), -1, dtype=int)
+    for i, j in _close_pairs(rows, tol_s):
+        sep = _separation_arcsec(rows, i, j)
+        fi, fj = files[rows.source[i]], files[rows.source[j]]
+        if sep > DUPLICATE_ARCSEC:
+            when = units.format_utc(units.tu_to_utc(units.parse_utc(READ_EPOCH), float(rows.times[i])))[:23]
+            raise MeasurementError(
+                f"site {str(rows.sites[i])!r} observed at {when}Z in {fi} and {fj} (times within "
+                f"{max(tol_s[rows.source[i]], tol_s[rows.source[j]]):g} s, the coarser file's time resolution) at "
+                f"positions {sep:.3g} arcsec apart (the same observation given twice with different values?); "
+                "give each observation once")
+        worse, better = sorted((i, j), key=lambda k: (tol_s[rows.source[k]], rows.source[k]), reverse=True)
+        drop[worse] = rows.source[better]
+    return drop
+
+
+def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.ndarray) -> list[str]:
+    """One line per file that lost observations as duplicates (``drop`` from :func:`_duplicates`)."""
+    notes = []
+    for k in sorted(set(rows.source[drop >= 0].tolist())):
+        mine = (drop >= 0) & (rows.source == k)
+        kept = ", ".join(Path(files[m]).name for m in sorted(set(drop[mine].tolist())))
+        notes.append(f"{Path(files[k]).name}: {int(np.count_nonzero(mine))} observations dropped as duplicates of "
+                     f"those in {kept} (same site and type, times within {tol_s[k]:g} s, positions within "
+                     f"{DUPLICATE_ARCSEC:g} arcsec); each observation is used once")
+    return notes
+
+
+def _merge(sets: list[MeasurementSet], files: list[str],
+           time_resolutions: list[float] | None = None) -> tuple[MeasurementSet, list[str]]:
+    """:func:`merge_sets` and one note per file whose duplicates were dropped."""
+    if len(sets) == 1:
+        return sets[0], []
+    table = _site_table(sets, files)
+    tol_s = np.asarray(time_resolutions if time_resolutions is not None else [0.0] * len(sets), dtype=float)
+    rows = _Rows.of(sets)
+    drop = _duplicates(rows, files, tol_s)
+    notes = _duplicate_notes(rows, drop, files, tol_s)
+    kept = rows.take(np.nonzero(drop < 0)[0])
+    r = kept.take(np.lexsort((kept.sites, kept.times)))
+    names = KIND_NAMES[r.kinds[0]] if len(set(r.kinds.tolist())) == 1 and r.kinds[0] in KIND_NAMES \
+        else ("angle_1", "angle_2")
     meta = dict(sets[0].meta)
     meta["source"] = ", ".join(files)
-    meta["default_sigma_count"] = int(sum(ms.meta.get("default_sigma_count", 0) for ms in sets))
-    return MeasurementSet(times, values, sigmas, names, meta, sites=sites, kinds=kinds, site_table=table)
+    meta["default_sigma_count"] = int(sum(min(ms.meta.get("default_sigma_count", 0),
+                                              int(np.count_nonzero(r.source == k))) for k, ms in enumerate(sets)))
+    if (drop >= 0).any():
+        meta["duplicates_dropped"] = int(np.count_nonzero(drop >= 0))
+    ms = MeasurementSet(r.times, r.values, r.sigmas, names, meta, sites=r.sites, kinds=r.kinds, site_table=table)
+    return ms, notes
+
+
+def merge_sets(sets: list[MeasurementSet], files: list[str],
+               time_resolutions: list[float] | None = None) -> MeasurementSet:
+    """One set of the observations of ``sets`` (same epoch), in time order.
+
+    An observation given in two files (same site and type, times within the coarser file's
+    ``time_resolutions`` entry, s per set; 0 s when absent; positions within
+    :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer time resolution; meta
+    ``duplicates_dropped`` counts the copies dropped. Refuses such a pair whose positions differ
+    more, and a site key given two positions (MeasurementError naming the files)."""
+    return _merge(sets, files, time_resolutions)[0]
 
 
 def read_object_observations(paths: list[str | Path], registry: Registry,
@@ -148,23 +308,30 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
     if not paths:
         raise ConfigError("no observation files given; give one or more files (ADES .psv/.xml, MPC 80-column, "
                           "CCSDS .tdm, cistrack .csv)")
+    check_file_sizes(paths)
     params = dict(reader_params or {})
-    by_object: dict[str, tuple[list[MeasurementSet], list[str]]] = {}
+    by_object: dict[str, tuple[list[MeasurementSet], list[str], list[float]]] = {}
     notes: dict[str, list[str]] = {}
     for p in paths:
         path = Path(p)
-        for ms in _read_file(path, params, registry):
+        found, resolution = _read_file(path, params, registry)
+        _require_sites(path, found)
+        for ms in found:
             obj = str(ms.meta.get("object") or UNNAMED)
-            sets, files = by_object.setdefault(obj, ([], []))
+            sets, files, resolutions = by_object.setdefault(obj, ([], [], []))
             sets.append(ms)
             files.append(str(path))
+            resolutions.append(resolution)
             note = weights_note(ms)
             notes.setdefault(obj, []).append(f"{path.name}: {len(ms)} observations of {obj}"
                                              + (f"; {note}" if note else ""))
             say(notes[obj][-1])
     out = []
-    for obj, (sets, files) in by_object.items():
-        out.append(ObjectObservations(obj, merge_sets(sets, files), files, notes[obj]))
+    for obj, (sets, files, resolutions) in by_object.items():
+        merged, dropped = _merge(sets, files, resolutions)
+        for line in dropped:
+            say(line)
+        out.append(ObjectObservations(obj, merged, files, notes[obj] + dropped))
     return out
 
 

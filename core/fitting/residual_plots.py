@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from cistrack import units
+from cistrack.results.atomic_files import atomic_target
 
-__all__ = ["plot_residuals", "residual_figure", "site_file_stem"]
+__all__ = ["plot_residuals", "residual_figure", "save_figure", "site_file_stem"]
 
 
 def site_file_stem(site: str) -> str:
@@ -34,15 +35,29 @@ def plot_residuals(directory: str | Path, table, epoch: datetime, designation: s
     d = Path(directory)
     if len(table) == 0:
         return []
-    written = []
-    for site in dict.fromkeys(table.sites.tolist()):
-        fig = residual_figure(table, site, epoch, designation)
-        stem = site_file_stem(site)
-        for suffix in (".png", ".svg"):
-            p = d / f"{stem}{suffix}"
-            fig.savefig(p, dpi=110)
-            written.append(p)
+    written: list[Path] = []
+    try:
+        for site in dict.fromkeys(table.sites.tolist()):
+            fig = residual_figure(table, site, epoch, designation)
+            for suffix in (".png", ".svg"):
+                written.append(save_figure(fig, d / f"{site_file_stem(site)}{suffix}"))
+    except OSError:
+        for p in written:  # no plot of this table without the others
+            p.unlink(missing_ok=True)
+        raise
     return written
+
+
+def save_figure(fig, path: str | Path) -> Path:
+    """Save the matplotlib Figure ``fig`` (110 dpi, the format of ``path``'s suffix) whole or not at
+    all: a temporary file and a rename. An OSError (a full disk) names ``path`` as its filename."""
+    p = Path(path)
+    try:
+        with atomic_target(p) as tmp:
+            fig.savefig(tmp, dpi=110, format=p.suffix.lstrip(".") or None)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(p)) from exc
+    return p
 
 
 def residual_figure(table, site: str, epoch: datetime, designation: str = ""):

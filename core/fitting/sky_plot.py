@@ -70,7 +70,13 @@ def sky_figure(sky, title: str):
 
 
 def plot_sky(sky, path: str | Path, title: str) -> Path:
-    """Write the PNG of :func:`sky_figure` to ``path``; returns it."""
-    p = Path(path)
-    sky_figure(sky, title).savefig(p, dpi=110)
-    return p
+    """Write the PNG of :func:`sky_figure` to ``path`` (whole or not at all); returns it. Raises
+    CistrackError naming ``path`` when it cannot be written."""
+    from cistrack.errors import CistrackError
+    from cistrack.fitting.residual_plots import save_figure
+
+    try:
+        return save_figure(sky_figure(sky, title), Path(path))
+    except OSError as exc:
+        raise CistrackError(f"{path}: cannot write the sky plot ({exc.strerror or exc}); nothing was "
+                            "written there") from None

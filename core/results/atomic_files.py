@@ -11,12 +11,13 @@ renamed (:func:`os.replace`) onto the target.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic"]
+__all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic", "write_text_new"]
 
 
 @contextlib.contextmanager
@@ -60,3 +61,28 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
 def write_text_atomic(path: str | Path, text: str, encoding: str = "utf-8") -> None:
     """Write ``text`` to ``path`` through a temporary file and a rename (never a partial file)."""
     write_bytes_atomic(path, text.encode(encoding))
+
+
+def write_text_new(path: str | Path, text: str, encoding: str = "utf-8") -> None:
+    """Write ``text`` to ``path``, which must not exist, through a temporary file: the complete
+    file appears under ``path`` at once (a hard link, which never replaces a file), or nothing
+    does. Raises FileExistsError when ``path`` exists (also when it appeared meanwhile) and
+    OSError when writing fails (the temporary file is removed then)."""
+    target = Path(path)
+    if os.path.lexists(target):
+        raise FileExistsError(errno.EEXIST, "File exists", str(target))
+    tmp = _new_file(target)
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(text.encode(encoding))
+        try:
+            os.link(tmp, target)
+        except FileExistsError:
+            raise
+        except OSError:  # a file system without hard links: a rename, unless the name appeared meanwhile
+            if os.path.lexists(target):
+                raise FileExistsError(errno.EEXIST, "File exists", str(target)) from None
+            os.rename(tmp, target)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()

@@ -21,11 +21,13 @@ Like the steps table, rows are written in part files of many steps while the run
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from cistrack.errors import ConfigError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.atomic_files import atomic_target
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
@@ -35,6 +37,9 @@ __all__ = ["EstimateWriter", "Estimates", "read_estimates", "ESTIMATES", "KM_SCA
 
 ESTIMATES = "estimates.parquet"
 _PARTS = "estimates-parts"
+_COLUMNS = ("step", "kind", "t_tu", "utc", "mean_km", "covariance_km", "n_components", "weights", "means_km",
+            "covariances_km")
+"""The columns every estimates table has (``nis`` and ``nis_dof`` are read when present)."""
 KM_SCALE = np.array([LU_KM, LU_KM, LU_KM, VU_KMS, VU_KMS, VU_KMS])
 """Nondimensional synodic state -> km, km/s, per component."""
 
@@ -137,17 +142,43 @@ class Estimates:
 
 
 def read_estimates(directory: str | Path) -> Estimates:
-    """The estimates of a run directory (``estimates.parquet``, or the parts of a killed run)."""
+    """The estimates of a run directory (``estimates.parquet``, or the parts of a killed run).
+
+    Raises FileNotFoundError when there are none (also for ``estimates.parquet`` a symbolic link
+    to nothing), ConfigError naming the file when one is not a readable estimates table (empty,
+    truncated, another file's content)."""
     d = Path(directory)
+    path = d / ESTIMATES
+    if path.is_symlink() and not path.exists():
+        raise FileNotFoundError(f"{path}: a symbolic link to {os.readlink(path)}, which does not exist; "
+                                "no estimates to read")
+    files = [path] if path.exists() else sorted((d / _PARTS).glob("part-*.parquet"))
+    if not files:
+        raise FileNotFoundError(f"{d}: no estimates ({ESTIMATES}); was the run written by cistrack "
+                                f"with an output directory?")
+    return _estimates_of(_read_tables(files))
+
+
+def _read_tables(files: list[Path]):
+    """The rows of ``files`` (parquet) as one table; ConfigError naming the file that is not one."""
     pa, pq = _arrow()
-    if (d / ESTIMATES).exists():
-        table = pq.read_table(d / ESTIMATES)
-    else:
-        parts = sorted((d / _PARTS).glob("part-*.parquet"))
-        if not parts:
-            raise FileNotFoundError(f"{d}: no estimates ({ESTIMATES}); was the run written by cistrack "
-                                    f"with an output directory?")
-        table = pa.concat_tables([pq.ParquetFile(p).read() for p in parts])
+    tables = []
+    for f in files:
+        try:
+            tables.append(pq.ParquetFile(f).read())
+        except (OSError, pa.ArrowException) as exc:  # ArrowInvalid: empty, truncated or not parquet
+            size = f.stat().st_size if f.exists() else 0
+            raise ConfigError(f"{f}: not a readable estimates table ({size} bytes: {exc}); write it again with "
+                              "'cistrack run' into this directory") from None
+    missing = [c for c in _COLUMNS if any(c not in t.column_names for t in tables)]
+    if missing:
+        raise ConfigError(f"{files[0] if len(files) == 1 else files[0].parent}: not an estimates table (no column "
+                          f"{', '.join(missing)}); write it again with 'cistrack run' into this directory")
+    return pa.concat_tables(tables, promote_options="default") if len(tables) > 1 else tables[0]
+
+
+def _estimates_of(table) -> Estimates:
+    """:class:`Estimates` from the columns of an estimates table (any row order)."""
     cols = table.to_pydict()
     order = np.argsort(np.asarray(cols["step"]))
     k = len(order)

@@ -2,8 +2,11 @@
 
 A results directory is either new, empty, or an earlier cistrack results directory (it holds a
 ``manifest.json``); anything else is refused, so that starting a run never deletes or replaces
-files that cistrack did not write. The directory is created here, so an unwritable place fails
-at once with the reason, not after the run has computed every step.
+files that cistrack did not write. A directory in which a run failed before it wrote its manifest
+(a full disk) counts as empty: it holds only the run's lock file and part folders (``steps/``,
+``estimates-parts/``) with nothing in them but part files, so the retry runs there. The directory
+is created here, so an unwritable place fails at once with the reason, not after the run has
+computed every step.
 
 A study directory (:func:`check_study_dir`) follows the same rule with a study's record in place of
 a run's manifest: new, empty, or an earlier directory of the same study (its ``study.json`` names
@@ -11,12 +14,13 @@ it); never the root of the file system, a single run's results directory or a fi
 """
 from __future__ import annotations
 
+import fnmatch
 from pathlib import Path
 
 from cistrack.errors import ConfigError
 
 __all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
-           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK"]
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "PART_FOLDERS"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
 """Files that describe an earlier run or fit of a results directory and that a new run there does
@@ -34,6 +38,8 @@ STUDY_RUNS_LOCK = ".study-runs.lock"
 RUN_LOCK = ".run.lock"
 """The lock file of a results directory that ``cistrack run`` holds while it writes there (see
 :mod:`cistrack.results.dir_lock`); not content."""
+PART_FOLDERS = ("steps", "estimates-parts")
+"""The folders of part files a run writes while it runs (``steps/``, ``estimates-parts/``)."""
 
 
 def check_output_dir(directory: str | Path, where: str) -> Path:
@@ -47,12 +53,28 @@ def check_output_dir(directory: str | Path, where: str) -> Path:
         if d.exists() and not d.is_dir():
             raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
                               "earlier results directory")
-        if d.is_dir() and any(e.name != RUN_LOCK for e in d.iterdir()) and not (d / "manifest.json").is_file():
+        if d.is_dir() and not (d / "manifest.json").is_file() and not _holds_no_results(d):
             raise ConfigError(f"{where} {d}: is not empty and holds no cistrack manifest.json; results go "
                               "to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def _holds_no_results(d: Path) -> bool:
+    """Whether ``d`` (a directory without a manifest) holds nothing but what a run that failed before
+    it wrote its manifest leaves (a full disk): its lock file and part folders that hold only part
+    files, temporary part files, or nothing. Such a directory is a run's own, with no results a
+    new run should protect; the new run replaces its parts."""
+    for e in d.iterdir():
+        if e.name == RUN_LOCK:
+            continue
+        if e.name not in PART_FOLDERS or e.is_symlink() or not e.is_dir():
+            return False
+        if any(not (p.is_file() and fnmatch.fnmatch(p.name, "part-*.*") and p.suffix in (".parquet", ".tmp"))
+               for p in e.iterdir()):
+            return False
+    return True
 
 
 def clear_earlier_results(directory: str | Path) -> list[Path]:

@@ -18,7 +18,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.atomic_files import atomic_target
@@ -33,6 +33,9 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["export_run", "export_refusal", "run_inertial_estimates", "scenario_of"]
+
+FIT_SOURCE = "cistrack fit"
+"""How the manifest of the filter run inside a ``cistrack fit`` directory starts its ``scenario_source``."""
 
 
 def scenario_of(run_dir: str | Path, reg: Registry | None = None):
@@ -74,7 +77,8 @@ def run_inertial_estimates(run_dir: str | Path, registry: Registry | None = None
 def export_refusal(run_dir: str | Path) -> str | None:
     """Why the estimate of the run in ``run_dir`` should not be exported without ``force``: it
     did not finish (failed, filter-failed, interrupted or killed, still running, or no readable
-    manifest tells) or its filter diverged; None for a finished run that did not diverge."""
+    manifest tells), its filter diverged, or it is the filter run of a fit whose ``fit.json`` was
+    never written (the fit failed to write its results); None for a finished run that did not diverge."""
     d = Path(run_dir)
     if not (d / "manifest.json").is_file():
         return "it has no manifest.json, so whether it finished is unknown"
@@ -84,6 +88,9 @@ def export_refusal(run_dir: str | Path) -> str | None:
     except (OSError, ValueError) as exc:
         return f"its manifest.json cannot be read ({exc}), so whether it finished is unknown"
     why = f" ({reason})" if reason else ""
+    if str(man.get("scenario_source", "")).startswith(FIT_SOURCE) and not (d / "fit.json").is_file():
+        return ("it is the filter run of a 'cistrack fit' whose fit did not complete (no fit.json): its estimate "
+                "is not the fitted orbit; run 'cistrack fit' into it again")
     if status == "running":
         proc = man.get("process") or {}
         return (f"it is still running (process {proc.get('pid', '?')} on {proc.get('host', '?')}); its "
@@ -101,12 +108,13 @@ def export_refusal(run_dir: str | Path) -> str | None:
 
 def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None = None,
                registry: Registry | None = None, overwrite: bool = False, force: bool = False,
-               **params: Any) -> Path:
+               log: Callable[[str], None] | None = None, **params: Any) -> Path:
     """Write the estimate of the run in ``run_dir`` with exporter ``format`` ("oem", "opm", ...)
     to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file, replaced on each
     export); returns the path written. An existing ``path`` is refused (before anything is
     read) unless ``overwrite``; a run that did not finish or diverged (:func:`export_refusal`)
-    unless ``force``, and then the file carries the reason as a COMMENT."""
+    unless ``force``, and then the file carries the reason as a COMMENT. ``log`` receives a line
+    per stage (:func:`cistrack.runs.progress.stage_log`)."""
     if path is not None and not overwrite and os.path.lexists(path):
         raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to "
                           f"replace it")
@@ -120,8 +128,11 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
                             f"export it anyway (the file then says this in a COMMENT)")
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
+    say = log or (lambda m: None)
+    say(f"reading the estimates of {d} and carrying them into the sensor's inertial frame")
     ie, scen = run_inertial_estimates(d, reg)
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
+    say(f"writing {len(ie.t_tu)} estimates as {format} to {out}")
     manifest = d / "manifest.json"
     try:
         run_id = json.loads(manifest.read_text()).get("run_id", scen.name) if manifest.exists() else scen.name

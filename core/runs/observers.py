@@ -8,6 +8,7 @@ from typing import Any, Iterable
 
 import pluggy
 
+from cistrack.errors import ConfigError
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.information_bound import InformationBoundMetric
 from cistrack.evaluation.metric_stage import MetricStage, StepMetric
@@ -19,7 +20,8 @@ from cistrack.plugin.registry import Registry
 from cistrack.runs.run_context import RunContext, RunOptions
 from cistrack.scenario.limits import check_count
 
-__all__ = ["make_plugin_manager", "finish_observers", "run_observers", "builtin_metrics", "metric_stage"]
+__all__ = ["make_plugin_manager", "finish_observers", "run_observers", "builtin_metrics", "metric_stage",
+           "checked_observers"]
 
 _LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
               "cistrack_run_failed", "cistrack_run_finished", "cistrack_metric_stages")
@@ -39,7 +41,27 @@ def run_observers(first: list[Any], options: RunOptions, registry: Registry) -> 
              else check_count(options.rows_per_part, "rows_per_part (--rows-per-part)", 1, 10 ** 9))
         obs += [ResultsWriter(options.output_dir, registry, rows_per_part=n),
                 EstimateWriter(options.output_dir, rows_per_part=n)]
-    return obs + list(options.observers)
+    return obs + checked_observers(options.observers, "observers")
+
+
+def checked_observers(observers: Iterable[Any] | None, argument: str = "observers") -> list[Any]:
+    """``observers`` as a list, each implementing at least one cistrack hook (a method marked
+    ``@cistrack.hookimpl`` named after a lifecycle hook or ``cistrack_metric_stages``); a
+    ConfigError names ``argument``, the index and what an observer is otherwise."""
+    allowed = ", ".join(_LIFECYCLE)
+    if observers is None:
+        return []
+    if isinstance(observers, (str, bytes)) or not isinstance(observers, Iterable):
+        raise ConfigError(f"{argument}: must be a list of observers (objects with @cistrack.hookimpl methods "
+                          f"named {allowed}), got {type(observers).__name__}")
+    out = list(observers)
+    probe = pluggy.PluginManager(hookspecs.PROJECT)
+    for i, obs in enumerate(out):
+        if not any(probe.parse_hookimpl_opts(obs, h) is not None for h in _LIFECYCLE):
+            raise ConfigError(f"{argument}[{i}]: {type(obs).__name__} object implements no cistrack hook; an "
+                              f"observer is an object with one or more methods marked @cistrack.hookimpl named "
+                              f"{allowed} (docs/plugins.md)")
+    return out
 
 
 def builtin_metrics(custody: CustodyMetric) -> list[StepMetric]:

@@ -20,6 +20,7 @@ from cistrack.errors import ConfigError
 from cistrack.evaluation.custody import CustodyRule
 from cistrack.plugin.param_docs import param_docs, summary_of
 from cistrack.plugin.registry import Registry, default_registry
+from cistrack.results.atomic_files import write_text_new
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 from cistrack.scenario.limits import check_path_component
 from cistrack.scenario.loading import COMPONENT_TABLES, Scenario
@@ -53,6 +54,8 @@ _RUN: dict[str, str] = {  # key -> meaning; the defaults are the Scenario's
     "end_with_prediction": "End the run with a prediction to duration_days after the last measurement.",
     "recording_frame": "Frame of a rerun recording: \"synodic\" (the rotating frame) or \"inertial\".",
 }
+#: component table -> the other components whose (commented) parameter tables the file lists too
+_ALTERNATIVES: dict[str, tuple[str, ...]] = {"filter": ("ukf", "enkf")}
 _MEASUREMENTS = ("Real observations instead of simulated ones (then [truth] may go): file = \"obs.csv\" and "
                  "optionally reader = {{ name = ... }} (docs/measurements.md).")
 
@@ -70,6 +73,8 @@ def _value(v: Any) -> str | None:
 
 
 def _component_lines(table: str, given: dict[str, Any], reg: Registry) -> list[str]:
+    """[TABLE] naming the component, then [TABLE.NAME] with its parameters (and, for a table with
+    :data:`_ALTERNATIVES`, the others' tables with every parameter at its default)."""
     kind = COMPONENT_TABLES[table]
     name = given["name"]
     entry = reg.get(kind, name)
@@ -77,8 +82,24 @@ def _component_lines(table: str, given: dict[str, Any], reg: Registry) -> list[s
     lines = [""] + _comment(f"[{table}]: the {kind}. {summary_of(entry.factory)}") + [f"[{table}]"]
     lines += _comment(f"A registered {kind}" + (f" (others: {others})" if others else "")
                       + f"; cistrack plugins {name} describes every parameter.") + [f"name = {_value(name)}"]
+    switch = " or ".join(f'"{n}"' for n in _ALTERNATIVES.get(table, ()) if n in reg.names(kind))
+    lines += _comment(f"Each {kind}'s parameters go in its own table, [{table}.NAME]: only the table of the {kind} "
+                      f"named above is read, so changing name{f' (to {switch}, say)' if switch else ''} needs no "
+                      f"other edit. A parameter written in [{table}] itself applies to whichever {kind} is named.")
+    params = {k: v for k, v in given.items() if k != "name"}
+    for other in [name] + [n for n in _ALTERNATIVES.get(table, ()) if n != name and n in reg.names(kind)]:
+        lines += [""] + _comment(f"[{table}.{other}]: the parameters of the {kind} {other!r}"
+                                 + (" (read only when name is changed to it)." if other != name else "."))
+        lines += [f"[{table}.{other}]"] + _param_lines(reg.get(kind, other).factory, params if other == name else {})
+    return lines
+
+
+def _param_lines(factory: Any, given: dict[str, Any]) -> list[str]:
+    """Each parameter of ``factory`` explained in a comment: ``key = value`` for those ``given``,
+    commented out at its default for the others."""
+    lines: list[str] = []
     previous = ""
-    for p in (param_docs(entry.factory) if isinstance(entry.factory, type) else []):
+    for p in (param_docs(factory) if isinstance(factory, type) else []):
         if p.name == "epoch":
             continue  # the scenario's epoch is injected
         unit = f", {p.unit}" if p.unit else ""
@@ -142,8 +163,7 @@ def write_scenario_template(name: str | None = None, registry: Registry | None =
     path = template_path(name)
     text = scenario_template(path.stem, registry)
     try:
-        with open(path, "x", encoding="utf-8") as fh:
-            fh.write(text)
+        write_text_new(path, text)  # whole or absent: a full disk leaves no empty file to block a retry
     except FileExistsError:
         raise ConfigError(f"{path} exists: cistrack init never overwrites a file; give another name "
                           "or remove it first") from None

@@ -9,16 +9,26 @@ reason: its manifest's status and failure, or what its worker said when no manif
 from __future__ import annotations
 
 import concurrent.futures as cf
+import socket
+import struct
 import sys
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.run_status import run_status
 from cistrack.results.store import read_manifest
 from cistrack.studies.resume import run_state
 
-__all__ = ["run_all", "run_problems", "shutdown"]
+__all__ = ["run_all", "run_problems", "shutdown", "check_dask_scheduler", "DASK_TIMEOUT_S"]
+
+DASK_TIMEOUT_S = 10.0
+"""Seconds ``--dask ADDRESS`` is given to accept a connection, and then to greet (each)."""
+_DASK_PORT = 8786
+"""A Dask scheduler's port when the address names none."""
+_GREETING_MAX = 1 << 20
+"""Bytes a scheduler's greeting (its handshake message, some hundred bytes) may announce at most."""
 
 
 def run_all(ex: cf.Executor, todo: Sequence[Any], fn: Callable[[Any], Any], bar: Any = None) -> dict[str, str]:
@@ -88,3 +98,86 @@ def _why(d: Path, fingerprint: str, said: str | None) -> str:
             return f"its results are of another scenario or seed (fingerprint differs){worker}"
         return f"{status}, but {d / 'steps.parquet'} is missing" + (f" ({reason})" if reason else "") + worker
     return status + (f": {reason}" if reason else "") + ("" if reason else worker)
+
+
+def check_dask_scheduler(address: str, timeout_s: float = DASK_TIMEOUT_S) -> None:
+    """Refuse (ConfigError naming ``address``) a ``--dask`` address of the TCP transport
+    (``tcp://HOST:PORT`` or ``HOST:PORT``) where no Dask scheduler answers: nothing accepts a
+    connection within ``timeout_s`` s, or what does accept does not greet the way a scheduler does
+    (a scheduler sends its handshake first: a length of 8 bytes in the machine's byte order, then that many
+    bytes of frames) within ``timeout_s`` s. A Dask client given such a service would wait forever
+    (an HTTP server sends nothing) or try to allocate the length it read (exbibytes). Addresses of
+    other transports (``tls://``, ``ucx://``, ...) are left to Dask."""
+    scheme, sep, place = address.partition("://")
+    if not sep:
+        scheme, place = "tcp", address
+    if scheme != "tcp":
+        return
+    host, port = _host_port(address, place)
+    expected = "a Dask scheduler (e.g. tcp://127.0.0.1:8786 from 'dask scheduler'), or 'local'"
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout_s)
+    except OSError as exc:
+        why = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        raise ConfigError(f"--dask {address}: cannot connect to {host}:{port} within {timeout_s:g} s ({why}); "
+                          f"give the address of {expected}") from None
+    with sock:
+        problem = _greeting_problem(sock, timeout_s)
+    if problem:
+        raise ConfigError(f"--dask {address}: what answers at {host}:{port} is not a Dask scheduler: {problem}; "
+                          f"give the address of {expected}")
+
+
+def _host_port(address: str, place: str) -> tuple[str, int]:
+    """(host, port) of ``HOST:PORT``, ``HOST``, ``[IPV6]:PORT`` or ``[IPV6]`` (port 8786 by default)."""
+    bad = ConfigError(f"--dask {address}: not an address: give tcp://HOST:PORT (PORT 1 to 65535; an IPv6 host "
+                      "in brackets, [::1]), or 'local'")
+    if place.startswith("["):
+        host, closed, tail = place[1:].partition("]")
+        if not closed or (tail and not tail.startswith(":")):
+            raise bad
+        port = tail[1:]
+    else:
+        host, sep, port = place.rpartition(":")
+        if not sep:
+            host, port = port, ""
+        if ":" in host:
+            raise bad
+    if not host or not (port == "" or (port.isascii() and port.isdigit() and 0 < int(port) < 65536)):
+        raise bad
+    return host, int(port) if port else _DASK_PORT
+
+
+def _greeting_problem(sock: socket.socket, timeout_s: float) -> str:
+    """What is wrong with the first bytes the peer on ``sock`` sends ("" when they look like a Dask
+    scheduler's handshake: a length, then a frame count and frame lengths that fit in it)."""
+    sock.settimeout(timeout_s)
+    try:
+        head = _read(sock, 8)
+        if len(head) < 8:
+            return "it closed the connection without a greeting" if not head else "it sent only a few bytes"
+        (n,) = struct.unpack("=Q", head)
+        if not 16 <= n <= _GREETING_MAX:
+            return (f"its first bytes {head!r} announce a message of {n} bytes, not a handshake of 16 bytes to "
+                    f"{_GREETING_MAX // 1024} KiB")
+        body = _read(sock, 8)
+        (frames,) = struct.unpack("=Q", body) if len(body) == 8 else (0,)
+        if not 1 <= frames <= (n - 8) // 8:
+            return f"its message of {n} bytes does not begin with a count of Dask frames"
+    except TimeoutError:
+        return (f"it sent nothing within {timeout_s:g} s (a scheduler greets first; e.g. an HTTP server waits for a "
+                "request)")
+    except OSError as exc:
+        return f"the connection failed ({exc.strerror or exc})"
+    return ""
+
+
+def _read(sock: socket.socket, n: int) -> bytes:
+    """Up to ``n`` bytes from ``sock`` (fewer when the peer closes the connection)."""
+    data = b""
+    while len(data) < n:
+        chunk = sock.recv(n - len(data))
+        if not chunk:
+            break
+        data += chunk
+    return data

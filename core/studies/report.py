@@ -387,17 +387,43 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     """Summarise a study: terminal text, summary.csv, summary.md and figures (PNG, SVG, PDF; see
     :mod:`cistrack.studies.report_plots`) in <out>/report/.
 
-    Raises ConfigError (and writes nothing) when no run of the study has finished.
+    Raises ConfigError (and writes nothing) when no run of the study has finished, and ConfigError
+    naming the folder or file when the report cannot be written there (a read-only study
+    directory, a full disk).
     """
     data, specs, out = _plan(path_or_name, out_dir, settings, first_seed, n_seeds)
     groups, tables, missing_ids = _finished_runs(specs)
-    name = data.get("name", out.name)
+    name = str(data.get("name", out.name))
     if not groups:
         raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
                           f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
                           + (f" --out {out_dir}" if out_dir else ""))
+    rep_dir = _report_dir(out, name)
+    try:
+        return _write_report(rep_dir, name, specs, (groups, tables, missing_ids))
+    except OSError as exc:
+        raise ConfigError(f"study '{name}': cannot write the report: {exc.filename or rep_dir}: "
+                          f"{exc.strerror or exc}; files of the report written before it are in {rep_dir}") from None
+
+
+def _report_dir(out: Path, name: str) -> Path:
+    """``out/report``, created; ConfigError naming it when no file can be made there."""
     rep_dir = out / "report"
-    rep_dir.mkdir(parents=True, exist_ok=True)
+    try:
+        rep_dir.mkdir(parents=True, exist_ok=True)
+        probe = rep_dir / ".cistrack-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise ConfigError(f"study '{name}': cannot write the report to {rep_dir} ({exc.strerror or exc}): the "
+                          f"report goes into the study directory's report/ folder; make {out} writable, or copy "
+                          "the study directory to a writable place and report the copy") from None
+    return rep_dir
+
+
+def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, list[str]]) -> dict:
+    """Write the report's files into ``rep_dir``; returns :func:`report_study`'s answer."""
+    groups, tables, missing_ids = finished
     study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
     counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
     arch = architectures_of(specs)
@@ -411,10 +437,10 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
     title = _title(name, len(specs), missing_ids)
     man_rows = _maneuver_rows(specs, groups, tables)
-    man_md, man_text, man_files = _maneuver_report(man_rows, rep_dir, str(name))
+    man_md, man_text, man_files = _maneuver_report(man_rows, rep_dir, name)
     write_text_atomic(rep_dir / "summary.md",
                       _summary_markdown(title, rows, has_truth, counted, arch, verdicts, flagged) + man_md + "\n")
     files.append(rep_dir / "summary.md")
     text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv") + man_text
-    files += _figures(groups, tables, rows, rep_dir, str(name)) + man_files
+    files += _figures(groups, tables, rows, rep_dir, name) + man_files
     return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids), "maneuver_rows": man_rows}

@@ -289,7 +289,9 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = ()):
     try:
         return base.with_overrides(ov, reg)
     except ConfigError as exc:
-        msg = str(exc)
+        from cistrack.studies.study_file import overrides_error
+
+        msg = overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source) or str(exc)
         if combo:
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
                     f"{base.name!r}; where a setting does not apply to a scenario, give the entry as a table "
@@ -316,6 +318,9 @@ def make_executor(workers: int | None = None, dask: str | None = None):
                                    host="127.0.0.1")
             client = Client(cluster)
         else:
+            from cistrack.studies.execution import check_dask_scheduler
+
+            check_dask_scheduler(dask)  # a service that is not a scheduler: refused, never a hang
             try:
                 client = Client(dask, timeout=10)
             except (OSError, TimeoutError, ValueError) as exc:

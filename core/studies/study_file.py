@@ -19,7 +19,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS", "study_sweep",
-           "scenario_entry"]
+           "scenario_entry", "overrides_error"]
 
 STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides",
               "sweep"}
@@ -206,3 +206,33 @@ def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: in
         count = check_count(n_seeds, "--n-seeds", 1, 1_000_000)
     check_seed(first + count - 1, f"{p}: the last seed (first seed + number of seeds - 1)")
     return list(range(first, first + count))
+
+
+def _blamed_settings(message: str, overrides: dict) -> list[tuple[str, object]]:
+    """The settings of ``overrides`` (dotted key, value) that a scenario error ``message``
+    (``"<file>: top level: ..."`` or ``"<file>: [table]: ..."``) is about; [] for none."""
+    settings = _flat(overrides)
+    top = [(k, v) for k, v in settings if "." not in k and f"'{k}'" in message]
+    if ": top level: " in message:
+        return top
+    tables = {k.split(".", 1)[0] for k, _ in settings if "." in k} | {k for k, _ in settings if "." not in k}
+    table = next((t for t in tables if f": [{t}]:" in message or f": [{t}." in message), None)
+    if table is None:
+        return []
+    mine = [(k, v) for k, v in settings if k == table or k.startswith(table + ".")]
+    named = [(k, v) for k, v in mine if f"'{k.rsplit('.', 1)[-1]}'" in message]
+    return named or mine
+
+
+def overrides_error(message: str, study: Path, overrides: dict, scenario_name: str,
+                    scenario_source: str | Path) -> str | None:
+    """A scenario's error under the study's ``[overrides]`` told against the study file: the file,
+    the key ``overrides``, the setting(s) and the scenario they were applied to; None when the
+    error is about none of the overrides (the scenario's own file, a variant, a sweep, --set)."""
+    blamed = _blamed_settings(message, overrides or {})
+    if not blamed:
+        return None
+    rest = message.split(": ", 1)[1] if message.startswith(f"{scenario_source}: ") else message
+    shown = ", ".join(f"{k} = {v!r}" for k, v in blamed)
+    return (f"{study}: key 'overrides', setting {shown} (applied to scenario {scenario_name!r}, "
+            f"{scenario_source}): {rest}")

@@ -17,7 +17,9 @@ TDM has no per-observation uncertainty: the reader's ``sigma_arcsec`` (default 1
 the sky: RA x cos(Dec) and Dec) applies unless the segment has ``COMMENT cistrack sigma_arcsec
 ANGLE_1=.. ANGLE_2=..`` (arcsec; for RADEC ANGLE_1 is on RA x cos(Dec)), which the writer writes
 (one segment per run of measurements with the same site, type and sigmas). Other keywords
-(RANGE, DOPPLER, ...) are refused by name. Times round-trip to 1 microsecond, angles and sigmas
+(RANGE, DOPPLER, ...) are refused by name. A file whose every ANGLE_1 lies in [0, 2 pi] and
+every ANGLE_2 in [-pi/2, pi/2] is refused as angles written in radians (the parameter
+``check_degrees = false`` reads it as degrees). Times round-trip to 1 microsecond, angles and sigmas
 bit for bit.
 """
 from __future__ import annotations
@@ -309,6 +311,20 @@ class _TdmParse:
                                 min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
 
 
+def _check_degrees(path, rows: list[ObsRow]) -> None:
+    """Refuse angles that read as radians: two or more observations, every ANGLE_1 value within
+    [0, 2 pi] and every ANGLE_2 within [-pi/2, pi/2] (values as written, degrees by the standard)."""
+    if len(rows) < 2:
+        return
+    deg = math.pi / 180.0
+    if all(r.a <= 2.0 * math.pi * deg and abs(r.b) <= 0.5 * math.pi * deg for r in rows):
+        raise FieldError(path, rows[0].line, "ANGLE_1/ANGLE_2 values",
+                         f"all {len(rows)} observations have ANGLE_1 within [0, 6.2832] and ANGLE_2 within "
+                         "[-1.5708, 1.5708]: these look like radians, but TDM angles are degrees; write the angles "
+                         "in degrees (radians x 57.29578), or set the tdm reader's check_degrees = false "
+                         "(--set measurements.reader.check_degrees=false) if they are degrees")
+
+
 class TdmReader(SiteReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
@@ -320,16 +336,33 @@ class TdmReader(SiteReader):
     sites : dict or None
         Explicit sites by PARTICIPANT_1 name: NAME -> {latitude_deg, longitude_deg, height_m}
         or {longitude_deg, rho_cos_phi, rho_sin_phi}.
+    designation : str or None
+        Read only the observations of this object (PARTICIPANT_2); None: all, refused when the
+        file names several objects.
+    check_degrees : bool
+        Refuse a file of two or more observations whose every ANGLE_1 lies in [0, 6.2832] and
+        every ANGLE_2 in [-1.5708, 1.5708] (angles written in radians, where TDM has degrees);
+        false reads such a file as degrees (an object within 6.3 deg of RA or azimuth 0 and 1.6
+        deg of the equator or horizon).
     """
 
     suffixes = (".tdm", ".kvn")
     measurement_kinds = ("azel", "radec")
+
+    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
+                 designation: str | None = None, check_degrees: bool = True) -> None:
+        super().__init__(sigma_arcsec, sites, designation)
+        if not isinstance(check_degrees, bool):
+            self._fail("check_degrees", check_degrees, "must be true or false")
+        self.check_degrees = check_degrees
 
     # -- reading ---------------------------------------------------------------------------------
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)
         parse = _TdmParse(path, self._sites)
         parse.run(read_text_lines(path))
+        if self.check_degrees:
+            _check_degrees(path, parse.rows)
         return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
 
     # -- writing ---------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ from ``x0`` to the times asked for, in one ``propagate`` call per request.
 from __future__ import annotations
 
 import math
+from datetime import timedelta
 
 import numpy as np
 
@@ -20,12 +21,17 @@ from cistrack import units
 from cistrack.units import TU_S, parse_utc, state_from_km
 from cistrack.errors import ConfigError, MeasurementError
 
-__all__ = ["ObserverOrbit", "start_of_orbit", "observer_start", "CHUNK_DAYS", "OBSERVER_RTOL", "OBSERVER_ATOL"]
+__all__ = ["ObserverOrbit", "start_of_orbit", "observer_start", "CHUNK_DAYS", "OBSERVER_RTOL", "OBSERVER_ATOL",
+           "DEFAULT_ORBIT", "MAX_STATE_AGE_DAYS"]
 
 CHUNK_DAYS: float = 32.0
 """Length of each extension of the observer's propagated span, days."""
 OBSERVER_RTOL: float = 1e-13
 OBSERVER_ATOL: float = 1e-15
+DEFAULT_ORBIT: str = "dro-2-1"
+"""Catalog orbit an observer flies when given neither ``orbit`` nor ``state_km``."""
+MAX_STATE_AGE_DAYS: float = 366.0
+"""Largest time from ``state_epoch`` to the scenario epoch, days: the observer is propagated over it."""
 
 
 class ObserverOrbit:
@@ -103,30 +109,45 @@ def start_of_orbit(registry_orbit, phase: float) -> tuple[np.ndarray, float]:
     return np.asarray(registry_orbit.state, dtype=float).copy(), -float(phase) * float(period)
 
 
-def observer_start(orbit: str, phase: float, state_km, state_epoch: str, epoch, fail):
-    """(x0, t0, orbit) of an observer given by a catalog ``orbit`` and ``phase``, or by
-    ``state_km`` (synodic km, km/s) at ``state_epoch`` (UTC text, "" = ``epoch``, a datetime);
-    ``fail(name, value, allowed)`` reports a bad parameter. The orbit returned is "" for a state."""
+def _state_t0(state_epoch, epoch, fail) -> float:
+    """TU from the scenario ``epoch`` (datetime) to ``state_epoch`` (UTC text, "" = the epoch):
+    at most 0, at least -:data:`MAX_STATE_AGE_DAYS` days."""
+    if not state_epoch:
+        return 0.0
+    try:
+        when = parse_utc(state_epoch)
+    except (ValueError, TypeError, OverflowError):
+        fail("state_epoch", state_epoch, "must be an ISO-8601 UTC time")
+    days = (when - epoch).total_seconds() / 86400.0
+    if not -MAX_STATE_AGE_DAYS <= days <= 0.0:
+        earliest = units.format_utc(epoch - timedelta(days=MAX_STATE_AGE_DAYS))[:19] + "Z"
+        fail("state_epoch", state_epoch, f"must lie from {earliest} to the scenario epoch "
+                                         f"{units.format_utc(epoch)[:19]}Z (at most {MAX_STATE_AGE_DAYS:g} days "
+                                         f"before it; it is {-days:.6g} days before)")
+    return days * 86400.0 / TU_S
+
+
+def observer_start(orbit: str | None, phase: float, state_km, state_epoch: str, epoch, fail):
+    """(x0, t0, orbit) of an observer given by a catalog ``orbit`` (None: :data:`DEFAULT_ORBIT`)
+    and ``phase``, or by ``state_km`` (synodic km, km/s) at ``state_epoch`` (UTC text, "" =
+    ``epoch``, a datetime; at most :data:`MAX_STATE_AGE_DAYS` before it); ``orbit`` and
+    ``state_km`` are exclusive. ``fail(name, value, allowed)`` reports a bad parameter. The
+    orbit returned is "" for a state."""
     if state_km is not None:
         s = state_km
         if (not isinstance(s, (list, tuple)) or len(s) != 6
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in s)
                 or not np.all(np.isfinite(np.asarray(s, dtype=float)))):
             fail("state_km", s, "must be 6 finite numbers [x, y, z km, vx, vy, vz km/s]")
-        if orbit not in ("", "dro-2-1"):
-            fail("orbit", orbit, "give either 'orbit' or 'state_km', not both (orbit = \"\")")
-        t0 = 0.0
-        if state_epoch:
-            try:
-                when = parse_utc(state_epoch)
-            except (ValueError, TypeError):
-                fail("state_epoch", state_epoch, "must be an ISO-8601 UTC time")
-            t0 = (when - epoch).total_seconds() / TU_S
-            if t0 > 0:
-                fail("state_epoch", state_epoch, "must be at or before the scenario epoch")
+        if orbit not in (None, ""):
+            fail("orbit", orbit, "cannot go with 'state_km' (also given): 'orbit' and 'state_km' are "
+                                 "exclusive; give 'orbit' (with 'phase') or 'state_km' (with 'state_epoch'), "
+                                 "not both")
+        t0 = _state_t0(state_epoch, epoch, fail)
         return state_from_km(np.asarray(s, dtype=float)), t0, ""
     if state_epoch:
         fail("state_epoch", state_epoch, "goes with 'state_km' (a catalog orbit uses 'phase')")
+    orbit = DEFAULT_ORBIT if orbit is None else orbit
     from cistrack.api import default_registry
     reg = default_registry()
     names = reg.names("orbit")

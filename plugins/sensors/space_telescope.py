@@ -43,15 +43,17 @@ class SpaceTelescope(Sensor):
 
     Parameters
     ----------
-    orbit : str
+    orbit : str or None
         Registered orbit the observer flies (``cistrack plugins`` lists them under "orbit");
-        "" when ``state_km`` is given.
+        None: "dro-2-1" unless ``state_km`` is given. Exclusive with ``state_km``.
     phase : float
         Fraction of the orbit's period the observer is along it at t = 0, in [0, 1).
     state_km : list of 6 floats or None
-        Observer state [x, y, z km, vx, vy, vz km/s], synodic barycentric (instead of ``orbit``).
+        Observer state [x, y, z km, vx, vy, vz km/s], synodic barycentric (instead of ``orbit``;
+        the two are exclusive).
     state_epoch : str
-        ISO-8601 UTC time of ``state_km``, at or before the scenario epoch ("" = the epoch).
+        ISO-8601 UTC time of ``state_km``, at or before the scenario epoch and at most 366 days
+        before it ("" = the epoch).
     dynamics : Dynamics, name or None
         Model that moves the observer; a scenario hands its own. None: the Earth-Moon CR3BP.
     epoch : str
@@ -82,7 +84,7 @@ class SpaceTelescope(Sensor):
         windows (what the schedules plan in). revisit_hours = 0: passes are the whole visibility.
     """
 
-    def __init__(self, orbit: str = "dro-2-1", phase: float = 0.0, state_km: list[float] | None = None,
+    def __init__(self, orbit: str | None = None, phase: float = 0.0, state_km: list[float] | None = None,
                  state_epoch: str = "", dynamics: Dynamics | str | None = None,
                  epoch: str = "2026-01-01T00:00:00Z", sigma_arcsec: float = 1.0,
                  measure_range: bool = False, measure_range_rate: bool = False, range_alpha: float = 0.05,

@@ -61,9 +61,10 @@ def test_two_files_of_one_object_merge_in_time_order(tmp_path):
     np.testing.assert_array_equal(objs[0].measurements.sites, whole.sites)
 
 
-def test_the_same_observation_in_two_files_is_refused_naming_both(tmp_path):
-    with pytest.raises(MeasurementError, match=r"site '(711|809)' observed at the same time in .*observations.psv and .*observations.tdm"):
-        read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry())
+def test_the_same_observations_in_two_files_are_used_once_and_the_dropped_copies_counted():
+    objs = read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry())
+    assert len(objs[0].measurements) == 65
+    assert "observations.tdm: 65 observations dropped as duplicates of those in observations.psv" in objs[0].notes[-1]
 
 
 def test_a_file_without_a_known_suffix_is_read_by_its_content(tmp_path):

@@ -1,0 +1,179 @@
+"""The printed summary of a fit, for a person: what ``cistrack fit`` prints per object and what
+:meth:`cistrack.fitting.from_observations.ObjectFit.report` returns.
+
+For a converged fit: the verdict with how well the orbit is determined, the results folder, the
+filter run's outcome, the least squares' epoch, observations used and rejected, weighted RMS and
+chi-square, the assumed and estimated noise per component, the 1-sigma position and velocity at
+the fit epoch, the line of variations, the earlier arcs' residual ladder, the orbit's events and
+every note and warning. For observations that determine no orbit (one lone tracklet): why, in
+words, with the tracklet's motion and admissible region.
+"""
+from __future__ import annotations
+
+__all__ = ["summary_lines", "short_lines"]
+
+
+def _arcs_and_events(one) -> list[str]:
+    """The residual ladder of the earlier arcs and the orbit's events (impacts, closest approaches)."""
+    lines: list[str] = []
+    arcs = getattr(one, "arcs", None)
+    if arcs is not None and arcs.ladder:
+        from cistrack.fitting.arc_fit import ladder_verdicts
+        from cistrack.fitting.residual_ladder import ladder_table
+
+        lines.append("  earlier arcs against this fit (residual ladder):")
+        lines += ["    " + ln for ln in ladder_table(arcs.ladder, one.scenario.epoch).splitlines()]
+        lines.append("  " + ladder_verdicts(arcs.ladder))
+    if one.ok and getattr(one, "events", None) is not None:
+        from cistrack.least_squares.events import event_lines
+
+        lines += event_lines(one.events)
+    return lines
+
+
+def _wrapped(lines: list[str], width: int = 118) -> list[str]:
+    """``lines`` folded to ``width`` columns, continuations indented two more spaces."""
+    import textwrap
+
+    out: list[str] = []
+    for line in lines:
+        lead = " " * (len(line) - len(line.lstrip(" ")))
+        out += textwrap.wrap(line, width, subsequent_indent=lead + "  ", break_on_hyphens=False) or [line]
+    return out
+
+
+def _undetermined_lines(one) -> list[str]:
+    """The summary of observations that determine no orbit (one lone tracklet): why, where the
+    tracklet is and how it moves on the sky, and the admissible region's ranges."""
+    u = one.undetermined
+    sky, region = u["tracklet"], u["admissible_region"]
+    lines = [f"fit {one.designation}: UNDETERMINED: one tracklet does not determine an orbit",
+             f"  results in {one.directory}",
+             f"  tracklet: {sky['n_observations']} observations from {sky['first_utc'][:19]}Z to "
+             f"{sky['last_utc'][11:19]}Z ({sky['span_minutes']:.0f} min), site {sky['site'] or '(the sensor)'}; "
+             f"RA {sky['ra_deg']:.4f} deg, Dec {sky['dec_deg']:+.4f} deg at its mean time",
+             f"  motion: RA cos(Dec) {sky['ra_cos_dec_rate_arcsec_min']:+.3g} \"/min, Dec {sky['dec_rate_arcsec_min']:+.3g} "
+             f"\"/min ({sky['rate_arcsec_min']:.3g} \"/min = {sky['rate_deg_day']:.3g} deg/day, position angle "
+             f"{sky['position_angle_deg']:.1f} deg)"]
+    if "range_km" in region:
+        lo, hi = region["range_km"]
+        rlo, rhi = region["range_rate_kms"]
+        lines.append(f"  admissible region (geocentric C3 <= {region['max_c3_km2_s2']:g} km^2/s^2): range {lo:,.0f} to "
+                     f"{hi:,.0f} km, range rate {rlo:+.3g} to {rhi:+.3g} km/s: the orbit may lie anywhere in it")
+    else:
+        lines.append(f"  admissible region: {region.get('why_none', 'not computed')}")
+    lines.append("  two angles and their rates leave the range and the range rate free: observe the object again on "
+                 "another night (or from another site) and fit all the observations together")
+    lines.append("  no orbit, nothing to export (exit status 3); see docs/real-data.md, 'When a fit fails'")
+    return _wrapped(lines)
+
+
+def _header_lines(one) -> list[str]:
+    """The verdict (with how well the orbit is determined), the results folder, the filter run."""
+    det = getattr(one, "determination", None)
+    if det is None or not one.ok:
+        lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED")]
+    else:  # never a bare "converged": how well the orbit is determined, and why, on the next line
+        kind, _, why = det.sentence.partition(": ")
+        lines = [f"fit {one.designation}: converged; {kind}", f"  {why}"]
+    lines.append(f"  results in {one.directory}")
+    if one.run is not None:
+        s = one.run.summary
+        lines.append(f"  filter {one.scenario.components['filter'].name} after IOD "
+                     f"{one.scenario.components['iod'].name}: {s.status}"
+                     + (f" ({s.failure})" if s.failure else "")
+                     + (f"; verdict {s.verdict.kind}" if getattr(s.verdict, "kind", None) else ""))
+    if one.failure:
+        lines.append(f"  error: {one.failure}")
+    return lines
+
+
+def summary_lines(one) -> list[str]:
+    """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
+    from cistrack import units
+    from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
+
+    if getattr(one, "undetermined", None):
+        return _undetermined_lines(one)
+    lines = _header_lines(one)
+    r = one.result
+    if r is None:
+        lines.append("  no orbit: see docs/real-data.md, 'When a fit fails'")
+        return lines
+    ms = one.run.context.measurements
+    epoch = units.format_utc(units.tu_to_utc(one.scenario.epoch, r.epoch))[:19] + "Z"
+    if one.start:
+        lines.append(f"  least squares restarted from {one.start}")
+    lines.append(f"  least squares at {epoch} ({one.choices.epoch} observation): {len(ms)} observations, "
+                 f"{r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}, chi-square {r.chi2:.1f} "
+                 f"for {2 * r.n_used - 6 - len(r.parameter_names)} degrees of freedom")
+    for name, v in noise_summary(ms, r).items():
+        unit = "km" if name.endswith("_km") else "arcsec"
+        label = name.rsplit("_", 1)[0].replace("ra_cos_dec", "RA cos(Dec)").replace("declination", "Dec")
+        lines.append(f"  {label}: assumed noise {v['assumed']:.3g} {unit}, estimated {v['estimated']:.3g} {unit} "
+                     f"(noise scale {r.noise_scale:.3f}), post-fit RMS {v['post_fit_rms']:.3g} {unit}")
+    sig = r.sigmas_km
+    lines.append("  1-sigma at the fit epoch (synodic): position " + " / ".join(f"{v:.3g}" for v in sig[:3])
+                 + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; condition number "
+                 f"{r.condition_number:.3g}")
+    lines += area_to_mass_summary(r)
+    if r.noise_scale > 1.0:
+        lines.append(f"  the exported covariance is this one times the noise scale squared ({r.noise_scale ** 2:.3g}): "
+                     "the residuals exceed the stated noise")
+    for m in r.messages[1:]:
+        lines.append(f"  note: {m}")
+    if one.lov:
+        from cistrack.least_squares.line_of_variations import line_summary
+
+        lv = line_summary(one.lov, r)
+        lo, hi = lv["sigma_range"]
+        lines.append(f"  line of variations {lo:g} to {hi:g} sigma ({len(one.lov)} points, lov.csv): leaves the "
+                     f"straight line by at most {lv['max_departure_sigma']:.3g} sigma ({lv['max_departure_km']:.3g} km), "
+                     f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2")
+        if not lv["linear"]:
+            lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
+                         "understates the uncertainty; sample the line (lov.csv, cistrack.least_squares.line_of_variations)")
+    lines += _arcs_and_events(one)
+    if r.unobservable:
+        lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
+    if not r.converged:
+        lines.append("  warning: the least squares did not converge; the orbit is not exported without --force "
+                     "(docs/real-data.md, 'When a fit fails')")
+    if r.noise_scale > 1.5:
+        lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
+                     "(--set measurements.reader.sigma_arcsec=...) or the data")
+    return _wrapped(lines)
+
+
+def _outcome(one) -> str:
+    """One phrase: converged (and how well determined), undetermined, or failed (and why, shortened)."""
+    if getattr(one, "undetermined", None):
+        return "UNDETERMINED: one tracklet does not determine an orbit"
+    det = getattr(one, "determination", None)
+    if one.ok:
+        return "converged" + (f"; {det.sentence.partition(': ')[0]}" if det is not None else "")
+    why = one.failure or (one.result.messages[0] if one.result is not None and one.result.messages else "")
+    why = why if len(why) <= 160 else why[:157] + "..."
+    return "FAILED" + (f": {why}" if why else "")
+
+
+def short_lines(one) -> list[str]:
+    """The short form of an :class:`~cistrack.fitting.from_observations.ObjectFit` (its ``repr``): the
+    object and outcome, the method, the observations used and rejected with the weighted RMS, the
+    fit epoch and the results folder."""
+    from cistrack import units
+
+    lines = [f"<ObjectFit {one.designation}: {_outcome(one)}"]
+    scen = one.scenario
+    if scen is not None:
+        iod = (one.seeding or {}).get("method") or scen.components["iod"].name
+        lines.append(f"  method: IOD '{iod}', filter '{scen.components['filter'].name}', least squares"
+                     + (f" at the {one.choices.epoch} observation" if one.result is not None else " (not made)"))
+    r = one.result
+    if r is not None:
+        n = len(one.run.context.measurements) if one.run is not None else r.n_used + r.n_rejected
+        epoch = units.format_utc(units.tu_to_utc(scen.epoch, r.epoch))[:19] + "Z"
+        lines.append(f"  observations: {n}, {r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}")
+        lines.append(f"  epoch: {epoch}")
+    lines.append(f"  results in {one.directory} (.report() for the full summary)>")
+    return lines

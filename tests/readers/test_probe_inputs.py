@@ -1,0 +1,124 @@
+"""Hostile inputs to `cistrack fit`: the same observations in two formats, TDM angles written in
+radians, an az/el CSV without sites, and files larger than the stated limit."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from cistrack.cli.main import main
+from cistrack.errors import ConfigError, MeasurementError
+from cistrack.fitting.observation_input import MAX_FILE_MB, MAX_FILE_MB_ENV, read_object_observations
+from cistrack.plugin.registry import default_registry
+from cistrack.runs.observation_files import read_observations, write_observations
+from cistrack.scenario.loading import builtin_scenario_path
+
+DATA = builtin_scenario_path("real-data").parent / "real_data"
+EPOCH = "2026-03-01T00:00:00Z"
+
+
+def _as_mpc80(tmp_path, shift_arcsec: float = 0.0):
+    """The shipped ADES observations written again as MPC 80-column (times to 1e-6 day), the
+    declinations moved by ``shift_arcsec``."""
+    ms = read_observations(DATA / "observations.psv", EPOCH)
+    ms.values[:, 1] += shift_arcsec * math.pi / 648_000
+    path = tmp_path / "observations.obs"
+    write_observations(path, ms, EPOCH, format="mpc80")
+    return path
+
+
+def _in_radians(tmp_path):
+    """The shipped TDM with every angle value written in radians."""
+    text = (DATA / "observations.tdm").read_text()
+    path = tmp_path / "radians.tdm"
+    path.write_text(re.sub(r"^(ANGLE_[12] = \S+ )(\S+)$", lambda m: f"{m[1]}{math.radians(float(m[2]))!r}", text,
+                           flags=re.M))
+    return path
+
+
+# -- the same observations given twice ------------------------------------------------------------
+
+def test_observations_given_as_ades_and_as_mpc_80_column_are_used_once(tmp_path):
+    objs = read_object_observations([DATA / "observations.psv", _as_mpc80(tmp_path)], default_registry())
+    assert len(objs[0].measurements) == 65
+
+
+def test_the_dropped_duplicates_are_counted_naming_both_files(tmp_path):
+    objs = read_object_observations([DATA / "observations.psv", _as_mpc80(tmp_path)], default_registry())
+    assert "observations.obs: 65 observations dropped as duplicates of those in observations.psv" in objs[0].notes[-1]
+    assert objs[0].measurements.meta["duplicates_dropped"] == 65
+
+
+def test_the_copy_kept_is_the_one_with_the_finer_times_whichever_file_comes_first(tmp_path):
+    objs = read_object_observations([_as_mpc80(tmp_path), DATA / "observations.psv"], default_registry())
+    ades = read_object_observations([DATA / "observations.psv"], default_registry())[0].measurements
+    np.testing.assert_array_equal(objs[0].measurements.times, ades.times)
+    np.testing.assert_array_equal(objs[0].measurements.values, ades.values)
+
+
+def test_two_files_at_one_site_and_time_with_positions_far_apart_are_refused_naming_both(tmp_path):
+    with pytest.raises(MeasurementError, match=r"observations\.psv and .*observations\.obs .*30(\.0)? arcsec apart"):
+        read_object_observations([DATA / "observations.psv", _as_mpc80(tmp_path, shift_arcsec=30.0)],
+                                 default_registry())
+
+
+# -- TDM angles in radians -------------------------------------------------------------------------
+
+def test_a_tdm_whose_angles_are_radians_is_refused_naming_the_file_and_the_keywords(tmp_path):
+    with pytest.raises(MeasurementError, match=r"radians\.tdm.*ANGLE_1/ANGLE_2.*look like radians.*degrees"):
+        read_observations(_in_radians(tmp_path), EPOCH)
+
+
+def test_fit_says_so_under_quiet_and_exits_with_an_input_error(tmp_path, capsys):
+    assert main(["fit", str(_in_radians(tmp_path)), "--out", str(tmp_path / "fit"), "--quiet"]) == 2
+    assert "look like radians" in capsys.readouterr().err
+    assert not (tmp_path / "fit").exists()
+
+
+def test_check_degrees_false_reads_such_a_file_as_degrees(tmp_path):
+    ms = read_observations(_in_radians(tmp_path), EPOCH, check_degrees=False)
+    assert len(ms) == 65 and float(np.max(ms.values[:, 0])) < math.radians(2 * math.pi)
+
+
+# -- an az/el CSV without sites ----------------------------------------------------------------------
+
+def test_an_azel_csv_without_a_site_column_is_refused_naming_the_file_and_the_column(tmp_path, capsys):
+    p = tmp_path / "azel.csv"
+    p.write_text("time_utc,azimuth_deg,elevation_deg\n2026-03-01T22:35:00Z,120.5,40.2\n"
+                 "2026-03-01T22:45:00Z,120.7,40.5\n")
+    assert main(["fit", str(p), "--out", str(tmp_path / "fit"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "azel.csv: no column 'site'" in err and "MPC observatory code" in err
+    assert "tdm" not in err.lower()
+
+
+# -- the file-size limit -----------------------------------------------------------------------------
+
+def test_the_default_limit_is_generous_for_survey_files():
+    assert MAX_FILE_MB == 50.0
+
+
+def test_a_file_over_the_limit_is_refused_before_reading_naming_its_size_and_how_to_raise_it(tmp_path,
+                                                                                             monkeypatch):
+    monkeypatch.setenv(MAX_FILE_MB_ENV, "0.001")
+    p = tmp_path / "big.psv"
+    p.write_bytes(b"x" * 2000)  # not even an observation file: it is never read
+    with pytest.raises(ConfigError, match=r"big\.psv: 0\.0 MB is larger than the 0\.001 MB limit.*"
+                                          r"--max-file-mb.*CISTRACK_MAX_FILE_MB"):
+        read_object_observations([p], default_registry())
+
+
+def test_max_file_mb_sets_the_limit_of_cistrack_fit(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv(MAX_FILE_MB_ENV, raising=False)
+    p = tmp_path / "obs.psv"
+    p.write_text((DATA / "observations.psv").read_text())
+    assert main(["fit", str(p), "--out", str(tmp_path / "fit"), "--quiet", "--max-file-mb", "0.001"]) == 2
+    assert "0.001 MB limit" in capsys.readouterr().err
+
+
+def test_a_limit_that_is_not_a_positive_number_is_refused_naming_the_variable(tmp_path, monkeypatch):
+    monkeypatch.setenv(MAX_FILE_MB_ENV, "lots")
+    with pytest.raises(ConfigError, match="CISTRACK_MAX_FILE_MB='lots': must be a positive number"):
+        read_object_observations([DATA / "observations.psv"], default_registry())

@@ -1,0 +1,37 @@
+"""A bad value in a study's ``[overrides]`` is told against the study file and the key, not
+against the built-in scenario it was applied to."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cistrack.errors import ConfigError
+from cistrack.studies.study import plan_runs
+
+
+def _study(tmp_path: Path, overrides: str) -> Path:
+    p = tmp_path / "mine.toml"
+    p.write_text(f'name = "mine"\nscenarios = ["quick"]\nseeds = [1]\n\n[overrides]\n{overrides}\n')
+    return p
+
+
+def test_a_bad_component_parameter_names_the_study_file_and_the_setting(tmp_path):
+    study = _study(tmp_path, 'filter = { name = "pgm", n_particles = -5 }')
+    with pytest.raises(ConfigError) as err:
+        plan_runs(study, tmp_path / "out")
+    msg = str(err.value)
+    assert msg.startswith(f"{study}: key 'overrides', setting filter.n_particles = -5")
+    assert "applied to scenario 'quick'" in msg and "must be >= 2" in msg
+
+
+def test_a_bad_top_level_value_names_the_study_file_and_the_key(tmp_path):
+    study = _study(tmp_path, "duration_days = -3")
+    with pytest.raises(ConfigError, match=rf"^{tmp_path}/mine\.toml: key 'overrides', setting duration_days = -3 "):
+        plan_runs(study, tmp_path / "out")
+
+
+def test_an_unknown_parameter_names_the_study_file_and_the_setting(tmp_path):
+    study = _study(tmp_path, "sensor = { nme = 3 }")
+    with pytest.raises(ConfigError, match=r"mine\.toml: key 'overrides', setting sensor\.nme = 3 .*unknown parameter"):
+        plan_runs(study, tmp_path / "out")
