@@ -1,20 +1,28 @@
-"""The worker threads that run compiled kernels on disjoint ranges of rows (GIL released).
+"""The worker threads that run compiled kernels on disjoint ranges of rows (GIL released), and
+the thread limit of the OpenMP and BLAS libraries during a run.
 
 Shared by the ensemble propagation (:mod:`cistrack.propagation`) and the compiled mixture
 densities (:mod:`cistrack.model.mixture_density`). Each row's numbers are computed by the same operations
 whichever thread runs it, so the thread count never changes a result.
+
+:func:`library_thread_limit` keeps the OpenMP and BLAS thread pools of every loaded library
+(numpy's and scipy's BLAS, scikit-learn's OpenMP, a plugin's own) to :func:`num_threads` inside
+a run, so ``$CISTRACK_NUM_THREADS`` bounds plugins too.
 """
 from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 
 from cistrack.errors import ConfigError
 
-__all__ = ["num_threads", "run_chunks"]
+__all__ = ["num_threads", "run_chunks", "library_thread_limit", "capped_threads"]
 
 _POOL: ThreadPoolExecutor | None = None
 _POOL_PID = -1
@@ -86,3 +94,80 @@ def run_chunks(kernel, n: int, args: tuple, chunks_per_worker: int = 8) -> None:
     finally:  # the helpers finish (or fail) before the caller's arrays are handed back
         for fut in helpers:
             fut.result()
+
+
+#: the variables an OpenMP or BLAS library reads when it loads: its thread count from then on
+_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+_API_VARIABLE = {"openmp": "OMP_NUM_THREADS", "openblas": "OPENBLAS_NUM_THREADS", "mkl": "MKL_NUM_THREADS",
+                 "blis": "BLIS_NUM_THREADS"}
+
+
+def _env_int(name: str, env: dict[str, str | None]) -> int | None:
+    """The first integer of ``$name`` ("4" or "4,2"), None when unset or not a positive integer."""
+    text = (env.get(name) or "").split(",")[0].strip()
+    return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else None
+
+
+@contextmanager
+def capped_threads(libraries: Iterable[Any], caps: dict[str, int]) -> Iterator[None]:
+    """Lower each threadpoolctl library controller in ``libraries`` to ``caps[user_api]`` threads
+    ("openmp", "blas") inside the block, then give each back its own count. A library already
+    at or below its cap is left alone: a tighter limit set around the block holds."""
+    lowered = []
+    try:
+        for lib in libraries:
+            cap = caps.get(lib.user_api)
+            count = lib.num_threads
+            if cap is not None and count > cap:
+                lib.set_num_threads(cap)
+                lowered.append((lib, count))
+        yield
+    finally:
+        for lib, count in reversed(lowered):
+            lib.set_num_threads(count)
+
+
+@contextmanager
+def library_thread_limit(n: int | None = None, *, blas: int | None = None) -> Iterator[int]:
+    """Keep OpenMP libraries to ``n`` threads and BLAS libraries to ``min(blas, n)`` inside the
+    block (``n`` default :func:`num_threads`; ``blas`` None: ``n``); yields ``n``.
+
+    Libraries already loaded are lowered through threadpoolctl (never raised). One first loaded
+    inside the block (a plugin importing scikit-learn at its first call) reads the limit from
+    ``$OMP_NUM_THREADS`` and friends, set for the block only, and is given back its usual count
+    at the end. OpenMP's limit holds on the calling thread and the threads it starts.
+
+    Raises :class:`ConfigError` for a bad ``$CISTRACK_NUM_THREADS``."""
+    from threadpoolctl import ThreadpoolController
+
+    n = num_threads() if n is None else n
+    caps = {"openmp": n, "blas": n if blas is None else max(1, min(blas, n))}
+    saved = {k: os.environ.get(k) for k in _THREAD_VARIABLES}
+    loaded = ThreadpoolController().lib_controllers
+    before = {lib.filepath for lib in loaded}
+    try:
+        for key in _THREAD_VARIABLES:
+            cap = caps["openmp" if key == "OMP_NUM_THREADS" else "blas"]
+            if (_env_int(key, saved) or cap + 1) > cap:
+                os.environ[key] = str(cap)
+        with capped_threads(loaded, caps):
+            yield n
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+        _give_back_late_libraries(before, saved)
+
+
+def _give_back_late_libraries(before: set[str], env: dict[str, str | None]) -> None:
+    """Libraries loaded inside :func:`library_thread_limit` get the thread count they would have
+    had without it: their own variable, else ``$OMP_NUM_THREADS``, else the usable CPUs."""
+    from threadpoolctl import ThreadpoolController
+
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    for lib in ThreadpoolController().lib_controllers:
+        if lib.filepath not in before:
+            own = _API_VARIABLE.get(lib.internal_api, "OMP_NUM_THREADS")
+            lib.set_num_threads(_env_int(own, env) or _env_int("OMP_NUM_THREADS", env) or cpus)

@@ -28,6 +28,7 @@ from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
+from cistrack.cli.text_width import cap_help_width, fit_row, wrap_lines, wrap_row
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -94,7 +95,8 @@ def _run_into(args, reg, scen, seed: int, out: Path, replaced: str):
     if replaced:
         say(f"  --overwrite: replacing the results in {out} ({replaced})")
     res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=out, progress=not args.quiet,
-                       log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part)
+                       log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part,
+                       residual_figure=True)
     _print_outcome(res.summary, out, args.quiet, out_)
     if args.rerun:
         out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
@@ -112,7 +114,7 @@ def _rerun_recorder(args, reg, scen):
 
 def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
     """The run's status, verdict, counts, final sigmas and errors, and its result files."""
-    from cistrack.evaluation.run_summary import count_lines
+    from cistrack.evaluation.run_summary import count_lines, final_lines
     from cistrack.evaluation.verdicts import verdict_lines
     from cistrack.results.store import results_line
 
@@ -124,13 +126,8 @@ def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
         out_(line)
     for line in count_lines(s):
         out_(line)
-    f = s.final
-    if f:
-        out_("  final per-axis sigma: position " + " / ".join(_fmt(f.get(k)) for k in ("sigma_x_km", "sigma_y_km", "sigma_z_km"))
-             + " km; velocity " + " / ".join(_fmt(f.get(k)) for k in ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")) + " cm/s")
-        if "pos_err_km" in f:
-            out_(f"  final error: position {_fmt(f['pos_err_km'])} km, velocity {_fmt(f['vel_err_ms'])} m/s, "
-                 f"NEES {_fmt(f['nees'])}, entropy {_fmt(f['entropy'])}")
+    for line in final_lines(s.final, _fmt):  # velocities in m/s throughout
+        out_(line)
     out_(results_line(out))  # only files that exist (a full disk may have kept some from being written)
 
 
@@ -186,12 +183,12 @@ def cmd_plugins(args) -> int:
     for kind in kinds:
         entries = reg.entries(kind)
         print(f"{kind} ({len(entries)})")
-        for e in entries:
-            print(f"  {e.name:<30} {e.distribution} {e.version:<8} {e.summary}")
+        for e in entries:  # one line per component: a long summary is cut ('cistrack plugins NAME' has it whole)
+            print(fit_row(f"  {e.name:<30} {e.distribution} {e.version:<8} ", e.summary))
     if reg.failures:
         print("plugins that failed to load:")
         for f in reg.failures:
-            print(f"  {f}")
+            print("\n".join(wrap_row("  ", str(f))))
     return 0
 
 
@@ -208,7 +205,7 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
         close = difflib.get_close_matches(name, every, n=1, cutoff=0.5)
         msg += f"; did you mean {close[0]!r}?" if close else f"; components: {', '.join(every)}"
         raise ConfigError(msg + " (cistrack plugins lists them all)")
-    print("\n\n".join(describe_component(e.kind, e.name, e.factory, e.source) for e in found))
+    print(wrap_lines("\n\n".join(describe_component(e.kind, e.name, e.factory, e.source) for e in found)))
     return 0
 
 
@@ -227,8 +224,11 @@ def cmd_export(args) -> int:
 
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
+    from cistrack.runs.progress import stage_log
+
     params = {} if args.step is None else {"step": args.step}
-    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force, **params)
+    out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force,
+                     log=None if args.quiet else stage_log("cistrack: "), **params)
     if args.force:
         why = export_refusal(args.run)
         if why:
@@ -257,10 +257,10 @@ def cmd_scenarios(args) -> int:
 
     print("scenarios (cistrack run NAME):")
     for name, desc in builtin_scenarios().items():
-        print(f"  {name:<28} {desc}")
+        print("\n".join(wrap_row(f"  {name:<28} ", desc)))
     print("studies (cistrack study run NAME):")
     for name, desc in builtin_studies().items():
-        print(f"  {name:<28} {desc}")
+        print("\n".join(wrap_row(f"  {name:<28} ", desc)))
     return 0
 
 
@@ -281,7 +281,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "other settings or another seed in --out (both refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
-    r.add_argument("--max-points", type=int, default=5000, help="particles logged per step in rerun")
+    r.add_argument("--max-points", type=int, default=2000, help="particles logged per step in rerun (each mixture component kept)")
     r.add_argument("--rows-per-part", type=int, default=None, metavar="N", help="steps per results part file (default 1000, or 10 s)")
     r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                    help="override a scenario value, validated like the file (repeatable), "
@@ -317,7 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_init_parser(sub)
     add_fit_parser(sub, export_parser=ex)
     add_predict_parser(sub)
-    return p
+    return cap_help_width(p)  # every help within MAX_WIDTH columns, whatever the terminal's width
 
 
 def _configure_logging(quiet: bool) -> None:
@@ -359,7 +359,13 @@ def main(argv: list[str] | None = None) -> int:
 
 def console_main() -> None:
     """The ``cistrack`` command: :func:`main`, then the end of the process (without interpreter
-    teardown after a run: :mod:`cistrack.cli.process_exit`)."""
+    teardown after a run: :mod:`cistrack.cli.process_exit`). Text the terminal's encoding cannot
+    show (a scenario named in Unicode under ``PYTHONIOENCODING=ascii`` or a C locale) is printed
+    as backslash escapes (``\\xef``), never an encoding error."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)  # absent on a stream that is not a text file
+        if reconfigure is not None:
+            reconfigure(errors="backslashreplace")
     exit_process(main())
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from cistrack.evaluation.custody import Verdict
 
-__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines"]
+__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines", "final_lines"]
 
 FINAL_KEYS: tuple[str, ...] = (
     "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
@@ -171,3 +171,28 @@ def count_lines(s: RunSummary) -> list[str]:
                "updates after it" if s.n_measurements_before_iod else f"{s.n_updates} filter updates")
     return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"
             + (f" (and {s.compile_time_s:.1f} s compiling, once per machine)" if s.compile_time_s >= 0.05 else "")]
+
+
+_SIGMA_POS = ("sigma_x_km", "sigma_y_km", "sigma_z_km")
+_SIGMA_VEL = ("sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms")
+_CMS_TO_MS = 0.01
+
+
+def final_lines(final: dict[str, float], fmt) -> list[str]:
+    """The final metrics (:attr:`RunSummary.final`) in words, positions in km and every velocity in
+    m/s (the stored per-axis velocity sigmas, cm/s, converted), the units said in a header line;
+    ``fmt`` formats one number (None as "-"). No lines without metrics."""
+    if not final:
+        return []
+
+    def ms(key: str) -> float | None:
+        v = final.get(key)
+        return None if v is None else float(v) * _CMS_TO_MS
+
+    lines = ["  final state (positions in km, velocities in m/s):",
+             "    per-axis sigma: position " + " / ".join(fmt(final.get(k)) for k in _SIGMA_POS) + " km, velocity "
+             + " / ".join(fmt(ms(k)) for k in _SIGMA_VEL) + " m/s"]
+    if "pos_err_km" in final:
+        lines.append(f"    error: position {fmt(final['pos_err_km'])} km, velocity {fmt(final.get('vel_err_ms'))} m/s, "
+                     f"NEES {fmt(final.get('nees'))}, entropy {fmt(final.get('entropy'))}")
+    return lines

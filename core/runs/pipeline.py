@@ -38,6 +38,7 @@ from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
+from cistrack.threads import library_thread_limit
 from cistrack.results.step_table import RowCollector, is_table_step
 from cistrack.runs.truth import Truth
 
@@ -167,17 +168,16 @@ def run_scenario(scenario: Scenario, *, options: RunOptions | None = None, **key
 
     ``blas_threads`` limits BLAS threads during the run (default 1): the linear algebra of a run
     is many small matrices, for which multi-threaded BLAS is slower (measured 150x on 6x6 solves
-    on a busy 2-core machine); the parallel work is the numba propagation. None leaves BLAS alone.
+    on a busy 2-core machine); the parallel work is the numba propagation. None: BLAS gets the
+    run's thread limit. The whole run, plugins included, runs within :func:`cistrack.threads.num_threads`
+    (``$CISTRACK_NUM_THREADS``) OpenMP and BLAS threads (:func:`cistrack.threads.library_thread_limit`).
 
     ``rows_per_part``: steps per results part file in ``output_dir`` (default
     :data:`cistrack.results.part_files.ROWS_PER_PART`; a part is also written every
     :data:`~cistrack.results.part_files.SECONDS_PER_PART` seconds); the merged tables do not depend on it.
     """
     opts = (options or RunOptions()).with_keywords(keywords)
-    if opts.blas_threads is None:
-        return _run(scenario, opts)
-    from threadpoolctl import threadpool_limits
-    with threadpool_limits(limits=opts.blas_threads, user_api="blas"):
+    with library_thread_limit(blas=opts.blas_threads):  # plugins' OpenMP and BLAS pools included
         return _run(scenario, opts)
 
 
@@ -251,6 +251,9 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
     if watch is not None:
         summary.maneuvers = watch.records(ctx)
     summary = finish_observers(pm, ctx, summary)
+    if opts.output_dir is not None and opts.residual_figure:  # drawn from the merged steps.parquet: after the results writer
+        from cistrack.runs.residual_figure import write_run_residual_figure
+        write_run_residual_figure(ctx, opts.output_dir, summary.status)
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)

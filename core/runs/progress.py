@@ -1,10 +1,29 @@
-"""A progress bar on stderr as an observer of a run's hooks."""
+"""Progress on stderr: a bar as an observer of a run's hooks, and stage lines for the commands
+that have no steps to count (an export, a fit's least squares).
+
+Both follow ``cistrack run``: the stage lines go to stderr, indented under the command's own first
+line, as the ``log`` callable that :func:`cistrack.runs.pipeline.run_scenario`, ``export_run`` and
+``fit_files`` take; ``--quiet`` (or ``progress=False``) passes no ``log`` and no bar is shown.
+"""
 from __future__ import annotations
+
+import sys
+from typing import Callable
 
 from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
 
-__all__ = ["ProgressBar"]
+__all__ = ["ProgressBar", "stage_log"]
+
+
+def stage_log(indent: str = "  ") -> Callable[[str], None]:
+    """A ``log`` callable that writes each stage message on its own line of stderr after ``indent``,
+    flushed at once (a person waiting sees it when the stage starts). ``sys.stderr`` is looked up
+    at each message, so a redirected stderr (a test, a notebook) receives it."""
+    def say(message: str) -> None:
+        print(f"{indent}{message}", file=sys.stderr, flush=True)
+
+    return say
 
 
 class ProgressBar:
@@ -14,8 +33,6 @@ class ProgressBar:
     """
 
     def __init__(self, run_id: str, total: int, custody=None) -> None:
-        import sys
-
         from tqdm.auto import tqdm
 
         self.custody = custody

@@ -37,8 +37,10 @@ class RunOptions:
     run_id : str or None            the scenario's run id when None
     keep_steps : bool               keep the steps themselves in the result
     log : callable or None          receives stage messages (a string each)
-    blas_threads : int or None      BLAS threads during the run; None leaves BLAS alone
+    blas_threads : int or None      BLAS threads during the run; None: the run's thread limit
     rows_per_part : int or None     steps per results part file (the default when None)
+    residual_figure : bool          with an ``output_dir``, draw its residuals.svg
+                                    (:mod:`cistrack.runs.residual_figure`; ~1 s with matplotlib's import)
     """
 
     seed: int | None = None
@@ -51,6 +53,7 @@ class RunOptions:
     log: Callable[[str], None] | None = None
     blas_threads: int | None = 1
     rows_per_part: int | None = None
+    residual_figure: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "observers", tuple(self.observers))

@@ -45,6 +45,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path, builtin_scenarios
+from cistrack.scenario.component_choice import choose_tables, keep_choice_table, recorded_tables
 from cistrack.plugin.component_tables import ComponentSpec, check_keys, component_spec, example_name, typed
 from cistrack.evaluation.custody import CustodyRule
 from cistrack.scenario.custody_table import custody_rule
@@ -145,7 +146,7 @@ def _merge_overrides(raw: dict, overrides: dict[str, Any] | None) -> dict:
         if key in COMPONENT_TABLES and isinstance(value, dict):
             old = raw.get(key, {})
             if "name" in value and value["name"] != old.get("name"):
-                raw[key] = copy.deepcopy(value)
+                raw[key] = keep_choice_table(old, value)
             else:
                 merged = dict(old)
                 merged.update(value)
@@ -182,6 +183,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     """Validate a scenario given as a dict (as read from TOML)."""
     reg = registry or default_registry()
     _check_tables(data, source, reg)
+    data, choices = choose_tables(data, COMPONENT_TABLES, reg, source)  # [filter.pgm]-style sub-tables
     top, epoch_text = _top_level(data, source)
     truth = data.get("truth", {})
     if not isinstance(truth, dict):
@@ -201,7 +203,7 @@ def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | No
     return Scenario(**top, components=components, truth_orbit=truth_orbit, truth_state=truth_state,
                     truth_dynamics=truth_dyn, truth_maneuvers=truth_maneuvers, custody=custody, **run, maneuvers=maneuvers,
                     measurements_file=measurements_file, measurements_reader=measurements_reader,
-                    observers=observers, source=source, raw=copy.deepcopy(data))
+                    observers=observers, source=source, raw=recorded_tables(data, choices))
 
 
 def _check_tables(data: Any, source: str, reg: Registry) -> None:

@@ -16,6 +16,7 @@ from typing import Any, Iterable
 
 from cistrack.errors import ConfigError
 from cistrack.scenario import toml_input
+from cistrack.scenario.component_choice import keep_choice_table
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -71,7 +72,7 @@ def merge_settings(tables: dict[str, Any], settings: dict[str, Any]) -> dict[str
         old = out.get(key)
         if isinstance(value, dict) and isinstance(old, dict):
             if "name" in value and value["name"] != old.get("name"):
-                out[key] = copy.deepcopy(value)
+                out[key] = keep_choice_table(old, value)  # the new component's own [TABLE.NAME] stays
             else:
                 out[key] = merge_settings(old, value)
         else:

@@ -1,0 +1,72 @@
+"""Keeping what the ``cistrack`` command prints within :data:`MAX_WIDTH` columns.
+
+Listings wrap a long description under its own column (:func:`wrap_row`) or, in a table of one
+line per row, cut it with ``...`` (:func:`fit_row`); help texts are wrapped by argparse at the
+terminal's width, at most :data:`MAX_WIDTH` (:func:`cap_help_width`).
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import textwrap
+
+__all__ = ["MAX_WIDTH", "wrap_row", "fit_row", "wrap_lines", "cap_help_width"]
+
+#: the widest line the command prints, in characters
+MAX_WIDTH = 120
+_ELLIPSIS = "..."  # ASCII: a terminal that cannot show Unicode still shows it in three columns
+
+
+def wrap_row(lead: str, text: str, width: int = MAX_WIDTH) -> list[str]:
+    """``lead`` (a padded name column) then ``text`` wrapped to ``width`` columns, each further
+    line indented to where ``text`` starts."""
+    indent = " " * len(lead)
+    lines = textwrap.wrap(text, width=width, initial_indent=lead, subsequent_indent=indent,
+                          break_on_hyphens=False)
+    return lines or [lead.rstrip()]
+
+
+def fit_row(lead: str, text: str, width: int = MAX_WIDTH) -> str:
+    """``lead + text`` on one line, ``text`` cut at a word and ended with ``...`` when the line
+    would be wider than ``width`` columns."""
+    line = lead + text
+    if len(line) <= width:
+        return line
+    room = max(0, width - len(lead) - len(_ELLIPSIS))
+    cut = text[:room]
+    if text[room:room + 1] != " " and " " in cut:  # a word would be cut: end at the one before
+        cut = cut.rsplit(" ", 1)[0]
+    return lead + cut.rstrip(" ,;:.") + _ELLIPSIS
+
+
+def wrap_lines(text: str, width: int = MAX_WIDTH) -> str:
+    """``text`` with each line wider than ``width`` wrapped, its continuation lines indented like
+    it (plus two spaces)."""
+    out: list[str] = []
+    for line in text.splitlines():
+        if len(line) <= width:
+            out.append(line)
+            continue
+        indent = line[:len(line) - len(line.lstrip())]
+        out += textwrap.wrap(line.strip(), width=width, initial_indent=indent, subsequent_indent=indent + "  ",
+                             break_on_hyphens=False)
+    return "\n".join(out)
+
+
+class _CappedHelpFormatter(argparse.HelpFormatter):
+    """argparse's help layout at the terminal's width, never wider than :data:`MAX_WIDTH`."""
+
+    def __init__(self, prog: str, *args, **kwargs):
+        kwargs.setdefault("width", min(shutil.get_terminal_size().columns, MAX_WIDTH) - 2)
+        super().__init__(prog, *args, **kwargs)
+
+
+def cap_help_width(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """``parser`` and each of its subcommands' parsers (at any depth) print their help within
+    :data:`MAX_WIDTH` columns; returns ``parser``."""
+    parser.formatter_class = _CappedHelpFormatter
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in set(action.choices.values()):
+                cap_help_width(sub)
+    return parser
