@@ -286,7 +286,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
 
 def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any] | Iterable[str] | None = None,
         out: str | Path | None = None, progress: bool = True, log: Callable[[str], None] | None = None,
-        registry: Registry | None = None) -> list[ObjectFit]:
+        registry: Registry | None = None, overwrite: bool = False) -> list[ObjectFit]:
     """Fit an orbit to each object in observation ``files`` (one path or several), as ``cistrack fit``
     does (docs/real-data.md), and return one :class:`ObjectFit` per object, in order of first
     appearance (``.designation``, ``.ok``, ``.result``: the :class:`cistrack.least_squares.FitResult`
@@ -297,11 +297,14 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     under it). ``progress``: progress on stderr (default), as ``cistrack fit`` shows it: a line per
     stage and the filter's progress bar; False is silent, as ``--quiet``. ``log``: receives the
     stage lines instead of stderr. ``registry``: the components to use (default: the installed plugins).
+    ``overwrite``: replace a run's results or another object's fit in ``out`` (refused otherwise, as
+    ``cistrack fit`` refuses without ``--overwrite``; an earlier fit of the same object is redone).
     """
     from cistrack.fitting.from_observations import fit_files
 
     paths = [files] if isinstance(files, (str, Path)) else list(files)
-    return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress)
+    return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress,
+                     overwrite=overwrite)
 
 
 def read_run(directory: str | Path) -> Run:

@@ -50,7 +50,7 @@ def cmd_fit(args) -> int:
     say = None if quiet else (lambda m: _eprint(f"  {m}"))
     with _file_size_limit(getattr(args, "max_file_mb", None)):
         results = fit_files(args.files, out=args.out, settings=args.set, registry=default_registry(), log=say,
-                            progress=not quiet)
+                            progress=not quiet, overwrite=args.overwrite)
     if not quiet:
         for one in results:
             for note in one.notes:
@@ -118,6 +118,9 @@ def add_fit_parser(sub, export_parser=None) -> None:
                         "parameter (measurements.reader.sigma_arcsec=0.5) or a fit setting (fit.epoch=middle, "
                         "fit.reject_sigma=4)")
     f.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
+    f.add_argument("--overwrite", action="store_true",
+                   help="replace a cistrack run's results or another object's fit in --out (an earlier fit "
+                        "of the same object is always redone)")
     f.add_argument("--max-file-mb", type=_positive_mb, default=None, metavar="MB",
                    help="largest observation file read, MB (default 50, or the environment variable "
                         "CISTRACK_MAX_FILE_MB); a larger file is refused before it is read")

@@ -56,6 +56,7 @@ from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
+from cistrack.fitting.fit_replacing import check_fit_replacing
 from cistrack.results.output_paths import check_output_dir
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 from cistrack.scenario.loading import Scenario, load_scenario, parse_scenario
@@ -454,7 +455,8 @@ def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
 
 def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
               settings: Iterable[str] | None = None, registry: Registry | None = None,
-              log: Callable[[str], None] | None = None, progress: bool = False) -> list[ObjectFit]:
+              log: Callable[[str], None] | None = None, progress: bool = False,
+              overwrite: bool = False) -> list[ObjectFit]:
     """Fit an orbit to each object observed in ``files`` (see the module docstring).
 
     Parameters
@@ -467,6 +469,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         (:func:`fit_choices`)
     log : receives one line per stage; ``progress``: progress on stderr, the filter's progress bar
         and, without ``log``, the stage lines (:func:`cistrack.runs.progress.stage_log`)
+    overwrite : replace a ``cistrack run``'s results or another object's fit in a directory
+        (refused otherwise: :func:`cistrack.fitting.fit_replacing.check_fit_replacing`); an earlier
+        fit of the same object is always redone
 
     Returns one :class:`ObjectFit` per object, in order of first appearance. Errors in the input
     (files, settings, output directory) raise before any run; a run or fit that fails is reported
@@ -486,11 +491,15 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         d = Path(out) if out is not None and len(objects) == 1 else (Path(out) / slug if out is not None
                                                                        else Path("runs") / slug)
         plans.append((obs, d))
-    for obs, d in plans:  # validate every scenario before the first run
+    where = "--out" if out is not None else "the results directory"
+    for obs, d in plans:  # validate every scenario and directory before the first run
         _scenario(obs, d / "observations.psv", scen_settings, reg)
+        replaced = check_fit_replacing(d, obs.designation, where, overwrite)
+        if replaced:
+            say(f"--overwrite: replacing {replaced} in {d}")
     results = []
     for obs, d in plans:
-        check_output_dir(d, "--out" if out is not None else "the results directory")
+        check_output_dir(d, where)
         results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
 
