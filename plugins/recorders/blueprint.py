@@ -29,7 +29,12 @@ __all__ = ["PLAYBACK_S", "RUN_VIEW_EYE", "TIMELINES", "axis_range_s", "camera_fo
 TIMELINES = ("utc", "step", "event")
 
 PLAYBACK_S = 60.0
-"""Seconds that playing a whole run takes at the speed the time panel opens with."""
+"""Seconds that playing a whole run takes at the speed the time panel opens with, in a viewer that
+draws at least 10 frames a second. Rerun (0.41) moves the time cursor by the speed times a frame's
+duration, that duration capped at 0.1 s, so a slower viewer plays slower in proportion: headless
+Chromium without a GPU (software rasterizer, about 1.5 s a frame on 2 busy cores) played Example 1
+about 15 times slower (docs/viewer.md). The speed is a property of the recording, not of the
+machine that shows it, so it is set for a viewer that keeps up."""
 
 RUN_VIEW_EYE = (1.8, -3.0, 1.7)
 """Camera of the run view in the estimate frame (units of the cloud's extent): from the radial,
@@ -37,7 +42,10 @@ negative along-track, cross-track side, far enough to see the cloud (most of it 
 and most of its 3-sigma ellipsoids."""
 
 RUN_VIEW_CONTENTS = ("/world/particles", "/world/components", "/world/estimate", "/world/truth/position",
-                     "/world/truth/trajectory", "/world/estimate_frame/**")
+                     "/world/estimate_frame/**")
+"""What the run view draws: the cloud and the estimate, the truth, and in the estimate frame its axes,
+labels, legend, line of sight and the truth trajectory near the estimate (the whole trajectory is
+the system view's)."""
 SYSTEM_VIEW_CONTENTS = ("/world/earth", "/world/moon", "/world/libration", "/world/truth/**",
                         "/world/estimate", "/world/observer", "/world/particles", "/world/line_of_sight",
                         "/world/observers/**")

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["CLOUD_QUANTILE", "MAX_ASPECT", "MIN_UNIT_KM", "ric_axes", "cloud_units_km", "to_frame",
-           "line_through_frame", "scale_label"]
+           "line_through_frame", "path_through_frame", "scale_label", "screen_plane_points"]
 
 CLOUD_QUANTILE = 0.98
 """One unit along an axis is this quantile of the particles' distances from the estimate along
@@ -120,3 +120,55 @@ def scale_label(scale_km: float) -> str:
     if s >= 100.0:
         return f"{s:,.0f} km"
     return f"{s:.3g} km"
+
+
+def screen_plane_points(eye: np.ndarray, right_up: np.ndarray) -> np.ndarray:
+    """Points (N, 3) of the frame that a camera at ``eye`` (3,), looking at the origin with the
+    frame's z axis up, sees at ``right_up`` (N, 2): offsets to the right and up on the screen, in
+    frame units, in the plane through the origin facing the camera (labels placed there keep
+    their place on the screen while the frame follows the cloud)."""
+    e = np.asarray(eye, dtype=float).reshape(3)
+    forward = -e / np.linalg.norm(e)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    ru = np.asarray(right_up, dtype=float).reshape(-1, 2)
+    return ru[:, :1] * right + ru[:, 1:] * up
+
+
+def path_through_frame(path_km: np.ndarray, mean_km: np.ndarray, axes: np.ndarray, units_km: np.ndarray,
+                       reach: float = 3.0, centre: int | None = None) -> np.ndarray:
+    """The part of a path near the estimate, in the frame's coordinates (M, 3), M = 0 when no
+    point of it comes within ``reach`` frame units (along every axis) of the estimate.
+
+    ``path_km`` (N, 3): points along the path in time order, km. The part is the run of
+    consecutive points within ``reach`` about the point ``centre`` (an index; None: the point
+    nearest to the estimate in frame units),
+    extended on each side to where the path leaves the box of half-side ``reach``: the path seen
+    where the cloud is, never its far parts, whose frame coordinates (the Moon's distance over a
+    unit of a few km, 10^5 units) would streak across the view."""
+    q = to_frame(path_km, mean_km, axes, units_km)
+    size = np.max(np.abs(q), axis=1)
+    centre = int(np.argmin(size)) if centre is None else int(centre)
+    if not size[centre] <= reach:
+        return np.zeros((0, 3))
+    lo, hi = centre, centre
+    while lo > 0 and size[lo - 1] <= reach:
+        lo -= 1
+    while hi < len(q) - 1 and size[hi + 1] <= reach:
+        hi += 1
+    part = [q[lo:hi + 1]]
+    if lo > 0:
+        part.insert(0, _to_box(q[lo], q[lo - 1], reach)[None])
+    if hi < len(q) - 1:
+        part.append(_to_box(q[hi], q[hi + 1], reach)[None])
+    return np.concatenate(part)
+
+
+def _to_box(inside: np.ndarray, outside: np.ndarray, reach: float) -> np.ndarray:
+    """Where the segment from ``inside`` (within the box of half-side ``reach``) to ``outside``
+    leaves the box (3,)."""
+    d = outside - inside
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(d != 0, (np.sign(d) * reach - inside) / d, np.inf)
+    return inside + min(1.0, float(np.min(t))) * d

@@ -7,7 +7,8 @@ that a run lacks is logged, so a ballistic run without a detector records none o
 ==================================  ==========================================================
 ``maneuvers/truth``                 text: each truth burn ("burn: 1 m/s in-track (rtn-moon)") at its time
 ``world/truth/burns``               the truth burns in the 3-D scene: an arrow along the velocity jump
-                                    at the burn's position, labelled (static)
+                                    at the burn's position (static)
+``world/truth/burns/labels``        each burn's name, off the Earth–Moon line (static)
 ``series/nees/truth_burns/<k>``     a vertical (orange) line across the NEES panel at burn ``k``'s time
 ``series/maneuver/statistic``       the detector's statistic (-log10 p) at every update
 ``series/maneuver/threshold``       its threshold, a constant line beside it
@@ -40,7 +41,8 @@ rr = LazyModule("rerun")
 
 __all__ = ["ManeuverMarks", "STATISTIC", "THRESHOLD", "DETECTIONS", "NEES_DETECTIONS", "ESTIMATED_BURNS",
            "NEES_BURNS", "STATISTIC_BURNS", "TRUTH_LOG", "DETECTION_LOG", "ESTIMATE_LOG", "BURN_ARROWS",
-           "STATISTIC_COLOUR", "burn_text", "estimate_text"]
+           "BURN_LABELS", "BURN_LABEL_OFFSET_KM", "STATISTIC_COLOUR", "burn_label_positions", "burn_text",
+           "estimate_text"]
 
 STATISTIC = "series/maneuver/statistic"
 THRESHOLD = "series/maneuver/threshold"
@@ -53,6 +55,7 @@ TRUTH_LOG = "maneuvers/truth"
 DETECTION_LOG = "maneuvers/detections"
 ESTIMATE_LOG = "maneuvers/estimates"
 BURN_ARROWS = "world/truth/burns"
+BURN_LABELS = "world/truth/burns/labels"
 
 STATISTIC_COLOUR = (60, 130, 255)
 THRESHOLD_COLOUR = (150, 150, 150)
@@ -69,6 +72,21 @@ _POINT_STYLES = {DETECTIONS: (DETECTION_COLOUR, "detection", "diamond"),
 
 BURN_ARROW_KM = 30_000.0
 """Length of a truth burn's arrow in the 3-D scene (the system view spans about 450,000 km)."""
+
+
+BURN_LABEL_OFFSET_KM = 60_000.0
+"""How far a burn's name sits from its arrow, across the Earth–Moon line (scene y, km): the
+system view shows that line from above with the Earth, Moon and L1..L5 labels on it, and a
+label at a burn near the Moon would cover the Moon's (60,000 km is about 100 pixels there)."""
+
+
+def burn_label_positions(origins_km: np.ndarray) -> np.ndarray:
+    """Where the names of burns at ``origins_km`` (N, 3), km, scene frame, are drawn (N, 3):
+    :data:`BURN_LABEL_OFFSET_KM` beyond each burn in y, on its side of the Earth–Moon line
+    (the +y side for a burn on it)."""
+    p = np.asarray(origins_km, dtype=float).reshape(-1, 3).copy()
+    p[:, 1] += np.where(p[:, 1] < 0.0, -BURN_LABEL_OFFSET_KM, BURN_LABEL_OFFSET_KM)
+    return p
 
 
 def _finite(value: Any) -> float | None:
@@ -170,8 +188,11 @@ class ManeuverMarks:
             vectors.append(jump / norm * BURN_ARROW_KM)
             labels.append(imp.label or "burn")
         if origins:
-            rec.log(BURN_ARROWS, rr.Arrows3D(origins=origins, vectors=vectors, labels=labels, show_labels=True,
-                                             colors=[BURN_COLOUR], radii=rr.Radius.ui_points(2.5)), static=True)
+            rec.log(BURN_ARROWS, rr.Arrows3D(origins=origins, vectors=vectors, colors=[BURN_COLOUR],
+                                             radii=rr.Radius.ui_points(2.5)), static=True)
+            rec.log(BURN_LABELS, rr.Points3D(burn_label_positions(np.array(origins)), labels=labels,
+                                             show_labels=True, colors=[BURN_COLOUR],
+                                             radii=rr.Radius.ui_points(1.0)), static=True)
 
     # -- each step with metrics -------------------------------------------------------------------
     def log_step(self, rec, step, nees_log10: float | None) -> None:

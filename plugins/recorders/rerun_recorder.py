@@ -13,15 +13,17 @@ What is logged (entity paths; positions in km, synodic frame, Earth–Moon baryc
 ``world/truth/trajectory``      the dense truth trajectory (static)
 ``world/truth/position``        the truth at each step
 ``world/particles``             the belief's particles at each event, class id = component
-``world/components``            n-sigma position ellipsoids of the mixture components (weights as
-                                hidden labels, shown on hover)
+``world/components``            n-sigma position ellipsoids of the ``max_ellipsoids`` heaviest mixture
+                                components (weights as hidden labels, shown on hover)
 ``world/estimate``              the mixture mean
 ``world/estimate_frame``        transform of the run view's frame: radial / along-track / cross-track
                                 about the mean, one unit per axis = the cloud's extent along it
                                 (:mod:`.estimate_frame`)
 ``world/estimate_frame/axes``   the frame's three axes, one unit long, and ``.../axis_labels`` their
-                                names and units in km ("radial ±4,755 km"), past the tips
-``world/estimate_frame/...``    ``line_of_sight``: the line of sight near the estimate, frame units
+                                names and units in km ("radial ±4,755 km"), in the view's corner
+``world/estimate_frame/...``    ``line_of_sight``: the line of sight near the estimate, frame units;
+                                ``truth_path``: the truth trajectory near the estimate; ``legend``:
+                                each component's colour and weight (:mod:`.run_view_log`)
 ``world/observer``              the observer's position at each step
 ``world/line_of_sight``         the measured line of sight at update steps (cleared otherwise)
 ``world/observers/<key>/...``   every observer, its lines of sight and exclusion cones (observers_view)
@@ -63,12 +65,14 @@ from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 
 from .blueprint import default_blueprint
+from .decimation import heaviest_components, subsample_indices
 from .estimate_frame import line_through_frame
 from .maneuver_marks import ManeuverMarks
 from .observers_view import log_observers
 from .run_extents import system_points_km, utc_range_s
 from .run_series import log10_series
-from .run_view_log import log_estimate_frame, log_run_view_styles, log_series
+from .run_view_log import (log_estimate_frame, log_legend, log_run_view_styles, log_series, log_truth_path,
+                           truth_path_in_frame)
 from .viewer_process import (LOOPBACK, ViewerUnavailableError, check_viewer, find_viewer_executable,
                              start_viewer)
 from .view_frame import VIEW_FRAMES, ViewFrame
@@ -97,19 +101,6 @@ _PALETTE = np.array([
 ], dtype=np.uint8)
 
 
-def subsample_indices(n: int, max_points: int, seed: int = 0) -> np.ndarray | None:
-    """Rows kept when a cloud of ``n`` particles is capped at ``max_points``.
-
-    Returns None when nothing is dropped, else ``max_points`` sorted distinct indices drawn with
-    ``numpy.random.default_rng([seed, n])``: the same rows for every step with the same ``n``,
-    so a cloud that is not resampled keeps its particles' identities between steps.
-    """
-    if n <= max_points:
-        return None
-    rng = np.random.default_rng([int(seed), int(n)])
-    return np.sort(rng.choice(n, size=max_points, replace=False))
-
-
 def _port_in_use(port: int) -> bool:
     """Whether 127.0.0.1:``port`` cannot be bound now (another server holds it)."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
@@ -135,7 +126,12 @@ class RerunRecorder(Component):
         Start the native viewer (bound to 127.0.0.1:``viewer_port``) and stream to it; raises
         :class:`ViewerUnavailableError` at construction when no viewer or no display exists.
     max_points : int
-        At most this many particles are logged per event (a seeded, deterministic subsample).
+        At most this many particles are logged per event: a seeded, deterministic subsample in
+        which every mixture component keeps particles (at least 2 % of those logged, or all of
+        its own), the rest drawn in proportion to the components' sizes (:mod:`.decimation`).
+    max_ellipsoids : int
+        Position ellipsoids of at most this many mixture components are logged per event, the
+        heaviest ones (their particles are all coloured and counted in the legend).
     serve_port : int
         Port of the gRPC server for ``serve`` (rerun's default is 9876).
     viewer_port : int
@@ -157,9 +153,9 @@ class RerunRecorder(Component):
     kind = "recorder"
 
     def __init__(self, path: str | None = None, serve: bool = False, spawn: bool = False,
-                 max_points: int = 20_000, serve_port: int = 9876, viewer_port: int = 9877,
+                 max_points: int = 2_000, serve_port: int = 9876, viewer_port: int = 9877,
                  ellipsoid_sigma: float = 3.0, subsample_seed: int = 0, frame: str = "synodic",
-                 overwrite: bool = False) -> None:
+                 overwrite: bool = False, max_ellipsoids: int = 4) -> None:
         if path is not None and not isinstance(path, (str, os.PathLike)):
             self._fail("path", path, "must be a file path (str) or None")
         self.path = None if path is None else os.fspath(path)
@@ -170,6 +166,7 @@ class RerunRecorder(Component):
         self.spawn = bool(spawn)
         self.overwrite = bool(overwrite)
         self.max_points = check_int(self, "max_points", max_points, minimum=1)
+        self.max_ellipsoids = check_int(self, "max_ellipsoids", max_ellipsoids, minimum=0)
         self.serve_port = check_int(self, "serve_port", serve_port, minimum=0, maximum=65535)
         self.viewer_port = check_int(self, "viewer_port", viewer_port, minimum=1, maximum=65535)
         self.ellipsoid_sigma = check_positive(self, "ellipsoid_sigma", ellipsoid_sigma)
@@ -205,6 +202,7 @@ class RerunRecorder(Component):
         self._files: list[str] = []
         self._mu = 0.0
         self._n_ranks = 0
+        self._truth: tuple[np.ndarray, np.ndarray] | None = None  # trajectory (N, 3) km, times (N,)
 
     # -- pickling: the stream and the viewer process stay in the process that made them ----------
     def __getstate__(self) -> dict[str, Any]:
@@ -253,6 +251,7 @@ class RerunRecorder(Component):
         self._rec = self._open(run)
         self._event = 0
         self._n_ranks = 0
+        self._truth = None
         self._mu = system_mu(run.dynamics)
         self._log_scene(self._rec, run)
         self._marks.log_start(self._rec, run)
@@ -309,7 +308,8 @@ class RerunRecorder(Component):
         return self.path
 
     def _open(self, run) -> rr.RecordingStream:
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4(), send_properties=True)
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4(), send_properties=True,
+                                 batcher_config=None if self.serve or self.spawn else _file_batching())
         rec.set_log_time_enabled(False)  # wall-clock time says nothing about the run
         sinks: list[Any] = []
         target = self._file_for(str(run.run_id))
@@ -361,6 +361,7 @@ class RerunRecorder(Component):
                                                    radii=rr.Radius.ui_points(4.0)), static=True)
         if run.has_truth:
             truth = view.states(run.truth_states, run.truth_times)
+            self._truth = (truth[:, :3] * LU_KM, np.asarray(run.truth_times, dtype=float))
             rec.log("world/truth/trajectory",
                     rr.LineStrips3D([truth[:, :3] * LU_KM],
                                     colors=[(230, 230, 230)], radii=rr.Radius.ui_points(1.0)),
@@ -378,19 +379,14 @@ class RerunRecorder(Component):
 
     def _log_cloud(self, rec: rr.RecordingStream, states: np.ndarray, labels: np.ndarray | None,
                    mixture, t: float = 0.0) -> np.ndarray:
-        """Log the particles (at most ``max_points``) in km; returns their positions (N, 3) km."""
+        """Log the particles (at most ``max_points``, every component kept) in km; returns their
+        positions (N, 3) km."""
         states = np.asarray(states, dtype=float)
-        keep = subsample_indices(states.shape[0], self.max_points, self.subsample_seed)
-        shown = states if keep is None else states[keep]
-        pos = shown[:, :3] if self._view is None else self._view.states(shown, t)[:, :3]
-        if labels is not None:
-            lab = np.asarray(labels) if keep is None else np.asarray(labels)[keep]
-            cls = np.where(lab < 0, UNASSIGNED_CLASS, lab).astype(np.uint16)
-        elif mixture is not None and mixture.n_components > 1:
-            full = states if keep is None else states[keep]
-            cls = most_likely_component(full, mixture).astype(np.uint16)
-        else:
-            cls = np.zeros(pos.shape[0], dtype=np.uint16)
+        cls = _particle_classes(states, labels, mixture)
+        keep = subsample_indices(states.shape[0], self.max_points, self.subsample_seed, labels=cls)
+        if keep is not None:
+            states, cls = states[keep], cls[keep]
+        pos = states[:, :3] if self._view is None else self._view.states(states, t)[:, :3]
         km = (pos * LU_KM).astype(np.float32)
         rec.log("world/particles", rr.Points3D(km, class_ids=cls, radii=rr.Radius.ui_points(2.0)))
         return km.astype(float)
@@ -408,9 +404,11 @@ class RerunRecorder(Component):
         self._log_components(rec, mix, t)
         frame = self._log_estimate(rec, mix, cloud_km, t)
         if step.truth is not None:
-            rec.log("world/truth/position", rr.Points3D(self._view.states(step.truth, t)[:, :3] * LU_KM,
-                                                        colors=[(255, 255, 255)],
+            truth_km = self._view.states(step.truth, t)[:, :3] * LU_KM
+            rec.log("world/truth/position", rr.Points3D(truth_km, colors=[(255, 255, 255)],
                                                         radii=rr.Radius.ui_points(6.0)))
+            if self._truth is not None:
+                log_truth_path(rec, truth_path_in_frame(*self._truth, t, truth_km[0], frame))
         obs = np.asarray(run.sensor.observer_position(float(step.t)), dtype=float).reshape(3)
         rec.log("world/observer", rr.Points3D(self._view.positions(obs, t) * LU_KM, colors=[(0, 230, 120)],
                                               radii=rr.Radius.ui_points(5.0)))
@@ -435,16 +433,18 @@ class RerunRecorder(Component):
                 colors=[(170, 170, 170)], labels=["Moon"], fill_mode=rr.components.FillMode.Solid))
 
     def _log_components(self, rec: rr.RecordingStream, mix, t: float) -> None:
-        """Each mixture component's position ellipsoid (km, ``ellipsoid_sigma``) with its weight."""
+        """The position ellipsoids (km, ``ellipsoid_sigma``) of the ``max_ellipsoids`` heaviest
+        components, each with its weight, and the run view's legend of every component."""
         view = self._view
-        means = view.states(mix.means, t)
-        centers, half, quat = position_ellipsoids(means, view.covariances(mix.means, mix.covariances, t),
-                                                  self.ellipsoid_sigma)
-        m = mix.n_components
+        shown = heaviest_components(mix.weights, self.max_ellipsoids)
+        means = view.states(mix.means[shown], t)
+        centers, half, quat = position_ellipsoids(
+            means, view.covariances(mix.means[shown], mix.covariances[shown], t), self.ellipsoid_sigma)
         rec.log("world/components", rr.Ellipsoids3D(
-            centers=centers, half_sizes=half, quaternions=quat, class_ids=np.arange(m, dtype=np.uint16),
-            labels=[f"w={w:.3f}" for w in mix.weights], show_labels=False,
+            centers=centers, half_sizes=half, quaternions=quat, class_ids=shown.astype(np.uint16),
+            labels=[f"w={mix.weights[i]:.3f}" for i in shown], show_labels=False,
             fill_mode=rr.components.FillMode.MajorWireframe))
+        log_legend(rec, np.asarray(mix.weights, dtype=float))
 
     def _log_estimate(self, rec: rr.RecordingStream, mix, cloud_km: np.ndarray, t: float) -> tuple:
         """The mixture mean (km) and its local frame; returns (mean (3,) km, axes, units) of
@@ -482,6 +482,28 @@ class RerunRecorder(Component):
         rec.log("world/estimate_frame/line_of_sight", rr.LineStrips3D(
             [line_through_frame(seg[0], seg[1], mean, axes, units)], colors=[(0, 230, 120)],
             radii=rr.Radius.ui_points(1.0)))
+
+
+FILE_FLUSH_BYTES = 4 << 20
+"""Bytes of logged rows gathered into chunks at a time for a recording to a file only (rerun's
+default is 2 MiB or every 0.2 s, which cuts a run of a few seconds into thousands of small chunks,
+each with its own header: a larger file that the viewer loads more slowly)."""
+
+
+def _file_batching() -> rr.ChunkBatcherConfig:
+    """Batching for a recording nobody watches live: by size only (:data:`FILE_FLUSH_BYTES`)."""
+    return rr.ChunkBatcherConfig(flush_tick=timedelta(hours=1), flush_num_bytes=FILE_FLUSH_BYTES)
+
+
+def _particle_classes(states: np.ndarray, labels: np.ndarray | None, mixture) -> np.ndarray:
+    """Class id (N,) uint16 of each particle: its component label (:data:`UNASSIGNED_CLASS` for a
+    clusterer's noise label < 0), else its most likely component, else 0."""
+    if labels is not None:
+        lab = np.asarray(labels)
+        return np.where(lab < 0, UNASSIGNED_CLASS, lab).astype(np.uint16)
+    if mixture is not None and mixture.n_components > 1:
+        return most_likely_component(states, mixture).astype(np.uint16)
+    return np.zeros(states.shape[0], dtype=np.uint16)
 
 
 def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:

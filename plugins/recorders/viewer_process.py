@@ -1,9 +1,13 @@
 """The rerun viewer as a separate process: finding its executable, checking for a display,
-starting it on 127.0.0.1 and waiting until it (not another process) listens."""
+starting it on 127.0.0.1 and waiting until it (not another process) listens, and tying a child's
+life to ours (:func:`parent_death_preexec`)."""
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import importlib.util
 import os
+import signal
 import shutil
 import socket
 import subprocess
@@ -15,8 +19,10 @@ from cistrack.errors import CistrackError
 
 from .ports import LOOPBACK, listened_by
 
-__all__ = ["LOOPBACK", "ViewerUnavailableError", "find_viewer_executable", "check_viewer", "start_viewer",
-           "wait_for_port"]
+__all__ = ["LOOPBACK", "ViewerUnavailableError", "find_viewer_executable", "check_viewer",
+           "parent_death_preexec", "start_viewer", "wait_for_port"]
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class ViewerUnavailableError(CistrackError, RuntimeError):
@@ -33,6 +39,29 @@ def find_viewer_executable() -> str | None:
             if exe.is_file() and os.access(exe, os.X_OK):
                 return str(exe)
     return shutil.which("rerun")
+
+
+def parent_death_preexec():
+    """A ``preexec_fn`` for :class:`subprocess.Popen` that has Linux kill the child (SIGKILL) when
+    the process starting it dies, however it dies (``kill -9`` included), so that a child server
+    never outlives us holding its port; None where the system has no such request (not Linux).
+
+    The request is ``prctl(PR_SET_PDEATHSIG, SIGKILL)``, made in the child between fork and exec
+    (it survives the exec). Linux sends the signal when the *thread* that started the child ends,
+    so start such children from a thread that lives as long as they should (the main thread).
+    A parent that died before the request was made is noticed (the child's parent id changed)
+    and the child exits at once."""
+    if not sys.platform.startswith("linux"):
+        return None
+    libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+    prctl = libc.prctl  # looked up here: the child only calls it
+    parent = os.getpid()
+
+    def arm() -> None:
+        if prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0 or os.getppid() != parent:
+            os._exit(1)
+
+    return arm
 
 
 def _has_display() -> bool:

@@ -8,7 +8,9 @@ viewer address opens its welcome page). Both servers listen on 127.0.0.1 only.
 
 The web port is checked before anything starts (an integer from 1 to 65535, not in use by another
 process), and the URL is returned only once the viewer we started is the process listening on it,
-so it never opens another process's viewer.
+so it never opens another process's viewer. The viewer process dies with the process that started
+it, even one killed with SIGKILL (Linux: :func:`.viewer_process.parent_death_preexec`), so it never
+keeps the port after ``cistrack view`` is gone.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from cistrack.interfaces.limits import check_port
 
 from .ports import LOOPBACK, PortInUseError, ensure_port_free, in_use_message
 from .recording_server import RecordingServer
-from .viewer_process import ViewerUnavailableError, find_viewer_executable
+from .viewer_process import ViewerUnavailableError, find_viewer_executable, parent_death_preexec
 from .viewer_process import wait_for_port as _wait_for_port
 
 __all__ = ["ServedRecording", "serve_recording", "viewer_url"]
@@ -91,7 +93,8 @@ def serve_recording(path: str | Path, web_port: int = 9090, timeout_s: float = 3
     # the viewer's log goes to a file: a pipe nobody reads would block it once full
     with tempfile.TemporaryFile() as log:
         viewer = subprocess.Popen([exe, "--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(web_port),
-                                   http.url], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log)
+                                   http.url], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log,
+                                  preexec_fn=parent_death_preexec())
         if _wait_for_port(web_port, viewer, timeout_s):
             return ServedRecording(viewer_url(web_port, http.url), http.url, web_port, http, viewer)
         _stop(viewer)

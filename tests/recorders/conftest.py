@@ -19,6 +19,7 @@ from cistrack.scenario.loading import parse_scenario
 NRHO_9_2 = np.array([1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0])
 N_PARTICLES = 300
 SMALL_MAX_POINTS = 50
+FEW_ELLIPSOIDS = 2
 
 
 @dataclass
@@ -64,6 +65,7 @@ class EventLog:
 class RecordedRun:
     full_rrd: Path
     small_rrd: Path
+    few_ellipsoids_rrd: Path
     result: object
     table: object
     log: EventLog
@@ -90,6 +92,7 @@ def recorded_run(tmp_path_factory) -> RecordedRun:
     d = tmp_path_factory.mktemp("recorded")
     full = reg.create("recorder", "rerun", path=str(d / "full.rrd"), max_points=100_000)
     small = reg.create("recorder", "rerun", path=str(d / "small.rrd"), max_points=SMALL_MAX_POINTS)
+    few = reg.create("recorder", "rerun", path=str(d / "few.rrd"), max_ellipsoids=FEW_ELLIPSOIDS)
     log = EventLog()
-    res = run_scenario(scen, registry=reg, observers=[full, small, log], output_dir=d / "out")
-    return RecordedRun(d / "full.rrd", d / "small.rrd", res, read_steps(d / "out"), log, reg)
+    res = run_scenario(scen, registry=reg, observers=[full, small, few, log], output_dir=d / "out")
+    return RecordedRun(d / "full.rrd", d / "small.rrd", d / "few.rrd", res, read_steps(d / "out"), log, reg)

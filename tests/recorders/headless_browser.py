@@ -11,6 +11,7 @@ pictures come from :mod:`.viewer_shots`):
 from __future__ import annotations
 
 import base64
+import contextlib
 import json
 import os
 import shutil
@@ -79,13 +80,49 @@ def _press(pipe: _Pipe, session: str, chord: str) -> None:
     pipe.call("Input.dispatchKeyEvent", {"type": "keyUp", **base}, session)
 
 
-def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: int = 1600,
-                height: int = 1000, settle_s: float = 25.0, after_keys_s: float = 6.0,
-                key_interval_s: float = 0.3, chromium: str | None = None) -> list[Path]:
-    """Open ``url``, wait ``settle_s`` seconds for it to draw, then for each ``(png, keys)`` of
-    ``shots`` press the key chords ``keys`` in order (e.g. ``["Ctrl+ArrowRight"]`` steps the
-    viewer's time to the next logged time, ``["End"]`` to the end), wait ``after_keys_s`` seconds
-    when keys were pressed, and write a PNG to ``png``. Key chords are ``key_interval_s`` apart."""
+class Page:
+    """One page of a headless Chromium started by :func:`open_page`: press keys, take pictures."""
+
+    def __init__(self, pipe: _Pipe, session: str):
+        self._pipe, self._session = pipe, session
+
+    def press(self, chord: str) -> None:
+        """Press and release a key chord such as "End", " " or "Ctrl+ArrowRight"."""
+        _press(self._pipe, self._session, chord)
+
+    def run_command(self, words: str, wait_s: float = 3.0) -> None:
+        """Run a command of the viewer's command palette: Ctrl+K opens it, ``words`` pick the
+        command ("end of timeline" is "Go to end of timeline"), Enter runs it."""
+        for kind, key, code, vk, mods, text in (("rawKeyDown", "k", "KeyK", 75, _MODIFIERS["Ctrl"], None),
+                                                ("keyUp", "k", "KeyK", 75, _MODIFIERS["Ctrl"], None)):
+            self._pipe.call("Input.dispatchKeyEvent", {"type": kind, "key": key, "code": code, "modifiers": mods,
+                                                       "windowsVirtualKeyCode": vk, "nativeVirtualKeyCode": vk},
+                            self._session)
+        time.sleep(wait_s)
+        self._pipe.call("Input.insertText", {"text": words}, self._session)
+        time.sleep(wait_s)
+        enter = {"key": "Enter", "code": "Enter", "windowsVirtualKeyCode": 13, "nativeVirtualKeyCode": 13}
+        self._pipe.call("Input.dispatchKeyEvent", {"type": "keyDown", "text": "\r", **enter}, self._session)
+        self._pipe.call("Input.dispatchKeyEvent", {"type": "keyUp", **enter}, self._session)
+
+    def png(self, wait_s: float = 30.0) -> bytes:
+        """A PNG of the page as it is drawn now (retried for up to ``wait_s`` seconds while the
+        page that is loading is not yet there to draw)."""
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                data = self._pipe.call("Page.captureScreenshot", {"format": "png"}, self._session, timeout_s=120.0)
+                return base64.b64decode(data["data"])
+            except RuntimeError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.5)
+
+
+@contextlib.contextmanager
+def open_page(url: str, *, width: int = 1600, height: int = 1000, chromium: str | None = None):
+    """Headless Chromium (software rendering) showing ``url`` in a ``width`` x ``height`` page;
+    yields a :class:`Page` right after navigating (nothing waited for) and stops Chromium after."""
     exe = chromium or find_chromium()
     if exe is None:
         raise FileNotFoundError("chromium is not installed (Debian: apt-get install -y chromium)")
@@ -111,20 +148,7 @@ def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: i
                   {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}, session)
         pipe.call("Page.enable", {}, session)
         pipe.call("Page.navigate", {"url": url}, session)
-        time.sleep(settle_s)
-        written = []
-        for png, keys in shots:
-            for chord in keys:
-                _press(pipe, session, chord)
-                time.sleep(key_interval_s)
-            if keys:
-                time.sleep(after_keys_s)
-            data = pipe.call("Page.captureScreenshot", {"format": "png"}, session)["data"]
-            out = Path(png)
-            out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_bytes(base64.b64decode(data))
-            written.append(out)
-        return written
+        yield Page(pipe, session)
     finally:
         if proc is not None:
             proc.terminate()
@@ -133,6 +157,29 @@ def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: i
             except subprocess.TimeoutExpired:
                 proc.kill()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: int = 1600,
+                height: int = 1000, settle_s: float = 25.0, after_keys_s: float = 6.0,
+                key_interval_s: float = 0.3, chromium: str | None = None) -> list[Path]:
+    """Open ``url``, wait ``settle_s`` seconds for it to draw, then for each ``(png, keys)`` of
+    ``shots`` press the key chords ``keys`` in order (e.g. ``["Ctrl+ArrowRight"]`` steps the
+    viewer's time to the next logged time, ``["End"]`` to the end), wait ``after_keys_s`` seconds
+    when keys were pressed, and write a PNG to ``png``. Key chords are ``key_interval_s`` apart."""
+    written = []
+    with open_page(url, width=width, height=height, chromium=chromium) as page:
+        time.sleep(settle_s)
+        for png, keys in shots:
+            for chord in keys:
+                page.press(chord)
+                time.sleep(key_interval_s)
+            if keys:
+                time.sleep(after_keys_s)
+            out = Path(png)
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_bytes(page.png())
+            written.append(out)
+    return written
 
 
 def screenshot(url: str, out_png: str | Path, *, width: int = 1600, height: int = 1000,

@@ -93,7 +93,21 @@ def test_the_burn_arrow_starts_at_the_truth_and_points_along_its_velocity_jump(b
     vec = component(row, "Arrows3D:vectors")[0]
     assert np.linalg.norm(vec) == pytest.approx(mm.BURN_ARROW_KM, rel=1e-6)
     assert vec @ imp.dv / (np.linalg.norm(vec) * np.linalg.norm(imp.dv)) == pytest.approx(1.0, abs=1e-6)
-    assert row.components["Arrows3D:labels"] == ["burn: 1 m/s in-track (rtn-moon)"]
+
+
+def test_the_burn_is_named_off_the_earth_moon_line_where_the_moon_label_sits(burn_run):
+    res, ent, _, _ = burn_run
+    (arrow,) = ent[f"/{mm.BURN_ARROWS}"]
+    assert "Arrows3D:labels" not in arrow.components or not arrow.components["Arrows3D:labels"]
+    (row,) = ent[f"/{mm.BURN_LABELS}"]
+    assert row.components["Points3D:labels"] == ["burn: 1 m/s in-track (rtn-moon)"]
+    at = component(row, "Points3D:positions")[0]
+    origin = component(arrow, "Arrows3D:origins")[0]
+    moon = component(ent["/world/moon"][0], "Ellipsoids3D:centers")[0]
+    # the system view looks down on the x-y plane: screen distance is the x-y distance
+    assert abs(at[1] - origin[1]) == pytest.approx(mm.BURN_LABEL_OFFSET_KM)
+    assert np.linalg.norm((at - moon)[:2]) >= mm.BURN_LABEL_OFFSET_KM - abs(origin[1])
+    assert abs(at[1]) > abs(origin[1])  # moved away from the line of Earth, Moon and L1..L5 labels
 
 
 def test_the_statistic_and_its_threshold_are_series_at_every_update(burn_run):

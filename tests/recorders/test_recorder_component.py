@@ -41,6 +41,8 @@ def test_registry_builds_the_recorder_with_the_cli_parameters(registry, tmp_path
     ({"path": "x.rrd", "ellipsoid_sigma": -1.0}, "ellipsoid_sigma"),
     ({"path": "x.rrd", "serve_port": 70000}, "serve_port"),
     ({"path": 3}, "path"),
+    ({"path": "x.rrd", "max_ellipsoids": -1}, "max_ellipsoids"),
+    ({"path": "x.rrd", "max_ellipsoids": 1.5}, "max_ellipsoids"),
 ])
 def test_bad_parameters_are_named(params, name):
     with pytest.raises(ParameterError, match=name):

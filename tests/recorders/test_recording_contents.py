@@ -13,7 +13,7 @@ from cistrack.plugins.recorders.rerun_recorder import subsample_indices
 from cistrack.plugins.recorders.scene import EARTH_RADIUS_KM, MOON_RADIUS_KM
 from cistrack.units import LU_KM, TU_S
 
-from .conftest import N_PARTICLES, SMALL_MAX_POINTS
+from .conftest import FEW_ELLIPSOIDS, N_PARTICLES, SMALL_MAX_POINTS
 from .rrd_reading import component, last_per_step, read_entities
 
 
@@ -96,12 +96,32 @@ def test_particles_are_coloured_by_component_label(entities, recorded_run):
 
 def test_max_points_logs_the_seeded_subsample(recorded_run):
     rows = _by_event(read_entities(recorded_run.small_rrd)["/world/particles"])
-    keep = subsample_indices(N_PARTICLES, SMALL_MAX_POINTS, 0)
-    assert keep.shape == (SMALL_MAX_POINTS,)
     for row, ev in zip(rows, recorded_run.log.events):
         assert ev.states.shape[0] == N_PARTICLES
+        keep = subsample_indices(N_PARTICLES, SMALL_MAX_POINTS, 0, labels=ev.labels)
+        assert keep.shape == (SMALL_MAX_POINTS,)
         np.testing.assert_array_equal(component(row, "Points3D:positions").astype(np.float32),
                                       _km32(ev.states[keep]))
+
+
+def test_max_points_keeps_particles_of_every_component(recorded_run):
+    rows = _by_event(read_entities(recorded_run.small_rrd)["/world/particles"])
+    labelled = [(r, e) for r, e in zip(rows, recorded_run.log.events) if e.labels is not None]
+    assert labelled
+    for row, ev in labelled:
+        shown = np.asarray(row.components["Points3D:class_ids"])
+        assert set(shown.tolist()) == set(np.asarray(ev.labels).tolist())
+
+
+def test_max_ellipsoids_logs_the_heaviest_components_ellipsoids(recorded_run):
+    rows = _by_event(read_entities(recorded_run.few_ellipsoids_rrd)["/world/components"])
+    events = recorded_run.log.events
+    assert len(rows) == len(events) and max(e.weights.size for e in events) > FEW_ELLIPSOIDS
+    for row, ev in zip(rows, events):
+        heaviest = sorted(np.argsort(-ev.weights, kind="stable")[:FEW_ELLIPSOIDS].tolist())
+        assert [int(i) for i in row.components["Ellipsoids3D:class_ids"]] == heaviest
+        np.testing.assert_allclose(component(row, "Ellipsoids3D:centers"), ev.means[heaviest, :3] * LU_KM,
+                                   rtol=1e-6)
 
 
 def _series_match_table(entities, table, entity_prefix, column_prefix, names):

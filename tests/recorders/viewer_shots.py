@@ -9,19 +9,24 @@ panels on the right).
 
 Run as a script to write the README pictures:
     .venv/bin/python tests/recorders/viewer_shots.py RUN.rrd docs/img
-which writes docs/img/viewer_start.png, viewer_middle.png and viewer_end.png (in 256 colours).
+which writes docs/img/viewer_start.png, viewer_middle.png and viewer_end.png (in 256 colours);
+with ``--timing`` it first measures, in a page of its own, how long the recording takes to load
+and to play (:func:`timings`) and prints the numbers as JSON.
 """
 from __future__ import annotations
 
+import io
 import socket
+import time
 from pathlib import Path
 
 import numpy as np
 
 SHOTS = ("start", "middle", "end")
 
-RUN_VIEW = (0.01, 0.59, 0.08, 0.58)
-"""x0, x1, y0, y1 of the run view's drawing area (page fractions)."""
+RUN_VIEW = (0.13, 0.59, 0.08, 0.58)
+"""x0, x1, y0, y1 of the run view's drawing area (page fractions), right of its legend: the
+legend's dots and labels are in the components' colours (the cloud is drawn at the centre)."""
 
 POSITION_PANEL = (0.62, 0.98, 0.07, 0.19)
 """x0, x1, y0, y1 of the first time-series panel's plot (page fractions)."""
@@ -67,6 +72,103 @@ def take(rrd: str | Path, out_dir: str | Path, *, settle_s: float = 30.0) -> dic
         pngs = screenshots(served.url, [(out / f"viewer_{s}.png", ["Ctrl+ArrowRight"] * steps[s]) for s in SHOTS],
                            settle_s=settle_s, key_interval_s=KEY_INTERVAL_S)
     return dict(zip(SHOTS, pngs))
+
+
+POLL_S = 2.0
+"""Seconds between two pictures while loading or playing is timed."""
+
+
+def _image(png: bytes) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+
+def curve_end(img: np.ndarray) -> int:
+    """Rightmost column of the position panel holding a curve pixel (-1 without one): the last
+    time loaded, since the panel's x axis spans the whole run from the start."""
+    r = region(img, POSITION_PANEL).astype(int)
+    cols = np.nonzero(((r.max(axis=2) - r.min(axis=2)) > 60).any(axis=0))[0]
+    return int(cols.max()) if cols.size else -1
+
+
+def cursor_column(img: np.ndarray) -> int | None:
+    """Column of the position panel where the time cursor is: the one with the most dark grey
+    pixels (the cursor is a line of (93, 92, 92), two pixels wide, in rerun 0.41), if they cover
+    more than half of its height (None otherwise)."""
+    r = region(img, POSITION_PANEL).astype(int)
+    dark = ((r.max(axis=2) < 130) & (r.max(axis=2) - r.min(axis=2) < 12)).sum(axis=0)
+    col = int(np.argmax(dark))
+    return col if dark[col] > 0.5 * r.shape[0] else None
+
+
+def _time_loading(page, max_s: float) -> tuple[float, float, int]:
+    """Seconds from navigating until the viewer first lays out the recording's panels (the
+    position panel's white plot area) and until the series reach their last time with the cloud
+    drawn (the first picture from which nothing more arrives); also that last column."""
+    t0 = time.monotonic()
+    seen: list[tuple[float, int, bool, bool]] = []
+    while time.monotonic() - t0 < max_s:
+        img = _image(page.png())
+        laid_out = region(img, POSITION_PANEL).mean() > 200
+        seen.append((time.monotonic() - t0, curve_end(img), bool(cloud_mask(img).sum() > 50), bool(laid_out)))
+        if len(seen) >= 4 and seen[-1][1] >= 0 and len({s[1] for s in seen[-4:]}) == 1:
+            break
+        time.sleep(POLL_S)
+    last = max(s[1] for s in seen)
+    up = next((t for t, _, _, laid_out in seen if laid_out), float("nan"))
+    loaded = next((t for t, e, cloud, _ in seen if e >= last - 2 and cloud), float("nan"))
+    return up, loaded, last
+
+
+def _time_playing(page, end_col: int, max_s: float) -> dict:
+    """Play from the start (Space) until the cursor reaches ``end_col`` or ``max_s`` passes: the
+    seconds, the fraction of the run played, and the whole run's playing time it implies."""
+    start = cursor_column(_image(page.png()))
+    page.press(" ")
+    t0 = time.monotonic()
+    col = start
+    while time.monotonic() - t0 < max_s:
+        time.sleep(POLL_S)
+        col = cursor_column(_image(page.png()))
+        if col is not None and col >= end_col - 2:
+            break
+    elapsed = time.monotonic() - t0
+    page.press(" ")
+    frac = (col - start) / max(end_col - start, 1) if None not in (col, start) else float("nan")
+    return {"played_s": round(elapsed, 1), "fraction_played": round(frac, 3),
+            "whole_run_s": round(elapsed / frac, 1) if frac > 0 else None}
+
+
+def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 150.0) -> dict:
+    """Load and playback times of ``rrd`` in headless Chromium (software rendering, 1600 x 1000):
+    ``viewer_up_s`` from opening the URL until the viewer lays out the panels, ``load_s`` until all
+    of the run is shown (both to within :data:`POLL_S` and the time a picture takes); ``whole_run_s``: how long
+    playing the whole run takes at the speed the viewer opens with (measured over at most
+    ``max_play_s`` and extrapolated); ``end_key_moves_to_end``: whether pressing End after Home
+    puts the time cursor at the end (not in rerun 0.41's web viewer); ``palette_moves_to_end``:
+    whether the command palette's "Go to end of timeline" does (Ctrl+K, "end of timeline", Enter)."""
+    from cistrack.plugins.recorders.web_viewer import serve_recording
+
+    from .headless_browser import open_page
+
+    with serve_recording(rrd, web_port=free_port()) as served, open_page(served.url) as page:
+        up_s, load_s, end_col = _time_loading(page, max_load_s)
+        out = {"viewer_up_s": round(up_s, 1), "load_s": round(load_s, 1),
+               **_time_playing(page, end_col, max_play_s)}
+        page.press("Home")
+        time.sleep(3 * POLL_S)
+        home = cursor_column(_image(page.png()))
+        page.press("End")
+        time.sleep(3 * POLL_S)
+        end = cursor_column(_image(page.png()))
+        page.run_command("end of timeline")
+        time.sleep(3 * POLL_S)
+        palette = cursor_column(_image(page.png()))
+        out.update(cursor_after_home=home, cursor_after_end=end, cursor_after_palette=palette, curves_end=end_col,
+                   end_key_moves_to_end=end is not None and end >= end_col - 2,
+                   palette_moves_to_end=palette is not None and palette >= end_col - 2)
+    return out
 
 
 def region(img: np.ndarray, box: tuple[float, float, float, float]) -> np.ndarray:
@@ -123,6 +225,7 @@ def raised_fraction(img: np.ndarray) -> float:
 
 
 if __name__ == "__main__":
+    import json
     import sys
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
@@ -130,6 +233,8 @@ if __name__ == "__main__":
 
     from PIL import Image
 
+    if "--timing" in sys.argv[3:]:
+        print(json.dumps(viewer_shots.timings(sys.argv[1])), flush=True)
     for name, png in viewer_shots.take(sys.argv[1], sys.argv[2]).items():
         # 256 colours: a quarter of the size, no visible change for the README
         Image.open(png).convert("RGB").quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(png, optimize=True)
