@@ -12,7 +12,7 @@ a fresh process. With ``--baseline`` (another installation's ``cistrack``, e.g. 
 before a change) the two run alternately, A B A B ..., so that both see the same background
 load, and the table adds the ratio of the medians. Prints the machine, then per command the
 wall time (median, mean, min) and the CPU time (user + system of the child, all its threads:
-the steadier measure on a loaded machine). The children run without
+the steadier measure on a loaded machine; median and range). The children run without
 ``PYTHONDONTWRITEBYTECODE`` so that the warm-up leaves bytecode as an installed package has.
 Not a test: timings depend on the machine and its load.
 """
@@ -65,7 +65,7 @@ def _fmt(samples: list[tuple[float, float]]) -> str:
     wall = [w for w, _ in samples]
     cpu = [c for _, c in samples]
     return (f"{statistics.median(wall):8.3f} {statistics.mean(wall):7.3f} {min(wall):7.3f} "
-            f"{statistics.median(cpu):8.3f}")
+            f"{statistics.median(cpu):8.3f} {f'{min(cpu):.2f}-{max(cpu):.2f}':>9}")
 
 
 def main() -> None:
@@ -85,9 +85,10 @@ def main() -> None:
     try:
         new = _commands(here, tmp / "new")
         base = _commands(args.baseline, tmp / "base") if args.baseline else None
-        head = f"{'command':<32} {'wall med':>8} {'mean':>7} {'min':>7} {'cpu med':>8}"
+        head = f"{'command':<32} {'wall med':>8} {'mean':>7} {'min':>7} {'cpu med':>8} {'cpu range':>9}"
         if base:
-            head += f" | {'base wall':>9} {'mean':>7} {'min':>7} {'cpu med':>8} | {'ratio wall':>10} {'cpu':>5}"
+            head += (f" | {'base wall':>8} {'mean':>7} {'min':>7} {'cpu med':>8} {'cpu range':>9} | "
+                     f"{'ratio wall':>10} {'cpu':>5}")
         print(head)
         for label in new:
             if args.only_run and not label.startswith("cistrack run"):

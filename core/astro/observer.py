@@ -20,12 +20,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import datetime
 
-import erfa
 import numpy as np
 
 from cistrack.astro.kept_by_time import kept_or_evaluated
 from cistrack.astro.sites import Site
+from cistrack.lazy import LazyModule
 from cistrack.units import parse_utc
+
+erfa = LazyModule("erfa")  # on first use: the command line and a CR3BP run do not need ERFA
 
 __all__ = ["Site", "ObserverGeometry", "ObserverState", "site_itrs_km", "neu_basis", "AU_KM", "C_KMS"]
 

@@ -38,10 +38,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import erfa
 import numpy as np
 
 from cistrack.astro.observer import C_KMS, ObserverState
+from cistrack.lazy import LazyModule
+
+erfa = LazyModule("erfa")  # on first use: a run without the real sky does not need ERFA
 
 __all__ = ["SkyCorrections", "astrometric_vector", "astrometric_radec", "apparent_azel",
            "refract_elevation", "unrefract_elevation", "standard_pressure_hpa", "unit_vectors_gcrs"]

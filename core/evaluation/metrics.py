@@ -8,7 +8,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.special import gammainc
 
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.model.belief import Belief
@@ -93,6 +92,8 @@ def hdr_level(belief: Belief, lp_truth: float, lp_samples: np.ndarray, nees_trut
     ``lp_truth`` and ``lp_samples`` (N,) are log densities under ``belief.mixture``."""
     mix = belief.mixture
     if mix.n_components == 1:
+        from scipy.special import gammainc  # on use: importing scipy.special costs ~0.1-0.3 s
+
         return float(gammainc(0.5 * mix.dim, 0.5 * max(nees_truth, 0.0)))
     w = belief.samples.weights
     above = (lp_samples > lp_truth).astype(float)

@@ -13,7 +13,6 @@ the scenario's epoch (the one special case: the epoch is a property of the scena
 from __future__ import annotations
 
 import copy
-import difflib
 import inspect
 import types
 import typing
@@ -75,6 +74,8 @@ def check_keys(table: dict, allowed: set[str], source: str, where: str) -> None:
     for key in table:
         if key not in allowed:
             msg = f"{source}: {where}: unknown key {key!r}; allowed keys: {', '.join(sorted(allowed))}"
+            import difflib  # on use: only an unknown name needs it
+
             close = difflib.get_close_matches(key, list(allowed), n=1)
             if close:
                 msg += f". Did you mean {close[0]!r}?"
@@ -153,6 +154,8 @@ def _unknown_parameter(key: str, specs: dict, what: str) -> None:
     """Raise the error for a key that is not a constructor parameter: the allowed ones, and the
     closest name."""
     msg = f"{what}; allowed: {', '.join(specs) or '(none)'}"
+    import difflib  # on use: only an unknown name needs it
+
     close = difflib.get_close_matches(key, list(specs), n=1)
     if close:
         msg += f". Did you mean {close[0]!r}?"

@@ -10,7 +10,6 @@ built-in components (distribution ``cistrack``).
 """
 from __future__ import annotations
 
-import difflib
 import logging
 import os
 import traceback
@@ -160,6 +159,8 @@ class Registry:
     def unknown_message(self, kind: str, name: Any) -> str:
         avail = self.names(kind)
         msg = f"unknown {kind} {name!r}; available: {', '.join(avail) if avail else '(none registered)'}"
+        import difflib  # on use: only an unknown name needs it
+
         close = difflib.get_close_matches(str(name), avail, n=1, cutoff=0.5)
         if close:
             msg += f". Did you mean {close[0]!r}?"

@@ -40,7 +40,7 @@ class RunOptions:
     blas_threads : int or None      BLAS threads during the run; None: the run's thread limit
     rows_per_part : int or None     steps per results part file (the default when None)
     residual_figure : bool          with an ``output_dir``, draw its residuals.svg
-                                    (:mod:`cistrack.runs.residual_figure`; ~1 s with matplotlib's import)
+                                    (:mod:`cistrack.runs.residual_figure`; a few ms)
     """
 
     seed: int | None = None

@@ -2,7 +2,6 @@
 descriptions and paths."""
 from __future__ import annotations
 
-import difflib
 import sys
 from importlib import resources
 from pathlib import Path
@@ -24,6 +23,8 @@ def builtin_scenario_path(name: str) -> Path:
     if not p.is_file():
         avail = sorted(builtin_scenarios())
         msg = f"no built-in scenario {name!r}; built-in scenarios: {', '.join(avail)}"
+        import difflib  # on use: only an unknown name needs it
+
         close = difflib.get_close_matches(name, avail, n=1)
         if close:
             msg += f". Did you mean {close[0]!r}?"

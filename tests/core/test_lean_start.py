@@ -2,8 +2,9 @@
 
 `cistrack --help` and `cistrack plugins` run in a fraction of a second only if importing
 cistrack and filling the registry leaves scikit-learn, numba, rerun, matplotlib, filterpy,
-astropy, Dask, pyarrow and urllib.request unloaded; they load when a component is built or used. Each check runs in a
-fresh interpreter, since this test process has long since imported everything.
+astropy, ERFA, Dask, pyarrow and urllib.request unloaded; they load when a component is built or
+used. A run with its results and residual figure loads neither matplotlib nor pandas (issue 51).
+Each check runs in a fresh interpreter, since this test process has long since imported everything.
 """
 from __future__ import annotations
 
@@ -17,13 +18,15 @@ import pytest
 HEAVY = ("sklearn", "numba", "rerun", "matplotlib", "filterpy", "astropy", "dask",
          "pyarrow",          # ~35 ms: only writing or reading results needs it
          "urllib.request",   # ~12 ms: xml.sax.saxutils imports it; the ADES XML writer escapes itself
-         "numpy.random")     # ~20 ms: numpy loads it on first use
+         "numpy.random",     # ~20 ms: numpy loads it on first use
+         "erfa",             # ~15 ms: the real sky's, loaded on its first use (issue 51)
+         "difflib")          # ~5 ms: only an unknown name's suggestion needs it (issue 51)
 
 
 @functools.lru_cache(maxsize=None)  # one fresh interpreter per probe, shared by the parametrised cases
-def _loaded_after(code: str) -> list[str]:
+def _loaded_after(code: str, modules: tuple[str, ...] = HEAVY) -> list[str]:
     probe = (f"import sys\n{code}\n"
-             f"print(__import__('json').dumps([m for m in {HEAVY!r} if m in sys.modules]))")
+             f"print(__import__('json').dumps([m for m in {modules!r} if m in sys.modules]))")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -90,5 +93,39 @@ def test_a_pgm_run_loads_neither_scikit_learn_nor_filterpy_nor_scipy_stats(tmp_p
              " if m in sys.modules]))")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
-    # numba: the probe can see a load; matplotlib: the run draws its residuals.svg
-    assert json.loads(out.stdout.strip().splitlines()[-1]) == ["matplotlib", "numba"]
+    # numba: the probe can see a load
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == ["numba"]
+
+
+# Issue 51: what a command-line run with results and its residual figure does not need
+RUN_LAZY = ("matplotlib",        # ~0.8 s to import: residuals.svg is written as text
+            "pandas",            # ~0.35 s: pyarrow's to_numpy and read_table (pyarrow.dataset) import it
+            "pyarrow.dataset",   # pq.read_table's; a plain file reads through ParquetFile
+            "pyarrow.compute",
+            "erfa")              # the real sky's (core/astro/observer.py, sky.py): not a CR3BP run's
+
+
+@functools.lru_cache(maxsize=None)
+def _loaded_by_a_run(out: str) -> tuple[list[str], bool]:
+    probe = ("import json, os, sys\n"
+             "from cistrack.cli.main import main\n"
+             f"assert main(['run', 'quick', '--set', 'duration_days=1.5', '--quiet', '--out', {out!r}]) == 0\n"
+             f"print(json.dumps([[m for m in {RUN_LAZY!r} if m in sys.modules],"
+             f" os.path.exists(os.path.join({out!r}, 'residuals.svg'))]))")
+    res = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    loaded, figure = json.loads(res.stdout.strip().splitlines()[-1])
+    return loaded, figure
+
+
+@pytest.mark.parametrize("library", RUN_LAZY)
+def test_a_run_that_writes_its_results_and_residual_figure_does_not_load(library, tmp_path_factory):
+    loaded, figure = _loaded_by_a_run(str(tmp_path_factory.getbasetemp() / "lean-run"))
+    assert figure  # the figure was drawn: the probe covers its code
+    assert library not in loaded
+
+
+def test_importing_the_run_pipeline_loads_no_scipy():
+    """scipy.special (~0.1-0.3 s with scipy's array-API layer) loads when a metric first needs it:
+    ``import cistrack.runs.pipeline`` (the Python API's run) does not pay for it up front."""
+    assert _loaded_after("import cistrack.runs.pipeline, cistrack.cli.main", ("scipy", "scipy.special")) == []
