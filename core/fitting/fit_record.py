@@ -133,7 +133,8 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         data["filter"] = {"name": scen.components["filter"].name, "iod": scen.components["iod"].name,
                           "status": s.status, "failure": s.failure,
                           "verdict": getattr(s.verdict, "kind", None), "verdict_reason": getattr(s.verdict, "reason", None),
-                          "final_epoch_utc": _utc(scen, belief.epoch)}
+                          "final_epoch_utc": _utc(scen, belief.epoch),
+                          "n_observations": int(getattr(one, "filter_rows", 0) or (len(ms) if ms is not None else 0))}
     if getattr(one, "undetermined", None):
         data["undetermined"] = one.undetermined
     if r is None:

@@ -9,10 +9,13 @@ For each object in the files (:mod:`cistrack.fitting.observation_input`):
    observation file (the merged observations, written into the results directory), then the
    ``--set`` items; it runs through :func:`cistrack.runs.pipeline.run_scenario`, which writes
    the usual results files;
-2. the filter's final estimate (at the last observation) is propagated to the fit epoch and
-   refined by :func:`cistrack.least_squares.fit_orbit` over the whole arc, without a prior by default
-   (the filter's covariance comes from the same observations: as a prior it would count them
-   twice); ``--set fit.prior=filter`` uses it anyway;
+2. the filter's final estimate is propagated to the fit epoch and refined by
+   :func:`cistrack.least_squares.fit_orbit` over the whole arc, without a prior by default (the
+   filter's covariance comes from the same observations: as a prior it would count them twice);
+   ``--set fit.prior=filter`` uses it anyway. By default the filter runs over the first hours
+   only (:mod:`cistrack.fitting.early_seed`; their observations in :data:`EARLY_FILE`), and over
+   every observation when the least squares from there does not give a clean fit
+   (``--set fit.filter_span=all``: always);
 3. ``fit.json``, ``residuals.csv`` and a residual plot per site are written
    (:mod:`cistrack.fitting.fit_record`, :mod:`cistrack.fitting.residual_plots`).
 
@@ -83,19 +86,27 @@ SHORT_ARC_HOURS = 24.0
 """A fit over observations spanning less than this says that the orbit is poorly determined."""
 _EPOCHS = ("last", "middle", "first")
 _PRIORS = ("none", "filter")
+_FILTER_SPANS = ("early", "all")
+EARLY_FILE = "observations-early"
+"""The observations the filter ran over when it took the first hours only (:mod:`.early_seed`),
+written beside ``observations.psv`` (the run's ``scenario.toml`` names it)."""
 
 
 @dataclass(frozen=True)
 class FitChoices:
     """The ``[fit]`` settings: ``epoch`` ("last", "middle" or "first" observation), ``prior``
     ("none" or "filter"), the :class:`FitOptions` of the least squares and ``lov`` (sigmas: the
-    line of variations out to that many sigmas each side, every half sigma; 0 = none)."""
+    line of variations out to that many sigmas each side, every half sigma; 0 = none) and
+    ``filter_span`` ("early": the least squares starts from the filter run over the first
+    hours only when that fit is clean, :mod:`cistrack.fitting.early_seed`; "all": the filter
+    runs over every observation)."""
 
     epoch: str = "last"
     prior: str = "none"
     options: FitOptions = field(default_factory=FitOptions)
     lov: float = 0.0
     arcs: ArcSettings = field(default_factory=ArcSettings)
+    filter_span: str = "early"
 
 
 def fit_choices(table: dict[str, Any]) -> FitChoices:
@@ -107,6 +118,11 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     epoch = opts.pop("epoch", "last")
     prior = opts.pop("prior", "none")
     lov = opts.pop("lov", 0.0)
+    span = opts.pop("filter_span", "early")
+    if span not in _FILTER_SPANS:
+        raise ConfigError(f"--set fit.filter_span={span!r}: must be 'early' (default: the filter over the "
+                          "first half day seeds the least squares when that fit is clean) or 'all' (the filter over "
+                          "every observation)")
     if isinstance(lov, bool) or not isinstance(lov, (int, float)) or not (lov == 0 or 0.5 <= lov <= 20):
         raise ConfigError(f"--set fit.lov={lov!r}: must be 0 (default: none) or a number of sigmas from 0.5 "
                           "to 20 (the line of variations out to that many sigmas each side)")
@@ -119,10 +135,10 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     known = set(FitOptions.__dataclass_fields__)
     unknown = sorted(set(opts) - known)
     if unknown:
-        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, arcs, arc_gap_days, link_gap_days, "
+        raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, filter_span, arcs, arc_gap_days, link_gap_days, "
                           + ", ".join(sorted(known)))
     try:
-        return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs)
+        return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs, span)
     except (TypeError, ValueError, CistrackError) as exc:
         raise ConfigError(f"--set fit.*: {exc}") from None
 
@@ -154,6 +170,8 @@ class ObjectFit:
                                 and rates on the sky, the admissible region's ranges and range
                                 rates; :func:`cistrack.fitting.determination.lone_tracklet_report`);
                                 empty otherwise
+    filter_rows : int           how many of the first observations the filter ran over when it
+                                took the first hours only (:mod:`.early_seed`); 0: all of them
     """
 
     designation: str
@@ -171,6 +189,7 @@ class ObjectFit:
     determination: Any = None
     events: Any = None
     undetermined: dict = field(default_factory=dict)
+    filter_rows: int = 0
 
     @property
     def ok(self) -> bool:
@@ -329,6 +348,65 @@ def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Reg
     return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
 
 
+def _attempt_early(one: ObjectFit, early: Scenario, registry: Registry, progress: bool,
+                   log: Callable[[str], None] | None) -> tuple[Any, FitResult, str, str] | None:
+    """(run, fit, "", "") from the filter run over the first hours (``early``, into the results
+    directory; :mod:`cistrack.fitting.early_seed`), the least squares over all the observations of
+    ``one.scenario`` from its final estimate; None when the run fails or the fit does not converge
+    or looks like a maneuver (:func:`cistrack.least_squares.burn_search.suspicion`). The run's
+    context then holds all the observations and their sensor; ``one.filter_rows`` is set."""
+    from cistrack.fitting.early_seed import early_starts
+    from cistrack.least_squares.burn_search import suspicion
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.runs.run_inputs import read_scenario_observations
+
+    try:
+        run = run_scenario(early, registry=registry, output_dir=one.directory, progress=progress,
+                           log=(lambda m: log(f"  {m}")) if log else None)
+        if run.summary.status != "finished":
+            return None
+        ms, sensor = read_scenario_observations(one.scenario, one.scenario.build("sensor", registry), registry,
+                                                lambda m: None)
+    except CistrackError:
+        return None
+    n_early = len(run.context.measurements)
+    run.context.measurements, run.context.sensor = ms, sensor
+    if log:
+        log(f"  least squares over the {len(ms)} observations from the filter's estimate after the first {n_early}")
+    for start in early_starts(run.context.filter.belief):
+        try:
+            result = _least_squares(run.context, one.choices, start)
+        except (FitError, PropagationError):
+            continue
+        if result.converged and not suspicion(result):
+            one.filter_rows = n_early
+            return run, result, "", ""
+    if log:
+        log("  no clean fit from there: the filter runs over every observation")
+    return None
+
+
+def _early_scenario(obs: ObjectObservations, scen: Scenario, d: Path, job: _Job) -> Scenario | None:
+    """The scenario of the filter over the first hours of ``obs`` (:func:`early_rows`; their file
+    :data:`EARLY_FILE` written into ``d``), or None when the fit takes the full run: ``fit.filter_span
+    = "all"``, a filter prior, the ranging IOD (it fits the whole arc itself) or too few later
+    observations."""
+    from dataclasses import replace
+
+    from cistrack.fitting.early_seed import early_rows
+
+    c = job.choices
+    if c.filter_span != "early" or c.prior != "none" or scen.components["iod"].name == RANGING_IOD:
+        return None
+    t = np.asarray(obs.measurements.times, dtype=float)
+    k = early_rows(np.sort(t))
+    if k == 0:
+        return None
+    part = replace(obs, measurements=obs.measurements.subset(t <= np.sort(t)[k - 1]))
+    suffix = write_merged(d / EARLY_FILE, part.measurements, obs.designation, job.registry)
+    return _scenario(part, d / f"{EARLY_FILE}{suffix}", job.settings, job.registry)
+
+
 def _fit_from_iod(ctx, choices: FitChoices) -> FitResult | None:
     """The least squares started from the ranging IOD's own orbit (its cloud's ``best_state`` and
     ``best_covariance`` at the cloud's epoch), or None when the IOD left none or that fit does not
@@ -358,13 +436,19 @@ def _fit_from_iod(ctx, choices: FitChoices) -> FitResult | None:
     return result if result.converged else None
 
 
-def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callable[[str], None] | None) -> None:
-    """Fill ``one`` (run, result, failure, start, seeding): the template's way first; when it gives
-    no converged fit, the ranging IOD (:data:`RANGING_IOD`), whose run replaces the first in the
-    results directory (the first's failure is kept in the seeding's ``why``)."""
+def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callable[[str], None] | None,
+                early: Scenario | None = None) -> None:
+    """Fill ``one`` (run, result, failure, start, seeding): the template's way first (with ``early``,
+    the scenario of the first hours, its filter run seeding the least squares when that fit is
+    clean: :func:`_attempt_early`); when it gives no converged fit, the ranging IOD
+    (:data:`RANGING_IOD`), whose run replaces the first in the results directory (the first's
+    failure is kept in the seeding's ``why``)."""
     say = log or (lambda m: None)
-    one.run, one.result, one.failure, one.start = _attempt(one.scenario, one.choices, one.directory, registry,
-                                                           progress, log)
+    attempt = _attempt_early(one, early, registry, progress, log) if early is not None else None
+    if attempt is None and early is not None:
+        Path(early.measurements_file).unlink(missing_ok=True)
+    one.run, one.result, one.failure, one.start = attempt or _attempt(one.scenario, one.choices, one.directory,
+                                                                      registry, progress, log)
     first = ""
     if not one.ok and one.scenario.components["iod"].name != RANGING_IOD:
         first = one.failure or (one.result.messages[0] if one.result is not None else "no fit")
@@ -376,6 +460,9 @@ def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callabl
             one.failure += f" (before it, with the template's IOD: {first})"
     if one.start:
         say(f"{one.designation}: least squares restarted from {one.start}")
+    elif one.run is not None and len(one.run.context.measurements) > one.filter_rows > 0:
+        say(f"{one.designation}: least squares from the filter's estimate after the first {one.filter_rows} "
+            f"observations (the filter ran over those only)")
     if one.run is not None:
         one.seeding = _seeding(one, first)
     if one.result is not None:
@@ -393,8 +480,10 @@ def _seeding(one: ObjectFit, fallback_from: str) -> dict[str, Any]:
             why += f"; used because the template's IOD gave no fit: {fallback_from}"
         extension = list(meta.get("extension", []))
     else:
+        rest = (f"the filter over the first {one.filter_rows} observations (the least squares over all "
+                f"{len(one.run.context.measurements)})" if one.filter_rows else "the filter over the rest")
         why, extension = (f"the kinematic fit of the first {len(rows)} observations of the first pass (the "
-                          "template's IOD), then the filter over the rest"), []
+                          f"template's IOD), then {rest}"), []
     return {"method": name, "rows": [int(i) for i in rows], "why": why, "extension": extension}
 
 
@@ -546,7 +635,8 @@ def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
             f"{scen.duration_days:g} days; results -> {d}")
     one = ObjectFit(obs.designation, d, scen, notes=list(obs.notes), choices=job.choices)
     if not _lone_tracklet(one, obs, job):
-        _fit_object(one, job.registry, job.progress, job.say if job.log else None)
+        early = _early_scenario(obs, scen, d, job)
+        _fit_object(one, job.registry, job.progress, job.say if job.log else None, early)
         add_maneuvers(one, job.say)
     return one
 

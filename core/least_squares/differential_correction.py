@@ -146,6 +146,15 @@ def _step_size(n: np.ndarray, dx: np.ndarray) -> float:
     return float(np.sqrt(max(dx @ n @ dx, 0.0)))
 
 
+def _stalled(say: list[str], gn_size: float, opts: FitOptions) -> bool:
+    """Whether a pass whose damped steps no longer lower the cost has converged (its Gauss-Newton
+    step, in sigmas, under ``opts.stall_step``: the cost's numerical floor); says so in ``say``."""
+    ok = gn_size < opts.stall_step
+    say.append(f"the cost stopped decreasing with a Gauss-Newton step of {gn_size:.3g} sigma"
+               + (" (numerical floor: converged)" if ok else " (not converged)"))
+    return ok
+
+
 def _one_pass(prob: _Problem, x: np.ndarray, used: np.ndarray, opts: FitOptions,
               say: list[str]) -> tuple[np.ndarray, int, bool]:
     """Levenberg-Marquardt with a fixed set of used rows: (state, iterations, converged)."""
@@ -193,14 +202,13 @@ def _one_pass(prob: _Problem, x: np.ndarray, used: np.ndarray, opts: FitOptions,
                 lam = max(lam / opts.damping_factor, 1e-12)
                 small_change = lam_was <= opts.damping and 0.5 * rel < opts.rms_tolerance
                 a = prob.jacobian(x)
+            elif gn_size < opts.stall_step:  # at the numerical floor: more damping only shortens the step
+                return x, its, _stalled(say, gn_size, opts)
             else:
                 lam *= opts.damping_factor
-                if lam > opts.max_damping or its >= opts.max_iterations:
-                    if lam > opts.max_damping:
-                        ok = gn_size < opts.stall_step
-                        say.append(f"the cost stopped decreasing with a Gauss-Newton step of {gn_size:.3g} sigma"
-                                   + (" (numerical floor: converged)" if ok else " (not converged)"))
-                        return x, its, ok
+                if lam > opts.max_damping:
+                    return x, its, _stalled(say, gn_size, opts)
+                if its >= opts.max_iterations:
                     break
     say.append(f"no convergence within {opts.max_iterations} iterations")
     return x, its, False

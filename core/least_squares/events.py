@@ -327,20 +327,28 @@ def first_impact(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float)
     return float(np.asarray(prop.impact_time)[0]), dynamics.bodies[int(np.asarray(prop.impact_body)[0])].name
 
 
-def _approach_windows(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float, body: str,
-                      step_tu: float) -> list[tuple[float, float]]:
-    """Windows (TU) of +-2 coarse steps about each interior minimum of the nominal orbit's
-    distance to ``body`` on a grid of ``step_tu``."""
+def _coarse_track(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float,
+                  step_tu: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The nominal orbit ``state`` (6,) from ``t0`` to ``t_end`` on a grid of ``step_tu``: (grid
+    (K,) TU, states (K, 1, 6), impact time TU or inf), one propagation shared by every body."""
     n = max(3, int(np.ceil(abs(t_end - t0) / step_tu)) + 1)
     grid = np.linspace(t0, t_end, n)
     prop = dynamics.propagate(state[None], t0, grid[1:])
     states = np.concatenate([state[None, None], np.asarray(prop.states, dtype=float)])
+    return grid, states, float(np.asarray(prop.impact_time)[0])
+
+
+def _approach_windows(dynamics: Dynamics, track: tuple[np.ndarray, np.ndarray, float],
+                      body: str) -> list[tuple[float, float]]:
+    """Windows (TU) of +-2 coarse steps about each interior minimum of the nominal orbit's
+    distance to ``body`` on the grid of ``track`` (:func:`_coarse_track`)."""
+    grid, states, impact = track
     r, _ = _distances(dynamics, states, grid, body)
     d = np.linalg.norm(r[:, 0], axis=1)
-    d[grid >= float(np.asarray(prop.impact_time)[0])] = np.inf
+    d[grid >= impact] = np.inf
     k = np.flatnonzero((d[1:-1] < d[:-2]) & (d[1:-1] <= d[2:])) + 1
     step = grid[1] - grid[0]
-    return [(max(t0 + 1e-12, grid[i] - 2 * step), min(t_end, grid[i] + 2 * step)) for i in k]
+    return [(max(grid[0] + 1e-12, grid[i] - 2 * step), min(grid[-1], grid[i] + 2 * step)) for i in k]
 
 
 def _event(dynamics, state, covariance, t0, kind, body, window, epoch) -> OrbitEvent | None:
@@ -375,8 +383,9 @@ def orbit_events(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray |
     if hit is not None:
         events.append(_event(dynamics, x, covariance, t0, "impact", hit[1], (t0, t_end), when))
     step = APPROACH_STEP_MINUTES * 60.0 / units.TU_S
-    for body in ([b.name for b in dynamics.bodies] if approaches else []):
-        for window in _approach_windows(dynamics, x, t0, end, body, step):
+    track = _coarse_track(dynamics, x, t0, end, step) if approaches and dynamics.bodies else None
+    for body in ([b.name for b in dynamics.bodies] if track is not None else []):
+        for window in _approach_windows(dynamics, track, body):
             events.append(_event(dynamics, x, covariance, t0, "closest approach", body, window, when))
     if altitude is not None:
         events.append(_event(dynamics, x, covariance, t0, altitude_kind(altitude[1]), altitude[0], (t0, end), when))

@@ -31,9 +31,10 @@ class FitOptions:
         Converged when an accepted step changes the weighted RMS by less than this, relatively
         (with the damping back at or below its initial value).
     stall_step : float
-        When no damped step lowers the cost any more (damping above ``max_damping``), the fit
-        counts as converged if the Gauss-Newton step was below this many sigma (the cost's
-        numerical floor), else as not converged.
+        The cost's numerical floor, in sigmas: a pass whose damped step does not lower the cost
+        while the Gauss-Newton step is below this has converged (more damping would only shorten
+        the step); one whose damped steps stop lowering the cost (damping above ``max_damping``)
+        with a larger Gauss-Newton step has not.
     damping, damping_factor, max_damping : float
         Initial Levenberg-Marquardt damping (relative to the normal matrix's diagonal), its
         factor after a rejected / accepted step, and the damping at which the iteration stops.
