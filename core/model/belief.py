@@ -120,6 +120,7 @@ class GaussianMixture:
     means: np.ndarray
     covariances: np.ndarray
     _chol: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _whiten: tuple | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.weights = np.atleast_1d(np.asarray(self.weights, dtype=float))
@@ -155,11 +156,17 @@ class GaussianMixture:
         return self._chol
 
     def _whitening(self) -> tuple[np.ndarray, np.ndarray]:
-        """Inverse Cholesky factors (M, d, d) and log normalising constants (M,)."""
+        """Inverse Cholesky factors (M, d, d) and log normalising constants (M,), kept with the
+        Cholesky factors they came from (a run's metrics evaluate each belief's density twice:
+        at its samples and at the truth)."""
         chol = self.cholesky()
+        if self._whiten is not None and self._whiten[0] is chol:
+            return self._whiten[1], self._whiten[2]
         linv = np.ascontiguousarray(np.linalg.inv(chol))  # one batched call
         logdet = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
-        return linv, np.ascontiguousarray(-0.5 * (logdet + self.dim * _LOG_2PI))
+        const = np.ascontiguousarray(-0.5 * (logdet + self.dim * _LOG_2PI))
+        self._whiten = (chol, linv, const)
+        return linv, const
 
     def _logpdf_table(self, x: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
         x = np.ascontiguousarray(np.atleast_2d(np.asarray(x, dtype=float)))
@@ -176,7 +183,14 @@ class GaussianMixture:
         return self._logpdf_table(x, np.zeros(self.n_components))
 
     def logpdf(self, x: np.ndarray) -> np.ndarray:
-        """Log density of points ``x`` (N, d) -> (N,)."""
+        """Log density of points ``x`` (N, d) -> (N,). Rows in blocks of ``_SAMPLE_CHUNK`` (each
+        row's density is its own): the (N, M) table of component densities is a block's."""
+        x = np.asarray(x, dtype=float)
+        if x.ndim == 2 and x.shape[0] > _SAMPLE_CHUNK:
+            out = np.empty(x.shape[0])
+            for lo in range(0, x.shape[0], _SAMPLE_CHUNK):
+                out[lo:lo + _SAMPLE_CHUNK] = self.logpdf(x[lo:lo + _SAMPLE_CHUNK])
+            return out
         with np.errstate(divide="ignore"):
             logw = np.log(self.weights)
         a = self._logpdf_table(x, logw)

@@ -11,7 +11,8 @@ from cistrack.interfaces import Clusterer
 
 from .lloyd import kmeans_fit, nearest_centres
 from .thread_limits import limited_threads
-from .points_and_labels import check_points, compact_labels, n_distinct_at_least, sklearn_seed, standardize
+from .points_and_labels import (Standardizer, check_points, compact_labels, n_distinct_at_least, sklearn_seed,
+                                standardize)
 
 __all__ = ["KMeansClusterer"]
 
@@ -58,9 +59,11 @@ class KMeansClusterer(Clusterer):
         if k <= 1:
             return np.zeros(x.shape[0], dtype=np.intp)
         seed = sklearn_seed(rng)
-        z = standardize(x)
-        subsample = 0 < self.max_fit_samples < z.shape[0] and self.max_fit_samples >= 10 * k
-        fit = z[rng.choice(z.shape[0], size=self.max_fit_samples, replace=False)] if subsample else z
+        subsample = 0 < self.max_fit_samples < x.shape[0] and self.max_fit_samples >= 10 * k
+        # subsampled: the fit's rows and then every row's label are standardised as needed, never
+        # all N rows at once (at a million particles that copy was 48 MB)
+        z = Standardizer(x) if subsample else standardize(x)
+        fit = z.take(rng.choice(x.shape[0], size=self.max_fit_samples, replace=False)) if subsample else z
         found = None
         if self.engine == "numpy" and self.n_init == 1:
             found = kmeans_fit(fit, k, seed, max_iter=self.max_iter)

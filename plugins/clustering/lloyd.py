@@ -38,6 +38,8 @@ import numpy as np
 
 from cistrack.lazy import lazy_njit
 
+from .points_and_labels import Standardizer
+
 __all__ = ["kmeans_fit", "nearest_centres"]
 
 
@@ -146,15 +148,17 @@ _ROWS_AT_ONCE = 65_536
 products, which at the PGM's 4 x 1,000,000 reacquisition particles were 200 MB and more)."""
 
 
-def nearest_centres(z: np.ndarray, centres: np.ndarray) -> np.ndarray:
+def nearest_centres(z: np.ndarray | Standardizer, centres: np.ndarray) -> np.ndarray:
     """Index (n,) of the nearest of ``centres`` (k, d) for each point of ``z`` (n, d), first on
     ties: numpy's ``argmin(|z|^2 - (2 z).c + |c|^2, axis=1)`` (the products by numpy, the sums and
-    the scan compiled, in the same order), for labelling every particle after a subsampled fit."""
-    z = np.asarray(z, dtype=np.float64)
-    labels = np.empty(z.shape[0], dtype=np.intp)
+    the scan compiled, in the same order), for labelling every particle after a subsampled fit.
+    ``z`` may be a :class:`Standardizer`, whose rows are standardised block by block."""
+    if not isinstance(z, Standardizer):
+        z = np.asarray(z, dtype=np.float64)
+    labels = np.empty(len(z), dtype=np.intp)
     c_norms = np.einsum("ij,ij->i", centres, centres)
-    for a in range(0, z.shape[0], _ROWS_AT_ONCE):  # rows in blocks: each row's numbers are its own
-        zb = z[a:a + _ROWS_AT_ONCE]
+    for a in range(0, len(z), _ROWS_AT_ONCE):  # rows in blocks: each row's numbers are its own
+        zb = z[a:a + _ROWS_AT_ONCE] if isinstance(z, np.ndarray) else z.rows(a, a + _ROWS_AT_ONCE)
         products = np.ascontiguousarray((2.0 * zb) @ centres.T)
         _nearest(np.einsum("ij,ij->i", zb, zb), products, c_norms, labels[a:a + _ROWS_AT_ONCE])
     return labels

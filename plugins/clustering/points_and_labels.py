@@ -6,7 +6,7 @@ import numpy as np
 from cistrack.errors import ParameterError
 from cistrack.lazy import lazy_njit
 
-__all__ = ["standardize", "compact_labels", "check_points", "sklearn_seed", "n_distinct_at_least"]
+__all__ = ["standardize", "Standardizer", "compact_labels", "check_points", "sklearn_seed", "n_distinct_at_least"]
 
 
 def check_points(x: np.ndarray, owner: str) -> np.ndarray:
@@ -37,6 +37,67 @@ def standardize(x: np.ndarray) -> np.ndarray:
     out = np.empty_like(x)
     _standardize(x, out)
     return out
+
+
+class Standardizer:
+    """:func:`standardize` of ``x`` (N, d) one block of rows at a time: ``rows(a, b)`` equals
+    ``standardize(x)[a:b]`` bit for bit, without an (N, d) copy of the points (C-ordered float64
+    ``x``; other layouts are standardised whole, once)."""
+
+    def __init__(self, x: np.ndarray):
+        x = np.asarray(x, dtype=np.float64)
+        self._z = None if x.flags.c_contiguous else standardize(x)
+        self._x = x
+        if self._z is None:
+            self._mean, self._std = np.zeros(x.shape[1]), np.empty(x.shape[1])
+            _column_moments(x, self._mean, self._std)
+
+    def __len__(self) -> int:
+        return self._x.shape[0]
+
+    def rows(self, a: int, b: int) -> np.ndarray:
+        """Standardised rows a:b, (b - a, d)."""
+        if self._z is not None:
+            return self._z[a:b]
+        out = np.empty((max(0, min(b, len(self)) - a), self._x.shape[1]))
+        _scale_rows(self._x[a:b], self._mean, self._std, out)
+        return out
+
+    def take(self, idx: np.ndarray) -> np.ndarray:
+        """Standardised rows ``idx`` (n,), (n, d)."""
+        if self._z is not None:
+            return self._z[idx]
+        out = np.empty((idx.size, self._x.shape[1]))
+        _scale_rows(self._x[idx], self._mean, self._std, out)
+        return out
+
+
+@lazy_njit(cache=True)
+def _column_moments(x, mean, std):
+    """mean (d,) and std (d,) of the columns of x (N, d), as :func:`_standardize` computes them."""
+    n, d = x.shape
+    for i in range(n):
+        for a in range(d):
+            mean[a] += x[i, a]
+    for a in range(d):
+        mean[a] = mean[a] / n
+    var = np.zeros(d)
+    for i in range(n):
+        for a in range(d):
+            t = x[i, a] - mean[a]
+            var[a] += t * t
+    for a in range(d):
+        s = np.sqrt(var[a] / n)
+        std[a] = s if s > 0 else 1.0
+
+
+@lazy_njit(cache=True)
+def _scale_rows(x, mean, std, out):
+    """out (n, d) = (x - mean) / std, row by row, as :func:`_standardize` writes it."""
+    n, d = x.shape
+    for i in range(n):
+        for a in range(d):
+            out[i, a] = (x[i, a] - mean[a]) / std[a]
 
 
 @lazy_njit(cache=True)
@@ -71,7 +132,7 @@ def compact_labels(labels: np.ndarray) -> np.ndarray:
         _, inv = np.unique(labels, return_inverse=True)
         return inv.reshape(-1).astype(np.intp)
     rank = np.cumsum(np.bincount(labels) > 0) - 1
-    return rank[labels].astype(np.intp)
+    return rank[labels].astype(np.intp, copy=False)
 
 
 def sklearn_seed(rng: np.random.Generator) -> int:

@@ -46,27 +46,35 @@ def group_moments(x: np.ndarray, d: np.ndarray | None, labels: np.ndarray, n_gro
     m = 0 if d is None else np.shape(d)[1]
     q = nx + m
     counts = np.bincount(labels, minlength=n_groups)[:n_groups]
-    # [x d] with the rows grouped by label, each group in particle order (a stable sort): one
-    # array, whose groups are views, instead of [x d] and a copy of the largest group
+    # each group's rows of [x d], in particle order, gathered into one block of its own in turn:
+    # the only work array is the largest group's block, not a copy of all N rows
     labels = np.asarray(labels)
-    # a stable sort's permutation is unique, so sorting the labels as int16 (numpy's radix sort,
-    # 3.5x faster at 10,000 particles than the merge sort of int64) gives the same order
-    order = np.argsort(labels.astype(np.int16) if n_groups <= np.iinfo(np.int16).max else labels, kind="stable")
-    y = np.empty((x.shape[0], q))
-    np.take(x, order, axis=0, out=y[:, :nx], mode="clip")  # "clip": unbuffered (the indices are valid)
-    if m:
-        np.take(np.asarray(d, dtype=float), order, axis=0, out=y[:, nx:], mode="clip")
-    del order
-    edges = np.concatenate(([0], np.cumsum(counts)))
+    d = np.empty((x.shape[0], 0)) if not m else np.asarray(d, dtype=float)
     means = np.zeros((n_groups, q))
     covs = np.zeros((n_groups, q, q))
-    _centre_groups(y, edges, means)  # means, and each group centred in place: y is this function's own
     for i in range(n_groups):  # loop over components (few), vectorised over their particles
+        yi = np.empty((counts[i], q))
+        _gather_group(x, d, labels, i, yi)
+        _centre_groups(yi, np.array([0, counts[i]]), means[i:i + 1])  # the mean, and yi centred in place
         if counts[i] > 1:
-            yi = y[edges[i]:edges[i + 1]]
             covs[i] = (yi.T @ yi) / (yi.shape[0] - 1)
+        del yi  # before the next group's block is made
     return GroupMoments(counts, means[:, :nx], means[:, nx:], covs[:, :nx, :nx], covs[:, :nx, nx:],
                         covs[:, nx:, nx:])
+
+
+@lazy_njit(cache=True)
+def _gather_group(x, d, labels, g, out):
+    """out (n_g, dx + m) = the rows of [x d] (x (N, dx), d (N, m)) labelled ``g``, in order."""
+    k = 0
+    nx = x.shape[1]
+    for j in range(labels.shape[0]):
+        if labels[j] == g:
+            for c in range(nx):
+                out[k, c] = x[j, c]
+            for c in range(d.shape[1]):
+                out[k, nx + c] = d[j, c]
+            k += 1
 
 
 @lazy_njit(cache=True)

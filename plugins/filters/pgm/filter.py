@@ -14,6 +14,8 @@ measurement far sharper than the cloud the particles may be clustered into more 
 """
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from cistrack.errors import FilterError
@@ -37,7 +39,7 @@ from .clusterer_choice import resolve_clusterer, split_clusterer
 from .component_spread import shrink_components
 from .component_update import COMPONENT_LIKELIHOODS
 from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
-from .reacquisition_particles import measurement_spread_sigma, particles_to_draw
+from .reacquisition_particles import draw_mixture, measurement_spread_sigma, particles_to_draw
 from .step_choice import check_step, resolve_step
 from .state_bounds import StateBounds, earth_position, sample_inside
 
@@ -201,6 +203,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if self.min_range_km is not None and self.max_range_km is not None and self.min_range_km >= self.max_range_km:
             self._fail("max_range_km", max_range_km, f"must exceed min_range_km = {min_range_km}")
         self._x: np.ndarray | None = None
+        self._clustered: ClusteredParticles | None = None  # an update's clustered prior, until its draw
+        self._probe = object()  # referenced by this attribute alone: see _owns_particles
         self._h: np.ndarray | None = None  # each particle's next integration step (TU), carried
 
     # -- lifecycle --------------------------------------------------------------------------------
@@ -240,7 +244,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that
         hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
-        x, alive, h = self._predictor.predict(self._dyn, self._x, self._t, t, self._rng, self._h, self._who())
+        self._invalidate()  # the last update's labels (N,) need not be held while propagating
+        own = {"overwrite": True} if getattr(self._predictor, "overwrites", False) and self._owns_particles() else {}
+        x, alive, h = self._predictor.predict(self._dyn, self._x, self._t, t, self._rng, self._h, self._who(), **own)
         lost = int(np.count_nonzero(~alive))
         self._lost_total += lost
         self._t = t
@@ -261,16 +267,22 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if self._reanchor is not None:
             self._reanchor.observe(measurement)
         meas = MeasuredComponents(self._sensor, measurement)
-        dres = meas.residuals_to_measurement(self._x)
+        dres = residuals_in_chunks(meas, self._x)
         if not np.all(np.isfinite(dres)):
             raise FilterError(f"filter '{who}': the sensor returned NaN predicted measurements")
         sharpness = _Sharpness(self._cluster_for(meas, dres), dres, meas.R)
         if self._kernels is not None and self._kernels.due(float(measurement.t), sharpness):
             self._kernel_update(meas, dres, sharpness.value, who)
             return
-        post, w, prior, spread, shrink, log_evidence = self._condition(meas, dres, who)
-        samples, slabels = self._draw_posterior(prior, post, spread, who)
-        step = steps_by_group(self._h, prior.labels, post.n_components)  # drawn particles start with their cluster's step
+        # drawn particles start with their cluster's step: the clusters' steps now, so that the
+        # carried steps (N,) are not held through the update
+        step = steps_by_group(self._h, self._labels, self._prior.n_components)
+        self._h = None
+        ess = sharpness.value
+        del sharpness
+        post, w, self._clustered, spread, shrink, log_evidence = self._condition(meas, dres, who)
+        del dres
+        samples, slabels = self._draw_posterior(post, spread, who)
         self._h = None if step is None else step[slabels]
         self._x, self._sample_labels = samples, slabels
         self._mixture = post
@@ -280,7 +292,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             "effective_components": float(1.0 / np.sum(w * w)),
             "log_likelihood": float(log_evidence),
             "max_component_weight": float(w.max()),
-            "likelihood_ess_fraction": float(sharpness.value),
+            "likelihood_ess_fraction": float(ess),
             "n_particles": float(samples.shape[0]),
             "prior_spread_sigma": spread,
             "components_shrunk": float(shrink),
@@ -319,12 +331,16 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             raise FilterError(f"filter '{who}': the component update produced non-finite moments")
         return GaussianMixture(w, means, covs), w, prior, spread, shrink, log_evidence
 
-    def _draw_posterior(self, prior: ClusteredParticles, post: GaussianMixture, spread: float,
-                        who: str) -> tuple[np.ndarray, np.ndarray]:
-        """The posterior particles and their components: the draw step's, except while
-        reacquiring (more particles drawn) or with state bounds (Gaussian draws inside them)."""
+    def _draw_posterior(self, post: GaussianMixture, spread: float, who: str) -> tuple[np.ndarray, np.ndarray]:
+        """The posterior particles and their components: the draw step's from the clustered prior
+        (``_clustered``, taken), except while reacquiring (more particles drawn) or with state
+        bounds (Gaussian draws inside them)."""
+        prior, self._clustered = self._clustered, None
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
         if n_draw != self.n_particles or self._bounds.active:
+            post.cholesky()  # a covariance that cannot be factorised fails here, with the prior still whole
+            self._release_prior()
+            del prior  # the prior particles are not needed for Gaussian draws: free them first
             return self._sample_posterior(post, n_draw)
         try:
             samples, slabels = self._draw.draw(prior, post, n_draw, self._rng)
@@ -424,16 +440,47 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._pruned_total += n_bad
         return x[ok], (None if h is None else h[ok])
 
+    def _owns_particles(self) -> bool:
+        """Whether nothing but this filter references its particles and steps (no belief, view or
+        caller holds them), so that the prediction may overwrite them: each has as many references
+        as ``_probe``, an object held by one attribute alone."""
+        alone = sys.getrefcount(self._probe)
+        return sys.getrefcount(self._x) <= alone and (self._h is None or sys.getrefcount(self._h) <= alone)
+
+    def _release_prior(self) -> None:
+        """Drop the filter's references to the prior particles (N, 6) and their labels, so that the
+        posterior draws do not coexist with them; the update sets new ones."""
+        self._x = self._labels = self._sample_labels = None
+
     def _sample_posterior(self, post: GaussianMixture, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """``n`` draws from ``post`` inside the state bounds, and their components; counts the pruned."""
-        x, lab, pruned = sample_inside(post, n, self._rng, self._bounds)
+        """``n`` draws from ``post`` inside the state bounds, and their components; counts the pruned.
+        Without bounds the draws are made in chunks (:func:`.reacquisition_particles.draw_mixture`)."""
         if not self._bounds.active:
-            return x, lab
+            return draw_mixture(post, n, self._rng)
+        x, lab, pruned = sample_inside(post, n, self._rng, self._bounds)
         self._pruned_total += pruned
         self._diag["particles_pruned"] = self._diag.get("particles_pruned", 0.0) + float(pruned)
         if x.shape[0] == 0:
             raise FilterError(f"filter '{self._who()}': the posterior lies entirely outside the state bounds")
         return x, lab
+
+
+RESIDUAL_CHUNK = 65_536  # particles whose predicted measurements are computed at once
+
+
+def residuals_in_chunks(meas: MeasuredComponents, x: np.ndarray, chunk: int = RESIDUAL_CHUNK) -> np.ndarray:
+    """``meas.residuals_to_measurement(x)`` (N, m) for particles ``x`` (N, 6), ``chunk`` rows at a
+    time: the sensor's work arrays are a chunk's, and each particle's residual is its own."""
+    n = x.shape[0]
+    if n <= chunk:
+        return meas.residuals_to_measurement(x)
+    first = meas.residuals_to_measurement(x[:chunk])
+    out = np.empty((n,) + first.shape[1:], dtype=first.dtype)
+    out[:chunk] = first
+    del first
+    for a in range(chunk, n, chunk):
+        out[a:a + chunk] = meas.residuals_to_measurement(x[a:a + chunk])
+    return out
 
 
 class _Sharpness:

@@ -16,12 +16,23 @@ the predicted-measurement residuals in noise units, sqrt(largest eigenvalue of
 R^-1/2 cov(h(x) - z) R^-1/2).
 
 Measurements behind the default factor 4 and threshold 1,000 sigma: docs/history/pgm.md.
+
+Memory. The reacquisition draws are the largest cloud of a run (``reacquire_factor`` x
+``n_particles`` particles), so :func:`draw_mixture` makes them in chunks of :data:`DRAW_CHUNK`
+rows: the only arrays as long as the draws are the draws themselves (n, d) and their component
+labels (n,). It takes the same numbers from the generator, in the same order, as
+``GaussianMixture.sample`` (one ``rng.choice`` of the components, then the standard normals row by
+row), so the particles are the same.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["measurement_spread_sigma", "particles_to_draw"]
+from cistrack.model.belief import GaussianMixture
+
+__all__ = ["DRAW_CHUNK", "draw_mixture", "measurement_spread_sigma", "particles_to_draw"]
+
+DRAW_CHUNK = 65_536  # rows drawn at once by draw_mixture
 
 
 def measurement_spread_sigma(residuals: np.ndarray, R: np.ndarray) -> float:
@@ -31,9 +42,23 @@ def measurement_spread_sigma(residuals: np.ndarray, R: np.ndarray) -> float:
     if res.shape[0] < 2:
         return 0.0
     L = np.linalg.cholesky(0.5 * (R + R.T))
-    w = np.linalg.solve(L, (res - res.mean(axis=0)).T)  # whitened residuals (m, N)
-    c = np.atleast_2d(np.cov(w))
+    mean = res.mean(axis=0)
+    w = np.empty((res.shape[1], res.shape[0]))  # whitened residuals (m, N), centred and whitened
+    for a in range(0, res.shape[0], DRAW_CHUNK):  # a chunk at a time (each column is solved on its own)
+        w[:, a:a + DRAW_CHUNK] = np.linalg.solve(L, (res[a:a + DRAW_CHUNK] - mean).T)
+    c = np.atleast_2d(_covariance_rows(w))
     return float(np.sqrt(max(np.linalg.eigvalsh(c).max(), 0.0)))
+
+
+def _covariance_rows(w: np.ndarray) -> np.ndarray:
+    """``np.cov(w)`` of rows ``w`` (m, N), N >= 2, the same numbers (numpy's centring and product),
+    centring ``w`` itself instead of a copy of it. np.cov multiplies ``w`` by a conjugated copy of
+    its transpose; the product with the transpose itself sums the same terms in the same order
+    (tests/filters/test_pgm_memory.py compares the two) without that copy."""
+    w -= w.mean(axis=1)[:, None]
+    c = np.dot(w, w.T)
+    c *= np.true_divide(1, w.shape[1] - 1)
+    return c.squeeze()
 
 
 def particles_to_draw(spread_sigma: float, n_particles: int, factor: float, threshold_sigma: float) -> int:
@@ -42,3 +67,33 @@ def particles_to_draw(spread_sigma: float, n_particles: int, factor: float, thre
     if not spread_sigma > threshold_sigma:
         return n_particles
     return max(n_particles, int(round(factor * n_particles)))
+
+
+def component_counts(weights: np.ndarray, n: int, rng: np.random.Generator, chunk: int = DRAW_CHUNK) -> np.ndarray:
+    """How many of ``n`` draws of ``rng.choice(len(weights), size=n, p=weights)`` fall on each
+    component (M,), from the same uniforms in the same order, ``chunk`` of them at a time."""
+    p = np.asarray(weights, dtype=np.float64)
+    cdf = p.cumsum()  # numpy's choice with p: the normalised cumulative sum, searched on the right
+    cdf /= cdf[-1]
+    counts = np.zeros(p.size, dtype=np.int64)
+    for a in range(0, n, chunk):
+        idx = cdf.searchsorted(rng.random(min(chunk, n - a)), side="right")
+        counts += np.bincount(idx, minlength=p.size)[:p.size]
+    return counts
+
+
+def draw_mixture(post: GaussianMixture, n: int, rng: np.random.Generator,
+                 chunk: int = DRAW_CHUNK) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` draws (n, d) from ``post`` and their components (n,) int64, sorted by component: the
+    same as ``post.sample(n, rng)``, with no work array longer than ``chunk`` rows."""
+    chol = post.cholesky()
+    counts = component_counts(post.weights, n, rng, chunk)
+    labels = np.repeat(np.arange(post.n_components, dtype=np.int64), counts)
+    out = np.empty((n, post.dim))
+    edges = np.concatenate(([0], np.cumsum(counts)))
+    for i in range(post.n_components):
+        for a in range(int(edges[i]), int(edges[i + 1]), chunk):
+            b = min(a + chunk, int(edges[i + 1]))
+            np.matmul(rng.standard_normal((b - a, post.dim)), chol[i].T, out=out[a:b])
+            out[a:b] += post.means[i]
+    return out, labels
