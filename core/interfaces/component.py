@@ -24,17 +24,15 @@ __all__ = [
 
 _EMPTY = inspect.Parameter.empty
 
-BYTES_PER_PARTICLE = 936
+BYTES_PER_PARTICLE = 446
 """Memory per particle of a run, used only to refuse sizes that cannot fit before allocating.
-Measured (issue 31): a whole one-period Example 1 run (IOD + PGM) peaked 809 and 2,426 MiB above
-the process's start at 1,000,000 and 3,000,000 particles, 848 bytes per particle at both sizes
-(``benchmarks/bench_memory.py --sizes 1000000 3000000 --cases run``, session 11, with the carried
-integration steps; 816 at 1,000,000 in session 9); rounded up by 10 %. The peak is in
-the PGM's first updates after the IOD, which draw ``reacquire_factor`` (4) x ``n_particles``
-particles (:mod:`cistrack.plugins.filters.pgm.reacquisition_particles`). The former 512 was too
-low for that: the same run peaked 1,157 MiB above its start (1,214 bytes per particle) before
-issue 31's changes. The IOD fits its oversampled samples in chunks of fixed size
-(:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not multiply it."""
+Measured: a whole one-period Example 1 run (IOD + PGM) peaked 386 MiB above the process's start at
+1,000,000 particles, 405 bytes per particle (``benchmarks/bench_memory.py --sizes 100000 300000
+1000000 --cases run``, docs/performance.md); rounded up by 10 %. The peak is the PGM's update of
+the ``reacquire_factor`` (4) x ``n_particles`` particles it draws after the IOD, in chunks
+(:mod:`cistrack.plugins.filters.pgm.reacquisition_particles`). The IOD fits its oversampled
+samples in chunks of fixed size (:data:`IOD_CHUNK_BYTES`), so the oversampling factor does not
+multiply it."""
 IOD_CHUNK_BYTES = 256 * 2 ** 20
 """Work arrays of one IOD chunk (measured ~130 MiB for 131,072 samples of 12 measurements)."""
 
