@@ -218,10 +218,25 @@ def _port_option(text: str) -> int:
     return int(text)
 
 
+def _check_step_option(format: str, step: int | None) -> None:
+    """Refuse ``--step`` for an exporter that writes every step (it has no ``step`` parameter)."""
+    from cistrack.interfaces.component import param_specs
+    from cistrack.plugin.registry import default_registry
+
+    reg = default_registry()
+    if step is None or format not in reg.names("exporter"):
+        return  # an unknown --format is refused by name where the exporter is made
+    factory = reg.get("exporter", format).factory
+    if not isinstance(factory, type) or "step" not in param_specs(factory):
+        raise ConfigError(f"--step {step}: --format {format} writes every step and takes no --step; "
+                          "--step selects the one step of a single-state format such as --format opm")
+
+
 def cmd_export(args) -> int:
     """``cistrack export``: a run's orbit estimate, or a fit's fitted orbit, as CCSDS OEM or OPM."""
     from cistrack.runs.export import export_refusal, export_run
 
+    _check_step_option(args.format, args.step)
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
     from cistrack.runs.progress import stage_log
@@ -238,10 +253,31 @@ def cmd_export(args) -> int:
     return 0
 
 
+RRD_MAGIC = b"RRF"
+"""How a rerun recording file starts (then the format's version digit)."""
+
+
+def _check_recording(path: str) -> None:
+    """Refuse a file that is not a rerun recording (empty, or another file renamed .rrd) before a
+    viewer is started for it; what is not a regular file is left to the recorder's own message."""
+    if not os.path.isfile(path):
+        return
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(RRD_MAGIC))
+    except OSError as exc:
+        raise CistrackError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+    if head != RRD_MAGIC:
+        raise CistrackError(f"{path}: not a rerun recording (" + ("an empty file" if not head else
+                            "it does not start as a .rrd file does") + "); give a file written by "
+                            "'cistrack run --rerun FILE.rrd'")
+
+
 def cmd_view(args) -> int:
     """``cistrack view FILE.rrd``: host the web viewer with the recording loaded, print the URL."""
     from cistrack.plugin.registry import default_registry
 
+    _check_recording(args.recording)
     # the recorder that wrote the file serves it (core never imports a plugin)
     recorder = default_registry().get("recorder", "rerun").factory
     served = recorder.serve_file(args.recording, web_port=args.port, option="--port")
@@ -266,6 +302,7 @@ def cmd_scenarios(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from cistrack import __version__
+    from cistrack.cli.option_types import count, path_text
 
     p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
     p.add_argument("--version", action="version", version=f"cistrack {__version__}")
@@ -273,7 +310,7 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")
     r.add_argument("scenario", nargs="?", help="scenario TOML file or built-in scenario name")
     r.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
-    r.add_argument("--out", default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>, with __set-<hash> "
+    r.add_argument("--out", type=path_text("--out"), default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>, with __set-<hash> "
                    "after it for --set items; must be new, empty or an earlier results directory; one "
                    "holding another scenario's, settings' or seed's results is refused without --overwrite)")
     r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
@@ -281,7 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "other settings or another seed in --out (both refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
-    r.add_argument("--max-points", type=int, default=2000, help="particles logged per step in rerun (each mixture component kept)")
+    r.add_argument("--max-points", type=count(1), default=2000, help="particles logged per step in rerun (each mixture component kept)")
     r.add_argument("--rows-per-part", type=int, default=None, metavar="N", help="steps per results part file (default 1000, or 10 s)")
     r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                    help="override a scenario value, validated like the file (repeatable), "
@@ -299,7 +336,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex = sub.add_parser("export", help="write a run's orbit estimate as CCSDS OEM or OPM")
     ex.add_argument("run", help="a run directory (written by 'cistrack run --out DIR')")
     ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm")
-    ex.add_argument("--out", default=None, help="file to write (default RUN/estimate.<format>)")
+    ex.add_argument("--out", type=path_text("--out"), default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
     ex.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")

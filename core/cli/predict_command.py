@@ -20,6 +20,8 @@ __all__ = ["add_predict_parser", "cmd_predict", "table_lines", "MAX_TIMES"]
 
 MAX_TIMES = 20_000
 """Most prediction times one command computes."""
+FIRST_YEAR, LAST_YEAR = 1900, 2052
+"""The whole years of the DE421 ephemeris (prediction times must lie within them)."""
 _HEADER = (f"{'UTC':<20}{'RA deg':>11}{'Dec deg':>10}{'RA rate':>9}{'Dec rate':>9}{'range km':>10}{'elev':>7}"
            f"{'Sun':>7}{'Moon':>7}{'3sig a':>9}{'3sig b':>9}{'PA':>6}")
 _UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min'.rjust(9) + "".rjust(10)
@@ -44,13 +46,19 @@ def _utc(text: str):
     from cistrack import units
 
     try:
-        return units.parse_utc(text)
+        t = units.parse_utc(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not an ISO-8601 UTC time such as 2026-03-08T00:00:00Z") from None
+    if not FIRST_YEAR <= t.year <= LAST_YEAR:
+        raise argparse.ArgumentTypeError(f"{text!r}: sky predictions need the DE421 ephemeris, which covers the "
+                                         f"years {FIRST_YEAR} to {LAST_YEAR}; give a time within them")
+    return t
 
 
 def add_predict_parser(sub) -> None:
     """Add ``cistrack predict`` to the sub-command parsers ``sub``."""
+    from cistrack.cli.option_types import path_text
+
     p = sub.add_parser("predict", help="where to point: RA/Dec, rates and the 1/3-sigma sky ellipse from an MPC site",
                        description="Sky predictions of the orbit of a 'cistrack fit' directory (the least-squares "
                                    "fit) or a 'cistrack run' directory (the filter's last estimate), seen from an "
@@ -60,7 +68,7 @@ def add_predict_parser(sub) -> None:
     p.add_argument("--start", type=_utc, default=None, metavar="UTC", help="first time (default: the orbit's epoch)")
     p.add_argument("--stop", type=_utc, default=None, metavar="UTC", help="last time (default: one day after --start)")
     p.add_argument("--step", type=_minutes, default=60.0, metavar="MINUTES", help="spacing, minutes (default 60)")
-    p.add_argument("--out", default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
+    p.add_argument("--out", type=path_text("--out"), default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
                    "(default DIR/sky-<CODE>)")
     p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
     p.set_defaults(func=cmd_predict)
@@ -72,7 +80,9 @@ def _times(args, orbit) -> np.ndarray:
     from cistrack.errors import ConfigError
 
     start = args.start or units.tu_to_utc(orbit.epoch, orbit.t0)
+    _check_year("--start", start)
     stop = args.stop or start + timedelta(days=1)
+    _check_year("--stop", stop)
     if stop < start:
         raise ConfigError(f"--stop {units.format_utc(stop)[:19]}Z is before --start {units.format_utc(start)[:19]}Z")
     n = int(math.floor((stop - start).total_seconds() / (60.0 * args.step) + 1e-9)) + 1
@@ -81,6 +91,26 @@ def _times(args, orbit) -> np.ndarray:
                           "(give a longer --step or a shorter span)")
     first = (start - orbit.epoch).total_seconds()
     return units.seconds_to_tu(first + 60.0 * args.step * np.arange(n))
+
+
+def _check_year(option: str, t) -> None:
+    """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need."""
+    from cistrack.errors import ConfigError
+
+    if not FIRST_YEAR <= t.year <= LAST_YEAR:
+        raise ConfigError(f"{option} {t.year:04d}-{t.month:02d}-{t.day:02d}: sky predictions need the DE421 "
+                          f"ephemeris, which covers the years {FIRST_YEAR} to {LAST_YEAR}; give a time within them")
+
+
+def _prefix(args) -> Path:
+    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist."""
+    from cistrack.errors import ConfigError
+
+    prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
+    if args.out and not prefix.parent.is_dir():
+        raise ConfigError(f"--out {args.out}: the folder {prefix.parent} does not exist; give a PREFIX in an "
+                          "existing folder")
+    return prefix
 
 
 def table_lines(sky) -> list[str]:
@@ -112,6 +142,7 @@ def cmd_predict(args) -> int:
     from cistrack.plugin.registry import default_registry
 
     site = _site(args.site)
+    prefix = _prefix(args)
     reg = default_registry()
     orbit = orbit_of_directory(args.run, reg)
     times = _times(args, orbit)
@@ -119,7 +150,6 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
-    prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
     csv_path = sky.write_csv(prefix.with_name(prefix.name + ".csv"))
     png = plot_sky(sky, prefix.with_name(prefix.name + ".png"),
                    f"{orbit.name} from {args.site} {site.name}: {orbit.source}")

@@ -55,11 +55,13 @@ def _seed_arguments(parser) -> None:
 
 def add_study_parser(subparsers) -> None:
     """Add ``study run`` and ``study report`` to the ``cistrack`` command's subparsers."""
+    from cistrack.cli.option_types import path_text
+
     st = subparsers.add_parser("study", help="run or report a comparative study")
     stsub = st.add_subparsers(dest="study_cmd", required=True)
     sr = stsub.add_parser("run", help="run every missing run of a study")
     sr.add_argument("study", help="study TOML file, built-in study name or study results directory")
-    sr.add_argument("--out", default=None, help="study directory (default studies_out/<name>)")
+    sr.add_argument("--out", type=path_text("--out"), default=None, help="study directory (default studies_out/<name>)")
     sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
     sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
@@ -71,7 +73,7 @@ def add_study_parser(subparsers) -> None:
     sr.set_defaults(func=cmd_study)
     srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
     srep.add_argument("study", help="study TOML file, built-in study name or study results directory (its own seeds and --set values)")
-    srep.add_argument("--out", default=None)
+    srep.add_argument("--out", type=path_text("--out"), default=None)
     srep.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                       help="report the study run with these --set values")
     _seed_arguments(srep)

@@ -28,6 +28,7 @@ def atomic_target(path: str | Path, tmp_name: str | None = None) -> Iterator[Pat
     names it: a fixed name beside ``path``, for a file only one process ever writes (a run's own
     tables), which a failed earlier attempt's leftover can never block."""
     target = Path(path)
+    _refuse_special(target)
     tmp = target.parent / tmp_name if tmp_name else _new_file(target)
     try:
         yield tmp
@@ -36,6 +37,20 @@ def atomic_target(path: str | Path, tmp_name: str | None = None) -> Iterator[Pat
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+
+
+def _refuse_special(target: Path) -> None:
+    """OSError when ``target`` (or what its symbolic link points to) is a device, pipe or socket:
+    a rename would replace that node (e.g. /dev/full) with a regular file."""
+    import stat
+
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        return
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise OSError(errno.EINVAL, "not a regular file (a device, pipe or socket), which is never replaced; "
+                                    "give the path of a regular file", str(target))
 
 
 def _new_file(target: Path) -> Path:

@@ -201,8 +201,13 @@ class ResultsWriter:
 
 
 def read_manifest(directory: str | Path) -> dict:
-    """The manifest of a run directory."""
-    return json.loads((Path(directory) / MANIFEST).read_text())
+    """The manifest of a run directory (a JSON object); ValueError naming the file when it holds
+    something else (a list, a number)."""
+    path = Path(directory) / MANIFEST
+    man = json.loads(path.read_text())
+    if not isinstance(man, dict):
+        raise ValueError(f"{path}: not a cistrack manifest (a JSON {type(man).__name__}, not an object)")
+    return man
 
 
 def read_steps(directory: str | Path) -> pa.Table:

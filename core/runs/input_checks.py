@@ -22,5 +22,7 @@ def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
         check_count(rows_per_part, "--rows-per-part", 1, 10 ** 9)
     f = getattr(scenario, "measurements_file", None)
     if f is not None and not Path(f).is_file():
-        why = "is a directory, not an observation file" if Path(f).is_dir() else "no such file"
+        why = ("is a directory, not an observation file" if Path(f).is_dir() else
+               "is not a regular file (a device, pipe or socket), not an observation file" if Path(f).exists()
+               else "no such file")
         raise ConfigError(f"{scenario.source}: [measurements] file = {f}: {why}; nothing was run")

@@ -17,7 +17,7 @@ from cistrack.interfaces.reader import FieldError, SeveralObjectsError, field_er
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry, default_registry
 
-__all__ = ["read_observations", "write_observations", "reader_for", "FieldError", "SeveralObjectsError", "field_error",
+__all__ = ["read_observations", "write_observations", "reader_for", "create_checked", "FieldError", "SeveralObjectsError", "field_error",
            "show_field", "read_text_lines"]
 
 
@@ -30,7 +30,7 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
         raise MeasurementError(f"{path}: is a directory, not an observation file; give the path of a file "
                                "(e.g. [measurements] file = \"obs.psv\")")
     if format is not None:
-        return reg.create("reader", format, **params)
+        return create_checked(reg, "reader", format, params)
     name = str(path).lower()
     matches = [e.name for e in reg.entries("reader")
                if any(name.endswith(s) for s in getattr(e.factory, "suffixes", ()))]
@@ -40,7 +40,23 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
                else f"several readers ({', '.join(matches)}) recognise")
         raise MeasurementError(f"{path}: {why} this file name; give a file whose name ends in a known "
                                f"suffix, or name the format (one of {', '.join(f'{k} {v}' for k, v in known.items())})")
-    return reg.create("reader", matches[0], **params)
+    return create_checked(reg, "reader", matches[0], params)
+
+
+def create_checked(reg: Registry, kind: str, name: str, params: dict[str, Any]) -> Any:
+    """``reg.create(kind, name, **params)``, first refusing a parameter the component does not take
+    (a ConfigError naming it and the parameters it takes, not a TypeError from its constructor)."""
+    from cistrack.errors import ConfigError
+    from cistrack.interfaces.component import param_specs
+
+    factory = reg.get(kind, name).factory
+    if params and isinstance(factory, type):
+        known = param_specs(factory)
+        unknown = sorted(k for k in params if k not in known)
+        if unknown:
+            raise ConfigError(f"{kind} {name!r}: unknown parameter {unknown[0]!r}; its parameters: "
+                              f"{', '.join(known) or '(none)'}")
+    return reg.create(kind, name, **params)
 
 
 def read_observations(path: str | PathLike, epoch: str | datetime, format: str | None = None,

@@ -149,9 +149,22 @@ def scenario_template(name: str = "my-scenario", registry: Registry | None = Non
     return "\n".join(lines) + "\n"
 
 
+def name_ok(file_name: str) -> bool:
+    """Whether ``file_name`` (the last part of a path) can name a scenario file: not empty, not
+    blank, not '.' or '..', without control characters."""
+    stem = file_name.removesuffix(".toml")
+    return bool(stem.strip()) and stem not in (".", "..") and stem == stem.strip() \
+        and not any(ord(ch) < 32 for ch in stem)
+
+
 def template_path(name: str | None) -> Path:
-    """The file ``cistrack init NAME`` writes: NAME, with ``.toml`` added when it has no such suffix."""
-    p = Path(name or "my-scenario")
+    """The file ``cistrack init NAME`` writes: NAME, with ``.toml`` added when it has no such suffix.
+
+    ConfigError for a NAME that names no file: empty, blank, or ending in '.' or '..'."""
+    p = Path("my-scenario" if name is None else name)
+    if not name_ok(p.name):
+        raise ConfigError(f"NAME {name!r}: not a scenario file name; give a name such as my-scenario "
+                          "(letters, digits, '-', '_'; optionally in a folder: runs/my-scenario)")
     return p if p.suffix == ".toml" else p.with_name(p.name + ".toml")
 
 

@@ -108,6 +108,10 @@ def _checked(data: dict, p: Path) -> dict:
                               + (f". Did you mean {close[0]!r}?" if close else ""))
     if not data.get("scenarios"):
         raise ConfigError(f"{p}: key 'scenarios' must list at least one scenario")
+    for key in ("filters", "iod"):
+        if key in data and not (isinstance(data[key], list) and data[key]):
+            raise ConfigError(f"{p}: key {key!r} = {data[key]!r}: give a list of at least one name or table, "
+                              f"or leave {key!r} out to keep each scenario's own")
     if "seeds" in data and ("n_seeds" in data or "first_seed" in data):
         raise ConfigError(f"{p}: give 'seeds', or 'n_seeds' (and optionally 'first_seed'), not both")
     keys = [k for k, _ in study_sweep(data, p)]

@@ -131,6 +131,10 @@ class _RowParser:
             t_utc = parse_utc(text)
         except ValueError:
             raise ValueError(f"time_utc {text!r} is not an ISO-8601 UTC time") from None
+        from .obs_rows import year_problem
+
+        if year_problem(t_utc):
+            raise ValueError(f"time_utc {text!r}: {year_problem(t_utc)}")
         return (t_utc - self.epoch).total_seconds() / TU_S
 
     def _angles(self, cells: list[str]) -> tuple[list[float], list[float]]:

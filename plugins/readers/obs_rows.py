@@ -20,9 +20,21 @@ from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
 
 from .decimal_units import to_rad
 
-__all__ = ["ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "TIME_FIELD_HELP"]
+__all__ = ["ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "year_problem", "TIME_FIELD_HELP",
+           "FIRST_YEAR", "LAST_YEAR"]
 
 TIME_FIELD_HELP = "an ISO-8601 UTC time such as 2026-03-01T03:40:00.000000Z"
+FIRST_YEAR, LAST_YEAR = 1800, 2199
+"""The years an observation may lie in: those of a scenario's span (cistrack.scenario.work_limits),
+whose time scales cistrack supports and whose dates never overflow."""
+
+
+def year_problem(t: datetime) -> str | None:
+    """Why the observation time ``t`` cannot be used (outside FIRST_YEAR..LAST_YEAR), or None."""
+    if FIRST_YEAR <= t.year <= LAST_YEAR:
+        return None
+    return (f"time {t.year:04d}-{t.month:02d}-{t.day:02d} is outside the years cistrack supports "
+            f"({FIRST_YEAR} to {LAST_YEAR})")
 
 
 @dataclass
@@ -98,6 +110,9 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     rows, obj = one_object(path, rows, designation)
     meta = {**(meta or {}), **({"object": obj} if obj else {})}
     rows = sorted(rows, key=lambda r: (r.t, r.line))
+    for row in (rows[0], rows[-1]):
+        if year_problem(row.t):
+            raise FieldError(path, row.line, row.time_field, year_problem(row.t))
     for prev, cur in zip(rows, rows[1:]):
         if cur.t == prev.t:
             raise FieldError(path, cur.line, cur.time_field,

@@ -1,0 +1,32 @@
+"""argparse ``type=`` converters shared by the sub-commands: each refuses a bad value with a
+message naming the option and what it takes (argparse prints it after the usage line)."""
+from __future__ import annotations
+
+import argparse
+from typing import Callable
+
+__all__ = ["path_text", "count"]
+
+
+def path_text(option: str) -> Callable[[str], str]:
+    """A converter for a path option such as ``--out``: any non-blank text (an empty value would
+    otherwise fall back silently to the default path)."""
+    def convert(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"{text!r} is empty; give a path, or leave {option} out "
+                                             "for the default")
+        return text
+    return convert
+
+
+def count(minimum: int = 1) -> Callable[[str], int]:
+    """A converter for a whole-number option of at least ``minimum``."""
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number; give one >= {minimum}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value}: give a whole number >= {minimum}")
+        return value
+    return convert
