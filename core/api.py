@@ -28,6 +28,7 @@ DeprecationWarning for at least one release (:mod:`cistrack._moved`).
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,8 +188,12 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
         return []
     if isinstance(settings, str):
         return [settings]
+    if not isinstance(settings, (Mapping, list, tuple)) or \
+            (not isinstance(settings, Mapping) and not all(isinstance(s, str) for s in settings)):
+        raise TypeError(f"settings={settings!r}: give a mapping such as {{'filter.n_particles': 500}} or a list of "
+                        "'TABLE.KEY=VALUE' strings")
     if not isinstance(settings, Mapping):
-        return [str(s) for s in settings]
+        return list(settings)
     import tomli_w
 
     items: list[str] = []
@@ -230,6 +235,18 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
     return apply_settings(scen, _setting_items(settings), reg)
 
 
+def _checked_arguments(**given: Any) -> None:
+    """TypeError naming the argument when ``out``, ``log``, ``directory`` or ``study`` has a type the
+    API does not take (before anything is read or run)."""
+    for name, value in given.items():
+        if name == "log":
+            if value is not None and not callable(value):
+                raise TypeError(f"log={value!r}: give a callable that takes one string, or None")
+        elif not (isinstance(value, (str, os.PathLike)) or (value is None and name == "out")):
+            allowed = "a path (str or pathlib.Path)" + (" or None" if name == "out" else "")
+            raise TypeError(f"{name}={value!r}: give {allowed}")
+
+
 def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,
         settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
         progress: bool = False, log: Callable[[str], None] | None = None, observers: Iterable[Any] = (),
@@ -266,6 +283,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.runs.observers import checked_observers
 
     observers = checked_observers(observers, "observers")
+    _checked_arguments(out=out, log=log)
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
@@ -302,7 +320,10 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     """
     from cistrack.fitting.from_observations import fit_files
 
-    paths = [files] if isinstance(files, (str, Path)) else list(files)
+    _checked_arguments(out=out, log=log)
+    paths = [files] if isinstance(files, (str, os.PathLike)) else files
+    if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
+        raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
     return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress,
                      overwrite=overwrite)
 
@@ -312,6 +333,7 @@ def read_run(directory: str | Path) -> Run:
     from cistrack.evaluation.run_summary import RunSummary
     from cistrack.results.store import read_manifest
 
+    _checked_arguments(directory=directory)
     d = Path(directory)
     if not d.is_dir():
         raise ConfigError(f"{d}: not a run's results folder (no such directory)")
@@ -390,6 +412,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     from cistrack.studies.study import run_study
     from cistrack.studies.study_table import study_rows
 
+    _checked_arguments(study=study, out=out, log=log)
     items = _setting_items(settings) or None
     res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
                     first_seed=first_seed, n_seeds=n_seeds)

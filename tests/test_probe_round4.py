@@ -185,3 +185,15 @@ def test_a_study_with_an_empty_or_unlisted_variant_key_is_refused(line, tmp_path
 def test_a_measurements_file_that_is_a_device_is_named_as_such_not_as_missing(tmp_path, capsys):
     err = _refused(QUICK + ["--set", "measurements.file=/dev/null", "--out", str(tmp_path / "r")], capsys)
     assert "[measurements] file = /dev/null: is not a regular file" in err
+
+
+def test_a_fit_of_observations_the_ephemeris_cannot_model_names_the_file_not_the_settings(tmp_path, capsys):
+    from cistrack.cli.main import main
+    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
+
+    text = (builtin_scenario_path("real-data").parent / "real_data" / "observations.psv").read_text()
+    old = tmp_path / "y1850.psv"
+    old.write_text(text.replace("|2026-", "|1850-"))
+    assert main(["fit", str(old), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert str(old) in err and "start 1850-03-01" in err and "which the fit cannot model" in err

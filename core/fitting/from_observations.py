@@ -243,6 +243,20 @@ def _data_span(obs: ObjectObservations) -> tuple[str, float]:
     return units.format_utc(start), math.ceil(days * 1e4) / 1e4
 
 
+def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
+                      registry: Registry) -> Scenario:
+    """:func:`_scenario`, whose refusal of the epoch the observations set (e.g. outside the
+    ephemeris' years) names the files and the observations' span: the data, not a setting, is at fault."""
+    try:
+        return _scenario(obs, obs_file, settings, registry)
+    except ConfigError as exc:
+        if "'epoch'" not in str(exc):
+            raise
+        epoch, days = _data_span(obs)
+        raise ConfigError(f"{', '.join(str(f) for f in obs.files)}: the observations of {obs.designation} "
+                          f"start {epoch[:10]} (span {days:.3g} d), which the fit cannot model: {exc}") from None
+
+
 def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any], registry: Registry) -> Scenario:
     template = load_scenario(TEMPLATE, registry)
     epoch, days = _data_span(obs)
@@ -582,7 +596,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         plans.append((obs, d))
     where = "--out" if out is not None else "the results directory"
     for obs, d in plans:  # validate every scenario and directory before the first run
-        _scenario(obs, d / "observations.psv", scen_settings, reg)
+        _checked_scenario(obs, d / "observations.psv", scen_settings, reg)
         replaced = check_fit_replacing(d, obs.designation, where, overwrite)
         if replaced:
             say(f"--overwrite: replacing {replaced} in {d}")

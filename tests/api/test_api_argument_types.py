@@ -1,0 +1,27 @@
+"""The Python API names the argument whose type it does not take, before anything runs."""
+from __future__ import annotations
+
+import pytest
+
+import cistrack as ct
+
+
+@pytest.mark.parametrize("call, argument", [
+    (lambda: ct.run("quick", settings=5), "settings=5"),
+    (lambda: ct.run("quick", settings=[1, 2]), "settings=[1, 2]"),
+    (lambda: ct.run("quick", log=5), "log=5"),
+    (lambda: ct.run("quick", out=3.5), "out=3.5"),
+    (lambda: ct.fit(5), "files=5"),
+    (lambda: ct.fit([]), "files=[]"),
+    (lambda: ct.fit("ok.psv", out=3.5), "out=3.5"),
+    (lambda: ct.read_run(5), "directory=5"),
+    (lambda: ct.study(5), "study=5"),
+])
+def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
+    with pytest.raises(TypeError, match=argument.replace("[", r"\[").replace("]", r"\]")):
+        call()
+
+
+def test_settings_as_a_mapping_or_a_list_of_strings_are_taken():
+    assert ct.load_scenario("quick", settings={"duration_days": 1.5}).duration_days == 1.5
+    assert ct.load_scenario("quick", settings=["duration_days=1.5"]).duration_days == 1.5
