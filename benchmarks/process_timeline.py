@@ -92,7 +92,14 @@ def main(argv: list[str]) -> int:
             _mark("numba target context (registries, scipy.linalg)")
         _count_numba_loads()
 
-    # the run's compile clock (cistrack.runs.compile_clock) is numba's first importer
+    # the run's thread limit (cistrack.threads.library_thread_limit) is numba's first importer
+    scenario_run = run.run_scenario
+
+    def run_with_numba(*a, **k):
+        start_numba("scenario")
+        return scenario_run(*a, **k)
+
+    run.run_scenario = run_with_numba
     clock_enter = compile_clock.CompileClock.__enter__
 
     def enter_clock(self):
