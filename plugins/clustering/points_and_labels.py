@@ -24,8 +24,8 @@ def standardize(x: np.ndarray) -> np.ndarray:
 
     Coordinates with zero spread (all particles equal) are only shifted, so duplicates stay finite.
     The result is bit for bit numpy's ``(x - x.mean(axis=0)) / x.std(axis=0)``: for a C-ordered
-    ``x`` numpy sums along axis 0 row by row, and the compiled :func:`_standardize` makes the same
-    additions in the same order in one pass with no temporaries (the filters standardise 10,000
+    ``x`` numpy sums along axis 0 row by row, and the compiled :func:`_column_moments` and
+    :func:`_scale_rows` make the same additions in the same order with no temporaries (the filters standardise 10,000
     particles every step); other layouts go through numpy itself.
     """
     x = np.asarray(x, dtype=np.float64)
@@ -34,8 +34,10 @@ def standardize(x: np.ndarray) -> np.ndarray:
         std = x.std(axis=0)
         std[~(std > 0)] = 1.0
         return (x - mean) / std
-    out = np.empty_like(x)
-    _standardize(x, out)
+    d = x.shape[1]
+    mean, std, out = np.zeros(d), np.empty(d), np.empty_like(x)
+    _column_moments(x, mean, std)
+    _scale_rows(x, mean, std, out)
     return out
 
 
@@ -74,7 +76,7 @@ class Standardizer:
 
 @lazy_njit(cache=True)
 def _column_moments(x, mean, std):
-    """mean (d,) and std (d,) of the columns of x (N, d), as :func:`_standardize` computes them."""
+    """mean (d,) and std (d,) of the columns of x (N, d), as :func:`standardize` computes them."""
     n, d = x.shape
     for i in range(n):
         for a in range(d):
@@ -93,32 +95,8 @@ def _column_moments(x, mean, std):
 
 @lazy_njit(cache=True)
 def _scale_rows(x, mean, std, out):
-    """out (n, d) = (x - mean) / std, row by row, as :func:`_standardize` writes it."""
+    """out (n, d) = (x - mean) / std, row by row, as :func:`standardize` writes it."""
     n, d = x.shape
-    for i in range(n):
-        for a in range(d):
-            out[i, a] = (x[i, a] - mean[a]) / std[a]
-
-
-@lazy_njit(cache=True)
-def _standardize(x, out):
-    """out (N, d) = (x - mean) / std per column of x (N, d), N >= 1; std 0 (or NaN) taken as 1."""
-    n, d = x.shape
-    mean = np.zeros(d)
-    for i in range(n):
-        for a in range(d):
-            mean[a] += x[i, a]
-    for a in range(d):
-        mean[a] = mean[a] / n
-    var = np.zeros(d)
-    for i in range(n):
-        for a in range(d):
-            t = x[i, a] - mean[a]
-            var[a] += t * t
-    std = np.empty(d)
-    for a in range(d):
-        s = np.sqrt(var[a] / n)
-        std[a] = s if s > 0 else 1.0
     for i in range(n):
         for a in range(d):
             out[i, a] = (x[i, a] - mean[a]) / std[a]
