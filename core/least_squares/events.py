@@ -86,7 +86,7 @@ class OrbitEvent:
     def _pm(self, key: str, fmt: str) -> str:
         """`` +- sigma`` of ``key`` in format ``fmt``, or "" without sigmas."""
         v = self.sigma.get(key)
-        return "" if v is None else f" +- {v:{fmt}}"
+        return "" if v is None else f" +- {v:{fmt}}" if np.isfinite(v) else " +- ?"
 
     def lines(self) -> list[str]:
         """Printed lines (each under 120 columns): what, when, how high and how fast; then where."""
@@ -98,6 +98,9 @@ class OrbitEvent:
             out.append(f"  {self.coordinates} latitude {self.latitude_deg:.3f}{self._pm('latitude_deg', '.2g')} deg, "
                        f"longitude {self.longitude_deg:.3f}{self._pm('longitude_deg', '.2g')} deg"
                        + (" (1-sigma)" if self.sigma else ""))
+        if any(not np.isfinite(v) for v in self.sigma.values()):
+            out.append("  (? : no 1-sigma: varied within its covariance the orbit has no such event in the "
+                       "search window, so the event is poorly determined)")
         return out
 
 
