@@ -19,7 +19,7 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
+__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
            "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "PART_FOLDERS"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
@@ -103,13 +103,18 @@ def check_writable_dir(directory: str | Path, where: str) -> Path:
     return _create_writable(d, where)
 
 
+def make_writable_dir(d: Path) -> None:
+    """Create ``d`` (parents included) and make and remove a file there; OSError when either fails."""
+    d.mkdir(parents=True, exist_ok=True)
+    probe = d / ".cistrack-write-test"
+    probe.write_bytes(b"")
+    probe.unlink()
+
+
 def _create_writable(d: Path, where: str) -> Path:
     """Create ``d`` (parents included) and check that a file can be made there."""
     try:
-        d.mkdir(parents=True, exist_ok=True)
-        probe = d / ".cistrack-write-test"
-        probe.write_bytes(b"")
-        probe.unlink()
+        make_writable_dir(d)
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot write there ({exc.strerror or exc})") from None
     return d

@@ -408,12 +408,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
 
 def _report_dir(out: Path, name: str) -> Path:
     """``out/report``, created; ConfigError naming it when no file can be made there."""
+    from cistrack.results.output_paths import make_writable_dir
+
     rep_dir = out / "report"
     try:
-        rep_dir.mkdir(parents=True, exist_ok=True)
-        probe = rep_dir / ".cistrack-write-test"
-        probe.write_bytes(b"")
-        probe.unlink()
+        make_writable_dir(rep_dir)
     except OSError as exc:
         raise ConfigError(f"study '{name}': cannot write the report to {rep_dir} ({exc.strerror or exc}): the "
                           f"report goes into the study directory's report/ folder; make {out} writable, or copy "
