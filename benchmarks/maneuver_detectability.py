@@ -13,6 +13,10 @@ probability 0.9 along the truth's direction u has |dv|_90 = sqrt(lambda_90 / (u^
 is a bound: it knows the burn's time, which a detector does not.
 
     .venv/bin/python benchmarks/maneuver_detectability.py example-1-maneuver --seeds 9301 9302 ... --passes 2
+
+Each row also gives the run's own detector on the burn (``next``: its first detection falls in the
+first pass observed after the burn; ``later``; ``missed``) and the surprise (-log10 p) of the first
+update after the burn. ``--set TABLE.KEY=VALUE`` changes the scenario as ``cistrack run`` does.
 """
 from __future__ import annotations
 
@@ -30,6 +34,7 @@ from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.trajectory import arc_states
 from cistrack.runs.pipeline import run_scenario
 from cistrack.scenario.loading import load_scenario
+from cistrack.scenario.settings import merge_settings, parse_settings
 
 
 def lambda_90(alpha: float) -> float:
@@ -68,21 +73,40 @@ def burn_bound(result, imp, passes: int, alpha: float) -> dict | None:
             "dv90_ms": float(np.sqrt(lambda_90(alpha) / info))}
 
 
+def detector_outcome(result, imp) -> tuple[str, float]:
+    """The run's own detector on this burn: 'next' (first detection in the first pass observed after
+    the burn), 'later', or 'missed'; and the surprise (-log10 p) of the first update after the burn."""
+    t_b = float(units.tu_to_days(imp.t))
+    ups = [r for r in result.rows if r["kind"] == "update" and r["t_days"] > t_b]
+    if not ups:
+        return "missed", float("nan")
+    hits = [r for r in ups if r.get("maneuver_detected") == 1.0]
+    first = float(ups[0].get("maneuver_statistic", float("nan")))
+    if not hits:
+        return "missed", first
+    return ("next" if int(hits[0]["pass_index"]) == int(ups[0]["pass_index"]) else "later"), first
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario")
     ap.add_argument("--seeds", type=int, nargs="+", required=True)
     ap.add_argument("--passes", type=int, default=2)
     ap.add_argument("--alpha", type=float, default=1e-4)
+    ap.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
+                    help="a scenario setting, as for cistrack run (e.g. maneuvers.detector.gap_hours=inf)")
     args = ap.parse_args()
-    scen = load_scenario(args.scenario).with_overrides({"maneuvers": {"response": "none"}})
-    print("seed,burn_t_days,dv_ms,sigma_along_ms,p_detect,dv90_ms")
+    over = merge_settings({"maneuvers": {"response": "none"}}, parse_settings(args.set))
+    scen = load_scenario(args.scenario).with_overrides(over)
+    print("seed,burn_t_days,dv_ms,sigma_along_ms,p_detect,dv90_ms,detector,first_update_surprise")
     for seed in args.seeds:
         res = run_scenario(scen, seed=seed)
         for imp in res.context.truth_impulses:
             b = burn_bound(res, imp, args.passes, args.alpha)
             if b is not None:
-                print(f"{seed},{b['t_days']:.3f},{b['dv_ms']:.3f},{b['sigma_along_ms']:.4f},{b['p_detect']:.3f},{b['dv90_ms']:.4f}")
+                outcome, first = detector_outcome(res, imp)
+                print(f"{seed},{b['t_days']:.3f},{b['dv_ms']:.3f},{b['sigma_along_ms']:.4f},{b['p_detect']:.3f},"
+                      f"{b['dv90_ms']:.4f},{outcome},{first:.2f}")
 
 
 if __name__ == "__main__":

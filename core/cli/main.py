@@ -114,7 +114,7 @@ def _rerun_recorder(args, reg, scen):
 
 def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
     """The run's status, verdict, counts, final sigmas and errors, and its result files."""
-    from cistrack.evaluation.run_summary import count_lines, final_lines
+    from cistrack.evaluation.run_summary import count_lines, final_lines, maneuver_lines
     from cistrack.evaluation.verdicts import verdict_lines
     from cistrack.results.store import results_line
 
@@ -124,7 +124,7 @@ def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
     ended = s.status in ("finished", "filter-failed")  # a failed run has no verdict to give
     for line in (verdict_lines(s, out, _fmt) if ended else ["  verdict: none (the run did not finish; see its status above)"]):
         out_(line)
-    for line in count_lines(s):
+    for line in count_lines(s) + maneuver_lines(s):
         out_(line)
     for line in final_lines(s.final, _fmt):  # velocities in m/s throughout
         out_(line)

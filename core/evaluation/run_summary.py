@@ -13,7 +13,7 @@ import numpy as np
 
 from cistrack.evaluation.custody import Verdict
 
-__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines", "final_lines"]
+__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines", "final_lines", "maneuver_lines"]
 
 FINAL_KEYS: tuple[str, ...] = (
     "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
@@ -171,6 +171,21 @@ def count_lines(s: RunSummary) -> list[str]:
                "updates after it" if s.n_measurements_before_iod else f"{s.n_updates} filter updates")
     return [f"  {s.n_measurements} measurements{passes}", f"  {updates}, wall time {s.wall_time_s:.1f} s"
             + (f" (and {s.compile_time_s:.1f} s compiling, once per machine)" if s.compile_time_s >= 0.05 else "")]
+
+
+def maneuver_lines(s: RunSummary) -> list[str]:
+    """The truth's burns and the maneuvers the run detected (``summary.maneuvers``), one line
+    each: when detected, and the burn's least-squares estimate (m/s, days since the epoch) or
+    why there is none. No lines for a ballistic run without detections."""
+    lines = [f"  truth burn: {b['delta_v_ms']:.3g} m/s at {b['t_days']:.3f} d" for b in s.truth_maneuvers]
+    for k, m in enumerate(s.maneuvers, 1):
+        head = f"  maneuver {k}: detected at {m['t_days']:.3f} d"
+        if m.get("confirmed"):
+            lines.append(f"{head}; burn {m['delta_v_ms']:.3g} +- {m['delta_v_sigma_ms']:.2g} m/s at "
+                         f"{m['t_burn_days']:.3f} +- {m.get('t_burn_sigma_days') or 0.0:.2g} d")
+        else:
+            lines.append(f"{head}; unconfirmed: the least squares kept no burn there")
+    return lines
 
 
 _SIGMA_POS = ("sigma_x_km", "sigma_y_km", "sigma_z_km")

@@ -87,13 +87,20 @@ class NisWindowDetector(SequentialDetector):
         Per-update tail probability below which an update counts as surprising for
         ``min_surprising``, in [false_alarm, 1]. 0.01: two chance updates of one window below it
         have probability ~3e-4.
+    gap_hours : float
+        An update at least this many hours after the one before it (the first of a pass) fires
+        alone when it is gross (tail probability below ``false_alarm``), whatever
+        ``min_surprising`` says: a burn in the gap shows first there, and a filter whose prior is
+        wide after the gap may absorb it at once (:mod:`.sequential`). 6 h lies between Example
+        1's spacing within a pass (40-60 min) and its gaps between passes (0.6-0.9 d); ``inf``
+        turns the rule off. In (0, inf].
     """
 
     registry_name = "nis-window"  # also when built without the registry: Detection.detector names it
 
     def __init__(self, window: int = 5, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
-                 update_level: float = 0.01) -> None:
-        self._init_test(window, false_alarm, warmup, min_surprising, update_level)
+                 update_level: float = 0.01, gap_hours: float = 6.0) -> None:
+        self._init_test(window, false_alarm, warmup, min_surprising, update_level, gap_hours)
 
     def _contribution(self, t, prior, group, sensor):
         inn = innovation(prior, group, sensor)
@@ -129,6 +136,9 @@ class MixtureLikelihoodDetector(SequentialDetector):
         (at most ``window``; see ``nis-window``).
     update_level : float
         Per-update p below which an update counts as surprising, in [false_alarm, 1].
+    gap_hours : float
+        An update at least this many hours after the one before it fires alone when it is gross
+        (see ``nis-window``). In (0, inf].
     n_draws : int
         Monte Carlo draws from the predictive mixture per update (0: the analytic bound only).
         2000 resolve p to ~±0.005 at p = 0.05; below ~1/n_draws the analytic bound decides.
@@ -140,10 +150,10 @@ class MixtureLikelihoodDetector(SequentialDetector):
     registry_name = "mixture-likelihood"
 
     def __init__(self, window: int = 5, false_alarm: float = 1e-4, warmup: int = 5, min_surprising: int = 2,
-                 update_level: float = 0.01, n_draws: int = 2000, seed: int = 52) -> None:
+                 update_level: float = 0.01, n_draws: int = 2000, seed: int = 52, gap_hours: float = 6.0) -> None:
         self.n_draws = check_int(self, "n_draws", n_draws, minimum=0, maximum=10_000_000)
         self.seed = check_int(self, "seed", seed, minimum=0)
-        self._init_test(window, false_alarm, warmup, min_surprising, update_level)
+        self._init_test(window, false_alarm, warmup, min_surprising, update_level, gap_hours)
 
     def _contribution(self, t, prior, group, sensor):
         weights, means, covs = predictive_mixture(prior, group, sensor)

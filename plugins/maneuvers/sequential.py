@@ -7,7 +7,12 @@ independent chi-squares is chi-square with the summed dof) and also tests the ne
 each is expressed as a surprise, -log10 of its tail probability, and compared with
 -log10(false_alarm). A detection further needs at least ``min_surprising`` of the window's
 updates each individually surprising (tail probability below ``update_level``), so that one
-gross outlier among good measurements does not fire by itself. ``warmup`` updates after
+gross outlier among good measurements does not fire by itself, with one exception: a *gross*
+update (tail probability below ``false_alarm``) that comes at least ``gap_hours`` after the update
+before it (the first of a pass) fires alone. A burn in the gap shows first there, and a filter
+whose prior is wide after the gap may absorb it at that update, leaving the rest of the pass
+consistent (on ``example-1-burn``'s 1 m/s burn, three runs in 30 whose first update after the
+burn had a surprise of 7.6-11.6 waited a pass for a second surprising update). ``warmup`` updates after
 :meth:`reset` are judged but never fire and do not enter the window (the filter settles after
 its IOD). After a detection the window is cleared: the next test starts on new evidence only.
 
@@ -27,6 +32,7 @@ from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from cistrack import units
 from cistrack.errors import FilterError, MeasurementError, ParameterError
 from cistrack.interfaces.component import check_int, check_range
 from cistrack.interfaces.maneuvers import Detection, ManeuverDetector
@@ -88,6 +94,7 @@ class _Entry:
     dof: float
     surprising: bool    # tail probability below update_level
     gross: bool         # tail probability below false_alarm
+    after_gap: bool     # at least gap_hours after the update before it
 
 
 class SequentialDetector(ManeuverDetector):
@@ -100,9 +107,10 @@ class SequentialDetector(ManeuverDetector):
     warmup: int
     min_surprising: int
     update_level: float
+    gap_hours: float
 
     def _init_test(self, window: int, false_alarm: float, warmup: int, min_surprising: int,
-                   update_level: float) -> None:
+                   update_level: float, gap_hours: float = 6.0) -> None:
         self.window = check_int(self, "window", window, minimum=1, maximum=1000)
         self.false_alarm = check_range(self, "false_alarm", false_alarm, 0.0, 0.5, lo_open=True)
         self.warmup = check_int(self, "warmup", warmup, minimum=0)
@@ -114,6 +122,8 @@ class SequentialDetector(ManeuverDetector):
         if self.update_level < self.false_alarm:
             raise ParameterError(f"{self._label()}: parameter 'update_level' = {update_level!r} is invalid: must be "
                                  f">= false_alarm ({self.false_alarm}); it is the looser per-update level")
+        off = isinstance(gap_hours, float) and gap_hours == math.inf
+        self.gap_hours = math.inf if off else check_range(self, "gap_hours", gap_hours, 0.0, math.inf, lo_open=True)
         self.reset()
 
     def reset(self) -> None:
@@ -148,13 +158,15 @@ class SequentialDetector(ManeuverDetector):
         self._seen += 1
         if self._seen <= self.warmup:
             return single, None
-        entry = _Entry(t, before, c, dof, single > -math.log10(self.update_level), single >= self.threshold)
+        after_gap = float(units.tu_to_days(t - before)) * 24.0 >= self.gap_hours
+        entry = _Entry(t, before, c, dof, single > -math.log10(self.update_level), single >= self.threshold, after_gap)
         self._entries.append(entry)
         self._recent.append(entry)
         total_c = sum(e.c for e in self._entries)
         total_dof = sum(e.dof for e in self._entries)
         statistic = max(single, -chi2_log10_sf(total_c, total_dof))
-        if statistic < self.threshold or sum(e.surprising for e in self._entries) < self.min_surprising:
+        enough = sum(e.surprising for e in self._entries) >= self.min_surprising or (entry.gross and entry.after_gap)
+        if statistic < self.threshold or not enough:
             return statistic, None
         first = next(e for e in self._entries if e.surprising)
         t_lo = min([first.t_before] + [e.t_before for e in self._recent if e.gross])

@@ -42,7 +42,8 @@ def test_both_are_registered_as_maneuver_detectors():
 @pytest.mark.parametrize(("params", "named"), [
     ({"window": 0}, "window"), ({"false_alarm": 0.0}, "false_alarm"), ({"false_alarm": 0.7}, "false_alarm"),
     ({"warmup": -1}, "warmup"), ({"min_surprising": 6}, "min_surprising"),
-    ({"update_level": 1e-6}, "update_level"), ({"window": 2.5}, "window")])
+    ({"update_level": 1e-6}, "update_level"), ({"window": 2.5}, "window"),
+    ({"gap_hours": 0.0}, "gap_hours"), ({"gap_hours": -1.0}, "gap_hours"), ({"gap_hours": "6"}, "gap_hours")])
 def test_bad_parameters_name_the_parameter_and_what_is_allowed(cls, params, named):
     with pytest.raises(ParameterError, match=f"'{named}'.*must"):
         cls(**params)
@@ -262,6 +263,47 @@ def _with_gross_update(seq, k, sigmas=50.0):
     m = seq.groups[k][0]
     seq.groups[k] = [Measurement(m.t, m.z + np.array([sigmas * seq.sigma_x, 0.0]), m.covariance, m.names)]
     return seq
+
+
+def _with_gap(seq, k, hours):
+    """The updates from ``k`` on moved ``hours`` later: a gap between updates k-1 and k."""
+    from dataclasses import replace
+
+    from cistrack import units
+
+    shift = float(units.days_to_tu(hours / 24.0))
+    for j in range(k, len(seq.times)):
+        t = float(seq.times[j] + shift)
+        seq.times[j] = t
+        b = seq.priors[j]
+        seq.priors[j] = Belief(t, b.mixture, replace(b.samples, epoch=t))
+        seq.groups[j] = [replace(m, t=t) for m in seq.groups[j]]
+    return seq
+
+
+@pytest.mark.parametrize("cls", DETECTORS)
+def test_a_gross_first_update_after_a_gap_fires_alone(cls):
+    """A burn in a gap between passes shows first at the pass's first update, where a filter with
+    a wide prior may absorb it: that update fires by itself when it is gross."""
+    seq = _with_gap(_with_gross_update(linear_gaussian_updates(30, seed=9), 20), 20, hours=12.0)
+    hits = [i for i, (_, d) in enumerate(_run(cls(), seq)) if d is not None]
+    assert hits == [20]
+
+
+@pytest.mark.parametrize("cls", DETECTORS)
+def test_a_gross_update_after_a_shorter_gap_than_gap_hours_needs_a_second_surprising_one(cls):
+    seq = _with_gap(_with_gross_update(linear_gaussian_updates(30, seed=9), 20), 20, hours=12.0)
+    assert not any(d for _, d in _run(cls(gap_hours=14.0), seq))  # the gap is 12 h + the 1 h spacing
+    assert not any(d for _, d in _run(cls(gap_hours=float("inf")), seq))
+
+
+@pytest.mark.parametrize("cls", DETECTORS)
+def test_a_merely_surprising_first_update_after_a_gap_does_not_fire_alone(cls):
+    """Surprising at the 1 % level but not gross (below false_alarm): the gap rule does not apply."""
+    seq = _with_gap(_with_gross_update(linear_gaussian_updates(30, seed=9), 20, sigmas=1.5), 20, hours=12.0)
+    results = _run(cls(), seq)
+    assert 2.0 < results[20][0] < 4.0  # surprise: beyond the 1 % level, short of false_alarm's 4
+    assert not any(d for _, d in results)
 
 
 @pytest.mark.parametrize("cls", DETECTORS)
