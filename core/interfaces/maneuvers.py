@@ -12,12 +12,14 @@ the measurements are unlikely under the prior in a way a burn explains, else Non
 
 A :class:`ManeuverResponse` is what a run does about a detection before the filter takes the
 measurements that raised it: a new cloud of particles at the detection time (the prior widened
-by the burns it may have made), from which the filter starts again; or nothing.
+by the burns it may have made), from which the filter starts again; or nothing. A response that
+sets ``needs_history = True`` is also handed a :class:`ResponseHistory`: the measurements taken
+before the detection, the sensor, and the filter's settled posterior before the suspect interval.
 """
 from __future__ import annotations
 
 from abc import abstractmethod
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,9 +28,10 @@ from cistrack.interfaces.component import Component
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.model.measurement import Measurement
+from cistrack.model.measurement import Measurement, MeasurementSet
 
-__all__ = ["Impulse", "ManeuverPlan", "Detection", "ManeuverDetector", "ManeuverResponse"]
+__all__ = ["Impulse", "ManeuverPlan", "Detection", "ManeuverDetector", "ManeuverResponse", "SettledPosterior",
+           "ResponseHistory"]
 
 
 @dataclass(frozen=True)
@@ -118,17 +121,68 @@ class ManeuverDetector(Component):
         Returns (the test statistic after this update, a :class:`Detection` or None)."""
 
 
+@dataclass(frozen=True)
+class SettledPosterior:
+    """One of the filter's posteriors, as a Gaussian.
+
+    Attributes
+    ----------
+    t : float                  TU, the update it follows
+    mean : (6,) float          synodic LU, VU
+    covariance : (6, 6) float  LU, VU squared
+    """
+
+    t: float
+    mean: np.ndarray
+    covariance: np.ndarray
+
+
+def _quiet(message: str) -> None:
+    """Say nothing (a history built without a log)."""
+
+
+@dataclass(frozen=True)
+class ResponseHistory:
+    """What a run saw before a detection, handed to a response with ``needs_history = True``.
+
+    Attributes
+    ----------
+    measurements : MeasurementSet   every measurement taken before the detection's time (TU, rad;
+                                    not those at it: the filter takes them after the response)
+    sensor : Sensor                 the sensor (or site network) that took them
+    posterior : SettledPosterior or None   the filter's latest settled posterior (largest position
+                                    sigma below ``cistrack.runs.maneuver_watch.SETTLED_KM``) at or
+                                    before ``PRE_DAYS`` before the suspect interval (else the
+                                    earliest settled one inside it); None when there is none
+    say : callable(str)             the run's log, for what the response did in words
+    """
+
+    measurements: MeasurementSet
+    sensor: Sensor
+    posterior: SettledPosterior | None = None
+    say: Callable[[str], None] = _quiet
+
+
 class ManeuverResponse(Component):
     """What a run does when a maneuver is detected (registry kind ``"maneuver-response"``).
 
     Called once per detection, before the filter's update with the measurements that raised it.
+
+    A response that sets the class attribute ``needs_history = True`` is called as
+    ``respond(detection, prior, dynamics, rng, history=ResponseHistory(...))`` (the measurements
+    before ``detection.t``, the sensor, the settled posterior before the suspect interval); it must
+    still work with ``history=None`` (a call outside a run). With ``needs_history = False`` (the
+    default) the call has the four arguments only.
     """
 
     kind = "maneuver-response"
+    needs_history: bool = False
 
     @abstractmethod
     def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics,
                 rng: np.random.Generator) -> ParticleCloud | None:
         """A cloud (N, 6) at ``detection.t`` (TU) from which the filter starts again, or None to
         leave the filter as it is. ``prior`` is the filter's belief at ``detection.t`` before the
-        update; ``dynamics`` the filter's model; every random draw comes from ``rng``."""
+        update; ``dynamics`` the filter's model; every random draw comes from ``rng``. A response
+        with ``needs_history = True`` takes a fifth keyword argument ``history``
+        (:class:`ResponseHistory` or None)."""

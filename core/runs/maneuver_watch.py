@@ -3,7 +3,9 @@
 At each update step the run hands the watch the prior and the measurements before the filter takes
 them (:meth:`ManeuverWatch.before_update`). The scenario's detector (``[maneuvers] detector``)
 judges them; on a detection the response (``[maneuvers] response``, default none) may hand back a
-widened cloud, from which the filter starts again before it takes the measurements. The watch keeps
+widened cloud, from which the filter starts again before it takes the measurements (a response
+with ``needs_history`` also gets a :class:`~cistrack.interfaces.maneuvers.ResponseHistory`:
+:meth:`ManeuverWatch.history`). The watch keeps
 each update's posterior mean (:meth:`after_update`), so that at the end of the run
 (:meth:`records`) the detections are grouped in episodes (:func:`episodes`: a filter that does not
 recover from a burn raises detection after detection) and each episode's burn is estimated by least
@@ -29,7 +31,8 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import PropagationError
-from cistrack.interfaces.maneuvers import Detection, ManeuverDetector, ManeuverResponse
+from cistrack.interfaces.maneuvers import (Detection, ManeuverDetector, ManeuverResponse, ResponseHistory,
+                                           SettledPosterior)
 from cistrack.interfaces.metric import StepMetric
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.options import FitOptions
@@ -42,8 +45,11 @@ earlier: a small burn is often detected a pass late, its interval starting after
 SETTLED_KM = 1000.0
 """The arc starts from a posterior whose largest position sigma is below this (km): one the filter
 has settled, not the IOD's cloud."""
-POST_DAYS = 2.0
-"""Days of measurements after the detection in the delta-v estimate."""
+POST_DAYS = 3.0
+"""Days of measurements after the detection in the delta-v estimate (fewer when the next
+episode's suspect interval starts sooner). A burn in the gap before a pass is often detected at
+that pass's first update; two days after it then hold only two passes, and the burn's sigma is
+several times what three give (``example-1-burn`` seed 1: 0.53 against 0.093 m/s)."""
 EPISODE_DAYS = 1.5
 """A detection this close (days) after the one before it belongs to the same maneuver (about one
 pass and the gap after it in the examples)."""
@@ -85,10 +91,25 @@ class ManeuverWatch:
             return None
         if not detection.detector:
             detection.detector = self.detector.registry_name or type(self.detector).__name__
+        before = self.detections[-1].t if self.detections else -np.inf
         self.detections.append(detection)
         if self.response is None:
             return None
-        return self.response.respond(detection, prior, ctx.dynamics, self.rng)
+        if not getattr(self.response, "needs_history", False):
+            return self.response.respond(detection, prior, ctx.dynamics, self.rng)
+        history = self.history(ctx, detection, before)
+        return self.response.respond(detection, prior, ctx.dynamics, self.rng, history=history)
+
+    def history(self, ctx: Any, d: Detection, before: float = -np.inf) -> ResponseHistory:
+        """What the run saw before the detection ``d``: the measurements before ``d.t`` (TU), the
+        sensor, and the settled posterior the burn's arc starts from (as :meth:`_estimate`'s:
+        :data:`PRE_DAYS` before the suspect interval, not before ``before``, the previous detection)."""
+        lo = float(d.t_burn_bounds[0]) if np.isfinite(d.t_burn_bounds[0]) else float(d.t)
+        start = self._start_state(max(lo - float(units.days_to_tu(PRE_DAYS)), before), lo)
+        posterior = None if start is None else SettledPosterior(start.t, start.mean.copy(), start.covariance.copy())
+        t = np.asarray(ctx.measurements.times, dtype=float)
+        say = self.say or (lambda m: None)
+        return ResponseHistory(ctx.measurements.subset(t < float(d.t)), ctx.sensor, posterior, say)
 
     def after_update(self, t: float, belief: Any) -> None:
         """Keep the posterior mean (6,) and covariance (6, 6) at ``t`` (TU)."""
@@ -105,7 +126,8 @@ class ManeuverWatch:
         out = []
         for k, group in enumerate(groups):
             before = groups[k - 1][0].t if k > 0 else -np.inf
-            burn = self._estimate(ctx, group[0], before, say) if self.estimate else None
+            after = float(groups[k + 1][0].t_burn_bounds[0]) if k + 1 < len(groups) else np.inf
+            burn = self._estimate(ctx, group[0], (before, after), say) if self.estimate else None
             out.append(_record(group, burn))
         return out
 
@@ -121,9 +143,11 @@ class ManeuverWatch:
         early = [p for p in settled if p.t < latest]
         return early[0] if early else None
 
-    def _estimate(self, ctx: Any, d: Detection, before: float, say) -> Any:
+    def _estimate(self, ctx: Any, d: Detection, between: tuple[float, float], say) -> Any:
         """The burn nearest before the detection ``d`` found in the arc around it (module
-        docstring), or None."""
+        docstring), or None; ``between``: the previous episode's detection and the next
+        episode's suspect interval start (TU), which the arc stays within."""
+        before, after = between
         from cistrack.least_squares.burn_search import search_maneuvers
         from cistrack.least_squares.differential_correction import fit_orbit
 
@@ -132,7 +156,8 @@ class ManeuverWatch:
         if start is None:
             return None
         t = np.asarray(ctx.measurements.times, dtype=float)
-        keep = (t >= start.t) & (t <= d.t + float(units.days_to_tu(POST_DAYS)))
+        end = d.t + float(units.days_to_tu(POST_DAYS))
+        keep = (t >= start.t) & (t <= end) & ((t < after) | (t <= d.t))
         if np.sum(keep & (t > d.t - 1e-12)) < 2 or np.sum(keep & (t < d.t)) < 3:
             return None
         arc = ctx.measurements.subset(keep)

@@ -6,9 +6,14 @@ span asked for, in time order, the same ones each time. A response is handed a d
 suspect interval is the last 0.2 TU (about 21 hours) and a Gaussian prior of 400 particles; it
 must return None or a finite cloud of the prior's dimension at the detection's time, draw only from
 the generator it is given (the same seed, the same cloud), leave the prior unchanged, and never
-narrow the prior: a burn it allows for can only add spread.
+narrow the prior: a burn it allows for can only add spread. The checks call ``respond`` with the
+four arguments, without a history; a response that asks for one (``needs_history = True``) must
+take the keyword ``history`` and work without it (a response that refits the measurements of its
+history may narrow the prior where they allow it, which these checks do not see).
 """
 from __future__ import annotations
+
+import inspect
 
 import numpy as np
 
@@ -115,10 +120,23 @@ def check_response_never_narrows_the_prior(c) -> None:
             f"{low:.3f}); a burn it allows for can only add spread")
 
 
+def check_response_takes_the_history_it_asks_for(c) -> None:
+    """``needs_history`` is a bool; when True, ``respond`` takes the keyword ``history``."""
+    flag = getattr(c, "needs_history", False)
+    require(isinstance(flag, bool), f"needs_history must be True or False, got {flag!r}")
+    if not flag:
+        return
+    params = inspect.signature(c.respond).parameters.values()
+    require(any(p.name == "history" or p.kind is inspect.Parameter.VAR_KEYWORD for p in params),
+            "needs_history is True but respond() takes no keyword 'history': the run passes "
+            "respond(detection, prior, dynamics, rng, history=ResponseHistory(...))")
+
+
 MANEUVER_PLAN_CHECKS = [("is_maneuver_plan", check_is_maneuver_plan),
                         ("impulses_are_well_formed_and_in_order", check_impulses_are_well_formed_and_in_order),
                         ("plan_is_deterministic", check_plan_is_deterministic)]
 MANEUVER_RESPONSE_CHECKS = [("is_maneuver_response", check_is_maneuver_response),
                             ("response_is_a_cloud_at_the_detection", check_response_is_a_cloud_at_the_detection),
                             ("response_draws_from_its_generator", check_response_draws_from_its_generator),
-                            ("response_never_narrows_the_prior", check_response_never_narrows_the_prior)]
+                            ("response_never_narrows_the_prior", check_response_never_narrows_the_prior),
+                            ("response_takes_the_history_it_asks_for", check_response_takes_the_history_it_asks_for)]

@@ -1,4 +1,5 @@
-"""Responses to a detected maneuver (kind ``maneuver-response``): ``inflate`` and ``impulse-samples``.
+"""Responses to a detected maneuver (kind ``maneuver-response``): ``inflate``, ``impulse-samples`` and
+``reanchor`` (its refit: :mod:`cistrack.plugins.maneuvers.reanchor`).
 
 Both widen the filter's prior at the detection time t by what an unknown impulsive burn in the
 suspect interval [t_a, t] (the detection's ``t_burn_bounds``) can have done: a burn dv at t_b
@@ -11,7 +12,11 @@ With dv ~ N(0, sigma^2 I) per axis and t_b uniform over the interval:
 - ``impulse-samples`` gives every particle its own burn: a t_b and a dv drawn, so the cloud carries
   the maneuver hypothesis itself (not Gaussian: a fan of trajectories the PGM's clusters follow).
 
-The filter then starts again from the widened cloud and takes the measurements that raised the
+``reanchor`` does not widen the prior: it refits the measurements since the filter's settled
+posterior before the suspect interval with an impulsive burn as solve-for parameters and draws the
+cloud from the fit (``inflate``'s when it cannot).
+
+The filter then starts again from the new cloud and takes the measurements that raised the
 detection.
 """
 from __future__ import annotations
@@ -22,10 +27,13 @@ from cistrack import units
 from cistrack.api import hookimpl
 from cistrack.interfaces import Dynamics, ManeuverResponse
 from cistrack.interfaces.component import check_positive
-from cistrack.interfaces.maneuvers import Detection
+from cistrack.errors import MeasurementError, PropagationError
+from cistrack.interfaces.maneuvers import Detection, ResponseHistory
+from cistrack.least_squares.errors import FitError
 from cistrack.model.belief import Belief, ParticleCloud
+from cistrack.plugins.maneuvers import reanchor
 
-__all__ = ["InflateResponse", "ImpulseSamplesResponse", "BURN_TIMES", "burn_maps"]
+__all__ = ["InflateResponse", "ImpulseSamplesResponse", "ReanchorResponse", "BURN_TIMES", "burn_maps"]
 
 BURN_TIMES = 8
 """Burn times across the suspect interval at which the transition matrix is evaluated."""
@@ -111,8 +119,43 @@ class ImpulseSamplesResponse(_Widen):
         return self._cloud(detection, prior, kicks)
 
 
+class ReanchorResponse(ManeuverResponse):
+    """Re-anchoring by least squares: the measurements since the settled posterior before the
+    suspect interval refitted with an impulsive burn, and the filter started again from the fit's
+    Gaussians at the detection (:mod:`cistrack.plugins.maneuvers.reanchor`); ``inflate``'s cloud,
+    said in the log, when that cannot be done.
+
+    Parameters
+    ----------
+    delta_v_sigma_ms : float
+        One sigma per synodic axis of the burn's delta-v prior (mean zero), m/s (> 0; default 1.0);
+        also the ``inflate`` fallback's.
+    """
+
+    default_name = "reanchor"
+    needs_history = True
+
+    def __init__(self, delta_v_sigma_ms: float = 1.0) -> None:
+        self.delta_v_sigma_ms = check_positive(self, "delta_v_sigma_ms", delta_v_sigma_ms)
+
+    def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics, rng: np.random.Generator,
+                history: ResponseHistory | None = None) -> ParticleCloud:
+        """The cloud (N, 6) at ``detection.t`` drawn from the refit (N: the prior's), or
+        ``inflate``'s when there is none (no ``history``, no settled posterior, too few
+        measurements, or the fit failed); ``detection.extra["reanchor"]`` says which."""
+        say = history.say if history is not None else (lambda m: None)
+        try:
+            anchors = reanchor.refit(detection, dynamics, history, self.delta_v_sigma_ms)
+        except (FitError, np.linalg.LinAlgError, PropagationError, MeasurementError) as exc:
+            detection.extra["reanchor"] = {"fallback": str(exc)}
+            say(f"reanchor: no refit at {units.tu_to_days(detection.t):.3f} d ({exc}); inflating instead")
+            return InflateResponse(self.delta_v_sigma_ms).respond(detection, prior, dynamics, rng)
+        return reanchor.draw(detection, anchors, np.asarray(prior.samples.states).shape[0], rng, say)
+
+
 @hookimpl
 def cistrack_register(registry):
-    """The responses ``inflate`` and ``impulse-samples``."""
+    """The responses ``inflate``, ``impulse-samples`` and ``reanchor``."""
     registry.add("maneuver-response", "inflate", InflateResponse)
     registry.add("maneuver-response", "impulse-samples", ImpulseSamplesResponse)
+    registry.add("maneuver-response", "reanchor", ReanchorResponse)
