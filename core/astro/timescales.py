@@ -5,7 +5,9 @@ Earth orientation parameters (UT1-UTC and polar motion) come from the IERS table
 astropy (package ``astropy-iers-data``: IERS finals2000A, measured values from 1973 plus about
 a year of IERS predictions). Nothing here downloads: importing this module sets
 ``astropy.utils.iers.conf.auto_download = False`` and ``auto_max_age = None`` for the process
-(astropy then reads only the bundled tables, whatever their age; see docs/real-sky.md).
+(astropy then reads only the bundled tables, whatever their age; see docs/real-sky.md). The
+parsed table is kept on disk by :mod:`cistrack.astro.iers_cache` (same values, read in
+milliseconds instead of parsed in about a second).
 
 Times are given as a UTC instant ``epoch`` (``datetime`` or ISO-8601 string) plus ``seconds``
 (scalar or (K,) array) of elapsed SI seconds after it, i.e. physical (TAI) seconds, which is what
@@ -152,8 +154,23 @@ def earth_orientation(epoch: datetime | str, seconds=0.0) -> EarthOrientation:
     return _orientation_of(utc_time(epoch, seconds))
 
 
+_CACHE_TRIED = False
+
+
+def _eop_table():
+    """astropy's Earth orientation table; the default one is loaded through :mod:`.iers_cache`
+    (the same table, without re-parsing the IERS files in every process)."""
+    global _CACHE_TRIED
+    if not _CACHE_TRIED:
+        _CACHE_TRIED = True
+        from cistrack.astro import iers_cache
+
+        iers_cache.install()
+    return iers.earth_orientation_table.get()
+
+
 def _orientation_of(t: Time) -> EarthOrientation:
-    table = iers.earth_orientation_table.get()
+    table = _eop_table()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         utc = t.utc
@@ -185,12 +202,49 @@ class TimeScales:
     orientation: EarthOrientation
 
 
+_KEPT_SCALES: dict[tuple, tuple[object, TimeScales]] = {}
+_KEPT_LIMIT = 32
+
+
+def _copied(sc: TimeScales) -> TimeScales:
+    def pair(p: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        return p[0].copy(), p[1].copy()
+
+    eo = sc.orientation
+    return TimeScales(pair(sc.utc), pair(sc.tt), pair(sc.tdb), pair(sc.ut1),
+                      EarthOrientation(eo.ut1_minus_utc.copy(), eo.xp.copy(), eo.yp.copy(), eo.tabulated.copy()))
+
+
 def time_scales(epoch: datetime | str, seconds=0.0) -> TimeScales:
     """UTC, TT, TDB and UT1 Julian dates and the Earth orientation from one astropy ``Time``.
 
     The same numbers as :func:`tt_jd`, :func:`tdb_jd`, :func:`ut1_jd` and
-    :func:`earth_orientation`, several times cheaper than calling them one by one.
+    :func:`earth_orientation`, several times cheaper than calling them one by one. The last
+    :data:`_KEPT_LIMIT` results are kept and returned again (as copies) for the same ``epoch``
+    and ``seconds`` with the same Earth orientation table: a least-squares fit asks for the
+    same observation times at every iteration.
     """
+    try:
+        s = np.asarray(seconds, dtype=float)
+        key = (epoch, s.shape, s.tobytes())
+        hash(key)
+    except (TypeError, ValueError):
+        return _time_scales(epoch, seconds)     # refused there, with the message for the culprit
+    table = _eop_table()
+    kept = _KEPT_SCALES.get(key)
+    if kept is not None and kept[0] is table:
+        return _copied(kept[1])
+    out = _time_scales(epoch, s)
+    try:
+        if len(_KEPT_SCALES) >= _KEPT_LIMIT:
+            _KEPT_SCALES.pop(next(iter(_KEPT_SCALES)), None)
+    except (RuntimeError, StopIteration):       # another thread changed it meanwhile
+        pass
+    _KEPT_SCALES[key] = (table, _copied(out))
+    return out
+
+
+def _time_scales(epoch: datetime | str, seconds) -> TimeScales:
     t = utc_time(epoch, seconds)
 
     def pair(x) -> tuple[np.ndarray, np.ndarray]:

@@ -257,7 +257,10 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
                           f"start {epoch[:10]} (span {days:.3g} d), which the fit cannot model: {exc}") from None
 
 
-def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any], registry: Registry) -> Scenario:
+def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any], registry: Registry,
+              early: bool = False) -> Scenario:
+    """The template's scenario for ``obs`` (read from ``obs_file``) with ``settings``; ``early``:
+    the filter over the first hours, with at most :data:`.early_seed.EARLY_PARTICLES` particles."""
     template = load_scenario(TEMPLATE, registry)
     epoch, days = _data_span(obs)
     raw = dict(template.raw)
@@ -266,6 +269,10 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
                 "measurements": {"file": str(obs_file.resolve())}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
     raw = _ranging_defaults(merge_settings(raw, settings))
+    if early:
+        from cistrack.fitting.early_seed import early_particles
+
+        raw = early_particles(raw)
     return parse_scenario(raw, f"cistrack fit ({builtin_scenario_path(TEMPLATE).name} with --set)", registry)
 
 
@@ -418,7 +425,7 @@ def _early_scenario(obs: ObjectObservations, scen: Scenario, d: Path, job: _Job)
         return None
     part = replace(obs, measurements=obs.measurements.subset(t <= np.sort(t)[k - 1]))
     suffix = write_merged(d / EARLY_FILE, part.measurements, obs.designation, job.registry)
-    return _scenario(part, d / f"{EARLY_FILE}{suffix}", job.settings, job.registry)
+    return _scenario(part, d / f"{EARLY_FILE}{suffix}", job.settings, job.registry, early=True)
 
 
 def _fit_from_iod(ctx, choices: FitChoices) -> FitResult | None:

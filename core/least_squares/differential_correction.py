@@ -75,6 +75,10 @@ def _check_prior(prior: Any) -> tuple[np.ndarray, np.ndarray] | None:
     return mean, np.linalg.inv(cov)
 
 
+_KEPT_POINTS = 4
+"""Points whose residuals and Jacobian a fit keeps (:meth:`_Problem._kept_or_computed`)."""
+
+
 class _Problem:
     """Residuals, cost and normal equations of one fit. The unknowns x are the state (6,) and,
     with ``solve_for``, its parameters after it (6 + P,)."""
@@ -84,14 +88,33 @@ class _Problem:
         self.dynamics, self.model, self.t0, self.prior = dynamics, model, t0, prior
         self.solve_for = solve_for
         self.n = 6 + (0 if solve_for is None else solve_for.size)
+        self._kept: dict[tuple[str, bytes], tuple[np.ndarray, ...]] = {}
+
+    def _kept_or_computed(self, what: str, x: np.ndarray, compute) -> tuple[np.ndarray, ...]:
+        """``compute()`` at the unknowns ``x``, kept for the next request at the same ``x`` (bit for
+        bit: the passes, their starts and the estimate ask again where an earlier step ended; the
+        propagation and the sensor give the same numbers again). Copies, at most 4 points each."""
+        key = (what, np.asarray(x, dtype=float).tobytes())
+        hit = self._kept.get(key)
+        if hit is None:
+            hit = tuple(np.array(a, copy=True) for a in compute())
+            mine = [k for k in self._kept if k[0] == what]
+            if len(mine) >= _KEPT_POINTS:
+                del self._kept[mine[0]]
+            self._kept[key] = hit
+        return tuple(a.copy() for a in hit)
 
     def _dynamics(self, x: np.ndarray) -> Dynamics:
         return self.dynamics if self.solve_for is None else self.solve_for.dynamics(x[6:])
 
     def evaluate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(weighted residuals (K, m), states (K, 6)) at the unknowns x."""
-        states = arc_states(self._dynamics(x), x[:6], self.t0, self.model.times)
-        return self.model.residuals(states) / self.model.sigmas, states
+        def compute() -> tuple[np.ndarray, np.ndarray]:
+            states = arc_states(self._dynamics(x), x[:6], self.t0, self.model.times)
+            return self.model.residuals(states) / self.model.sigmas, states
+
+        w, states = self._kept_or_computed("evaluate", x, compute)
+        return w, states
 
     def cost(self, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> float:
         c = float(np.sum(w[used] ** 2))
@@ -103,6 +126,9 @@ class _Problem:
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """Weighted d r / d x (K, m, 6 + P): H(x(t_i)) Phi(t_i, t0) / sigma, then the parameters'
         central differences (:mod:`cistrack.least_squares.solve_for_parameters`) / sigma."""
+        return self._kept_or_computed("jacobian", x, lambda: (self._jacobian(x),))[0]
+
+    def _jacobian(self, x: np.ndarray) -> np.ndarray:
         states, stms = arc_states_and_stms(self._dynamics(x), x[:6], self.t0, self.model.times)
         h = self.model.jacobian(states)
         a = np.einsum("kmj,kjl->kml", h, stms) / self.model.sigmas[:, :, None]

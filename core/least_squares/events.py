@@ -336,9 +336,25 @@ def _coarse_track(dynamics: Dynamics, state: np.ndarray, t0: float, t_end: float
     (K,) TU, states (K, 1, 6), impact time TU or inf), one propagation shared by every body."""
     n = max(3, int(np.ceil(abs(t_end - t0) / step_tu)) + 1)
     grid = np.linspace(t0, t_end, n)
+    if callable(getattr(dynamics, "dense_trajectory", None)):
+        return grid, *_dense_track(dynamics, state, t0, grid)
     prop = dynamics.propagate(state[None], t0, grid[1:])
     states = np.concatenate([state[None, None], np.asarray(prop.states, dtype=float)])
     return grid, states, float(np.asarray(prop.impact_time)[0])
+
+
+def _dense_track(dynamics: Dynamics, state: np.ndarray, t0: float, grid: np.ndarray) -> tuple[np.ndarray, float]:
+    """(states (K, 1, 6), impact time TU or inf) of ``state`` (6,) at ``t0`` on ``grid`` (K,) from one
+    dense integration, evaluated at every grid time together (a model integrating in another
+    frame converts all of them at once, not time by time); frozen at the impact point after one."""
+    traj = dynamics.dense_trajectory(state, t0, float(grid[-1]))
+    impact = float(traj.impact_time)
+    flying = grid <= traj.t1 if traj.t1 >= t0 else grid >= traj.t1
+    states = np.empty((grid.size, 1, 6))
+    states[flying, 0] = traj.states(grid[flying])
+    states[~flying, 0] = traj.states(np.array([traj.t1]))[0]
+    states[0, 0] = state
+    return states, impact
 
 
 def _approach_windows(dynamics: Dynamics, track: tuple[np.ndarray, np.ndarray, float],
