@@ -124,3 +124,21 @@ def test_example_1_maneuver_burns_at_each_apolune():
                                    "truth.maneuvers.n_burns=1"))
     assert len(ctx.truth_impulses) == 1
     assert np.linalg.norm(ctx.truth_impulses[0].dv) * MS_PER_VU == pytest.approx(0.05, rel=1e-12)
+
+
+def test_example_1_dro_burn_flies_example_1_burns_burn_seen_from_the_dro():
+    space, ground = load_scenario("example-1-dro-burn"), load_scenario("example-1-burn")
+    assert (space.truth_maneuvers.name, space.truth_maneuvers.params) == (ground.truth_maneuvers.name,
+                                                                          ground.truth_maneuvers.params)
+    assert space.build("sensor").registry_name == "space-telescope"
+    assert space.components["iod"].name == "noisy-range"
+
+
+def test_the_space_maneuver_study_plans_its_false_alarm_runs_and_every_burn_combination(tmp_path):
+    from cistrack.studies.study import plan_runs
+
+    _, specs, _ = plan_runs("maneuver-detection-space", tmp_path / "out")
+    per_seed = 2 + 5 * 2  # example-1-dro over the response; example-1-dro-burn over dv x response
+    assert len(specs) == per_seed * 3 * 20
+    assert {s.scenario_name for s in specs if not s.scenario_name.startswith("example-1-dro-burn")} == {
+        "example-1-dro[resp=none]", "example-1-dro[resp=inflate]"}
