@@ -8,7 +8,10 @@ import pytest
 
 from cistrack import units
 from cistrack.least_squares.events import APPROACH_STEP_MINUTES, _approach_windows, _coarse_track, first_impact
+
 from cistrack.plugin.registry import default_registry
+
+from .test_orbit_events import _towards_moon as _near_moon
 
 STEP = APPROACH_STEP_MINUTES * 60.0 / units.TU_S
 
@@ -16,12 +19,6 @@ STEP = APPROACH_STEP_MINUTES * 60.0 / units.TU_S
 @pytest.fixture(scope="module")
 def dyn():
     return default_registry().create("dynamics", "ephemeris", epoch="2026-03-01T00:00:00Z")
-
-
-def _near_moon(dyn, offset_km, rel_v_kms):
-    fr = dyn.frame
-    m, mv = fr.ephemeris.moon(*fr.epoch_tdb)
-    return fr.gcrs_to_synodic(np.concatenate([m + offset_km, mv + rel_v_kms]), 0.0)
 
 
 def _propagated(dyn, x, grid):
