@@ -11,11 +11,14 @@ Run as a script to write the README pictures:
     .venv/bin/python tests/recorders/viewer_shots.py RUN.rrd docs/img
 which writes docs/img/viewer_start.png, viewer_middle.png and viewer_end.png (in 256 colours);
 with ``--timing`` it first measures, in a page of its own, how long the recording takes to load
-and to play (:func:`timings`) and prints the numbers as JSON.
+and to play (:func:`timings`) and prints the numbers as JSON;
+    .venv/bin/python tests/recorders/viewer_shots.py RUN.rrd --load-only
+measures the load only and writes no picture.
 """
 from __future__ import annotations
 
 import io
+import math
 import socket
 import time
 from pathlib import Path
@@ -75,7 +78,7 @@ def take(rrd: str | Path, out_dir: str | Path, *, settle_s: float = 30.0) -> dic
 
 
 POLL_S = 2.0
-"""Seconds between two pictures while loading or playing is timed."""
+"""Seconds between two pictures while playing is timed."""
 
 
 def _image(png: bytes) -> np.ndarray:
@@ -102,23 +105,40 @@ def cursor_column(img: np.ndarray) -> int | None:
     return col if dark[col] > 0.5 * r.shape[0] else None
 
 
+SETTLE_S = 5.0
+"""The viewer has loaded when its picture has not changed for this many seconds (and three
+pictures)."""
+
+
+def same_picture(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two pictures (H, W, 3) show the same: fewer than 20 pixels differ by more than 40
+    in a channel (JPEG noise and antialiasing differ by less; a missing curve by far more)."""
+    return int((np.abs(a.astype(int) - b.astype(int)).max(axis=2) > 40).sum()) < 20
+
+
 def _time_loading(page, max_s: float) -> tuple[float, float, int]:
-    """Seconds from navigating until the viewer first lays out the recording's panels (the
-    position panel's white plot area) and until the series reach their last time with the cloud
-    drawn (the first picture from which nothing more arrives); also that last column."""
+    """Seconds from navigating until the viewer first draws (a picture that is not blank) and until
+    it shows the run whole (the first of the pictures that stay the same for :data:`SETTLE_S`
+    seconds: every panel drawn); also the series' last column in a full-size picture.
+    Quick half-size pictures (:meth:`Page.quick_picture`) are taken one after the other: each
+    comes with the viewer's next frame, so the times are within one frame of the truth."""
     t0 = time.monotonic()
-    seen: list[tuple[float, int, bool, bool]] = []
+    up = whole = float("nan")
+    settled: np.ndarray | None = None  # the first picture of the latest run of equal pictures
+    n_same = 0
     while time.monotonic() - t0 < max_s:
-        img = _image(page.png())
-        laid_out = region(img, POSITION_PANEL).mean() > 200
-        seen.append((time.monotonic() - t0, curve_end(img), bool(cloud_mask(img).sum() > 50), bool(laid_out)))
-        if len(seen) >= 4 and seen[-1][1] >= 0 and len({s[1] for s in seen[-4:]}) == 1:
+        img = _image(page.quick_picture())
+        t = time.monotonic() - t0
+        if math.isnan(up) and img.std() > 5:  # the first picture that is not blank
+            up = t
+        if settled is None or not same_picture(settled, img):
+            settled, whole, n_same = img, t, 1
+            continue
+        n_same += 1
+        if not math.isnan(up) and n_same >= 3 and t - whole >= SETTLE_S:
             break
-        time.sleep(POLL_S)
-    last = max(s[1] for s in seen)
-    up = next((t for t, _, _, laid_out in seen if laid_out), float("nan"))
-    loaded = next((t for t, e, cloud, _ in seen if e >= last - 2 and cloud), float("nan"))
-    return up, loaded, last
+        time.sleep(0.2)
+    return up, whole, curve_end(_image(page.png()))
 
 
 def _time_playing(page, end_col: int, max_s: float) -> dict:
@@ -140,10 +160,11 @@ def _time_playing(page, end_col: int, max_s: float) -> dict:
             "whole_run_s": round(elapsed / frac, 1) if frac > 0 else None}
 
 
-def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 150.0) -> dict:
+def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 150.0, play: bool = True) -> dict:
     """Load and playback times of ``rrd`` in headless Chromium (software rendering, 1600 x 1000):
-    ``viewer_up_s`` from opening the URL until the viewer lays out the panels, ``load_s`` until all
-    of the run is shown (both to within :data:`POLL_S` and the time a picture takes); ``whole_run_s``: how long
+    ``viewer_up_s`` from opening the URL until the viewer draws, ``load_s`` until it shows the run
+    whole (:func:`_time_loading`); ``load_avg``: the 1-minute load average when the page opened.
+    Without ``play`` that is all; otherwise ``whole_run_s``: how long
     playing the whole run takes at the speed the viewer opens with (measured over at most
     ``max_play_s`` and extrapolated); ``end_key_moves_to_end``: whether pressing End after Home
     puts the time cursor at the end (not in rerun 0.41's web viewer); ``palette_moves_to_end``:
@@ -152,10 +173,13 @@ def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 1
 
     from .headless_browser import open_page
 
+    load_avg = float(Path("/proc/loadavg").read_text().split()[0]) if Path("/proc/loadavg").exists() else None
     with serve_recording(rrd, web_port=free_port()) as served, open_page(served.url) as page:
         up_s, load_s, end_col = _time_loading(page, max_load_s)
-        out = {"viewer_up_s": round(up_s, 1), "load_s": round(load_s, 1),
-               **_time_playing(page, end_col, max_play_s)}
+        out = {"viewer_up_s": round(up_s, 1), "load_s": round(load_s, 1), "load_avg": load_avg}
+        if not play:
+            return out
+        out.update(_time_playing(page, end_col, max_play_s))
         page.press("Home")
         time.sleep(3 * POLL_S)
         home = cursor_column(_image(page.png()))
@@ -233,6 +257,9 @@ if __name__ == "__main__":
 
     from PIL import Image
 
+    if "--load-only" in sys.argv[2:]:  # viewer_shots.py RUN.rrd --load-only: load times only, no pictures
+        print(json.dumps(viewer_shots.timings(sys.argv[1], play=False)), flush=True)
+        sys.exit(0)
     if "--timing" in sys.argv[3:]:
         print(json.dumps(viewer_shots.timings(sys.argv[1])), flush=True)
     for name, png in viewer_shots.take(sys.argv[1], sys.argv[2]).items():
