@@ -42,6 +42,8 @@ __all__ = ["ResultsWriter", "read_steps", "read_manifest", "results_line", "writ
 MANIFEST = "manifest.json"
 STEPS = "steps.parquet"
 PARTS = "steps"
+RESIDUALS_FIGURE = "residuals.svg"
+"""A filter run's residual figure (:mod:`cistrack.runs.residual_figure`)."""
 
 
 def write_json_atomic(path: Path, data: dict) -> None:
@@ -222,14 +224,15 @@ def read_steps(directory: str | Path) -> pa.Table:
 
 
 def results_line(directory: str | Path) -> str:
-    """The line naming a run's results for a person (``cistrack run``): only files that exist, the
-    unmerged parts of a run whose merge failed, or that nothing was written."""
+    """The line naming a run's results for a person (``cistrack run``): only files that exist (the
+    step table, the manifest, the residual figure), the unmerged parts of a run whose merge
+    failed, or that nothing was written."""
     d = Path(directory)
     found = [f"{d}/{STEPS}"] if (d / STEPS).is_file() else []
     n_parts = len(list((d / PARTS).glob("part-*.parquet"))) if (d / PARTS).is_dir() else 0
     if not found and n_parts:
         found.append(f"{d}/{PARTS}/part-*.parquet ({n_parts} files, not merged)")
-    found += [f"{d}/{MANIFEST}"] if (d / MANIFEST).is_file() else []
+    found += [f"{d}/{name}" for name in (MANIFEST, RESIDUALS_FIGURE) if (d / name).is_file()]
     if not found:
         return f"  results: none written in {d}"
     return "  results: " + ", ".join(found)

@@ -30,10 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
+from cistrack.results.store import RESIDUALS_FIGURE, STEPS
+
 __all__ = ["FIGURE", "ResidualPanel", "residual_panels", "residual_figure", "write_residual_figure",
            "write_run_residual_figure"]
 
-FIGURE = "residuals.svg"
+FIGURE = RESIDUALS_FIGURE
 """The figure's file name in a run's results directory."""
 GAP_DAYS = 0.25
 """The bands are not drawn across a time without updates longer than this (between passes)."""
@@ -369,7 +371,7 @@ def write_run_residual_figure(ctx, directory: Path, status: str) -> Path | None:
     not interrupted (an earlier run's figure is removed otherwise). A failure to write (a full disk)
     is a warning on the ``cistrack`` logger: the run's results stand without the figure."""
     d = Path(directory)
-    if status == "interrupted" or not (d / "steps.parquet").is_file():
+    if status == "interrupted" or not (d / STEPS).is_file():
         (d / FIGURE).unlink(missing_ok=True)
         return None
     from cistrack import units

@@ -141,3 +141,9 @@ def test_a_run_draws_no_figure_unless_asked(tmp_path):
     every run's."""
     run_scenario(load_scenario("quick").with_overrides({"duration_days": 1.5}), output_dir=tmp_path / "run")
     assert not (tmp_path / "run" / FIGURE).exists()
+
+
+def test_the_results_line_names_the_residual_figure(quick_run):
+    from cistrack.results.store import results_line
+
+    assert results_line(quick_run).endswith(f", {quick_run}/manifest.json, {quick_run}/{FIGURE}")
