@@ -81,3 +81,19 @@ def test_nearest_centres_in_blocks_equal_the_one_product_formula():
     c = np.round(r.normal(size=(9, 6)), 1)
     plain = np.argmin(np.einsum("ij,ij->i", z, z)[:, None] - (2.0 * z) @ c.T + np.einsum("ij,ij->i", c, c), axis=1)
     assert np.array_equal(nearest_centres(z, c), plain)
+
+
+def test_group_moments_in_blocks_keep_the_mean_and_the_covariance(monkeypatch):
+    """A group larger than GROUP_BLOCK_ROWS: the same mean bits, the covariance to rounding."""
+    from cistrack.plugins.filters import kalman_update
+
+    r = np.random.default_rng(8)
+    x, d = r.normal(size=(5000, 6)) * 1e3 + 7.0, r.normal(size=(5000, 2))
+    labels = r.integers(0, 3, size=5000)
+    whole = group_moments(x, d, labels, 3)
+    monkeypatch.setattr(kalman_update, "GROUP_BLOCK_ROWS", 500)  # every group in 3-4 blocks
+    blocks = group_moments(x, d, labels, 3)
+    assert np.array_equal(blocks.mean_x, whole.mean_x) and np.array_equal(blocks.mean_d, whole.mean_d)
+    for a, b in ((blocks.pxx, whole.pxx), (blocks.pxd, whole.pxd), (blocks.pdd, whole.pdd)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+    np.testing.assert_allclose(blocks.pxx[1], np.cov(x[labels == 1].T), rtol=1e-12)

@@ -151,6 +151,20 @@ def test_group_moments_hold_one_group_at_a_time():
     assert peak <= largest * 64 + 1 * MB
 
 
+def test_a_group_larger_than_a_block_is_summed_in_blocks(monkeypatch):
+    from cistrack.plugins.filters import kalman_update
+
+    n = 600_000
+    r = np.random.default_rng(7)
+    x, d, labels = r.normal(size=(n, 6)), r.normal(size=(n, 2)), np.zeros(n, dtype=np.intp)
+    with monkeypatch.context() as small:
+        small.setattr(kalman_update, "GROUP_BLOCK_ROWS", 10)
+        group_moments(x[:100], d[:100], labels[:100], 1)  # the block path compiled before counting
+    _, peak = _peak_above_start(group_moments, x, d, labels, 1)
+    # one block of GROUP_BLOCK_ROWS rows of [x d] (64 bytes a row), not all 600,000 rows (38 MB)
+    assert peak <= kalman_update.GROUP_BLOCK_ROWS * 64 + 1 * MB
+
+
 def test_kmeans_labels_every_particle_without_a_standardised_copy():
     n = 600_000
     x = np.random.default_rng(5).normal(size=(n, 6)) * np.logspace(-3, 3, 6)
@@ -168,19 +182,28 @@ def test_mixture_density_blocks_equal_one_evaluation():
     assert np.array_equal(mix.logpdf(x), blocks)
 
 
-def test_the_spread_whitened_in_chunks_equals_the_plain_formula():
-    r = np.random.default_rng(12)
-    res = r.normal(size=(200_003, 2)) * np.array([3e-3, 4e-5]) + 0.2
-    R = np.array([[4.0, 1.2], [1.2, 1.0]]) * 1e-10
+def _plain_spread(res, R):
     L = np.linalg.cholesky(R)
     plain = np.cov(np.linalg.solve(L, (res - res.mean(axis=0)).T))
-    assert measurement_spread_sigma(res, R) == float(np.sqrt(np.linalg.eigvalsh(plain).max()))
+    return float(np.sqrt(np.linalg.eigvalsh(plain).max()))
 
 
-def test_the_spread_holds_one_whitened_copy_of_the_residuals():
+@pytest.mark.parametrize("n", [100_003, 200_003])  # held whole up to SPREAD_WHOLE_ROWS, in blocks above
+def test_the_spread_whitened_in_chunks_equals_the_plain_formula(n):
+    from cistrack.plugins.filters.pgm.reacquisition_particles import SPREAD_WHOLE_ROWS
+
+    r = np.random.default_rng(12)
+    res = r.normal(size=(n, 2)) * np.array([3e-3, 4e-5]) + 0.2
+    R = np.array([[4.0, 1.2], [1.2, 1.0]]) * 1e-10
+    if n <= SPREAD_WHOLE_ROWS:  # the numbers runs of up to 131,072 particles have always had
+        assert measurement_spread_sigma(res, R) == _plain_spread(res, R)
+    else:
+        assert measurement_spread_sigma(res, R) == pytest.approx(_plain_spread(res, R), rel=1e-12)
+
+
+def test_the_spread_of_many_residuals_holds_no_whitened_copy_of_them():
     res = np.random.default_rng(13).normal(size=(400_000, 2))
     measurement_spread_sigma(res[:10], np.eye(2))
     _, peak = _peak_above_start(measurement_spread_sigma, res, np.eye(2))
-    # the whitened copy and a few chunks; the plain formula held three copies at once (the
-    # centred residuals, the solver's copy and its output), and np.cov three
-    assert peak <= res.nbytes + 4 * MB
+    # a few chunks of DRAW_CHUNK rows; holding the whitened residuals whole took res.nbytes more
+    assert peak <= 4 * MB
