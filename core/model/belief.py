@@ -212,19 +212,23 @@ class GaussianMixture:
         """Draw ``n`` points. Returns (samples (n, d), component labels (n,))."""
         labels = rng.choice(self.n_components, size=n, p=self.weights)
         labels.sort()
-        chol = self.cholesky()
-        out = np.empty((n, self.dim))
-        # Labels are sorted, so component i's draws are one block of rows. The standard normals
-        # are drawn block by block, in chunks, in row order: the same numbers as one (n, d) draw
-        # (numpy's generator fills arrays one value after the other), without holding all of
-        # them: the peak memory of a run is here, with reacquire_factor x n_particles draws.
         edges = np.searchsorted(labels, np.arange(self.n_components + 1))
+        return self.draw_blocks(edges, rng), labels
+
+    def draw_blocks(self, edges: np.ndarray, rng: np.random.Generator, chunk: int = _SAMPLE_CHUNK) -> np.ndarray:
+        """Draws (edges[-1], d) whose rows edges[i]:edges[i+1] come from component i (``edges``
+        (M + 1,) nondecreasing from 0). The standard normals are drawn block by block, ``chunk``
+        rows at a time, in row order: the same numbers as one (n, d) draw (numpy's generator
+        fills arrays one value after the other), without holding all of them (the peak memory of
+        a run is here, with reacquire_factor x n_particles draws)."""
+        chol = self.cholesky()
+        out = np.empty((int(edges[-1]), self.dim))
         for i in range(self.n_components):
-            for a in range(int(edges[i]), int(edges[i + 1]), _SAMPLE_CHUNK):
-                b = min(a + _SAMPLE_CHUNK, int(edges[i + 1]))
+            for a in range(int(edges[i]), int(edges[i + 1]), chunk):
+                b = min(a + chunk, int(edges[i + 1]))
                 np.matmul(rng.standard_normal((b - a, self.dim)), chol[i].T, out=out[a:b])
                 out[a:b] += self.means[i]
-        return out, labels
+        return out
 
     @property
     def mean(self) -> np.ndarray:

@@ -106,14 +106,6 @@ def draw_mixture(post: GaussianMixture, n: int, rng: np.random.Generator,
                  chunk: int = DRAW_CHUNK) -> tuple[np.ndarray, np.ndarray]:
     """``n`` draws (n, d) from ``post`` and their components (n,) int64, sorted by component: the
     same as ``post.sample(n, rng)``, with no work array longer than ``chunk`` rows."""
-    chol = post.cholesky()
     counts = component_counts(post.weights, n, rng, chunk)
     labels = np.repeat(np.arange(post.n_components, dtype=np.int64), counts)
-    out = np.empty((n, post.dim))
-    edges = np.concatenate(([0], np.cumsum(counts)))
-    for i in range(post.n_components):
-        for a in range(int(edges[i]), int(edges[i + 1]), chunk):
-            b = min(a + chunk, int(edges[i + 1]))
-            np.matmul(rng.standard_normal((b - a, post.dim)), chol[i].T, out=out[a:b])
-            out[a:b] += post.means[i]
-    return out, labels
+    return post.draw_blocks(np.concatenate(([0], np.cumsum(counts))), rng, chunk), labels
