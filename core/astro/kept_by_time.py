@@ -6,14 +6,16 @@ runs ERFA or DE421.
 """
 from __future__ import annotations
 
+from collections.abc import Hashable
 from typing import Callable, TypeVar
 
 __all__ = ["kept_or_evaluated"]
 
 T = TypeVar("T")
+K = TypeVar("K", bound=Hashable)
 
 
-def kept_or_evaluated(kept: dict[float, T], key: float, limit: int, evaluate: Callable[[], T]) -> T:
+def kept_or_evaluated(kept: dict[K, T], key: K, limit: int, evaluate: Callable[[], T]) -> T:
     """``kept[key]``, or ``evaluate()`` stored there first; at most ``limit`` entries, the oldest
     dropped first (``kept`` is a plain dict: insertion order)."""
     hit = kept.get(key)

@@ -36,6 +36,7 @@ from astropy import units as u
 from astropy.time import Time, TimeDelta
 from astropy.utils import iers
 
+from cistrack.astro.kept_by_time import kept_or_evaluated
 from cistrack.units import DAY_S, parse_utc
 
 __all__ = [
@@ -231,17 +232,11 @@ def time_scales(epoch: datetime | str, seconds=0.0) -> TimeScales:
     except (TypeError, ValueError):
         return _time_scales(epoch, seconds)     # refused there, with the message for the culprit
     table = _eop_table()
-    kept = _KEPT_SCALES.get(key)
-    if kept is not None and kept[0] is table:
-        return _copied(kept[1])
-    out = _time_scales(epoch, s)
-    try:
-        if len(_KEPT_SCALES) >= _KEPT_LIMIT:
-            _KEPT_SCALES.pop(next(iter(_KEPT_SCALES)), None)
-    except (RuntimeError, StopIteration):       # another thread changed it meanwhile
-        pass
-    _KEPT_SCALES[key] = (table, _copied(out))
-    return out
+    kept = kept_or_evaluated(_KEPT_SCALES, (id(table), *key), _KEPT_LIMIT,
+                             lambda: (table, _copied(_time_scales(epoch, s))))
+    if kept[0] is not table:                    # an id reused by a later table: not this one's
+        return _time_scales(epoch, s)
+    return _copied(kept[1])
 
 
 def _time_scales(epoch: datetime | str, seconds) -> TimeScales:
