@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from cistrack.astro.kept_by_time import kept_or_evaluated
 from cistrack.errors import MeasurementError, PropagationError, StateError
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.measurement_model import MeasurementModel
@@ -88,20 +89,14 @@ class _Problem:
         self.dynamics, self.model, self.t0, self.prior = dynamics, model, t0, prior
         self.solve_for = solve_for
         self.n = 6 + (0 if solve_for is None else solve_for.size)
-        self._kept: dict[tuple[str, bytes], tuple[np.ndarray, ...]] = {}
+        self._kept: dict[str, dict[bytes, tuple[np.ndarray, ...]]] = {"evaluate": {}, "jacobian": {}}
 
     def _kept_or_computed(self, what: str, x: np.ndarray, compute) -> tuple[np.ndarray, ...]:
         """``compute()`` at the unknowns ``x``, kept for the next request at the same ``x`` (bit for
         bit: the passes, their starts and the estimate ask again where an earlier step ended; the
         propagation and the sensor give the same numbers again). Copies, at most 4 points each."""
-        key = (what, np.asarray(x, dtype=float).tobytes())
-        hit = self._kept.get(key)
-        if hit is None:
-            hit = tuple(np.array(a, copy=True) for a in compute())
-            mine = [k for k in self._kept if k[0] == what]
-            if len(mine) >= _KEPT_POINTS:
-                del self._kept[mine[0]]
-            self._kept[key] = hit
+        hit = kept_or_evaluated(self._kept[what], np.asarray(x, dtype=float).tobytes(), _KEPT_POINTS,
+                                lambda: tuple(np.array(a, copy=True) for a in compute()))
         return tuple(a.copy() for a in hit)
 
     def _dynamics(self, x: np.ndarray) -> Dynamics:
