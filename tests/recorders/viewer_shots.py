@@ -257,6 +257,11 @@ if __name__ == "__main__":
 
     from PIL import Image
 
+    args = sys.argv[1:]
+    if not args or args[0] in ("-h", "--help") or (len(args) < 2 and "--load-only" not in args):
+        print("usage: viewer_shots.py RUN.rrd OUTDIR [--timing]   (start, middle and end pictures)\n"
+              "       viewer_shots.py RUN.rrd --load-only          (load time only, as JSON)", file=sys.stderr)
+        sys.exit(0 if args and args[0] in ("-h", "--help") else 2)
     if "--load-only" in sys.argv[2:]:  # viewer_shots.py RUN.rrd --load-only: load times only, no pictures
         print(json.dumps(viewer_shots.timings(sys.argv[1], play=False)), flush=True)
         sys.exit(0)
