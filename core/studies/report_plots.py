@@ -277,8 +277,8 @@ def _set_y_axes(f: _Figure, filters: dict[str, dict[str, Any]], chi: tuple[float
     medians, clipped to the limits."""
     import matplotlib.ticker
 
-    if not any(f.shown[k] for k in f.shown):  # every filter diverged: then they set the axes after all
-        for flt, g in filters.items():
+    if all(_off_scale(g["summaries"])[0] for g in filters.values()):  # every filter diverged: they set the axes
+        for g in filters.values():  # after all (beside any reference line, such as the information bound)
             for key, _, _ in f.panels:
                 f.shown[key] += [band_over_seeds(sr, f.grid)[1] for sr in [_series(g["tables"], key)] if sr]
     nees_ax = f.nees_ax

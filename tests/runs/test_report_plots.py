@@ -85,3 +85,16 @@ def test_the_nees_reference_line_is_the_chi_square_median_beside_the_plotted_med
                                                 "summaries": [{"custody_kept": True}] * 3}}
     svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
     assert "chi-square(6) median 5.35" in svg
+
+
+def test_when_every_filter_diverged_their_medians_set_every_panel_beside_the_bound(tmp_path):
+    """The information bound alone sets no panel: the entropy and NEES panels hold the medians."""
+    def with_bound(seed):
+        t = _table(seed, True)
+        return t.append_column("bound_pos_km", pa.array(5e3 * np.exp(-2 * np.linspace(0.0, 2.0, 9))))
+
+    diverged = {"custody_kept": False, "custody_lost_t_days": 0.3, "verdict": {"kind": "diverged"}}
+    groups = {("quick", "noisy-range", f): {"tables": [with_bound(s) for s in (1, 2, 3)], "summaries": [diverged] * 3}
+              for f in ("pgm", "ukf")}
+    svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
+    assert ">\u221260<" in svg  # the entropy panel reaches the medians' -70 nats
