@@ -281,7 +281,10 @@ def cmd_view(args) -> int:
     # the recorder that wrote the file serves it (core never imports a plugin)
     recorder = default_registry().get("recorder", "rerun").factory
     served = recorder.serve_file(args.recording, web_port=args.port, option="--port")
-    print(f"open in a browser (127.0.0.1 only): {served.url}", flush=True)
+    print(f"open in a browser (127.0.0.1 only): {served.page_url or served.url}", flush=True)
+    if getattr(served, "software_url", None):
+        print("  (a browser without a GPU, rendering in software, gets a faster playback speed: the run still "
+              "plays in about a minute)", flush=True)
     print("serving until you press Ctrl-C", flush=True)
     _wait_for_ctrl_c(served.close)
     return 0

@@ -8,7 +8,10 @@ fixed camera :data:`RUN_VIEW_EYE` keeps the cloud and its ellipsoids filling the
 to convergence. Bottom, the Earth–Moon system seen from above, from the Earth to beyond L2. Right,
 time series over the whole run in log10 (see :mod:`.run_series`), their colours named in the
 titles instead of legends over the data, and the time panel set so that playing the run takes
-about :data:`PLAYBACK_S` seconds.
+about :data:`PLAYBACK_S` seconds in a viewer that keeps up, or (``frame_s``) in one that draws a
+frame every ``frame_s`` seconds, such as a web viewer on a software renderer
+(:data:`SOFTWARE_FRAME_S`; ``cistrack view`` serves that variant to such a browser, see
+:mod:`.web_viewer`).
 """
 from __future__ import annotations
 
@@ -22,9 +25,12 @@ from .run_series import NEES_BAND, NEES_BAND_ENTITIES, SERIES, nees_y_range
 
 rrb = LazyModule("rerun.blueprint")  # loads with the first recording, not with the registry
 
-__all__ = ["PLAYBACK_S", "RUN_VIEW_EYE", "TIMELINES", "axis_range_s", "camera_for",
-           "default_blueprint", "playback_speed"]
+__all__ = ["APPLICATION_ID", "FRAME_CAP_S", "PLAYBACK_S", "RUN_VIEW_EYE", "SOFTWARE_FRAME_S", "TIMELINES",
+           "axis_range_s", "camera_for", "default_blueprint", "playback_speed"]
 
+
+APPLICATION_ID = "cistrack"
+"""The rerun application id of cistrack's recordings; a blueprint applies to recordings of its id."""
 
 TIMELINES = ("utc", "step", "event")
 
@@ -34,7 +40,15 @@ draws at least 10 frames a second. Rerun (0.41) moves the time cursor by the spe
 duration, that duration capped at 0.1 s, so a slower viewer plays slower in proportion: headless
 Chromium without a GPU (software rasterizer, about 1.5 s a frame on 2 busy cores) played Example 1
 about 15 times slower (docs/viewer.md). The speed is a property of the recording, not of the
-machine that shows it, so it is set for a viewer that keeps up."""
+machine that shows it, so the recording's own is set for a viewer that keeps up; ``cistrack view``
+gives a browser that renders in software a second one, set for :data:`SOFTWARE_FRAME_S`."""
+
+FRAME_CAP_S = 0.1
+"""The most of a frame's duration by which rerun (0.41) moves the time cursor while playing."""
+
+SOFTWARE_FRAME_S = 1.5
+"""Seconds per frame of the web viewer on a software renderer (headless Chromium with SwiftShader,
+Example 1's recording, 1600 x 1000 page, 2 shared cores: 1.5 to 2 s; docs/viewer.md)."""
 
 RUN_VIEW_EYE = (1.8, -3.0, 1.7)
 """Camera of the run view in the estimate frame (units of the cloud's extent): from the radial,
@@ -122,13 +136,17 @@ def camera_for(points_km: np.ndarray | None, direction=(0.55, -0.65, 0.52),
     return target + distance * size * d / np.linalg.norm(d), target
 
 
-def playback_speed(utc_range_s: tuple[float, float] | None) -> float:
+def playback_speed(utc_range_s: tuple[float, float] | None, frame_s: float | None = None) -> float:
     """Playback multiplier that plays a run spanning ``utc_range_s`` (unix seconds, first and
-    last time) in :data:`PLAYBACK_S` seconds (1 without a range)."""
+    last time) in :data:`PLAYBACK_S` seconds (1 without a range) in a viewer drawing a frame every
+    ``frame_s`` seconds (None: one that keeps up, at least 1 / :data:`FRAME_CAP_S` frames a
+    second). A slower viewer moves the cursor by at most :data:`FRAME_CAP_S` of each frame, so
+    its speed is raised by ``frame_s / FRAME_CAP_S``."""
     if utc_range_s is None:
         return 1.0
     span = float(utc_range_s[1] - utc_range_s[0])
-    return max(1.0, span / PLAYBACK_S) if np.isfinite(span) and span > 0 else 1.0
+    slowdown = max(1.0, float(frame_s) / FRAME_CAP_S) if frame_s is not None else 1.0
+    return max(1.0, span * slowdown / PLAYBACK_S) if np.isfinite(span) and span > 0 else 1.0
 
 
 def _eye(eye: tuple[np.ndarray, np.ndarray] | None):
@@ -180,7 +198,8 @@ def _series_column(r: tuple[float, float] | None, watching: bool, burns: bool):
 
 
 def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[float, float] | None = None,
-                      live: bool = False, watching: bool = False, burns: bool = False) -> rrb.Blueprint:
+                      live: bool = False, watching: bool = False, burns: bool = False,
+                      frame_s: float | None = None) -> rrb.Blueprint:
     """What the viewer shows at first open.
 
     ``system_km`` (N, 3): points the system view frames from above (Earth, Moon, L1, L2 and the
@@ -189,7 +208,8 @@ def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[fl
     ``live``: the run streams to a viewer (follow the newest data instead of opening paused at the
     start); ``watching``: the run's updates carry the maneuver detector's statistic (its panel
     beside the NEES); ``burns``: the truth has burns (their lines on both panels and a text log of
-    the maneuvers, see :mod:`.maneuver_marks`).
+    the maneuvers, see :mod:`.maneuver_marks`); ``frame_s``: seconds per frame of the viewer it is
+    for (:func:`playback_speed`; None: one that keeps up).
     """
     r = utc_range_s
     run_view = rrb.Spatial3DView(
@@ -207,7 +227,7 @@ def default_blueprint(system_km: np.ndarray | None = None, utc_range_s: tuple[fl
             _series_column(r, watching, burns),
             column_shares=[3, 2],
         ),
-        rrb.TimePanel(timeline="utc", state="collapsed", playback_speed=playback_speed(r),
+        rrb.TimePanel(timeline="utc", state="collapsed", playback_speed=playback_speed(r, frame_s),
                       play_state=None if live else "paused"),
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),

@@ -17,6 +17,10 @@ answers exactly that:
   site) or whose ``Origin`` is another page's is refused (403); other methods are refused (405).
 
 The file is read at each request, so a recording written again in place is served as it is now.
+Besides the file, the server answers the exact paths added with :meth:`RecordingServer.add_page`
+(``/<same token>/<name>``, a query after it allowed) with bytes made in memory: ``cistrack
+view``'s opening page and the blueprint for a software renderer (:mod:`.web_viewer`); never a
+file of the folder.
 """
 from __future__ import annotations
 
@@ -25,6 +29,7 @@ import secrets
 import stat
 import sys
 import threading
+from collections import Counter
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import quote
@@ -62,6 +67,11 @@ class _RecordingHandler(BaseHTTPRequestHandler):
         origin = self.headers.get("Origin")
         if origin is not None and origin != srv.viewer_origin:
             return self._empty(403)
+        page_path = self.path.split("?", 1)[0]  # a page may be given a query (the opening page's ?playback=)
+        page = srv.pages.get(page_path)
+        if page is not None:
+            srv.served[page_path] += 1
+            return self._send_page(*page, send_body=send_body)
         if self.path != srv.url_path:
             return self._empty(404)
         try:
@@ -72,6 +82,7 @@ class _RecordingHandler(BaseHTTPRequestHandler):
             info = os.fstat(fh.fileno())
             if not stat.S_ISREG(info.st_mode):
                 return self._empty(404)
+            srv.served[self.path] += 1
             self.send_response(200)
             self.send_header("Content-Type", "application/octet-stream")
             self.send_header("Content-Length", str(info.st_size))
@@ -85,6 +96,15 @@ class _RecordingHandler(BaseHTTPRequestHandler):
                         break
                     self.wfile.write(chunk)
                     left -= len(chunk)
+
+    def _send_page(self, content_type: str, body: bytes, send_body: bool) -> None:
+        self.send_response(200)
+        self.send_header("Content-Type", content_type)
+        self.send_header("Content-Length", str(len(body)))
+        self._common_headers()
+        self.end_headers()
+        if send_body:
+            self.wfile.write(body)
 
     def _common_headers(self) -> None:
         self.send_header("Access-Control-Allow-Origin", self.server.viewer_origin)
@@ -113,15 +133,32 @@ class RecordingServer(ThreadingHTTPServer):
     def __init__(self, file: str | Path, viewer_origin: str) -> None:
         self.file = str(Path(file).resolve(strict=True))
         self.viewer_origin = viewer_origin
-        self.url_path = f"/{secrets.token_urlsafe(18)}/{quote(Path(self.file).name, safe='')}"
+        self._token = secrets.token_urlsafe(18)
+        self.url_path = f"/{self._token}/{quote(Path(self.file).name, safe='')}"
+        self.pages: dict[str, tuple[str, bytes]] = {}
+        self.served: Counter[str] = Counter()
+        """How many times each path was answered with content (the file or a page)."""
         super().__init__((LOOPBACK, 0), _RecordingHandler)
         self.authority = f"{LOOPBACK}:{self.server_address[1]}"
         self._thread: threading.Thread | None = None
 
     @property
     def url(self) -> str:
-        """The recording's address: the only one this server answers."""
+        """The recording's address (the only file this server sends)."""
         return f"http://{self.authority}{self.url_path}"
+
+    def add_page(self, name: str, content_type: str, body: bytes) -> str:
+        """Answer ``/<token>/<name>`` with ``body``; returns its URL. ``name`` must differ from the
+        recording's file name."""
+        path = f"/{self._token}/{quote(name, safe='')}"
+        if path == self.url_path:
+            raise ValueError(f"a page may not take the recording's own name {name!r}")
+        self.pages[path] = (content_type, bytes(body))
+        return self.pages_url(name)
+
+    def pages_url(self, name: str) -> str:
+        """The URL of the page ``name`` (:meth:`add_page`)."""
+        return f"http://{self.authority}/{self._token}/{quote(name, safe='')}"
 
     def handle_error(self, request, client_address) -> None:
         """A browser that stops reading mid-file (a closed tab) is not worth a traceback."""

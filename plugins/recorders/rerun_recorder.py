@@ -64,7 +64,8 @@ from cistrack.api import hookimpl
 from cistrack.lazy import LazyModule
 from cistrack.units import LU_KM, TU_S, parse_utc
 
-from .blueprint import default_blueprint
+from .blueprint import APPLICATION_ID
+from .blueprint_inputs import BlueprintInputs
 from .decimation import heaviest_components, subsample_indices
 from .estimate_frame import line_through_frame
 from .maneuver_marks import ManeuverMarks
@@ -88,7 +89,6 @@ rrb = LazyModule("rerun.blueprint")
 __all__ = ["RerunRecorder", "ViewerUnavailableError", "subsample_indices", "LOOPBACK",
            "find_viewer_executable"]
 
-APPLICATION_ID = "cistrack"
 UNASSIGNED_CLASS = 999
 """Class id of particles without a component label (a clusterer's noise label, < 0)."""
 
@@ -322,10 +322,12 @@ class RerunRecorder(Component):
         if self.spawn:
             sinks.append(rr.GrpcSink(self._start_viewer()))
         marks = self._marks
-        rec.set_sinks(*sinks, default_blueprint=default_blueprint(
-            system_points_km(run, self._view), utc_range_s(run, self._epoch), live=self.serve or self.spawn,
-            watching=marks is not None and marks.watching, burns=marks is not None and bool(marks.burns)))
+        inputs = BlueprintInputs.of(system_points_km(run, self._view), utc_range_s(run, self._epoch),
+                                    watching=marks is not None and marks.watching,
+                                    burns=marks is not None and bool(marks.burns))
+        rec.set_sinks(*sinks, default_blueprint=inputs.blueprint(live=self.serve or self.spawn))
         rec.send_recording_name(str(run.run_id))
+        inputs.send(rec)  # so that cistrack view can build the blueprint again for a slower viewer
         return rec
 
     def _start_viewer(self) -> str:

@@ -72,7 +72,7 @@ def take(rrd: str | Path, out_dir: str | Path, *, settle_s: float = 30.0) -> dic
     steps = {"start": 0, "middle": n // 2, "end": n - 1 - n // 2}  # presses since the previous shot
     out = Path(out_dir)
     with serve_recording(rrd, web_port=free_port()) as served:
-        pngs = screenshots(served.url, [(out / f"viewer_{s}.png", ["Ctrl+ArrowRight"] * steps[s]) for s in SHOTS],
+        pngs = screenshots(served.page_url, [(out / f"viewer_{s}.png", ["Ctrl+ArrowRight"] * steps[s]) for s in SHOTS],
                            settle_s=settle_s, key_interval_s=KEY_INTERVAL_S)
     return dict(zip(SHOTS, pngs))
 
@@ -161,8 +161,9 @@ def _time_playing(page, end_col: int, max_s: float) -> dict:
 
 
 def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 150.0, play: bool = True) -> dict:
-    """Load and playback times of ``rrd`` in headless Chromium (software rendering, 1600 x 1000):
-    ``viewer_up_s`` from opening the URL until the viewer draws, ``load_s`` until it shows the run
+    """Load and playback times of ``rrd`` in headless Chromium (software rendering, 1600 x 1000),
+    opened as ``cistrack view`` says (its opening page, which goes on to the viewer with the
+    software renderer's playback speed): ``viewer_up_s`` from opening the URL until the viewer draws, ``load_s`` until it shows the run
     whole (:func:`_time_loading`); ``load_avg``: the 1-minute load average when the page opened.
     Without ``play`` that is all; otherwise ``whole_run_s``: how long
     playing the whole run takes at the speed the viewer opens with (measured over at most
@@ -174,7 +175,7 @@ def timings(rrd: str | Path, *, max_load_s: float = 180.0, max_play_s: float = 1
     from .headless_browser import open_page
 
     load_avg = float(Path("/proc/loadavg").read_text().split()[0]) if Path("/proc/loadavg").exists() else None
-    with serve_recording(rrd, web_port=free_port()) as served, open_page(served.url) as page:
+    with serve_recording(rrd, web_port=free_port()) as served, open_page(served.page_url) as page:
         up_s, load_s, end_col = _time_loading(page, max_load_s)
         out = {"viewer_up_s": round(up_s, 1), "load_s": round(load_s, 1), "load_avg": load_avg}
         if not play:
