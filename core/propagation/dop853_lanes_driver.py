@@ -69,7 +69,7 @@ MAX_GRID = 4096
 HALF_SQRT3 = 0.8660254037844387
 GRID_SLACK = 1e-9  # LU (0.4 mm)
 
-@njit(cache=CACHE, fastmath=FASTMATH)
+@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')
 def _lanes_step(w, params, rtol, atol):
 {STAGES}    _lanes_error(w, rtol, atol)
 

@@ -31,6 +31,9 @@ from cistrack.propagation.dop853_lanes_rows import out_row, rows, stage_c, stage
 __all__ = ["scratch_plan", "keyed_stage_function", "keys_function", "fill_function"]
 
 _HEAD = "@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')"
+_INLINE_HEAD = "@njit(inline='always', cache=CACHE, fastmath=FASTMATH, error_model='numpy')"
+"""A keyed stage is inlined into ``_lanes_step`` like the plain stages (:mod:`.dop853_lanes_source`);
+its per-lane variant, which the one-record case never enters, stays a function of its own."""
 
 
 def _target_and_value(stmt: ast.stmt) -> tuple[str, ast.expr] | None:
@@ -148,7 +151,7 @@ def keyed_stage_function(s: int, body, dim: int, lanes: int) -> str:
     replicated, kept = scratch_plan(body)
     r = rows(dim, keyed=True, scratch=len(replicated), lanes=lanes)
     key = w_at(r["KEY"], lanes)
-    L = [_HEAD, f"def _lanes_stage{s}(_w, _p):"]
+    L = [_INLINE_HEAD, f"def _lanes_stage{s}(_w, _p):"]
     L += ["    " + line for line in body.key.invariant.splitlines()]
     if s > 0:
         step_key = r["STEP_KEY"] * lanes + 2 * s

@@ -54,6 +54,12 @@ RESERVED = {"np", "njit", "rhs", "body_position", "DIM", "CACHE", "SAFETY", "MAX
 """Module-level names of a generated kernel module other than the underscored ones."""
 
 
+STAGE_HEAD = "@njit(inline='always', cache=CACHE, fastmath=FASTMATH, error_model='numpy')"
+"""Decorator of the stage and error functions: inlined into ``_lanes_step`` by numba, so that the
+step compiles as one function instead of fourteen (about a third less compile time of the
+step, the same operations in the same order: the same numbers)."""
+
+
 def _stage_function(s: int, body, dim: int, lanes: int) -> str:
     """Stage ``s`` (1..12): ytmp = y + h * sum(a_sm k_m), then k_s = rhs(t + c_s h, ytmp) per lane;
     ``s == 12`` is the new state (weights B, stored in YN) and its derivative (next step's k0);
@@ -61,7 +67,7 @@ def _stage_function(s: int, body, dim: int, lanes: int) -> str:
     if body.key is not None:
         return keyed_stage_function(s, body, dim, lanes)
     r = rows(dim)
-    L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
+    L = [STAGE_HEAD,
          f"def _lanes_stage{s}(_w, _p):",
          "    for _l in range(LANES):"] + stage_point(s, r, dim, lanes, "        ")
     out0 = out_row(s, r, dim)
@@ -72,7 +78,7 @@ def _stage_function(s: int, body, dim: int, lanes: int) -> str:
 
 def _error_function(dim: int, lanes: int) -> str:
     r = rows(dim)
-    L = ["@njit(cache=CACHE, fastmath=FASTMATH, error_model='numpy')",
+    L = [STAGE_HEAD,
          "def _lanes_error(_w, rtol, atol):",
          "    for _l in range(LANES):",
          "        s5 = 0.0", "        s3 = 0.0"]
