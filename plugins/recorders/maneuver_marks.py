@@ -10,7 +10,8 @@ that a run lacks is logged, so a ballistic run without a detector records none o
                                     at the burn's position (static)
 ``world/truth/burns/labels``        each burn's name, off the Earth–Moon line (static)
 ``series/nees/truth_burns/<k>``     a vertical (orange) line across the NEES panel at burn ``k``'s time
-``series/maneuver/statistic``       the detector's statistic (-log10 p) at every update
+``series/maneuver/statistic``       the detector's statistic (-log10 p) at every update, its line broken
+                                    between passes (:data:`STATISTIC_GAP_HOURS`)
 ``series/maneuver/threshold``       its threshold, a constant line beside it
 ``series/maneuver/truth_burns/<k>`` a vertical line across the statistic panel at burn ``k``'s time
 ``series/maneuver/detections``      a red diamond on the statistic at each update that raised a detection
@@ -41,7 +42,7 @@ rr = LazyModule("rerun")
 
 __all__ = ["ManeuverMarks", "STATISTIC", "THRESHOLD", "DETECTIONS", "NEES_DETECTIONS", "ESTIMATED_BURNS",
            "NEES_BURNS", "STATISTIC_BURNS", "TRUTH_LOG", "DETECTION_LOG", "ESTIMATE_LOG", "BURN_ARROWS",
-           "BURN_LABELS", "BURN_LABEL_OFFSET_KM", "STATISTIC_COLOUR", "burn_label_positions", "burn_text",
+           "BURN_LABELS", "BURN_LABEL_OFFSET_KM", "STATISTIC_COLOUR", "STATISTIC_GAP_HOURS", "burn_label_positions", "burn_text",
            "estimate_text"]
 
 STATISTIC = "series/maneuver/statistic"
@@ -56,6 +57,11 @@ DETECTION_LOG = "maneuvers/detections"
 ESTIMATE_LOG = "maneuvers/estimates"
 BURN_ARROWS = "world/truth/burns"
 BURN_LABELS = "world/truth/burns/labels"
+
+STATISTIC_GAP_HOURS = 6.0
+"""Updates further apart than this (between passes) are not joined by the statistic's line: the test
+takes no value in between. A ``Clear`` logged at the earlier update's times (after its value) ends
+the line there on every timeline."""
 
 STATISTIC_COLOUR = (60, 130, 255)
 THRESHOLD_COLOUR = (150, 150, 150)
@@ -134,6 +140,7 @@ class ManeuverMarks:
         self.threshold = _finite(getattr(getattr(self.watch, "detector", None), "threshold", None))
         self.top = 2.0 * self.threshold if self.threshold is not None else 1.0
         self._styled: set[str] = set()
+        self._last: tuple[int, int, float] | None = None  # (event, step, t TU) of the last statistic
 
     @property
     def watching(self) -> bool:
@@ -195,14 +202,15 @@ class ManeuverMarks:
                                              radii=rr.Radius.ui_points(1.0)), static=True)
 
     # -- each step with metrics -------------------------------------------------------------------
-    def log_step(self, rec, step, nees_log10: float | None) -> None:
+    def log_step(self, rec, step, nees_log10: float | None, event: int) -> None:
         """The statistic and its threshold at an update; a detection's markers and text
         (``nees_log10``: the step's plotted log10 NEES, None without one). Call with the step's
-        time set."""
+        time set (``event``: its value on the ``event`` timeline)."""
         metrics = step.metrics or {}
         stat = _finite(metrics.get("maneuver_statistic"))
         if stat is None:
             return
+        self._break_after_gap(rec, step, event)
         rec.log(STATISTIC, rr.Scalars(stat))
         self.top = max(self.top, stat)
         if self.threshold is not None:
@@ -214,6 +222,21 @@ class ManeuverMarks:
             self._point(rec, NEES_DETECTIONS, nees_log10)
         rec.log(DETECTION_LOG, rr.TextLog(self._detection_text(step, stat), level="WARN",
                                           color=DETECTION_COLOUR))
+
+    def _break_after_gap(self, rec, step, event: int) -> None:
+        """End the statistic's line at the last update when this one comes more than
+        :data:`STATISTIC_GAP_HOURS` after it (the times set again to this step's afterwards)."""
+        last, self._last = self._last, (int(event), int(step.index), float(step.t))
+        if last is None or float(units.tu_to_days(float(step.t) - last[2])) * 24.0 <= STATISTIC_GAP_HOURS:
+            return
+        self._set_times(rec, *last)
+        rec.log(STATISTIC, rr.Clear(recursive=False))
+        self._set_times(rec, *self._last)
+
+    def _set_times(self, rec, event: int, index: int, t: float) -> None:
+        rec.set_time("event", sequence=event)
+        rec.set_time("step", sequence=index)
+        rec.set_time("utc", timestamp=self._utc(t))
 
     def _detection_text(self, step, stat: float) -> str:
         t = float(step.t)

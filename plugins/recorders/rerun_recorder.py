@@ -422,7 +422,7 @@ class RerunRecorder(Component):
             rec.log("components/weights", rr.Scalars(np.asarray(mix.weights, dtype=float)))
             self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
             if self._marks is not None:
-                self._marks.log_step(rec, step, log10_series(step.metrics).get("series/nees/nees"))
+                self._marks.log_step(rec, step, log10_series(step.metrics).get("series/nees/nees"), self._event - 1)
 
     def _log_moon(self, rec: rr.RecordingStream, run, t: float) -> None:
         """The Moon as a solid sphere (km) in views where it moves (not the synodic one)."""

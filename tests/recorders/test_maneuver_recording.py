@@ -117,11 +117,30 @@ def test_the_statistic_and_its_threshold_are_series_at_every_update(burn_run):
     stat = np.asarray(table.column("maneuver_statistic").to_pylist(), dtype=float)
     expected = {int(s): v for s, v in zip(steps, stat) if np.isfinite(v)}
     assert len(expected) > 20
-    logged = {s: float(component(r, "Scalars:scalars")[0]) for s, r in last_per_step(ent[f"/{mm.STATISTIC}"]).items()}
+    values = [r for r in ent[f"/{mm.STATISTIC}"] if "Scalars:scalars" in r.components]  # not the line breaks
+    logged = {s: float(component(r, "Scalars:scalars")[0]) for s, r in last_per_step(values).items()}
     assert logged == expected
     thresholds = {float(component(r, "Scalars:scalars")[0]) for r in ent[f"/{mm.THRESHOLD}"] if r.times}
     assert thresholds == {4.0}  # -log10 of the detector's false-alarm probability 1e-4
     assert len(last_per_step(ent[f"/{mm.THRESHOLD}"])) == len(expected)
+
+
+def test_the_statistic_line_ends_at_the_last_update_of_each_pass_but_the_last(burn_run):
+    res, ents, steps, _ = burn_run
+    cols = {c: steps.column(c).to_pylist() for c in ("pass_index", "t_tu", "maneuver_statistic")}
+    last: dict[int, float] = {}
+    for p, t, stat in zip(cols["pass_index"], cols["t_tu"], cols["maneuver_statistic"]):
+        if stat is not None and np.isfinite(stat):
+            last[int(p)] = max(last.get(int(p), -np.inf), float(t))
+    last_of_pass = sorted(last.values())[:-1]
+    assert len(last_of_pass) >= 4
+    clears = [r for r in ents[f"/{mm.STATISTIC}"] if any("Clear" in k for k in r.components)]
+    assert sorted(r.times["utc"] for r in clears) == [_utc_ns(res.context, t) for t in last_of_pass]
+    by_time = {r.times["utc"]: r for r in ents[f"/{mm.STATISTIC}"] if "Scalars:scalars" in r.components}
+    for c in clears:  # logged after the pass's last value, at its step and event too
+        value = by_time[c.times["utc"]]
+        assert (c.times["step"], c.times["event"]) == (value.times["step"], value.times["event"])
+        assert c.row_id > value.row_id
 
 
 def test_each_detection_is_marked_on_the_statistic_and_the_nees_after_the_burn(burn_run):
