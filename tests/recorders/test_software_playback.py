@@ -140,3 +140,15 @@ def test_headless_chromium_is_sent_to_the_software_variant_unless_told(recorded_
     with serve_recording(recorded_run.small_rrd, web_port=free_port()) as served:
         assert (_blueprint_fetched(served, query) > 0) is fetched
         assert served.served.get(urlparse(served.file_url).path, 0) >= 1
+
+
+def test_an_odd_file_name_gets_a_working_page_and_blueprint(recorded_run, tmp_path):
+    if find_viewer_executable() is None:
+        pytest.skip("the rerun viewer executable is not installed")
+    rrd = tmp_path / 'a run\'s "odd" <name>?#ü.rrd'
+    rrd.write_bytes(recorded_run.small_rrd.read_bytes())
+    with serve_recording(rrd, web_port=free_port()) as s:
+        page = get(s.page_url)
+        assert page.status == 200 and "<name>" not in page.body.decode()  # the title is escaped
+        assert page_targets(page.body.decode()) == (s.url, s.software_url)
+        assert get(s.blueprint_url).status == 200 and get(s.file_url).status == 200
