@@ -21,6 +21,7 @@ keeps the port after ``cistrack view`` is gone.
 """
 from __future__ import annotations
 
+import logging
 import subprocess
 import tempfile
 from dataclasses import dataclass, field
@@ -39,6 +40,8 @@ from .viewer_process import ViewerUnavailableError, find_viewer_executable, pare
 from .viewer_process import wait_for_port as _wait_for_port
 
 __all__ = ["ServedRecording", "serve_recording", "viewer_url"]
+
+_LOG = logging.getLogger("cistrack.recorders")
 
 
 def viewer_url(web_port: int, *file_urls: str) -> str:
@@ -96,9 +99,14 @@ def _add_pages(http: RecordingServer, rrd: Path, web_port: int) -> tuple[str, st
     (both None without inputs)."""
     url, software_url, rbl = viewer_url(web_port, http.url), None, None
     inputs = read_blueprint_inputs(rrd)
+    blueprint = None
     if inputs is not None:
-        rbl = http.add_page(f"{rrd.stem}.software.rbl", "application/octet-stream",
-                            software_blueprint(inputs, APPLICATION_ID))
+        try:
+            blueprint = software_blueprint(inputs, APPLICATION_ID)
+        except Exception as exc:  # the software variant is an extra: without it the recording plays as written
+            _LOG.debug("no software renderer's blueprint for %s: %s", rrd, exc)
+    if blueprint is not None:
+        rbl = http.add_page(f"{rrd.stem}.software.rbl", "application/octet-stream", blueprint)
         software_url = viewer_url(web_port, http.url, rbl)
     http.add_page("view", "text/html; charset=utf-8", opening_page(rrd.name, url, software_url))
     return url, software_url, rbl
@@ -125,7 +133,11 @@ def serve_recording(path: str | Path, web_port: int = 9090, timeout_s: float = 3
         raise ViewerUnavailableError("the rerun viewer is not installed (it ships with rerun-sdk: "
                                      "pip install rerun-sdk); cannot host the web viewer")
     http = RecordingServer(rrd, viewer_origin=f"http://{LOOPBACK}:{web_port}")
-    url, software_url, rbl = _add_pages(http, rrd, web_port)
+    try:
+        url, software_url, rbl = _add_pages(http, rrd, web_port)
+    except BaseException:
+        http.server_close()
+        raise
     http.start()
     # the viewer's log goes to a file: a pipe nobody reads would block it once full
     with tempfile.TemporaryFile() as log:
