@@ -40,7 +40,8 @@ def test_the_estimate_grows_with_the_load(monkeypatch):
     idle = background_compile.estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=False)
     monkeypatch.setattr(background_compile.os, "getloadavg", lambda: (8.0, 8.0, 8.0))
     busy = background_compile.estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=False)
-    assert busy > idle >= 14.0
+    each = background_compile.COMPILE_CPU_SECONDS
+    assert busy > idle >= each["dense_kernel"] + each["propagate_lanes_kernel"]  # one after the other
 
 
 @pytest.mark.slow
