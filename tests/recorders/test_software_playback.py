@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 import time
+from pathlib import Path
 from urllib.parse import urlparse
 
 import numpy as np
@@ -152,3 +155,22 @@ def test_an_odd_file_name_gets_a_working_page_and_blueprint(recorded_run, tmp_pa
         assert page.status == 200 and "<name>" not in page.body.decode()  # the title is escaped
         assert page_targets(page.body.decode()) == (s.url, s.software_url)
         assert get(s.blueprint_url).status == 200 and get(s.file_url).status == 200
+
+
+def test_cistrack_view_prints_the_opening_page(recorded_run):
+    cli = Path(sys.executable).with_name("cistrack")
+    if find_viewer_executable() is None or not cli.exists():
+        pytest.skip("the rerun viewer executable or the cistrack command is not installed")
+    port = free_port()
+    view = subprocess.Popen([str(cli), "view", str(recorded_run.small_rrd), "--port", str(port)],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        url = view.stdout.readline().rsplit(" ", 1)[-1].strip()
+        assert "without a GPU" in view.stdout.readline()
+        reply = get(url)
+        assert reply.status == 200 and reply.headers["Content-Type"].startswith("text/html")
+        gpu, software = page_targets(reply.body.decode())
+        assert urlparse(gpu).port == port and "software.rbl" in software
+    finally:
+        view.terminate()
+        view.wait(timeout=20)
