@@ -6,8 +6,9 @@ per-axis sigmas, km, log), NEES with the chi-square 5-95 % band of a consistent 
 degrees of freedom) and its median as the reference line, and differential entropy (nats). Each
 seed's series is held constant between its steps and sampled on a common grid; the line is the
 median over seeds, the band the 5th to 95th percentile. Ticks at the bottom mark the measurement
-times of the first seed, triangles at the top each run's custody loss (the time the custody rule
-fired), and a dotted black line the information bound's RMS position sigma
+times of the first seed, triangles at the top the custody losses (the times the custody rule
+fired; a row per filter, one triangle per time with the number of runs beside it when several),
+and a dotted black line the information bound's RMS position sigma
 (:mod:`cistrack.evaluation.information_bound`) in the error and sigma panels. Written as PNG, SVG
 and PDF.
 
@@ -35,7 +36,8 @@ from cistrack.studies.time_axis import GapAxis
 
 from cistrack.results.atomic_files import atomic_target
 
-__all__ = ["PANELS", "CHI2_DOF", "band_over_seeds", "nees_band", "nees_median", "plot_study", "save_figure",
+__all__ = ["PANELS", "CHI2_DOF", "LOSS_ROW_STEP", "band_over_seeds", "loss_marks", "nees_band", "nees_median",
+           "plot_study", "save_figure",
            "FORMATS", "plot_maneuver_detection", "plot_false_alarms", "detection_lines"]
 
 CHI2_DOF = 6
@@ -234,17 +236,40 @@ def _draw_bands(f: _Figure, ci: int, flt: str, g: dict[str, Any], thin: bool) ->
                 label=f"{flt}: median of {len(series)} seed{'s' if len(series) != 1 else ''}, band 5-95 %")
 
 
+LOSS_ROW_STEP = 0.045
+"""Axes fraction between the rows of custody-loss triangles of successive filters (the first at the
+top edge), so that filters losing custody at the same time do not hide one another."""
+
+
+def loss_marks(lost_days: list[float], resolution_days: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct custody-loss times (days, to ``resolution_days``) and how many runs lost custody
+    at each: one triangle per time, labelled with its count, instead of one per run on top of one
+    another."""
+    if not lost_days:
+        return np.zeros(0), np.zeros(0, dtype=int)
+    keys, counts = np.unique(np.round(np.asarray(lost_days, dtype=float) / resolution_days), return_counts=True)
+    return keys * resolution_days, counts
+
+
 def _draw_marks(f: _Figure, ci: int, flt: str, g: dict[str, Any]) -> None:
-    """Triangles at the top at each custody loss; for the first filter, ticks at the bottom at the
-    measurement times of its first seed."""
+    """Triangles at the top at each custody loss (a row per filter, a count beside a triangle that
+    stands for several runs); for the first filter, ticks at the bottom at the measurement times of
+    its first seed."""
     color = f"C{ci}"
     lost = [s.get("custody_lost_t_days") for s in g["summaries"] if not s.get("custody_kept", True)]
     lost = [x for x in lost if x is not None]
+    times, counts = loss_marks(lost)
+    y = 1.0 - LOSS_ROW_STEP * ci
     for ax in f.axes:
         if lost:
-            ax.plot(f.tax.forward(np.asarray(lost)), [1.0] * len(lost), marker="v", ls="none", color=color, ms=7,
+            x = f.tax.forward(times)
+            ax.plot(x, [y] * len(x), marker="v", ls="none", color=color, ms=7,
                     transform=ax.get_xaxis_transform(), clip_on=False,
                     label=f"{flt}: custody lost ({len(lost)} of {len(g['summaries'])} runs)")
+            for xi, n in zip(x, counts):
+                if n > 1:
+                    ax.text(xi, y, f" {n}", transform=ax.get_xaxis_transform(), color=color, fontsize=7,
+                            ha="left", va="center", clip_on=False)
     first = g["tables"][0] if g["tables"] else None
     if first is not None and ci == 0:
         days = _measurement_days(first)

@@ -5,7 +5,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from cistrack.studies.report_plots import FORMATS, band_over_seeds, nees_band, plot_study
+from cistrack.studies.report_plots import FORMATS, band_over_seeds, loss_marks, nees_band, plot_study
 
 
 def test_each_seed_is_held_between_its_steps_and_percentiles_are_taken_across_seeds():
@@ -98,3 +98,18 @@ def test_when_every_filter_diverged_their_medians_set_every_panel_beside_the_bou
               for f in ("pgm", "ukf")}
     svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
     assert ">\u221260<" in svg  # the entropy panel reaches the medians' -70 nats
+
+
+def test_custody_losses_at_one_time_are_one_triangle_with_their_count():
+    times, counts = loss_marks([1.2, 2.5, 1.2, 1.2004, 2.5, 1.21])  # to the default 0.001 d
+    assert times == pytest.approx([1.2, 1.21, 2.5]) and list(counts) == [3, 1, 2]
+    assert loss_marks([])[0].size == 0
+
+
+def test_each_filter_draws_its_losses_in_its_own_row_with_their_count(tmp_path):
+    groups = {("quick", "noisy-range", f): {"tables": [_table(s, True) for s in (1, 2, 3)],
+                                            "summaries": [{"custody_kept": False, "custody_lost_t_days": 1.2}] * 3}
+              for f in ("enkf", "ukf")}
+    svg = next(f for f in plot_study(groups, tmp_path, "demo") if f.suffix == ".svg").read_text()
+    assert "enkf: custody lost (3 of 3 runs)" in svg and "ukf: custody lost (3 of 3 runs)" in svg
+    assert svg.count("> 3<") + svg.count(">\u00a03<") + svg.count(" 3</text>") >= 2  # the count beside each row
