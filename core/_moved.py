@@ -12,6 +12,7 @@ old path in it, and ``cistrack plugins --check`` lists the old paths a plugin st
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import importlib.abc
 import importlib.machinery
 import sys
@@ -192,6 +193,8 @@ def module_getattr(package: str, module: str):
     def __getattr__(name: str):
         if name.startswith("_"):
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        if importlib.util.find_spec(f"{package}.{name}") is not None:  # a submodule of the package, not a moved name
+            return importlib.import_module(f"{package}.{name}")
         target = importlib.import_module(module)
         try:
             value = getattr(target, name)
