@@ -22,12 +22,17 @@ from .blueprint import default_blueprint
 
 rr = LazyModule("rerun")
 
-__all__ = ["BlueprintInputs", "PROPERTY", "read_blueprint_inputs"]
+__all__ = ["BlueprintInputs", "PROPERTY", "SCAN_CHUNKS", "read_blueprint_inputs"]
 
 PROPERTY = "cistrack_blueprint"
 """The recording property (entity ``/__properties/cistrack_blueprint``) holding the inputs."""
 
 _VERSION = 1
+
+SCAN_CHUNKS = 64
+"""How many of a recording's first chunks are searched for the property: the recorder flushes it
+with the recording's other properties before any step is logged, so a large recording is not
+read whole to find it."""
 
 
 def _pair(value) -> tuple[float, float] | None:
@@ -93,8 +98,9 @@ class BlueprintInputs:
 
 
 def read_blueprint_inputs(rrd: str | Path) -> BlueprintInputs | None:
-    """The inputs the recording ``rrd`` carries; None when it carries none (a recording written
-    by another program or an older cistrack) or cannot be read."""
+    """The inputs the recording ``rrd`` carries among its first :data:`SCAN_CHUNKS` chunks; None
+    when it carries none (a recording written by another program or an older cistrack) or cannot
+    be read."""
     from rerun.chunk import RrdReader
 
     entity = f"/__properties/{PROPERTY}"
@@ -102,7 +108,9 @@ def read_blueprint_inputs(rrd: str | Path) -> BlueprintInputs | None:
         with warnings.catch_warnings():  # a file without rerun's footer is read whole, with a warning
             warnings.simplefilter("ignore")
             reader = RrdReader(str(rrd))
-        for chunk in reader.stream():
+        for i, chunk in enumerate(reader.stream()):
+            if i >= SCAN_CHUNKS:
+                return None
             if chunk.entity_path != entity:
                 continue
             batch = chunk.to_record_batch()

@@ -21,7 +21,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 from cistrack.plugins.recorders.blueprint import FRAME_CAP_S, PLAYBACK_S, SOFTWARE_FRAME_S, playback_speed
-from cistrack.plugins.recorders.blueprint_inputs import read_blueprint_inputs
+from cistrack.plugins.recorders.blueprint_inputs import PROPERTY, SCAN_CHUNKS, read_blueprint_inputs
 from cistrack.plugins.recorders.run_extents import system_points_km, utc_range_s
 from cistrack.plugins.recorders.viewer_process import find_viewer_executable
 from cistrack.plugins.recorders.web_viewer import serve_recording
@@ -72,6 +72,14 @@ def test_a_recording_carries_the_inputs_of_its_blueprint(recorded_run):
     pts = system_points_km(ctx)
     np.testing.assert_allclose(inputs.system_box_km, [pts.min(axis=0), pts.max(axis=0)], rtol=1e-12)
     assert (inputs.watching, inputs.burns) == (True, False)
+
+
+def test_the_inputs_are_among_the_recordings_first_chunks(recorded_run):
+    """cistrack view does not read a large recording whole to find them."""
+    for i, chunk in enumerate(RrdReader(str(recorded_run.full_rrd)).stream()):
+        if chunk.entity_path == f"/__properties/{PROPERTY}":
+            break
+    assert i < 4 < SCAN_CHUNKS
 
 
 @pytest.mark.parametrize("content", ["another program's recording", "a truncated recording", "not a recording"])
