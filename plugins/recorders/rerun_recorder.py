@@ -328,7 +328,8 @@ class RerunRecorder(Component):
         rec.set_sinks(*sinks, default_blueprint=inputs.blueprint(live=self.serve or self.spawn))
         rec.send_recording_name(str(run.run_id))
         inputs.send(rec)  # so that cistrack view can build the blueprint again for a slower viewer
-        rec.flush()  # the properties as the file's first chunks, where cistrack view looks for them
+        if not (self.serve or self.spawn):  # a live viewer may still be starting: no wait for it here
+            rec.flush()  # the properties as the file's first chunks, where cistrack view looks for them
         return rec
 
     def _start_viewer(self) -> str:
