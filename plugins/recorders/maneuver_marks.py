@@ -27,15 +27,16 @@ filter); the detections at their update's step.
 from __future__ import annotations
 
 import math
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any
 
 import numpy as np
 
 from cistrack import units
 from cistrack.lazy import LazyModule
-from cistrack.units import LU_KM, TU_S
+from cistrack.units import LU_KM
 
+from .run_extents import set_step_times, utc_at
 from .run_series import nees_y_range
 
 rr = LazyModule("rerun")
@@ -148,7 +149,7 @@ class ManeuverMarks:
         return self.watch is not None
 
     def _utc(self, t_tu: float) -> datetime:
-        return self.epoch + timedelta(seconds=float(t_tu) * TU_S)
+        return utc_at(self.epoch, t_tu)
 
     # -- run start --------------------------------------------------------------------------------
     def log_start(self, rec, run) -> None:
@@ -229,14 +230,9 @@ class ManeuverMarks:
         last, self._last = self._last, (int(event), int(step.index), float(step.t))
         if last is None or float(units.tu_to_days(float(step.t) - last[2])) * 24.0 <= STATISTIC_GAP_HOURS:
             return
-        self._set_times(rec, *last)
+        set_step_times(rec, last[0], last[1], self._utc(last[2]))
         rec.log(STATISTIC, rr.Clear(recursive=False))
-        self._set_times(rec, *self._last)
-
-    def _set_times(self, rec, event: int, index: int, t: float) -> None:
-        rec.set_time("event", sequence=event)
-        rec.set_time("step", sequence=index)
-        rec.set_time("utc", timestamp=self._utc(t))
+        set_step_times(rec, event, step.index, self._utc(step.t))
 
     def _detection_text(self, step, stat: float) -> str:
         t = float(step.t)

@@ -62,7 +62,7 @@ from cistrack.interfaces.component import Component, check_int, check_positive
 from cistrack.errors import ParameterError
 from cistrack.api import hookimpl
 from cistrack.lazy import LazyModule
-from cistrack.units import LU_KM, TU_S, parse_utc
+from cistrack.units import LU_KM, parse_utc
 
 from .blueprint import APPLICATION_ID
 from .blueprint_inputs import BlueprintInputs
@@ -70,7 +70,7 @@ from .decimation import heaviest_components, subsample_indices
 from .estimate_frame import line_through_frame
 from .maneuver_marks import ManeuverMarks
 from .observers_view import log_observers
-from .run_extents import system_points_km, utc_range_s
+from .run_extents import set_step_times, system_points_km, utc_at, utc_range_s
 from .run_series import log10_series
 from .run_view_log import (log_estimate_frame, log_legend, log_run_view_styles, log_series, log_truth_path,
                            truth_path_in_frame)
@@ -339,10 +339,8 @@ class RerunRecorder(Component):
         return f"rerun+http://{LOOPBACK}:{self.viewer_port}/proxy"
 
     def _set_time(self, rec: rr.RecordingStream, index: int, t: float) -> None:
-        rec.set_time("event", sequence=self._event)
+        set_step_times(rec, self._event, index, utc_at(self._epoch, t))
         self._event += 1
-        rec.set_time("step", sequence=int(index))
-        rec.set_time("utc", timestamp=self._epoch + timedelta(seconds=float(t) * TU_S))
 
     def _log_scene(self, rec: rr.RecordingStream, run) -> None:
         mu = system_mu(run.dynamics)

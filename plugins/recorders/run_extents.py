@@ -1,6 +1,8 @@
 """What the blueprint is set from: the run's span on the ``utc`` timeline and the points the
-system view frames."""
+system view frames; and where a step sits on the recording's timelines."""
 from __future__ import annotations
+
+from datetime import datetime, timedelta
 
 import numpy as np
 
@@ -9,7 +11,19 @@ from cistrack.units import LU_KM, TU_S
 from .scene import libration_points, primary_positions, system_mu
 from .view_frame import ViewFrame
 
-__all__ = ["utc_range_s", "system_points_km"]
+__all__ = ["utc_range_s", "system_points_km", "utc_at", "set_step_times"]
+
+
+def utc_at(epoch: datetime, t_tu: float) -> datetime:
+    """The UTC instant ``t_tu`` (TU) after the scenario ``epoch``."""
+    return epoch + timedelta(seconds=float(t_tu) * TU_S)
+
+
+def set_step_times(rec, event: int, index: int, when: datetime) -> None:
+    """Set the recording's ``event``, ``step`` and ``utc`` timelines for what is logged next."""
+    rec.set_time("event", sequence=int(event))
+    rec.set_time("step", sequence=int(index))
+    rec.set_time("utc", timestamp=when)
 
 
 def utc_range_s(run, epoch) -> tuple[float, float] | None:
