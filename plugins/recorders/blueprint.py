@@ -26,7 +26,7 @@ from .run_series import NEES_BAND, NEES_BAND_ENTITIES, SERIES, nees_y_range
 rrb = LazyModule("rerun.blueprint")  # loads with the first recording, not with the registry
 
 __all__ = ["APPLICATION_ID", "FRAME_CAP_S", "PLAYBACK_S", "RUN_VIEW_EYE", "SOFTWARE_FRAME_S", "TIMELINES",
-           "axis_range_s", "camera_for", "default_blueprint", "playback_speed"]
+           "axis_range_s", "camera_for", "points_box", "default_blueprint", "playback_speed"]
 
 
 APPLICATION_ID = "cistrack"
@@ -118,18 +118,25 @@ def _series(name: str, entities: list[str], utc_range_s: tuple[float, float] | N
                               plot_legend=rrb.PlotLegend(visible=False))
 
 
+def points_box(points_km: np.ndarray | None) -> np.ndarray | None:
+    """(2, 3) the corners (min, max) of the box around the finite rows of ``points_km`` (N, 3);
+    None without any. The system view's camera (:func:`camera_for`) depends on this box only."""
+    if points_km is None:
+        return None
+    pts = np.asarray(points_km, dtype=float).reshape(-1, 3)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    return np.stack([pts.min(axis=0), pts.max(axis=0)]) if pts.shape[0] else None
+
+
 def camera_for(points_km: np.ndarray | None, direction=(0.55, -0.65, 0.52),
                distance: float = 1.6) -> tuple[np.ndarray, np.ndarray] | None:
     """(eye position, look target), km: looking at the box around ``points_km`` (N, 3) along
     ``direction`` (from the target to the eye), ``distance`` times the box's largest side away;
     None without points."""
-    if points_km is None:
+    box = points_box(points_km)
+    if box is None:
         return None
-    pts = np.asarray(points_km, dtype=float).reshape(-1, 3)
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    if pts.shape[0] == 0:
-        return None
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    lo, hi = box
     target = 0.5 * (lo + hi)
     size = max(float(np.max(hi - lo)), 2.0e4)  # at least 20,000 km across
     d = np.asarray(direction, dtype=float)

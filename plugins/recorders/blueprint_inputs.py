@@ -18,7 +18,7 @@ import numpy as np
 
 from cistrack.lazy import LazyModule
 
-from .blueprint import default_blueprint
+from .blueprint import default_blueprint, points_box
 
 rr = LazyModule("rerun")
 
@@ -59,12 +59,7 @@ class BlueprintInputs:
     def of(cls, system_km: np.ndarray | None, utc_range_s: tuple[float, float] | None,
            watching: bool, burns: bool) -> "BlueprintInputs":
         """The inputs of a run whose system view frames ``system_km`` (N, 3), km."""
-        box = None
-        if system_km is not None:
-            pts = np.asarray(system_km, dtype=float).reshape(-1, 3)
-            pts = pts[np.all(np.isfinite(pts), axis=1)]
-            box = np.stack([pts.min(axis=0), pts.max(axis=0)]) if pts.shape[0] else None
-        return cls(box, _pair(utc_range_s), bool(watching), bool(burns))
+        return cls(points_box(system_km), _pair(utc_range_s), bool(watching), bool(burns))
 
     def blueprint(self, live: bool = False, frame_s: float | None = None):
         """The default blueprint for a viewer drawing a frame every ``frame_s`` seconds."""
