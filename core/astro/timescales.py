@@ -232,10 +232,9 @@ def time_scales(epoch: datetime | str, seconds=0.0) -> TimeScales:
     except (TypeError, ValueError):
         return _time_scales(epoch, seconds)     # refused there, with the message for the culprit
     table = _eop_table()
+    # the kept entry holds its table, so no later table can take that table's id
     kept = kept_or_evaluated(_KEPT_SCALES, (id(table), *key), _KEPT_LIMIT,
-                             lambda: (table, _copied(_time_scales(epoch, s))))
-    if kept[0] is not table:                    # an id reused by a later table: not this one's
-        return _time_scales(epoch, s)
+                             lambda: (table, _time_scales(epoch, s)))
     return _copied(kept[1])
 
 

@@ -94,9 +94,9 @@ class _Problem:
     def _kept_or_computed(self, what: str, x: np.ndarray, compute) -> tuple[np.ndarray, ...]:
         """``compute()`` at the unknowns ``x``, kept for the next request at the same ``x`` (bit for
         bit: the passes, their starts and the estimate ask again where an earlier step ended; the
-        propagation and the sensor give the same numbers again). Copies, at most 4 points each."""
-        hit = kept_or_evaluated(self._kept[what], np.asarray(x, dtype=float).tobytes(), _KEPT_POINTS,
-                                lambda: tuple(np.array(a, copy=True) for a in compute()))
+        propagation and the sensor give the same numbers again). ``compute`` returns new arrays; the
+        caller gets copies of the kept ones. At most 4 points each."""
+        hit = kept_or_evaluated(self._kept[what], np.asarray(x, dtype=float).tobytes(), _KEPT_POINTS, compute)
         return tuple(a.copy() for a in hit)
 
     def _dynamics(self, x: np.ndarray) -> Dynamics:
