@@ -20,9 +20,10 @@ _LOG_2PI = float(np.log(2.0 * np.pi))
 
 GROUP_BLOCK_ROWS = 131_072
 """A group with more particles than this has its covariance summed over blocks of this many rows
-(8 MiB of [x d] each) instead of one block of all its rows: at 1,000,000 particles a large component's block was the run's peak. Its mean is
-the same bits either way; its covariance differs in the last bits (another order of additions).
-Example 1's default 10,000 particles never come near it."""
+(8 MiB of [x d] each) instead of one block of all its rows: at 1,000,000 particles a large
+component's block was the run's peak. Its mean is the same bits either way; its covariance
+differs in the last bits (another order of additions). Example 1's default 10,000 particles never
+come near it."""
 
 
 @dataclass
