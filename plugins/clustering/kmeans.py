@@ -35,7 +35,7 @@ class KMeansClusterer(Clusterer):
         Lloyd iterations run on at most this many randomly chosen particles (drawn from the
         rng); every particle is then labelled by its nearest centroid. 0 fits on all particles.
         Centroids of a few clusters are estimated well from a few thousand points, and the
-        filter clusters at every step, so this is its largest saving (about 4x at N = 10,000).
+        PGM clusters at every update, so this is its largest saving (about 4x at N = 10,000).
     engine : str
         "numpy" (default): cistrack's numpy k-means (:mod:`.lloyd`), which returns scikit-learn's
         one-thread result bit for bit without importing scikit-learn (1.3 s of CPU) and without

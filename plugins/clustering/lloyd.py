@@ -4,7 +4,7 @@
 Why: importing ``sklearn.cluster`` costs about 1.3 s of CPU (it imports scipy.stats, which parses
 its docstrings at import), half of Example 1's whole run; and each ``KMeans.fit`` spends
 milliseconds validating parameters and limiting thread pools, on a 2,500-point fit that takes
-less than that. The filters cluster at every step, so both costs count.
+less than that. The PGM clusters at every update, so both costs count.
 
 The steps and the random draws are the ones scikit-learn documents for its estimator, in the same
 order and with the same numpy operations, so that a fit from the same integer seed returns the

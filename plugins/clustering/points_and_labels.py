@@ -25,8 +25,8 @@ def standardize(x: np.ndarray) -> np.ndarray:
     Coordinates with zero spread (all particles equal) are only shifted, so duplicates stay finite.
     The result is bit for bit numpy's ``(x - x.mean(axis=0)) / x.std(axis=0)``: for a C-ordered
     ``x`` numpy sums along axis 0 row by row, and the compiled :func:`_column_moments` and
-    :func:`_scale_rows` make the same additions in the same order with no temporaries (the filters standardise 10,000
-    particles every step); other layouts go through numpy itself.
+    :func:`_scale_rows` make the same additions in the same order with no temporaries (the PGM standardises 10,000
+    particles at every update); other layouts go through numpy itself.
     """
     x = np.asarray(x, dtype=np.float64)
     if not x.flags.c_contiguous:  # numpy sums a contiguous axis pairwise: keep its numbers there

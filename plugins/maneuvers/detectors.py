@@ -111,7 +111,7 @@ class NisWindowDetector(SequentialDetector):
 class MixtureLikelihoodDetector(SequentialDetector):
     """Sequential test on the predictive likelihood of a Gaussian-mixture belief.
 
-    Per update each component of the prior's mixture (the PGM's clusters; one Gaussian from the
+    Per update each component of the prior's mixture (the PGM's propagated components; one Gaussian from the
     samples when the belief has no usable mixture) predicts the measurement by the unscented
     transform plus the noise R (:mod:`cistrack.plugins.maneuvers.predictive_mixture`). The
     observed measurement's tail probability p = P(log f(Z) <= log f(z)), Z from the predictive

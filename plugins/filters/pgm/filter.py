@@ -5,7 +5,9 @@ Particles are only propagated between measurements. At a measurement the particl
 clustered into components (weight N_i/N, sample mean and covariance; a ``clustering``
 component), each component is conditioned on the measurement (a ``pgm-update`` component), the
 component weights are multiplied by the components' measurement likelihoods (log domain), and the
-N posterior particles are drawn (a ``pgm-draw`` component). Two hooks change that course: at the
+N posterior particles are drawn (a ``pgm-draw`` component), each remembering its component.
+Between measurements the belief is the propagated mixture: the particles grouped by the component
+each was drawn from, without clustering or random draws. Two hooks change that course: at the
 prediction that ends a pass the belief may be replaced by least-squares fits of the arc (a
 ``pgm-reanchor`` component), and in the first pass after a gap a measurement far sharper than the
 cloud conditions every particle as its own kernel (:mod:`.kernel_update`, ``kernel_ess``). At a
@@ -33,6 +35,7 @@ from ..initial_cloud import check_cloud, initial_particles
 from ..kalman_update import group_moments
 from ..measured_components import MeasuredComponents, check_epoch
 from ..particle_declarations import ParticleFilterDeclarations
+from ..random_streams import independent_stream
 from ..resampling import normalize_log_weights
 from .cluster_merge import merge_small_clusters
 from .clusterer_choice import resolve_clusterer, split_clusterer
@@ -215,13 +218,14 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         check_cloud(cloud, who)
         self._build_steps(who)
         self._dyn, self._sensor, self._rng = dynamics, sensor, rng
+        self._belief_rng = independent_stream(rng)
         self._bounds = StateBounds(self.min_range_km, self.max_range_km, self.max_speed_kms, earth_position(dynamics))
         self._t = float(cloud.epoch)
         x = initial_particles(cloud, self.n_particles, rng)
         self._lost_total = 0
         self._pruned_total = 0
         self._diag: dict[str, float] = {}
-        self._x, self._h = self._prune(x)
+        self._x, self._h, _ = self._prune(x)
         self._invalidate()
         self._kernels = self._kernel_step.start()
         self._reanchor = self._reanchor_step.start()
@@ -244,15 +248,17 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that
         hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
-        self._invalidate()  # the last update's labels (N,) need not be held while propagating
+        carried = self._sample_labels  # each particle's component, carried through the propagation
+        self._invalidate()  # the last update's clustering (N,) need not be held while propagating
         own = {"overwrite": True} if getattr(self._predictor, "overwrites", False) and self._owns_particles() else {}
         x, alive, h = self._predictor.predict(self._dyn, self._x, self._t, t, self._rng, self._h, self._who(), **own)
         lost = int(np.count_nonzero(~alive))
         self._lost_total += lost
         self._t = t
         pruned_before = self._pruned_total
-        self._x, self._h = self._prune(x, h)
-        self._invalidate()
+        if carried is not None and lost:
+            carried = carried[alive]
+        self._x, self._h, self._sample_labels = self._prune(x, h, carried)
         self._diag = {"n_particles": float(self._x.shape[0]), "particles_lost": float(self._lost_total),
                       "particles_lost_step": float(lost),
                       "particles_pruned": float(self._pruned_total - pruned_before)}
@@ -357,9 +363,10 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         prior = ClusteredParticles(self._x, self._labels, self._prior.means, self._prior.covariances)
         spread = measurement_spread_sigma(dres, meas.R)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
-        samples, slabels, log_evidence = self._kernels.update(prior, meas.residuals_to_measurement, meas.R, n_draw,
+        samples, _, log_evidence = self._kernels.update(prior, meas.residuals_to_measurement, meas.R, n_draw,
                                                               self._rng, who)
-        self._x, self._sample_labels, self._h = samples, slabels, None
+        # the draws' parent clusters are no components of the posterior: the belief clusters them
+        self._x, self._sample_labels, self._h = samples, None, None
         self._mixture = None
         self._labels = self._prior = None
         self._diag.update({"log_likelihood": log_evidence, "likelihood_ess_fraction": float(sharpness),
@@ -373,19 +380,26 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             return False
         x = self._reanchor.draw(self.n_particles, self._rng)
         if x is None:
-            self._x, self._h = self._sample_posterior(mix, self.n_particles)[0], None
+            (self._x, self._sample_labels), self._h = self._sample_posterior(mix, self.n_particles), None
         else:
-            self._x, self._h = self._prune(x)
+            self._x, self._h, self._sample_labels = self._prune(x)
         return True
 
     # -- belief -----------------------------------------------------------------------------------
     @property
     def belief(self) -> Belief:
         """Posterior mixture and resampled particles after an update; after a prediction the
-        clustered prior (the clustering is reused by the next update)."""
+        propagated mixture: each particle keeps the component it was drawn from, and each
+        component is the mean and covariance of its particles now. Where the particles carry no
+        components (the start, a kernel update, a re-anchoring to least-squares draws) they are
+        clustered with a random stream of the belief's own. Reading the belief never draws from the update's random stream, so the estimates
+        do not depend on how often it is read."""
         self._require_init()
         if self._mixture is None:
-            self._ensure_clustered()
+            labels = self._sample_labels
+            if labels is None:
+                labels = self._clustered_labels(self._clusterer, self._belief_rng)
+            self._mixture, self._sample_labels = self._group_mixture(labels)
         return Belief(self._t, self._mixture, ParticleCloud(self._x, self._t, None, self._sample_labels))
 
     def _totals(self) -> dict[str, float]:
@@ -409,36 +423,48 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         ``clusterer`` (default: the filter's)."""
         if self._labels is not None:
             return
-        x = self._x
-        d = x.shape[1]
-        labels = np.asarray((clusterer or self._clusterer).cluster(x, self._rng), dtype=np.intp)
-        if labels.shape != (x.shape[0],) or labels.min() < 0:
+        self._prior, self._labels = self._group_mixture(self._clustered_labels(clusterer or self._clusterer, self._rng))
+
+    def _clustered_labels(self, clusterer: Clusterer, rng: np.random.Generator) -> np.ndarray:
+        """The clusterer's labels (N,) of the current particles, drawing from ``rng``."""
+        labels = np.asarray(clusterer.cluster(self._x, rng), dtype=np.intp)
+        if labels.shape != (self._x.shape[0],) or labels.min() < 0:
             raise FilterError(f"filter '{self._who()}': clusterer returned labels of shape {labels.shape}")
+        return labels
+
+    def _group_mixture(self, labels: np.ndarray) -> tuple[GaussianMixture, np.ndarray]:
+        """The mixture of the current particles grouped by ``labels`` (N,) (weight N_i/N, each group's
+        mean and covariance), and the labels (N,) it was made from: numbered from 0 without gaps
+        (groups emptied since the labels were given are dropped), groups too small for a
+        covariance merged into their nearest."""
         labels = (np.cumsum(np.bincount(labels) > 0) - 1)[labels]  # np.unique's inverse, without its sort
-        min_size = self.min_cluster_size if self.min_cluster_size is not None else max(
-            2 * d, int(np.ceil(self._min_cluster_fraction * self.n_particles)))
-        labels, merged = merge_small_clusters(x, labels, min(min_size, x.shape[0]))
+        labels, merged = merge_small_clusters(self._x, labels, self._min_size())
         m = int(labels.max()) + 1
-        mom = group_moments(x, None, labels, m)
-        self._labels = labels
-        self._prior = GaussianMixture(mom.counts / mom.counts.sum(), mom.mean_x,
-                                      regularize_covariance(mom.pxx, 1e-12))
-        if self._mixture is None:
-            self._mixture = self._prior
-            self._sample_labels = labels
+        mom = group_moments(self._x, None, labels, m)
         self._diag["clusters_merged"] = float(merged)
         self._diag["n_components"] = float(m)
+        return GaussianMixture(mom.counts / mom.counts.sum(), mom.mean_x, regularize_covariance(mom.pxx, 1e-12)), labels
 
-    def _prune(self, x: np.ndarray, h: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-        """The particles (N, 6) inside the state bounds, and their carried step sizes (N,) or None."""
+    def _min_size(self) -> int:
+        """Fewest particles a component may have: ``min_cluster_size``, else the larger of 2 x the
+        dimension and ``_min_cluster_fraction`` of the particles (never more than there are)."""
+        n, d = self._x.shape
+        size = self.min_cluster_size if self.min_cluster_size is not None else max(
+            2 * d, int(np.ceil(self._min_cluster_fraction * self.n_particles)))
+        return min(size, n)
+
+    def _prune(self, x: np.ndarray, h: np.ndarray | None = None, labels: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """The particles (N, 6) inside the state bounds, with their carried step sizes (N,) and
+        components (N,), each None when not carried."""
         if not self._bounds.active:
-            return x, h
+            return x, h, labels
         ok = self._bounds.admissible(x)
         n_bad = int(np.count_nonzero(~ok))
         if n_bad == x.shape[0]:
             raise FilterError(f"filter '{self._who()}': every particle lies outside the state bounds")
         self._pruned_total += n_bad
-        return x[ok], (None if h is None else h[ok])
+        return x[ok], (None if h is None else h[ok]), (None if labels is None else labels[ok])
 
     def _owns_particles(self) -> bool:
         """Whether nothing but this filter references its particles and steps (no belief, view or
