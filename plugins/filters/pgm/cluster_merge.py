@@ -33,6 +33,5 @@ def merge_small_clusters(x: np.ndarray, labels: np.ndarray, min_size: int) -> tu
     sm = np.flatnonzero(small)
     dist = np.linalg.norm(means[sm][:, None, :] - means[big][None, :, :], axis=2)
     target[sm] = big[np.argmin(dist, axis=1)]
-    new = target[labels]
-    _, new = np.unique(new, return_inverse=True)
-    return new.reshape(-1).astype(np.intp), int(sm.size)
+    target = np.cumsum(np.bincount(target, minlength=m) > 0)[target] - 1  # np.unique's inverse, without its sort
+    return target[labels].astype(np.intp, copy=False), int(sm.size)
