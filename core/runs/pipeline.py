@@ -302,7 +302,7 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
     filt = ctx.filter
     tp = time.perf_counter()
     filt.predict(t)
-    prior = filt.belief  # timed with the prediction: the PGM clusters its particles here
+    prior = filt.belief  # timed with the prediction (forming the belief is part of it)
     t_pred = time.perf_counter() - tp
     if not group:
         step = _step(ctx, k, t, "predict", prior)

@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["merge_small_clusters"]
+__all__ = ["merge_small_clusters", "merged_cluster_targets", "MERGE_WHOLE_ROWS"]
+
+MERGE_WHOLE_ROWS = 131_072
+"""Up to this many particles the scaled coordinates (N, d) are made whole (the numbers Example 1
+has always had); above it, the scale and the clusters' means are summed block by block, so that a
+merge at 1,000,000 particles makes no (N, d) temporaries (three of them were 144 MB, the run's
+peak); the same means to rounding."""
 
 
 def merge_small_clusters(x: np.ndarray, labels: np.ndarray, min_size: int) -> tuple[np.ndarray, int]:
@@ -14,24 +20,46 @@ def merge_small_clusters(x: np.ndarray, labels: np.ndarray, min_size: int) -> tu
     x (N, d), labels (N,) in [0, M). Returns (labels (N,) in [0, M'), number of clusters merged).
     """
     labels = np.asarray(labels, dtype=np.intp)
+    target, merged = merged_cluster_targets(x, labels, min_size)
+    return (labels if target is None else target[labels]), merged
+
+
+def merged_cluster_targets(x: np.ndarray, labels: np.ndarray, min_size: int) -> tuple[np.ndarray | None, int]:
+    """What :func:`merge_small_clusters` relabels each cluster to: ``target`` (M,), the new label
+    of old label j (None when no cluster is merged), and the number of clusters merged; so that a
+    caller that owns ``labels`` (N,) may relabel them in place."""
     m = int(labels.max()) + 1 if labels.size else 0
     counts = np.bincount(labels, minlength=m)
     small = (counts < min_size) & (counts > 0)
     if not small.any():
-        return labels, 0
+        return None, 0
     big = np.flatnonzero(counts >= min_size)
     if big.size == 0:
-        return np.zeros_like(labels), int(np.count_nonzero(counts)) - 1
-    scale = x.std(axis=0)
-    scale[~(scale > 0)] = 1.0
-    z = x / scale
-    means = np.zeros((m, x.shape[1]))
-    for j in range(x.shape[1]):  # loop over coordinates, vectorised over particles
-        means[:, j] = np.bincount(labels, weights=z[:, j], minlength=m)
-    means /= np.maximum(counts, 1)[:, None]
+        return np.zeros(m, dtype=np.intp), int(np.count_nonzero(counts)) - 1
+    means = _scaled_means(x, labels, counts)
     target = np.arange(m)
     sm = np.flatnonzero(small)
     dist = np.linalg.norm(means[sm][:, None, :] - means[big][None, :, :], axis=2)
     target[sm] = big[np.argmin(dist, axis=1)]
-    target = np.cumsum(np.bincount(target, minlength=m) > 0)[target] - 1  # np.unique's inverse, without its sort
-    return target[labels].astype(np.intp, copy=False), int(sm.size)
+    return np.cumsum(np.bincount(target, minlength=m) > 0)[target] - 1, int(sm.size)  # np.unique's inverse, unsorted
+
+
+def _scaled_means(x: np.ndarray, labels: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Each cluster's mean (M, d) of ``x`` (N, d) divided by the overall standard deviation of its
+    coordinate (a zero deviation counts as 1)."""
+    n, d = x.shape
+    m = counts.size
+    if n <= MERGE_WHOLE_ROWS:
+        scale = x.std(axis=0)
+        blocks = [(0, n)]
+    else:
+        blocks = [(a, min(n, a + MERGE_WHOLE_ROWS)) for a in range(0, n, MERGE_WHOLE_ROWS)]
+        mean = sum(x[a:b].sum(axis=0) for a, b in blocks) / n
+        scale = np.sqrt(sum(((x[a:b] - mean) ** 2).sum(axis=0) for a, b in blocks) / n)
+    scale[~(scale > 0)] = 1.0
+    means = np.zeros((m, d))
+    for a, b in blocks:
+        z = x[a:b] / scale
+        for j in range(d):  # loop over coordinates, vectorised over particles
+            means[:, j] += np.bincount(labels[a:b], weights=z[:, j], minlength=m)
+    return means / np.maximum(counts, 1)[:, None]

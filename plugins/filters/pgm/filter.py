@@ -37,7 +37,7 @@ from ..measured_components import MeasuredComponents, check_epoch
 from ..particle_declarations import ParticleFilterDeclarations
 from ..random_streams import independent_stream
 from ..resampling import normalize_log_weights
-from .cluster_merge import merge_small_clusters
+from .cluster_merge import merged_cluster_targets
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .component_spread import shrink_components
 from .component_update import COMPONENT_LIKELIHOODS
@@ -248,7 +248,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         """Re-anchor if a pass ends here, then propagate every particle to ``t`` (TU); particles that
         hit a body are removed and counted."""
         reanchored = self._reanchor is not None and self._reanchor.due(t) and self._try_reanchor()
-        carried = self._sample_labels  # each particle's component, carried through the propagation
+        carried = _narrow(self._sample_labels)  # each particle's component, carried through the propagation
         self._invalidate()  # the last update's clustering (N,) need not be held while propagating
         own = {"overwrite": True} if getattr(self._predictor, "overwrites", False) and self._owns_particles() else {}
         x, alive, h = self._predictor.predict(self._dyn, self._x, self._t, t, self._rng, self._h, self._who(), **own)
@@ -272,6 +272,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         check_epoch(self._t, measurement, who)
         if self._reanchor is not None:
             self._reanchor.observe(measurement)
+        self._sample_labels = self._mixture = None  # the carried components (N,): the update clusters afresh
+        if self._split_clusterer is None:  # cluster before the residuals (N, m) exist, so that the
+            self._ensure_clustered()       # clustering's work arrays never meet them
         meas = MeasuredComponents(self._sensor, measurement)
         dres = residuals_in_chunks(meas, self._x)
         if not np.all(np.isfinite(dres)):
@@ -399,7 +402,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             labels = self._sample_labels
             if labels is None:
                 labels = self._clustered_labels(self._clusterer, self._belief_rng)
-            self._mixture, self._sample_labels = self._group_mixture(labels)
+            self._mixture, labels = self._group_mixture(labels)
+            self._sample_labels = _narrow(labels)  # held beside the next update's own clustering
         return Belief(self._t, self._mixture, ParticleCloud(self._x, self._t, None, self._sample_labels))
 
     def _totals(self) -> dict[str, float]:
@@ -437,8 +441,13 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         mean and covariance), and the labels (N,) it was made from: numbered from 0 without gaps
         (groups emptied since the labels were given are dropped), groups too small for a
         covariance merged into their nearest."""
-        labels = (np.cumsum(np.bincount(labels) > 0) - 1)[labels]  # np.unique's inverse, without its sort
-        labels, merged = merge_small_clusters(self._x, labels, self._min_size())
+        labels = labels.astype(np.intp)  # its own copy, relabelled in place: one (N,) array at a time
+        used = np.bincount(labels) > 0
+        if not used.all():  # a group emptied: np.unique's inverse, without its sort
+            np.take(np.cumsum(used) - 1, labels, out=labels, mode="clip")
+        target, merged = merged_cluster_targets(self._x, labels, self._min_size())
+        if target is not None:
+            np.take(target, labels, out=labels, mode="clip")
         m = int(labels.max()) + 1
         mom = group_moments(self._x, None, labels, m)
         self._diag["clusters_merged"] = float(merged)
@@ -489,6 +498,14 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if x.shape[0] == 0:
             raise FilterError(f"filter '{self._who()}': the posterior lies entirely outside the state bounds")
         return x, lab
+
+
+def _narrow(labels: np.ndarray | None) -> np.ndarray | None:
+    """``labels`` (N,) as int8 when they fit (1 byte a particle instead of 8 while carried through a
+    propagation), else as they are."""
+    if labels is None or labels.size == 0 or labels.max() > np.iinfo(np.int8).max:
+        return labels
+    return labels.astype(np.int8)
 
 
 RESIDUAL_CHUNK = 65_536  # particles whose predicted measurements are computed at once
