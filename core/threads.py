@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -22,7 +23,7 @@ import numpy as np
 
 from cistrack.errors import ConfigError
 
-__all__ = ["num_threads", "run_chunks", "library_thread_limit", "capped_threads"]
+__all__ = ["num_threads", "run_chunks", "library_thread_limit", "capped_threads", "SHARE_MIN_SECONDS"]
 
 _POOL: ThreadPoolExecutor | None = None
 _POOL_PID = -1
@@ -55,23 +56,48 @@ def _pool(workers: int) -> ThreadPoolExecutor:
     return _POOL
 
 
+SHARE_MIN_SECONDS = 0.004
+"""Work that the calling thread alone would finish within this many seconds (estimated from its
+first chunk) is not shared: waking a worker and handing chunks back and forth cost more CPU than
+the wall time it saves there (Example 1's propagations, about 0.6 ms at 10,000 particles, took the
+same wall time on one thread as on two, with 0.1 s more CPU per run: docs/performance.md)."""
+
+_PROBE_CHUNKS = 4
+"""Chunks per worker at least, so that the first chunk, which the calling thread runs alone to
+estimate the work, is a small share of it."""
+
+
 def run_chunks(kernel, n: int, args: tuple, chunks_per_worker: int = 8) -> None:
-    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the calling thread and the worker
-    threads (GIL released).
+    """Run ``kernel(i0, i1, *args)`` over 0..n in chunks on the calling thread and, when the work
+    is large enough (:data:`SHARE_MIN_SECONDS`), the worker threads (GIL released).
 
     ``chunks_per_worker``: several chunks per worker balance uneven rows (particles near a close
-    approach take more steps); rows of equal cost need one. The chunks are taken in turn by
-    whichever thread is free, the calling thread among them: it starts at once, where a sleeping
-    worker takes time to wake (on a virtual machine's idle core, as long as a short call itself)."""
+    approach take more steps); rows of equal cost need few. The calling thread runs the first
+    chunk and times it; if the rest would take it less than :data:`SHARE_MIN_SECONDS` it runs the
+    rest too. Otherwise the chunks are taken in turn by whichever thread is free, the calling
+    thread among them: it goes on at once, where a sleeping worker takes time to wake (on a
+    virtual machine's idle core, as long as a short call itself)."""
     workers = min(num_threads(), n)
     if workers <= 1 or n < 32:
         kernel(0, n, *args)
         return
     if not getattr(kernel, "signatures", True):  # numba dispatcher not loaded yet: load it here on an
         kernel(0, 0, *args)                       # empty range, or each worker thread would load it
-    n_chunks = min(n, workers * chunks_per_worker)
+    n_chunks = min(n, workers * max(chunks_per_worker, _PROBE_CHUNKS))
     edges = np.linspace(0, n, n_chunks + 1).astype(np.int64)
     chunks = iter([(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a])
+    i0, i1 = next(chunks)
+    started = time.perf_counter()
+    kernel(i0, i1, *args)
+    if (time.perf_counter() - started) * (n - i1) / (i1 - i0) < SHARE_MIN_SECONDS:
+        for i0, i1 in chunks:
+            kernel(i0, i1, *args)
+        return
+    _share(kernel, chunks, args, workers)
+
+
+def _share(kernel, chunks: Iterator[tuple[int, int]], args: tuple, workers: int) -> None:
+    """Run the remaining ``chunks`` on the calling thread and ``workers - 1`` worker threads."""
     lock = threading.Lock()
 
     def drain() -> None:

@@ -1,5 +1,6 @@
-"""The worker threads of cistrack.threads: every row once, the calling thread working too, and a
-failing chunk reported after every thread has stopped."""
+"""The worker threads of cistrack.threads: every row once, the calling thread working too, work too
+small to share done on the calling thread alone, and a failing chunk reported after every thread
+has stopped."""
 from __future__ import annotations
 
 import threading
@@ -8,6 +9,7 @@ import time
 import numpy as np
 import pytest
 
+import cistrack.threads
 from cistrack.threads import run_chunks
 
 
@@ -18,10 +20,12 @@ def threads(monkeypatch):
     return use
 
 
+@pytest.mark.parametrize("share_below", [0.0, cistrack.threads.SHARE_MIN_SECONDS])
 @pytest.mark.parametrize("n_threads", [1, 2, 3])
 @pytest.mark.parametrize("n", [31, 32, 100, 1001])
-def test_every_row_is_computed_exactly_once(threads, n_threads, n):
+def test_every_row_is_computed_exactly_once(threads, monkeypatch, n_threads, n, share_below):
     threads(n_threads)
+    monkeypatch.setattr(cistrack.threads, "SHARE_MIN_SECONDS", share_below)  # 0: always shared
     hits = np.zeros(n, dtype=np.int64)
 
     def kernel(i0, i1, out):
@@ -43,6 +47,17 @@ def test_the_calling_thread_takes_chunks_beside_the_workers(threads):
     assert len(seen) == 16  # 2 threads x 8 chunks each
     assert threading.current_thread().name in seen
     assert any(name.startswith("cistrack-propagate") for name in seen)
+
+
+def test_work_too_small_to_share_stays_on_the_calling_thread(threads):
+    threads(2)
+    seen: list[str] = []
+
+    def kernel(i0, i1):
+        seen.append(threading.current_thread().name)
+
+    run_chunks(kernel, 1000, ())
+    assert len(seen) == 16 and set(seen) == {threading.current_thread().name}
 
 
 def test_a_failing_chunk_is_raised_once_every_thread_has_stopped(threads):
