@@ -79,7 +79,8 @@ class ObserverGeometry:
     """Observer states for one site and one UTC epoch, at seconds after the epoch.
 
     ``state(seconds)`` evaluates ERFA once per distinct time and keeps the most recent scalar
-    times in a small cache (filters ask for the same measurement time many times).
+    times and vectors of times (filters ask for the same measurement time many times, a
+    least-squares fit for the same vector).
 
     Parameters
     ----------
@@ -92,6 +93,12 @@ class ObserverGeometry:
     """
 
     _CACHE_SIZE = 64
+    _KEPT_VECTORS = 4
+    """Vectors of times whose states are kept (a least-squares fit asks for all its observation
+    times at every iteration and for every column of its Jacobian: 19 times per fit of a
+    319-observation arc)."""
+    _KEPT_VECTOR_ROWS = 65_536
+    """Longest vector of distinct times whose states are kept (152 bytes a time)."""
 
     def __init__(self, site: Site, epoch: datetime | str, *, polar_motion: bool = True,
                  ut1: bool = True) -> None:
@@ -100,6 +107,7 @@ class ObserverGeometry:
         self.polar_motion = bool(polar_motion)
         self.ut1 = bool(ut1)
         self._cache: dict[float, ObserverState] = {}
+        self._kept: dict[tuple, ObserverState] = {}
 
     def state(self, seconds) -> ObserverState:
         """Observer state at ``seconds`` (scalar or (K,)) SI seconds after the epoch (K=1 for a scalar)."""
@@ -107,7 +115,11 @@ class ObserverGeometry:
         if s.size == 1:
             return kept_or_evaluated(self._cache, float(s[0]), self._CACHE_SIZE, lambda: self._evaluate(s))
         uniq, inv = np.unique(s, return_inverse=True)
-        st = self._evaluate(uniq)
+        if uniq.size <= self._KEPT_VECTOR_ROWS:  # the states are handed out indexed: new arrays
+            st = kept_or_evaluated(self._kept, (uniq.size, uniq.tobytes()), self._KEPT_VECTORS,
+                                   lambda: self._evaluate(uniq))
+        else:
+            st = self._evaluate(uniq)
         return ObserverState(*(a[inv] for a in (st.position_km, st.velocity_kms, st.gcrs_to_itrs,
                                                  st.earth_velocity_kms, st.sun_distance_au)))
 

@@ -161,3 +161,18 @@ def test_azel_and_radec_agree_with_astropy_to_0_01_arcsec_at_epochs_2000_to_2050
 def test_azel_and_radec_agree_with_astropy_for_1000_cislunar_points():
     worst_azel, worst_radec = _acceptance(n=334, seed=101)     # 3 sites x 334 = 1,002 points
     assert worst_azel < 0.01 and worst_radec < 0.01, (worst_azel, worst_radec)
+
+
+def test_a_vector_of_times_asked_again_is_evaluated_once_and_handed_out_afresh(monkeypatch):
+    geometry = ObserverGeometry(Site(35.0, -110.0, 2000.0), EPOCH)
+    calls = []
+    evaluate = geometry._evaluate
+    monkeypatch.setattr(geometry, "_evaluate", lambda s: calls.append(s.size) or evaluate(s))
+    secs = np.array([600.0, 0.0, 3600.0, 600.0])
+    first = geometry.state(secs)
+    first.position_km[:] = 0.0  # a caller's change to its copy
+    again = geometry.state(secs.copy())
+    assert calls == [3]
+    fresh = ObserverGeometry(Site(35.0, -110.0, 2000.0), EPOCH).state(secs)
+    for name in ("position_km", "velocity_kms", "gcrs_to_itrs", "earth_velocity_kms", "sun_distance_au"):
+        assert np.array_equal(getattr(again, name), getattr(fresh, name))
