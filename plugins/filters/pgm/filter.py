@@ -367,7 +367,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         spread = measurement_spread_sigma(dres, meas.R)
         n_draw = particles_to_draw(spread, self.n_particles, self.reacquire_factor, self.reacquire_spread_sigma)
         samples, _, log_evidence = self._kernels.update(prior, meas.residuals_to_measurement, meas.R, n_draw,
-                                                              self._rng, who)
+                                                        self._rng, who)
         # the draws' parent clusters are no components of the posterior: the belief clusters them
         self._x, self._sample_labels, self._h = samples, None, None
         self._mixture = None
@@ -395,8 +395,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         propagated mixture: each particle keeps the component it was drawn from, and each
         component is the mean and covariance of its particles now. Where the particles carry no
         components (the start, a kernel update, a re-anchoring to least-squares draws) they are
-        clustered with a random stream of the belief's own. Reading the belief never draws from the update's random stream, so the estimates
-        do not depend on how often it is read."""
+        clustered with a random stream of the belief's own. Reading the belief never draws from
+        the update's random stream, so the estimates do not depend on how often it is read."""
         self._require_init()
         if self._mixture is None:
             labels = self._sample_labels
@@ -503,7 +503,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
 def _narrow(labels: np.ndarray | None) -> np.ndarray | None:
     """``labels`` (N,) as int8 when they fit (1 byte a particle instead of 8 while carried through a
     propagation), else as they are."""
-    if labels is None or labels.size == 0 or labels.max() > np.iinfo(np.int8).max:
+    if labels is None or labels.dtype == np.int8 or labels.size == 0 or labels.max() > np.iinfo(np.int8).max:
         return labels
     return labels.astype(np.int8)
 
