@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["merge_small_clusters", "merged_cluster_targets", "MERGE_WHOLE_ROWS"]
+__all__ = ["merge_small_clusters", "merged_cluster_targets", "used_ranks", "MERGE_WHOLE_ROWS"]
 
 MERGE_WHOLE_ROWS = 131_072
 """Up to this many particles the scaled coordinates (N, d) are made whole (the numbers Example 1
@@ -41,7 +41,7 @@ def merged_cluster_targets(x: np.ndarray, labels: np.ndarray, min_size: int) -> 
     sm = np.flatnonzero(small)
     dist = np.linalg.norm(means[sm][:, None, :] - means[big][None, :, :], axis=2)
     target[sm] = big[np.argmin(dist, axis=1)]
-    return np.cumsum(np.bincount(target, minlength=m) > 0)[target] - 1, int(sm.size)  # np.unique's inverse, unsorted
+    return used_ranks(target, m)[target], int(sm.size)
 
 
 def _scaled_means(x: np.ndarray, labels: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -63,3 +63,10 @@ def _scaled_means(x: np.ndarray, labels: np.ndarray, counts: np.ndarray) -> np.n
         for j in range(d):  # loop over coordinates, vectorised over particles
             means[:, j] += np.bincount(labels[a:b], weights=z[:, j], minlength=m)
     return means / np.maximum(counts, 1)[:, None]
+
+
+def used_ranks(labels: np.ndarray, m: int = 0) -> np.ndarray:
+    """For each label value j < max(m, labels.max() + 1), its rank among the values ``labels`` (N,)
+    uses (np.unique's inverse as a lookup table (M,), without its sort); unused values map to the
+    rank of the next used one below them."""
+    return np.cumsum(np.bincount(labels, minlength=m) > 0) - 1

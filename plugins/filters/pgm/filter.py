@@ -37,7 +37,7 @@ from ..measured_components import MeasuredComponents, check_epoch
 from ..particle_declarations import ParticleFilterDeclarations
 from ..random_streams import independent_stream
 from ..resampling import normalize_log_weights
-from .cluster_merge import merged_cluster_targets
+from .cluster_merge import merged_cluster_targets, used_ranks
 from .clusterer_choice import resolve_clusterer, split_clusterer
 from .component_spread import shrink_components
 from .component_update import COMPONENT_LIKELIHOODS
@@ -442,9 +442,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         (groups emptied since the labels were given are dropped), groups too small for a
         covariance merged into their nearest."""
         labels = labels.astype(np.intp)  # its own copy, relabelled in place: one (N,) array at a time
-        used = np.bincount(labels) > 0
-        if not used.all():  # a group emptied: np.unique's inverse, without its sort
-            np.take(np.cumsum(used) - 1, labels, out=labels, mode="clip")
+        ranks = used_ranks(labels)
+        if ranks[-1] + 1 < ranks.size:  # a group emptied: renumbered without gaps
+            np.take(ranks, labels, out=labels, mode="clip")
         target, merged = merged_cluster_targets(self._x, labels, self._min_size())
         if target is not None:
             np.take(target, labels, out=labels, mode="clip")
