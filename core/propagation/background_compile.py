@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["start", "wait_for", "lockstep_cached", "idle_core", "COMPILE_CPU_SECONDS", "estimate_seconds"]
+__all__ = ["start", "wait_for", "lockstep_cached", "lockstep_available", "idle_core", "COMPILE_CPU_SECONDS", "estimate_seconds"]
 
 _LOG = logging.getLogger("cistrack.propagation")
 
@@ -88,6 +88,12 @@ def lockstep_cached(mod: Any) -> bool:
         return os.path.exists(kernel._cache._cache_file._index_path)
     except AttributeError:
         return True
+
+
+def lockstep_available(mod: Any) -> bool:
+    """Whether the lockstep kernel of generated module ``mod`` needs no compiling here: compiled
+    in this process, in numba's on-disk cache, or being compiled by a child (:func:`start`)."""
+    return mod.__name__ in _CHILDREN or lockstep_cached(mod)
 
 
 def start(dynamics: Any, state: np.ndarray) -> bool:

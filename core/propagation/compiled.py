@@ -70,12 +70,16 @@ from cistrack.propagation.kernels import kernels_for, num_threads, run_chunks
 __all__ = ["CompiledDynamics", "PropagationError", "StateError", "LOCKSTEP_MIN_PARTICLES"]
 
 LOCKSTEP_MIN_PARTICLES = 4
-"""Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel (16 lanes, 32 for
-a right-hand side with a table key such as the ephemeris model's; idle lanes repeat an active
-one). A full batch costs a quarter to a third of what the one-particle
-kernel costs for 16 particles (docs/performance.md), so a part-filled batch of 4-5 particles
-costs about what the one-particle kernel does; and a run then needs no one-particle kernel compiled (the
-information bound's central differences propagate 12 particles)."""
+"""Fewest particles :meth:`CompiledDynamics.propagate` gives the lockstep kernel when that kernel
+is not yet compiled here, in numba's cache or in a second process (16 lanes, 32 for a
+right-hand side with a table key such as the ephemeris model's; idle lanes repeat an active
+one). A full batch costs a quarter to a third of what the one-particle kernel costs for 16
+particles (docs/performance.md), so a part-filled batch of 4-5 particles costs about what the
+one-particle kernel does. Once the lockstep kernel exists, fewer particles go through it too
+(one particle costs 1.3-1.7 times the one-particle kernel's few hundredths of a millisecond,
+the same numbers), so a run that also propagates lone states (the least squares' trajectory)
+compiles or loads no one-particle kernel; with neither kernel compiled, a lone state compiles
+the smaller one-particle kernel."""
 
 
 # -- the base class ------------------------------------------------------------------------------
@@ -217,11 +221,12 @@ class CompiledDynamics(Dynamics):
         return check_output_times(self._label(), t0, times)
 
     def _propagate_kernel(self, n: int) -> Any:
-        """The SIMD-lockstep kernel when the model has one and ``n`` particles fill enough lanes
-        (the same numbers), else the per-particle kernel."""
+        """The SIMD-lockstep kernel when the model has one and it exists already or ``n`` particles
+        fill enough lanes (:data:`LOCKSTEP_MIN_PARTICLES`; the same numbers), else the
+        per-particle kernel."""
         mod = self._kernels()
         lockstep = getattr(mod, "propagate_lanes_kernel", None)
-        if lockstep is not None and n >= LOCKSTEP_MIN_PARTICLES:
+        if lockstep is not None and (n >= LOCKSTEP_MIN_PARTICLES or background_compile.lockstep_available(mod)):
             background_compile.wait_for(mod)
             return lockstep
         return mod.propagate_kernel

@@ -161,7 +161,13 @@ def _surface_gap(t, y, params, body_pos, body_rad, b):
 
 @njit(cache=CACHE, fastmath=FASTMATH)
 def _locate_impact(t, h, y, k0, params, ytmp, yout, f, body_pos, body_rad, b):
-    """Fraction s of the step h at which y crosses body b's surface; yout = state there."""
+    """Fraction s of the step h at which y crosses body b's surface; yout = state there.
+
+    The partial steps are the dense step's (the same ``yout`` as ``_rk_step``'s, bit for bit;
+    its coefficients go to a scratch array): every kernel then shares the one step that the
+    dense kernel compiles anyway, and a run compiles no ``_rk_step`` unless it integrates one
+    particle at a time."""
+    coef = np.empty((7, DIM))
     s_lo = 0.0
     g_lo = _surface_gap(t, y, params, body_pos, body_rad, b)
     s_hi = 1.0
@@ -176,7 +182,7 @@ def _locate_impact(t, h, y, k0, params, ytmp, yout, f, body_pos, body_rad, b):
         s = (s_lo * g_hi - s_hi * g_lo) / (g_hi - g_lo)
         if not (s > s_lo and s < s_hi):
             s = 0.5 * (s_lo + s_hi)
-        _rk_step(t, s * h, y, k0, params, ytmp, yout, f, 1.0, 1.0)
+        _rk_step_dense(t, s * h, y, k0, params, ytmp, yout, f, 1.0, 1.0, coef)
         g = _surface_gap(t + s * h, yout, params, body_pos, body_rad, b)
         if g > 0.0:
             s_lo = s
