@@ -32,19 +32,26 @@ def sample_covariance(x: np.ndarray, weights: np.ndarray | None = None) -> np.nd
     return c / denom if denom > 0 else c
 
 
-def regularize_covariance(p: np.ndarray, rel: float = 1e-12) -> np.ndarray:
+def regularize_covariance(p: np.ndarray, rel: float = 1e-12, each: bool = False) -> np.ndarray:
     """Symmetrise ``p`` (..., d, d) and lift eigenvalues below ``rel``·max(diag) to that floor.
 
     Keeps a covariance positive definite after a Joseph-less Kalman update or a degenerate
-    cluster without changing well-conditioned matrices.
+    cluster without changing well-conditioned matrices. A stack is rebuilt from its eigenvectors
+    as a whole when any matrix needs lifting; with ``each`` (p (M, d, d)) only the matrices that
+    need it are, so that each matrix comes out as it would alone.
     """
     p = 0.5 * (p + np.swapaxes(p, -1, -2))
     w, v = np.linalg.eigh(p)
     scale = np.max(np.abs(np.diagonal(p, axis1=-2, axis2=-1)), axis=-1, keepdims=True)
     floor = np.maximum(rel * scale, np.finfo(float).tiny)
-    if np.all(w >= floor):
+    low = w < floor
+    if not np.any(low):
         return p
     w = np.maximum(w, floor)
+    if each and p.ndim == 3:
+        sel = np.any(low, axis=-1)
+        p[sel] = (v[sel] * w[sel][:, None, :]) @ np.swapaxes(v[sel], -1, -2)
+        return p
     return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
 
 

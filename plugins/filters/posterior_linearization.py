@@ -31,7 +31,7 @@ from cistrack.errors import FilterError
 if TYPE_CHECKING:  # filterpy (and through it matplotlib) is imported only where a UKF runs
     from filterpy.kalman import MerweScaledSigmaPoints
 
-__all__ = ["PosteriorLinearization", "posterior_linearization_update"]
+__all__ = ["PosteriorLinearization", "posterior_linearization_update", "posterior_linearization_updates"]
 
 
 @dataclass
@@ -58,43 +58,79 @@ class PosteriorLinearization:
 
 
 def _psd_part(a: np.ndarray) -> np.ndarray:
-    """Symmetric positive semi-definite part of a small square matrix (negative eigenvalues -> 0)."""
-    a = 0.5 * (a + a.T)
+    """Symmetric positive semi-definite parts of small square matrices a (M, m, m) (negative
+    eigenvalues -> 0; a matrix without any is returned symmetrised, unchanged otherwise)."""
+    a = 0.5 * (a + np.swapaxes(a, -1, -2))
     w, v = np.linalg.eigh(a)
-    if np.all(w >= 0):
-        return a
-    return (v * np.maximum(w, 0.0)) @ v.T
+    negative = np.any(w < 0, axis=-1)
+    for i in np.flatnonzero(negative):
+        a[i] = (v[i] * np.maximum(w[i], 0.0)) @ v[i].T
+    return a
+
+
+def _solve_each(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solutions (M, n, k) of a[i] x = b[i] for a (M, n, n), b (M, n, k); a singular a[i] gets
+    its least-squares solution."""
+    try:
+        return np.linalg.solve(a, b)
+    except np.linalg.LinAlgError:
+        out = np.empty(a.shape[:1] + b.shape[1:])
+        for i in range(a.shape[0]):
+            try:
+                out[i] = np.linalg.solve(a[i], b[i])
+            except np.linalg.LinAlgError:
+                out[i] = np.linalg.lstsq(a[i], b[i], rcond=None)[0]
+        return out
+
+
+def _sigma_points(points: MerweScaledSigmaPoints, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Sigma points (M, 2n+1, n) of the Gaussians N(x[i] (n,), P[i] (n, n))."""
+    batch = getattr(points, "sigma_points_batch", None)
+    if batch is not None:
+        return batch(x, P)
+    return np.stack([points.sigma_points(x[i], P[i]) for i in range(x.shape[0])])
 
 
 def _linear_regression(points: MerweScaledSigmaPoints, x: np.ndarray, P: np.ndarray,
                        residual_to_z: Callable[[np.ndarray], np.ndarray]):
-    """Statistical linear regression of h over the sigma points of N(x, P), in the chart
-    d = h - z centred on the measurement: d ≈ A (x' - x) + dbar, residual covariance Omega.
+    """Statistical linear regression of h over the sigma points of each N(x[i], P[i]) (x (M, d),
+    P (M, d, d)), in the chart d = h - z centred on the measurement: d ≈ A (x' - x) + dbar,
+    residual covariance Omega. One call of ``residual_to_z`` for all M Gaussians' points.
 
-    Returns A (m, d), dbar (m,), Omega (m, m), Pdd (m, m).
+    Returns A (M, m, d), dbar (M, m), Omega (M, m, m), Pdd (M, m, m).
 
     The Merwe points are x and x ± U_k (rows of U, U^T U = (n + lambda) P), so
     P^-1 Pxd = M^-1 (d+ - d-) / 2 with M the matrix of rows U_k: A is the central difference of h
     along the sigma directions, with no inverse of the (possibly very ill-conditioned) P.
     """
-    n = x.size
-    sig = points.sigma_points(x, P)
-    d = np.asarray(residual_to_z(sig), dtype=float)
+    g, n = x.shape
+    sig = _sigma_points(points, x, P)
+    k = sig.shape[1]
+    d = np.asarray(residual_to_z(sig.reshape(g * k, n)), dtype=float)
     if not np.all(np.isfinite(d)):
         raise FilterError("the sensor returned NaN predicted measurements at a sigma point")
+    d = d.reshape(g, k, -1)
     dbar = points.Wm @ d
-    dd = d - dbar
-    pdd = (dd.T * points.Wc) @ dd
-    M = sig[1:n + 1] - x
-    try:
-        At = np.linalg.solve(M, 0.5 * (d[1:n + 1] - d[n + 1:]))
-    except np.linalg.LinAlgError:
-        At = np.linalg.lstsq(M, 0.5 * (d[1:n + 1] - d[n + 1:]), rcond=None)[0]
-    A = At.T
+    dd = d - dbar[:, None, :]
+    pdd = (np.swapaxes(dd, 1, 2) * points.Wc) @ dd
+    M = sig[:, 1:n + 1] - x[:, None, :]
+    At = _solve_each(M, 0.5 * (d[:, 1:n + 1] - d[:, n + 1:]))
+    A = np.swapaxes(At, 1, 2)
     c = n + points.alpha ** 2 * (n + points.kappa) - n  # n + lambda
-    AMt = A @ M.T                                       # A P A^T = (A M^T)(A M^T)^T / (n + lambda)
-    omega = _psd_part(pdd - AMt @ AMt.T / c)
+    AMt = A @ np.swapaxes(M, 1, 2)                      # A P A^T = (A M^T)(A M^T)^T / (n + lambda)
+    omega = _psd_part(pdd - AMt @ np.swapaxes(AMt, 1, 2) / c)
     return A, dbar, omega, pdd
+
+
+def _mahalanobis_steps(P: np.ndarray, dx: np.ndarray) -> np.ndarray:
+    """Length of each dx[i] (d,) in the metric of P[i] (d, d); inf where P[i] is not positive definite."""
+    try:
+        y = np.linalg.solve(np.linalg.cholesky(P), dx[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        if P.shape[0] == 1:
+            return np.array([np.inf])
+        return np.concatenate([_mahalanobis_steps(P[i:i + 1], dx[i:i + 1]) for i in range(P.shape[0])])
+    return np.array([np.linalg.norm(row) for row in y])
 
 
 def posterior_linearization_update(points: MerweScaledSigmaPoints, x0: np.ndarray, P0: np.ndarray,
@@ -116,30 +152,49 @@ def posterior_linearization_update(points: MerweScaledSigmaPoints, x0: np.ndarra
     regularize : eigenvalue floor, relative to max(diag P), of the returned covariance
     """
     x0 = np.asarray(x0, dtype=float)
+    return posterior_linearization_updates(points, x0.reshape(1, -1), np.asarray(P0, dtype=float)[None],
+                                           residual_to_z, R, max_iterations, tolerance, regularize)[0]
+
+
+def posterior_linearization_updates(points: MerweScaledSigmaPoints, x0: np.ndarray, P0: np.ndarray,
+                                    residual_to_z: Callable[[np.ndarray], np.ndarray], R: np.ndarray,
+                                    max_iterations: int = 10, tolerance: float = 1e-3,
+                                    regularize: float = 1e-12) -> list[PosteriorLinearization]:
+    """:func:`posterior_linearization_update` of M Gaussians N(x0[i] (d,), P0[i] (d, d)) with the
+    same measurement: each iterates on its own (the same numbers as one at a time), and each
+    iteration calls ``residual_to_z`` once, on the sigma points of all that still iterate."""
+    x0 = np.asarray(x0, dtype=float)
     P0 = np.asarray(P0, dtype=float)
     R = np.asarray(R, dtype=float)
-    xi, Pi = x0, P0
-    first = None
-    step = np.inf
-    it = 0
+    g = x0.shape[0]
+    if g == 0:
+        return []
+    xi, Pi = x0.copy(), P0.copy()
+    steps = np.full(g, np.inf)
+    its = np.zeros(g, dtype=int)
+    first: list = [None] * g
+    last: list = [None] * g
+    active = np.arange(g)
     for it in range(1, max_iterations + 1):
-        A, dbar, omega, pdd = _linear_regression(points, xi, Pi, residual_to_z)
-        dhat = dbar + A @ (x0 - xi)         # predicted h(x0) - z under the linear model
-        S = A @ P0 @ A.T + omega + R
-        S = 0.5 * (S + S.T)
-        if first is None:
-            first = (-dbar, 0.5 * (pdd + pdd.T) + R)
+        a0, p0 = x0[active], P0[active]
+        A, dbar, omega, pdd = _linear_regression(points, xi[active], Pi[active], residual_to_z)
+        dhat = dbar + (A @ (a0 - xi[active])[..., None])[..., 0]   # predicted h(x0) - z, linear model
+        At = np.swapaxes(A, 1, 2)
+        S = A @ p0 @ At + omega + R
+        S = 0.5 * (S + np.swapaxes(S, 1, 2))
         # K = P0 A^T S^-1  <=>  S K^T = A P0
-        K = np.linalg.solve(S, A @ P0).T
-        x = x0 - K @ dhat
-        P = regularize_covariance(P0 - K @ S @ K.T, regularize)
-        try:
-            L = np.linalg.cholesky(P)
-            step = float(np.linalg.norm(np.linalg.solve(L, x - xi)))
-        except np.linalg.LinAlgError:
-            step = np.inf
-        xi, Pi = x, P
-        last = (-dhat, S)
-        if it > 1 and step < tolerance:
+        K = np.swapaxes(np.linalg.solve(S, A @ p0), 1, 2)
+        x = a0 - (K @ dhat[..., None])[..., 0]
+        P = regularize_covariance(p0 - K @ S @ np.swapaxes(K, 1, 2), regularize, each=True)
+        steps[active] = _mahalanobis_steps(P, x - xi[active])
+        for j, i in enumerate(active):
+            if first[i] is None:
+                first[i] = (-dbar[j], 0.5 * (pdd[j] + pdd[j].T) + R)
+            last[i] = (-dhat[j], S[j])
+        xi[active], Pi[active], its[active] = x, P, it
+        if it > 1:
+            active = active[~(steps[active] < tolerance)]
+        if active.size == 0:
             break
-    return PosteriorLinearization(xi, Pi, it, step, first[0], first[1], last[0], last[1])
+    return [PosteriorLinearization(xi[i], Pi[i], int(its[i]), float(steps[i]), first[i][0], first[i][1],
+                                   last[i][0], last[i][1]) for i in range(g)]

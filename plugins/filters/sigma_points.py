@@ -46,6 +46,21 @@ class MerweSigmaPoints:
         lam = self.alpha ** 2 * (n + self.kappa) - n
         return merwe_points(x, cholesky((lam + n) * np.atleast_2d(P)))
 
+    def sigma_points_batch(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """Points (M, 2n+1, n) of M Gaussians of means ``x`` (M, n) and covariances ``P`` (M, n, n):
+        each as :meth:`sigma_points` gives it."""
+        from scipy.linalg import cholesky
+
+        n = self.n
+        x = np.asarray(x, dtype=float).reshape(-1, n)
+        lam = self.alpha ** 2 * (n + self.kappa) - n
+        U = cholesky((lam + n) * np.asarray(P, dtype=float).reshape(-1, n, n))
+        sigmas = np.empty((x.shape[0], 2 * n + 1, n))
+        sigmas[:, 0] = x
+        sigmas[:, 1:n + 1] = np.subtract(x[:, None, :], -U)
+        sigmas[:, n + 1:] = np.subtract(x[:, None, :], U)
+        return sigmas
+
 
 def merwe_points(x: np.ndarray, U: np.ndarray) -> np.ndarray:
     """The 2n+1 points (2n+1, n): ``x`` (n,), then x - (-U[k]) and x - U[k] for the rows of ``U``

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
 from cistrack.evaluation.metrics import LOG_JACOBIAN_KM, entropy, step_metrics
 
 
@@ -189,3 +189,12 @@ def test_position_marginal_of_a_mixture_has_the_position_blocks_and_the_closed_f
     expected = np.log(sum(w * multivariate_normal(m[:3], c[:3, :3]).pdf(x)
                           for w, m, c in zip(gm.weights, gm.means, gm.covariances)))
     np.testing.assert_allclose(pos.logpdf(x), expected, rtol=1e-12)
+
+
+def test_a_stack_regularized_each_on_its_own_changes_only_the_matrix_that_needs_it():
+    good = np.array([[2.0, 0.3], [0.3, 1.0]])
+    flat = np.array([[1.0, 1.0], [1.0, 1.0]])  # singular: an eigenvalue below the floor
+    out = regularize_covariance(np.stack([good, flat]), 1e-9, each=True)
+    assert np.array_equal(out[0], regularize_covariance(good, 1e-9))
+    assert np.array_equal(out[1], regularize_covariance(flat, 1e-9))
+    assert np.linalg.eigvalsh(out[1]).min() >= 1e-9 * 0.999

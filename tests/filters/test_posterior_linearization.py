@@ -8,7 +8,8 @@ import pytest
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 from cistrack.errors import ParameterError
-from cistrack.plugins.filters.posterior_linearization import posterior_linearization_update
+from cistrack.plugins.filters.posterior_linearization import (posterior_linearization_update,
+                                                              posterior_linearization_updates)
 from cistrack.plugins.filters.ukf import UKFFilter
 
 
@@ -111,6 +112,41 @@ def test_iterations_stop_once_the_mean_settles():
                                          np.array([[SIGMA ** 2]]), max_iterations=50, tolerance=1e-3)
     assert 1 < res.iterations < 50
     assert res.step < 1e-3
+
+
+def _three_bearing_priors():
+    """The bearing prior, a tighter one (it settles in fewer iterations) and a shifted one."""
+    xs = np.array([X0, [9.0, 2.0], [12.0, 3.0]])
+    Ps = np.array([P0_BEARING, np.diag([0.05 ** 2, 0.05 ** 2]), [[4.0, 1.0], [1.0, 6.0]]])
+    return xs, Ps
+
+
+def test_gaussians_updated_together_come_out_as_each_alone():
+    xs, Ps = _three_bearing_priors()
+    R = np.array([[SIGMA ** 2]])
+    together = posterior_linearization_updates(_points(2), xs, Ps, _bearing_residual, R,
+                                               max_iterations=20, tolerance=1e-6)
+    assert len({res.iterations for res in together}) > 1  # they stopped at different iterations
+    for i, res in enumerate(together):
+        alone = posterior_linearization_update(_points(2), xs[i], Ps[i], _bearing_residual, R,
+                                               max_iterations=20, tolerance=1e-6)
+        assert res.iterations == alone.iterations and res.step == alone.step
+        for name in ("x", "P", "innovation", "S", "innovation_final", "S_final"):
+            assert np.array_equal(getattr(res, name), getattr(alone, name)), name
+
+
+def test_gaussians_updated_together_share_one_sensor_call_per_iteration():
+    xs, Ps = _three_bearing_priors()
+    calls = []
+
+    def residual(X):
+        calls.append(X.shape[0])
+        return _bearing_residual(X)
+
+    together = posterior_linearization_updates(_points(2), xs, Ps, residual, np.array([[SIGMA ** 2]]),
+                                               max_iterations=20, tolerance=1e-6)
+    assert len(calls) == max(res.iterations for res in together)
+    assert calls[0] == 3 * 5 and calls[-1] < calls[0]  # 2d+1 points each; the settled ones drop out
 
 
 @pytest.mark.parametrize("name, value", [("update_iterations", 0), ("update_tolerance", 0.0),

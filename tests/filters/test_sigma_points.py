@@ -31,3 +31,14 @@ def test_points_reproduce_the_mean_and_covariance():
     dev = s - mean
     assert np.allclose(mean, x, rtol=0, atol=1e-14)
     assert np.allclose((dev.T * pts.Wc) @ dev, P, rtol=0, atol=1e-13)
+
+
+def test_points_of_several_gaussians_at_once_are_each_ones_points():
+    g = np.random.default_rng(11)
+    a = g.normal(size=(4, 6, 6)) * np.array([1e-3, 1e-3, 1e-3, 1e-5, 1e-5, 1e-5])
+    P = a @ np.swapaxes(a, 1, 2) + 1e-14 * np.eye(6)
+    x = g.normal(size=(4, 6))
+    pts = MerweSigmaPoints(6, 1.0, 2.0, 0.0)
+    batch = pts.sigma_points_batch(x, P)
+    assert batch.shape == (4, 13, 6)
+    assert all(np.array_equal(batch[i], pts.sigma_points(x[i], P[i])) for i in range(4))

@@ -27,7 +27,7 @@ from cistrack.interfaces.pgm_steps import ComponentUpdate
 from cistrack.model.belief import regularize_covariance
 
 from ..kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
-from ..posterior_linearization import posterior_linearization_update
+from ..posterior_linearization import posterior_linearization_updates
 from ..sigma_points import MerweSigmaPoints
 
 __all__ = ["ensemble_component_update", "iterated_component_update", "EnsembleUpdate", "IteratedUpdate",
@@ -55,21 +55,18 @@ def iterated_component_update(means: np.ndarray, covs: np.ndarray,
         the states that explain z are), "prior" with the one-shot (prior-wide) linearisation.
     Returns means (M, d), covariances (M, d, d), log-likelihoods (M,).
     """
-    m, d = means.shape
+    d = means.shape[1]
     points = MerweSigmaPoints(d, alpha=1.0, beta=2.0, kappa=0.0)  # filterpy's points, without importing filterpy
-    out_m = np.empty_like(means)
-    out_p = np.empty_like(covs)
-    nus, Ss = [], []
-    for i in range(m):  # loop over components (few); each iteration is one sensor call on 2d+1 points
-        res = posterior_linearization_update(points, means[i], covs[i], residual_to_z, R,
-                                             max_iterations=max_iterations, tolerance=tolerance)
-        out_m[i], out_p[i] = res.x, res.P
-        if likelihood == "posterior":
-            nus.append(res.innovation_final)
-            Ss.append(res.S_final)
-        else:
-            nus.append(res.innovation)
-            Ss.append(res.S)
+    # all components at once: each iteration is one sensor call on the 2d+1 points of every
+    # component still iterating
+    results = posterior_linearization_updates(points, means, covs, residual_to_z, R,
+                                              max_iterations=max_iterations, tolerance=tolerance)
+    out_m = np.array([res.x for res in results]).reshape(means.shape)
+    out_p = np.array([res.P for res in results]).reshape(covs.shape)
+    if likelihood == "posterior":
+        nus, Ss = [res.innovation_final for res in results], [res.S_final for res in results]
+    else:
+        nus, Ss = [res.innovation for res in results], [res.S for res in results]
     loglik = gaussian_log_likelihood(np.array(nus), np.array(Ss))
     return out_m, regularize_covariance(out_p, 1e-12), loglik
 
