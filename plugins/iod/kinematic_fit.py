@@ -189,14 +189,16 @@ def kinematic_states(fit: FitInputs, sensor: Sensor, angles: np.ndarray,
     az = angles[..., 0].T
     el = angles[..., 1].T
     r = rho.T
-    rce = r * np.cos(el)
-    data = np.empty((k, 6, n))
-    data[:, 3] = rce * np.cos(az)
-    data[:, 4] = rce * np.sin(az)
-    data[:, 5] = r * np.sin(el)
+    data = np.empty((k, 6, n))  # filled in place: (K, N) temporaries cost more in page faults than in arithmetic
+    rce = np.cos(el)
+    rce *= r
+    np.multiply(np.cos(az, out=data[:, 3]), rce, out=data[:, 3])
+    np.multiply(np.sin(az, out=data[:, 4]), rce, out=data[:, 4])
+    np.multiply(np.sin(el, out=data[:, 5]), r, out=data[:, 5])
     if fit.neu_to_synodic is not None:
         # los = M_k @ u_neu: one 3x3 matrix per fit time instead of one frame chain per sample
-        data[:, :3] = fit.observer[:, :, None] + fit.neu_to_synodic @ data[:, 3:]
+        np.matmul(fit.neu_to_synodic, data[:, 3:], out=data[:, :3])
+        data[:, :3] += fit.observer[:, :, None]
     else:
         flat = angles.reshape(n * k, 2)
         tk = np.broadcast_to(fit.times, (n, k)).reshape(-1)
