@@ -24,12 +24,12 @@ from cistrack import units
 from cistrack.astro.site_network import build_site_network
 from cistrack.fitting.arc_fit import ArcFit, latest_arc_fit
 from cistrack.fitting.arcs import arc_sets, in_time_base
-from cistrack.fitting.determination import determination
+from cistrack.fitting.determination import determination, is_lone_tracklet
 from cistrack.fitting.observation_input import READ_EPOCH, ObjectObservations
 from cistrack.least_squares.events import fit_events
 from cistrack.plugin.registry import Registry
 
-__all__ = ["arcs_to_fit", "arc_report", "kept_observations", "add_findings", "EXPLAINED_REJECTED"]
+__all__ = ["arcs_to_fit", "latest_determined_arc", "arc_report", "kept_observations", "add_findings", "EXPLAINED_REJECTED"]
 
 EXPLAINED_REJECTED = 0.1
 """A fit that rejects at most this share of its arc's observations explains the arc: its links
@@ -40,6 +40,32 @@ def arcs_to_fit(obs: ObjectObservations, choice: str, arc_gap_days: float) -> li
     """The observation sets to fit for ``fit.arcs = choice`` ("latest": one, "each": every arc,
     oldest first, "all": everything at once), each as an :class:`ObjectObservations`."""
     return [dataclasses.replace(obs, measurements=ms) for ms in arc_sets(obs.measurements, choice, arc_gap_days)]
+
+
+def latest_determined_arc(obs: ObjectObservations, arc_gap_days: float) -> tuple[ObjectObservations, ObjectObservations, str]:
+    """What ``fit.arcs = "latest"`` fits: the latest long-gap arc that is more than one lone
+    tracklet (:func:`cistrack.fitting.determination.is_lone_tracklet`: it alone determines no
+    orbit). Returns (the observations up to that arc's end, the arc, a note on the lone tracklets
+    after it that are not fitted, "" when there are none). When every arc is a lone tracklet, the
+    latest is the arc (the fit then says what a lone tracklet gives)."""
+    arcs = arcs_to_fit(obs, "each", arc_gap_days)
+    k = len(arcs) - 1
+    while k > 0 and is_lone_tracklet(arcs[k].measurements):
+        k -= 1
+    if k == len(arcs) - 1 or is_lone_tracklet(arcs[k].measurements):
+        return obs, arcs[-1], ""
+    times = obs.measurements.times
+    end = float(arcs[k].measurements.times[-1])
+    upto = dataclasses.replace(obs, measurements=obs.measurements.subset(times <= end))
+    later = [a.measurements for a in arcs[k + 1:]]
+    epoch = units.parse_utc(READ_EPOCH)
+    first = units.tu_to_utc(epoch, float(later[0].times[0]))
+    n = sum(len(ms) for ms in later)
+    note = (f"{n} observation(s) after the fitted arc, in {len(later)} lone tracklet(s) more than "
+            f"{arc_gap_days:g} days later (the first from site {later[0].site_at(0)} on {first:%Y-%m-%d}, "
+            f"{units.tu_to_days(float(later[0].times[0]) - end):.1f} days after the arc), are not fitted: a lone "
+            "tracklet determines no orbit on its own (fit.arcs=all fits one orbit over every observation)")
+    return upto, arcs[k], note
 
 
 def _everything(one, obs: ObjectObservations, registry: Registry):

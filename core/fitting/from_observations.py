@@ -635,8 +635,10 @@ def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
     from cistrack.fitting.fit_findings import arcs_to_fit
 
     arcs = job.choices.arcs
+    if arcs.arcs == "latest":
+        return [_fit_latest_determined(obs, d, job)]
     sets = arcs_to_fit(obs, arcs.arcs, arcs.arc_gap_days)
-    if arcs.arcs != "each":
+    if arcs.arcs == "all":
         return [_finish(_fit_latest(obs, sets[0], d, job), sets[0], job)]
     out = []
     for part in sets:
@@ -645,6 +647,22 @@ def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
         check_output_dir(sub, "the arc's results directory")
         out.append(_finish(_fit_run(part, sub, job), part, job))
     return out
+
+
+def _fit_latest_determined(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
+    """The fit of the latest arc that determines an orbit (lone tracklets after it are left out,
+    and the fit says so: :func:`cistrack.fitting.fit_findings.latest_determined_arc`)."""
+    from cistrack.fitting.fit_findings import latest_determined_arc
+
+    upto, arc, note = latest_determined_arc(obs, job.choices.arcs.arc_gap_days)
+    if note:
+        job.say(f"{obs.designation}: {note}")
+    one = _fit_latest(upto, arc, d, job)
+    if note and one.result is not None:
+        one.result = _with_messages(one.result, [note])
+    elif note:
+        one.failure = f"{one.failure}; {note}" if one.failure else note
+    return _finish(one, arc, job)
 
 
 def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import io
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,3 +130,17 @@ def test_a_clean_tracklet_lies_on_its_curve(tmp_path):
     _rc, _out, rec = _fit(tmp_path, ROWS)
     assert rec["undetermined"]["tracklet"]["consistent"] is True
     assert rec["undetermined"]["tracklet"]["misfit_sigma"] < 5.0
+
+
+def test_a_lone_tracklet_long_after_a_determined_arc_leaves_that_arc_fitted(tmp_path):
+    """The shipped five-night file plus one exposure a year later: the latest long-gap arc is that
+    lone tracklet, which determines nothing; the fit is the arc before it, and says what it left."""
+    shipped = (Path(__file__).parents[2] / "core/scenarios/real_data/observations.psv").read_text().splitlines()
+    rows = [r for r in shipped if r and not r.startswith("#") and "|" in r][1:]
+    late = rows[0].split("|")
+    late[3] = "2027-03-01T22:35:00Z"
+    rc, out, rec = _fit(tmp_path, rows + ["|".join(late)])
+    assert rc == 0 and rec["converged"] is True
+    assert rec["n_used"] + rec["n_rejected"] == len(rows)
+    note = next(m for m in rec["messages"] if "lone tracklet" in m)
+    assert "1 observation(s) after the fitted arc" in note and "2027-03-01" in note
