@@ -31,7 +31,13 @@ from cistrack.errors import FilterError
 if TYPE_CHECKING:  # filterpy (and through it matplotlib) is imported only where a UKF runs
     from filterpy.kalman import MerweScaledSigmaPoints
 
-__all__ = ["PosteriorLinearization", "posterior_linearization_update", "posterior_linearization_updates"]
+__all__ = ["PosteriorLinearization", "posterior_linearization_update", "posterior_linearization_updates",
+           "MAX_UPDATE_ITERATIONS"]
+
+MAX_UPDATE_ITERATIONS = 1000
+"""Most linearisations a filter's ``update_iterations`` may ask for: the update settles in 2-10;
+more only repeats one that does not settle (each a sensor call per component), and a run asked
+for a million of them took minutes per update."""
 
 
 @dataclass

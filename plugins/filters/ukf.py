@@ -31,6 +31,7 @@ from cistrack.model.measurement import Measurement
 from .gaussian_belief import gaussian_belief
 from .measured_components import MeasuredComponents, check_epoch
 from .initial_cloud import check_cloud
+from .posterior_linearization import MAX_UPDATE_ITERATIONS
 from .process_noise import velocity_random_walk_covariance
 
 __all__ = ["UKFFilter"]
@@ -49,7 +50,8 @@ class UKFFilter(FilterBase):
     velocity_noise_kms_per_sqrt_day : float
         Process noise Q: velocity random walk, km/s after one day (0 = none).
     update_iterations : int
-        Posterior linearisations per measurement update at most (1 = the ordinary UKF update).
+        Posterior linearisations per measurement update at most, 1 to 1000 (1 = the ordinary UKF
+        update).
     update_tolerance : float
         Stop iterating once the posterior mean moves less than this many posterior standard
         deviations (Mahalanobis length) in one iteration.
@@ -70,7 +72,8 @@ class UKFFilter(FilterBase):
         self.n_samples = check_int(self, "n_samples", n_samples, minimum=1)
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
-        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
+        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1,
+                                           maximum=MAX_UPDATE_ITERATIONS)
         self.update_tolerance = check_positive(self, "update_tolerance", update_tolerance)
         self._ukf = None  # a ukf_batch.BatchUKF once initialised
 

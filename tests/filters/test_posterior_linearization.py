@@ -150,7 +150,15 @@ def test_gaussians_updated_together_share_one_sensor_call_per_iteration():
 
 
 @pytest.mark.parametrize("name, value", [("update_iterations", 0), ("update_tolerance", 0.0),
-                                         ("kappa", -6.0), ("update_iterations", 2.5)])
+                                         ("kappa", -6.0), ("update_iterations", 2.5),
+                                         ("update_iterations", 1_000_000)])
 def test_ukf_rejects_bad_iteration_settings(name, value):
     with pytest.raises(ParameterError, match=name):
         UKFFilter(**{name: value})
+
+
+def test_pgm_rejects_a_million_update_iterations():
+    from cistrack.plugins.filters.pgm.filter import PGMFilter
+
+    with pytest.raises(ParameterError, match=r"update_iterations.*<= 1000"):
+        PGMFilter(update_iterations=1_000_000)

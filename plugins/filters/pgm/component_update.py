@@ -27,7 +27,7 @@ from cistrack.interfaces.pgm_steps import ComponentUpdate
 from cistrack.model.belief import regularize_covariance
 
 from ..kalman_update import GroupMoments, component_posterior, gaussian_log_likelihood, kalman_gains
-from ..posterior_linearization import posterior_linearization_updates
+from ..posterior_linearization import MAX_UPDATE_ITERATIONS, posterior_linearization_updates
 from ..sigma_points import MerweSigmaPoints
 
 __all__ = ["ensemble_component_update", "iterated_component_update", "EnsembleUpdate", "IteratedUpdate",
@@ -78,14 +78,15 @@ class IteratedUpdate(ComponentUpdate):
     Parameters
     ----------
     update_iterations : int
-        Most posterior linearisations per component and measurement.
+        Most posterior linearisations per component and measurement, 1 to 1000.
     component_likelihood : str
         What reweights the components: "posterior" (the measurement likelihood with h linearised
         over the component's posterior) or "prior" (over its prior).
     """
 
     def __init__(self, update_iterations: int = 10, component_likelihood: str = "posterior"):
-        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
+        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1,
+                                           maximum=MAX_UPDATE_ITERATIONS)
         self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
                                                  COMPONENT_LIKELIHOODS)
 

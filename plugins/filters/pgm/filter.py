@@ -34,6 +34,7 @@ from ..ensemble_propagation import steps_by_group
 from ..initial_cloud import check_cloud, initial_particles
 from ..kalman_update import group_moments
 from ..measured_components import MeasuredComponents, check_epoch
+from ..posterior_linearization import MAX_UPDATE_ITERATIONS
 from ..particle_declarations import ParticleFilterDeclarations
 from ..random_streams import independent_stream
 from ..resampling import normalize_log_weights
@@ -76,8 +77,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         its mean stops moving) or "ensemble" (the paper's Kalman update from the particles'
         sample cross-covariances).
     update_iterations : int
-        Most posterior linearisations per component and measurement (iterated update only; handed
-        to the component_update that takes it).
+        Most posterior linearisations per component and measurement, 1 to 1000 (iterated update
+        only; handed to the component_update that takes it).
     component_likelihood : str
         What reweights the components under the iterated update: "posterior" (the measurement
         likelihood with h linearised over the component's posterior) or "prior" (over its prior).
@@ -187,7 +188,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.reacquire_spread_sigma = check_positive(self, "reacquire_spread_sigma", reacquire_spread_sigma)
         self.component_update = check_step(self, "component_update", component_update, ComponentUpdate,
                                            ("iterated", "ensemble"))
-        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1)
+        self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1,
+                                           maximum=MAX_UPDATE_ITERATIONS)
         self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
                                                  COMPONENT_LIKELIHOODS)
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
