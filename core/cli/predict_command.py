@@ -135,6 +135,20 @@ def _site(code: str):
         raise ConfigError(f"--site {code}: {exc}") from None
 
 
+def _write(sky, prefix: Path, title: str, plot_sky) -> tuple[Path, Path]:
+    """PREFIX.csv and PREFIX.png of ``sky``; ConfigError naming the file when it cannot be written."""
+    from cistrack.errors import ConfigError
+
+    path = prefix.with_name(prefix.name + ".csv")
+    try:
+        csv_path = sky.write_csv(path)
+        path = prefix.with_name(prefix.name + ".png")
+        return csv_path, plot_sky(sky, path, title)
+    except OSError as exc:
+        raise ConfigError(f"--out {prefix}: cannot write {path} ({exc.strerror or exc}); give a PREFIX in a "
+                          "folder you can write to") from None
+
+
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
@@ -150,9 +164,7 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
-    csv_path = sky.write_csv(prefix.with_name(prefix.name + ".csv"))
-    png = plot_sky(sky, prefix.with_name(prefix.name + ".png"),
-                   f"{orbit.name} from {args.site} {site.name}: {orbit.source}")
+    csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}", plot_sky)
     if not args.quiet:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):

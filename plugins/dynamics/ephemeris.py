@@ -143,14 +143,29 @@ class EphemerisDynamics(CompiledDynamics):
 
     def _ensure_window(self, t_lo: float, t_hi: float) -> None:
         half = float(units.days_to_tu(self.window_days))
-        lo, hi = min(t_lo, -half), max(t_hi, half)
+        first, last = self._coverage(t_lo, t_hi)
+        lo, hi = max(min(t_lo, -half), first), min(max(t_hi, half), last)
         if self._params_cache is not None and self._window[0] <= lo and hi <= self._window[1]:
             return
         if self._params_cache is not None:  # widen generously so repeated calls do not rebuild
-            lo = min(lo, self._window[0] - half)
-            hi = max(hi, self._window[1] + half)
+            lo = max(min(lo, self._window[0] - half), first)
+            hi = min(max(hi, self._window[1] + half), last)
         self._params_cache = self._build_params(lo, hi)
         self._window = (lo, hi)
+
+    def _coverage(self, t_lo: float, t_hi: float) -> tuple[float, float]:
+        """The span of DE421 in TU from the epoch (the body tables are padded only within it);
+        StateError naming the dates when ``[t_lo, t_hi]`` (TU) leaves it."""
+        eph = self.frame.ephemeris
+        o1, o2 = self.frame.epoch_tdb
+        first = ((eph.first_jd - o1) - o2) * DAY_S / units.TU_S
+        last = ((eph.last_jd - o1) - o2) * DAY_S / units.TU_S
+        if t_lo < first or t_hi > last:
+            epoch = units.parse_utc(self.epoch)
+            when = [units.format_utc(units.tu_to_utc(epoch, t))[:10] for t in (t_lo, t_hi, first, last)]
+            raise StateError(f"{self._label()}: the propagation from {when[0]} to {when[1]} leaves the DE421 "
+                             f"ephemeris, which covers {when[2]} to {when[3]}; give times within it")
+        return first, last
 
     def _build_params(self, t_lo: float, t_hi: float) -> np.ndarray:
         frame = self.frame

@@ -8,6 +8,7 @@ import pytest
 
 from cistrack import units
 from cistrack.astro.ephemeris import DAY_S
+from cistrack.errors import StateError
 from cistrack.plugins.dynamics.orbit_catalog import get_orbit
 from cistrack.plugins.dynamics.ephemeris import EphemerisDynamics
 from cistrack.testing import check_plugin
@@ -260,3 +261,12 @@ def test_the_model_integrates_the_point_mass_right_hand_side_unless_j2_or_radiat
     assert EphemerisDynamics(epoch=EPOCH, srp_area_to_mass_m2_kg=0.01)._rhs() is ephemeris_rhs
     assert EphemerisDynamics(epoch=EPOCH, srp_area_to_mass_m2_kg=0.01, srp_reflectivity=0.0)._rhs() \
         is ephemeris_point_mass_rhs
+
+
+def test_a_propagation_near_the_start_of_de421_runs_and_one_past_it_is_refused_naming_the_dates():
+    early = EphemerisDynamics(epoch="1900-01-10T00:00:00Z", sun=False)  # DE421 starts 1899-12-04
+    x = _nrho_state(early)[None]
+    back = early.propagate(x, 0.0, -float(units.days_to_tu(5.0)))  # the body tables' padding stays inside DE421
+    assert np.all(np.isfinite(back.states))
+    with pytest.raises(StateError, match=r"1899-11-1\d.*leaves the DE421 ephemeris, which covers 1899-12-0\d"):
+        early.propagate(x, 0.0, -float(units.days_to_tu(60.0)))

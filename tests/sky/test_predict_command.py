@@ -44,6 +44,10 @@ def test_predict_prints_writes_csv_and_plot_for_a_fit(tmp_path, capsys):
     assert (tmp_path / "fit" / "sky-568.png").stat().st_size > 10_000
     assert main(["predict", d, "--site", "568", "--start", "2026-03-08T00:00:00Z", "--stop", "2026-03-07T00:00:00Z"]) == 2
     assert "--stop" in capsys.readouterr().err
+    (tmp_path / "taken.csv").mkdir()  # the table's path is a folder: the write fails
+    assert main(["predict", d, "--site", "568", "--out", str(tmp_path / "taken")]) == 2
+    err = capsys.readouterr().err
+    assert "cannot write" in err and "taken.csv" in err and "Traceback" not in err
 
 
 def test_a_cr3bp_run_is_refused_naming_the_dynamics(tmp_path, capsys):
