@@ -236,7 +236,7 @@ def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _
     ``label``) with one filter and IOD variant ``(filter label, table, IOD label, table)``."""
     flabel, ftable, ilabel, itable = variant_tables
     ov = _variant_overrides(grid, base, ftable, itable, combo)
-    variant = _validated_variant(base, ov, grid, reg, combo)
+    variant = _validated_variant(base, ov, grid, reg, combo, {"filter": ftable, "iod": itable})
     fl = flabel or variant.components["filter"].name
     il = ilabel or variant.components["iod"].name
     scen_path = str(Path(base.source).resolve())
@@ -283,15 +283,17 @@ def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | No
     return ov
 
 
-def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = ()):
+def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entries: dict | None = None):
     """The scenario ``base`` with the overrides ``ov``, validated now; a ConfigError names the
-    sweep combination (with the study file and its key) and the ``--set`` items when there are any."""
+    study file's key behind a bad setting (``overrides``, or the ``filters``/``iod`` entry among
+    ``entries``), the sweep combination and the ``--set`` items when there are any."""
     try:
         return base.with_overrides(ov, reg)
     except ConfigError as exc:
-        from cistrack.studies.study_file import overrides_error
+        from cistrack.studies.study_file import overrides_error, variant_error
 
-        msg = overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source) or str(exc)
+        msg = (overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source)
+               or variant_error(str(exc), grid.study, entries or {}, base.name, base.source) or str(exc))
         if combo:
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
                     f"{base.name!r}; where a setting does not apply to a scenario, give the entry as a table "

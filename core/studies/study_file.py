@@ -19,7 +19,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS", "study_sweep",
-           "scenario_entry", "overrides_error"]
+           "scenario_entry", "overrides_error", "variant_error"]
 
 STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides",
               "sweep"}
@@ -228,6 +228,11 @@ def _blamed_settings(message: str, overrides: dict) -> list[tuple[str, object]]:
     return named or mine
 
 
+def _without_source(message: str, scenario_source: str | Path) -> str:
+    """``message`` without its leading ``"<scenario file>: "``."""
+    return message.split(": ", 1)[1] if message.startswith(f"{scenario_source}: ") else message
+
+
 def overrides_error(message: str, study: Path, overrides: dict, scenario_name: str,
                     scenario_source: str | Path) -> str | None:
     """A scenario's error under the study's ``[overrides]`` told against the study file: the file,
@@ -236,7 +241,21 @@ def overrides_error(message: str, study: Path, overrides: dict, scenario_name: s
     blamed = _blamed_settings(message, overrides or {})
     if not blamed:
         return None
-    rest = message.split(": ", 1)[1] if message.startswith(f"{scenario_source}: ") else message
+    rest = _without_source(message, scenario_source)
     shown = ", ".join(f"{k} = {v!r}" for k, v in blamed)
     return (f"{study}: key 'overrides', setting {shown} (applied to scenario {scenario_name!r}, "
             f"{scenario_source}): {rest}")
+
+
+def variant_error(message: str, study: Path, entries: dict, scenario_name: str,
+                  scenario_source: str | Path) -> str | None:
+    """A scenario's error about its ``[filter]`` or ``[iod]`` table where the study's ``filters``
+    or ``iod`` list replaced it (``entries``: table name -> the list's entry, or None), told
+    against the study file: the file, the key, the entry and the scenario; None otherwise."""
+    for table, key in (("filter", "filters"), ("iod", "iod")):
+        entry = entries.get(table)
+        if entry and (f": [{table}]:" in message or f": [{table}." in message):
+            rest = _without_source(message, scenario_source)
+            return (f"{study}: key '{key}', entry {entry!r} (applied to scenario {scenario_name!r}, "
+                    f"{scenario_source}): {rest}")
+    return None

@@ -35,3 +35,16 @@ def test_an_unknown_parameter_names_the_study_file_and_the_setting(tmp_path):
     study = _study(tmp_path, "sensor = { nme = 3 }")
     with pytest.raises(ConfigError, match=r"mine\.toml: key 'overrides', setting sensor\.nme = 3 .*unknown parameter"):
         plan_runs(study, tmp_path / "out")
+
+
+@pytest.mark.parametrize("lists, key, words", [
+    ('filters = ["pgm", "nope"]', "filters", "unknown filter 'nope'"),
+    ('iod = [{ name = "uniform-range", n_particles = -3 }]', "iod", "'n_particles' = -3"),
+])
+def test_a_bad_filters_or_iod_entry_names_the_study_file_and_the_entry(tmp_path, lists, key, words):
+    study = tmp_path / "mine.toml"
+    study.write_text(f'name = "mine"\nscenarios = ["quick"]\nseeds = [1]\n{lists}\n')
+    with pytest.raises(ConfigError) as err:
+        plan_runs(study, tmp_path / "out")
+    msg = str(err.value)
+    assert msg.startswith(f"{study}: key '{key}', entry ") and "applied to scenario 'quick'" in msg and words in msg
