@@ -7,7 +7,9 @@ Read: a header (``CCSDS_TDM_VERS``, ``CREATION_DATE``, ``ORIGINATOR``), then seg
 * ``PARTICIPANT_1`` the observing station: an MPC observatory code of the bundled table, a key
   of the reader's ``sites`` parameter, or a site declared in the segment by a comment line
   ``COMMENT cistrack site KEY latitude_deg=.. longitude_deg=.. height_m=..`` (what the writer
-  writes for sites that are not MPC codes);
+  writes for sites that are not MPC codes); ``PARTICIPANT_2`` the object;
+* ``MODE = SEQUENTIAL`` and ``PATH`` between participants 1 and 2 (``2,1``), when given (others
+  are refused: the angles are read as the station observing the object);
 * ``ANGLE_TYPE = AZEL`` (ANGLE_1 azimuth, ANGLE_2 elevation) or ``RADEC`` (right ascension,
   declination; ``REFERENCE_FRAME`` EME2000, ICRF or GCRF); angles in degrees;
 * data lines ``ANGLE_1 = <epoch> <value>`` and ``ANGLE_2 = <epoch> <value>``, one pair per
@@ -129,6 +131,7 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
     at, al = meta["ANGLE_TYPE"]
     if at not in ("AZEL", "RADEC"):
         raise FieldError(path, al, "ANGLE_TYPE", f"{show_field(at)}: AZEL and RADEC are read")
+    _check_mode_and_path(path, meta)
     kind = at.lower()
     if kind == "radec":
         rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
@@ -136,6 +139,21 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
             raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
                                                           f"{', '.join(sorted(_RADEC_FRAMES))}")
     return kind
+
+
+def _check_mode_and_path(path, meta: dict) -> None:
+    """Refuse a MODE other than SEQUENTIAL and a PATH other than one between PARTICIPANT_1 (the
+    station) and PARTICIPANT_2 (the object), the geometry the angles are read with (both optional)."""
+    mode, ml = meta.get("MODE", ("SEQUENTIAL", 0))
+    if mode != "SEQUENTIAL":
+        raise FieldError(path, ml, "MODE", f"{show_field(mode)}: angles are read in MODE = SEQUENTIAL only")
+    if "PATH" not in meta:
+        return
+    text, pl = meta["PATH"]
+    legs = [leg.strip() for leg in text.split(",")]
+    if len(legs) < 2 or set(legs) != {"1", "2"}:
+        raise FieldError(path, pl, "PATH", f"{show_field(text)}: the angles are read as PARTICIPANT_1 (the station) "
+                                           "observing PARTICIPANT_2 (the object): give PATH = 2,1 (or 1,2)")
 
 
 def _declared_site(path, m: re.Match, cl: int) -> Site:

@@ -123,6 +123,10 @@ TDM_CASES = [
     ("missing DATA_STOP", tdm(tail=""), 12, "DATA_STOP"),
     ("not key = value", tdm(meta="TIME_SYSTEM UTC SECRETX\n"), 5, "(keyword)"),
     ("day of year 366 in 2026", tdm(data="ANGLE_1 = 2026-366T01:00:00 10.5\nANGLE_2 = 2026-366T01:00:00 20.5\n"), 11, "ANGLE_1 epoch"),
+    ("mode not sequential", tdm(meta="TIME_SYSTEM = UTC\nPARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\nMODE = INTEGRATED\n"
+                                     "ANGLE_TYPE = AZEL\n"), 8, "MODE"),
+    ("path through participants never named", tdm(meta="TIME_SYSTEM = UTC\nPARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\n"
+                                                        "PATH = 7,9\nANGLE_TYPE = AZEL\n"), 8, "PATH"),
 ]
 
 # -- CSV ------------------------------------------------------------------------------------------
