@@ -144,6 +144,8 @@ class CustodyMetric(StepMetric):
         """Each loss that was regained: (the loss's verdict, the step and time (days) it was regained)."""
         self.earth_distance_km: float | None = None
         """Distance of the last posterior mean from Earth (km), for the final verdict."""
+        self.truth_earth_distance_km: float | None = None
+        """Distance of the truth from Earth (km) at that step, when the run has a truth."""
 
     def judge(self, step) -> Verdict | None:
         """The verdict after update ``step`` if custody is lost there, else None."""
@@ -165,6 +167,9 @@ class CustodyMetric(StepMetric):
             return
         mean = np.asarray(belief.mixture.mean, dtype=float)
         self.earth_distance_km = float(np.linalg.norm(mean[:3] - _EARTH) * units.LU_KM)
+        truth = getattr(step, "truth", None)
+        self.truth_earth_distance_km = (None if truth is None else
+                                        float(np.linalg.norm(np.asarray(truth, dtype=float)[:3] - _EARTH) * units.LU_KM))
 
     def compute(self, run, step, event: str) -> dict[str, float]:
         """``{"custody": 1.0 or 0.0}`` on every table step of a run with a truth (none without):

@@ -98,7 +98,7 @@ def _nis_far(rows: list[dict[str, Any]], rule: CustodyRule) -> str | None:
 
 
 def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRule, has_truth: bool,
-                  earth_distance_km: float | None = None) -> Verdict:
+                  earth_distance_km: float | None = None, truth_earth_distance_km: float | None = None) -> Verdict:
     """The run's final :class:`Verdict`.
 
     Parameters
@@ -109,6 +109,9 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
     rule : thresholds (see :class:`~cistrack.evaluation.custody.CustodyRule`)
     has_truth : whether the run had a truth
     earth_distance_km : distance of the last mean from Earth (km), if known
+    truth_earth_distance_km : the truth's distance from Earth (km) at that step, if known: a mean
+        beyond ``max_earth_distance_km`` is no divergence when the truth is beyond it too (an
+        escaping object followed; the error and NEES rule judges such a run)
 
     Times: a run that keeps custody (tracking, not-converged) has no step or time; a run that
     was lost and then diverged keeps the step and time at which the custody rule first fired;
@@ -116,6 +119,8 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
     """
     if verdict.kind == "filter-failed":
         return verdict
+    if truth_earth_distance_km is not None and not truth_earth_distance_km <= rule.max_earth_distance_km:
+        earth_distance_km = None  # the truth left cislunar space as well: following it is no divergence
     final = _final_verdict(verdict, rows, rule, has_truth, earth_distance_km)
     if final.kept:  # custody kept: no loss time (the verdict was judged on the last update)
         return Verdict(final.kind, final.reason + (f"; {verdict.reason}" if verdict.reason else ""))

@@ -244,8 +244,8 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
     pending = [_initial_step(ctx, rngs["filter"])]  # handed on, not kept here: its particles go with its hooks
     status, failure, abort = _guarded(pm, ctx, collector, lambda: _steps(ctx, pm, metrics, events, pending))
     verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
-                            custody.earth_distance_km) if status in ("finished", "filter-failed") \
-        else custody.verdict
+                            custody.earth_distance_km, custody.truth_earth_distance_km) \
+        if status in ("finished", "filter-failed") else custody.verdict
     summary = summarize(ctx, collector.rows, verdict, status, failure,
                         time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
     if watch is not None:

@@ -97,6 +97,8 @@ class Truth:
     def _impact(self, b: int, t: float) -> None:
         bodies = self.dynamics.bodies
         name = bodies[b].name if 0 <= b < len(bodies) else "a body"
+        if t <= self.t0:
+            raise ConfigError(f"the truth's initial state lies inside {name}; give [truth] a state outside it")
         raise ConfigError(f"the truth trajectory hits {name} at t = "
                           f"{units.tu_to_days(t):.3f} days; shorten duration_days")
 

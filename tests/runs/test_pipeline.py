@@ -161,3 +161,12 @@ def test_the_rows_returned_are_the_rows_written(tmp_path):
 
     assert strip(table) == strip(res.rows)
     assert res.summary.n_steps == len(res.rows)
+
+
+def test_a_truth_that_starts_inside_the_moon_is_refused_as_such():
+    from cistrack.errors import ConfigError
+
+    dyn = CR3BP()
+    inside = np.array([1.0 - dyn.mu + 1e-4, 0.0, 0.0, 0.0, 0.0, 0.0])  # 38 km from the Moon's centre
+    with pytest.raises(ConfigError, match="initial state lies inside Moon"):
+        Truth(dyn, inside, t_end=0.5).states_at([0.1])

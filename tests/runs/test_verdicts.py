@@ -153,3 +153,18 @@ def test_the_regularised_particle_filter_tracks_where_the_bootstrap_filter_degen
     assert min(r["diag_ess_before_resampling"] for r in ups) >= 0.5 * 1000 * (1 - 1e-6)
     assert res.summary.verdict.kind == "tracking", res.summary.verdict
     assert res.summary.final["nees"] < 20 and res.summary.final["pos_err_km"] < 100
+
+
+def _consistent_rows(n: int = 4) -> list[dict]:
+    return [{"kind": "update", "step": k, "t_days": 0.5 * k, "sigma_x_km": 5.0, "sigma_y_km": 5.0, "sigma_z_km": 5.0,
+             "pos_err_km": 3.0, "nees": 5.0, "entropy": 10.0} for k in range(1, n + 1)]
+
+
+def test_a_mean_beyond_cislunar_space_with_the_truth_there_too_is_no_divergence():
+    """An escaping object followed closely: the mean is 3.5 million km out because the truth is."""
+    v = final_verdict(Verdict(), _consistent_rows(), CustodyRule(), True, earth_distance_km=3.5e6,
+                      truth_earth_distance_km=3.5e6)
+    assert v.kind == "tracking", v
+    v = final_verdict(Verdict(), _consistent_rows(), CustodyRule(), True, earth_distance_km=3.5e6,
+                      truth_earth_distance_km=4.0e5)
+    assert v.kind == "diverged" and v.reason.startswith("left cislunar space"), v
