@@ -392,6 +392,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader closed our stdout (e.g. `cistrack scenarios | head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # a path the system refuses where no check caught it first: said, not a traceback
+        where = f"{exc.filename}: " if exc.filename else ""
+        _eprint(f"cistrack: error: {where}{exc.strerror or exc}")
+        return 2
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -13,6 +13,7 @@ import fnmatch
 import json
 import os
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -122,7 +123,15 @@ def check_recording_path(recording: str | Path, directory: str | Path, where: st
     """Refuse (:class:`ConfigError` naming both paths) a recording path that is the results
     directory, one of the run's result files (or their temporary files), a file a run removes as it
     starts (:data:`~cistrack.results.output_paths.EARLIER_RESULTS`), or a path inside its part
-    folders: writing the recording there would replace the run's results, or the run the recording."""
+    folders: writing the recording there would replace the run's results, or the run the recording.
+    A path the system refuses (too long a name, ...) is refused too, before the run starts."""
+    try:
+        _check_recording_path(recording, directory, where)
+    except OSError as exc:
+        raise ConfigError(f"{where} {recording}: cannot write there ({exc.strerror or exc})") from None
+
+
+def _check_recording_path(recording: str | Path, directory: str | Path, where: str) -> None:
     r, d = Path(os.path.abspath(recording)).resolve(), Path(os.path.abspath(directory)).resolve()
     why = ""
     if r == d:
@@ -140,6 +149,26 @@ def check_recording_path(recording: str | Path, directory: str | Path, where: st
         raise ConfigError(f"{where} {recording}: {why}; the recording would replace the run's results. Give a "
                           f"recording path outside {Path(directory) / PARTS} and {Path(directory) / ESTIMATE_PARTS}, "
                           f"not named like a result file (e.g. {Path(directory) / 'recording.rrd'})")
+    _check_writable(Path(recording), where)
+
+
+def _check_writable(recording: Path, where: str) -> None:
+    """Refuse, before the run starts, a recording path the system will not let us write (tried:
+    a file opened to append, and removed again when it was new; in a folder given for one file
+    per run, a temporary file). A missing folder is left to the results directory (made later)
+    or the recorder, which names it."""
+    try:
+        if recording.is_dir():
+            with tempfile.TemporaryFile(dir=recording):
+                pass
+        elif recording.parent.is_dir():
+            new = not recording.exists()
+            with open(recording, "ab"):
+                pass
+            if new:
+                recording.unlink(missing_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{where} {recording}: cannot write there ({exc.strerror or exc})") from None
 
 
 def _same(a: Path, b: Path) -> bool:

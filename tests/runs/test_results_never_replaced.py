@@ -142,3 +142,11 @@ def test_a_recording_inside_a_new_directorys_part_folder_is_refused_before_it_is
     out = tmp_path / "new"
     assert _run("--out", str(out), *SHORT, "--rerun", str(out / "steps" / "rec.rrd")) == 2
     assert "part files" in capsys.readouterr().err and not out.exists()
+
+
+def test_a_recording_path_the_system_refuses_is_refused_before_the_run(tmp_path, capsys):
+    out = tmp_path / "r"
+    path = tmp_path / ("x" * 300 + ".rrd")  # longer than a file name may be: the folder is writable, the file not
+    assert _run("--out", str(out), *SHORT, "--rerun", str(path)) == 2
+    err = capsys.readouterr().err
+    assert f"--rerun {path}: cannot write there" in err and "Traceback" not in err and not out.exists()
