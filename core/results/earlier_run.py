@@ -154,19 +154,22 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
 
 def _check_writable(recording: Path, where: str) -> None:
     """Refuse, before the run starts, a recording path the system will not let us write (tried:
-    a file opened to append, and removed again when it was new; in a folder given for one file
-    per run, a temporary file). A missing folder is left to the results directory (made later)
-    or the recorder, which names it."""
+    an existing file opened to append, a new one created and removed again, a temporary file in
+    a folder given for one file per run; a link is never written through). A missing folder is
+    left to the results directory (made later) or the recorder, which names it."""
     try:
         if recording.is_dir():
             with tempfile.TemporaryFile(dir=recording):
                 pass
-        elif recording.parent.is_dir():
-            new = not recording.exists()
+        elif recording.is_symlink():
+            return  # never written through here: the recorder refuses what is there without --overwrite
+        elif os.path.lexists(recording):
             with open(recording, "ab"):
                 pass
-            if new:
-                recording.unlink(missing_ok=True)
+        elif recording.parent.is_dir():
+            with open(recording, "xb"):  # created here, only here, and removed again
+                pass
+            recording.unlink()
     except OSError as exc:
         raise ConfigError(f"{where} {recording}: cannot write there ({exc.strerror or exc})") from None
 
