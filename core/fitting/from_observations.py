@@ -127,8 +127,9 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
         raise ConfigError(f"--set fit.lov={lov!r}: must be 0 (default: none) or a number of sigmas from 0.5 "
                           "to 20 (the line of variations out to that many sigmas each side)")
     if epoch not in _EPOCHS:
-        raise ConfigError(f"--set fit.epoch={epoch!r}: must be one of {', '.join(_EPOCHS)} (the observation "
-                          "at which the state is estimated)")
+        shown = epoch.isoformat() if hasattr(epoch, "isoformat") else repr(epoch)  # a TOML date as typed
+        raise ConfigError(f"--set fit.epoch={shown}: must be one of {', '.join(_EPOCHS)} (the observation "
+                          "at which the state is estimated; the fit's epoch is not a date)")
     if prior not in _PRIORS:
         raise ConfigError(f"--set fit.prior={prior!r}: must be 'none' (default) or 'filter' (the filter's "
                           "final covariance as a prior)")
@@ -219,6 +220,11 @@ def _slug(designation: str) -> str:
 def _split_settings(items: Iterable[str] | None) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
     """(scenario settings, fit settings, reader parameters) from ``--set`` items."""
     settings = parse_settings(items)
+    fixed = sorted(k for k in ("epoch", "duration_days", "name") if k in settings)
+    if fixed:
+        raise ConfigError(f"--set {fixed[0]}: cistrack fit sets the scenario's epoch, duration_days and name from "
+                          "the observations (epoch: 30 min before the first, duration: to past the last); "
+                          "fit.epoch=first|middle|last chooses where the state is estimated")
     fit_table = settings.pop("fit", {})
     meas = settings.pop("measurements", {})
     if not isinstance(meas, dict) or set(meas) - {"reader"}:

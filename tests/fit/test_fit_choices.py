@@ -44,3 +44,18 @@ def test_the_line_of_variations_is_asked_in_sigmas():
 def test_a_bad_line_of_variations_is_refused_naming_it(bad):
     with pytest.raises(ConfigError, match="fit.lov=.*0.5 to 20"):
         fit_choices({"lov": bad})
+
+
+def test_a_date_for_the_fit_epoch_is_shown_as_typed():
+    from datetime import datetime, timezone
+
+    with pytest.raises(ConfigError, match=r"fit\.epoch=2030-01-01T00:00:00\+00:00: must be one of last"):
+        fit_choices({"epoch": datetime(2030, 1, 1, tzinfo=timezone.utc)})
+
+
+@pytest.mark.parametrize("item", ["duration_days=1", "epoch=2026-03-01T00:00:00Z", "name=x"])
+def test_the_span_and_name_the_observations_set_are_refused_as_settings(tmp_path, capsys, item):
+    from cistrack.cli.main import main
+
+    assert main(["fit", str(tmp_path / "none.psv"), "--set", item, "--out", str(tmp_path / "o")]) == 2
+    assert f"--set {item.split('=')[0]}: cistrack fit sets" in capsys.readouterr().err
