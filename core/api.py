@@ -230,6 +230,9 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
     from cistrack.scenario.loading import load_scenario as _load
     from cistrack.scenario.settings import apply_settings
 
+    if not isinstance(scenario, (str, os.PathLike, Scenario)):
+        raise TypeError(f"scenario={scenario!r}: give a built-in scenario name, a path to a TOML file "
+                        "(str or pathlib.Path) or a Scenario from load_scenario")
     reg = registry or default_registry()
     scen = scenario if isinstance(scenario, Scenario) else _load(scenario, reg)
     return apply_settings(scen, _setting_items(settings), reg)

@@ -16,6 +16,9 @@ import cistrack as ct
     (lambda: ct.fit("ok.psv", out=3.5), "out=3.5"),
     (lambda: ct.read_run(5), "directory=5"),
     (lambda: ct.study(5), "study=5"),
+    (lambda: ct.run(None), "scenario=None"),
+    (lambda: ct.run(123), "scenario=123"),
+    (lambda: ct.load_scenario({}), "scenario={}"),
 ])
 def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
     with pytest.raises(TypeError, match=argument.replace("[", r"\[").replace("]", r"\]")):
