@@ -200,3 +200,12 @@ def test_each_builtin_step_implements_its_interface_and_rebuilds_from_its_params
     step = cls()
     assert isinstance(step, interface)
     assert type(step)(**step.get_params()).get_params() == step.get_params()
+
+
+def test_more_components_than_the_particles_hold_clusters_of_the_kept_size_are_refused():
+    from cistrack.plugins.filters.pgm.filter import PGMFilter
+
+    with pytest.raises(ParameterError, match=r"n_components' = 5000 .*must be <= 33: 10000 particles"):
+        PGMFilter(n_particles=10000, n_components=5000)
+    assert PGMFilter(n_particles=10000, n_components=33).n_components == 33
+    assert PGMFilter(n_particles=10000, n_components=100, min_cluster_size=50).n_components == 100

@@ -58,7 +58,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     n_particles : int
         Particles N carried between measurements.
     n_components : int or None
-        Components M the clusterer is asked for; None lets the clusterer choose (e.g. "bic").
+        Components M the clusterer is asked for; None lets the clusterer choose (e.g. "bic"). At
+        most n_particles / min_cluster_size (33 for 10,000 particles by default).
     clusterer : Clusterer or str
         A clusterer instance or a registered clustering name. Default "kmeans" (the paper's);
         "gmm" (EM) suits the "ensemble" update better. Why: docs/pgm-parameters.md.
@@ -200,6 +201,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.clusterer = clusterer
         self.min_cluster_size = None if min_cluster_size is None else check_int(
             self, "min_cluster_size", min_cluster_size, minimum=1)
+        self._check_component_count()
         self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
             self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
         self.min_range_km = None if min_range_km is None else check_nonnegative(self, "min_range_km", min_range_km)
@@ -455,6 +457,20 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._diag["clusters_merged"] = float(merged)
         self._diag["n_components"] = float(m)
         return GaussianMixture(mom.counts / mom.counts.sum(), mom.mean_x, regularize_covariance(mom.pxx, 1e-12)), labels
+
+    def _check_component_count(self) -> None:
+        """Refuse more components than ``n_particles`` holds clusters of the smallest size kept
+        (``min_cluster_size``, else 3 % of the particles): the rest would be merged into their
+        neighbours after a clustering into all of them (minutes for thousands)."""
+        if self.n_components is None:
+            return
+        size = self.min_cluster_size or int(np.ceil(self._min_cluster_fraction * self.n_particles))
+        most = max(1, self.n_particles // size)
+        if self.n_components > most:
+            which = "min_cluster_size" if self.min_cluster_size else "min_cluster_size's default, 3 % of n_particles"
+            self._fail("n_components", self.n_components,
+                       f"must be <= {most}: {self.n_particles} particles hold at most {most} clusters of {size} "
+                       f"({which}); smaller ones are merged into their neighbours anyway")
 
     def _min_size(self) -> int:
         """Fewest particles a component may have: ``min_cluster_size``, else the larger of 2 x the
