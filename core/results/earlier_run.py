@@ -149,29 +149,27 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
         raise ConfigError(f"{where} {recording}: {why}; the recording would replace the run's results. Give a "
                           f"recording path outside {Path(directory) / PARTS} and {Path(directory) / ESTIMATE_PARTS}, "
                           f"not named like a result file (e.g. {Path(directory) / 'recording.rrd'})")
-    _check_writable(Path(recording), where)
+    _check_writable(Path(recording))
 
 
-def _check_writable(recording: Path, where: str) -> None:
+def _check_writable(recording: Path) -> None:
     """Refuse, before the run starts, a recording path the system will not let us write (tried:
     an existing file opened to append, a new one created and removed again, a temporary file in
     a folder given for one file per run; a link is never written through). A missing folder is
-    left to the results directory (made later) or the recorder, which names it."""
-    try:
-        if recording.is_dir():
-            with tempfile.TemporaryFile(dir=recording):
-                pass
-        elif recording.is_symlink():
-            return  # never written through here: the recorder refuses what is there without --overwrite
-        elif os.path.lexists(recording):
-            with open(recording, "ab"):
-                pass
-        elif recording.parent.is_dir():
-            with open(recording, "xb"):  # created here, only here, and removed again
-                pass
-            recording.unlink()
-    except OSError as exc:
-        raise ConfigError(f"{where} {recording}: cannot write there ({exc.strerror or exc})") from None
+    left to the results directory (made later) or the recorder, which names it. An OSError here
+    is the refusal (:func:`check_recording_path` says it)."""
+    if recording.is_dir():
+        with tempfile.TemporaryFile(dir=recording):
+            pass
+    elif recording.is_symlink():
+        return  # never written through here: the recorder refuses what is there without --overwrite
+    elif os.path.lexists(recording):
+        with open(recording, "ab"):
+            pass
+    elif recording.parent.is_dir():
+        with open(recording, "xb"):  # created here, only here, and removed again
+            pass
+        recording.unlink()
 
 
 def _same(a: Path, b: Path) -> bool:
