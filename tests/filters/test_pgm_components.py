@@ -209,3 +209,11 @@ def test_more_components_than_the_particles_hold_clusters_of_the_kept_size_are_r
         PGMFilter(n_particles=10000, n_components=5000)
     assert PGMFilter(n_particles=10000, n_components=33).n_components == 33
     assert PGMFilter(n_particles=10000, n_components=100, min_cluster_size=50).n_components == 100
+
+
+def test_fewer_particles_than_a_six_dimensional_mixture_needs_are_refused():
+    from cistrack.plugins.filters.pgm.filter import PGMFilter
+
+    with pytest.raises(ParameterError, match=r"n_particles' = 5 .*must be >= 100: .*6-D state"):
+        PGMFilter(n_particles=5, n_components=1)
+    assert PGMFilter(n_particles=100, n_components=1).n_particles == 100

@@ -22,7 +22,7 @@ def test_a_bad_component_parameter_names_the_study_file_and_the_setting(tmp_path
         plan_runs(study, tmp_path / "out")
     msg = str(err.value)
     assert msg.startswith(f"{study}: key 'overrides', setting filter.n_particles = -5")
-    assert "applied to scenario 'quick'" in msg and "must be >= 2" in msg
+    assert "applied to scenario 'quick'" in msg and "must be >= 100" in msg
 
 
 def test_a_bad_top_level_value_names_the_study_file_and_the_key(tmp_path):

@@ -25,6 +25,7 @@ from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range,
                                            param_specs)
 from cistrack.interfaces.filter import FilterBase
+from cistrack.interfaces.iod import MIN_IOD_PARTICLES
 from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
                                            PosteriorDraw, Reanchor)
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
@@ -56,7 +57,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     Parameters
     ----------
     n_particles : int
-        Particles N carried between measurements.
+        Particles N carried between measurements, at least 100.
     n_components : int or None
         Components M the clusterer is asked for; None lets the clusterer choose (e.g. "bic"). At
         most n_particles / min_cluster_size (33 for 10,000 particles by default).
@@ -193,7 +194,11 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                                            maximum=MAX_UPDATE_ITERATIONS)
         self.component_likelihood = check_choice(self, "component_likelihood", component_likelihood,
                                                  COMPONENT_LIKELIHOODS)
-        self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
+        self.n_particles = check_int(self, "n_particles", n_particles)
+        if self.n_particles < MIN_IOD_PARTICLES:  # the same floor as the IOD's cloud, for the same reason
+            self._fail("n_particles", n_particles, f"must be >= {MIN_IOD_PARTICLES}: the particles carry a mixture "
+                                                   "over a 6-D state, whose covariances need at least 7 each to have "
+                                                   "full rank; fewer end in a collapsed or lost belief")
         self.n_components = None if n_components is None else check_int(self, "n_components", n_components,
                                                                          minimum=1)
         if not isinstance(clusterer, (str, Clusterer)):
