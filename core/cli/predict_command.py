@@ -135,9 +135,10 @@ def _site(code: str):
         raise ConfigError(f"--site {code}: {exc}") from None
 
 
-def _write(sky, prefix: Path, title: str, plot_sky) -> tuple[Path, Path]:
+def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
     """PREFIX.csv and PREFIX.png of ``sky``; ConfigError naming the file when it cannot be written."""
     from cistrack.errors import ConfigError
+    from cistrack.fitting.sky_plot import plot_sky
 
     path = prefix.with_name(prefix.name + ".csv")
     try:
@@ -152,7 +153,6 @@ def _write(sky, prefix: Path, title: str, plot_sky) -> tuple[Path, Path]:
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
-    from cistrack.fitting.sky_plot import plot_sky
     from cistrack.plugin.registry import default_registry
 
     site = _site(args.site)
@@ -164,7 +164,7 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
-    csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}", plot_sky)
+    csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}")
     if not args.quiet:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):

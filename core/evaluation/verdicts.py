@@ -119,9 +119,7 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
     """
     if verdict.kind == "filter-failed":
         return verdict
-    if truth_earth_distance_km is not None and not truth_earth_distance_km <= rule.max_earth_distance_km:
-        earth_distance_km = None  # the truth left cislunar space as well: following it is no divergence
-    final = _final_verdict(verdict, rows, rule, has_truth, earth_distance_km)
+    final = _final_verdict(verdict, rows, rule, has_truth, earth_distance_km, truth_earth_distance_km)
     if final.kept:  # custody kept: no loss time (the verdict was judged on the last update)
         return Verdict(final.kind, final.reason + (f"; {verdict.reason}" if verdict.reason else ""))
     if verdict.kind == "lost" and verdict.step is not None and final.kind == "diverged" \
@@ -133,7 +131,7 @@ def final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRul
 
 
 def _final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRule, has_truth: bool,
-                   earth_distance_km: float | None) -> Verdict:
+                   earth_distance_km: float | None, truth_earth_distance_km: float | None) -> Verdict:
     """:func:`final_verdict` before the loss time is settled."""
     last = _last_update(rows)
     step, t_days = last.get("step"), last.get("t_days")
@@ -159,7 +157,8 @@ def _final_verdict(verdict: Verdict, rows: list[dict[str, Any]], rule: CustodyRu
         if err > rule.diverged_error_km and not nees <= rule.diverged_nees:
             return Verdict("diverged", f"error far beyond sigma: final position error {err:.4g} km > "
                            f"{rule.diverged_error_km:g} km with NEES {nees:.3g} > {rule.diverged_nees:g}", *at)
-    if earth_distance_km is not None and not earth_distance_km <= rule.max_earth_distance_km:
+    truth_inside = truth_earth_distance_km is None or truth_earth_distance_km <= rule.max_earth_distance_km
+    if earth_distance_km is not None and not earth_distance_km <= rule.max_earth_distance_km and truth_inside:
         return Verdict("diverged", f"left cislunar space: mean {earth_distance_km:.4g} km from Earth > "
                        f"{rule.max_earth_distance_km:g} km", *at)
     if not has_truth:

@@ -49,11 +49,10 @@ def latest_determined_arc(obs: ObjectObservations, arc_gap_days: float) -> tuple
     after it that are not fitted, "" when there are none). When every arc is a lone tracklet, the
     latest is the arc (the fit then says what a lone tracklet gives)."""
     arcs = arcs_to_fit(obs, "each", arc_gap_days)
-    k = len(arcs) - 1
-    while k > 0 and is_lone_tracklet(arcs[k].measurements):
-        k -= 1
-    if k == len(arcs) - 1 or is_lone_tracklet(arcs[k].measurements):
+    determined = [i for i, a in enumerate(arcs) if not is_lone_tracklet(a.measurements)]
+    if not determined or determined[-1] == len(arcs) - 1:
         return obs, arcs[-1], ""
+    k = determined[-1]
     times = obs.measurements.times
     end = float(arcs[k].measurements.times[-1])
     upto = dataclasses.replace(obs, measurements=obs.measurements.subset(times <= end))
