@@ -34,7 +34,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("cistrack.fitting",),
     ("cistrack.studies",),
     ("cistrack.cli",),
-    ("cistrack.api",),
+    ("cistrack.api", "cistrack.console"),
 ]
 
 

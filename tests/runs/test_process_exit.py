@@ -15,7 +15,7 @@ SMALL = ["--set", "duration_days=1.4", "--set", "filter.n_particles=300", "--set
 
 
 def _console(tmp_path, argv: list[str], prelude: str = "", env_extra: dict | None = None):
-    """Run cistrack.cli.main.console_main (the installed command's entry point) in a child process."""
+    """Run cistrack.cli.main.console_main (which the installed command calls) in a child process."""
     code = textwrap.dedent(prelude) + textwrap.dedent(f"""
         import sys
         from cistrack.cli.main import console_main

@@ -1,0 +1,33 @@
+"""The ``cistrack`` executable: BLAS libraries loaded with one thread, then the command.
+
+Every run does its linear algebra with one BLAS thread (``blas_threads``, default 1, of
+:func:`cistrack.runs.pipeline.run_scenario`: many small matrices), and a least-squares fit's
+matrices are as small. A BLAS library loaded with more threads still costs CPU: OpenBLAS starts
+its thread pool when it loads and its threads spin for about 0.1 s of CPU before they sleep, once
+for numpy's OpenBLAS and once for scipy's, so about 0.13 s of a 1.9 s ``cistrack run example-1``
+process went to threads that never did any work (``benchmarks/process_timeline.py``: importing
+numpy 0.113 s CPU against 0.060 s wall, numba's target context, which imports scipy.linalg, 0.384
+s against 0.282 s). So before anything imports numpy this module sets ``$OPENBLAS_NUM_THREADS``,
+``$MKL_NUM_THREADS`` and ``$BLIS_NUM_THREADS`` to 1 where they are unset; a variable the user set
+is left as it is. Worker processes of a study inherit them. Importing :mod:`cistrack.cli` from
+Python changes nothing in the process's environment: only the executable does this.
+"""
+from __future__ import annotations
+
+import os
+
+__all__ = ["BLAS_THREAD_VARIABLES", "console_main"]
+
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+"""The variables a BLAS library reads for its thread count when it loads."""
+
+
+def console_main() -> None:
+    """The ``cistrack`` command (:func:`cistrack.cli.main.console_main`), its BLAS libraries
+    loaded with one thread unless the environment says otherwise."""
+    for name in BLAS_THREAD_VARIABLES:
+        if not os.environ.get(name, "").strip():
+            os.environ[name] = "1"
+    from cistrack.cli.main import console_main as command
+
+    command()
