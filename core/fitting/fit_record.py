@@ -33,6 +33,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
+from cistrack.fitting.fit_record_check import check_orbit_fields
 from cistrack.results.atomic_files import write_text_atomic
 
 __all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
@@ -272,7 +273,9 @@ def _text_file(text: str) -> Callable[[Path], list[Path]]:
 
 
 def read_fit_record(run_dir: str | Path) -> dict[str, Any]:
-    """The ``fit.json`` of a fit directory; ConfigError naming the file when absent or unreadable."""
+    """The ``fit.json`` of a fit directory; ConfigError naming the file when absent or unreadable,
+    or naming the field when its orbit is not one a fit writes
+    (:func:`cistrack.fitting.fit_record_check.check_orbit_fields`)."""
     p = Path(run_dir) / FIT_RECORD
     try:
         data = json.loads(p.read_text())
@@ -283,4 +286,6 @@ def read_fit_record(run_dir: str | Path) -> dict[str, Any]:
         raise ConfigError(f"{p}: cannot be read ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != _FORMAT:
         raise ConfigError(f"{p}: not a cistrack fit record (no \"format\": \"{_FORMAT}\")")
+    if "state" in data:
+        check_orbit_fields(p, data)
     return data

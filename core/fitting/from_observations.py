@@ -37,9 +37,11 @@ estimate there is the one a prediction starts from. All three give the same orbi
 """
 from __future__ import annotations
 
+import hashlib
 import math
 import re
 import warnings
+from collections import Counter
 from dataclasses import dataclass, field
 from datetime import timedelta
 from pathlib import Path
@@ -59,8 +61,9 @@ from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
-from cistrack.fitting.fit_replacing import check_fit_replacing
+from cistrack.fitting.fit_replacing import FIT_RECORD, check_fit_replacing
 from cistrack.results.output_paths import check_output_dir
+from cistrack.results.store import MANIFEST
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 from cistrack.scenario.loading import Scenario, load_scenario, parse_scenario
 from cistrack.scenario.settings import merge_settings, parse_settings
@@ -215,6 +218,16 @@ class ObjectFit:
 def _slug(designation: str) -> str:
     s = re.sub(r"[^A-Za-z0-9_.-]+", "_", designation.strip()).strip("._") or "object"
     return s[:64]
+
+
+def _directory_names(designations: list[str]) -> list[str]:
+    """``fit-<slug>`` for each designation; designations whose slugs coincide (``2026 AB`` and
+    ``2026/AB``; letter case counts as the same, as on a case-insensitive file system) each get
+    a short hash of the designation appended, so that no object's fit lands in another's directory."""
+    slugs = [_slug(d) for d in designations]
+    counts = Counter(s.casefold() for s in slugs)
+    return [f"fit-{s}" if counts[s.casefold()] == 1 else
+            f"fit-{s}-{hashlib.sha256(d.encode('utf-8')).hexdigest()[:8]}" for d, s in zip(designations, slugs)]
 
 
 def _split_settings(items: Iterable[str] | None) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
@@ -602,8 +615,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     choices = fit_choices(fit_table)
     objects = read_object_observations(list(files), reg, reader_params, say)
     plans = []
-    for obs in objects:
-        slug = f"fit-{_slug(obs.designation)}"
+    for obs, slug in zip(objects, _directory_names([o.designation for o in objects])):
         d = Path(out) if out is not None and len(objects) == 1 else (Path(out) / slug if out is not None
                                                                        else Path("runs") / slug)
         plans.append((obs, d))
@@ -615,7 +627,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             say(f"--overwrite: replacing {replaced} in {d}")
     results = []
     for obs, d in plans:
-        check_output_dir(d, where)
+        check_output_dir(d, where, records=(MANIFEST, FIT_RECORD))
         results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
 
@@ -650,7 +662,7 @@ def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
     for part in sets:
         first = units.tu_to_utc(units.parse_utc(READ_EPOCH), float(part.measurements.times[0]))
         sub = d / f"arc-{first:%Y-%m-%d}"
-        check_output_dir(sub, "the arc's results directory")
+        check_output_dir(sub, "the arc's results directory", records=(MANIFEST, FIT_RECORD))
         out.append(_finish(_fit_run(part, sub, job), part, job))
     return out
 

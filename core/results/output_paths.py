@@ -42,20 +42,22 @@ PART_FOLDERS = ("steps", "estimates-parts")
 """The folders of part files a run writes while it runs (``steps/``, ``estimates-parts/``)."""
 
 
-def check_output_dir(directory: str | Path, where: str) -> Path:
+def check_output_dir(directory: str | Path, where: str, records: tuple[str, ...] = ("manifest.json",)) -> Path:
     """Create ``directory`` (parents included) or check that it may hold results; return it.
 
+    ``records``: the files that mark a directory as cistrack's results (a run's ``manifest.json``;
+    a fit adds its ``fit.json``, which a fit that stopped before its filter run writes alone).
     Raises :class:`ConfigError` naming ``where`` (a flag or key) if it exists and is not a
-    directory, is a non-empty directory without a cistrack ``manifest.json``, or cannot be
-    created or written."""
+    directory, is a non-empty directory holding none of ``records``, or cannot be created or
+    written."""
     d = Path(directory)
     try:  # a parent that may not be searched (EACCES) answers here, not with a traceback
         if d.exists() and not d.is_dir():
             raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
                               "earlier results directory")
-        if d.is_dir() and not (d / "manifest.json").is_file() and not _holds_no_results(d):
-            raise ConfigError(f"{where} {d}: is not empty and holds no cistrack manifest.json; results go "
-                              "to a new or empty directory, or replace an earlier run's results directory")
+        if d.is_dir() and not any((d / name).is_file() for name in records) and not _holds_no_results(d):
+            raise ConfigError(f"{where} {d}: is not empty and holds no cistrack {' or '.join(records)}; results "
+                              "go to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)

@@ -15,6 +15,8 @@ from cistrack.fitting.fit_export import GRID_MINUTES, export_fit
 from cistrack.fitting.from_observations import fit_files
 from cistrack.scenario.loading import builtin_scenario_path
 from cistrack.units import TU_S
+from cistrack.plugin.registry import default_registry
+from cistrack.runs.export import scenario_of
 
 DATA = builtin_scenario_path("real-data").parent / "real_data"
 
@@ -124,12 +126,17 @@ def test_covariance_on_a_run_that_is_not_a_fit_is_refused_naming_the_option(tmp_
 
 
 def test_covariances_kept_linear_are_counted_and_dated_in_a_warning(fit_dir, tmp_path):
-    d = tmp_path / "indefinite"
+    d = tmp_path / "into-the-earth"
     shutil.copytree(fit_dir, d)
     rec = json.loads((d / "fit.json").read_text())
-    cov = np.asarray(rec["covariance"])
-    cov[2, 2] = -cov[2, 2]  # no sigma points: every covariance falls back to the linear map
-    rec["covariance"] = cov.tolist()
+    # a rank-one covariance along the line to the Earth's centre: one sigma point (state + sqrt(6)
+    # times the square root of the covariance, which the export scales by the noise scale) starts
+    # at the Earth's centre, so every covariance falls back to the linear map
+    reg = default_registry()
+    earth = scenario_of(d, reg).build("dynamics", reg).primary("Earth").position_at(rec["epoch_tu"])
+    u = np.zeros(6)
+    u[:3] = (earth - np.asarray(rec["state"])[:3]) / np.sqrt(6.0) / max(1.0, rec["noise_scale"])
+    rec["covariance"] = np.outer(u, u).tolist()
     (d / "fit.json").write_text(json.dumps(rec))
     text = export_fit(d, "oem").read_text()
     n = len(list(_read(d / "estimate.oem").states))

@@ -45,3 +45,31 @@ def test_overwrite_names_what_it_replaces(run_dir, tmp_path):
     copy = tmp_path / "r"
     shutil.copytree(run_dir, copy)
     assert "cistrack run" in check_fit_replacing(copy, "C2RLB52", "--out", overwrite=True)
+
+
+def _one_tracklet_each(path: Path, designations: list[str]) -> Path:
+    """An ADES PSV file: the first two observations of the shipped example for each designation
+    (one short tracklet each: every fit stops before its filter run and writes its fit.json)."""
+    header, *rows = OBSERVATIONS.read_text(encoding="utf-8").splitlines()[:4]
+    body = [header, rows[0]] + [name + row[row.index("|"):] for name in designations for row in rows[1:3]]
+    path.write_text("\n".join(body) + "\n", encoding="utf-8")
+    return path
+
+
+def test_objects_whose_names_make_the_same_folder_name_each_get_their_own(tmp_path, capsys):
+    names = ["2026 AB", "2026/AB", "2026_ab"]
+    obs = _one_tracklet_each(tmp_path / "three.psv", names)
+    assert main(["fit", str(obs), "--out", str(tmp_path / "out"), "--quiet"]) == 3  # one tracklet each
+    folders = sorted((tmp_path / "out").iterdir())
+    assert len(folders) == 3
+    assert sorted(json.loads((f / "fit.json").read_text())["designation"] for f in folders) == sorted(names)
+
+
+def test_a_fit_that_stopped_before_its_run_is_redone_in_its_folder(tmp_path, capsys):
+    obs = _one_tracklet_each(tmp_path / "one.psv", ["C2RLB52"])
+    out = tmp_path / "out"
+    assert main(["fit", str(obs), "--out", str(out), "--quiet"]) == 3
+    assert not (out / "manifest.json").exists() and (out / "fit.json").is_file()
+    capsys.readouterr()
+    assert main(["fit", str(obs), "--out", str(out), "--quiet"]) == 3
+    assert "not empty" not in capsys.readouterr().err

@@ -1,0 +1,102 @@
+"""The orbit fields of a ``fit.json``, checked before ``cistrack predict`` or ``cistrack export`` use them.
+
+A record edited by hand or by another program must give a clear error naming the file and the
+field, never a traceback from numpy or datetime, and never predictions or an OEM full of NaN: the
+state six finite numbers, the covariance a finite, symmetric, positive semi-definite 6 x 6 matrix,
+the epoch a finite time within about a thousand years of the scenario's epoch, the noise scale
+positive (or NaN: undefined), the counts whole numbers, and an estimated area-to-mass ratio a finite
+value with its finite, symmetric 7 x 7 joint covariance.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cistrack.errors import ConfigError
+
+__all__ = ["check_orbit_fields", "MAX_EPOCH_TU"]
+
+MAX_EPOCH_TU = 1.0e5
+"""The largest |epoch_tu| accepted (about 1,190 years from the scenario's epoch, within the dates
+Python can represent)."""
+
+_NUMBERS = ("rms", "chi2", "condition_number")
+_COUNTS = ("n_used", "n_rejected", "iterations")
+
+
+def _fail(path: Path, field: str, what: str, value: Any) -> ConfigError:
+    shown = repr(value)
+    shown = shown if len(shown) <= 80 else shown[:77] + "..."
+    return ConfigError(f"{path}: field {field!r} must be {what} (got {shown}); the file is not a fit record "
+                       "that cistrack wrote: fit the observations again")
+
+
+def _array(path: Path, field: str, value: Any, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``value`` as a finite float array of ``shape``, else ConfigError naming ``field``."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise _fail(path, field, what, value) from None
+    if arr.shape != shape or not np.all(np.isfinite(arr)):
+        raise _fail(path, field, what, value)
+    return arr
+
+
+def _covariance(path: Path, field: str, value: Any, n: int) -> None:
+    what = f"a {n} x {n} matrix of finite numbers, symmetric and positive semi-definite"
+    cov = _array(path, field, value, (n, n), what)
+    scale = float(np.max(np.abs(cov))) or 1.0
+    if not np.allclose(cov, cov.T, rtol=1e-9, atol=1e-12 * scale):
+        raise _fail(path, field, what + " (it is not symmetric)", value)
+    eig = np.linalg.eigvalsh(0.5 * (cov + cov.T))
+    if eig[-1] <= 0.0 or eig[0] < -1e-9 * eig[-1]:
+        raise _fail(path, field, what + f" (eigenvalues {eig[0]:.3g} to {eig[-1]:.3g})", value)
+
+
+def _number(path: Path, field: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise _fail(path, field, "a number", value)
+    return float(value)
+
+
+def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:
+    """Raise :class:`ConfigError` naming ``path`` and the field when the orbit of ``record`` (a
+    ``fit.json`` with a ``state``) is not one a fit writes (module docstring)."""
+    p = Path(path)
+    _array(p, "state", record.get("state"), (6,), "6 finite numbers (the synodic state)")
+    _covariance(p, "covariance", record.get("covariance"), 6)
+    epoch = _number(p, "epoch_tu", record.get("epoch_tu"))
+    if not (math.isfinite(epoch) and abs(epoch) <= MAX_EPOCH_TU):
+        raise _fail(p, "epoch_tu", f"a finite time within {MAX_EPOCH_TU:g} TU of the scenario's epoch", epoch)
+    if not isinstance(record.get("epoch_utc"), str):
+        raise _fail(p, "epoch_utc", "a UTC time as text", record.get("epoch_utc"))
+    scale = _number(p, "noise_scale", record.get("noise_scale"))
+    if not (math.isnan(scale) or (math.isfinite(scale) and scale > 0.0)):
+        raise _fail(p, "noise_scale", "a positive number (NaN: undefined)", scale)
+    for field in _NUMBERS:
+        _number(p, field, record.get(field))
+    for field in _COUNTS:
+        value = record.get(field)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise _fail(p, field, "a whole number >= 0", value)
+    if not isinstance(record.get("converged"), bool):
+        raise _fail(p, "converged", "true or false", record.get("converged"))
+    _array(p, "weakest_direction_km", record.get("weakest_direction_km"), (6,), "6 finite numbers")
+    _check_area_to_mass(p, record.get("area_to_mass"))
+
+
+def _check_area_to_mass(p: Path, amr: Any) -> None:
+    if amr is None:
+        return
+    if not isinstance(amr, dict):
+        raise _fail(p, "area_to_mass", "a table", amr)
+    if not amr.get("estimated"):
+        return
+    value = _number(p, "area_to_mass.value_m2_kg", amr.get("value_m2_kg"))
+    if not math.isfinite(value):
+        raise _fail(p, "area_to_mass.value_m2_kg", "a finite number (m^2/kg)", value)
+    if "full_covariance" in amr:
+        _covariance(p, "area_to_mass.full_covariance", amr["full_covariance"], 7)

@@ -1,0 +1,71 @@
+"""A fit.json whose orbit fields are not what a fit writes is refused by name (predict and export
+read it through read_fit_record): never a traceback from numpy or datetime, never NaN predictions."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from cistrack.errors import ConfigError
+from cistrack.fitting.fit_record import read_fit_record
+
+
+def _record() -> dict:
+    """The orbit fields of a fit record as a fit writes them (a correlated, positive-definite covariance)."""
+    a = np.arange(36, dtype=float).reshape(6, 6) / 36.0
+    cov = 1e-10 * (a @ a.T + np.eye(6))
+    return {"format": "cistrack-fit", "designation": "C2RLB52", "state": [1.02, 0.0, -0.18, 0.0, -0.1, 0.0],
+            "covariance": cov.tolist(), "epoch_tu": 1.05, "epoch_utc": "2026-03-06T12:02:32.999088Z",
+            "noise_scale": 1.1, "rms": 1.07, "chi2": 150.6, "condition_number": 445.7, "n_used": 65,
+            "n_rejected": 0, "iterations": 5, "converged": True, "weakest_direction_km": [2.3, -0.3, -0.5, 0, 0, 0],
+            "area_to_mass": {"estimated": False}}
+
+
+def _written(tmp_path, record: dict):
+    (tmp_path / "fit.json").write_text(json.dumps(record))
+    return tmp_path
+
+
+def _tampered(field: str, value) -> dict:
+    rec = _record()
+    if field.startswith("covariance["):
+        i, j = (int(c) for c in field[len("covariance["):-1].split(","))
+        rec["covariance"][i][j] = value
+    else:
+        rec[field] = value
+    return rec
+
+
+def test_a_record_as_a_fit_writes_it_is_read(tmp_path):
+    assert read_fit_record(_written(tmp_path, _record()))["designation"] == "C2RLB52"
+
+
+def test_an_undefined_noise_scale_is_allowed(tmp_path):
+    assert math.isnan(read_fit_record(_written(tmp_path, _tampered("noise_scale", float("nan"))))["noise_scale"])
+
+
+@pytest.mark.parametrize("field, value, named", [
+    ("state", "abc", "'state'"),
+    ("state", [1, 2, 3, 4, 5], "'state'"),
+    ("state", [1, 2, 3, 4, 5, float("nan")], "'state'"),
+    ("epoch_tu", "x", "'epoch_tu'"),
+    ("epoch_tu", 1e6, "'epoch_tu'"),
+    ("epoch_utc", None, "'epoch_utc'"),
+    ("noise_scale", "x", "'noise_scale'"),
+    ("noise_scale", -2.0, "'noise_scale'"),
+    ("noise_scale", float("inf"), "'noise_scale'"),
+    ("n_used", 6.5, "'n_used'"),
+    ("converged", "yes", "'converged'"),
+    ("covariance[0,0]", float("nan"), "'covariance'"),
+    ("covariance[0,0]", float("inf"), "'covariance'"),
+    ("covariance[0,0]", -1.0, "positive semi-definite"),
+    ("covariance[0,1]", 1.0, "not symmetric"),
+    ("covariance", [[0.0] * 6] * 6, "'covariance'"),
+    ("area_to_mass", {"estimated": True, "value_m2_kg": "big"}, "'area_to_mass.value_m2_kg'"),
+])
+def test_an_orbit_field_a_fit_never_writes_is_refused_by_name(tmp_path, field, value, named):
+    with pytest.raises(ConfigError, match="fit.json: field ") as exc:
+        read_fit_record(_written(tmp_path, _tampered(field, value)))
+    assert named in str(exc.value)
