@@ -20,6 +20,7 @@ from cistrack.errors import ParameterError
 __all__ = [
     "Component", "ParamSpec", "param_specs", "MemoryNeed", "BYTES_PER_PARTICLE", "IOD_CHUNK_BYTES",
     "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
+    "SIGMA_ARCSEC_BOUNDS", "sigma_arcsec_problem", "check_sigma_arcsec",
 ]
 
 _EMPTY = inspect.Parameter.empty
@@ -141,6 +142,30 @@ def check_positive(owner: Component, name: str, value: Any) -> float:
     v = _real(owner, name, value)
     if v <= 0:
         owner._fail(name, value, "must be > 0")
+    return v
+
+
+SIGMA_ARCSEC_BOUNDS = (1e-6, 648000.0)
+"""The angle sigmas (arcsec) a measurement may have: from a micro-arcsecond (beyond any telescope's
+astrometry) to 180 degrees (an angle that says nothing). A sigma outside them is a unit or a typing
+mistake, not a measurement: weights of 1e60 or 1e-600 wreck the fits that use them."""
+
+
+def sigma_arcsec_problem(value: float) -> str | None:
+    """Why an angle sigma of ``value`` arcsec is not one a measurement can have, or None."""
+    lo, hi = SIGMA_ARCSEC_BOUNDS
+    if not (math.isfinite(value) and lo <= value <= hi):
+        return f"must lie in [{lo:g}, {hi:g}] arcsec (a micro-arcsecond to 180 degrees)"
+    return None
+
+
+def check_sigma_arcsec(owner: Component, name: str, value: Any) -> float:
+    """Return ``value`` (an angle sigma, arcsec) as float; raise ParameterError unless it lies in
+    :data:`SIGMA_ARCSEC_BOUNDS`."""
+    v = _real(owner, name, value)
+    problem = sigma_arcsec_problem(v)
+    if problem:
+        owner._fail(name, value, problem)
     return v
 
 

@@ -24,6 +24,7 @@ from datetime import datetime
 
 from cistrack.errors import MeasurementError
 from cistrack.model.measurement import MeasurementSet
+from cistrack.interfaces.component import sigma_arcsec_problem
 from cistrack.interfaces.reader import FieldError, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
@@ -67,8 +68,9 @@ def _sigma(rec, name, path, line, scale=1.0):
         v = to_rad(text, "arcsec", scale)
     except ValueError as exc:
         raise FieldError(path, ln, name, f"{show_field(text)} is {exc}") from None
-    if not v > 0:
-        raise FieldError(path, ln, name, f"{show_field(text)} must be > 0 arcsec")
+    problem = sigma_arcsec_problem(float(text)) if v > 0 else "must be > 0 arcsec"
+    if problem:
+        raise FieldError(path, ln, name, f"{show_field(text)} {problem}")
     return v
 
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cistrack.interfaces.component import check_positive
+from cistrack.interfaces.component import check_positive, check_sigma_arcsec, sigma_arcsec_problem
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Reader
@@ -151,8 +151,9 @@ class _RowParser:
 
     def _angle_sigma(self, cell: str, name: str) -> float:
         s = _number(cell, name) if cell else self.sigma_arcsec
-        if s <= 0:
-            raise ValueError(f"{name} {s} must be > 0")
+        problem = sigma_arcsec_problem(s)
+        if problem:
+            raise ValueError(f"{name} {s} {problem}")
         return to_rad(cell, "arcsec") if cell else s * ARCSEC_RAD
 
     def _range(self, cells: list[str]) -> tuple[float, float]:
@@ -248,8 +249,10 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     """
     p = Path(path)
     ep = _parse_epoch(p, epoch)
-    if not (sigma_arcsec > 0 and range_alpha > 0):
-        raise MeasurementError(f"{p}: default sigma_arcsec and range_alpha must be > 0")
+    problem = sigma_arcsec_problem(float(sigma_arcsec))
+    if problem or not range_alpha > 0:
+        raise MeasurementError(f"{p}: default sigma_arcsec {problem or 'is fine'}; range_alpha must be > 0 "
+                               f"(got sigma_arcsec={sigma_arcsec!r}, range_alpha={range_alpha!r})")
     rows = _data_lines(p)
     col = _header_columns(p, rows)
     parser = _RowParser(col, ep, sigma_arcsec, range_alpha, sites or {})
@@ -334,7 +337,7 @@ class CsvReader(Reader):
 
     def __init__(self, sigma_arcsec: float = 1.5, range_alpha: float = 0.05, include_range: bool = True,
                  sites: dict | None = None) -> None:
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self.range_alpha = check_positive(self, "range_alpha", range_alpha)
         if not isinstance(include_range, bool):
             self._fail("include_range", include_range, "must be true or false")

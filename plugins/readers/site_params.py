@@ -12,7 +12,7 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from cistrack.interfaces.component import check_positive
+from cistrack.interfaces.component import check_sigma_arcsec
 from cistrack.errors import MeasurementError
 from cistrack.interfaces import Reader
 from cistrack.astro.sites import Site, observatory, site_from_parallax
@@ -91,7 +91,7 @@ class SiteReader(Reader):
 
     def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
                  designation: str | None = None) -> None:
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self._sites = parse_sites(self, sites)
         self.sites = sites
         if designation is not None and (not isinstance(designation, str) or not designation.strip()):

@@ -34,6 +34,7 @@ from pathlib import Path
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
+from cistrack.interfaces.component import sigma_arcsec_problem
 from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
@@ -171,8 +172,9 @@ def _comment_sigmas(path, m: re.Match, cl: int) -> tuple[tuple[float, float], st
         sig = (to_rad(m.group(1), "arcsec"), to_rad(m.group(2), "arcsec"))
     except ValueError:
         raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas are not numbers") from None
-    if not (sig[0] > 0 and sig[1] > 0):
-        raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", "the sigmas must be > 0")
+    problem = next(filter(None, (sigma_arcsec_problem(float(t)) for t in m.groups())), None)
+    if problem:
+        raise FieldError(path, cl, "COMMENT cistrack sigma_arcsec", f"the sigmas {problem}")
     return sig, m.group(1)
 
 

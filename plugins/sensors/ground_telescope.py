@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.interfaces.component import check_choice, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_positive, check_sigma_arcsec, check_range
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Pass, Sensor
@@ -77,7 +77,7 @@ class GroundTelescope(Sensor):
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
         self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         if not isinstance(measure_range, bool):
             self._fail("measure_range", measure_range, "must be true or false")
         self.measure_range = measure_range

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.interfaces.component import check_choice, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_positive, check_sigma_arcsec, check_range
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Sensor
@@ -105,7 +105,7 @@ class RealTelescope(Sensor):
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
         self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
         self.measurement = check_choice(self, "measurement", measurement, _MEASUREMENTS)
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self.measure_range = self._bool("measure_range", measure_range)
         self.range_alpha = check_positive(self, "range_alpha", range_alpha)
         self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,

@@ -23,7 +23,7 @@ import numpy as np
 from cistrack.errors import MeasurementError
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.sensor import passes_from_mask
-from cistrack.interfaces.component import check_positive, check_range
+from cistrack.interfaces.component import check_positive, check_sigma_arcsec, check_range
 from cistrack.model.measurement import MeasurementSet
 from cistrack.api import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
@@ -95,7 +95,7 @@ class SpaceTelescope(Sensor):
                  moon_phase_deg: float = 0.0, revisit_hours: float = 0.0, window_hours: float = 8.0,
                  first_window_hours: float = 1.0) -> None:
         self.phase = check_range(self, "phase", phase, 0.0, 1.0, hi_open=True)
-        self.sigma_arcsec = check_positive(self, "sigma_arcsec", sigma_arcsec)
+        self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self._set_measured(measure_range, measure_range_rate, light_time, range_alpha, range_rate_sigma_kms)
         for name, value in (("sun_exclusion_deg", sun_exclusion_deg), ("earth_exclusion_deg", earth_exclusion_deg),
                             ("moon_exclusion_deg", moon_exclusion_deg)):

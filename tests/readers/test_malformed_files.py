@@ -32,6 +32,8 @@ PSV_CASES = [
     ("time not UTC", psv("SECRETX|CCD|705|2026-03-01T02:00:00+02:00|10|5|1.0|1.0|Gaia3"), 4, "obsTime"),
     ("negative rmsDec", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|-1.0|Gaia3"), 4, "rmsDec"),
     ("rmsRA nan", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|nan|1.0|Gaia3"), 4, "rmsRA"),
+    ("rmsRA beyond the sky", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1e300|1.0|Gaia3"), 4, "rmsRA"),
+    ("rmsDec below a micro-arcsecond", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1e-30|Gaia3"), 4, "rmsDec"),
     ("unknown station", psv("SECRETX|CCD|Q9Z|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "stn"),
     ("too few fields", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0"), 4, "(field count)"),
     ("no object", psv("|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "permID/provID/trkSub"),
@@ -120,6 +122,9 @@ TDM_CASES = [
     ("elevation 95", tdm(data="ANGLE_1 = 2026-03-01T01:00:00 10.5\nANGLE_2 = 2026-03-01T01:00:00 95\n"), 12, "ANGLE_2 value"),
     ("unpaired angle", tdm(data="ANGLE_1 = 2026-03-01T01:00:00 10.5\nANGLE_2 = 2026-03-01T01:05:00 20.5\n"), 11, "ANGLE_2"),
     ("range data", tdm(data="RANGE = 2026-03-01T01:00:00 1000\n"), 11, "RANGE"),
+    ("sigma comment beyond the sky", tdm(meta="COMMENT cistrack sigma_arcsec ANGLE_1=1e300 ANGLE_2=1\nTIME_SYSTEM = UTC\n"
+                                              "PARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\nANGLE_TYPE = AZEL\n"), 5,
+     "COMMENT cistrack sigma_arcsec"),
     ("missing DATA_STOP", tdm(tail=""), 12, "DATA_STOP"),
     ("not key = value", tdm(meta="TIME_SYSTEM UTC SECRETX\n"), 5, "(keyword)"),
     ("day of year 366 in 2026", tdm(data="ANGLE_1 = 2026-366T01:00:00 10.5\nANGLE_2 = 2026-366T01:00:00 20.5\n"), 11, "ANGLE_1 epoch"),
@@ -148,6 +153,8 @@ CSV_CASES = [
     ("unknown site", csv("2026-03-01T02:00:00Z,10,20,ZZ9"), 3, "site"),
     ("too many fields", csv("2026-03-01T02:00:00Z,10,20,705,1"), 3, "fields (columns)"),
     ("empty azimuth", csv("2026-03-01T02:00:00Z,,20,705"), 3, "azimuth_deg"),
+    ("sigma below a micro-arcsecond", "time_utc,azimuth_deg,elevation_deg,site,sigma_azimuth_arcsec\n"
+     "2026-03-01T01:00:00Z,10.5,20.5,705,1e-30\n", 2, "sigma_azimuth_arcsec"),
     ("unknown column", "time_utc,azimuth_deg,elevation_deg,colour\n", 1, "colour"),
 ]
 
