@@ -1,7 +1,9 @@
 """Where results may be written: checked before anything is computed.
 
 A results directory is either new, empty, or an earlier cistrack results directory (it holds a
-``manifest.json``); anything else is refused, so that starting a run never deletes or replaces
+``manifest.json`` that cistrack wrote: a JSON object with the run's ``run_id`` and the
+``versions`` it ran with, ``cistrack``'s among them; a web app's ``manifest.json`` is not one);
+anything else is refused, so that starting a run never deletes or replaces
 files that cistrack did not write. A directory in which a run failed before it wrote its manifest
 (a full disk) counts as empty: it holds only the run's lock file and part folders (``steps/``,
 ``estimates-parts/``) with nothing in them but part files, so the retry runs there. The directory
@@ -15,6 +17,7 @@ it); never the root of the file system, a single run's results directory or a fi
 from __future__ import annotations
 
 import fnmatch
+import json
 from pathlib import Path
 
 from cistrack.errors import ConfigError
@@ -55,12 +58,28 @@ def check_output_dir(directory: str | Path, where: str, records: tuple[str, ...]
         if d.exists() and not d.is_dir():
             raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
                               "earlier results directory")
-        if d.is_dir() and not any((d / name).is_file() for name in records) and not _holds_no_results(d):
+        if d.is_dir() and not any(_is_cistrack_record(d / name) for name in records) and not _holds_no_results(d):
             raise ConfigError(f"{where} {d}: is not empty and holds no cistrack {' or '.join(records)}; results "
                               "go to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def _is_cistrack_record(path: Path) -> bool:
+    """Whether ``path`` is a record cistrack wrote: a run's manifest (a JSON object with a ``run_id``
+    and ``versions`` naming cistrack) or a fit's record (``"format": "cistrack-fit"``)."""
+    if not path.is_file():
+        return False
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    if not isinstance(data, dict):
+        return False
+    versions = data.get("versions")
+    return data.get("format") == "cistrack-fit" or (isinstance(data.get("run_id"), str) and isinstance(versions, dict)
+                                                    and "cistrack" in versions)
 
 
 def _holds_no_results(d: Path) -> bool:

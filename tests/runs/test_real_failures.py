@@ -58,7 +58,8 @@ def test_a_full_disk_during_the_run_ends_failed_with_the_written_steps_merged(tm
 def test_a_full_disk_at_the_merge_keeps_the_parts_and_the_cli_says_failed(tmp_path):
     out = tmp_path / "r"
     out.mkdir()
-    (out / "manifest.json").write_text("{}")  # an earlier results directory, which --out may replace
+    (out / "manifest.json").write_text('{"run_id": "earlier", "versions": {"cistrack": "0.2.0"}}')  # an earlier
+    # results directory, which --out may replace
     (out / "steps.parquet.tmp").symlink_to(FULL)
     proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), *SMALL],
                           capture_output=True, text=True, timeout=600)

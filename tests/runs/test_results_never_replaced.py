@@ -150,3 +150,13 @@ def test_a_recording_path_the_system_refuses_is_refused_before_the_run(tmp_path,
     assert _run("--out", str(out), *SHORT, "--rerun", str(path)) == 2
     err = capsys.readouterr().err
     assert f"--rerun {path}: cannot write there" in err and "Traceback" not in err and not out.exists()
+
+
+def test_another_programs_manifest_is_not_taken_for_an_earlier_run(tmp_path, capsys):
+    web = tmp_path / "webapp"
+    web.mkdir()
+    (web / "manifest.json").write_text('{"name": "My PWA", "start_url": "/index.html"}')
+    (web / "index.html").write_text("<html>")
+    assert main(["run", "quick", "--out", str(web), "--quiet", "--set", "duration_days=1.5"]) == 2
+    assert "holds no cistrack manifest.json" in capsys.readouterr().err
+    assert json.loads((web / "manifest.json").read_text())["name"] == "My PWA"
