@@ -15,7 +15,8 @@ registered component of its kind with that component's parameters::
 Only the sub-table of the component named is read; those of the kind's other components wait
 until ``name`` names them. A parameter written in the component table itself applies to
 whichever component is named and wins over its sub-table (``--set filter.KEY=VALUE`` writes
-there). A key that is neither is refused as an unknown parameter, as before.
+there); the two may not give one parameter different values (the sub-table's would be ignored).
+A key that is neither is refused as an unknown parameter, as before.
 """
 from __future__ import annotations
 
@@ -82,10 +83,23 @@ def _choose(table: Any, kind: str, reg: Registry, source: str, where: str) -> tu
     if "name" in own:
         raise ConfigError(f"{source}: [{where}.{name}]: key 'name': the {kind} is named in [{where}] itself; "
                           "remove it here")
+    _refuse_conflicts(rest, own, source, where, name)
     chosen = dict(rest)  # the table's own keys first ('name' leads), and they win
     for key, value in copy.deepcopy(own).items():
         chosen.setdefault(key, value)
     return chosen, copy.deepcopy(others)
+
+
+def _refuse_conflicts(table: dict[str, Any], own: dict[str, Any], source: str, where: str, name: str) -> None:
+    """ConfigError when the named component's sub-table sets a parameter that the table itself
+    sets to another value: the table's would win, and the sub-table's (a ``--set``, a study's
+    sweep) would be dropped without a word."""
+    clash = sorted(k for k in own if k in table and table[k] != own[k])
+    if clash:
+        k = clash[0]
+        raise ConfigError(f"{source}: [{where}] {k} = {table[k]!r} and [{where}.{name}] {k} = {own[k]!r}: a parameter "
+                          f"in [{where}] wins over [{where}.{name}], so the second would be ignored; set it in one "
+                          f"place (--set {where}.{k}=VALUE writes in [{where}])")
 
 
 def keep_choice_table(old: Any, new: dict[str, Any]) -> dict[str, Any]:

@@ -74,9 +74,26 @@ def merge_settings(tables: dict[str, Any], settings: dict[str, Any]) -> dict[str
             if "name" in value and value["name"] != old.get("name"):
                 out[key] = keep_choice_table(old, value)  # the new component's own [TABLE.NAME] stays
             else:
-                out[key] = merge_settings(old, value)
+                out[key] = merge_settings(_yield_to(old, value), value)
         else:
             out[key] = copy.deepcopy(value)
+    return out
+
+
+def _yield_to(old: dict[str, Any], value: dict[str, Any]) -> dict[str, Any]:
+    """``old`` (a table) without what ``value`` sets in the other place of a component choice: a
+    parameter set in the table leaves the named component's sub-table (``[filter.pgm]``), one set
+    in that sub-table leaves the table, so that the setting given wins wherever it is written
+    (:mod:`cistrack.scenario.component_choice`)."""
+    name = old.get("name")
+    if not isinstance(name, str):
+        return old
+    out = dict(old)
+    sub, new_sub = old.get(name), value.get(name)
+    if isinstance(sub, dict):
+        out[name] = {k: v for k, v in sub.items() if k not in value or isinstance(value[k], dict)}
+    if isinstance(new_sub, dict):
+        out = {k: v for k, v in out.items() if k not in new_sub or isinstance(v, dict)}
     return out
 
 

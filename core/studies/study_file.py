@@ -132,6 +132,19 @@ def _flat(table: dict, prefix: str = "") -> list[tuple[str, object]]:
     return out
 
 
+_NOT_SWEPT = {"seed": "the study's seeds are 'seeds' (or --first-seed/--n-seeds)",
+              "name": "the run names its scenario variants itself",
+              "filter.name": "filters are the study's key 'filters'", "iod.name": "IOD methods are the study's key 'iod'"}
+"""Settings a sweep may not vary, with what the study file uses instead: a swept seed or filter
+would be overridden by the study's own seeds and filters, and the runs named for values they never had."""
+
+
+def _check_sweepable(key: str, where: str) -> None:
+    why = _NOT_SWEPT.get(key)
+    if why:
+        raise ConfigError(f"{where}: cannot be swept: {why}")
+
+
 def study_sweep(data: dict, p: Path) -> list[tuple[str, list]]:
     """The study's ``sweep``: (dotted setting, its values) pairs in file order; [] without one.
 
@@ -144,10 +157,15 @@ def study_sweep(data: dict, p: Path) -> list[tuple[str, list]]:
         raise ConfigError(f"{p}: key 'sweep' must be a table of settings to lists of values, e.g. "
                           'sweep = {"truth.maneuvers.delta_v_ms" = [0.1, 1.0]}')
     out = []
+    seen: dict[str, str] = {}
     for key, values in _flat(table):
         where = f"{p}: key 'sweep', setting {key!r}"
-        if not all(part.strip() for part in key.split(".")):
-            raise ConfigError(f"{where}: not a dotted setting TABLE.KEY (as --set takes)")
+        if not all(part.strip() == part and part for part in key.split(".")):
+            raise ConfigError(f"{where}: not a dotted setting TABLE.KEY (as --set takes; no spaces around the parts)")
+        _check_sweepable(key, where)
+        if key in seen:
+            raise ConfigError(f"{where}: the same setting as {seen[key]!r}; sweep each setting once")
+        seen[key] = key
         if not isinstance(values, list) or not values:
             raise ConfigError(f"{where}: must be a non-empty list of values, got {values!r}")
         bad = [v for v in values if not isinstance(v, _SWEEP_VALUE)]

@@ -35,3 +35,27 @@ def test_applied_settings_are_validated_and_the_error_names_the_setting():
         apply_settings(scen, ["filter.n_particles=-1"])
     with pytest.raises(ConfigError, match="bogus"):
         apply_settings(scen, ["filter.bogus=1"])
+
+
+def test_a_setting_in_the_named_components_table_wins_over_the_same_key_in_the_filter_table():
+    scen = apply_settings(load_scenario("quick"), ["filter.pgm.n_particles=500"])  # quick's [filter]: 1000
+    assert scen.components["filter"].params["n_particles"] == 500
+
+
+def _quick_text() -> str:
+    return open(load_scenario("quick").source).read()
+
+
+def test_a_setting_in_the_filter_table_wins_over_the_named_components_table(tmp_path):
+    path = tmp_path / "s.toml"  # as cistrack init writes it: the parameter in [filter.pgm]
+    path.write_text(_quick_text().replace('name = "pgm"\nn_particles = 1000\n', 'name = "pgm"\n')
+                    + "\n[filter.pgm]\nn_particles = 1000\n")
+    assert load_scenario(str(path)).components["filter"].params["n_particles"] == 1000
+    assert apply_settings(load_scenario(str(path)), ["filter.n_particles=300"]).components["filter"].params["n_particles"] == 300
+
+
+def test_a_file_giving_one_parameter_two_values_is_refused_naming_both(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(_quick_text() + "\n[filter.pgm]\nn_particles = 500\n")
+    with pytest.raises(ConfigError, match=r"\[filter\] n_particles = 1000 and \[filter.pgm\] n_particles = 500"):
+        load_scenario(str(path))

@@ -56,10 +56,15 @@ def _scenario(filter_table: dict) -> dict:
             "iod": {"name": "noisy-range", "n_particles": 100}, "filter": filter_table}
 
 
-def test_a_key_in_the_filter_table_itself_wins_over_the_filters_own_table():
-    scen = parse_scenario(_scenario({"name": "pgm", "n_particles": 200, "pgm": {"n_particles": 500, "n_components": 3}}))
+def test_the_filter_table_and_the_filters_own_table_merge_where_they_agree():
+    scen = parse_scenario(_scenario({"name": "pgm", "n_particles": 200, "pgm": {"n_particles": 200, "n_components": 3}}))
     assert scen.components["filter"].params["n_particles"] == 200
     assert scen.components["filter"].params["n_components"] == 3
+
+
+def test_one_parameter_given_two_values_in_the_two_tables_is_refused():
+    with pytest.raises(ConfigError, match=r"\[filter\] n_particles = 200 and \[filter.pgm\] n_particles = 500"):
+        parse_scenario(_scenario({"name": "pgm", "n_particles": 200, "pgm": {"n_particles": 500, "n_components": 3}}))
 
 
 def test_a_filter_named_key_that_is_not_a_table_is_refused_naming_it():

@@ -96,6 +96,11 @@ def test_every_combination_is_validated_before_any_run(tmp_path):
     ('{"truth.maneuvers.delta_v_ms" = [0.1, 0.1]}', "repeats a value"),
     ('{"truth.maneuvers" = [{name = "impulse"}]}', "values must be numbers, strings or booleans"),
     ('{"truth..delta_v_ms" = [0.1]}', "not a dotted setting"),
+    ('{"filter.n_particles " = [700]}', "not a dotted setting"),
+    ('{"filter.n_particles" = [500], filter = {n_particles = [700]}}', "the same setting as 'filter.n_particles'"),
+    ('{"seed" = [1, 2]}', "cannot be swept: the study's seeds"),
+    ('{"filter.name" = ["pgm", "enkf"]}', "cannot be swept: filters are the study's key 'filters'"),
+    ('{"iod.name" = ["noisy-range"]}', "cannot be swept: IOD methods"),
 ])
 def test_a_malformed_sweep_is_refused_naming_the_file_and_key(tmp_path, sweep, match):
     p = _study(tmp_path, '["example-1-burn"]', sweep=sweep)
