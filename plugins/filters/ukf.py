@@ -43,8 +43,10 @@ class UKFFilter(FilterBase):
     Parameters
     ----------
     alpha, beta, kappa : float
-        Merwe scaled sigma-point parameters (spread, prior knowledge, secondary scaling); kappa
-        may be negative down to > -6 (the state is 6-D), e.g. the classic 3 - n = -3.
+        Merwe scaled sigma-point parameters (spread, prior knowledge, secondary scaling); alpha
+        from 1e-4 (below it the weights' n + lambda = alpha^2 (n + kappa) cancels to zero in
+        floating point) to 10; kappa may be negative down to > -6 (the state is 6-D), e.g. the
+        classic 3 - n = -3.
     n_samples : int
         Draws from the Gaussian exposed as the belief's samples.
     velocity_noise_kms_per_sqrt_day : float
@@ -66,7 +68,7 @@ class UKFFilter(FilterBase):
     def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, n_samples: int = 2000,
                  velocity_noise_kms_per_sqrt_day: float = 0.0, update_iterations: int = 10,
                  update_tolerance: float = 1e-3):
-        self.alpha = check_positive(self, "alpha", alpha)
+        self.alpha = check_range(self, "alpha", alpha, 1e-4, 10.0)
         self.beta = check_nonnegative(self, "beta", beta)
         self.kappa = check_range(self, "kappa", kappa, -6.0, 1e6, lo_open=True)
         self.n_samples = check_int(self, "n_samples", n_samples, minimum=1)

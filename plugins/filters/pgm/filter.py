@@ -16,14 +16,15 @@ measurement far sharper than the cloud the particles may be clustered into more 
 """
 from __future__ import annotations
 
+import math
 import sys
 
 import numpy as np
 
 from cistrack.errors import FilterError
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
-from cistrack.interfaces.component import (check_choice, check_int, check_nonnegative, check_positive, check_range,
-                                           param_specs)
+from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive,
+                                           check_range, param_specs)
 from cistrack.interfaces.filter import FilterBase
 from cistrack.interfaces.iod import MIN_IOD_PARTICLES
 from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
@@ -49,6 +50,10 @@ from .step_choice import check_step, resolve_step
 from .state_bounds import StateBounds, earth_position, sample_inside
 
 __all__ = ["PGMFilter", "resolve_clusterer"]
+
+
+MAX_REACQUIRE_FACTOR = 100.0
+"""The most particles, times ``n_particles``, the PGM draws while reacquiring (4 by default)."""
 
 
 class PGMFilter(ParticleFilterDeclarations, FilterBase):
@@ -99,7 +104,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
     reacquire_factor : float
         Particles resampled from a posterior, times ``n_particles``, while the prior's predicted
         measurements spread wider than ``reacquire_spread_sigma`` noise sigmas (a cloud
-        reacquiring after a long gap); 1 = off.
+        reacquiring after a long gap); 1 = off; at most 100 (:data:`MAX_REACQUIRE_FACTOR`).
     reacquire_spread_sigma : float
         That spread threshold, in noise standard deviations.
     shrink_spread_sigma : float
@@ -186,7 +191,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.split_components = None if not split_components else check_int(
             self, "split_components", split_components, minimum=1)
         self.split_ess = check_range(self, "split_ess", split_ess, 0.0, 1.0)
-        self.reacquire_factor = check_positive(self, "reacquire_factor", reacquire_factor)
+        self.reacquire_factor = check_range(self, "reacquire_factor", reacquire_factor, 0.0, MAX_REACQUIRE_FACTOR,
+                                            lo_open=True)
         self.reacquire_spread_sigma = check_positive(self, "reacquire_spread_sigma", reacquire_spread_sigma)
         self.component_update = check_step(self, "component_update", component_update, ComponentUpdate,
                                            ("iterated", "ensemble"))
@@ -220,6 +226,11 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._h: np.ndarray | None = None  # each particle's next integration step (TU), carried
 
     # -- lifecycle --------------------------------------------------------------------------------
+    def memory_need(self) -> MemoryNeed:
+        """Its particles and the ``reacquire_factor`` x ``n_particles`` it draws while reacquiring
+        (:data:`~cistrack.interfaces.component.BYTES_PER_PARTICLE` holds the default factor 4)."""
+        return MemoryNeed.particles(int(math.ceil(self.n_particles * max(1.0, self.reacquire_factor / 4.0))))
+
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """Start from ``cloud`` (N, 6) at ``cloud.epoch``; builds the clusterer and the steps."""

@@ -1,0 +1,33 @@
+"""Filter parameters whose extremes used to run for ever or crash inside filterpy are refused by name."""
+from __future__ import annotations
+
+import pytest
+
+from cistrack.errors import ParameterError
+from cistrack.plugin.registry import default_registry
+
+
+def _filter(name: str, **params):
+    return default_registry().create("filter", name, **params)
+
+
+@pytest.mark.parametrize("factor", [1e9, 101.0, 0.0])
+def test_a_reacquisition_factor_beyond_its_range_is_refused(factor):
+    with pytest.raises(ParameterError, match="'reacquire_factor'"):
+        _filter("pgm", reacquire_factor=factor)
+
+
+def test_the_reacquisition_draws_count_in_the_memory_a_pgm_needs():
+    plain = _filter("pgm", n_particles=10000).memory_need().bytes
+    assert _filter("pgm", n_particles=10000, reacquire_factor=100.0).memory_need().bytes == pytest.approx(25 * plain)
+
+
+@pytest.mark.parametrize("alpha", [1e-9, 1e200])
+def test_a_ukf_alpha_whose_weights_cannot_be_computed_is_refused(alpha):
+    with pytest.raises(ParameterError, match="'alpha'.*0.0001, 10"):
+        _filter("ukf", alpha=alpha)
+
+
+@pytest.mark.parametrize("alpha", [1e-4, 10.0])
+def test_the_ukf_alpha_bounds_themselves_are_allowed(alpha):
+    assert _filter("ukf", alpha=alpha).alpha == alpha
