@@ -30,6 +30,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from cistrack.errors import CistrackError
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
@@ -37,7 +38,7 @@ from cistrack.results.output_paths import clear_earlier_results
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
 from cistrack.results.step_table import is_table_step, row_of
 
-__all__ = ["ResultsWriter", "read_steps", "read_manifest", "results_line", "write_json_atomic", "versions"]
+__all__ = ["ResultsWriter", "read_steps", "steps_readable", "read_manifest", "results_line", "write_json_atomic", "versions"]
 
 MANIFEST = "manifest.json"
 STEPS = "steps.parquet"
@@ -202,6 +203,16 @@ class ResultsWriter:
             raise OSError(f"{self.directory}: " + "; ".join(problems))
 
 
+def steps_readable(directory: str | Path) -> bool:
+    """Whether the run in ``directory`` has a merged step table whose Parquet footer can be read (a
+    truncated or overwritten file cannot): a cheap check, without reading the table."""
+    try:
+        pq.read_metadata(Path(directory) / STEPS)
+    except (pa.ArrowException, OSError):
+        return False
+    return True
+
+
 def read_manifest(directory: str | Path) -> dict:
     """The manifest of a run directory (a JSON object); ValueError naming the file when it holds
     something else (a list, a number)."""
@@ -213,10 +224,16 @@ def read_manifest(directory: str | Path) -> dict:
 
 
 def read_steps(directory: str | Path) -> pa.Table:
-    """The per-step table of a run: steps.parquet, or the parts a killed run left behind."""
+    """The per-step table of a run: steps.parquet, or the parts a killed run left behind.
+    :class:`~cistrack.errors.CistrackError` naming the file when steps.parquet is not a Parquet table
+    (truncated, or written over by something else)."""
     d = Path(directory)
     if (d / STEPS).exists():
-        return pq.read_table(d / STEPS)
+        try:
+            return pq.read_table(d / STEPS)
+        except (pa.ArrowException, OSError) as exc:
+            raise CistrackError(f"{d / STEPS}: not a readable step table ({exc}); run the scenario again into "
+                                f"{d} (a study reruns it)") from None
     table = read_parts(d / PARTS)
     if table is None:
         raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")

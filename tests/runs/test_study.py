@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from cistrack.errors import CistrackError
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.studies.study import plan_runs, run_study
 from cistrack.studies.report import report_study
@@ -204,3 +205,17 @@ def test_report_names_the_runs_that_did_not_finish(tiny_study, tmp_path):
     rep = report_study(tiny_study, out_dir=out, n_seeds=2)
     assert rep["missing"] > 0
     assert "not finished:" in rep["text"] and "seed2" in rep["text"]
+
+
+def test_a_run_whose_step_table_was_overwritten_is_reported_missing_and_run_again(tiny_study, tmp_path):
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=2)
+    broken = sorted((out / "runs").iterdir())[0]
+    (broken / "steps.parquet").write_text("not parquet")
+    with pytest.raises(CistrackError, match="steps.parquet: not a readable step table"):
+        read_steps(broken)
+    rep = report_study(tiny_study, out_dir=out, n_seeds=2)
+    assert rep["missing"] == 1 and broken.name in rep["text"]
+    res = run_study(tiny_study, out_dir=out, workers=1, n_seeds=2)
+    assert (res["completed"], res["failed"]) == (1, 0)
+    assert read_steps(broken).num_rows > 1
