@@ -22,7 +22,7 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir", "check_study_dir", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
+__all__ = ["check_output_dir", "check_study_dir", "recorded_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
            "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "PART_FOLDERS"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
@@ -141,11 +141,9 @@ def _create_writable(d: Path, where: str) -> Path:
     return d
 
 
-def _recorded_study(record: Path) -> tuple[str | None, str | None]:
+def recorded_study(record: Path) -> tuple[str | None, str | None]:
     """(name, source) of the study a ``study.json`` records; raises OSError or ValueError when it
     cannot be read."""
-    import json
-
     data = json.loads(record.read_text())
     if not isinstance(data, dict):
         raise ValueError("not a JSON object")
@@ -176,7 +174,7 @@ def check_study_dir(directory: str | Path, name: str, source: str, where: str) -
                                   f"study; {allowed}")
             if record.is_file():
                 try:
-                    rec_name, rec_source = _recorded_study(record)
+                    rec_name, rec_source = recorded_study(record)
                 except (OSError, ValueError) as exc:
                     raise ConfigError(f"{where} {d}: its {STUDY_RECORD} cannot be read ({exc}); {allowed} "
                                       f"(or delete that {STUDY_RECORD} if the directory is this study's)") from None

@@ -170,9 +170,30 @@ def _plan(path_or_name, out_dir, settings, first_seed, n_seeds):
     """The study's data, run specs and output directory; a directory that 'study run' wrote is
     reported with the seeds it recorded, not the study file's full list."""
     data, specs, out = plan_runs(path_or_name, out_dir, settings, first_seed, n_seeds)
-    if first_seed is None and n_seeds is None and not Path(path_or_name).is_dir() and (out / "study.json").is_file():
-        data, specs, out = plan_runs(out, out, settings)
+    if not Path(path_or_name).is_dir() and (out / "study.json").is_file():
+        _check_same_study(out, data, path_or_name, "--out" if out_dir is not None else "the study directory")
+        if first_seed is None and n_seeds is None:
+            data, specs, out = plan_runs(out, out, settings)
     return data, specs, out
+
+
+def _check_same_study(out: Path, data: dict, path_or_name, where: str) -> None:
+    """ConfigError when the study directory ``out`` holds another study than ``path_or_name``
+    (its ``study.json`` names another): 'study run' refuses to write there, and a report of it
+    under this study's name would describe runs of the other."""
+    from cistrack.results.output_paths import recorded_study
+    from cistrack.studies.study_file import study_source
+
+    source = study_source(path_or_name)
+    name = str(data.get("name") or Path(source).stem)
+    try:
+        rec_name, rec_source = recorded_study(out / "study.json")
+    except (OSError, ValueError):
+        return  # unreadable: the runs are checked one by one
+    if (rec_name != name) if rec_name is not None else (rec_source != source):
+        other = rec_name if rec_name is not None else rec_source
+        raise ConfigError(f"{where} {out}: holds another study ('{other}'), not '{name}': report it as "
+                          f"'cistrack study report {out}' (the directory alone), or give this study's own directory")
 
 
 def _finished_runs(specs) -> tuple[dict, dict, list[str]]:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from cistrack.errors import CistrackError
+from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.studies.study import plan_runs, run_study
 from cistrack.studies.report import report_study
@@ -219,3 +219,10 @@ def test_a_run_whose_step_table_was_overwritten_is_reported_missing_and_run_agai
     res = run_study(tiny_study, out_dir=out, workers=1, n_seeds=2)
     assert (res["completed"], res["failed"]) == (1, 0)
     assert read_steps(broken).num_rows > 1
+
+
+def test_a_report_of_one_study_on_another_studys_directory_is_refused(tiny_study, tmp_path):
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=1)
+    with pytest.raises(ConfigError, match="holds another study \\('tiny'\\), not 'quick-comparison'"):
+        report_study("quick-comparison", out_dir=out)
