@@ -386,7 +386,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:
         why = str(exc) or "SIGINT"
-        _eprint(f"cistrack: interrupted ({why}); completed steps are kept and the manifest says 'interrupted'")
+        _eprint(f"cistrack: interrupted ({why}){_INTERRUPTED.get(getattr(args, 'cmd', ''), '')}")
         sig = getattr(signal, why, None) if why.startswith("SIG") else None
         return 128 + int(sig) if sig is not None else 130
     except BrokenPipeError:  # the reader closed our stdout (e.g. `cistrack scenarios | head`)
@@ -399,6 +399,15 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+_INTERRUPTED = {
+    "run": "; completed steps are kept and the manifest says 'interrupted'",
+    "fit": ("; a fit is complete only once its fit.json is written (its filter run may have finished): "
+            "run 'cistrack fit' into the same directory again"),
+    "study": "; finished runs are kept: 'cistrack study run' with the same options runs the rest",
+}
+"""What an interrupted command leaves, by command (nothing said for the others)."""
 
 
 def console_main() -> None:

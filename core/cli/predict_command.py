@@ -93,6 +93,39 @@ def _times(args, orbit) -> np.ndarray:
     return units.seconds_to_tu(first + 60.0 * args.step * np.arange(n))
 
 
+def _until_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:
+    """The prediction ``times`` before the orbit hits a body, and a note saying how many later
+    ones it leaves out (""); ConfigError naming --start when the orbit has hit it before them all."""
+    from cistrack import units
+    from cistrack.errors import ConfigError
+    from cistrack.least_squares.events import times_until_impact
+
+    kept, hit = times_until_impact(orbit.dynamics, orbit.state, orbit.t0, times)
+    if hit is None:
+        return times, ""
+    when = units.format_utc(units.tu_to_utc(orbit.epoch, hit[0]))[:19] + "Z"
+    before = times[times < hit[0]]
+    if before.size == 0:
+        raise ConfigError(f"--start: the orbit hits the {hit[1]} at {when} (see the fit's events), before the first "
+                          "prediction time; give a --start before it")
+    return before, (f"note: the orbit hits the {hit[1]} at {when}; the {times.size - before.size} prediction times "
+                    "after it are left out")
+
+
+LOST_DEG = 10.0
+"""A 3-sigma ellipse longer than this (degrees) says the orbit no longer gives the sky position."""
+
+
+def _lost_note(sky) -> str:
+    """A note on the times whose 3-sigma ellipse is longer than :data:`LOST_DEG` ("" if none)."""
+    major = 3.0 * sky.ellipse()[0] / 3600.0
+    lost = np.flatnonzero(~(major <= LOST_DEG))
+    if lost.size == 0:
+        return ""
+    return (f"note: at {lost.size} of {major.size} times the 3-sigma ellipse is longer than {LOST_DEG:g} degrees "
+            f"(up to {np.nanmax(major):.3g}): the orbit does not give the sky position there")
+
+
 def _check_year(option: str, t) -> None:
     """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need."""
     from cistrack.errors import ConfigError
@@ -159,7 +192,7 @@ def cmd_predict(args) -> int:
     prefix = _prefix(args)
     reg = default_registry()
     orbit = orbit_of_directory(args.run, reg)
-    times = _times(args, orbit)
+    times, impact_note = _until_impact(_times(args, orbit), orbit)
     if not args.quiet:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
@@ -169,5 +202,7 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
+        for line in filter(None, (impact_note, _lost_note(sky))):
+            print(line)
         print(f"wrote {csv_path}\nwrote {png}")
     return 0

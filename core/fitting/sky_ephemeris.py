@@ -256,7 +256,8 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     """The orbit of a ``cistrack fit`` directory (``fit.json``: the least-squares state and its
     covariance as exported, times the noise scale squared when above 1, and the dynamics with the
     area-to-mass ratio it estimated, if it did) or of a ``cistrack run``
-    directory (the filter's estimate at its last step); ConfigError naming the directory otherwise."""
+    directory (the filter's estimate at its last step, when the run finished without diverging:
+    what `cistrack export` exports); ConfigError naming the directory otherwise."""
     from cistrack.fitting.fit_export import _result as fit_result
     from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
@@ -286,6 +287,11 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
 
 def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:
     from cistrack.results.estimates import KM_SCALE, read_estimates
+    from cistrack.runs.export import export_refusal
+
+    why = export_refusal(d)  # the rule 'cistrack export' follows: no orbit from a run that did not finish
+    if why is not None:
+        raise ConfigError(f"{d}: no orbit to predict from: {why}")
 
     try:
         est = read_estimates(d)

@@ -64,3 +64,59 @@ def test_predict_takes_a_runs_last_filter_estimate(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "filter estimate at step" in captured.err
     assert len([line for line in captured.out.splitlines() if line.startswith("2026-03-07T")]) == 4
+
+
+@pytest.fixture(scope="module")
+def fitted(tmp_path_factory):
+    """The shipped real-data example fitted (its orbit hits the Moon on 2026-03-17 at 00:56 UTC)."""
+    from cistrack.fitting.from_observations import fit_files
+    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
+
+    obs = builtin_scenario_path("real-data").parent / "real_data" / "observations.psv"
+    out = tmp_path_factory.mktemp("fit") / "fit"
+    [one] = fit_files([obs], out=out)
+    assert one.ok
+    return out
+
+
+def test_a_window_across_the_impact_is_predicted_up_to_it_and_says_so(fitted, tmp_path, capsys):
+    assert main(["predict", str(fitted), "--site", "809", "--start", "2026-03-16T20:00:00Z", "--stop",
+                 "2026-03-17T06:00:00Z", "--step", "60", "--out", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr().out
+    assert "the orbit hits the Moon at 2026-03-17T00:56" in out and "the 6 prediction times after it" in out
+    rows = list(csv.DictReader(open(tmp_path / "p.csv")))
+    assert len(rows) == 5
+
+
+def test_a_window_after_the_impact_is_refused_naming_start(fitted, tmp_path, capsys):
+    assert main(["predict", str(fitted), "--site", "809", "--start", "2026-03-18T00:00:00Z",
+                 "--out", str(tmp_path / "p")]) == 2
+    assert "--start: the orbit hits the Moon at 2026-03-17T00:56" in capsys.readouterr().err
+
+
+def test_times_far_from_the_fit_say_the_orbit_no_longer_gives_the_sky_position(fitted, tmp_path, capsys):
+    assert main(["predict", str(fitted), "--site", "809", "--start", "1990-01-01T00:00:00Z",
+                 "--out", str(tmp_path / "p")]) == 0
+    assert "3-sigma ellipse is longer than 10 degrees" in capsys.readouterr().out
+
+
+def test_a_fit_that_did_not_complete_gives_no_orbit_to_predict_from(fitted, tmp_path, capsys):
+    import shutil
+
+    shutil.copytree(fitted, tmp_path / "fit")
+    (tmp_path / "fit" / "fit.json").unlink()  # as a fit interrupted after its filter run leaves it
+    assert main(["predict", str(tmp_path / "fit"), "--site", "568"]) == 2
+    err = capsys.readouterr().err
+    assert "no orbit to predict from" in err and "fit did not complete" in err
+
+
+def test_an_interrupted_run_gives_no_orbit_to_predict_from(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "run"
+    assert main(["run", "quick", "--set", "duration_days=1.2", "--out", str(out), "--quiet"]) == 0
+    man = json.loads((out / "manifest.json").read_text())
+    (out / "manifest.json").write_text(json.dumps({**man, "status": "interrupted"}))
+    capsys.readouterr()
+    assert main(["predict", str(out), "--site", "568"]) == 2
+    assert "no orbit to predict from: it was interrupted" in capsys.readouterr().err
