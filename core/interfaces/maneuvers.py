@@ -70,6 +70,11 @@ class ManeuverPlan(Component):
         (radial/in-track/cross-track, velocity-normal-binormal) resolves them along the trajectory
         flown with the earlier impulses applied."""
 
+    def burns_outside(self, t0: float, t_end: float) -> list[str]:
+        """The burns the plan gives outside ``(t0, t_end]`` TU (so not flown), one short
+        description each ('burn 2 at 5 days'); the run's log names them. Default: none known."""
+        return []
+
 
 @dataclass
 class Detection:

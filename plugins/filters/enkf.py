@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative
+from cistrack.interfaces.component import check_int
 from cistrack.errors import FilterError
 from cistrack import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
@@ -25,7 +25,7 @@ from .particle_declarations import ParticleFilterDeclarations
 from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
 from .measured_components import MeasuredComponents, check_epoch
-from .process_noise import velocity_random_walk_covariance
+from .process_noise import check_velocity_noise, velocity_random_walk_covariance
 
 __all__ = ["EnKFFilter"]
 
@@ -58,8 +58,7 @@ class EnKFFilter(ParticleFilterDeclarations, FilterBase):
             n_particles = n_members
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
         self.n_members = None  # the deprecated alias is folded into n_particles
-        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
-            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,

@@ -3,9 +3,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from cistrack.interfaces.component import check_range
 from cistrack.units import DAY_S, TU_S, VU_KMS
 
-__all__ = ["velocity_random_walk_covariance"]
+__all__ = ["velocity_random_walk_covariance", "check_velocity_noise", "MAX_VELOCITY_NOISE_KMS_PER_SQRT_DAY"]
+
+MAX_VELOCITY_NOISE_KMS_PER_SQRT_DAY = 1.0
+"""The largest velocity random walk a filter takes (km/s after one day): a cislunar orbit's whole
+speed; more is a unit mistake (a day's noise larger than the orbit itself)."""
+
+
+def check_velocity_noise(owner, value) -> float:
+    """``velocity_noise_kms_per_sqrt_day`` as float; ParameterError unless in [0, 1] km/s/sqrt(day)."""
+    return check_range(owner, "velocity_noise_kms_per_sqrt_day", value, 0.0, MAX_VELOCITY_NOISE_KMS_PER_SQRT_DAY)
 
 
 def velocity_random_walk_covariance(sigma_kms_per_sqrt_day: float, dt_tu: float, dim: int = 6) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.model.belief import Belief, ParticleCloud
-from cistrack.interfaces.component import check_int, check_nonnegative, check_range
+from cistrack.interfaces.component import check_int, check_range
 from cistrack.errors import FilterError
 from cistrack import hookimpl
 from cistrack.interfaces import Dynamics, Sensor
@@ -24,6 +24,7 @@ from .gaussian_belief import single_gaussian
 from .initial_cloud import check_cloud, initial_particles
 from .measured_components import MeasuredComponents, check_epoch
 from .resampling import effective_sample_size, normalize_log_weights, systematic_resample
+from .process_noise import check_velocity_noise
 
 __all__ = ["SIRFilter"]
 
@@ -50,8 +51,7 @@ class SIRFilter(ParticleFilterDeclarations, FilterBase):
                  velocity_noise_kms_per_sqrt_day: float = 0.0):
         self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
         self.resample_threshold = check_range(self, "resample_threshold", resample_threshold, 0.0, 1.0)
-        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
-            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
         self._x: np.ndarray | None = None
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,

@@ -32,7 +32,7 @@ from .gaussian_belief import gaussian_belief
 from .measured_components import MeasuredComponents, check_epoch
 from .initial_cloud import check_cloud
 from .posterior_linearization import MAX_UPDATE_ITERATIONS
-from .process_noise import velocity_random_walk_covariance
+from .process_noise import check_velocity_noise, velocity_random_walk_covariance
 
 __all__ = ["UKFFilter"]
 
@@ -72,8 +72,7 @@ class UKFFilter(FilterBase):
         self.beta = check_nonnegative(self, "beta", beta)
         self.kappa = check_range(self, "kappa", kappa, -6.0, 1e6, lo_open=True)
         self.n_samples = check_int(self, "n_samples", n_samples, minimum=1)
-        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
-            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
         self.update_iterations = check_int(self, "update_iterations", update_iterations, minimum=1,
                                            maximum=MAX_UPDATE_ITERATIONS)
         self.update_tolerance = check_positive(self, "update_tolerance", update_tolerance)

@@ -24,7 +24,7 @@ import numpy as np
 from cistrack import units
 from cistrack.api import hookimpl
 from cistrack.errors import ConfigError, ParameterError
-from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics
 
@@ -33,6 +33,10 @@ from .local_frames import DIRECTIONS, FRAMES, body_position, direction_vector, f
 __all__ = ["ImpulsePlan", "BurnsPlan", "StationKeepingPlan", "BurnSpec", "resolve_burns"]
 
 _BURN_KEYS = ("t_days", "delta_v_ms", "direction", "frame", "vector_ms", "label")
+
+MAX_DELTA_V_MS = 10_000.0
+"""The largest burn a plan takes, m/s: more than any cislunar transfer needs (a larger one is a unit
+mistake, km/s or cm/s for m/s)."""
 
 
 class BurnSpec:
@@ -77,7 +81,27 @@ def _check_vector(owner, value: Any) -> list[float]:
             for v in value):
         owner._fail("vector_ms", value, "must be 3 finite numbers (m/s, the burn's components in its frame) "
                                         "or an empty list (use delta_v_ms and direction)")
+    if value and float(np.linalg.norm(np.asarray(value, dtype=float))) > MAX_DELTA_V_MS:
+        owner._fail("vector_ms", value, f"the burn's size must be at most {MAX_DELTA_V_MS:g} m/s")
     return [float(v) for v in value]
+
+
+def _check_delta_v(owner, value: Any) -> float:
+    return check_range(owner, "delta_v_ms", value, 0.0, MAX_DELTA_V_MS)
+
+
+def _check_one_burn_form(owner, vector_ms: list[float], delta_v_ms: float, direction: str) -> None:
+    """vector_ms replaces delta_v_ms and direction: giving both forms (other than their defaults)
+    is refused, since one would be dropped."""
+    if vector_ms and (delta_v_ms != 1.0 or direction != "in-track"):
+        owner._fail("vector_ms", vector_ms, f"gives the burn's components, and delta_v_ms = {delta_v_ms:g} with "
+                                            f"direction = {direction!r} give it too; give one form (vector_ms, or "
+                                            "delta_v_ms and direction)")
+
+
+def _outside(specs: list[BurnSpec], t0: float, t_end: float) -> list[str]:
+    """The burns of ``specs`` outside ``(t0, t_end]`` TU, each as 'LABEL at D days'."""
+    return [f"{b.label} at {float(units.tu_to_days(b.t)):g} days" for b in specs if not t0 < b.t <= t_end]
 
 
 def _check_burn_frame(owner, frame: Any, vector_ms: list[float], direction: Any) -> None:
@@ -102,7 +126,7 @@ class ImpulsePlan(ManeuverPlan):
     t_days : float
         Time of the burn, days since the scenario epoch (> 0; a burn after the run's end is not flown).
     delta_v_ms : float
-        Size of the burn, m/s (>= 0).
+        Size of the burn, m/s (0 to 10,000).
     direction : str
         Direction of the burn in its frame: one of in-track, anti-in-track, radial, anti-radial,
         cross-track, anti-cross-track.
@@ -112,7 +136,8 @@ class ImpulsePlan(ManeuverPlan):
         synodic velocity) or synodic (needs vector_ms).
     vector_ms : list of float
         The burn as 3 components in m/s along the frame's axes (R, T, N; V, N, B; or x, y, z),
-        overriding delta_v_ms and direction; empty (the default) to use them.
+        instead of delta_v_ms and direction (giving both forms is refused); empty (the default)
+        to use them.
     label : str
         A name for reports (default: burn).
     """
@@ -120,9 +145,10 @@ class ImpulsePlan(ManeuverPlan):
     def __init__(self, t_days: float = 1.0, delta_v_ms: float = 1.0, direction: str = "in-track",
                  frame: str = "rtn-moon", vector_ms: list[float] | None = None, label: str = "") -> None:
         self.t_days = check_positive(self, "t_days", t_days)
-        self.delta_v_ms = check_nonnegative(self, "delta_v_ms", delta_v_ms)
+        self.delta_v_ms = _check_delta_v(self, delta_v_ms)
         self.vector_ms = _check_vector(self, vector_ms)
         _check_burn_frame(self, frame, self.vector_ms, direction)
+        _check_one_burn_form(self, self.vector_ms, self.delta_v_ms, direction)
         self.direction, self.frame = direction, frame
         if not isinstance(label, str):
             self._fail("label", label, "must be a string")
@@ -137,6 +163,9 @@ class ImpulsePlan(ManeuverPlan):
 
     def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
         return resolve_burns(dynamics, x0, t0, t_end, [self.burn()])
+
+    def burns_outside(self, t0: float, t_end: float) -> list[str]:
+        return _outside([self.burn()], t0, t_end)
 
 
 class BurnsPlan(ManeuverPlan):
@@ -168,9 +197,14 @@ class BurnsPlan(ManeuverPlan):
         except ParameterError as exc:
             raise ParameterError(f"{self._label()}: parameter '{where}': {str(exc).split(': ', 1)[-1]}") from None
 
+    def _specs(self) -> list[BurnSpec]:
+        return [p.burn(f"burn {i + 1}") for i, p in enumerate(self._plans)]
+
     def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
-        specs = [p.burn(f"burn {i + 1}") for i, p in enumerate(self._plans)]
-        return resolve_burns(dynamics, x0, t0, t_end, specs)
+        return resolve_burns(dynamics, x0, t0, t_end, self._specs())
+
+    def burns_outside(self, t0: float, t_end: float) -> list[str]:
+        return _outside(self._specs(), t0, t_end)
 
 
 class StationKeepingPlan(ManeuverPlan):
@@ -182,7 +216,7 @@ class StationKeepingPlan(ManeuverPlan):
     Parameters
     ----------
     delta_v_ms : float
-        Size of each burn, m/s (>= 0).
+        Size of each burn, m/s (0 to 10,000).
     first_after_days : float
         The first burn is at the first apolune after this time, days since the scenario epoch (>= 0).
     n_burns : int
@@ -201,7 +235,7 @@ class StationKeepingPlan(ManeuverPlan):
 
     def __init__(self, delta_v_ms: float = 0.1, first_after_days: float = 0.0, n_burns: int = 2,
                  direction: str = "in-track", frame: str = "rtn-moon") -> None:
-        self.delta_v_ms = check_nonnegative(self, "delta_v_ms", delta_v_ms)
+        self.delta_v_ms = _check_delta_v(self, delta_v_ms)
         self.first_after_days = check_nonnegative(self, "first_after_days", first_after_days)
         self.n_burns = check_int(self, "n_burns", n_burns, minimum=1, maximum=10_000)
         check_choice(self, "frame", frame, [f for f in FRAMES if f != "synodic"])

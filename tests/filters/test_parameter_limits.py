@@ -31,3 +31,9 @@ def test_a_ukf_alpha_whose_weights_cannot_be_computed_is_refused(alpha):
 @pytest.mark.parametrize("alpha", [1e-4, 10.0])
 def test_the_ukf_alpha_bounds_themselves_are_allowed(alpha):
     assert _filter("ukf", alpha=alpha).alpha == alpha
+
+
+@pytest.mark.parametrize("name", ["pgm", "ukf", "enkf", "sir"])
+def test_a_velocity_noise_larger_than_an_orbits_speed_is_refused(name):
+    with pytest.raises(ParameterError, match="'velocity_noise_kms_per_sqrt_day'.*\\[0.0, 1.0\\]"):
+        _filter(name, velocity_noise_kms_per_sqrt_day=1e9)

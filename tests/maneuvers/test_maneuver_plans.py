@@ -122,6 +122,14 @@ def test_fly_plan_wraps_the_truth_and_says_one_line_per_burn(cr3bp):
     assert describe_impulse(Impulse(1.0, np.zeros(3)), 1).startswith("truth burn 1")
 
 
+def test_fly_plan_names_each_burn_it_leaves_out_after_the_run(cr3bp):
+    lines = []
+    plan = BurnsPlan(burns=[{"t_days": 50.0, "delta_v_ms": 0.5}, {"t_days": 1.0, "delta_v_ms": 0.5}])
+    dyn, imps = fly_plan(plan, cr3bp, NRHO, 0.0, SPAN, lines.append, where="[truth.maneuvers]")
+    assert len(imps) == 1 and len(lines) == 2
+    assert "burn 1: 0.5 m/s in-track (rtn-moon) at 50 days lies outside the run" in lines[1] and "not flown" in lines[1]
+
+
 def test_fly_plan_refuses_a_plan_that_returns_burns_outside_the_span(cr3bp):
     class Bad(ImpulsePlan):
         def impulses(self, dynamics, x0, t0, t_end):
@@ -139,6 +147,10 @@ def test_fly_plan_refuses_a_plan_that_returns_burns_outside_the_span(cr3bp):
     (ImpulsePlan, {"frame": "synodic"}, "frame"),
     (ImpulsePlan, {"vector_ms": [1.0, 2.0]}, "vector_ms"),
     (ImpulsePlan, {"vector_ms": [1.0, 2.0, float("nan")]}, "vector_ms"),
+    (ImpulsePlan, {"delta_v_ms": 1e9}, "delta_v_ms"),
+    (ImpulsePlan, {"vector_ms": [1e5, 0.0, 0.0]}, "vector_ms"),
+    (ImpulsePlan, {"vector_ms": [0.1, 0.0, 0.0], "delta_v_ms": 5.0, "direction": "radial"}, "vector_ms"),
+    (StationKeepingPlan, {"delta_v_ms": 2e4}, "delta_v_ms"),
     (StationKeepingPlan, {"n_burns": 0}, "n_burns"),
     (StationKeepingPlan, {"frame": "synodic"}, "frame"),
     (StationKeepingPlan, {"first_after_days": -1.0}, "first_after_days"),

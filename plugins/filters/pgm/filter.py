@@ -48,6 +48,7 @@ from .measurement_sharpness import likelihood_ess_fraction, measurement_quadrati
 from .reacquisition_particles import draw_mixture, measurement_spread_sigma, particles_to_draw
 from .step_choice import check_step, resolve_step
 from .state_bounds import StateBounds, earth_position, sample_inside
+from ..process_noise import check_velocity_noise
 
 __all__ = ["PGMFilter", "resolve_clusterer"]
 
@@ -213,8 +214,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self.min_cluster_size = None if min_cluster_size is None else check_int(
             self, "min_cluster_size", min_cluster_size, minimum=1)
         self._check_component_count()
-        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
-            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
         self.min_range_km = None if min_range_km is None else check_nonnegative(self, "min_range_km", min_range_km)
         self.max_range_km = None if max_range_km is None else check_positive(self, "max_range_km", max_range_km)
         self.max_speed_kms = None if max_speed_kms is None else check_positive(self, "max_speed_kms", max_speed_kms)

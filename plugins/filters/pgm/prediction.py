@@ -13,11 +13,10 @@ import numpy as np
 
 from cistrack.errors import FilterError
 from cistrack.interfaces import Dynamics
-from cistrack.interfaces.component import check_nonnegative
 from cistrack.interfaces.pgm_steps import ParticlePrediction
 
 from ..ensemble_propagation import propagate_ensemble, propagate_particles
-from ..process_noise import velocity_random_walk_covariance
+from ..process_noise import check_velocity_noise, velocity_random_walk_covariance
 
 __all__ = ["PROPAGATION_CHUNK", "PropagateParticles", "propagate_in_place"]
 
@@ -37,8 +36,7 @@ class PropagateParticles(ParticlePrediction):
     overwrites = True  # predict(..., overwrite=True) may write the new states over its input
 
     def __init__(self, velocity_noise_kms_per_sqrt_day: float = 0.0):
-        self.velocity_noise_kms_per_sqrt_day = check_nonnegative(
-            self, "velocity_noise_kms_per_sqrt_day", velocity_noise_kms_per_sqrt_day)
+        self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
 
     def predict(self, dynamics: Dynamics, states: np.ndarray, t0: float, t1: float, rng: np.random.Generator,
                 steps: np.ndarray | None, who: str, overwrite: bool = False
