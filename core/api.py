@@ -233,16 +233,21 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
     if not isinstance(scenario, (str, os.PathLike, Scenario)):
         raise TypeError(f"scenario={scenario!r}: give a built-in scenario name, a path to a TOML file "
                         "(str or pathlib.Path) or a Scenario from load_scenario")
+    _checked_arguments(registry=registry)
     reg = registry or default_registry()
     scen = scenario if isinstance(scenario, Scenario) else _load(scenario, reg)
     return apply_settings(scen, _setting_items(settings), reg)
 
 
 def _checked_arguments(**given: Any) -> None:
-    """TypeError naming the argument when ``out``, ``log``, ``directory`` or ``study`` has a type the
-    API does not take (before anything is read or run)."""
+    """TypeError naming the argument when ``out``, ``log``, ``registry``, ``directory`` or ``study``
+    has a type the API does not take (before anything is read or run)."""
     for name, value in given.items():
-        if name == "log":
+        if name == "registry":
+            if value is not None and not isinstance(value, Registry):
+                raise TypeError(f"registry={value!r}: give a cistrack Registry (cistrack.api.default_registry() or "
+                                "load_registry()), or None for the default one")
+        elif name == "log":
             if value is not None and not callable(value):
                 raise TypeError(f"log={value!r}: give a callable that takes one string, or None")
         elif not (isinstance(value, (str, os.PathLike)) or (value is None and name == "out")):
@@ -286,7 +291,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.runs.observers import checked_observers
 
     observers = checked_observers(observers, "observers")
-    _checked_arguments(out=out, log=log)
+    _checked_arguments(out=out, log=log, registry=registry)
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
@@ -323,7 +328,7 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     """
     from cistrack.fitting.from_observations import fit_files
 
-    _checked_arguments(out=out, log=log)
+    _checked_arguments(out=out, log=log, registry=registry)
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")

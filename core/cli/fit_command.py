@@ -60,7 +60,7 @@ def cmd_fit(args) -> int:
                 print(f"  weights: {note}")
             for line in summary_lines(one):
                 print(line)
-            if not one.undetermined:
+            if one.ok:
                 print(f"  next: cistrack export {one.directory} --format oem [--predict DAYS]")
     else:
         for one in results:

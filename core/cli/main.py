@@ -158,6 +158,8 @@ def cmd_plugins(args) -> int:
     from cistrack.plugin.registry import default_registry
 
     reg = default_registry()
+    if args.param and not args.check:
+        raise ConfigError("--param: sets a parameter for --check NAME only (to see the parameters: cistrack plugins NAME)")
     if args.check:
         from cistrack.testing import check_registered
         params = {}
@@ -169,6 +171,7 @@ def cmd_plugins(args) -> int:
                 params[key.strip()] = tomllib.loads(f"v = {value}")["v"]
             except tomllib.TOMLDecodeError:
                 params[key.strip()] = value  # a bare word: take it as a string
+        _check_param_names(reg, args.check, args.kind, params)
         results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None)
         failed = 0
         for r in results:
@@ -192,13 +195,29 @@ def cmd_plugins(args) -> int:
     return 0
 
 
+def _check_param_names(reg, name: str, kind: str | None, params: dict) -> None:
+    """ConfigError naming a ``--param`` key that the component ``name`` does not take, with the ones it takes."""
+    from cistrack.interfaces import KINDS
+    from cistrack.interfaces.component import param_specs
+
+    found = [reg.get(k, name) for k in ([kind] if kind else KINDS) if (k, name) in reg]
+    takes = set().union(*(param_specs(e.factory) for e in found if isinstance(e.factory, type))) if found else set()
+    unknown = sorted(set(params) - takes)
+    if found and unknown:
+        raise ConfigError(f"--param {unknown[0]}: {name!r} takes no parameter {unknown[0]!r}; it takes "
+                          f"{', '.join(sorted(takes)) or 'none'}")
+
+
 def _describe(reg, name: str, kinds: list[str]) -> int:
     """``cistrack plugins NAME``: every parameter of each component called NAME."""
     import difflib
 
+    from cistrack.interfaces import KINDS
     from cistrack.plugin.param_docs import describe_component
 
     found = [reg.get(kind, name) for kind in kinds if (kind, name) in reg]
+    if not found and name in KINDS:
+        raise ConfigError(f"{name!r} is a kind of component, not a component: cistrack plugins --kind {name} lists them")
     if not found:
         every = sorted({n for kind in kinds for n in reg.names(kind)})
         msg = f"no component named {name!r}"

@@ -267,13 +267,13 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     if not d.is_dir():
         raise ConfigError(f"{d}: no such directory; give the --out directory of 'cistrack fit' or 'cistrack run'")
     reg = registry or default_registry()
+    rec = read_fit_record(d) if is_fit_directory(d) else None
+    why = fit_refusal(rec) if rec is not None else None
+    if why is not None:  # said before anything else: a failed fit may have no scenario.toml
+        raise ConfigError(f"{d}: no orbit to predict from: {why}")
     scen = scenario_of(d, reg)
     dyn = scen.build("dynamics", reg)
-    if is_fit_directory(d):
-        rec = read_fit_record(d)
-        why = fit_refusal(rec)
-        if why is not None:
-            raise ConfigError(f"{d}: no orbit to predict from: {why}")
+    if rec is not None:
         cov = np.asarray(rec["covariance"], dtype=float) * covariance_scale(rec)
         amr = rec.get("area_to_mass")
         fit = None

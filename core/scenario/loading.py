@@ -235,7 +235,7 @@ def _top_level(data: dict, source: str) -> tuple[dict[str, Any], Any]:
     check_seed(seed, f"{source}: top level: key 'seed'")
     duration = float(typed(data.get("duration_days", 7.0), (int, float), source, "top level", "duration_days"))
     if not np.isfinite(duration) or duration <= 0:
-        raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be > 0")
+        raise ConfigError(f"{source}: top level: key 'duration_days' = {duration} must be a finite number > 0")
     return dict(name=name, description=description, epoch=epoch, seed=seed, duration_days=duration), epoch_text
 
 

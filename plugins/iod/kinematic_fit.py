@@ -99,7 +99,9 @@ def _measured_ranges(measurements: MeasurementSet, idx: np.ndarray, who: str) ->
                        f"the sensor measure range for IOD or use 'uniform-range'")
     ranges = measurements.values[idx][:, measurements.names.index("range")]
     if np.any(ranges <= 0):
-        raise IODError(f"{who}: measured ranges must be > 0")
+        raise IODError(f"{who}: measured ranges must be > 0, but {int(np.sum(ranges <= 0))} of the {ranges.size} ranges "
+                       "of the first pass are not (a range noise so large that ranges fall below zero: lower the "
+                       "sensor's range_alpha, e.g. to 0.2 or less)")
     return ranges
 
 

@@ -63,6 +63,14 @@ tracklets of one site four days apart (2025-010D on 2025-12-21 and 25, 7 and 5 e
 the orbit weakly determined, and Levenberg-Marquardt needed 84 iterations from the best grid state."""
 
 
+def _tried_text(records: list[dict]) -> str:
+    """The seeds tried, one short phrase each ('tracklet 1 scored on 2, 3: 8000 ranges, 3 fits'),
+    at most four, then how many more."""
+    parts = [f"tracklet {r['seed'] + 1} scored on {', '.join(str(j + 1) for j in r['scored_on']) or 'none'}: "
+             f"{r['grid_states']} ranges, {r['fits_tried']} fits" for r in records[:4]]
+    return "; ".join(parts) + (f"; and {len(records) - 4} more" if len(records) > 4 else "")
+
+
 class TrackletRangingIOD(IODMethod):
     """Systematic ranging over a tracklet's admissible region (see the module docstring).
 
@@ -104,6 +112,10 @@ class TrackletRangingIOD(IODMethod):
         self.n_particles = check_iod_particles(self, n_particles)
         if not isinstance(dynamics, (str, Dynamics)):
             self._fail("dynamics", dynamics, "must be a registered dynamics name or a Dynamics")
+        if isinstance(dynamics, str):
+            from cistrack.api import default_registry
+
+            check_choice(self, "dynamics", dynamics, default_registry().names("dynamics"))
         self.dynamics = dynamics
         self.arc = check_choice(self, "arc", arc, ARCS)
         self.gap_hours = check_positive(self, "gap_hours", gap_hours)
@@ -210,8 +222,8 @@ class TrackletRangingIOD(IODMethod):
     def _ranged(self, dyn, sensor, ms, atts, order, rng, who) -> ParticleCloud:
         k, fit, rows, rec, records = self._first_seed(dyn, sensor, ms, atts, order)
         if fit is None:
-            raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} "
-                           f"tried: {records}); check the observations or widen range_min_km/range_max_km")
+            raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} tried: "
+                           f"{_tried_text(records)}); check the observations or widen range_min_km/range_max_km")
         patient = (f"; its least squares needed more than {_SEED_OPTIONS.max_iterations} iterations (given "
                    f"{_PATIENT_OPTIONS.max_iterations})") if "max_iterations" in rec else ""
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"

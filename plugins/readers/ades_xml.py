@@ -7,6 +7,7 @@ entities are fetched) keeping the line of every element, so errors name the line
 """
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from xml.parsers import expat
 
@@ -39,6 +40,7 @@ class _OpticalCollector:
         self.field: str | None = None  # the field element being read, its text pieces and line
         self.buf: list[str] = []
         self.fline = 0
+        self.skipped: dict[str, int] = {}  # other ADES observation elements (<radar>, ...) by name
 
     def start(self, name, attrs) -> None:
         line = self.parser.CurrentLineNumber
@@ -50,6 +52,8 @@ class _OpticalCollector:
             if self.rec is not None:
                 raise FieldError(self.path, line, "<optical>", "an <optical> element inside another")
             self.rec, self.line = {}, line
+        elif name in OTHER_OBSERVATIONS and self.rec is None:
+            self.skipped[name] = self.skipped.get(name, 0) + 1
         elif self.rec is not None:
             if self.field is not None:
                 raise FieldError(self.path, line, self.field, f"contains an element <{name[:40]}>; ADES fields are text")
@@ -74,8 +78,13 @@ class _OpticalCollector:
                          "DTDs and entity declarations are not allowed")
 
 
-def _records(path, text: str) -> list[tuple[int, dict]]:
-    """(line, {field: (text, line)}) of every <optical> element."""
+OTHER_OBSERVATIONS = ("radar", "offset", "occultation")
+"""ADES observation elements that are not optical astrometry: counted and said, not read."""
+
+
+def _records(path, text: str) -> tuple[list[tuple[int, dict]], dict[str, int]]:
+    """(line, {field: (text, line)}) of every <optical> element, and the count of every other
+    ADES observation element (:data:`OTHER_OBSERVATIONS`) by name."""
     parser = expat.ParserCreate()
     collector = _OpticalCollector(path, parser)
     parser.StartElementHandler = collector.start
@@ -87,7 +96,19 @@ def _records(path, text: str) -> list[tuple[int, dict]]:
         parser.Parse(text, True)
     except expat.ExpatError as exc:
         raise FieldError(path, exc.lineno, "(XML)", f"not well-formed XML: {expat.ErrorString(exc.code)}") from None
-    return collector.out
+    return collector.out, collector.skipped
+
+
+def _say_skipped(path, skipped: dict[str, int], any_optical: bool) -> None:
+    """Refuse a file of other observations only; warn (logger ``cistrack.readers``) of those left out."""
+    if not skipped:
+        return
+    what = ", ".join(f"{n} <{name}>" for name, n in sorted(skipped.items()))
+    if not any_optical:
+        raise FieldError(path, 1, "(observations)", f"the file holds {what} records and no <optical> one: cistrack "
+                                                    "reads optical astrometry (RA/Dec) only")
+    logging.getLogger("cistrack.readers").warning(f"{path}: {what} records are not read (cistrack reads optical "
+                                                  "astrometry, <optical>, only)")
 
 
 class AdesXmlReader(SiteReader):
@@ -109,8 +130,10 @@ class AdesXmlReader(SiteReader):
         ep = parse_epoch(path, epoch)
         text = "\n".join(read_text_lines(path))
         rows, table = [], {}
-        for line, rec in _records(path, text):
+        records, skipped = _records(path, text)
+        for line, rec in records:
             rows.append(record_to_row(rec, path, line, self._sites, table))
+        _say_skipped(path, skipped, bool(rows))
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:

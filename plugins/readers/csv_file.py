@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cistrack.interfaces.component import check_positive, check_sigma_arcsec, sigma_arcsec_problem
+from cistrack.interfaces.component import check_range, check_sigma_arcsec, sigma_arcsec_problem
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Reader
@@ -338,7 +338,7 @@ class CsvReader(Reader):
     def __init__(self, sigma_arcsec: float = 1.5, range_alpha: float = 0.05, include_range: bool = True,
                  sites: dict | None = None) -> None:
         self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
-        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.range_alpha = check_range(self, "range_alpha", range_alpha, 0.0, 1.0, lo_open=True)
         if not isinstance(include_range, bool):
             self._fail("include_range", include_range, "must be true or false")
         self.include_range = include_range

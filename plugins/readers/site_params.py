@@ -8,6 +8,7 @@ key is looked up as an MPC observatory code in the bundled list.
 """
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import replace
 from typing import Any
@@ -56,7 +57,31 @@ def parse_sites(owner, value: Any) -> dict[str, Site]:
                 out[str(key)] = replace(site, code="")  # a declared site, not one from the MPC list
         except MeasurementError as exc:
             owner._fail("sites", {key: spec}, str(exc))
+        _note_replaced_code(str(key), out[str(key)])
     return out
+
+
+_NOTED: set[tuple] = set()
+
+
+def _note_replaced_code(key: str, site: Site) -> None:
+    """Warn (logger ``cistrack.readers``, once per process) when ``key`` is also a bundled MPC
+    observatory code whose place differs from ``site`` (by more than 0.01 degrees or 100 m): the
+    given coordinates replace the observatory's, which a typing mistake would otherwise hide."""
+    try:
+        known = observatory(key)
+    except MeasurementError:
+        return
+    dlon = abs((known.longitude_deg - site.longitude_deg + 180.0) % 360.0 - 180.0)
+    if abs(known.latitude_deg - site.latitude_deg) <= 0.01 and dlon <= 0.01 and abs(known.height_m - site.height_m) <= 100:
+        return
+    noted = (key, site.latitude_deg, site.longitude_deg, site.height_m)
+    if noted not in _NOTED:
+        _NOTED.add(noted)
+        logging.getLogger("cistrack.readers").warning(
+            f"sites: {key!r} is given at latitude {site.latitude_deg:g}, longitude {site.longitude_deg:g}, height "
+            f"{site.height_m:g} m, which replaces the MPC observatory {key} ({known.name or 'bundled list'}: "
+            f"{known.latitude_deg:.4f}, {known.longitude_deg:.4f}, {known.height_m:.0f} m) for these observations")
 
 
 def resolve_site(key: str, explicit: dict[str, Site]) -> Site:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.interfaces.component import check_choice, check_positive, check_sigma_arcsec, check_range
+from cistrack.interfaces.component import check_choice, check_range, check_sigma_arcsec
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Pass, Sensor
@@ -81,7 +81,7 @@ class GroundTelescope(Sensor):
         if not isinstance(measure_range, bool):
             self._fail("measure_range", measure_range, "must be true or false")
         self.measure_range = measure_range
-        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.range_alpha = check_range(self, "range_alpha", range_alpha, 0.0, 1.0, lo_open=True)
         self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
                                               -90.0, 90.0, hi_open=True)
         self.moon_phase_deg = check_range(self, "moon_phase_deg", moon_phase_deg, -360.0, 360.0)

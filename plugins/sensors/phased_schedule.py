@@ -51,6 +51,11 @@ class _Phase:
         return np.full(n, self.dt_min)
 
 
+def _dot(where: str) -> str:
+    """``where`` and a dot before a key name, or nothing for a preset's own parameters."""
+    return f"{where}." if where else ""
+
+
 class PhasedSchedule(Schedule):
     """General tasking policy: a list of phases, each a window with a cadence rule.
 
@@ -70,6 +75,8 @@ class PhasedSchedule(Schedule):
         self._phases = self._parse(self.phases, "phases")
 
     # -- validation -----------------------------------------------------------------------------
+    # A phase's keys are named "phases[i].KEY"; a one-phase preset's phase (pname "parameters") is
+    # made of the preset's own parameters, named "KEY" as the user wrote them.
     def _parse(self, phases: Any, pname: str, names: Sequence[tuple[str, str]] | None = None) -> list[_Phase]:
         """Validated phases; ``names`` give, per phase, the parameters that set its spacing and
         count when they are not the phase's own keys (presets)."""
@@ -77,7 +84,8 @@ class PhasedSchedule(Schedule):
             self._fail(pname, phases, "must be a non-empty list of tables (one per phase)")
         out = []
         for i, p in enumerate(phases):
-            ph = self._parse_one(p, f"{pname}[{i}]")
+            own = pname == "parameters" and len(phases) == 1  # a one-phase preset's keys are its own parameters
+            ph = self._parse_one(p, "" if own else f"{pname}[{i}]")
             ph.names = names[i] if names else (f"{pname}[{i}].interval_minutes", f"{pname}[{i}].count")
             ph.values = (p.get("interval_minutes"), p.get("count", 5))
             out.append(ph)
@@ -85,44 +93,44 @@ class PhasedSchedule(Schedule):
 
     def _parse_one(self, p: Any, where: str) -> _Phase:
         if not isinstance(p, dict):
-            self._fail(where, p, "must be a table with at least 'rule'")
+            self._fail(where or "parameters", p, "must be a table with at least 'rule'")
         unknown = sorted(set(p) - _ALLOWED_KEYS)
         if unknown:
-            self._fail(where, p, f"unknown key(s) {unknown}; allowed: {sorted(_ALLOWED_KEYS)}")
-        rule = check_choice(self, f"{where}.rule", p.get("rule"), RULES)
+            self._fail(where or "parameters", p, f"unknown key(s) {unknown}; allowed: {sorted(_ALLOWED_KEYS)}")
+        rule = check_choice(self, f"{_dot(where)}rule", p.get("rule"), RULES)
         start = self._time(p, where, "start", 0.0)
         end = self._time(p, where, "end", math.inf)
         if end <= start:
-            self._fail(where, p, "the phase must end after it starts")
-        from_pass = check_int(self, f"{where}.from_pass", p.get("from_pass", 0), minimum=0)
+            self._fail(where or "parameters", p, "the phase must end after it starts")
+        from_pass = check_int(self, f"{_dot(where)}from_pass", p.get("from_pass", 0), minimum=0)
         to_pass = p.get("to_pass", None)
         if to_pass is not None:
-            to_pass = check_int(self, f"{where}.to_pass", to_pass, minimum=from_pass + 1)
+            to_pass = check_int(self, f"{_dot(where)}to_pass", to_pass, minimum=from_pass + 1)
         dt_min = dt_max = 0.0
         if rule != "off":
             if "interval_minutes" not in p:
-                self._fail(where, p, f"rule '{rule}' needs 'interval_minutes'")
-            dt_min = check_positive(self, f"{where}.interval_minutes", p["interval_minutes"]) * _MIN_TU
+                self._fail(where or "parameters", p, f"rule '{rule}' needs 'interval_minutes'")
+            dt_min = check_positive(self, f"{_dot(where)}interval_minutes", p["interval_minutes"]) * _MIN_TU
             dt_max = dt_min
             if "interval_max_minutes" in p:
-                hi = check_positive(self, f"{where}.interval_max_minutes", p["interval_max_minutes"])
+                hi = check_positive(self, f"{_dot(where)}interval_max_minutes", p["interval_max_minutes"])
                 if hi * _MIN_TU < dt_min:
-                    self._fail(f"{where}.interval_max_minutes", hi, "must be >= interval_minutes")
+                    self._fail(f"{_dot(where)}interval_max_minutes", hi, "must be >= interval_minutes")
                 dt_max = hi * _MIN_TU
-        align = check_choice(self, f"{where}.align", p.get("align", "pass"), ("pass", "clock"))
-        count = check_int(self, f"{where}.count", p.get("count", 5), minimum=1)
+        align = check_choice(self, f"{_dot(where)}align", p.get("align", "pass"), ("pass", "clock"))
+        count = check_int(self, f"{_dot(where)}count", p.get("count", 5), minimum=1)
         return _Phase(rule, start, end, from_pass, to_pass, dt_min, dt_max, align, count)
 
     def _time(self, p: dict, where: str, which: str, default: float) -> float:
         h, d = p.get(f"{which}_hours"), p.get(f"{which}_days")
         if h is not None and d is not None:
-            self._fail(where, p, f"give '{which}_hours' or '{which}_days', not both")
+            self._fail(where or "parameters", p, f"give '{which}_hours' or '{which}_days', not both")
         if h is None and d is None:
             return default
         key, value, unit = (f"{which}_hours", h, _HOUR_TU) if h is not None else (f"{which}_days", d, _DAY_TU)
         if isinstance(value, (int, float)) and not isinstance(value, bool) and value == math.inf:
             return math.inf
-        return check_nonnegative(self, f"{where}.{key}", value) * unit
+        return check_nonnegative(self, f"{_dot(where)}{key}", value) * unit
 
     # -- planning -------------------------------------------------------------------------------
     def plan(self, passes: Sequence[Pass], t_end: float, rng: np.random.Generator) -> np.ndarray:

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cistrack.interfaces.component import check_choice, check_positive, check_sigma_arcsec, check_range
+from cistrack.interfaces.component import check_choice, check_range, check_sigma_arcsec
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Sensor
@@ -107,7 +107,7 @@ class RealTelescope(Sensor):
         self.measurement = check_choice(self, "measurement", measurement, _MEASUREMENTS)
         self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self.measure_range = self._bool("measure_range", measure_range)
-        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.range_alpha = check_range(self, "range_alpha", range_alpha, 0.0, 1.0, lo_open=True)
         self.elevation_mask_deg = check_range(self, "elevation_mask_deg", elevation_mask_deg,
                                               -90.0, 90.0, hi_open=True)
         self._set_epoch(epoch)

@@ -23,7 +23,7 @@ import numpy as np
 from cistrack.errors import MeasurementError
 from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.sensor import passes_from_mask
-from cistrack.interfaces.component import check_positive, check_sigma_arcsec, check_range
+from cistrack.interfaces.component import check_positive, check_range, check_sigma_arcsec
 from cistrack.model.measurement import MeasurementSet
 from cistrack.api import hookimpl
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
@@ -120,7 +120,7 @@ class SpaceTelescope(Sensor):
                 self._fail(name, value, "must be true or false")
         self.measure_range, self.measure_range_rate = bool(measure_range), bool(measure_range_rate)
         self.light_time = bool(light_time)
-        self.range_alpha = check_positive(self, "range_alpha", range_alpha)
+        self.range_alpha = check_range(self, "range_alpha", range_alpha, 0.0, 1.0, lo_open=True)
         self.range_rate_sigma_kms = check_positive(self, "range_rate_sigma_kms", range_rate_sigma_kms)
 
     def _set_photometry(self, diameter_m, albedo, limiting_magnitude, max_range_km) -> None:

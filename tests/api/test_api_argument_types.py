@@ -19,6 +19,9 @@ import cistrack as ct
     (lambda: ct.run(None), "scenario=None"),
     (lambda: ct.run(123), "scenario=123"),
     (lambda: ct.load_scenario({}), "scenario={}"),
+    (lambda: ct.run("quick", registry="x"), "registry='x'"),
+    (lambda: ct.load_scenario("quick", registry=3), "registry=3"),
+    (lambda: ct.fit("ok.psv", registry={}), "registry={}"),
 ])
 def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
     with pytest.raises(TypeError, match=argument.replace("[", r"\[").replace("]", r"\]")):

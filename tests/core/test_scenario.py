@@ -152,3 +152,16 @@ def test_a_hundred_million_particles_are_refused_in_16_gib_naming_the_key(monkey
     monkeypatch.setattr(limits, "available_memory_bytes", lambda: 16 * 2 ** 30)
     with pytest.raises(ConfigError, match=r"n_particles.*memory"):
         _example1_with(100_000_000)
+
+
+@pytest.mark.parametrize("settings, words", [
+    (["schedule.name=every", "schedule.end_hours=-5"], "parameter 'end_hours' = -5.0"),
+    (["duration_days=1e400"], "must be a finite number > 0"),
+    (["iod.name=tracklet-ranging", "iod.dynamics=foo"], "parameter 'dynamics' = 'foo' is invalid: must be one of"),
+])
+def test_a_bad_setting_is_named_as_the_user_wrote_it(settings, words):
+    from cistrack.scenario.settings import apply_settings
+
+    with pytest.raises(ConfigError) as exc:
+        apply_settings(load_scenario("quick"), settings)
+    assert words in str(exc.value)

@@ -37,3 +37,10 @@ def test_the_ukf_alpha_bounds_themselves_are_allowed(alpha):
 def test_a_velocity_noise_larger_than_an_orbits_speed_is_refused(name):
     with pytest.raises(ParameterError, match="'velocity_noise_kms_per_sqrt_day'.*\\[0.0, 1.0\\]"):
         _filter(name, velocity_noise_kms_per_sqrt_day=1e9)
+
+
+def test_state_bounds_that_no_particle_meets_are_named(tmp_path, capsys):
+    from cistrack.cli.main import main
+
+    assert main(["run", "quick", "--set", "filter.min_range_km=1e9", "--out", str(tmp_path / "r"), "--quiet"]) == 2
+    assert "outside the state bounds (min_range_km = 1000000000.0" in capsys.readouterr().err

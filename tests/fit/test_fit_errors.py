@@ -94,3 +94,15 @@ def test_a_fit_settling_far_above_the_noise_is_reported_as_not_converged():
                     options=FitOptions(reject_outliers=False))
     assert not res.converged and res.rms > 100.0
     assert any("does not fit the observations" in m for m in res.messages)
+
+
+@pytest.mark.slow
+def test_an_iod_that_finds_no_orbit_says_what_it_tried_in_words(tmp_path, capsys):
+    from cistrack.cli.main import main
+    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
+
+    obs = builtin_scenario_path("real-data").parent / "real_data" / "observations.psv"
+    assert main(["fit", str(obs), "--out", str(tmp_path / "f"), "--quiet", "--set",
+                 "measurements.reader.sites={809={latitude_deg=0,longitude_deg=0,height_m=0}}"]) == 3
+    err = capsys.readouterr().err
+    assert "8 tried: tracklet 1 scored on 2, 3, 4:" in err and "{'seed'" not in err

@@ -73,3 +73,12 @@ def test_a_fit_that_stopped_before_its_run_is_redone_in_its_folder(tmp_path, cap
     capsys.readouterr()
     assert main(["fit", str(obs), "--out", str(out), "--quiet"]) == 3
     assert "not empty" not in capsys.readouterr().err
+
+
+def test_a_failed_fit_suggests_no_export_and_gives_no_orbit_to_predict_from(tmp_path, capsys):
+    obs = _one_tracklet_each(tmp_path / "one.psv", ["C2RLB52"])
+    out = tmp_path / "out"
+    assert main(["fit", str(obs), "--out", str(out)]) == 3
+    assert "next: cistrack export" not in capsys.readouterr().out
+    assert main(["predict", str(out), "--site", "809"]) == 2
+    assert "no orbit to predict from: it has no fitted orbit" in capsys.readouterr().err

@@ -182,3 +182,19 @@ def test_malformed_file_is_refused_naming_line_and_field(tmp_path, fmt, reader, 
     assert f"line {line}" in msg, msg
     assert field in msg, msg
     assert "SECRETX" not in msg, msg
+
+
+def test_an_ades_xml_file_of_radar_records_only_says_optical_astrometry_is_read(tmp_path):
+    p = tmp_path / "radar.xml"
+    p.write_text(xml(GOOD_FIELDS).replace("<optical>", "<radar>").replace("</optical>", "</radar>"))
+    with pytest.raises(MeasurementError, match=r"1 <radar> records and no <optical> one"):
+        AdesXmlReader().read(p, EPOCH)
+
+
+def test_radar_records_beside_optical_ones_are_said_to_be_left_out(tmp_path, caplog):
+    p = tmp_path / "mixed.xml"
+    radar = "<radar>\n<trkSub>SECRETX</trkSub>\n<stn>705</stn>\n</radar>\n"
+    p.write_text(xml(GOOD_FIELDS, extra=radar))
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        assert len(AdesXmlReader().read(p, EPOCH)) == 1
+    assert "1 <radar> records are not read" in caplog.text

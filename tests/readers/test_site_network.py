@@ -99,3 +99,21 @@ def test_build_refuses_ra_dec_for_an_az_el_sensor(network_and_members):
                         kinds=np.full(12, "radec"), site_table={"711": observatory("711"), "809": observatory("809")})
     with pytest.raises(ConfigError, match="radec.*measures azimuth, elevation"):
         build_site_network(ComponentSpec("sensor", "ground-telescope", {}, "test"), default_registry(), ms)
+
+
+def test_a_site_given_under_a_bundled_code_elsewhere_is_said_to_replace_it(caplog):
+    from cistrack.plugins.readers.ades_psv import AdesPsvReader
+
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        AdesPsvReader(sites={"809": {"latitude_deg": 1.5, "longitude_deg": 2.5, "height_m": 0.0}})
+    assert "'809' is given at latitude 1.5" in caplog.text and "replaces the MPC observatory 809" in caplog.text
+
+
+def test_a_site_given_where_its_bundled_code_is_says_nothing(caplog):
+    from cistrack.astro.sites import observatory
+    from cistrack.plugins.readers.ades_psv import AdesPsvReader
+
+    la_silla = observatory("809")
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        AdesPsvReader(sites={"809": [la_silla.latitude_deg, la_silla.longitude_deg, la_silla.height_m]})
+    assert "replaces" not in caplog.text

@@ -505,7 +505,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         ok = self._bounds.admissible(x)
         n_bad = int(np.count_nonzero(~ok))
         if n_bad == x.shape[0]:
-            raise FilterError(f"filter '{self._who()}': every particle lies outside the state bounds")
+            raise FilterError(f"filter '{self._who()}': every particle lies outside the state bounds (min_range_km = "
+                              f"{self.min_range_km}, max_range_km = {self.max_range_km}, max_speed_kms = "
+                              f"{self.max_speed_kms}; range from the Earth's centre): widen them or leave them unset")
         self._pruned_total += n_bad
         return x[ok], (None if h is None else h[ok]), (None if labels is None else labels[ok])
 

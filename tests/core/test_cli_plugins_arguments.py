@@ -1,0 +1,21 @@
+"""`cistrack plugins` refuses arguments it would otherwise ignore or blame on the plugin."""
+from __future__ import annotations
+
+import pytest
+
+from cistrack.cli.main import main
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["plugins", "pgm", "--param", "n_particles=5"], "--param: sets a parameter for --check NAME only"),
+    (["plugins", "--check", "kmeans", "--param", "zzz=1"], "'kmeans' takes no parameter 'zzz'; it takes"),
+    (["plugins", "filter"], "cistrack plugins --kind filter"),
+])
+def test_an_argument_that_would_be_ignored_or_misread_is_refused_naming_it(argv, words, capsys):
+    assert main(argv) == 2
+    assert words in capsys.readouterr().err
+
+
+def test_a_parameter_the_component_takes_is_checked_as_before(capsys):
+    assert main(["plugins", "--check", "kmeans", "--param", "n_init=2"]) == 0
+    assert capsys.readouterr().out.rstrip().endswith("0 failed")
