@@ -38,6 +38,10 @@ from .visibility_rules import ExclusionRules, Photometry, SkyRules
 __all__ = ["SpaceTelescope"]
 
 
+MIN_SEPARATION_KM = 1.0
+"""The closest the target may come to a space telescope (km): nearer, it is the observer itself."""
+
+
 class SpaceTelescope(Sensor):
     """Optical telescope on an orbit in cislunar space (RA/Dec, optional range and range rate).
 
@@ -276,8 +280,17 @@ class SpaceTelescope(Sensor):
         return (h >= 0) & (np.mod(h, self.revisit_hours) <= self.window_hours)
 
     def passes(self, times: np.ndarray, states: np.ndarray):
-        """Visible samples inside the tasking windows, as contiguous runs (sample at <= 5 min)."""
+        """Visible samples inside the tasking windows, as contiguous runs (sample at <= 5 min).
+        MeasurementError when the target comes within :data:`MIN_SEPARATION_KM` of the observer
+        (the same orbit and phase: no line of sight)."""
         tt, x = checked_pass_samples("space-telescope", times, states)
+        tgt, obs = self._inertial(x, tt)
+        sep = np.linalg.norm(tgt[:, :3] - obs[:, :3], axis=1)
+        k = int(np.argmin(sep))
+        if not sep[k] >= MIN_SEPARATION_KM:
+            raise MeasurementError(f"sensor 'space-telescope': the target comes within {sep[k]:.3g} km of the observer "
+                                   f"(at {tt[k] * TU_S / 86400.0:.3f} days): a telescope cannot observe an object at "
+                                   "its own place; give the observer another orbit, phase or state_km")
         return passes_from_mask(tt, self.visible(x, tt) & self.in_window(tt))
 
     def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:

@@ -110,3 +110,14 @@ def test_an_observer_orbit_that_hits_the_moon_is_refused():
     sensor = SpaceTelescope(orbit="", state_km=km)
     with pytest.raises(ConfigError, match="hits Moon"):
         sensor.observer_position(1.0)
+
+
+def test_a_target_flying_the_observers_own_orbit_is_refused_with_the_reason():
+    from cistrack.errors import MeasurementError
+
+    sensor = SpaceTelescope(orbit="nrho-9-2")
+    x0 = np.array(ORBITS["nrho-9-2"].state)
+    grid = np.linspace(0.0, 0.5, 20)
+    states = np.stack([cr3bp_state(x0, 0.0, s) for s in grid])
+    with pytest.raises(MeasurementError, match="comes within .* km of the observer .* cannot observe an object at its own"):
+        sensor.passes(grid, states)
