@@ -344,7 +344,7 @@ def read_run(directory: str | Path) -> Run:
     _checked_arguments(directory=directory)
     d = Path(directory)
     if not d.is_dir():
-        raise ConfigError(f"{d}: not a run's results folder (no such directory)")
+        raise ConfigError(f"{d}: not a run's results folder ({'a file' if d.exists() else 'no such directory'})")
     try:
         manifest = read_manifest(d)
     except FileNotFoundError:

@@ -11,8 +11,11 @@ def cmd_init(args: Any) -> int:
     """Write NAME.toml (never over an existing file) and say how to run it."""
     from cistrack.scenario.template import write_scenario_template
 
+    import shlex
+
     path = write_scenario_template(args.name)
-    print(f"wrote {path}: a commented scenario (the built-in example-1's values); run it with: cistrack run {path}")
+    print(f"wrote {path}: a commented scenario (the built-in example-1's values); run it with: cistrack run "
+          f"{shlex.quote(str(path))}")
     return 0
 
 

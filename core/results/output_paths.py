@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import os
 from pathlib import Path
 
 from cistrack.errors import ConfigError
@@ -134,6 +135,9 @@ def make_writable_dir(d: Path) -> None:
 
 def _create_writable(d: Path, where: str) -> Path:
     """Create ``d`` (parents included) and check that a file can be made there."""
+    if d.is_symlink() and not d.exists():
+        raise ConfigError(f"{where} {d}: a link to {os.readlink(d)}, which does not exist; give a directory, or create "
+                          "the link's target first")
     try:
         make_writable_dir(d)
     except OSError as exc:

@@ -162,9 +162,14 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
                   overrides: dict[str, Any] | None = None) -> Scenario:
     """Read and validate a scenario file, or a built-in scenario by name; ``overrides`` (as for
     :meth:`Scenario.with_overrides`) are applied before the one validation."""
+    if not str(path_or_name).strip():
+        raise ConfigError("scenario: empty name; give a built-in scenario's name (cistrack scenarios lists them) or "
+                          "the path of a scenario file")
     p = Path(path_or_name)
     if not p.exists() and p.suffix != ".toml" and "/" not in str(path_or_name):
         p = builtin_scenario_path(str(path_or_name))
+    if p.is_dir():
+        raise ConfigError(f"{p}: a directory, not a scenario file (a TOML file or a built-in scenario's name)")
     if not p.exists():
         raise ConfigError(f"scenario file not found: {p}")
     try:

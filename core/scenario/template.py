@@ -9,6 +9,7 @@ change it. The file runs as written: ``cistrack run NAME.toml``.
 from __future__ import annotations
 
 import dataclasses
+import shlex
 import sys
 import textwrap
 from pathlib import Path
@@ -126,7 +127,7 @@ def scenario_template(name: str = "my-scenario", registry: Registry | None = Non
     data["name"] = name
     data["description"] = f"My scenario, started from the built-in {TEMPLATE_SOURCE}: {data.get('description', '')}"
     lines = _comment(f"A cistrack scenario, written by 'cistrack init' from the built-in {TEMPLATE_SOURCE}. "
-                     f"Run it with: cistrack run {name}.toml (--seed N, --set TABLE.KEY=VALUE change one value "
+                     f"Run it with: cistrack run {shlex.quote(name + '.toml')} (--seed N, --set TABLE.KEY=VALUE change one value "
                      "without editing). Lines '# key = value' are parameters left at their default: "
                      "uncomment one to change it. cistrack plugins lists every component.")
     for key, doc in _TOP.items():
