@@ -256,6 +256,7 @@ def cmd_export(args) -> int:
     from cistrack.runs.export import export_refusal, export_run
 
     _check_step_option(args.format, args.step)
+    _check_out_suffix(args.format, args.out)
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
     from cistrack.runs.progress import stage_log
@@ -270,6 +271,22 @@ def cmd_export(args) -> int:
     if not args.quiet:
         print(f"wrote {out}")
     return 0
+
+
+_FORMAT_SUFFIXES = {"oem": ".oem", "opm": ".opm"}
+"""The file name endings of the CCSDS message formats cistrack writes."""
+
+
+def _check_out_suffix(format: str, out: str | None) -> None:
+    """Refuse an ``--out`` named for the other CCSDS message than ``--format`` writes (x.oem for OPM)."""
+    if out is None:
+        return
+    ending = Path(out).suffix.lower()
+    named = next((f for f, suffix in _FORMAT_SUFFIXES.items() if suffix == ending), None)
+    if named is not None and named != format:
+        raise ConfigError(f"--out {out}: named for {named.upper()}, but --format {format} writes "
+                          f"{format.upper()}; name it {Path(out).with_suffix(_FORMAT_SUFFIXES.get(format, '.txt'))} or "
+                          f"give --format {named}")
 
 
 RRD_MAGIC = b"RRF"

@@ -14,7 +14,7 @@ from pathlib import Path
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.interfaces.reader import FieldError, read_text_lines
+from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
 from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
 from .obs_rows import build_set, parse_epoch
@@ -23,6 +23,18 @@ from .site_params import SiteReader
 __all__ = ["AdesPsvReader"]
 
 _KNOWN_FIELDS_MIN = {"obsTime", "ra", "dec", "stn"}
+
+
+ADES_VERSIONS = ("2017", "2022")
+"""The ADES versions whose PSV files this reader reads (their optical fields are the same)."""
+
+
+def _check_version(path, line: int, text: str) -> None:
+    """FieldError for a ``# version=X`` line naming a version other than :data:`ADES_VERSIONS`."""
+    key, sep, value = text.lstrip("#!").strip().partition("=")
+    if sep and key.strip() == "version" and value.strip() not in ADES_VERSIONS:
+        raise FieldError(path, line, "version", f"{show_field(value.strip())}: ADES versions "
+                                                f"{' and '.join(ADES_VERSIONS)} are read")
 
 
 class AdesPsvReader(SiteReader):
@@ -53,6 +65,7 @@ class AdesPsvReader(SiteReader):
             if not text:
                 continue
             if text.startswith("#") or text.startswith("!"):
+                _check_version(path, i, text)
                 header = None  # a new block may bring a new field-name line
                 continue
             cells = [c.strip() for c in text.split("|")]

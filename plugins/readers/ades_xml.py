@@ -48,6 +48,9 @@ class _OpticalCollector:
             self.root = name
             if name != "ades":
                 raise FieldError(self.path, line, "<ades>", f"the root element is <{name[:40]}>, not <ades>")
+            if attrs.get("xmlns"):  # ADES elements have no namespace: another vocabulary's <ades>
+                raise FieldError(self.path, line, "<ades>", f"in the namespace {attrs['xmlns'][:80]!r}; ADES elements "
+                                                             "have none")
         if name == "optical":
             if self.rec is not None:
                 raise FieldError(self.path, line, "<optical>", "an <optical> element inside another")

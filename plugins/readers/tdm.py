@@ -191,6 +191,10 @@ def _segment_comments(path, seg: _Segment) -> tuple[dict[str, Site], tuple, str]
         m = _SIGMA_RE.match(text)
         if m:
             sig, sig_text = _comment_sigmas(path, m, cl)
+        elif text.split()[:1] == ["cistrack"]:
+            raise FieldError(path, cl, "COMMENT cistrack", f"{show_field(text[:60])} is not one this reader knows: "
+                             "'cistrack site KEY latitude_deg=.. longitude_deg=.. height_m=..' or 'cistrack "
+                             "sigma_arcsec ANGLE_1=.. ANGLE_2=..'")
     return declared, sig, sig_text
 
 
@@ -209,6 +213,23 @@ def _participant_site(path, seg: _Segment, declared: dict, table: dict, sites: d
         raise FieldError(path, nl, "PARTICIPANT_1", f"{show_field(name)} was declared with another position earlier")
     table[name] = site
     return name
+
+
+def _segment_span(path, seg: _Segment) -> tuple[datetime, datetime] | None:
+    """The segment's (START_TIME, STOP_TIME) when it gives both (its data must lie within them),
+    else None; FieldError for a time that cannot be read or a STOP_TIME before the START_TIME."""
+    if "START_TIME" not in seg.meta or "STOP_TIME" not in seg.meta:
+        return None
+    times = []
+    for key in ("START_TIME", "STOP_TIME"):
+        text, kl = seg.meta[key]
+        try:
+            times.append(_parse_time(text))
+        except ValueError as exc:
+            raise FieldError(path, kl, key, f"{show_field(text)} {exc}") from None
+    if times[1] < times[0]:
+        raise FieldError(path, seg.meta["STOP_TIME"][1], "STOP_TIME", "is before START_TIME")
+    return times[0], times[1]
 
 
 def _segment_context(path, seg: _Segment, ln: int, table: dict, sites: dict) -> dict:
@@ -269,6 +290,7 @@ class _TdmParse:
     def _meta(self, word: str, text: str, ln: int) -> None:
         if word == "META_STOP":
             self.ctx = _segment_context(self.path, self.seg, ln, self.table, self.sites)
+            self.ctx["span"] = _segment_span(self.path, self.seg)
             self.state = "between"
             return
         k, v = _kv(text, self.path, ln)
@@ -315,6 +337,10 @@ class _TdmParse:
         except ValueError as exc:
             raise FieldError(path, ln, f"{k} value", f"{show_field(parts[1])} is {exc}") from None
         _check_angle(path, ln, k, parts[1], val)
+        span = self.ctx.get("span")
+        if span is not None and not span[0] <= t <= span[1]:
+            raise FieldError(path, ln, f"{k} epoch", f"{format_utc(t)[:23]}Z lies outside the segment's START_TIME "
+                                                     f"to STOP_TIME ({format_utc(span[0])[:19]}Z to {format_utc(span[1])[:19]}Z)")
         return k, t, val
 
     def _pair(self, k: str, t: datetime, val: float, ln: int) -> None:

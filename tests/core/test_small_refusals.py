@@ -34,3 +34,8 @@ def test_init_prints_a_command_a_shell_can_run(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["init", "x y;z"]) == 0
     assert "cistrack run 'x y;z.toml'" in capsys.readouterr().out
+
+
+def test_an_export_named_for_the_other_message_is_refused(tmp_path, capsys):
+    assert main(["export", str(tmp_path), "--format", "opm", "--out", str(tmp_path / "x.oem")]) == 2
+    assert "named for OEM, but --format opm writes OPM" in capsys.readouterr().err

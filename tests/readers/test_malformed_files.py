@@ -39,6 +39,7 @@ PSV_CASES = [
     ("no object", psv("|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "permID/provID/trkSub"),
     ("repeated time", psv("SECRETX|CCD|711|2026-03-01T01:00:00.000000Z|10|5|1.0|1.0|Gaia3"), 4, "obsTime"),
     ("header lacks dec", "# version=2022\ntrkSub|stn|obsTime|ra\n", 2, "dec"),
+    ("unknown version", "# version=banana\ntrkSub|mode|stn|obsTime|ra|dec\n", 1, "version"),
     ("header repeats a field", "# version=2022\nstn|obsTime|ra|dec|ra\n", 2, "ra"),
     ("non-WGS84 position", "# version=2022\ntrkSub|stn|obsTime|ra|dec|sys|ctr|pos1|pos2|pos3\n"
      "SECRETX|247|2026-03-01T02:00:00Z|10|5|ICRF|399|1|2|3\n", 3, "sys"),
@@ -67,6 +68,7 @@ XML_CASES = [
     ("wrong root", '<?xml version="1.0"?>\n<observations>\n</observations>\n', 2, "<ades>"),
     ("entity declaration", '<?xml version="1.0"?>\n<!DOCTYPE ades [<!ENTITY x "y">]>\n<ades></ades>\n', 2, "(DOCTYPE)"),
     ("nested optical", xml(GOOD_FIELDS + "<optical>\n"), 11, "<optical>"),
+    ("another vocabulary's ades", xml(GOOD_FIELDS).replace('<ades version="2022">', '<ades version="2022" xmlns="http://example.com/foo">'), 2, "<ades>"),
 ]
 
 # -- MPC 80 ---------------------------------------------------------------------------------------
@@ -122,6 +124,14 @@ TDM_CASES = [
     ("elevation 95", tdm(data="ANGLE_1 = 2026-03-01T01:00:00 10.5\nANGLE_2 = 2026-03-01T01:00:00 95\n"), 12, "ANGLE_2 value"),
     ("unpaired angle", tdm(data="ANGLE_1 = 2026-03-01T01:00:00 10.5\nANGLE_2 = 2026-03-01T01:05:00 20.5\n"), 11, "ANGLE_2"),
     ("range data", tdm(data="RANGE = 2026-03-01T01:00:00 1000\n"), 11, "RANGE"),
+    ("stop before start", tdm(meta="TIME_SYSTEM = UTC\nPARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\nANGLE_TYPE = AZEL\n"
+                               "START_TIME = 2026-03-02T00:00:00\nSTOP_TIME = 2026-03-01T00:00:00\n"), 10, "STOP_TIME"),
+    ("data outside start to stop", tdm(meta="TIME_SYSTEM = UTC\nPARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\n"
+                                        "ANGLE_TYPE = AZEL\nSTART_TIME = 2026-03-01T02:00:00\n"
+                                        "STOP_TIME = 2026-03-01T03:00:00\n"), 13, "ANGLE_1 epoch"),
+    ("unknown cistrack comment", tdm(meta="COMMENT cistrack sigma_arcsec ANGLE_1=1.0 junk\nTIME_SYSTEM = UTC\n"
+                                          "PARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\nANGLE_TYPE = AZEL\n"), 5,
+     "COMMENT cistrack"),
     ("sigma comment beyond the sky", tdm(meta="COMMENT cistrack sigma_arcsec ANGLE_1=1e300 ANGLE_2=1\nTIME_SYSTEM = UTC\n"
                                               "PARTICIPANT_1 = 705\nPARTICIPANT_2 = SECRETX\nANGLE_TYPE = AZEL\n"), 5,
      "COMMENT cistrack sigma_arcsec"),
