@@ -64,7 +64,9 @@ def add_predict_parser(sub) -> None:
                                    "fit) or a 'cistrack run' directory (the filter's last estimate), seen from an "
                                    "MPC observatory: docs/sky-predictions.md.")
     p.add_argument("run", metavar="DIR", help="a fit or run results directory")
-    p.add_argument("--site", required=True, metavar="CODE", help="MPC observatory code, e.g. 568, 711, J04")
+    p.add_argument("--site", required=True, metavar="CODE",
+                   help="MPC observatory code, e.g. 568, 711, J04; or LAT,LON,HEIGHT_M (WGS84 degrees, metres; "
+                        "--site=-29.26,289.27,2345 for a southern latitude)")
     p.add_argument("--start", type=_utc, default=None, metavar="UTC", help="first time (default: the orbit's epoch)")
     p.add_argument("--stop", type=_utc, default=None, metavar="UTC", help="last time (default: one day after --start)")
     p.add_argument("--step", type=_minutes, default=60.0, metavar="MINUTES", help="spacing, minutes (default 60)")
@@ -159,13 +161,35 @@ def table_lines(sky) -> list[str]:
 
 
 def _site(code: str):
+    """The site of ``--site``: an MPC observatory code, or LAT,LON,HEIGHT_M (WGS84: degrees North,
+    degrees East, metres) for a site outside the list (one a fit's file declared, say)."""
     from cistrack.astro.sites import observatory
     from cistrack.errors import ConfigError, MeasurementError
 
+    if len(code.split(",")) == 3:
+        return _given_site(code)
     try:
         return observatory(code)
     except MeasurementError as exc:
-        raise ConfigError(f"--site {code}: {exc}") from None
+        raise ConfigError(f"--site {code}: {str(exc).split('; give its coordinates')[0]}; give the site as "
+                          "LAT,LON,HEIGHT_M instead (WGS84 degrees North, degrees East, metres)") from None
+
+
+def _given_site(text: str):
+    """The site LAT,LON,HEIGHT_M of ``--site``; ConfigError naming the option otherwise."""
+    from cistrack.astro.sites import Site
+    from cistrack.errors import ConfigError, MeasurementError
+
+    try:
+        lat, lon, height = (float(p) for p in text.split(","))
+    except ValueError:
+        raise ConfigError(f"--site {text}: LAT,LON,HEIGHT_M must be three numbers (degrees, degrees, metres)") from None
+    if not all(math.isfinite(v) for v in (lat, lon, height)):
+        raise ConfigError(f"--site {text}: LAT,LON,HEIGHT_M must be finite numbers")
+    try:
+        return Site(lat, lon, height, name="given site")
+    except MeasurementError as exc:
+        raise ConfigError(f"--site {text}: {str(exc).split(': ', 1)[-1]}") from None
 
 
 def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:

@@ -234,7 +234,8 @@ def is_lone_tracklet(measurements: MeasurementSet) -> bool:
         return False
     if any(ms.kind_at(i) != "radec" for i in range(len(ms))):
         return False
-    return float(units.tu_to_hours(float(ms.times[-1] - ms.times[0]))) <= LONE_TRACKLET_HOURS
+    # a span of exactly LONE_TRACKLET_HOURS reads back from TU a few picoseconds longer: a millisecond of slack
+    return float(units.tu_to_hours(float(ms.times[-1] - ms.times[0]))) <= LONE_TRACKLET_HOURS + 1e-3 / 3600.0
 
 
 def sky_motion(measurements: MeasurementSet, epoch) -> dict:

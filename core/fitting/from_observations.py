@@ -238,6 +238,11 @@ def _split_settings(items: Iterable[str] | None) -> tuple[dict[str, Any], dict[s
         raise ConfigError(f"--set {fixed[0]}: cistrack fit sets the scenario's epoch, duration_days and name from "
                           "the observations (epoch: 30 min before the first, duration: to past the last); "
                           "fit.epoch=first|middle|last chooses where the state is estimated")
+    unused = sorted(k for k in ("truth", "schedule") if k in settings)
+    if unused:
+        raise ConfigError(f"--set {unused[0]}.*: cistrack fit simulates nothing, so [{unused[0]}] (a simulated "
+                          "truth, or the schedule of simulated measurements) is not used; the observations come "
+                          "from the files")
     fit_table = settings.pop("fit", {})
     meas = settings.pop("measurements", {})
     if not isinstance(meas, dict) or set(meas) - {"reader"}:

@@ -48,7 +48,8 @@ def add_maneuvers(one, say) -> None:
     in it, their delta-v no longer among its parameters: every later step predicts forward of the
     burns with the run's ballistic model); ``one.dynamics`` is the model with the burns (for the
     residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
-    explains is not reported as converged: its messages say why."""
+    explains, or that is still suspect with the burns found, is not reported as converged (and the
+    burns are not reported): its messages say why."""
     from cistrack.least_squares.burn_search import flown, search_maneuvers, suspicion
 
     r = one.result
@@ -67,6 +68,13 @@ def add_maneuvers(one, say) -> None:
         return
     times = np.asarray(ctx.measurements.times, dtype=float)
     fit, burns = _after_burns(ctx, found)
+    still = suspicion(fit)
+    if still:  # the burns do not explain what made the fit suspect: not reported as maneuvers
+        tried = "; ".join(f"{b.magnitude_ms:.3g} +- {b.magnitude_sigma_ms:.2g} m/s" for b in burns)
+        one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+            f"not a clean fit: it looks like an object that maneuvered ({why}), and with the burns found "
+            f"({tried}) {still}: they do not explain it (outliers, a bias or another object are as likely)",))
+        return
     one.maneuvers = [maneuver_record(b, w, float(times[times > b.t][0]), one.scenario.epoch)
                      for b, w in zip(burns, found.windows)]
     one.dynamics = flown(ctx.dynamics, burns)

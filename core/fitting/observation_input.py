@@ -5,8 +5,9 @@ Each file is read by the registered reader its name's suffix names (``.psv``, ``
 first that reads it. A file naming several objects (ADES permID / provID / trkSub, the MPC 80-column
 designation, TDM ``PARTICIPANT_2``) is read once per object. The sets of one object from all the
 files are merged in time order, each observation keeping its site. An observation given in two
-files (the same site and type, times within the coarser file's time resolution, e.g. 0.0864 s for
-MPC 80-column, positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
+files (the same site and type, times within the coarser file's time resolution: its format's,
+e.g. 0.0864 s for MPC 80-column, or the step its times are rounded to, e.g. a whole second;
+positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
 time resolution, and the files' notes say how many copies were dropped; two such observations
 whose positions differ more are refused naming both files.
 
@@ -125,6 +126,22 @@ def check_file_sizes(paths: list[str | Path]) -> None:
 
 def _params(params: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k != "name"}
+
+
+_TIME_QUANTA_S = (1.0, 0.1, 0.01, 0.001)
+"""Time steps a file may round its times to (s), coarsest first."""
+
+
+def data_time_resolution(ms: MeasurementSet) -> float:
+    """The coarsest of :data:`_TIME_QUANTA_S` that every time of ``ms`` is a multiple of (s; 0 when
+    none is: times written to full precision). A file that rounds its times to whole seconds has a
+    time resolution of a second whatever its format allows, and a copy of its observations in
+    another file then differs from them by up to that much."""
+    sec = np.asarray(ms.times, dtype=float) * units.TU_S
+    for q in _TIME_QUANTA_S:
+        if sec.size >= 2 and np.all(np.abs(sec - np.round(sec / q) * q) < 2e-6):
+            return q
+    return 0.0
 
 
 def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> tuple[list[MeasurementSet], float]:
@@ -321,7 +338,7 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
             sets, files, resolutions = by_object.setdefault(obj, ([], [], []))
             sets.append(ms)
             files.append(str(path))
-            resolutions.append(resolution)
+            resolutions.append(max(resolution, data_time_resolution(ms)))
             note = weights_note(ms)
             notes.setdefault(obj, []).append(f"{path.name}: {len(ms)} observations of {obj}"
                                              + (f"; {note}" if note else ""))

@@ -43,7 +43,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "flown", "MIN_GAP_HOURS", "MAX_BURNS",
-           "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS"]
+           "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS"]
 
 MIN_GAP_HOURS = 0.2
 """Gaps between observations at least this long (12 minutes) are candidate burn intervals: between
@@ -60,6 +60,9 @@ BLOCK_SHARE = 0.05
 """A contiguous block of rejected observations this large a share of the arc (and at least
 :data:`BLOCK_MIN` observations) makes a fit suspect."""
 BLOCK_MIN = 4
+MAX_BURN_MS = 1000.0
+"""The largest burn the search keeps, m/s (a lunar orbit insertion's size): a larger one fitted
+between observations of a cislunar object explains outliers or another object, not a maneuver."""
 MAX_RMS = 1.5
 """A fit whose weighted RMS exceeds this is suspect (1 when the noise is as stated)."""
 
@@ -173,10 +176,12 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
         fit, window, t_sigma = step
         ev = burn_evidence(found.result, fit, FALSE_ALARM, found.prior)
         b = fit.searched
+        plausible = b.magnitude_ms <= MAX_BURN_MS
         say(f"burn tried in the gap {_utc_days(window[0]):.3f}-{_utc_days(window[1]):.3f} d: |dv| = "
             f"{b.magnitude_ms:.4f} +- {b.magnitude_sigma_ms:.4f} m/s, cost drop {ev.cost_drop:.1f} "
-            f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted else "not kept"))
-        if not ev.accepted:
+            f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted and plausible else "not kept")
+            + ("" if plausible else f" (larger than {MAX_BURN_MS:g} m/s: not a burn between observations)"))
+        if not (ev.accepted and plausible):
             break
         fit = _timed(arc, fit, t_sigma, found, window)
         windows = found.windows + [window]

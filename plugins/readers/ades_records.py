@@ -91,6 +91,9 @@ def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) ->
             if not math.isfinite(v):
                 raise FieldError(path, pln, f, f"{show_field(text)} is not finite")
             vals.append((v, pln, f))
+        if not -180.0 <= vals[0][0] <= 360.0:  # ADES pos1: East longitude, degrees
+            raise FieldError(path, vals[0][1], "pos1", f"{show_field(rec['pos1'][0])} is outside [-180, 360] degrees "
+                                                       "(East longitude)")
         try:
             site = Site(vals[1][0], vals[0][0] if vals[0][0] <= 180 else vals[0][0] - 360.0, vals[2][0], name=stn)
         except MeasurementError as exc:

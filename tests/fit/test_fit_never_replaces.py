@@ -82,3 +82,9 @@ def test_a_failed_fit_suggests_no_export_and_gives_no_orbit_to_predict_from(tmp_
     assert "next: cistrack export" not in capsys.readouterr().out
     assert main(["predict", str(out), "--site", "809"]) == 2
     assert "no orbit to predict from: it has no fitted orbit" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("item", ["truth.dynamics.name=cr3bp", "schedule.name=every"])
+def test_settings_of_tables_a_fit_does_not_use_are_refused(tmp_path, capsys, item):
+    assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", item]) == 2
+    assert "cistrack fit simulates nothing" in capsys.readouterr().err and not (tmp_path / "f").exists()

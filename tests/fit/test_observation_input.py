@@ -1,6 +1,8 @@
 """Observation files for `cistrack fit`: formats, several files merged, several objects split."""
 from __future__ import annotations
 
+from datetime import datetime, timedelta
+
 import numpy as np
 import pytest
 
@@ -79,3 +81,19 @@ def test_a_file_no_reader_reads_is_refused_with_each_readers_reason(tmp_path):
     p.write_text("hello\n")
     with pytest.raises(MeasurementError, match="no reader reads its content.*ades-psv"):
         read_object_observations([p], default_registry())
+
+
+def test_a_copy_with_its_times_rounded_to_the_second_is_a_duplicate(tmp_path):
+    out = []
+    for line in (DATA / "observations.psv").read_text().splitlines():
+        f = line.split("|")
+        if len(f) > 5 and f[3].endswith("Z") and "T" in f[3]:
+            t = datetime.strptime(f[3], "%Y-%m-%dT%H:%M:%S.%fZ") + timedelta(microseconds=500_000)
+            f[3] = t.strftime("%Y-%m-%dT%H:%M:%SZ")  # to the nearest second
+            f[4], f[5] = f"{float(f[4]):.5f}", f"{float(f[5]):.5f}"
+        out.append("|".join(f))
+    rounded = tmp_path / "rounded.psv"
+    rounded.write_text("\n".join(out) + "\n")
+    objs = read_object_observations([DATA / "observations.psv", rounded], default_registry())
+    assert len(objs[0].measurements) == 65
+    assert "rounded.psv: 65 observations dropped as duplicates" in objs[0].notes[-1]

@@ -41,6 +41,8 @@ PSV_CASES = [
     ("header lacks dec", "# version=2022\ntrkSub|stn|obsTime|ra\n", 2, "dec"),
     ("unknown version", "# version=banana\ntrkSub|mode|stn|obsTime|ra|dec\n", 1, "version"),
     ("header repeats a field", "# version=2022\nstn|obsTime|ra|dec|ra\n", 2, "ra"),
+    ("longitude beyond a turn", "# version=2022\ntrkSub|stn|obsTime|ra|dec|sys|ctr|pos1|pos2|pos3\n"
+     "SECRETX|XX1|2026-03-01T02:00:00Z|10|5|WGS84|399|1000|30|2075\n", 3, "pos1: '1000'"),
     ("non-WGS84 position", "# version=2022\ntrkSub|stn|obsTime|ra|dec|sys|ctr|pos1|pos2|pos3\n"
      "SECRETX|247|2026-03-01T02:00:00Z|10|5|ICRF|399|1|2|3\n", 3, "sys"),
 ]

@@ -120,3 +120,17 @@ def test_an_interrupted_run_gives_no_orbit_to_predict_from(tmp_path, capsys):
     capsys.readouterr()
     assert main(["predict", str(out), "--site", "568"]) == 2
     assert "no orbit to predict from: it was interrupted" in capsys.readouterr().err
+
+
+def test_a_site_given_by_coordinates_predicts_as_its_mpc_code_does(fitted, tmp_path, capsys):
+    from cistrack.astro.sites import observatory
+
+    la_silla = observatory("809")
+    given = f"{la_silla.latitude_deg!r},{la_silla.longitude_deg!r},{la_silla.height_m!r}"
+    window = ["--start", "2026-03-07T00:00:00Z", "--stop", "2026-03-07T04:00:00Z", "--quiet"]
+    assert main(["predict", str(fitted), "--site", "809", "--out", str(tmp_path / "code"), *window]) == 0
+    assert main(["predict", str(fitted), f"--site={given}", "--out", str(tmp_path / "given"), *window]) == 0
+    by_code = list(csv.DictReader(open(tmp_path / "code.csv")))
+    by_place = list(csv.DictReader(open(tmp_path / "given.csv")))
+    assert [r["ra_deg"] for r in by_code] == [r["ra_deg"] for r in by_place]
+    assert [r["elevation_deg"] for r in by_code] == [r["elevation_deg"] for r in by_place]
