@@ -13,7 +13,7 @@ from pathlib import Path
 from cistrack.errors import ConfigError
 from cistrack.results.store import MANIFEST
 
-__all__ = ["check_fit_replacing", "FIT_RECORD"]
+__all__ = ["check_fit_replacing", "check_fit_form", "other_form_results", "remove_other_form", "FIT_RECORD"]
 
 FIT_RECORD = "fit.json"
 """The record a finished fit writes last in its directory."""
@@ -49,3 +49,47 @@ def check_fit_replacing(directory: str | Path, designation: str, where: str = "-
         return what
     raise ConfigError(f"{where} {d}: holds {what}. A fit never replaces other results: give another --out, "
                       f"remove {d}, or add --overwrite to replace them")
+
+
+def other_form_results(directory: str | Path, each: bool) -> list[Path]:
+    """What an earlier fit of the other ``fit.arcs`` form left in ``directory``: for a fit of each
+    arc (``each``), the top-level fit.json of a whole-arc fit; otherwise the ``arc-*`` folders of a
+    fit of each arc. A refit of the other form would leave them beside its own results."""
+    d = Path(directory)
+    if not d.is_dir():
+        return []
+    if each:
+        return [d / FIT_RECORD] if (d / FIT_RECORD).is_file() else []
+    return sorted(p for p in d.glob("arc-*") if p.is_dir() and (p / FIT_RECORD).is_file())
+
+
+def check_fit_form(directory: str | Path, each: bool, where: str = "--out", overwrite: bool = False) -> list[Path]:
+    """Refuse (:class:`ConfigError`) a fit into ``directory`` that holds an earlier fit of the other
+    ``fit.arcs`` form (:func:`other_form_results`), unless ``overwrite``: then returns what to remove."""
+    stale = other_form_results(directory, each)
+    if not stale or overwrite:
+        return stale
+    what = (f"the fit of the whole arc ({FIT_RECORD})" if each else
+            f"{len(stale)} folder(s) of a fit of each arc ({', '.join(p.name for p in stale[:3])}"
+            + (", ..." if len(stale) > 3 else "") + ")")
+    raise ConfigError(f"{where} {directory}: holds {what} from an earlier fit with another fit.arcs; this fit would "
+                      "leave it beside its own results: give another --out, remove it, or add --overwrite to remove it")
+
+
+def remove_other_form(directory: str | Path, stale: list[Path]) -> None:
+    """Remove what :func:`check_fit_form` returned: ``arc-*`` folders, or a whole-arc fit's files."""
+    import shutil
+
+    from cistrack.results.earlier_run import RESULT_FILES, RESULT_FOLDERS
+    from cistrack.results.output_paths import clear_earlier_results
+
+    d = Path(directory)
+    for p in stale:
+        if p.is_dir():
+            shutil.rmtree(p)
+        elif p.name == FIT_RECORD:  # the whole-arc fit: its record, plots and filter run
+            clear_earlier_results(d)
+            for name in RESULT_FILES + ("observations.psv", "observations-early.psv"):  # and the fit's copies
+                (d / name).unlink(missing_ok=True)
+            for name in RESULT_FOLDERS:
+                shutil.rmtree(d / name, ignore_errors=True)

@@ -88,3 +88,15 @@ def test_a_failed_fit_suggests_no_export_and_gives_no_orbit_to_predict_from(tmp_
 def test_settings_of_tables_a_fit_does_not_use_are_refused(tmp_path, capsys, item):
     assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", item]) == 2
     assert "cistrack fit simulates nothing" in capsys.readouterr().err and not (tmp_path / "f").exists()
+
+
+def test_a_refit_of_another_arcs_form_does_not_leave_the_earlier_beside_it(tmp_path, capsys):
+    out = str(tmp_path / "f")
+    assert main(["fit", str(OBSERVATIONS), "--out", out, "--quiet"]) == 0
+    assert main(["fit", str(OBSERVATIONS), "--out", out, "--quiet", "--set", "fit.arcs=each"]) == 2
+    assert "holds the fit of the whole arc (fit.json) from an earlier fit with another fit.arcs" in capsys.readouterr().err
+    assert main(["fit", str(OBSERVATIONS), "--out", out, "--quiet", "--set", "fit.arcs=each", "--overwrite"]) == 0
+    assert not (tmp_path / "f" / "fit.json").exists() and not (tmp_path / "f" / "manifest.json").exists()
+    assert [p.name for p in (tmp_path / "f").glob("arc-*")] == ["arc-2026-03-01"]
+    assert main(["fit", str(OBSERVATIONS), "--out", out, "--quiet"]) == 2
+    assert "1 folder(s) of a fit of each arc (arc-2026-03-01)" in capsys.readouterr().err
