@@ -243,7 +243,10 @@ def _checked_arguments(**given: Any) -> None:
     """TypeError naming the argument when ``out``, ``log``, ``registry``, ``directory`` or ``study``
     has a type the API does not take (before anything is read or run)."""
     for name, value in given.items():
-        if name == "registry":
+        if name == "progress":
+            if not isinstance(value, bool):
+                raise TypeError(f"progress={value!r}: give True or False")
+        elif name == "registry":
             if value is not None and not isinstance(value, Registry):
                 raise TypeError(f"registry={value!r}: give a cistrack Registry (cistrack.api.default_registry() or "
                                 "load_registry()), or None for the default one")
@@ -291,7 +294,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.runs.observers import checked_observers
 
     observers = checked_observers(observers, "observers")
-    _checked_arguments(out=out, log=log, registry=registry)
+    _checked_arguments(out=out, log=log, registry=registry, progress=progress)
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
@@ -328,7 +331,7 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     """
     from cistrack.fitting.from_observations import fit_files
 
-    _checked_arguments(out=out, log=log, registry=registry)
+    _checked_arguments(out=out, log=log, registry=registry, progress=progress)
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
@@ -420,7 +423,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     from cistrack.studies.study import run_study
     from cistrack.studies.study_table import study_rows
 
-    _checked_arguments(study=study, out=out, log=log)
+    _checked_arguments(study=study, out=out, log=log, progress=progress)
     items = _setting_items(settings) or None
     res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
                     first_seed=first_seed, n_seeds=n_seeds)

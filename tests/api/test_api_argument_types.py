@@ -22,6 +22,8 @@ import cistrack as ct
     (lambda: ct.run("quick", registry="x"), "registry='x'"),
     (lambda: ct.load_scenario("quick", registry=3), "registry=3"),
     (lambda: ct.fit("ok.psv", registry={}), "registry={}"),
+    (lambda: ct.fit("ok.psv", progress="no"), "progress='no'"),
+    (lambda: ct.run("quick", progress=1), "progress=1"),
 ])
 def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
     with pytest.raises(TypeError, match=argument.replace("[", r"\[").replace("]", r"\]")):
