@@ -352,9 +352,14 @@ def read_run(directory: str | Path) -> Run:
         manifest = read_manifest(d)
     except FileNotFoundError:
         raise ConfigError(f"{d}: not a run's results folder (no manifest.json)") from None
+    except ValueError as exc:  # truncated, or not JSON
+        raise ConfigError(f"{d}/manifest.json: cannot be read ({exc}); not a manifest cistrack finished writing") from None
     summary = manifest.get("summary")
     if not isinstance(summary, dict):
-        raise ConfigError(f"{d}/manifest.json: holds no run summary (the run did not finish writing it)")
+        raise ConfigError(f"{d}/manifest.json: holds no run summary (the run was killed, or is still running, before "
+                          "it wrote one); the steps it wrote stay readable with "
+                          "cistrack.results.store.read_steps(DIRECTORY), and 'cistrack export --force' exports its "
+                          "last estimate")
     return Run(RunSummary.from_dict(summary), d)
 
 

@@ -255,8 +255,12 @@ def cmd_export(args) -> int:
     """``cistrack export``: a run's orbit estimate, or a fit's fitted orbit, as CCSDS OEM or OPM."""
     from cistrack.runs.export import export_refusal, export_run
 
+    from cistrack.results.earlier_run import check_export_path
+
     _check_step_option(args.format, args.step)
     _check_out_suffix(args.format, args.out)
+    if args.out:
+        check_export_path(args.out, args.run)
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
     from cistrack.runs.progress import stage_log
@@ -352,7 +356,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", type=path_text("--out"), default=None, help="results directory (default runs/<scenario>__<filter>__<iod>__seed<N>, with __set-<hash> "
                    "after it for --set items; must be new, empty or an earlier results directory; one "
                    "holding another scenario's, settings' or seed's results is refused without --overwrite)")
-    r.add_argument("--rerun", metavar="FILE.rrd", default=None, help="write a rerun recording")
+    r.add_argument("--rerun", metavar="FILE.rrd", default=None, type=path_text("--rerun"), help="write a rerun recording")
     r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file, and the results of another scenario, "
                    "other settings or another seed in --out (both refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")

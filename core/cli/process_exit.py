@@ -26,9 +26,23 @@ import os
 import sys
 import threading
 
+from cistrack.env_flags import env_flag
+from cistrack.errors import CistrackError
+
 __all__ = ["allow_quick_exit", "exit_process"]
 
 _ALLOWED = False
+
+
+def _full_exit_asked() -> bool:
+    """``$CISTRACK_FULL_EXIT`` (:func:`cistrack.env_flags.env_flag`); a value that is not yes or no
+    gets the ordinary exit, the safe one, and a warning."""
+    try:
+        return bool(env_flag("CISTRACK_FULL_EXIT"))
+    except CistrackError as exc:
+        if sys.stderr is not None:
+            print(f"cistrack: warning: {exc}; exiting the ordinary way", file=sys.stderr)
+        return True
 
 
 def allow_quick_exit() -> None:
@@ -47,7 +61,7 @@ def _busy_threads() -> bool:
 
 def exit_process(code: int) -> None:
     """End the process with ``code``: quickly if the command allowed it, else through sys.exit."""
-    if not _ALLOWED or os.environ.get("CISTRACK_FULL_EXIT", "").strip() not in ("", "0") or _busy_threads():
+    if not _ALLOWED or _full_exit_asked() or _busy_threads():
         sys.exit(code)
     try:
         for stream in (sys.stdout, sys.stderr):

@@ -63,8 +63,10 @@ def add_study_parser(subparsers) -> None:
     sr.add_argument("study", help="study TOML file, built-in study name or study results directory")
     sr.add_argument("--out", type=path_text("--out"), default=None, help="study directory (default studies_out/<name>)")
     sr.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
-    sr.add_argument("--dask", default=None, metavar="ADDRESS", help="run on a Dask cluster ('local' for a local one)")
-    sr.add_argument("--rerun", metavar="DIR", default=None, help="write one rerun recording per run into DIR")
+    sr.add_argument("--dask", default=None, metavar="ADDRESS", type=path_text("--dask"),
+                    help="run on a Dask cluster ('local' for a local one)")
+    sr.add_argument("--rerun", metavar="DIR", default=None, type=path_text("--rerun"),
+                    help="write one rerun recording per run into DIR")
     sr.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                     help="override a value in every run (after the study's own overrides and variants), "
                          "validated like a scenario file; the default study directory names the settings")

@@ -50,10 +50,13 @@ def idle_core() -> bool:
     """Whether a second process would find a core free: at least 2 usable CPUs and a 1-minute
     load average below their number (on busy cores the two processes share them and compile
     the helpers both kernels use twice, which costs more than it saves).
-    ``CISTRACK_BACKGROUND_COMPILE=0`` says no, ``=1`` yes whatever the load."""
-    env = os.environ.get("CISTRACK_BACKGROUND_COMPILE", "").strip()
-    if env in ("0", "1"):
-        return env == "1"
+    ``CISTRACK_BACKGROUND_COMPILE=0`` (no, false, off) says no, ``=1`` (yes, true, on) yes whatever
+    the load (:func:`cistrack.env_flags.env_flag`)."""
+    from cistrack.env_flags import env_flag
+
+    forced = env_flag("CISTRACK_BACKGROUND_COMPILE")
+    if forced is not None:
+        return forced
     try:
         load = os.getloadavg()[0]
     except OSError:

@@ -30,6 +30,7 @@ import importlib.util
 import inspect
 import logging
 import os
+import shlex
 import stat
 import sys
 import tempfile
@@ -65,13 +66,15 @@ _KERNELS: dict[tuple[int, int], ModuleType] = {}
 def kernel_cache_dir() -> Path:
     """Directory where generated kernel modules (and numba's cache of them) are kept.
 
-    ``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels``, else
-    ``~/.cache/cistrack/kernels``; the path only (see :func:`secure_cache_dir`)."""
+    ``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels`` (an absolute path: a
+    relative one is ignored, as the XDG specification says, or every working directory would get
+    its own cache and compile afresh), else ``~/.cache/cistrack/kernels``; the path only (see
+    :func:`secure_cache_dir`)."""
     env = os.environ.get("CISTRACK_KERNEL_DIR")
     if env:
         return Path(env)
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg) if xdg else Path.home() / ".cache"
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = Path(xdg) if os.path.isabs(xdg) else Path.home() / ".cache"
     return base / "cistrack" / "kernels"
 
 
@@ -94,7 +97,7 @@ def secure_cache_dir(directory: Path | None = None) -> Path:
                           "cistrack imports code from it and only uses a directory you own")
     if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
         raise ConfigError(f"{where}: writable by group or others (mode {stat.S_IMODE(st.st_mode):o}); "
-                          f"cistrack imports code from it: run chmod 700 {path}")
+                          f"cistrack imports code from it: run chmod 700 {shlex.quote(str(path))}")
     return path
 
 

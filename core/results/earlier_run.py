@@ -29,7 +29,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["check_replacing", "check_recording_path", "RESULT_FILES", "RESULT_FOLDERS"]
+__all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -77,7 +77,8 @@ def _differences(old: dict | None, new: dict) -> list[str]:
 
 def _describe(man: dict, d: Path, scenario: Any, seed: int) -> str:
     """What the earlier run in ``d`` was and how this one differs, for a refusal."""
-    there = (f"a {man.get('status', 'unknown')} run of scenario '{man.get('scenario', '?')}', seed "
+    status = str(man.get("status", "unknown"))
+    there = (f"{'an' if status[:1] in 'aeiou' else 'a'} {status} run of scenario '{man.get('scenario', '?')}', seed "
              f"{man.get('seed', '?')}, filter {_component(man, 'filter')}, IOD {_component(man, 'iod')}")
     diffs = _differences(_recorded_tables(d), getattr(scenario, "raw", {}) or {})
     if man.get("seed") != int(seed):
@@ -134,6 +135,9 @@ def check_recording_path(recording: str | Path, directory: str | Path, where: st
 def _check_recording_path(recording: str | Path, directory: str | Path, where: str) -> None:
     r, d = Path(os.path.abspath(recording)).resolve(), Path(os.path.abspath(directory)).resolve()
     why = ""
+    if r != d and (str(recording).endswith(("/", os.sep)) or r.is_dir()):
+        raise ConfigError(f"{where} {recording}: a directory; give the recording's file name (e.g. "
+                          f"{Path(recording) / 'run.rrd'})")
     if r == d:
         why = f"is the results directory {directory} itself"
     elif any(r.is_relative_to(d / f) for f in RESULT_FOLDERS):
@@ -150,6 +154,22 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
                           f"recording path outside {Path(directory) / PARTS} and {Path(directory) / ESTIMATE_PARTS}, "
                           f"not named like a result file (e.g. {Path(directory) / 'recording.rrd'})")
     _check_writable(Path(recording))
+
+
+_FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")
+"""A fit's own records in its results directory (beside the run's)."""
+
+
+def check_export_path(out: str | Path, directory: str | Path, where: str = "--out") -> None:
+    """Refuse (:class:`ConfigError`) an export file that is one of the results it exports from:
+    the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records or a path inside
+    the part folders of ``directory``."""
+    o, d = Path(os.path.abspath(out)).resolve(), Path(os.path.abspath(directory)).resolve()
+    own = (o.parent == d and any(o.name == n or o.name.startswith(n + ".") for n in RESULT_FILES + _FIT_FILES)) \
+        or any(o.is_relative_to(d / f) for f in RESULT_FOLDERS) or o == d
+    if own:
+        raise ConfigError(f"{where} {out}: is one of the results of {directory} (or among them); the export would "
+                          f"replace them: give another file (default {Path(directory) / 'estimate.<format>'})")
 
 
 def _check_writable(recording: Path) -> None:

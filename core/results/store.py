@@ -172,6 +172,11 @@ class ResultsWriter:
         manifest says "failed" and why, and the error is raised again (after the manifest is
         written) so that the run's summary says so too."""
         status, extra, problems = summary.status, {}, []
+        if not self._manifest:  # the run failed before this observer saw it start (another observer's start)
+            self.directory.mkdir(parents=True, exist_ok=True)
+            self._manifest = {"run_id": run.run_id, "scenario": run.scenario.name, "seed": int(run.seed),
+                              "versions": versions(self.registry), "started_unix": time.time()}
+            self._t0 = time.perf_counter()
         try:
             self._parts.flush()
         except OSError as exc:

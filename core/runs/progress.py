@@ -39,7 +39,8 @@ class ProgressBar:
         # on a terminal the bar redraws at most every 0.1 s; into a file or a CI log, where every
         # redraw is kept, at most every 10 s (and once at the end)
         interactive = getattr(sys.stderr, "isatty", lambda: False)()
-        self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True, mininterval=0.1 if interactive else 10.0)
+        self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True, mininterval=0.1 if interactive else 10.0,
+                        disable=sys.stderr is None)  # stderr closed (2>&-): no bar, the run goes on
 
     def _advance(self, step) -> None:
         lost = self.custody is not None and step.truth is not None and not self.custody.verdict.kept

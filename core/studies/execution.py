@@ -59,13 +59,37 @@ def run_all(ex: cf.Executor, todo: Sequence[Any], fn: Callable[[Any], Any], bar:
     return said
 
 
+STOP_SECONDS = 5.0
+"""How long an interrupted study waits for a terminated worker process before killing it."""
+
+
 def shutdown(ex: cf.Executor, cancel: bool) -> None:
-    """Shut ``ex`` down, waiting for its workers; ``cancel``: runs not started yet never start
-    (the study was interrupted)."""
+    """Shut ``ex`` down, waiting for its workers; ``cancel`` (the study was interrupted): runs not
+    started yet never start, and a local pool's worker processes are terminated, so that the
+    interrupt ends the study at once (a worker that caught the interrupt itself could otherwise take
+    the next run, and waiting on a pool whose workers were interrupted can hang). A run they leave
+    unfinished says "running" in its manifest with a process that is gone: the next 'study run'
+    runs it again."""
+    if cancel and isinstance(ex, cf.ProcessPoolExecutor):
+        _stop_workers(ex)
+        return
     try:
         ex.shutdown(wait=True, cancel_futures=cancel)
     except TypeError:  # an executor whose shutdown takes no cancel_futures (older Dask)
         ex.shutdown(wait=True)
+
+
+def _stop_workers(ex: cf.ProcessPoolExecutor) -> None:
+    procs = list((getattr(ex, "_processes", None) or {}).values())  # CPython's pool keeps them here
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        p.join(timeout=STOP_SECONDS)
+        if p.is_alive():
+            p.kill()
+            p.join(timeout=STOP_SECONDS)
 
 
 def run_problems(specs: Sequence[Any], said: dict[str, str]) -> list[tuple[str, str]]:

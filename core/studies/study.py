@@ -469,7 +469,7 @@ def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, s
     bar = None
     if opts.progress and todo:
         from tqdm.auto import tqdm
-        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run")
+        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run", disable=sys.stderr is None)  # 2>&-: no bar
     said: dict[str, str] = {}
     ended = False
     try:

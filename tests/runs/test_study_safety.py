@@ -252,3 +252,33 @@ def test_a_disk_too_full_for_the_study_record_is_refused_and_leaves_nothing_to_b
     again = _cli("study", "run", str(study), "--out", str(out), "--workers", "1", "--quiet", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert _statuses(out) == ["finished"]
+
+
+@needs_proc
+def test_ctrl_c_ends_a_study_at_once_with_no_worker_left_and_the_next_run_completes_it(tmp_path):
+    study = _study(tmp_path, seeds="[1, 2, 3, 4]", days=6.0)
+    out = tmp_path / "s"
+    with open(tmp_path / "study.log", "w") as log:  # Ctrl-C reaches the whole process group, workers included
+        proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "study", "run", str(study), "--out", str(out),
+                                 "--workers", "2", "--quiet"], stdout=log, stderr=subprocess.STDOUT, cwd=tmp_path,
+                                start_new_session=True)
+    kids: list[int] = []
+    try:
+        _wait_for_a_run(proc, out)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGINT)
+        assert proc.wait(timeout=120) == 130  # a limit on waiting (a hang fails), not a timing requirement
+        deadline = time.monotonic() + 60  # multiprocessing's resource tracker ends just after the study
+        while time.monotonic() < deadline and any(_alive(k) for k in kids):
+            time.sleep(0.1)
+        assert [k for k in kids if _alive(k)] == [], "a worker outlived the interrupted study"
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        for k in kids:
+            if _alive(k):
+                os.kill(k, signal.SIGKILL)
+    assert "interrupted (SIGINT); finished runs are kept" in (tmp_path / "study.log").read_text()
+    again = _cli("study", "run", str(study), "--out", str(out), "--workers", "2", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert _statuses(out) == ["finished"] * 4
