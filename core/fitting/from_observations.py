@@ -757,12 +757,31 @@ def _fit_latest(obs: ObjectObservations, latest: ObjectObservations, d: Path, jo
     return one
 
 
+def _note_rejected_epoch(one: ObjectFit) -> None:
+    """A message when the fit's epoch lies more than a day after the last observation it used (the
+    observations there were rejected): the state and covariance there are the orbit's, propagated."""
+    from dataclasses import replace
+
+    r = one.result
+    if r is None or r.residuals is None or len(r.residuals.times) == 0:
+        return
+    used = np.asarray(r.residuals.times, dtype=float)[~np.asarray(r.residuals.rejected, dtype=bool)]
+    if used.size == 0:
+        return
+    gap_days = float(units.tu_to_days(float(r.epoch) - float(np.max(used))))
+    if gap_days > 1.0:
+        one.result = replace(r, messages=tuple(r.messages) + (
+            f"the fit epoch is {gap_days:.1f} days after the last observation it used (the later ones were rejected); "
+            "the state there is the fitted orbit propagated",))
+
+
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
     from cistrack.fitting.fit_record import write_fit_outputs
 
     add_findings(one, job.registry, job.say)
+    _note_rejected_epoch(one)
     if one.ok and job.choices.lov > 0:
         job.say(f"{obs.designation}: line of variations to +-{job.choices.lov:g} sigma")
         one.lov = _line_of_variations(one.run.context, one.result, job.choices)

@@ -62,3 +62,15 @@ def test_a_lone_tracklet_of_exactly_two_hours_determines_no_orbit(tmp_path, caps
     (tmp_path / "lone.psv").write_text(header + rows)
     assert main(["fit", str(tmp_path / "lone.psv"), "--out", str(tmp_path / "f"), "--quiet"]) == 3
     assert "one tracklet does not determine an orbit" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_fit_whose_latest_observations_are_rejected_says_how_far_its_epoch_lies_beyond_the_data(tmp_path):
+    text = OBSERVATIONS.read_text()
+    late = "".join(f"cis0001|CCD|711|2026-03-13T0{h}:00:00.000000Z|{200 + k}.0|-5.0{k}|1.0|1.0|Gaia3\n"
+                   for k, h in enumerate((3, 4, 5)))  # three observations far off the orbit
+    obs = tmp_path / "late.psv"
+    obs.write_text(text + late)
+    assert main(["fit", str(obs), "--out", str(tmp_path / "f"), "--quiet"]) in (0, 3)
+    record = json.loads((tmp_path / "f" / "fit.json").read_text())
+    assert any("days after the last observation it used" in m for m in record["messages"])
