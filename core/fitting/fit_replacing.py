@@ -80,16 +80,16 @@ def remove_other_form(directory: str | Path, stale: list[Path]) -> None:
     """Remove what :func:`check_fit_form` returned: ``arc-*`` folders, or a whole-arc fit's files."""
     import shutil
 
-    from cistrack.results.earlier_run import RESULT_FILES, RESULT_FOLDERS
+    from cistrack.results.earlier_run import FIT_FILES, RESULT_FILES, RESULT_FOLDERS
     from cistrack.results.output_paths import clear_earlier_results
 
     d = Path(directory)
     for p in stale:
         if p.is_dir():
             shutil.rmtree(p)
-        elif p.name == FIT_RECORD:  # the whole-arc fit: its record, plots and filter run
+        elif p.name == FIT_RECORD:  # the whole-arc fit: its record, plots, observations and filter run
             clear_earlier_results(d)
-            for name in RESULT_FILES + ("observations.psv", "observations-early.psv"):  # and the fit's copies
+            for name in RESULT_FILES + FIT_FILES:
                 (d / name).unlink(missing_ok=True)
             for name in RESULT_FOLDERS:
                 shutil.rmtree(d / name, ignore_errors=True)

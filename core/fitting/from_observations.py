@@ -625,15 +625,16 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
                                                                        else Path("runs") / slug)
         plans.append((obs, d))
     where = "--out" if out is not None else "the results directory"
+    stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
     for obs, d in plans:  # validate every scenario and directory before the first run
         _checked_scenario(obs, d / "observations.psv", scen_settings, reg)
         replaced = check_fit_replacing(d, obs.designation, where, overwrite)
         if replaced:
             say(f"--overwrite: replacing {replaced} in {d}")
-        check_fit_form(d, choices.arcs.arcs == "each", where, overwrite)
+        stale_of[d] = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite)
     results = []
     for obs, d in plans:
-        stale = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite)
+        stale = stale_of[d]
         if stale:
             remove_other_form(d, stale)
             say(f"--overwrite: removed the earlier fit of another fit.arcs in {d} ({', '.join(p.name for p in stale)})")
@@ -760,8 +761,6 @@ def _fit_latest(obs: ObjectObservations, latest: ObjectObservations, d: Path, jo
 def _note_rejected_epoch(one: ObjectFit) -> None:
     """A message when the fit's epoch lies more than a day after the last observation it used (the
     observations there were rejected): the state and covariance there are the orbit's, propagated."""
-    from dataclasses import replace
-
     r = one.result
     if r is None or r.residuals is None or len(r.residuals.times) == 0:
         return
@@ -770,9 +769,8 @@ def _note_rejected_epoch(one: ObjectFit) -> None:
         return
     gap_days = float(units.tu_to_days(float(r.epoch) - float(np.max(used))))
     if gap_days > 1.0:
-        one.result = replace(r, messages=tuple(r.messages) + (
-            f"the fit epoch is {gap_days:.1f} days after the last observation it used (the later ones were rejected); "
-            "the state there is the fitted orbit propagated",))
+        one.result = _with_messages(r, [f"the fit epoch is {gap_days:.1f} days after the last observation it used "
+                                        "(the later ones were rejected); the state there is the fitted orbit propagated"])
 
 
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:

@@ -29,7 +29,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS"]
+__all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
+           "FIT_FILES"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -140,9 +141,9 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
                           f"{Path(recording) / 'run.rrd'})")
     if r == d:
         why = f"is the results directory {directory} itself"
-    elif any(r.is_relative_to(d / f) for f in RESULT_FOLDERS):
+    elif _in_part_folders(r, d):
         why = f"is inside a folder of part files of the results directory {directory}"
-    elif r.parent == d and any(r.name == n or r.name.startswith(n + ".") for n in RESULT_FILES):
+    elif _named_as(r, d, RESULT_FILES):
         why = f"is one of the run's own result files in the results directory {directory}"
     elif r.parent == d and any(fnmatch.fnmatch(r.name, p) for p in EARLIER_RESULTS):
         why = (f"is a file that the run removes as it starts in the results directory {directory} "
@@ -156,8 +157,18 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
     _check_writable(Path(recording))
 
 
-_FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")
+FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")
 """A fit's own records in its results directory (beside the run's)."""
+
+
+def _in_part_folders(path: Path, d: Path) -> bool:
+    """Whether ``path`` lies inside one of the part folders of the results directory ``d``."""
+    return any(path.is_relative_to(d / f) for f in RESULT_FOLDERS)
+
+
+def _named_as(path: Path, d: Path, names: tuple[str, ...]) -> bool:
+    """Whether ``path`` is one of ``names`` in ``d``, or one of their temporary files (``NAME.*``)."""
+    return path.parent == d and any(path.name == n or path.name.startswith(n + ".") for n in names)
 
 
 def check_export_path(out: str | Path, directory: str | Path, where: str = "--out") -> None:
@@ -165,9 +176,7 @@ def check_export_path(out: str | Path, directory: str | Path, where: str = "--ou
     the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records or a path inside
     the part folders of ``directory``."""
     o, d = Path(os.path.abspath(out)).resolve(), Path(os.path.abspath(directory)).resolve()
-    own = (o.parent == d and any(o.name == n or o.name.startswith(n + ".") for n in RESULT_FILES + _FIT_FILES)) \
-        or any(o.is_relative_to(d / f) for f in RESULT_FOLDERS) or o == d
-    if own:
+    if o == d or _named_as(o, d, RESULT_FILES + FIT_FILES) or _in_part_folders(o, d):
         raise ConfigError(f"{where} {out}: is one of the results of {directory} (or among them); the export would "
                           f"replace them: give another file (default {Path(directory) / 'estimate.<format>'})")
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir", "check_study_dir", "recorded_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
+__all__ = ["check_output_dir", "check_study_dir", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
            "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "PART_FOLDERS"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
@@ -155,6 +155,13 @@ def recorded_study(record: Path) -> tuple[str | None, str | None]:
     return (str(name) if name is not None else None), (str(source) if source is not None else None)
 
 
+def is_same_study(recorded: tuple[str | None, str | None], name: str, source: str) -> bool:
+    """Whether the study a ``study.json`` records (:func:`recorded_study`: name, source) is study
+    ``name`` from the file ``source`` (by name; by source for a record written before names were)."""
+    rec_name, rec_source = recorded
+    return rec_name == name if rec_name is not None else rec_source == source
+
+
 def check_study_dir(directory: str | Path, name: str, source: str, where: str) -> Path:
     """Create the study directory ``directory`` or check that study ``name`` (from the study file
     ``source``) may write there; return it.
@@ -182,8 +189,7 @@ def check_study_dir(directory: str | Path, name: str, source: str, where: str) -
                 except (OSError, ValueError) as exc:
                     raise ConfigError(f"{where} {d}: its {STUDY_RECORD} cannot be read ({exc}); {allowed} "
                                       f"(or delete that {STUDY_RECORD} if the directory is this study's)") from None
-                same = rec_name == name if rec_name is not None else rec_source == source
-                if not same:
+                if not is_same_study((rec_name, rec_source), name, source):
                     raise ConfigError(f"{where} {d}: holds another study ("
                                       + (f"'{rec_name}'" if rec_name is not None else f"from {rec_source}")
                                       + f"), not '{name}'; {allowed}")

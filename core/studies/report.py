@@ -181,7 +181,7 @@ def _check_same_study(out: Path, data: dict, path_or_name, where: str) -> None:
     """ConfigError when the study directory ``out`` holds another study than ``path_or_name``
     (its ``study.json`` names another): 'study run' refuses to write there, and a report of it
     under this study's name would describe runs of the other."""
-    from cistrack.results.output_paths import recorded_study
+    from cistrack.results.output_paths import is_same_study, recorded_study
     from cistrack.studies.study_file import study_source
 
     source = study_source(path_or_name)
@@ -190,7 +190,7 @@ def _check_same_study(out: Path, data: dict, path_or_name, where: str) -> None:
         rec_name, rec_source = recorded_study(out / "study.json")
     except (OSError, ValueError):
         return  # unreadable: the runs are checked one by one
-    if (rec_name != name) if rec_name is not None else (rec_source != source):
+    if not is_same_study((rec_name, rec_source), name, source):
         other = rec_name if rec_name is not None else rec_source
         raise ConfigError(f"{where} {out}: holds another study ('{other}'), not '{name}': report it as "
                           f"'cistrack study report {out}' (the directory alone), or give this study's own directory")

@@ -157,15 +157,15 @@ def study_sweep(data: dict, p: Path) -> list[tuple[str, list]]:
         raise ConfigError(f"{p}: key 'sweep' must be a table of settings to lists of values, e.g. "
                           'sweep = {"truth.maneuvers.delta_v_ms" = [0.1, 1.0]}')
     out = []
-    seen: dict[str, str] = {}
+    seen: set[str] = set()
     for key, values in _flat(table):
         where = f"{p}: key 'sweep', setting {key!r}"
         if not all(part.strip() == part and part for part in key.split(".")):
             raise ConfigError(f"{where}: not a dotted setting TABLE.KEY (as --set takes; no spaces around the parts)")
         _check_sweepable(key, where)
         if key in seen:
-            raise ConfigError(f"{where}: the same setting as {seen[key]!r}; sweep each setting once")
-        seen[key] = key
+            raise ConfigError(f"{where}: the same setting as {key!r}; sweep each setting once")
+        seen.add(key)
         if not isinstance(values, list) or not values:
             raise ConfigError(f"{where}: must be a non-empty list of values, got {values!r}")
         bad = [v for v in values if not isinstance(v, _SWEEP_VALUE)]

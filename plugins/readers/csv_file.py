@@ -249,10 +249,11 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     """
     p = Path(path)
     ep = _parse_epoch(p, epoch)
-    problem = sigma_arcsec_problem(float(sigma_arcsec))
-    if problem or not range_alpha > 0:
-        raise MeasurementError(f"{p}: default sigma_arcsec {problem or 'is fine'}; range_alpha must be > 0 "
-                               f"(got sigma_arcsec={sigma_arcsec!r}, range_alpha={range_alpha!r})")
+    problems = [f"default sigma_arcsec {p_}" for p_ in [sigma_arcsec_problem(float(sigma_arcsec))] if p_]
+    problems += [] if range_alpha > 0 else ["range_alpha must be > 0"]
+    if problems:
+        raise MeasurementError(f"{p}: {'; '.join(problems)} (got sigma_arcsec={sigma_arcsec!r}, "
+                               f"range_alpha={range_alpha!r})")
     rows = _data_lines(p)
     col = _header_columns(p, rows)
     parser = _RowParser(col, ep, sigma_arcsec, range_alpha, sites or {})

@@ -253,7 +253,10 @@ class SpaceTelescope(Sensor):
         """Outside every exclusion cone and detectable: states (N, 6), t scalar or (N,) -> (N,) bool."""
         x = self._check_states(states)
         tt = self._check_times(t, x.shape[0])
-        tgt, obs = self._inertial(x, tt)
+        return self._allowed(*self._inertial(x, tt), tt)
+
+    def _allowed(self, tgt: np.ndarray, obs: np.ndarray, tt: np.ndarray) -> np.ndarray:
+        """:meth:`visible` of the inertial target and observer states (N, 6) km at ``tt``."""
         return self._rules.allowed(tgt[:, :3] - obs[:, :3], obs[:, :3], self._sky.bodies_km(tt), self._sky.radii_km)
 
     def exclusion_cones(self, t: float) -> dict[str, tuple[np.ndarray, float]]:
@@ -291,7 +294,7 @@ class SpaceTelescope(Sensor):
             raise MeasurementError(f"sensor 'space-telescope': the target comes within {sep[k]:.3g} km of the observer "
                                    f"(at {tt[k] * TU_S / 86400.0:.3f} days): a telescope cannot observe an object at "
                                    "its own place; give the observer another orbit, phase or state_km")
-        return passes_from_mask(tt, self.visible(x, tt) & self.in_window(tt))
+        return passes_from_mask(tt, self._allowed(tgt, obs, tt) & self.in_window(tt))
 
     def line_of_sight(self, angles: np.ndarray, t) -> np.ndarray:
         """Unit synodic vectors (N, 3) along (RA, Dec) pairs (N, 2) rad at t (scalar or (N,) TU).
