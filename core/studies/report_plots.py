@@ -44,7 +44,7 @@ CHI2_DOF = 6
 FORMATS = ("png", "svg", "pdf")
 PANELS: tuple[tuple[str, str, str], ...] = (
     ("pos_err_km", "position error (km)", "log"),
-    ("sigma_pos_km", "1-sigma position, RSS of axes (km)", "log"),
+    ("sigma_pos_km", "1-sigma position\n(RSS of axes, km)", "log"),
     ("nees", "NEES", "log"),
     ("entropy", "entropy (nats)", "linear"),
 )
