@@ -1,6 +1,6 @@
 """The ``cistrack`` command.
 
-    cistrack run [SCENARIO] [--seed N] [--out DIR] [--set K=V ...] [--overwrite] [--rerun FILE.rrd] [--rerun-serve]
+    cistrack run [SCENARIO] [--seed N] [--out DIR] [--set K=V ...] [--overwrite] [--rerun FILE.rrd] [--rerun-serve [--rerun-port N]]
     cistrack plugins [NAME] [--check NAME] [--kind KIND]
     cistrack view FILE.rrd [--port 9090]
     cistrack scenarios
@@ -24,7 +24,7 @@ from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
 from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
 from cistrack.cli.predict_command import add_predict_parser
-from cistrack.scenario.limits import PORT_MAX, PORT_MIN, check_seed
+from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
@@ -59,6 +59,8 @@ def cmd_run(args) -> int:
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings, settings_suffix
 
+    if args.rerun_port is not None and not args.rerun_serve:
+        raise ConfigError("--rerun-port: the port of --rerun-serve only; give --rerun-serve too")
     reg = default_registry()
     scen = apply_settings(load_scenario(args.scenario or DEFAULT_SCENARIO, reg), args.set, reg)
     seed = scen.seed if args.seed is None else check_seed(args.seed, "--seed")
@@ -107,9 +109,10 @@ def _rerun_recorder(args, reg, scen):
     """The rerun recorder the options ask for (a file, a server, a viewer), or None."""
     if not (args.rerun or args.rerun_serve or args.rerun_spawn):
         return None
+    port_ = {} if args.rerun_port is None else {"serve_port": args.rerun_port}
     return reg.create("recorder", "rerun", path=args.rerun, serve=args.rerun_serve,
                       spawn=args.rerun_spawn, max_points=args.max_points,
-                      frame=scen.recording_frame, overwrite=args.overwrite)
+                      frame=scen.recording_frame, overwrite=args.overwrite, **port_)
 
 
 def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
@@ -228,15 +231,6 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
     return 0
 
 
-def _port_option(text: str) -> int:
-    """``--port``: a TCP port number, decimal digits only, from 1 to 65535 (argparse prints the
-    error naming the option)."""
-    if not (text.isascii() and text.isdigit()) or not PORT_MIN <= int(text) <= PORT_MAX:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a port: give an integer from {PORT_MIN} "
-                                         f"to {PORT_MAX} (default 9090)")
-    return int(text)
-
-
 def _check_step_option(format: str, step: int | None) -> None:
     """Refuse ``--step`` for an exporter that writes every step (it has no ``step`` parameter)."""
     from cistrack.interfaces.component import param_specs
@@ -345,7 +339,7 @@ def cmd_scenarios(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from cistrack import __version__
-    from cistrack.cli.option_types import count, path_text
+    from cistrack.cli.option_types import count, path_text, port
 
     p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
     p.add_argument("--version", action="version", version=f"cistrack {__version__}")
@@ -360,6 +354,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--overwrite", action="store_true", help="replace an existing --rerun file, and the results of another scenario, "
                    "other settings or another seed in --out (both refused otherwise)")
     r.add_argument("--rerun-serve", action="store_true", help="serve the recording to a viewer on 127.0.0.1")
+    r.add_argument("--rerun-port", type=port(9876), default=None, metavar="PORT",
+                   help="the 127.0.0.1 port --rerun-serve serves on (default 9876)")
     r.add_argument("--rerun-spawn", action="store_true", help="start the native rerun viewer")
     r.add_argument("--max-points", type=count(1), default=2000, help="particles logged per step in rerun (each mixture component kept)")
     r.add_argument("--rows-per-part", type=int, default=None, metavar="N", help="steps per results part file (default 1000, or 10 s)")
@@ -388,7 +384,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex.set_defaults(func=cmd_export)
     v = sub.add_parser("view", help="open a rerun recording in the web viewer (prints a URL that loads it)")
     v.add_argument("recording", help="a .rrd file written by cistrack run --rerun")
-    v.add_argument("--port", type=_port_option, default=9090,
+    v.add_argument("--port", type=port(9090), default=9090,
                    help="web viewer port on 127.0.0.1, 1 to 65535, not in use (default 9090)")
     v.set_defaults(func=cmd_view)
     sc = sub.add_parser("scenarios", help="list the built-in scenarios and studies")
@@ -459,7 +455,35 @@ def console_main() -> None:
         reconfigure = getattr(stream, "reconfigure", None)  # absent on a stream that is not a text file
         if reconfigure is not None:
             reconfigure(errors="backslashreplace")
+    if sys.stdout is not None:
+        sys.stdout = NamedOutput(sys.stdout, "standard output")
     exit_process(main())
+
+
+class NamedOutput:
+    """A text stream whose write and flush errors name it (``standard output: No space left on
+    device``, where the bare OSError named nothing). A closed pipe stays a BrokenPipeError;
+    everything else is the stream's own."""
+
+    def __init__(self, stream, label: str):
+        self._stream, self._label = stream, label
+
+    def write(self, text: str) -> int:
+        return self._named(self._stream.write, text)
+
+    def flush(self) -> None:
+        self._named(self._stream.flush)
+
+    def _named(self, call, *args):
+        try:
+            return call(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), self._label) from exc
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Callable
 
-__all__ = ["path_text", "count"]
+__all__ = ["path_text", "count", "port"]
 
 
 def path_text(option: str) -> Callable[[str], str]:
@@ -29,4 +29,18 @@ def count(minimum: int = 1) -> Callable[[str], int]:
         if value < minimum:
             raise argparse.ArgumentTypeError(f"{value}: give a whole number >= {minimum}")
         return value
+    return convert
+
+
+
+def port(default: int) -> Callable[[str], int]:
+    """A converter for a TCP port option: decimal digits only, from 1 to 65535 (``default`` is
+    named in the message)."""
+    from cistrack.interfaces.limits import PORT_MAX, PORT_MIN
+
+    def convert(text: str) -> int:
+        if not (text.isascii() and text.isdigit()) or not PORT_MIN <= int(text) <= PORT_MAX:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a port: give an integer from {PORT_MIN} "
+                                             f"to {PORT_MAX} (default {default})")
+        return int(text)
     return convert

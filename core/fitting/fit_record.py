@@ -26,6 +26,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 from pathlib import Path
 from typing import Any, Callable
 
@@ -36,7 +37,7 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.fitting.fit_record_check import check_orbit_fields
 from cistrack.results.atomic_files import write_text_atomic
 
-__all__ = ["write_fit_outputs", "read_fit_record", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
+__all__ = ["write_fit_outputs", "read_fit_record", "UNDEFINED_NUMBERS", "finite_or_null", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
            "area_to_mass_record", "area_to_mass_summary"]
 
 FIT_RECORD = "fit.json"
@@ -214,6 +215,24 @@ def _residuals_csv(scen, table) -> str:
     return buf.getvalue()
 
 
+UNDEFINED_NUMBERS = ("rms", "chi2", "noise_scale", "condition_number", "rejection_threshold")
+"""Numbers of ``fit.json`` that may be undefined (NaN) or unbounded (infinite), written as null
+(strict JSON has neither) and read back as NaN."""
+
+
+def finite_or_null(v: Any) -> Any:
+    """``v`` with every NaN or infinite number (Python or numpy, in lists and tables) as None."""
+    if isinstance(v, dict):
+        return {k: finite_or_null(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [finite_or_null(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return finite_or_null(v.tolist())
+    if isinstance(v, (float, np.floating)) and not math.isfinite(float(v)):
+        return None
+    return v
+
+
 def _json_default(v: Any) -> Any:
     if isinstance(v, (np.floating, np.integer)):
         return v.item()
@@ -257,7 +276,7 @@ def _artefacts(one, obs, d: Path) -> list[tuple[Path, Callable[[Path], list[Path
         out.append((d, lambda _d: plot_residuals(d, one.result.residuals, one.scenario.epoch, one.designation)))
     if one.result is not None and one.lov:
         out.append((d / LOV, _text_file(_lov_csv(one.lov, one.result))))
-    record = json.dumps(_fit_dict(one, obs), indent=1, default=_json_default, allow_nan=True)
+    record = json.dumps(finite_or_null(_fit_dict(one, obs)), indent=1, default=_json_default, allow_nan=False)
     return out + [(d / FIT_RECORD, _text_file(record + "\n"))]
 
 
@@ -286,6 +305,9 @@ def read_fit_record(run_dir: str | Path) -> dict[str, Any]:
         raise ConfigError(f"{p}: cannot be read ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != _FORMAT:
         raise ConfigError(f"{p}: not a cistrack fit record (no \"format\": \"{_FORMAT}\")")
+    for key in UNDEFINED_NUMBERS:
+        if key in data and data[key] is None:
+            data[key] = math.nan
     if "state" in data:
         check_orbit_fields(p, data)
     return data

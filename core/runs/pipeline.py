@@ -128,16 +128,20 @@ def _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say)
     """(measurements, passes) of the scenario's one sensor: its passes of the truth (a pass in
     progress at t = 0 skipped), the schedule's times in them, noisy measurements at those times."""
     passes = sensor.passes(grid, grid_states)
+    skipped = ""
     if passes and passes[0].start <= grid[0] + 1e-12:
         # A pass already in progress at t = 0 is cut short; the target is acquired at its
         # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
-        say(f"skipping the pass in progress at t = 0 (visible for its first "
-            f"{units.tu_to_hours(passes[0].end - grid[0]):.1f} h only)")
+        hours = units.tu_to_hours(passes[0].end - grid[0])
+        say(f"skipping the pass in progress at t = 0 (visible for its first {hours:.1f} h only)")
+        skipped = (f"; the pass in progress at t = 0 ({hours:.1f} h"
+                   f"{', the whole run: the target never sets' if passes[0].end >= grid[-1] - 1e-12 else ''})"
+                   " is never tasked, as the target is acquired at its first rise")
         passes = passes[1:]
     times = plan_measurement_times(scenario, schedule, passes, rngs["schedule"])
     if times.size == 0:
         raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
-                          f"({len(passes)} visibility passes in {scenario.duration_days:g} days)")
+                          f"({len(passes)} visibility passes in {scenario.duration_days:g} days{skipped})")
     say(f"{len(passes)} passes, {times.size} measurements scheduled")
     return sensor.simulate(truth.states_at(times), times, rngs["measurements"]), passes
 

@@ -186,7 +186,7 @@ class RerunRecorder(Component):
         if self.serve and self.serve_port and _port_in_use(self.serve_port):
             self._fail("serve_port", self.serve_port,
                        f"127.0.0.1:{self.serve_port} is already in use (another viewer or run?); stop "
-                       "that process or give another serve_port")
+                       "that process or give another serve_port (cistrack run --rerun-port N)")
         if self.path is not None:
             target = Path(self.path)
             folder = target if target.is_dir() else target.parent  # a directory: one file per run

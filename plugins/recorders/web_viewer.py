@@ -32,6 +32,7 @@ from cistrack.errors import CistrackError
 from cistrack.interfaces.limits import check_port
 
 from .blueprint import APPLICATION_ID
+from .recording_check import recording_problem
 from .blueprint_inputs import read_blueprint_inputs
 from .opening_page import opening_page, software_blueprint
 from .ports import LOOPBACK, PortInUseError, ensure_port_free, in_use_message
@@ -126,6 +127,9 @@ def serve_recording(path: str | Path, web_port: int = 9090, timeout_s: float = 3
     rrd = rrd.resolve()
     if rrd.suffix != ".rrd":
         raise CistrackError(f"{path}: expected a rerun recording (.rrd)")
+    problem = recording_problem(rrd)
+    if problem:
+        _LOG.warning(f"warning: {problem}")
     web_port = check_port(web_port, option)
     ensure_port_free(web_port, option)
     exe = find_viewer_executable()

@@ -13,3 +13,20 @@ def test_a_reader_closing_the_pipe_early_ends_the_listing_quietly():
     rc, _, err = out.stdout.partition("\n")
     assert rc.strip() == "0", out.stdout
     assert "Traceback" not in err and "BrokenPipeError" not in err, err
+
+
+def test_a_full_standard_output_is_named_in_the_error(tmp_path):
+    """Output that cannot be written (here /dev/full: "No space left on device") is an error that
+    says it was the standard output, not a bare system message."""
+    import os
+
+    import pytest
+
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    with open("/dev/full", "w") as full:
+        out = subprocess.run([sys.executable, "-m", "cistrack.cli.main", "scenarios"], stdout=full,
+                             stderr=subprocess.PIPE, text=True, timeout=120)
+    assert out.returncode == 2
+    assert "cistrack: error: standard output: No space left on device" in out.stderr
+    assert "Traceback" not in out.stderr

@@ -46,6 +46,22 @@ def test_an_undefined_noise_scale_is_allowed(tmp_path):
     assert math.isnan(read_fit_record(_written(tmp_path, _tampered("noise_scale", float("nan"))))["noise_scale"])
 
 
+def test_an_undefined_number_written_as_null_reads_back_as_nan(tmp_path):
+    rec = read_fit_record(_written(tmp_path, _tampered("noise_scale", None)))
+    assert math.isnan(rec["noise_scale"])
+
+
+def test_fit_json_numbers_are_strict_json():
+    """NaN and infinities, which strict JSON readers (jq, JavaScript) refuse, are written as null."""
+    from cistrack.fitting.fit_record import finite_or_null
+
+    data = {"noise_scale": float("nan"), "rejection_threshold": np.inf, "sigmas": np.array([1.0, -np.inf]),
+            "nested": [{"x": np.float64("nan"), "n": 3, "ok": 2.5}]}
+    text = json.dumps(finite_or_null(data), allow_nan=False)
+    assert json.loads(text) == {"noise_scale": None, "rejection_threshold": None, "sigmas": [1.0, None],
+                                "nested": [{"x": None, "n": 3, "ok": 2.5}]}
+
+
 @pytest.mark.parametrize("field, value, named", [
     ("state", "abc", "'state'"),
     ("state", [1, 2, 3, 4, 5], "'state'"),

@@ -144,3 +144,15 @@ def test_the_summary_counts_passes_without_measurements_as_unobserved():
     unobserved = s.n_passes - s.n_passes_observed
     assert (f"{s.n_measurements} measurements in {len(observed)} of {s.n_passes} visibility passes "
             f"({unobserved} unobserved: schedule or sensor shutoff)") in count_lines(s)[0]
+
+
+def test_a_target_that_never_sets_is_refused_with_the_reason():
+    """With the elevation mask at -90 deg the target is in view for the whole run: its one pass is
+    in progress at t = 0 and is never tasked. The error says so, not only "0 visibility passes"."""
+    from cistrack.errors import ConfigError
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+
+    scen = load_scenario("quick").with_overrides({"sensor": {"elevation_mask_deg": -90.0}})
+    with pytest.raises(ConfigError, match=r"the whole run: the target never sets\) is never tasked"):
+        run_scenario(scen, seed=1)

@@ -105,6 +105,24 @@ def test_rerun_serve_from_the_cli_with_the_default_port_taken_fails_fast(tmp_pat
     assert time.time() - t0 < 60
 
 
+def test_rerun_port_chooses_the_served_port_and_the_refusal_names_the_option(tmp_path):
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(tmp_path / "r"),
+                               "--rerun-serve", "--rerun-port", str(port), "--quiet"],
+                              capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert f"127.0.0.1:{port} is already in use" in proc.stderr and "--rerun-port N" in proc.stderr
+
+
+def test_rerun_port_without_rerun_serve_is_refused():
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", "quick", "--rerun-port", "9000"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "give --rerun-serve too" in proc.stderr
+
+
 def test_rerun_to_an_unwritable_place_is_refused_before_computing(tmp_path):
     from cistrack.errors import ParameterError
     from cistrack.plugin.registry import default_registry
