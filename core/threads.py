@@ -23,7 +23,7 @@ import numpy as np
 
 from cistrack.errors import ConfigError
 
-__all__ = ["num_threads", "run_chunks", "library_thread_limit", "capped_threads", "SHARE_MIN_SECONDS"]
+__all__ = ["num_threads", "thread_setting", "run_chunks", "library_thread_limit", "capped_threads", "SHARE_MIN_SECONDS"]
 
 _POOL: ThreadPoolExecutor | None = None
 _POOL_PID = -1
@@ -35,17 +35,27 @@ def num_threads() -> int:
     changes the numbers (rows are computed independently).
 
     Raises :class:`ConfigError` if ``$CISTRACK_NUM_THREADS`` is not an integer from 1 to 1024."""
-    env = os.environ.get("CISTRACK_NUM_THREADS")
-    if env is not None and env.strip():
-        digits = env.strip()
-        n = int(digits) if digits.isascii() and digits.isdigit() else 0  # int() would take "1_0" as 10
-        if not 1 <= n <= 1024:
-            raise ConfigError(f"environment variable CISTRACK_NUM_THREADS={env!r}: must be an integer "
-                              "from 1 to 1024 (or unset: numba's thread count)")
+    n = thread_setting()
+    if n is not None:
         return n
     import numba
 
     return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def thread_setting() -> int | None:
+    """``$CISTRACK_NUM_THREADS`` as a count, None when unset or blank (numba is not imported).
+
+    Raises :class:`ConfigError` if it is not an integer from 1 to 1024."""
+    env = os.environ.get("CISTRACK_NUM_THREADS")
+    if env is None or not env.strip():
+        return None
+    digits = env.strip()
+    n = int(digits) if digits.isascii() and digits.isdigit() else 0  # int() would take "1_0" as 10
+    if not 1 <= n <= 1024:
+        raise ConfigError(f"environment variable CISTRACK_NUM_THREADS={env!r}: must be an integer "
+                          "from 1 to 1024 (or unset: numba's thread count)")
+    return n
 
 
 def _pool(workers: int) -> ThreadPoolExecutor:

@@ -27,10 +27,14 @@ def entropy(belief: Belief, sample_logpdf: np.ndarray | None = None) -> float:
     the belief's mixture density of the state in km and km/s (nats). ``sample_logpdf`` (N,)
     may pass the nondimensional log density of the samples when it is already known."""
     lp = belief.mixture.logpdf(belief.samples.states) if sample_logpdf is None else sample_logpdf
-    if belief.samples.weights is not None:
-        h = -float(belief.samples.weights @ lp)
-    else:
-        h = -float(np.mean(lp))
+    w = belief.samples.weights
+    if w is None:
+        return -float(np.mean(lp)) + LOG_JACOBIAN_KM
+    with np.errstate(invalid="ignore"):
+        h = -float(w @ lp)
+    if np.isnan(h):  # a sample of weight 0 where the density is 0 adds nothing (0 x -inf is NaN)
+        kept = w > 0.0
+        h = -float(w[kept] @ lp[kept])
     return h + LOG_JACOBIAN_KM
 
 

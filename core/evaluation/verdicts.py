@@ -196,6 +196,8 @@ def verdict_lines(summary, run_dir=None, fmt=lambda v: f"{v:.3g}" if v is not No
                 + " (no truth to compare against)")
         where = f" (per measurement in {run_dir}/steps.parquet: res_*_arcsec, sd_*_arcsec, nis)" if run_dir else ""
         return [head, f"  measurement consistency: {consistency_text(c)}{where}"]
-    custody = ("kept" if summary.custody_kept else
-               f"LOST at step {summary.custody_lost_step} (t = {fmt(summary.custody_lost_t_days)} d)")
+    lost_at = ("" if summary.custody_lost_step is None else f" at step {summary.custody_lost_step}") + (
+        f" (t = {fmt(summary.custody_lost_t_days)} d)" if summary.custody_lost_t_days is not None
+        else f" (the run ended {summary.status}, before it was judged)")
+    custody = "kept" if summary.custody_kept else f"LOST{lost_at}"
     return [f"  verdict: {v.kind}{at}" + (f": {v.reason}" if v.reason else ""), f"  custody: {custody}"]

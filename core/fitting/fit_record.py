@@ -36,8 +36,9 @@ from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.fitting.fit_record_check import check_orbit_fields
 from cistrack.results.atomic_files import write_text_atomic
+from cistrack.results.strict_json import finite_or_null
 
-__all__ = ["write_fit_outputs", "read_fit_record", "UNDEFINED_NUMBERS", "finite_or_null", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
+__all__ = ["write_fit_outputs", "read_fit_record", "UNDEFINED_NUMBERS", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
            "area_to_mass_record", "area_to_mass_summary"]
 
 FIT_RECORD = "fit.json"
@@ -218,19 +219,6 @@ def _residuals_csv(scen, table) -> str:
 UNDEFINED_NUMBERS = ("rms", "chi2", "noise_scale", "condition_number", "rejection_threshold")
 """Numbers of ``fit.json`` that may be undefined (NaN) or unbounded (infinite), written as null
 (strict JSON has neither) and read back as NaN."""
-
-
-def finite_or_null(v: Any) -> Any:
-    """``v`` with every NaN or infinite number (Python or numpy, in lists and tables) as None."""
-    if isinstance(v, dict):
-        return {k: finite_or_null(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [finite_or_null(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return finite_or_null(v.tolist())
-    if isinstance(v, (float, np.floating)) and not math.isfinite(float(v)):
-        return None
-    return v
 
 
 def _json_default(v: Any) -> Any:

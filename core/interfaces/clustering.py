@@ -5,9 +5,10 @@ from abc import abstractmethod
 
 import numpy as np
 
+from cistrack.errors import FilterError
 from cistrack.interfaces.component import Component
 
-__all__ = ["Clusterer"]
+__all__ = ["Clusterer", "checked_labels"]
 
 
 class Clusterer(Component):
@@ -18,3 +19,26 @@ class Clusterer(Component):
     @abstractmethod
     def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Labels (N,) int in [0, M) for the particles ``x`` (N, d); every label in range is used."""
+
+
+def checked_labels(labels, n: int, who: str) -> np.ndarray:
+    """A clusterer's ``labels`` for ``n`` particles as a (n,) intp array, refused (FilterError naming
+    ``who``) unless they are what :meth:`Clusterer.cluster` promises: n whole numbers from 0 to n - 1
+    (whole-valued floats are taken as they are)."""
+    try:
+        raw = np.asarray(labels)
+        values = raw.astype(float) if raw.dtype.kind in "biuf" else None
+    except (TypeError, ValueError):
+        values = None
+    if values is None:
+        raise FilterError(f"{who}: cluster() returned {type(labels).__name__} of {getattr(raw, 'dtype', '?')}, "
+                          "not labels (a (N,) array of whole numbers)")
+    if values.shape != (n,):
+        raise FilterError(f"{who}: cluster() returned labels of shape {values.shape} for {n} particles; "
+                          f"expected ({n},)")
+    if n and not (np.all(np.isfinite(values)) and np.all(values == np.floor(values))
+                  and values.min() >= 0 and values.max() < n):
+        raise FilterError(f"{who}: cluster() returned labels that are not whole numbers from 0 to {n - 1} "
+                          f"(from {np.nanmin(values):g} to {np.nanmax(values):g})")
+    return raw.astype(np.intp)
+

@@ -11,7 +11,6 @@ built-in components (distribution ``cistrack``).
 from __future__ import annotations
 
 import logging
-import os
 import traceback
 from dataclasses import dataclass
 from importlib import metadata
@@ -20,6 +19,7 @@ from typing import Any
 import pluggy
 
 from cistrack.plugin import hookspecs
+from cistrack.env_flags import env_flag
 from cistrack.errors import DuplicateComponentError, ParameterError, RunInterrupted, UnknownComponentError
 from cistrack.interfaces import KINDS
 
@@ -73,10 +73,12 @@ class _BoundRegistry:
     def __init__(self, registry: "Registry", distribution: str, version: str, entry_point: str):
         self._registry = registry
         self._source = (distribution, version, entry_point)
+        self.added: list[tuple[str, str]] = []  # (kind, name), taken back if the plugin then fails
 
     def add(self, kind: str, name: str, factory: Any) -> None:
         """Register ``factory`` (a component class, or an object for kinds 'orbit') as ``name``."""
         self._registry.add(kind, name, factory, *self._source)
+        self.added.append((kind, name))
 
 
 class Registry:
@@ -107,7 +109,7 @@ class Registry:
     def load_entry_points(self, autoload_third_party: bool | None = None) -> "Registry":
         """Load every entry point of the group ``cistrack``, each on its own."""
         if autoload_third_party is None:
-            autoload_third_party = os.environ.get(AUTOLOAD_ENV, "").strip().lower() not in ("1", "true", "yes")
+            autoload_third_party = not env_flag(AUTOLOAD_ENV)  # refused by name unless a yes/no spelling
         pm = pluggy.PluginManager(hookspecs.PROJECT)
         pm.add_hookspecs(hookspecs.CistrackSpecs)
         idents: dict = {}
@@ -118,18 +120,21 @@ class Registry:
             dist, version = _dist_identity(ep, idents)
             if dist != BUILTIN_DISTRIBUTION and not autoload_third_party:
                 continue
+            bound = _BoundRegistry(self, dist, version, ep.name)
             try:
                 module = ep.load()
                 pm.register(module, name=f"{dist}:{ep.name}")
                 impls = [i for i in pm.hook.cistrack_register.get_hookimpls() if i.plugin is module]
-                bound = _BoundRegistry(self, dist, version, ep.name)
                 for impl in impls:
                     impl.function(registry=bound)
                 self.plugins.append((dist, ep.name, module))
             except RunInterrupted:  # a real SIGTERM/SIGHUP arrived while loading: stop as asked
                 raise
             except BaseException as exc:  # a broken plugin must not stop the others, nor the process:
-                # SystemExit (sys.exit on import), KeyboardInterrupt and other BaseExceptions included
+                # SystemExit (sys.exit on import), KeyboardInterrupt and other BaseExceptions included;
+                # what it registered before failing is taken back: a skipped plugin adds nothing
+                for kind, name in bound.added:
+                    self._entries[kind].pop(name, None)
                 self.failures.append(PluginFailure(dist, ep.name, _describe_failure(exc),
                                                    traceback.format_exc()))
                 logging.getLogger("cistrack").warning(f"warning: plugin {self.failures[-1]}; it is skipped "

@@ -59,12 +59,25 @@ def check_output_dir(directory: str | Path, where: str, records: tuple[str, ...]
         if d.exists() and not d.is_dir():
             raise ConfigError(f"{where} {d}: exists and is not a directory; give a new directory or an "
                               "earlier results directory")
+        owner = _run_owning_parts_of(d)
+        if owner is not None:
+            raise ConfigError(f"{where} {d}: lies inside the part folders of the run in {owner}, which its "
+                              "merges and --overwrite replace; give a directory outside that run")
         if d.is_dir() and not any(_is_cistrack_record(d / name) for name in records) and not _holds_no_results(d):
             raise ConfigError(f"{where} {d}: is not empty and holds no cistrack {' or '.join(records)}; results "
                               "go to a new or empty directory, or replace an earlier run's results directory")
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def _run_owning_parts_of(d: Path) -> Path | None:
+    """The results directory of a cistrack run whose part folders (:data:`PART_FOLDERS`) hold ``d``,
+    or None."""
+    for parent in Path(os.path.abspath(d)).parents:
+        if parent.name in PART_FOLDERS and _is_cistrack_record(parent.parent / "manifest.json"):
+            return parent.parent
+    return None
 
 
 def _is_cistrack_record(path: Path) -> bool:

@@ -32,6 +32,7 @@ import pyarrow.parquet as pq
 
 from cistrack.errors import CistrackError
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
+from cistrack.results.strict_json import finite_or_null
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.output_paths import clear_earlier_results
@@ -49,8 +50,10 @@ RESIDUALS_FIGURE = "residuals.svg"
 
 def write_json_atomic(path: Path, data: dict) -> None:
     """Write JSON to ``path`` via a temporary file and rename (never a half-written file; the
-    temporary file is removed when writing fails, e.g. on a full disk)."""
-    write_text_atomic(path, json.dumps(data, indent=2, sort_keys=True, default=_json_default))
+    temporary file is removed when writing fails, e.g. on a full disk). Strict JSON: a NaN or
+    infinite number is written as null (:func:`~cistrack.results.strict_json.finite_or_null`)."""
+    write_text_atomic(path, json.dumps(finite_or_null(data), indent=2, sort_keys=True, default=_json_default,
+                                       allow_nan=False))
 
 
 def _json_default(o: Any):
@@ -139,6 +142,8 @@ class ResultsWriter:
             "started_unix": time.time(),
             "process": {"host": socket.gethostname(), "pid": os.getpid()},  # see cistrack.results.run_status
         }
+        # the manifest first: a folder a failed write left without it holds nothing a retry must keep
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
         try:
             import tomli_w  # optional: nicer record of the scenario as run
             text = tomli_w.dumps(scen.raw)
@@ -146,7 +151,6 @@ class ResultsWriter:
             write_text_atomic(self.directory / "scenario.json", json.dumps(scen.raw, indent=2, default=str))
         else:  # a failing write (full disk) is raised, never hidden behind the JSON fallback
             write_text_atomic(self.directory / "scenario.toml", text)
-        write_json_atomic(self.directory / MANIFEST, self._manifest)
 
     @hookimpl
     def cistrack_step_updated(self, run, step) -> None:

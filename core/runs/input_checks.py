@@ -16,13 +16,30 @@ __all__ = ["check_run_inputs"]
 
 
 def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
-    """Raise :class:`ConfigError` when ``scenario``'s ``[measurements] file`` is not a readable file
-    or ``rows_per_part`` (``--rows-per-part``) is not a count of at least 1."""
+    """Raise :class:`ConfigError` when ``scenario``'s ``[measurements] file`` is not a readable file,
+    ``rows_per_part`` (``--rows-per-part``) is not a count of at least 1, or the environment's
+    ``$CISTRACK_NUM_THREADS`` or kernel cache directory cannot serve a run."""
     if rows_per_part is not None:
         check_count(rows_per_part, "--rows-per-part", 1, 10 ** 9)
+    _check_environment()
     f = getattr(scenario, "measurements_file", None)
     if f is not None and not Path(f).is_file():
         why = ("is a directory, not an observation file" if Path(f).is_dir() else
                "is not a regular file (a device, pipe or socket), not an observation file" if Path(f).exists()
                else "no such file")
         raise ConfigError(f"{scenario.source}: [measurements] file = {f}: {why}; nothing was run")
+
+
+def _check_environment() -> None:
+    """The thread count and the kernel cache directory a run will use, checked (and the cache made)
+    before a results directory is."""
+    from cistrack.propagation.kernels import secure_cache_dir
+    from cistrack.threads import thread_setting
+
+    thread_setting()
+    try:
+        secure_cache_dir()
+    except OSError as exc:
+        raise ConfigError(f"kernel cache directory: {exc.strerror or exc} ({exc.filename or ''}); set "
+                          "CISTRACK_KERNEL_DIR to a directory you may write") from None
+

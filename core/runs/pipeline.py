@@ -26,7 +26,7 @@ from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
-from cistrack.errors import CistrackError, ConfigError
+from cistrack.errors import CistrackError, ConfigError, FilterError
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
@@ -266,8 +266,16 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
 def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
     """The filter initialised with the IOD cloud, as step 0 (its time in ``timings["initialize"]``)."""
     t0 = time.perf_counter()
-    ctx.filter.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rng)
-    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", ctx.filter.belief)
+    try:
+        ctx.filter.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rng)
+        belief = ctx.filter.belief
+    except (CistrackError, KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
+        name = getattr(ctx.filter, "registry_name", None) or type(ctx.filter).__name__
+        raise FilterError(f"filter '{name}' failed while starting from the IOD's cloud: "
+                          f"{type(exc).__name__}: {exc}") from exc
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", belief)
     step0.timings["initialize"] = time.perf_counter() - t0
     return step0
 

@@ -20,6 +20,7 @@ import numpy as np
 from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.errors import ConfigError, IODError, MeasurementError, ParameterError
+from cistrack.interfaces.schedule import checked_plan
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry
 from cistrack.scenario.loading import Scenario
@@ -104,9 +105,13 @@ def plan_measurement_times(scenario: Scenario, schedule: Any, passes: list, rng:
     """The schedule's measurement times (TU); a schedule refusing its parameters for these
     passes (e.g. too many times) is named as the scenario's ``[schedule]`` table."""
     try:
-        return np.asarray(schedule.plan(passes, scenario.duration, rng), dtype=float)
+        planned = schedule.plan(passes, scenario.duration, rng)
     except ParameterError as exc:
         raise ConfigError(f"{scenario.source}: [schedule]: {exc}") from None
+    name = getattr(schedule, "registry_name", None) or type(schedule).__name__
+    return checked_plan(planned, passes, scenario.duration, f"{scenario.source}: [schedule] '{name}': plan()")
+
+
 
 
 def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sensor: Any,

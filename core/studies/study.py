@@ -118,10 +118,29 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
         specs += _scenario_runs(sc, p, grid, reg)
-    ids = [s.run_id for s in specs]
-    if len(set(ids)) != len(ids):
-        raise ConfigError(f"{p}: two runs share an id; give repeated filters or IOD tables distinct 'label's")
+    _check_distinct_ids(specs, p)
     return data, specs, out
+
+
+def _check_distinct_ids(specs: list[RunSpec], p: Path) -> None:
+    """Refuse two runs of one id (one results directory), naming the id and what the two share."""
+    first: dict[str, RunSpec] = {}
+    for s in specs:
+        other = first.setdefault(s.run_id, s)
+        if other is s:
+            continue
+        if other.sweep != s.sweep:
+            why = (f"the sweep values {_sweep_text(other.sweep)} and {_sweep_text(s.sweep)} label their runs "
+                   "alike; give the sweep distinct values")
+        elif other.filter_label != s.filter_label or other.iod_label != s.iod_label or other.scenario != s.scenario:
+            why = "give repeated filters or IOD tables distinct 'label's"
+        else:
+            why = (f"scenario {s.scenario_name!r} is listed twice with the same filter, IOD and seed; list it once")
+        raise ConfigError(f"{p}: two runs share the id {s.run_id!r}: {why}")
+
+
+def _sweep_text(combination: tuple) -> str:
+    return ", ".join(f"{k} = {v!r}" for k, v in combination) or "(none)"
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ from collections import Counter
 import sys
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from cistrack.errors import ConfigError
 from cistrack.scenario import toml_input
@@ -172,10 +173,20 @@ def study_sweep(data: dict, p: Path) -> list[tuple[str, list]]:
         if bad:
             raise ConfigError(f"{where}: values must be numbers, strings or booleans, got {bad[0]!r} (filters "
                               "and IOD variants are the keys 'filters' and 'iod')")
-        if len({(type(v), v) for v in values}) != len(values):
-            raise ConfigError(f"{where}: repeats a value; each value must appear once (it names runs)")
+        if len({_sweep_key(v) for v in values}) != len(values):
+            raise ConfigError(f"{where}: repeats a value; each value must appear once (it names runs; 2 and 2.0 "
+                              "are the same number)")
         out.append((key, list(values)))
     return out
+
+
+def _sweep_key(value: Any) -> tuple:
+    """What makes two sweep values the same run: a boolean, else a number's value (2 is 2.0), else the text."""
+    if isinstance(value, bool):
+        return ("bool", value)
+    if isinstance(value, (int, float)):
+        return ("number", float(value))
+    return ("text", value)
 
 
 def scenario_entry(entry: object, p: Path, sweep_keys: list[str]) -> tuple[str, list[str]]:

@@ -67,6 +67,17 @@ def test_entropy_estimate_of_a_gaussian_matches_the_closed_form(rng):
     assert abs(h - closed) < 0.02
 
 
+def test_a_sample_of_weight_zero_where_the_density_is_zero_adds_nothing_to_the_entropy(rng):
+    """0 x log 0 is 0 in the weighted sum, not NaN (a particle filter whose weights collapsed)."""
+    gm = GaussianMixture([1.0], np.zeros((1, 6)), (np.eye(6) * 1e-8)[None])
+    x, _ = gm.sample(3, rng)
+    w = np.array([0.5, 0.5, 0.0])
+    lp = gm.logpdf(x)
+    lp[2] = -np.inf
+    h = entropy(Belief(0.0, gm, ParticleCloud(x, 0.0, weights=w)), sample_logpdf=lp)
+    assert h == pytest.approx(-(0.5 * lp[0] + 0.5 * lp[1]) + LOG_JACOBIAN_KM, rel=1e-12)
+
+
 def test_nees_of_the_mean_is_chi_square_with_six_degrees_of_freedom(rng):
     cov = np.diag([1e-6] * 3 + [1e-8] * 3)
     gm = GaussianMixture([1.0], np.zeros((1, 6)), cov[None])

@@ -79,6 +79,21 @@ def test_environment_variable_disables_third_party_autoloading(third_party_plugi
     assert "pgm" in reg.names("filter")
 
 
+@pytest.mark.parametrize("value, loaded", [("on", False), ("YES", False), ("true", False), ("0", True),
+                                           ("off", True), ("", True)])
+def test_the_autoload_switch_takes_every_yes_no_spelling(third_party_plugins, monkeypatch, value, loaded):
+    monkeypatch.setenv(AUTOLOAD_ENV, value)
+    assert ("one-cluster" in load_registry().names("clustering")) is loaded
+
+
+def test_an_autoload_switch_that_is_neither_yes_nor_no_is_refused_by_name(monkeypatch):
+    from cistrack.errors import ConfigError
+
+    monkeypatch.setenv(AUTOLOAD_ENV, "bogus")
+    with pytest.raises(ConfigError, match=f"{AUTOLOAD_ENV}='bogus'"):
+        load_registry()
+
+
 def test_cli_plugins_lists_builtins_and_third_party_with_distributions(third_party_plugins):
     out = subprocess.run([sys.executable, "-m", "cistrack.cli", "plugins"], capture_output=True, text=True,
                          check=True).stdout
@@ -127,3 +142,4 @@ def test_a_plugin_reusing_a_taken_name_is_reported_naming_both_and_the_builtin_s
     assert "clustering 'kmeans' is registered twice" in dup[0].error
     assert "by cistrack " in dup[0].error and "cistrack-duplicate-plugin 1.2.0" in dup[0].error
     assert reg.get("clustering", "kmeans").distribution == "cistrack"
+    assert "kmeans-again" not in reg.names("clustering")  # what it added before failing is taken back

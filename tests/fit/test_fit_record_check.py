@@ -53,7 +53,7 @@ def test_an_undefined_number_written_as_null_reads_back_as_nan(tmp_path):
 
 def test_fit_json_numbers_are_strict_json():
     """NaN and infinities, which strict JSON readers (jq, JavaScript) refuse, are written as null."""
-    from cistrack.fitting.fit_record import finite_or_null
+    from cistrack.results.strict_json import finite_or_null
 
     data = {"noise_scale": float("nan"), "rejection_threshold": np.inf, "sigmas": np.array([1.0, -np.inf]),
             "nested": [{"x": np.float64("nan"), "n": 3, "ok": 2.5}]}

@@ -26,6 +26,7 @@ from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive,
                                            check_range, param_specs)
 from cistrack.interfaces.filter import FilterBase
+from cistrack.interfaces.clustering import checked_labels
 from cistrack.interfaces.iod import MIN_IOD_PARTICLES
 from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
                                            PosteriorDraw, Reanchor)
@@ -211,6 +212,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         if not isinstance(clusterer, (str, Clusterer)):
             self._fail("clusterer", clusterer, "must be a Clusterer instance or a registered clustering name")
         self.clusterer = clusterer
+        if isinstance(clusterer, Clusterer):  # n_components set in two places is refused here, before any run
+            resolve_clusterer(clusterer, self.n_components)
         self.min_cluster_size = None if min_cluster_size is None else check_int(
             self, "min_cluster_size", min_cluster_size, minimum=1)
         self._check_component_count()
@@ -451,10 +454,9 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
 
     def _clustered_labels(self, clusterer: Clusterer, rng: np.random.Generator) -> np.ndarray:
         """The clusterer's labels (N,) of the current particles, drawing from ``rng``."""
-        labels = np.asarray(clusterer.cluster(self._x, rng), dtype=np.intp)
-        if labels.shape != (self._x.shape[0],) or labels.min() < 0:
-            raise FilterError(f"filter '{self._who()}': clusterer returned labels of shape {labels.shape}")
-        return labels
+        name = getattr(clusterer, "registry_name", None) or type(clusterer).__name__
+        return checked_labels(clusterer.cluster(self._x, rng), self._x.shape[0],
+                              f"filter '{self._who()}': clusterer '{name}'")
 
     def _group_mixture(self, labels: np.ndarray) -> tuple[GaussianMixture, np.ndarray]:
         """The mixture of the current particles grouped by ``labels`` (N,) (weight N_i/N, each group's

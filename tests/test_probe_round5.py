@@ -1,0 +1,213 @@
+"""Hostile input, round 5: each case was a traceback, a silent acceptance, a NaN in a result file or a
+wrong end state, and is now refused by name or handled. Third-party components are written here as
+a plugin author would (subclasses of the interfaces, added to a registry), run through the real
+pipeline."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cistrack.cli.main import main
+from cistrack.errors import ConfigError, FilterError
+from cistrack.interfaces.clustering import Clusterer
+from cistrack.interfaces.schedule import Schedule
+from cistrack.plugin.registry import load_registry
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
+
+
+def _strict_json(path) -> dict:
+    """The file's JSON, refusing NaN and infinities as strict JSON readers do."""
+    def refuse(name):
+        raise AssertionError(f"{path}: {name} is not JSON")
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+# --- a collapsed particle filter: no NaN entropy, a strict manifest ----------------------------
+
+def test_a_collapsed_particle_filter_writes_a_finite_entropy_and_a_strict_manifest(tmp_path, capsys):
+    out = tmp_path / "sir"
+    rc = main(["run", "quick", "--set", 'filter={name="sir", n_particles=100, resample_threshold=0}',
+               "--out", str(out), "--quiet"])
+    assert rc == 0
+    final = _strict_json(out / "manifest.json")["summary"]["final"]
+    assert np.isfinite(final["entropy"])
+    assert "RuntimeWarning" not in capsys.readouterr().err
+
+
+# --- a third-party schedule that breaks its contract -----------------------------------------
+
+class _BadSchedule(Schedule):
+    """Evenly spaced times inside each pass, then spoiled as ``how`` says."""
+
+    def __init__(self, how: str = "none"):
+        self.how = how
+
+    def plan(self, passes, t_end, rng):
+        t = np.concatenate([np.linspace(p.start, p.end, 12)[1:-1] for p in passes])
+        if self.how == "after":
+            return np.append(t, t_end + 5.0)
+        if self.how == "between":
+            return np.sort(np.append(t, 0.5 * (passes[0].end + passes[1].start)))
+        if self.how == "nan":
+            return np.append(t, np.nan)
+        if self.how == "2d":
+            return np.stack([t, t], axis=1)
+        if self.how == "text":
+            return ["soon"]
+        if self.how == "unsorted":
+            return t[::-1]
+        return t
+
+
+@pytest.mark.parametrize("how, said", [("after", "outside the run"), ("between", "outside every visibility pass"),
+                                       ("nan", "NaN or infinite"), ("2d", "shape"), ("text", "not times"),
+                                       ("unsorted", "do not increase strictly")])
+def test_a_schedule_breaking_its_contract_is_refused_by_name(how, said):
+    reg = load_registry()
+    reg.add("schedule", "bad-schedule", _BadSchedule)
+    scen = load_scenario("quick", reg, overrides={"schedule": {"name": "bad-schedule", "how": how}})
+    with pytest.raises(ConfigError, match=said) as info:
+        run_scenario(scen, seed=1, registry=reg)
+    assert "[schedule] 'bad-schedule': plan()" in str(info.value)
+
+
+def test_a_schedule_keeping_its_contract_runs():
+    reg = load_registry()
+    reg.add("schedule", "bad-schedule", _BadSchedule)
+    scen = load_scenario("quick", reg, overrides={"schedule": {"name": "bad-schedule"}, "duration_days": 2.0})
+    assert run_scenario(scen, seed=1, registry=reg).summary.status == "finished"
+
+
+# --- a third-party clusterer that breaks its contract ----------------------------------------
+
+class _BadClusterer(Clusterer):
+    """Two halves labelled 0 and 1, then spoiled as ``how`` says."""
+
+    def __init__(self, how: str = "none"):
+        self.how = how
+
+    def cluster(self, x, rng):
+        labels = (np.arange(x.shape[0]) >= x.shape[0] // 2).astype(int)
+        if self.how == "huge":
+            return labels * 10 ** 12
+        if self.how == "half":
+            return labels + 0.5
+        if self.how == "text":
+            return np.array(["a"] * x.shape[0])
+        if self.how == "short":
+            return labels[:-1]
+        if self.how == "raise":
+            raise ValueError("the plugin's own bug")
+        return labels
+
+
+@pytest.mark.parametrize("how, said", [("huge", "not whole numbers from 0 to"), ("half", "not whole numbers"),
+                                       ("text", "not labels"), ("short", "shape"),
+                                       ("raise", "failed while starting from the IOD's cloud: ValueError: the "
+                                                 "plugin's own bug")])
+def test_a_clusterer_breaking_its_contract_is_named_at_the_filters_start(how, said, tmp_path, capsys):
+    """The PGM clusters the IOD's cloud as it starts: a clusterer's bad labels or its own exception
+    end the command with the filter named, never a traceback."""
+    reg = load_registry()
+    reg.add("clustering", "bad-clusterer", _BadClusterer)
+    scen = load_scenario("quick", reg, overrides={"filter": {"clusterer": {"name": "bad-clusterer", "how": how},
+                                                             "n_components": 2}})
+    with pytest.raises(FilterError, match=said) as info:
+        run_scenario(scen, seed=1, registry=reg, output_dir=tmp_path / "out")
+    assert ("clusterer 'bad-clusterer'" if how != "raise" else "filter 'pgm'") in str(info.value)
+
+
+def test_a_clusterer_keeping_its_contract_runs():
+    reg = load_registry()
+    reg.add("clustering", "bad-clusterer", _BadClusterer)
+    scen = load_scenario("quick", reg, overrides={"filter": {"clusterer": "bad-clusterer", "n_components": 2}})
+    assert run_scenario(scen, seed=1, registry=reg).summary.status == "finished"
+
+
+# --- n_components set in two places: refused when the scenario or study is read ---------------
+
+def test_a_pgm_and_clusterer_component_count_conflict_is_refused_when_the_scenario_is_read():
+    with pytest.raises(ConfigError, match=r"\[filter\]: filter 'pgm': n_components = 6 conflicts with the clusterer"):
+        load_scenario("quick", overrides={"filter": {"n_components": 6,
+                                                     "clusterer": {"name": "kmeans", "n_components": 2}}})
+
+
+def test_a_study_with_that_conflict_is_refused_before_any_run(tmp_path):
+    from cistrack.studies.study import plan_runs
+
+    study = tmp_path / "st.toml"
+    study.write_text('name = "st"\nscenarios = ["quick"]\nseeds = [1]\n'
+                     'filters = [{name = "pgm", n_particles = 500, n_components = 3, '
+                     'clusterer = {name = "kmeans", n_components = 2}}]\n')
+    with pytest.raises(ConfigError, match="conflicts with the clusterer"):
+        plan_runs(study, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+
+# --- a bad environment is refused before the results directory is made --------------------------
+
+@pytest.mark.parametrize("variable, value", [("CISTRACK_NUM_THREADS", "0"), ("CISTRACK_KERNEL_DIR", "{file}"),
+                                             ("CISTRACK_KERNEL_DIR", "{file}/below")])
+def test_a_bad_thread_count_or_kernel_directory_is_refused_before_the_results_directory(
+        variable, value, tmp_path, monkeypatch, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    monkeypatch.setenv(variable, value.format(file=afile))
+    out = tmp_path / "out"
+    assert main(["run", "quick", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert ("CISTRACK_NUM_THREADS" in err or "kernel cache directory" in err) and "Traceback" not in err
+    assert not out.exists()
+
+
+# --- a study's run-id clash names what clashed ---------------------------------------------------
+
+def _study_file(tmp_path, body: str):
+    p = tmp_path / "st.toml"
+    p.write_text('name = "st"\nseeds = [0]\nfilters = [{name = "enkf", n_particles = 100}]\n' + body)
+    return p
+
+
+def test_a_scenario_listed_twice_is_refused_naming_it_and_the_run_id(tmp_path):
+    from cistrack.studies.study import plan_runs
+
+    with pytest.raises(ConfigError, match=r"two runs share the id 'quick__enkf__noisy-range__seed0': scenario 'quick' "
+                                          r"is listed twice"):
+        plan_runs(_study_file(tmp_path, 'scenarios = ["quick", "quick"]\n'), tmp_path / "out")
+
+
+def test_sweep_values_that_are_the_same_number_are_a_repeat(tmp_path):
+    from cistrack.studies.study_file import load_study
+
+    with pytest.raises(ConfigError, match="repeats a value.*2 and 2.0 are the same number"):
+        load_study(_study_file(tmp_path, 'scenarios = ["quick"]\nsweep = { "duration_days" = [2.0, 2] }\n'))
+
+
+# --- a run that failed before its custody was judged does not print an empty time ----------------
+
+def test_custody_of_a_run_that_failed_before_it_was_judged_says_so():
+    from cistrack.evaluation.verdicts import Verdict, verdict_lines
+
+    class Summary:
+        has_truth, custody_kept, custody_lost_step, custody_lost_t_days = True, False, 3, None
+        status, verdict = "filter-failed", Verdict()
+
+    custody = verdict_lines(Summary())[1]
+    assert custody == "  custody: LOST at step 3 (the run ended filter-failed, before it was judged)"
+    assert "- d" not in custody
+
+
+# --- results are never written inside another run's part folders --------------------------------
+
+def test_out_inside_an_earlier_runs_part_folder_is_refused(tmp_path, capsys):
+    base = tmp_path / "base"
+    quick = ["run", "quick", "--set", "duration_days=1.5", "--set", "iod.n_particles=300",
+             "--set", "filter.n_particles=300", "--quiet"]
+    assert main(quick + ["--out", str(base)]) == 0
+    assert main(quick + ["--out", str(base / "steps" / "inner")]) == 2
+    assert "lies inside the part folders of the run in" in capsys.readouterr().err
+    assert not (base / "steps" / "inner").exists()
