@@ -211,3 +211,52 @@ def test_out_inside_an_earlier_runs_part_folder_is_refused(tmp_path, capsys):
     assert main(quick + ["--out", str(base / "steps" / "inner")]) == 2
     assert "lies inside the part folders of the run in" in capsys.readouterr().err
     assert not (base / "steps" / "inner").exists()
+
+
+# --- a fit stopped before its records can be run again into its directory -----------------------
+
+def test_a_fit_directory_holding_only_what_a_stopped_fit_wrote_takes_the_retry(tmp_path):
+    """Interrupted after it merged the observations (before its filter run's manifest): the
+    directory holds the fit's marker and merged files; the retry the message asks for is allowed."""
+    from cistrack.results.output_paths import FIT_STARTED, check_output_dir
+
+    d = tmp_path / "fit"
+    d.mkdir()
+    (d / FIT_STARTED).write_text("cistrack fit of X\n")
+    (d / "observations.psv").write_text("# version=2022\n")
+    (d / "observations-early.psv").write_text("# version=2022\n")
+    assert check_output_dir(d, "--out", records=("manifest.json", "fit.json")) == d
+
+
+def test_a_users_folder_with_an_observation_file_is_still_refused(tmp_path):
+    from cistrack.results.output_paths import check_output_dir
+
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / "observations.psv").write_text("# version=2022\n")
+    with pytest.raises(ConfigError, match="is not empty and holds no cistrack"):
+        check_output_dir(d, "--out", records=("manifest.json", "fit.json"))
+
+
+def test_every_fit_directory_starts_with_its_marker(tmp_path):
+    from cistrack.results.output_paths import FIT_STARTED
+
+    rows = ["# version=2022", "trkSub|mode|stn|obsTime|ra|dec|rmsRA|rmsDec|astCat"] + [
+        f"fast|CCD|711|2026-08-08T10:10:{10 * j:02d}.000Z|{79.0 + 5 * j:.6f}|{28.0 + j:.6f}|0.648|0.648|Gaia3"
+        for j in range(4)]
+    f = tmp_path / "lone.psv"
+    f.write_text("\n".join(rows) + "\n")
+    assert main(["fit", str(f), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    assert (tmp_path / "out" / FIT_STARTED).is_file()
+
+
+# --- residual plots of sites whose file names coincide ------------------------------------------
+
+def test_sites_whose_plot_names_coincide_each_get_their_own_files():
+    from cistrack.fitting.residual_plots import site_file_stems
+
+    stems = site_file_stems(["a/b", "a_b", "711", "A_B"])
+    assert stems["711"] == "residuals-711"
+    assert len({s.casefold() for s in stems.values()}) == 4
+    assert all(stems[k].startswith("residuals-a_b-") or stems[k].startswith("residuals-A_B-")
+               for k in ("a/b", "a_b", "A_B"))

@@ -69,7 +69,11 @@ def fit_refusal(record: dict[str, Any]) -> str | None:
     if "state" not in record:
         return "it has no fitted orbit (" + (record.get("failure") or "the fit was not made") + ")"
     if not record.get("converged"):
-        return "its least squares did not converge (" + "; ".join(record.get("messages", [])[:2]) + ")"
+        messages = [str(m) for m in record.get("messages", [])]
+        verdict = [m for m in messages if m.startswith("not a ")]  # a converged least squares judged unsound
+        if verdict:
+            return f"the fit is {verdict[-1]}"
+        return "its least squares did not converge (" + "; ".join(messages[:2]) + ")"
     return None
 
 

@@ -37,12 +37,10 @@ estimate there is the one a prediction starts from. All three give the same orbi
 """
 from __future__ import annotations
 
-import hashlib
 import math
 import re
 import warnings
-from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import timedelta
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -62,7 +60,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.fitting.fit_replacing import FIT_RECORD, check_fit_form, check_fit_replacing, remove_other_form
-from cistrack.results.output_paths import check_output_dir
+from cistrack.results.output_paths import check_output_dir, distinct_stems
 from cistrack.results.store import MANIFEST
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 from cistrack.scenario.loading import Scenario, load_scenario, parse_scenario
@@ -224,10 +222,8 @@ def _directory_names(designations: list[str]) -> list[str]:
     """``fit-<slug>`` for each designation; designations whose slugs coincide (``2026 AB`` and
     ``2026/AB``; letter case counts as the same, as on a case-insensitive file system) each get
     a short hash of the designation appended, so that no object's fit lands in another's directory."""
-    slugs = [_slug(d) for d in designations]
-    counts = Counter(s.casefold() for s in slugs)
-    return [f"fit-{s}" if counts[s.casefold()] == 1 else
-            f"fit-{s}-{hashlib.sha256(d.encode('utf-8')).hexdigest()[:8]}" for d, s in zip(designations, slugs)]
+    stems = distinct_stems(designations, lambda d: f"fit-{_slug(d)}")
+    return [stems[d] for d in designations]
 
 
 def _split_settings(items: Iterable[str] | None) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
@@ -773,11 +769,39 @@ def _note_rejected_epoch(one: ObjectFit) -> None:
                                         "(the later ones were rejected); the state there is the fitted orbit propagated"])
 
 
+CISLUNAR_LIMIT_KM = 3.0e6
+"""A converged fit whose state lies farther than this from the Earth (about eight lunar distances,
+the ranging IOD's ``range_max_km``) is not a cislunar orbit: the observations left the distance
+free (a star, or a body far beyond the Moon, barely moves against the stars), and the fit is not
+reported as converged."""
+
+
+def _refuse_not_cislunar(one: ObjectFit) -> None:
+    """``one.result`` not converged, saying why, when its state lies beyond :data:`CISLUNAR_LIMIT_KM`."""
+    from cistrack.astro.primaries import MU_EARTH_MOON
+
+    r = one.result
+    if r is None or not r.converged:
+        return
+    x = np.asarray(r.state_km, dtype=float)
+    earth_km = np.array([-MU_EARTH_MOON * units.LU_KM, 0.0, 0.0])
+    distance = float(np.linalg.norm(x[:3] - earth_km))
+    if distance <= CISLUNAR_LIMIT_KM:
+        return
+    speed = float(np.linalg.norm(x[3:]))
+    one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+        f"not a cislunar orbit: the fitted state lies {distance:.3g} km from the Earth (beyond "
+        f"{CISLUNAR_LIMIT_KM:.0e} km), moving {speed:.3g} km/s in the rotating frame; the observations "
+        "do not determine the distance (an object that barely moves against the stars: a star, a "
+        "distant body, or observations of different objects?)",))
+
+
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
     from cistrack.fitting.fit_record import write_fit_outputs
 
+    _refuse_not_cislunar(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
     if one.ok and job.choices.lov > 0:

@@ -28,6 +28,8 @@ from cistrack import units
 from cistrack.errors import ConfigError, MeasurementError
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
 from cistrack.plugin.registry import Registry
+from cistrack.results.atomic_files import write_text_atomic
+from cistrack.results.output_paths import FIT_STARTED
 from cistrack.runs.observation_files import SeveralObjectsError, reader_for, write_observations
 from cistrack.runs.run_inputs import weights_note
 
@@ -355,6 +357,9 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
 def write_merged(path: Path, measurements: MeasurementSet, designation: str, registry: Registry) -> str:
     """Write ``measurements`` (TU since :data:`READ_EPOCH`) to ``path`` as ADES PSV (RA/Dec) or
     CCSDS TDM (other angle types), with the designation; returns the suffix used (".psv"/".tdm")."""
+    marker = path.parent / FIT_STARTED  # first: a fit stopped before its records may be retried here
+    if not marker.is_file():
+        write_text_atomic(marker, f"cistrack fit of {designation}\n")
     ms = measurements.subset(np.ones(len(measurements), dtype=bool))
     ms.meta["object"] = designation
     kinds = {ms.kind_at(i) for i in range(len(ms))}

@@ -19,14 +19,21 @@ import numpy as np
 
 from cistrack import units
 from cistrack.results.atomic_files import atomic_target
+from cistrack.results.output_paths import distinct_stems
 
-__all__ = ["plot_residuals", "residual_figure", "save_figure", "site_file_stem"]
+__all__ = ["plot_residuals", "residual_figure", "save_figure", "site_file_stem", "site_file_stems"]
 
 
 def site_file_stem(site: str) -> str:
     """``residuals-<site>`` with the site key made safe for a file name ("" -> "residuals-sensor")."""
     s = re.sub(r"[^A-Za-z0-9_.-]+", "_", site).strip("._")
     return f"residuals-{s or 'sensor'}"
+
+
+def site_file_stems(sites: list[str]) -> dict[str, str]:
+    """:func:`site_file_stem` of each site; sites whose stems coincide (``a/b`` and ``a_b``) each get
+    a short hash of the site key appended, so that no site's plot replaces another's."""
+    return distinct_stems(sites, site_file_stem)
 
 
 def plot_residuals(directory: str | Path, table, epoch: datetime, designation: str = "") -> list[Path]:
@@ -37,10 +44,10 @@ def plot_residuals(directory: str | Path, table, epoch: datetime, designation: s
         return []
     written: list[Path] = []
     try:
-        for site in dict.fromkeys(table.sites.tolist()):
+        for site, stem in site_file_stems(table.sites.tolist()).items():
             fig = residual_figure(table, site, epoch, designation)
             for suffix in (".png", ".svg"):
-                written.append(save_figure(fig, d / f"{site_file_stem(site)}{suffix}"))
+                written.append(save_figure(fig, d / f"{stem}{suffix}"))
     except OSError:
         for p in written:  # no plot of this table without the others
             p.unlink(missing_ok=True)

@@ -17,14 +17,17 @@ it); never the root of the file system, a single run's results directory or a fi
 from __future__ import annotations
 
 import fnmatch
+import hashlib
 import json
 import os
+from collections import Counter
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from cistrack.errors import ConfigError
 
 __all__ = ["check_output_dir", "check_study_dir", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
-           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "PART_FOLDERS"]
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv")
 """Files that describe an earlier run or fit of a results directory and that a new run there does
@@ -40,6 +43,10 @@ STUDY_LOCK = ".study.lock"
 STUDY_RUNS_LOCK = ".study-runs.lock"
 """The lock file its runs share while they write (see :mod:`cistrack.studies.study_lock`); not content."""
 RUN_LOCK = ".run.lock"
+FIT_STARTED = ".fit-started"
+"""Written into a fit's directory before anything else of the fit: with it, the merged observation
+files a fit stopped before its records (``observations*.psv``/``.tdm``) are the fit's own and a
+retry may replace them."""
 """The lock file of a results directory that ``cistrack run`` holds while it writes there (see
 :mod:`cistrack.results.dir_lock`); not content."""
 PART_FOLDERS = ("steps", "estimates-parts")
@@ -101,8 +108,9 @@ def _holds_no_results(d: Path) -> bool:
     it wrote its manifest leaves (a full disk): its lock file and part folders that hold only part
     files, temporary part files, or nothing. Such a directory is a run's own, with no results a
     new run should protect; the new run replaces its parts."""
+    started = (d / FIT_STARTED).is_file()
     for e in d.iterdir():
-        if e.name == RUN_LOCK:
+        if e.name == RUN_LOCK or (started and _is_fit_input(e)):
             continue
         if e.name not in PART_FOLDERS or e.is_symlink() or not e.is_dir():
             return False
@@ -110,6 +118,12 @@ def _holds_no_results(d: Path) -> bool:
                for p in e.iterdir()):
             return False
     return True
+
+
+def _is_fit_input(e: Path) -> bool:
+    """The fit's marker or one of the merged observation files a fit writes before its records."""
+    return e.is_file() and not e.is_symlink() and (
+        e.name == FIT_STARTED or (fnmatch.fnmatch(e.name, "observations*.*") and e.suffix in (".psv", ".tdm")))
 
 
 def clear_earlier_results(directory: str | Path) -> list[Path]:
@@ -212,3 +226,14 @@ def check_study_dir(directory: str | Path, name: str, source: str, where: str) -
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def distinct_stems(keys: Iterable[str], stem: Callable[[str], str]) -> dict[str, str]:
+    """``stem(key)`` for each key, as file or directory names that never coincide: keys whose stems
+    coincide (letter case counts as the same, as on a case-insensitive file system) each get a
+    short hash of the key appended."""
+    stems = {key: stem(key) for key in dict.fromkeys(keys)}
+    counts = Counter(s.casefold() for s in stems.values())
+    return {key: s if counts[s.casefold()] == 1 else f"{s}-{hashlib.sha256(key.encode('utf-8')).hexdigest()[:8]}"
+            for key, s in stems.items()}
+

@@ -33,6 +33,7 @@ import inspect
 import numpy as np
 
 from cistrack.errors import IODError
+from cistrack import units
 from cistrack.interfaces import Dynamics, IODMethod, Sensor
 from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.interfaces.iod import check_iod_particles
@@ -252,6 +253,13 @@ class TrackletRangingIOD(IODMethod):
         """One tracklet: the admissible region itself (range undetermined); ``meta["admissible_region"]``
         gives its extent (:func:`.ranging_search.admissible_extent`)."""
         states, rho = self._grid(att)
+        if len(states) == 0:
+            rate = float(np.linalg.norm(att.u_dot)) * 206264.806 * 60.0 / units.TU_S  # arcsec per minute
+            raise IODError(
+                f"iod '{type(self).registry_name or 'tracklet-ranging'}': the lone tracklet ({att.indices.size} "
+                f"observations, moving {rate:,.4g}\"/min in the synodic frame) admits no orbit: at no range from "
+                f"{self.range_min_km:,.0f} to {self.range_max_km:,.0f} km is this motion that of an orbit with "
+                f"C3 <= {self.max_c3:g} km^2/s^2. A near-Earth object, or exposures with wrong times?")
         pick = rng.choice(len(states), size=self.n_particles, replace=len(states) < self.n_particles)
         region = admissible_extent(att, range_min_km=self.range_min_km, range_max_km=self.range_max_km,
                                    max_c3=self.max_c3)

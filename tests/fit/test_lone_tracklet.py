@@ -144,3 +144,15 @@ def test_a_lone_tracklet_long_after_a_determined_arc_leaves_that_arc_fitted(tmp_
     assert rec["n_used"] + rec["n_rejected"] == len(rows)
     note = next(m for m in rec["messages"] if "lone tracklet" in m)
     assert "1 observation(s) after the fitted arc" in note and "2027-03-01" in note
+
+
+def test_a_lone_tracklet_too_fast_for_any_orbit_is_undetermined_with_the_reason(tmp_path):
+    """Four exposures 10 s apart moving 5 degrees each (a near-Earth object, or wrong times): no range
+    admits an orbit, so the admissible region is empty; said, not a traceback."""
+    rows = [f"fast|CCD|711|2026-08-08T10:10:{10 * j:02d}.000Z|{79.0 + 5 * j:.6f}|{28.0 + j:.6f}|0.648|0.648|Gaia3"
+            for j in range(4)]
+    rc, out, rec = _fit(tmp_path, rows)
+    assert rc == 3
+    assert "UNDETERMINED: one tracklet does not determine an orbit" in out
+    assert "admits no orbit" in out and "near-Earth object, or exposures with wrong times" in out
+    assert "state" not in rec

@@ -1,0 +1,52 @@
+"""A fit whose least squares runs off to an orbit far beyond cislunar space is not reported as
+converged. The case: a fixed star (the same RA/Dec) observed from two sites on three nights, which
+the least squares "fitted" 1.9e11 km away at 1.4e6 km/s (faster than light), exit status 0."""
+from __future__ import annotations
+
+import io
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from cistrack.cli.main import main
+from cistrack.fitting.from_observations import CISLUNAR_LIMIT_KM
+
+HEADER = ["# version=2022", "trkSub|mode|stn|obsTime|ra|dec|rmsRA|rmsDec|astCat"]
+
+
+@pytest.fixture(scope="module")
+def star_fit(tmp_path_factory):
+    d = tmp_path_factory.mktemp("star")
+    rows = [f"obj1|CCD|{site}|2026-03-0{2 + day}T{(hour * 60 + 20 * k) // 60:02d}:{(20 * k) % 60:02d}:00.000Z|"
+            "123.456|12.345|1.0|1.0|Gaia3"
+            for day in range(3) for site, hour in (("809", 2), ("711", 4)) for k in range(5)]
+    (d / "star.psv").write_text("\n".join(HEADER + rows) + "\n")
+    buf = io.StringIO()
+    mp = pytest.MonkeyPatch()
+    mp.setattr(sys, "stdout", buf)
+    try:
+        rc = main(["fit", str(d / "star.psv"), "--out", str(d / "fit")])
+    finally:
+        mp.undo()
+    return rc, buf.getvalue(), json.loads((d / "fit" / "fit.json").read_text()), d
+
+
+def test_a_fit_far_beyond_cislunar_space_is_not_converged_and_says_why(star_fit):
+    rc, out, rec, _ = star_fit
+    assert rc == 3 and rec["converged"] is False
+    note = [m for m in rec["messages"] if m.startswith("not a cislunar orbit")]
+    assert note and "do not determine the distance" in note[0]
+    assert "not a cislunar orbit" in out and "next: cistrack export" not in out
+
+
+def test_its_state_is_indeed_beyond_the_limit(star_fit):
+    rec = star_fit[2]
+    assert np.linalg.norm(np.asarray(rec["state_km"])[:3]) > CISLUNAR_LIMIT_KM
+
+
+def test_such_a_fit_is_not_exported_and_the_refusal_gives_the_reason(star_fit, capsys):
+    d = star_fit[3]
+    assert main(["export", str(d / "fit"), "--out", str(d / "star.oem")]) == 2
+    assert "not exported: the fit is not a cislunar orbit" in capsys.readouterr().err
