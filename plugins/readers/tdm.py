@@ -12,6 +12,15 @@ Read: a header (``CCSDS_TDM_VERS``, ``CREATION_DATE``, ``ORIGINATOR``), then seg
   are refused: the angles are read as the station observing the object);
 * ``ANGLE_TYPE = AZEL`` (ANGLE_1 azimuth, ANGLE_2 elevation) or ``RADEC`` (right ascension,
   declination; ``REFERENCE_FRAME`` EME2000, ICRF or GCRF); angles in degrees;
+* ``DATA_QUALITY`` (when given) ``RAW`` or ``VALIDATED``; ``DEGRADED`` data are read with a warning
+  (logger ``cistrack.readers``) naming the file; any other value (``REJECTED``, ...) refuses the
+  file, naming the keyword and its line, whatever other segments it holds;
+* ``TIMETAG_REF`` (when given) ``RECEIVE``, the time the light reached the station (``TRANSMIT``
+  means nothing for optical angles and is refused);
+* ``INTEGRATION_INTERVAL`` (seconds, at most a day) with ``INTEGRATION_REF``: the observation's
+  time is the middle of the exposure, so a time tag at its ``START`` is moved on by half the
+  interval and one at its ``END`` back by half; ``MIDDLE`` (the default) moves nothing. ``START``
+  or ``END`` without an interval is refused;
 * data lines ``ANGLE_1 = <epoch> <value>`` and ``ANGLE_2 = <epoch> <value>``, one pair per
   observation at the same epoch (``YYYY-MM-DDThh:mm:ss[.d...]`` or ``YYYY-DDDThh:mm:ss[.d...]``).
 
@@ -28,7 +37,9 @@ from __future__ import annotations
 
 import math
 import re
+import logging
 from datetime import datetime, timedelta, timezone
+from decimal import Decimal
 from pathlib import Path
 
 from cistrack.errors import MeasurementError
@@ -52,6 +63,9 @@ _META_KEYS = {"TIME_SYSTEM", "PARTICIPANT_1", "PARTICIPANT_2", "PARTICIPANT_3", 
               "TIMETAG_REF", "CORRECTIONS_APPLIED", "EPHEMERIS_NAME_1", "EPHEMERIS_NAME_2", "TRACK_ID",
               "RANGE_MODE", "RANGE_MODULUS", "RANGE_UNITS", "INTERPOLATION", "INTERPOLATION_DEGREE"}
 _RADEC_FRAMES = {"EME2000", "ICRF", "GCRF"}
+_QUALITIES = ("RAW", "VALIDATED", "DEGRADED")
+MAX_INTEGRATION_S = 86_400.0
+"""The longest INTEGRATION_INTERVAL read, seconds (an optical exposure is far shorter)."""
 _TIME_RE = re.compile(r"^(\d{4})-(?:(\d{2})-(\d{2})|(\d{3}))T(\d{2}):(\d{2}):(\d{2})(\.\d+)?Z?$")
 _SITE_RE = re.compile(r"^cistrack site (\S+) latitude_deg=(\S+) longitude_deg=(\S+) height_m=(\S+)$")
 _SIGMA_RE = re.compile(r"^cistrack sigma_arcsec ANGLE_1=(\S+) ANGLE_2=(\S+)$")
@@ -133,6 +147,7 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
     if at not in ("AZEL", "RADEC"):
         raise FieldError(path, al, "ANGLE_TYPE", f"{show_field(at)}: AZEL and RADEC are read")
     _check_mode_and_path(path, meta)
+    _check_quality_and_timetag(path, meta, seg.line)
     kind = at.lower()
     if kind == "radec":
         rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
@@ -140,6 +155,43 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
             raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
                                                           f"{', '.join(sorted(_RADEC_FRAMES))}")
     return kind
+
+
+def _check_quality_and_timetag(path, meta: dict, first: int) -> None:
+    """Refuse a DATA_QUALITY other than RAW, VALIDATED or DEGRADED and a TIMETAG_REF other than
+    RECEIVE (both optional); ``first`` is the line of the segment's META_START."""
+    quality, ql = meta.get("DATA_QUALITY", ("RAW", 0))
+    if quality not in _QUALITIES:
+        raise FieldError(path, ql, "DATA_QUALITY", f"{show_field(quality)}: the data of the segment starting at line "
+                                                   f"{first} are not to be used; RAW and VALIDATED data are read, "
+                                                   "DEGRADED with a warning (leave the segment out of the file)")
+    ref, rl = meta.get("TIMETAG_REF", ("RECEIVE", 0))
+    if ref != "RECEIVE":
+        raise FieldError(path, rl, "TIMETAG_REF", f"{show_field(ref)}: optical angles are tagged with the time the "
+                                                  "light was received (TIMETAG_REF = RECEIVE, the default)")
+
+
+def _integration_shift(path, meta: dict) -> timedelta:
+    """What moves a data line's time tag to the middle of its exposure: half INTEGRATION_INTERVAL
+    on for INTEGRATION_REF = START, back for END; nothing for MIDDLE (the default)."""
+    ref, rl = meta.get("INTEGRATION_REF", ("MIDDLE", 0))
+    if ref not in ("START", "MIDDLE", "END"):
+        raise FieldError(path, rl, "INTEGRATION_REF", f"{show_field(ref)}: START, MIDDLE or END")
+    if "INTEGRATION_INTERVAL" not in meta:
+        if ref != "MIDDLE":
+            raise FieldError(path, rl, "INTEGRATION_REF", f"{ref} needs INTEGRATION_INTERVAL (seconds) to place the "
+                                                          "middle of the exposure")
+        return timedelta(0)
+    text, il = meta["INTEGRATION_INTERVAL"]
+    try:
+        seconds = plain_float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0.0 < seconds <= MAX_INTEGRATION_S:
+        raise FieldError(path, il, "INTEGRATION_INTERVAL", f"{show_field(text)}: must be a number of seconds in "
+                                                           f"(0, {MAX_INTEGRATION_S:.0f}]")
+    half = timedelta(microseconds=int(round(Decimal(text) * 500_000)))
+    return {"START": half, "MIDDLE": timedelta(0), "END": -half}[ref]
 
 
 def _check_mode_and_path(path, meta: dict) -> None:
@@ -238,7 +290,8 @@ def _segment_context(path, seg: _Segment, ln: int, table: dict, sites: dict) -> 
     declared, sig, sig_text = _segment_comments(path, seg)
     name = _participant_site(path, seg, declared, table, sites)
     return {"kind": kind, "site": name, "sig": sig, "sig_text": sig_text,
-            "object": seg.meta.get("PARTICIPANT_2", ("", ln))[0]}
+            "object": seg.meta.get("PARTICIPANT_2", ("", ln))[0], "shift": _integration_shift(path, seg.meta),
+            "degraded": seg.meta.get("DATA_QUALITY", ("", 0))[0] == "DEGRADED"}
 
 
 class _TdmParse:
@@ -255,6 +308,7 @@ class _TdmParse:
         self.table: dict[str, Site] = {}
         self.pending: dict[datetime, tuple[str, float, int]] = {}  # epoch -> (keyword, angle, line)
         self.ctx: dict = {}
+        self.degraded: list[int] = []  # lines of observations in DATA_QUALITY = DEGRADED segments
 
     def run(self, lines: list[str]) -> None:
         handlers = {"header": self._header, "meta": self._meta, "between": self._between,
@@ -353,8 +407,18 @@ class _TdmParse:
             raise FieldError(self.path, ln, k, f"a second {k} at {format_utc(t)} (line {pl} has the first)")
         a, b = (other_v, val) if name == "ANGLE_1" else (val, other_v)
         ctx = self.ctx
-        self.rows.append(ObsRow(t, a, b, _first_sigma(ctx, b), ctx["sig"][1], ctx["site"], ctx["kind"],
-                                min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
+        self.rows.append(ObsRow(t + ctx["shift"], a, b, _first_sigma(ctx, b), ctx["sig"][1], ctx["site"],
+                                ctx["kind"], min(ln, pl), "ANGLE_1 epoch", ctx["object"]))
+        if ctx["degraded"]:
+            self.degraded.append(min(ln, pl))
+
+
+def _say_degraded(path, lines: list[int]) -> None:
+    """Warn (logger ``cistrack.readers``) that the observations at ``lines`` are DEGRADED data."""
+    if lines:
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}: {len(lines)} observations (from line {min(lines)}) are in segments with DATA_QUALITY = "
+            "DEGRADED (data with quality problems); they are used: look at their residuals")
 
 
 def _check_degrees(path, rows: list[ObsRow]) -> None:
@@ -407,6 +471,7 @@ class TdmReader(SiteReader):
         ep = parse_epoch(path, epoch)
         parse = _TdmParse(path, self._sites)
         parse.run(read_text_lines(path))
+        _say_degraded(path, parse.degraded)
         if self.check_degrees:
             _check_degrees(path, parse.rows)
         return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
