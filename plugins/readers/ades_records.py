@@ -8,8 +8,10 @@ ra, dec     topocentric astrometric RA and Dec, decimal degrees (required)
 rmsRA       RA uncertainty x cos(dec), arcsec (optional; else the reader's ``sigma_arcsec``)
 rmsDec      Dec uncertainty, arcsec (optional)
 stn         MPC observatory code (required); sites outside the bundled table come from the
-            reader's ``sites`` parameter or from sys = WGS84 with pos1 (East longitude, deg),
-            pos2 (latitude, deg), pos3 (height, m)
+            reader's ``sites`` parameter or from sys = WGS84 (ctr = 399, the Earth, or absent)
+            with pos1 (East longitude, deg), pos2 (latitude, deg), pos3 (height, m). A position
+            given under a bundled code more than 1 km from the code's place replaces it, with a
+            warning naming both places (once per code and file)
 mode        optional, written "CCD"
 permID / provID / trkSub   the object (one of them required)
 ==========  ===================================================================================
@@ -19,6 +21,7 @@ astCat (required by ADES) from ``meta["astCat"]`` or "Gaia3".
 """
 from __future__ import annotations
 
+import logging
 import math
 from datetime import datetime
 
@@ -31,7 +34,7 @@ from cistrack.units import format_utc, tu_to_utc
 
 from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, parse_iso_utc
-from .site_params import resolve_site
+from .site_params import place_text, replaced_code, resolve_site
 
 __all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS"]
 
@@ -74,36 +77,62 @@ def _sigma(rec, name, path, line, scale=1.0):
     return v
 
 
+def _position_value(rec, name: str, path, line: int) -> tuple[float, int]:
+    """The number in position field ``name`` and its line; FieldError when it is none or not finite."""
+    text, pln = _get(rec, name, path, line)
+    try:
+        v = plain_float(text)
+    except ValueError:
+        raise FieldError(path, pln, name, f"{show_field(text)} is not a number") from None
+    if not math.isfinite(v):
+        raise FieldError(path, pln, name, f"{show_field(text)} is not finite")
+    return v, pln
+
+
+def _file_position(rec, path, line: int, stn: str) -> Site:
+    """The site a record gives itself (sys = WGS84, ctr = 399 or absent, pos1 East longitude,
+    pos2 latitude, pos3 height m); FieldError naming the field otherwise."""
+    sys_text, sln = _get(rec, "sys", path, line)
+    if sys_text != "WGS84":
+        raise FieldError(path, sln, "sys", f"{show_field(sys_text)}: only WGS84 (geodetic) positions are read")
+    ctr, cln = _get(rec, "ctr", path, line, required=False)
+    if ctr is not None and ctr != "399":
+        raise FieldError(path, cln, "ctr", f"{show_field(ctr)}: a WGS84 position is on the Earth: ctr = 399 (or "
+                                           "no ctr); positions about other centres are not read")
+    lon, lon_line = _position_value(rec, "pos1", path, line)
+    lat, lat_line = _position_value(rec, "pos2", path, line)
+    height, _ = _position_value(rec, "pos3", path, line)
+    if not -180.0 <= lon <= 360.0:  # ADES pos1: East longitude, degrees
+        raise FieldError(path, lon_line, "pos1", f"{show_field(rec['pos1'][0])} is outside [-180, 360] degrees "
+                                                 "(East longitude)")
+    try:
+        return Site(lat, lon if lon <= 180 else lon - 360.0, height, name=stn)
+    except MeasurementError as exc:
+        raise FieldError(path, lat_line, "pos1/pos2/pos3", str(exc).split(": ", 1)[-1]) from None
+
+
+def _given_site(rec, path, line: int, stn: str, table: dict[str, Site]) -> str:
+    """The table key of a record that gives its own position, entered in ``table``; a warning
+    (logger ``cistrack.readers``, once per code and file) when the position replaces that of a
+    bundled MPC observatory code."""
+    site = _file_position(rec, path, line, stn)
+    key = stn if stn != "247" else f"247@{site.latitude_deg!r},{site.longitude_deg!r},{site.height_m!r}"
+    if key in table and table[key] != site:
+        raise FieldError(path, rec["pos1"][1], "pos1", f"station {show_field(stn)} was given another position "
+                                                       f"earlier in the file")
+    known = replaced_code(key, site) if key not in table else None
+    if known is not None:
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}, line {line}: station {stn!r} is given at {place_text(site)} (sys, pos1, pos2, pos3), which "
+            f"replaces {known} for these observations")
+    table[key] = site
+    return key
+
+
 def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) -> str:
     stn, ln = _get(rec, "stn", path, line)
-    has_pos = any(rec.get(f, ("", 0))[0].strip() for f in POS_FIELDS)
-    if has_pos:
-        sys_text, sln = _get(rec, "sys", path, line)
-        if sys_text != "WGS84":
-            raise FieldError(path, sln, "sys", f"{show_field(sys_text)}: only WGS84 (geodetic) positions are read")
-        vals = []
-        for f in ("pos1", "pos2", "pos3"):
-            text, pln = _get(rec, f, path, line)
-            try:
-                v = plain_float(text)
-            except ValueError:
-                raise FieldError(path, pln, f, f"{show_field(text)} is not a number") from None
-            if not math.isfinite(v):
-                raise FieldError(path, pln, f, f"{show_field(text)} is not finite")
-            vals.append((v, pln, f))
-        if not -180.0 <= vals[0][0] <= 360.0:  # ADES pos1: East longitude, degrees
-            raise FieldError(path, vals[0][1], "pos1", f"{show_field(rec['pos1'][0])} is outside [-180, 360] degrees "
-                                                       "(East longitude)")
-        try:
-            site = Site(vals[1][0], vals[0][0] if vals[0][0] <= 180 else vals[0][0] - 360.0, vals[2][0], name=stn)
-        except MeasurementError as exc:
-            raise FieldError(path, vals[1][1], "pos1/pos2/pos3", str(exc).split(": ", 1)[-1]) from None
-        key = stn if stn != "247" else f"247@{vals[1][0]!r},{vals[0][0]!r},{vals[2][0]!r}"
-        if key in table and table[key] != site:
-            raise FieldError(path, vals[0][1], "pos1", f"station {show_field(stn)} was given another position "
-                                                       f"earlier in the file")
-        table[key] = site
-        return key
+    if any(rec.get(f, ("", 0))[0].strip() for f in POS_FIELDS):
+        return _given_site(rec, path, line, stn, table)
     if stn not in table:
         try:
             table[stn] = resolve_site(stn, explicit)

@@ -18,7 +18,7 @@ from cistrack.errors import MeasurementError
 from cistrack.interfaces import Reader
 from cistrack.astro.sites import Site, observatory, site_from_parallax
 
-__all__ = ["parse_sites", "resolve_site", "site_columns"]
+__all__ = ["parse_sites", "resolve_site", "site_columns", "replaced_code", "place_text", "REPLACED_CODE_KM"]
 
 _SITE_FIELDS = (("latitude_deg", "longitude_deg", "height_m"), ("longitude_deg", "rho_cos_phi", "rho_sin_phi"))
 """The two ways to give a site: WGS84 geodetic, or MPC parallax constants."""
@@ -63,25 +63,41 @@ def parse_sites(owner, value: Any) -> dict[str, Site]:
 
 _NOTED: set[tuple] = set()
 
+REPLACED_CODE_KM = 1.0
+"""A site given under a bundled MPC observatory code further than this (km) from the code's own
+place is said to replace it (the MPC's parallax constants place a site to some tens of metres)."""
 
-def _note_replaced_code(key: str, site: Site) -> None:
-    """Warn (logger ``cistrack.readers``, once per process) when ``key`` is also a bundled MPC
-    observatory code whose place differs from ``site`` (by more than 0.01 degrees or 100 m): the
-    given coordinates replace the observatory's, which a typing mistake would otherwise hide."""
+
+def place_text(site: Site) -> str:
+    """A site's place for a message: latitude, longitude (degrees) and height (m)."""
+    return f"latitude {site.latitude_deg:g}, longitude {site.longitude_deg:g}, height {site.height_m:g} m"
+
+
+def replaced_code(key: str, site: Site) -> str | None:
+    """The bundled MPC observatory ``key``, its place and its distance from ``site``, for a message,
+    when ``site`` lies more than :data:`REPLACED_CODE_KM` from it; None otherwise (also when ``key``
+    is no bundled code)."""
     try:
         known = observatory(key)
     except MeasurementError:
-        return
-    dlon = abs((known.longitude_deg - site.longitude_deg + 180.0) % 360.0 - 180.0)
-    if abs(known.latitude_deg - site.latitude_deg) <= 0.01 and dlon <= 0.01 and abs(known.height_m - site.height_m) <= 100:
-        return
+        return None
+    km = math.dist(known.ecef_km(), site.ecef_km())
+    if km <= REPLACED_CODE_KM:
+        return None
+    return (f"the MPC observatory {key} ({known.name or 'bundled list'}: {known.latitude_deg:.4f}, "
+            f"{known.longitude_deg:.4f}, {known.height_m:.0f} m; {km:,.1f} km away)")
+
+
+def _note_replaced_code(key: str, site: Site) -> None:
+    """Warn (logger ``cistrack.readers``, once per process) when ``key`` is also a bundled MPC
+    observatory code whose place lies more than :data:`REPLACED_CODE_KM` from ``site``: the given
+    coordinates replace the observatory's, which a typing mistake would otherwise hide."""
+    known = replaced_code(key, site)
     noted = (key, site.latitude_deg, site.longitude_deg, site.height_m)
-    if noted not in _NOTED:
+    if known is not None and noted not in _NOTED:
         _NOTED.add(noted)
         logging.getLogger("cistrack.readers").warning(
-            f"sites: {key!r} is given at latitude {site.latitude_deg:g}, longitude {site.longitude_deg:g}, height "
-            f"{site.height_m:g} m, which replaces the MPC observatory {key} ({known.name or 'bundled list'}: "
-            f"{known.latitude_deg:.4f}, {known.longitude_deg:.4f}, {known.height_m:.0f} m) for these observations")
+            f"sites: {key!r} is given at {place_text(site)}, which replaces {known} for these observations")
 
 
 def resolve_site(key: str, explicit: dict[str, Site]) -> Site:
