@@ -16,7 +16,7 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
-from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
+from .ades_records import POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped
 from .obs_rows import build_set, parse_epoch
 from .site_params import SiteReader
 
@@ -59,7 +59,7 @@ class AdesPsvReader(SiteReader):
         lines = read_text_lines(path)
         header: list[str] | None = None
         header_line = 0
-        rows, table = [], {}
+        rows, table, radar = [], {}, 0
         for i, raw in enumerate(lines, start=1):
             text = raw.strip()
             if not text:
@@ -83,10 +83,14 @@ class AdesPsvReader(SiteReader):
                 raise FieldError(path, i, "(field count)", f"{len(cells)} fields, the header of line "
                                                             f"{header_line} has {len(header)}")
             rec = {name: (cell, i) for name, cell in zip(header, cells)}
+            if is_radar(rec):
+                radar += 1
+                continue
             rows.append(record_to_row(rec, path, i, self._sites, table))
-        if header is None and not rows:
+        if header is None and not rows and not radar:
             raise FieldError(path, max(1, len(lines)), "(header)", "no ADES PSV field-name line "
                                                                   "(obsTime|ra|dec|stn|...) found")
+        say_skipped(path, {"mode RAD": radar} if radar else {}, bool(rows))
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-psv"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:

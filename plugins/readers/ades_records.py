@@ -12,7 +12,10 @@ stn         MPC observatory code (required); sites outside the bundled table com
             with pos1 (East longitude, deg), pos2 (latitude, deg), pos3 (height, m). A position
             given under a bundled code more than 1 km from the code's place replaces it, with a
             warning naming both places (once per code and file)
-mode        optional, written "CCD"
+mode        optional, written "CCD"; radar records (RAD) are left out with a warning, as the
+            XML reader leaves out ``<radar>`` elements (a file of nothing else is refused); any
+            other mode than those of optical astrometry (:data:`OPTICAL_MODES`) is refused
+rmsCorr     optional correlation of the RA and Dec errors: refused outside [-1, 1], else not used
 permID / provID / trkSub   the object (one of them required)
 ==========  ===================================================================================
 
@@ -36,7 +39,8 @@ from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, parse_iso_utc
 from .site_params import place_text, replaced_code, resolve_site
 
-__all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS"]
+__all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "OPTICAL_MODES", "is_radar",
+           "say_skipped"]
 
 WRITE_FIELDS = ("trkSub", "mode", "stn", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "astCat")
 POS_FIELDS = ("sys", "ctr", "pos1", "pos2", "pos3")
@@ -141,10 +145,51 @@ def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) ->
     return stn
 
 
+OPTICAL_MODES = ("CCD", "CMO", "VID", "PHO", "ENC", "PMT", "MIC", "MER", "TDI", "UNK")
+"""ADES ``mode`` values of optical astrometry (instruments that measure RA/Dec)."""
+
+
+def is_radar(rec: dict) -> bool:
+    """Whether an ADES record is a radar observation (``mode`` RAD): skipped, as ``<radar>`` is."""
+    return rec.get("mode", ("", 0))[0].strip() == "RAD"
+
+
+def say_skipped(path, skipped: dict[str, int], any_optical: bool) -> None:
+    """Refuse a file of other observations only (``skipped``: count by kind, e.g. "<radar>", "mode
+    RAD"); warn (logger ``cistrack.readers``) of those left out beside optical ones."""
+    if not skipped:
+        return
+    what = ", ".join(f"{n} {name}" for name, n in sorted(skipped.items()))
+    if not any_optical:
+        raise FieldError(path, 1, "(observations)", f"the file holds {what} records and no optical one: cistrack "
+                                                    "reads optical astrometry (RA/Dec) only")
+    logging.getLogger("cistrack.readers").warning(f"{path}: {what} records are not read (cistrack reads optical "
+                                                  "astrometry only)")
+
+
+def _check_optical(rec, path, line: int) -> None:
+    """Refuse a record whose ``mode`` is not an optical one (radar, ...) or whose ``rmsCorr`` (the
+    correlation of the RA and Dec errors) is not a number in [-1, 1]."""
+    mode, mln = _get(rec, "mode", path, line, required=False)
+    if mode is not None and mode not in OPTICAL_MODES:
+        what = "radar observations are not read" if mode == "RAD" else "not an optical mode"
+        raise FieldError(path, mln, "mode", f"{show_field(mode)}: {what}; cistrack reads optical RA/Dec "
+                                            f"(mode {', '.join(OPTICAL_MODES)})")
+    corr, cln = _get(rec, "rmsCorr", path, line, required=False)
+    if corr is not None:
+        try:
+            value = plain_float(corr)
+        except ValueError:
+            value = math.nan
+        if not -1.0 <= value <= 1.0:
+            raise FieldError(path, cln, "rmsCorr", f"{show_field(corr)}: a correlation must be a number in [-1, 1]")
+
+
 def record_to_row(rec: dict, path, line: int, explicit: dict[str, Site], table: dict[str, Site]) -> ObsRow:
     """One ADES optical record -> ObsRow (RA/Dec in rad); FieldError naming line and field."""
     if not any(rec.get(f, ("", 0))[0].strip() for f in _ID_FIELDS):
         raise FieldError(path, line, "permID/provID/trkSub", "the observation names no object")
+    _check_optical(rec, path, line)
     text, tln = _get(rec, "obsTime", path, line)
     try:
         t = parse_iso_utc(text)

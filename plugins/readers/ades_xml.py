@@ -7,7 +7,6 @@ entities are fetched) keeping the line of every element, so errors name the line
 """
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 from xml.parsers import expat
 
@@ -15,7 +14,7 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines
 
-from .ades_records import POS_FIELDS, WRITE_FIELDS, record_to_row, rows_for_writing
+from .ades_records import POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped
 from .obs_rows import build_set, parse_epoch
 from .site_params import SiteReader
 
@@ -102,18 +101,6 @@ def _records(path, text: str) -> tuple[list[tuple[int, dict]], dict[str, int]]:
     return collector.out, collector.skipped
 
 
-def _say_skipped(path, skipped: dict[str, int], any_optical: bool) -> None:
-    """Refuse a file of other observations only; warn (logger ``cistrack.readers``) of those left out."""
-    if not skipped:
-        return
-    what = ", ".join(f"{n} <{name}>" for name, n in sorted(skipped.items()))
-    if not any_optical:
-        raise FieldError(path, 1, "(observations)", f"the file holds {what} records and no <optical> one: cistrack "
-                                                    "reads optical astrometry (RA/Dec) only")
-    logging.getLogger("cistrack.readers").warning(f"{path}: {what} records are not read (cistrack reads optical "
-                                                  "astrometry, <optical>, only)")
-
-
 class AdesXmlReader(SiteReader):
     """IAU ADES optical astrometry (RA/Dec), XML.
 
@@ -134,9 +121,13 @@ class AdesXmlReader(SiteReader):
         text = "\n".join(read_text_lines(path))
         rows, table = [], {}
         records, skipped = _records(path, text)
+        skipped = {f"<{name}>": n for name, n in skipped.items()}
         for line, rec in records:
+            if is_radar(rec):
+                skipped["mode RAD"] = skipped.get("mode RAD", 0) + 1
+                continue
             rows.append(record_to_row(rec, path, line, self._sites, table))
-        _say_skipped(path, skipped, bool(rows))
+        say_skipped(path, skipped, bool(rows))
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:
