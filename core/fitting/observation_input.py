@@ -26,6 +26,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import ConfigError, MeasurementError
+from cistrack.interfaces.reader import not_a_file
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
 from cistrack.plugin.registry import Registry
 from cistrack.results.atomic_files import write_text_atomic
@@ -121,7 +122,8 @@ def check_file_sizes(paths: list[str | Path]) -> None:
         except OSError:
             continue
         if size > limit * 1e6:
-            raise ConfigError(f"observation file {p}: {size / 1e6:.1f} MB is larger than the {limit:g} MB limit on "
+            raise ConfigError(f"observation file {p}: {size:,} bytes ({size / 1e6:.4g} MB) is larger than the "
+                              f"{limit:g} MB limit on "
                               f"an observation file; split it, or raise the limit (cistrack fit --max-file-mb MB, "
                               f"or the environment variable {MAX_FILE_MB_ENV})")
 
@@ -148,9 +150,9 @@ def data_time_resolution(ms: MeasurementSet) -> float:
 
 def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> tuple[list[MeasurementSet], float]:
     """The sets of one file, one per object named in it, and the time resolution (s) of its format."""
-    if not path.is_file():
-        raise ConfigError(f"observation file {path}: " + ("is a directory, not a file" if path.is_dir()
-                                                           else "no such file"))
+    why = not_a_file(path)
+    if why is not None:
+        raise ConfigError(f"observation file {path}: {why}")
     reader, done = _reader(path, params, registry)
     resolution = float(getattr(reader, "time_resolution_s", 0.0))
     if done is not None:

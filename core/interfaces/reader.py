@@ -4,6 +4,9 @@ error of a file holding several objects (:class:`SeveralObjectsError`), reading 
 lines (:func:`read_text_lines`) and quoting an offending field (:func:`show_field`)."""
 from __future__ import annotations
 
+import errno
+import os
+import stat
 from abc import abstractmethod
 from datetime import datetime
 from os import PathLike
@@ -14,7 +17,8 @@ from cistrack.errors import MeasurementError
 from cistrack.interfaces.component import Component
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["Reader", "FieldError", "SeveralObjectsError", "show_field", "field_error", "read_text_lines"]
+__all__ = ["Reader", "FieldError", "SeveralObjectsError", "show_field", "field_error", "read_text_lines",
+           "not_a_file"]
 
 _SHOWN = 40
 
@@ -83,10 +87,40 @@ def field_error(path, line: int, fieldname: str, reason: str) -> FieldError:
     return FieldError(path, line, fieldname, reason)
 
 
+_NOT_REGULAR = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                (stat.S_ISFIFO, "a named pipe (fifo)"), (stat.S_ISSOCK, "a socket"))
+
+
+def not_a_file(path: str | PathLike) -> str | None:
+    """Why ``path`` cannot be read as an observation file, for a message after its name ("no such
+    file", "is a directory, not a file", "is not a regular file: a character device", "is a loop
+    of symbolic links", ...), or None when it is a regular file (or a link to one). Nothing is
+    opened: a pipe or a device is never read."""
+    if str(path) == "-" and not os.path.lexists(path):
+        return "standard input is not read: give the name of an observation file"
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a loop of symbolic links"
+        if exc.errno == errno.ENOENT and os.path.islink(path):
+            return f"is a symbolic link to a missing file ({os.readlink(os.fspath(path))})"
+        return "no such file" if exc.errno in (errno.ENOENT, errno.ENOTDIR) else f"cannot be examined: {exc.strerror}"
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a directory, not a file"
+    kind = next((what for test, what in _NOT_REGULAR if test(mode)), "not a file of data")
+    return f"is not a regular file: {kind}"
+
+
 def read_text_lines(path: str | PathLike) -> list[str]:
     """The lines of a UTF-8 text file (a leading byte-order mark is dropped), with a
-    MeasurementError naming the file if unreadable."""
+    MeasurementError naming the file if it is not a regular file (:func:`not_a_file`) or unreadable."""
     p = Path(path)
+    why = not_a_file(p)
+    if why is not None:
+        raise MeasurementError(f"observation file {p}: {why}")
     try:
         data = p.read_bytes()
     except OSError as exc:

@@ -6,10 +6,10 @@ directory behind, empty. :func:`check_run_inputs` refuses those first, naming th
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.reader import not_a_file
 from cistrack.scenario.limits import check_count
 
 __all__ = ["check_run_inputs"]
@@ -23,10 +23,8 @@ def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
         check_count(rows_per_part, "--rows-per-part", 1, 10 ** 9)
     _check_environment()
     f = getattr(scenario, "measurements_file", None)
-    if f is not None and not Path(f).is_file():
-        why = ("is a directory, not an observation file" if Path(f).is_dir() else
-               "is not a regular file (a device, pipe or socket), not an observation file" if Path(f).exists()
-               else "no such file")
+    why = None if f is None else not_a_file(f)
+    if why is not None:
         raise ConfigError(f"{scenario.source}: [measurements] file = {f}: {why}; nothing was run")
 
 

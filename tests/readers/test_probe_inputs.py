@@ -105,7 +105,7 @@ def test_a_file_over_the_limit_is_refused_before_reading_naming_its_size_and_how
     monkeypatch.setenv(MAX_FILE_MB_ENV, "0.001")
     p = tmp_path / "big.psv"
     p.write_bytes(b"x" * 2000)  # not even an observation file: it is never read
-    with pytest.raises(ConfigError, match=r"big\.psv: 0\.0 MB is larger than the 0\.001 MB limit.*"
+    with pytest.raises(ConfigError, match=r"big\.psv: 2,000 bytes \(0\.002 MB\) is larger than the 0\.001 MB limit.*"
                                           r"--max-file-mb.*CISTRACK_MAX_FILE_MB"):
         read_object_observations([p], default_registry())
 
@@ -116,6 +116,14 @@ def test_max_file_mb_sets_the_limit_of_cistrack_fit(tmp_path, monkeypatch, capsy
     p.write_text((DATA / "observations.psv").read_text())
     assert main(["fit", str(p), "--out", str(tmp_path / "fit"), "--quiet", "--max-file-mb", "0.001"]) == 2
     assert "0.001 MB limit" in capsys.readouterr().err
+
+
+def test_a_file_just_over_the_limit_shows_a_size_that_differs_from_it(tmp_path, monkeypatch):
+    monkeypatch.setenv(MAX_FILE_MB_ENV, "0.002")
+    p = tmp_path / "big.psv"
+    p.write_bytes(b"x" * 2001)
+    with pytest.raises(ConfigError, match=r"big\.psv: 2,001 bytes \(0\.002001 MB\) is larger than the 0\.002 MB"):
+        read_object_observations([p], default_registry())
 
 
 def test_a_limit_that_is_not_a_positive_number_is_refused_naming_the_variable(tmp_path, monkeypatch):
