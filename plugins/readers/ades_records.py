@@ -3,7 +3,8 @@
 A record is a mapping field name -> (text, line). The fields cistrack reads:
 
 ==========  ===================================================================================
-obsTime     UTC, ISO-8601 ending in Z (required)
+obsTime     UTC, ISO-8601 ending in Z (required; a time without the Z, or with another zone,
+            is refused, and so is a leap second, 23:59:60)
 ra, dec     topocentric astrometric RA and Dec, decimal degrees (required)
 rmsRA       RA uncertainty x cos(dec), arcsec (optional; else the reader's ``sigma_arcsec``)
 rmsDec      Dec uncertainty, arcsec (optional)

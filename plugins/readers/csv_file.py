@@ -127,11 +127,14 @@ class _RowParser:
         return t, values, sigmas
 
     def _time(self, text: str) -> float:
+        from .obs_rows import LEAP_SECOND_PROBLEM, is_leap_second, year_problem
+
+        if is_leap_second(text):
+            raise ValueError(f"time_utc {text!r} {LEAP_SECOND_PROBLEM}")
         try:
             t_utc = parse_utc(text)
         except ValueError:
             raise ValueError(f"time_utc {text!r} is not an ISO-8601 UTC time") from None
-        from .obs_rows import year_problem
 
         if year_problem(t_utc):
             raise ValueError(f"time_utc {text!r}: {year_problem(t_utc)}")

@@ -8,6 +8,7 @@ per-measurement sites and types. Times are given as UTC datetimes.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from datetime import datetime, timezone
 
@@ -21,7 +22,7 @@ from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
 from .decimal_units import to_rad
 
 __all__ = ["ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "year_problem", "TIME_FIELD_HELP",
-           "FIRST_YEAR", "LAST_YEAR"]
+           "FIRST_YEAR", "LAST_YEAR", "is_leap_second", "LEAP_SECOND_PROBLEM"]
 
 TIME_FIELD_HELP = "an ISO-8601 UTC time such as 2026-03-01T03:40:00.000000Z"
 FIRST_YEAR, LAST_YEAR = 1800, 2199
@@ -63,13 +64,25 @@ def parse_epoch(path, epoch) -> datetime:
         raise MeasurementError(f"{path}: epoch {epoch!r} is not an ISO-8601 UTC time") from None
 
 
+_LEAP_SECOND = re.compile(r"T\d{2}:\d{2}:60(?:[.,]\d*)?(?:Z|[+-]\d{2}:?\d{2})?$")
+LEAP_SECOND_PROBLEM = "is a leap second (second 60): leap-second time tags are not supported"
+
+
+def is_leap_second(text: str) -> bool:
+    """Whether the ISO-8601 time ``text`` has second 60 (a leap second, which datetime cannot hold)."""
+    return bool(_LEAP_SECOND.search(text.strip()))
+
+
 def parse_iso_utc(text: str) -> datetime:
-    """An ISO-8601 time that must be UTC ('Z', '+00:00' or no zone); ValueError otherwise."""
+    """An ISO-8601 UTC time ending in Z, as ADES writes it ('2026-03-01T03:40:00.5Z'); ValueError
+    otherwise (a time with another zone, +00:00 or none, a leap second)."""
     s = text.strip()
     if not s or "T" not in s:
         raise ValueError("not " + TIME_FIELD_HELP)
+    if is_leap_second(s):
+        raise ValueError(LEAP_SECOND_PROBLEM)
     dt = parse_utc(s)
-    if s[-1] not in "Z" and ("+" in s[10:] or s.count("-") > 2) and not s.endswith("+00:00"):
+    if not s.endswith("Z"):
         raise ValueError("must be UTC (end in Z)")
     return dt.astimezone(timezone.utc)
 
