@@ -14,8 +14,8 @@ stn         MPC observatory code (required); sites outside the bundled table com
             given under a bundled code more than 1 km from the code's place replaces it, with a
             warning naming both places (once per code and file)
 mode        optional, written "CCD"; radar records (RAD) are left out with a warning, as the
-            XML reader leaves out ``<radar>`` elements (a file of nothing else is refused); any
-            other mode than those of optical astrometry (:data:`OPTICAL_MODES`) is refused
+            XML reader leaves out ``<radar>`` elements (a file of nothing else is refused); a
+            mode not among those of optical astrometry (:data:`OPTICAL_MODES`) is read with a warning
 rmsCorr     optional correlation of the RA and Dec errors: refused outside [-1, 1], else not used
 permID / provID / trkSub   the object (one of them required)
 ==========  ===================================================================================
@@ -146,8 +146,11 @@ def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) ->
     return stn
 
 
-OPTICAL_MODES = ("CCD", "CMO", "VID", "PHO", "ENC", "PMT", "MIC", "MER", "TDI", "UNK")
-"""ADES ``mode`` values of optical astrometry (instruments that measure RA/Dec)."""
+OPTICAL_MODES = ("CCD", "CMO", "VID", "PHO", "ENC", "PMT", "MIC", "MER", "TDI", "OCC", "UNK")
+"""ADES ``mode`` values of optical astrometry (instruments that measure RA/Dec); another mode
+(other than radar, RAD) is read as optical with a warning, once per file and mode."""
+
+_WARNED_MODES: set[tuple[str, str]] = set()
 
 
 def is_radar(rec: dict) -> bool:
@@ -169,13 +172,17 @@ def say_skipped(path, skipped: dict[str, int], any_optical: bool) -> None:
 
 
 def _check_optical(rec, path, line: int) -> None:
-    """Refuse a record whose ``mode`` is not an optical one (radar, ...) or whose ``rmsCorr`` (the
-    correlation of the RA and Dec errors) is not a number in [-1, 1]."""
+    """Refuse a radar record (``mode`` RAD) or one whose ``rmsCorr`` (the correlation of the RA and
+    Dec errors) is not a number in [-1, 1]; warn of a mode that is not a known optical one."""
     mode, mln = _get(rec, "mode", path, line, required=False)
-    if mode is not None and mode not in OPTICAL_MODES:
-        what = "radar observations are not read" if mode == "RAD" else "not an optical mode"
-        raise FieldError(path, mln, "mode", f"{show_field(mode)}: {what}; cistrack reads optical RA/Dec "
-                                            f"(mode {', '.join(OPTICAL_MODES)})")
+    if mode == "RAD":
+        raise FieldError(path, mln, "mode", f"{show_field(mode)}: radar observations are not read; cistrack "
+                                            f"reads optical RA/Dec (mode {', '.join(OPTICAL_MODES)})")
+    if mode is not None and mode not in OPTICAL_MODES and (str(path), mode) not in _WARNED_MODES:
+        _WARNED_MODES.add((str(path), mode))
+        logging.getLogger("cistrack.readers").warning(
+            f"warning: {path}: line {mln}: mode {show_field(mode)} is not an optical mode cistrack knows "
+            f"({', '.join(OPTICAL_MODES)}); its rows are read as optical RA/Dec")
     corr, cln = _get(rec, "rmsCorr", path, line, required=False)
     if corr is not None:
         try:

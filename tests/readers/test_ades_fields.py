@@ -75,8 +75,17 @@ def test_the_xml_reader_leaves_out_a_radar_optical_record_the_same_way(tmp_path,
     assert len(ms) == 1 and "1 mode RAD records are not read" in caplog.text
 
 
-@pytest.mark.parametrize("mode", ["OCC", "radar", "XYZ"])
-def test_another_mode_is_refused_naming_file_line_and_the_modes_read(tmp_path, mode):
-    with pytest.raises(MeasurementError, match=rf"fields\.psv, line 3, field mode: '{mode}': not an optical mode; "
-                                               r"cistrack reads optical RA/Dec \(mode CCD, CMO, VID"):
-        read_observations(_psv(tmp_path, (mode, ""), ("CCD", "")), EPOCH)
+@pytest.mark.parametrize("mode", ["radar", "XYZ"])
+def test_a_mode_that_is_no_known_optical_one_is_read_with_a_warning_naming_file_and_line(tmp_path, mode, caplog):
+    """ADES may add optical modes; a file using one is not refused, but the warning says the rows are
+    read as optical RA/Dec."""
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        ms = read_observations(_psv(tmp_path, (mode, ""), ("CCD", "")), EPOCH)
+    assert len(ms) == 2
+    assert f"fields.psv: line 3: mode '{mode}' is not an optical mode cistrack knows" in caplog.text
+
+
+def test_occultation_astrometry_is_an_optical_mode(tmp_path, caplog):
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        assert len(read_observations(_psv(tmp_path, ("OCC", ""), ("CCD", "")), EPOCH)) == 2
+    assert "not an optical mode" not in caplog.text
