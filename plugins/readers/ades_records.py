@@ -211,7 +211,9 @@ def record_to_row(rec: dict, path, line: int, explicit: dict[str, Site], table: 
     s_dec = _sigma(rec, "rmsDec", path, line)
     site = _site(rec, path, line, explicit, table)
     obj = next(rec[f][0].strip() for f in _ID_FIELDS if rec.get(f, ("", 0))[0].strip())
-    return ObsRow(t, ra, dec, s_ra, s_dec, site, "radec", line, "obsTime", obj)
+    prov = rec.get("provID", ("", 0))[0].strip()
+    alias = prov if prov and prov != obj else ""  # a permID's provID: rows named by it are this object's
+    return ObsRow(t, ra, dec, s_ra, s_dec, site, "radec", line, "obsTime", obj, alias)
 
 
 def rows_for_writing(ms: MeasurementSet, epoch: datetime, who: str) -> tuple[list[dict[str, str]], bool]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
 import numpy as np
@@ -54,6 +54,9 @@ class ObsRow:
     time_field: str
     obj: str = ""
     """The object's designation in the file ("": the format names none)."""
+    alias: str = ""
+    """Another designation the row gives the same object (ADES: the provID of a row named by its
+    permID), linking rows that name it only that way."""
 
 
 def parse_epoch(path, epoch) -> datetime:
@@ -95,12 +98,23 @@ def _default_first(row: ObsRow, sigma_arcsec: float, default_rad: float) -> floa
     return to_rad(repr(float(sigma_arcsec)), "arcsec", scale=math.cos(row.b))
 
 
+def _linked(rows: list[ObsRow]) -> list[ObsRow]:
+    """``rows`` with each row named by a designation another row gives as its alias (an ADES
+    provID beside a permID) named as that row is: one object, not two."""
+    names = {r.alias: r.obj for r in rows if r.alias and r.obj}
+    if not names:
+        return rows
+    return [replace(r, obj=names[r.obj]) if r.obj in names else r for r in rows]
+
+
 def one_object(path, rows: list[ObsRow], designation: str | None) -> tuple[list[ObsRow], str | None]:
     """The rows of one object and its designation: those of ``designation`` when given (a
     FieldError when the file has none), else all rows, refused with :class:`SeveralObjectsError`
     when they name several objects."""
+    rows = _linked(rows)
     objects = list(dict.fromkeys(r.obj for r in rows if r.obj))
     if designation is not None:
+        designation = {r.alias: r.obj for r in rows if r.alias}.get(designation, designation)
         keep = [r for r in rows if r.obj == designation]
         if not keep:
             raise FieldError(path, 1, "(designation)", f"no observation of object {show_field(designation)}; the "

@@ -1,5 +1,5 @@
 """ADES fields that say what a record is or how its errors are correlated: ``mode`` (radar records
-are left out, as the XML reader leaves out ``<radar>``; other non-optical modes are refused) and
+are left out, as the XML reader leaves out ``<radar>``; other modes are read with a warning) and
 ``rmsCorr`` (a correlation, in [-1, 1])."""
 from __future__ import annotations
 
