@@ -20,8 +20,6 @@ __all__ = ["add_predict_parser", "cmd_predict", "table_lines", "MAX_TIMES"]
 
 MAX_TIMES = 20_000
 """Most prediction times one command computes."""
-FIRST_YEAR, LAST_YEAR = 1900, 2052
-"""The whole years of the DE421 ephemeris (prediction times must lie within them)."""
 _HEADER = (f"{'UTC':<20}{'RA deg':>11}{'Dec deg':>10}{'RA rate':>9}{'Dec rate':>9}{'range km':>10}{'elev':>7}"
            f"{'Sun':>7}{'Moon':>7}{'3sig a':>9}{'3sig b':>9}{'PA':>6}")
 _UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min'.rjust(9) + "".rjust(10)
@@ -44,6 +42,7 @@ def _minutes(text: str) -> float:
 
 def _utc(text: str):
     from cistrack import units
+    from cistrack.fitting.sky_ephemeris import FIRST_YEAR, LAST_YEAR
 
     try:
         t = units.parse_utc(text)
@@ -131,6 +130,7 @@ def _lost_note(sky) -> str:
 def _check_year(option: str, t) -> None:
     """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need."""
     from cistrack.errors import ConfigError
+    from cistrack.fitting.sky_ephemeris import FIRST_YEAR, LAST_YEAR
 
     if not FIRST_YEAR <= t.year <= LAST_YEAR:
         raise ConfigError(f"{option} {t.year:04d}-{t.month:02d}-{t.day:02d}: sky predictions need the DE421 "

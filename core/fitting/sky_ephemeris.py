@@ -10,7 +10,9 @@ the range; its azel twin the elevation (apparent, no refraction). The sky-plane 
 (RA cos(Dec), Dec) is the state covariance mapped by the measurement's Jacobian (central
 differences); its ellipse: 1-sigma semi-axes (arcsec) and the position angle of the major axis
 (degrees from North through East); 3-sigma is three times those (the 2-D 3-sigma region holds
-98.9 % of a Gaussian). Rates are central differences over +-30 s; solar elongation and lunar
+98.9 % of a Gaussian). Rates are central differences over +-30 s (within 30 s before an impact,
+where the orbit ends, one-sided differences of the same order over the 60 s before); solar
+elongation and lunar
 distance are the angles from the site between the target and the Sun's and the Moon's centres
 (DE421), degrees.
 
@@ -23,7 +25,7 @@ import csv
 import math
 from dataclasses import dataclass
 from typing import Any
-from datetime import datetime
+from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +39,10 @@ from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.plugin.registry import Registry, default_registry
 
 __all__ = ["SkyEphemeris", "sky_ephemeris", "sky_ephemeris_of", "predicted_orbit", "DirectoryOrbit", "orbit_of_directory", "CSV_COLUMNS",
-           "RATE_SECONDS"]
+           "RATE_SECONDS", "FIRST_YEAR", "LAST_YEAR"]
 
+FIRST_YEAR, LAST_YEAR = 1900, 2052
+"""The whole years of the DE421 ephemeris (prediction times must lie within them)."""
 RATE_SECONDS = 30.0
 """Half-width of the central differences of the rates, seconds."""
 CSV_COLUMNS = ("utc", "ra_deg", "dec_deg", "ra_rate_arcsec_min", "dec_rate_arcsec_min", "range_km", "elevation_deg",
@@ -152,14 +156,43 @@ def _sky_jacobian(radec, states: np.ndarray, times: np.ndarray, dec: np.ndarray)
 
 
 def _rates(dynamics, radec, state, t0, times, dec) -> tuple[np.ndarray, np.ndarray]:
-    """(RA cos(Dec), Dec) rates (K,) each, arcsec/min."""
-    dt = units.seconds_to_tu(RATE_SECONDS)
-    both = np.concatenate([times - dt, times + dt])
-    z = radec.measure(arc_states(dynamics, state, t0, both), both)[:, :2]
-    k = times.size
-    dra = (z[k:, 0] - z[:k, 0] + math.pi) % (2 * math.pi) - math.pi
+    """(RA cos(Dec), Dec) rates (K,) each, arcsec/min: central differences over +-h
+    (:data:`RATE_SECONDS`), and at a time whose central stencil would cross an impact (h or less
+    before it) the one-sided difference of the same order, (3 z(t) - 4 z(t-h) + z(t-2h)) / 2h."""
+    h = float(units.seconds_to_tu(RATE_SECONDS))
+    s = _rate_sides(dynamics, state, t0, times, h)                  # 0 central, -1 backward, +1 forward
+    a = np.where(s == 0, times - h, times + s * h)
+    b = np.where(s == 0, times + h, times + 2 * s * h)
+    at = np.concatenate([times, a, b])
+    z = radec.measure(arc_states(dynamics, state, t0, at), at)[:, :2].reshape(3, times.size, 2)
+    da, db = z[1] - z[0], z[2] - z[0]
+    da[:, 0], db[:, 0] = _wrapped(da[:, 0]), _wrapped(db[:, 0])
+    diff = np.where((s == 0)[:, None], db - da, s[:, None] * (4 * da - db))   # both: 2h times the rate
     scale = _ARCSEC * 60.0 / (2 * RATE_SECONDS)
-    return dra * np.cos(dec) * scale, (z[k:, 1] - z[:k, 1]) * scale
+    return diff[:, 0] * np.cos(dec) * scale, diff[:, 1] * scale
+
+
+def _wrapped(angle: np.ndarray) -> np.ndarray:
+    """An angle difference (rad) wrapped into [-pi, pi)."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def _rate_sides(dynamics, state: np.ndarray, t0: float, times: np.ndarray, h: float) -> np.ndarray:
+    """Which difference gives the rates at ``times`` (K,): -1 (backward) where t + h reaches an
+    impact after ``t0``, +1 (forward) where t - h reaches one before it (an orbit propagated back
+    into the body it left), 0 (central) elsewhere."""
+    from cistrack.least_squares.events import first_impact
+
+    side = np.zeros(times.size)
+    margin = float(units.seconds_to_tu(1.0))
+    late, early = float(times.max()) + h, float(times.min()) - h
+    hit = first_impact(dynamics, state, t0, late) if late > t0 else None
+    if hit is not None:
+        side[times + h > hit[0] - margin] = -1.0
+    hit = first_impact(dynamics, state, t0, early) if early < t0 else None
+    if hit is not None:
+        side[times - h < hit[0] + margin] = 1.0
+    return side
 
 
 def _angles_to_sun_and_moon(site: Site, epoch: datetime, times: np.ndarray, ra: np.ndarray,
@@ -181,13 +214,24 @@ def _angles_to_sun_and_moon(site: Site, epoch: datetime, times: np.ndarray, ra: 
     return out[0], out[1]
 
 
-def _checked(dynamics: Dynamics, times) -> np.ndarray:
+def _checked(dynamics: Dynamics, times, epoch: datetime | str) -> np.ndarray:
+    """``times`` as a (K,) float array; StateError naming ``times`` unless they are finite and
+    within the years of the DE421 ephemeris (``epoch``: the UTC of t = 0); ConfigError for dynamics
+    with no place on the real sky."""
     if getattr(dynamics, "frame", None) is None:
         raise ConfigError(f"sky predictions need dynamics in the real Earth-Moon frame ('ephemeris'); these are "
                           f"'{getattr(dynamics, 'name', type(dynamics).__name__)}', whose orbit has no place on the real sky")
     tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
     if tt.size == 0 or not np.all(np.isfinite(tt)):
         raise StateError("sky predictions: times must be one or more finite numbers (TU)")
+    when = units.parse_utc(epoch)
+    first, last = (float(units.seconds_to_tu((datetime(y, 1, 1, tzinfo=timezone.utc) - when).total_seconds()))
+                   for y in (FIRST_YEAR, LAST_YEAR + 1))
+    outside = tt[(tt < first) | (tt >= last)]
+    if outside.size:
+        raise StateError(f"sky predictions: times: {outside[0]:.6g} TU (since {units.format_utc(when)[:19]}Z) is "
+                         f"outside the years {FIRST_YEAR} to {LAST_YEAR} of the DE421 ephemeris the sky positions "
+                         f"need; give times from {first:.6g} to {last:.6g} TU")
     return tt
 
 
@@ -196,7 +240,7 @@ def sky_ephemeris(dynamics: Dynamics, state: np.ndarray, covariance: np.ndarray,
     """Sky predictions (see the module docstring) of the orbit ``state`` (6,) and ``covariance``
     (6, 6) [LU, VU] at ``t0`` (TU) at ``times`` (K,) TU from ``site``; ``epoch``: the UTC of t = 0
     (the dynamics' and scenario's)."""
-    tt = _checked(dynamics, times)
+    tt = _checked(dynamics, times, epoch)
     x = np.asarray(state, float)
     return _sky(dynamics, (x, t0), predicted_orbit(dynamics, x, np.asarray(covariance, float), t0, tt), tt, site,
                 epoch, registry)
@@ -208,7 +252,7 @@ def sky_ephemeris_of(orbit: "DirectoryOrbit", times, site: Site, registry: Regis
     carried from the joint covariance of state and parameters
     (:func:`cistrack.least_squares.area_to_mass.joint_covariances`), so that the parameters'
     uncertainty widens the ellipses away from the fit epoch, as in the export."""
-    tt = _checked(orbit.dynamics, times)
+    tt = _checked(orbit.dynamics, times, orbit.epoch)
     x = np.asarray(orbit.state, float)
     predicted = _orbit_at(orbit.dynamics, x, np.asarray(orbit.covariance, float), orbit.t0, tt, orbit.fit)
     return _sky(orbit.dynamics, (x, orbit.t0), predicted, tt, site, orbit.epoch, registry)

@@ -1,5 +1,6 @@
 """Sky predictions (cistrack.fitting.sky_ephemeris): the Sun and Moon angles against astropy, the
-sky ellipse against 2,000 orbits drawn from the covariance, the rates against the positions."""
+sky ellipse against 2,000 orbits drawn from the covariance, the rates against the positions (up to
+an impact), the times refused outside the ephemeris' years."""
 import warnings
 
 import numpy as np
@@ -7,7 +8,7 @@ import pytest
 
 from cistrack import units
 from cistrack.astro.sites import observatory
-from cistrack.errors import ConfigError
+from cistrack.errors import ConfigError, StateError
 from cistrack.fitting.sky_ephemeris import CSV_COLUMNS, sky_ephemeris
 from cistrack.plugin.registry import default_registry
 from cistrack.results.estimates import KM_SCALE
@@ -72,6 +73,27 @@ def test_the_rates_are_the_motion_between_neighbouring_predictions(case):
     dra = (near.ra_deg[1] - near.ra_deg[0]) * np.cos(np.radians(sk.dec_deg[0])) * 3600.0 / 2.0
     ddec = (near.dec_deg[1] - near.dec_deg[0]) * 3600.0 / 2.0
     assert abs(dra - sk.ra_rate_arcsec_min[0]) < 0.01 and abs(ddec - sk.dec_rate_arcsec_min[0]) < 0.01
+
+
+def test_rates_within_30_s_before_the_impact_are_the_motion_before_it(case):
+    from cistrack.least_squares.events import first_impact
+
+    dyn, x, cov, _, _ = case
+    hit, body = first_impact(dyn, x, 0.0, units.days_to_tu(17.0))     # the truth hits the Moon on 2026-03-17
+    assert body == "Moon"
+    second = units.seconds_to_tu(1.0)
+    t = np.array([hit - 20 * second, hit - 10 * second])               # their +30 s lies past the impact
+    sk = sky_ephemeris(dyn, x, cov, 0.0, t, observatory("568"), EPOCH)
+    dra = (sk.ra_deg[1] - sk.ra_deg[0]) * np.cos(np.radians(sk.dec_deg.mean())) * 3600.0 * 6.0
+    ddec = (sk.dec_deg[1] - sk.dec_deg[0]) * 3600.0 * 6.0                # arcsec per minute over the 10 s
+    assert abs(dra - sk.ra_rate_arcsec_min.mean()) < 0.05 and abs(ddec - sk.dec_rate_arcsec_min.mean()) < 0.05
+
+
+@pytest.mark.parametrize("t", [1e9, -1e9, 1e4])
+def test_times_outside_the_ephemeris_years_are_refused_naming_times(case, t):
+    dyn, x, cov, _, _ = case
+    with pytest.raises(StateError, match="times: .* outside the years 1900 to 2052"):
+        sky_ephemeris(dyn, x, cov, 0.0, np.array([1.0, t]), observatory("568"), EPOCH)
 
 
 def test_rows_and_csv_hold_every_column(case, tmp_path):
