@@ -138,13 +138,19 @@ def _check_year(option: str, t) -> None:
 
 
 def _prefix(args) -> Path:
-    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist."""
+    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist or when
+    PREFIX.csv or PREFIX.png would replace one of the directory's own results (fit.json, ...)."""
     from cistrack.errors import ConfigError
+    from cistrack.results.earlier_run import check_export_path
 
-    prefix = Path(args.out) if args.out else Path(args.run) / f"sky-{args.site}"
+    default = Path(args.run) / f"sky-{args.site}"
+    prefix = Path(args.out) if args.out else default
     if args.out and not prefix.parent.is_dir():
         raise ConfigError(f"--out {args.out}: the folder {prefix.parent} does not exist; give a PREFIX in an "
                           "existing folder")
+    for suffix in (".csv", ".png"):
+        check_export_path(prefix.with_name(prefix.name + suffix), args.run, f"--out {args.out}:", by="the prediction",
+                          instead=f"give another PREFIX (default {default})")
     return prefix
 
 

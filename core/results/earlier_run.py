@@ -30,7 +30,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
-           "FIT_FILES"]
+           "FIT_FILES", "FIT_PLOTS"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -159,6 +159,8 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
 
 FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")
 """A fit's own records in its results directory (beside the run's)."""
+FIT_PLOTS = ("residuals-*.png", "residuals-*.svg")
+"""A fit's residual plots in its results directory (one per site)."""
 
 
 def _in_part_folders(path: Path, d: Path) -> bool:
@@ -171,14 +173,18 @@ def _named_as(path: Path, d: Path, names: tuple[str, ...]) -> bool:
     return path.parent == d and any(path.name == n or path.name.startswith(n + ".") for n in names)
 
 
-def check_export_path(out: str | Path, directory: str | Path, where: str = "--out") -> None:
-    """Refuse (:class:`ConfigError`) an export file that is one of the results it exports from:
-    the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records or a path inside
-    the part folders of ``directory``."""
+def check_export_path(out: str | Path, directory: str | Path, where: str = "--out", *, by: str = "the export",
+                      instead: str = "give another file (default {directory}/estimate.<format>)") -> None:
+    """Refuse (:class:`ConfigError` naming ``where``) a file written from ``directory`` (by an
+    export, or ``by`` another writer such as a sky prediction) that is one of the results it is
+    made from: the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records and
+    residual plots, or a path inside the part folders of ``directory``. ``instead``: what to do,
+    said in the refusal (``{directory}`` is replaced by the directory)."""
     o, d = Path(os.path.abspath(out)).resolve(), Path(os.path.abspath(directory)).resolve()
-    if o == d or _named_as(o, d, RESULT_FILES + FIT_FILES) or _in_part_folders(o, d):
-        raise ConfigError(f"{where} {out}: is one of the results of {directory} (or among them); the export would "
-                          f"replace them: give another file (default {Path(directory) / 'estimate.<format>'})")
+    plot = o.parent == d and any(fnmatch.fnmatch(o.name, p) for p in FIT_PLOTS)
+    if o == d or plot or _named_as(o, d, RESULT_FILES + FIT_FILES) or _in_part_folders(o, d):
+        raise ConfigError(f"{where} {out}: is one of the results of {directory} (or among them); {by} would "
+                          f"replace them: " + instead.format(directory=Path(directory)))
 
 
 def _check_writable(recording: Path) -> None:

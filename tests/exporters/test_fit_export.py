@@ -77,6 +77,13 @@ def test_cli_export_of_a_fit_directory_writes_the_fitted_orbit(fit_dir, tmp_path
     assert "least-squares" in text and "OBJECT_NAME = cis0001" in text
 
 
+@pytest.mark.parametrize("name", ["residuals-711.png", "residuals-809.svg", "residuals.csv", "fit.json"])
+def test_an_export_over_the_fits_own_results_is_refused(fit_dir, capsys, name):
+    before = (fit_dir / name).read_bytes()
+    assert main(["export", str(fit_dir), "--out", str(fit_dir / name), "--overwrite"]) == 2
+    assert "is one of the results of" in capsys.readouterr().err and (fit_dir / name).read_bytes() == before
+
+
 def test_a_fit_that_did_not_converge_is_refused_unless_forced(fit_dir, tmp_path):
     d = tmp_path / "bad"
     shutil.copytree(fit_dir, d)

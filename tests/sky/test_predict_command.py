@@ -110,6 +110,21 @@ def test_times_far_from_the_fit_say_the_orbit_no_longer_gives_the_sky_position(f
     assert "3-sigma ellipse is longer than 10 degrees" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("prefix, replaced", [("residuals", "residuals.csv"), ("residuals-711", "residuals-711.png"),
+                                              ("steps/x", "steps/x.csv"), ("fit", None)])
+def test_an_out_prefix_over_the_fits_own_results_is_refused(fitted, tmp_path, capsys, prefix, replaced):
+    import shutil
+
+    d = tmp_path / "fit"
+    shutil.copytree(fitted, d)
+    before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
+    assert main(["predict", str(d), "--site", "568", "--out", str(d / prefix), "--quiet"]) == (2 if replaced else 0)
+    err = capsys.readouterr().err
+    if replaced:
+        assert f"--out {d / prefix}: {d / replaced}: is one of the results of {d}" in err and "sky-568" in err
+    assert {p.name: p.read_bytes() for p in d.iterdir() if p.name in before} == before
+
+
 def test_a_fit_that_did_not_complete_gives_no_orbit_to_predict_from(fitted, tmp_path, capsys):
     import shutil
 
