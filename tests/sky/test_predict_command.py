@@ -125,6 +125,21 @@ def test_an_out_prefix_over_the_fits_own_results_is_refused(fitted, tmp_path, ca
     assert {p.name: p.read_bytes() for p in d.iterdir() if p.name in before} == before
 
 
+def test_a_refit_in_the_directory_removes_the_sky_prediction_of_the_earlier_orbit(fitted, tmp_path, capsys):
+    import shutil
+
+    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
+
+    d = tmp_path / "fit"
+    shutil.copytree(fitted, d)
+    assert main(["predict", str(d), "--site", "568", "--quiet"]) == 0
+    assert (d / "sky-568.csv").is_file() and (d / "sky-568.png").is_file()
+    lines = (builtin_scenario_path("real-data").parent / "real_data" / "observations.psv").read_text().splitlines()
+    (tmp_path / "part.psv").write_text("\n".join(lines[:62]) + "\n")     # the first nights only: another orbit
+    assert main(["fit", str(tmp_path / "part.psv"), "--out", str(d), "--quiet"]) == 0
+    assert not (d / "sky-568.csv").exists() and not (d / "sky-568.png").exists()
+
+
 def test_a_fit_that_did_not_complete_gives_no_orbit_to_predict_from(fitted, tmp_path, capsys):
     import shutil
 
