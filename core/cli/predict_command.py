@@ -199,18 +199,30 @@ def _given_site(text: str):
 
 
 def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
-    """PREFIX.csv and PREFIX.png of ``sky``; ConfigError naming the file when it cannot be written."""
-    from cistrack.errors import ConfigError
-    from cistrack.fitting.sky_plot import plot_sky
+    """PREFIX.csv and PREFIX.png of ``sky``, both or neither: each is written to a temporary file
+    beside it and the two are renamed into place once both are whole (a full disk leaves neither,
+    and an earlier pair as it was); ConfigError naming the file that cannot be written."""
+    import errno
+    from contextlib import ExitStack
 
-    path = prefix.with_name(prefix.name + ".csv")
+    from cistrack.errors import ConfigError
+    from cistrack.fitting.sky_plot import sky_figure
+    from cistrack.results.atomic_files import atomic_target
+
+    csv_path, png = prefix.with_name(prefix.name + ".csv"), prefix.with_name(prefix.name + ".png")
+    path = next((p for p in (csv_path, png) if p.is_dir()), csv_path)
     try:
-        csv_path = sky.write_csv(path)
-        path = prefix.with_name(prefix.name + ".png")
-        return csv_path, plot_sky(sky, path, title)
+        if path.is_dir():  # found before either is written: its rename would fail after the other's
+            raise IsADirectoryError(errno.EISDIR, "a folder is there")
+        with ExitStack() as both:  # both temporaries renamed on leaving, once both are written
+            tmp_csv, tmp_png = (both.enter_context(atomic_target(p)) for p in (csv_path, png))
+            sky.write_csv(tmp_csv)
+            path = png
+            sky_figure(sky, title).savefig(tmp_png, dpi=110, format="png")
     except OSError as exc:
-        raise ConfigError(f"--out {prefix}: cannot write {path} ({exc.strerror or exc}); give a PREFIX in a "
-                          "folder you can write to") from None
+        raise ConfigError(f"--out {prefix}: cannot write {path} ({exc.strerror or exc}); neither {csv_path.name} nor "
+                          f"{png.name} was written; give a PREFIX in a folder you can write to, with room") from None
+    return csv_path, png
 
 
 def cmd_predict(args) -> int:

@@ -140,6 +140,31 @@ def test_a_refit_in_the_directory_removes_the_sky_prediction_of_the_earlier_orbi
     assert not (d / "sky-568.csv").exists() and not (d / "sky-568.png").exists()
 
 
+def test_a_full_disk_for_the_plot_leaves_neither_file_and_an_earlier_pair_as_it_was(fitted, tmp_path, capsys,
+                                                                                     monkeypatch):
+    import builtins
+    import os
+
+    window = ["predict", str(fitted), "--site", "568", "--out", str(tmp_path / "p"), "--quiet"]
+    assert main([*window, "--step", "360"]) == 0
+    before = {f.name: f.read_bytes() for f in tmp_path.iterdir()}
+    assert sorted(before) == ["p.csv", "p.png"]
+    real_open = builtins.open
+
+    def open_on_full_disk(file, mode="r", *args, **kwargs):  # the plot's writes go to /dev/full (ENOSPC)
+        if isinstance(file, (str, os.PathLike)) and "w" in mode and "p.png" in os.fspath(file):
+            return real_open("/dev/full", mode, *args, **kwargs)
+        return real_open(file, mode, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", open_on_full_disk)
+    assert main([*window, "--step", "60"]) == 2
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    assert f"--out {tmp_path / 'p'}: cannot write {tmp_path / 'p.png'} (No space left on device)" in err
+    assert "neither p.csv nor p.png was written" in err and "Traceback" not in err
+    assert {f.name: f.read_bytes() for f in tmp_path.iterdir()} == before  # no temporary file left either
+
+
 def test_a_fit_that_did_not_complete_gives_no_orbit_to_predict_from(fitted, tmp_path, capsys):
     import shutil
 
