@@ -75,8 +75,14 @@ def cmd_export_fit(args) -> int:
     """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fitting.fit_export`)."""
     from cistrack.fitting.fit_export import export_fit
 
+    from cistrack.errors import ConfigError
+
     params = {} if getattr(args, "step", None) is None else {"step": args.step}
     if getattr(args, "covariance", None) is not None:  # else export_fit's default
+        if args.format == "opm":
+            raise ConfigError(f"--covariance {args.covariance}: --format opm writes the state and covariance at the "
+                              "fit epoch, which are not propagated, and takes no --covariance; --covariance says how "
+                              "--format oem carries the covariance over its grid")
         params["covariance"] = args.covariance
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
                      predict_days=getattr(args, "predict", None), **params)

@@ -245,12 +245,23 @@ def _check_step_option(format: str, step: int | None) -> None:
                           "--step selects the one step of a single-state format such as --format opm")
 
 
+def _exporter_name(format: str) -> str:
+    """The registered exporter ``--format`` names in any case (OEM: oem); as given when none or
+    several match (an unknown --format is refused by name where the exporter is made)."""
+    from cistrack.plugin.registry import default_registry
+
+    names = default_registry().names("exporter")
+    same = [n for n in names if n.lower() == format.lower()]
+    return same[0] if format not in names and len(same) == 1 else format
+
+
 def cmd_export(args) -> int:
     """``cistrack export``: a run's orbit estimate, or a fit's fitted orbit, as CCSDS OEM or OPM."""
     from cistrack.runs.export import export_refusal, export_run
 
     from cistrack.results.earlier_run import check_export_path
 
+    args.format = _exporter_name(args.format)
     _check_step_option(args.format, args.step)
     _check_out_suffix(args.format, args.out)
     if args.out:
@@ -374,7 +385,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.set_defaults(func=cmd_plugins)
     ex = sub.add_parser("export", help="write a run's orbit estimate as CCSDS OEM or OPM")
     ex.add_argument("run", help="a run directory (written by 'cistrack run --out DIR')")
-    ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm")
+    ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm (either case)")
     ex.add_argument("--out", type=path_text("--out"), default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")

@@ -171,7 +171,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     ``path`` without ``overwrite``, a fit that did not converge without ``force``, an unknown
     ``covariance``."""
     opts, params = _split_keywords(options, params)
-    days = _checked_request(opts, path)
+    days = _checked_request(opts, path, format)
     d = Path(run_dir)
     record = read_fit_record(d)
     refusal = _refusal(d, record, opts.force)
@@ -192,11 +192,11 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
-    comments = _comments(record, name, opts, pred, utc, n_arc, refusal)
+    comments = _comments(record, name, opts, pred, utc, n_arc, refusal, propagated=format != "opm")
     if impact is not None:
         comments += ["WARNING: the orbit ends on the surface; the last state is 1 ms before the impact:"] + impact.lines()
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
-    meta = _metadata(name, comments)
+    meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
     _write(exporter, out, ie, meta, format, path is not None)
     return out
@@ -259,9 +259,13 @@ def _split_keywords(options: FitExportOptions | None, params: dict[str, Any]
     return dataclasses.replace(options or FitExportOptions(), **mine), rest
 
 
-def _checked_request(opts: FitExportOptions, path: str | Path | None) -> float:
+def _checked_request(opts: FitExportOptions, path: str | Path | None, format: str) -> float:
     """The prediction span, days (0 when ``predict_days`` is None), once the covariance method,
-    the output path and the span are valid; raises ConfigError naming the option."""
+    the output path and the span are valid (none for ``format`` opm, the one state at the fit
+    epoch); raises ConfigError naming the option."""
+    if format == "opm" and opts.predict_days is not None:
+        raise ConfigError(f"--predict {opts.predict_days!r}: --format opm writes the one state at the fit epoch and "
+                          "takes no --predict; --predict extends the grid of --format oem beyond the last observation")
     if opts.covariance not in COVARIANCE_METHODS:
         raise ConfigError(f"--covariance {opts.covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
     if path is not None and not opts.overwrite and os.path.lexists(path):
@@ -307,16 +311,17 @@ def _estimates(times: np.ndarray, n_arc: int, utc: np.ndarray, pred) -> Estimate
 
 
 def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, utc: np.ndarray, n_arc: int,
-              refusal: str | None) -> list[str]:
-    """The file's COMMENT lines: the arc and fit, the covariance's scale and propagation, the
-    prediction span, and first, when forced, why the fit is not a converged orbit."""
+              refusal: str | None, propagated: bool = True) -> list[str]:
+    """The file's COMMENT lines: the arc and fit, the covariance's scale and propagation (none when
+    not ``propagated``: the one state at the fit epoch), the prediction span, and first, when
+    forced, why the fit is not a converged orbit."""
     arc = record["arc"]
     comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
                 f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
                 f"weighted RMS {record['rms']:.4g}, noise scale {record['noise_scale']:.4g}, "
                 f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
-    comments += _covariance_comments(record, opts.covariance, pred.linear, utc)
-    comments += _area_to_mass_comments(record)
+    comments += _covariance_comments(record, opts.covariance if propagated else None, pred.linear, utc)
+    comments += _area_to_mass_comments(record)[:None if propagated else 1]  # at the epoch: nothing carried
     if len(utc) > n_arc:
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
@@ -326,13 +331,18 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
     return comments
 
 
-def _covariance_comments(record: dict[str, Any], covariance: str, linear: np.ndarray, utc: np.ndarray) -> list[str]:
-    """How the covariance was scaled and propagated; a warning naming the span of the ``linear``
-    (K,) bool points when the unscented transform fell back to transition matrices there."""
+def _covariance_comments(record: dict[str, Any], covariance: str | None, linear: np.ndarray,
+                         utc: np.ndarray) -> list[str]:
+    """How the covariance was scaled and propagated (``covariance`` None: not propagated, the fit's
+    own at its epoch); a warning naming the span of the ``linear`` (K,) bool points when the
+    unscented transform fell back to transition matrices there."""
     comments = []
     if covariance_scale(record) > 1.0:
         comments.append(f"covariance scaled by the noise scale squared ({covariance_scale(record):.4g}): the "
                         "post-fit residuals exceed the stated noise")
+    if covariance is None:
+        comments.append("covariance of the fit at its epoch, not propagated")
+        return comments
     if covariance == "linear":
         comments.append("covariance propagated linearly (state transition matrices)")
         return comments
@@ -347,10 +357,13 @@ def _covariance_comments(record: dict[str, Any], covariance: str, linear: np.nda
     return comments
 
 
-def _metadata(name: str, comments: list[str]) -> dict[str, Any]:
+def _metadata(name: str, comments: list[str], grid: bool = True) -> dict[str, Any]:
+    """The exporter's ``meta``: names, COMMENT lines and what the states are (``grid``: propagated
+    over the grid; else the one state at the fit epoch)."""
+    what = (f"least-squares state and covariance propagated every {GRID_MINUTES:g} min, km and km/s" if grid else
+            "least-squares state and covariance at the fit epoch, km and km/s")
     return {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
-            "interpolation": "LAGRANGE", "interpolation_degree": INTERPOLATION_DEGREE,
-            "data_comment": f"least-squares state and covariance propagated every {GRID_MINUTES:g} min, km and km/s"}
+            "interpolation": "LAGRANGE", "interpolation_degree": INTERPOLATION_DEGREE, "data_comment": what}
 
 
 def _write(exporter, out: Path, ie, meta: dict[str, Any], format: str, named: bool) -> None:

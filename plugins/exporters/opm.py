@@ -1,7 +1,8 @@
 """CCSDS Orbit Parameter Message (OPM 2.0, KVN): exporter ``"opm"``.
 
 The state vector and its covariance at one step (the last one by default; ``step`` selects
-another), km and km/s, ``TIME_SYSTEM = UTC``, frame and ``meta["comments"]`` as in the OEM exporter.
+another), km and km/s, ``TIME_SYSTEM = UTC``, frame and ``meta["comments"]`` as in the OEM exporter;
+``meta["data_comment"]`` replaces the comment that says what the state is (a filter's belief).
 """
 from __future__ import annotations
 
@@ -56,7 +57,8 @@ class OpmExporter(Exporter):
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",
                 f"OBJECT_ID = {meta.get('object_id', 'cistrack-target')}",
                 f"CENTER_NAME = {est.frame.center}", f"REF_FRAME = {est.frame.name}", "TIME_SYSTEM = UTC", "",
-                f"COMMENT moment-matched mean of the filter's belief at step {int(est.step[k])}, km and km/s",
+                "COMMENT " + str(meta.get("data_comment")
+                                 or f"moment-matched mean of the filter's belief at step {int(est.step[k])}, km and km/s"),
                 f"EPOCH = {ccsds_epoch(est.utc[k])}"]
         out += [f"{key} = {num(v)}" for key, v in zip(_STATE_KEYS, est.state_km[k])]
         out.append("")

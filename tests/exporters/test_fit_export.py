@@ -84,6 +84,38 @@ def test_an_export_over_the_fits_own_results_is_refused(fit_dir, capsys, name):
     assert "is one of the results of" in capsys.readouterr().err and (fit_dir / name).read_bytes() == before
 
 
+@pytest.mark.parametrize("format, suffix", [("OEM", ".oem"), ("Opm", ".opm")])
+def test_format_names_are_taken_in_either_case(fit_dir, tmp_path, capsys, format, suffix):
+    assert main(["export", str(fit_dir), "--format", format, "--out", str(tmp_path / f"u{suffix}")]) == 0
+    assert (tmp_path / f"u{suffix}").read_text().startswith(f"CCSDS_{format.upper()}_VERS")
+
+
+@pytest.mark.parametrize("option", [["--predict", "3"], ["--covariance", "linear"]])
+def test_an_option_the_opm_does_not_use_is_refused_naming_both(fit_dir, tmp_path, capsys, option):
+    assert main(["export", str(fit_dir), "--format", "opm", *option, "--out", str(tmp_path / "o.opm")]) == 2
+    err = capsys.readouterr().err
+    assert f"{option[0]} {option[1]}" in err and "--format opm" in err and "takes no " + option[0] in err
+    assert not (tmp_path / "o.opm").exists()
+
+
+def test_the_opm_says_its_covariance_is_the_fits_own_at_the_epoch(fit_dir, tmp_path):
+    from cistrack.plugins.exporters.opm import read_opm
+
+    unscented = export_fit(fit_dir, "opm", tmp_path / "u.opm")
+    linear = export_fit(fit_dir, "opm", tmp_path / "l.opm", covariance="linear")
+    np.testing.assert_array_equal(read_opm(unscented)["covariance"], read_opm(linear)["covariance"])
+    for path in (unscented, linear):
+        text = path.read_text()
+        assert "COMMENT covariance of the fit at its epoch, not propagated" in text
+        assert "propagated by the unscented" not in text and "propagated linearly" not in text
+        assert "COMMENT least-squares state and covariance at the fit epoch" in text and "filter's belief" not in text
+
+
+def test_an_opm_with_a_prediction_span_is_refused_in_python_too(fit_dir, tmp_path):
+    with pytest.raises(CistrackError, match="--predict 3.0: --format opm writes the one state at the fit epoch"):
+        export_fit(fit_dir, "opm", tmp_path / "o.opm", predict_days=3.0)
+
+
 def test_a_fit_that_did_not_converge_is_refused_unless_forced(fit_dir, tmp_path):
     d = tmp_path / "bad"
     shutil.copytree(fit_dir, d)
