@@ -175,14 +175,18 @@ def screenshots(url: str, shots: list[tuple[str | Path, list[str]]], *, width: i
                 key_interval_s: float = 0.3, chromium: str | None = None) -> list[Path]:
     """Open ``url``, wait ``settle_s`` seconds for it to draw, then for each ``(png, keys)`` of
     ``shots`` press the key chords ``keys`` in order (e.g. ``["Ctrl+ArrowRight"]`` steps the
-    viewer's time to the next logged time, ``["End"]`` to the end), wait ``after_keys_s`` seconds
-    when keys were pressed, and write a PNG to ``png``. Key chords are ``key_interval_s`` apart."""
+    viewer's time to the next logged time; ``"command:WORDS"`` runs a command of the viewer's palette,
+    e.g. ``"command:end of timeline"``), wait ``after_keys_s`` seconds when keys were pressed, and
+    write a PNG to ``png``. Key chords are ``key_interval_s`` apart."""
     written = []
     with open_page(url, width=width, height=height, chromium=chromium) as page:
         time.sleep(settle_s)
         for png, keys in shots:
             for chord in keys:
-                page.press(chord)
+                if chord.startswith("command:"):
+                    page.run_command(chord[len("command:"):])
+                else:
+                    page.press(chord)
                 time.sleep(key_interval_s)
             if keys:
                 time.sleep(after_keys_s)

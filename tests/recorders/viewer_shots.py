@@ -1,9 +1,9 @@
 """Screenshots of a recording in the web viewer at the start, middle and end of the run, and the
 pixel measures the browser test applies to them.
 
-The viewer opens paused at the run's first time; Ctrl+ArrowRight steps its time cursor to the
-next time with data, so the middle and end shots step through half and then all of the
-recording's ``utc`` times. Positions are fractions of the 1600 x 1000 page (the default
+The viewer opens paused near the run's first time; Ctrl+ArrowRight steps its time cursor to the
+next time with data, so the middle shot steps through half of the recording's ``utc`` times; the
+end shot goes to the end of the timeline through the command palette. Positions are fractions of the 1600 x 1000 page (the default
 blueprint's layout: 3-D views on the left 60 %, run view above the system view, five series
 panels on the right).
 
@@ -68,11 +68,13 @@ def take(rrd: str | Path, out_dir: str | Path, *, settle_s: float = 30.0) -> dic
 
     from .headless_browser import screenshots
 
-    n = n_times(rrd)
-    steps = {"start": 0, "middle": n // 2, "end": n - 1 - n // 2}  # presses since the previous shot
+    keys = {"start": [], "middle": ["Ctrl+ArrowRight"] * (n_times(rrd) // 2),
+            # the palette's "Go to end of timeline": stepping on from the middle can pass the last time
+            # and wrap round to the first (an Example 1 end shot showed the IOD's cloud)
+            "end": ["command:end of timeline"]}
     out = Path(out_dir)
     with serve_recording(rrd, web_port=free_port()) as served:
-        pngs = screenshots(served.page_url, [(out / f"viewer_{s}.png", ["Ctrl+ArrowRight"] * steps[s]) for s in SHOTS],
+        pngs = screenshots(served.page_url, [(out / f"viewer_{s}.png", keys[s]) for s in SHOTS],
                            settle_s=settle_s, key_interval_s=KEY_INTERVAL_S)
     return dict(zip(SHOTS, pngs))
 
