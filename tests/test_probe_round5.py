@@ -259,3 +259,64 @@ def test_sites_whose_plot_names_coincide_each_get_their_own_files():
     assert len({s.casefold() for s in stems.values()}) == 4
     assert all(stems[k].startswith("residuals-a_b-") or stems[k].startswith("residuals-A_B-")
                for k in ("a/b", "a_b", "A_B"))
+
+
+# --- round 6: the Python API ---------------------------------------------------------------------
+
+def test_a_run_stopped_by_an_observer_is_not_judged_kept():
+    import cistrack as ct
+    from cistrack.api import hookimpl
+
+    class Boom:
+        @hookimpl
+        def cistrack_step_updated(self, run, step):
+            raise RuntimeError("boom from observer")
+
+    r = ct.run("quick", settings={"duration_days": 1.6}, observers=[Boom()])
+    assert r.summary.status == "failed"
+    assert r.verdict.kind == "none" and "did not finish (failed)" in r.verdict.reason
+
+
+@pytest.mark.parametrize("kwargs, said", [({"weights": [2.0, -1.0, 0.0, 0.0]}, "weights must be finite, non-negative"),
+                                          ({"weights": [np.nan] * 4}, "weights must be finite"),
+                                          ({"weights": [0.0] * 4}, "not all zero"),
+                                          ({"labels": [-3, 7, 1, 0]}, "labels must be 4 whole numbers >= 0"),
+                                          ({"epoch": "x"}, "epoch must be a finite time"),
+                                          ({"epoch": float("nan")}, "epoch must be a finite time")])
+def test_a_particle_cloud_refuses_what_no_belief_can_be(kwargs, said):
+    from cistrack.model.belief import ParticleCloud
+
+    args = {"states": np.ones((4, 6)), "epoch": 0.0, **kwargs}
+    with pytest.raises(ValueError, match=said):
+        ParticleCloud(**args)
+
+
+@pytest.fixture(scope="module")
+def filter_parts():
+    from cistrack.model.belief import ParticleCloud
+
+    reg = load_registry()
+    rng = np.random.default_rng(1)
+    states = np.array([1.02, 0.0, -0.18, 0.0, -0.1, 0.0]) + 1e-4 * rng.standard_normal((200, 6))
+    return reg, ParticleCloud(states, 0.0), reg.create("dynamics", "cr3bp"), reg.create("sensor", "ground-telescope")
+
+
+@pytest.mark.parametrize("name", ["pgm", "ukf", "enkf", "sir", "rpf"])
+def test_a_filter_used_out_of_order_or_with_wrong_types_says_so(name, filter_parts):
+    from cistrack.errors import CistrackError
+    from cistrack.model.belief import ParticleCloud
+
+    reg, cloud, dyn, sensor = filter_parts
+    f = reg.create("filter", name, **({"n_particles": 200} if name != "ukf" else {}))
+    with pytest.raises(CistrackError, match="call initialize"):
+        f.diagnostics
+    for bad in [(cloud, "cr3bp", sensor, np.random.default_rng(1)), (cloud, dyn, sensor, 5),
+                (ParticleCloud(cloud.states[:1], 0.0), dyn, sensor, np.random.default_rng(1)),
+                (ParticleCloud(cloud.states[:, :4], 0.0), dyn, sensor, np.random.default_rng(1))]:
+        with pytest.raises(CistrackError):
+            f.initialize(*bad)
+    f.initialize(cloud, dyn, sensor, np.random.default_rng(1))
+    with pytest.raises(CistrackError, match="a time in TU"):
+        f.predict("0.005")
+    with pytest.raises(CistrackError, match="needs a cistrack Measurement"):
+        f.update("hello")

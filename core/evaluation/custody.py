@@ -97,7 +97,9 @@ class Verdict:
                                truth :func:`cistrack.evaluation.verdicts.final_verdict` turns "kept" into
                                "tracking" or "not-converged" and any kind but "filter-failed"
                                into "diverged" when the belief collapsed or ran away; a run
-                               without a truth ends "no-truth" (judged by its NIS instead)
+                               without a truth ends "no-truth" (judged by its NIS instead); one
+                               that did not finish (failed, interrupted) "none" unless custody
+                               was lost before it stopped
     reason : str               one sentence a person can read, e.g. which threshold was crossed
     step : int or None         step index where the verdict changed from "kept" (None if kept)
     t_days : float or None     time of that step, days since the epoch

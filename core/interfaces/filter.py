@@ -124,6 +124,9 @@ class FilterBase(Filter):
     def predict(self, t: float) -> None:
         """Propagate the belief to time ``t`` (TU); a no-op at the current time."""
         self._require_init()
+        if isinstance(t, (bool, str, bytes)) or not isinstance(t, (int, float, np.integer, np.floating)):
+            raise FilterError(f"filter '{self._who()}': predict() needs a time in TU (a number), got "
+                              f"{type(t).__name__} {t!r}")
         t = float(t)
         if t == self._t:
             return
@@ -140,6 +143,7 @@ class FilterBase(Filter):
 
     @property
     def diagnostics(self) -> dict[str, float]:
+        self._require_init()
         d = dict(getattr(self, "_diag", {}))
         d.update(self._totals())
         return d

@@ -55,6 +55,15 @@ def regularize_covariance(p: np.ndarray, rel: float = 1e-12, each: bool = False)
     return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
 
 
+def _is_finite_number(v) -> bool:
+    if isinstance(v, (bool, str, bytes)):
+        return False
+    try:
+        return bool(np.isfinite(float(v)))
+    except (TypeError, ValueError):
+        return False
+
+
 @dataclass
 class ParticleCloud:
     """Samples of a belief.
@@ -82,11 +91,20 @@ class ParticleCloud:
 
     def __post_init__(self) -> None:
         self.states = np.atleast_2d(np.asarray(self.states, dtype=float))
+        n = self.states.shape[0]
+        if not _is_finite_number(self.epoch):
+            raise ValueError(f"ParticleCloud: epoch must be a finite time in TU, got {self.epoch!r}")
         if self.weights is not None:
             w = np.asarray(self.weights, dtype=float)
-            if w.shape != (self.states.shape[0],):
-                raise ValueError(f"weights shape {w.shape} does not match {self.states.shape[0]} particles")
+            if w.shape != (n,):
+                raise ValueError(f"weights shape {w.shape} does not match {n} particles")
+            if not (np.all(np.isfinite(w)) and np.all(w >= 0.0) and w.sum() > 0.0):
+                raise ValueError("ParticleCloud: weights must be finite, non-negative and not all zero")
             self.weights = w / w.sum()
+        if self.labels is not None:
+            lab = np.asarray(self.labels)
+            if lab.shape != (n,) or lab.dtype.kind not in "iu" or (n and lab.min() < 0):
+                raise ValueError(f"ParticleCloud: labels must be {n} whole numbers >= 0, one per particle")
 
     def __len__(self) -> int:
         return self.states.shape[0]

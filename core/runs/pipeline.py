@@ -22,7 +22,7 @@ import numpy as np
 import pluggy
 
 from cistrack import units
-from cistrack.evaluation.custody import CustodyMetric
+from cistrack.evaluation.custody import CustodyMetric, Verdict
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
@@ -249,7 +249,7 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
     status, failure, abort = _guarded(pm, ctx, collector, lambda: _steps(ctx, pm, metrics, events, pending))
     verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
                             custody.earth_distance_km, custody.truth_earth_distance_km) \
-        if status in ("finished", "filter-failed") else custody.verdict
+        if status in ("finished", "filter-failed") else _unfinished_verdict(custody.verdict, status)
     summary = summarize(ctx, collector.rows, verdict, status, failure,
                         time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
     if watch is not None:
@@ -261,6 +261,14 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _unfinished_verdict(custody: Verdict, status: str) -> Verdict:
+    """The verdict of a run that did not finish (failed, interrupted): custody lost before it
+    stopped, else "none" (a "kept" custody was never judged at the end)."""
+    if custody.kind != "kept":
+        return custody
+    return Verdict("none", f"the run did not finish ({status}); it was not judged")
 
 
 def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:

@@ -64,7 +64,7 @@ class EnKFFilter(ParticleFilterDeclarations, FilterBase):
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """Members are ``n_particles`` particles of the cloud at ``cloud.epoch``."""
-        check_cloud(cloud, self._who())
+        check_cloud(cloud, self._who(), dynamics, sensor, rng)
         members = initial_particles(cloud, self.n_particles, rng)
         from .enkf_batch import BatchEnKF  # filterpy, imported on use
 

@@ -22,7 +22,9 @@ EPOCH_TOLERANCE_TU = 1e-9
 
 
 def check_epoch(epoch: float, measurement: Measurement, who: str) -> None:
-    """Raise FilterError unless ``measurement`` was taken at the belief's ``epoch`` (TU)."""
+    """Raise FilterError unless ``measurement`` is a Measurement taken at the belief's ``epoch`` (TU)."""
+    if not isinstance(measurement, Measurement):
+        raise FilterError(f"filter '{who}': update() needs a cistrack Measurement, got {type(measurement).__name__}")
     if abs(float(measurement.t) - float(epoch)) > EPOCH_TOLERANCE_TU * max(1.0, abs(float(epoch))):
         raise FilterError(f"filter '{who}': measurement at t = {measurement.t!r} TU but the belief is at "
                           f"t = {epoch!r} TU; call predict(measurement.t) before update()")

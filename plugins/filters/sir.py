@@ -57,7 +57,7 @@ class SIRFilter(ParticleFilterDeclarations, FilterBase):
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """``n_particles`` equally weighted particles from the cloud at ``cloud.epoch``."""
-        check_cloud(cloud, self._who())
+        check_cloud(cloud, self._who(), dynamics, sensor, rng)
         self._x = initial_particles(cloud, self.n_particles, rng)
         self._logw = np.full(self._x.shape[0], -np.log(self._x.shape[0]))
         self._dyn, self._sensor, self._rng = dynamics, sensor, rng

@@ -81,7 +81,7 @@ class UKFFilter(FilterBase):
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:
         """Start from the cloud's mean and covariance at ``cloud.epoch``."""
-        check_cloud(cloud, self._who())
+        check_cloud(cloud, self._who(), dynamics, sensor, rng)
         if len(cloud) < 2:
             raise FilterError(f"filter '{self._who()}': need at least 2 particles to moment-match the cloud")
         d = cloud.states.shape[1]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import subprocess
 import sys
 
@@ -27,7 +28,9 @@ HEAVY = ("sklearn", "numba", "rerun", "matplotlib", "filterpy", "astropy", "dask
 def _loaded_after(code: str, modules: tuple[str, ...] = HEAVY) -> list[str]:
     probe = (f"import sys\n{code}\n"
              f"print(__import__('json').dumps([m for m in {modules!r} if m in sys.modules]))")
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+    # built-in components only: a third-party test plugin another test installs meanwhile may load anything
+    env = {**os.environ, "CISTRACK_DISABLE_PLUGIN_AUTOLOAD": "1"}
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300, env=env)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout.strip().splitlines()[-1])
 

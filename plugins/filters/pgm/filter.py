@@ -238,7 +238,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
                    rng: np.random.Generator) -> None:
         """Start from ``cloud`` (N, 6) at ``cloud.epoch``; builds the clusterer and the steps."""
         who = self._who()
-        check_cloud(cloud, who)
+        check_cloud(cloud, who, dynamics, sensor, rng)
         self._build_steps(who)
         self._dyn, self._sensor, self._rng = dynamics, sensor, rng
         self._belief_rng = independent_stream(rng)
