@@ -320,3 +320,37 @@ def test_a_filter_used_out_of_order_or_with_wrong_types_says_so(name, filter_par
         f.predict("0.005")
     with pytest.raises(CistrackError, match="needs a cistrack Measurement"):
         f.update("hello")
+
+
+# --- round 6: maneuvers -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["inflate", "impulse-samples", "reanchor"])
+def test_a_response_wider_than_a_kilometre_per_second_is_refused(name):
+    from cistrack.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"delta_v_sigma_ms.*must lie in \(0.0, 1000.0\]"):
+        load_registry().create("maneuver-response", name, delta_v_sigma_ms=1e6)
+
+
+def test_a_parameter_of_a_component_chosen_by_name_in_the_file_can_be_set_alone():
+    """example-1-burn's file says response = "inflate"; --set maneuvers.response.delta_v_sigma_ms
+    sets that component's parameter (it said "missing key 'name'")."""
+    from cistrack.scenario.settings import apply_settings
+
+    scen = apply_settings(load_scenario("example-1-burn"), ["maneuvers.response.delta_v_sigma_ms=0.5"])
+    assert scen.raw["maneuvers"]["response"] == {"name": "inflate", "delta_v_sigma_ms": 0.5}
+
+
+@pytest.mark.parametrize("items", [["maneuvers.response=reanchor", "maneuvers.response.delta_v_sigma_ms=0.5"],
+                                   ["maneuvers.response.delta_v_sigma_ms=0.5", "maneuvers.response=reanchor"]])
+def test_a_component_name_and_its_parameter_set_in_either_order_go_together(items):
+    from cistrack.scenario.settings import parse_settings
+
+    assert parse_settings(items) == {"maneuvers": {"response": {"name": "reanchor", "delta_v_sigma_ms": 0.5}}}
+
+
+def test_an_array_with_a_wrong_element_names_the_element():
+    from cistrack.scenario.settings import apply_settings
+
+    with pytest.raises(ConfigError, match=r"key 'vector_ms\[0\]' = 'a' has type str; expected a number"):
+        apply_settings(load_scenario("example-1-burn"), ['truth.maneuvers.vector_ms=["a", 1, 1]'])

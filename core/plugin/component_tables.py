@@ -241,15 +241,25 @@ def _coerce_union(value: Any, args: tuple, source: str, where: str, key: str, re
     if comp_kinds and (isinstance(value, dict) or isinstance(value, str)):
         return component_spec(value, comp_kinds[0], f"{where}.{key}" if not where.endswith("]")
                               else f"{where[:-1]}.{key}]", source, reg)
+    shaped = None  # the error of the member whose shape the value has (an array's bad element)
     for a in args:
         if a is type(None):
             continue
         try:
             return _coerce(value, a, source, where, key, reg)
-        except ConfigError:
-            pass
+        except ConfigError as exc:
+            if shaped is None and isinstance(value, list) and _is_array_type(a):
+                shaped = exc
+    if shaped is not None:
+        raise shaped
     expected = " or ".join(_type_name(a) for a in args if a is not type(None))
     raise ConfigError(f"{source}: {where}: key {key!r} = {value!r}: expected {expected}")
+
+
+def _is_array_type(a: Any) -> bool:
+    import collections.abc
+
+    return typing.get_origin(a) in (list, tuple, collections.abc.Sequence) or a in (list, tuple)
 
 
 _SCALARS: dict[type, str] = {float: "a number", int: "an integer", bool: "true or false", str: "a string"}

@@ -58,10 +58,16 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
         node = out
         for part in path[:-1]:
             child = node.setdefault(part, {})
+            if isinstance(child, str):  # a component chosen by name, then one of its parameters
+                child = node[part] = {"name": child}
             if not isinstance(child, dict):
                 raise ConfigError(f"--set {item!r}: '{part}' was already set to a value, not a table")
             node = child
-        node[path[-1]] = _value(text.strip(), item if len(item) <= 60 else item[:60] + "...")
+        value = _value(text.strip(), item if len(item) <= 60 else item[:60] + "...")
+        if isinstance(value, str) and isinstance(node.get(path[-1]), dict):
+            node[path[-1]]["name"] = value  # its parameters were set first: they stay with the name
+        else:
+            node[path[-1]] = value
     return out
 
 
@@ -70,6 +76,8 @@ def merge_settings(tables: dict[str, Any], settings: dict[str, Any]) -> dict[str
     out = copy.deepcopy(tables)
     for key, value in settings.items():
         old = out.get(key)
+        if isinstance(value, dict) and isinstance(old, str) and "name" not in value:
+            old = {"name": old}  # a component chosen by name in the file: these are its parameters
         if isinstance(value, dict) and isinstance(old, dict):
             if "name" in value and value["name"] != old.get("name"):
                 out[key] = keep_choice_table(old, value)  # the new component's own [TABLE.NAME] stays

@@ -115,7 +115,8 @@ def score_run(summary: dict, updates: list[dict]) -> RunManeuverScore:
     episodes = sorted(({"t": t, "e": e} for e in summary.get("maneuvers") or []
                        for t in [_finite(e.get("t_days"))] if t is not None), key=lambda x: x["t"])
     end = updates[-1]["t_days"] if updates else max([x["t"] for x in episodes], default=0.0)
-    burns = sorted((b for b in summary.get("truth_maneuvers") or [] if _finite(b.get("t_days")) is not None),
+    burns = sorted((b for b in summary.get("truth_maneuvers") or [] if _finite(b.get("t_days")) is not None
+                    and (_finite(b.get("delta_v_ms")) or 0.0) > 0.0),  # a 0 m/s "burn" is none: not flown
                    key=lambda b: float(b["t_days"]))
     burns = [b for b in burns if float(b["t_days"]) < end]  # a burn after the last update is never observed
     scores, matched = [], 0

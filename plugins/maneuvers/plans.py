@@ -254,7 +254,19 @@ class StationKeepingPlan(ManeuverPlan):
             out += resolve_burns(_flown(dynamics, out), x0, t0, t_end,
                                  [BurnSpec(t_b, vec, self.frame, f"station-keeping {k + 1}: {what}")])
             t_from = t_b + self.search_step_tu
+        self._found = (len(out), float(t0), float(t_end))
         return out
+
+    def burns_outside(self, t0: float, t_end: float) -> list[str]:
+        """The burns of ``n_burns`` whose apolune the run does not reach (known once
+        :meth:`impulses` has searched this span)."""
+        found, a, b = getattr(self, "_found", (None, None, None))
+        if found is None or (a, b) != (float(t0), float(t_end)) or found >= self.n_burns:
+            return []
+        first = found + 1
+        which = f"station-keeping burn {first}" if first == self.n_burns else \
+            f"station-keeping burns {first} to {self.n_burns}"
+        return [f"{which} (no apolune passage after the first {found} before the run ends)"]
 
 
 def _evaluator(dynamics, x0: np.ndarray, t0: float, t_end: float):

@@ -26,7 +26,7 @@ import numpy as np
 from cistrack import units
 from cistrack.api import hookimpl
 from cistrack.interfaces import Dynamics, ManeuverResponse
-from cistrack.interfaces.component import check_positive
+from cistrack.interfaces.component import check_range
 from cistrack.errors import MeasurementError, PropagationError
 from cistrack.interfaces.maneuvers import Detection, ResponseHistory
 from cistrack.least_squares.errors import FitError
@@ -57,13 +57,22 @@ def burn_maps(detection: Detection, prior: Belief, dynamics: Dynamics) -> np.nda
     return fwd[:, :, 3:6]
 
 
+MAX_DELTA_V_SIGMA_MS = 1000.0
+"""The largest one-sigma delta-v per axis a response takes, m/s: a belief widened by more leaves
+the Earth-Moon system within a day (orbital speeds there are about 1 km/s)."""
+
+
+def _check_sigma(owner, value) -> float:
+    return check_range(owner, "delta_v_sigma_ms", value, 0.0, MAX_DELTA_V_SIGMA_MS, lo_open=True)
+
+
 class _Widen(ManeuverResponse):
     """Shared: parameters and the cloud."""
 
     default_name = "inflate"
 
     def __init__(self, delta_v_sigma_ms: float = 1.0) -> None:
-        self.delta_v_sigma_ms = check_positive(self, "delta_v_sigma_ms", delta_v_sigma_ms)
+        self.delta_v_sigma_ms = _check_sigma(self, delta_v_sigma_ms)
 
     def _sigma_vu(self) -> float:
         return float(units.kms_to_vu(self.delta_v_sigma_ms / 1000.0))
@@ -82,7 +91,7 @@ class InflateResponse(_Widen):
     Parameters
     ----------
     delta_v_sigma_ms : float
-        One sigma per axis of the unknown burn's delta-v, m/s (> 0; default 1.0).
+        One sigma per axis of the unknown burn's delta-v, m/s (0 to 1000, above 0; default 1.0).
     """
 
     default_name = "inflate"
@@ -104,7 +113,7 @@ class ImpulseSamplesResponse(_Widen):
     Parameters
     ----------
     delta_v_sigma_ms : float
-        One sigma per axis of the drawn delta-v, m/s (> 0; default 1.0).
+        One sigma per axis of the drawn delta-v, m/s (0 to 1000, above 0; default 1.0).
     """
 
     default_name = "impulse-samples"
@@ -128,15 +137,15 @@ class ReanchorResponse(ManeuverResponse):
     Parameters
     ----------
     delta_v_sigma_ms : float
-        One sigma per synodic axis of the burn's delta-v prior (mean zero), m/s (> 0; default 1.0);
-        also the ``inflate`` fallback's.
+        One sigma per synodic axis of the burn's delta-v prior (mean zero), m/s (0 to 1000, above 0;
+        default 1.0); also the ``inflate`` fallback's.
     """
 
     default_name = "reanchor"
     needs_history = True
 
     def __init__(self, delta_v_sigma_ms: float = 1.0) -> None:
-        self.delta_v_sigma_ms = check_positive(self, "delta_v_sigma_ms", delta_v_sigma_ms)
+        self.delta_v_sigma_ms = _check_sigma(self, delta_v_sigma_ms)
 
     def respond(self, detection: Detection, prior: Belief, dynamics: Dynamics, rng: np.random.Generator,
                 history: ResponseHistory | None = None) -> ParticleCloud:

@@ -113,6 +113,14 @@ def test_station_keeping_burns_at_successive_apolunes(cr3bp):
     assert len(later) == 1 and later[0].t == pytest.approx(imps[1].t, abs=1e-3) and later[0].t != imps[1].t
 
 
+def test_station_keeping_burns_the_run_does_not_reach_are_named_in_the_log(cr3bp):
+    lines = []
+    fly_plan(StationKeepingPlan(delta_v_ms=0.1, n_burns=5), cr3bp, NRHO, 0.0, float(units.days_to_tu(13.2)),
+             lines.append)
+    assert any("station-keeping burns 3 to 5 (no apolune passage after the first 2 before the run ends) lies "
+               "outside the run" in line for line in lines), lines
+
+
 def test_fly_plan_wraps_the_truth_and_says_one_line_per_burn(cr3bp):
     lines = []
     plan = BurnsPlan(burns=[{"t_days": 1.0, "delta_v_ms": 1.0}, {"t_days": 2.0, "delta_v_ms": 0.5}])

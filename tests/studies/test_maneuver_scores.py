@@ -67,6 +67,12 @@ def test_a_run_whose_truth_does_not_burn_counts_every_episode_as_a_false_alarm()
     assert has_maneuvers([_summary()])
 
 
+def test_a_swept_burn_of_zero_is_no_burn_its_detections_are_false_alarms():
+    """A sweep of delta_v_ms from 0: the 0 m/s "burn" is not flown, so it is not a missed detection."""
+    s = score_run(_summary([_episode(4.03)], burns=((3.62, 0.0),)), UPDATES)
+    assert (s.burns, s.false_alarms) == ([], 1)
+
+
 def test_update_rows_keeps_the_update_steps_of_a_steps_table_in_time_order():
     import pyarrow as pa
 
