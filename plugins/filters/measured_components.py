@@ -13,7 +13,7 @@ import numpy as np
 
 from cistrack.errors import FilterError, MeasurementError
 from cistrack.interfaces import Sensor
-from cistrack.model.measurement import Measurement
+from cistrack.model.measurement import Measurement, StackedMeasurement
 
 __all__ = ["MeasuredComponents", "check_epoch", "EPOCH_TOLERANCE_TU"]
 
@@ -23,7 +23,7 @@ EPOCH_TOLERANCE_TU = 1e-9
 
 def check_epoch(epoch: float, measurement: Measurement, who: str) -> None:
     """Raise FilterError unless ``measurement`` is a Measurement taken at the belief's ``epoch`` (TU)."""
-    if not isinstance(measurement, Measurement):
+    if not isinstance(measurement, (Measurement, StackedMeasurement)):
         raise FilterError(f"filter '{who}': update() needs a cistrack Measurement, got {type(measurement).__name__}")
     if abs(float(measurement.t) - float(epoch)) > EPOCH_TOLERANCE_TU * max(1.0, abs(float(epoch))):
         raise FilterError(f"filter '{who}': measurement at t = {measurement.t!r} TU but the belief is at "
