@@ -5,6 +5,7 @@ pipeline."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,8 @@ from cistrack.interfaces.schedule import Schedule
 from cistrack.plugin.registry import load_registry
 from cistrack.runs.pipeline import run_scenario
 from cistrack.scenario.loading import load_scenario
+
+REAL_DATA = Path(__file__).resolve().parents[1] / "core" / "scenarios" / "real_data"
 
 
 def _strict_json(path) -> dict:
@@ -354,3 +357,77 @@ def test_an_array_with_a_wrong_element_names_the_element():
 
     with pytest.raises(ConfigError, match=r"key 'vector_ms\[0\]' = 'a' has type str; expected a number"):
         apply_settings(load_scenario("example-1-burn"), ['truth.maneuvers.vector_ms=["a", 1, 1]'])
+
+
+# --- round 6: signals, paths, concurrency -------------------------------------------------------
+
+@pytest.mark.parametrize("delay_s", [0.3, 0.6])
+def test_ctrl_c_while_plugins_load_ends_the_command(tmp_path, delay_s):
+    """Ctrl-C early (the registry loading its plugins): it was taken for a broken plugin and the run
+    went on to exit 0, or failed blaming the scenario; now the command ends, status 130."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "example-1", "--out", str(tmp_path / "r")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(delay_s)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "raised while loading" not in err and "Traceback" not in err
+
+
+def test_a_fit_into_a_directory_another_fit_is_writing_is_refused_at_once(tmp_path, capsys):
+    """Two fits into one --out both exited 0 and left one object's fit.json beside the other's files."""
+    import threading
+
+    from cistrack.results.dir_lock import fit_lock
+
+    d = tmp_path / "fit"
+    d.mkdir()
+    held, release = threading.Event(), threading.Event()
+
+    def hold():
+        with fit_lock(d):
+            held.set()
+            release.wait(60)
+
+    t = threading.Thread(target=hold)
+    t.start()
+    held.wait(10)
+    try:
+        obs = REAL_DATA / "observations.psv"
+        assert main(["fit", str(obs), "--out", str(d), "--quiet"]) == 2
+    finally:
+        release.set()
+        t.join()
+    assert "another 'cistrack fit'" in capsys.readouterr().err
+    assert not (d / "fit.json").exists()
+
+
+@pytest.mark.parametrize("command", [["run", "quick"], ["fit", "OBS"], ["study", "run", "quick-comparison"]])
+def test_an_out_path_that_is_not_utf8_is_refused_before_any_work(command, tmp_path, capsys):
+    import os
+
+    bad = os.fsdecode(os.fsencode(str(tmp_path)) + b"/bad\xff")
+    argv = [str(REAL_DATA / "observations.psv") if c == "OBS" else c for c in command]
+    assert main(argv + ["--out", bad, "--quiet"]) == 2
+    assert "not valid UTF-8" in capsys.readouterr().err
+    assert not os.path.lexists(bad)
+
+
+def test_a_recording_onto_a_disk_short_of_room_is_refused_before_the_run(tmp_path, monkeypatch):
+    """rerun's file writer waits for ever once the disk is full (no signal ends it): a disk with
+    less free room than a recording needs is refused up front. (The file system's answer is
+    replaced: a test cannot fill a disk.)"""
+    import collections
+    import shutil
+
+    from cistrack.errors import ParameterError
+
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 2_000_000, 2_000_000))
+    with pytest.raises(ParameterError, match="only 2 MB free on the disk"):
+        load_registry().create("recorder", "rerun", path=str(tmp_path / "x.rrd"))

@@ -100,8 +100,11 @@ def _run_into(args, reg, scen, seed: int, out: Path, replaced: str):
                        log=(None if args.quiet else lambda m: _eprint(f"  {m}")), rows_per_part=args.rows_per_part,
                        residual_figure=True)
     _print_outcome(res.summary, out, args.quiet, out_)
-    if args.rerun:
+    if args.rerun and res.summary.status == "finished":
         out_(f"  rerun recording: {args.rerun}  (open with: cistrack view {args.rerun})")
+    elif args.rerun and os.path.exists(args.rerun):
+        out_(f"  rerun recording: {args.rerun} is incomplete (the run {res.summary.status}); a run with "
+             "--overwrite replaces it")
     return res, recorder
 
 
@@ -449,7 +452,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 _INTERRUPTED = {
-    "run": "; completed steps are kept and the manifest says 'interrupted'",
+    "run": "; completed steps are kept and the manifest says 'interrupted' (when the run had started)",
     "fit": ("; a fit is complete only once its fit.json is written (its filter run may have finished): "
             "run 'cistrack fit' into the same directory again"),
     "study": "; finished runs are kept: 'cistrack study run' with the same options runs the rest",

@@ -19,13 +19,23 @@ def _raise_interrupted(signum, frame) -> None:
     raise RunInterrupted(signal.Signals(signum).name)
 
 
+def _raise_ctrl_c(signum, frame) -> None:
+    """Ctrl-C as Python raises it (an empty message: "SIGINT, Ctrl-C" in the manifest), but as a
+    RunInterrupted, so that code that catches a plugin's own KeyboardInterrupt (the registry,
+    loading plugins) still stops for a real one."""
+    raise RunInterrupted()
+
+
 def install_signal_handlers() -> dict:
-    """SIGTERM and SIGHUP end a run like Ctrl-C (completed steps merged, manifest "interrupted");
-    only in the main thread of the process running ``main``. Returns the previous handlers."""
+    """SIGTERM and SIGHUP end a run like Ctrl-C (completed steps merged, manifest "interrupted"),
+    and Ctrl-C raises a RunInterrupted (where Python's own handler is in place); only in the main
+    thread of the process running ``main``. Returns the previous handlers."""
     old = {}
     if threading.current_thread() is threading.main_thread():
         for name in ("SIGTERM", "SIGHUP"):
             sig = getattr(signal, name, None)
             if sig is not None:
                 old[sig] = signal.signal(sig, _raise_interrupted)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            old[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_ctrl_c)
     return old

@@ -60,6 +60,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.fitting.fit_replacing import FIT_RECORD, check_fit_form, check_fit_replacing, remove_other_form
+from cistrack.results.dir_lock import fit_lock
 from cistrack.results.output_paths import check_output_dir, distinct_stems
 from cistrack.results.store import MANIFEST
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
@@ -635,7 +636,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             remove_other_form(d, stale)
             say(f"--overwrite: removed the earlier fit of another fit.arcs in {d} ({', '.join(p.name for p in stale)})")
         check_output_dir(d, where, records=(MANIFEST, FIT_RECORD))
-        results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
+        with fit_lock(d, where):  # one fit at a time in a directory; what it replaces checked again under it
+            check_fit_replacing(d, obs.designation, where, overwrite)
+            results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
 
 

@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from cistrack.errors import CistrackError
-from cistrack.results.output_paths import RUN_LOCK
+from cistrack.results.output_paths import FIT_LOCK, RUN_LOCK
 
-__all__ = ["RunBusy", "run_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
+__all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
 
 
 class RunBusy(CistrackError):
@@ -92,3 +92,15 @@ def run_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
             f"{where} {d}: another 'cistrack run'{holder} is writing its results in this directory; "
             "wait for it to end, or give another --out")):
         yield
+
+
+@contextlib.contextmanager
+def fit_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
+    """Hold the fit lock of the fit directory ``directory`` for the block (a whole fit: its filter
+    run takes the run lock inside it); raise :class:`RunBusy` at once if another process holds it."""
+    d = Path(directory)
+    with holding(d / FIT_LOCK, where, lambda holder: RunBusy(
+            f"{where} {d}: another 'cistrack fit'{holder} is writing its results in this directory; "
+            "wait for it to end, or give another --out")):
+        yield
+

@@ -27,7 +27,7 @@ from pathlib import Path
 from cistrack.errors import ConfigError
 
 __all__ = ["check_output_dir", "check_study_dir", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
-           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv",
                    "sky-*.csv", "sky-*.png")
@@ -45,6 +45,8 @@ STUDY_LOCK = ".study.lock"
 STUDY_RUNS_LOCK = ".study-runs.lock"
 """The lock file its runs share while they write (see :mod:`cistrack.studies.study_lock`); not content."""
 RUN_LOCK = ".run.lock"
+FIT_LOCK = ".fit.lock"
+"""Held by a whole ``cistrack fit`` of a directory (its filter run holds :data:`RUN_LOCK` inside it)."""
 FIT_STARTED = ".fit-started"
 """Written into a fit's directory before anything else of the fit: with it, the merged observation
 files a fit stopped before its records (``observations*.psv``/``.tdm``) are the fit's own and a
@@ -112,7 +114,7 @@ def _holds_no_results(d: Path) -> bool:
     new run should protect; the new run replaces its parts."""
     started = (d / FIT_STARTED).is_file()
     for e in d.iterdir():
-        if e.name == RUN_LOCK or (started and _is_fit_input(e)):
+        if e.name in (RUN_LOCK, FIT_LOCK) or (started and _is_fit_input(e)):
             continue
         if e.name not in PART_FOLDERS or e.is_symlink() or not e.is_dir():
             return False
@@ -164,8 +166,16 @@ def make_writable_dir(d: Path) -> None:
 
 def _create_writable(d: Path, where: str) -> Path:
     """Create ``d`` (parents included) and check that a file can be made there."""
+    try:
+        str(d).encode("utf-8")
+    except UnicodeEncodeError:
+        raise ConfigError(f"{where} {str(d)!r}: the path is not valid UTF-8 (bytes no character has), which the "
+                          "results' own records cannot hold; give a name in UTF-8") from None
     if d.is_symlink() and not d.exists():
-        raise ConfigError(f"{where} {d}: a link to {os.readlink(d)}, which does not exist; give a directory, or create "
+        target = os.readlink(d)
+        if os.path.lexists(d.parent / target):
+            raise ConfigError(f"{where} {d}: a loop of symbolic links (through {target}); give a directory")
+        raise ConfigError(f"{where} {d}: a link to {target}, which does not exist; give a directory, or create "
                           "the link's target first")
     try:
         make_writable_dir(d)

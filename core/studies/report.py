@@ -14,6 +14,8 @@ truth burn or a detected maneuver, a "Maneuvers" table (``maneuvers.csv``, summa
 from __future__ import annotations
 
 import csv
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -420,11 +422,34 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
                           f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
                           + (f" --out {out_dir}" if out_dir else ""))
     rep_dir = _report_dir(out, name)
+    draft = rep_dir.parent / f".{rep_dir.name}.draft-{os.getpid()}"
     try:
-        return _write_report(rep_dir, name, specs, (groups, tables, missing_ids))
+        shutil.rmtree(draft, ignore_errors=True)
+        draft.mkdir()
+        answer = _write_report(draft, name, specs, (groups, tables, missing_ids))
+        _replace_report(rep_dir, draft)
     except OSError as exc:
-        raise ConfigError(f"study '{name}': cannot write the report: {exc.filename or rep_dir}: "
-                          f"{exc.strerror or exc}; files of the report written before it are in {rep_dir}") from None
+        shutil.rmtree(draft, ignore_errors=True)
+        where = str(exc.filename or rep_dir).replace(str(draft), str(rep_dir))
+        raise ConfigError(f"study '{name}': cannot write the report: {where}: {exc.strerror or exc}; the "
+                          f"report in {rep_dir} is left as it was (an earlier one, or none)") from None
+    return _moved(answer, draft, rep_dir)
+
+
+def _replace_report(rep_dir: Path, draft: Path) -> None:
+    """The whole new report (written in ``draft``) in place of ``rep_dir``'s: a report is never a
+    mixture of two."""
+    old = rep_dir.parent / f".{rep_dir.name}.old-{os.getpid()}"
+    shutil.rmtree(old, ignore_errors=True)
+    rep_dir.rename(old)
+    draft.rename(rep_dir)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _moved(answer: dict, draft: Path, rep_dir: Path) -> dict:
+    """:func:`report_study`'s answer with the draft folder's paths as the report folder's."""
+    files = [rep_dir / Path(f).relative_to(draft) for f in answer["files"]]
+    return {**answer, "files": files, "text": answer["text"].replace(str(draft), str(rep_dir))}
 
 
 def _report_dir(out: Path, name: str) -> Path:

@@ -48,6 +48,7 @@ event counter; the viewer process is in :mod:`.viewer_process`, the blueprint in
 from __future__ import annotations
 
 import os
+import shutil
 import socket
 import subprocess
 import uuid
@@ -110,6 +111,11 @@ def _port_in_use(port: int) -> bool:
             return True
     return False
 
+
+MIN_FREE_BYTES = 32_000_000
+"""Free disk space a recording to a file asks for before the run: rerun's file sink, once the
+disk is full, leaves the process waiting in its own code for ever (no signal ends it), so a disk
+short of room is refused up front. A disk that fills during the run is not caught by this."""
 
 class RerunRecorder(Component):
     """Record a run for the rerun viewer (3-D synodic scene, clouds, ellipsoids, metrics).
@@ -193,6 +199,11 @@ class RerunRecorder(Component):
             if not folder.is_dir() or not os.access(folder, os.W_OK):
                 self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
                            "not writable")
+            free = shutil.disk_usage(folder).free
+            if free < MIN_FREE_BYTES:
+                self._fail("path", self.path, f"only {free / 1e6:.3g} MB free on the disk of {folder}; a recording "
+                           f"needs room (Example 1: about 4 MB) and rerun's file writer cannot report a full disk "
+                           f"(it waits for ever), so at least {MIN_FREE_BYTES / 1e6:g} MB free are asked for")
             if "{run_id}" not in self.path and not target.is_dir():
                 self._refuse_existing(self.path)
         self._rec: rr.RecordingStream | None = None

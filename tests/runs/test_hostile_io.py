@@ -161,3 +161,31 @@ def test_init_on_a_full_disk_leaves_no_file_and_the_next_init_writes_it(small_di
     small_disk.free_up()
     assert main(["init", "mine"]) == 0
     assert "[filter]" in (small_disk.path / "mine.toml").read_text()
+
+
+def test_a_report_that_fails_half_way_leaves_the_earlier_report_whole(tmp_path, capsys, monkeypatch):
+    """A full disk while the report is written: the earlier report stays as it was (it used to be
+    mixed with the new one's first files), and no draft folder is left."""
+    import concurrent.futures as cf
+
+    from cistrack.studies.study import run_study
+
+    study, out = tmp_path / "tiny.toml", tmp_path / "s"
+    study.write_text(STUDY)
+    run_study(study, out_dir=out, executor=cf.ThreadPoolExecutor(1), progress=False)
+    assert main(["study", "report", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in (out / "report").iterdir()}
+    real_replace = os.replace
+
+    def disk_full_at_summary_md(src, dst, *args, **kwargs):
+        if Path(dst).name == "summary.md":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(dst))
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(os, "replace", disk_full_at_summary_md)
+    capsys.readouterr()
+    assert main(["study", "report", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{out / 'report' / 'summary.md'}: No space left on device" in err and "left as it was" in err
+    assert {p.name: p.read_bytes() for p in (out / "report").iterdir()} == before
+    assert [p.name for p in out.iterdir() if p.name.startswith(".report")] == []
