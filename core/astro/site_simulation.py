@@ -17,6 +17,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import ConfigError
+from cistrack.interfaces.component import component_name
 from cistrack.interfaces.schedule import checked_plan
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry, default_registry
@@ -84,9 +85,8 @@ def simulate_sites(scenario, sites: dict[str, Site], seed: int | None = None,
         if passes and passes[0].start <= grid[0] + 1e-12:
             passes = passes[1:]
         schedule = scenario.build("schedule", reg)
-        name = getattr(schedule, "registry_name", None) or type(schedule).__name__
         times = checked_plan(schedule.plan(passes, scenario.duration, sched_rng), passes, scenario.duration,
-                             f"{scenario.source}: [schedule] '{name}': plan() for site {key}")
+                             f"{scenario.source}: [schedule] '{component_name(schedule)}': plan() for site {key}")
         if taken.size and times.size:
             near = np.min(np.abs(times[:, None] - taken[None, :]), axis=1) * units.TU_S < min_gap_s
             times = times[~near]

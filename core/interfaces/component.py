@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 from cistrack.errors import ParameterError
 
 __all__ = [
-    "Component", "ParamSpec", "param_specs", "MemoryNeed", "BYTES_PER_PARTICLE", "IOD_CHUNK_BYTES",
+    "Component", "component_name", "ParamSpec", "param_specs", "MemoryNeed", "BYTES_PER_PARTICLE", "IOD_CHUNK_BYTES",
     "check_positive", "check_nonnegative", "check_range", "check_choice", "check_int",
     "SIGMA_ARCSEC_BOUNDS", "sigma_arcsec_problem", "check_sigma_arcsec",
 ]
@@ -88,6 +88,12 @@ def param_specs(cls: type) -> dict[str, ParamSpec]:
                                 p.default is _EMPTY)
     return out
 
+
+
+def component_name(obj: Any) -> str:
+    """The name a component goes by in messages: its registered name, else its class's name (a
+    component made by hand, or an object that is none)."""
+    return getattr(obj, "registry_name", None) or type(obj).__name__
 
 class Component(ABC):
     """Base class of every registered component (an ABC: a subclass that leaves one of its

@@ -27,6 +27,7 @@ from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
 from cistrack.errors import CistrackError, ConfigError, FilterError
+from cistrack.interfaces.component import component_name
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
@@ -280,8 +281,7 @@ def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
     except (CistrackError, KeyboardInterrupt, MemoryError):
         raise
     except Exception as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
-        name = getattr(ctx.filter, "registry_name", None) or type(ctx.filter).__name__
-        raise FilterError(f"filter '{name}' failed while starting from the IOD's cloud: "
+        raise FilterError(f"filter '{component_name(ctx.filter)}' failed while starting from the IOD's cloud: "
                           f"{type(exc).__name__}: {exc}") from exc
     step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", belief)
     step0.timings["initialize"] = time.perf_counter() - t0

@@ -20,6 +20,7 @@ import numpy as np
 from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.errors import ConfigError, IODError, MeasurementError, ParameterError
+from cistrack.interfaces.component import component_name
 from cistrack.interfaces.schedule import checked_plan
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry
@@ -108,8 +109,8 @@ def plan_measurement_times(scenario: Scenario, schedule: Any, passes: list, rng:
         planned = schedule.plan(passes, scenario.duration, rng)
     except ParameterError as exc:
         raise ConfigError(f"{scenario.source}: [schedule]: {exc}") from None
-    name = getattr(schedule, "registry_name", None) or type(schedule).__name__
-    return checked_plan(planned, passes, scenario.duration, f"{scenario.source}: [schedule] '{name}': plan()")
+    return checked_plan(planned, passes, scenario.duration,
+                        f"{scenario.source}: [schedule] '{component_name(schedule)}': plan()")
 
 
 

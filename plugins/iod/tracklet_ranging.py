@@ -254,7 +254,7 @@ class TrackletRangingIOD(IODMethod):
         gives its extent (:func:`.ranging_search.admissible_extent`)."""
         states, rho = self._grid(att)
         if len(states) == 0:
-            rate = float(np.linalg.norm(att.u_dot)) * 206264.806 * 60.0 / units.TU_S  # arcsec per minute
+            rate = float(np.linalg.norm(att.u_dot)) / units.ARCSEC_RAD * 60.0 / units.TU_S  # arcsec per minute
             raise IODError(
                 f"iod '{type(self).registry_name or 'tracklet-ranging'}': the lone tracklet ({att.indices.size} "
                 f"observations, moving {rate:,.4g}\"/min in the synodic frame) admits no orbit: at no range from "

@@ -79,22 +79,24 @@ def fitted(tmp_path_factory):
     return out
 
 
+def _predicted(fitted, tmp_path, capsys, site: str, start: str, stop: str, step: str) -> tuple[str, list[dict]]:
+    """(printed text, CSV rows) of a successful ``cistrack predict`` of ``fitted``."""
+    assert main(["predict", str(fitted), "--site", site, "--start", start, "--stop", stop, "--step", step,
+                 "--out", str(tmp_path / "p")]) == 0
+    with open(tmp_path / "p.csv") as fh:
+        return capsys.readouterr().out, list(csv.DictReader(fh))
+
+
 def test_a_window_across_the_impact_is_predicted_up_to_it_and_says_so(fitted, tmp_path, capsys):
-    assert main(["predict", str(fitted), "--site", "809", "--start", "2026-03-16T20:00:00Z", "--stop",
-                 "2026-03-17T06:00:00Z", "--step", "60", "--out", str(tmp_path / "p")]) == 0
-    out = capsys.readouterr().out
+    out, rows = _predicted(fitted, tmp_path, capsys, "809", "2026-03-16T20:00:00Z", "2026-03-17T06:00:00Z", "60")
     assert "the orbit hits the Moon at 2026-03-17T00:56" in out and "the 6 prediction times after it" in out
-    rows = list(csv.DictReader(open(tmp_path / "p.csv")))
     assert len(rows) == 5
 
 
 def test_a_time_less_than_30_s_before_the_impact_is_predicted(fitted, tmp_path, capsys):
     # 2026-03-17T00:56:10Z: 17 s before the impact, so its central +-30 s rate difference would cross it
-    assert main(["predict", str(fitted), "--site", "568", "--start", "2026-03-16T00:56:10Z", "--stop",
-                 "2026-03-18T01:00:00Z", "--step", "1440", "--out", str(tmp_path / "p")]) == 0
-    out = capsys.readouterr().out
+    out, rows = _predicted(fitted, tmp_path, capsys, "568", "2026-03-16T00:56:10Z", "2026-03-18T01:00:00Z", "1440")
     assert "the orbit hits the Moon at 2026-03-17T00:56" in out and "the 1 prediction times after it" in out
-    rows = list(csv.DictReader(open(tmp_path / "p.csv")))
     assert [r["utc"] for r in rows] == ["2026-03-16T00:56:10Z", "2026-03-17T00:56:10Z"]
 
 

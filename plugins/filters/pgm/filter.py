@@ -24,7 +24,7 @@ import numpy as np
 from cistrack.errors import FilterError
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive,
-                                           check_range, param_specs)
+                                           check_range, component_name, param_specs)
 from cistrack.interfaces.filter import FilterBase
 from cistrack.interfaces.clustering import checked_labels
 from cistrack.interfaces.iod import MIN_IOD_PARTICLES
@@ -454,9 +454,8 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
 
     def _clustered_labels(self, clusterer: Clusterer, rng: np.random.Generator) -> np.ndarray:
         """The clusterer's labels (N,) of the current particles, drawing from ``rng``."""
-        name = getattr(clusterer, "registry_name", None) or type(clusterer).__name__
         return checked_labels(clusterer.cluster(self._x, rng), self._x.shape[0],
-                              f"filter '{self._who()}': clusterer '{name}'")
+                              f"filter '{self._who()}': clusterer '{component_name(clusterer)}'")
 
     def _group_mixture(self, labels: np.ndarray) -> tuple[GaussianMixture, np.ndarray]:
         """The mixture of the current particles grouped by ``labels`` (N,) (weight N_i/N, each group's
