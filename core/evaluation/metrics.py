@@ -40,12 +40,13 @@ def entropy(belief: Belief, sample_logpdf: np.ndarray | None = None) -> float:
 
 def nees(error: np.ndarray, covariance: np.ndarray) -> float:
     """Normalised estimation error squared e^T P^-1 e (unit-free): e (d,), P (d, d)."""
-    try:
-        c = np.linalg.cholesky(covariance)
-        y = np.linalg.solve(c, error)
-        return float(y @ y)
-    except np.linalg.LinAlgError:
-        return float(error @ np.linalg.pinv(covariance) @ error)
+    with np.errstate(over="ignore"):  # a collapsed belief's NEES beyond the largest float is infinite, said so
+        try:
+            c = np.linalg.cholesky(covariance)
+            y = np.linalg.solve(c, error)
+            return float(y @ y)
+        except np.linalg.LinAlgError:
+            return float(error @ np.linalg.pinv(covariance) @ error)
 
 
 def step_metrics(belief: Belief, truth: np.ndarray | None) -> dict[str, float]:

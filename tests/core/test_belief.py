@@ -209,3 +209,13 @@ def test_a_stack_regularized_each_on_its_own_changes_only_the_matrix_that_needs_
     assert np.array_equal(out[0], regularize_covariance(good, 1e-9))
     assert np.array_equal(out[1], regularize_covariance(flat, 1e-9))
     assert np.linalg.eigvalsh(out[1]).min() >= 1e-9 * 0.999
+
+
+def test_the_nees_of_a_collapsed_belief_is_infinite_without_a_warning():
+    import warnings
+
+    from cistrack.evaluation.metrics import nees
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert nees(np.full(6, 1e10), np.eye(6) * 1e-300) == np.inf
