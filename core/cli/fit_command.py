@@ -14,15 +14,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import sys
 
 from cistrack.fitting.fit_summary import summary_lines
+from cistrack.runs.progress import eprint as _eprint
 
 __all__ = ["add_fit_parser", "add_predict_option", "is_fit_export", "cmd_fit", "cmd_export_fit", "summary_lines"]
-
-
-def _eprint(*a) -> None:
-    print(*a, file=sys.stderr, flush=True)
 
 
 @contextlib.contextmanager

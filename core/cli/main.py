@@ -17,6 +17,7 @@ import argparse
 import os
 import signal
 import sys
+import warnings
 from pathlib import Path
 
 from cistrack.errors import CistrackError, ConfigError
@@ -29,6 +30,7 @@ from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
 from cistrack.cli.text_width import cap_help_width, fit_row, wrap_lines, wrap_row
+from cistrack.runs.progress import eprint as _eprint
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -36,10 +38,6 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 DEFAULT_SCENARIO = "example-1"
-
-
-def _eprint(*a) -> None:
-    print(*a, file=sys.stderr, flush=True)
 
 
 def _fmt(v, nd=3) -> str:
@@ -266,9 +264,9 @@ def cmd_export(args) -> int:
 
     args.format = _exporter_name(args.format)
     _check_step_option(args.format, args.step)
-    _check_out_suffix(args.format, args.out)
     if args.out:
         check_export_path(args.out, args.run)
+    _check_out_suffix(args.format, args.out)
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
     from cistrack.runs.progress import stage_log
@@ -288,12 +286,22 @@ def cmd_export(args) -> int:
 _FORMAT_SUFFIXES = {"oem": ".oem", "opm": ".opm"}
 """The file name endings of the CCSDS message formats cistrack writes."""
 
+_OTHER_SUFFIXES = {".psv": "ADES observations", ".csv": "a table", ".parquet": "a results table",
+                   ".json": "a manifest or fit result", ".toml": "a scenario", ".rrd": "a rerun recording",
+                   ".svg": "a figure", ".png": "a figure", ".tdm": "a CCSDS tracking data message"}
+"""Endings of files of other kinds, refused as an export's ``--out`` (an orbit message under such a
+name would be taken for what the name says)."""
+
 
 def _check_out_suffix(format: str, out: str | None) -> None:
-    """Refuse an ``--out`` named for the other CCSDS message than ``--format`` writes (x.oem for OPM)."""
+    """Refuse an ``--out`` named for the other CCSDS message than ``--format`` writes (x.oem for OPM),
+    or for another kind of file (:data:`_OTHER_SUFFIXES`)."""
     if out is None:
         return
     ending = Path(out).suffix.lower()
+    if ending in _OTHER_SUFFIXES:
+        raise ConfigError(f"--out {out}: a {ending} name is for {_OTHER_SUFFIXES[ending]}, not a CCSDS "
+                          f"{format.upper()}; name it {Path(out).with_suffix(_FORMAT_SUFFIXES.get(format, '.txt'))}")
     named = next((f for f, suffix in _FORMAT_SUFFIXES.items() if suffix == ending), None)
     if named is not None and named != format:
         raise ConfigError(f"--out {out}: named for {named.upper()}, but --format {format} writes "
@@ -471,7 +479,16 @@ def console_main() -> None:
             reconfigure(errors="backslashreplace")
     if sys.stdout is not None:
         sys.stdout = NamedOutput(sys.stdout, "standard output")
+    warnings.showwarning = show_warning
     exit_process(main())
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """How the command shows a Python warning: ``cistrack: warning: <message>`` on stderr (above a
+    progress bar), without the source file and line that Python's default adds (they mean nothing
+    to a person running the command)."""
+    text = str(message)
+    _eprint(f"cistrack: warning: {text.removeprefix('cistrack: ')}")
 
 
 class NamedOutput:

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
+
+from cistrack.runs.progress import eprint as _eprint
 
 __all__ = ["add_predict_parser", "cmd_predict", "table_lines", "MAX_TIMES"]
 
@@ -24,10 +25,6 @@ _HEADER = (f"{'UTC':<20}{'RA deg':>11}{'Dec deg':>10}{'RA rate':>9}{'Dec rate':>
            f"{'Sun':>7}{'Moon':>7}{'3sig a':>9}{'3sig b':>9}{'PA':>6}")
 _UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min'.rjust(9) + "".rjust(10)
           + "deg".rjust(7) * 3 + "arcsec".rjust(9) * 2 + "deg".rjust(6))
-
-
-def _eprint(*a) -> None:
-    print(*a, file=sys.stderr, flush=True)
 
 
 def _minutes(text: str) -> float:

@@ -13,7 +13,24 @@ from typing import Callable
 from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
 
-__all__ = ["ProgressBar", "stage_log"]
+__all__ = ["ProgressBar", "eprint", "stage_log"]
+
+
+def eprint(*parts: object) -> None:
+    """Write ``parts`` (joined by spaces) as one line on stderr, flushed. While a progress bar is
+    shown the line goes above it and the bar is drawn again below (a line written after a bar's
+    last redraw would otherwise continue the bar's line). Nothing is written when stderr is
+    closed (``2>&-``)."""
+    stream = sys.stderr
+    if stream is None:
+        return
+    text = " ".join(str(p) for p in parts)
+    tq = sys.modules.get("tqdm")  # a bar exists only if tqdm was imported: never imported here for this
+    if tq is not None and getattr(tq.tqdm, "_instances", None):
+        tq.tqdm.write(text, file=stream)
+        stream.flush()
+        return
+    print(text, file=stream, flush=True)
 
 
 def stage_log(indent: str = "  ") -> Callable[[str], None]:
@@ -21,7 +38,7 @@ def stage_log(indent: str = "  ") -> Callable[[str], None]:
     flushed at once (a person waiting sees it when the stage starts). ``sys.stderr`` is looked up
     at each message, so a redirected stderr (a test, a notebook) receives it."""
     def say(message: str) -> None:
-        print(f"{indent}{message}", file=sys.stderr, flush=True)
+        eprint(f"{indent}{message}")
 
     return say
 

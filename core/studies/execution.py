@@ -11,7 +11,6 @@ from __future__ import annotations
 import concurrent.futures as cf
 import socket
 import struct
-import sys
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -19,6 +18,7 @@ from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.run_status import run_status
 from cistrack.results.store import read_manifest
+from cistrack.runs.progress import eprint
 from cistrack.studies.resume import run_state
 
 __all__ = ["run_all", "run_problems", "shutdown", "check_dask_scheduler", "DASK_TIMEOUT_S"]
@@ -53,7 +53,7 @@ def run_all(ex: cf.Executor, todo: Sequence[Any], fn: Callable[[Any], Any], bar:
                 write_text_atomic(Path(spec.out_dir) / "error.txt", f"{type(exc).__name__}: {exc}\n")
             except OSError:  # a full disk: the reason is still printed and reported
                 pass
-            print(f"run {spec.run_id} failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+            eprint(f"run {spec.run_id} failed: {type(exc).__name__}: {exc}")
         if bar is not None:
             bar.update(1)
     return said

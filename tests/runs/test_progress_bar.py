@@ -15,3 +15,19 @@ def test_into_a_file_the_bar_redraws_at_its_interval_not_at_every_step(tmp_path)
     total = int(draws[-1].split("|")[2].split("/")[1].split()[0])
     assert total > 10 and len(draws) <= 4
     assert f"{total}/{total}" in draws[-1] and "t=" in draws[-1] and "H=" in draws[-1]
+
+
+def test_a_stage_line_said_while_the_bar_is_shown_starts_a_line_of_its_own(monkeypatch):
+    import io
+
+    from cistrack.runs.progress import ProgressBar, stage_log
+
+    err = io.StringIO()  # not a terminal: the bar's draws are kept, with no newline after them
+    monkeypatch.setattr(sys, "stderr", err)
+    bar = ProgressBar("run-x", 10)
+    bar.bar.update(1)
+    bar.bar.refresh()
+    stage_log()("maneuver detected at 2.000 d")
+    bar.bar.close()
+    lines = err.getvalue().replace("\r", "\n").split("\n")
+    assert "  maneuver detected at 2.000 d" in lines
