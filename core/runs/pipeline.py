@@ -241,6 +241,8 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
         ctx.maneuvers = watch
     t_prepare = time.perf_counter() - t_start - clock.seconds
     events = _events(scenario, ctx)
+    if watch is not None:
+        _say_if_detector_idle(watch, events, opts.log)
     if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
         ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])
     if opts.progress:
@@ -364,6 +366,16 @@ def _maneuver_watch(scenario: Scenario, reg: Registry) -> ManeuverWatch | None:
         return None
     response = settings.response.build(reg) if settings.response is not None else None
     return ManeuverWatch(settings.detector.build(reg), response, settings.estimate)
+
+
+def _say_if_detector_idle(watch: ManeuverWatch, events: list, say) -> None:
+    """Say so when the detector's ``warmup`` (updates it only watches) covers every update of
+    the run: such a run can detect nothing."""
+    warmup = getattr(watch.detector, "warmup", 0)
+    n_updates = sum(1 for _, group in events if group)
+    if say is not None and isinstance(warmup, int) and warmup >= n_updates:
+        say(f"maneuver detector {component_name(watch.detector)}: warmup = {warmup} covers all {n_updates} "
+            "updates of this run; it can detect nothing (lower [maneuvers.detector] warmup)")
 
 
 def _watch(ctx: RunContext, t: float, prior, ms: tuple) -> None:

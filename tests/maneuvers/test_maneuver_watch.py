@@ -137,3 +137,15 @@ def test_adding_the_maneuver_stream_leaves_the_other_streams_as_they_were():
     new = _streams(7)
     for name, child in zip(("measurements", "schedule", "iod", "filter"), old):
         assert new[name].random() == np.random.default_rng(child).random()
+
+
+def test_a_detector_whose_warmup_covers_every_update_says_it_can_detect_nothing():
+    from cistrack.scenario.settings import apply_settings
+
+    s = apply_settings(load_scenario("example-1-burn"), ["duration_days=1.4", "filter.n_particles=200",
+                                                          "filter.n_components=2", "iod.n_particles=200",
+                                                          "maneuvers.detector.warmup=400"])
+    lines: list[str] = []
+    run_scenario(s, seed=SEED, log=lines.append)
+    said = [m for m in lines if "warmup = 400 covers all" in m]
+    assert len(said) == 1 and "can detect nothing" in said[0] and "mixture-likelihood" in said[0]
