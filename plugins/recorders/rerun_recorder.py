@@ -52,6 +52,7 @@ import shutil
 import socket
 import subprocess
 import uuid
+import warnings
 from datetime import timedelta
 from pathlib import Path
 from typing import Any
@@ -115,7 +116,12 @@ def _port_in_use(port: int) -> bool:
 MIN_FREE_BYTES = 32_000_000
 """Free disk space a recording to a file asks for before the run: rerun's file sink, once the
 disk is full, leaves the process waiting in its own code for ever (no signal ends it), so a disk
-short of room is refused up front. A disk that fills during the run is not caught by this."""
+short of room is refused up front. A disk that fills during the run: :data:`LOW_FREE_BYTES`."""
+
+LOW_FREE_BYTES = 16_000_000
+"""Free disk space below which a recording to a file stops between two steps (flushed and
+closed while its last batch still fits; the run goes on and says so), before rerun's file
+writer meets a full disk."""
 
 class RerunRecorder(Component):
     """Record a run for the rerun viewer (3-D synodic scene, clouds, ellipsoids, metrics).
@@ -199,7 +205,7 @@ class RerunRecorder(Component):
             if not folder.is_dir() or not os.access(folder, os.W_OK):
                 self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
                            "not writable")
-            free = shutil.disk_usage(folder).free
+            free = _free_bytes(folder)
             if free < MIN_FREE_BYTES:
                 self._fail("path", self.path, f"only {free / 1e6:.3g} MB free on the disk of {folder}; a recording "
                            f"needs room (Example 1: about 4 MB) and rerun's file writer cannot report a full disk "
@@ -406,7 +412,7 @@ class RerunRecorder(Component):
 
     def _log_step(self, run, step) -> None:
         rec = self._rec
-        if rec is None:  # a step without run_started: nothing is open to log to
+        if rec is None or self._disk_short(run, step):  # no run_started, or stopped: nothing to log to
             return
         self._set_time(rec, step.index, step.t)
         belief = step.belief
@@ -434,6 +440,18 @@ class RerunRecorder(Component):
             self._n_ranks = log_series(rec, step.metrics, mix.weights, self._n_ranks)
             if self._marks is not None:
                 self._marks.log_step(rec, step, log10_series(step.metrics).get("series/nees/nees"), self._event - 1)
+
+    def _disk_short(self, run, step) -> bool:
+        """Whether the recording's file has just been stopped (flushed and closed) because its disk
+        is short of room (:data:`LOW_FREE_BYTES`), with a RuntimeWarning saying why."""
+        target = self._files[-1] if self._files else None
+        if target is None or _free_bytes(os.path.dirname(os.path.abspath(target))) >= LOW_FREE_BYTES:
+            return False
+        self.close()
+        warnings.warn(f"cistrack: recording {target} stopped at step {step.index}: under {LOW_FREE_BYTES / 1e6:g} MB "
+                      "free on its disk; it holds the run up to here and the run goes on without it",
+                      RuntimeWarning, stacklevel=2)
+        return True
 
     def _log_moon(self, rec: rr.RecordingStream, run, t: float) -> None:
         """The Moon as a solid sphere (km) in views where it moves (not the synodic one)."""
@@ -501,6 +519,11 @@ FILE_FLUSH_BYTES = 4 << 20
 """Bytes of logged rows gathered into chunks at a time for a recording to a file only (rerun's
 default is 2 MiB or every 0.2 s, which cuts a run of a few seconds into thousands of small chunks,
 each with its own header: a larger file that the viewer loads more slowly)."""
+
+
+def _free_bytes(folder: str | Path) -> int:
+    """Free bytes on the disk of ``folder`` (the operating system's figure)."""
+    return shutil.disk_usage(folder).free
 
 
 def _file_batching() -> rr.ChunkBatcherConfig:

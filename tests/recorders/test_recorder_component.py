@@ -103,3 +103,28 @@ def test_a_single_file_path_refuses_a_second_run(recorded_run, tmp_path):
     rec.cistrack_run_finished(run=ctx, summary=recorded_run.result.summary)
     with pytest.raises(ParameterError, match="run_id"):
         rec.cistrack_run_started(run=dataclasses.replace(ctx, run_id="other"))
+
+
+def test_a_disk_that_runs_short_during_the_run_stops_the_recording_and_the_run_goes_on(tmp_path, monkeypatch):
+    from cistrack.plugin.registry import load_registry
+    from cistrack.plugins.recorders import rerun_recorder
+    from cistrack.plugins.recorders.recording_check import recording_problem
+    from cistrack.runs.pipeline import run_scenario
+
+    from .conftest import small_scenario
+
+    reg = load_registry()
+    rec = reg.create("recorder", "rerun", path=str(tmp_path / "run.rrd"))
+    calls = {"n": 0}
+
+    def filling_disk(folder):  # the operating system's answer: room for five steps, then under 1 MB
+        calls["n"] += 1
+        return 10**9 if calls["n"] <= 5 else 900_000
+
+    monkeypatch.setattr(rerun_recorder, "_free_bytes", filling_disk)
+    with pytest.warns(RuntimeWarning, match=r"run\.rrd stopped at step \d+: under 16 MB free"):
+        res = run_scenario(small_scenario(reg), registry=reg, observers=[rec])
+    assert res.summary.status == "finished", res.summary.failure
+    assert recording_problem(tmp_path / "run.rrd") is None  # flushed and closed: a whole file, shorter
+    steps = {r.times.get("step") for r in read_entities(tmp_path / "run.rrd").get("/world/particles", [])}
+    assert 0 < len(steps) <= 5
