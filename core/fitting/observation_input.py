@@ -128,6 +128,38 @@ def check_file_sizes(paths: list[str | Path]) -> None:
                               f"or the environment variable {MAX_FILE_MB_ENV})")
 
 
+class _SharedParams:
+    """Reader parameters given for several files of different formats: each file's reader (by its
+    name's suffix) gets those it takes (``check_degrees`` goes to a TDM file's reader only); one
+    that no reader of the files takes is refused before any file is read."""
+
+    def __init__(self, params: dict[str, Any], registry: Registry) -> None:
+        self.params, self.registry, self.taken = params, registry, set()
+
+    def of(self, path: Path) -> dict[str, Any]:
+        from cistrack.interfaces.component import param_specs
+
+        name = str(path).lower()
+        claims = [e for e in self.registry.entries("reader")
+                  if any(name.endswith(x) for x in getattr(e.factory, "suffixes", ()))]
+        if len(claims) != 1 or not isinstance(claims[0].factory, type):
+            self.taken.update(self.params)  # no one reader by name: every reader is tried with all of them
+            return self.params
+        known = param_specs(claims[0].factory)
+        mine = {k: v for k, v in self.params.items() if k in known}
+        self.taken.update(mine)
+        return mine
+
+    def per_file(self, paths: list[str | Path]) -> list[dict[str, Any]]:
+        """The parameters of each file's reader; ConfigError for one no reader takes."""
+        out = [self.of(Path(p)) for p in paths]
+        unused = sorted(set(self.params) - self.taken)
+        if unused:
+            raise ConfigError(f"reader parameter {unused[0]!r}: no reader of the files given takes it "
+                              f"({', '.join(str(p) for p in paths)})")
+        return out
+
+
 def _params(params: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k != "name"}
 
@@ -333,9 +365,11 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
     params = dict(reader_params or {})
     by_object: dict[str, tuple[list[MeasurementSet], list[str], list[float]]] = {}
     notes: dict[str, list[str]] = {}
-    for p in paths:
+    per_file = _SharedParams(params, registry).per_file(paths) if len(paths) > 1 and not params.get("name") \
+        else [params] * len(paths)
+    for p, file_params in zip(paths, per_file):
         path = Path(p)
-        found, resolution = _read_file(path, params, registry)
+        found, resolution = _read_file(path, file_params, registry)
         _require_sites(path, found)
         for ms in found:
             obj = str(ms.meta.get("object") or UNNAMED)

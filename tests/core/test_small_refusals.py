@@ -41,6 +41,12 @@ def test_an_export_named_for_the_other_message_is_refused(tmp_path, capsys):
     assert "named for OEM, but --format opm writes OPM" in capsys.readouterr().err
 
 
+def test_an_export_named_for_observations_is_refused(tmp_path, capsys):
+    assert main(["export", str(tmp_path), "--format", "oem", "--out", str(tmp_path / "x.psv")]) == 2
+    assert "a .psv name is for ADES observations, not a CCSDS OEM; name it" in capsys.readouterr().err
+    assert not (tmp_path / "x.psv").exists()
+
+
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("run") / "r"

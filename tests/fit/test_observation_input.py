@@ -6,7 +6,7 @@ from datetime import datetime, timedelta
 import numpy as np
 import pytest
 
-from cistrack.errors import MeasurementError
+from cistrack.errors import ConfigError, MeasurementError
 from cistrack.fitting.observation_input import read_object_observations
 from cistrack.plugin.registry import default_registry
 from cistrack.runs.observation_files import SeveralObjectsError, read_observations
@@ -97,3 +97,15 @@ def test_a_copy_with_its_times_rounded_to_the_second_is_a_duplicate(tmp_path):
     objs = read_object_observations([DATA / "observations.psv", rounded], default_registry())
     assert len(objs[0].measurements) == 65
     assert "rounded.psv: 65 observations dropped as duplicates" in objs[0].notes[-1]
+
+
+def test_a_reader_parameter_of_one_format_goes_to_that_formats_files_only():
+    objs = read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry(),
+                                    reader_params={"check_degrees": False})
+    assert len(objs) == 1 and len(objs[0].measurements) > 0
+
+
+def test_a_reader_parameter_no_reader_of_the_files_takes_is_refused_by_name():
+    with pytest.raises(ConfigError, match="reader parameter 'range_alpha': no reader of the files given takes it"):
+        read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry(),
+                                 reader_params={"range_alpha": 0.1})
