@@ -201,7 +201,7 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",
                                                 motion_import=None if body_motion is None else "",
                                                 lanes=None if body is None else dop853_source.LaneKernel(body))
-            _announce_compile(repr(rhs))
+            _announce_compile(repr(rhs), cached=False)
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
             for name in names:  # the globals the rewritten lane body reads
@@ -230,14 +230,16 @@ def _numba_cached(path: Path) -> bool:
     return any((path.parent / "__pycache__").glob(f"{path.stem}.propagate*_kernel-*.nbi"))
 
 
-def _announce_compile(what: str) -> None:
+def _announce_compile(what: str, cached: bool = True) -> None:
     """Say (through logging; the command line shows it) that the next call compiles kernels, and
     about how long a run's kernels (dense and lockstep, the latter in a second process when
-    there is a second core) take on this machine."""
+    there is a second core) take on this machine; ``cached``: whether later runs load them
+    (False: compiled in memory, in every process)."""
     from cistrack.propagation.background_compile import estimate_seconds, idle_core
 
     seconds = estimate_seconds(("dense_kernel", "propagate_lanes_kernel"), parallel=idle_core())
-    _LOG.info("compiling propagation kernels for %s (one-time, first run here: ~%.0f s)...", what, seconds)
+    when = "one-time, first run here" if cached else "in memory, again in every process"
+    _LOG.info("compiling propagation kernels for %s (%s: ~%.0f s)...", what, when, seconds)
 
 
 # -- threads ---------------------------------------------------------------------------------------

@@ -24,7 +24,7 @@ __all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic", "write_te
 def atomic_target(path: str | Path, tmp_name: str | None = None) -> Iterator[Path]:
     """Yield a fresh temporary path beside ``path`` to write to; on leaving the block without an
     exception it replaces ``path``, on an exception (of any kind) it is deleted and ``path`` is
-    left as it was. The temporary file exists (empty) when the block starts, unless ``tmp_name``
+    left as it was (an OSError that names no file is raised again naming ``path``). The temporary file exists (empty) when the block starts, unless ``tmp_name``
     names it: a fixed name beside ``path``, for a file only one process ever writes (a run's own
     tables), which a failed earlier attempt's leftover can never block."""
     target = Path(path)
@@ -33,9 +33,12 @@ def atomic_target(path: str | Path, tmp_name: str | None = None) -> Iterator[Pat
     try:
         yield tmp
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError) and exc.errno is not None and not exc.filename:
+            # a failed write names no file ("No space left on device"): name the one being written
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
 
 

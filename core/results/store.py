@@ -249,6 +249,18 @@ def read_steps(directory: str | Path) -> pa.Table:
     return table
 
 
+def _stale_note(path: Path) -> str:
+    """For a manifest still saying "running" once the run is over (its final version could not be
+    written, e.g. on a full disk): a note saying so; else nothing."""
+    if path.name != MANIFEST:
+        return ""
+    try:
+        status = json.loads(path.read_text()).get("status")
+    except (OSError, ValueError, AttributeError):
+        return " (unreadable)"
+    return " (still says 'running': its final version could not be written)" if status == "running" else ""
+
+
 def results_line(directory: str | Path) -> str:
     """The line naming a run's results for a person (``cistrack run``): only files that exist (the
     step table, the manifest, the residual figure), the unmerged parts of a run whose merge
@@ -258,7 +270,7 @@ def results_line(directory: str | Path) -> str:
     n_parts = len(list((d / PARTS).glob("part-*.parquet"))) if (d / PARTS).is_dir() else 0
     if not found and n_parts:
         found.append(f"{d}/{PARTS}/part-*.parquet ({n_parts} files, not merged)")
-    found += [f"{d}/{name}" for name in (MANIFEST, RESIDUALS_FIGURE) if (d / name).is_file()]
+    found += [f"{d}/{name}" + _stale_note(d / name) for name in (MANIFEST, RESIDUALS_FIGURE) if (d / name).is_file()]
     if not found:
         return f"  results: none written in {d}"
     return "  results: " + ", ".join(found)

@@ -147,3 +147,15 @@ def test_the_results_line_names_the_residual_figure(quick_run):
     from cistrack.results.store import results_line
 
     assert results_line(quick_run).endswith(f", {quick_run}/manifest.json, {quick_run}/{FIGURE}")
+
+
+def test_the_results_line_says_when_the_manifest_was_left_saying_running(tmp_path):
+    import json
+
+    from cistrack.results.store import results_line
+
+    (tmp_path / "manifest.json").write_text(json.dumps({"status": "running"}))  # its final write failed
+    assert results_line(tmp_path).endswith("manifest.json (still says 'running': its final version could not "
+                                           "be written)")
+    (tmp_path / "manifest.json").write_text(json.dumps({"status": "finished"}))
+    assert results_line(tmp_path).endswith("manifest.json")

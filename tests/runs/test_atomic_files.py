@@ -1,0 +1,21 @@
+"""Files written whole or not at all: a failed write leaves no temporary file and its error names
+the file being written."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def test_a_write_that_fails_names_the_file_and_leaves_nothing_behind(tmp_path):
+    target = tmp_path / "fit.json"
+    code = ("import resource, signal, sys\n"
+            "from cistrack.results.atomic_files import write_text_atomic\n"
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (10, 10))  # the disk as good as full: writes fail\n"
+            "try:\n"
+            f"    write_text_atomic({str(target)!r}, 'x' * 1000)\n"
+            "except OSError as exc:\n"
+            "    print(exc.filename)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.strip() == str(target), out.stderr
+    assert list(tmp_path.iterdir()) == []
