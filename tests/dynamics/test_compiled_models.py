@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from numba import njit
 
 from cistrack.propagation import CompiledDynamics
@@ -41,6 +42,7 @@ def test_a_new_model_defined_by_its_rhs_propagates_to_the_closed_form(rng):
     assert prop.alive.all() and (prop.impact_body == -1).all()
 
 
+@pytest.mark.slow  # compiles its own kernel in memory (~20 s on 2 cores)
 def test_a_model_defined_in_a_function_still_works_without_cache():
     @njit
     def decay(t, y, p, out):

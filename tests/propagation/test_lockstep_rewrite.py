@@ -67,6 +67,7 @@ def test_a_time_table_keyed_by_lane_uniform_gives_the_one_particle_results_bit_f
     assert _lockstep_equals_one_particle(table, _spread(45), times)
 
 
+@pytest.mark.slow  # its own kernel, ~50 s of compile on 2 cores; the time table above covers lane-uniform keys
 @pytest.mark.parametrize("times", [np.array([1.3, 7.9]), np.array([-6.0])], ids=["forward", "backward"])
 def test_a_periodic_table_keyed_by_lane_uniform_gives_the_one_particle_results_bit_for_bit(times):
     assert _lockstep_equals_one_particle(Parity(np.r_[0.25, 1.0, -1.0]), _spread(45), times)
