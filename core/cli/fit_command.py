@@ -44,7 +44,9 @@ def cmd_fit(args) -> int:
     from cistrack.cli.process_exit import allow_quick_exit
     from cistrack.fitting.from_observations import fit_files
     from cistrack.plugin.registry import default_registry
+    from cistrack.runs.input_checks import check_environment
 
+    check_environment()  # before the fit's directory is made
     quiet = bool(args.quiet)
     say = None if quiet else (lambda m: _eprint(f"  {m}"))
     with _file_size_limit(getattr(args, "max_file_mb", None)):

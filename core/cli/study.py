@@ -11,6 +11,9 @@ def cmd_study(args) -> int:
     from cistrack.studies import study
 
     if args.study_cmd == "run":
+        from cistrack.runs.input_checks import check_environment
+
+        check_environment()  # before the study's directory: its workers would each fail on it
         res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
                               progress=not args.quiet, rerun_dir=args.rerun, settings=args.set,
                               first_seed=args.first_seed, n_seeds=args.n_seeds)

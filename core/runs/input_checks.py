@@ -12,7 +12,7 @@ from cistrack.errors import ConfigError
 from cistrack.interfaces.reader import not_a_file
 from cistrack.scenario.limits import check_count
 
-__all__ = ["check_run_inputs"]
+__all__ = ["check_run_inputs", "check_environment"]
 
 
 def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
@@ -21,21 +21,23 @@ def check_run_inputs(scenario: Any, rows_per_part: int | None = None) -> None:
     ``$CISTRACK_NUM_THREADS`` or kernel cache directory cannot serve a run."""
     if rows_per_part is not None:
         check_count(rows_per_part, "--rows-per-part", 1, 10 ** 9)
-    _check_environment()
+    check_environment()
     f = getattr(scenario, "measurements_file", None)
     why = None if f is None else not_a_file(f)
     if why is not None:
         raise ConfigError(f"{scenario.source}: [measurements] file = {f}: {why}; nothing was run")
 
 
-def _check_environment() -> None:
-    """The thread count and the kernel cache directory a run will use, checked (and the cache made)
+def check_environment() -> None:
+    """The thread count, the background-compile switch and the kernel cache directory a run will use, checked (and the cache made)
     before a results directory is; a cache directory that cannot be made is left to the run (it
     compiles in memory and says so)."""
+    from cistrack.env_flags import env_flag
     from cistrack.propagation.kernels import secure_cache_dir
     from cistrack.threads import thread_setting
 
     thread_setting()
+    env_flag("CISTRACK_BACKGROUND_COMPILE")  # read only when a kernel compiles: checked for every run here
     try:
         secure_cache_dir()  # ConfigError: not a directory, another user's, writable by others
     except OSError:  # cannot be made: the run compiles in memory, slower to start, and its warning says why
