@@ -66,12 +66,14 @@ _KERNELS: dict[tuple[int, int], ModuleType] = {}
 def kernel_cache_dir() -> Path:
     """Directory where generated kernel modules (and numba's cache of them) are kept.
 
-    ``$CISTRACK_KERNEL_DIR``, else ``$XDG_CACHE_HOME/cistrack/kernels`` (an absolute path: a
-    relative one is ignored, as the XDG specification says, or every working directory would get
-    its own cache and compile afresh), else ``~/.cache/cistrack/kernels``; the path only (see
-    :func:`secure_cache_dir`)."""
+    ``$CISTRACK_KERNEL_DIR`` (an absolute path; ConfigError for a relative one), else
+    ``$XDG_CACHE_HOME/cistrack/kernels`` (an absolute path: a relative one is ignored, as the XDG
+    specification says, or every working directory would get its own cache and compile afresh),
+    else ``~/.cache/cistrack/kernels``; the path only (see :func:`secure_cache_dir`)."""
     env = os.environ.get("CISTRACK_KERNEL_DIR")
     if env:
+        if not os.path.isabs(env):  # a relative one would make a cache (and compile afresh) in every directory
+            raise ConfigError(f"environment variable CISTRACK_KERNEL_DIR={env!r}: must be an absolute path")
         return Path(env)
     xdg = os.environ.get("XDG_CACHE_HOME", "")
     base = Path(xdg) if os.path.isabs(xdg) else Path.home() / ".cache"
@@ -201,7 +203,7 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",
                                                 motion_import=None if body_motion is None else "",
                                                 lanes=None if body is None else dop853_source.LaneKernel(body))
-            _announce_compile(repr(rhs), cached=False)
+            _announce_compile(_qualified_name(rhs), cached=False)
             mod = ModuleType(f"cistrack_kernel_inmemory_{id(rhs)}")
             mod.__dict__["rhs"] = rhs  # the generated header re-wraps it for inlining
             for name in names:  # the globals the rewritten lane body reads
@@ -228,6 +230,12 @@ def _numba_cached(path: Path) -> bool:
     """Whether numba's on-disk cache already holds a propagation kernel of module ``path`` (the
     one-particle or the lockstep one: a run with many particles compiles only the latter)."""
     return any((path.parent / "__pycache__").glob(f"{path.stem}.propagate*_kernel-*.nbi"))
+
+
+def _qualified_name(rhs: Any) -> str:
+    """``module.name`` of a right-hand side (of its Python function, for a numba dispatcher)."""
+    func = getattr(rhs, "py_func", rhs)
+    return f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(rhs))}"
 
 
 def _announce_compile(what: str, cached: bool = True) -> None:

@@ -19,6 +19,12 @@ def test_cache_directory_is_created_private(tmp_path, monkeypatch):
     assert stat.S_IMODE(target.stat().st_mode) == 0o700
 
 
+def test_a_relative_cache_directory_is_refused(monkeypatch):
+    monkeypatch.setenv("CISTRACK_KERNEL_DIR", "kernels")  # would make a cache in every working directory
+    with pytest.raises(ConfigError, match="CISTRACK_KERNEL_DIR='kernels': must be an absolute path"):
+        kernels.kernel_cache_dir()
+
+
 def test_cache_directory_writable_by_others_is_refused(tmp_path):
     target = tmp_path / "shared"
     target.mkdir()
