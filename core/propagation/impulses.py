@@ -421,7 +421,7 @@ def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: 
         (say or (lambda line: None))(describe_impulse(imp, k))
     days = float(units.tu_to_days(t_end - t0))
     for text in (plan.burns_outside(float(t0), float(t_end)) if say is not None else []):
-        say(f"{where}: {text} lies outside the run (0 to {days:g} days): not flown")
+        say(f"{where}: outside the run (0 to {days:g} days), not flown: {text}")
     if not impulses and say is not None:
         say(f"{where}: no burn inside the run ({days:g} days); the truth is ballistic")
     return flown, impulses

@@ -101,7 +101,7 @@ def _check_one_burn_form(owner, vector_ms: list[float], delta_v_ms: float, direc
 
 def _outside(specs: list[BurnSpec], t0: float, t_end: float) -> list[str]:
     """The burns of ``specs`` outside ``(t0, t_end]`` TU, each as 'LABEL at D days'."""
-    return [f"{b.label} at {float(units.tu_to_days(b.t)):g} days" for b in specs if not t0 < b.t <= t_end]
+    return [f"{b.label} at {float(units.tu_to_days(b.t)):.12g} days" for b in specs if not t0 < b.t <= t_end]
 
 
 def _check_burn_frame(owner, frame: Any, vector_ms: list[float], direction: Any) -> None:
@@ -150,8 +150,8 @@ class ImpulsePlan(ManeuverPlan):
         _check_burn_frame(self, frame, self.vector_ms, direction)
         _check_one_burn_form(self, self.vector_ms, self.delta_v_ms, direction)
         self.direction, self.frame = direction, frame
-        if not isinstance(label, str):
-            self._fail("label", label, "must be a string")
+        if not isinstance(label, str) or any(ord(c) < 32 or ord(c) == 127 for c in label):
+            self._fail("label", label, "must be a string of printable characters (no line breaks or tabs)")
         self.label = label
 
     def burn(self, default_label: str = "burn") -> BurnSpec:
@@ -198,7 +198,9 @@ class BurnsPlan(ManeuverPlan):
             raise ParameterError(f"{self._label()}: parameter '{where}': {str(exc).split(': ', 1)[-1]}") from None
 
     def _specs(self) -> list[BurnSpec]:
-        return [p.burn(f"burn {i + 1}") for i, p in enumerate(self._plans)]
+        """The burns in time order, unlabelled ones named "burn N" in that order (as the log numbers them)."""
+        in_time = sorted(self._plans, key=lambda p: p.t_days)
+        return [p.burn(f"burn {i + 1}") for i, p in enumerate(in_time)]
 
     def impulses(self, dynamics, x0: np.ndarray, t0: float, t_end: float) -> list[Impulse]:
         return resolve_burns(dynamics, x0, t0, t_end, self._specs())
@@ -266,7 +268,9 @@ class StationKeepingPlan(ManeuverPlan):
         first = found + 1
         which = f"station-keeping burn {first}" if first == self.n_burns else \
             f"station-keeping burns {first} to {self.n_burns}"
-        return [f"{which} (no apolune passage after the first {found} before the run ends)"]
+        why = (f"no apolune passage between first_after_days = {self.first_after_days:g} and the end of the run"
+               if found == 0 else f"the run ends before apolune passage {first}")
+        return [f"{which} ({why})"]
 
 
 def _evaluator(dynamics, x0: np.ndarray, t0: float, t_end: float):

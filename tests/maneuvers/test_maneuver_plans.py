@@ -86,7 +86,7 @@ def test_burns_are_resolved_along_the_truth_with_the_earlier_burns(cr3bp):
     plan = BurnsPlan(burns=[{"t_days": 6.0, "delta_v_ms": 0.5, "direction": "radial", "label": "late"},
                             {"t_days": 2.0, "delta_v_ms": 3.0}])
     first, second = plan.impulses(cr3bp, NRHO, 0.0, SPAN + 1)
-    assert first.t < second.t and first.label.startswith("burn 2") and second.label.startswith("late")
+    assert first.t < second.t and first.label.startswith("burn 1") and second.label.startswith("late")  # in time order
     t2 = second.t
     axes_with = frame_axes("rtn-moon", _state_at(cr3bp, t2, [first]), t2, cr3bp)
     np.testing.assert_allclose(second.dv, axes_with[:, 0] * 0.5 / MS_PER_VU, atol=1e-15)
@@ -117,8 +117,15 @@ def test_station_keeping_burns_the_run_does_not_reach_are_named_in_the_log(cr3bp
     lines = []
     fly_plan(StationKeepingPlan(delta_v_ms=0.1, n_burns=5), cr3bp, NRHO, 0.0, float(units.days_to_tu(13.2)),
              lines.append)
-    assert any("station-keeping burns 3 to 5 (no apolune passage after the first 2 before the run ends) lies "
-               "outside the run" in line for line in lines), lines
+    assert any("not flown: station-keeping burns 3 to 5 (the run ends before apolune passage 3)" in line
+               for line in lines), lines
+
+
+def test_station_keeping_that_starts_after_the_run_names_first_after_days(cr3bp):
+    lines = []
+    fly_plan(StationKeepingPlan(first_after_days=1e9), cr3bp, NRHO, 0.0, SPAN, lines.append)
+    assert any("no apolune passage between first_after_days = 1e+09 and the end of the run" in line
+               for line in lines), lines
 
 
 def test_fly_plan_wraps_the_truth_and_says_one_line_per_burn(cr3bp):
@@ -135,7 +142,19 @@ def test_fly_plan_names_each_burn_it_leaves_out_after_the_run(cr3bp):
     plan = BurnsPlan(burns=[{"t_days": 50.0, "delta_v_ms": 0.5}, {"t_days": 1.0, "delta_v_ms": 0.5}])
     dyn, imps = fly_plan(plan, cr3bp, NRHO, 0.0, SPAN, lines.append, where="[truth.maneuvers]")
     assert len(imps) == 1 and len(lines) == 2
-    assert "burn 1: 0.5 m/s in-track (rtn-moon) at 50 days lies outside the run" in lines[1] and "not flown" in lines[1]
+    assert "not flown: burn 2: 0.5 m/s in-track (rtn-moon) at 50 days" in lines[1]  # "burn N" numbered in time order
+
+
+def test_a_burn_just_after_the_run_shows_the_digits_that_put_it_there(cr3bp):
+    lines = []
+    end_days = float(units.tu_to_days(SPAN))
+    fly_plan(ImpulsePlan(t_days=end_days + 1e-9, delta_v_ms=1.0), cr3bp, NRHO, 0.0, SPAN, lines.append)
+    assert any(f"at {end_days + 1e-9:.12g} days" in line for line in lines), lines
+
+
+def test_a_burn_label_with_a_line_break_is_refused():
+    with pytest.raises(ParameterError, match="printable characters"):
+        ImpulsePlan(t_days=1.0, label="x\ny")
 
 
 def test_fly_plan_refuses_a_plan_that_returns_burns_outside_the_span(cr3bp):
