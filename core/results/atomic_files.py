@@ -13,11 +13,12 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import secrets
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic", "write_text_new"]
+__all__ = ["atomic_target", "write_text_atomic", "write_bytes_atomic", "write_text_new", "remove_stale_temporaries"]
 
 
 @contextlib.contextmanager
@@ -104,3 +105,21 @@ def write_text_new(path: str | Path, text: str, encoding: str = "utf-8") -> None
     finally:
         with contextlib.suppress(OSError):
             tmp.unlink()
+
+
+_TEMPORARY = re.compile(r"^\..+\.[0-9a-f]{8}\.tmp$")
+"""The names :func:`_new_file` gives its temporary files."""
+
+
+def remove_stale_temporaries(directory: str | Path) -> int:
+    """Delete the temporary files of writes into ``directory`` that a killed process (``kill -9``)
+    left half-written; call it only while holding the directory's lock (no other writer then).
+    Returns how many were removed."""
+    removed = 0
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(directory):
+            if _TEMPORARY.match(entry.name) and entry.is_file(follow_symlinks=False):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+                    removed += 1
+    return removed

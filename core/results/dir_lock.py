@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from cistrack.errors import CistrackError
+from cistrack.results.atomic_files import remove_stale_temporaries
 from cistrack.results.output_paths import FIT_LOCK, RUN_LOCK
 
 __all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
@@ -91,6 +92,7 @@ def run_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
     with holding(d / RUN_LOCK, where, lambda holder: RunBusy(
             f"{where} {d}: another 'cistrack run'{holder} is writing its results in this directory; "
             "wait for it to end, or give another --out")):
+        remove_stale_temporaries(d)  # half-written files of a run killed mid-write; no writer is live now
         yield
 
 
@@ -102,5 +104,6 @@ def fit_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
     with holding(d / FIT_LOCK, where, lambda holder: RunBusy(
             f"{where} {d}: another 'cistrack fit'{holder} is writing its results in this directory; "
             "wait for it to end, or give another --out")):
+        remove_stale_temporaries(d)
         yield
 

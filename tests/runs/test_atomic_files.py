@@ -19,3 +19,13 @@ def test_a_write_that_fails_names_the_file_and_leaves_nothing_behind(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.stdout.strip() == str(target), out.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_taking_a_run_directorys_lock_removes_what_a_killed_writer_left_half_written(tmp_path):
+    from cistrack.results.dir_lock import run_lock
+
+    (tmp_path / ".manifest.json.1a2b3c4d.tmp").write_text('{"status": "fin')  # kill -9 during a write
+    (tmp_path / "notes.tmp").write_text("a user's file")
+    with run_lock(tmp_path):
+        pass
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".run.lock", "notes.tmp"]
