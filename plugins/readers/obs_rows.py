@@ -2,8 +2,8 @@
 
 Each reader parses its syntax into :class:`ObsRow` (time, two angles in rad, optional sigmas,
 site key, type, and the line each came from) and hands them to :func:`build_set`, which sorts
-by time, refuses two observations at the same time with both lines named, and fills the
-per-measurement sites and types. Times are given as UTC datetimes.
+by time, refuses two observations of one site at the same time with both lines named (several
+sites may share a time), and fills the per-measurement sites and types. Times are given as UTC datetimes.
 """
 from __future__ import annotations
 
@@ -125,6 +125,19 @@ def one_object(path, rows: list[ObsRow], designation: str | None) -> tuple[list[
     return rows, (objects[0] if objects else None)
 
 
+def _refuse_repeats(path, rows: list[ObsRow]) -> None:
+    """FieldError for a row at the time and site of an earlier one (the same observation twice,
+    naming both lines); rows of different sites at one time are several observatories observing
+    at once, and are kept."""
+    seen: dict[tuple[datetime, str], ObsRow] = {}
+    for row in rows:
+        first = seen.setdefault((row.t, row.site), row)
+        if first is not row:
+            raise FieldError(path, row.line, row.time_field,
+                             f"time {format_utc(row.t)} at site {show_field(row.site)} repeats the observation of "
+                             f"line {first.line}; one site observes once at a time (other sites may share the time)")
+
+
 def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, Site],
               sigma_arcsec: float, meta: dict | None = None, designation: str | None = None) -> MeasurementSet:
     """The MeasurementSet of ``rows`` in time order (TU since ``epoch``).
@@ -140,11 +153,7 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     for row in (rows[0], rows[-1]):
         if year_problem(row.t):
             raise FieldError(path, row.line, row.time_field, year_problem(row.t))
-    for prev, cur in zip(rows, rows[1:]):
-        if cur.t == prev.t:
-            raise FieldError(path, cur.line, cur.time_field,
-                             f"time {format_utc(cur.t)} repeats the observation of line {prev.line}; "
-                             f"times must differ")
+    _refuse_repeats(path, rows)
     kinds = {r.kind for r in rows}
     names = KIND_NAMES[rows[0].kind] if len(kinds) == 1 else ("angle_1", "angle_2")
     default = sigma_arcsec * ARCSEC_RAD

@@ -37,7 +37,7 @@ PSV_CASES = [
     ("unknown station", psv("SECRETX|CCD|Q9Z|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "stn"),
     ("too few fields", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0"), 4, "(field count)"),
     ("no object", psv("|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "permID/provID/trkSub"),
-    ("repeated time", psv("SECRETX|CCD|711|2026-03-01T01:00:00.000000Z|10|5|1.0|1.0|Gaia3"), 4, "obsTime"),
+    ("repeated time and site", psv("SECRETX|CCD|705|2026-03-01T01:00:00.000000Z|10|5|1.0|1.0|Gaia3"), 4, "obsTime"),
     ("header lacks dec", "# version=2022\ntrkSub|stn|obsTime|ra\n", 2, "dec"),
     ("unknown version", "# version=banana\ntrkSub|mode|stn|obsTime|ra|dec\n", 1, "version"),
     ("header repeats a field", "# version=2022\nstn|obsTime|ra|dec|ra\n", 2, "ra"),
@@ -100,7 +100,7 @@ MPC_CASES = [
     ("Dec minutes 61", mpc(col(MPC_OK, 49, "61")), 2, "Dec (columns 45-56)"),
     ("unknown observatory", mpc(col(MPC_OK, 78, "ZZ9")), 2, "observatory code"),
     ("blank observatory", mpc(col(MPC_OK, 78, "   ")), 2, "observatory code"),
-    ("repeated time", mpc(col(MPC_OK, 78, "711")), 2, "date (columns 16-32)"),
+    ("repeated time and site", mpc(col(MPC_OK, 55, "3")), 2, "date (columns 16-32)"),
 ]
 
 # -- TDM ------------------------------------------------------------------------------------------
