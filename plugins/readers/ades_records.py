@@ -11,8 +11,11 @@ rmsDec      Dec uncertainty, arcsec (optional)
 stn         MPC observatory code (required); sites outside the bundled table come from the
             reader's ``sites`` parameter or from sys = WGS84 (ctr = 399, the Earth, or absent)
             with pos1 (East longitude, deg), pos2 (latitude, deg), pos3 (height, m). A position
-            given under a bundled code more than 1 km from the code's place replaces it, with a
-            warning naming both places (once per code and file)
+            is that record's own: given under a code with a place of its own (bundled or in
+            ``sites``) and away from it, the record's site key is ``CODE@lat,lon,height`` and the
+            code's other records keep its place; more than 1 km away, with a warning naming both
+            places (once per position and file). A code with no place of its own (not bundled,
+            not in ``sites``) takes one position per file; a roving observer (247, 270) any number
 mode        optional, written "CCD"; radar records (RAD) are left out with a warning, as the
             XML reader leaves out ``<radar>`` elements (a file of nothing else is refused); a
             mode not among those of optical astrometry (:data:`OPTICAL_MODES`) is read with a warning
@@ -46,6 +49,8 @@ __all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "O
 WRITE_FIELDS = ("trkSub", "mode", "stn", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "astCat")
 POS_FIELDS = ("sys", "ctr", "pos1", "pos2", "pos3")
 _ID_FIELDS = ("permID", "provID", "trkSub")
+ROVING_CODES = ("247", "270")
+"""MPC codes of roving observers: each position given under them is a site of its own."""
 
 
 def _get(rec, name, path, line, required=True):
@@ -116,16 +121,48 @@ def _file_position(rec, path, line: int, stn: str) -> Site:
         raise FieldError(path, lat_line, "pos1/pos2/pos3", str(exc).split(": ", 1)[-1]) from None
 
 
-def _given_site(rec, path, line: int, stn: str, table: dict[str, Site]) -> str:
-    """The table key of a record that gives its own position, entered in ``table``; a warning
-    (logger ``cistrack.readers``, once per code and file) when the position replaces that of a
-    bundled MPC observatory code."""
+def _code_site(stn: str, explicit: dict[str, Site]) -> Site | None:
+    """The site ``stn`` names without a position (the reader's ``sites``, else the bundled MPC
+    list), or None when it names none (a code of no fixed place, or no code at all)."""
+    try:
+        return resolve_site(stn, explicit)
+    except MeasurementError:
+        return None
+
+
+def _same_place(a: Site, b: Site) -> bool:
+    return (a.latitude_deg, a.longitude_deg, a.height_m) == (b.latitude_deg, b.longitude_deg, b.height_m)
+
+
+def _position_key(stn: str, site: Site, base: Site | None) -> str:
+    """The table key of a record at ``site`` under code ``stn`` (``base``: the code's own place):
+    the code itself at the code's own place, or for a code that has none (except a roving
+    observer's); else the code with the position, ``CODE@lat,lon,height`` (that record's own site)."""
+    if base is not None and _same_place(site, base):
+        return stn
+    if base is None and stn not in ROVING_CODES:
+        return stn
+    return f"{stn}@{site.latitude_deg!r},{site.longitude_deg!r},{site.height_m!r}"
+
+
+def _given_site(rec, path, line: int, stn: str, explicit: dict[str, Site], table: dict[str, Site]) -> str:
+    """The table key of a record that gives its own position, entered in ``table``: a position is
+    the record's own, so one away from the code's place has a key of its own (rows of the code
+    without a position keep the code's place); a warning (logger ``cistrack.readers``, once per
+    position and file) when it lies more than 1 km from a bundled MPC observatory code's place."""
     site = _file_position(rec, path, line, stn)
-    key = stn if stn != "247" else f"247@{site.latitude_deg!r},{site.longitude_deg!r},{site.height_m!r}"
-    if key in table and table[key] != site:
-        raise FieldError(path, rec["pos1"][1], "pos1", f"station {show_field(stn)} was given another position "
-                                                       f"earlier in the file")
-    known = replaced_code(key, site) if key not in table else None
+    base = _code_site(stn, explicit)
+    key = _position_key(stn, site, base)
+    if key in table:
+        if not _same_place(table[key], site):
+            raise FieldError(path, rec["pos1"][1], "pos1", f"station {show_field(stn)} was given another position "
+                                                           f"on an earlier line of the file; a station outside the "
+                                                           f"MPC list and the reader's sites has one position")
+        return key
+    if base is not None and _same_place(site, base):
+        table[key] = base
+        return key
+    known = replaced_code(stn, site)
     if known is not None:
         logging.getLogger("cistrack.readers").warning(
             f"{path}, line {line}: station {stn!r} is given at {place_text(site)} (sys, pos1, pos2, pos3), which "
@@ -135,14 +172,17 @@ def _given_site(rec, path, line: int, stn: str, table: dict[str, Site]) -> str:
 
 
 def _site(rec, path, line, explicit: dict[str, Site], table: dict[str, Site]) -> str:
+    """The table key of a record's site: its own position (sys, pos1..3) when it gives one, else
+    its code's place (the reader's ``sites``, else the bundled MPC list), whatever other records give."""
     stn, ln = _get(rec, "stn", path, line)
     if any(rec.get(f, ("", 0))[0].strip() for f in POS_FIELDS):
-        return _given_site(rec, path, line, stn, table)
-    if stn not in table:
-        try:
-            table[stn] = resolve_site(stn, explicit)
-        except MeasurementError as exc:
-            raise FieldError(path, ln, "stn", str(exc)) from None
+        return _given_site(rec, path, line, stn, explicit, table)
+    try:
+        site = resolve_site(stn, explicit)
+    except MeasurementError as exc:
+        raise FieldError(path, ln, "stn", f"{exc}, or this row's position (sys = WGS84, pos1, pos2, pos3): a "
+                                          "position given on another row is that row's only") from None
+    table.setdefault(stn, site)
     return stn
 
 

@@ -51,7 +51,7 @@ def test_an_earth_centred_position_or_one_without_ctr_is_read(tmp_path, ctr):
 def test_a_position_given_under_an_mpc_code_far_from_it_is_said_once_naming_both_places(tmp_path, caplog):
     with caplog.at_level("WARNING", logger="cistrack.readers"):
         ms = read_observations(_psv(tmp_path, stn="711"), EPOCH)
-    assert ms.site_table["711"].latitude_deg == 20.0  # the file's position is used
+    assert ms.site_table[ms.sites[0]].latitude_deg == 20.0  # the file's position is used
     said = [r.getMessage() for r in caplog.records if "replaces the MPC observatory 711" in r.getMessage()]
     assert len(said) == 1
     assert said[0].startswith(f"{tmp_path / 'pos.psv'}, line 3: station '711' is given at latitude 20, longitude 10, "
