@@ -107,19 +107,34 @@ def _linked(rows: list[ObsRow]) -> list[ObsRow]:
     return [replace(r, obj=names[r.obj]) if r.obj in names else r for r in rows]
 
 
+def _refuse_unnamed(path, rows: list[ObsRow], objects: list[str]) -> None:
+    """FieldError when some rows name no object (a TDM segment without PARTICIPANT_2) beside rows
+    naming several objects: whose observations they are is unknown (beside one object they are
+    that object's)."""
+    unnamed = [r for r in rows if not r.obj]
+    if unnamed and len(objects) > 1:
+        shown = ", ".join(show_field(o) for o in objects[:5]) + (", ..." if len(objects) > 5 else "")
+        raise FieldError(path, min(r.line for r in unnamed), "(object)",
+                         f"{len(unnamed)} of the file's {len(rows)} observations (the first on this line) name no "
+                         f"object, beside observations of {len(objects)} objects ({shown}): which object they are "
+                         "of is unknown; name the object of each (TDM PARTICIPANT_2 in every segment) or give "
+                         "them a file of their own")
+
+
 def one_object(path, rows: list[ObsRow], designation: str | None) -> tuple[list[ObsRow], str | None]:
     """The rows of one object and its designation: those of ``designation`` when given (a
     FieldError when the file has none), else all rows, refused with :class:`SeveralObjectsError`
-    when they name several objects."""
+    when they name several objects. Rows naming no object are those of the one object the file
+    names; beside several they are refused (:func:`_refuse_unnamed`), never left out."""
     rows = _linked(rows)
     objects = list(dict.fromkeys(r.obj for r in rows if r.obj))
+    _refuse_unnamed(path, rows, objects)
     if designation is not None:
         designation = {r.alias: r.obj for r in rows if r.alias}.get(designation, designation)
-        keep = [r for r in rows if r.obj == designation]
-        if not keep:
+        if designation not in objects:
             raise FieldError(path, 1, "(designation)", f"no observation of object {show_field(designation)}; the "
                                                        f"file names {', '.join(objects) or 'no object'}")
-        return keep, designation
+        return [r for r in rows if r.obj in (designation, "")], designation
     if len(objects) > 1:
         raise SeveralObjectsError(path, objects)
     return rows, (objects[0] if objects else None)

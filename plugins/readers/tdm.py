@@ -7,7 +7,8 @@ Read: a header (``CCSDS_TDM_VERS``, ``CREATION_DATE``, ``ORIGINATOR``), then seg
 * ``PARTICIPANT_1`` the observing station: an MPC observatory code of the bundled table, a key
   of the reader's ``sites`` parameter, or a site declared in the segment by a comment line
   ``COMMENT cistrack site KEY latitude_deg=.. longitude_deg=.. height_m=..`` (what the writer
-  writes for sites that are not MPC codes); ``PARTICIPANT_2`` the object;
+  writes for sites that are not MPC codes); ``PARTICIPANT_2`` the object (a segment without it is
+  of the one object the other segments name; beside several it is refused);
 * ``MODE = SEQUENTIAL`` and ``PATH`` between participants 1 and 2 (``2,1``), when given (others
   are refused: the angles are read as the station observing the object);
 * ``ANGLE_TYPE = AZEL`` (ANGLE_1 azimuth, ANGLE_2 elevation) or ``RADEC`` (right ascension,
