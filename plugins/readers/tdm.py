@@ -351,6 +351,10 @@ class _TdmParse:
         k, v = _kv(text, self.path, ln)
         if k not in _META_KEYS:
             raise FieldError(self.path, ln, k[:40], "unknown metadata keyword")
+        if k in self.seg.meta:
+            raise FieldError(self.path, ln, k, f"given again: line {self.seg.meta[k][1]} of this metadata block "
+                                               f"(from line {self.seg.line}) gives it already; each keyword is given "
+                                               "once per block")
         self.seg.meta[k] = (v, ln)
 
     def _between(self, word: str, text: str, ln: int) -> None:

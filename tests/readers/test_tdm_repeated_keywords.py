@@ -1,0 +1,32 @@
+"""A TDM metadata keyword given twice in one META block is refused naming both lines (it had
+silently taken the last value)."""
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from cistrack.errors import MeasurementError
+from cistrack.runs.observation_files import read_observations
+
+EPOCH = "2026-03-01T00:00:00Z"
+HEAD = "CCSDS_TDM_VERS = 2.0\nCREATION_DATE = 2026-03-01T00:00:00\nORIGINATOR = cistrack\n"
+META = "TIME_SYSTEM = UTC\nPARTICIPANT_1 = 705\nPARTICIPANT_2 = X\nANGLE_TYPE = AZEL\n"
+DATA = "DATA_START\nANGLE_1 = 2026-03-01T0{h}:00:00 10.5\nANGLE_2 = 2026-03-01T0{h}:00:00 20.5\nDATA_STOP\n"
+
+
+def _tdm(tmp_path, extra: str):
+    path = tmp_path / "repeat.tdm"
+    path.write_text(HEAD + "META_START\n" + META + extra + "META_STOP\n" + DATA.format(h=1))
+    return path
+
+
+@pytest.mark.parametrize("extra, keyword", [("PARTICIPANT_1 = 711\n", "PARTICIPANT_1"),
+                                            ("TIME_SYSTEM = UTC\n", "TIME_SYSTEM")])
+def test_a_keyword_given_twice_in_one_block_is_refused_naming_both_lines(tmp_path, extra, keyword):
+    path = _tdm(tmp_path, extra)
+    first = 5 if keyword == "TIME_SYSTEM" else 6
+    with pytest.raises(MeasurementError, match=rf"{re.escape(str(path))}, line 9, field {keyword}: given again: "
+                                               rf"line {first} of this metadata block \(from line 4\) gives it already"):
+        read_observations(path, EPOCH)
+
