@@ -20,7 +20,8 @@ The format has no uncertainties: every observation gets the reader's ``sigma_arc
 1.0 arcsec) on the sky, i.e. on RA x cos(Dec) (sigma_arcsec / cos(Dec) on RA) and on Dec. Lines
 that are blank or start with ``#`` (not part of the format) are skipped. The writer writes the
 time to 1e-6 day, RA to 0.001 s and Dec to 0.01 arcsec; reading gives those rounded values
-back, and writing them again gives the same text.
+back, and writing them again gives the same text. It writes the designation (``meta["object"]``,
+else cis0001) in columns 6-12 and refuses one that does not fit them (over 7 characters) or is blank.
 """
 from __future__ import annotations
 
@@ -156,10 +157,27 @@ def _format(t: datetime, ra: float, dec: float, code: str, desig: str) -> str:
     dd, rem = divmod(dec_s, 3600)
     dm, dsec = divmod(rem, 60)
     sign = "-" if dec < 0 and dec_s > 0 else "+"
-    line = (f"{'':5}{desig[:7]:<7}  C{t.year:04d} {t.month:02d} {day:09.6f}"
+    line = (f"{'':5}{desig:<7}  C{t.year:04d} {t.month:02d} {day:09.6f}"
             f"{int(h):02d} {int(m):02d} {sec:06.3f}{sign}{int(dd):02d} {int(dm):02d} {dsec:05.2f}"
             f"{'':21}{code}")
     return line
+
+
+DESIGNATION_COLUMNS = 7
+"""Width of the designation the writer writes: columns 6-12, the provisional or temporary
+designation of the MPC format (columns 1-5 hold a packed number, which cistrack does not write)."""
+
+
+def _designation_problem(desig: str) -> str | None:
+    """Why the writer cannot write ``desig`` so that reading gives it back, or None."""
+    if not desig.strip():
+        return "is blank: an MPC observation must name its object"
+    if len(desig) > DESIGNATION_COLUMNS:
+        return (f"has {len(desig)} characters; the MPC designation field (columns 6-12) holds "
+                f"{DESIGNATION_COLUMNS} (write ADES .psv or .xml, which hold any designation)")
+    if desig != desig.strip() or not desig.isprintable():
+        return "has spaces at its ends or characters that are not printable"
+    return None
 
 
 class Mpc80Reader(SiteReader):
@@ -201,6 +219,9 @@ class Mpc80Reader(SiteReader):
         if bad:
             raise MeasurementError(f"{who}: sites {bad} are not 3-character MPC observatory codes")
         desig = str(ms.meta.get("object", "cis0001"))
+        problem = _designation_problem(desig)
+        if problem:
+            raise MeasurementError(f"{who}: designation {show_field(desig)} {problem}")
         out = [_format(tu_to_utc(ep, ms.times[k]), float(ms.values[k, 0]), float(ms.values[k, 1]),
                        str(ms.sites[k]), desig) for k in range(len(ms))]
         Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
