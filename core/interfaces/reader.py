@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import stat
 from abc import abstractmethod
 from datetime import datetime
@@ -18,7 +19,7 @@ from cistrack.interfaces.component import Component
 from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["Reader", "FieldError", "SeveralObjectsError", "show_field", "field_error", "read_text_lines",
-           "not_a_file"]
+           "split_lines", "not_a_file"]
 
 _SHOWN = 40
 
@@ -114,9 +115,28 @@ def not_a_file(path: str | PathLike) -> str | None:
     return f"is not a regular file: {kind}"
 
 
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
+def split_lines(text: str) -> list[str]:
+    """The lines of ``text``, split at line breaks only: LF, CR LF and CR (str.splitlines also
+    splits at form feeds, U+2028, U+0085, ..., which a comment may hold). A break at the end of
+    the text ends the last line (as splitlines: no empty line after it)."""
+    lines = _LINE_BREAK.split(text)
+    if lines[-1] == "":
+        lines.pop()
+    return lines
+
+
+def _line_of(text: str) -> int:
+    """The line (from 1) on which the end of ``text`` lies."""
+    return len(_LINE_BREAK.findall(text)) + 1
+
+
 def read_text_lines(path: str | PathLike) -> list[str]:
-    """The lines of a UTF-8 text file (a leading byte-order mark is dropped), with a
-    MeasurementError naming the file if it is not a regular file (:func:`not_a_file`) or unreadable."""
+    """The lines of a UTF-8 text file (a leading byte-order mark is dropped; lines end at LF, CR LF
+    or CR: :func:`split_lines`), with a MeasurementError naming the file if it is not a regular
+    file (:func:`not_a_file`) or unreadable."""
     p = Path(path)
     why = not_a_file(p)
     if why is not None:
@@ -128,9 +148,8 @@ def read_text_lines(path: str | PathLike) -> list[str]:
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        line = data[:exc.start].count(b"\n") + 1
+        line = _line_of(data[:exc.start].decode("utf-8-sig", errors="replace"))
         raise FieldError(p, line, "(encoding)", f"not UTF-8 text ({exc.reason})") from None
     if "\x00" in text:
-        line = text[:text.index("\x00")].count("\n") + 1
-        raise FieldError(p, line, "(encoding)", "contains a NUL byte: not a text file")
-    return text.splitlines()
+        raise FieldError(p, _line_of(text[:text.index("\x00")]), "(encoding)", "contains a NUL byte: not a text file")
+    return split_lines(text)

@@ -28,6 +28,7 @@ from cistrack.interfaces.component import check_range, check_sigma_arcsec, sigma
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Reader
+from cistrack.interfaces.reader import split_lines
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
@@ -62,7 +63,7 @@ def _parse_epoch(p: Path, epoch: str | datetime) -> datetime:
 def _data_lines(p: Path) -> list[tuple[int, str]]:
     """The file's non-blank, non-comment lines as (1-based line number, text)."""
     try:
-        lines = p.read_text(encoding="utf-8-sig").splitlines()  # a leading byte-order mark is dropped
+        lines = split_lines(p.read_text(encoding="utf-8-sig"))  # a leading byte-order mark is dropped
     except OSError as exc:
         raise MeasurementError(f"cannot read measurement file {p}: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:
