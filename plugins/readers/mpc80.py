@@ -18,7 +18,10 @@ One observation per 80-column line (columns counted from 1):
 
 The format has no uncertainties: every observation gets the reader's ``sigma_arcsec`` (default
 1.0 arcsec) on the sky, i.e. on RA x cos(Dec) (sigma_arcsec / cos(Dec) on RA) and on Dec. Lines
-that are blank or start with ``#`` (not part of the format) are skipped. The writer writes the
+that are blank or start with ``#`` (not part of the format) are skipped, and so are the lines of
+an MPC submission header (``COD 568``, ``OBS ...``, ``MEA``, ``TEL``, ``NET``, ``ACK``, ``AC2``,
+``CON``, ``COM``, ``BND``, ``NUM``: a keyword of three characters, then a space), which carry no
+observation. Spaces after column 80 (a line copied from a web page) are read past. The writer writes the
 time to 1e-6 day, RA to 0.001 s and Dec to 0.01 arcsec; reading gives those rounded values
 back, and writing them again gives the same text. It writes the designation (``meta["object"]``,
 else cis0001) in columns 6-12 and refuses one that does not fit them (over 7 characters) or is blank.
@@ -58,6 +61,16 @@ def _seconds(text: str, path, line: int, fieldname: str) -> Decimal:
     if not t or not all(c.isdigit() or c == "." for c in t) or t.count(".") > 1:
         raise FieldError(path, line, fieldname, f"{show_field(text)} is not a number of seconds")
     return Decimal(t)
+
+
+HEADER_KEYWORDS = ("COD", "CON", "OBS", "MEA", "TEL", "NET", "BND", "COM", "NUM", "ACK", "AC2")
+"""Keywords of the header of an MPC submission (``COD 568``, ``OBS J. Smith``, ...): lines that
+start with one and a space (or are the keyword alone) carry no observation and are skipped."""
+
+
+def is_header_line(text: str) -> bool:
+    """Whether ``text`` is a line of an MPC submission header (:data:`HEADER_KEYWORDS`)."""
+    return text[:3] in HEADER_KEYWORDS and text[3:4] in ("", " ")
 
 
 def _check_line(s: str, path, ln: int) -> None:
@@ -134,7 +147,7 @@ def _site_code(code: str, path, ln: int, explicit, table) -> str:
 
 
 def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
-    s = line_text.rstrip("\n")
+    s = line_text[:80] + line_text[80:].rstrip()  # spaces after column 80 (a copy from a web page) are not part of it
     _check_line(s, path, ln)
     t = _date(s[15:32], path, ln)
     ra = _ra(s[32:44], path, ln)
@@ -201,7 +214,7 @@ class Mpc80Reader(SiteReader):
         ep = parse_epoch(path, epoch)
         rows, table = [], {}
         for i, text in enumerate(read_text_lines(path), start=1):
-            if not text.strip() or text.startswith("#"):
+            if not text.strip() or text.startswith("#") or is_header_line(text):
                 continue
             rows.append(_parse(text, path, i, self._sites, table))
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "mpc80"}, self.designation)
