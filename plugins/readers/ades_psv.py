@@ -16,7 +16,8 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
-from .ades_records import POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped
+from .ades_records import (POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped,
+                           say_tiny_sigmas)
 from .obs_rows import build_set, parse_epoch
 from .site_params import SiteReader
 
@@ -91,6 +92,7 @@ class AdesPsvReader(SiteReader):
             raise FieldError(path, max(1, len(lines)), "(header)", "no ADES PSV field-name line "
                                                                   "(obsTime|ra|dec|stn|...) found")
         say_skipped(path, {"mode RAD": radar} if radar else {}, bool(rows))
+        say_tiny_sigmas(path, rows)
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-psv"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:

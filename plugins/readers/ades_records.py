@@ -7,7 +7,8 @@ obsTime     UTC, ISO-8601 ending in Z (required; a time without the Z, or with a
             is refused, and so is a leap second, 23:59:60)
 ra, dec     topocentric astrometric RA and Dec, decimal degrees (required)
 rmsRA       RA uncertainty x cos(dec), arcsec (optional; else the reader's ``sigma_arcsec``)
-rmsDec      Dec uncertainty, arcsec (optional)
+rmsDec      Dec uncertainty, arcsec (optional). Values below 1 milliarcsecond are used with a
+            warning asking whether they are degrees (:func:`say_tiny_sigmas`)
 stn         MPC observatory code (required); sites outside the bundled table come from the
             reader's ``sites`` parameter or from sys = WGS84 (ctr = 399, the Earth, or absent)
             with pos1 (East longitude, deg), pos2 (latitude, deg), pos3 (height, m). A position
@@ -37,14 +38,14 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.component import sigma_arcsec_problem
 from cistrack.interfaces.reader import FieldError, show_field
 from cistrack.astro.sites import Site, observatory
-from cistrack.units import format_utc, tu_to_utc
+from cistrack.units import ARCSEC_RAD, format_utc, tu_to_utc
 
 from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, parse_iso_utc
 from .site_params import place_text, replaced_code, resolve_site
 
 __all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "OPTICAL_MODES", "is_radar",
-           "say_skipped"]
+           "say_skipped", "say_tiny_sigmas", "SMALLEST_PLAUSIBLE_ARCSEC"]
 
 WRITE_FIELDS = ("trkSub", "mode", "stn", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "astCat")
 POS_FIELDS = ("sys", "ctr", "pos1", "pos2", "pos3")
@@ -209,6 +210,35 @@ def say_skipped(path, skipped: dict[str, int], any_optical: bool) -> None:
                                                     "reads optical astrometry (RA/Dec) only")
     logging.getLogger("cistrack.readers").warning(f"{path}: {what} records are not read (cistrack reads optical "
                                                   "astrometry only)")
+
+
+SMALLEST_PLAUSIBLE_ARCSEC = 0.001
+"""The smallest stated angle uncertainty (arcsec, 1 milliarcsecond) taken without a warning: no
+astrometry, from the ground or from space, is finer; one below it is most likely in degrees."""
+
+
+def _stated_arcsec(row: ObsRow) -> dict[str, float]:
+    """The uncertainties a row states, by ADES field, arcsec (rmsRA on RA x cos(Dec))."""
+    out = {}
+    if row.sigma_a is not None:
+        out["rmsRA"] = row.sigma_a * math.cos(row.b) / ARCSEC_RAD
+    if row.sigma_b is not None:
+        out["rmsDec"] = row.sigma_b / ARCSEC_RAD
+    return out
+
+
+def say_tiny_sigmas(path, rows: list[ObsRow]) -> None:
+    """Warn (logger ``cistrack.readers``, once per field and file) of rmsRA or rmsDec values below
+    :data:`SMALLEST_PLAUSIBLE_ARCSEC`: arcseconds by the standard, but likely degrees by mistake
+    (weights some 3600 times too tight make a fit fail far from the data). They are used as given."""
+    for name in ("rmsRA", "rmsDec"):
+        tiny = [(r.line, v) for r in rows for f, v in _stated_arcsec(r).items() if f == name
+                and v < SMALLEST_PLAUSIBLE_ARCSEC]
+        if tiny:
+            logging.getLogger("cistrack.readers").warning(
+                f"{path}, line {tiny[0][0]}: field {name}: {len(tiny)} observations state an uncertainty below 1 "
+                f"milliarcsecond (this one {tiny[0][1]:.3g} arcsec); ADES {name} is in arcseconds: are these "
+                "degrees? They are used as given")
 
 
 def _check_optical(rec, path, line: int) -> None:

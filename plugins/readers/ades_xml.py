@@ -14,7 +14,8 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines
 
-from .ades_records import POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped
+from .ades_records import (POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped,
+                           say_tiny_sigmas)
 from .obs_rows import build_set, parse_epoch
 from .site_params import SiteReader
 
@@ -128,6 +129,7 @@ class AdesXmlReader(SiteReader):
                 continue
             rows.append(record_to_row(rec, path, line, self._sites, table))
         say_skipped(path, skipped, bool(rows))
+        say_tiny_sigmas(path, rows)
         return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"}, self.designation)
 
     def write(self, path, measurements, epoch) -> None:
