@@ -2,7 +2,7 @@
 
 Each file is read by the registered reader its name's suffix names (``.psv``, ``.xml``, ``.tdm``,
 ...); a file whose suffix no reader claims is offered to every registered reader in turn and taken by the
-first that reads it. A file naming several objects (ADES permID / provID / trkSub, the MPC 80-column
+first that reads it. A file naming several objects (ADES permID / provID / artSat / trkSub, the MPC 80-column
 designation, TDM ``PARTICIPANT_2``) is read once per object. The sets of one object from all the
 files are merged in time order, each observation keeping its site. An observation given in two
 files (the same site and type, times within the coarser file's time resolution: its format's,

@@ -21,7 +21,7 @@ mode        optional, written "CCD"; radar records (RAD) are left out with a war
             XML reader leaves out ``<radar>`` elements (a file of nothing else is refused); a
             mode not among those of optical astrometry (:data:`OPTICAL_MODES`) is read with a warning
 rmsCorr     optional correlation of the RA and Dec errors: refused outside [-1, 1], else not used
-permID / provID / trkSub   the object (one of them required)
+permID / provID / artSat / trkSub   the object (one of them required; artSat: an artificial satellite)
 ==========  ===================================================================================
 
 Other ADES fields (astCat, mag, band, notes, ...) are accepted and ignored; the writer writes
@@ -49,7 +49,9 @@ __all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "O
 
 WRITE_FIELDS = ("trkSub", "mode", "stn", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "astCat")
 POS_FIELDS = ("sys", "ctr", "pos1", "pos2", "pos3")
-_ID_FIELDS = ("permID", "provID", "trkSub")
+_ID_FIELDS = ("permID", "provID", "artSat", "trkSub")
+"""The fields naming the object, in the order one is taken when several are given (ADES 2022:
+permID with or without provID, provID, or artSat; trkSub beside any of them or alone)."""
 ROVING_CODES = ("247", "270")
 """MPC codes of roving observers: each position given under them is a site of its own."""
 
@@ -266,7 +268,7 @@ def _check_optical(rec, path, line: int) -> None:
 def record_to_row(rec: dict, path, line: int, explicit: dict[str, Site], table: dict[str, Site]) -> ObsRow:
     """One ADES optical record -> ObsRow (RA/Dec in rad); FieldError naming line and field."""
     if not any(rec.get(f, ("", 0))[0].strip() for f in _ID_FIELDS):
-        raise FieldError(path, line, "permID/provID/trkSub", "the observation names no object")
+        raise FieldError(path, line, "permID/provID/artSat/trkSub", "the observation names no object")
     _check_optical(rec, path, line)
     text, tln = _get(rec, "obsTime", path, line)
     try:

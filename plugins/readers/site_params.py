@@ -126,7 +126,7 @@ class SiteReader(Reader):
         {longitude_deg, rho_cos_phi, rho_sin_phi[, name]} (MPC parallax constants, degrees and
         Earth equatorial radii).
     designation : str or None
-        Read only the observations of this object (permID / provID / trkSub, MPC designation,
+        Read only the observations of this object (permID / provID / artSat / trkSub, MPC designation,
         TDM PARTICIPANT_2); None: all, refused when the file names several objects.
     """
 

@@ -36,7 +36,7 @@ PSV_CASES = [
     ("rmsDec below a micro-arcsecond", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1e-30|Gaia3"), 4, "rmsDec"),
     ("unknown station", psv("SECRETX|CCD|Q9Z|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "stn"),
     ("too few fields", psv("SECRETX|CCD|705|2026-03-01T02:00:00Z|10|5|1.0"), 4, "(field count)"),
-    ("no object", psv("|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "permID/provID/trkSub"),
+    ("no object", psv("|CCD|705|2026-03-01T02:00:00Z|10|5|1.0|1.0|Gaia3"), 4, "permID/provID/artSat/trkSub"),
     ("repeated time and site", psv("SECRETX|CCD|705|2026-03-01T01:00:00.000000Z|10|5|1.0|1.0|Gaia3"), 4, "obsTime"),
     ("header lacks dec", "# version=2022\ntrkSub|stn|obsTime|ra\n", 2, "dec"),
     ("unknown version", "# version=banana\ntrkSub|mode|stn|obsTime|ra|dec\n", 1, "version"),
