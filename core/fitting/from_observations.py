@@ -55,7 +55,7 @@ from cistrack.fitting.maneuver_search import add_maneuvers
 from cistrack.fitting.arcs import ArcSettings, arc_settings
 from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
                                             write_merged)
-from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.options import FitOptions, fit_option_problem
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
@@ -140,10 +140,11 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     if unknown:
         raise ConfigError(f"--set fit.{unknown[0]}: unknown fit setting; known: epoch, prior, lov, filter_span, arcs, arc_gap_days, link_gap_days, "
                           + ", ".join(sorted(known)))
-    try:
-        return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs, span)
-    except (TypeError, ValueError, CistrackError) as exc:
-        raise ConfigError(f"--set fit.*: {exc}") from None
+    for key, value in opts.items():
+        why = fit_option_problem(key, value)
+        if why:
+            raise ConfigError(f"--set fit.{key}={value!r}: {why}")
+    return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs, span)
 
 
 @dataclass

@@ -1,14 +1,16 @@
 """Settings of the least-squares fit."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+import numbers
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from cistrack.errors import ParameterError
 
-__all__ = ["FitOptions", "AREA_TO_MASS", "AREA_TO_MASS_MODES"]
+__all__ = ["FitOptions", "fit_option_problem", "AREA_TO_MASS", "AREA_TO_MASS_MODES"]
 
 AREA_TO_MASS = "area_to_mass_m2_kg"
 """The dynamics parameter the ``area_to_mass`` option estimates: C_R A/m, m^2/kg."""
@@ -92,29 +94,69 @@ class FitOptions:
     area_to_mass: str = "off"
 
     def __post_init__(self) -> None:
-        def bad(name: str, why: str) -> None:
-            raise ParameterError(f"fit option {name}={getattr(self, name)!r}: {why}")
+        for f in fields(self):
+            why = fit_option_problem(f.name, getattr(self, f.name))
+            if why:
+                raise ParameterError(f"fit option {f.name} = {getattr(self, f.name)!r}: {why}")
 
-        for name in ("max_iterations", "max_passes"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                bad(name, "must be an integer >= 1")
-        for name in ("step_tolerance", "rms_tolerance", "stall_step", "damping", "max_damping",
-                     "reject_sigma", "max_condition", "max_weak_sigma_km", "max_rms"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
-                bad(name, "must be a finite number > 0")
-        if not (np.isfinite(self.damping_factor) and self.damping_factor > 1):
-            bad("damping_factor", "must be a finite number > 1")
-        if not 0 <= self.max_reject_fraction < 1:
-            bad("max_reject_fraction", "must lie in [0, 1)")
-        for name in ("reject_outliers", "robust_threshold", "use_range"):
-            if not isinstance(getattr(self, name), bool):
-                bad(name, "must be true or false")
-        if self.area_to_mass not in AREA_TO_MASS_MODES:
-            bad("area_to_mass", "must be one of " + ", ".join(AREA_TO_MASS_MODES)
-                + " (estimate the radiation pressure's area-to-mass ratio: never, always, where the arc supports it)")
-        if self.sensor_steps is not None:
-            s = np.asarray(self.sensor_steps, dtype=float).reshape(-1)
-            if s.shape != (6,) or not np.all(np.isfinite(s) & (s > 0)):
-                bad("sensor_steps", "must be 6 positive numbers (LU, VU)")
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+
+
+def _finite(v: Any) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer too large for a float
+        return False
+
+
+def _count(v: Any) -> str | None:
+    ok = isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_)) and v >= 1
+    return None if ok else "must be an integer >= 1"
+
+
+def _positive(v: Any) -> str | None:
+    return None if _is_number(v) and _finite(v) and v > 0 else "must be a finite number > 0"
+
+
+def _growth(v: Any) -> str | None:
+    return None if _is_number(v) and _finite(v) and v > 1 else "must be a finite number > 1"
+
+
+def _fraction(v: Any) -> str | None:
+    return None if _is_number(v) and 0 <= v < 1 else "must be a number in [0, 1)"
+
+
+def _switch(v: Any) -> str | None:
+    return None if isinstance(v, bool) else "must be true or false"
+
+
+def _mode(v: Any) -> str | None:
+    if isinstance(v, str) and v in AREA_TO_MASS_MODES:
+        return None
+    return ("must be one of " + ", ".join(AREA_TO_MASS_MODES)
+            + " (estimate the radiation pressure's area-to-mass ratio: never, always, where the arc supports it)")
+
+
+def _steps(v: Any) -> str | None:
+    if v is None:
+        return None
+    seq = isinstance(v, (list, tuple)) or (isinstance(v, np.ndarray) and v.ndim == 1)
+    ok = seq and len(v) == 6 and all(_is_number(x) and _finite(x) and x > 0 for x in v)
+    return None if ok else "must be 6 positive numbers (LU, VU)"
+
+
+_CHECKS = {
+    "max_iterations": _count, "max_passes": _count, "step_tolerance": _positive, "rms_tolerance": _positive,
+    "stall_step": _positive, "damping": _positive, "max_damping": _positive, "reject_sigma": _positive,
+    "max_condition": _positive, "max_weak_sigma_km": _positive, "max_rms": _positive,
+    "damping_factor": _growth, "max_reject_fraction": _fraction, "reject_outliers": _switch,
+    "robust_threshold": _switch, "use_range": _switch, "area_to_mass": _mode, "sensor_steps": _steps,
+}
+
+
+def fit_option_problem(name: str, value: Any) -> str | None:
+    """What is wrong with ``value`` for the :class:`FitOptions` field ``name`` ("must be ...", its
+    type checked before its range), or None when it is admissible."""
+    return _CHECKS[name](value)
