@@ -4,7 +4,9 @@ One segment: the run's estimate at every step (moment-matched mean of the filter
 km and km/s), with a covariance block (km^2, km^2/s, km^2/s^2; the lower triangle) at every
 epoch. ``TIME_SYSTEM = UTC``; ``CENTER_NAME`` and ``REF_FRAME`` come from the run's inertial
 frame; a frame that is not CCSDS-registered is named and described in a COMMENT line, and
-``meta["comments"]`` (e.g. that the run did not finish) are COMMENT lines of the header.
+``meta["comments"]`` (e.g. that the run did not finish) are COMMENT lines of the header; a comment
+longer than a KVN line (254 characters) goes on over several, and a longer keyword line (an
+OBJECT_NAME of more than 240 characters) is refused.
 Numbers are written with the shortest text that reads back to the same double. Steps at the
 same epoch (an update right after a prediction) keep the last one. ``meta["interpolation"]`` and
 ``meta["interpolation_degree"]`` (a fitted orbit on a regular grid) add the INTERPOLATION keywords,
@@ -21,7 +23,7 @@ from cistrack.errors import CistrackError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Exporter
 
-from .ccsds_text import ccsds_epoch, comment_lines, lower_triangle, num
+from .ccsds_text import comment, kvn_text, ccsds_epoch, comment_lines, lower_triangle, num
 
 __all__ = ["OemExporter"]
 
@@ -48,7 +50,7 @@ class OemExporter(Exporter):
         out = ["CCSDS_OEM_VERS = 2.0", *comment_lines(meta), f"CREATION_DATE = {now}",
                f"ORIGINATOR = {meta.get('originator', 'cistrack')}", "", "META_START"]
         if not est.frame.ccsds:
-            out.append(f"COMMENT REF_FRAME {est.frame.name}: {est.frame.description}")
+            out += comment(f"REF_FRAME {est.frame.name}: {est.frame.description}")
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",
                 f"OBJECT_ID = {meta.get('object_id', 'cistrack-target')}",
                 f"CENTER_NAME = {est.frame.center}", f"REF_FRAME = {est.frame.name}", "TIME_SYSTEM = UTC",
@@ -57,8 +59,7 @@ class OemExporter(Exporter):
             out += [f"INTERPOLATION = {meta['interpolation']}",
                     f"INTERPOLATION_DEGREE = {int(meta.get('interpolation_degree', 7))}"]
         out += ["META_STOP", ""]
-        out.append("COMMENT " + str(meta.get("data_comment") or "moment-matched mean of the filter's belief at each "
-                                                                 "step, km and km/s"))
+        out += comment(meta.get("data_comment") or "moment-matched mean of the filter's belief at each step, km and km/s")
         for e, k in zip(epochs, idx):
             out.append(" ".join([e] + [num(v) for v in est.state_km[k]]))
         out += ["", "COVARIANCE_START"]
@@ -66,7 +67,7 @@ class OemExporter(Exporter):
             out.append(f"EPOCH = {e}")
             out += [" ".join(num(v) for v in row) for row in lower_triangle(est.covariance_km[k])]
         out.append("COVARIANCE_STOP")
-        Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
+        Path(path).write_text(kvn_text("oem", out), encoding="utf-8")
 
 
 @hookimpl

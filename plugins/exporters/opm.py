@@ -16,7 +16,7 @@ from cistrack.errors import CistrackError
 from cistrack.api import hookimpl
 from cistrack.interfaces import Exporter
 
-from .ccsds_text import COV_KEYS, ccsds_epoch, comment_lines, num
+from .ccsds_text import comment, kvn_text, COV_KEYS, ccsds_epoch, comment_lines, num
 
 __all__ = ["OpmExporter", "read_opm"]
 
@@ -53,12 +53,12 @@ class OpmExporter(Exporter):
         out = ["CCSDS_OPM_VERS = 2.0", *comment_lines(meta), f"CREATION_DATE = {now}",
                f"ORIGINATOR = {meta.get('originator', 'cistrack')}", ""]
         if not est.frame.ccsds:
-            out.append(f"COMMENT REF_FRAME {est.frame.name}: {est.frame.description}")
+            out += comment(f"REF_FRAME {est.frame.name}: {est.frame.description}")
         out += [f"OBJECT_NAME = {meta.get('object_name', 'cistrack-target')}",
                 f"OBJECT_ID = {meta.get('object_id', 'cistrack-target')}",
                 f"CENTER_NAME = {est.frame.center}", f"REF_FRAME = {est.frame.name}", "TIME_SYSTEM = UTC", "",
-                "COMMENT " + str(meta.get("data_comment")
-                                 or f"moment-matched mean of the filter's belief at step {int(est.step[k])}, km and km/s"),
+                *comment(meta.get("data_comment")
+                         or f"moment-matched mean of the filter's belief at step {int(est.step[k])}, km and km/s"),
                 f"EPOCH = {ccsds_epoch(est.utc[k])}"]
         out += [f"{key} = {num(v)}" for key, v in zip(_STATE_KEYS, est.state_km[k])]
         out.append("")
@@ -68,7 +68,7 @@ class OpmExporter(Exporter):
         user = meta.get("user_defined") or {}
         if user:  # CCSDS OPM's user-defined parameters, e.g. a fitted area-to-mass ratio
             out += ["", *(f"USER_DEFINED_{k} = {num(v)}" for k, v in user.items())]
-        Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
+        Path(path).write_text(kvn_text("opm", out), encoding="utf-8")
 
 
 def read_opm(path) -> dict:

@@ -181,3 +181,26 @@ def test_covariances_kept_linear_are_counted_and_dated_in_a_warning(fit_dir, tmp
     n = len(list(_read(d / "estimate.oem").states))
     assert f"COMMENT WARNING: {n} of {n} covariances, between " in text
     assert "are propagated linearly" in text
+
+
+def test_a_forced_export_of_a_fit_from_many_sites_keeps_every_line_within_254_characters(fit_dir, tmp_path):
+    d = tmp_path / "many-sites"
+    shutil.copytree(fit_dir, d)
+    rec = json.loads((d / "fit.json").read_text())
+    rec["converged"] = False
+    rec["arc"]["sites"] = [f"S{k:02d}" for k in range(60)]
+    (d / "fit.json").write_text(json.dumps(rec))
+    lines = export_fit(d, "oem", force=True).read_text().splitlines()
+    assert max(map(len, lines)) <= 254 and len(list(_read(d / "estimate.oem").states)) > 1
+    assert any(line.startswith("COMMENT WARNING: exported with --force") for line in lines)
+
+
+def test_a_designation_too_long_for_the_object_name_line_is_refused_naming_the_keyword(fit_dir, tmp_path):
+    d = tmp_path / "long-name"
+    shutil.copytree(fit_dir, d)
+    rec = json.loads((d / "fit.json").read_text())
+    rec["designation"] = "x" * 300
+    (d / "fit.json").write_text(json.dumps(rec))
+    with pytest.raises(CistrackError, match="OBJECT_NAME 'xxx.*' has 300 characters; .* at most 254"):
+        export_fit(d, "oem")
+    assert not (d / "estimate.oem").exists()
