@@ -15,6 +15,7 @@ import argparse
 import contextlib
 import os
 
+from cistrack.cli.text_width import wrap_lines
 from cistrack.fitting.fit_summary import summary_lines
 from cistrack.runs.progress import eprint as _eprint
 
@@ -48,14 +49,14 @@ def cmd_fit(args) -> int:
 
     check_environment()  # before the fit's directory is made
     quiet = bool(args.quiet)
-    say = None if quiet else (lambda m: _eprint(f"  {m}"))
+    say = None if quiet else (lambda m: _eprint(wrap_lines(f"  {m}")))
     with _file_size_limit(getattr(args, "max_file_mb", None)):
         results = fit_files(args.files, out=args.out, settings=args.set, registry=default_registry(), log=say,
                             progress=not quiet, overwrite=args.overwrite)
     if not quiet:
         for one in results:
             for note in one.notes:
-                print(f"  weights: {note}")
+                print(wrap_lines(f"  weights: {note}"))
             for line in summary_lines(one):
                 print(line)
             if one.ok:

@@ -99,7 +99,7 @@ def summary_lines(one) -> list[str]:
     r = one.result
     if r is None:
         lines.append("  no orbit: see docs/real-data.md, 'When a fit fails'")
-        return lines
+        return _wrapped(lines)
     ms = one.run.context.measurements
     epoch = units.format_utc(units.tu_to_utc(one.scenario.epoch, r.epoch))[:19] + "Z"
     if one.start:
