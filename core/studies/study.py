@@ -19,8 +19,9 @@ combination is validated before any run. A swept run's scenario label, hence its
 group, names the combination: ``example-1-burn[dv=0.3,resp=inflate]`` (:func:`sweep_label`). A
 scenario entry given as a table ``{name = "example-1", sweep = false}`` is not swept (``sweep =
 ["maneuvers.response"]``: only those settings); a setting that does not apply to a scenario it is
-swept over is refused, naming the study file, the key and the scenario. A study without a sweep
-names its runs as before.
+swept over is refused, naming the study file, the key and the scenario, and an invalid value of one
+that does apply naming the setting, the value and why. A study without a sweep names its runs as
+before.
 
 Each run is written to ``<out>/runs/<run id>/`` as it finishes (see :mod:`cistrack.results.store`);
 running the study again runs only what is missing (reports: :mod:`cistrack.studies.report`). Runs are pure functions of (scenario, seed):
@@ -309,14 +310,14 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entr
     try:
         return base.with_overrides(ov, reg)
     except ConfigError as exc:
-        from cistrack.studies.study_file import overrides_error, variant_error
+        from cistrack.studies.study_file import overrides_error, sweep_error, variant_error
 
-        msg = (overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source)
+        swept = sweep_error(str(exc), grid.study, combo, base.name, base.source)
+        msg = (swept or overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source)
                or variant_error(str(exc), grid.study, entries or {}, base.name, base.source) or str(exc))
-        if combo:
+        if combo and not swept:
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
-                    f"{base.name!r}; where a setting does not apply to a scenario, give the entry as a table "
-                    f"{{name = \"{base.name}\", sweep = false}} or sweep = [the settings that apply])")
+                    f"{base.name!r})")
         if grid.extra:
             msg += f" (with {' '.join('--set ' + i for i in grid.settings)})"
         if msg == str(exc):

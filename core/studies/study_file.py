@@ -20,7 +20,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS", "study_sweep",
-           "scenario_entry", "overrides_error", "variant_error"]
+           "scenario_entry", "overrides_error", "variant_error", "sweep_error"]
 
 STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides",
               "sweep"}
@@ -241,10 +241,9 @@ def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: in
     return list(range(first, first + count))
 
 
-def _blamed_settings(message: str, overrides: dict) -> list[tuple[str, object]]:
-    """The settings of ``overrides`` (dotted key, value) that a scenario error ``message``
-    (``"<file>: top level: ..."`` or ``"<file>: [table]: ..."``) is about; [] for none."""
-    settings = _flat(overrides)
+def _blamed_settings(message: str, settings: list[tuple[str, object]]) -> list[tuple[str, object]]:
+    """The ``settings`` (dotted key, value) that a scenario error ``message`` (``"<file>: top
+    level: ..."`` or ``"<file>: [table]: ..."``) is about; [] for none."""
     top = [(k, v) for k, v in settings if "." not in k and f"'{k}'" in message]
     if ": top level: " in message:
         return top
@@ -267,7 +266,7 @@ def overrides_error(message: str, study: Path, overrides: dict, scenario_name: s
     """A scenario's error under the study's ``[overrides]`` told against the study file: the file,
     the key ``overrides``, the setting(s) and the scenario they were applied to; None when the
     error is about none of the overrides (the scenario's own file, a variant, a sweep, --set)."""
-    blamed = _blamed_settings(message, overrides or {})
+    blamed = _blamed_settings(message, _flat(overrides or {}))
     if not blamed:
         return None
     rest = _without_source(message, scenario_source)
@@ -288,3 +287,42 @@ def variant_error(message: str, study: Path, entries: dict, scenario_name: str,
             return (f"{study}: key '{key}', entry {entry!r} (applied to scenario {scenario_name!r}, "
                     f"{scenario_source}): {rest}")
     return None
+
+
+def _named_setting(message: str, combo: tuple) -> tuple[str, Any] | None:
+    """The setting of the sweep combination ``combo`` that a scenario error ``message`` names (its
+    last part quoted in its table, or at the top level), or one under a table the error says lacks
+    its component's name (a table the sweep made); None for none."""
+    blamed = _blamed_settings(message, list(combo))
+    named = [(k, v) for k, v in blamed if f"'{k.rsplit('.', 1)[-1]}'" in message]
+    if named:
+        return named[0]
+    made = [(k, v) for k, v in blamed if f": [{k.rsplit('.', 1)[0]}]: missing key 'name'" in message]
+    return made[0] if made else None
+
+
+def _unknown_setting(rest: str, key: str) -> bool:
+    """Whether a scenario error (``rest``) about the swept ``key`` says the scenario does not know it."""
+    last = key.rsplit(".", 1)[-1]
+    return (f"unknown key '{last}'" in rest or f"unknown parameter '{last}'" in rest
+            or f"[{key.rsplit('.', 1)[0]}]: missing key 'name'" in rest)
+
+
+def sweep_error(message: str, study: Path, combo: tuple, scenario_name: str,
+                scenario_source: str | Path) -> str | None:
+    """A scenario's error about a setting of the sweep combination ``combo`` (pairs of dotted
+    setting and value) told against the study file: the key ``sweep``, the setting and its value
+    with why it is refused; where the scenario does not know the setting, that it does not apply
+    there and how to leave the scenario out of it. None when the error names none of the settings."""
+    hit = _named_setting(message, combo)
+    if hit is None:
+        return None
+    key, value = hit
+    rest = _without_source(message, scenario_source)
+    where = f"{study}: key 'sweep', setting {key!r}"
+    if _unknown_setting(rest, key):
+        return (f"{where} does not apply to scenario {scenario_name!r} ({scenario_source}: {rest}); give its "
+                f"entry as a table {{name = \"{scenario_name}\", sweep = false}} or sweep = [the settings that apply]")
+    marker = f"'{key.rsplit('.', 1)[-1]}' = {value!r}"
+    why = rest.split(marker, 1)[1].strip().removeprefix("is invalid:").strip() if marker in rest else rest
+    return f"{where}: value {value!r} is invalid: {why} (scenario {scenario_name!r}, {scenario_source})"
