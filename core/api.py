@@ -360,7 +360,10 @@ def read_run(directory: str | Path) -> Run:
                           "it wrote one); the steps it wrote stay readable with "
                           "cistrack.results.store.read_steps(DIRECTORY), and 'cistrack export --force' exports its "
                           "last estimate")
-    return Run(RunSummary.from_dict(summary), d)
+    try:
+        return Run(RunSummary.from_dict(summary), d)
+    except ValueError as exc:  # a damaged summary: no run_id, a seed that is not a number
+        raise ConfigError(f"{d}/manifest.json: {exc}; not a manifest cistrack wrote") from None
 
 
 @dataclass(frozen=True)

@@ -107,7 +107,9 @@ class RunSummary:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "RunSummary":
-        """Inverse of :meth:`to_dict`; also reads summaries written before ``verdict`` existed."""
+        """Inverse of :meth:`to_dict`; also reads summaries written before ``verdict`` existed.
+        ValueError saying what is missing when ``data`` is not a run summary (a damaged manifest)."""
+        _check_summary(data)
         if "verdict" in data and isinstance(data["verdict"], dict):
             verdict = Verdict.from_dict(data["verdict"])
         elif data.get("custody_kept", True):
@@ -122,6 +124,18 @@ class RunSummary:
         has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
         return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
                    **{k: data[k] for k in names if k in data})
+
+
+def _check_summary(data: Any) -> None:
+    """ValueError unless ``data`` is a run summary: a JSON object with a text ``run_id`` and an
+    integer ``seed``."""
+    if not isinstance(data, dict):
+        raise ValueError(f"not a run summary (a JSON {type(data).__name__}, not an object)")
+    if not isinstance(data.get("run_id"), str):
+        raise ValueError(f"not a run summary: its 'run_id' is {data.get('run_id')!r}, not a text")
+    seed = data.get("seed")
+    if not isinstance(seed, int) or isinstance(seed, bool):
+        raise ValueError(f"not a run summary: its 'seed' is {seed!r}, not an integer")
 
 
 def summarize(run, rows: list[dict[str, Any]], verdict: Verdict, status: str, failure: str,

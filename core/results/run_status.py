@@ -40,7 +40,8 @@ def run_status(directory: str | Path) -> tuple[str, str]:
     "running" by a process that is gone is ("interrupted", "interrupted (process gone: ...)")."""
     man = read_manifest(directory)
     status = str(man.get("status", "unknown"))
-    reason = str((man.get("summary") or {}).get("failure", "") or "")
+    summary = man.get("summary")
+    reason = str(summary.get("failure", "") or "") if isinstance(summary, dict) else ""
     proc = man.get("process")
     if status == "running" and process_gone(proc):
         return "interrupted", (f"interrupted (process gone: pid {proc['pid']} on {proc['host']} ended without "
