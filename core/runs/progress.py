@@ -13,7 +13,24 @@ from typing import Callable
 from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
 
-__all__ = ["ProgressBar", "eprint", "stage_log"]
+__all__ = ["ProgressBar", "eprint", "stage_log", "bar_columns", "BAR_MAX_COLUMNS"]
+
+BAR_MAX_COLUMNS = 120
+"""The widest a progress bar is drawn (the command line's output width), narrower on a narrower
+terminal."""
+
+
+def bar_columns() -> int:
+    """Columns for a progress bar: the width of the terminal stderr is, at most
+    :data:`BAR_MAX_COLUMNS` (and that when stderr is not a terminal: a file or a CI log)."""
+    import os
+
+    try:
+        if sys.stderr is not None and sys.stderr.isatty():
+            return max(20, min(BAR_MAX_COLUMNS, os.get_terminal_size(sys.stderr.fileno()).columns))
+    except (OSError, ValueError, AttributeError):  # no file number (a notebook), or not a terminal after all
+        pass
+    return BAR_MAX_COLUMNS
 
 
 def eprint(*parts: object) -> None:
@@ -57,6 +74,7 @@ class ProgressBar:
         # redraw is kept, at most every 10 s (and once at the end)
         interactive = getattr(sys.stderr, "isatty", lambda: False)()
         self.bar = tqdm(total=total, desc=run_id, unit="step", leave=True, mininterval=0.1 if interactive else 10.0,
+                        ncols=bar_columns(),
                         disable=sys.stderr is None)  # stderr closed (2>&-): no bar, the run goes on
 
     def _advance(self, step) -> None:

@@ -489,7 +489,10 @@ def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, s
     bar = None
     if opts.progress and todo:
         from tqdm.auto import tqdm
-        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run", disable=sys.stderr is None)  # 2>&-: no bar
+
+        from cistrack.runs.progress import bar_columns
+        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run", ncols=bar_columns(),
+                   disable=sys.stderr is None)  # 2>&-: no bar
     said: dict[str, str] = {}
     ended = False
     try:

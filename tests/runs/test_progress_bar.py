@@ -31,3 +31,18 @@ def test_a_stage_line_said_while_the_bar_is_shown_starts_a_line_of_its_own(monke
     bar.bar.close()
     lines = err.getvalue().replace("\r", "\n").split("\n")
     assert "  maneuver detected at 2.000 d" in lines
+
+
+def test_the_bar_of_a_run_with_a_long_name_stays_within_120_columns(monkeypatch):
+    import io
+
+    from cistrack.runs.progress import ProgressBar
+
+    err = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", err)
+    bar = ProgressBar("example-1-burn__pgm__uniform-range-velocity-bound__seed123456__with-a-long-tail", 40)
+    bar.bar.set_postfix_str("t=3.62 d H=-21.4 custody LOST")
+    bar.bar.update(7)
+    bar.bar.close()
+    draws = [d for d in err.getvalue().replace("\r", "\n").split("\n") if d]
+    assert draws and max(len(d) for d in draws) <= 120
