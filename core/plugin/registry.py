@@ -29,6 +29,7 @@ __all__ = ["Registration", "PluginFailure", "Registry", "default_registry", "loa
 ENTRY_POINT_GROUP = "cistrack"
 AUTOLOAD_ENV = "CISTRACK_DISABLE_PLUGIN_AUTOLOAD"
 BUILTIN_DISTRIBUTION = "cistrack"
+_HOOK_NAMES = tuple(n for n in vars(hookspecs.CistrackSpecs) if n.startswith("cistrack_"))
 
 
 @dataclass(frozen=True)
@@ -95,9 +96,8 @@ class Registry:
         """Register ``factory`` under ``kind``/``name``; a duplicate name names both sources."""
         if kind not in self._entries:
             raise ParameterError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
-        if not isinstance(name, str) or not name:
-            raise ParameterError(f"component names must be non-empty strings, got {name!r}")
         reg = Registration(kind, name, factory, distribution, version, entry_point)
+        _check_registration(reg)
         old = self._entries[kind].get(name)
         if old is not None:
             raise DuplicateComponentError(
@@ -124,6 +124,7 @@ class Registry:
             try:
                 module = ep.load()
                 pm.register(module, name=f"{dist}:{ep.name}")
+                _require_marked_hooks(pm, module)
                 impls = [i for i in pm.hook.cistrack_register.get_hookimpls() if i.plugin is module]
                 for impl in impls:
                     impl.function(registry=bound)
@@ -192,10 +193,51 @@ class Registry:
             raise UnknownComponentError(f"unknown component kind {kind!r}; kinds are: {', '.join(KINDS)}")
 
 
+def _check_registration(reg: Registration) -> None:
+    """Refuse (ParameterError naming the plugin, the kind and the name) a name that is not a
+    non-empty string free of whitespace and control characters (a scenario names it in a TOML
+    value, a person in a command), and a factory that is not a class for any kind but ``orbit``
+    (whose components are objects): an instance would be shared by every run in the process."""
+    who = f"plugin {reg.distribution}{' ' + reg.version if reg.version else ''} (entry point '{reg.entry_point}')"
+    name = reg.name
+    if not isinstance(name, str) or not name or any(c.isspace() or not c.isprintable() for c in name):
+        raise ParameterError(f"{who}: {reg.kind} name {name!r} is not allowed: a component name is a non-empty "
+                             "string without whitespace or control characters (e.g. 'my-filter')")
+    if reg.kind != "orbit" and not isinstance(reg.factory, type):
+        raise ParameterError(f"{who}: {reg.kind} {name!r} must be registered as a class (the component's class, "
+                             f"built by the registry for each run), got {type(reg.factory).__name__} "
+                             f"{_short_repr(reg.factory)}")
+
+
+def _short_repr(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+class _UnmarkedHooks(ParameterError):
+    """A plugin module whose hook functions are not marked ``@cistrack.hookimpl``."""
+
+
+def _require_marked_hooks(pm: pluggy.PluginManager, module: Any) -> None:
+    """Refuse (:class:`_UnmarkedHooks`) a plugin module that defines functions named after cistrack hooks but
+    marks none of them ``@cistrack.hookimpl``: pluggy would skip them all and the plugin would
+    register, observe and add nothing, without a word."""
+    if pm.get_hookcallers(module):
+        return
+    unmarked = [h for h in _HOOK_NAMES if callable(getattr(module, h, None))]
+    if unmarked:
+        it, them = ("it is", "it") if len(unmarked) == 1 else ("they are", "them")
+        raise _UnmarkedHooks(f"its module {getattr(module, '__name__', module)!s} has {', '.join(unmarked)} but {it} "
+                             "not marked @cistrack.hookimpl (from cistrack.api import hookimpl), so cistrack never "
+                             f"calls {them}")
+
+
 def _describe_failure(exc: BaseException) -> str:
     """One line for a plugin's import or registration error; for ``sys.exit`` it says so."""
     if isinstance(exc, SystemExit):
         return f"SystemExit: it called sys.exit({exc.code!r}) while loading"
+    if isinstance(exc, _UnmarkedHooks):
+        return str(exc)
     text = str(exc)
     return f"{type(exc).__name__}: {text}" if text else f"{type(exc).__name__} raised while loading"
 

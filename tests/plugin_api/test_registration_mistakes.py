@@ -1,0 +1,72 @@
+"""What the registry refuses from a plugin, and how: each refusal names the plugin (distribution,
+entry point), the kind and the name, so that a plugin author's slip never registers something
+that fails later under another name, or registers nothing without a word."""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import pytest
+
+from cistrack.errors import ParameterError
+from cistrack.plugin.registry import Registry, load_registry
+from cistrack.plugins.filters.ukf import UKFFilter
+
+_COUNT = itertools.count()
+
+UNMARKED = '''
+from cistrack.plugins.filters.ukf import UKFFilter
+
+
+class Mine(UKFFilter):
+    """A filter registered by a hook its author forgot to mark."""
+
+
+def cistrack_register(registry):
+    registry.add("filter", "unmarked-filter", Mine)
+'''
+
+
+def _plugin_on_path(tmp_path: Path, monkeypatch, body: str) -> str:
+    """A distribution ``cistrack-slip`` whose one entry point is a module with ``body``, on sys.path;
+    returns the entry point's (and module's) name, new for each test (modules are imported once)."""
+    module = f"slip_plugin_{next(_COUNT)}"
+    info = tmp_path / "cistrack_slip-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cistrack-slip\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[cistrack]\n{module} = {module}\n")
+    (tmp_path / f"{module}.py").write_text(body)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delenv("CISTRACK_DISABLE_PLUGIN_AUTOLOAD", raising=False)
+    return module
+
+
+def test_a_cistrack_register_not_marked_as_a_hook_is_listed_as_a_plugin_that_failed_to_load(tmp_path, monkeypatch):
+    module = _plugin_on_path(tmp_path, monkeypatch, UNMARKED)
+    reg = load_registry()
+    failed = [str(f) for f in reg.failures if f.entry_point == module]
+    assert failed == [f"cistrack-slip: entry point '{module}' failed: its module {module} has cistrack_register but "
+                      "it is not marked @cistrack.hookimpl (from cistrack.api import hookimpl), so cistrack never "
+                      "calls it"]
+    assert "unmarked-filter" not in reg.names("filter")
+
+
+def _add(factory, name: str = "slip-filter", kind: str = "filter") -> None:
+    Registry().add(kind, name, factory, "cistrack-slip", "0.1", "slip")
+
+
+def test_a_factory_that_is_not_a_class_is_refused_naming_the_plugin_the_kind_and_the_name():
+    with pytest.raises(ParameterError, match=r"^plugin cistrack-slip 0\.1 \(entry point 'slip'\): filter "
+                                             r"'slip-filter' must be registered as a class .* got int 42$"):
+        _add(42)
+
+
+def test_an_instance_is_refused_as_a_factory_it_would_be_shared_by_every_run():
+    with pytest.raises(ParameterError, match="filter 'slip-filter' must be registered as a class .* got UKFFilter"):
+        _add(UKFFilter())
+
+
+@pytest.mark.parametrize("name", ["has space", "tab\tname", "new\nline", "bell\x07", ""])
+def test_a_name_with_whitespace_or_control_characters_is_refused(name):
+    with pytest.raises(ParameterError, match=r"plugin cistrack-slip 0\.1 .*filter name .* is not allowed"):
+        _add(UKFFilter, name)
