@@ -52,3 +52,18 @@ class PropagationError(CistrackError, RuntimeError):
 class RunInterrupted(KeyboardInterrupt):
     """A signal (SIGTERM, SIGHUP) asked the process to stop; raised where it arrives so that the
     run ends like a Ctrl-C: completed steps merged, manifest "interrupted" with the signal."""
+
+
+class PluginError(CistrackError):
+    """A plugin's hook or metric stage broke its contract during a run: it raised, called
+    ``sys.exit``, or returned what the hook does not promise. The message names the plugin (or
+    stage) and the hook; the run ends "failed" with it (not "filter-failed": the filter is not at
+    fault)."""
+
+
+def exception_text(exc: BaseException) -> str:
+    """``RuntimeError: boom`` (the type alone when the message is empty); for ``sys.exit`` what was
+    called: ``SystemExit: it called sys.exit(3)``."""
+    if isinstance(exc, SystemExit):
+        return f"SystemExit: it called sys.exit({exc.code!r})"
+    return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__

@@ -22,7 +22,9 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-from cistrack.errors import ConfigError
+import numpy as np
+
+from cistrack.errors import CistrackError, ConfigError, PluginError, exception_text
 from cistrack.interfaces.metric import EVENTS, StepMetric
 
 __all__ = ["StepMetric", "ReadOnlyMetrics", "MetricStage", "order_metrics", "EVENTS"]
@@ -85,31 +87,65 @@ def order_metrics(stages: Iterable[StepMetric]) -> list[StepMetric]:
     return done
 
 
-class MetricStage:
-    """Runs a run's ordered :class:`StepMetric` stages on each step event (see the module docstring)."""
+_PASS_THROUGH = (CistrackError, np.linalg.LinAlgError, FloatingPointError)
+"""Errors of a stage that say the belief cannot be measured (the filter's failure, as when the filter
+raises them itself): they reach the run as they are. Any other is the stage's own failure."""
+_NUMBERS = (float, int, np.floating, np.integer, np.bool_)
 
-    def __init__(self, stages: Iterable[StepMetric]) -> None:
+
+class MetricStage:
+    """Runs a run's ordered :class:`StepMetric` stages on each step event (see the module docstring).
+    ``origins``: stage name -> the plugin that added it, named with the stage in its errors."""
+
+    def __init__(self, stages: Iterable[StepMetric], origins: dict[str, str] | None = None) -> None:
         self.stages = order_metrics(stages)
+        self.origins = dict(origins or {})
 
     def start(self, run: Any) -> None:
         for s in self.stages:
-            s.start(run)
+            self._call(s, "start", run)
 
     def measure(self, run: Any, step: Any, event: str) -> Any:
         """Compute every stage's metrics of ``step`` at ``event`` into ``step.metrics`` (left
-        read-only); returns ``step``. A stage returning a key already present raises ValueError."""
+        read-only); returns ``step``. A stage that raises (but for :data:`_PASS_THROUGH`), returns
+        anything but a dict of str -> number, or a key already present raises PluginError naming it."""
         found: dict[str, float] = dict(step.metrics)
         for s in self.stages:
             step.metrics = ReadOnlyMetrics(found)
-            out = s.compute(run, step, event)
-            if out:
-                again = found.keys() & out.keys()
-                if again:  # a programming error of a stage, not a failure of the filter
-                    raise ValueError(f"metric stage {s.name!r} writes {', '.join(sorted(again))}, "
-                                     "which an earlier stage wrote")
+            out = self._call(s, "compute", run, step, event)
+            if out is not None and not (isinstance(out, dict) and not out):
+                self._check(s, out, found)
                 found.update(out)
         step.metrics = ReadOnlyMetrics(found)
         return step
+
+    def _error(self, stage: StepMetric, what: str) -> PluginError:
+        """PluginError ``metric stage 'name'<what>``, with the plugin that added the stage."""
+        origin = self.origins.get(stage.name)
+        return PluginError(f"metric stage {stage.name!r}{what}" + (f" (a stage of {origin})" if origin else ""))
+
+    def _call(self, stage: StepMetric, method: str, *args: Any) -> Any:
+        try:
+            return getattr(stage, method)(*args)
+        except _PASS_THROUGH:
+            raise
+        except (Exception, SystemExit) as exc:
+            raise self._error(stage, f": {method}() raised {exception_text(exc)}") from exc
+
+    def _check(self, stage: StepMetric, out: Any, found: dict[str, float]) -> None:
+        """Refuse (PluginError) a result that is not a dict of str -> number, or that writes a key
+        an earlier stage wrote (a programming error of a stage, not a failure of the filter)."""
+        if not isinstance(out, dict):
+            raise self._error(stage, f": compute() must return a dict of str -> float, got {type(out).__name__}")
+        for k, v in out.items():
+            if not isinstance(k, str):
+                raise self._error(stage, f": key {k!r} ({type(k).__name__}) is not a str: metric names are str")
+            if not (isinstance(v, _NUMBERS) or (isinstance(v, np.ndarray) and v.ndim == 0 and v.dtype.kind in "biuf")):
+                shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
+                raise self._error(stage, f": key {k!r} = {shown} is not a number")
+        again = found.keys() & out.keys()
+        if again:
+            raise self._error(stage, f" writes {', '.join(sorted(again))}, which an earlier stage wrote")
 
     def timed(self, run: Any, step: Any, event: str) -> Any:
         """:meth:`measure`, with its time in ``step.timings["metrics"]`` (seconds)."""

@@ -21,7 +21,7 @@ from typing import Any
 
 from cistrack import units
 from cistrack.interfaces.component import Component, param_specs
-from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError
+from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError, exception_text
 from cistrack.plugin.registry import BUILTIN_DISTRIBUTION, Registry
 
 __all__ = ["ComponentSpec", "component_spec", "check_keys", "typed", "example_name"]
@@ -193,7 +193,8 @@ def _build(spec: ComponentSpec, reg: Registry) -> Any:
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"{spec.where}: {spec.kind} {spec.name!r} rejected its parameters: {exc}") from None
     except (Exception, SystemExit) as exc:  # a plugin's own failure (a missing optional library, a bug, sys.exit)
-        raise ConfigError(f"{spec.where}: {_origin(spec, reg)}: could not be constructed: {_raised(exc)}") from exc
+        raise ConfigError(f"{spec.where}: {_origin(spec, reg)}: could not be constructed: "
+                          f"{exception_text(exc)}") from exc
 
 
 def _origin(spec: ComponentSpec, reg: Registry) -> str:
@@ -202,13 +203,6 @@ def _origin(spec: ComponentSpec, reg: Registry) -> str:
     if got.distribution == BUILTIN_DISTRIBUTION:
         return f"{spec.kind} {spec.name!r}"
     return f"{spec.kind} {spec.name!r} ({got.distribution}{' ' + got.version if got.version else ''})"
-
-
-def _raised(exc: BaseException) -> str:
-    """``RuntimeError: boom``; for ``sys.exit`` what it called."""
-    if isinstance(exc, SystemExit):
-        return f"it called sys.exit({exc.code!r})"
-    return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
 
 
 def _union_component_kind(ann: Any) -> str | None:

@@ -8,7 +8,7 @@ from typing import Any, Iterable
 
 import pluggy
 
-from cistrack.errors import ConfigError
+from cistrack.errors import ConfigError, PluginError, exception_text
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.information_bound import InformationBoundMetric
 from cistrack.evaluation.metric_stage import MetricStage, StepMetric
@@ -21,7 +21,7 @@ from cistrack.runs.run_context import RunContext, RunOptions
 from cistrack.scenario.limits import check_count
 
 __all__ = ["make_plugin_manager", "finish_observers", "run_observers", "builtin_metrics", "metric_stage",
-           "checked_observers"]
+           "checked_observers", "notify"]
 
 _LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
               "cistrack_run_failed", "cistrack_run_finished", "cistrack_metric_stages")
@@ -73,9 +73,55 @@ def builtin_metrics(custody: CustodyMetric) -> list[StepMetric]:
 def metric_stage(pm: pluggy.PluginManager, scenario: Any, builtins: list[StepMetric]) -> MetricStage:
     """The run's :class:`MetricStage`: ``builtins``, then the stages that plugins and observers return
     from ``cistrack_metric_stages`` (in registration order), each after the stages it needs.
-    Raises ConfigError when a stage needs one that is missing, or names repeat."""
-    found = pm.hook.cistrack_metric_stages(scenario=scenario)  # pluggy's call order: last registered first
-    return MetricStage([*builtins, *(s for stages in reversed(found) for s in (stages or ()))])
+    Raises ConfigError naming the plugin when its hook raises or returns anything but a list of
+    StepMetric objects (or None), and when a stage needs one that is missing, or names repeat."""
+    stages, origins = list(builtins), {}
+    for impl in pm.hook.cistrack_metric_stages.get_hookimpls():  # registration order (pluggy calls the last first)
+        for s in _stages_of(impl, scenario):
+            stages.append(s)
+            origins.setdefault(s.name, impl.plugin_name)
+    return MetricStage(stages, origins)
+
+
+def _stages_of(impl: Any, scenario: Any) -> list[StepMetric]:
+    """The stages one ``cistrack_metric_stages`` implementation returns, checked."""
+    who = f"{impl.plugin_name}: cistrack_metric_stages"
+    try:
+        found = impl.function(*[{"scenario": scenario}[a] for a in impl.argnames])
+    except (Exception, SystemExit) as exc:
+        raise ConfigError(f"{who} raised {exception_text(exc)}") from exc
+    if found is None:
+        return []
+    if not isinstance(found, (list, tuple)):
+        raise ConfigError(f"{who} must return a list of cistrack.api.StepMetric objects (or None), got "
+                          f"{type(found).__name__} {_short(found)}")
+    for s in found:
+        if not isinstance(s, StepMetric):
+            raise ConfigError(f"{who} returned {type(s).__name__} {_short(s)}, which is not a cistrack.api.StepMetric")
+    return list(found)
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def notify(pm: pluggy.PluginManager, hook: str, **kwargs: Any) -> None:
+    """Call every implementation of the lifecycle ``hook`` with ``kwargs``, in pluggy's order (the
+    last registered first). One that raises, or calls ``sys.exit``, stops the run with a
+    :class:`~cistrack.errors.PluginError` naming its plugin and the hook (KeyboardInterrupt passes)."""
+    for impl in reversed(getattr(pm.hook, hook).get_hookimpls()):
+        try:
+            impl.function(*[kwargs[a] for a in impl.argnames])
+        except (Exception, SystemExit) as exc:
+            raise PluginError(f"{impl.plugin_name}: {hook} raised {exception_text(exc)}{_read_only_hint(exc)}") from exc
+
+
+def _read_only_hint(exc: BaseException) -> str:
+    """What to do instead, when ``exc`` is numpy's refusal to write into a read-only array."""
+    if isinstance(exc, ValueError) and "read-only" in str(exc):
+        return " (what a hook is given is read-only: observers must not modify the step, its belief or the run)"
+    return ""
 
 
 def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.PluginManager:
@@ -109,8 +155,8 @@ def finish_observers(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSumm
         try:
             args = {"run": ctx, "summary": summary}
             impl.function(*[args[a] for a in impl.argnames])
-        except Exception as exc:
-            errors.append(f"{impl.plugin_name}: {type(exc).__name__}: {exc}")
+        except (Exception, SystemExit) as exc:  # sys.exit in a plugin is that plugin's failure, not the process's end
+            errors.append(f"{impl.plugin_name}: {exception_text(exc)}")
     if len(errors) > told:  # the last observers failed: say so in the summary returned
         summary = dataclasses.replace(
             summary, status="failed" if summary.status == "finished" else summary.status,

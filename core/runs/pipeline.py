@@ -26,14 +26,15 @@ from cistrack.evaluation.custody import CustodyMetric, Verdict
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
-from cistrack.errors import CistrackError, ConfigError, FilterError
+from cistrack.errors import CistrackError, ConfigError, FilterError, PluginError, exception_text
 from cistrack.interfaces.component import component_name
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
 from cistrack.runs.iod_message import iod_message
 from cistrack.runs.maneuver_watch import ManeuverMetric, ManeuverWatch
-from cistrack.runs.observers import builtin_metrics, finish_observers, make_plugin_manager, metric_stage, run_observers
+from cistrack.runs.observers import (builtin_metrics, finish_observers, make_plugin_manager, metric_stage, notify,
+                                     run_observers)
 from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
@@ -295,17 +296,19 @@ def _guarded(pm: pluggy.PluginManager, ctx: RunContext, collector: RowCollector,
     """Run ``steps``; (status, failure, the interrupt to raise again once the run is finished)."""
     try:
         steps()
+    except PluginError as exc:  # a plugin's hook or metric stage, named in the message
+        return "failed", str(exc), None
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError) as exc:
         failure = f"{type(exc).__name__}: {exc}"
         try:
-            pm.hook.cistrack_run_failed(run=ctx, step_index=len(collector.rows), error=failure)
-        except Exception as obs_exc:  # an observer failing on the failure: still finish the run
-            return "failed", f"{failure}; then {type(obs_exc).__name__}: {obs_exc}", None
+            notify(pm, "cistrack_run_failed", run=ctx, step_index=len(collector.rows), error=failure)
+        except PluginError as obs_exc:  # an observer failing on the failure: still finish the run
+            return "failed", f"{failure}; then {obs_exc}", None
         return "filter-failed", failure, None
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
         return "interrupted", f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)", exc
-    except Exception as exc:  # an observer (recorder, results writer: full disk), a metric stage, or anything else
-        return "failed", f"{type(exc).__name__}: {exc}", None
+    except (Exception, SystemExit) as exc:  # a results writer (full disk), a component's sys.exit, or anything else
+        return "failed", exception_text(exc), None
     return "finished", "", None
 
 
@@ -313,7 +316,7 @@ def _steps(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, even
     """The run from its start: the metric stages and observers told, the initial step (taken from
     ``pending``), then one step per event."""
     metrics.start(ctx)
-    pm.hook.cistrack_run_started(run=ctx)
+    notify(pm, "cistrack_run_started", run=ctx)
     _observe(ctx, pm, metrics, pending.pop(), "predicted")
     for k, (t, group) in enumerate(events, start=1):
         _event(ctx, pm, metrics, k, t, group)  # no step outlives its call: its belief is free before the next predict
@@ -355,8 +358,7 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
         metrics.timed(ctx, step, event)
     else:
         metrics.measure(ctx, step, event)
-    hook = pm.hook.cistrack_step_updated if event == "updated" else pm.hook.cistrack_step_predicted
-    hook(run=ctx, step=step)
+    notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
 
 
 def _maneuver_watch(scenario: Scenario, reg: Registry) -> ManeuverWatch | None:

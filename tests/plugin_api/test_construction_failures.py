@@ -39,5 +39,5 @@ def test_a_constructor_raising_its_own_error_is_a_config_error_naming_the_compon
 
 def test_a_constructor_calling_sys_exit_is_a_config_error_not_the_end_of_the_process():
     with pytest.raises(ConfigError, match=r"filter 'h-init' \(hplug 0\.1\): could not be constructed: "
-                                          r"it called sys\.exit\(3\)$"):
+                                          r"SystemExit: it called sys\.exit\(3\)$"):
         _load(InitExit)
