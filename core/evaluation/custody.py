@@ -38,7 +38,8 @@ class CustodyRule:
 
     Custody is lost at the first update step where the truth's log-likelihood under the belief's
     mixture (state in km and km/s) is below ``loglik_threshold``, or where the truth lies outside
-    the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps.
+    the ``hdr_threshold`` highest-density region for ``hdr_consecutive`` consecutive update steps,
+    or where either is NaN (undefined: never counted as kept).
     A loss is final unless ``regain_updates`` > 0.
     """
 
@@ -153,6 +154,9 @@ class CustodyMetric(StepMetric):
         """The verdict after update ``step`` if custody is lost there, else None."""
         m = step.metrics
         ll = m.get("truth_loglik", 0.0)
+        if np.isnan(ll) or np.isnan(m.get("hdr_level", 0.0)):  # undefined: never counted as kept
+            return Verdict("lost", f"the custody metrics are undefined (truth log-likelihood {ll:g}, HDR level "
+                           f"{m.get('hdr_level', 0.0):g})", step.index, float(units.tu_to_days(step.t)))
         if ll < self.rule.loglik_threshold:  # a collapsed cloud gives about -1e38: 3 digits, not 40
             shown = f"{ll:.1f}" if ll > -1e6 else f"{ll:.3g}"
             return Verdict("lost", f"truth log-likelihood {shown} < {self.rule.loglik_threshold:g}",

@@ -286,9 +286,40 @@ def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
     except Exception as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
         raise FilterError(f"filter '{component_name(ctx.filter)}' failed while starting from the IOD's cloud: "
                           f"{type(exc).__name__}: {exc}") from exc
-    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", belief)
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", _check_belief(ctx.filter, belief, ctx.iod_cloud.epoch, 0,
+                                                                          "initialize"))
     step0.timings["initialize"] = time.perf_counter() - t0
     return step0
+
+
+def _check_belief(filt, belief, t: float, k: int, after: str):
+    """``belief``, the filter's after ``after`` ("initialize", "predict", "update") at step ``k``,
+    time ``t`` (TU); a FilterError naming the filter and the step unless it is at ``t`` (to 1e-9 TU
+    relative) with a finite mean and covariance: metrics would compare a stale belief with the
+    truth at a later time, or carry NaN as if it were a track."""
+    who, days = f"filter '{component_name(filt)}'", float(units.tu_to_days(t))
+    try:
+        epoch, gm = float(belief.epoch), belief.mixture
+        finite = bool(np.isfinite(gm.means).all() and np.isfinite(gm.covariances).all())
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise FilterError(f"{who}: its belief after {after} at step {k} is not a cistrack Belief with a time and "
+                          f"a GaussianMixture ({exception_text(exc)})") from None
+    if not abs(epoch - t) <= 1e-9 * max(1.0, abs(t)):
+        shown = _two_times(float(units.tu_to_days(epoch)), days)
+        raise FilterError(f"{who}: belief epoch {shown[0]} d after {after} to {shown[1]} d (step {k}); a filter's "
+                          "belief must be at the time it was moved to")
+    if not finite:
+        raise FilterError(f"{who}: the belief's mean or covariance is NaN or infinite after {after} at step {k} "
+                          f"(t = {days:.3f} d)")
+    return belief
+
+
+def _two_times(a: float, b: float) -> tuple[str, str]:
+    """``a`` and ``b`` (days) with 3 decimals, or with as many digits as tell them apart."""
+    digits = 3
+    while f"{a:.{digits}f}" == f"{b:.{digits}f}" and digits < 15:
+        digits += 2
+    return f"{a:.{digits}f}", f"{b:.{digits}f}"
 
 
 def _guarded(pm: pluggy.PluginManager, ctx: RunContext, collector: RowCollector,
@@ -329,6 +360,7 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
     filt.predict(t)
     prior = filt.belief  # timed with the prediction (forming the belief is part of it)
     t_pred = time.perf_counter() - tp
+    _check_belief(filt, prior, t, k, "predict")
     if not group:
         step = _step(ctx, k, t, "predict", prior)
         step.timings["predict"] = t_pred
@@ -342,7 +374,7 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
     tu = time.perf_counter()
     for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
         filt.update(m)  # several sites at one time: one stacked update, or one after another
-    step = _step(ctx, k, t, "update", filt.belief, ms)
+    step = _step(ctx, k, t, "update", _check_belief(filt, filt.belief, t, k, "update"), ms)
     if ctx.maneuvers is not None:
         ctx.maneuvers.after_update(t, step.belief)
     step.timings.update({"predict": t_pred, "update": time.perf_counter() - tu})

@@ -17,6 +17,9 @@ from cistrack.testing.reference_sensor import GeocentricAnglesSensor
 __all__ = ["FILTER_CHECKS"]
 
 N_UPDATES = 2
+LIFECYCLE_UPDATES = 5
+"""Updates of the lifecycle check: a few more than the others make, so that a belief that turns
+NaN (or stops moving) after a couple of updates is caught here rather than in a run."""
 
 
 @dataclass
@@ -29,11 +32,11 @@ class _Case:
     sensor: GeocentricAnglesSensor
 
 
-def _case() -> _Case:
+def _case(n_updates: int = N_UPDATES) -> _Case:
     cloud, _ = initial_cloud(300)
     times, states = nrho_truth(16)
     sensor = GeocentricAnglesSensor()
-    ms = sensor.simulate(states[1:N_UPDATES + 1], times[1:N_UPDATES + 1], np.random.default_rng(FIXTURE_SEED))
+    ms = sensor.simulate(states[1:n_updates + 1], times[1:n_updates + 1], np.random.default_rng(FIXTURE_SEED))
     return _Case(cloud, times, states, list(ms), ReferenceCR3BP(), sensor)
 
 
@@ -76,9 +79,9 @@ def check_is_filter(f) -> None:
 
 
 def check_lifecycle_and_belief(f) -> None:
-    """initialize, predict, update twice; the belief is valid (epoch, shapes, PD covariances)
-    after every call."""
-    _run(f, _case())
+    """initialize, then predict and update :data:`LIFECYCLE_UPDATES` times; the belief is valid
+    (epoch, shapes, finite PD covariances) after every call."""
+    _run(f, _case(LIFECYCLE_UPDATES), steps=LIFECYCLE_UPDATES)
 
 
 def _logdet_position(b: Belief) -> float:

@@ -1,0 +1,95 @@
+"""The run holds a filter to its belief after every predict and update: a belief that is not at
+the step's time, or whose mean or covariance is NaN or infinite, stops the run as "filter-failed"
+naming the filter and the step, rather than measuring a stale or undefined belief against the
+truth (custody had stayed 1.0 on rows of NaN and the divergence had been dated ten steps late)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cistrack.evaluation.custody import CustodyMetric
+from cistrack.model.belief import Belief, GaussianMixture
+from cistrack.plugin.registry import load_registry
+from cistrack.plugins.filters.ukf import UKFFilter
+from cistrack.runs.pipeline import run_scenario
+from cistrack.runs.run_context import Step
+from cistrack.scenario.loading import load_scenario
+
+
+class LateNaN(UKFFilter):
+    """A UKF whose belief mean turns NaN from its third update on."""
+
+    def update(self, m):
+        super().update(m)
+        self._n = getattr(self, "_n", 0) + 1
+
+    @property
+    def belief(self):
+        b = super().belief
+        if getattr(self, "_n", 0) < 3:
+            return b
+        g = b.mixture
+        return Belief(b.epoch, GaussianMixture(g.weights, g.means * np.nan, g.covariances), b.samples)
+
+
+class Stale(UKFFilter):
+    """A UKF whose belief stops at the epoch of its third update."""
+
+    def update(self, m):
+        super().update(m)
+        self._n = getattr(self, "_n", 0) + 1
+        if self._n == 3:
+            self._frozen = super().belief
+
+    @property
+    def belief(self):
+        return getattr(self, "_frozen", None) or super().belief
+
+
+def _run(cls):
+    reg = load_registry(autoload_third_party=False)
+    reg.add("filter", "h-mine", cls, "hplug", "0.1", "hplug")
+    scen = load_scenario("quick", reg, overrides={"duration_days": 2.0, "filter": {"name": "h-mine"}})
+    return run_scenario(scen, seed=1, registry=reg)
+
+
+def test_a_belief_that_turns_nan_stops_the_run_as_filter_failed_at_that_step_naming_the_filter():
+    res = _run(LateNaN)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure == ("FilterError: filter 'h-mine': the belief's mean or covariance is NaN or infinite "
+                                   "after update at step 3 (t = 1.161 d)")
+    assert [r["step"] for r in res.rows] == [0, 1, 2]
+
+
+def test_a_belief_left_at_an_earlier_time_stops_the_run_naming_both_times():
+    res = _run(Stale)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine': belief epoch 1.161 d after predict to "
+                                          "1.196 d (step 4)")
+
+
+def _update_step(**metrics) -> Step:
+    gm = GaussianMixture(np.ones(1), np.zeros((1, 6)), np.eye(6)[None])
+    return Step(index=3, t=0.27, utc="", kind="update", belief=Belief(0.27, gm, None), truth=np.zeros(6),
+                metrics=metrics)
+
+
+def test_custody_is_lost_where_the_truth_log_likelihood_is_nan():
+    custody = CustodyMetric()
+    assert custody.compute(None, _update_step(truth_loglik=float("nan"), hdr_level=0.5), "updated") == {"custody": 0.0}
+    assert custody.verdict.kind == "lost" and custody.verdict.step == 3
+    assert "undefined" in custody.verdict.reason
+
+
+def test_custody_is_lost_where_the_hdr_level_is_nan():
+    custody = CustodyMetric()
+    assert custody.compute(None, _update_step(truth_loglik=-3.0, hdr_level=float("nan")), "updated") == {"custody": 0.0}
+    assert custody.verdict.kind == "lost"
+
+
+def test_the_filter_conformance_lifecycle_check_catches_a_belief_that_turns_nan_on_a_later_update():
+    from cistrack.testing import iter_checks
+
+    check = dict(iter_checks(LateNaN))["lifecycle_and_belief"]
+    with pytest.raises(AssertionError, match="after update.* has NaN or infinity"):
+        check()
