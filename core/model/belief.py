@@ -5,13 +5,14 @@ States are nondimensional synodic, shape ``(N, d)`` with d = 6 for orbits
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from cistrack.model.mixture_density import _by_rows, _row_logsumexp, _whitened_logpdf, whitened_kernel  # noqa: F401
 
-__all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance"]
+__all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance", "read_only_view"]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 
@@ -53,6 +54,16 @@ def regularize_covariance(p: np.ndarray, rel: float = 1e-12, each: bool = False)
         p[sel] = (v[sel] * w[sel][:, None, :]) @ np.swapaxes(v[sel], -1, -2)
         return p
     return (v * w[..., None, :]) @ np.swapaxes(v, -1, -2)
+
+
+def read_only_view(a):
+    """``a`` itself unless it is a writeable ndarray, else a view of it that refuses writes (no
+    copy: the data stays shared, its owner can still change it)."""
+    if not isinstance(a, np.ndarray) or not a.flags.writeable:
+        return a
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 def _is_finite_number(v) -> bool:
@@ -124,6 +135,12 @@ class ParticleCloud:
     def moment_match(self) -> "GaussianMixture":
         """Single-component mixture with the cloud's mean and covariance."""
         return GaussianMixture(np.ones(1), self.mean[None], self.covariance[None])
+
+    def read_only(self) -> "ParticleCloud":
+        """This cloud with read-only views of its arrays (no copy, no checks run again)."""
+        out = copy.copy(self)
+        out.states, out.weights, out.labels = (read_only_view(a) for a in (self.states, self.weights, self.labels))
+        return out
 
 
 _SAMPLE_CHUNK = 65_536
@@ -268,6 +285,14 @@ class GaussianMixture:
         return (np.einsum("m,mij->ij", self.weights, self.covariances)
                 + np.einsum("m,mi,mj->ij", self.weights, diff, diff))
 
+    def read_only(self) -> "GaussianMixture":
+        """This mixture with read-only views of its weights, means and covariances (no copy, no
+        checks run again)."""
+        out = copy.copy(self)
+        out.weights, out.means, out.covariances = (read_only_view(a) for a in (self.weights, self.means,
+                                                                               self.covariances))
+        return out
+
     def moment_match(self) -> "GaussianMixture":
         """Single Gaussian with the mixture's mean and covariance."""
         return GaussianMixture(np.ones(1), self.mean[None], self.covariance[None])
@@ -295,3 +320,15 @@ class Belief:
     epoch: float
     mixture: GaussianMixture
     samples: ParticleCloud
+
+    def read_only(self) -> "Belief":
+        """This belief with read-only views of its arrays (what observers are handed: writing into
+        it raises ValueError instead of changing the filter's state). Costs no copy of the data."""
+        out = copy.copy(self)
+        out.mixture, out.samples = _read_only_part(self.mixture), _read_only_part(self.samples)
+        return out
+
+
+def _read_only_part(part):
+    ro = getattr(part, "read_only", None)
+    return ro() if callable(ro) else part

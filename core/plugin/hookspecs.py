@@ -23,7 +23,8 @@ Lifecycle hooks
 ---------------
 Observers (result writers, the rerun recorder, progress displays, your own) receive the
 events of a run. They are called in the process that runs the scenario, in order, and must not
-modify the objects they are given (``step.metrics`` is read-only: changing it raises TypeError).
+modify the objects they are given (``step.metrics`` is read-only: changing it raises TypeError;
+the arrays of ``step.belief`` are read-only views: writing into them raises ValueError).
 No observer depends on another's order.
 """
 from __future__ import annotations

@@ -390,7 +390,15 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
         metrics.timed(ctx, step, event)
     else:
         metrics.measure(ctx, step, event)
+    step.belief = read_only_belief(step.belief)  # observers get views that refuse writes: the filter's state is safe
     notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
+
+
+def read_only_belief(belief):
+    """``belief`` with read-only views of its arrays (:meth:`Belief.read_only`; as it is when it
+    has no such method)."""
+    ro = getattr(belief, "read_only", None)
+    return ro() if callable(ro) else belief
 
 
 def _maneuver_watch(scenario: Scenario, reg: Registry) -> ManeuverWatch | None:

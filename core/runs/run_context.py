@@ -2,7 +2,8 @@
 
 Observers (hook implementations of ``cistrack_run_started``, ``cistrack_step_predicted``,
 ``cistrack_step_updated``, ``cistrack_run_finished``) receive these objects and must treat them
-as read-only (a step's metrics are a read-only mapping by the time they see it).
+as read-only (a step's metrics are a read-only mapping by the time they see it, and the arrays
+of its belief read-only views of the filter's: writing into them raises ValueError).
 """
 from __future__ import annotations
 
@@ -133,7 +134,8 @@ class Step:
     t : float                    TU since the epoch
     utc : str                    ISO-8601 UTC of t
     kind : str                   "initial" (IOD cloud), "predict" (no measurement) or "update"
-    belief : Belief              prior for "predict" events and predict-only steps, posterior after update
+    belief : Belief              prior for "predict" events and predict-only steps, posterior after update;
+                                 observers get it with read-only arrays (:meth:`Belief.read_only`)
     truth : (6,) float or None   truth state at t, nondimensional synodic
     measurement : Measurement or None   the measurement used (angles only), for "update" steps;
                                  the first of ``group`` when several share the step's time

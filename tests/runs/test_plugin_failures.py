@@ -143,3 +143,47 @@ def test_a_plugin_module_failing_in_a_step_hook_is_named_by_its_distribution_and
     reg.plugins.append(("hplug", "hooks", module))  # as the entry point "hooks" of distribution hplug would add it
     res = run_scenario(_small(), seed=1, registry=reg)
     assert res.summary.failure == "hplug:hooks: cistrack_step_predicted raised RuntimeError: module boom"
+
+
+class WritesBelief:
+    """An observer writing zeros into the means of the belief it is handed."""
+
+    @hookimpl
+    def cistrack_step_updated(self, run, step):
+        step.belief.mixture.means[:] = 0.0
+
+
+def test_an_observer_writing_into_the_belief_fails_the_run_naming_it_and_the_hook():
+    res = run_scenario(_small(), seed=1, observers=[WritesBelief()])
+    assert res.summary.status == "failed"
+    assert res.summary.failure.endswith("-WritesBelief: cistrack_step_updated raised ValueError: assignment destination "
+                                        "is read-only (what a hook is given is read-only: observers must not modify "
+                                        "the step, its belief or the run)")
+
+
+class TriesEveryWrite:
+    """An observer trying to change each array of the belief it is handed, keeping what refused."""
+
+    def __init__(self):
+        self.refused: set[str] = set()
+        self.tried = 0
+
+    @hookimpl
+    def cistrack_step_predicted(self, run, step):
+        b = step.belief
+        arrays = {"weights": b.mixture.weights, "means": b.mixture.means, "covariances": b.mixture.covariances,
+                  "states": b.samples.states}
+        for name, a in arrays.items():
+            self.tried += 1
+            try:
+                a *= 1.0
+            except ValueError:
+                self.refused.add(name)
+
+
+def test_every_array_of_the_belief_handed_to_observers_refuses_writes_and_the_run_is_unchanged():
+    watcher = TriesEveryWrite()
+    res = run_scenario(_small(), seed=1, observers=[watcher])
+    assert watcher.tried and watcher.refused == {"weights", "means", "covariances", "states"}
+    plain = run_scenario(_small(), seed=1)
+    assert [r["pos_err_km"] for r in res.rows] == [r["pos_err_km"] for r in plain.rows]
