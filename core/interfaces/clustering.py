@@ -18,7 +18,8 @@ class Clusterer(Component):
 
     @abstractmethod
     def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Labels (N,) int in [0, M) for the particles ``x`` (N, d); every label in range is used."""
+        """Labels (N,) int in [0, M) for the particles ``x`` (N, d); every label in range is used.
+        ``x`` may be read-only (the PGM hands a read-only view of its particles): never write into it."""
 
 
 def checked_labels(labels, n: int, who: str) -> np.ndarray:

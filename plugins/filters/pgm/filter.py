@@ -30,7 +30,7 @@ from cistrack.interfaces.clustering import checked_labels
 from cistrack.interfaces.iod import MIN_IOD_PARTICLES
 from cistrack.interfaces.pgm_steps import (ClusteredParticles, ComponentUpdate, KernelUpdate, ParticlePrediction,
                                            PosteriorDraw, Reanchor)
-from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, regularize_covariance
+from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud, read_only_view, regularize_covariance
 from cistrack.model.measurement import Measurement
 
 from ..ensemble_propagation import steps_by_group
@@ -453,9 +453,18 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         self._prior, self._labels = self._group_mixture(self._clustered_labels(clusterer or self._clusterer, self._rng))
 
     def _clustered_labels(self, clusterer: Clusterer, rng: np.random.Generator) -> np.ndarray:
-        """The clusterer's labels (N,) of the current particles, drawing from ``rng``."""
-        return checked_labels(clusterer.cluster(self._x, rng), self._x.shape[0],
-                              f"filter '{self._who()}': clusterer '{component_name(clusterer)}'")
+        """The clusterer's labels (N,) of the current particles, drawing from ``rng``. The clusterer
+        is handed a read-only view of the particles (no copy): one that writes into them is a
+        FilterError naming it, where it would have moved the filter's particles."""
+        who = f"filter '{self._who()}': clusterer '{component_name(clusterer)}'"
+        try:
+            labels = clusterer.cluster(read_only_view(self._x), rng)
+        except ValueError as exc:
+            if "read-only" not in str(exc):
+                raise
+            raise FilterError(f"{who}: cluster() tried to write into the particles it was given ({exc}); a "
+                              "clusterer must not change its input (work on a copy)") from exc
+        return checked_labels(labels, self._x.shape[0], who)
 
     def _group_mixture(self, labels: np.ndarray) -> tuple[GaussianMixture, np.ndarray]:
         """The mixture of the current particles grouped by ``labels`` (N,) (weight N_i/N, each group's
