@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from cistrack import units
 from cistrack.errors import MeasurementError
 
 __all__ = ["Measurement", "MeasurementSet", "StackedMeasurement", "KIND_NAMES", "kind_of_names", "names_of_kind"]
@@ -194,9 +195,10 @@ class MeasurementSet:
             i = int(np.argmax(np.diff(self.times) < 0))
             raise MeasurementError(f"measurement times must not decrease; row {i + 1} is before row {i}")
         if not (np.all(np.isfinite(self.values)) and np.all(np.isfinite(self.sigmas))):
-            raise MeasurementError("measurement values or sigmas contain NaN or infinity")
+            raise MeasurementError("measurement values or sigmas contain NaN or infinity: "
+                                   + self._first_where(lambda v, s: ~(np.isfinite(v) & np.isfinite(s))))
         if np.any(self.sigmas <= 0):
-            raise MeasurementError("measurement sigmas must be > 0")
+            raise MeasurementError("measurement sigmas must be > 0: " + self._first_where(lambda v, s: s <= 0))
         if self.sites is not None:
             self.sites = np.asarray(self.sites, dtype=str).reshape(-1)
             if self.sites.shape[0] != k:
@@ -218,6 +220,14 @@ class MeasurementSet:
                 raise MeasurementError(f"components named {self.names} but measurement types "
                                        f"{sorted(set(self.kinds.tolist()))}; a mixed set names its "
                                        f"angle columns ('angle_1', 'angle_2')")
+
+    def _first_where(self, bad) -> str:
+        """The first measurement and component where ``bad(values, sigmas)`` (K, m) holds, with its
+        time: "measurement 0 (t = 0.2581 TU = 1.121 d), azimuth: value nan, sigma 7.27e-06"."""
+        k, c = np.argwhere(bad(self.values, self.sigmas))[0]
+        t = float(self.times[k])
+        return (f"measurement {k} (t = {t:.6g} TU = {float(units.tu_to_days(t)):.4g} d), {self.names[c]}: "
+                f"value {self.values[k, c]:.6g}, sigma {self.sigmas[k, c]:.3g}")
 
     def __len__(self) -> int:
         return self.times.shape[0]

@@ -22,7 +22,7 @@ from typing import Any
 from cistrack import units
 from cistrack.interfaces.component import Component, param_specs
 from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError, exception_text
-from cistrack.plugin.registry import BUILTIN_DISTRIBUTION, Registry
+from cistrack.plugin.registry import Registry
 
 __all__ = ["ComponentSpec", "component_spec", "check_keys", "typed", "example_name"]
 
@@ -193,16 +193,8 @@ def _build(spec: ComponentSpec, reg: Registry) -> Any:
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"{spec.where}: {spec.kind} {spec.name!r} rejected its parameters: {exc}") from None
     except (Exception, SystemExit) as exc:  # a plugin's own failure (a missing optional library, a bug, sys.exit)
-        raise ConfigError(f"{spec.where}: {_origin(spec, reg)}: could not be constructed: "
+        raise ConfigError(f"{spec.where}: {reg.describe(spec.kind, spec.name)}: could not be constructed: "
                           f"{exception_text(exc)}") from exc
-
-
-def _origin(spec: ComponentSpec, reg: Registry) -> str:
-    """``filter 'h-initraise' (hplug 0.1)``: the component and, for a third party's, its distribution."""
-    got = reg.get(spec.kind, spec.name)
-    if got.distribution == BUILTIN_DISTRIBUTION:
-        return f"{spec.kind} {spec.name!r}"
-    return f"{spec.kind} {spec.name!r} ({got.distribution}{' ' + got.version if got.version else ''})"
 
 
 def _union_component_kind(ann: Any) -> str | None:

@@ -175,6 +175,14 @@ class Registry:
             msg += " (plugins that failed to load: " + "; ".join(str(f) for f in failed) + ")"
         return msg
 
+    def describe(self, kind: str, name: str) -> str:
+        """``filter 'h-mine' (hplug 0.1)``: a component in messages, with the distribution it came
+        from unless it is a built-in (or the name is not registered)."""
+        got = self._entries.get(kind, {}).get(name)
+        if got is None or got.distribution == BUILTIN_DISTRIBUTION:
+            return f"{kind} {name!r}"
+        return f"{kind} {name!r} ({got.distribution}{' ' + got.version if got.version else ''})"
+
     def create(self, kind: str, name: str, **params: Any) -> Any:
         """Build ``kind``/``name`` with ``params`` (validated by the component itself)."""
         factory = self.get(kind, name).factory

@@ -18,7 +18,7 @@ from cistrack.astro.site_network import SiteNetwork, merge_sites
 from cistrack.errors import ConfigError
 from cistrack.interfaces import Pass
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.run_inputs import plan_measurement_times
+from cistrack.runs.run_inputs import plan_measurement_times, simulate_measurements
 
 __all__ = ["NetworkObservations", "simulate_network", "skip_pass_in_progress", "iod_input"]
 
@@ -58,7 +58,7 @@ def simulate_network(scenario, registry, truth, grid: np.ndarray, grid_states: n
         times = plan_measurement_times(scenario, scenario.build("schedule", registry), passes, s_rng)
         say(f"observer {key!r}: {len(passes)} passes, {times.size} measurements scheduled")
         if times.size:
-            parts.append((key, None, sensor.simulate(truth.states_at(times), times, n_rng)))
+            parts.append((key, None, simulate_measurements(sensor, truth.states_at(times), times, n_rng, registry)))
     if not parts:
         raise ConfigError(f"{scenario.source}: no observer saw the target in {scenario.duration_days:g} days "
                           f"(observers: {', '.join(keys)})")

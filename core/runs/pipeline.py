@@ -37,7 +37,8 @@ from cistrack.runs.observers import (builtin_metrics, finish_observers, make_plu
                                      run_observers)
 from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
-from cistrack.runs.run_inputs import estimate_iod, plan_measurement_times, read_scenario_observations
+from cistrack.runs.run_inputs import (estimate_iod, plan_measurement_times, read_scenario_observations,
+                                      simulate_measurements)
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
 from cistrack.threads import library_thread_limit
@@ -108,7 +109,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
             seen = simulate_network(scenario, reg, truth, grid, grid_states, rngs, say)
             measurements, sensor, passes = seen.measurements, seen.sensor, seen.passes
         else:
-            measurements, passes = _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say)
+            measurements, passes = _one_sensor(scenario, (sensor, schedule, reg), truth, (grid, grid_states), rngs, say)
     if scenario.observers and truth is not None:
         from cistrack.runs.network import iod_input
         iod_measurements, iod_sensor = iod_input(scenario, measurements, sensor)
@@ -126,9 +127,11 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     return ctx, rngs
 
 
-def _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say):
+def _one_sensor(scenario, components, truth, grids, rngs, say):
     """(measurements, passes) of the scenario's one sensor: its passes of the truth (a pass in
-    progress at t = 0 skipped), the schedule's times in them, noisy measurements at those times."""
+    progress at t = 0 skipped), the schedule's times in them, noisy measurements at those times.
+    ``components``: (sensor, schedule, registry); ``grids``: the truth's (times, states)."""
+    (sensor, schedule, reg), (grid, grid_states) = components, grids
     passes = sensor.passes(grid, grid_states)
     skipped = ""
     if passes and passes[0].start <= grid[0] + 1e-12:
@@ -145,7 +148,7 @@ def _one_sensor(scenario, sensor, schedule, truth, grid, grid_states, rngs, say)
         raise ConfigError(f"{scenario.source}: the schedule produced no measurement times "
                           f"({len(passes)} visibility passes in {scenario.duration_days:g} days{skipped})")
     say(f"{len(passes)} passes, {times.size} measurements scheduled")
-    return sensor.simulate(truth.states_at(times), times, rngs["measurements"]), passes
+    return simulate_measurements(sensor, truth.states_at(times), times, rngs["measurements"], reg), passes
 
 
 def _compile_ahead(dynamics, state) -> None:

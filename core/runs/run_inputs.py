@@ -8,6 +8,7 @@
   plan) named as the scenario's ``[schedule]`` table.
 - :func:`estimate_iod`: the IOD, whose failure on measurements simulated from a ``state_km``
   truth points at that state.
+- :func:`simulate_measurements`: the sensor's simulated measurements, its refusals naming the sensor.
 
 Every refusal is a :class:`~cistrack.errors.CistrackError` naming the scenario file and key.
 """
@@ -27,7 +28,8 @@ from cistrack.plugin.registry import Registry
 from cistrack.scenario.loading import Scenario
 from cistrack.scenario.work_limits import check_steps
 
-__all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod"]
+__all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod",
+           "simulate_measurements"]
 
 _SPAN_TOLERANCE_TU = 1e-9
 """Observations this close to the span's ends (about 0.4 ms) count as inside."""
@@ -129,3 +131,16 @@ def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sen
         where = f" (it puts the target {r_km:,.0f} km from Earth at t = 0)"
         raise IODError(f"{exc} The measurements were simulated from {scenario.source}: [truth]: key "
                        f"'state_km'{where}: check that state, which the IOD's bounds must admit.") from None
+
+
+def simulate_measurements(sensor: Any, states: np.ndarray, times: np.ndarray, rng: np.random.Generator,
+                          registry: Registry) -> MeasurementSet:
+    """``sensor.simulate(states, times, rng)``; a MeasurementError it gives (NaN values, sigmas that
+    are not > 0, ...) names the sensor by its registered name and distribution, unless it does so itself."""
+    try:
+        return sensor.simulate(states, times, rng)
+    except MeasurementError as exc:
+        name = component_name(sensor)
+        if str(exc).startswith(f"sensor '{name}'"):
+            raise
+        raise MeasurementError(f"{registry.describe('sensor', name)}: simulate() gave {exc}") from None

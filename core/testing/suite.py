@@ -62,11 +62,13 @@ def infer_kind(component: Any) -> str:
 
 
 def label(component: Any) -> str:
-    """A short name for messages and test ids: registry name, orbit name or class name."""
+    """A short name for messages and test ids: the name the class itself was registered under (not
+    one it inherits from a registered parent), the orbit's name, or the class name."""
     if isinstance(component, ReferenceOrbit):
         return component.name
     cls = component if isinstance(component, type) else type(component)
-    return getattr(cls, "registry_name", "") or cls.__name__
+    own = cls.__dict__.get("registry_name", "")
+    return own if isinstance(own, str) and own else cls.__name__
 
 
 class BoundCheck:

@@ -68,6 +68,13 @@ class GroundTelescope(Sensor):
         diameter_m, albedo, max_range_km. Pass edges are then the samples' (no bisection).
     """
 
+    def _name(self) -> str:
+        """The name this class was registered under (a registered subclass's own), in messages."""
+        return type(self).registry_name or "ground-telescope"
+
+    def _who(self) -> str:
+        return f"sensor '{self._name()}'"
+
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
                  height_m: float = 103.8, sigma_arcsec: float = 1.5, measure_range: bool = False,
                  range_alpha: float = 0.05, elevation_mask_deg: float = 10.0,
@@ -125,19 +132,17 @@ class GroundTelescope(Sensor):
             self._affine_last = (float(t), a, b)
         return a, b
 
-    @staticmethod
-    def _check_states(states) -> np.ndarray:
-        return checked_states("ground-telescope", states)
+    def _check_states(self, states) -> np.ndarray:
+        return checked_states(self._name(), states)
 
-    @staticmethod
-    def _check_times(t, n: int) -> np.ndarray:
+    def _check_times(self, t, n: int) -> np.ndarray:
         tt = np.asarray(t, dtype=float)
         if tt.ndim == 0:
             return tt
         tt = tt.reshape(-1)
         if tt.shape[0] != n:
             raise MeasurementError(
-                f"sensor 'ground-telescope': t must be a scalar or have one time per row ({n}), "
+                f"{self._who()}: t must be a scalar or have one time per row ({n}), "
                 f"got shape {np.shape(t)}")
         if tt.size and tt[0] == tt[-1] and np.all(tt == tt[0]):
             return tt[0]                       # one common time: the fast (3, 3) path
@@ -220,9 +225,9 @@ class GroundTelescope(Sensor):
         """
         ang = np.asarray(angles, dtype=float)
         if ang.ndim != 2 or ang.shape[1] < 2:
-            raise MeasurementError(f"sensor 'ground-telescope': angles must have shape (N, 2), got {ang.shape}")
+            raise MeasurementError(f"{self._who()}: angles must have shape (N, 2), got {ang.shape}")
         if not np.all(np.isfinite(ang[:, :2])):
-            raise MeasurementError("sensor 'ground-telescope': angles contain NaN or infinity")
+            raise MeasurementError(f"{self._who()}: angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
         if self.angles == "radec":
             rot, _ = self._frames.synodic_to_eci(tt)
@@ -239,7 +244,7 @@ class GroundTelescope(Sensor):
         v = np.asarray(values, dtype=float)
         if v.ndim != 2 or v.shape[1] < 3:
             raise MeasurementError(
-                f"sensor 'ground-telescope': need (azimuth, elevation, range) rows (N, 3), got {v.shape}")
+                f"{self._who()}: need (azimuth, elevation, range) rows (N, 3), got {v.shape}")
         tt = self._check_times(t, v.shape[0])
         return self.observer_position(tt) + v[:, 2:3] * self.line_of_sight(v[:, :2], tt)
 
@@ -280,7 +285,7 @@ class GroundTelescope(Sensor):
         A pass already under way at the first sample starts there; one still under way at the
         last sample ends there. Sample densely enough (<= 1 h) not to miss short passes.
         """
-        tt, x = checked_pass_samples("ground-telescope", times, states)
+        tt, x = checked_pass_samples(self._name(), times, states)
         if tt.size == 0:
             return []
         vis = self.visible(x, tt)
@@ -314,7 +319,7 @@ class GroundTelescope(Sensor):
         tt = np.asarray(times, dtype=float).reshape(-1)
         if tt.shape[0] != x.shape[0]:
             raise MeasurementError(
-                f"sensor 'ground-telescope': {tt.shape[0]} times for {x.shape[0]} states")
+                f"{self._who()}: {tt.shape[0]} times for {x.shape[0]} states")
         values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "ground-telescope", "epoch": self.epoch}
         if self.angles == "radec":

@@ -92,6 +92,13 @@ class RealTelescope(Sensor):
         Sky rules, off unless given, as for "ground-telescope" (docs/space-observers.md); DE421 Sun.
     """
 
+    def _name(self) -> str:
+        """The name this class was registered under (a registered subclass's own), in messages."""
+        return type(self).registry_name or "real-telescope"
+
+    def _who(self) -> str:
+        return f"sensor '{self._name()}'"
+
     def __init__(self, latitude_deg: float = 30.618963, longitude_deg: float = -96.339214,
                  height_m: float = 103.8, measurement: str = "azel", sigma_arcsec: float = 1.5,
                  measure_range: bool = False, range_alpha: float = 0.05,
@@ -200,10 +207,10 @@ class RealTelescope(Sensor):
 
     # -- validation -----------------------------------------------------------------------------
     def _check_states(self, states) -> np.ndarray:
-        return checked_states("real-telescope", states)
+        return checked_states(self._name(), states)
 
     def _check_times(self, t, n: int) -> np.ndarray:
-        return checked_times("real-telescope", t, n)
+        return checked_times(self._name(), t, n)
 
     # -- geometry -------------------------------------------------------------------------------
     def _gcrs(self, x: np.ndarray, tt: np.ndarray):
@@ -293,9 +300,9 @@ class RealTelescope(Sensor):
         """
         ang = np.asarray(angles, dtype=float)
         if ang.ndim != 2 or ang.shape[1] < 2:
-            raise MeasurementError(f"sensor 'real-telescope': angles must have shape (N, 2), got {ang.shape}")
+            raise MeasurementError(f"{self._who()}: angles must have shape (N, 2), got {ang.shape}")
         if not np.all(np.isfinite(ang[:, :2])):
-            raise MeasurementError("sensor 'real-telescope': angles contain NaN or infinity")
+            raise MeasurementError(f"{self._who()}: angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
         obs = self._observer.state(tt * TU_S)
         u = unit_vectors_gcrs(ang[:, 0], ang[:, 1], obs, self._neu, self.corrections,
@@ -311,7 +318,7 @@ class RealTelescope(Sensor):
     # -- passes and simulation ------------------------------------------------------------------
     def passes(self, times: np.ndarray, states: np.ndarray):
         """Visibility passes: contiguous runs of visible samples (sample at <= 1 h spacing)."""
-        tt, x = checked_pass_samples("real-telescope", times, states)
+        tt, x = checked_pass_samples(self._name(), times, states)
         return super().passes(tt, x)
 
     def simulate(self, states: np.ndarray, times: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
@@ -319,7 +326,7 @@ class RealTelescope(Sensor):
         x = self._check_states(states)
         tt = np.asarray(times, dtype=float).reshape(-1)
         if tt.shape[0] != x.shape[0]:
-            raise MeasurementError(f"sensor 'real-telescope': {tt.shape[0]} times for {x.shape[0]} states")
+            raise MeasurementError(f"{self._who()}: {tt.shape[0]} times for {x.shape[0]} states")
         values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "real-telescope", "epoch": self.epoch, "measurement": self.measurement,
                 "frame": "real Earth-Moon rotating (DE421)", "corrections": self.corrections.applied(),

@@ -88,6 +88,13 @@ class SpaceTelescope(Sensor):
         windows (what the schedules plan in). revisit_hours = 0: passes are the whole visibility.
     """
 
+    def _name(self) -> str:
+        """The name this class was registered under (a registered subclass's own), in messages."""
+        return type(self).registry_name or "space-telescope"
+
+    def _who(self) -> str:
+        return f"sensor '{self._name()}'"
+
     def __init__(self, orbit: str | None = None, phase: float = 0.0, state_km: list[float] | None = None,
                  state_epoch: str = "", dynamics: Dynamics | str | None = None,
                  epoch: str = "2026-01-01T00:00:00Z", sigma_arcsec: float = 1.0,
@@ -111,7 +118,7 @@ class SpaceTelescope(Sensor):
         self.dynamics = self._checked_dynamics(dynamics)
         self.orbit, self.state_km, self.state_epoch = orbit, state_km, state_epoch
         x0, t0 = self._start()
-        self._orbit = ObserverOrbit(self.dynamics, x0, t0, "space-telescope")
+        self._orbit = ObserverOrbit(self.dynamics, x0, t0, self._name())
         self._sky = sky_for(self.dynamics, self._epoch, self.moon_phase_deg)
         self._set_names()
 
@@ -192,10 +199,10 @@ class SpaceTelescope(Sensor):
 
     # -- validation -----------------------------------------------------------------------------
     def _check_states(self, states) -> np.ndarray:
-        return checked_states("space-telescope", states)
+        return checked_states(self._name(), states)
 
     def _check_times(self, t, n: int) -> np.ndarray:
-        return checked_times("space-telescope", t, n)
+        return checked_times(self._name(), t, n)
 
     # -- geometry -------------------------------------------------------------------------------
     def observer_states(self, t) -> np.ndarray:
@@ -286,12 +293,12 @@ class SpaceTelescope(Sensor):
         """Visible samples inside the tasking windows, as contiguous runs (sample at <= 5 min).
         MeasurementError when the target comes within :data:`MIN_SEPARATION_KM` of the observer
         (the same orbit and phase: no line of sight)."""
-        tt, x = checked_pass_samples("space-telescope", times, states)
+        tt, x = checked_pass_samples(self._name(), times, states)
         tgt, obs = self._inertial(x, tt)
         sep = np.linalg.norm(tgt[:, :3] - obs[:, :3], axis=1)
         k = int(np.argmin(sep))
         if not sep[k] >= MIN_SEPARATION_KM:
-            raise MeasurementError(f"sensor 'space-telescope': the target comes within {sep[k]:.3g} km of the observer "
+            raise MeasurementError(f"{self._who()}: the target comes within {sep[k]:.3g} km of the observer "
                                    f"(at {tt[k] * TU_S / 86400.0:.3f} days): a telescope cannot observe an object at "
                                    "its own place; give the observer another orbit, phase or state_km")
         return passes_from_mask(tt, self._allowed(tgt, obs, tt) & self.in_window(tt))
@@ -303,9 +310,9 @@ class SpaceTelescope(Sensor):
         """
         ang = np.asarray(angles, dtype=float)
         if ang.ndim != 2 or ang.shape[1] < 2:
-            raise MeasurementError(f"sensor 'space-telescope': angles must have shape (N, 2), got {ang.shape}")
+            raise MeasurementError(f"{self._who()}: angles must have shape (N, 2), got {ang.shape}")
         if not np.all(np.isfinite(ang[:, :2])):
-            raise MeasurementError("sensor 'space-telescope': angles contain NaN or infinity")
+            raise MeasurementError(f"{self._who()}: angles contain NaN or infinity")
         tt = self._check_times(t, ang.shape[0])
         rot = np.broadcast_to(self._sky.rotation(tt), (ang.shape[0], 3, 3))
         return np.einsum("nji,nj->ni", rot, unit_of_radec(ang[:, 0], ang[:, 1]))
@@ -327,7 +334,7 @@ class SpaceTelescope(Sensor):
         x = self._check_states(states)
         tt = np.asarray(times, dtype=float).reshape(-1)
         if tt.shape[0] != x.shape[0]:
-            raise MeasurementError(f"sensor 'space-telescope': {tt.shape[0]} times for {x.shape[0]} states")
+            raise MeasurementError(f"{self._who()}: {tt.shape[0]} times for {x.shape[0]} states")
         values, s = noisy_measurements(self, x, tt, rng)
         meta = {"sensor": "space-telescope", "epoch": self.epoch, "measurement": "radec",
                 "frame": self._sky.name, "observer": self.orbit or "state_km",
