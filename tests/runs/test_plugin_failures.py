@@ -187,3 +187,18 @@ def test_every_array_of_the_belief_handed_to_observers_refuses_writes_and_the_ru
     assert watcher.tried and watcher.refused == {"weights", "means", "covariances", "states"}
     plain = run_scenario(_small(), seed=1)
     assert [r["pos_err_km"] for r in res.rows] == [r["pos_err_km"] for r in plain.rows]
+
+
+class ExitsWhenFinished:
+    """An observer whose cistrack_run_finished calls a library that calls sys.exit."""
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary):
+        raise SystemExit(4)
+
+
+def test_an_observer_calling_sys_exit_at_the_end_fails_the_run_naming_it_and_the_manifest_is_completed(tmp_path):
+    res = run_scenario(_small(), seed=1, observers=[ExitsWhenFinished()], output_dir=tmp_path / "run")
+    assert res.summary.status == "failed"
+    assert res.summary.failure.endswith("-ExitsWhenFinished: SystemExit: it called sys.exit(4)")
+    assert json.loads((tmp_path / "run" / "manifest.json").read_text())["status"] == "failed"
