@@ -31,21 +31,25 @@ _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleC
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
          "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
          "study": "api", "StudyResult": "api", "fit": "api", "ObjectFit": "api"}
+#: Submodules that are also documented as attributes of the package (``ct.api.default_registry()``).
+_LAZY_MODULES = ("api",)
 
 
 def __getattr__(name: str):
     module = _LAZY.get(name)
-    if module is None:
+    if module is None and name not in _LAZY_MODULES:
         raise AttributeError(f"module 'cistrack' has no attribute {name!r}")
     from importlib import import_module
 
+    if module is None:
+        return import_module(f".{name}", __name__)  # the import system sets it on the package
     value = getattr(import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | set(_LAZY_MODULES))
 
 
 class _Package(_types.ModuleType):

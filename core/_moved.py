@@ -147,6 +147,7 @@ class MovedModuleFinder(importlib.abc.MetaPathFinder):
         warnings.warn(moved_message(fullname, new), DeprecationWarning, stacklevel=2)
         module = importlib.import_module(new)
         _set_on_function(fullname, module)
+        _names_on_function(fullname, module)
         return importlib.machinery.ModuleSpec(fullname, _ExistingModule(module),
                                               is_package=hasattr(module, "__path__"))
 
@@ -161,6 +162,22 @@ def _set_on_function(fullname: str, module: ModuleType) -> None:
         function = getattr(sys.modules[holder], name, None)
         if callable(function) and not isinstance(function, ModuleType):
             setattr(function, child, module)
+
+
+def _names_on_function(fullname: str, module: ModuleType) -> None:
+    """``import cistrack.run as pipeline`` binds ``pipeline`` to the package's attribute ``run``, which
+    is now the function :func:`cistrack.api.run`: the moved module's public names (its ``__all__``) are
+    set on that function, so that ``pipeline.run_scenario`` keeps working. This import is the one
+    that gave the DeprecationWarning naming the new module."""
+    holder, _, name = fullname.rpartition(".")
+    if holder not in sys.modules:
+        return
+    function = getattr(sys.modules[holder], name, None)
+    if not callable(function) or isinstance(function, ModuleType):
+        return
+    for public in getattr(module, "__all__", ()):
+        if not hasattr(function, public):
+            setattr(function, public, getattr(module, public))
 
 
 def renamed_names(module: str, renames: dict[str, tuple[str, Any]]):

@@ -93,3 +93,23 @@ def test_a_submodule_of_a_package_that_replaced_a_module_imports_without_warning
     out = subprocess.run([sys.executable, "-W", "error::DeprecationWarning", "-c", statement],
                          capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-600:]
+
+
+@pytest.mark.parametrize("old,name", [("cistrack.run", "run_scenario"), ("cistrack.study", "plan_runs"),
+                                      ("cistrack.fit", "fit_orbit")])
+def test_old_module_imported_as_a_name_in_a_fresh_process_reaches_the_moved_names_with_a_warning(old, name):
+    """``import cistrack.run as pipeline`` binds the function ``cistrack.run``: the moved module's
+    public names are on it, so 0.1 code runs unchanged, and the import warns with the new path."""
+    code = (f"import warnings\nwarnings.simplefilter('always')\nimport {old} as m\nimport {MOVED[old]} as new\n"
+            f"print(m.{name} is new.{name}, callable(m))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["True", "True"]
+    assert f"<string>:3: DeprecationWarning: {old} moved to {MOVED[old]}" in proc.stderr
+
+
+def test_the_api_module_is_an_attribute_of_the_package_without_importing_it_first():
+    code = "import cistrack as ct\nprint(ct.api.default_registry is ct.api.__dict__['default_registry'])"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["True"]
