@@ -203,17 +203,31 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
             for k, v in value.items():
                 add(f"{prefix}.{k}" if prefix else str(k), v)
             return
-        if isinstance(value, float) and not math.isfinite(value):
+        plain = _plain_value(value)
+        if isinstance(plain, float) and not math.isfinite(plain):
             raise ConfigError(f"settings[{prefix!r}] = {value!r}: a setting must be a finite number")
         try:
-            text = tomli_w.dumps({"v": value}).partition("=")[2].strip()
+            text = tomli_w.dumps({"v": plain}).partition("=")[2].strip()
         except TypeError:
-            raise ConfigError(f"settings[{prefix!r}] = {value!r}: not a TOML value (numbers, strings, "
-                              "booleans, lists and tables are)") from None
+            raise ConfigError(f"settings[{prefix!r}] = {value!r}: not a setting value (give a number, string, "
+                              "boolean, path, list or table)") from None
         items.append(f"{prefix}={text}")
 
     add("", settings)
     return items
+
+
+def _plain_value(value: Any) -> Any:
+    """A setting's value as TOML can write it: a numpy scalar (``np.int64(500)``, ``np.float32(1.5)``)
+    as the Python number it holds, a path (``os.PathLike``) as its string, inside lists too."""
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, (list, tuple)):
+        return [_plain_value(v) for v in value]
+    item = getattr(value, "item", None)
+    if type(value).__module__ == "numpy" and callable(item) and getattr(value, "ndim", None) == 0:
+        return item()
+    return value
 
 
 def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,

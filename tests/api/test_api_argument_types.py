@@ -1,6 +1,9 @@
 """The Python API names the argument whose type it does not take, before anything runs."""
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
 import pytest
 
 import cistrack as ct
@@ -33,3 +36,23 @@ def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
 def test_settings_as_a_mapping_or_a_list_of_strings_are_taken():
     assert ct.load_scenario("quick", settings={"duration_days": 1.5}).duration_days == 1.5
     assert ct.load_scenario("quick", settings=["duration_days=1.5"]).duration_days == 1.5
+
+
+@pytest.mark.parametrize("value, expected", [(np.int64(500), 500), (np.int32(700), 700)])
+def test_a_numpy_integer_setting_is_taken_as_the_integer_it_holds(value, expected):
+    assert ct.load_scenario("quick", settings={"iod.n_particles": value}).components["iod"].params["n_particles"] == expected
+
+
+def test_a_numpy_float_setting_is_taken_as_the_number_it_holds():
+    assert ct.load_scenario("quick", settings={"duration_days": np.float32(1.5)}).duration_days == 1.5
+
+
+def test_a_path_setting_is_taken_as_its_string():
+    scenario = ct.load_scenario("real-data", settings={"measurements.file": Path("real_data/observations.psv")})
+    assert scenario.measurements_file.name == "observations.psv"
+
+
+@pytest.mark.parametrize("value", [object(), None, np.array([1, 2])])
+def test_a_setting_that_is_no_value_is_refused_saying_what_is_taken(value):
+    with pytest.raises(ct.ConfigError, match=r"settings\['duration_days'\] = .*: not a setting value \(give a number"):
+        ct.load_scenario("quick", settings={"duration_days": value})
