@@ -48,6 +48,11 @@ zero-width characters), surrogate, private-use and unassigned characters, line a
 separators. They would make a folder name that reads differently from what it is."""
 
 
+#: The rule of :func:`check_path_component`, as its messages state it.
+PATH_COMPONENT_RULE = ("no '/', '\\', control or invisible characters; not '.' or '..'; not starting with '.', '-' "
+                       "or a space, nor ending with a space; at most 100 characters")
+
+
 def check_path_component(value: Any, where: str) -> str:
     """``value`` as a name that becomes one directory or file name (a run id, a label).
 
@@ -70,8 +75,8 @@ def check_path_component(value: Any, where: str) -> str:
         bad = (f"contains a control or invisible formatting character (U+{ord(c):04X}; control characters, "
                "bidirectional overrides and zero-width characters are refused)")
     if bad:
-        raise ConfigError(f"{where}: {value!r} {bad}; it names a directory, so it must be one path "
-                          "component (letters, digits, spaces, '.', '_', '-'; no '/' or '..')")
+        raise ConfigError(f"{where}: {value!r} {bad}; it names a directory, so it must be one path component "
+                          f"({PATH_COMPONENT_RULE})")
     return value
 
 

@@ -23,7 +23,7 @@ from cistrack.plugin.param_docs import param_docs, summary_of
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.atomic_files import write_text_new
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
-from cistrack.scenario.limits import check_path_component
+from cistrack.scenario.limits import PATH_COMPONENT_RULE, check_path_component
 from cistrack.scenario.loading import COMPONENT_TABLES, Scenario
 
 if sys.version_info >= (3, 11):
@@ -38,7 +38,7 @@ TEMPLATE_SOURCE = "example-1"
 _WIDTH = 96
 
 _TOP: dict[str, str] = {
-    "name": "The scenario's name: the first part of each run's id (letters, digits, '-', '_', '.').",
+    "name": f"The scenario's name: the first part of each run's id, so one folder name ({PATH_COMPONENT_RULE}).",
     "description": "One line saying what the scenario is for.",
     "epoch": "UTC of t = 0 (ISO 8601); times in results are days since this epoch.",
     "seed": "The default seed of a run (cistrack run --seed N overrides it); the same seed gives the same numbers.",
@@ -150,22 +150,15 @@ def scenario_template(name: str = "my-scenario", registry: Registry | None = Non
     return "\n".join(lines) + "\n"
 
 
-def name_ok(file_name: str) -> bool:
-    """Whether ``file_name`` (the last part of a path) can name a scenario file: not empty, not
-    blank, not '.' or '..', without control characters."""
-    stem = file_name.removesuffix(".toml")
-    return bool(stem.strip()) and stem not in (".", "..") and stem == stem.strip() \
-        and not any(ord(ch) < 32 for ch in stem)
-
-
 def template_path(name: str | None) -> Path:
     """The file ``cistrack init NAME`` writes: NAME, with ``.toml`` added when it has no such suffix.
 
-    ConfigError for a NAME that names no file: empty, blank, or ending in '.' or '..'."""
+    ConfigError for a NAME whose file name (without ``.toml``), the scenario's name, could not name
+    the scenario's run folders: the rule of :func:`~cistrack.scenario.limits.check_path_component`,
+    stated in the message. Any other character is taken (``cistrack init "x y;z"`` writes
+    ``x y;z.toml``)."""
     p = Path("my-scenario" if name is None else name)
-    if not name_ok(p.name):
-        raise ConfigError(f"NAME {name!r}: not a scenario file name; give a name such as my-scenario "
-                          "(letters, digits, '-', '_'; optionally in a folder: runs/my-scenario)")
+    check_path_component(p.name.removesuffix(".toml"), f"cistrack init NAME {name!r}: the scenario name")
     return p if p.suffix == ".toml" else p.with_name(p.name + ".toml")
 
 

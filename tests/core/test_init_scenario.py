@@ -77,6 +77,18 @@ def test_init_refuses_to_overwrite_an_existing_file(tmp_path, capsys):
     assert mine.read_text() == "keep me\n"
 
 
+@pytest.mark.parametrize("name", [" ", "-x", ".x", "a\tb"])
+def test_a_refused_name_is_told_the_rule_that_is_applied(tmp_path, capsys, monkeypatch, name):
+    """The message states the rule init applies (it takes 'a b', so it must not say letters and digits only)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["init", "--", name]) == 2
+    err = capsys.readouterr().err
+    assert f"cistrack init NAME {name!r}" in err
+    assert "not starting with '.', '-' or a space, nor ending with a space" in err
+    assert "letters, digits" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cistrack_run_runs_the_written_file_as_written(written, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", str(written), "--quiet",
                            "--out", str(tmp_path / "run")], capture_output=True, text=True, timeout=600)
