@@ -316,12 +316,12 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
         res = run_scenario(scen, seed=seed, registry=reg, observers=observers, progress=progress, log=log)
         return Run(res.summary, None, tuple(res.rows))
     from cistrack.results.dir_lock import run_lock
-    from cistrack.results.earlier_run import check_replacing
+    from cistrack.results.earlier_run import PYTHON_WORDS, check_replacing
 
     directory = Path(out)
     check_output_dir(directory, "out")
     with run_lock(directory, "out"):  # one run at a time in a results directory, as cistrack run
-        check_replacing(directory, scen, seed, "out", overwrite=overwrite)
+        check_replacing(directory, scen, seed, "out", overwrite=overwrite, words=PYTHON_WORDS)
         res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
                            progress=progress, log=log, residual_figure=True)
     return Run(res.summary, directory, tuple(res.rows))
@@ -344,13 +344,14 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     ``cistrack fit`` refuses without ``--overwrite``; an earlier fit of the same object is redone).
     """
     from cistrack.fitting.from_observations import fit_files
+    from cistrack.results.earlier_run import PYTHON_WORDS
 
     _checked_arguments(out=out, log=log, registry=registry, progress=progress)
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
     return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress,
-                     overwrite=overwrite)
+                     overwrite=overwrite, words=PYTHON_WORDS)
 
 
 def read_run(directory: str | Path) -> Run:

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 from cistrack.errors import ConfigError
+from cistrack.results.earlier_run import CLI_WORDS, OptionWords
 from cistrack.results.store import MANIFEST
 
 __all__ = ["check_fit_replacing", "check_fit_form", "other_form_results", "remove_other_form", "FIT_RECORD"]
@@ -39,16 +40,17 @@ def _earlier(d: Path, designation: str) -> str:
 
 
 def check_fit_replacing(directory: str | Path, designation: str, where: str = "--out",
-                        overwrite: bool = False) -> str:
+                        overwrite: bool = False, words: OptionWords = CLI_WORDS) -> str:
     """Refuse (:class:`ConfigError` naming ``where`` and the directory) a fit of ``designation`` into
     ``directory`` when it holds a run's results or another object's fit, unless ``overwrite``.
-    Returns what will be replaced (for a note when ``overwrite`` allowed it), or ""."""
+    Returns what will be replaced (for a note when ``overwrite`` allowed it), or "". ``words``: the
+    caller's options, as the refusal names them."""
     d = Path(directory)
     what = _earlier(d, designation) if d.is_dir() else ""
     if not what or overwrite:
         return what
-    raise ConfigError(f"{where} {d}: holds {what}. A fit never replaces other results: give another --out, "
-                      f"remove {d}, or add --overwrite to replace them")
+    raise ConfigError(f"{where} {d}: holds {what}. A fit never replaces other results: give another {words.out}, "
+                      f"remove {d}, or {words.add_overwrite} to replace them")
 
 
 def other_form_results(directory: str | Path, each: bool) -> list[Path]:
@@ -63,7 +65,8 @@ def other_form_results(directory: str | Path, each: bool) -> list[Path]:
     return sorted(p for p in d.glob("arc-*") if p.is_dir() and (p / FIT_RECORD).is_file())
 
 
-def check_fit_form(directory: str | Path, each: bool, where: str = "--out", overwrite: bool = False) -> list[Path]:
+def check_fit_form(directory: str | Path, each: bool, where: str = "--out", overwrite: bool = False,
+                   words: OptionWords = CLI_WORDS) -> list[Path]:
     """Refuse (:class:`ConfigError`) a fit into ``directory`` that holds an earlier fit of the other
     ``fit.arcs`` form (:func:`other_form_results`), unless ``overwrite``: then returns what to remove."""
     stale = other_form_results(directory, each)
@@ -73,7 +76,8 @@ def check_fit_form(directory: str | Path, each: bool, where: str = "--out", over
             f"{len(stale)} folder(s) of a fit of each arc ({', '.join(p.name for p in stale[:3])}"
             + (", ..." if len(stale) > 3 else "") + ")")
     raise ConfigError(f"{where} {directory}: holds {what} from an earlier fit with another fit.arcs; this fit would "
-                      "leave it beside its own results: give another --out, remove it, or add --overwrite to remove it")
+                      f"leave it beside its own results: give another {words.out}, remove it, or {words.add_overwrite} "
+                      "to remove it")
 
 
 def remove_other_form(directory: str | Path, stale: list[Path]) -> None:

@@ -60,6 +60,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.fitting.fit_replacing import FIT_RECORD, check_fit_form, check_fit_replacing, remove_other_form
+from cistrack.results.earlier_run import CLI_WORDS, OptionWords
 from cistrack.results.dir_lock import fit_lock
 from cistrack.results.output_paths import check_output_dir, distinct_stems
 from cistrack.results.store import MANIFEST
@@ -588,7 +589,7 @@ def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
 def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
               settings: Iterable[str] | None = None, registry: Registry | None = None,
               log: Callable[[str], None] | None = None, progress: bool = False,
-              overwrite: bool = False) -> list[ObjectFit]:
+              overwrite: bool = False, words: OptionWords = CLI_WORDS) -> list[ObjectFit]:
     """Fit an orbit to each object observed in ``files`` (see the module docstring).
 
     Parameters
@@ -604,6 +605,8 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     overwrite : replace a ``cistrack run``'s results or another object's fit in a directory
         (refused otherwise: :func:`cistrack.fitting.fit_replacing.check_fit_replacing`); an earlier
         fit of the same object is always redone
+    words : the caller's options, as refusals and notes name them (``--out``, ``--overwrite`` by
+        default; :data:`cistrack.results.earlier_run.PYTHON_WORDS` for :func:`cistrack.fit`)
 
     Returns one :class:`ObjectFit` per object, in order of first appearance. Errors in the input
     (files, settings, output directory) raise before any run; a run or fit that fails is reported
@@ -622,23 +625,24 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         d = Path(out) if out is not None and len(objects) == 1 else (Path(out) / slug if out is not None
                                                                        else Path("runs") / slug)
         plans.append((obs, d))
-    where = "--out" if out is not None else "the results directory"
+    where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
     for obs, d in plans:  # validate every scenario and directory before the first run
         _checked_scenario(obs, d / "observations.psv", scen_settings, reg)
-        replaced = check_fit_replacing(d, obs.designation, where, overwrite)
+        replaced = check_fit_replacing(d, obs.designation, where, overwrite, words)
         if replaced:
-            say(f"--overwrite: replacing {replaced} in {d}")
-        stale_of[d] = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite)
+            say(f"{words.overwrite}: replacing {replaced} in {d}")
+        stale_of[d] = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite, words)
     results = []
     for obs, d in plans:
         stale = stale_of[d]
         if stale:
             remove_other_form(d, stale)
-            say(f"--overwrite: removed the earlier fit of another fit.arcs in {d} ({', '.join(p.name for p in stale)})")
+            say(f"{words.overwrite}: removed the earlier fit of another fit.arcs in {d} "
+                f"({', '.join(p.name for p in stale)})")
         check_output_dir(d, where, records=(MANIFEST, FIT_RECORD))
         with fit_lock(d, where):  # one fit at a time in a directory; what it replaces checked again under it
-            check_fit_replacing(d, obs.designation, where, overwrite)
+            check_fit_replacing(d, obs.designation, where, overwrite, words)
             results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
 

@@ -14,6 +14,7 @@ import json
 import os
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +31,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
-           "FIT_FILES", "FIT_PLOTS"]
+           "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -38,6 +39,25 @@ RESULT_FOLDERS = (PARTS, ESTIMATE_PARTS)
 """The folders of part files a run writes in its results directory."""
 _SHOWN = 4
 """Differences named in a refusal (the rest are counted)."""
+
+
+@dataclass(frozen=True)
+class OptionWords:
+    """How a refusal names its caller's options: ``cistrack run --out DIR --overwrite`` on the command
+    line, ``ct.run(out=DIR, overwrite=True)`` from Python."""
+
+    out: str = "--out"
+    """The output option, as the refusal names it (``give another --out``)."""
+    overwrite: str = "--overwrite"
+    """The option that allows the replacement, as given (a note says it allowed one)."""
+    add_overwrite: str = "add --overwrite"
+    """What to do to allow it (``..., or add --overwrite to replace them``)."""
+
+
+CLI_WORDS = OptionWords()
+"""The command line's words."""
+PYTHON_WORDS = OptionWords(out="out=", overwrite="overwrite=True", add_overwrite="pass overwrite=True")
+"""The Python API's words (:func:`cistrack.run`, :func:`cistrack.fit`)."""
 
 
 def _has_results(d: Path) -> bool:
@@ -96,11 +116,12 @@ def _component(man: dict, kind: str) -> str:
 
 
 def check_replacing(directory: str | Path, scenario: Any, seed: int, where: str = "--out",
-                    overwrite: bool = False) -> str:
+                    overwrite: bool = False, words: OptionWords = CLI_WORDS) -> str:
     """Refuse (:class:`ConfigError` naming ``where`` and the directory) a run of ``scenario`` and
     ``seed`` in ``directory`` that holds the step table of a run with another fingerprint (or an
     unreadable manifest), unless ``overwrite``. Returns a description of the results that will be
-    replaced (for a note when ``overwrite`` allowed it), or "" when nothing of another run is there."""
+    replaced (for a note when ``overwrite`` allowed it), or "" when nothing of another run is there.
+    ``words``: the caller's options, as the refusal names them (:data:`CLI_WORDS`, :data:`PYTHON_WORDS`)."""
     d = Path(directory)
     if not (d / MANIFEST).is_file() or not _has_results(d):
         return ""
@@ -117,8 +138,8 @@ def check_replacing(directory: str | Path, scenario: Any, seed: int, where: str 
     if overwrite:
         return what
     raise ConfigError(f"{where} {d}: holds {what}. A run never replaces the results of another scenario, "
-                      f"other settings or another seed: give another --out, remove {d}, or add --overwrite "
-                      "to replace them")
+                      f"other settings or another seed: give another {words.out}, remove {d}, or "
+                      f"{words.add_overwrite} to replace them")
 
 
 def check_recording_path(recording: str | Path, directory: str | Path, where: str = "--rerun") -> None:
