@@ -7,10 +7,12 @@ per-axis sigma, NEES with the chi-square 5-95 % band of a consistent filter (6 d
 and its median, NIS with its chi-square band (only for a run without a truth, which has no
 error and no NEES: the NIS is its consistency), and differential entropy (nats). A panel whose values span more than
 two decades is on a log axis. Ticks at the bottom mark the updates, a triangle at the top and a
-dotted line the time custody was lost.
+dotted line the time custody was lost. A quantity that is undefined (NaN) after some step, a
+filter whose belief became NaN, stops there, with a note on its panel saying after which step.
 """
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -18,7 +20,7 @@ import numpy as np
 from cistrack.errors import CistrackError
 from cistrack.studies.report_plots import CHI2_DOF, nees_band, nees_median
 
-__all__ = ["plot_run", "RUN_PANELS", "log_scale_fits"]
+__all__ = ["plot_run", "RUN_PANELS", "log_scale_fits", "undefined_after"]
 
 #: (column, axis label) of each panel, top to bottom; a panel is drawn when its column has values.
 RUN_PANELS: tuple[tuple[str, str], ...] = (
@@ -83,11 +85,7 @@ def plot_run(steps: Any, summary: dict[str, Any], title: str = "") -> Any:
         if column == "pos_err_km" and sigma is not None:
             ax.fill_between(t, 0.0, 3.0 * sigma, color="C1", alpha=0.18, lw=0, label="3-sigma envelope (3 x RSS sigma)")
         if column == "sigma_pos_km":
-            per_axis = [v for v in (_values(steps, c) for c in _SIGMA_AXES) if v is not None]
-            if per_axis:
-                stack = np.vstack(per_axis)
-                ax.fill_between(t, np.nanmin(stack, axis=0), np.nanmax(stack, axis=0), color="C0", alpha=0.18,
-                                lw=0, label="band: smallest to largest per-axis sigma")
+            _sigma_band(ax, steps, t)
         if column == "nees":
             _chi2_band(ax, CHI2_DOF, "NEES", y)
         if column == "nis":
@@ -98,6 +96,7 @@ def plot_run(steps: Any, summary: dict[str, Any], title: str = "") -> Any:
             ax.set_yscale("log")
         ax.set_ylabel(label)
         ax.grid(True, which="major", alpha=0.3)
+        _note_undefined(ax, steps, column, y)
     _mark_updates_and_custody(axes, steps, t, summary)
     axes[-1].set_xlabel("time since epoch (days)")
     for ax in axes:
@@ -106,6 +105,40 @@ def plot_run(steps: Any, summary: dict[str, Any], title: str = "") -> Any:
     fig.suptitle(title + (f": {verdict}" if verdict else ""), fontsize=11)
     fig.tight_layout()
     return fig
+
+
+def _sigma_band(ax: Any, steps: Any, t: np.ndarray) -> None:
+    """The band from the smallest to the largest per-axis sigma (a gap where they are undefined)."""
+    per_axis = [v for v in (_values(steps, c) for c in _SIGMA_AXES) if v is not None]
+    if not per_axis:
+        return
+    stack = np.vstack(per_axis)
+    with warnings.catch_warnings():  # a step where every sigma is NaN is a gap, said by _note_undefined
+        warnings.simplefilter("ignore", RuntimeWarning)
+        lo, hi = np.nanmin(stack, axis=0), np.nanmax(stack, axis=0)
+    ax.fill_between(t, lo, hi, color="C0", alpha=0.18, lw=0, label="band: smallest to largest per-axis sigma")
+
+
+def undefined_after(steps: Any, column: str, y: np.ndarray) -> int | None:
+    """The step after which ``column`` (values ``y``, in the order of ``steps``) is undefined (NaN or
+    infinite) on every row of a kind where it is ever defined (a NIS only at updates), or None when
+    it is defined to the end."""
+    kinds = steps["kind"].to_numpy() if "kind" in steps.columns else np.full(len(y), "")
+    finite = np.isfinite(y)
+    rows = np.isin(kinds, np.unique(kinds[finite]))
+    last = int(np.flatnonzero(finite)[-1])
+    if not (rows[last + 1:] & ~finite[last + 1:]).any():
+        return None
+    index = steps["step"].to_numpy() if "step" in steps.columns else np.arange(len(y))
+    return int(index[last])
+
+
+def _note_undefined(ax: Any, steps: Any, column: str, y: np.ndarray) -> None:
+    """A note on the panel when its quantity is undefined (NaN) after some step: the line just stops."""
+    k = undefined_after(steps, column, y)
+    if k is not None:
+        ax.text(0.99, 0.95, f"undefined (NaN) after step {k}", transform=ax.transAxes, ha="right", va="top",
+                fontsize=8, color="C3")
 
 
 def _mark_updates_and_custody(axes: Any, steps: Any, t: np.ndarray, summary: dict[str, Any]) -> None:
