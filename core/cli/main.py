@@ -399,7 +399,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm (either case)")
     ex.add_argument("--out", type=path_text("--out"), default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
-    ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file (refused otherwise)")
+    ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file, or a different export "
+                    "(other --step, --predict) in the default RUN/estimate.<format> (refused otherwise)")
     ex.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")
     ex.add_argument("--force", action="store_true", help="export a run that did not finish, was killed or diverged "
                     "(refused otherwise); the file then says so in a COMMENT")

@@ -45,7 +45,7 @@ from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
 from cistrack.plugin.registry import Registry, default_registry
-from cistrack.results.atomic_files import atomic_target
+from cistrack.results.export_file import write_export
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
@@ -161,7 +161,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
                options: FitExportOptions | None = None, registry: Registry | None = None,
                **params: Any) -> Path:
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
-    (default ``RUN_DIR/estimate.<suffix>``, as for a run); returns the path.
+    (default ``RUN_DIR/estimate.<suffix>``, as for a run: one there holding a different export,
+    e.g. without ``predict_days``, is refused unless ``overwrite``); returns the path.
 
     ``options`` (a :class:`FitExportOptions`), each field of which may also be given as a keyword
     (a keyword wins): ``overwrite``, ``force``, ``predict_days`` (>= 0, at most
@@ -198,7 +199,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
-    _write(exporter, out, ie, meta, format, path is not None)
+    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite)
     return out
 
 
@@ -364,13 +365,3 @@ def _metadata(name: str, comments: list[str], grid: bool = True) -> dict[str, An
             "least-squares state and covariance at the fit epoch, km and km/s")
     return {"object_name": name, "object_id": name, "originator": "cistrack", "comments": comments,
             "interpolation": "LAGRANGE", "interpolation_degree": INTERPOLATION_DEGREE, "data_comment": what}
-
-
-def _write(exporter, out: Path, ie, meta: dict[str, Any], format: str, named: bool) -> None:
-    """Write the file atomically; ``named``: ``out`` was given as ``--out`` (the error says so)."""
-    try:
-        with atomic_target(out) as tmp:
-            exporter.write(tmp, ie, meta)
-    except OSError as exc:
-        raise CistrackError(("--out " if named else "") + f"{out}: cannot write the {format} file "
-                            f"({exc.strerror or exc}); nothing was written there") from None

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from cistrack.errors import CistrackError, ConfigError
-from cistrack.results.atomic_files import atomic_target
+from cistrack.results.export_file import write_export
 from cistrack.results.estimates import read_estimates
 from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
@@ -110,9 +110,10 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
                registry: Registry | None = None, overwrite: bool = False, force: bool = False,
                log: Callable[[str], None] | None = None, **params: Any) -> Path:
     """Write the estimate of the run in ``run_dir`` with exporter ``format`` ("oem", "opm", ...)
-    to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file, replaced on each
-    export); returns the path written. An existing ``path`` is refused (before anything is
-    read) unless ``overwrite``; a run that did not finish or diverged (:func:`export_refusal`)
+    to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file: written again with the
+    same content by the same export, but an export with other options there is refused unless
+    ``overwrite``, :func:`cistrack.results.export_file.write_export`); returns the path written.
+    An existing ``path`` is refused (before anything is read) unless ``overwrite``; a run that did not finish or diverged (:func:`export_refusal`)
     unless ``force``, and then the file carries the reason as a COMMENT. ``log`` receives a line
     per stage (:func:`cistrack.runs.progress.stage_log`)."""
     if path is not None and not overwrite and os.path.lexists(path):
@@ -132,7 +133,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     say(f"reading the estimates of {d} and carrying them into the sensor's inertial frame")
     ie, scen = run_inertial_estimates(d, reg)
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
-    say(f"writing {len(ie.t_tu)} estimates as {format} to {out}")
+    say(f"writing {_what_is_written(exporter, ie)} as {format} to {out}")
     manifest = d / "manifest.json"
     try:
         run_id = json.loads(manifest.read_text()).get("run_id", scen.name) if manifest.exists() else scen.name
@@ -142,10 +143,14 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if refusal is not None:
         meta["comments"] = [f"WARNING: exported with --force although run {run_id} is not a finished, "
                             f"converged run: {refusal}"]
-    try:
-        with atomic_target(out) as tmp:  # a full disk leaves no partial file under the final name
-            exporter.write(tmp, ie, meta)
-    except OSError as exc:
-        raise CistrackError(("--out " if path is not None else "") + f"{out}: cannot write the {format} file "
-                            f"({exc.strerror or exc}); nothing was written there") from None
+    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite)
     return out
+
+
+def _what_is_written(exporter: Any, ie: InertialEstimates) -> str:
+    """``15 estimates``, or for an exporter of one step (its ``step`` parameter, -1 the last)
+    ``step 3``."""
+    step = getattr(exporter, "step", None)
+    if isinstance(step, int) and not isinstance(step, bool) and len(ie.step):
+        return f"step {int(ie.step[-1]) if step == -1 else step}"
+    return f"{len(ie.t_tu)} estimates"

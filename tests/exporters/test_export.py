@@ -140,3 +140,32 @@ def test_an_existing_out_file_is_kept_unless_overwrite_is_given(run_dir, tmp_pat
     assert "already exists" in capsys.readouterr().err and target.read_text() == "an earlier export\n"
     assert main(["export", str(out), "--out", str(target), "--overwrite"]) == 0
     assert target.read_text().startswith("CCSDS_OEM_VERS")
+
+
+@pytest.fixture
+def run_copy(run_dir, tmp_path):
+    import shutil
+    d = tmp_path / "run"
+    shutil.copytree(run_dir[0], d)
+    return d
+
+
+def _epoch(path) -> str:
+    return read_opm(path)["EPOCH"]
+
+
+def test_the_default_file_is_rewritten_with_the_same_export_but_not_replaced_by_another_step(run_copy, capsys):
+    from cistrack.cli.main import main
+    assert main(["export", str(run_copy), "--format", "opm", "--step", "5", "--quiet"]) == 0
+    first = _epoch(run_copy / "estimate.opm")
+    assert main(["export", str(run_copy), "--format", "opm", "--step", "5", "--quiet"]) == 0
+    assert main(["export", str(run_copy), "--format", "opm", "--step", "3", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "estimate.opm: already holds a different export" in err and "--overwrite" in err
+    assert _epoch(run_copy / "estimate.opm") == first
+
+
+def test_the_log_of_an_opm_export_names_the_step_it_writes(run_copy, capsys):
+    from cistrack.cli.main import main
+    assert main(["export", str(run_copy), "--format", "opm", "--step", "3"]) == 0
+    assert "writing step 3 as opm to" in capsys.readouterr().err

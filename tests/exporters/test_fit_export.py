@@ -204,3 +204,15 @@ def test_a_designation_too_long_for_the_object_name_line_is_refused_naming_the_k
     with pytest.raises(CistrackError, match="OBJECT_NAME 'xxx.*' has 300 characters; .* at most 254"):
         export_fit(d, "oem")
     assert not (d / "estimate.oem").exists()
+
+
+def test_a_prediction_does_not_silently_replace_the_fits_default_export(fit_dir, tmp_path, capsys):
+    d = tmp_path / "copy"
+    shutil.copytree(fit_dir, d)
+    assert main(["export", str(d), "--format", "oem", "--quiet"]) == 0
+    arc_only = (d / "estimate.oem").read_text()
+    assert main(["export", str(d), "--format", "oem", "--predict", "1", "--quiet"]) == 2
+    assert "estimate.oem: already holds a different export" in capsys.readouterr().err
+    assert (d / "estimate.oem").read_text() == arc_only
+    assert main(["export", str(d), "--format", "oem", "--predict", "1", "--overwrite", "--quiet"]) == 0
+    assert "predicted beyond the last observation" in (d / "estimate.oem").read_text()
