@@ -165,25 +165,7 @@ def cmd_plugins(args) -> int:
     if args.param and not args.check:
         raise ConfigError("--param: sets a parameter for --check NAME only (to see the parameters: cistrack plugins NAME)")
     if args.check:
-        from cistrack.testing import check_registered
-        params = {}
-        for item in args.param or []:
-            key, sep, value = item.partition("=")
-            if not sep or not key.strip():
-                raise ConfigError(f"--param {item!r}: expected KEY=VALUE (VALUE in TOML syntax, e.g. path=\"out.rrd\")")
-            try:
-                params[key.strip()] = tomllib.loads(f"v = {value}")["v"]
-            except tomllib.TOMLDecodeError:
-                params[key.strip()] = value  # a bare word: take it as a string
-        _check_param_names(reg, args.check, args.kind, params)
-        results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None)
-        failed = 0
-        for r in results:
-            name, passed, message = (r if isinstance(r, tuple) else (r.name, r.passed, r.message))
-            print(f"  {'PASS' if passed else 'FAIL'}  {name}" + (f": {message}" if message and not passed else ""))
-            failed += 0 if passed else 1
-        print(f"{len(results) - failed} passed, {failed} failed")
-        return 1 if failed else 0
+        return _check_plugin(reg, args)
     kinds = [args.kind] if args.kind else list(KINDS)
     if args.name:
         return _describe(reg, args.name, kinds)
@@ -197,6 +179,56 @@ def cmd_plugins(args) -> int:
         for f in reg.failures:
             print("\n".join(wrap_row("  ", str(f))))
     return 0
+
+
+SLOW_CHECK_S = 60.0
+"""A conformance check that takes longer than this many seconds is warned about: docs/plugins.md
+says the whole suite runs in seconds, and a plugin's tests run it."""
+SHOWN_CHECK_S = 1.0
+"""A check that takes longer than this shows its time."""
+
+
+def _check_plugin(reg, args) -> int:
+    """``cistrack plugins --check NAME [--param KEY=VALUE ...]``: each check's line as soon as it ends."""
+    from cistrack.testing import check_registered
+
+    params = _check_params(args.param or [])
+    _check_param_names(reg, args.check, args.kind, params)
+    advice = (f"if it needs settings, give them with --param KEY=VALUE, VALUE in TOML syntax, e.g. cistrack plugins "
+              f"--check {args.check} --param path=\"out.rrd\"; cistrack plugins {args.check} lists its parameters")
+    results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None,
+                               on_result=_print_check, advice=advice)
+    failed = sum(not r.passed for r in results)
+    print(f"{len(results) - failed} passed, {failed} failed")
+    return 1 if failed else 0
+
+
+def _check_params(items: list[str]) -> dict:
+    """``--param KEY=VALUE`` items as a dict (VALUE in TOML syntax; a bare word is a string)."""
+    params = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"--param {item!r}: expected KEY=VALUE (VALUE in TOML syntax, e.g. path=\"out.rrd\")")
+        try:
+            params[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError:
+            params[key.strip()] = value  # a bare word: take it as a string
+    return params
+
+
+def _print_check(result) -> None:
+    """One check's line (wrapped within the width; its time when it took over a second), flushed at
+    once so that a slow suite shows its progress, and a warning on stderr for a check that took
+    longer than :data:`SLOW_CHECK_S`."""
+    took = f" ({result.seconds:.1f} s)" if result.seconds > SHOWN_CHECK_S else ""
+    text = result.name + took + (f": {result.message}" if result.message and not result.passed else "")
+    print("\n".join(wrap_row(f"  {'PASS' if result.passed else 'FAIL'}  ", text)), flush=True)
+    if result.seconds > SLOW_CHECK_S:
+        _eprint("\n".join(wrap_row("cistrack: warning: ", f"check '{result.name}' took {result.seconds:.0f} s; the "
+                                    f"whole conformance suite is meant to run in seconds (docs/plugins.md), and a "
+                                    f"plugin's tests run it: make the component faster on the checks' small "
+                                    f"inputs")))
 
 
 def _check_param_names(reg, name: str, kind: str | None, params: dict) -> None:

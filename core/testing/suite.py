@@ -47,6 +47,10 @@ KIND_CHECKS: dict[str, list[tuple[str, Callable[[Any], None]]]] = {
 }
 """The kind-specific checks, run after the parameter checks (which every class-based kind gets)."""
 
+PYTHON_ADVICE = "if it needs settings, check an instance: check_plugin(Cls(...)) or check_registered(name, params={...})"
+"""What a failure to construct a class with its defaults advises, from Python (the command line
+gives its own: ``--param KEY=VALUE``)."""
+
 
 def infer_kind(component: Any) -> str:
     """The registry kind of a component, class or reference orbit."""
@@ -80,11 +84,13 @@ class BoundCheck:
     rebuilt from ``get_params()``, so checks do not see each other's state.
     """
 
-    def __init__(self, name: str, func: Callable[[Any], None], component: Any, kind: str):
+    def __init__(self, name: str, func: Callable[[Any], None], component: Any, kind: str,
+                 advice: str = PYTHON_ADVICE):
         self.name = name
         self.func = func
         self.component = component
         self.kind = kind
+        self.advice = advice
 
     def __repr__(self) -> str:
         return f"<check {self.name} of {self.kind} {label(self.component)!r}>"
@@ -98,8 +104,7 @@ class BoundCheck:
         except Exception as exc:
             how = "with its default parameters" if isinstance(component, type) else "from get_params()"
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(component)}': could not "
-                                   f"construct it {how}: {describe_exception(exc)} (if it needs settings, check an instance: "
-                                   f"check_plugin(Cls(...)) or check_registered(name, params={{...}}))") from exc
+                                   f"construct it {how}: {describe_exception(exc)} ({self.advice})") from exc
 
     def __call__(self, component: Any = None) -> None:
         target = self.component if component is None else component
@@ -117,9 +122,11 @@ def _constructs_with_defaults(component: Any) -> None:
     """Building the component with no arguments works (the BoundCheck did it already)."""
 
 
-def iter_checks(component: Any, kind: str | None = None) -> Iterator[tuple[str, BoundCheck]]:
+def iter_checks(component: Any, kind: str | None = None, *,
+                advice: str = PYTHON_ADVICE) -> Iterator[tuple[str, BoundCheck]]:
     """Yield ``(check_name, check)`` for every check that applies to ``component`` (a class, an
-    instance, or a ReferenceOrbit). Each ``check`` is a :class:`BoundCheck`: call it to run it."""
+    instance, or a ReferenceOrbit). Each ``check`` is a :class:`BoundCheck`: call it to run it.
+    ``advice``: what a class that cannot be built with its defaults is told to do."""
     kind = kind or infer_kind(component)
     if kind not in KIND_CHECKS:
         raise ParameterError(f"unknown plugin kind {kind!r}; kinds are: {', '.join(KINDS)}")
@@ -134,7 +141,7 @@ def iter_checks(component: Any, kind: str | None = None) -> Iterator[tuple[str, 
             checks.append(("parameters_declared", check_parameters_declared))
     checks.extend(KIND_CHECKS[kind])
     for name, func in checks:
-        yield name, BoundCheck(name, func, component, kind)
+        yield name, BoundCheck(name, func, component, kind, advice)
 
 
 def _run(name: str, check: Callable[[], None]) -> CheckResult:
@@ -146,11 +153,15 @@ def _run(name: str, check: Callable[[], None]) -> CheckResult:
     return CheckResult(name, True, "", time.perf_counter() - t0)
 
 
-def _run_all(component: Any, kind: str) -> list[CheckResult]:
-    """Every check's result; if the component cannot even be constructed, only that failure."""
+def _run_all(component: Any, kind: str, on_result: Callable[[CheckResult], None] | None = None,
+             advice: str = PYTHON_ADVICE) -> list[CheckResult]:
+    """Every check's result, each also handed to ``on_result`` as soon as it is known; if the
+    component cannot even be constructed, only that failure."""
     results = []
-    for name, check in iter_checks(component, kind):
+    for name, check in iter_checks(component, kind, advice=advice):
         results.append(_run(name, check))
+        if on_result is not None:
+            on_result(results[-1])
         if name == "constructs_with_defaults" and not results[-1].passed:
             break
     return results
@@ -173,13 +184,16 @@ def check_plugin(component_or_class: Any, kind: str | None = None) -> Conformanc
 
 
 def check_registered(name: str, kind: str | None = None, registry: Any = None,
-                     params: dict[str, Any] | None = None) -> list[CheckResult]:
+                     params: dict[str, Any] | None = None, *, on_result: Callable[[CheckResult], None] | None = None,
+                     advice: str = PYTHON_ADVICE) -> list[CheckResult]:
     """Look ``name`` up in ``registry`` (default: the process-wide one) and run its checks.
 
     ``kind`` is needed only when ``name`` is registered under several kinds. ``params`` builds
     the component with those parameters instead of its defaults (for components such as a
     recorder that need, e.g., an output path). Returns one :class:`CheckResult` (name, passed,
-    message) per check; it does not raise on failures.
+    message, seconds) per check; it does not raise on failures. ``on_result`` receives each
+    result as soon as its check ends (``cistrack plugins --check`` prints it then); ``advice``
+    is what a component that cannot be built with its defaults is told to do.
     """
     if registry is None:
         from cistrack.plugin.registry import default_registry
@@ -198,9 +212,12 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
             factory = registry.create(kind, name, **(params or {}))
         except Exception as exc:
             how = f"with {params}" if params else "with its default parameters"
-            return [CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
-                                f"{describe_exception(exc)}")]
-    return _run_all(factory, kind)
+            failed = CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
+                                 f"{describe_exception(exc)}")
+            if on_result is not None:
+                on_result(failed)
+            return [failed]
+    return _run_all(factory, kind, on_result, advice)
 
 
 def parametrize_with_checks(components: Iterable[Any]):

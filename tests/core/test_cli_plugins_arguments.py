@@ -19,3 +19,12 @@ def test_an_argument_that_would_be_ignored_or_misread_is_refused_naming_it(argv,
 def test_a_parameter_the_component_takes_is_checked_as_before(capsys):
     assert main(["plugins", "--check", "kmeans", "--param", "n_init=2"]) == 0
     assert capsys.readouterr().out.rstrip().endswith("0 failed")
+
+
+def test_a_component_that_needs_a_parameter_is_told_the_command_lines_option(capsys):
+    """The built-in rerun recorder needs somewhere to record: the advice is --param, not Python."""
+    assert main(["plugins", "--check", "rerun"]) == 1
+    out = capsys.readouterr().out
+    assert 'cistrack plugins --check rerun --param path="out.rrd"' in " ".join(out.split())
+    assert "check_plugin(" not in out and "check_registered(" not in out
+
