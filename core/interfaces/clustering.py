@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from abc import abstractmethod
+from typing import ClassVar
 
 import numpy as np
 
@@ -15,6 +16,10 @@ class Clusterer(Component):
     """Partition particles into components. Implementations standardise coordinates themselves."""
 
     kind = "clustering"
+    chooses_n_components: ClassVar[bool] = False
+    """Whether the clusterer decides how many clusters to return itself, its ``n_components``
+    parameter (if any) only a hint: the conformance suite then does not hold it to at most
+    ``n_components`` clusters (``max_components`` is always a bound)."""
 
     @abstractmethod
     def cluster(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:

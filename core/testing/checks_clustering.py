@@ -65,6 +65,37 @@ def check_reproducible(c) -> None:
     require(np.array_equal(a, b), "cluster() with generators of the same seed gave different labels")
 
 
+COUNT_LIMITS = ("n_components", "max_components")
+"""Parameters that bound how many clusters a clusterer returns."""
+
+
+def _with_limit(c, name: str, limit: int):
+    """``c`` rebuilt with parameter ``name`` = ``limit``, or None when it does not take that value."""
+    try:
+        return type(c)(**{**c.get_params(), name: limit})
+    except Exception:
+        return None
+
+
+def check_respects_n_components(c) -> None:
+    """A clusterer given n_components = M (or max_components = M) returns at most M clusters, with
+    its own value and with 2, on two blobs of 200 particles; one that chooses the count itself
+    (``chooses_n_components = True``) is not held to its n_components."""
+    get_params = getattr(c, "get_params", None)
+    params = get_params() if callable(get_params) else {}
+    hint = "n_components" if getattr(c, "chooses_n_components", False) else None
+    names = [n for n in COUNT_LIMITS if n != hint and isinstance(params.get(n), int) and not isinstance(params.get(n), bool)]
+    x, _ = two_blobs()
+    for name in names:
+        for limit, clusterer in ((params[name], c), (2, _with_limit(c, name, 2))):
+            if clusterer is None:
+                continue
+            m = int(_cluster(clusterer, x).max()) + 1
+            require(m <= limit, f"given {name}={limit}, cluster() returned {m} clusters of {x.shape[0]} particles: "
+                                f"return at most {name} clusters (a clusterer that chooses the count itself, its "
+                                f"{name} only a hint, says so with the class attribute chooses_n_components = True)")
+
+
 def check_same_after_pickle(c) -> None:
     x, _ = two_blobs()
     other = round_trip(c)
@@ -77,4 +108,5 @@ CLUSTERING_CHECKS = [
     ("invariant_to_units", check_invariant_to_units),
     ("reproducible", check_reproducible),
     ("same_after_pickle", check_same_after_pickle),
+    ("respects_n_components", check_respects_n_components),
 ]

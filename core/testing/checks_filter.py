@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cistrack.model.belief import Belief, GaussianMixture, ParticleCloud
-from cistrack.interfaces.filter import Filter
+from cistrack.interfaces.filter import Diagnostics, Filter
 from cistrack.model.measurement import Measurement
 from cistrack.testing.check_support import (close, fresh, no_global_random_state, require, round_trip, unchanged)
 from cistrack.testing.fixtures import FIXTURE_SEED, initial_cloud, nrho_truth
@@ -20,6 +20,8 @@ N_UPDATES = 2
 LIFECYCLE_UPDATES = 5
 """Updates of the lifecycle check: a few more than the others make, so that a belief that turns
 NaN (or stops moving) after a couple of updates is caught here rather than in a run."""
+DOCUMENTED_DIAGNOSTICS = tuple(Diagnostics.__annotations__)
+"""The diagnostics whose meaning the framework relies on: each a count or size, finite and >= 0."""
 
 
 @dataclass
@@ -55,9 +57,22 @@ def _check_belief(f, epoch: float, when: str) -> Belief:
     require(isinstance(s, ParticleCloud) and s.states.ndim == 2 and s.states.shape[1] == 6 and len(s) >= 1,
             f"belief.samples {when} must be a ParticleCloud of (n, 6) states")
     require(np.all(np.isfinite(s.states)), f"belief.samples {when} contain NaN or infinity")
-    diag = f.diagnostics
-    require(isinstance(diag, dict) and all(isinstance(k, str) for k in diag), f"diagnostics {when} must be a dict with str keys")
+    _check_diagnostics(f.diagnostics, when)
     return b
+
+
+def _check_diagnostics(diag, when: str) -> None:
+    """A dict with str keys, whose keys of :class:`~cistrack.interfaces.filter.Diagnostics` (counts,
+    sizes: the verdict reads them) are finite, non-negative numbers."""
+    require(isinstance(diag, dict) and all(isinstance(k, str) for k in diag), f"diagnostics {when} must be a dict with str keys")
+    for key in DOCUMENTED_DIAGNOSTICS:
+        if key not in diag:
+            continue
+        value = diag[key]
+        ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+        require(ok and np.isfinite(value) and value >= 0,
+                f"diagnostics[{key!r}] {when} is {value!r}; a documented diagnostic (cistrack.interfaces.filter."
+                f"Diagnostics: {', '.join(DOCUMENTED_DIAGNOSTICS)}) is a count or size: a finite number >= 0")
 
 
 def _run(f, case: _Case, seed: int = 0, steps: int = N_UPDATES) -> list[tuple[Belief, Belief]]:
@@ -119,8 +134,10 @@ def check_reproducible(f) -> None:
 
 
 def check_inputs_not_mutated(f) -> None:
+    """The cloud, the measurements, and the dynamics and sensor objects (their attributes) are as
+    they were after the filter ran: a run shares them with the truth and the other components."""
     case = _case()
-    with unchanged(cloud=case.cloud, measurements=case.measurements):
+    with unchanged(cloud=case.cloud, measurements=case.measurements, dynamics=case.dynamics, sensor=case.sensor):
         _run(f, case)
 
 
