@@ -29,7 +29,7 @@ from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
-from cistrack.cli.text_width import cap_help_width, fit_row, wrap_lines, wrap_row
+from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
 from cistrack.runs.progress import eprint as _eprint
 
 if sys.version_info >= (3, 11):
@@ -122,17 +122,21 @@ def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
     from cistrack.evaluation.verdicts import verdict_lines
     from cistrack.results.store import results_line
 
-    out_(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
+    def say(line: str) -> None:  # within 120 columns, continuations under the text after a label
+        for part in wrap_labelled(line):
+            out_(part)
+
+    say(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     if quiet and s.status != "finished":
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     ended = s.status in ("finished", "filter-failed")  # a failed run has no verdict to give
     for line in (verdict_lines(s, out, _fmt) if ended else ["  verdict: none (the run did not finish; see its status above)"]):
-        out_(line)
+        say(line)
     for line in count_lines(s) + maneuver_lines(s):
-        out_(line)
+        say(line)
     for line in final_lines(s.final, _fmt):  # velocities in m/s throughout
-        out_(line)
-    out_(results_line(out))  # only files that exist (a full disk may have kept some from being written)
+        say(line)
+    say(results_line(out))  # only files that exist (a full disk may have kept some from being written)
 
 
 def _serve_until_interrupted(recorder, out_) -> None:
@@ -457,8 +461,8 @@ def _configure_logging(quiet: bool) -> None:
     import logging
 
     class _Stderr(logging.Handler):  # looks sys.stderr up at each message (tests swap it)
-        def emit(self, record: logging.LogRecord) -> None:
-            _eprint(f"cistrack: {record.getMessage()}")
+        def emit(self, record: logging.LogRecord) -> None:  # within 120 columns, like the rest
+            _eprint("\n".join(wrap_labelled(f"cistrack: {record.getMessage()}")))
 
     logger = logging.getLogger("cistrack")
     if not any(type(h).__name__ == "_Stderr" for h in logger.handlers):

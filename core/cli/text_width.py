@@ -7,10 +7,11 @@ terminal's width, at most :data:`MAX_WIDTH` (:func:`cap_help_width`).
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import textwrap
 
-__all__ = ["MAX_WIDTH", "wrap_row", "fit_row", "wrap_lines", "cap_help_width"]
+__all__ = ["MAX_WIDTH", "wrap_row", "fit_row", "wrap_lines", "wrap_labelled", "cap_help_width"]
 
 #: the widest line the command prints, in characters
 MAX_WIDTH = 120
@@ -51,6 +52,28 @@ def wrap_lines(text: str, width: int = MAX_WIDTH) -> str:
         out += textwrap.wrap(line.strip(), width=width, initial_indent=indent, subsequent_indent=indent + "  ",
                              break_on_hyphens=False)
     return "\n".join(out)
+
+
+_LABEL = re.compile(r"\s*[^:\s][^:]*?: ")
+"""A line's label: leading spaces, then words up to the first ': ' (``  verdict: ``)."""
+MAX_LABEL = 40
+"""The longest label whose width continuation lines keep; a longer one is indented like the line."""
+
+
+def wrap_labelled(line: str, width: int = MAX_WIDTH) -> list[str]:
+    """``line`` within ``width`` columns: a line that starts with a short label (``  verdict: ``,
+    ``cistrack: warning: ``...) continues under the text after its first label (:func:`wrap_row`),
+    any other as :func:`wrap_lines` wraps it. Line breaks inside ``line`` are kept."""
+    out: list[str] = []
+    for part in line.split("\n"):
+        label = _LABEL.match(part)
+        if len(part) <= width:
+            out.append(part)
+        elif label and len(label.group(0)) <= MAX_LABEL:
+            out += wrap_row(label.group(0), part[label.end():], width)
+        else:
+            out += wrap_lines(part, width).split("\n")
+    return out
 
 
 class _CappedHelpFormatter(argparse.HelpFormatter):

@@ -246,7 +246,7 @@ def _describe_failure(exc: BaseException) -> str:
         return f"SystemExit: it called sys.exit({exc.code!r}) while loading"
     if isinstance(exc, _UnmarkedHooks):
         return str(exc)
-    text = str(exc)
+    text = " ".join(str(exc).split())  # one line: a pluggy validation error breaks its own lines
     return f"{type(exc).__name__}: {text}" if text else f"{type(exc).__name__} raised while loading"
 
 
