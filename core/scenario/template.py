@@ -158,7 +158,10 @@ def template_path(name: str | None) -> Path:
     stated in the message. Any other character is taken (``cistrack init "x y;z"`` writes
     ``x y;z.toml``)."""
     p = Path("my-scenario" if name is None else name)
-    check_path_component(p.name.removesuffix(".toml"), f"cistrack init NAME {name!r}: the scenario name")
+    try:
+        check_path_component(p.name.removesuffix(".toml"), f"cistrack init NAME {name!r}: the scenario name")
+    except ConfigError as exc:
+        raise ConfigError(f"{exc}; give a name such as my-scenario (optionally in a folder: runs/my-scenario)") from None
     return p if p.suffix == ".toml" else p.with_name(p.name + ".toml")
 
 
