@@ -32,7 +32,9 @@ def test_a_run_ends_with_its_output_flushed_and_its_results_complete(tmp_path):
     out = tmp_path / "r"
     proc = _console(tmp_path, ["run", "quick", "--out", str(out), *SMALL])
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.rstrip().splitlines()[-1].startswith("  results: ")  # the last line printed
+    lines = proc.stdout.rstrip().splitlines()
+    last = max(i for i, line in enumerate(lines) if line.startswith("  results: "))
+    assert all(line.startswith("    ") for line in lines[last + 1:])  # the results (wrapped) are printed last
     steps = pq.read_table(out / "steps.parquet")
     assert steps.num_rows > 1
     assert json.loads((out / "manifest.json").read_text())["status"] == "finished"
