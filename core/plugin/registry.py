@@ -227,12 +227,11 @@ class _UnmarkedHooks(ParameterError):
 
 
 def _require_marked_hooks(pm: pluggy.PluginManager, module: Any) -> None:
-    """Refuse (:class:`_UnmarkedHooks`) a plugin module that defines functions named after cistrack hooks but
-    marks none of them ``@cistrack.hookimpl``: pluggy would skip them all and the plugin would
-    register, observe and add nothing, without a word."""
-    if pm.get_hookcallers(module):
-        return
-    unmarked = [h for h in _HOOK_NAMES if callable(getattr(module, h, None))]
+    """Refuse (:class:`_UnmarkedHooks`) a plugin module that defines a function named after a cistrack
+    hook without marking it ``@cistrack.hookimpl``: pluggy would skip it, and the plugin would
+    register, observe or add nothing through it, without a word (its marked hooks do not excuse it)."""
+    marked = {caller.name for caller in pm.get_hookcallers(module) or []}
+    unmarked = [h for h in _HOOK_NAMES if callable(getattr(module, h, None)) and h not in marked]
     if unmarked:
         it, them = ("it is", "it") if len(unmarked) == 1 else ("they are", "them")
         raise _UnmarkedHooks(f"its module {getattr(module, '__name__', module)!s} has {', '.join(unmarked)} but {it} "

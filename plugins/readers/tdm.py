@@ -305,6 +305,7 @@ class _TdmParse:
         self.path, self.sites = path, sites
         self.state, self.seg = "header", None
         self.seen_version = False
+        self.header_lines: dict[str, int] = {}  # header keyword -> its line
         self.rows: list[ObsRow] = []
         self.table: dict[str, Site] = {}
         self.pending: dict[datetime, tuple[str, float, int]] = {}  # epoch -> (keyword, angle, line)
@@ -337,6 +338,10 @@ class _TdmParse:
         k, v = _kv(text, self.path, ln)
         if k not in _HEADER_KEYS:
             raise FieldError(self.path, ln, k[:40], f"unknown header keyword; expected {', '.join(sorted(_HEADER_KEYS))} then META_START")
+        if k in self.header_lines:
+            raise FieldError(self.path, ln, k, f"given again: line {self.header_lines[k]} of the header gives it "
+                                               "already; each keyword is given once")
+        self.header_lines[k] = ln
         if k == "CCSDS_TDM_VERS":
             if v not in ("1.0", "2.0"):
                 raise FieldError(self.path, ln, k, f"{show_field(v)}: versions 1.0 and 2.0 are read")

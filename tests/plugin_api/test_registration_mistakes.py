@@ -70,3 +70,30 @@ def test_an_instance_is_refused_as_a_factory_it_would_be_shared_by_every_run():
 def test_a_name_with_whitespace_or_control_characters_is_refused(name):
     with pytest.raises(ParameterError, match=r"plugin cistrack-slip 0\.1 .*filter name .* is not allowed"):
         _add(UKFFilter, name)
+
+
+HALF_MARKED = '''
+from cistrack.api import hookimpl
+from cistrack.plugins.filters.ukf import UKFFilter
+
+
+class Mine(UKFFilter):
+    """A filter registered by a marked hook beside an observer hook its author forgot to mark."""
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("filter", "half-marked-filter", Mine)
+
+
+def cistrack_step_updated(run, step):
+    pass
+'''
+
+
+def test_an_unmarked_hook_beside_a_marked_one_fails_the_plugin_naming_it(tmp_path, monkeypatch):
+    module = _plugin_on_path(tmp_path, monkeypatch, HALF_MARKED)
+    reg = load_registry()
+    failed = [str(f) for f in reg.failures if f.entry_point == module]
+    assert len(failed) == 1 and "has cistrack_step_updated but it is not marked @cistrack.hookimpl" in failed[0]
+    assert "half-marked-filter" not in reg.names("filter")

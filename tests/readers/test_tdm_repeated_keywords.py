@@ -30,3 +30,11 @@ def test_a_keyword_given_twice_in_one_block_is_refused_naming_both_lines(tmp_pat
                                                rf"line {first} of this metadata block \(from line 4\) gives it already"):
         read_observations(path, EPOCH)
 
+
+
+def test_a_header_keyword_given_twice_is_refused_naming_both_lines(tmp_path):
+    path = tmp_path / "header.tdm"
+    path.write_text(HEAD + "ORIGINATOR = someone else\nMETA_START\n" + META + "META_STOP\n" + DATA.format(h=1))
+    with pytest.raises(MeasurementError, match=rf"{re.escape(str(path))}, line 4, field ORIGINATOR: given again: "
+                                               r"line 3 of the header gives it already"):
+        read_observations(path, EPOCH)
