@@ -145,7 +145,9 @@ class Run:
 
     @property
     def final(self) -> dict[str, float]:
-        """Metrics of the last update: per-axis sigmas (km, cm/s), errors (km, m/s), NEES, entropy."""
+        """Metrics of the last update: per-axis sigmas (km, cm/s), errors (km, m/s), NEES, entropy;
+        one that is undefined is NaN in the run's own process and None once read back (the
+        manifest, strict JSON, writes it as null)."""
         return dict(self.summary.final)
 
     def table(self) -> pyarrow.Table:
