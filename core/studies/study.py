@@ -510,17 +510,26 @@ def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, s
 
 def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:
     """Tell on stderr which finished runs are stale, which have a damaged manifest and which were
-    left by a process that is gone."""
+    left by a process that is gone (each notice wrapped within 120 columns)."""
     stale = [s.run_id for s in specs if states[s.run_id] == "stale"]
     if stale:
-        print(f"study: {len(stale)} finished run(s) were made with another scenario, seed or input file "
-              f"(fingerprint changed) and are run again: {', '.join(stale[:5])}"
-              + (" ..." if len(stale) > 5 else ""), file=sys.stderr)
+        _notice(f"{len(stale)} finished run(s) were made with another scenario, seed or input file "
+                f"(fingerprint changed) and are run again: {', '.join(stale[:5])}" + (" ..." if len(stale) > 5 else ""))
     damaged = [str(Path(s.out_dir) / "manifest.json") for s in specs if states[s.run_id] == "damaged"]
     if damaged:
-        print(f"study: {len(damaged)} run(s) whose manifest.json is cut short or damaged (it cannot be read "
-              f"back) are run again: {', '.join(damaged[:3])}" + (" ..." if len(damaged) > 3 else ""), file=sys.stderr)
+        _notice(f"{len(damaged)} run(s) whose manifest.json is cut short or damaged (it cannot be read "
+                f"back) are run again: {', '.join(damaged[:3])}" + (" ..." if len(damaged) > 3 else ""))
     gone = [s.run_id for s in specs if states[s.run_id] == "gone"]
     if gone:
-        print(f"study: {len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
-              f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""), file=sys.stderr)
+        _notice(f"{len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
+                f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""))
+
+
+def _notice(text: str, width: int = 120) -> None:
+    """``study: text`` on stderr, wrapped within ``width`` columns under the text."""
+    import textwrap
+
+    from cistrack.runs.progress import eprint
+
+    eprint("\n".join(textwrap.wrap(text, width=width, initial_indent="study: ", subsequent_indent="       ",
+                                   break_on_hyphens=False, break_long_words=False)))

@@ -53,7 +53,7 @@ def test_study_run_runs_again_a_run_with_a_damaged_manifest_saying_so_by_its_fil
     res = run_study(study, out_dir=out, workers=1, progress=False)
     assert (res["completed"], res["skipped"], res["failed"]) == (1, 1, 0)
     assert read_manifest(run)["summary"]["run_id"] == run.name
-    err = capsys.readouterr().err
+    err = " ".join(capsys.readouterr().err.split())  # the notice is wrapped within 120 columns
     assert f"manifest.json is cut short or damaged (it cannot be read back) are run again: {run / 'manifest.json'}" in err
     assert "fingerprint changed" not in err
 
@@ -64,3 +64,15 @@ def test_reading_back_a_run_whose_summary_lacks_its_run_id_names_the_manifest(fi
     _, _, run = _damaged(finished, tmp_path, DAMAGED["a summary without run_id"])
     with pytest.raises(ConfigError, match=r"manifest\.json: not a run summary: its 'run_id' is None"):
         cistrack.read_run(run)
+
+
+def test_the_notice_of_runs_run_again_stays_within_120_columns(capsys):
+    from types import SimpleNamespace
+
+    from cistrack.studies.study import _say_rerun
+
+    specs = [SimpleNamespace(run_id=f"example-1-burn[dv=1,resp=inflate]__pgm__noisy-range__seed{k}", out_dir=f"r{k}")
+             for k in range(4)]
+    _say_rerun(specs, {s.run_id: "gone" for s in specs})
+    err = capsys.readouterr().err
+    assert "4 run(s) were left 'running'" in err and max(len(line) for line in err.splitlines()) <= 120
