@@ -75,7 +75,10 @@ def iod_input(scenario, measurements: MeasurementSet, sensor: SiteNetwork):
     key = scenario.iod_observer
     rows = np.flatnonzero(measurements.sites == key)
     if rows.size == 0:
-        raise ConfigError(f"{scenario.source}: [run]: key 'iod_observer' = {key!r}: that observer took no "
-                          f"measurements; the IOD needs an arc (observers that measured: "
-                          f"{', '.join(measurements.site_keys())})")
+        measured = list(measurements.site_keys())
+        fix = (f"set [run] iod_observer = {measured[0]!r}" + (f" (observers that measured: {', '.join(measured)})"
+                                                             if len(measured) > 1 else "")
+               if measured else "no observer took any")
+        raise ConfigError(f"{scenario.source}: the IOD works from observer {key!r} ([run] iod_observer, by default the "
+                          f"first [sensors] table), which took no measurements; the IOD needs an arc: {fix}")
     return measurements.subset(rows), sensor.subset(rows)

@@ -86,3 +86,14 @@ def test_a_scenario_without_any_sensor_is_refused_naming_both_forms():
     from cistrack.scenario.loading import parse_scenario
     with pytest.raises(ConfigError, match=r"missing table \[sensor\].*\[sensors.<key>\]"):
         parse_scenario(raw)
+
+
+def test_an_iod_observer_that_measured_nothing_is_named_with_its_default_and_the_setting_that_helps():
+    raw = load_scenario("example-1-ground-space").raw
+    blind = {**raw["sensors"]["texas"], "latitude_deg": -89.0}  # the target never rises there
+    scenario = load_scenario("example-1-ground-space", overrides={**SMALL, "run": {"iod_observer": "texas"},
+                                                                  "sensors": {"texas": blind, "dro": raw["sensors"]["dro"]}})
+    with pytest.raises(ConfigError, match=r"the IOD works from observer 'texas' \(\[run\] iod_observer, by default the "
+                                          r"first \[sensors\] table\), which took no measurements; .*set \[run\] "
+                                          r"iod_observer = 'dro'"):
+        prepare_run(scenario, seed=2)
