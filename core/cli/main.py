@@ -68,16 +68,34 @@ def cmd_run(args) -> int:
     check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
     if args.rerun:
         check_recording_path(args.rerun, out)
+    made = not out.exists()
     check_output_dir(out, where)
-    with run_lock(out, where):  # one run at a time in a results directory
-        replaced = check_replacing(out, scen, seed, where, overwrite=args.overwrite)
-        res, recorder = _run_into(args, reg, scen, seed, out, replaced)
+    try:
+        with run_lock(out, where):  # one run at a time in a results directory
+            replaced = check_replacing(out, scen, seed, where, overwrite=args.overwrite)
+            res, recorder = _run_into(args, reg, scen, seed, out, replaced)
+    except CistrackError:  # refused before the run (e.g. its --rerun file): leave no directory it made
+        if made:
+            _remove_if_only_lock(out)
+        raise
     out_ = (lambda *a, **k: None) if args.quiet else print
     if recorder is not None and (args.rerun_serve or args.rerun_spawn):
         _serve_until_interrupted(recorder, out_)
     if recorder is None:
         allow_quick_exit()  # results written and closed; no recorder to flush at exit
     return 0 if res.summary.status == "finished" else 3
+
+
+def _remove_if_only_lock(out: Path) -> None:
+    """Remove the directory ``out`` when it holds nothing but the run's lock file."""
+    from cistrack.results.output_paths import RUN_LOCK
+
+    try:
+        if [p.name for p in out.iterdir()] == [RUN_LOCK]:
+            (out / RUN_LOCK).unlink()
+            out.rmdir()
+    except OSError:
+        pass
 
 
 def _run_into(args, reg, scen, seed: int, out: Path, replaced: str):

@@ -93,3 +93,9 @@ def test_a_run_with_stderr_closed_finishes(tmp_path):
                           timeout=300)
     assert proc.returncode == 0, proc.stdout
     assert (tmp_path / "r" / "steps.parquet").is_file()
+
+
+def test_a_refused_recording_path_leaves_no_results_directory_behind(tmp_path, capsys):
+    assert main(["run", "quick", "--out", str(tmp_path / "r"), "--rerun", str(tmp_path / "nodir" / "x.rrd"),
+                 "--quiet"]) == 2
+    assert "cannot be written" in capsys.readouterr().err and not (tmp_path / "r").exists()
