@@ -200,6 +200,12 @@ def _fit_inside_and_before(arc: _Arc, t_lo: float) -> list[Anchor]:
     return out + [replace(_fit_at(arc, tb), log_prior=float(np.log(p_in / inside.size))) for tb in inside]
 
 
+PLACED_WEIGHT_FACTOR = 2.0
+"""The burn time is said to be placed when its candidate's weight exceeds this many times the
+uniform weight 1/K of K candidates; below, the log says the measurements cannot place it (the
+cloud is the same either way)."""
+
+
 def draw(detection: Detection, anchors: list[Anchor], n: int, rng: np.random.Generator,
          say: Callable[[str], None]) -> ParticleCloud:
     """``n`` particles (n, 6) at ``detection.t`` from the candidates' mixture, weighted by their
@@ -214,6 +220,10 @@ def draw(detection: Detection, anchors: list[Anchor], n: int, rng: np.random.Gen
     dv_ms = best.dv * float(units.vu_to_kms(1.0)) * 1000.0
     detection.extra["reanchor"] = {"fallback": None, "t_burn_candidates": [a.tb for a in anchors],
                                    "weights": w.tolist(), "t_burn": best.tb, "delta_v_ms": dv_ms.tolist()}
-    say(f"reanchor: refitted with a burn at {units.tu_to_days(best.tb):.3f} d (weight {np.max(w):.2f} of "
-        f"{len(anchors)} candidate times), |dv| = {np.linalg.norm(dv_ms):.3f} m/s")
+    if len(anchors) > 1 and np.max(w) < PLACED_WEIGHT_FACTOR / len(anchors):
+        say(f"reanchor: the measurements cannot place the burn yet (largest weight {np.max(w):.2f} of {len(anchors)} "
+            "candidate times): the cloud spreads over all of them")
+    else:
+        say(f"reanchor: refitted with a burn at {units.tu_to_days(best.tb):.3f} d (weight {np.max(w):.2f} of "
+            f"{len(anchors)} candidate times), |dv| = {np.linalg.norm(dv_ms):.3f} m/s")
     return ParticleCloud(states=np.vstack(parts), epoch=float(detection.t))

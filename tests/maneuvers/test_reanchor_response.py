@@ -150,3 +150,24 @@ def test_conformance_refuses_a_response_that_asks_for_a_history_it_cannot_take()
     check_response_takes_the_history_it_asks_for(ReanchorResponse())
     with pytest.raises(AssertionError, match="history"):
         check_response_takes_the_history_it_asks_for(_AsksButTakesNoHistory())
+
+
+def _anchors(log_evidences):
+    from cistrack.plugins.maneuvers.reanchor import Anchor
+
+    return [Anchor(tb=0.1 * k, log_evidence=e, cost=0.0, mean=np.zeros(6), covariance=np.eye(6) * 1e-8,
+                   dv=np.zeros(3)) for k, e in enumerate(log_evidences)]
+
+
+def test_reanchor_says_when_the_measurements_cannot_place_the_burn():
+    from cistrack.interfaces.maneuvers import Detection
+    from cistrack.plugins.maneuvers.reanchor import draw
+
+    lines: list[str] = []
+    draw(Detection(t=3.0, statistic=5.0, threshold=4.0), _anchors([0.0] * 26), 50, np.random.default_rng(0),
+         lines.append)
+    assert "cannot place the burn yet (largest weight 0.04 of 26 candidate times)" in lines[0]
+    lines.clear()
+    draw(Detection(t=3.0, statistic=5.0, threshold=4.0), _anchors([0.0] * 25 + [20.0]), 50, np.random.default_rng(0),
+         lines.append)
+    assert lines[0].startswith("reanchor: refitted with a burn at")
