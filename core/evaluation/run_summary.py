@@ -197,6 +197,8 @@ def maneuver_lines(s: RunSummary) -> list[str]:
         if m.get("confirmed"):
             lines.append(f"{head}; burn {m['delta_v_ms']:.3g} +- {m['delta_v_sigma_ms']:.2g} m/s at "
                          f"{m['t_burn_days']:.3f} +- {m.get('t_burn_sigma_days') or 0.0:.2g} d")
+        elif m.get("confirmed") is None:
+            lines.append(f"{head}; not estimated ([maneuvers] estimate = false)")
         else:
             lines.append(f"{head}; unconfirmed: the least squares kept no burn there")
     return lines

@@ -128,7 +128,7 @@ class ManeuverWatch:
             before = groups[k - 1][0].t if k > 0 else -np.inf
             after = float(groups[k + 1][0].t_burn_bounds[0]) if k + 1 < len(groups) else np.inf
             burn = self._estimate(ctx, group[0], (before, after), say) if self.estimate else None
-            out.append(_record(group, burn))
+            out.append(_record(group, burn, estimated=self.estimate))
         return out
 
     def _start_state(self, target: float, latest: float) -> _Posterior | None:
@@ -188,13 +188,14 @@ def episodes(detections: list[Detection]) -> list[list[Detection]]:
     return out
 
 
-def _record(group: list[Detection], burn: Any) -> dict[str, Any]:
+def _record(group: list[Detection], burn: Any, estimated: bool = True) -> dict[str, Any]:
     """One ``summary.maneuvers`` entry for an episode of detections (its first ``d``):
     ``t_days`` (the first detection), ``detections`` (how many in the episode), ``t_burn_days`` (the burn time
     estimated by least squares, else the detector's, else NaN), ``t_burn_window_days``,
     ``delta_v_ms`` and ``delta_v_sigma_ms`` (magnitude, m/s; NaN without an estimate),
-    ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test), the
-    detector's name, statistic and threshold."""
+    ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test; None when
+    ``estimated`` is False: ``[maneuvers] estimate = false`` ran none), the detector's name,
+    statistic and threshold."""
     d = group[0]
     lo, hi = d.t_burn_bounds
     rec: dict[str, Any] = {"t_days": float(units.tu_to_days(d.t)), "detector": d.detector, "detections": len(group),
@@ -202,7 +203,7 @@ def _record(group: list[Detection], burn: Any) -> dict[str, Any]:
                            "t_burn_window_days": [float(units.tu_to_days(lo)), float(units.tu_to_days(hi))],
                            "t_burn_days": float(units.tu_to_days(d.t_burn)) if d.t_burn is not None else float("nan"),
                            "delta_v_ms": float("nan"), "delta_v_sigma_ms": float("nan"),
-                           "delta_v_vector_ms": [float("nan")] * 3, "confirmed": False}
+                           "delta_v_vector_ms": [float("nan")] * 3, "confirmed": False if estimated else None}
     if burn is not None:
         rec.update({"t_burn_days": float(units.tu_to_days(burn.t)), "t_burn_sigma_days": float(units.tu_to_days(burn.t_sigma)),
                     "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,

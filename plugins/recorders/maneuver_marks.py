@@ -123,7 +123,7 @@ def estimate_text(m: dict) -> str:
     size = "no delta-v estimate"
     if dv is not None:
         size = f"delta-v {dv:.3g} ± {sigma:.2g} m/s" if sigma is not None else f"delta-v {dv:.3g} m/s"
-    verdict = "confirmed" if m.get("confirmed") else "unconfirmed"
+    verdict = "confirmed" if m.get("confirmed") else ("not estimated" if m.get("confirmed") is None else "unconfirmed")
     return f"{when}{detected}: {size}, {verdict}"
 
 

@@ -149,3 +149,16 @@ def test_a_detector_whose_warmup_covers_every_update_says_it_can_detect_nothing(
     run_scenario(s, seed=SEED, log=lines.append)
     said = [m for m in lines if "warmup = 400 covers all" in m]
     assert len(said) == 1 and "can detect nothing" in said[0] and "mixture-likelihood" in said[0]
+
+
+def test_a_detection_not_estimated_is_recorded_and_said_as_not_estimated_not_as_rejected():
+    from types import SimpleNamespace
+
+    from cistrack.evaluation.run_summary import maneuver_lines
+    from cistrack.runs.maneuver_watch import _record
+
+    d = Detection(t=3.0, statistic=5.0, threshold=4.0, detector="nis-window", t_burn_bounds=(2.9, 3.0))
+    rec = _record([d], None, estimated=False)
+    assert rec["confirmed"] is None and _record([d], None)["confirmed"] is False
+    [line] = maneuver_lines(SimpleNamespace(truth_maneuvers=[], maneuvers=[rec]))
+    assert line.endswith("not estimated ([maneuvers] estimate = false)")
