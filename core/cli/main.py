@@ -68,7 +68,7 @@ def cmd_run(args) -> int:
     check_run_inputs(scen, args.rows_per_part)  # before the results directory is made
     if args.rerun:
         check_recording_path(args.rerun, out)
-    made = not out.exists()
+    made = not os.path.lexists(out)  # (False, not an error, where the parent may not be searched)
     check_output_dir(out, where)
     try:
         with run_lock(out, where):  # one run at a time in a results directory
