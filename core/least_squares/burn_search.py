@@ -183,7 +183,7 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
             + ("" if plausible else f" (larger than {MAX_BURN_MS:g} m/s: not a burn between observations)"))
         if not (ev.accepted and plausible):
             break
-        fit = _timed(arc, fit, t_sigma, found, window)
+        fit = _carried(_timed(arc, fit, t_sigma, found, window), found.burns)
         windows = found.windows + [window]
         order = np.argsort([x.t for x in found.burns] + [b.t], kind="stable")
         found = ManeuverSearch(fit.fit, flown(dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
@@ -194,11 +194,22 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
 def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,
            window: tuple[float, float]) -> ImpulseFit:
     """``fit`` with the burn time refined in its gap and its uncertainty in the delta-v covariance
-    (as it is when that fails)."""
+    (as it is when that fails: its burn then has no time uncertainty, ``dv_dt`` None, which the
+    search's users must not report as a measured 0; the reason goes in ``found.notes``)."""
     try:
         return with_time_uncertainty(arc, fit, t_sigma, known=[x.t for x in found.burns], bounds=window)
-    except (FitError, PropagationError):
+    except (FitError, PropagationError) as exc:
+        found.notes.append(f"burn at {_utc_days(fit.searched.t):.3f} d: its time's uncertainty was not measured ({exc})")
         return fit
+
+
+def _carried(fit: ImpulseFit, before: list[BurnEstimate]) -> ImpulseFit:
+    """``fit`` with the burns found before it (refitted jointly, their times held: t_sigma 0)
+    given back their time uncertainty (:meth:`BurnEstimate.refitted`): without it a burn found
+    first would be reported at its time +- 0 with a delta-v sigma that ignores the time's."""
+    by_t = {x.t: x for x in before}
+    burns = [by_t[b.t].refitted(b) if k != fit.new and b.t in by_t else b for k, b in enumerate(fit.burns)]
+    return replace(fit, burns=burns)
 
 
 def _utc_days(t: float) -> float:

@@ -59,12 +59,25 @@ class BurnEstimate:
     covariance_ms2 : (3, 3) float  its covariance, (m/s)^2 (with the burn time's uncertainty mapped in
                                    by :func:`with_time_uncertainty`)
     t_sigma : float                TU, one sigma of the burn time (0 when not assessed)
+    dv_dt : (3,) float or None     d dv / d t_b, (m/s) / TU, measured by :func:`with_time_uncertainty`
+                                   (the term g g^T t_sigma^2 of ``covariance_ms2``); None when not assessed
     """
 
     t: float
     delta_v_ms: np.ndarray
     covariance_ms2: np.ndarray
     t_sigma: float = 0.0
+    dv_dt: np.ndarray | None = None
+
+    def refitted(self, later: "BurnEstimate") -> "BurnEstimate":
+        """``later`` (a joint refit of this burn at the same time, with another burn added: its
+        time held fixed, so t_sigma 0) with this burn's time uncertainty kept: its t_sigma, and
+        the time term g g^T t_sigma^2 (g as measured here) added to the refit's covariance."""
+        if self.dv_dt is None:
+            return later
+        g = np.asarray(self.dv_dt, dtype=float)
+        return BurnEstimate(later.t, later.delta_v_ms, later.covariance_ms2 + np.outer(g, g) * self.t_sigma ** 2,
+                            self.t_sigma, g)
 
     @property
     def magnitude_ms(self) -> float:
@@ -355,13 +368,16 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
     ``bounds`` (TU), the gap) give the full fits' cost profile: the parabola through the three
     costs moves the burn time to its vertex when that lies a half step or more away (one more fit
     there) and gives its one sigma (Delta cost = 1; ``t_sigma`` when the profile is not convex);
-    their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2."""
+    their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2. Raises
+    :class:`FitError` when ``bounds`` leave no room for the two fits (the time's uncertainty
+    cannot be measured: the burn is returned with none, t_sigma 0, never silently)."""
     b = burn.searched
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     h = max(float(t_sigma), float(units.seconds_to_tu(60.0)))
     ts = _two_sides(b.t, h, lo, hi)
     if ts is None:
-        return burn
+        raise FitError(f"with_time_uncertainty: the interval [{lo:.5f}, {hi:.5f}] TU leaves no room for the "
+                       f"burn time's profile (step {h:.2e} TU): its uncertainty cannot be measured")
     (c_a, f_a), (c_b, f_b) = (_fit_at(arc, burn, float(t), known) for t in ts)
     c0 = capped_cost(burn.fit, arc.prior)
     pts = sorted([(ts[0], c_a), (b.t, c0), (ts[1], c_b)])
@@ -373,7 +389,7 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
     g = (f_b.searched.delta_v_ms - f_a.searched.delta_v_ms) / (ts[1] - ts[0])
     nb = best.searched
     burns = list(best.burns)
-    burns[best.new] = BurnEstimate(nb.t, nb.delta_v_ms, nb.covariance_ms2 + np.outer(g, g) * sigma ** 2, sigma)
+    burns[best.new] = BurnEstimate(nb.t, nb.delta_v_ms, nb.covariance_ms2 + np.outer(g, g) * sigma ** 2, sigma, g)
     return ImpulseFit(burns, best.fit, best.new, burn.costs, burn.candidates)
 
 
