@@ -199,6 +199,8 @@ def maneuver_lines(s: RunSummary) -> list[str]:
                          f"{m['t_burn_days']:.3f} +- {m.get('t_burn_sigma_days') or 0.0:.2g} d")
         elif m.get("confirmed") is None:
             lines.append(f"{head}; not estimated ([maneuvers] estimate = false)")
+        elif m.get("unconfirmed_reason"):
+            lines.append(f"{head}; unconfirmed: {m['unconfirmed_reason']}")
         else:
             lines.append(f"{head}; unconfirmed: the least squares kept no burn there")
     return lines

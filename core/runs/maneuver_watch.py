@@ -15,8 +15,9 @@ squares over the measurements from :data:`PRE_DAYS` before its first detection's
 it a few days of one site's angles absorb a small burn into another ballistic orbit): a ballistic
 fit, then the burn search of :mod:`cistrack.least_squares.burn_search` (the gaps screened, the burn time's
 profile, the delta-v as solve-for parameters, tested against the ballistic fit). The latest burn
-kept before the detection is its estimate (``confirmed``); a detection for which the search keeps
-none is reported unconfirmed, without a delta-v.
+kept before the detection is its estimate (``confirmed`` when it passes :func:`_doubt`'s consistency
+checks, else unconfirmed with the reason, ``unconfirmed_reason``, and its numbers); a detection for
+which the search keeps none is reported unconfirmed, without a delta-v.
 
 The metric stage ``maneuvers`` (:class:`ManeuverMetric`) writes each update's test statistic
 (``maneuver_statistic``) and whether it raised a detection (``maneuver_detected``).
@@ -145,7 +146,7 @@ class ManeuverWatch:
 
     def _estimate(self, ctx: Any, d: Detection, between: tuple[float, float], say) -> Any:
         """The burn nearest before the detection ``d`` found in the arc around it (module
-        docstring), or None; ``between``: the previous episode's detection and the next
+        docstring) with why it is not confirmed (:class:`_Estimate`, :func:`_doubt`), or None; ``between``: the previous episode's detection and the next
         episode's suspect interval start (TU), which the arc stays within."""
         before, after = between
         from cistrack.least_squares.burn_search import search_maneuvers
@@ -172,7 +173,67 @@ class ManeuverWatch:
             say(f"maneuver detected at {units.tu_to_days(d.t):.3f} d: no delta-v estimate ({exc})")
             return None
         burns = [b for b in found.burns if b.t <= d.t]
-        return burns[-1] if burns else None
+        if not burns:
+            return None
+        return _Estimate(burns[-1], _doubt(found, burns, d.t))
+
+
+@dataclass(frozen=True)
+class _Estimate:
+    """The burn the search kept for an episode, and why it is not confirmed ("" when it is)."""
+
+    burn: Any
+    doubt: str = ""
+
+
+GOODNESS_FALSE_ALARM = 1e-4
+"""The false-alarm level of the fit-with-the-burn's goodness-of-fit test (:func:`_doubt`)."""
+
+
+def _doubt(found: Any, before: list, t_detect: float) -> str:
+    """Why the latest of the burns ``before`` the detection (TU ``t_detect``) that the search
+    ``found`` kept is not a confirmed estimate, in words ("" when it is):
+
+    - its time's uncertainty was not measured (t_sigma 0 is never a measured value);
+    - its time lies outside the gap the search placed it in, or after the detection;
+    - the search kept more than one burn before the detection: the change the detector saw is split
+      over several burns (a large burn whose linearised profile missed its time, ``example-1-burn``
+      seed 3 at 100 m/s: 17.6 m/s at 3.116 d and 82 m/s at 3.840 d for one 100 m/s burn at 3.620 d),
+      and the latest's delta-v is not the maneuver's;
+    - the fit with every burn does not fit the measurements: its capped cost (each observation's
+      chi-square capped at the rejection threshold, plus the prior's term) exceeds the chi-square
+      quantile at :data:`GOODNESS_FALSE_ALARM` of its degrees of freedom (measurement components
+      minus 3 per burn and the solve-for parameters; the prior's 6 rows balance the state's 6).
+    """
+    from cistrack.least_squares.chi_square import chi2_ppf
+    from cistrack.least_squares.impulse_fit import capped_cost
+
+    burn = before[-1]
+    days = units.tu_to_days
+    if burn.dv_dt is None or not burn.t_sigma > 0:
+        why = next((n for n in found.notes if "uncertainty was not measured" in n), "")
+        return "its burn time's uncertainty could not be measured" + (f" ({why})" if why else "")
+    k = next((j for j, b in enumerate(found.burns) if b is burn), None)
+    if k is not None and k < len(found.windows):
+        lo, hi = found.windows[k]
+        if not lo <= burn.t <= hi:
+            return (f"its burn time {days(burn.t):.3f} d lies outside the gap {days(lo):.3f}-{days(hi):.3f} d "
+                    "the search placed it in")
+    if burn.t > t_detect:
+        return f"its burn time {days(burn.t):.3f} d is after the detection"
+    if len(before) > 1:
+        at = ", ".join(f"{b.magnitude_ms:.3g} m/s at {days(b.t):.3f} d" for b in before)
+        return f"the search split the change over {len(before)} burns before the detection ({at})"
+    fit = found.result
+    comps = int(np.sum(np.isfinite(np.asarray(fit.residuals.normalised, dtype=float))))
+    dof = comps - len(fit.parameter_names) - (0 if found.prior is not None else 6)
+    cost = capped_cost(fit, found.prior)
+    if dof > 0:
+        limit = chi2_ppf(1.0 - GOODNESS_FALSE_ALARM, dof)
+        if cost > limit:
+            return (f"the fit with the burn does not fit the measurements (cost {cost:.1f} > {limit:.1f}, "
+                    f"the chi-square bound of {dof} degrees of freedom at {GOODNESS_FALSE_ALARM:g})")
+    return ""
 
 
 def episodes(detections: list[Detection]) -> list[list[Detection]]:
@@ -188,14 +249,16 @@ def episodes(detections: list[Detection]) -> list[list[Detection]]:
     return out
 
 
-def _record(group: list[Detection], burn: Any, estimated: bool = True) -> dict[str, Any]:
+def _record(group: list[Detection], estimate: Any, estimated: bool = True) -> dict[str, Any]:
     """One ``summary.maneuvers`` entry for an episode of detections (its first ``d``):
     ``t_days`` (the first detection), ``detections`` (how many in the episode), ``t_burn_days`` (the burn time
     estimated by least squares, else the detector's, else NaN), ``t_burn_window_days``,
     ``delta_v_ms`` and ``delta_v_sigma_ms`` (magnitude, m/s; NaN without an estimate),
-    ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test; None when
-    ``estimated`` is False: ``[maneuvers] estimate = false`` ran none), the detector's name,
-    statistic and threshold."""
+    ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test and the
+    estimate's consistency, :func:`_doubt`; None when ``estimated`` is False: ``[maneuvers]
+    estimate = false`` ran none), ``unconfirmed_reason`` (only when an estimate was made but fails
+    that consistency: why; its numbers are still given), the detector's name, statistic and
+    threshold."""
     d = group[0]
     lo, hi = d.t_burn_bounds
     rec: dict[str, Any] = {"t_days": float(units.tu_to_days(d.t)), "detector": d.detector, "detections": len(group),
@@ -204,10 +267,14 @@ def _record(group: list[Detection], burn: Any, estimated: bool = True) -> dict[s
                            "t_burn_days": float(units.tu_to_days(d.t_burn)) if d.t_burn is not None else float("nan"),
                            "delta_v_ms": float("nan"), "delta_v_sigma_ms": float("nan"),
                            "delta_v_vector_ms": [float("nan")] * 3, "confirmed": False if estimated else None}
-    if burn is not None:
-        rec.update({"t_burn_days": float(units.tu_to_days(burn.t)), "t_burn_sigma_days": float(units.tu_to_days(burn.t_sigma)),
+    if estimate is not None:
+        burn = estimate.burn
+        t_sigma = float(units.tu_to_days(burn.t_sigma)) if burn.t_sigma > 0 else float("nan")  # never a measured 0
+        rec.update({"t_burn_days": float(units.tu_to_days(burn.t)), "t_burn_sigma_days": t_sigma,
                     "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,
-                    "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "confirmed": True})
+                    "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "confirmed": not estimate.doubt})
+        if estimate.doubt:
+            rec["unconfirmed_reason"] = estimate.doubt
     return {k: _json(v) for k, v in rec.items()}
 
 
