@@ -254,7 +254,8 @@ def _record(group: list[Detection], estimate: Any, estimated: bool = True) -> di
     ``t_days`` (the first detection), ``detections`` (how many in the episode), ``t_burn_days`` (the burn time
     estimated by least squares, else the detector's, else NaN), ``t_burn_window_days``,
     ``delta_v_ms`` and ``delta_v_sigma_ms`` (magnitude, m/s; NaN without an estimate),
-    ``delta_v_vector_ms`` (synodic components), ``confirmed`` (the least squares' test and the
+    ``delta_v_vector_ms`` (synodic components) and, with an estimate, its ``delta_v_covariance_ms2``
+    ((3, 3), (m/s)^2, the burn time's uncertainty mapped in), ``confirmed`` (the least squares' test and the
     estimate's consistency, :func:`_doubt`; None when ``estimated`` is False: ``[maneuvers]
     estimate = false`` ran none), ``unconfirmed_reason`` (only when an estimate was made but fails
     that consistency: why; its numbers are still given), the detector's name, statistic and
@@ -272,7 +273,9 @@ def _record(group: list[Detection], estimate: Any, estimated: bool = True) -> di
         t_sigma = float(units.tu_to_days(burn.t_sigma)) if burn.t_sigma > 0 else float("nan")  # never a measured 0
         rec.update({"t_burn_days": float(units.tu_to_days(burn.t)), "t_burn_sigma_days": t_sigma,
                     "delta_v_ms": burn.magnitude_ms, "delta_v_sigma_ms": burn.magnitude_sigma_ms,
-                    "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms], "confirmed": not estimate.doubt})
+                    "delta_v_vector_ms": [float(v) for v in burn.delta_v_ms],
+                    "delta_v_covariance_ms2": [[float(x) for x in row] for row in np.asarray(burn.covariance_ms2)],
+                    "confirmed": not estimate.doubt})
         if estimate.doubt:
             rec["unconfirmed_reason"] = estimate.doubt
     return {k: _json(v) for k, v in rec.items()}

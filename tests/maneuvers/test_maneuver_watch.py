@@ -162,3 +162,11 @@ def test_a_detection_not_estimated_is_recorded_and_said_as_not_estimated_not_as_
     assert rec["confirmed"] is None and _record([d], None)["confirmed"] is False
     [line] = maneuver_lines(SimpleNamespace(truth_maneuvers=[], maneuvers=[rec]))
     assert line.endswith("not estimated ([maneuvers] estimate = false)")
+
+
+def test_an_estimated_burn_is_recorded_with_the_covariance_of_its_delta_v_vector(burn_run):
+    [m] = [m for m in burn_run.summary.maneuvers if m.get("confirmed")][:1]
+    cov = np.asarray(m["delta_v_covariance_ms2"])
+    assert cov.shape == (3, 3) and np.allclose(cov, cov.T) and np.all(np.linalg.eigvalsh(cov) > 0)
+    u = np.asarray(m["delta_v_vector_ms"]) / m["delta_v_ms"]
+    assert np.sqrt(u @ cov @ u) == pytest.approx(m["delta_v_sigma_ms"], rel=1e-9)  # the magnitude's sigma is its projection
