@@ -33,6 +33,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.sites import Site
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
 
+from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
 from .site_params import parse_sites, resolve_site
 
@@ -101,6 +102,17 @@ def _header_columns(p: Path, rows: list[tuple[int, str]]) -> dict[str, int]:
     return {name: header.index(name) for name in header}
 
 
+def _say_tiny_sigmas(path, tiny: dict[str, list[float]]) -> None:
+    """Warn (logger ``cistrack.readers``, once per column and file) of stated angle sigmas below
+    1 milliarcsecond: arcseconds by the column's name, most likely degrees by mistake. They are used."""
+    import logging
+
+    for name, values in tiny.items():
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}: column {name}: {len(values)} rows state an uncertainty below 1 milliarcsecond (the first "
+            f"{values[0]:.3g} arcsec); the column is in arcseconds: are these degrees? They are used as given")
+
+
 @dataclass
 class _RowParser:
     """Turns the cells of one data row into (t [TU], values, sigmas) in rad/LU; collects sites."""
@@ -111,6 +123,7 @@ class _RowParser:
     range_alpha: float
     sites: dict[str, Site]
     site_table: dict[str, Site] = field(default_factory=dict)
+    tiny: dict[str, list[float]] = field(default_factory=dict)  # column -> stated sigmas below 1 mas, arcsec
 
     def cell(self, cells: list[str], name: str) -> str:
         return cells[self.col[name]] if name in self.col else ""
@@ -158,6 +171,8 @@ class _RowParser:
         problem = sigma_arcsec_problem(s)
         if problem:
             raise ValueError(f"{name} {s} {problem}")
+        if cell and s < SMALLEST_PLAUSIBLE_ARCSEC:
+            self.tiny.setdefault(name, []).append(s)
         return to_rad(cell, "arcsec") if cell else s * ARCSEC_RAD
 
     def _range(self, cells: list[str]) -> tuple[float, float]:
@@ -264,6 +279,7 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     errors: list[str] = []
     times, values, sigmas, row_sites = _parse_rows(rows[1:], parser, errors)
     _raise_row_errors(p, errors)
+    _say_tiny_sigmas(p, parser.tiny)
     if not times:
         raise MeasurementError(f"{p}: the file has a header but no measurements")
 

@@ -41,3 +41,14 @@ def test_the_xml_reader_says_so_too(tmp_path, caplog):
     with caplog.at_level("WARNING", logger="cistrack.readers"):
         read_observations(_xml(tmp_path, "0.0003", "0.0003"), EPOCH)
     assert "field rmsDec: 1 observations state an uncertainty below 1 milliarcsecond" in caplog.text
+
+
+def test_the_csv_reader_says_so_for_its_sigma_columns(tmp_path, caplog):
+    path = tmp_path / "azel.csv"
+    path.write_text("time_utc,azimuth_deg,elevation_deg,sigma_azimuth_arcsec,sigma_elevation_arcsec\n"
+                    "2026-03-01T01:00:00Z,100.0,30.0,1.5,0.0004\n2026-03-01T02:00:00Z,101.0,31.0,1.5,1.5\n")
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        ms = read_observations(path, EPOCH)
+    assert len(ms) == 2
+    assert (f"{path}: column sigma_elevation_arcsec: 1 rows state an uncertainty below 1 milliarcsecond (the first "
+            "0.0004 arcsec)") in caplog.text and "sigma_azimuth_arcsec" not in caplog.text
