@@ -13,6 +13,7 @@ import pytest
 from cistrack.cli.main import _print_outcome, main
 from cistrack.evaluation.custody import Verdict
 from cistrack.evaluation.run_summary import RunSummary
+from plugin_site import plugin_site  # tests/ is on sys.path
 
 MAX = 120
 LONG_REASON = ("innovations blew up: NIS 1.34e+07 at this update and above 1e+06 on 3 consecutive updates "
@@ -56,13 +57,8 @@ def cistrack_register(reg):       # the argument must be called 'registry'
 
 @pytest.fixture
 def site(tmp_path: Path) -> Path:
-    site = tmp_path / "site"
-    info = site / "cistrack_badhook-1.0.dist-info"
-    info.mkdir(parents=True)
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cistrack-badhook\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text("[cistrack]\nbadhook = cistrack_badhook_plugin\n")
-    (site / "cistrack_badhook_plugin.py").write_text(BAD_HOOK)
-    return site
+    return plugin_site(tmp_path / "site", "cistrack-badhook", "1.0", {"cistrack_badhook_plugin": BAD_HOOK},
+                       {"badhook": "cistrack_badhook_plugin"})
 
 
 def test_a_plugin_load_warning_is_one_message_wrapped_within_120_columns(site, tmp_path):

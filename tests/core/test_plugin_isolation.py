@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from plugin_site import plugin_site  # tests/ is on sys.path
 
 BODIES = {
     "hostile_exit": "import sys\nsys.exit(3)\n",
@@ -26,14 +27,7 @@ EXPECTED = {"hostile_exit": "sys.exit(3)", "hostile_interrupt": "KeyboardInterru
 @pytest.fixture
 def site(tmp_path: Path) -> Path:
     """A folder with the distribution ``cistrack-hostile``: one entry point per way of ending an import."""
-    site = tmp_path / "site"
-    info = site / "cistrack_hostile-1.0.dist-info"
-    info.mkdir(parents=True)
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cistrack-hostile\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text("[cistrack]\n" + "".join(f"{m} = {m}\n" for m in BODIES))
-    for module, body in BODIES.items():
-        (site / f"{module}.py").write_text(body)
-    return site
+    return plugin_site(tmp_path / "site", "cistrack-hostile", "1.0", BODIES)
 
 
 def _cistrack(site: Path, cwd: Path, *argv: str) -> subprocess.CompletedProcess:

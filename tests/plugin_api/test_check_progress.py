@@ -13,6 +13,7 @@ import pytest
 
 from cistrack.cli.main import SLOW_CHECK_S, _print_check
 from cistrack.testing.check_results import CheckResult
+from plugin_site import plugin_site  # tests/ is on sys.path
 
 SLOW_MODULE = '''
 import time
@@ -40,13 +41,8 @@ def cistrack_register(registry):
 
 @pytest.fixture
 def site(tmp_path: Path) -> Path:
-    site = tmp_path / "site"
-    info = site / "cistrack_slow-1.0.dist-info"
-    info.mkdir(parents=True)
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cistrack-slow\nVersion: 1.0\n")
-    (info / "entry_points.txt").write_text("[cistrack]\nslow = cistrack_slow_plugin\n")
-    (site / "cistrack_slow_plugin.py").write_text(SLOW_MODULE)
-    return site
+    return plugin_site(tmp_path / "site", "cistrack-slow", "1.0", {"cistrack_slow_plugin": SLOW_MODULE},
+                       {"slow": "cistrack_slow_plugin"})
 
 
 def _lines_with_times(site: Path, cwd: Path) -> list[tuple[float, str]]:

@@ -11,6 +11,7 @@ import pytest
 from cistrack.errors import ParameterError
 from cistrack.plugin.registry import Registry, load_registry
 from cistrack.plugins.filters.ukf import UKFFilter
+from plugin_site import plugin_site  # tests/ is on sys.path
 
 _COUNT = itertools.count()
 
@@ -31,11 +32,7 @@ def _plugin_on_path(tmp_path: Path, monkeypatch, body: str) -> str:
     """A distribution ``cistrack-slip`` whose one entry point is a module with ``body``, on sys.path;
     returns the entry point's (and module's) name, new for each test (modules are imported once)."""
     module = f"slip_plugin_{next(_COUNT)}"
-    info = tmp_path / "cistrack_slip-0.1.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: cistrack-slip\nVersion: 0.1\n")
-    (info / "entry_points.txt").write_text(f"[cistrack]\n{module} = {module}\n")
-    (tmp_path / f"{module}.py").write_text(body)
+    plugin_site(tmp_path, "cistrack-slip", "0.1", {module: body})
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.delenv("CISTRACK_DISABLE_PLUGIN_AUTOLOAD", raising=False)
     return module
