@@ -13,7 +13,7 @@ from typing import Callable
 from cistrack import units
 from cistrack.plugin.hookspecs import hookimpl
 
-__all__ = ["ProgressBar", "eprint", "stage_log", "bar_columns", "BAR_MAX_COLUMNS"]
+__all__ = ["ProgressBar", "eprint", "stage_log", "bar_columns", "bar_class", "BAR_MAX_COLUMNS"]
 
 BAR_MAX_COLUMNS = 120
 """The widest a progress bar is drawn (the command line's output width), narrower on a narrower
@@ -31,6 +31,18 @@ def bar_columns() -> int:
     except (OSError, ValueError, AttributeError):  # no file number (a notebook), or not a terminal after all
         pass
     return BAR_MAX_COLUMNS
+
+
+def bar_class() -> type:
+    """tqdm's bar class: the notebook widget under IPython (``tqdm.auto``), else the text bar.
+
+    ``tqdm.auto`` imports asyncio and tqdm's notebook module in every process (about 10 ms of a
+    run's start-up); outside IPython it resolves to the text bar, which this imports directly."""
+    if "IPython" in sys.modules:
+        from tqdm.auto import tqdm
+    else:
+        from tqdm.std import tqdm
+    return tqdm
 
 
 def eprint(*parts: object) -> None:
@@ -67,8 +79,7 @@ class ProgressBar:
     """
 
     def __init__(self, run_id: str, total: int, custody=None) -> None:
-        from tqdm.auto import tqdm
-
+        tqdm = bar_class()
         self.custody = custody
         # on a terminal the bar redraws at most every 0.1 s; into a file or a CI log, where every
         # redraw is kept, at most every 10 s (and once at the end)

@@ -488,10 +488,8 @@ def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, s
     ex = opts.executor or (make_executor(opts.workers, opts.dask) if todo else None)
     bar = None
     if opts.progress and todo:
-        from tqdm.auto import tqdm
-
-        from cistrack.runs.progress import bar_columns
-        bar = tqdm(total=len(todo), desc=f"study {name}", unit="run", ncols=bar_columns(),
+        from cistrack.runs.progress import bar_class, bar_columns
+        bar = bar_class()(total=len(todo), desc=f"study {name}", unit="run", ncols=bar_columns(),
                    disable=sys.stderr is None)  # 2>&-: no bar
     said: dict[str, str] = {}
     ended = False

@@ -46,3 +46,22 @@ def test_the_bar_of_a_run_with_a_long_name_stays_within_120_columns(monkeypatch)
     bar.bar.close()
     draws = [d for d in err.getvalue().replace("\r", "\n").split("\n") if d]
     assert draws and max(len(d) for d in draws) <= 120
+
+
+def test_outside_ipython_the_bar_is_tqdms_text_bar_and_asyncio_is_not_imported():
+    code = ("import sys; from cistrack.runs.progress import ProgressBar; import tqdm.std; "
+            "b = ProgressBar('r', 3); b.bar.close(); "
+            "print(type(b.bar) is tqdm.std.tqdm, 'asyncio' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.stdout.split() == ["True", "False"], proc.stderr[-2000:]
+
+
+def test_under_ipython_the_bar_is_tqdm_autos_choice(monkeypatch):
+    import types
+
+    import tqdm.auto
+
+    from cistrack.runs.progress import bar_class
+
+    monkeypatch.setitem(sys.modules, "IPython", types.ModuleType("IPython"))
+    assert bar_class() is tqdm.auto.tqdm
