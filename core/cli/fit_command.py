@@ -73,6 +73,7 @@ def cmd_fit(args) -> int:
 def cmd_export_fit(args) -> int:
     """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fitting.fit_export`)."""
     from cistrack.fitting.fit_export import export_fit
+    from cistrack.results.export_file import CLI_EXPORT_WORDS
 
     from cistrack.errors import ConfigError
 
@@ -84,7 +85,7 @@ def cmd_export_fit(args) -> int:
                               "--format oem carries the covariance over its grid")
         params["covariance"] = args.covariance
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
-                     predict_days=getattr(args, "predict", None), **params)
+                     predict_days=getattr(args, "predict", None), words=CLI_EXPORT_WORDS, **params)
     if not getattr(args, "quiet", False):
         print(f"wrote {out}")
     return 0

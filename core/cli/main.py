@@ -313,6 +313,7 @@ def _exporter_name(format: str) -> str:
 def cmd_export(args) -> int:
     """``cistrack export``: a run's orbit estimate, or a fit's fitted orbit, as CCSDS OEM or OPM."""
     from cistrack.runs.export import export_refusal, export_run
+    from cistrack.results.export_file import CLI_EXPORT_WORDS
 
     from cistrack.results.earlier_run import check_export_path
 
@@ -327,7 +328,7 @@ def cmd_export(args) -> int:
 
     params = {} if args.step is None else {"step": args.step}
     out = export_run(args.run, args.format, args.out, overwrite=args.overwrite, force=args.force,
-                     log=None if args.quiet else stage_log("cistrack: "), **params)
+                     log=None if args.quiet else stage_log("cistrack: "), words=CLI_EXPORT_WORDS, **params)
     if args.force:
         why = export_refusal(args.run)
         if why:

@@ -45,7 +45,7 @@ from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
 from cistrack.plugin.registry import Registry, default_registry
-from cistrack.results.export_file import write_export
+from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
@@ -159,7 +159,7 @@ class FitExportOptions:
 
 def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None = None, *,
                options: FitExportOptions | None = None, registry: Registry | None = None,
-               **params: Any) -> Path:
+               words: ExportWords = PYTHON_EXPORT_WORDS, **params: Any) -> Path:
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
     (default ``RUN_DIR/estimate.<suffix>``, as for a run: one there holding a different export,
     e.g. without ``predict_days``, is refused unless ``overwrite``); returns the path.
@@ -168,14 +168,14 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     (a keyword wins): ``overwrite``, ``force``, ``predict_days`` (>= 0, at most
     :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation, ``covariance`` (one of
     :data:`cistrack.least_squares.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
-    The other keywords ``params`` go to the exporter. Refusals name the option: an existing
-    ``path`` without ``overwrite``, a fit that did not converge without ``force``, an unknown
-    ``covariance``."""
+    The other keywords ``params`` go to the exporter. Refusals name the option as ``words`` say
+    (Python's keywords; the command line passes its own): an existing ``path`` without
+    ``overwrite``, a fit that did not converge without ``force``, an unknown ``covariance``."""
     opts, params = _split_keywords(options, params)
-    days = _checked_request(opts, path, format)
+    days = _checked_request(opts, path, format, words)
     d = Path(run_dir)
     record = read_fit_record(d)
-    refusal = _refusal(d, record, opts.force)
+    refusal = _refusal(d, record, opts.force, words)
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
     scen = _scenario(d, reg)
@@ -199,7 +199,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
-    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite)
+    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
+                 words=words)
     return out
 
 
@@ -260,30 +261,35 @@ def _split_keywords(options: FitExportOptions | None, params: dict[str, Any]
     return dataclasses.replace(options or FitExportOptions(), **mine), rest
 
 
-def _checked_request(opts: FitExportOptions, path: str | Path | None, format: str) -> float:
+def _checked_request(opts: FitExportOptions, path: str | Path | None, format: str, words: ExportWords) -> float:
     """The prediction span, days (0 when ``predict_days`` is None), once the covariance method,
     the output path and the span are valid (none for ``format`` opm, the one state at the fit
-    epoch); raises ConfigError naming the option."""
+    epoch); raises ConfigError naming the option as ``words`` say."""
+    w = words
     if format == "opm" and opts.predict_days is not None:
-        raise ConfigError(f"--predict {opts.predict_days!r}: --format opm writes the one state at the fit epoch and "
-                          "takes no --predict; --predict extends the grid of --format oem beyond the last observation")
+        raise ConfigError(f"{w.option('predict', opts.predict_days)}: {w.option('format', 'opm')} writes the one "
+                          f"state at the fit epoch and takes no {w.predict}; {w.predict} extends the grid of "
+                          f"{w.option('format', 'oem')} beyond the last observation")
     if opts.covariance not in COVARIANCE_METHODS:
-        raise ConfigError(f"--covariance {opts.covariance!r}: must be one of {', '.join(COVARIANCE_METHODS)}")
+        raise ConfigError(f"{w.covariance}{'' if w.covariance.endswith('=') else ' '}{opts.covariance!r}: must be "
+                          f"one of {', '.join(COVARIANCE_METHODS)}")
     if path is not None and not opts.overwrite and os.path.lexists(path):
-        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to replace it")
+        raise ConfigError(f"{w.option('path', str(path))}: already exists; give another file, or {w.overwrite} to "
+                          "replace it")
     days = 0.0 if opts.predict_days is None else opts.predict_days
     if not (isinstance(days, (int, float)) and math.isfinite(days) and 0.0 <= days <= MAX_PREDICT_DAYS):
-        raise ConfigError(f"--predict {opts.predict_days!r}: must be a number of days from 0 to {MAX_PREDICT_DAYS:g}")
+        raise ConfigError(f"{w.predict}{'' if w.predict.endswith('=') else ' '}{opts.predict_days!r}: must be a "
+                          f"number of days from 0 to {MAX_PREDICT_DAYS:g}")
     return days
 
 
-def _refusal(d: Path, record: dict[str, Any], force: bool) -> str | None:
+def _refusal(d: Path, record: dict[str, Any], force: bool, words: ExportWords) -> str | None:
     """Why the fit should not be exported (None when it may be); raises CistrackError unless
     ``force``, and when there is no orbit at all."""
     refusal = fit_refusal(record)
     if refusal is not None and not force:
-        raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or add "
-                            "--force to export it anyway (the file then says this in a COMMENT)")
+        raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or "
+                            f"{words.force} to export it anyway (the file then says this in a COMMENT)")
     if "state" not in record:
         raise CistrackError(f"{d}: nothing to export: {refusal}")
     return refusal

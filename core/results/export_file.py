@@ -9,13 +9,51 @@ file is refused. The comparison skips CCSDS's ``CREATION_DATE`` line (the time o
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.atomic_files import atomic_target
 
-__all__ = ["write_export", "same_export"]
+__all__ = ["write_export", "same_export", "ExportWords", "CLI_EXPORT_WORDS", "PYTHON_EXPORT_WORDS"]
+
+
+@dataclass(frozen=True)
+class ExportWords:
+    """How an export's refusals name its caller's options: ``cistrack export RUN --out FILE
+    --overwrite`` on the command line, ``export_run(RUN, path=FILE, overwrite=True)`` from Python."""
+
+    path: str = "--out"
+    """The output file option (``--out FILE: already exists``)."""
+    give_path: str = "give --out FILE"
+    """What to do to write elsewhere."""
+    overwrite: str = "add --overwrite"
+    """What to do to allow a replacement."""
+    force: str = "add --force"
+    """What to do to export a run or fit that did not end well."""
+    predict: str = "--predict"
+    """The prediction span option (days)."""
+    covariance: str = "--covariance"
+    """The covariance method option."""
+    format: str = "--format"
+    """The exporter option."""
+    step: str = "--step"
+    """The option of an exporter of one step."""
+
+    def option(self, name: str, value: Any) -> str:
+        """``--out x.oem`` or ``path='x.oem'``: option ``name`` (a field) with its value."""
+        word = getattr(self, name)
+        return f"{word}{value!r}" if word.endswith("=") else f"{word} {value}"
+
+
+CLI_EXPORT_WORDS = ExportWords()
+"""The command line's words."""
+PYTHON_EXPORT_WORDS = ExportWords(path="path=", give_path="give path=FILE", overwrite="pass overwrite=True",
+                                  force="pass force=True", predict="predict_days=", covariance="covariance=",
+                                  format="format=", step="step=")
+"""The Python functions' words (:func:`cistrack.runs.export.export_run`,
+:func:`cistrack.fitting.fit_export.export_fit`)."""
 
 _WRITING_TIME = (b"CREATION_DATE",)
 """Line starts that say when a file was written, not what it holds."""
@@ -30,24 +68,25 @@ def same_export(a: bytes, b: bytes) -> bool:
 
 
 def write_export(exporter: Any, out: Path, estimates: Any, meta: dict[str, Any], *, format: str, named: bool,
-                 overwrite: bool) -> None:
+                 overwrite: bool, words: ExportWords = CLI_EXPORT_WORDS) -> None:
     """``exporter.write`` to ``out`` through a temporary file and a rename. ``named``: ``out`` was
-    given as ``--out`` (refused earlier when it exists without ``overwrite``; errors name it so);
+    given as ``--out`` (``words.path``; refused earlier when it exists without ``overwrite``; errors name it so);
     otherwise ``out`` is the default file in the run's directory, and one there holding a different
     export is refused (:class:`ConfigError`, nothing changed) unless ``overwrite``."""
     try:
         with atomic_target(out) as tmp:  # a full disk leaves no partial file under the final name
             exporter.write(tmp, estimates, meta)
             if not named and not overwrite:
-                _check_default_file(out, tmp)
+                _check_default_file(out, tmp, words)
     except OSError as exc:
-        raise CistrackError(("--out " if named else "") + f"{out}: cannot write the {format} file "
+        raise CistrackError((words.option("path", str(out)) if named else str(out)) + f": cannot write the {format} file "
                             f"({exc.strerror or exc}); nothing was written there") from None
 
 
-def _check_default_file(out: Path, new: Path) -> None:
+def _check_default_file(out: Path, new: Path, words: ExportWords) -> None:
     """Refuse replacing the default file ``out`` with ``new`` when they differ."""
     if not out.is_file() or same_export(out.read_bytes(), new.read_bytes()):
         return
-    raise ConfigError(f"{out}: already holds a different export (made with other options, e.g. another --step or "
-                      "--predict); give --out FILE to write this one beside it, or add --overwrite to replace it")
+    raise ConfigError(f"{out}: already holds a different export (made with other options, e.g. another {words.step} or "
+                      f"{words.predict}); {words.give_path} to write this one beside it, or {words.overwrite} to "
+                      "replace it")

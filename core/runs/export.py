@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from cistrack.errors import CistrackError, ConfigError
-from cistrack.results.export_file import write_export
+from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
 from cistrack.results.estimates import read_estimates
 from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
@@ -108,24 +108,27 @@ def export_refusal(run_dir: str | Path) -> str | None:
 
 def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None = None,
                registry: Registry | None = None, overwrite: bool = False, force: bool = False,
-               log: Callable[[str], None] | None = None, **params: Any) -> Path:
+               log: Callable[[str], None] | None = None, words: ExportWords = PYTHON_EXPORT_WORDS,
+               **params: Any) -> Path:
     """Write the estimate of the run in ``run_dir`` with exporter ``format`` ("oem", "opm", ...)
     to ``path`` (default ``RUN_DIR/estimate.<format>``, the run's own file: written again with the
     same content by the same export, but an export with other options there is refused unless
     ``overwrite``, :func:`cistrack.results.export_file.write_export`); returns the path written.
+    ``words``: how refusals name the options (``path=``, ``overwrite=True`` from Python; the command
+    line passes :data:`cistrack.results.export_file.CLI_EXPORT_WORDS`).
     An existing ``path`` is refused (before anything is read) unless ``overwrite``; a run that did not finish or diverged (:func:`export_refusal`)
     unless ``force``, and then the file carries the reason as a COMMENT. ``log`` receives a line
     per stage (:func:`cistrack.runs.progress.stage_log`)."""
     if path is not None and not overwrite and os.path.lexists(path):
-        raise ConfigError(f"--out {path}: already exists; give another file, or add --overwrite to "
-                          f"replace it")
+        raise ConfigError(f"{words.option('path', str(path))}: already exists; give another file, or "
+                          f"{words.overwrite} to replace it")
     d = Path(run_dir)
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
         raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
                           "no such directory") + "); give the --out directory of a 'cistrack run'")
     refusal = export_refusal(d)
     if refusal is not None and not force:
-        raise CistrackError(f"{d}: not exported: {refusal}. Export only finished runs, or add --force to "
+        raise CistrackError(f"{d}: not exported: {refusal}. Export only finished runs, or {words.force} to "
                             f"export it anyway (the file then says this in a COMMENT)")
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
@@ -143,7 +146,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if refusal is not None:
         meta["comments"] = [f"WARNING: exported with --force although run {run_id} is not a finished, "
                             f"converged run: {refusal}"]
-    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite)
+    write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite, words=words)
     return out
 
 

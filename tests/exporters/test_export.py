@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 
+from cistrack.errors import ConfigError
 from cistrack.results.estimates import KM_SCALE, read_estimates
 from cistrack.runs.export import export_run, run_inertial_estimates
 from cistrack.plugins.exporters.opm import read_opm
@@ -169,3 +170,11 @@ def test_the_log_of_an_opm_export_names_the_step_it_writes(run_copy, capsys):
     from cistrack.cli.main import main
     assert main(["export", str(run_copy), "--format", "opm", "--step", "3"]) == 0
     assert "writing step 3 as opm to" in capsys.readouterr().err
+
+
+def test_export_run_from_python_names_its_keywords_when_the_path_exists(run_dir, tmp_path):
+    out, _ = run_dir
+    (tmp_path / "taken.oem").write_text("")
+    with pytest.raises(ConfigError, match=r"path='.*taken.oem': already exists; give another file, or pass "
+                                          r"overwrite=True"):
+        export_run(out, "oem", tmp_path / "taken.oem")

@@ -112,7 +112,7 @@ def test_the_opm_says_its_covariance_is_the_fits_own_at_the_epoch(fit_dir, tmp_p
 
 
 def test_an_opm_with_a_prediction_span_is_refused_in_python_too(fit_dir, tmp_path):
-    with pytest.raises(CistrackError, match="--predict 3.0: --format opm writes the one state at the fit epoch"):
+    with pytest.raises(CistrackError, match="predict_days=3.0: format='opm' writes the one state at the fit epoch"):
         export_fit(fit_dir, "opm", tmp_path / "o.opm", predict_days=3.0)
 
 
@@ -122,7 +122,7 @@ def test_a_fit_that_did_not_converge_is_refused_unless_forced(fit_dir, tmp_path)
     rec = json.loads((d / "fit.json").read_text())
     rec["converged"] = False
     (d / "fit.json").write_text(json.dumps(rec))
-    with pytest.raises(CistrackError, match="did not converge.*--force"):
+    with pytest.raises(CistrackError, match="did not converge.*pass force=True"):
         export_fit(d, "oem")
     path = export_fit(d, "oem", force=True)
     assert "COMMENT WARNING: exported with --force" in path.read_text()
@@ -135,7 +135,7 @@ def test_predict_on_a_run_that_is_not_a_fit_is_refused_naming_the_option(tmp_pat
 
 
 def test_a_negative_prediction_span_is_refused(fit_dir, tmp_path):
-    with pytest.raises(CistrackError, match="--predict"):
+    with pytest.raises(CistrackError, match="predict_days=-1.0: must be a number of days from 0"):
         export_fit(fit_dir, "oem", tmp_path / "n.oem", predict_days=-1.0)
 
 
@@ -154,7 +154,7 @@ def test_the_covariance_is_carried_by_the_unscented_transform_unless_linear_is_a
 
 
 def test_an_unknown_covariance_method_is_refused_naming_the_option(fit_dir, tmp_path):
-    with pytest.raises(CistrackError, match="--covariance 'quadratic': must be one of unscented, linear"):
+    with pytest.raises(CistrackError, match="covariance='quadratic': must be one of unscented, linear"):
         export_fit(fit_dir, "oem", tmp_path / "q.oem", covariance="quadratic")
 
 
@@ -216,3 +216,17 @@ def test_a_prediction_does_not_silently_replace_the_fits_default_export(fit_dir,
     assert (d / "estimate.oem").read_text() == arc_only
     assert main(["export", str(d), "--format", "oem", "--predict", "1", "--overwrite", "--quiet"]) == 0
     assert "predicted beyond the last observation" in (d / "estimate.oem").read_text()
+
+
+def test_the_command_line_names_its_own_options_in_an_exports_refusal(fit_dir, tmp_path, capsys):
+    (tmp_path / "taken.oem").write_text("")
+    assert main(["export", str(fit_dir), "--out", str(tmp_path / "taken.oem")]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {tmp_path / 'taken.oem'}: already exists" in err and "add --overwrite" in err
+
+
+def test_python_names_its_keywords_when_the_path_exists(fit_dir, tmp_path):
+    (tmp_path / "taken.oem").write_text("")
+    with pytest.raises(CistrackError, match=r"path='.*taken.oem': already exists; give another file, or pass "
+                                            r"overwrite=True"):
+        export_fit(fit_dir, "oem", tmp_path / "taken.oem")
