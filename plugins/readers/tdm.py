@@ -51,6 +51,7 @@ from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 from cistrack.astro.sites import Site, observatory
 from cistrack.units import format_utc, tu_to_utc
 
+from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
 from .obs_rows import ObsRow, build_set, parse_epoch
 from .site_params import SiteReader, resolve_site
@@ -231,6 +232,27 @@ def _comment_sigmas(path, m: re.Match, cl: int) -> tuple[tuple[float, float], st
     return sig, m.group(1)
 
 
+def _tiny_comment_sigma(seg: _Segment) -> tuple[int, float] | None:
+    """(line, arcsec) of the first sigma below :data:`SMALLEST_PLAUSIBLE_ARCSEC` in the segment's
+    ``COMMENT cistrack sigma_arcsec``, or None."""
+    for text, cl in seg.comments:
+        m = _SIGMA_RE.match(text)
+        tiny = [float(t) for t in m.groups() if float(t) < SMALLEST_PLAUSIBLE_ARCSEC] if m else []
+        if tiny:
+            return cl, tiny[0]
+    return None
+
+
+def _say_tiny_sigmas(path, tiny: list[tuple[int, float]]) -> None:
+    """Warn (logger ``cistrack.readers``, once per file) of sigma comments below 1 milliarcsecond:
+    arcseconds by the comment's name, most likely degrees by mistake. They are used as given."""
+    if tiny:
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}, line {tiny[0][0]}: COMMENT cistrack sigma_arcsec: {len(tiny)} segments state an uncertainty "
+            f"below 1 milliarcsecond (this one {tiny[0][1]:.3g} arcsec); the comment is in arcseconds: are these "
+            "degrees? They are used as given")
+
+
 def _segment_comments(path, seg: _Segment) -> tuple[dict[str, Site], tuple, str]:
     """Sites declared in the segment's cistrack comments, and its sigmas (rad; (None, None) when
     absent) with ANGLE_1's sigma text."""
@@ -311,6 +333,7 @@ class _TdmParse:
         self.pending: dict[datetime, tuple[str, float, int]] = {}  # epoch -> (keyword, angle, line)
         self.ctx: dict = {}
         self.degraded: list[int] = []  # lines of observations in DATA_QUALITY = DEGRADED segments
+        self.tiny_sigmas: list[tuple[int, float]] = []  # (line, arcsec) of sigma comments below 1 mas
 
     def run(self, lines: list[str]) -> None:
         handlers = {"header": self._header, "meta": self._meta, "between": self._between,
@@ -350,6 +373,7 @@ class _TdmParse:
     def _meta(self, word: str, text: str, ln: int) -> None:
         if word == "META_STOP":
             self.ctx = _segment_context(self.path, self.seg, ln, self.table, self.sites)
+            self.tiny_sigmas += filter(None, [_tiny_comment_sigma(self.seg)])
             self.ctx["span"] = _segment_span(self.path, self.seg)
             self.state = "between"
             return
@@ -482,6 +506,7 @@ class TdmReader(SiteReader):
         parse = _TdmParse(path, self._sites)
         parse.run(read_text_lines(path))
         _say_degraded(path, parse.degraded)
+        _say_tiny_sigmas(path, parse.tiny_sigmas)
         if self.check_degrees:
             _check_degrees(path, parse.rows)
         return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)

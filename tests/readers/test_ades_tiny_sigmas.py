@@ -1,4 +1,4 @@
-"""ADES rmsRA / rmsDec below 1 milliarcsecond (no astrometry is finer; 0.0003 is 1 arcsec written
+"""ADES rmsRA / rmsDec (and CSV sigma columns, TDM sigma comments) below 1 milliarcsecond (no astrometry is finer; 0.0003 is 1 arcsec written
 in degrees) are used as given, with a warning naming the file, the line and the field and asking
 whether they are degrees (they had been taken silently, and the fit then failed far from the data)."""
 from __future__ import annotations
@@ -52,3 +52,18 @@ def test_the_csv_reader_says_so_for_its_sigma_columns(tmp_path, caplog):
     assert len(ms) == 2
     assert (f"{path}: column sigma_elevation_arcsec: 1 rows state an uncertainty below 1 milliarcsecond (the first "
             "0.0004 arcsec)") in caplog.text and "sigma_azimuth_arcsec" not in caplog.text
+
+
+def test_the_tdm_reader_says_so_for_a_sigma_comment_once_per_file(tmp_path, caplog):
+    head = "CCSDS_TDM_VERS = 2.0\nCREATION_DATE = 2026-03-01T00:00:00\nORIGINATOR = cistrack\n"
+    seg = ("META_START\nCOMMENT cistrack sigma_arcsec ANGLE_1={s} ANGLE_2={s}\nTIME_SYSTEM = UTC\n"
+           "PARTICIPANT_1 = 705\nPARTICIPANT_2 = X\nANGLE_TYPE = AZEL\nMETA_STOP\nDATA_START\n"
+           "ANGLE_1 = 2026-03-01T0{h}:00:00 10.5\nANGLE_2 = 2026-03-01T0{h}:00:00 20.5\nDATA_STOP\n")
+    path = tmp_path / "tiny.tdm"
+    path.write_text(head + seg.format(s="1.5", h=1) + seg.format(s="0.0004", h=2) + seg.format(s="0.0004", h=3))
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        ms = read_observations(path, EPOCH)
+    assert len(ms) == 3
+    assert caplog.text.count("below 1 milliarcsecond") == 1
+    assert (f"{path}, line 16: COMMENT cistrack sigma_arcsec: 2 segments state an uncertainty below 1 "
+            "milliarcsecond (this one 0.0004 arcsec)") in caplog.text
