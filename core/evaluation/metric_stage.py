@@ -130,7 +130,9 @@ class MetricStage:
         except _PASS_THROUGH:
             raise
         except (Exception, SystemExit) as exc:
-            raise self._error(stage, f": {method}() raised {exception_text(exc)}") from exc
+            hint = (" (the step's belief is read-only: a stage measures it and must not modify it)"
+                    if isinstance(exc, ValueError) and "read-only" in str(exc) else "")
+            raise self._error(stage, f": {method}() raised {exception_text(exc)}{hint}") from exc
 
     def _check(self, stage: StepMetric, out: Any, found: dict[str, float]) -> None:
         """Refuse (PluginError) a result that is not a dict of str -> number, or that writes a key

@@ -387,13 +387,14 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
 def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, step: Step, event: str) -> None:
     """The metric stage, then the observers' hook of ``event``. A table step (see
     :func:`~cistrack.results.step_table.is_table_step`) also gets the filter's diagnostics and the
-    metrics' time; the prior of an update only what the stages compute for it."""
+    metrics' time; the prior of an update only what the stages compute for it. Stages and observers
+    get the belief with read-only arrays: the filter's state is safe from them."""
+    step.belief = read_only_belief(step.belief)
     if is_table_step(event, step):
         step.diagnostics = dict(ctx.filter.diagnostics)
         metrics.timed(ctx, step, event)
     else:
         metrics.measure(ctx, step, event)
-    step.belief = read_only_belief(step.belief)  # observers get views that refuse writes: the filter's state is safe
     notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
 
 

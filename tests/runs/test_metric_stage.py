@@ -206,6 +206,27 @@ def test_a_stage_that_overwrites_an_earlier_stages_metric_fails_the_run_naming_i
     assert "'entropy-again' writes entropy" in res.summary.failure
 
 
+class ShiftsTheCloud(StepMetric):
+    name = "shifts-the-cloud"
+
+    def compute(self, run, step, event):
+        step.belief.samples.states[:, 0] += 1.0  # against the rule: a stage measures the belief
+        return {}
+
+
+class ShiftPlugin:
+    @hookimpl
+    def cistrack_metric_stages(self, scenario):
+        return [ShiftsTheCloud()]
+
+
+def test_a_stage_that_writes_into_the_belief_fails_the_run_naming_it_and_the_filter_is_untouched():
+    res = run_scenario(_small(), seed=3, observers=[ShiftPlugin()])
+    assert res.summary.status == "failed"
+    assert "metric stage 'shifts-the-cloud': compute() raised" in res.summary.failure
+    assert "the step's belief is read-only" in res.summary.failure
+
+
 class _Named(StepMetric):
     def __init__(self, name, needs=()):
         self.name, self.needs = name, tuple(needs)
