@@ -98,6 +98,41 @@ def _unit_scales(unit: str) -> tuple[float, float]:
 AXES_KEPT = 4096
 """Single times whose frame :meth:`EarthMoonFrame.axes` keeps (about 1 kB each; not pickled)."""
 
+SETS_KEPT = 64
+"""Vectors of times whose frames :meth:`EarthMoonFrame.axes` keeps (a least squares asks for the
+frames at its arc's measurement times at every iteration and Jacobian column)."""
+
+SET_SIZE_KEPT = 2048
+"""The longest vector of times kept (about 350 kB of axes); longer ones are evaluated each time."""
+
+FRAMES_SHARED = 8
+"""(epoch, ephemeris) pairs whose kept times are shared by all their frames (the oldest dropped
+first)."""
+
+
+@dataclass(frozen=True)
+class _KeptAxes:
+    """What the frames of one epoch and ephemeris keep: axes by single time, and by vector of times
+    (its bytes)."""
+
+    ephemeris: object
+    singles: dict
+    sets: dict
+
+
+_kept_by_frame: dict[tuple, _KeptAxes] = {}
+"""(TDB epoch, id of the ephemeris) -> what every frame of that epoch and ephemeris keeps. A fit
+builds the frame again for each attempt and each trial C_R A/m (43 frames in the 2025-010D fit),
+and each had evaluated DE421 at the same times afresh; the ephemeris is held with the entry, so
+its id is not reused while the entry lives."""
+
+
+def _shared_kept(epoch_tdb: tuple[float, float], ephemeris) -> _KeptAxes:
+    """The kept axes of every frame with this epoch and ephemeris."""
+    entry = kept_or_evaluated(_kept_by_frame, (epoch_tdb, id(ephemeris)), FRAMES_SHARED,
+                              lambda: _KeptAxes(ephemeris, {}, {}))
+    return entry if entry.ephemeris is ephemeris else _KeptAxes(ephemeris, {}, {})
+
 
 class EarthMoonFrame:
     """Transforms between the real Earth-Moon rotating frame and GCRS (see module docstring).
@@ -114,12 +149,16 @@ class EarthMoonFrame:
         self.epoch_tdb = (float(epoch_tdb[0]), float(epoch_tdb[1]))
         self.ephemeris = ephemeris if ephemeris is not None else de421()
         self.mu = self.ephemeris.earth_share
-        self._axes_at: dict[float, FrameAxes] = {}
+        self._kept = _shared_kept(self.epoch_tdb, self.ephemeris)
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        state["_axes_at"] = {}  # kept evaluations are rebuilt on use, not shipped to other processes
+        del state["_kept"]  # kept evaluations are rebuilt on use, not shipped to other processes
         return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._kept = _shared_kept(self.epoch_tdb, self.ephemeris)
 
     @classmethod
     def from_utc(cls, epoch: datetime | str, ephemeris: DE421 | None = None) -> "EarthMoonFrame":
@@ -141,11 +180,16 @@ class EarthMoonFrame:
         at, again and again (a propagation ends where the next one starts, and re-anchoring
         revisits every measurement time), and each evaluation of DE421 costs about 0.4 ms.
         Several times at once are evaluated together (vectorised over the times, which rounds a
-        few values differently from one time at a time: not mixed with the kept ones)."""
+        few values differently from one time at a time: not mixed with the kept ones), and kept
+        as a set (up to :data:`SETS_KEPT` vectors of at most :data:`SET_SIZE_KEPT` times). Every
+        frame of the same epoch and ephemeris shares what is kept."""
         tt = np.atleast_1d(np.asarray(t, dtype=float)).reshape(-1)
         if tt.size == 1:
-            return kept_or_evaluated(self._axes_at, float(tt[0]), AXES_KEPT, lambda: _read_only(self._evaluate_axes(tt)))
-        return self._evaluate_axes(tt)
+            return kept_or_evaluated(self._kept.singles, float(tt[0]), AXES_KEPT,
+                                     lambda: _read_only(self._evaluate_axes(tt)))
+        if tt.size > SET_SIZE_KEPT:
+            return self._evaluate_axes(tt)
+        return kept_or_evaluated(self._kept.sets, tt.tobytes(), SETS_KEPT, lambda: _read_only(self._evaluate_axes(tt)))
 
     def _evaluate_axes(self, t: np.ndarray) -> FrameAxes:
         jd1, jd2 = self.epoch_tdb

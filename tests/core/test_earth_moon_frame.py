@@ -121,28 +121,63 @@ def test_the_frame_at_one_time_is_kept_read_only_and_equals_a_fresh_evaluation()
         first.rotation[0, 0, 0] = 0.0
 
 
-def test_at_most_axes_kept_times_are_kept_the_oldest_going_first(monkeypatch):
+@pytest.fixture
+def nothing_kept(monkeypatch):
+    """An empty table of kept axes for the test (other tests' frames share the process's one)."""
     from cistrack.astro import earth_moon
 
-    monkeypatch.setattr(earth_moon, "AXES_KEPT", 3)
+    monkeypatch.setattr(earth_moon, "_kept_by_frame", {})
+    return earth_moon
+
+
+def test_at_most_axes_kept_times_are_kept_the_oldest_going_first(monkeypatch, nothing_kept):
+    monkeypatch.setattr(nothing_kept, "AXES_KEPT", 3)
     frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
     kept = [frame.axes(t) for t in (0.0, 0.1, 0.2, 0.3)]
     assert frame.axes(0.3) is kept[3] and frame.axes(0.1) is kept[1]
     assert frame.axes(0.0) is not kept[0]  # dropped when the fourth time came
 
 
-def test_several_times_at_once_are_evaluated_not_kept():
+def test_several_times_at_once_are_evaluated_together_and_kept_as_a_set(nothing_kept):
     frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
     both = frame.axes(np.array([0.5, 0.6]))
-    assert both.rotation.shape == (2, 3, 3) and both.rotation.flags.writeable
-    assert frame.axes(0.5) is frame.axes(0.5)
+    assert both.rotation.shape == (2, 3, 3) and not both.rotation.flags.writeable
+    assert frame.axes(np.array([0.5, 0.6])) is both
+    fresh = frame._evaluate_axes(np.array([0.5, 0.6]))
+    assert all(np.array_equal(getattr(both, n), getattr(fresh, n)) for n in vars(fresh))
+    assert frame.axes(0.5) is frame.axes(0.5) and frame.axes(0.5) is not both
 
 
-def test_a_pickled_frame_leaves_its_kept_axes_behind_and_gives_the_same_ones():
+def test_a_vector_longer_than_the_kept_length_is_evaluated_each_time(monkeypatch, nothing_kept):
+    monkeypatch.setattr(nothing_kept, "SET_SIZE_KEPT", 2)
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    times = np.array([0.5, 0.6, 0.7])
+    assert frame.axes(times) is not frame.axes(times) and frame.axes(times).rotation.flags.writeable
+
+
+def test_frames_of_one_epoch_and_ephemeris_share_what_they_keep(monkeypatch, nothing_kept):
+    evaluated = []
+    real = EarthMoonFrame._evaluate_axes
+    monkeypatch.setattr(EarthMoonFrame, "_evaluate_axes", lambda self, t: evaluated.append(t.size) or real(self, t))
+    first = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    one, several = first.axes(1.5), first.axes(np.array([1.5, 1.6]))
+    second = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    assert second.axes(1.5) is one and second.axes(np.array([1.5, 1.6])) is several
+    assert evaluated == [1, 2]  # the second frame evaluated nothing
+
+
+def test_frames_of_another_epoch_keep_their_own(nothing_kept):
+    first = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    other = EarthMoonFrame.from_utc("2026-01-02T00:00:00Z")
+    a, b = first.axes(1.5), other.axes(1.5)
+    assert a is not b and not np.array_equal(a.rotation, b.rotation)
+
+
+def test_a_pickled_frame_leaves_its_kept_axes_behind_and_gives_the_same_ones(nothing_kept):
     import pickle
 
     frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
     before = frame.axes(2.0)
+    assert "_kept" not in frame.__getstate__()
     copy = pickle.loads(pickle.dumps(frame))
-    assert copy._axes_at == {}
     assert all(np.array_equal(a, b) for a, b in zip(vars(copy.axes(2.0)).values(), vars(before).values()))
