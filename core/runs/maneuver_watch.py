@@ -175,7 +175,7 @@ class ManeuverWatch:
         burns = [b for b in found.burns if b.t <= d.t]
         if not burns:
             return None
-        return _Estimate(burns[-1], _doubt(found, burns, d.t))
+        return _Estimate(burns[-1], _doubt(found, burns, d.t, ballistic))
 
 
 @dataclass(frozen=True)
@@ -190,7 +190,7 @@ GOODNESS_FALSE_ALARM = 1e-4
 """The false-alarm level of the fit-with-the-burn's goodness-of-fit test (:func:`_doubt`)."""
 
 
-def _doubt(found: Any, before: list, t_detect: float) -> str:
+def _doubt(found: Any, before: list, t_detect: float, ballistic: Any = None) -> str:
     """Why the latest of the burns ``before`` the detection (TU ``t_detect``) that the search
     ``found`` kept is not a confirmed estimate, in words ("" when it is):
 
@@ -203,11 +203,16 @@ def _doubt(found: Any, before: list, t_detect: float) -> str:
     - the fit with every burn does not fit the measurements: its capped cost (each observation's
       chi-square capped at the rejection threshold, plus the prior's term) exceeds the chi-square
       quantile at :data:`GOODNESS_FALSE_ALARM` of its degrees of freedom (measurement components
-      minus 3 per burn and the solve-for parameters; the prior's 6 rows balance the state's 6).
+      minus 3 per burn and the solve-for parameters; the prior's 6 rows balance the state's 6);
+    - the measurements alone do not call for the burns (:func:`_prior_only`, given the ``ballistic``
+      fit the search started from).
     """
-    from cistrack.least_squares.chi_square import chi2_ppf
-    from cistrack.least_squares.impulse_fit import capped_cost
+    return _time_doubt(found, before, t_detect) or _goodness_doubt(found) or _prior_only(found, ballistic)
 
+
+def _time_doubt(found: Any, before: list, t_detect: float) -> str:
+    """:func:`_doubt`'s checks of the burn's time: measured, inside its gap, before the detection,
+    the only burn before it."""
     burn = before[-1]
     days = units.tu_to_days
     if burn.dv_dt is None or not burn.t_sigma > 0:
@@ -224,6 +229,14 @@ def _doubt(found: Any, before: list, t_detect: float) -> str:
     if len(before) > 1:
         at = ", ".join(f"{b.magnitude_ms:.3g} m/s at {days(b.t):.3f} d" for b in before)
         return f"the search split the change over {len(before)} burns before the detection ({at})"
+    return ""
+
+
+def _goodness_doubt(found: Any) -> str:
+    """:func:`_doubt`'s goodness-of-fit test of the fit with every burn."""
+    from cistrack.least_squares.chi_square import chi2_ppf
+    from cistrack.least_squares.impulse_fit import capped_cost
+
     fit = found.result
     comps = int(np.sum(np.isfinite(np.asarray(fit.residuals.normalised, dtype=float))))
     dof = comps - len(fit.parameter_names) - (0 if found.prior is not None else 6)
@@ -234,6 +247,36 @@ def _doubt(found: Any, before: list, t_detect: float) -> str:
             return (f"the fit with the burn does not fit the measurements (cost {cost:.1f} > {limit:.1f}, "
                     f"the chi-square bound of {dof} degrees of freedom at {GOODNESS_FALSE_ALARM:g})")
     return ""
+
+
+def _prior_only(found: Any, ballistic: Any) -> str:
+    """Why the burns' evidence is the prior's rather than the measurements' ("" when it is not).
+
+    With a prior on the state at the arc's start, the search's test counts the prior's term in
+    both fits' costs. When the ballistic fit already fits the measurements and the burns lower
+    mostly the prior's term, what the arc shows is that its measurements and its prior disagree:
+    a burn before the arc's start (the filter's posterior there taken after it, ``example-1-burn``
+    seed 2 with 2 m/s at 2.0 d: the arc starts at 2.094 d and a burn of 9.8 m/s at 2.33 d,
+    4 sigma off, lowered the prior's term from 24.4 to 2.4 and the measurements' chi-square from
+    33.1 to 29.7), or a prior that is off, explains that as well as a burn inside the arc. So the
+    measurements' own part of the cost (each observation's chi-square capped at the rejection
+    threshold) must drop by more than the search's threshold: the chi-square quantile of 4
+    degrees of freedom per burn at :data:`cistrack.least_squares.burn_search.FALSE_ALARM`."""
+    from cistrack.least_squares.burn_search import FALSE_ALARM
+    from cistrack.least_squares.chi_square import chi2_ppf
+    from cistrack.least_squares.impulse_fit import capped_cost
+
+    if ballistic is None or found.prior is None or not found.burns:
+        return ""
+    drop = capped_cost(ballistic) - capped_cost(found.result)
+    limit = chi2_ppf(1.0 - FALSE_ALARM, 4 * len(found.burns))
+    if drop > limit:
+        return ""
+    before, after = (capped_cost(f, found.prior) - capped_cost(f) for f in (ballistic, found.result))
+    return (f"the measurements alone do not call for the burn: it lowers their chi-square by {drop:.1f} "
+            f"(a burn needs > {limit:.1f}) and the prior's term from {before:.1f} to {after:.1f}; a burn before "
+            f"the arc's start at {units.tu_to_days(ballistic.epoch):.3f} d, or a prior that is off, explains "
+            "the arc as well")
 
 
 def episodes(detections: list[Detection]) -> list[list[Detection]]:

@@ -71,6 +71,36 @@ def test_a_fit_whose_residuals_exceed_the_chi_square_bound_is_unconfirmed():
     assert _doubt(_found([b], [(0.5, 1.5)], rejected=1), [b], 2.0) == ""
 
 
+def _ballistic(chi2_each, offset, n=20):
+    """A ballistic fit of ``n`` observations at ``chi2_each`` each, its state ``offset`` (6,) from the
+    prior's mean (zero, identity covariance: the prior's term is |offset|^2)."""
+    res = SimpleNamespace(chi2=np.full(n, chi2_each), normalised=np.ones((n, 2)), rejected=np.zeros(n, dtype=bool))
+    return SimpleNamespace(residuals=res, rejection_threshold=9.0, parameter_names=(), state=np.asarray(offset, float),
+                           epoch=0.5)
+
+
+PRIOR = (np.zeros(6), np.eye(6))
+
+
+def test_a_burn_whose_evidence_is_the_priors_term_is_unconfirmed():
+    """The ballistic fit fits the measurements (chi-square 2 per observation) but lies 5 sigma from
+    the prior (term 25); the burn fit lowers the prior's term to 0 and the measurements' chi-square
+    by 2 only: a burn before the arc's start, or a prior that is off, explains the arc as well."""
+    b = _burn()
+    found = _found([b], [(0.5, 1.5)], chi2_each=1.9, prior=PRIOR)
+    why = _doubt(found, [b], 2.0, _ballistic(2.0, [5.0, 0, 0, 0, 0, 0]))
+    assert why.startswith("the measurements alone do not call for the burn")
+    assert "prior's term from 25.0 to 0.0" in why
+
+
+def test_a_burn_the_measurements_call_for_is_confirmed_whatever_the_priors_term():
+    """The same prior's term, but the ballistic fit leaves the measurements at chi-square 4 each:
+    the burn lowers their part by 42, beyond the search's threshold (23.5, 4 dof at 1e-4)."""
+    b = _burn()
+    found = _found([b], [(0.5, 1.5)], chi2_each=1.9, prior=PRIOR)
+    assert _doubt(found, [b], 2.0, _ballistic(4.0, [5.0, 0, 0, 0, 0, 0])) == ""
+
+
 def test_an_unconfirmed_estimate_keeps_its_numbers_and_says_why():
     from cistrack.evaluation.run_summary import RunSummary, maneuver_lines
 
@@ -83,13 +113,17 @@ def test_an_unconfirmed_estimate_keeps_its_numbers_and_says_why():
     assert ok["confirmed"] is True and "unconfirmed_reason" not in ok
 
 
-def _big_burn_run(seed):
+def _burn_run(seed, *settings):
     from cistrack.runs.pipeline import run_scenario
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings
 
-    sc = apply_settings(load_scenario("example-1-burn"), ["truth.maneuvers.delta_v_ms=100"])
-    (m,) = run_scenario(sc, seed=seed).summary.maneuvers
+    sc = apply_settings(load_scenario("example-1-burn"), list(settings))
+    return run_scenario(sc, seed=seed).summary.maneuvers
+
+
+def _big_burn_run(seed):
+    (m,) = _burn_run(seed, "truth.maneuvers.delta_v_ms=100")
     return m
 
 
@@ -105,3 +139,13 @@ def test_a_100_ms_burn_whose_fit_leaves_large_residuals_is_not_confirmed():
     """example-1-burn seed 2 at 100 m/s: had been confirmed as 111 +- 0.65 m/s (17 sigma off)."""
     m = _big_burn_run(2)
     assert not m["confirmed"] and m["unconfirmed_reason"].startswith("the fit with the burn does not fit")
+
+
+def test_a_burn_before_the_arcs_start_is_not_confirmed_in_a_later_gap():
+    """example-1-burn seed 2 with 2 m/s at 2.0 d: the filter's first settled posterior, where the arc
+    starts, is at 2.094 d, after the burn; the ballistic fit fits the arc's measurements and only the
+    prior's term called for a burn. It had been confirmed as 9.8 +- 2.4 m/s at 2.330 d (3.3 sigma
+    off, nearly the opposite direction); the numbers are still given."""
+    (m,) = _burn_run(2, "truth.maneuvers.t_days=2.0", "truth.maneuvers.delta_v_ms=2")
+    assert not m["confirmed"] and m["unconfirmed_reason"].startswith("the measurements alone do not call for the burn")
+    assert m["delta_v_ms"] > 0 and m["t_burn_days"] > 2.0
