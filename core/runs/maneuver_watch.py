@@ -151,6 +151,7 @@ class ManeuverWatch:
         before, after = between
         from cistrack.least_squares.burn_search import search_maneuvers
         from cistrack.least_squares.differential_correction import fit_orbit
+        from cistrack.least_squares.impulse_fit import BurnArc
 
         lo = float(d.t_burn_bounds[0]) if np.isfinite(d.t_burn_bounds[0]) else float(d.t)
         start = self._start_state(max(lo - float(units.days_to_tu(PRE_DAYS)), before), lo)
@@ -175,7 +176,8 @@ class ManeuverWatch:
         burns = [b for b in found.burns if b.t <= d.t]
         if not burns:
             return None
-        return _Estimate(burns[-1], _doubt(found, burns, d.t, ballistic))
+        rival = _rival(BurnArc(ctx.dynamics, ctx.sensor, arc, opts, prior), ballistic, found, burns[-1], d.t)
+        return _Estimate(burns[-1], _doubt(found, burns, d.t, ballistic, rival))
 
 
 @dataclass(frozen=True)
@@ -190,7 +192,19 @@ GOODNESS_FALSE_ALARM = 1e-4
 """The false-alarm level of the fit-with-the-burn's goodness-of-fit test (:func:`_doubt`)."""
 
 
-def _doubt(found: Any, before: list, t_detect: float, ballistic: Any = None) -> str:
+def _rival(arc: Any, ballistic: Any, found: Any, burn: Any, t_detect: float) -> Any:
+    """:func:`cistrack.least_squares.burn_search.rival_time` of ``burn``, None when it fails."""
+    from cistrack.least_squares.burn_search import rival_time
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UnobservableWarning)
+            return rival_time(arc, ballistic, found, burn, t_detect)
+    except (FitError, PropagationError, np.linalg.LinAlgError):
+        return None
+
+
+def _doubt(found: Any, before: list, t_detect: float, ballistic: Any = None, rival: Any = None) -> str:
     """Why the latest of the burns ``before`` the detection (TU ``t_detect``) that the search
     ``found`` kept is not a confirmed estimate, in words ("" when it is):
 
@@ -205,9 +219,13 @@ def _doubt(found: Any, before: list, t_detect: float, ballistic: Any = None) -> 
       quantile at :data:`GOODNESS_FALSE_ALARM` of its degrees of freedom (measurement components
       minus 3 per burn and the solve-for parameters; the prior's 6 rows balance the state's 6);
     - the measurements alone do not call for the burns (:func:`_prior_only`, given the ``ballistic``
-      fit the search started from).
+      fit the search started from);
+    - another burn time the measurements allow, the ``rival``
+      (:class:`~cistrack.least_squares.burn_search.RivalTime`), needs a delta-v outside the
+      estimate's covariance (:func:`_unstable`).
     """
-    return _time_doubt(found, before, t_detect) or _goodness_doubt(found) or _prior_only(found, ballistic)
+    return (_time_doubt(found, before, t_detect) or _goodness_doubt(found) or _prior_only(found, ballistic)
+            or _unstable(rival))
 
 
 def _time_doubt(found: Any, before: list, t_detect: float) -> str:
@@ -277,6 +295,22 @@ def _prior_only(found: Any, ballistic: Any) -> str:
             f"(a burn needs > {limit:.1f}) and the prior's term from {before:.1f} to {after:.1f}; a burn before "
             f"the arc's start at {units.tu_to_days(ballistic.epoch):.3f} d, or a prior that is off, explains "
             "the arc as well")
+
+
+def _unstable(rival: Any) -> str:
+    """Why the estimate's time and delta-v are not determined ("" when they are, ``rival`` None):
+    another burn time fits about as well with a delta-v outside the estimate's covariance
+    (:func:`cistrack.least_squares.burn_search.rival_time`)."""
+    from cistrack.least_squares.burn_search import RIVAL_COST, RIVAL_FALSE_ALARM
+    from cistrack.least_squares.chi_square import chi2_ppf
+
+    if rival is None:
+        return ""
+    dv = ", ".join(f"{v:+.3g}" for v in rival.delta_v_ms)
+    return (f"its burn time and delta-v are not determined: a burn at {units.tu_to_days(rival.t):.3f} d fits "
+            f"about as well (cost {rival.cost_delta:+.1f}, within {RIVAL_COST:g}) with a delta-v of ({dv}) m/s, "
+            f"chi-square {rival.chi2:.1f} from the estimate's (> {chi2_ppf(1.0 - RIVAL_FALSE_ALARM, 3):.1f}, "
+            f"3 dof at {RIVAL_FALSE_ALARM:g})")
 
 
 def episodes(detections: list[Detection]) -> list[list[Detection]]:

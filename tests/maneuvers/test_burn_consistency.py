@@ -101,6 +101,17 @@ def test_a_burn_the_measurements_call_for_is_confirmed_whatever_the_priors_term(
     assert _doubt(found, [b], 2.0, _ballistic(4.0, [5.0, 0, 0, 0, 0, 0])) == ""
 
 
+def test_a_burn_whose_delta_v_another_allowed_time_contradicts_is_unconfirmed():
+    """A rival burn time (cistrack.least_squares.burn_search.rival_time) that fits within 1.9 of the
+    estimate's cost with a delta-v 52.8 (chi-square, 3 dof) from it: neither is determined."""
+    from cistrack.least_squares.burn_search import RivalTime
+
+    b = _burn()
+    rival = RivalTime(1.2, np.array([0.0, -0.11, -0.04]), 1.9, 52.8)
+    why = _doubt(_found([b], [(0.5, 1.5)]), [b], 2.0, rival=rival)
+    assert why.startswith("its burn time and delta-v are not determined") and "cost +1.9" in why
+
+
 def test_an_unconfirmed_estimate_keeps_its_numbers_and_says_why():
     from cistrack.evaluation.run_summary import RunSummary, maneuver_lines
 
@@ -149,3 +160,17 @@ def test_a_burn_before_the_arcs_start_is_not_confirmed_in_a_later_gap():
     (m,) = _burn_run(2, "truth.maneuvers.t_days=2.0", "truth.maneuvers.delta_v_ms=2")
     assert not m["confirmed"] and m["unconfirmed_reason"].startswith("the measurements alone do not call for the burn")
     assert m["delta_v_ms"] > 0 and m["t_burn_days"] > 2.0
+
+
+def test_a_station_keeping_burn_whose_time_the_arc_does_not_place_is_not_confirmed():
+    """example-1-maneuver seed 2 with 3,000 particles: its second 0.1 m/s burn (13.133 d) had been
+    confirmed as 0.199 +- 0.072 m/s at 11.564 +- 0.68 d along +x (the truth: -y), though a burn
+    anywhere in 11.4-14.2 d fits within 4.3 of its cost; the first burn's estimate stays confirmed."""
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+    from cistrack.scenario.settings import apply_settings
+
+    sc = apply_settings(load_scenario("example-1-maneuver"), ["filter.n_particles=3000", "iod.n_particles=3000"])
+    first, second = run_scenario(sc, seed=2).summary.maneuvers
+    assert first["confirmed"] and abs(first["delta_v_ms"] - 0.1) < 3 * first["delta_v_sigma_ms"]
+    assert not second["confirmed"] and second["unconfirmed_reason"].startswith("its burn time and delta-v are not")
