@@ -237,7 +237,7 @@ class RivalTime:
     t : float                 TU
     delta_v_ms : (3,) float   the delta-v fitted there, synodic m/s
     cost_delta : float        its fit's capped cost minus the estimate's
-    chi2 : float              (dv - dv_est)^T C^-1 (dv - dv_est), C the estimate's covariance
+    chi2 : float              (dv - dv_est)^T C^-1 (dv - dv_est), C the sum of the two delta-v's covariances
     """
 
     t: float
@@ -257,8 +257,9 @@ def rival_time(arc: BurnArc, ballistic: FitResult, found: ManeuverSearch, burn: 
                latest: float) -> RivalTime | None:
     """Another burn time up to ``latest`` (TU, the detection) that the measurements allow as well as
     ``burn``'s (its fit costs at most :data:`RIVAL_COST` more than the search's, ``found``, with its
-    other burns held at their times) but with a delta-v outside ``burn``'s covariance (chi-square
-    of 3 dof beyond its quantile at :data:`RIVAL_FALSE_ALARM`): of those, the one whose fit costs
+    other burns held at their times) but with a delta-v the two estimates' uncertainties do not
+    cover (chi-square of 3 dof in the sum of both covariances beyond its quantile at
+    :data:`RIVAL_FALSE_ALARM`; the sum, as neither time is the true one): of those, the one whose fit costs
     least; None when there is none. ``arc``: the search's, its ``dynamics`` ballistic.
 
     The burn time's sigma comes from the cost's profile near its minimum, and the time's term in the
@@ -280,8 +281,9 @@ def rival_time(arc: BurnArc, ballistic: FitResult, found: ManeuverSearch, burn: 
     for tb in near:
         try:
             one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, float(tb)])
-            dv = next(b for b in one.burns if b.t == float(tb)).delta_v_ms
-            chi2 = float((dv - burn.delta_v_ms) @ np.linalg.solve(burn.covariance_ms2, dv - burn.delta_v_ms))
+            there = next(b for b in one.burns if b.t == float(tb))
+            dv, both = there.delta_v_ms, burn.covariance_ms2 + there.covariance_ms2
+            chi2 = float((dv - burn.delta_v_ms) @ np.linalg.solve(both, dv - burn.delta_v_ms))
         except (FitError, PropagationError, np.linalg.LinAlgError):
             continue
         cost = capped_cost(one.fit, arc.prior) - best

@@ -299,7 +299,7 @@ def _prior_only(found: Any, ballistic: Any) -> str:
 
 def _unstable(rival: Any) -> str:
     """Why the estimate's time and delta-v are not determined ("" when they are, ``rival`` None):
-    another burn time fits about as well with a delta-v outside the estimate's covariance
+    another burn time fits about as well with a delta-v the two estimates' covariances do not cover
     (:func:`cistrack.least_squares.burn_search.rival_time`)."""
     from cistrack.least_squares.burn_search import RIVAL_COST, RIVAL_FALSE_ALARM
     from cistrack.least_squares.chi_square import chi2_ppf
@@ -309,8 +309,8 @@ def _unstable(rival: Any) -> str:
     dv = ", ".join(f"{v:+.3g}" for v in rival.delta_v_ms)
     return (f"its burn time and delta-v are not determined: a burn at {units.tu_to_days(rival.t):.3f} d fits "
             f"about as well (cost {rival.cost_delta:+.1f}, within {RIVAL_COST:g}) with a delta-v of ({dv}) m/s, "
-            f"chi-square {rival.chi2:.1f} from the estimate's (> {chi2_ppf(1.0 - RIVAL_FALSE_ALARM, 3):.1f}, "
-            f"3 dof at {RIVAL_FALSE_ALARM:g})")
+            f"chi-square {rival.chi2:.1f} from the estimate's in their two covariances "
+            f"(> {chi2_ppf(1.0 - RIVAL_FALSE_ALARM, 3):.1f}, 3 dof at {RIVAL_FALSE_ALARM:g})")
 
 
 def episodes(detections: list[Detection]) -> list[list[Detection]]:

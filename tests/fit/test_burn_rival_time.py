@@ -1,5 +1,5 @@
-"""Another burn time the measurements allow as well as the estimate's, with a delta-v outside the
-estimate's covariance (cistrack.least_squares.burn_search.rival_time), on a linear problem: a
+"""Another burn time the measurements allow as well as the estimate's, with a delta-v that the two
+estimates' covariances together do not cover (cistrack.least_squares.burn_search.rival_time), on a linear problem: a
 force-free particle whose position is measured, one observation at the prior's epoch (t = 0), an
 uninformative pass at 2.0-2.2, two passes after a burn at 3.0."""
 from __future__ import annotations
@@ -52,7 +52,7 @@ def _judged(v_sigma, tb):
 def test_a_burn_time_the_measurements_do_not_place_has_a_rival_with_another_delta_v():
     """With a loose prior on the velocity a burn anywhere before the pass at 4.0 fits the noise-free
     data: the estimate at 1.0 has a rival, whose delta-v (near the truth's, at 3.0) lies far outside
-    the estimate's covariance."""
+    the two covariances."""
     burn, rival = _judged(1.0, 1.0)
     assert rival is not None and rival.cost_delta <= 4.0 and rival.chi2 > 1e3
     assert np.linalg.norm(rival.delta_v_ms - burn.delta_v_ms) > 1.0
