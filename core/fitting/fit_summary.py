@@ -137,7 +137,9 @@ def summary_lines(one) -> list[str]:
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
     if not r.converged:
-        lines.append("  warning: the least squares did not converge; the orbit is not exported without --force "
+        what = ("the least squares converged, but the fit is not a clean one (the note above)"
+                if any(str(m).startswith("not a ") for m in r.messages) else "the least squares did not converge")
+        lines.append(f"  warning: {what}; the orbit is not exported without --force "
                      "(docs/real-data.md, 'When a fit fails')")
     if r.noise_scale > 1.5:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "

@@ -1,7 +1,7 @@
 """Burns found in an arc of observations: the search that ``cistrack fit`` and a run's maneuver watch share.
 
 A ballistic fit of an object that maneuvered shows it in one of three ways: it rejects a
-contiguous block of observations (those on one side of the burn), its residuals are far larger
+contiguous block of observations that reaches an end of the arc (those on one side of the burn), its residuals are far larger
 than the noise (weighted RMS), or it does not converge. :func:`suspicion` names which. Then
 :func:`search_maneuvers` looks for burns in the gaps between the observations (a burn between
 nights, or between tracklets of one night):
@@ -79,20 +79,27 @@ RIVAL_SCREEN_SLACK = 3.0
 few units of the full fits' costs near a 1 m/s burn)."""
 
 
-def _longest_block(rejected: np.ndarray) -> int:
-    best = run = 0
-    for r in rejected:
-        run = run + 1 if r else 0
-        best = max(best, run)
-    return best
+def _end_block(rejected: np.ndarray) -> int:
+    """The longer run of rejections that starts the arc or ends it (time order)."""
+    def lead(r: np.ndarray) -> int:
+        kept = np.flatnonzero(~r)
+        return int(kept[0]) if kept.size else int(r.size)
+
+    return max(lead(rejected), lead(rejected[::-1]))
 
 
 def suspicion(result: FitResult) -> str:
     """Why the ballistic ``result`` looks like an object that maneuvered, in words ("" when it
-    does not): a contiguous block of rejections, a large RMS, or no convergence."""
+    does not): a contiguous block of rejections at the start or the end of the arc, a large RMS,
+    or no convergence.
+
+    The block must reach an end of the arc: after a burn every later observation is off the
+    ballistic orbit, so a fit that follows one side rejects the other side to the arc's end. A
+    block between accepted observations (one mis-identified tracklet, one site's wrong position)
+    is bad data, not a maneuver: it is rejected and the fit stays clean."""
     order = np.argsort(result.residuals.times, kind="stable")
     rejected = np.asarray(result.residuals.rejected, dtype=bool)[order]
-    block = _longest_block(rejected)
+    block = _end_block(rejected)
     if block >= max(BLOCK_MIN, BLOCK_SHARE * rejected.size):
         return (f"it rejects a contiguous block of {block} of {rejected.size} observations "
                 f"({100.0 * block / rejected.size:.0f} %)")

@@ -74,3 +74,29 @@ def test_no_burn_is_kept_for_an_object_that_did_not_maneuver():
     assert suspicion(ballistic) == ""
     found = search_maneuvers(b.dynamics, b.sensor, b.measurements, ballistic, OPTS)
     assert found.burns == []
+
+
+@pytest.fixture(scope="module")
+def clean_fit():
+    return _ballistic(burned(0.0))
+
+
+def _with_rejected(fit, rows):
+    from dataclasses import replace
+
+    rejected = np.zeros(len(fit.residuals.rejected), dtype=bool)
+    order = np.argsort(fit.residuals.times, kind="stable")
+    rejected[order[rows]] = True
+    return replace(fit, residuals=replace(fit.residuals, rejected=rejected))
+
+
+def test_a_block_of_rejections_that_ends_the_arc_makes_the_fit_suspect(clean_fit):
+    n = len(clean_fit.residuals.rejected)
+    assert "contiguous block" in suspicion(_with_rejected(clean_fit, np.arange(n - 10, n)))
+
+
+def test_a_block_of_rejections_between_accepted_observations_is_bad_data_not_a_maneuver(clean_fit):
+    """One mis-identified tracklet in the middle of the arc: after a burn every later observation
+    would be off the ballistic orbit, so a block with accepted observations after it is no burn's."""
+    n = len(clean_fit.residuals.rejected)
+    assert suspicion(_with_rejected(clean_fit, np.arange(n // 2, n // 2 + 10))) == ""

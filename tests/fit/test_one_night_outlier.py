@@ -1,0 +1,43 @@
+"""One site's night with one gross outlier: no burn is searched on an arc this short (a burn's three
+parameters fit the outlier as readily as a maneuver: it had taken a 912 +- 626 m/s burn between two
+exposures 12 minutes apart and predicted an Earth impact 5 hours later), the fit is reported not
+clean, and its warning says the least squares converged."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from cistrack.cli.main import main
+
+ROWS = """# version=2022
+trkSub|mode|stn|obsTime|ra|dec|rmsRA|rmsDec|astCat
+nrho|CCD|568|2026-04-29T07:30:14.099192Z|191.55705821097963|-4.891664142452307|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T07:42:20.275941Z|191.6274610602796|-4.94059104986468|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T07:55:00.136433Z|191.70062859951547|-4.9923504014232294|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:26:49.246598Z|192.86585846920763|-5.874674533860282|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:34:22.810826Z|192.91050728583393|-5.906780528388479|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:42:27.313984Z|193.03132738612708|-5.959593893098624|0.706|0.706|Gaia3
+"""
+
+
+@pytest.fixture(scope="module")
+def fitted(tmp_path_factory):
+    d = tmp_path_factory.mktemp("night")
+    (d / "night.psv").write_text(ROWS)
+    code = main(["fit", str(d / "night.psv"), "--out", str(d / "fit")])
+    return code, json.loads((d / "fit" / "fit.json").read_text())
+
+
+def test_no_burn_is_searched_on_one_night_and_the_fit_is_not_clean(fitted):
+    code, record = fitted
+    assert code == 3 and not record["converged"] and not record.get("maneuvers")
+    assert any("cannot tell a burn from outliers" in m and "no burn was searched" in m for m in record["messages"])
+
+
+def test_its_warning_says_the_least_squares_converged_but_the_fit_is_not_clean(tmp_path, capsys):
+    (tmp_path / "night.psv").write_text(ROWS)
+    assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit")]) == 3
+    out = " ".join(capsys.readouterr().out.split())
+    assert "warning: the least squares converged, but the fit is not a clean one" in out
+    assert "did not converge" not in out and "impact" not in out
