@@ -23,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from cistrack.errors import StateError
+from cistrack.errors import ParameterError, StateError
 from cistrack.interfaces.dynamics import Dynamics
+from cistrack.least_squares.errors import FitError
 
 __all__ = ["SolveFor", "STEPS", "solve_for", "fitted_dynamics"]
 
@@ -72,7 +73,11 @@ class SolveFor:
         """The model with the parameters at ``values`` (P,) (the last one built is reused)."""
         key = np.asarray(values, dtype=float).tobytes()
         if self._cache is None or self._cache[0] != key:
-            dyn = self.base.with_parameters(**{n: float(v) for n, v in zip(self.names, values)})
+            try:
+                dyn = self.base.with_parameters(**{n: float(v) for n, v in zip(self.names, values)})
+            except ParameterError as exc:  # an iterate outside the model's range: the fit's failure, not the user's
+                shown = ", ".join(f"{n} = {float(v):.4g}" for n, v in zip(self.names, values))
+                raise FitError(f"the solve-for parameters left the model's range ({shown}): {exc}") from None
             self._cache = (key, dyn)
         return self._cache[1]
 

@@ -61,3 +61,13 @@ def test_dynamics_without_the_parameter_are_refused_by_name():
     _, sensor, ms, x0 = simulate(0.0, 3.0, seed=7)
     with pytest.raises(StateError, match="area_to_mass_m2_kg.*ephemeris"):
         fit_orbit(cr3bp, sensor, ms, x0, 0.0, options=FitOptions(area_to_mass="solve"))
+
+
+def test_an_iterate_outside_the_models_range_is_the_fits_failure_not_a_settings_error():
+    """A least-squares step to C_R A/m = -1.2e11 m^2/kg (a diverging fit of a survey set) had ended
+    the command as if the user had set a bad value (exit 2, no fit.json)."""
+    from cistrack.least_squares.errors import FitError
+
+    dyn = default_registry().create("dynamics", "ephemeris", epoch=EPOCH)
+    with pytest.raises(FitError, match=r"left the model's range \(area_to_mass_m2_kg = -1\.171e\+11\)"):
+        SolveFor(dyn, ("area_to_mass_m2_kg",)).dynamics(np.array([-117123731138.67]))
