@@ -189,6 +189,9 @@ def _horizon_words(days: float, note: str) -> str:
     if note.startswith("the fitted orbit"):
         return f"the orbits it allows stay within a {field} until {note}"
     why = note or f"{100 * LOST_SHARE:g} % of the orbits it allows then leave a {field}"
+    if days < 0.5 * HORIZON_STEP_DAYS:  # the first step of the grid already lost them
+        return (f"the orbits it allows spread beyond a {field} within {24 * HORIZON_STEP_DAYS:g} hours of the last "
+                f"observation ({why}): the arc does not say where to look")
     return f"observe again within {days:.2g} days ({why})"
 
 

@@ -74,3 +74,13 @@ def test_one_night_is_lost_at_the_perilune_where_the_orbits_it_allows_hit_the_mo
     perilune_days = (k + 1) / 96.0
     assert d.horizon_days == pytest.approx(perilune_days, abs=HORIZON_STEP_DAYS)
     assert "hit the Moon" in d.horizon_note and "observe again within 1.8 days" in d.sentence
+
+
+def test_orbits_lost_at_the_first_step_are_said_so_not_a_floating_point_horizon():
+    """With huge stated uncertainties the horizon came out as 'observe again within 5e-16 days'."""
+    from cistrack.fitting.determination import _horizon_words
+
+    words = _horizon_words(5e-16, "")
+    assert "e-16" not in words and "observe again within" not in words
+    assert words.startswith("the orbits it allows spread beyond a 1-degree field within 6 hours")
+    assert _horizon_words(1.8, "").startswith("observe again within 1.8 days")
