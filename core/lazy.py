@@ -12,10 +12,49 @@ from __future__ import annotations
 import functools
 import logging
 import os
+import pickle
 import threading
 from typing import Any, Callable
 
-__all__ = ["LazyJit", "LazyModule", "lazy_njit"]
+__all__ = ["LazyJit", "LazyModule", "lazy_njit", "tolerate_damaged_cache"]
+
+_DAMAGE = (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError, IndexError, KeyError,
+           ImportError)
+"""What unpickling a truncated or garbled numba cache file raises."""
+_TOLERANT = threading.Lock()
+
+
+def tolerate_damaged_cache() -> None:
+    """Make numba treat an unreadable entry of its on-disk cache as absent: the function is compiled
+    again (and its entry rewritten), with a warning naming the file (logger ``cistrack.lazy``).
+
+    Numba raises the unpickling error instead, from every later run, until someone finds and
+    deletes the file (a disk that filled mid-write, a copied or truncated cache directory). Wraps
+    ``numba.core.caching.IndexDataCacheFile.load`` once per process; idempotent."""
+    from numba.core import caching
+
+    cls = getattr(caching, "IndexDataCacheFile", None)
+    with _TOLERANT:
+        load = getattr(cls, "load", None)
+        if load is None or getattr(load, "_cistrack_tolerant", False):
+            return
+
+        @functools.wraps(load)
+        def tolerant_load(self, key):
+            try:
+                return load(self, key)
+            except _DAMAGE as exc:
+                logging.getLogger("cistrack.lazy").warning(
+                    "numba's cache entry %s is damaged (%s: %s); compiling the function again",
+                    getattr(self, "_index_path", "?"), type(exc).__name__, str(exc)[:80])
+                try:
+                    self.flush()  # an empty index: the compiled function's entry is written afresh
+                except OSError:
+                    pass
+                return None
+
+        tolerant_load._cistrack_tolerant = True
+        cls.load = tolerant_load
 
 
 class LazyJit:
@@ -36,6 +75,8 @@ class LazyJit:
             with self._lock:
                 if self._dispatcher is None:
                     from numba import njit
+
+                    tolerate_damaged_cache()
 
                     self._dispatcher = njit(**self.options)(self.py_func)
         return self._dispatcher

@@ -138,6 +138,9 @@ def _helpers_digest(files=HELPER_FILES) -> str:
 
 
 def _load_file_module(name: str, path: Path) -> ModuleType:
+    from cistrack.lazy import tolerate_damaged_cache
+
+    tolerate_damaged_cache()  # a damaged cache entry of the kernel is compiled again, not a traceback
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module

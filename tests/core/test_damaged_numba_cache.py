@@ -1,0 +1,51 @@
+"""A damaged entry of numba's on-disk cache (a truncated or garbled index or data file) is treated as
+absent: the function is compiled again, a warning names the file, and the entry is rewritten. Numba
+itself raised the unpickling error from every later run until someone deleted the file."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+MODULE = textwrap.dedent("""
+    from cistrack.lazy import lazy_njit
+
+    @lazy_njit(cache=True)
+    def plus_one(x):
+        return x + 1.0
+""")
+
+CALL = ("import logging, sys; logging.basicConfig(stream=sys.stderr, level=logging.WARNING); "
+        "sys.path.insert(0, {where!r}); import cached_fn; print(cached_fn.plus_one(2.0))")
+
+
+def _call(tmp_path):
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PATH": "/usr/bin:/bin"}
+    return subprocess.run([sys.executable, "-c", CALL.format(where=str(tmp_path))], capture_output=True, text=True,
+                          timeout=300, env=env)
+
+
+@pytest.fixture
+def damaged(tmp_path):
+    (tmp_path / "cached_fn.py").write_text(MODULE)
+    first = _call(tmp_path)
+    assert first.stdout.split() == ["3.0"], first.stderr[-2000:]
+    index = list((tmp_path / "nb").rglob("*.nbi"))
+    assert index
+    for f in index:
+        f.write_bytes(b"garbage")
+    return tmp_path
+
+
+def test_a_damaged_index_is_compiled_again_with_a_warning_naming_it(damaged):
+    proc = _call(damaged)
+    assert proc.returncode == 0 and proc.stdout.split() == ["3.0"], proc.stderr[-2000:]
+    assert "numba's cache entry" in proc.stderr and ".nbi is damaged" in " ".join(proc.stderr.split())
+
+
+def test_the_entry_is_rewritten_and_the_next_process_loads_it_silently(damaged):
+    _call(damaged)
+    proc = _call(damaged)
+    assert proc.stdout.split() == ["3.0"] and "damaged" not in proc.stderr
