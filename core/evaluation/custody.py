@@ -32,6 +32,10 @@ VERDICT_KINDS: tuple[str, ...] = ("tracking", "not-converged", "lost", "diverged
 """Final verdict kinds of a run."""
 
 
+COLLAPSE_ARCSEC = 1.5
+"""The angle sigma (arcsec) :attr:`CustodyRule.collapse_sigma_km` is stated for."""
+
+
 @dataclass(frozen=True)
 class CustodyRule:
     """When custody is lost, and whether it can be regained.
@@ -52,7 +56,9 @@ class CustodyRule:
     ("not-converged")."""
     collapse_sigma_km: float = 1e-3
     """A final largest per-axis position sigma below this (km, 1 m) is a collapsed belief: no
-    telescope at 1.5 arcsec can pin a cislunar object that tightly ("diverged")."""
+    telescope at 1.5 arcsec can pin a cislunar object that tightly ("diverged"). A run whose
+    measurements are finer judges with it scaled by their finest angle sigma over 1.5 arcsec
+    (:meth:`for_angle_sigma`)."""
     diverged_error_km: float = 50.0
     diverged_nees: float = 1e4
     """A final position error above ``diverged_error_km`` (km) together with a NEES above
@@ -85,6 +91,16 @@ class CustodyRule:
     updates means the measurements fall far outside the spread the belief predicts, the
     no-truth counterpart of "error far beyond sigma" ("diverged"; a chi-square with 2 to 6
     degrees of freedom exceeds 1e3 with probability ~0)."""
+
+    def for_angle_sigma(self, arcsec: float) -> "CustodyRule":
+        """This rule for measurements whose finest angle sigma is ``arcsec``: the collapse threshold
+        scaled by ``arcsec`` / 1.5 when that is below 1 (a 1e-4 arcsec sensor pins the object to
+        about a metre, and a consistent filter of it had been judged collapsed)."""
+        from dataclasses import replace
+
+        if not (np.isfinite(arcsec) and 0.0 < arcsec < COLLAPSE_ARCSEC):
+            return self
+        return replace(self, collapse_sigma_km=self.collapse_sigma_km * arcsec / COLLAPSE_ARCSEC)
 
 
 @dataclass(frozen=True)

@@ -254,7 +254,8 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
         pm.register(ProgressBar(ctx.run_id, len(events), custody), name="observer-progress-ProgressBar")
     pending = [_initial_step(ctx, rngs["filter"])]  # handed on, not kept here: its particles go with its hooks
     status, failure, abort = _guarded(pm, ctx, collector, lambda: _steps(ctx, pm, metrics, events, pending))
-    verdict = final_verdict(custody.verdict, collector.rows, scenario.custody, ctx.truth is not None,
+    verdict = final_verdict(custody.verdict, collector.rows, _judging_rule(scenario.custody, ctx.measurements),
+                            ctx.truth is not None,
                             custody.earth_distance_km, custody.truth_earth_distance_km) \
         if status in ("finished", "filter-failed") else _unfinished_verdict(custody.verdict, status)
     summary = summarize(ctx, collector.rows, verdict, status, failure,
@@ -396,6 +397,18 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
     else:
         metrics.measure(ctx, step, event)
     notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
+
+
+def _judging_rule(rule, measurements):
+    """``rule`` for the run's measurements: its collapse threshold scaled to their finest angle
+    sigma (:meth:`cistrack.evaluation.custody.CustodyRule.for_angle_sigma`)."""
+    names = tuple(getattr(measurements, "names", ()))
+    cols = [j for j, n in enumerate(names) if "range" not in str(n)]
+    sig = np.asarray(getattr(measurements, "sigmas", np.empty((0, 0))), dtype=float)
+    if not cols or sig.ndim != 2 or sig.shape[0] == 0:
+        return rule
+    finest = float(np.nanmin(sig[:, cols])) * 180.0 / np.pi * 3600.0
+    return rule.for_angle_sigma(finest)
 
 
 def read_only_belief(belief):

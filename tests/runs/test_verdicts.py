@@ -168,3 +168,18 @@ def test_a_mean_beyond_cislunar_space_with_the_truth_there_too_is_no_divergence(
     v = final_verdict(Verdict(), _consistent_rows(), CustodyRule(), True, earth_distance_km=3.5e6,
                       truth_earth_distance_km=4.0e5)
     assert v.kind == "diverged" and v.reason.startswith("left cislunar space"), v
+
+
+def test_the_collapse_threshold_scales_with_measurements_finer_than_its_1_5_arcsec():
+    rule = CustodyRule()
+    assert rule.for_angle_sigma(1e-4).collapse_sigma_km == pytest.approx(1e-3 * 1e-4 / 1.5)
+    assert rule.for_angle_sigma(1.5) is rule and rule.for_angle_sigma(3.0) is rule
+    assert rule.for_angle_sigma(float("nan")) is rule
+
+
+def test_a_consistent_filter_of_a_1e_4_arcsec_sensor_is_tracking_not_collapsed():
+    """Its belief is about a metre wide, as the data allow; it had been judged "diverged: belief
+    collapsed" with custody lost, beside an error of 0.9 m and a NEES of 3.3."""
+    sc = load_scenario("quick").with_overrides({"sensor": {"sigma_arcsec": 1e-4}})
+    res = run_scenario(sc, seed=1)
+    assert res.summary.verdict.kind == "tracking", res.summary.verdict.reason
