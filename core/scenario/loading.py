@@ -173,11 +173,9 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
     if not p.exists():
         raise ConfigError(f"scenario file not found: {p}")
     try:
-        data = toml_input.loads(p.read_text(), str(p))
+        data = toml_input.loads(toml_input.read_file(p), str(p))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{p}: cannot read: {exc}") from None
     scen = parse_scenario(_merge_overrides(data, overrides) if overrides else data, str(p), registry)
     if scen.measurements_file is not None and not scen.measurements_file.is_absolute():
         scen.measurements_file = (p.parent / scen.measurements_file).resolve()

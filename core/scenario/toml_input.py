@@ -1,5 +1,9 @@
 """Reading TOML from users (scenario files, study files, ``--set`` values) with a nesting limit.
 
+:func:`read_file` reads a scenario or study file: a regular file, or a pipe (so that a shell's
+process substitution ``<(...)`` works), of at most :data:`MAX_FILE_MB`; a device (``/dev/zero``),
+a socket or a larger file is refused naming the path, before (or, for a pipe, while) it is read.
+
 ``tomllib`` parses arrays and inline tables recursively, so a value nested a few hundred levels
 deep ends in a RecursionError, and one nested a little less passes the parser but then meets
 code that walks it recursively (copies, merges, messages). :func:`loads` refuses both with a
@@ -8,21 +12,29 @@ left to the caller (``tomllib.TOMLDecodeError``), which words them for its own i
 """
 from __future__ import annotations
 
+import os
+import stat
 import sys
+from pathlib import Path
 from typing import Any
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.reader import not_a_file
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["MAX_DEPTH", "loads", "check_depth", "TOMLDecodeError"]
+__all__ = ["MAX_DEPTH", "MAX_FILE_MB", "loads", "check_depth", "read_file", "TOMLDecodeError"]
 
 MAX_DEPTH = 16
 """Most levels of tables and arrays inside one another (counting the top level). The deepest
 legitimate values are about 5 levels deep (a schedule's phases, a reader's sites)."""
+
+MAX_FILE_MB = 10.0
+"""Largest scenario or study file read, MB (10^6 bytes). The built-in ones are under 5 kB; the
+limit keeps a wrong path (a log, an archive, a pipe that never ends) from being read whole."""
 
 TOMLDecodeError = tomllib.TOMLDecodeError
 
@@ -55,3 +67,33 @@ def loads(text: str, where: str) -> dict[str, Any]:
     except RecursionError:
         raise _too_deep(where, "hundreds of") from None
     return check_depth(data, where)
+
+
+def _too_large(path: Path, size: str) -> ConfigError:
+    return ConfigError(f"{path}: larger than the {MAX_FILE_MB:g} MB limit on a scenario or study file ({size}); "
+                       "give the path of a scenario or study TOML file")
+
+
+def read_file(path: Path) -> str:
+    """The text of the scenario or study file ``path`` (UTF-8).
+    ConfigError naming the path for what is neither a regular file nor a pipe, for a file larger
+    than :data:`MAX_FILE_MB` (a pipe is read up to the limit only) and for what cannot be read
+    or is not UTF-8."""
+    why = not_a_file(path)
+    if why is not None and not (os.path.exists(path) and stat.S_ISFIFO(os.stat(path).st_mode)):
+        raise ConfigError(f"{path}: {why}; give the path of a scenario or study TOML file")
+    limit = int(MAX_FILE_MB * 1e6)
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            if size > limit:
+                raise _too_large(path, f"{size:,} bytes")
+            data = f.read(limit + 1)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise _too_large(path, f"more than {limit:,} bytes read")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: cannot read: not UTF-8 text ({exc})") from None

@@ -95,7 +95,7 @@ def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
         src = src if src.is_file() else p / "study.json"  # relative scenario paths resolve beside it
         return _checked(data, src), src
     try:
-        data = toml_input.loads(p.read_text(), str(p))
+        data = toml_input.loads(toml_input.read_file(p), str(p))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
     return _checked(data, p), p
