@@ -3,6 +3,7 @@
 :func:`read_file` reads a scenario or study file: a regular file, or a pipe (so that a shell's
 process substitution ``<(...)`` works), of at most :data:`MAX_FILE_MB`; a device (``/dev/zero``),
 a socket or a larger file is refused naming the path, before (or, for a pipe, while) it is read.
+A leading UTF-8 byte-order mark is dropped, as the observation readers drop it.
 
 ``tomllib`` parses arrays and inline tables recursively, so a value nested a few hundred levels
 deep ends in a RecursionError, and one nested a little less passes the parser but then meets
@@ -75,7 +76,7 @@ def _too_large(path: Path, size: str) -> ConfigError:
 
 
 def read_file(path: Path) -> str:
-    """The text of the scenario or study file ``path`` (UTF-8).
+    """The text of the scenario or study file ``path`` (UTF-8, a leading byte-order mark dropped).
     ConfigError naming the path for what is neither a regular file nor a pipe, for a file larger
     than :data:`MAX_FILE_MB` (a pipe is read up to the limit only) and for what cannot be read
     or is not UTF-8."""
@@ -94,6 +95,6 @@ def read_file(path: Path) -> str:
     if len(data) > limit:
         raise _too_large(path, f"more than {limit:,} bytes read")
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: cannot read: not UTF-8 text ({exc})") from None

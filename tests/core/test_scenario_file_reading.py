@@ -1,5 +1,5 @@
-"""A scenario or study path is read only when it is a file of data of a sane size, as UTF-8 text;
-anything else is refused naming the path, before it is read."""
+"""A scenario or study path is read only when it is a file of data of a sane size, as UTF-8 text
+(a leading byte-order mark dropped); anything else is refused naming the path, before it is read."""
 from __future__ import annotations
 
 import os
@@ -58,3 +58,8 @@ def test_a_pipe_is_read_only_up_to_the_size_limit(tmp_path, monkeypatch):
         load_scenario(str(fifo))
     writer.join()
 
+
+def test_a_scenario_file_with_a_utf8_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + _quick_text().encode())
+    assert load_scenario(str(path)).raw == load_scenario("quick").raw
