@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
-                             MeasurementError, ParameterError, UnknownComponentError)
+                             MeasurementError, ParameterError, UnknownComponentError, quoted)
 from cistrack.interfaces import (KINDS, Body, Clusterer, Dynamics, Exporter, Filter, IODMethod, Pass,
                                  Propagation, RangePrior, Reader, ReferenceOrbit, Schedule, Sensor)
 from cistrack.interfaces.component import (Component, check_choice, check_int, check_nonnegative,
@@ -207,11 +207,11 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
             return
         plain = _plain_value(value)
         if isinstance(plain, float) and not math.isfinite(plain):
-            raise ConfigError(f"settings[{prefix!r}] = {value!r}: a setting must be a finite number")
+            raise ConfigError(f"settings[{prefix!r}] = {quoted(value)}: a setting must be a finite number")
         try:
             text = tomli_w.dumps({"v": plain}).partition("=")[2].strip()
         except TypeError:
-            raise ConfigError(f"settings[{prefix!r}] = {value!r}: not a setting value (give a number, string, "
+            raise ConfigError(f"settings[{prefix!r}] = {quoted(value)}: not a setting value (give a number, string, "
                               "boolean, path, list or table)") from None
         items.append(f"{prefix}={text}")
 

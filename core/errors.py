@@ -67,3 +67,27 @@ def exception_text(exc: BaseException) -> str:
     if isinstance(exc, SystemExit):
         return f"SystemExit: it called sys.exit({exc.code!r})"
     return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+
+
+QUOTED_CHARACTERS = 40
+"""Most characters of a value a message quotes (:func:`quoted`)."""
+
+
+def quoted(value: object) -> str:
+    """``value`` as a message quotes it: its repr, or, when that is longer than
+    :data:`QUOTED_CHARACTERS` + 20 characters (a 100,000-character ``--set`` value), the start of
+    it and its length, e.g. ``'xxxxxxxx...' (100,000 characters)``, so that no message grows
+    with what it quotes."""
+    text = repr(value)
+    if len(text) <= QUOTED_CHARACTERS + 20:
+        return text
+    if isinstance(value, str):
+        return f"{value[:QUOTED_CHARACTERS] + '...'!r} ({len(value):,} characters)"
+    return f"{text[:QUOTED_CHARACTERS]}... ({len(text):,} characters as written)"
+
+
+def shown(text: str) -> str:
+    """``text`` as a message shows an argument it names unquoted (``--site 568``): as it is when
+    short, else shortened as :func:`quoted` shortens it."""
+    text = str(text)
+    return text if len(text) <= QUOTED_CHARACTERS + 20 else quoted(text)

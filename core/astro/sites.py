@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 
-from cistrack.errors import MeasurementError
+from cistrack.errors import MeasurementError, quoted
 from cistrack.astro.primaries import EARTH_RADIUS_KM
 
 __all__ = ["Site", "observatory", "observatory_codes", "site_from_parallax", "EARTH_EQUATORIAL_RADIUS_KM"]
@@ -133,7 +133,7 @@ def observatory(code: str) -> Site:
     try:
         lon, rc, rs, name = _table()[str(code)]
     except KeyError:
-        raise MeasurementError(f"MPC observatory code {code!r} is not in the MPC list bundled with "
+        raise MeasurementError(f"MPC observatory code {quoted(code)} is not in the MPC list bundled with "
                                f"cistrack ({len(_table())} codes); give its coordinates explicitly "
                                f"(reader parameter 'sites')") from None
     if lon is None or rc is None or rs is None:

@@ -167,32 +167,32 @@ def _site(code: str):
     """The site of ``--site``: an MPC observatory code, or LAT,LON,HEIGHT_M (WGS84: degrees North,
     degrees East, metres) for a site outside the list (one a fit's file declared, say)."""
     from cistrack.astro.sites import observatory
-    from cistrack.errors import ConfigError, MeasurementError
+    from cistrack.errors import ConfigError, MeasurementError, shown
 
     if len(code.split(",")) == 3:
         return _given_site(code)
     try:
         return observatory(code)
     except MeasurementError as exc:
-        raise ConfigError(f"--site {code}: {str(exc).split('; give its coordinates')[0]}; give the site as "
+        raise ConfigError(f"--site {shown(code)}: {str(exc).split('; give its coordinates')[0]}; give the site as "
                           "LAT,LON,HEIGHT_M instead (WGS84 degrees North, degrees East, metres)") from None
 
 
 def _given_site(text: str):
     """The site LAT,LON,HEIGHT_M of ``--site``; ConfigError naming the option otherwise."""
     from cistrack.astro.sites import Site
-    from cistrack.errors import ConfigError, MeasurementError
+    from cistrack.errors import ConfigError, MeasurementError, shown
 
     try:
         lat, lon, height = (float(p) for p in text.split(","))
     except ValueError:
-        raise ConfigError(f"--site {text}: LAT,LON,HEIGHT_M must be three numbers (degrees, degrees, metres)") from None
+        raise ConfigError(f"--site {shown(text)}: LAT,LON,HEIGHT_M must be three numbers (degrees, degrees, metres)") from None
     if not all(math.isfinite(v) for v in (lat, lon, height)):
-        raise ConfigError(f"--site {text}: LAT,LON,HEIGHT_M must be finite numbers")
+        raise ConfigError(f"--site {shown(text)}: LAT,LON,HEIGHT_M must be finite numbers")
     try:
         return Site(lat, lon, height, name="given site")
     except MeasurementError as exc:
-        raise ConfigError(f"--site {text}: {str(exc).split(': ', 1)[-1]}") from None
+        raise ConfigError(f"--site {shown(text)}: {str(exc).split(': ', 1)[-1]}") from None
 
 
 def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:

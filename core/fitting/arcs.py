@@ -31,7 +31,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from cistrack.errors import CistrackError, ConfigError
+from cistrack.errors import CistrackError, ConfigError, quoted
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import seconds_to_tu, tu_to_days
 
@@ -157,7 +157,7 @@ def link_latest_arc(dynamics, sensor, measurements: MeasurementSet, fit, refit: 
 def arc_choice(value: Any) -> str:
     """``fit.arcs`` checked: one of :data:`ARC_CHOICES`; ConfigError naming the key otherwise."""
     if value not in ARC_CHOICES:
-        raise ConfigError(f"--set fit.arcs={value!r}: must be one of {', '.join(ARC_CHOICES)} (latest: fit the "
+        raise ConfigError(f"--set fit.arcs={quoted(value)}: must be one of {', '.join(ARC_CHOICES)} (latest: fit the "
                           "latest arc and report the others' misses; each: fit every arc on its own; all: one fit "
                           "over every observation)")
     return str(value)

@@ -48,7 +48,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import CistrackError, ConfigError, PropagationError
+from cistrack.errors import CistrackError, ConfigError, PropagationError, quoted
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.fitting.maneuver_search import add_maneuvers
@@ -123,18 +123,18 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     lov = opts.pop("lov", 0.0)
     span = opts.pop("filter_span", "early")
     if span not in _FILTER_SPANS:
-        raise ConfigError(f"--set fit.filter_span={span!r}: must be 'early' (default: the filter over the "
+        raise ConfigError(f"--set fit.filter_span={quoted(span)}: must be 'early' (default: the filter over the "
                           "first half day seeds the least squares when that fit is clean) or 'all' (the filter over "
                           "every observation)")
     if isinstance(lov, bool) or not isinstance(lov, (int, float)) or not (lov == 0 or 0.5 <= lov <= 20):
-        raise ConfigError(f"--set fit.lov={lov!r}: must be 0 (default: none) or a number of sigmas from 0.5 "
+        raise ConfigError(f"--set fit.lov={quoted(lov)}: must be 0 (default: none) or a number of sigmas from 0.5 "
                           "to 20 (the line of variations out to that many sigmas each side)")
     if epoch not in _EPOCHS:
-        shown = epoch.isoformat() if hasattr(epoch, "isoformat") else repr(epoch)  # a TOML date as typed
+        shown = epoch.isoformat() if hasattr(epoch, "isoformat") else quoted(epoch)  # a TOML date as typed
         raise ConfigError(f"--set fit.epoch={shown}: must be one of {', '.join(_EPOCHS)} (the observation "
                           "at which the state is estimated; the fit's epoch is not a date)")
     if prior not in _PRIORS:
-        raise ConfigError(f"--set fit.prior={prior!r}: must be 'none' (default) or 'filter' (the filter's "
+        raise ConfigError(f"--set fit.prior={quoted(prior)}: must be 'none' (default) or 'filter' (the filter's "
                           "final covariance as a prior)")
     known = set(FitOptions.__dataclass_fields__)
     unknown = sorted(set(opts) - known)

@@ -15,7 +15,7 @@ import typing
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from cistrack.errors import ParameterError
+from cistrack.errors import ParameterError, quoted
 
 __all__ = [
     "Component", "component_name", "ParamSpec", "param_specs", "MemoryNeed", "BYTES_PER_PARTICLE", "IOD_CHUNK_BYTES",
@@ -131,7 +131,7 @@ class Component(ABC):
 
     # -- validation helpers usable as self.check_xxx in __init__ ---------------------------------
     def _fail(self, name: str, value: Any, allowed: str) -> None:
-        raise ParameterError(f"{self._label()}: parameter '{name}' = {value!r} is invalid: {allowed}")
+        raise ParameterError(f"{self._label()}: parameter '{name}' = {quoted(value)} is invalid: {allowed}")
 
 
 def _real(owner: Component, name: str, value: Any) -> float:

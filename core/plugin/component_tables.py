@@ -21,7 +21,7 @@ from typing import Any
 
 from cistrack import units
 from cistrack.interfaces.component import Component, param_specs
-from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError, exception_text
+from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError, exception_text, quoted
 from cistrack.plugin.registry import Registry
 
 __all__ = ["ComponentSpec", "component_spec", "check_keys", "typed", "example_name"]
@@ -73,7 +73,7 @@ def example_name(reg: Registry, kind: str) -> str:
 def check_keys(table: dict, allowed: set[str], source: str, where: str) -> None:
     for key in table:
         if key not in allowed:
-            msg = f"{source}: {where}: unknown key {key!r}; allowed keys: {', '.join(sorted(allowed))}"
+            msg = f"{source}: {where}: unknown key {quoted(key)}; allowed keys: {', '.join(sorted(allowed))}"
             import difflib  # on use: only an unknown name needs it
 
             close = difflib.get_close_matches(key, list(allowed), n=1)
@@ -87,7 +87,7 @@ def typed(value: Any, types_: Any, source: str, where: str, key: str) -> Any:
     ok = isinstance(value, tt) and not (isinstance(value, bool) and bool not in tt)
     if not ok:
         names = " or ".join(t.__name__ for t in tt)
-        raise ConfigError(f"{source}: {where}: key {key!r} = {value!r} has type {type(value).__name__}; expected {names}")
+        raise ConfigError(f"{source}: {where}: key {key!r} = {quoted(value)} has type {type(value).__name__}; expected {names}")
     return value
 
 
@@ -125,7 +125,7 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
     # nested components last, so that the values handed on to them are checked and converted first
     for key, value in sorted(params.items(), key=lambda kv: kv[0] in shared):
         if key not in specs:
-            _unknown_parameter(key, specs, f"{source}: {where}: unknown parameter {key!r} for {kind} {name!r}")
+            _unknown_parameter(key, specs, f"{source}: {where}: unknown parameter {quoted(key)} for {kind} {name!r}")
         value = _hand_on(value, shared.get(key, ()), out, specs, specs[key].annotation, reg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
     for key, ps in specs.items():
@@ -228,11 +228,11 @@ def _coerce(value: Any, ann: Any, source: str, where: str, key: str, reg: Regist
         return _coerce_sequence(value, origin, args, source, where, key, reg)
     if origin is dict or ann is dict:
         if not isinstance(value, dict):
-            raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected a table")
+            raise ConfigError(f"{loc} = {quoted(value)} has type {type(value).__name__}; expected a table")
         return value
     if origin is typing.Literal:
         if value not in args:
-            raise ConfigError(f"{loc} = {value!r}; allowed: {', '.join(map(repr, args))}")
+            raise ConfigError(f"{loc} = {quoted(value)}; allowed: {', '.join(map(repr, args))}")
         return value
     return value
 
@@ -256,7 +256,7 @@ def _coerce_union(value: Any, args: tuple, source: str, where: str, key: str, re
     if shaped is not None:
         raise shaped
     expected = " or ".join(_type_name(a) for a in args if a is not type(None))
-    raise ConfigError(f"{source}: {where}: key {key!r} = {value!r}: expected {expected}")
+    raise ConfigError(f"{source}: {where}: key {key!r} = {quoted(value)}: expected {expected}")
 
 
 def _is_array_type(a: Any) -> bool:
@@ -275,7 +275,7 @@ def _coerce_scalar(value: Any, ann: type, loc: str) -> Any:
     ok = {float: number, int: isinstance(value, int) and not isinstance(value, bool),
           bool: isinstance(value, bool), str: isinstance(value, str)}[ann]
     if not ok:
-        raise ConfigError(f"{loc} = {value!r} has type {type(value).__name__}; expected {_SCALARS[ann]}")
+        raise ConfigError(f"{loc} = {quoted(value)} has type {type(value).__name__}; expected {_SCALARS[ann]}")
     return float(value) if ann is float else value
 
 
@@ -283,7 +283,7 @@ def _coerce_sequence(value: Any, origin: Any, args: tuple, source: str, where: s
     """An array: a list (``list[T]``, ``Sequence[T]``), a tuple of fixed length (``tuple[A, B]``)
     or of any length (``tuple[T, ...]``), each element coerced to its type."""
     if not isinstance(value, list):
-        raise ConfigError(f"{source}: {where}: key {key!r} = {value!r} has type {type(value).__name__}; expected an array")
+        raise ConfigError(f"{source}: {where}: key {key!r} = {quoted(value)} has type {type(value).__name__}; expected an array")
     if args and not (origin is tuple and len(args) == 2 and args[1] is Ellipsis):
         if origin is tuple:
             if len(args) != len(value):

@@ -20,7 +20,7 @@ import pluggy
 
 from cistrack.plugin import hookspecs
 from cistrack.env_flags import env_flag
-from cistrack.errors import DuplicateComponentError, ParameterError, RunInterrupted, UnknownComponentError
+from cistrack.errors import DuplicateComponentError, ParameterError, RunInterrupted, UnknownComponentError, quoted
 from cistrack.interfaces import KINDS
 
 __all__ = ["Registration", "PluginFailure", "Registry", "default_registry", "load_registry",
@@ -164,7 +164,7 @@ class Registry:
 
     def unknown_message(self, kind: str, name: Any) -> str:
         avail = self.names(kind)
-        msg = f"unknown {kind} {name!r}; available: {', '.join(avail) if avail else '(none registered)'}"
+        msg = f"unknown {kind} {quoted(name)}; available: {', '.join(avail) if avail else '(none registered)'}"
         import difflib  # on use: only an unknown name needs it
 
         close = difflib.get_close_matches(str(name), avail, n=1, cutoff=0.5)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 from typing import TYPE_CHECKING, Any
 
-from cistrack.errors import ConfigError, UnknownComponentError
+from cistrack.errors import ConfigError, UnknownComponentError, quoted
 
 if TYPE_CHECKING:
     from cistrack.plugin.registry import Registry
@@ -74,7 +74,7 @@ def _choose(table: Any, kind: str, reg: Registry, source: str, where: str) -> tu
         if key not in choices:
             rest[key] = value
         elif not isinstance(value, dict):
-            raise ConfigError(f"{source}: [{where}]: key {key!r} = {value!r}: a key named after the {kind} {key!r} "
+            raise ConfigError(f"{source}: [{where}]: key {key!r} = {quoted(value)}: a key named after the {kind} {key!r} "
                               f"holds its parameters and must be a table, [{where}.{key}]")
         elif key == name:
             own = value
@@ -97,7 +97,7 @@ def _refuse_conflicts(table: dict[str, Any], own: dict[str, Any], source: str, w
     clash = sorted(k for k in own if k in table and table[k] != own[k])
     if clash:
         k = clash[0]
-        raise ConfigError(f"{source}: [{where}] {k} = {table[k]!r} and [{where}.{name}] {k} = {own[k]!r}: a parameter "
+        raise ConfigError(f"{source}: [{where}] {k} = {quoted(table[k])} and [{where}.{name}] {k} = {quoted(own[k])}: a parameter "
                           f"in [{where}] wins over [{where}.{name}], so the second would be ignored; set it in one "
                           f"place (--set {where}.{k}=VALUE writes in [{where}])")
 

@@ -12,7 +12,7 @@ import os
 import unicodedata
 from typing import Any
 
-from cistrack.errors import ConfigError
+from cistrack.errors import ConfigError, quoted
 from cistrack.interfaces.limits import PORT_MAX, PORT_MIN, check_port  # defined where components reach them
 
 __all__ = ["SEED_MAX", "PORT_MIN", "PORT_MAX", "check_seed", "check_path_component", "check_count",
@@ -25,7 +25,7 @@ SEED_MAX = 2 ** 63 - 1
 def check_seed(value: Any, where: str) -> int:
     """``value`` as a seed: an integer in [0, 2**63 - 1]."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ConfigError(f"{where}: seed {value!r} must be an integer from 0 to 2**63-1")
+        raise ConfigError(f"{where}: seed {quoted(value)} must be an integer from 0 to 2**63-1")
     if not 0 <= value <= SEED_MAX:
         raise ConfigError(f"{where}: seed {value} is out of range: allowed 0 to 2**63-1 ({SEED_MAX})")
     return int(value)
@@ -34,7 +34,7 @@ def check_seed(value: Any, where: str) -> int:
 def check_count(value: Any, where: str, minimum: int = 1, maximum: int | None = None) -> int:
     """``value`` as an integer count in [minimum, maximum]."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ConfigError(f"{where}: {value!r} must be an integer >= {minimum}"
+        raise ConfigError(f"{where}: {quoted(value)} must be an integer >= {minimum}"
                           + (f" and <= {maximum}" if maximum is not None else ""))
     if value < minimum or (maximum is not None and value > maximum):
         raise ConfigError(f"{where}: {value} is out of range: allowed {minimum} to "
@@ -60,7 +60,7 @@ def check_path_component(value: Any, where: str) -> str:
     ``-``, path separators, and control or invisible formatting characters (bidirectional
     overrides, zero-width characters); at most 100 characters."""
     if not isinstance(value, str):
-        raise ConfigError(f"{where}: {value!r} must be a string")
+        raise ConfigError(f"{where}: {quoted(value)} must be a string")
     bad = ""
     if value in ("", ".", ".."):
         bad = "is empty or a relative directory"
@@ -75,7 +75,7 @@ def check_path_component(value: Any, where: str) -> str:
         bad = (f"contains a control or invisible formatting character (U+{ord(c):04X}; control characters, "
                "bidirectional overrides and zero-width characters are refused)")
     if bad:
-        raise ConfigError(f"{where}: {value!r} {bad}; it names a directory, so it must be one path component "
+        raise ConfigError(f"{where}: {quoted(value)} {bad}; it names a directory, so it must be one path component "
                           f"({PATH_COMPONENT_RULE})")
     return value
 

@@ -54,7 +54,7 @@ from cistrack.scenario.observer_tables import observer_specs
 from cistrack.scenario.limits import check_memory, check_path_component, check_seed
 from cistrack.scenario import toml_input
 from cistrack.scenario.work_limits import check_epoch_span, check_steps
-from cistrack.errors import ConfigError, UnknownComponentError
+from cistrack.errors import ConfigError, UnknownComponentError, quoted
 from cistrack.interfaces import ReferenceOrbit
 from cistrack.plugin.registry import Registry, default_registry
 
@@ -231,7 +231,7 @@ def _top_level(data: dict, source: str) -> tuple[dict[str, Any], Any]:
     try:
         epoch = units.parse_utc(epoch_text)
     except ValueError:
-        raise ConfigError(f"{source}: top level: key 'epoch' = {epoch_text!r} is not an ISO-8601 UTC time "
+        raise ConfigError(f"{source}: top level: key 'epoch' = {quoted(epoch_text)} is not an ISO-8601 UTC time "
                           f"(e.g. '2026-01-01T00:00:00Z')") from None
     check_epoch_span(epoch, 0.0, f"{source}: top level: key 'epoch'")
     seed = typed(data.get("seed", 0), int, source, "top level", "seed")
@@ -337,11 +337,11 @@ def _run_options(data: dict, source: str, components: dict[str, ComponentSpec], 
     ewp = typed(run.get("end_with_prediction", True), bool, source, "[run]", "end_with_prediction")
     iod_obs = typed(run.get("iod_observer", next(iter(observers), "")), str, source, "[run]", "iod_observer")
     if iod_obs and iod_obs not in observers:
-        raise ConfigError(f"{source}: [run]: key 'iod_observer' = {iod_obs!r} names no [sensors] table; "
+        raise ConfigError(f"{source}: [run]: key 'iod_observer' = {quoted(iod_obs)} names no [sensors] table; "
                           f"observers: {', '.join(observers) or '(none: the scenario has one [sensor])'}")
     rframe = typed(run.get("recording_frame", "synodic"), str, source, "[run]", "recording_frame")
     if rframe not in ("synodic", "inertial"):
-        raise ConfigError(f"{source}: [run]: key 'recording_frame' = {rframe!r} must be 'synodic' (the rotating "
+        raise ConfigError(f"{source}: [run]: key 'recording_frame' = {quoted(rframe)} must be 'synodic' (the rotating "
                           "frame) or 'inertial' (the sensor's Earth-centred inertial frame)")
     return dict(truth_grid_minutes=grid, predict_every_hours=pe, end_with_prediction=ewp,
                 recording_frame=rframe, iod_observer=iod_obs)

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any, Iterable
 
-from cistrack.errors import ConfigError
+from cistrack.errors import QUOTED_CHARACTERS, ConfigError, quoted, shown
 from cistrack.scenario import toml_input
 from cistrack.scenario.component_choice import keep_choice_table
 
@@ -41,9 +41,16 @@ def settings_suffix(settings: Iterable[str] | None) -> str:
 def _value(text: str, item: str) -> Any:
     """The TOML value ``text`` of the setting ``item`` (a bare word: the string itself)."""
     try:
-        return toml_input.loads(f"v = {text}", f"--set {item!r}")["v"]
+        return toml_input.loads(f"v = {text}", f"--set {item}")["v"]
     except tomllib.TOMLDecodeError:
         return text  # a bare word: take it as a string
+
+
+def _shown(item: str) -> str:
+    """The setting ``item`` as a message shows it: whole when short, else its key and its value
+    shortened (:func:`~cistrack.errors.quoted`)."""
+    key, sep, text = item.partition("=")
+    return f"{key}={shown(text)}" if sep and len(key) <= QUOTED_CHARACTERS else shown(item)
 
 
 def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
@@ -53,7 +60,7 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
         key, sep, text = item.partition("=")
         path = [part.strip() for part in key.split(".")]
         if not sep or not all(path):
-            raise ConfigError(f"--set {item!r}: expected TABLE.KEY=VALUE (VALUE in TOML syntax), "
+            raise ConfigError(f"--set {quoted(item)}: expected TABLE.KEY=VALUE (VALUE in TOML syntax), "
                               f"e.g. --set filter.n_particles=20000 or --set duration_days=2")
         node = out
         for part in path[:-1]:
@@ -61,9 +68,9 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
             if isinstance(child, str):  # a component chosen by name, then one of its parameters
                 child = node[part] = {"name": child}
             if not isinstance(child, dict):
-                raise ConfigError(f"--set {item!r}: '{part}' was already set to a value, not a table")
+                raise ConfigError(f"--set {_shown(item)}: '{part}' was already set to a value, not a table")
             node = child
-        value = _value(text.strip(), item if len(item) <= 60 else item[:60] + "...")
+        value = _value(text.strip(), _shown(item))
         if isinstance(value, str) and isinstance(node.get(path[-1]), dict):
             node[path[-1]]["name"] = value  # its parameters were set first: they stay with the name
         else:
@@ -106,7 +113,8 @@ def _yield_to(old: dict[str, Any], value: dict[str, Any]) -> dict[str, Any]:
 
 
 def describe_settings(items: Iterable[str] | None) -> str:
-    return " ".join(f"--set {i}" for i in items or [])
+    """The ``--set`` items as a message names them, a long value shortened."""
+    return " ".join(f"--set {_shown(i)}" for i in items or [])
 
 
 def apply_settings(scenario, items: Iterable[str] | None, registry=None):

@@ -47,6 +47,7 @@ from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_stu
                                          study_source, study_sweep)
 from cistrack.studies.resume import run_state
 from cistrack.scenario.limits import check_count, check_path_component
+from cistrack.scenario.settings import describe_settings
 from cistrack.scenario.settings import settings_suffix as _settings_suffix  # the name it had here
 from cistrack.studies.workers import execute_run, init_worker, run_spec
 from cistrack.runs.run_id import run_id
@@ -222,7 +223,7 @@ def _check_settings_against_sweep(settings: list[str] | None, sweep: tuple, p: P
         key = ".".join(part.strip() for part in item.partition("=")[0].split("."))
         hit = [k for k, _ in sweep if k == key or k.startswith(key + ".")]
         if hit:
-            raise ConfigError(f"--set {item}: {p}: key 'sweep' already varies {hit[0]!r}; change the study's "
+            raise ConfigError(f"{describe_settings([item])}: {p}: key 'sweep' already varies {hit[0]!r}; change the study's "
                               "sweep (or use a study file without it) instead of setting it for every run")
 
 
@@ -319,7 +320,7 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entr
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
                     f"{base.name!r})")
         if grid.extra:
-            msg += f" (with {' '.join('--set ' + i for i in grid.settings)})"
+            msg += f" (with {describe_settings(grid.settings)})"
         if msg == str(exc):
             raise
         raise ConfigError(msg) from None

@@ -1,0 +1,32 @@
+"""A message quotes a value at most about 60 characters long: a longer one is cut, with its
+length said, so that no error grows with what the user gave (a 100,000-character ``--set``)."""
+from __future__ import annotations
+
+import pytest
+
+from cistrack.errors import ConfigError, quoted
+from cistrack.scenario.loading import load_scenario
+from cistrack.scenario.settings import apply_settings
+
+LONG = "x" * 100_000
+
+
+def test_a_long_string_is_quoted_by_its_start_and_its_length():
+    assert quoted(LONG) == f"'{'x' * 40}...' (100,000 characters)"
+    assert quoted("ukf") == "'ukf'"
+
+
+@pytest.mark.parametrize("item", [f"name={LONG}", f"dynamics.name={LONG}", f"epoch={LONG}", f"seed={LONG}",
+                                  f"filter.n_particles={LONG}", f"sensor.{LONG}=1", f"filter.n_particles=[{'1,' * 50_000}1]"])
+def test_an_error_about_a_long_setting_is_short(item):
+    with pytest.raises(ConfigError) as err:
+        apply_settings(load_scenario("quick"), [item])
+    assert len(str(err.value)) < 700 and "100,0" in str(err.value)
+
+
+def test_predict_site_error_quotes_a_long_code_shortened():
+    from cistrack.cli.predict_command import _site
+
+    with pytest.raises(ConfigError) as err:
+        _site(LONG)
+    assert len(str(err.value)) < 400 and "(100,000 characters)" in str(err.value)
