@@ -54,8 +54,10 @@ def _shown(item: str) -> str:
 
 
 def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
-    """``["filter.n_particles=500", "seed=3"]`` -> ``{"filter": {"n_particles": 500}, "seed": 3}``."""
+    """``["filter.n_particles=500", "seed=3"]`` -> ``{"filter": {"n_particles": 500}, "seed": 3}``.
+    Two items that give one key different values are refused naming both."""
     out: dict[str, Any] = {}
+    given: dict[tuple[str, ...], str] = {}  # the item that set each key, for a conflict's message
     for item in items or []:
         key, sep, text = item.partition("=")
         path = [part.strip() for part in key.split(".")]
@@ -63,19 +65,39 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
             raise ConfigError(f"--set {quoted(item)}: expected TABLE.KEY=VALUE (VALUE in TOML syntax), "
                               f"e.g. --set filter.n_particles=20000 or --set duration_days=2")
         node = out
-        for part in path[:-1]:
+        for i, part in enumerate(path[:-1]):
             child = node.setdefault(part, {})
             if isinstance(child, str):  # a component chosen by name, then one of its parameters
                 child = node[part] = {"name": child}
+                given[tuple(path[:i + 1]) + ("name",)] = given.pop(tuple(path[:i + 1]), item)
             if not isinstance(child, dict):
                 raise ConfigError(f"--set {_shown(item)}: '{part}' was already set to a value, not a table")
             node = child
-        value = _value(text.strip(), _shown(item))
-        if isinstance(value, str) and isinstance(node.get(path[-1]), dict):
-            node[path[-1]]["name"] = value  # its parameters were set first: they stay with the name
-        else:
-            node[path[-1]] = value
+        _put(node, tuple(path), _value(text.strip(), _shown(item)), item, given)
     return out
+
+
+def _put(node: dict[str, Any], path: tuple[str, ...], value: Any, item: str,
+         given: dict[tuple[str, ...], str]) -> None:
+    """Set ``path[-1]`` of the table ``node`` to ``value`` (the setting ``item``'s); ConfigError
+    naming both items when an earlier one (in ``given``) gave that key a different value. A table
+    value is merged key by key; a component's name given after its parameters joins them."""
+    key, old = path[-1], node.get(path[-1])
+    if isinstance(value, str) and isinstance(old, dict):
+        path, node, key, old = path + ("name",), old, "name", old.get("name")
+    if isinstance(value, dict) and isinstance(old, (dict, str)):
+        if isinstance(old, str):
+            old = node[key] = {"name": old}
+            given[path + ("name",)] = given.pop(path, item)
+        for k, v in value.items():
+            _put(old, path + (k,), v, item, given)
+        return
+    if old is not None and (old != value or type(old) is not type(value)):
+        first = next(given[path[:n]] for n in range(len(path), 0, -1) if path[:n] in given)
+        raise ConfigError(f"--set {_shown(first)} and --set {_shown(item)}: two values for {'.'.join(path)}; "
+                          "give one")
+    node[key] = value
+    given.setdefault(path, item)
 
 
 def merge_settings(tables: dict[str, Any], settings: dict[str, Any]) -> dict[str, Any]:

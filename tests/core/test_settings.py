@@ -59,3 +59,27 @@ def test_a_file_giving_one_parameter_two_values_is_refused_naming_both(tmp_path)
     path.write_text(_quick_text() + "\n[filter.pgm]\nn_particles = 500\n")
     with pytest.raises(ConfigError, match=r"\[filter\] n_particles = 1000 and \[filter.pgm\] n_particles = 500"):
         load_scenario(str(path))
+
+
+def test_one_key_given_two_values_by_two_settings_is_refused_naming_both():
+    with pytest.raises(ConfigError, match=r"--set filter.n_particles=2000 and --set filter.n_particles=3000: "
+                                          r"two values for filter.n_particles"):
+        parse_settings(["filter.n_particles=2000", "filter.n_particles=3000"])
+
+
+def test_a_table_setting_and_a_key_setting_that_disagree_are_refused():
+    with pytest.raises(ConfigError, match=r"two values for filter.clusterer.n_init"):
+        parse_settings(['filter.clusterer={name="gmm", n_init=2}', "filter.clusterer.n_init=3"])
+
+
+def test_one_key_given_the_same_value_twice_is_taken():
+    assert parse_settings(["filter.n_particles=500", "filter.n_particles=500"]) == {"filter": {"n_particles": 500}}
+
+
+def test_api_settings_giving_one_parameter_as_a_table_and_a_dotted_key_are_refused_in_either_order():
+    import cistrack as ct
+
+    for settings in ({"filter": {"n_particles": 2000}, "filter.n_particles": 3000},
+                     {"filter.n_particles": 3000, "filter": {"n_particles": 2000}}):
+        with pytest.raises(ConfigError, match="two values for filter.n_particles"):
+            ct.load_scenario("quick", settings=settings)
