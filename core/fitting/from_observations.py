@@ -53,8 +53,8 @@ from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.fitting.maneuver_search import add_maneuvers
 from cistrack.fitting.arcs import ArcSettings, arc_settings
-from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, data_kind, read_object_observations,
-                                            write_merged)
+from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, copies_read_quietly, data_kind,
+                                                read_object_observations, write_merged)
 from cistrack.least_squares.options import FitOptions, fit_option_problem
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
@@ -641,7 +641,8 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             say(f"{words.overwrite}: removed the earlier fit of another fit.arcs in {d} "
                 f"({', '.join(p.name for p in stale)})")
         check_output_dir(d, where, records=(MANIFEST, FIT_RECORD))
-        with fit_lock(d, where):  # one fit at a time in a directory; what it replaces checked again under it
+        with fit_lock(d, where), copies_read_quietly():  # one fit at a time in a directory; what it
+            # replaces checked again under it; the reader's warnings were given for the user's files
             check_fit_replacing(d, obs.designation, where, overwrite, words)
             results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results

@@ -16,11 +16,13 @@ writing the merged set into the results directory (:func:`write_merged`).
 """
 from __future__ import annotations
 
+import logging
 import math
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -36,7 +38,7 @@ from cistrack.runs.run_inputs import weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
            "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC",
-           "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes"]
+           "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly"]
 
 READ_EPOCH = "2000-01-01T00:00:00Z"
 """UTC epoch the files are read against (times TU since it) before the fit's own epoch is known."""
@@ -126,6 +128,23 @@ def check_file_sizes(paths: list[str | Path]) -> None:
                               f"{limit:g} MB limit on "
                               f"an observation file; split it, or raise the limit (cistrack fit --max-file-mb MB, "
                               f"or the environment variable {MAX_FILE_MB_ENV})")
+
+
+@contextmanager
+def copies_read_quietly() -> Iterator[None]:
+    """Within it, the readers' warnings (logger ``cistrack.readers``) are dropped: the fit reads
+    its own copies of the observations (:func:`write_merged`: ``observations.psv``,
+    ``observations-early.psv``) once per attempt, and what a reader has to say of them it said
+    of the user's files, by their names, when they were read."""
+    logger = logging.getLogger("cistrack.readers")
+
+    def drop(record: logging.LogRecord) -> bool:
+        return False
+    logger.addFilter(drop)
+    try:
+        yield
+    finally:
+        logger.removeFilter(drop)
 
 
 class _SharedParams:
