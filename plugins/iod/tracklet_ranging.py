@@ -72,6 +72,23 @@ def _tried_text(records: list[dict]) -> str:
     return "; ".join(parts) + (f"; and {len(records) - 4} more" if len(records) > 4 else "")
 
 
+def _failure_advice(ms: MeasurementSet) -> str:
+    """What to check when no seed gives an orbit: the stated angle uncertainties first when their
+    median is below :data:`SMALLEST_PLAUSIBLE_ARCSEC` (weights that tight fit no orbit; they are
+    most likely degrees written where arcseconds belong), else the observations and the range bounds."""
+    median = float(np.median(ms.sigmas[:, :2])) / units.ARCSEC_RAD
+    if median < SMALLEST_PLAUSIBLE_ARCSEC:
+        return (f"the observations state angle uncertainties of {median:.3g} arcsec (median), below 1 "
+                "milliarcsecond, finer than any astrometry: no orbit fits them to within such weights; check "
+                "them (degrees written as arcseconds?), then the range bounds range_min_km/range_max_km")
+    return "check the observations or widen range_min_km/range_max_km"
+
+
+SMALLEST_PLAUSIBLE_ARCSEC = 0.001
+"""Smallest plausible angle uncertainty, arcsec (1 milliarcsecond: no astrometry is finer); as
+the observation readers warn of."""
+
+
 class TrackletRangingIOD(IODMethod):
     """Systematic ranging over a tracklet's admissible region (see the module docstring).
 
@@ -190,8 +207,12 @@ class TrackletRangingIOD(IODMethod):
         gives a fit."""
         ms = measurements
         who = f"iod '{type(self).registry_name or 'tracklet-ranging'}'"
-        if not isinstance(ms, MeasurementSet) or len(ms) < self.min_tracklet:
-            raise IODError(f"{who}: needs a MeasurementSet with at least {self.min_tracklet} observations")
+        if not isinstance(ms, MeasurementSet):
+            raise IODError(f"{who}: needs a MeasurementSet, got {type(ms).__name__}")
+        n_times = len(np.unique(ms.times))
+        if n_times < self.min_tracklet:
+            raise IODError(f"{who}: needs observations at {self.min_tracklet} or more distinct times (one "
+                           f"observation per time is used); these are at {n_times} time{'s' * (n_times != 1)}")
         sites = np.array([ms.site_at(i) for i in range(len(ms))])
         groups = [g for g in split_tracklets(ms.times, sites, self.gap_hours) if g.size >= 2]
         atts = [attributable(ms, sensor, g) for g in groups]
@@ -224,7 +245,7 @@ class TrackletRangingIOD(IODMethod):
         k, fit, rows, rec, records = self._first_seed(dyn, sensor, ms, atts, order)
         if fit is None:
             raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} tried: "
-                           f"{_tried_text(records)}); check the observations or widen range_min_km/range_max_km")
+                           f"{_tried_text(records)}); " + _failure_advice(ms))
         patient = (f"; its least squares needed more than {_SEED_OPTIONS.max_iterations} iterations (given "
                    f"{_PATIENT_OPTIONS.max_iterations})") if "max_iterations" in rec else ""
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"

@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 from cistrack.api import default_registry
+from cistrack.astro.sites import observatory
 from cistrack.errors import IODError
+from cistrack.model.measurement import MeasurementSet
 from cistrack.plugins.iod.ranging_search import EARTH, MU_EARTH, admissible_states
 from cistrack.plugins.iod.tracklets import attributable, split_tracklets, states_from_ranges
-from cistrack.units import LU_KM, VU_KMS, hours_to_tu
+from cistrack.units import ARCSEC_RAD, LU_KM, VU_KMS, hours_to_tu
 
 H = float(hours_to_tu(1.0))
 
@@ -130,3 +132,23 @@ def test_a_seed_with_an_outlier_gives_way_to_the_next(dro):
     assert "ranging from tracklet 2" in cloud.meta["why"] and "gross outlier" in cloud.meta["why"]
     e = np.asarray(cloud.meta["best_state"]) - _truth_at(dyn, x0, times[-1])
     assert np.linalg.norm(e[:3]) * LU_KM < 200.0 and cloud.meta["n_rejected"] >= 1
+
+
+def test_observations_at_too_few_distinct_times_are_refused_counting_times_not_rows(dro):
+    dyn, sensor, _, ms, _ = dro
+    codes = ["568", "809", "M22", "711", "G96"]               # five sites at one instant
+    one_instant = MeasurementSet(np.full(5, ms.times[0]), np.repeat(ms.values[:1], 5, axis=0),
+                                 np.repeat(ms.sigmas[:1], 5, axis=0), ms.names, sites=np.array(codes),
+                                 site_table={c: observatory(c) for c in codes})
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn)
+    with pytest.raises(IODError, match=r"needs observations at 3 or more distinct times .*; these are at 1 time$"):
+        iod.estimate(one_instant, sensor, np.random.default_rng(1))
+
+
+def test_a_failure_under_sub_milliarcsecond_stated_uncertainties_names_them_before_the_range_bounds(dro):
+    dyn, sensor, _, ms, _ = dro
+    tight = MeasurementSet(ms.times, ms.values, np.full_like(ms.sigmas, 1e-6 * ARCSEC_RAD), ms.names)
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, n_particles=200, n_range=30, n_rate=8)
+    with pytest.raises(IODError, match=r"angle uncertainties of 1e-06 arcsec \(median\), below 1 milliarcsecond.*"
+                                       r"check them \(degrees written as arcseconds\?\), then the range bounds"):
+        iod.estimate(tight, sensor, np.random.default_rng(1))
