@@ -126,7 +126,7 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
     for key, value in sorted(params.items(), key=lambda kv: kv[0] in shared):
         if key not in specs:
             _unknown_parameter(key, specs, f"{source}: {where}: unknown parameter {quoted(key)} for {kind} {name!r}")
-        value = _hand_on(value, shared.get(key, ()), out, specs, specs[key].annotation, reg)
+        value = _hand_on(_named_default(value, specs[key]), shared.get(key, ()), out, specs, specs[key].annotation, reg)
         out[key] = _coerce(value, specs[key].annotation, source, f"{where}", key, reg)
     for key, ps in specs.items():
         # A parameter that names another component by default (e.g. the PGM's clusterer = "kmeans")
@@ -137,6 +137,16 @@ def component_spec(table: Any, kind: str, where: str, source: str, reg: Registry
     spec = ComponentSpec(kind, name, out, f"{source}: {where}")
     spec._validated = (reg, _build(spec, reg))  # value checks before anything runs; kept for the run
     return spec
+
+
+def _named_default(value: Any, ps: Any) -> Any:
+    """``value``, or, for a table of parameters without a ``name`` given to a parameter whose
+    default is a component by name (``--set filter.clusterer.n_init=2`` on a filter whose clusterer
+    is the default "kmeans"), that table of the default component."""
+    if isinstance(value, dict) and "name" not in value and isinstance(ps.default, str) \
+            and _union_component_kind(ps.annotation):
+        return {"name": ps.default, **value}
+    return value
 
 
 def _set_scenario_epoch(params: dict, kind: str, specs: dict, epoch_text: Any, source: str, where: str) -> None:

@@ -83,3 +83,9 @@ def test_api_settings_giving_one_parameter_as_a_table_and_a_dotted_key_are_refus
                      {"filter.n_particles": 3000, "filter": {"n_particles": 2000}}):
         with pytest.raises(ConfigError, match="two values for filter.n_particles"):
             ct.load_scenario("quick", settings=settings)
+
+
+def test_a_parameter_of_a_default_nested_component_can_be_set_without_its_name():
+    scen = apply_settings(load_scenario("quick"), ["filter.clusterer.n_init=2"])  # quick names no clusterer
+    clusterer = scen.components["filter"].params["clusterer"]
+    assert (clusterer.name, clusterer.params["n_init"]) == ("kmeans", 2)
