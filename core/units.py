@@ -8,6 +8,7 @@ Constants (the Earth-Moon CR3BP units used throughout): LU = 384,400 km, TU = 37
 """
 from __future__ import annotations
 
+import re
 from datetime import datetime, timedelta, timezone
 
 import numpy as np
@@ -28,7 +29,8 @@ __all__ = [
     "LU_KM", "TU_S", "VU_KMS", "DAY_S", "TU_DAYS", "ARCSEC_RAD", "KM_SCALE",
     "km_to_lu", "lu_to_km", "kms_to_vu", "vu_to_kms", "days_to_tu", "tu_to_days",
     "hours_to_tu", "tu_to_hours", "seconds_to_tu", "tu_to_seconds",
-    "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc",
+    "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc", "is_leap_second", "utc_problem",
+    "LEAP_SECOND_PROBLEM",
 ]
 
 
@@ -96,6 +98,22 @@ def state_from_km(states_km):
     s[..., :3] /= LU_KM
     s[..., 3:] /= VU_KMS
     return s
+
+
+_LEAP_SECOND = re.compile(r"T\d{2}:\d{2}:60(?:[.,]\d*)?(?:Z|[+-]\d{2}:?\d{2})?$")
+LEAP_SECOND_PROBLEM = "is a leap second (second 60): leap-second time tags are not supported"
+"""How the observation readers and the scenario word a time with second 60 (datetime holds none)."""
+
+
+def is_leap_second(text: str) -> bool:
+    """Whether the ISO-8601 time ``text`` has second 60 (a leap second, which datetime cannot hold)."""
+    return bool(_LEAP_SECOND.search(str(text).strip()))
+
+
+def utc_problem(text: str, example: str = "2026-01-01T00:00:00Z") -> str:
+    """Why :func:`parse_utc` refused ``text``, for a message after it: a leap second
+    (:data:`LEAP_SECOND_PROBLEM`), else not an ISO-8601 UTC time, with ``example``."""
+    return LEAP_SECOND_PROBLEM if is_leap_second(text) else f"is not an ISO-8601 UTC time (e.g. '{example}')"
 
 
 def parse_utc(text: str | datetime) -> datetime:

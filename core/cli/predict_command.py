@@ -39,12 +39,13 @@ def _minutes(text: str) -> float:
 
 def _utc(text: str):
     from cistrack import units
+    from cistrack.errors import quoted
     from cistrack.fitting.sky_ephemeris import FIRST_YEAR, LAST_YEAR
 
     try:
         t = units.parse_utc(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an ISO-8601 UTC time such as 2026-03-08T00:00:00Z") from None
+        raise argparse.ArgumentTypeError(f"{quoted(text)} {units.utc_problem(text, '2026-03-08T00:00:00Z')}") from None
     if not FIRST_YEAR <= t.year <= LAST_YEAR:
         raise argparse.ArgumentTypeError(f"{text!r}: sky predictions need the DE421 ephemeris, which covers the "
                                          f"years {FIRST_YEAR} to {LAST_YEAR}; give a time within them")

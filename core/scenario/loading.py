@@ -231,8 +231,8 @@ def _top_level(data: dict, source: str) -> tuple[dict[str, Any], Any]:
     try:
         epoch = units.parse_utc(epoch_text)
     except ValueError:
-        raise ConfigError(f"{source}: top level: key 'epoch' = {quoted(epoch_text)} is not an ISO-8601 UTC time "
-                          f"(e.g. '2026-01-01T00:00:00Z')") from None
+        raise ConfigError(f"{source}: top level: key 'epoch' = {quoted(epoch_text)} "
+                          f"{units.utc_problem(epoch_text)}") from None
     check_epoch_span(epoch, 0.0, f"{source}: top level: key 'epoch'")
     seed = typed(data.get("seed", 0), int, source, "top level", "seed")
     check_seed(seed, f"{source}: top level: key 'seed'")

@@ -8,7 +8,6 @@ sites may share a time), and fills the per-measurement sites and types. Times ar
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
@@ -17,7 +16,7 @@ import numpy as np
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet
 from cistrack.interfaces.reader import FieldError, SeveralObjectsError, show_field
 from cistrack.astro.sites import Site
-from cistrack.units import ARCSEC_RAD, TU_S, format_utc, parse_utc
+from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, TU_S, format_utc, is_leap_second, parse_utc
 
 from .decimal_units import to_rad
 
@@ -65,15 +64,6 @@ def parse_epoch(path, epoch) -> datetime:
     except (ValueError, TypeError):
         from cistrack.errors import MeasurementError
         raise MeasurementError(f"{path}: epoch {epoch!r} is not an ISO-8601 UTC time") from None
-
-
-_LEAP_SECOND = re.compile(r"T\d{2}:\d{2}:60(?:[.,]\d*)?(?:Z|[+-]\d{2}:?\d{2})?$")
-LEAP_SECOND_PROBLEM = "is a leap second (second 60): leap-second time tags are not supported"
-
-
-def is_leap_second(text: str) -> bool:
-    """Whether the ISO-8601 time ``text`` has second 60 (a leap second, which datetime cannot hold)."""
-    return bool(_LEAP_SECOND.search(text.strip()))
 
 
 def parse_iso_utc(text: str) -> datetime:

@@ -165,3 +165,9 @@ def test_a_bad_setting_is_named_as_the_user_wrote_it(settings, words):
     with pytest.raises(ConfigError) as exc:
         apply_settings(load_scenario("quick"), settings)
     assert words in str(exc.value)
+
+
+def test_a_leap_second_epoch_is_refused_as_the_observation_readers_refuse_one(tmp_path):
+    msg = _error(tmp_path, GOOD.replace('epoch = "2026-01-01T00:00:00Z"', 'epoch = "2016-12-31T23:59:60Z"'))
+    assert "key 'epoch' = '2016-12-31T23:59:60Z' is a leap second (second 60): leap-second time tags are not " \
+           "supported" in msg
