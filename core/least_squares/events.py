@@ -98,10 +98,18 @@ class OrbitEvent:
             out.append(f"  {self.coordinates} latitude {self.latitude_deg:.3f}{self._pm('latitude_deg', '.2g')} deg, "
                        f"longitude {self.longitude_deg:.3f}{self._pm('longitude_deg', '.2g')} deg"
                        + (" (1-sigma)" if self.sigma else ""))
-        if any(not np.isfinite(v) for v in self.sigma.values()):
-            out.append("  (? : no 1-sigma: varied within its covariance the orbit has no such event in the "
-                       "search window, so the event is poorly determined)")
+        if self.undetermined():
+            out.append(UNDETERMINED_NOTE)
         return out
+
+    def undetermined(self) -> bool:
+        """Whether a 1-sigma could not be mapped (printed ``+- ?``)."""
+        return any(not np.isfinite(v) for v in self.sigma.values())
+
+
+UNDETERMINED_NOTE = ("  (? : no 1-sigma: varied within its covariance the orbit has no such event in the search "
+                     "window, so the event is poorly determined)")
+"""What a printed ``+- ?`` means (said once under a list of events)."""
 
 
 def _epoch_of(dynamics: Dynamics, epoch: datetime | str | None) -> datetime | None:
@@ -476,4 +484,5 @@ def event_lines(events: list[OrbitEvent], days: float = FIT_EVENT_DAYS) -> list[
     if not events:
         return [f"  no impact and no closest approach within {days:g} days of the fit epoch"]
     head = f"  impacts and closest approaches within {days:g} days of the fit epoch (1-sigma by linear mapping):"
-    return [head] + ["  " + line for e in events for line in e.lines()]
+    lines = ["  " + line for e in events for line in e.lines() if line != UNDETERMINED_NOTE]
+    return [head] + lines + (["  " + UNDETERMINED_NOTE] if any(e.undetermined() for e in events) else [])

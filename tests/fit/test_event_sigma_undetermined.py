@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from cistrack.least_squares.events import OrbitEvent
+from cistrack.least_squares.events import OrbitEvent, event_lines
 
 
 def _approach(sigma: dict) -> OrbitEvent:
@@ -21,3 +21,9 @@ def test_mapped_sigmas_print_as_numbers():
     text = "\n".join(_approach({"time_s": 74.6, "latitude_deg": 0.0019, "longitude_deg": 0.018,
                                 "altitude_km": 5.8, "speed_kms": 1.7e-5}).lines())
     assert "+- 74.6 s" in text and "?" not in text
+
+
+def test_a_list_of_events_explains_the_question_mark_once_after_them():
+    undetermined = dict.fromkeys(("time_s", "altitude_km", "speed_kms"), math.nan)
+    lines = event_lines([_approach(undetermined), _approach(undetermined)])
+    assert sum("(? : no 1-sigma" in line for line in lines) == 1 and "(? : no 1-sigma" in lines[-1]
