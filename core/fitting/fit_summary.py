@@ -132,7 +132,9 @@ def summary_lines(one) -> list[str]:
                      f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2")
         if not lv["linear"]:
             lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
-                         "understates the uncertainty; sample the line (lov.csv, cistrack.least_squares.line_of_variations)")
+                         "understates the uncertainty, and the 1-sigma, the horizon and the sky predictions drawn from it "
+                         "with it; sample the line (lov.csv, cistrack.least_squares.line_of_variations), or observe "
+                         "again sooner")
     lines += _arcs_and_events(one)
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")

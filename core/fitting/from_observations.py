@@ -95,11 +95,18 @@ EARLY_FILE = "observations-early"
 written beside ``observations.psv`` (the run's ``scenario.toml`` names it)."""
 
 
+AUTO_LOV_SIGMAS = 3.0
+"""How far (sigmas each side) the line of variations goes by default when the fit is poorly
+determined (:mod:`cistrack.fitting.determination`): one site's night had a 1-sigma of 1,577 km
+with the truth 28,917 km away, and the line shows where the linear covariance stops holding."""
+
+
 @dataclass(frozen=True)
 class FitChoices:
     """The ``[fit]`` settings: ``epoch`` ("last", "middle" or "first" observation), ``prior``
     ("none" or "filter"), the :class:`FitOptions` of the least squares and ``lov`` (sigmas: the
-    line of variations out to that many sigmas each side, every half sigma; 0 = none) and
+    line of variations out to that many sigmas each side, every half sigma; 0 = none; None, the
+    default "auto": :data:`AUTO_LOV_SIGMAS` when the fit is poorly determined, else none) and
     ``filter_span`` ("early": the least squares starts from the filter run over the first
     hours only when that fit is clean, :mod:`cistrack.fitting.early_seed`; "all": the filter
     runs over every observation)."""
@@ -107,7 +114,7 @@ class FitChoices:
     epoch: str = "last"
     prior: str = "none"
     options: FitOptions = field(default_factory=FitOptions)
-    lov: float = 0.0
+    lov: float | None = None
     arcs: ArcSettings = field(default_factory=ArcSettings)
     filter_span: str = "early"
 
@@ -120,15 +127,17 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
     opts.setdefault("area_to_mass", "auto")  # C_R A/m where the arc supports it (cistrack.least_squares.area_to_mass)
     epoch = opts.pop("epoch", "last")
     prior = opts.pop("prior", "none")
-    lov = opts.pop("lov", 0.0)
+    lov = opts.pop("lov", "auto")
     span = opts.pop("filter_span", "early")
     if span not in _FILTER_SPANS:
         raise ConfigError(f"--set fit.filter_span={quoted(span)}: must be 'early' (default: the filter over the "
                           "first half day seeds the least squares when that fit is clean) or 'all' (the filter over "
                           "every observation)")
-    if isinstance(lov, bool) or not isinstance(lov, (int, float)) or not (lov == 0 or 0.5 <= lov <= 20):
-        raise ConfigError(f"--set fit.lov={quoted(lov)}: must be 0 (default: none) or a number of sigmas from 0.5 "
-                          "to 20 (the line of variations out to that many sigmas each side)")
+    if lov != "auto" and (isinstance(lov, bool) or not isinstance(lov, (int, float))
+                          or not (lov == 0 or 0.5 <= lov <= 20)):
+        raise ConfigError(f"--set fit.lov={quoted(lov)}: must be 'auto' (default: {AUTO_LOV_SIGMAS:g} sigmas when the "
+                          "fit is poorly determined), 0 (none) or a number of sigmas from 0.5 to 20 (the line of "
+                          "variations out to that many sigmas each side)")
     if epoch not in _EPOCHS:
         shown = epoch.isoformat() if hasattr(epoch, "isoformat") else quoted(epoch)  # a TOML date as typed
         raise ConfigError(f"--set fit.epoch={shown}: must be one of {', '.join(_EPOCHS)} (the observation "
@@ -145,7 +154,7 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
         why = fit_option_problem(key, value)
         if why:
             raise ConfigError(f"--set fit.{key}={value!r}: {why}")
-    return FitChoices(epoch, prior, FitOptions(**opts), float(lov), arcs, span)
+    return FitChoices(epoch, prior, FitOptions(**opts), None if lov == "auto" else float(lov), arcs, span)
 
 
 @dataclass
@@ -571,16 +580,25 @@ def _with_messages(result: FitResult, lines: list[str]) -> FitResult:
     return replace(result, messages=tuple(result.messages) + add) if add else result
 
 
-def _line_of_variations(ctx, result: FitResult, choices: FitChoices) -> list:
+def _lov_sigmas(one: ObjectFit, choices: FitChoices) -> float:
+    """How far the fit's line of variations goes (sigmas; 0: none): ``choices.lov``, or with "auto"
+    :data:`AUTO_LOV_SIGMAS` when the fit is poorly determined."""
+    if choices.lov is not None:
+        return choices.lov
+    det = one.determination
+    return AUTO_LOV_SIGMAS if det is not None and not getattr(det, "well", True) else 0.0
+
+
+def _line_of_variations(ctx, result: FitResult, choices: FitChoices, sigmas: float) -> list:
     """The fit's line of variations over the observations it used (see
-    :mod:`cistrack.least_squares.line_of_variations`), every half sigma to +-``choices.lov`` (each point's
+    :mod:`cistrack.least_squares.line_of_variations`), every half sigma to +-``sigmas`` (each point's
     Levenberg-Marquardt gets at least 300 iterations: the constraint's stiff penalty slows it)."""
     from dataclasses import replace
 
     from cistrack.least_squares.line_of_variations import line_of_variations
 
     used = ctx.measurements.subset(~np.asarray(result.residuals.rejected, dtype=bool))
-    return line_of_variations(ctx.dynamics, ctx.sensor, used, result, step=0.5, max_sigma=choices.lov,
+    return line_of_variations(ctx.dynamics, ctx.sensor, used, result, step=0.5, max_sigma=sigmas,
                               max_delta_chi2=float("inf"),
                               options=replace(choices.options, reject_outliers=False,
                                               max_iterations=max(choices.options.max_iterations, 300)))
@@ -813,9 +831,10 @@ def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     _refuse_not_cislunar(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
-    if one.ok and job.choices.lov > 0:
-        job.say(f"{obs.designation}: line of variations to +-{job.choices.lov:g} sigma")
-        one.lov = _line_of_variations(one.run.context, one.result, job.choices)
+    sigmas = _lov_sigmas(one, job.choices) if one.ok else 0.0
+    if sigmas > 0:
+        job.say(f"{obs.designation}: line of variations to +-{sigmas:g} sigma")
+        one.lov = _line_of_variations(one.run.context, one.result, job.choices, sigmas)
     job.say(f"{obs.designation}: writing fit.json, residuals.csv and the residual plots to {one.directory}")
     write_fit_outputs(one, obs)
     return one

@@ -32,8 +32,9 @@ def test_a_bad_option_value_is_refused_naming_it():
         fit_choices({"reject_sigma": -1.0})
 
 
-def test_no_line_of_variations_by_default():
-    assert fit_choices({}).lov == 0.0
+def test_the_line_of_variations_is_auto_by_default_and_0_turns_it_off():
+    assert fit_choices({}).lov is None and fit_choices({"lov": "auto"}).lov is None
+    assert fit_choices({"lov": 0}).lov == 0.0
 
 
 def test_the_line_of_variations_is_asked_in_sigmas():

@@ -41,3 +41,16 @@ def test_its_warning_says_the_least_squares_converged_but_the_fit_is_not_clean(t
     out = " ".join(capsys.readouterr().out.split())
     assert "warning: the least squares converged, but the fit is not a clean one" in out
     assert "did not converge" not in out and "impact" not in out
+
+
+CLEAN_NIGHT = "\n".join(ROWS.splitlines()[:-1]) + "\n"  # the same night without its outlier
+
+
+def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_path):
+    """One site's night: the linear 1-sigma had been printed alone (on another such night it was 18
+    times smaller than the error); the line of variations shows where it stops holding."""
+    (tmp_path / "night.psv").write_text(CLEAN_NIGHT)
+    assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit")]) == 0
+    record = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert record["settings"]["lov"] == "auto" and record["line_of_variations"]["points"] == 13
+    assert (tmp_path / "fit" / "lov.csv").is_file()
