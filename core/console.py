@@ -15,6 +15,7 @@ Python changes nothing in the process's environment: only the executable does th
 from __future__ import annotations
 
 import os
+import sys
 
 __all__ = ["BLAS_THREAD_VARIABLES", "console_main"]
 
@@ -28,6 +29,9 @@ def console_main() -> None:
     for name in BLAS_THREAD_VARIABLES:
         if not os.environ.get(name, "").strip():
             os.environ[name] = "1"
-    from cistrack.cli.main import console_main as command
-
+    try:
+        from cistrack.cli.main import console_main as command
+    except KeyboardInterrupt:  # Ctrl-C while the command is still loading (before its handlers exist)
+        sys.stderr.write("cistrack: interrupted (SIGINT) while starting; nothing was done\n")
+        raise SystemExit(130) from None
     command()

@@ -431,3 +431,36 @@ def test_a_recording_onto_a_disk_short_of_room_is_refused_before_the_run(tmp_pat
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 2_000_000, 2_000_000))
     with pytest.raises(ParameterError, match="only 2 MB free on the disk"):
         load_registry().create("recorder", "rerun", path=str(tmp_path / "x.rrd"))
+
+
+INTERRUPT_ON_IMPORT = """
+import sys
+class Interrupt:
+    def find_spec(self, name, path=None, target=None):
+        if name == "cistrack.cli.main":
+            raise KeyboardInterrupt
+sys.meta_path.insert(0, Interrupt())
+sys.argv = {argv!r}
+import cistrack.cli
+"""
+
+
+def test_ctrl_c_while_the_command_module_loads_ends_with_130_and_no_traceback():
+    """A Ctrl-C that lands while cistrack.cli is still importing (before the command's handlers
+    exist: a loaded machine stretches that window) had given Python's KeyboardInterrupt traceback."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-c", INTERRUPT_ON_IMPORT.format(argv=["-m"])],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in proc.stderr
+    assert "cistrack: interrupted (SIGINT) while starting; nothing was done" in proc.stderr
+
+
+def test_ctrl_c_while_python_code_imports_the_cli_is_the_callers_keyboard_interrupt():
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-c", INTERRUPT_ON_IMPORT.format(argv=["my_script.py"])],
+                          capture_output=True, text=True, timeout=120)
+    assert "KeyboardInterrupt" in proc.stderr and proc.returncode != 130
