@@ -5,11 +5,19 @@ person reads or writes is in km, km/s, days and UTC. These helpers are the one p
 two meet.
 
 Constants (the Earth-Moon CR3BP units used throughout): LU = 384,400 km, TU = 375,149 s (4.342 d), VU = LU/TU.
+
+Time: t is elapsed SI seconds (in TU) since a UTC epoch, as :mod:`cistrack.astro.timescales`
+evaluates it, so a UTC label and t differ by the leap seconds between the epoch and the label:
+:func:`utc_to_tu`, :func:`tu_to_utc`, :func:`elapsed_seconds` and :func:`utc_after` convert
+between them with ERFA's TAI-UTC table (the one astropy uses). When no leap second lies between
+the epoch and the time they are plain clock arithmetic, bit for bit. An instant inside a leap
+second (23:59:60.x UTC) has no Python ``datetime``: it is written as 23:59:59.999999 of that day.
 """
 from __future__ import annotations
 
 import re
 from datetime import datetime, timedelta, timezone
+from functools import lru_cache
 
 import numpy as np
 
@@ -30,7 +38,7 @@ __all__ = [
     "km_to_lu", "lu_to_km", "kms_to_vu", "vu_to_kms", "days_to_tu", "tu_to_days",
     "hours_to_tu", "tu_to_hours", "seconds_to_tu", "tu_to_seconds",
     "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc", "is_leap_second", "utc_problem",
-    "LEAP_SECOND_PROBLEM",
+    "LEAP_SECOND_PROBLEM", "utc_to_tu", "leap_seconds", "elapsed_seconds", "utc_after", "grid_leap_seconds",
 ]
 
 
@@ -141,6 +149,86 @@ def format_utc(dt: datetime) -> str:
     return dt.astimezone(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
 
+def leap_seconds(epoch: datetime, when: datetime) -> float:
+    """Leap seconds from the UTC instant ``epoch`` to ``when`` (TAI-UTC at ``when`` minus at
+    ``epoch``, s; negative when ``when`` is earlier): 0.0 when no leap second lies between them.
+
+    From ERFA's table (``erfa.dat``); none before 1960 or after the table's last leap second, as
+    :mod:`cistrack.astro.timescales` assumes. Before 1972 UTC drifted against TAI, so the value
+    then has a fractional part.
+    """
+    return _tai_minus_utc(when) - _tai_minus_utc(epoch)
+
+
+def _tai_minus_utc(when: datetime) -> float:
+    if when.tzinfo is not None:
+        when = when.astimezone(timezone.utc)
+    if when.year >= 1972:  # whole leap seconds since 1972, taken at a day's end: one value per UTC day
+        return _tai_minus_utc_on(when.year, when.month, when.day)
+    day_s = when.hour * 3600.0 + when.minute * 60.0 + when.second + when.microsecond * 1e-6
+    return _erfa_dat(when.year, when.month, when.day, day_s / DAY_S)
+
+
+@lru_cache(maxsize=4096)
+def _tai_minus_utc_on(year: int, month: int, day: int) -> float:
+    return _erfa_dat(year, month, day, 0.0)
+
+
+def _erfa_dat(year: int, month: int, day: int, fraction: float) -> float:
+    """TAI-UTC (s) from ERFA, imported here so that importing cistrack does not load it; ERFA's
+    'dubious year' warning (before 1960, years after its table) is expected and silenced."""
+    import warnings
+
+    import erfa
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", erfa.ErfaWarning)
+        return float(erfa.dat(year, month, day, fraction))
+
+
+def elapsed_seconds(epoch: datetime, when: datetime) -> float:
+    """Elapsed SI seconds from the UTC instant ``epoch`` to the UTC label ``when`` (negative
+    before it): the clock difference plus the leap seconds between them."""
+    clock = (when - epoch).total_seconds()
+    leap = leap_seconds(epoch, when)
+    return clock if leap == 0.0 else clock + leap
+
+
+def utc_to_tu(epoch: datetime, when: datetime) -> float:
+    """Nondimensional time t (TU since ``epoch``, elapsed) of the UTC label ``when``."""
+    return elapsed_seconds(epoch, when) / TU_S
+
+
+def utc_after(epoch: datetime, seconds: float) -> datetime:
+    """UTC label ``seconds`` elapsed SI seconds after the UTC instant ``epoch`` (the inverse of
+    :func:`elapsed_seconds`, to the microsecond).
+
+    An instant inside a leap second (23:59:60.x) is given as 23:59:59.999999 of that day, the last
+    label before it: the label then reads up to 1 s early, and never later than the next one.
+    """
+    clock = epoch + timedelta(seconds=seconds)
+    leap = leap_seconds(epoch, clock)
+    if leap == 0.0:
+        return clock
+    label = epoch + timedelta(seconds=seconds - leap)
+    if abs(leap_seconds(epoch, label) - leap) < 0.5:
+        return label
+    # Inside a leap second: the midnight it ends lies between the two guesses.
+    later = max(clock, label)
+    midnight = (later.astimezone(timezone.utc) if later.tzinfo else later).replace(hour=0, minute=0, second=0,
+                                                                                    microsecond=0)
+    return midnight - timedelta(microseconds=1)
+
+
+def grid_leap_seconds(epoch: datetime, first: datetime, step: timedelta, n: int) -> np.ndarray | None:
+    """Leap seconds (s, (n,)) from ``epoch`` to each UTC label ``first + k * step`` of a grid
+    (k = 0 .. n-1): what its clock times since ``epoch`` miss of elapsed time. None when no leap
+    second lies between the epoch and any of them (TAI-UTC only grows, so the ends tell)."""
+    if n <= 0 or (leap_seconds(epoch, first) == 0.0 and leap_seconds(epoch, first + (n - 1) * step) == 0.0):
+        return None
+    return np.array([leap_seconds(epoch, first + k * step) for k in range(n)])
+
+
 def tu_to_utc(epoch: datetime, t: float) -> datetime:
-    """UTC of nondimensional time t (TU since epoch)."""
-    return epoch + timedelta(seconds=float(t) * TU_S)
+    """UTC label of nondimensional time t (TU elapsed since ``epoch``); see :func:`utc_after`."""
+    return utc_after(epoch, float(t) * TU_S)
