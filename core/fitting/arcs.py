@@ -26,14 +26,14 @@ predicts from; the others are reported as a residual ladder), ``each`` (every ar
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any, Callable
 
 import numpy as np
 
 from cistrack.errors import CistrackError, ConfigError, quoted
 from cistrack.model.measurement import MeasurementSet
-from cistrack.units import seconds_to_tu, tu_to_days
+from cistrack.units import TU_S, leap_seconds, seconds_to_tu, tu_to_days, tu_to_utc, utc_to_tu
 
 __all__ = ["ArcSpan", "LinkedArc", "ArcSettings", "observation_groups", "long_gap_arcs", "link_latest_arc",
            "arc_choice", "arc_settings", "arc_sets", "in_time_base", "ARC_CHOICES", "ARC_KEYS", "LONG_GAP_DAYS",
@@ -203,9 +203,39 @@ def arc_settings(table: dict[str, Any]) -> tuple[ArcSettings, dict[str, Any]]:
 
 
 def in_time_base(measurements: MeasurementSet, epoch: datetime, new_epoch: datetime) -> MeasurementSet:
-    """``measurements`` with times (TU since ``epoch``) counted from ``new_epoch`` instead (earlier
-    arcs get negative times in a scenario that starts at the latest)."""
+    """``measurements`` with times (TU elapsed since ``epoch``) counted from ``new_epoch`` instead
+    (earlier arcs get negative times in a scenario that starts at the latest).
+
+    A time read from a UTC label (to the microsecond) is moved as its label's clock time since
+    ``epoch`` minus the clock shift, plus the leap seconds between ``new_epoch`` and the label: no
+    leap second in between gives the same bits whatever leap seconds lie between ``epoch`` and
+    the label. Other times are moved by the elapsed time between the epochs."""
     shift = float(seconds_to_tu((new_epoch - epoch).total_seconds()))
     ms = measurements
-    return MeasurementSet(ms.times - shift, ms.values, ms.sigmas, ms.names, dict(ms.meta), ms.sites, ms.kinds,
+    elapsed_shift = utc_to_tu(epoch, new_epoch)
+    labels = [_label_of(epoch, float(t)) for t in ms.times]
+    moved = np.array([t - elapsed_shift if when is None else _moved(epoch, new_epoch, when, shift)
+                      for t, when in zip(ms.times, labels)], dtype=float).reshape(np.shape(ms.times))
+    return MeasurementSet(moved, ms.values, ms.sigmas, ms.names, dict(ms.meta), ms.sites, ms.kinds,
                           dict(ms.site_table))
+
+
+def _label_of(epoch: datetime, t: float) -> datetime | None:
+    """The UTC label (whole microseconds) a reader turned into ``t`` (TU since ``epoch``), None
+    when no label gives exactly ``t``."""
+    near = tu_to_utc(epoch, t)
+    for when in (near, near - _MICROSECOND, near + _MICROSECOND):
+        if utc_to_tu(epoch, when) == t:
+            return when
+    return None
+
+
+def _moved(epoch: datetime, new_epoch: datetime, when: datetime, shift: float) -> float:
+    """TU from ``new_epoch`` to the label ``when``: the clock time since ``epoch`` less the clock
+    ``shift``, plus the leap seconds between ``new_epoch`` and ``when`` if any."""
+    t = (when - epoch).total_seconds() / TU_S - shift
+    leap = leap_seconds(new_epoch, when)
+    return t if leap == 0.0 else t + leap / TU_S
+
+
+_MICROSECOND = timedelta(microseconds=1)

@@ -11,8 +11,10 @@ positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
 time resolution, and the files' notes say how many copies were dropped; two such observations
 whose positions differ more are refused naming both files.
 
-Times are TU since a working epoch (:data:`READ_EPOCH`): the fit moves them to its own epoch by
-writing the merged set into the results directory (:func:`write_merged`).
+Times are TU elapsed since a working epoch (:data:`READ_EPOCH`, leap seconds counted): the fit
+moves them to its own epoch (:func:`cistrack.fitting.arcs.in_time_base`, bit for bit the clock
+arithmetic when no leap second lies between that epoch and an observation) and writes the merged
+set into the results directory (:func:`write_merged`).
 """
 from __future__ import annotations
 

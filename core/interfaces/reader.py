@@ -28,7 +28,8 @@ class Reader(Component):
     """An observation file format (registry kind ``"reader"``).
 
     ``read`` turns a file into a :class:`~cistrack.model.measurement.MeasurementSet` with times in TU
-    since ``epoch`` (the scenario's UTC epoch), angles in rad, ranges in LU, and per-measurement
+    elapsed since ``epoch`` (the scenario's UTC epoch; leap seconds between count, see
+    :func:`cistrack.units.utc_to_tu`), angles in rad, ranges in LU, and per-measurement
     site keys and types where the format has them; ``write`` writes a set so that ``read`` gives
     it back (to the format's stated resolution). A malformed file raises
     :class:`~cistrack.errors.MeasurementError` naming the file, the line and the field, and never

@@ -31,7 +31,7 @@ from cistrack.interfaces import Reader
 from cistrack.interfaces.reader import split_lines
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.sites import Site
-from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, format_utc, parse_utc, tu_to_utc
+from cistrack.units import ARCSEC_RAD, LU_KM, format_utc, parse_utc, tu_to_utc, utc_to_tu
 
 from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
@@ -152,7 +152,7 @@ class _RowParser:
 
         if year_problem(t_utc):
             raise ValueError(f"time_utc {text!r}: {year_problem(t_utc)}")
-        return (t_utc - self.epoch).total_seconds() / TU_S
+        return utc_to_tu(self.epoch, t_utc)  # elapsed: leap seconds counted
 
     def _angles(self, cells: list[str]) -> tuple[list[float], list[float]]:
         az_text, el_text = cells[self.col["azimuth_deg"]], cells[self.col["elevation_deg"]]

@@ -16,7 +16,7 @@ import numpy as np
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet
 from cistrack.interfaces.reader import FieldError, SeveralObjectsError, show_field
 from cistrack.astro.sites import Site
-from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, TU_S, format_utc, is_leap_second, parse_utc
+from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, format_utc, is_leap_second, parse_utc, utc_to_tu
 
 from .decimal_units import to_rad
 
@@ -145,7 +145,7 @@ def _refuse_repeats(path, rows: list[ObsRow]) -> None:
 
 def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, Site],
               sigma_arcsec: float, meta: dict | None = None, designation: str | None = None) -> MeasurementSet:
-    """The MeasurementSet of ``rows`` in time order (TU since ``epoch``).
+    """The MeasurementSet of ``rows`` in time order (TU elapsed since ``epoch``, leap seconds counted).
 
     Rows without sigmas get the reader's default ``sigma_arcsec`` on the sky: on Dec, and on
     RA x cos(Dec) (so sigma_arcsec / cos(Dec) on RA itself; az/el: on each angle). The set's meta
@@ -162,7 +162,7 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     kinds = {r.kind for r in rows}
     names = KIND_NAMES[rows[0].kind] if len(kinds) == 1 else ("angle_1", "angle_2")
     default = sigma_arcsec * ARCSEC_RAD
-    times = np.array([(r.t - epoch).total_seconds() / TU_S for r in rows])
+    times = np.array([utc_to_tu(epoch, r.t) for r in rows])  # elapsed: leap seconds counted
     values = np.array([[r.a, r.b] for r in rows])
     sigmas = np.array([[r.sigma_a if r.sigma_a is not None else _default_first(r, sigma_arcsec, default),
                         r.sigma_b if r.sigma_b is not None else default] for r in rows])

@@ -1,11 +1,13 @@
 """Observation times the readers refuse by what they are: a leap second (second 60), which
-cistrack's UTC times cannot hold, and an ADES obsTime without the Z that ADES requires."""
+cistrack's UTC times cannot hold, and an ADES obsTime without the Z that ADES requires; and
+times on both sides of a leap second, which are elapsed time apart, not clock time."""
 from __future__ import annotations
 
 import pytest
 
 from cistrack.errors import MeasurementError
 from cistrack.runs.observation_files import read_observations
+from cistrack.units import TU_S
 
 EPOCH = "2026-03-01T00:00:00Z"
 
@@ -45,6 +47,23 @@ def test_a_csv_leap_second_is_refused_as_a_leap_second_naming_the_column(tmp_pat
     with pytest.raises(MeasurementError, match=r"line 2: time_utc '2016-12-31T23:59:60Z' is a leap second \(second "
                                                r"60\): leap-second time tags are not supported"):
         read_observations(path, EPOCH)
+
+
+def test_ades_rows_on_both_sides_of_a_leap_second_are_one_second_further_apart_than_their_labels(tmp_path):
+    path = tmp_path / "leap.psv"
+    path.write_text("# version=2022\ntrkSub|stn|obsTime|ra|dec\nX|809|2016-12-31T23:30:00Z|10|5\n"
+                    "X|809|2017-01-01T00:05:00Z|10.1|5\n")
+    times = read_observations(path, "2016-12-31T23:00:00Z").times * TU_S
+    assert times[0] == pytest.approx(1800.0, abs=1e-6)
+    assert times[1] - times[0] == pytest.approx(35 * 60 + 1.0, abs=1e-6)     # 35 min on the clock + the leap second
+
+
+def test_csv_rows_on_both_sides_of_a_leap_second_are_one_second_further_apart_than_their_labels(tmp_path):
+    path = tmp_path / "leap.csv"
+    path.write_text("time_utc,azimuth_deg,elevation_deg,site\n2016-12-31T23:59:59Z,120.5,40.2,711\n"
+                    "2017-01-01T00:00:00Z,120.7,40.5,711\n")
+    times = read_observations(path, "2016-12-31T23:00:00Z").times * TU_S
+    assert times[1] - times[0] == pytest.approx(2.0, abs=1e-6)
 
 
 # -- the Z of an ADES obsTime -------------------------------------------------------------------------------
