@@ -89,7 +89,9 @@ def _times(args, orbit) -> np.ndarray:
         raise ConfigError(f"--step {args.step:g}: {n} times between --start and --stop; at most {MAX_TIMES} "
                           "(give a longer --step or a shorter span)")
     first = (start - orbit.epoch).total_seconds()
-    return units.seconds_to_tu(first + 60.0 * args.step * np.arange(n))
+    times = units.seconds_to_tu(first + 60.0 * args.step * np.arange(n))
+    leaps = units.grid_leap_seconds(orbit.epoch, start, timedelta(minutes=args.step), n)  # a grid of UTC labels
+    return times if leaps is None else times + units.seconds_to_tu(leaps)
 
 
 def _until_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:

@@ -31,6 +31,7 @@ import dataclasses
 import math
 import os
 from dataclasses import dataclass
+from datetime import timedelta
 from pathlib import Path
 from typing import Any
 
@@ -113,13 +114,16 @@ def fit_grid(first_tu: float, last_tu: float, epoch, predict_days: float = 0.0,
              minutes: float = GRID_MINUTES) -> tuple[np.ndarray, int]:
     """Grid times (TU since ``epoch``) every ``minutes`` from the first observation floored to a
     whole minute through the last one, then ``predict_days`` on; and the number of grid points
-    that cover the arc."""
+    that cover the arc. The grid is one of UTC labels (whole minutes apart on the clock): a step
+    across a leap second is one second longer in elapsed time."""
     first_utc = units.tu_to_utc(epoch, first_tu).replace(second=0, microsecond=0)
     start = (first_utc - epoch).total_seconds() / units.TU_S
     step = minutes * 60.0 / units.TU_S
     n_arc = int(math.ceil((last_tu - start) / step - 1e-9)) + 1
     n_all = n_arc + int(math.ceil(predict_days * 1440.0 / minutes - 1e-9))
-    return start + step * np.arange(n_all), n_arc
+    grid = start + step * np.arange(n_all)
+    leaps = units.grid_leap_seconds(epoch, first_utc, timedelta(minutes=minutes), n_all)
+    return (grid, n_arc) if leaps is None else (grid + leaps / units.TU_S, n_arc)
 
 
 def _scenario(d: Path, reg: Registry):

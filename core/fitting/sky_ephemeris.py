@@ -225,7 +225,7 @@ def _checked(dynamics: Dynamics, times, epoch: datetime | str) -> np.ndarray:
     if tt.size == 0 or not np.all(np.isfinite(tt)):
         raise StateError("sky predictions: times must be one or more finite numbers (TU)")
     when = units.parse_utc(epoch)
-    first, last = (float(units.seconds_to_tu((datetime(y, 1, 1, tzinfo=timezone.utc) - when).total_seconds()))
+    first, last = (float(units.seconds_to_tu(units.elapsed_seconds(when, datetime(y, 1, 1, tzinfo=timezone.utc))))
                    for y in (FIRST_YEAR, LAST_YEAR + 1))
     outside = tt[(tt < first) | (tt >= last)]
     if outside.size:

@@ -2,11 +2,11 @@
 system view frames; and where a step sits on the recording's timelines."""
 from __future__ import annotations
 
-from datetime import datetime, timedelta
+from datetime import datetime
 
 import numpy as np
 
-from cistrack.units import LU_KM, TU_S
+from cistrack.units import LU_KM, TU_S, leap_seconds, tu_to_utc
 
 from .scene import libration_points, primary_positions, system_mu
 from .view_frame import ViewFrame
@@ -15,8 +15,9 @@ __all__ = ["utc_range_s", "system_points_km", "utc_at", "set_step_times"]
 
 
 def utc_at(epoch: datetime, t_tu: float) -> datetime:
-    """The UTC instant ``t_tu`` (TU) after the scenario ``epoch``."""
-    return epoch + timedelta(seconds=float(t_tu) * TU_S)
+    """The UTC instant ``t_tu`` (TU elapsed) after the scenario ``epoch``: its label, as the
+    files give it (:func:`cistrack.units.tu_to_utc`)."""
+    return tu_to_utc(epoch, t_tu)
 
 
 def set_step_times(rec, event: int, index: int, when: datetime) -> None:
@@ -40,7 +41,14 @@ def utc_range_s(run, epoch) -> tuple[float, float] | None:
     if not ends or not max(ends) > start:
         return None
     t0 = epoch.timestamp()
-    return t0 + start * TU_S, t0 + max(ends) * TU_S
+    return _unix_s(epoch, t0, start), _unix_s(epoch, t0, max(ends))
+
+
+def _unix_s(epoch: datetime, t0: float, t_tu: float) -> float:
+    """Unix seconds (``t0`` at ``epoch``) of the label :func:`utc_at` gives ``t_tu``: the unix
+    clock, like UTC labels, skips the leap seconds elapsed time counts."""
+    leap = leap_seconds(epoch, utc_at(epoch, t_tu))
+    return t0 + t_tu * TU_S if leap == 0.0 else t0 + t_tu * TU_S - leap
 
 
 def system_points_km(run, view: ViewFrame | None = None) -> np.ndarray | None:

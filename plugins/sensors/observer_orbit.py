@@ -118,7 +118,7 @@ def _state_t0(state_epoch, epoch, fail) -> float:
         when = parse_utc(state_epoch)
     except (ValueError, TypeError, OverflowError):
         fail("state_epoch", state_epoch, "must be an ISO-8601 UTC time")
-    days = (when - epoch).total_seconds() / 86400.0
+    days = units.elapsed_seconds(epoch, when) / 86400.0  # elapsed: leap seconds counted
     if not -MAX_STATE_AGE_DAYS <= days <= 0.0:
         earliest = units.format_utc(epoch - timedelta(days=MAX_STATE_AGE_DAYS))[:19] + "Z"
         fail("state_epoch", state_epoch, f"must lie from {earliest} to the scenario epoch "

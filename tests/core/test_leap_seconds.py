@@ -12,6 +12,7 @@ import pytest
 from cistrack import units
 from cistrack.astro import timescales
 from cistrack.fitting.arcs import in_time_base
+from cistrack.fitting.fit_export import fit_grid
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import TU_S, parse_utc, tu_to_utc, utc_to_tu
 
@@ -63,6 +64,14 @@ def test_an_instant_inside_a_leap_second_is_labelled_the_last_microsecond_before
     assert [units.utc_after(BEFORE, s) for s in inside] == [expected] * 3
     assert units.utc_after(BEFORE, 3601.0) == parse_utc("2017-01-01T00:00:00Z")
     assert units.utc_after(AFTER, -3600.5) == expected                        # and coming from after it
+
+
+def test_a_time_grid_across_the_leap_second_keeps_whole_minute_labels():
+    first, last = utc_to_tu(BEFORE, parse_utc("2016-12-31T23:50:00Z")), utc_to_tu(BEFORE, AFTER)
+    grid, n_arc = fit_grid(first, last, BEFORE, minutes=10.0)
+    labels = [units.format_utc(tu_to_utc(BEFORE, t))[:19] for t in grid]
+    assert labels[:3] == ["2016-12-31T23:50:00", "2017-01-01T00:00:00", "2017-01-01T00:10:00"]
+    assert np.diff(grid)[:2] * TU_S == pytest.approx([601.0, 600.0], abs=1e-6)
 
 
 def _set(times) -> MeasurementSet:
