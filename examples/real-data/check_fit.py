@@ -96,7 +96,7 @@ def main() -> int:
     dyn = scen.build("dynamics", reg)
     frame = scen.build("sensor", reg).inertial_frame()
     rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
-    t_truth = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
+    t_truth = units.utc_to_tu(scen.epoch, units.parse_utc(rows[0][0]))
     x_truth = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
 
     def truth_at(t: np.ndarray) -> np.ndarray:
@@ -111,7 +111,7 @@ def main() -> int:
         return out
 
     epochs, states, covs = read_oem(oem_path)
-    t = np.array([(units.parse_utc(e + "Z") - scen.epoch).total_seconds() / units.TU_S for e in epochs])
+    t = np.array([units.utc_to_tu(scen.epoch, units.parse_utc(e + "Z")) for e in epochs])
     truth_i = frame.from_synodic(truth_at(t), t)
     m2 = np.array([float((truth_i[k] - states[k]) @ np.linalg.solve(covs[k], truth_i[k] - states[k]))
                    for k in range(len(t))])

@@ -27,7 +27,7 @@ def truth_at(truth_csv: Path, scen, t_tu: np.ndarray) -> np.ndarray:
     propagated with the scenario's truth dynamics (the model the observations came from)."""
     from cistrack.plugin.registry import default_registry
     rows = [r for r in csv.reader(line for line in truth_csv.read_text().splitlines() if not line.startswith("#"))][1:]
-    t0 = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
+    t0 = units.utc_to_tu(scen.epoch, units.parse_utc(rows[0][0]))
     x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
     spec = scen.truth_dynamics or scen.components["dynamics"]
     dyn = spec.build(default_registry())

@@ -103,7 +103,7 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tu
     dyn = scen.build("dynamics", reg)
     frame = scen.build("sensor", reg).inertial_frame()
     rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
-    t0 = (units.parse_utc(rows[0][0]) - scen.epoch).total_seconds() / units.TU_S
+    t0 = units.utc_to_tu(scen.epoch, units.parse_utc(rows[0][0]))
     x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
 
     def truth_at(t: np.ndarray) -> np.ndarray:
@@ -117,7 +117,7 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tu
                 out[side] = res
         return out
 
-    t = np.array([(units.parse_utc(e + "Z") - scen.epoch).total_seconds() / units.TU_S for e in epochs])
+    t = np.array([units.utc_to_tu(scen.epoch, units.parse_utc(e + "Z")) for e in epochs])
     return t, frame.from_synodic(truth_at(t), t), truth_at
 
 

@@ -124,7 +124,7 @@ def _ephemeris_halo(scen, days: float):
     orbit = correct_catalog_orbit(dyn, np.array(HALO_L1), HALO_PERIOD, revs, first=min(revs, 4))
     x = orbit.synodic(dyn)[0]
     epoch = units.tu_to_utc(scen.epoch, float(orbit.times[0])).replace(microsecond=0)
-    x = dyn.propagate(x[None], float(orbit.times[0]), np.array([(epoch - scen.epoch).total_seconds() / units.TU_S])).states[0, 0]
+    x = dyn.propagate(x[None], float(orbit.times[0]), np.array([units.utc_to_tu(scen.epoch, epoch)])).states[0, 0]
     return scen.with_overrides({"epoch": units.format_utc(epoch),
                                 "truth": {"state_km": [float(v) for v in units.state_to_km(x)]}})
 
