@@ -39,6 +39,7 @@ __all__ = [
     "hours_to_tu", "tu_to_hours", "seconds_to_tu", "tu_to_seconds",
     "state_to_km", "state_from_km", "parse_utc", "format_utc", "tu_to_utc", "is_leap_second", "utc_problem",
     "LEAP_SECOND_PROBLEM", "utc_to_tu", "leap_seconds", "elapsed_seconds", "utc_after", "grid_leap_seconds",
+    "LAST_LEAP_SECOND_END",
 ]
 
 
@@ -157,7 +158,20 @@ def leap_seconds(epoch: datetime, when: datetime) -> float:
     :mod:`cistrack.astro.timescales` assumes. Before 1972 UTC drifted against TAI, so the value
     then has a fractional part.
     """
+    if _after_the_last_leap_second(epoch) and _after_the_last_leap_second(when):
+        return 0.0      # no lookup: a simulated run of today's epochs does not load ERFA
     return _tai_minus_utc(when) - _tai_minus_utc(epoch)
+
+
+LAST_LEAP_SECOND_END = datetime(2017, 1, 1, tzinfo=timezone.utc)
+"""The UTC midnight that ends the last leap second in ERFA's table (2016-12-31T23:59:60; TAI-UTC =
+37 s since). Two times at or after it have none between them and need no lookup; tests check it
+against the installed ERFA (``erfa.leap_seconds``), so a newer table with another leap second
+fails them until this is moved."""
+
+
+def _after_the_last_leap_second(when: datetime) -> bool:
+    return (when if when.tzinfo is not None else when.replace(tzinfo=timezone.utc)) >= LAST_LEAP_SECOND_END
 
 
 def _tai_minus_utc(when: datetime) -> float:

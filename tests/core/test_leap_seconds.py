@@ -48,6 +48,14 @@ def test_elapsed_time_is_what_the_time_scales_evaluate_at_the_label(label):
     assert timescales.utc_time(BEFORE, seconds).isot[:23] == units.format_utc(when)[:23]    # to the millisecond
 
 
+def test_the_last_leap_second_cistrack_knows_without_erfa_is_the_last_of_erfas_table():
+    import erfa
+
+    year, month, _ = erfa.leap_seconds.get()[-1]
+    assert datetime(int(year), int(month), 1, tzinfo=timezone.utc) == units.LAST_LEAP_SECOND_END
+    assert units.leap_seconds(parse_utc("2016-12-31T00:00:00Z"), units.LAST_LEAP_SECOND_END) == 1.0
+
+
 def test_with_no_leap_second_in_between_the_conversions_are_the_clock_arithmetic_bit_for_bit():
     rng = np.random.default_rng(5)
     epoch = parse_utc("2025-01-10T03:17:00.25Z")
