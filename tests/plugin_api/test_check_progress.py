@@ -69,7 +69,9 @@ def test_each_check_line_comes_when_the_check_ends_not_when_the_suite_does(site,
 def test_a_check_over_a_second_shows_its_time(site, tmp_path):
     lines = [text for _, text in _lines_with_times(site, tmp_path)]
     slow = [text for text in lines if " s)" in text]
-    assert len(slow) == 1 and slow[0].startswith("  PASS  ") and "(3." in slow[0], lines
+    assert len(slow) == 1 and slow[0].startswith("  PASS  "), lines
+    shown = float(slow[0].rsplit("(", 1)[1].split(" s)")[0])
+    assert shown >= 3.0, lines  # the check sleeps 3 s; a loaded machine only adds to it
 
 
 def test_a_check_over_a_minute_is_warned_about_on_stderr(capsys):
