@@ -31,8 +31,13 @@ from cistrack.units import LU_KM, VU_KMS
 
 from .tracklets import Attributable, states_from_ranges
 
-__all__ = ["admissible_states", "admissible_extent", "score_states", "refine", "ScoredGrid", "SCORE_SCALE", "MU_EARTH", "EARTH"]
+__all__ = ["admissible_states", "admissible_extent", "score_states", "refine", "ScoredGrid", "SCORE_SCALE", "MU_EARTH",
+           "EARTH", "CLEAN_NOISE_SCALE"]
 
+CLEAN_NOISE_SCALE = 1.5
+"""A fit whose noise scale (residuals over their stated noise, 1 for noise) is below this fits its
+observations (the least squares' own bound on a clean fit, ``burn_search.MAX_RMS``); above it, a fit
+that converged sits in a false minimum or holds bad data."""
 SCORE_SCALE = 25.0
 """chi2 of one observation at which its score term is log 2 (5 sigma)."""
 MU_EARTH = 1.0 - 1.2150582e-2
@@ -172,7 +177,7 @@ def refine(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, rows: np.ndar
     """(best fit or None, index of the grid state it started from, fits tried): the least squares
     on the observations ``rows`` from the ``tries`` best-scored grid states that lie apart in range;
     the best converged fit by weighted RMS (rejections count against it), its state at
-    ``grid.t0``. Stops early at a fit whose noise scale is below 1.5."""
+    ``grid.t0``. Stops early at a fit whose noise scale is below :data:`CLEAN_NOISE_SCALE`."""
     sub = ms.subset(np.asarray(rows, dtype=int))
     order = np.argsort(grid.score, kind="stable")
     order = order[np.isfinite(grid.score[order])]
@@ -182,6 +187,6 @@ def refine(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, rows: np.ndar
         fit = _one_fit(dynamics, sensor, sub, grid.states[i], grid.t0, options)
         if _quality(fit) < _quality(best):
             best, best_i = fit, i
-        if best is not None and best.converged and best.noise_scale < 1.5:
+        if best is not None and best.converged and best.noise_scale < CLEAN_NOISE_SCALE:
             break
     return best, best_i, tried

@@ -76,3 +76,18 @@ def test_fit_recovers_each_family(tmp_path, family):
     assert row.rejected_injected == row.injected == len(info["outliers"])
     assert row.clean_rejected <= row.max_clean_rejected, f"{row.clean_rejected} clean observations rejected"
     assert json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["converged"]
+
+
+@pytest.mark.slow
+def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
+    """Halo seed 33 (a 3-exposure first night, then tracklets two and three days later): the first
+    tracklet's ranging fit converged with residuals 57 times the noise, 139,000 km off, and from that
+    seed the fit ended FAILED (weighted RMS 289,069); the next seed's fit is clean."""
+    set_dir = tmp_path / "halo-s33"
+    info = make(set_dir, "halo", seed=33)
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert row.n_fitted == row.n_observations == info["n_observations"]
+    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    assert any("tracklet 1's fit converged with residuals" in m and "a false minimum" in m for m in messages)
