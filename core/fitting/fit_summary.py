@@ -123,18 +123,7 @@ def summary_lines(one) -> list[str]:
     for m in r.messages[1:]:
         lines.append(f"  note: {m}")
     if one.lov:
-        from cistrack.least_squares.line_of_variations import line_summary
-
-        lv = line_summary(one.lov, r)
-        lo, hi = lv["sigma_range"]
-        lines.append(f"  line of variations {lo:g} to {hi:g} sigma ({len(one.lov)} points, lov.csv): leaves the "
-                     f"straight line by at most {lv['max_departure_sigma']:.3g} sigma ({lv['max_departure_km']:.3g} km), "
-                     f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2")
-        if not lv["linear"]:
-            lines.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
-                         "understates the uncertainty, and the 1-sigma, the horizon and the sky predictions drawn from it "
-                         "with it; sample the line (lov.csv, cistrack.least_squares.line_of_variations), or observe "
-                         "again sooner")
+        lines += _lov_lines(one.lov, r)
     lines += _arcs_and_events(one)
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
@@ -147,6 +136,28 @@ def summary_lines(one) -> list[str]:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
                      "(--set measurements.reader.sigma_arcsec=...) or the data")
     return _wrapped(lines)
+
+
+def _lov_lines(points: list, r) -> list[str]:
+    """The summary's lines on the line of variations ``points`` of fit ``r``."""
+    from cistrack.least_squares.line_of_variations import line_summary
+
+    lv = line_summary(points, r)
+    lo, hi = lv["sigma_range"]
+    if not lv["followed"]:
+        return [f"  line of variations: followed only from {lo:g} to {hi:g} sigma ({len(points)} point(s), lov.csv): "
+                "the fits beyond its first points did not converge, so it checks nothing",
+                "  warning: the covariance is unchecked and may understate the uncertainty, and the 1-sigma, the "
+                "horizon and the sky predictions drawn from it with it; observe again sooner"]
+    out = [f"  line of variations {lo:g} to {hi:g} sigma ({len(points)} points, lov.csv): leaves the "
+           f"straight line by at most {lv['max_departure_sigma']:.3g} sigma ({lv['max_departure_km']:.3g} km), "
+           f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2"]
+    if not lv["linear"]:
+        out.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
+                   "understates the uncertainty, and the 1-sigma, the horizon and the sky predictions drawn from it "
+                   "with it; sample the line (lov.csv, cistrack.least_squares.line_of_variations), or observe "
+                   "again sooner")
+    return out
 
 
 def _outcome(one) -> str:

@@ -14,7 +14,13 @@ import numpy as np
 from cistrack import units
 from cistrack.least_squares.impulse_fit import BurnEstimate
 
-__all__ = ["maneuver_record", "MIN_SEARCH_ARC_DAYS"]
+__all__ = ["maneuver_record", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS"]
+
+MIN_BURN_SIGMAS = 3.0
+"""A burn the fit reports has a magnitude of at least this many of its sigmas (its time's
+uncertainty included): mis-identified tracklets at the end of a survey arc had been fitted with a
+532 +- 24,668 m/s burn and reported "converged", the truth 3,454 km away. (A run's maneuver watch,
+which detects a burn before estimating it, keeps smaller ones and judges them by its own checks.)"""
 
 MIN_SEARCH_ARC_DAYS = 0.5
 """The shortest arc searched for burns (12 hours): within one night a burn's three parameters fit an
@@ -81,6 +87,14 @@ def add_maneuvers(one, say) -> None:
             "the gaps between the observations explains it",))
         return
     fit, burns = _after_burns(ctx, found)
+    vague = [b for b in burns if not b.magnitude_ms >= MIN_BURN_SIGMAS * b.magnitude_sigma_ms]
+    if vague:  # a burn the arc cannot tell from none explains nothing (mis-identified tracklets at the arc's end)
+        tried = "; ".join(f"{b.magnitude_ms:.3g} +- {b.magnitude_sigma_ms:.3g} m/s" for b in vague)
+        one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+            f"not a clean fit: it looks like an object that maneuvered ({why}), and the burn the search kept "
+            f"({tried}) is within {MIN_BURN_SIGMAS:g} sigma of none: the arc does not determine it (outliers, "
+            "mis-identified observations or another object are as likely)",))
+        return
     still = suspicion(fit)
     if still:  # the burns do not explain what made the fit suspect: not reported as maneuvers
         tried = "; ".join(f"{b.magnitude_ms:.3g} +- {b.magnitude_sigma_ms:.2g} m/s" for b in burns)

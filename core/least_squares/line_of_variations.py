@@ -202,8 +202,10 @@ def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
     straight line is d = x_k - (x* + sigma_k v), measured as sqrt(d^T N d) (sigmas of the fit)
     and in position km; its chi-square rise is compared with the linear sigma^2. Returns a dict:
     ``sigma_range`` [lowest, highest], ``max_departure_sigma``, ``max_departure_km``,
-    ``max_chi2_excess`` (largest |delta chi2 - sigma^2|) and ``linear`` (departure below 1
-    sigma and chi-square within 1 of sigma^2 everywhere: the covariance describes the solutions)."""
+    ``max_chi2_excess`` (largest |delta chi2 - sigma^2|), ``followed`` (the line has points on
+    both sides of the nominal one: its fits converged there) and ``linear`` (followed, with the
+    departure below 1 sigma and the chi-square within 1 of sigma^2 everywhere: the covariance
+    describes the solutions; a line whose first fits failed checks nothing)."""
     from cistrack.least_squares.observability import to_km
 
     v = weakest_direction(fit.covariance)
@@ -217,5 +219,7 @@ def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
     out = {"sigma_range": [float(min(p.sigma for p in points)), float(max(p.sigma for p in points))],
            "max_departure_sigma": max(dep_sigma), "max_departure_km": max(dep_km),
            "max_chi2_excess": float(max(excess))}
-    out["linear"] = bool(out["max_departure_sigma"] < 1.0 and out["max_chi2_excess"] < 1.0)
+    lo, hi = out["sigma_range"]
+    out["followed"] = bool(lo < 0.0 < hi)
+    out["linear"] = bool(out["followed"] and out["max_departure_sigma"] < 1.0 and out["max_chi2_excess"] < 1.0)
     return out

@@ -182,3 +182,14 @@ def test_the_summary_sees_one_night_bend():
     _, _, fit, pts = _fit_and_line("one", 4)
     s = line_summary(pts, fit)
     assert not s["linear"] and s["max_departure_sigma"] > 1.0
+
+
+def test_a_line_whose_first_fits_failed_is_not_called_linear():
+    """Only the nominal point (the first fits on both sides did not converge): it had been reported
+    as 'leaves the straight line by at most 0 sigma', linear, for a fit 1e11 in Mahalanobis^2 off."""
+    _, _, fit, pts = _fit_and_line("all", 4)
+    nominal = [p for p in pts if p.sigma == 0.0]
+    s = line_summary(nominal, fit)
+    assert not s["followed"] and not s["linear"]
+    one_side = [p for p in pts if p.sigma >= 0.0]
+    assert not line_summary(one_side, fit)["linear"]

@@ -91,3 +91,25 @@ def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
     assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
     messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
     assert any("tracklet 1's fit converged with residuals" in m and "a false minimum" in m for m in messages)
+
+
+@pytest.mark.slow
+def test_mis_identified_tracklets_at_the_arcs_end_are_no_burn(tmp_path):
+    """The last 7 observations of nrho seed 31 moved by 0.02 deg RA, 0.01 deg Dec (two tracklets of
+    one night): the fit had kept a 532 +- 24,668 m/s burn and said "converged", the truth 3,454 km
+    away. A burn that cannot be told from none is no maneuver: the fit is reported not clean."""
+    from cistrack.cli.main import main
+
+    make(tmp_path / "set", "nrho", seed=31)
+    lines = (tmp_path / "set" / "observations.psv").read_text().splitlines()
+    head, rows = lines[:2], lines[2:]
+    moved = []
+    for row in rows[-7:]:
+        f = row.split("|")
+        f[4], f[5] = repr(float(f[4]) + 0.02), repr(float(f[5]) + 0.01)
+        moved.append("|".join(f))
+    (tmp_path / "end7.psv").write_text("\n".join(head + rows[:-7] + moved) + "\n")
+    assert main(["fit", str(tmp_path / "end7.psv"), "--out", str(tmp_path / "fit"), "--quiet"]) == 3
+    record = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    assert not record["converged"] and not record.get("maneuvers")
+    assert any("within 3 sigma of none" in m for m in record["messages"])
