@@ -63,7 +63,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Scenario", "ComponentSpec", "CustodyRule", "load_scenario", "parse_scenario",
+__all__ = ["Scenario", "ComponentSpec", "CustodyRule", "load_scenario", "parse_scenario", "relative_base",
            "builtin_scenarios", "builtin_scenario_path", "COMPONENT_TABLES"]
 
 COMPONENT_TABLES: dict[str, str] = {
@@ -178,8 +178,14 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
     scen = parse_scenario(_merge_overrides(data, overrides) if overrides else data, str(p), registry)
     if scen.measurements_file is not None and not scen.measurements_file.is_absolute():
-        scen.measurements_file = (p.parent / scen.measurements_file).resolve()
+        scen.measurements_file = (relative_base(p) / scen.measurements_file).resolve()
     return scen
+
+
+def relative_base(p: Path) -> Path:
+    """The directory a file's relative paths are read from: its own, or the current directory for a
+    pipe (``cistrack run <(...)``: its directory, /dev/fd, holds nothing of the user's)."""
+    return p.parent if p.is_file() else Path.cwd()
 
 
 def parse_scenario(data: dict, source: str = "<memory>", registry: Registry | None = None) -> Scenario:

@@ -167,9 +167,11 @@ class _Grid:
 def _scenario_source(sc: str, p: Path) -> str | Path:
     """A study's scenario entry as load_scenario takes it: a path relative to the study file
     ``p`` when one exists there, else the entry's own path when it exists, else a built-in name."""
+    from cistrack.scenario.loading import relative_base
+
     sp = Path(sc)
-    if not sp.is_absolute() and (p.parent / sp).exists():
-        sp = p.parent / sp
+    if not sp.is_absolute() and (relative_base(p) / sp).exists():
+        sp = relative_base(p) / sp
     return sp if sp.exists() else sc
 
 

@@ -63,3 +63,20 @@ def test_a_scenario_file_with_a_utf8_byte_order_mark_is_read(tmp_path):
     path = tmp_path / "bom.toml"
     path.write_bytes(b"\xef\xbb\xbf" + _quick_text().encode())
     assert load_scenario(str(path)).raw == load_scenario("quick").raw
+
+
+def test_a_scenario_read_from_a_pipe_finds_its_relative_measurement_file_in_the_current_directory(tmp_path,
+                                                                                                   monkeypatch):
+    """``cistrack run <(cat real-data.toml)``: its relative [measurements] file had been looked for
+    under /proc/PID/fd, which never holds it."""
+    text = open(load_scenario("real-data").source, encoding="utf-8").read()
+    (tmp_path / "real_data").mkdir()
+    monkeypatch.chdir(tmp_path)
+    r, w = os.pipe()
+    os.write(w, text.encode())
+    os.close(w)
+    try:
+        scen = load_scenario(f"/dev/fd/{r}")
+    finally:
+        os.close(r)
+    assert scen.measurements_file == (tmp_path / "real_data" / "observations.psv").resolve()
