@@ -24,6 +24,17 @@ _DAMAGE = (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeErr
 _TOLERANT = threading.Lock()
 
 
+def _damaged_file(exc: BaseException, cache_file: Any) -> str:
+    """The file whose unpickling raised ``exc``: the data file (``_load_data``'s ``path``) when that
+    is where it failed, else the cache's index."""
+    tb = exc.__traceback__
+    while tb is not None:
+        if tb.tb_frame.f_code.co_name == "_load_data" and tb.tb_frame.f_locals.get("path"):
+            return str(tb.tb_frame.f_locals["path"])
+        tb = tb.tb_next
+    return str(getattr(cache_file, "_index_path", "?"))
+
+
 def tolerate_damaged_cache() -> None:
     """Make numba treat an unreadable entry of its on-disk cache as absent: the function is compiled
     again (and its entry rewritten), with a warning naming the file (logger ``cistrack.lazy``).
@@ -45,8 +56,8 @@ def tolerate_damaged_cache() -> None:
                 return load(self, key)
             except _DAMAGE as exc:
                 logging.getLogger("cistrack.lazy").warning(
-                    "numba's cache entry %s is damaged (%s: %s); compiling the function again",
-                    getattr(self, "_index_path", "?"), type(exc).__name__, str(exc)[:80])
+                    "numba's cache file %s is damaged (%s: %s); compiling the function again",
+                    _damaged_file(exc, self), type(exc).__name__, str(exc)[:80])
                 try:
                     self.flush()  # an empty index: the compiled function's entry is written afresh
                 except OSError:

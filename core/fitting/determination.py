@@ -151,6 +151,7 @@ def _horizon(fit, dynamics, t_last: float, rng: np.random.Generator) -> tuple[fl
     if gone.size and grid[gone[0]] <= nominal:
         k = gone[0]
         days = float(units.tu_to_days(grid[k] - t_last)) - HORIZON_STEP_DAYS
+        days = round(days / HORIZON_STEP_DAYS) * HORIZON_STEP_DAYS  # a whole number of steps, not 5e-16
         if hit[k] > 0.5 * share[k]:
             return max(days, 0.0), f"orbits within the covariance hit the {_bodies_hit(dynamics, prop, k, grid)}"
         return max(days, 0.0), ""

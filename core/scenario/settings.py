@@ -77,6 +77,15 @@ def parse_settings(items: Iterable[str] | None) -> dict[str, Any]:
     return out
 
 
+def _same_value(a: Any, b: Any) -> bool:
+    """Whether two settings give one value: equal, and of one type except a number written as an
+    integer and as a float (``1`` and ``1.0``); ``true`` is not ``1``."""
+    numbers = (int, float)
+    if isinstance(a, numbers) and isinstance(b, numbers) and not isinstance(a, bool) and not isinstance(b, bool):
+        return a == b
+    return a == b and type(a) is type(b)
+
+
 def _put(node: dict[str, Any], path: tuple[str, ...], value: Any, item: str,
          given: dict[tuple[str, ...], str]) -> None:
     """Set ``path[-1]`` of the table ``node`` to ``value`` (the setting ``item``'s); ConfigError
@@ -92,7 +101,7 @@ def _put(node: dict[str, Any], path: tuple[str, ...], value: Any, item: str,
         for k, v in value.items():
             _put(old, path + (k,), v, item, given)
         return
-    if old is not None and (old != value or type(old) is not type(value)):
+    if old is not None and not _same_value(old, value):
         first = next(given[path[:n]] for n in range(len(path), 0, -1) if path[:n] in given)
         raise ConfigError(f"--set {_shown(first)} and --set {_shown(item)}: two values for {'.'.join(path)}; "
                           "give one")

@@ -42,10 +42,19 @@ def damaged(tmp_path):
 def test_a_damaged_index_is_compiled_again_with_a_warning_naming_it(damaged):
     proc = _call(damaged)
     assert proc.returncode == 0 and proc.stdout.split() == ["3.0"], proc.stderr[-2000:]
-    assert "numba's cache entry" in proc.stderr and ".nbi is damaged" in " ".join(proc.stderr.split())
+    assert "numba's cache file" in proc.stderr and ".nbi is damaged" in " ".join(proc.stderr.split())
 
 
 def test_the_entry_is_rewritten_and_the_next_process_loads_it_silently(damaged):
     _call(damaged)
     proc = _call(damaged)
     assert proc.stdout.split() == ["3.0"] and "damaged" not in proc.stderr
+
+
+def test_a_damaged_data_file_is_named_itself(tmp_path):
+    (tmp_path / "cached_fn.py").write_text(MODULE)
+    assert _call(tmp_path).stdout.split() == ["3.0"]
+    for f in (tmp_path / "nb").rglob("*.nbc"):
+        f.write_bytes(f.read_bytes()[:50])
+    proc = _call(tmp_path)
+    assert proc.stdout.split() == ["3.0"] and ".nbc is damaged" in " ".join(proc.stderr.split()), proc.stderr

@@ -76,6 +76,15 @@ def test_one_key_given_the_same_value_twice_is_taken():
     assert parse_settings(["filter.n_particles=500", "filter.n_particles=500"]) == {"filter": {"n_particles": 500}}
 
 
+def test_one_number_written_as_an_integer_and_as_a_float_is_one_value():
+    assert parse_settings(["duration_days=1", "duration_days=1.0"]) == {"duration_days": 1.0}
+
+
+def test_true_and_1_are_two_values():
+    with pytest.raises(ConfigError, match="two values for filter.flag"):
+        parse_settings(["filter.flag=true", "filter.flag=1"])
+
+
 def test_api_settings_giving_one_parameter_as_a_table_and_a_dotted_key_are_refused_in_either_order():
     import cistrack as ct
 

@@ -84,3 +84,11 @@ def test_orbits_lost_at_the_first_step_are_said_so_not_a_floating_point_horizon(
     assert "e-16" not in words and "observe again within" not in words
     assert words.startswith("the orbits it allows spread beyond a 1-degree field within 6 hours")
     assert _horizon_words(1.8, "").startswith("observe again within 1.8 days")
+
+
+def test_the_horizon_is_a_whole_number_of_grid_steps():
+    """fit.json had kept 'horizon_days': 4.996e-16 where the text said 'within 6 hours'."""
+    from cistrack.fitting.determination import HORIZON_STEP_DAYS
+
+    d = _fit("night")[2]
+    assert d.horizon_days / HORIZON_STEP_DAYS == round(d.horizon_days / HORIZON_STEP_DAYS)
