@@ -337,6 +337,11 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")
+    lov = record.get("line_of_variations")
+    if isinstance(lov, dict) and not lov.get("linear", True):
+        comments.insert(0, "WARNING: the fit's line of variations " + ("bends away from this covariance"
+                           if lov.get("followed", True) else "could not be followed")
+                        + ": the covariance understates the uncertainty (a poorly determined orbit; fit.json, lov.csv)")
     if refusal is not None:
         comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
     return comments

@@ -54,3 +54,7 @@ def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_pat
     record = json.loads((tmp_path / "fit" / "fit.json").read_text())
     assert record["settings"]["lov"] == "auto" and record["line_of_variations"]["points"] == 13
     assert (tmp_path / "fit" / "lov.csv").is_file()
+    assert not record["line_of_variations"]["linear"]
+    assert main(["export", str(tmp_path / "fit"), "--format", "oem", "--quiet"]) == 0
+    head = (tmp_path / "fit" / "estimate.oem").read_text().splitlines()[:4]
+    assert any("WARNING: the fit's line of variations bends away from this covariance" in line for line in head)
