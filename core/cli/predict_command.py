@@ -225,6 +225,26 @@ def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
     return csv_path, png
 
 
+def _bent_line_note(run_dir) -> str:
+    """A warning when the fit's line of variations bends away from its covariance (or could not be
+    followed): the ellipses drawn from that covariance then understate where to look."""
+    from cistrack.fitting.fit_export import is_fit_directory
+    from cistrack.fitting.fit_record import read_fit_record
+
+    if not is_fit_directory(run_dir):
+        return ""
+    from cistrack.errors import CistrackError
+
+    try:
+        lov = read_fit_record(Path(run_dir)).get("line_of_variations")
+    except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no note is no harm
+        return ""
+    if not isinstance(lov, dict) or lov.get("linear", True):
+        return ""
+    return ("warning: the fit's line of variations " + ("bends away from" if lov.get("followed", True) else
+            "could not check") + " its covariance: the 3-sigma ellipses understate where to look")
+
+
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
@@ -244,7 +264,7 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        for line in filter(None, (impact_note, _lost_note(sky))):
+        for line in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run))):
             print(line)
         print(f"wrote {csv_path}\nwrote {png}")
     return 0

@@ -58,3 +58,13 @@ def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_pat
     assert main(["export", str(tmp_path / "fit"), "--format", "oem", "--quiet"]) == 0
     head = (tmp_path / "fit" / "estimate.oem").read_text().splitlines()[:4]
     assert any("WARNING: the fit's line of variations bends away from this covariance" in line for line in head)
+
+
+def test_predict_warns_when_the_fits_line_of_variations_bends(tmp_path, capsys):
+    (tmp_path / "night.psv").write_text(CLEAN_NIGHT)
+    assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit"), "--quiet"]) == 0
+    assert main(["predict", str(tmp_path / "fit"), "--site", "568", "--start", "2026-04-30T09:00:00Z",
+                 "--stop", "2026-04-30T10:00:00Z"]) == 0
+    out = capsys.readouterr().out
+    assert "warning: the fit's line of variations bends away from its covariance: the 3-sigma ellipses " \
+           "understate where to look" in out
