@@ -370,8 +370,11 @@ def test_ctrl_c_while_plugins_load_ends_the_command(tmp_path, delay_s):
     import sys
     import time
 
+    # SIGINT as a terminal leaves it (a shell's background job, such as a CI script started with '&',
+    # inherits it ignored, and a program started so rightly keeps ignoring it)
     proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "example-1", "--out", str(tmp_path / "r")],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(delay_s)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)

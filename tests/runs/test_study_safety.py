@@ -261,7 +261,8 @@ def test_ctrl_c_ends_a_study_at_once_with_no_worker_left_and_the_next_run_comple
     with open(tmp_path / "study.log", "w") as log:  # Ctrl-C reaches the whole process group, workers included
         proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "study", "run", str(study), "--out", str(out),
                                  "--workers", "2", "--quiet"], stdout=log, stderr=subprocess.STDOUT, cwd=tmp_path,
-                                start_new_session=True)
+                                start_new_session=True,  # SIGINT as a terminal leaves it, even under '&'
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     kids: list[int] = []
     try:
         _wait_for_a_run(proc, out)
