@@ -19,3 +19,20 @@ def plugin_site(site: Path, dist: str, version: str, modules: dict[str, str],
     for module, body in modules.items():
         (site / f"{module}.py").write_text(body)
     return site
+
+
+def registry_with_module(folder: Path, module: str, source: str, dist: str, entry_point: str):
+    """The default registry with ``source`` loaded as module ``module`` (written to ``folder``) among
+    its plugins, as the entry point ``entry_point`` of distribution ``dist`` would add it."""
+    import importlib.util
+
+    from cistrack.plugin.registry import load_registry
+
+    path = folder / f"{module}.py"
+    path.write_text(source)
+    spec = importlib.util.spec_from_file_location(module, path)
+    loaded = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(loaded)
+    reg = load_registry()
+    reg.plugins.append((dist, entry_point, loaded))
+    return reg

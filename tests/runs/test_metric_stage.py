@@ -139,16 +139,9 @@ def cistrack_metric_stages(scenario):
 
 
 def test_an_installed_plugin_module_adds_a_metric_column(tmp_path):
-    import importlib.util
+    from plugin_site import registry_with_module  # tests/ is on sys.path
 
-    from cistrack.plugin.registry import load_registry
-
-    (tmp_path / "count_plugin.py").write_text(PLUGIN_MODULE)
-    spec = importlib.util.spec_from_file_location("count_plugin", tmp_path / "count_plugin.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    reg = load_registry()
-    reg.plugins.append(("count-dist", "update-count", module))  # as the entry point "update-count" would add it
+    reg = registry_with_module(tmp_path, "count_plugin", PLUGIN_MODULE, "count-dist", "update-count")
     res = run_scenario(_small(), seed=3, registry=reg)
     counts = [row["updates_so_far"] for row in res.rows]
     assert counts == [float(sum(r["kind"] == "update" for r in res.rows[:i + 1])) for i in range(len(res.rows))]
@@ -194,14 +187,19 @@ class WritesEntropy(StepMetric):
         return {"entropy": 0.0}
 
 
-class EntropyPlugin:
+class StagesPlugin:
+    """A plugin object adding the given stages."""
+
+    def __init__(self, *stages: StepMetric):
+        self.stages = list(stages)
+
     @hookimpl
     def cistrack_metric_stages(self, scenario):
-        return [WritesEntropy()]
+        return self.stages
 
 
 def test_a_stage_that_overwrites_an_earlier_stages_metric_fails_the_run_naming_it():
-    res = run_scenario(_small(), seed=3, observers=[EntropyPlugin()])
+    res = run_scenario(_small(), seed=3, observers=[StagesPlugin(WritesEntropy())])
     assert res.summary.status == "failed"
     assert "'entropy-again' writes entropy" in res.summary.failure
 
@@ -214,14 +212,8 @@ class ShiftsTheCloud(StepMetric):
         return {}
 
 
-class ShiftPlugin:
-    @hookimpl
-    def cistrack_metric_stages(self, scenario):
-        return [ShiftsTheCloud()]
-
-
 def test_a_stage_that_writes_into_the_belief_fails_the_run_naming_it_and_the_filter_is_untouched():
-    res = run_scenario(_small(), seed=3, observers=[ShiftPlugin()])
+    res = run_scenario(_small(), seed=3, observers=[StagesPlugin(ShiftsTheCloud())])
     assert res.summary.status == "failed"
     assert "metric stage 'shifts-the-cloud': compute() raised" in res.summary.failure
     assert "the step's belief is read-only" in res.summary.failure

@@ -131,16 +131,9 @@ def cistrack_step_predicted(run, step):
 
 
 def test_a_plugin_module_failing_in_a_step_hook_is_named_by_its_distribution_and_entry_point(tmp_path):
-    import importlib.util
+    from plugin_site import registry_with_module  # tests/ is on sys.path
 
-    from cistrack.plugin.registry import load_registry
-
-    (tmp_path / "boom_plugin.py").write_text(PLUGIN_MODULE)
-    spec = importlib.util.spec_from_file_location("boom_plugin", tmp_path / "boom_plugin.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    reg = load_registry()
-    reg.plugins.append(("hplug", "hooks", module))  # as the entry point "hooks" of distribution hplug would add it
+    reg = registry_with_module(tmp_path, "boom_plugin", PLUGIN_MODULE, "hplug", "hooks")
     res = run_scenario(_small(), seed=1, registry=reg)
     assert res.summary.failure == "hplug:hooks: cistrack_step_predicted raised RuntimeError: module boom"
 
