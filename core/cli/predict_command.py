@@ -228,20 +228,19 @@ def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
 def _bent_line_note(run_dir) -> str:
     """A warning when the fit's line of variations bends away from its covariance (or could not be
     followed): the ellipses drawn from that covariance then understate where to look."""
-    from cistrack.fitting.fit_export import is_fit_directory
+    from cistrack.errors import CistrackError
+    from cistrack.fitting.fit_export import covariance_doubt, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
 
     if not is_fit_directory(run_dir):
         return ""
-    from cistrack.errors import CistrackError
-
     try:
-        lov = read_fit_record(Path(run_dir)).get("line_of_variations")
+        doubt = covariance_doubt(read_fit_record(Path(run_dir)))
     except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no note is no harm
         return ""
-    if not isinstance(lov, dict) or lov.get("linear", True):
+    if doubt is None:
         return ""
-    return ("warning: the fit's line of variations " + ("bends away from" if lov.get("followed", True) else
+    return ("warning: the fit's line of variations " + ("bends away from" if doubt == "bends" else
             "could not check") + " its covariance: the 3-sigma ellipses understate where to look")
 
 

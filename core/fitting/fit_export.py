@@ -50,7 +50,8 @@ from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
-__all__ = ["export_fit", "FitExportOptions", "fit_refusal", "fit_grid", "covariance_scale", "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
+__all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
+           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -76,6 +77,16 @@ def fit_refusal(record: dict[str, Any]) -> str | None:
             return f"the fit is {verdict[-1]}"
         return "its least squares did not converge (" + "; ".join(messages[:2]) + ")"
     return None
+
+
+def covariance_doubt(record: dict[str, Any]) -> str | None:
+    """What the fit's line of variations (``record["line_of_variations"]``, when drawn) says against
+    its covariance: "bends" (it leaves the covariance's straight line), "unfollowed" (its first fits
+    failed: nothing checked), or None (straight, or not drawn)."""
+    lov = record.get("line_of_variations")
+    if not isinstance(lov, dict) or lov.get("linear", True):
+        return None
+    return "bends" if lov.get("followed", True) else "unfollowed"
 
 
 def covariance_scale(record: dict[str, Any]) -> float:
@@ -337,10 +348,10 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")
-    lov = record.get("line_of_variations")
-    if isinstance(lov, dict) and not lov.get("linear", True):
+    doubt = covariance_doubt(record)
+    if doubt is not None:
         comments.insert(0, "WARNING: the fit's line of variations " + ("bends away from this covariance"
-                           if lov.get("followed", True) else "could not be followed")
+                           if doubt == "bends" else "could not be followed")
                         + ": the covariance understates the uncertainty (a poorly determined orbit; fit.json, lov.csv)")
     if refusal is not None:
         comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")

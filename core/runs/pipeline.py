@@ -407,7 +407,7 @@ def _judging_rule(rule, measurements):
     sig = np.asarray(getattr(measurements, "sigmas", np.empty((0, 0))), dtype=float)
     if not cols or sig.ndim != 2 or sig.shape[0] == 0:
         return rule
-    finest = float(np.nanmin(sig[:, cols])) * 180.0 / np.pi * 3600.0
+    finest = float(np.nanmin(sig[:, cols])) / units.ARCSEC_RAD
     return rule.for_angle_sigma(finest)
 
 
