@@ -225,9 +225,10 @@ def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
     return csv_path, png
 
 
-def _bent_line_note(run_dir) -> str:
-    """A warning when the fit's line of variations bends away from its covariance (or could not be
-    followed): the ellipses drawn from that covariance then understate where to look."""
+def _bent_line_note(run_dir, sky) -> str:
+    """A note when the fit's line of variations bends away from its covariance: the ellipses were
+    widened to hold it (``sky.line_reach_arcsec``), or, when the line could not be followed or read,
+    a warning that the ellipses drawn from the covariance understate where to look."""
     from cistrack.errors import CistrackError
     from cistrack.fitting.fit_export import covariance_doubt, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
@@ -240,6 +241,10 @@ def _bent_line_note(run_dir) -> str:
         return ""
     if doubt is None:
         return ""
+    if doubt == "bends" and sky.line_reach_arcsec is not None:
+        return ("note: the fit's line of variations bends away from its covariance: the 3-sigma ellipses are widened "
+                "to hold the orbits along it within 3 sigma (up to "
+                f"{float(np.max(sky.line_reach_arcsec)):,.0f} arcsec from the predicted position; line_reach_arcsec)")
     return ("warning: the fit's line of variations " + ("bends away from" if doubt == "bends" else
             "could not check") + " its covariance: the 3-sigma ellipses understate where to look")
 
@@ -263,7 +268,7 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        for line in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run))):
+        for line in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run, sky))):
             print(line)
         print(f"wrote {csv_path}\nwrote {png}")
     return 0

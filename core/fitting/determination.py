@@ -15,7 +15,8 @@ does), the observations it used and the dynamics:
   (1 %) of them lie more than :data:`FIELD_RADIUS_DEG` (0.5 degree: a 1-degree field, a small
   telescope with a CMOS camera) from the fitted orbit's direction seen from the Earth's centre,
   or have hit a body. After it a telescope pointed at the prediction may miss the object:
-  "observe again within N days". Drawn orbits, not a propagated covariance: from one night of the
+  "observe again within N days". Where the fit's line of variations bends away from its
+  covariance, the orbits are drawn along the line instead. Drawn orbits, not a propagated covariance: from one night of the
   9:2 NRHO (one site), 24 % of 2,000 such orbits hit the Moon at the next perilune, 1.8 days on,
   which the unscented covariance (its 13 sigma-point orbits miss the Moon) does not show: its
   3-sigma stays under 0.5 degree for 13 days.
@@ -125,9 +126,19 @@ def _bodies_hit(dynamics, prop, k: int, grid: np.ndarray) -> str:
     return " and the ".join(dynamics.bodies[b].name if 0 <= b < len(dynamics.bodies) else f"body {b}" for b in idx)
 
 
-def _outside(fit, dynamics, grid: np.ndarray, rng: np.random.Generator):
+def _drawn(fit, rng: np.random.Generator, line: tuple | None) -> np.ndarray:
+    """N_DRAWS orbits (N, 6): from the covariance, or along the ``line`` (points, weakest direction)."""
+    if line is None:
+        return rng.multivariate_normal(fit.state, fit.covariance, size=N_DRAWS, method="eigh")
+    from cistrack.least_squares.line_of_variations import sample_line
+
+    points, direction = line
+    return sample_line(points, N_DRAWS, rng, float(points[1].sigma - points[0].sigma), direction)
+
+
+def _outside(fit, dynamics, grid: np.ndarray, rng: np.random.Generator, line: tuple | None = None):
     """(share of drawn orbits outside the field or hit (K,), share hit (K,), propagation)."""
-    draws = rng.multivariate_normal(fit.state, fit.covariance, size=N_DRAWS, method="eigh")
+    draws = _drawn(fit, rng, line)
     prop = dynamics.propagate(np.vstack([fit.state[None], draws]), fit.epoch, grid)
     earth = np.array([dynamics.primary("Earth").position_at(t) for t in grid])        # (K, 3)
     rel = prop.states[:, :, :3] - earth[:, None, :]                                    # (K, 1 + N, 3)
@@ -138,14 +149,14 @@ def _outside(fit, dynamics, grid: np.ndarray, rng: np.random.Generator):
     return out.mean(axis=1), hit.mean(axis=1), prop
 
 
-def _horizon(fit, dynamics, t_last: float, rng: np.random.Generator) -> tuple[float, str]:
+def _horizon(fit, dynamics, t_last: float, rng: np.random.Generator, line: tuple | None = None) -> tuple[float, str]:
     """(days after ``t_last`` that at least 1 - LOST_SHARE of the drawn orbits stay within the
     field, note); the grid starts at ``t_last`` and ends at HORIZON_DAYS or where the fitted orbit
     hits a body."""
     step = float(units.days_to_tu(HORIZON_STEP_DAYS))
     grid = t_last + step * np.arange(1, int(round(HORIZON_DAYS / HORIZON_STEP_DAYS)) + 1)
     grid = grid[grid > fit.epoch]
-    share, hit, prop = _outside(fit, dynamics, grid, rng)
+    share, hit, prop = _outside(fit, dynamics, grid, rng, line)
     gone = np.nonzero(share > LOST_SHARE)[0]
     nominal = prop.impact_time[0]
     if gone.size and grid[gone[0]] <= nominal:
@@ -197,15 +208,22 @@ def _horizon_words(days: float, note: str) -> str:
 
 
 def determination(fit, dynamics, sensor, measurements: MeasurementSet,
-                  rng: np.random.Generator | None = None) -> Determination:
+                  rng: np.random.Generator | None = None, line: list | None = None) -> Determination:
     """How well ``fit`` (a FitResult) determines the orbit (module docstring).
 
     ``measurements`` are the observations it was fitted to (times TU; its rejected rows, as the
     fit's residual table marks them, are left out), ``sensor`` predicts them (a site network for
     several sites), ``dynamics`` propagates the orbit (with the fit's solve-for parameters) and
     ``rng`` draws the orbits of the horizon
-    (default: a generator seeded with :data:`DRAW_SEED`).
+    (default: a generator seeded with :data:`DRAW_SEED`); with ``line``, the fit's line of
+    variations (two or more :class:`~cistrack.least_squares.line_of_variations.LovPoint`, spaced
+    evenly), they are drawn along it (:func:`~cistrack.least_squares.line_of_variations.sample_line`)
+    instead of from the covariance: where the line bends, the covariance does not hold the orbits
+    the arc allows.
     """
+    from cistrack.least_squares.line_of_variations import weakest_direction
+
+    along = (line, weakest_direction(fit.covariance)) if line is not None and len(line) > 1 else None
     fit = _scaled(fit)
     dynamics = fitted_dynamics(dynamics, fit)
     rng = np.random.default_rng(DRAW_SEED) if rng is None else rng
@@ -213,7 +231,7 @@ def determination(fit, dynamics, sensor, measurements: MeasurementSet,
     sessions, sites = _sessions(used.times), len(used.site_keys())
     arc_days = float(units.tu_to_days(used.times[-1] - used.times[0]))
     rng_km, sigma = _range_and_sigma(fit, dynamics, sensor, used)
-    days, note = _horizon(fit, dynamics, float(used.times[-1]), rng)
+    days, note = _horizon(fit, dynamics, float(used.times[-1]), rng, along)
     poor = (days < POOR_HORIZON_DAYS and not note.startswith("the fitted orbit")) \
         or sigma / rng_km > POOR_RANGE_FRACTION or bool(fit.unobservable)
     parts = [_coverage(sessions, sites, arc_days), _range_words(rng_km, sigma), _horizon_words(days, note)]

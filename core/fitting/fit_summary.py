@@ -153,10 +153,26 @@ def _lov_lines(points: list, r) -> list[str]:
            f"straight line by at most {lv['max_departure_sigma']:.3g} sigma ({lv['max_departure_km']:.3g} km), "
            f"chi-square within {lv['max_chi2_excess']:.3g} of sigma^2"]
     if not lv["linear"]:
+        out += _reach_lines(lv)
         out.append("  warning: the solutions bend away from the covariance's ellipsoid: the covariance "
-                   "understates the uncertainty, and the 1-sigma, the horizon and the sky predictions drawn from it "
-                   "with it; sample the line (lov.csv, cistrack.least_squares.line_of_variations), or observe "
-                   "again sooner")
+                   "understates the uncertainty, and the 1-sigma and the horizon drawn from it with it (cistrack "
+                   "predict widens its ellipses to hold the line); sample the line (lov.csv, "
+                   "cistrack.least_squares.line_of_variations), or observe again sooner")
+    return out
+
+
+def _reach_lines(lv: dict) -> list[str]:
+    """Where the orbits the data allow lie along the line (its other minima, its 3-sigma reach)."""
+    out = []
+    for m in lv["minima"][1:]:
+        out.append(f"  another solution along the line at {m['sigma']:+g} sigma: chi-square {m['delta_chi2']:.3g} higher, "
+                   f"{m['offset_km']:,.0f} km from the fit at the epoch" + (" (the line was cut there: the minimum may lie "
+                                                                             "beyond)" if m["at_end"] else ""))
+    reach = lv["reach"]
+    lo, hi = reach["sigma_range"]
+    out.append(f"  within 3 sigma (chi-square within 9 of the lowest) the line runs from {lo:+g} to {hi:+g} sigma: orbits "
+               f"up to {reach['max_offset_km']:,.0f} km from the fit at the epoch"
+               + (", and on beyond the line's end" if reach["open"] else ""))
     return out
 
 

@@ -49,6 +49,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError, quoted
+from cistrack.fitting.lov_solutions import AUTO_DELTA_CHI2
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.fitting.maneuver_search import add_maneuvers
@@ -95,18 +96,13 @@ EARLY_FILE = "observations-early"
 written beside ``observations.psv`` (the run's ``scenario.toml`` names it)."""
 
 
-AUTO_LOV_SIGMAS = 3.0
-"""How far (sigmas each side) the line of variations goes by default when the fit is poorly
-determined (:mod:`cistrack.fitting.determination`): one site's night had a 1-sigma of 1,577 km
-with the truth 28,917 km away, and the line shows where the linear covariance stops holding."""
-
-
 @dataclass(frozen=True)
 class FitChoices:
     """The ``[fit]`` settings: ``epoch`` ("last", "middle" or "first" observation), ``prior``
     ("none" or "filter"), the :class:`FitOptions` of the least squares and ``lov`` (sigmas: the
     line of variations out to that many sigmas each side, every half sigma; 0 = none; None, the
-    default "auto": :data:`AUTO_LOV_SIGMAS` when the fit is poorly determined, else none) and
+    default "auto": when the fit is poorly determined, until the data rule the line out,
+    :mod:`.lov_solutions`, else none) and
     ``filter_span`` ("early": the least squares starts from the filter run over the first
     hours only when that fit is clean, :mod:`cistrack.fitting.early_seed`; "all": the filter
     runs over every observation)."""
@@ -135,9 +131,9 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
                           "every observation)")
     if lov != "auto" and (isinstance(lov, bool) or not isinstance(lov, (int, float))
                           or not (lov == 0 or 0.5 <= lov <= 20)):
-        raise ConfigError(f"--set fit.lov={quoted(lov)}: must be 'auto' (default: {AUTO_LOV_SIGMAS:g} sigmas when the "
-                          "fit is poorly determined), 0 (none) or a number of sigmas from 0.5 to 20 (the line of "
-                          "variations out to that many sigmas each side)")
+        raise ConfigError(f"--set fit.lov={quoted(lov)}: must be 'auto' (default: when the fit is poorly "
+                          f"determined, until the chi-square has risen by {AUTO_DELTA_CHI2:g}), 0 (none) or a number of "
+                          "sigmas from 0.5 to 20 (the line of variations out to that many sigmas each side)")
     if epoch not in _EPOCHS:
         shown = epoch.isoformat() if hasattr(epoch, "isoformat") else quoted(epoch)  # a TOML date as typed
         raise ConfigError(f"--set fit.epoch={shown}: must be one of {', '.join(_EPOCHS)} (the observation "
@@ -580,28 +576,51 @@ def _with_messages(result: FitResult, lines: list[str]) -> FitResult:
     return replace(result, messages=tuple(result.messages) + add) if add else result
 
 
-def _lov_sigmas(one: ObjectFit, choices: FitChoices) -> float:
-    """How far the fit's line of variations goes (sigmas; 0: none): ``choices.lov``, or with "auto"
-    :data:`AUTO_LOV_SIGMAS` when the fit is poorly determined."""
+def _lov_sigmas(one: ObjectFit, choices: FitChoices) -> float | None:
+    """How far the fit's line of variations goes: ``choices.lov`` sigmas (0: none), or with "auto"
+    None (until the data rule it out, :mod:`.lov_solutions`) when the fit is poorly determined, else 0."""
     if choices.lov is not None:
         return choices.lov
     det = one.determination
-    return AUTO_LOV_SIGMAS if det is not None and not getattr(det, "well", True) else 0.0
+    return None if det is not None and not getattr(det, "well", True) else 0.0
 
 
-def _line_of_variations(ctx, result: FitResult, choices: FitChoices, sigmas: float) -> list:
-    """The fit's line of variations over the observations it used (see
-    :mod:`cistrack.least_squares.line_of_variations`), every half sigma to +-``sigmas`` (each point's
-    Levenberg-Marquardt gets at least 300 iterations: the constraint's stiff penalty slows it)."""
-    from dataclasses import replace
+def _follow_line(one: ObjectFit, job: "_Job") -> None:
+    """``one.lov``: the converged fit's line of variations (:func:`_lov_sigmas`); with "auto", a
+    better solution found along it replaces the fit (its findings and its line made again)."""
+    from cistrack.fitting.fit_findings import add_findings
+    from cistrack.fitting.lov_solutions import better_solution, follow_line
 
-    from cistrack.least_squares.line_of_variations import line_of_variations
+    sigmas = _lov_sigmas(one, job.choices) if one.ok else 0.0
+    if sigmas == 0:
+        return
+    ctx, opts = one.run.context, job.choices.options
+    job.say(f"{one.designation}: line of variations " + ("until the data rule it out" if sigmas is None
+                                                         else f"to +-{sigmas:g} sigma"))
+    one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, sigmas)
+    if sigmas is None and job.choices.prior == "none" and not getattr(one, "maneuvers", None):
+        better = better_solution(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.lov, opts)
+        if better is not None:
+            job.say(f"{one.designation}: {better.messages[-1]}")
+            one.result = better
+            _refuse_not_cislunar(one)
+            add_findings(one, job.registry, job.say)
+            _note_rejected_epoch(one)
+            one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
+    _horizon_along_line(one)
 
-    used = ctx.measurements.subset(~np.asarray(result.residuals.rejected, dtype=bool))
-    return line_of_variations(ctx.dynamics, ctx.sensor, used, result, step=0.5, max_sigma=sigmas,
-                              max_delta_chi2=float("inf"),
-                              options=replace(choices.options, reject_outliers=False,
-                                              max_iterations=max(choices.options.max_iterations, 300)))
+
+def _horizon_along_line(one: ObjectFit) -> None:
+    """The determination made again with its horizon's orbits drawn along the line of variations
+    when the line bends away from the covariance."""
+    from cistrack.fitting.determination import determination
+    from cistrack.least_squares.line_of_variations import line_summary
+
+    if not one.ok or one.determination is None or len(one.lov) < 2 or line_summary(one.lov, one.result)["linear"]:
+        return
+    ctx = one.run.context
+    dynamics = getattr(one, "dynamics", None) or ctx.dynamics
+    one.determination = determination(one.result, dynamics, ctx.sensor, ctx.measurements, line=one.lov)
 
 
 def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
@@ -831,10 +850,7 @@ def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     _refuse_not_cislunar(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
-    sigmas = _lov_sigmas(one, job.choices) if one.ok else 0.0
-    if sigmas > 0:
-        job.say(f"{obs.designation}: line of variations to +-{sigmas:g} sigma")
-        one.lov = _line_of_variations(one.run.context, one.result, job.choices, sigmas)
+    _follow_line(one, job)
     job.say(f"{obs.designation}: writing fit.json, residuals.csv and the residual plots to {one.directory}")
     write_fit_outputs(one, obs)
     return one

@@ -32,7 +32,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.sites import Site
-from cistrack.errors import ConfigError, StateError
+from cistrack.errors import ConfigError, PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
 from cistrack.least_squares.unscented_prediction import unscented_covariances
@@ -48,7 +48,7 @@ RATE_SECONDS = 30.0
 CSV_COLUMNS = ("utc", "ra_deg", "dec_deg", "ra_rate_arcsec_min", "dec_rate_arcsec_min", "range_km", "elevation_deg",
                "solar_elongation_deg", "lunar_distance_deg", "sigma_ra_arcsec", "sigma_dec_arcsec",
                "semi_major_1sigma_arcsec", "semi_minor_1sigma_arcsec", "position_angle_deg",
-               "semi_major_3sigma_arcsec", "semi_minor_3sigma_arcsec", "linear_covariance")
+               "semi_major_3sigma_arcsec", "semi_minor_3sigma_arcsec", "linear_covariance", "line_reach_arcsec")
 _ARCSEC = 180.0 * 3600.0 / math.pi
 
 
@@ -57,7 +57,9 @@ class SkyEphemeris:
     """Sky predictions at K times (arrays (K,) unless said): see the module docstring.
 
     ``ra_rate`` is the rate of RA cos(Dec); ``covariance_arcsec2`` (K, 2, 2) is that of
-    (RA cos(Dec), Dec); ``linear`` marks the times whose state covariance is the linear one."""
+    (RA cos(Dec), Dec); ``linear`` marks the times whose state covariance is the linear one;
+    ``line_reach_arcsec`` (K,) is how far from the predicted position the orbits along the fit's
+    bent line of variations lie (0 when it was not used: :func:`sky_ephemeris_of`)."""
 
     utc: list[str]
     t_tu: np.ndarray
@@ -72,6 +74,7 @@ class SkyEphemeris:
     covariance_arcsec2: np.ndarray
     linear: np.ndarray
     site: Site
+    line_reach_arcsec: np.ndarray | None = None
 
     def ellipse(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """1-sigma semi-major and semi-minor axes (K,) arcsec and the major axis' position angle
@@ -96,7 +99,8 @@ class SkyEphemeris:
         cols = (self.ra_deg, self.dec_deg, self.ra_rate_arcsec_min, self.dec_rate_arcsec_min, self.range_km,
                 self.elevation_deg, self.solar_elongation_deg, self.lunar_distance_deg, sig[:, 0], sig[:, 1], a, b, pa,
                 3 * a, 3 * b)
-        return [dict(zip(CSV_COLUMNS, [self.utc[k]] + [float(c[k]) for c in cols] + [bool(self.linear[k])]))
+        reach = np.zeros(len(self.utc)) if self.line_reach_arcsec is None else self.line_reach_arcsec
+        return [dict(zip(CSV_COLUMNS, [self.utc[k]] + [float(c[k]) for c in cols] + [bool(self.linear[k]), float(reach[k])]))
                 for k in range(len(self.utc))]
 
     def write_csv(self, path: str | Path) -> Path:
@@ -255,7 +259,51 @@ def sky_ephemeris_of(orbit: "DirectoryOrbit", times, site: Site, registry: Regis
     tt = _checked(orbit.dynamics, times, orbit.epoch)
     x = np.asarray(orbit.state, float)
     predicted = _orbit_at(orbit.dynamics, x, np.asarray(orbit.covariance, float), orbit.t0, tt, orbit.fit)
-    return _sky(orbit.dynamics, (x, orbit.t0), predicted, tt, site, orbit.epoch, registry)
+    sky = _sky(orbit.dynamics, (x, orbit.t0), predicted, tt, site, orbit.epoch, registry)
+    return sky if orbit.line is None else _holding_line(sky, orbit, tt, registry)
+
+
+def _holding_line(sky: SkyEphemeris, orbit: "DirectoryOrbit", tt: np.ndarray, registry: Registry | None) -> SkyEphemeris:
+    """``sky`` with each time's covariance widened along the sky offsets d of the orbits of
+    ``orbit.line`` (C + s M, M their mean d d^T, s the least that puts every d within the 3-sigma
+    ellipse) and their farthest offset as ``line_reach_arcsec``. A line orbit that cannot be
+    propagated over the times (it hits a body) is left out."""
+    from dataclasses import replace
+
+    radec, _ = _sensors(sky.site, units.parse_utc(orbit.epoch), registry or default_registry())
+    offsets = []
+    for state in orbit.line:
+        try:
+            z = radec.measure(arc_states(orbit.dynamics, state, orbit.t0, tt), tt)
+        except (PropagationError, StateError):
+            continue
+        dra = _wrapped(z[:, 0] - np.radians(sky.ra_deg)) * np.cos(np.radians(sky.dec_deg))
+        offsets.append(np.stack([dra, z[:, 1] - np.radians(sky.dec_deg)], 1) * _ARCSEC)
+    if not offsets:
+        return sky
+    d = np.transpose(np.array(offsets), (1, 0, 2))                       # (K, M, 2) arcsec
+    cov = np.array([_widened(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
+    return replace(sky, covariance_arcsec2=cov, line_reach_arcsec=np.max(np.linalg.norm(d, axis=2), axis=1))
+
+
+def _widened(cov: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """C + s M (2, 2): M the mean of d d^T over the offsets d (M, 2), s >= 0 the least (to 1 %) with
+    every d^T (C + s M)^-1 d <= 9."""
+    m = np.einsum("mi,mj->ij", d, d) / len(d)
+
+    def inside(s: float) -> bool:
+        return bool(np.max(np.einsum("mi,ij,mj->m", d, np.linalg.inv(cov + s * m), d)) <= 9.0)
+
+    if inside(0.0):
+        return cov
+    hi = 1.0
+    while not inside(hi) and hi < 1e12:
+        hi *= 4.0
+    lo = hi / 4.0 if hi > 1.0 else 0.0
+    while hi - lo > 0.01 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if inside(mid) else (mid, hi)
+    return cov + hi * m
 
 
 def _sky(dynamics: Dynamics, start: tuple, predicted: tuple, tt: np.ndarray, site: Site, epoch: datetime | str,
@@ -294,6 +342,10 @@ class DirectoryOrbit:
     fit: Any = None
     """The fit record as a FitResult when the fit estimated solve-for parameters (for
     :func:`sky_ephemeris`'s ``fit``), else None."""
+    line: np.ndarray | None = None
+    """States (M, 6) [LU, VU] at ``t0`` of the fit's line of variations within 3 sigma (chi-square
+    within 9 of its lowest, times the noise scale squared when above 1) when the line bends away
+    from the covariance, else None: :func:`sky_ephemeris_of` widens the ellipses to hold them."""
 
 
 def orbit_of_directory(directory: str | Path, registry: Registry | None = None) -> DirectoryOrbit:
@@ -325,8 +377,32 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
             dyn = dyn.with_parameters(area_to_mass_m2_kg=float(amr["value_m2_kg"]))
             fit = fit_result(rec)                                         # and its uncertainty
         return DirectoryOrbit(np.asarray(rec["state"], dtype=float), cov, float(rec["epoch_tu"]), scen.epoch, dyn,
-                              str(rec.get("designation") or scen.name), "least-squares fit", fit)
+                              str(rec.get("designation") or scen.name), "least-squares fit", fit,
+                              _bent_line(d, rec, covariance_scale(rec)))
     return _run_orbit(d, scen, dyn)
+
+
+def _bent_line(d: Path, rec: dict, scale: float) -> np.ndarray | None:
+    """The states (M, 6) [LU, VU] of ``d``'s ``lov.csv`` within 3 sigma (:data:`DirectoryOrbit.line`;
+    ``scale``: the covariance's, :func:`cistrack.fitting.fit_export.covariance_scale`) when fit.json
+    says the line is not linear; None otherwise, or when the file is missing or unreadable."""
+    from cistrack.least_squares.line_of_variations import REACH_DELTA_CHI2
+
+    lov = rec.get("line_of_variations")
+    if not isinstance(lov, dict) or lov.get("linear", True) or not isinstance(lov.get("file"), str):
+        return None
+    try:
+        with (d / Path(lov["file"]).name).open(newline="") as fh:
+            rows = [(float(r["chi2"]), [float(r[c]) for c in ("x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")])
+                    for r in csv.DictReader(fh)]
+    except (OSError, KeyError, TypeError, ValueError, csv.Error):
+        return None
+    chi2 = np.array([c for c, _ in rows])
+    if chi2.size == 0 or not np.all(np.isfinite(chi2)):
+        return None
+    states = units.state_from_km(np.array([x for _, x in rows]))
+    keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * scale
+    return states[keep] if np.all(np.isfinite(states[keep])) else None
 
 
 def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:

@@ -39,8 +39,12 @@ from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["LovPoint", "weakest_direction", "line_of_variations", "line_weights", "sample_line", "line_summary"]
+__all__ = ["LovPoint", "weakest_direction", "line_of_variations", "line_weights", "sample_line", "line_summary",
+           "line_minima", "line_reach", "REACH_DELTA_CHI2"]
 
+REACH_DELTA_CHI2 = 9.0
+"""The line's points within this chi-square of its lowest are the orbits the data allow at 3 sigma
+(one dimension): :func:`line_reach`."""
 _STIFFNESS = 1e8  # penalty per squared sigma off the hyperplane: the point stays within 1e-4 sigma
 
 
@@ -222,4 +226,44 @@ def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
     lo, hi = out["sigma_range"]
     out["followed"] = bool(lo < 0.0 < hi)
     out["linear"] = bool(out["followed"] and out["max_departure_sigma"] < 1.0 and out["max_chi2_excess"] < 1.0)
+    out["minima"] = line_minima(points)
+    out["reach"] = line_reach(points)
     return out
+
+
+def line_minima(points: list[LovPoint]) -> list[dict]:
+    """The minima of the chi-square along the line ``points`` (ordered by sigma): points lower than
+    both neighbours, and an end point lower than its one neighbour (the line was cut there, so the
+    minimum may lie beyond), lowest first, as dicts: ``sigma``, ``delta_chi2`` (above the lowest),
+    ``offset_km`` (position from the lowest at the epoch) and ``at_end``."""
+    if not points:
+        return []
+    chi2 = np.array([p.chi2 for p in points])
+    last = len(points) - 1
+    idx = [k for k in range(len(points))
+           if (k == 0 or chi2[k] < chi2[k - 1]) and (k == last or chi2[k] < chi2[k + 1])]
+    idx.sort(key=lambda k: chi2[k])
+    best = points[idx[0]].state
+    return [{"sigma": float(points[k].sigma), "delta_chi2": float(chi2[k] - chi2[idx[0]]),
+             "offset_km": _km_apart(points[k].state, best), "at_end": bool(len(points) > 1 and k in (0, last))}
+            for k in idx]
+
+
+def line_reach(points: list[LovPoint], delta_chi2: float = REACH_DELTA_CHI2) -> dict:
+    """How far the orbits the data allow reach along the line ``points`` (ordered by sigma): those
+    within ``delta_chi2`` of the lowest chi-square. A dict: ``sigma_range`` [lowest, highest sigma
+    of such points], ``max_offset_km`` (their farthest position from the lowest point at the
+    epoch) and ``open`` (an end point of the line is among them: the allowed orbits go on beyond it)."""
+    chi2 = np.array([p.chi2 for p in points])
+    inside = np.flatnonzero(chi2 <= chi2.min() + delta_chi2)
+    best = points[int(np.argmin(chi2))].state
+    return {"sigma_range": [float(points[inside[0]].sigma), float(points[inside[-1]].sigma)],
+            "max_offset_km": max(_km_apart(points[k].state, best) for k in inside),
+            "open": bool(inside[0] == 0 or inside[-1] == len(points) - 1)}
+
+
+def _km_apart(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance (km) between the positions of two states (LU, VU)."""
+    from cistrack.least_squares.observability import to_km
+
+    return float(np.linalg.norm(to_km(a - b)[:3]))

@@ -52,7 +52,7 @@ def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_pat
     (tmp_path / "night.psv").write_text(CLEAN_NIGHT)
     assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit")]) == 0
     record = json.loads((tmp_path / "fit" / "fit.json").read_text())
-    assert record["settings"]["lov"] == "auto" and record["line_of_variations"]["points"] == 13
+    assert record["settings"]["lov"] == "auto" and record["line_of_variations"]["points"] >= 13
     assert (tmp_path / "fit" / "lov.csv").is_file()
     assert not record["line_of_variations"]["linear"]
     assert main(["export", str(tmp_path / "fit"), "--format", "oem", "--quiet"]) == 0
@@ -60,9 +60,11 @@ def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_pat
     assert any("WARNING: the fit's line of variations bends away from this covariance" in line for line in head)
 
 
-def test_predict_warns_when_the_fits_line_of_variations_bends(tmp_path, capsys):
+def test_predict_warns_when_the_fits_bent_line_cannot_be_read(tmp_path, capsys):
+    """Without lov.csv predict cannot widen its ellipses to hold the line: it says they understate."""
     (tmp_path / "night.psv").write_text(CLEAN_NIGHT)
     assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit"), "--quiet"]) == 0
+    (tmp_path / "fit" / "lov.csv").unlink()
     assert main(["predict", str(tmp_path / "fit"), "--site", "568", "--start", "2026-04-30T09:00:00Z",
                  "--stop", "2026-04-30T10:00:00Z"]) == 0
     out = capsys.readouterr().out
