@@ -19,8 +19,9 @@ from typing import Any, Callable
 __all__ = ["LazyJit", "LazyModule", "lazy_njit", "tolerate_damaged_cache"]
 
 _DAMAGE = (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError, IndexError, KeyError,
-           ImportError)
-"""What unpickling a truncated or garbled numba cache file raises."""
+           ImportError, MemoryError, OverflowError, SystemError)
+"""What unpickling a truncated or garbled numba cache file raises (random bytes cut short gave a
+MemoryError: a length field read as gigabytes)."""
 _TOLERANT = threading.Lock()
 
 

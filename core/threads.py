@@ -38,9 +38,22 @@ def num_threads() -> int:
     n = thread_setting()
     if n is not None:
         return n
+    _check_numba_threads()
     import numba
 
     return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def _check_numba_threads() -> None:
+    """ConfigError naming ``$NUMBA_NUM_THREADS`` when it is set but not a whole number of at least 1
+    (numba itself raises a bare ValueError from deep inside its import)."""
+    env = os.environ.get("NUMBA_NUM_THREADS")
+    if env is None or not env.strip():
+        return
+    digits = env.strip()
+    if not (digits.isascii() and digits.isdigit() and int(digits) >= 1):
+        raise ConfigError(f"environment variable NUMBA_NUM_THREADS={env!r}: must be a whole number of threads, at "
+                          "least 1 (or unset: the CPUs this process may use)")
 
 
 def thread_setting() -> int | None:

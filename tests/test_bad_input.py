@@ -377,6 +377,8 @@ add("meas-range-underscores", **meas_case(measurements("2026-01-01T03:40:00Z,101
                                                        "time_utc,azimuth_deg,elevation_deg,range_km\n"),
                                           ("obs.csv", "range_km", "not a number")))
 add("env-threads-underscores", **run_case(env={"CISTRACK_NUM_THREADS": "1_0"}, words=("CISTRACK_NUM_THREADS", "1 to 1024")))
+add("env-numba-threads-zero", **run_case(env={"NUMBA_NUM_THREADS": "0"}, words=("NUMBA_NUM_THREADS", "at least 1")),
+    subprocess=True)
 add("scenario-name-rtl-override", **run_case(words=("name", "U+202E"), top__name="evil\u202ecod.exe"))
 add("scenario-name-zero-width", **run_case(words=("name", "U+200B"), top__name="a\u200bb"))
 add("study-name-rtl-override", **study_case(("name", "U+202E"), study_text=study(name="st\u202eudy")))

@@ -58,3 +58,13 @@ def test_a_damaged_data_file_is_named_itself(tmp_path):
         f.write_bytes(f.read_bytes()[:50])
     proc = _call(tmp_path)
     assert proc.stdout.split() == ["3.0"] and ".nbc is damaged" in " ".join(proc.stderr.split()), proc.stderr
+
+
+def test_a_data_file_whose_unpickling_runs_out_of_memory_is_damage_too(tmp_path):
+    """Garbled bytes can read as a length of exabytes: pickle raises MemoryError, not an unpickling error."""
+    (tmp_path / "cached_fn.py").write_text(MODULE)
+    assert _call(tmp_path).stdout.split() == ["3.0"]
+    for f in (tmp_path / "nb").rglob("*.nbc"):
+        f.write_bytes(b"\x80\x04\x8e" + (2 ** 62).to_bytes(8, "little"))
+    proc = _call(tmp_path)
+    assert proc.stdout.split() == ["3.0"] and "MemoryError" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
