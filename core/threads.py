@@ -44,14 +44,19 @@ def num_threads() -> int:
     return max(1, int(numba.config.NUMBA_NUM_THREADS))
 
 
+def _whole_number(text: str) -> int:
+    """``text`` as a whole number of ASCII digits, else 0 (int() would take "1_0" as 10, or "１")."""
+    digits = text.strip()
+    return int(digits) if digits.isascii() and digits.isdigit() else 0
+
+
 def _check_numba_threads() -> None:
     """ConfigError naming ``$NUMBA_NUM_THREADS`` when it is set but not a whole number of at least 1
     (numba itself raises a bare ValueError from deep inside its import)."""
     env = os.environ.get("NUMBA_NUM_THREADS")
     if env is None or not env.strip():
         return
-    digits = env.strip()
-    if not (digits.isascii() and digits.isdigit() and int(digits) >= 1):
+    if _whole_number(env) < 1:
         raise ConfigError(f"environment variable NUMBA_NUM_THREADS={env!r}: must be a whole number of threads, at "
                           "least 1 (or unset: the CPUs this process may use)")
 
@@ -63,8 +68,7 @@ def thread_setting() -> int | None:
     env = os.environ.get("CISTRACK_NUM_THREADS")
     if env is None or not env.strip():
         return None
-    digits = env.strip()
-    n = int(digits) if digits.isascii() and digits.isdigit() else 0  # int() would take "1_0" as 10
+    n = _whole_number(env)
     if not 1 <= n <= 1024:
         raise ConfigError(f"environment variable CISTRACK_NUM_THREADS={env!r}: must be an integer "
                           "from 1 to 1024 (or unset: numba's thread count)")

@@ -189,7 +189,7 @@ def _context_record(one) -> dict[str, Any]:
 
 def _lov_csv(points, fit) -> str:
     from cistrack.least_squares.line_of_variations import weakest_direction
-    from cistrack.least_squares.observability import to_km
+    from cistrack.least_squares.observability import km_apart, to_km
 
     v = weakest_direction(fit.covariance)
     buf = io.StringIO()
@@ -200,8 +200,7 @@ def _lov_csv(points, fit) -> str:
         km = to_km(p.state)
         w.writerow([repr(float(p.sigma)), repr(float(p.chi2)), repr(float(p.chi2 - fit.chi2)),
                     *[repr(float(c)) for c in km],
-                    repr(float(np.linalg.norm(to_km(p.state - fit.state)[:3]))),
-                    repr(float(np.linalg.norm(to_km(p.state - fit.state - p.sigma * v)[:3])))])
+                    repr(km_apart(p.state, fit.state)), repr(km_apart(p.state, fit.state + p.sigma * v))])
     return buf.getvalue()
 
 

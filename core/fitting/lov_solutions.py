@@ -27,7 +27,7 @@ from cistrack.errors import MeasurementError, PropagationError
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.line_of_variations import LovPoint, line_of_variations
-from cistrack.least_squares.observability import to_km
+from cistrack.least_squares.observability import km_apart
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 
@@ -77,7 +77,7 @@ def better_solution(dynamics, sensor, measurements, result: FitResult, points: l
         return None
     if not (again.converged and again.n_used >= result.n_used and again.chi2 < result.chi2 - BETTER_BY):
         return None
-    km = float(np.linalg.norm(to_km(again.state - result.state)[:3]))
+    km = km_apart(again.state, result.state)
     found = (f"a better solution along the line of variations: started again from {low.sigma:+g} sigma of the first "
              f"solution, the fit's chi-square is {result.chi2 - again.chi2:.3g} lower (the first solution lies {km:,.0f} km "
              "from it at the epoch and fits worse)")

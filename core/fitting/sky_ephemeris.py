@@ -34,7 +34,7 @@ from cistrack import units
 from cistrack.astro.sites import Site
 from cistrack.errors import ConfigError, PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics
-from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
+from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms, ensemble_arc_states
 from cistrack.least_squares.unscented_prediction import unscented_covariances
 from cistrack.plugin.registry import Registry, default_registry
 
@@ -271,17 +271,16 @@ def _holding_line(sky: SkyEphemeris, orbit: "DirectoryOrbit", tt: np.ndarray, re
     from dataclasses import replace
 
     radec, _ = _sensors(sky.site, units.parse_utc(orbit.epoch), registry or default_registry())
-    offsets = []
-    for state in orbit.line:
-        try:
-            z = radec.measure(arc_states(orbit.dynamics, state, orbit.t0, tt), tt)
-        except (PropagationError, StateError):
-            continue
-        dra = _wrapped(z[:, 0] - np.radians(sky.ra_deg)) * np.cos(np.radians(sky.dec_deg))
-        offsets.append(np.stack([dra, z[:, 1] - np.radians(sky.dec_deg)], 1) * _ARCSEC)
-    if not offsets:
+    try:
+        states, alive = ensemble_arc_states(orbit.dynamics, orbit.line, orbit.t0, tt)   # (K, M, 6), (M,)
+    except (PropagationError, StateError):
         return sky
-    d = np.transpose(np.array(offsets), (1, 0, 2))                       # (K, M, 2) arcsec
+    if not np.any(alive):
+        return sky
+    k, m = tt.size, int(np.sum(alive))
+    z = radec.measure(states[:, alive].reshape(k * m, 6), np.repeat(tt, m)).reshape(k, m, -1)
+    ra, dec = np.radians(sky.ra_deg)[:, None], np.radians(sky.dec_deg)[:, None]
+    d = np.stack([_wrapped(z[:, :, 0] - ra) * np.cos(dec), z[:, :, 1] - dec], 2) * _ARCSEC   # (K, M, 2) arcsec
     cov = np.array([_widened(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
     return replace(sky, covariance_arcsec2=cov, line_reach_arcsec=np.max(np.linalg.norm(d, axis=2), axis=1))
 

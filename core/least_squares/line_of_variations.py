@@ -33,6 +33,7 @@ from cistrack.errors import MeasurementError, PropagationError
 from cistrack.least_squares.solve_for_parameters import fitted_dynamics
 from cistrack.least_squares.differential_correction import _one_pass, _Problem
 from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.observability import km_apart
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.interfaces.dynamics import Dynamics
@@ -210,15 +211,13 @@ def line_summary(points: list[LovPoint], fit: FitResult) -> dict:
     both sides of the nominal one: its fits converged there) and ``linear`` (followed, with the
     departure below 1 sigma and the chi-square within 1 of sigma^2 everywhere: the covariance
     describes the solutions; a line whose first fits failed checks nothing)."""
-    from cistrack.least_squares.observability import to_km
-
     v = weakest_direction(fit.covariance)
     n = np.linalg.inv(fit.covariance)
     dep_sigma, dep_km, excess = [], [], []
     for p in points:
         d = p.state - (fit.state + p.sigma * v)
         dep_sigma.append(float(np.sqrt(max(d @ n @ d, 0.0))))
-        dep_km.append(float(np.linalg.norm(to_km(d)[:3])))
+        dep_km.append(km_apart(p.state, fit.state + p.sigma * v))
         excess.append(abs(p.chi2 - fit.chi2 - p.sigma ** 2))
     out = {"sigma_range": [float(min(p.sigma for p in points)), float(max(p.sigma for p in points))],
            "max_departure_sigma": max(dep_sigma), "max_departure_km": max(dep_km),
@@ -245,7 +244,7 @@ def line_minima(points: list[LovPoint]) -> list[dict]:
     idx.sort(key=lambda k: chi2[k])
     best = points[idx[0]].state
     return [{"sigma": float(points[k].sigma), "delta_chi2": float(chi2[k] - chi2[idx[0]]),
-             "offset_km": _km_apart(points[k].state, best), "at_end": bool(len(points) > 1 and k in (0, last))}
+             "offset_km": km_apart(points[k].state, best), "at_end": bool(len(points) > 1 and k in (0, last))}
             for k in idx]
 
 
@@ -258,12 +257,5 @@ def line_reach(points: list[LovPoint], delta_chi2: float = REACH_DELTA_CHI2) -> 
     inside = np.flatnonzero(chi2 <= chi2.min() + delta_chi2)
     best = points[int(np.argmin(chi2))].state
     return {"sigma_range": [float(points[inside[0]].sigma), float(points[inside[-1]].sigma)],
-            "max_offset_km": max(_km_apart(points[k].state, best) for k in inside),
+            "max_offset_km": max(km_apart(points[k].state, best) for k in inside),
             "open": bool(inside[0] == 0 or inside[-1] == len(points) - 1)}
-
-
-def _km_apart(a: np.ndarray, b: np.ndarray) -> float:
-    """Distance (km) between the positions of two states (LU, VU)."""
-    from cistrack.least_squares.observability import to_km
-
-    return float(np.linalg.norm(to_km(a - b)[:3]))

@@ -12,7 +12,7 @@ import numpy as np
 
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["Observability", "observability", "to_km"]
+__all__ = ["Observability", "observability", "to_km", "km_apart"]
 
 _KM = np.array([LU_KM] * 3 + [VU_KMS] * 3)
 
@@ -31,6 +31,11 @@ class Observability:
         self.condition = condition
         self.weakest_direction_km = weakest_direction_km
         self.eigenvalues = eigenvalues
+
+
+def km_apart(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance (km) between the positions of two states (6,) [LU, VU]."""
+    return float(np.linalg.norm(to_km(np.asarray(a) - np.asarray(b))[:3]))
 
 
 def observability(normal: np.ndarray) -> Observability:

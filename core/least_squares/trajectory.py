@@ -11,7 +11,7 @@ import numpy as np
 from cistrack.errors import PropagationError
 from cistrack.interfaces.dynamics import Dynamics
 
-__all__ = ["arc_states", "arc_states_and_stms"]
+__all__ = ["arc_states", "arc_states_and_stms", "ensemble_arc_states"]
 
 
 def _sides(t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
@@ -50,6 +50,25 @@ def arc_states(dynamics: Dynamics, state: np.ndarray, t0: float, times: np.ndarr
             out[float(t)] = prop.states[k, 0]
     per_time = np.array([out[float(t)] for t in uniq])
     return per_time[inv]
+
+
+def ensemble_arc_states(dynamics: Dynamics, states: np.ndarray, t0: float,
+                        times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """States (K, N, 6) [LU, VU] of ``states`` (N, 6) at ``t0`` propagated together to ``times``
+    (K,) TU (one propagation each side of ``t0``), and (N,) bool: the orbits that hit no body
+    over the times (the others' states are the dynamics' after the impact; leave them out)."""
+    uniq, inv, (at, after, before) = _sides(t0, times)
+    x = np.asarray(states, dtype=float).reshape(-1, 6)
+    per_time = np.empty((uniq.size, x.shape[0], 6))
+    alive = np.ones(x.shape[0], dtype=bool)
+    per_time[np.isin(uniq, at)] = x
+    for side in (after, before):
+        if side.size == 0:
+            continue
+        prop = dynamics.propagate(x, t0, side)
+        alive &= np.asarray(prop.alive, dtype=bool).reshape(-1)
+        per_time[np.searchsorted(uniq, side)] = prop.states
+    return per_time[inv], alive
 
 
 def arc_states_and_stms(dynamics: Dynamics, state: np.ndarray, t0: float,
