@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from datetime import timedelta
 from pathlib import Path
 
@@ -70,6 +71,8 @@ def add_predict_parser(sub) -> None:
     p.add_argument("--out", type=path_text("--out"), default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
                    "(default DIR/sky-<CODE>)")
     p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing --out PREFIX.csv/.png, or a different earlier prediction in DIR/sky-<CODE>")
     p.set_defaults(func=cmd_predict)
 
 
@@ -138,8 +141,9 @@ def _check_year(option: str, t) -> None:
 
 
 def _prefix(args) -> Path:
-    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist or when
-    PREFIX.csv or PREFIX.png would replace one of the directory's own results (fit.json, ...)."""
+    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist, when
+    PREFIX.csv or PREFIX.png would replace one of the directory's own results (fit.json, ...), or
+    when a given PREFIX's files exist without --overwrite."""
     from cistrack.errors import ConfigError
     from cistrack.results.earlier_run import check_export_path
 
@@ -149,8 +153,12 @@ def _prefix(args) -> Path:
         raise ConfigError(f"--out {args.out}: the folder {prefix.parent} does not exist; give a PREFIX in an "
                           "existing folder")
     for suffix in (".csv", ".png"):
-        check_export_path(prefix.with_name(prefix.name + suffix), args.run, f"--out {args.out}:", by="the prediction",
+        path = prefix.with_name(prefix.name + suffix)
+        check_export_path(path, args.run, f"--out {args.out}:", by="the prediction",
                           instead=f"give another PREFIX (default {default})")
+        if args.out and not args.overwrite and os.path.lexists(path):
+            raise ConfigError(f"--out {args.out}: {path} already exists; give another PREFIX, or add --overwrite to "
+                              "replace it")
     return prefix
 
 
@@ -198,10 +206,11 @@ def _given_site(text: str):
         raise ConfigError(f"--site {shown(text)}: {str(exc).split(': ', 1)[-1]}") from None
 
 
-def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
+def _write(sky, prefix: Path, title: str, keep_other: bool = False) -> tuple[Path, Path]:
     """PREFIX.csv and PREFIX.png of ``sky``, both or neither: each is written to a temporary file
     beside it and the two are renamed into place once both are whole (a full disk leaves neither,
-    and an earlier pair as it was); ConfigError naming the file that cannot be written."""
+    and an earlier pair as it was); ConfigError naming the file that cannot be written, or, with
+    ``keep_other``, naming the PREFIX.csv that holds a different prediction (nothing changed)."""
     import errno
     from contextlib import ExitStack
 
@@ -217,6 +226,9 @@ def _write(sky, prefix: Path, title: str) -> tuple[Path, Path]:
         with ExitStack() as both:  # both temporaries renamed on leaving, once both are written
             tmp_csv, tmp_png = (both.enter_context(atomic_target(p)) for p in (csv_path, png))
             sky.write_csv(tmp_csv)
+            if keep_other and csv_path.is_file() and csv_path.read_bytes() != tmp_csv.read_bytes():
+                raise ConfigError(f"{csv_path}: already holds a different prediction (another window, step or orbit); "
+                                  "give --out PREFIX to write this one beside it, or add --overwrite to replace it")
             path = png
             sky_figure(sky, title).savefig(tmp_png, dpi=110, format="png")
     except OSError as exc:
@@ -263,7 +275,8 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
-    csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}")
+    csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}",
+                           keep_other=not (args.out or args.overwrite))
     if not args.quiet:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):

@@ -159,7 +159,7 @@ def test_a_full_disk_for_the_plot_leaves_neither_file_and_an_earlier_pair_as_it_
         return real_open(file, mode, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "open", open_on_full_disk)
-    assert main([*window, "--step", "60"]) == 2
+    assert main([*window, "--step", "60", "--overwrite"]) == 2
     monkeypatch.undo()
     err = capsys.readouterr().err
     assert f"--out {tmp_path / 'p'}: cannot write {tmp_path / 'p.png'} (No space left on device)" in err
@@ -201,3 +201,21 @@ def test_a_site_given_by_coordinates_predicts_as_its_mpc_code_does(fitted, tmp_p
     by_place = list(csv.DictReader(open(tmp_path / "given.csv")))
     assert [r["ra_deg"] for r in by_code] == [r["ra_deg"] for r in by_place]
     assert [r["elevation_deg"] for r in by_code] == [r["elevation_deg"] for r in by_place]
+
+
+def test_a_different_prediction_does_not_replace_the_default_files_unasked(fitted, capsys):
+    at = ["predict", str(fitted), "--site", "G96", "--quiet", "--step", "360"]
+    assert main(at) == 0
+    before = (fitted / "sky-G96.csv").read_bytes()
+    assert main(at) == 0                                   # the same prediction again: the same files
+    assert main([*at[:-1], "180"]) == 2
+    assert "already holds a different prediction" in capsys.readouterr().err
+    assert (fitted / "sky-G96.csv").read_bytes() == before
+    assert main([*at[:-1], "180", "--overwrite"]) == 0 and (fitted / "sky-G96.csv").read_bytes() != before
+
+
+def test_a_given_prefix_that_exists_is_replaced_only_with_overwrite(fitted, tmp_path, capsys):
+    at = ["predict", str(fitted), "--site", "568", "--quiet", "--step", "360", "--out", str(tmp_path / "q")]
+    assert main(at) == 0
+    assert main(at) == 2 and "already exists" in capsys.readouterr().err
+    assert main([*at, "--overwrite"]) == 0
