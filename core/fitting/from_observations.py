@@ -96,6 +96,18 @@ EARLY_FILE = "observations-early"
 written beside ``observations.psv`` (the run's ``scenario.toml`` names it)."""
 
 
+def __getattr__(name: str) -> Any:
+    """``AUTO_LOV_SIGMAS`` (3.0, the default line's old reach) with a DeprecationWarning, until the
+    next release: the default line now runs until the data rule it out (:mod:`.lov_solutions`)."""
+    if name == "AUTO_LOV_SIGMAS":
+        warnings.warn("cistrack.fitting.from_observations.AUTO_LOV_SIGMAS no longer sets the default line of variations, "
+                      "which now runs until its chi-square has risen by cistrack.fitting.lov_solutions.AUTO_DELTA_CHI2; "
+                      "the old value 3.0 is kept, with this warning, until the next release",
+                      DeprecationWarning, stacklevel=2)
+        return 3.0
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 @dataclass(frozen=True)
 class FitChoices:
     """The ``[fit]`` settings: ``epoch`` ("last", "middle" or "first" observation), ``prior``

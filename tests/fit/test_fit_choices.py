@@ -60,3 +60,9 @@ def test_the_span_and_name_the_observations_set_are_refused_as_settings(tmp_path
 
     assert main(["fit", str(tmp_path / "none.psv"), "--set", item, "--out", str(tmp_path / "o")]) == 2
     assert f"--set {item.split('=')[0]}: cistrack fit sets" in capsys.readouterr().err
+
+
+def test_the_old_default_reach_of_the_line_still_imports_with_a_deprecation_warning():
+    with pytest.warns(DeprecationWarning, match="AUTO_DELTA_CHI2"):
+        from cistrack.fitting.from_observations import AUTO_LOV_SIGMAS
+    assert AUTO_LOV_SIGMAS == 3.0
