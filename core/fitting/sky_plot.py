@@ -54,7 +54,8 @@ def sky_figure(sky, title: str):
     ax.set_aspect(1.0 / max(np.cos(np.radians(np.mean(sky.dec_deg))), 0.05), adjustable="datalim")
     ax.set_xlabel("RA (deg, ICRF, topocentric astrometric)")
     ax.set_ylabel("Dec (deg)")
-    ax.set_title(f"3-sigma ellipses x{scale:g}" if scale > 1 else "3-sigma ellipses (true size)", fontsize=10)
+    held = ", widened to hold the fit's line of variations" if sky.line_reach_arcsec is not None else ""
+    ax.set_title((f"3-sigma ellipses x{scale:g}" if scale > 1 else "3-sigma ellipses (true size)") + held, fontsize=10)
     ax.legend(loc="best", fontsize=8)
     hours = (sky.t_tu - sky.t_tu[0]) * units.TU_S / 3600.0
     ax2.plot(hours, 3 * a, label="3-sigma semi-major")
