@@ -11,7 +11,8 @@ A study file (TOML)::
                                                # seeds 500..509
     sweep = {"truth.maneuvers.delta_v_ms" = [0.1, 1.0], "maneuvers.response" = ["none", "inflate"]}
     [overrides]                                # applied to every scenario first
-    duration_days = 6.6
+    duration_days = 6.6                        # a filter or iod table here applies under each
+                                               # filters/iod entry too (the entry's own keys win)
 
 A ``sweep`` crosses every scenario entry with every combination of its values, each applied as a
 ``--set`` item after the study's overrides (and before the command line's ``--set``); every
@@ -285,16 +286,16 @@ def _sweep_settings(combo: tuple) -> dict:
 
 
 def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | None, combo: tuple = ()) -> dict:
-    """The study's overrides with the variant's filter and IOD tables, then the sweep combination,
+    """The study's overrides with the variant's filter and IOD tables (each over the overrides' own
+    table of that name: an entry's keys win, the other overrides stay), then the sweep combination,
     then the ``--set`` items; a table they set that the variant does not replace is merged into the
     scenario's own table."""
     from cistrack.scenario.settings import merge_settings
 
     ov = copy.deepcopy(grid.overrides)
-    if ftable:
-        ov["filter"] = ftable
-    if itable:
-        ov["iod"] = itable
+    for table, entry in (("filter", ftable), ("iod", itable)):
+        if entry:  # the entry's component, with the study's overrides of that table under the entry's own keys
+            ov[table] = merge_settings(ov[table], entry) if isinstance(ov.get(table), dict) else entry
     replaced = (("filter",) if ftable else ()) + (("iod",) if itable else ())
     for extra in (_sweep_settings(combo), grid.extra):
         if not extra:

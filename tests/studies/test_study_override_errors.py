@@ -48,3 +48,26 @@ def test_a_bad_filters_or_iod_entry_names_the_study_file_and_the_entry(tmp_path,
         plan_runs(study, tmp_path / "out")
     msg = str(err.value)
     assert msg.startswith(f"{study}: key '{key}', entry ") and "applied to scenario 'quick'" in msg and words in msg
+
+
+def _with_filters(tmp_path: Path, overrides: str, filters: str = 'filters = ["pgm"]') -> Path:
+    p = tmp_path / "mine.toml"
+    p.write_text(f'name = "mine"\nscenarios = ["quick"]\nseeds = [1]\n{filters}\n\n[overrides]\n{overrides}\n')
+    return p
+
+
+def test_the_overrides_of_a_filter_apply_under_a_filters_entry_naming_it(tmp_path):
+    _, (spec,), _ = plan_runs(_with_filters(tmp_path, "filter = { n_particles = 500 }"), tmp_path / "out")
+    assert spec.overrides["filter"] == {"name": "pgm", "n_particles": 500}
+
+
+def test_a_filters_entrys_own_parameter_wins_over_the_overrides(tmp_path):
+    study = _with_filters(tmp_path, "filter = { n_particles = 500 }", 'filters = [{ name = "pgm", n_particles = 800 }]')
+    _, (spec,), _ = plan_runs(study, tmp_path / "out")
+    assert spec.overrides["filter"]["n_particles"] == 800
+
+
+def test_a_bad_override_of_a_filter_named_by_a_filters_entry_is_refused_naming_the_overrides(tmp_path):
+    study = _with_filters(tmp_path, "filter = { n_particles = -5 }")
+    with pytest.raises(ConfigError, match=r"mine\.toml: key 'overrides', setting filter\.n_particles = -5 .*must be >= 100"):
+        plan_runs(study, tmp_path / "out")
