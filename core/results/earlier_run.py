@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from cistrack.errors import ConfigError
+from cistrack.interfaces.reader import not_a_file
 from cistrack.results.estimates import _PARTS as ESTIMATE_PARTS
 from cistrack.results.estimates import ESTIMATES
 from cistrack.results.fingerprint import scenario_fingerprint
@@ -175,6 +176,10 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
         raise ConfigError(f"{where} {recording}: {why}; the recording would replace the run's results. Give a "
                           f"recording path outside {Path(directory) / PARTS} and {Path(directory) / ESTIMATE_PARTS}, "
                           f"not named like a result file (e.g. {Path(directory) / 'recording.rrd'})")
+    special = not_a_file(recording) if os.path.lexists(recording) and not r.is_dir() else None
+    if special is not None and special.startswith("is not a regular file"):  # opening a pipe to write waits for a reader
+        raise ConfigError(f"{where} {recording}: {special}, which a recording is never written to; give the path of a "
+                          "file (e.g. run.rrd)")
     _check_writable(Path(recording))
 
 

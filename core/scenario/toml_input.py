@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import stat
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,10 @@ legitimate values are about 5 levels deep (a schedule's phases, a reader's sites
 MAX_FILE_MB = 10.0
 """Largest scenario or study file read, MB (10^6 bytes). The built-in ones are under 5 kB; the
 limit keeps a wrong path (a log, an archive, a pipe that never ends) from being read whole."""
+
+PIPE_WAIT_TRIES = 10
+"""A pipe that gives nothing is read again this many times, 50 ms apart, before it is refused (a
+writer may still be opening its end of a named pipe)."""
 
 TOMLDecodeError = tomllib.TOMLDecodeError
 
@@ -75,23 +80,45 @@ def _too_large(path: Path, size: str) -> ConfigError:
                        "give the path of a scenario or study TOML file")
 
 
+def _opened(path: Path, pipe: bool):
+    """``path`` opened to read bytes; a pipe without waiting for a writer (a named pipe nobody
+    writes to would block the open for ever): opened non-blocking, then read blocking, so that a
+    writer's data (process substitution) is read whole and no writer reads as empty."""
+    if not pipe:
+        return open(path, "rb")
+    import fcntl
+
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) & ~os.O_NONBLOCK)
+    return os.fdopen(fd, "rb")
+
+
 def read_file(path: Path) -> str:
     """The text of the scenario or study file ``path`` (UTF-8, a leading byte-order mark dropped).
     ConfigError naming the path for what is neither a regular file nor a pipe, for a file larger
-    than :data:`MAX_FILE_MB` (a pipe is read up to the limit only) and for what cannot be read
-    or is not UTF-8."""
+    than :data:`MAX_FILE_MB` (a pipe is read up to the limit only), for a pipe that gives nothing
+    (a named pipe nobody writes to is not waited for) and for what cannot be read or is not UTF-8."""
     why = not_a_file(path)
-    if why is not None and not (os.path.exists(path) and stat.S_ISFIFO(os.stat(path).st_mode)):
+    pipe = os.path.exists(path) and stat.S_ISFIFO(os.stat(path).st_mode)
+    if why is not None and not pipe:
         raise ConfigError(f"{path}: {why}; give the path of a scenario or study TOML file")
     limit = int(MAX_FILE_MB * 1e6)
     try:
-        with open(path, "rb") as f:
+        with _opened(path, pipe) as f:
             size = os.fstat(f.fileno()).st_size
             if size > limit:
                 raise _too_large(path, f"{size:,} bytes")
             data = f.read(limit + 1)
+            for _ in range(PIPE_WAIT_TRIES if pipe and not data else 0):  # a writer still opening its end
+                time.sleep(0.05)
+                data = f.read(limit + 1)
+                if data:
+                    break
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if pipe and not data:
+        raise ConfigError(f"{path}: a pipe that nothing was written to (a named pipe without a writer is read as empty); "
+                          "give the path of a scenario or study TOML file")
     if len(data) > limit:
         raise _too_large(path, f"more than {limit:,} bytes read")
     try:
