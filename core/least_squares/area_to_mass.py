@@ -29,13 +29,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from cistrack.errors import MeasurementError, PropagationError
+from cistrack.errors import MeasurementError, ParameterError, PropagationError
 from cistrack.least_squares.errors import FitError
 from cistrack.least_squares.options import AREA_TO_MASS, FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.units import TU_S
 
-__all__ = ["fit_area_to_mass_auto", "area_to_mass_verdict", "joint_covariances", "MIN_ARC_DAYS", "MIN_SIGNIFICANCE",
+__all__ = ["fit_area_to_mass_auto", "area_to_mass_verdict", "estimate_doubt", "forced_decision", "joint_covariances", "MIN_ARC_DAYS", "MIN_SIGNIFICANCE",
            "MIN_CHI2_DROP", "MAX_AREA_TO_MASS"]
 
 MIN_ARC_DAYS = 10.0
@@ -56,11 +56,9 @@ def _chi2_drop(six: FitResult, seven: FitResult) -> float:
     return float(np.sum(np.asarray(six.residuals.chi2)[used]) - np.sum(np.asarray(seven.residuals.chi2)[used]))
 
 
-def area_to_mass_verdict(six: FitResult, seven: FitResult) -> str | None:
-    """Why ``seven`` (a fit with the ratio) should not replace ``six`` (without it), or None when
-    it should (module docstring)."""
-    if not seven.converged:
-        return "the fit with it did not converge"
+def estimate_doubt(seven: FitResult) -> str | None:
+    """Why the ratio ``seven`` estimated says nothing about the object (not significant, or not
+    physical), or None."""
     value, sigma = seven.parameter(AREA_TO_MASS)
     scaled = sigma * max(1.0, float(seven.noise_scale) if np.isfinite(seven.noise_scale) else 1.0)
     what = f"estimate {value:.4g} +- {scaled:.2g} m^2/kg"
@@ -68,6 +66,30 @@ def area_to_mass_verdict(six: FitResult, seven: FitResult) -> str | None:
         return f"{what} is not significant (|A/m| / sigma {abs(value) / scaled:.2f} < {MIN_SIGNIFICANCE:g})"
     if not 0.0 < value <= MAX_AREA_TO_MASS:
         return f"{what} is not physical (outside (0, {MAX_AREA_TO_MASS:g}] m^2/kg)"
+    return None
+
+
+def forced_decision(result: FitResult) -> FitResult:
+    """A fit made with ``area_to_mass="solve"``, its decision saying when the estimate is not
+    significant or not physical (the arc does not determine the ratio: refit with "auto" or "off")."""
+    if result.parameter(AREA_TO_MASS) is None or not result.converged:
+        return result
+    why = estimate_doubt(result)
+    return result if why is None else _decided(result, f"estimated as asked (area_to_mass = 'solve'), but the {why}: "
+                                                       "this arc does not determine it; fit again with 'auto' or 'off'")
+
+
+def area_to_mass_verdict(six: FitResult, seven: FitResult) -> str | None:
+    """Why ``seven`` (a fit with the ratio) should not replace ``six`` (without it), or None when
+    it should (module docstring)."""
+    if not seven.converged:
+        return "the fit with it did not converge"
+    doubt = estimate_doubt(seven)
+    if doubt is not None:
+        return doubt
+    value, sigma = seven.parameter(AREA_TO_MASS)
+    scaled = sigma * max(1.0, float(seven.noise_scale) if np.isfinite(seven.noise_scale) else 1.0)
+    what = f"estimate {value:.4g} +- {scaled:.2g} m^2/kg"
     drop = _chi2_drop(six, seven)
     if drop < MIN_CHI2_DROP:
         return f"{what} lowers the chi-square by only {drop:.3g} (< {MIN_CHI2_DROP:g})"
@@ -201,8 +223,11 @@ def _joint_unscented(dynamics: Any, result: FitResult, times: np.ndarray) -> tup
     values, group = np.unique(everything[:, 6:], axis=0, return_inverse=True)
     for g, v in enumerate(values):
         members = np.flatnonzero(group.reshape(-1) == g)
-        states[:, members], alive = _batch(_with_values(dynamics, names, v), everything[members, :6],
-                                           result.epoch, times)
+        try:
+            model = _with_values(dynamics, names, v)
+        except ParameterError:  # a sigma point beyond the values the dynamics allow: the linear map stands in
+            return np.zeros((times.size, 6, 6)), np.zeros(times.size, dtype=bool)
+        states[:, members], alive = _batch(model, everything[members, :6], result.epoch, times)
         ok &= alive
     d = states[:, 1:] - states[:, :1]
     spread = np.einsum("kni,knj->kij", d, d) / len(points)

@@ -474,8 +474,11 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
                              solve_for=names or None)
 
         return fit_area_to_mass_auto(fit, dynamics, measurements, x, options=opts)
-    if opts.area_to_mass == "solve" and AREA_TO_MASS not in names:
-        names = names + (AREA_TO_MASS,)
+    if opts.area_to_mass == "solve":
+        from cistrack.least_squares.area_to_mass import forced_decision
+
+        names = names if AREA_TO_MASS in names else names + (AREA_TO_MASS,)
+        return forced_decision(_fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names)))
     return _fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names))
 
 
