@@ -15,9 +15,17 @@ from typing import Any
 
 import numpy as np
 
+from cistrack import units
 from cistrack.errors import ConfigError
 
-__all__ = ["check_orbit_fields", "MAX_EPOCH_TU"]
+__all__ = ["check_orbit_fields", "MAX_EPOCH_TU", "MAX_DISTANCE_KM", "MAX_SPEED_KMS"]
+
+MAX_DISTANCE_KM = 3.0e6
+"""The farthest fitted position (km; about eight lunar distances): a fit beyond it is not a cislunar
+orbit and is not reported as converged (:data:`cistrack.fitting.from_observations.CISLUNAR_LIMIT_KM`)."""
+MAX_SPEED_KMS = 100.0
+"""The fastest fitted state (km/s in the synodic frame; an object falling to the Earth's surface
+from the Moon's distance reaches about 11)."""
 
 MAX_EPOCH_TU = 1.0e5
 """The largest |epoch_tu| accepted (about 1,190 years from the scenario's epoch, within the dates
@@ -66,7 +74,11 @@ def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:
     """Raise :class:`ConfigError` naming ``path`` and the field when the orbit of ``record`` (a
     ``fit.json`` with a ``state``) is not one a fit writes (module docstring)."""
     p = Path(path)
-    _array(p, "state", record.get("state"), (6,), "6 finite numbers (the synodic state)")
+    km = units.state_to_km(_array(p, "state", record.get("state"), (6,), "6 finite numbers (the synodic state)"))
+    far = np.linalg.norm(km[:3]) > MAX_DISTANCE_KM or np.linalg.norm(km[3:]) > MAX_SPEED_KMS
+    if far and record.get("converged") is not False:  # a fit refused as not cislunar keeps its state
+        raise _fail(p, "state", f"a synodic state within {MAX_DISTANCE_KM:.3g} km of the Earth-Moon barycentre, "
+                    f"moving slower than {MAX_SPEED_KMS:g} km/s", record.get("state"))
     _covariance(p, "covariance", record.get("covariance"), 6)
     epoch = _number(p, "epoch_tu", record.get("epoch_tu"))
     if not (math.isfinite(epoch) and abs(epoch) <= MAX_EPOCH_TU):

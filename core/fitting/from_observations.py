@@ -49,6 +49,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError, quoted
+from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM
 from cistrack.fitting.lov_solutions import AUTO_DELTA_CHI2
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
@@ -827,7 +828,7 @@ def _note_rejected_epoch(one: ObjectFit) -> None:
                                         "(the later ones were rejected); the state there is the fitted orbit propagated"])
 
 
-CISLUNAR_LIMIT_KM = 3.0e6
+CISLUNAR_LIMIT_KM = MAX_DISTANCE_KM
 """A converged fit whose state lies farther than this from the Earth (about eight lunar distances,
 the ranging IOD's ``range_max_km``) is not a cislunar orbit: the observations left the distance
 free (a star, or a body far beyond the Moon, barely moves against the stars), and the fit is not

@@ -85,3 +85,20 @@ def test_an_orbit_field_a_fit_never_writes_is_refused_by_name(tmp_path, field, v
     with pytest.raises(ConfigError, match="fit.json: field ") as exc:
         read_fit_record(_written(tmp_path, _tampered(field, value)))
     assert named in str(exc.value)
+
+
+@pytest.mark.parametrize("state, words", [
+    ([1e30] * 6, "within 3e+06 km of the Earth-Moon barycentre"),
+    ([8.0, 0.0, 0.0, 0.0, 0.0, 0.0], "within 3e+06 km"),       # 3.1 million km out
+    ([1.02, 0.0, -0.18, 0.0, 100.0, 0.0], "slower than 100 km/s"),
+])
+def test_a_state_no_fit_writes_is_refused_naming_the_field(tmp_path, state, words):
+    with pytest.raises(ConfigError, match=r"field 'state' must be a synodic state") as err:
+        read_fit_record(_written(tmp_path, _tampered("state", state)))
+    assert words in str(err.value)
+
+
+def test_a_fit_refused_as_not_cislunar_keeps_its_far_state_readable(tmp_path):
+    rec = _tampered("state", [8.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    rec["converged"] = False
+    assert read_fit_record(_written(tmp_path, rec))["state"][0] == 8.0
