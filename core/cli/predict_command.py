@@ -104,16 +104,39 @@ def _until_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:
     from cistrack.errors import ConfigError
     from cistrack.least_squares.events import times_until_impact
 
+    times, back_note = _after_backward_impact(times, orbit)
     kept, hit = times_until_impact(orbit.dynamics, orbit.state, orbit.t0, times)
     if hit is None:
-        return times, ""
+        return times, back_note
     when = units.format_utc(units.tu_to_utc(orbit.epoch, hit[0]))[:19] + "Z"
     before = times[times < hit[0]]
     if before.size == 0:
         raise ConfigError(f"--start: the orbit hits the {hit[1]} at {when} (see the fit's events), before the first "
                           "prediction time; give a --start before it")
-    return before, (f"note: the orbit hits the {hit[1]} at {when}; the {times.size - before.size} prediction times "
-                    "after it are left out")
+    return before, "\n".join(filter(None, (back_note, f"note: the orbit hits the {hit[1]} at {when}; the "
+                                              f"{times.size - before.size} prediction times after it are left out")))
+
+
+def _after_backward_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:
+    """The prediction ``times`` after the body the orbit, carried back from its epoch, meets first
+    (a body it came from), and a note on those left out ("" when none); ConfigError naming --start
+    when that leaves no time."""
+    from cistrack import units
+    from cistrack.errors import ConfigError
+    from cistrack.least_squares.events import IMPACT_MARGIN_S, first_impact
+
+    if times.size == 0 or times[0] >= orbit.t0:
+        return times, ""
+    hit = first_impact(orbit.dynamics, orbit.state, orbit.t0, float(times[0]))
+    if hit is None:
+        return times, ""
+    when = units.format_utc(units.tu_to_utc(orbit.epoch, hit[0]))[:19] + "Z"
+    after = times[times > hit[0] + units.seconds_to_tu(IMPACT_MARGIN_S)]
+    if after.size == 0:
+        raise ConfigError(f"--start: carried back from its epoch, the orbit meets the {hit[1]} at {when}, after every "
+                          "prediction time: the fitted orbit cannot be carried back past it; give a --start after it")
+    return after, (f"note: carried back from its epoch, the orbit meets the {hit[1]} at {when}; the "
+                   f"{times.size - after.size} prediction times before it are left out")
 
 
 LOST_DEG = 10.0

@@ -1,6 +1,7 @@
 """`cistrack predict`: refusals name the option; end to end on a fitted example (slow)."""
 import csv
 
+import numpy as np
 import pytest
 
 from cistrack.cli.main import main
@@ -219,3 +220,33 @@ def test_a_given_prefix_that_exists_is_replaced_only_with_overwrite(fitted, tmp_
     assert main(at) == 0
     assert main(at) == 2 and "already exists" in capsys.readouterr().err
     assert main([*at, "--overwrite"]) == 0
+
+
+def _from_the_moon():
+    """An orbit 7,700 km from the Moon moving straight away from it: carried back, it meets the Moon."""
+    from datetime import datetime, timezone
+
+    from cistrack.fitting.sky_ephemeris import DirectoryOrbit
+    from tests.fit.arcs import cr3bp_arc
+
+    dyn = cr3bp_arc().dynamics
+    state = np.array([1.0 - dyn.mu + 0.02, 0.0, 0.0, 1.0, 0.0, 0.0])
+    return DirectoryOrbit(state, np.eye(6) * 1e-12, 0.0, datetime(2026, 1, 1, tzinfo=timezone.utc), dyn, "x", "fit")
+
+
+def test_times_before_the_body_the_orbit_came_from_are_left_out_with_a_note():
+    from cistrack.cli.predict_command import _until_impact
+
+    times, note = _until_impact(np.array([-0.3, -0.2, -0.01, 0.05]), _from_the_moon())
+    assert times.tolist() == [-0.01, 0.05]
+    assert note.startswith("note: carried back from its epoch, the orbit meets the Moon at 2025-12-31T") \
+        and "the 2 prediction times before it are left out" in note
+
+
+def test_a_window_wholly_before_that_body_is_refused_naming_start():
+    from cistrack.cli.predict_command import _until_impact
+    from cistrack.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"^--start: carried back from its epoch, the orbit meets the Moon at .*"
+                                          r"give a --start after it"):
+        _until_impact(np.array([-0.3, -0.2]), _from_the_moon())
