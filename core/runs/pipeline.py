@@ -245,7 +245,7 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
         ctx.maneuvers = watch
     t_prepare = time.perf_counter() - t_start - clock.seconds
     events = _events(scenario, ctx)
-    if watch is not None:
+    if watch is not None and scenario.maneuvers.asked:  # the default watch of a short run is no one's choice
         _say_if_detector_idle(watch, events, opts.log)
     if ctx.truth is not None:  # the third wave of truth times (see cistrack.runs.truth): evaluations
         ctx.truth.states_at([ctx.iod_cloud.epoch] + [e[0] for e in events])

@@ -33,6 +33,9 @@ class ManeuverSettings:
     detector: ComponentSpec | None = None
     response: ComponentSpec | None = None
     estimate: bool = True
+    asked: bool = False
+    """The scenario's ``[maneuvers]`` table names the detector or sets its parameters (it is not
+    the default watch every run keeps)."""
 
 
 def _auto(filter_name: str, reg: Registry, source: str, params: dict | None = None) -> ComponentSpec | None:
@@ -66,4 +69,4 @@ def maneuver_settings(data: dict, filter_name: str, source: str, reg: Registry) 
         raise ConfigError(f"{source}: [maneuvers]: a response ({response.name!r}) needs a detector; "
                           "set detector to 'auto' or a maneuver-detector")
     estimate = typed(table.get("estimate", True), bool, source, "[maneuvers]", "estimate")
-    return ManeuverSettings(detector, response, bool(estimate))
+    return ManeuverSettings(detector, response, bool(estimate), "detector" in table)

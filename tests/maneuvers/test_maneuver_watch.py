@@ -170,3 +170,15 @@ def test_an_estimated_burn_is_recorded_with_the_covariance_of_its_delta_v_vector
     assert cov.shape == (3, 3) and np.allclose(cov, cov.T) and np.all(np.linalg.eigvalsh(cov) > 0)
     u = np.asarray(m["delta_v_vector_ms"]) / m["delta_v_ms"]
     assert np.sqrt(u @ cov @ u) == pytest.approx(m["delta_v_sigma_ms"], rel=1e-9)  # the magnitude's sigma is its projection
+
+
+def test_the_default_watch_of_a_run_too_short_for_it_says_nothing():
+    """cistrack fit's own filter run over a first tracklet had printed advice to lower a warmup
+    nobody had set."""
+    from cistrack.scenario.settings import apply_settings
+
+    s = apply_settings(load_scenario("quick"), ["duration_days=1.3", "filter.n_particles=200", "iod.n_particles=200"])
+    assert not s.maneuvers.asked and s.maneuvers.detector is not None
+    lines: list[str] = []
+    run_scenario(s, seed=SEED, log=lines.append)
+    assert not [m for m in lines if "can detect nothing" in m]
