@@ -69,7 +69,7 @@ def add_predict_parser(sub) -> None:
     p.add_argument("--stop", type=_utc, default=None, metavar="UTC", help="last time (default: one day after --start)")
     p.add_argument("--step", type=_minutes, default=60.0, metavar="MINUTES", help="spacing, minutes (default 60)")
     p.add_argument("--out", type=path_text("--out"), default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
-                   "(default DIR/sky-<CODE>)")
+                   "(default DIR/sky-<CODE>; a folder: FOLDER/sky-<CODE>)")
     p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing --out PREFIX.csv/.png, or a different earlier prediction in DIR/sky-<CODE>")
@@ -164,7 +164,8 @@ def _check_year(option: str, t) -> None:
 
 
 def _prefix(args) -> Path:
-    """The --out PREFIX (default DIR/sky-CODE); ConfigError when its folder does not exist, when
+    """The --out PREFIX (default DIR/sky-CODE; a folder given as PREFIX gets FOLDER/sky-CODE);
+    ConfigError when its folder does not exist, when
     PREFIX.csv or PREFIX.png would replace one of the directory's own results (fit.json, ...), or
     when a given PREFIX's files exist without --overwrite."""
     from cistrack.errors import ConfigError
@@ -172,6 +173,8 @@ def _prefix(args) -> Path:
 
     default = Path(args.run) / f"sky-{args.site}"
     prefix = Path(args.out) if args.out else default
+    if args.out and (args.out.endswith(("/", os.sep)) or prefix.is_dir()):  # a folder: the files go inside it
+        prefix = prefix / default.name
     if args.out and not prefix.parent.is_dir():
         raise ConfigError(f"--out {args.out}: the folder {prefix.parent} does not exist; give a PREFIX in an "
                           "existing folder")

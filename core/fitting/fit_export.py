@@ -302,11 +302,11 @@ def _refusal(d: Path, record: dict[str, Any], force: bool, words: ExportWords) -
     """Why the fit should not be exported (None when it may be); raises CistrackError unless
     ``force``, and when there is no orbit at all."""
     refusal = fit_refusal(record)
+    if "state" not in record:  # --force cannot help: there is no orbit to write
+        raise CistrackError(f"{d}: nothing to export: {refusal}. See docs/real-data.md (when a fit fails)")
     if refusal is not None and not force:
         raise CistrackError(f"{d}: not exported: {refusal}. See docs/real-data.md (when a fit fails), or "
                             f"{words.force} to export it anyway (the file then says this in a COMMENT)")
-    if "state" not in record:
-        raise CistrackError(f"{d}: nothing to export: {refusal}")
     return refusal
 
 

@@ -250,3 +250,12 @@ def test_a_window_wholly_before_that_body_is_refused_naming_start():
     with pytest.raises(ConfigError, match=r"^--start: carried back from its epoch, the orbit meets the Moon at .*"
                                           r"give a --start after it"):
         _until_impact(np.array([-0.3, -0.2]), _from_the_moon())
+
+
+def test_a_folder_given_as_the_prefix_gets_the_files_inside_it(fitted, tmp_path):
+    (tmp_path / "sky").mkdir()
+    for out in (str(tmp_path / "sky") + "/", str(tmp_path / "sky")):
+        assert main(["predict", str(fitted), "--site", "568", "--quiet", "--step", "360", "--out", out,
+                     "--overwrite"]) == 0
+    assert sorted(p.name for p in (tmp_path / "sky").iterdir()) == ["sky-568.csv", "sky-568.png"]
+    assert not (tmp_path / "sky.csv").exists()
