@@ -84,9 +84,11 @@ def cmd_export_fit(args) -> int:
                               "fit epoch, which are not propagated, and takes no --covariance; --covariance says how "
                               "--format oem carries the covariance over its grid")
         params["covariance"] = args.covariance
+    quiet = getattr(args, "quiet", False)
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
-                     predict_days=getattr(args, "predict", None), words=CLI_EXPORT_WORDS, **params)
-    if not getattr(args, "quiet", False):
+                     predict_days=getattr(args, "predict", None), words=CLI_EXPORT_WORDS,
+                     log=None if quiet else print, **params)
+    if not quiet:
         print(f"wrote {out}")
     return 0
 

@@ -33,7 +33,7 @@ import os
 from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -51,7 +51,7 @@ from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
-           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE"]
+           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -174,7 +174,8 @@ class FitExportOptions:
 
 def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None = None, *,
                options: FitExportOptions | None = None, registry: Registry | None = None,
-               words: ExportWords = PYTHON_EXPORT_WORDS, **params: Any) -> Path:
+               words: ExportWords = PYTHON_EXPORT_WORDS, log: Callable[[str], None] | None = None,
+               **params: Any) -> Path:
     """Write the fitted orbit of the fit directory ``run_dir`` with exporter ``format`` to ``path``
     (default ``RUN_DIR/estimate.<suffix>``, as for a run: one there holding a different export,
     e.g. without ``predict_days``, is refused unless ``overwrite``); returns the path.
@@ -183,7 +184,9 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     (a keyword wins): ``overwrite``, ``force``, ``predict_days`` (>= 0, at most
     :data:`MAX_PREDICT_DAYS`) extends the grid beyond the last observation, ``covariance`` (one of
     :data:`cistrack.least_squares.prediction.COVARIANCE_METHODS`) says how the covariance is carried.
-    The other keywords ``params`` go to the exporter. Refusals name the option as ``words`` say
+    The other keywords ``params`` go to the exporter. ``log`` is told, in a line each, where the
+    predicted states end at an impact and when they go past the fit's horizon (both are also
+    COMMENT WARNING lines of the file: :func:`prediction_warnings`). Refusals name the option as ``words`` say
     (Python's keywords; the command line passes its own): an existing ``path`` without
     ``overwrite``, a fit that did not converge without ``force``, an unknown ``covariance``."""
     opts, params = _split_keywords(options, params)
@@ -209,13 +212,40 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
     comments = _comments(record, name, opts, pred, utc, n_arc, refusal, propagated=format != "opm")
+    warned = prediction_warnings(record, times, n_arc, impact, scen.epoch)
+    comments += [f"WARNING: {w}" for w in warned]
     if impact is not None:
         comments += ["WARNING: the orbit ends on the surface; the last state is 1 ms before the impact:"] + impact.lines()
+    for w in warned if log is not None else ():
+        log(f"note: {w}")
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
                  words=words)
+    return out
+
+
+def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, impact: Any,
+                        epoch: Any) -> list[str]:
+    """What a reader of the predicted states (``times`` (K,) TU past the first ``n_arc``) must be
+    told: that they end at an ``impact`` before the span asked, and that they run past the fit's
+    horizon (``record["determination"]["horizon_days"]``), where the orbits the fit allows leave a
+    1-degree field and the covariance may no longer hold the object."""
+    if times.size <= n_arc:
+        return []
+    out = []
+    if impact is not None:
+        out.append(f"the predicted states end at the {impact.body}'s surface ({impact.kind} at "
+                   f"{units.format_utc(units.tu_to_utc(epoch, impact.t_tu))[:19]}Z), before the span asked")
+    last = float(record["arc"]["last_tu"])
+    horizon = (record.get("determination") or {}).get("horizon_days")
+    span = float(units.tu_to_days(float(times[-1]) - last))
+    if isinstance(horizon, (int, float)) and math.isfinite(horizon) and span > horizon:
+        when = units.format_utc(units.tu_to_utc(epoch, last + float(units.days_to_tu(horizon))))[:19]
+        out.append(f"the predicted states run {span:.3g} days past the last observation, beyond the fit's horizon of "
+                   f"{horizon:g} days ({when}Z): after it the orbits the fit allows leave a 1-degree field, and its "
+                   "covariance may no longer hold the object; observe again before then")
     return out
 
 

@@ -135,3 +135,13 @@ def test_a_missing_file_is_refused_naming_it(tmp_path, capsys):
     rc = main(["fit", str(tmp_path / "none.psv")])
     assert rc == 2
     assert "none.psv" in capsys.readouterr().err
+
+
+def test_an_export_predicted_past_the_impact_says_where_it_ends(fitted, capsys, tmp_path):
+    """The shipped orbit hits the Moon 10.5 days after its last observation: a 30-day prediction
+    says so on the terminal and in the file, not only the span asked."""
+    oem = tmp_path / "p.oem"
+    assert main(["export", str(fitted[0]), "--format", "oem", "--predict", "30", "--out", str(oem)]) == 0
+    said = "the predicted states end at the Moon's surface (impact at 2026-03-17T"
+    assert f"note: {said}" in capsys.readouterr().out
+    assert f"COMMENT WARNING: {said}" in oem.read_text()

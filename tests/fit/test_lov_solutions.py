@@ -122,3 +122,13 @@ def test_predict_widens_its_ellipses_to_hold_the_line(fitted, capsys):
         rows = list(csv.DictReader(fh))
     assert all(float(r["line_reach_arcsec"]) > 0 for r in rows)
     assert all(float(r["semi_major_3sigma_arcsec"]) >= float(r["line_reach_arcsec"]) for r in rows)
+
+
+def test_an_export_predicted_past_the_horizon_warns_on_the_terminal_and_in_the_file(fitted, capsys, tmp_path):
+    d, _ = fitted
+    oem = tmp_path / "p.oem"
+    assert main(["export", str(d), "--format", "oem", "--predict", "2", "--out", str(oem)]) == 0
+    said = "days past the last observation, beyond the fit's horizon of 0.5 days"
+    assert said in capsys.readouterr().out and said in " ".join(oem.read_text().split())
+    assert main(["export", str(d), "--format", "oem", "--predict", "0.25", "--out", str(tmp_path / "q.oem")]) == 0
+    assert "horizon" not in capsys.readouterr().out
