@@ -25,6 +25,7 @@ value-changing fast-math flags: see :data:`.dop853_source.DEFAULT_FASTMATH`.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import importlib.util
 import inspect
@@ -80,6 +81,15 @@ def kernel_cache_dir() -> Path:
     return base / "cistrack" / "kernels"
 
 
+def _home_is_blank() -> bool:
+    """The default cache would hang off ``$HOME``, and ``$HOME`` is set but empty (Python then takes
+    the root directory for the home)."""
+    if os.environ.get("CISTRACK_KERNEL_DIR") or os.path.isabs(os.environ.get("XDG_CACHE_HOME", "")):
+        return False
+    home = os.environ.get("HOME")
+    return home is not None and not home.strip()
+
+
 def secure_cache_dir(directory: Path | None = None) -> Path:
     """Create (mode 0700) or check the kernel cache directory; return it.
 
@@ -89,6 +99,9 @@ def secure_cache_dir(directory: Path | None = None) -> Path:
     """
     path = Path(directory) if directory is not None else kernel_cache_dir()
     where = f"kernel cache directory {path} (set CISTRACK_KERNEL_DIR to choose another)"
+    if directory is None and _home_is_blank():
+        raise OSError(errno.ENOENT, "the environment variable HOME is empty, so there is no home directory to keep "
+                      "the cache in (it would have gone to /.cache)")
     if not path.exists():
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
     st = path.stat()

@@ -96,3 +96,14 @@ def test_a_changed_kernel_helper_changes_the_kernel_digest(tmp_path):
     helper.write_text("def view(a):\n    return a[:]\n")
     assert kernels._helpers_digest((helper,)) != before
     assert any(path.name == "borrowed_view.py" and path.is_file() for path in kernels.HELPER_FILES)
+
+
+def test_an_empty_home_gives_no_cache_directory_rather_than_one_at_the_root(monkeypatch):
+    """Python takes the root directory for an empty HOME: the cache had been made at /.cache."""
+    from cistrack.propagation.kernels import secure_cache_dir
+
+    monkeypatch.delenv("CISTRACK_KERNEL_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("HOME", "")
+    with pytest.raises(OSError, match="HOME is empty"):
+        secure_cache_dir()
