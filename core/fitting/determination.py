@@ -264,7 +264,8 @@ def sky_motion(measurements: MeasurementSet, epoch) -> dict:
     """The tracklet's place and motion on the sky: its first and last UTC, site, count and span,
     RA and Dec (deg) at its mean time and their rates (a straight line in time through the
     observations, RA unwrapped): RA x cos(Dec) and Dec in arcsec per minute, the total rate (arcsec
-    per minute and deg per day) and its position angle (deg, east of north)."""
+    per minute and deg per day) and its position angle (deg, east of north); the rates and the angle
+    are None when every observation has the same time (no motion is measured)."""
     ms = measurements
     t = np.asarray(ms.times, dtype=float)
     minutes = float(units.tu_to_hours(1.0)) * 60.0 * (t - t.mean())
@@ -277,11 +278,13 @@ def sky_motion(measurements: MeasurementSet, epoch) -> dict:
     north = float(dec_rate) / units.ARCSEC_RAD
     total = float(np.hypot(east, north))
     utc = [units.format_utc(units.tu_to_utc(epoch, float(v))) for v in (t[0], t[-1])]
+    moved = bool(np.ptp(minutes) > 0)  # one time: a place, no motion (the rates are None)
     return {"first_utc": utc[0], "last_utc": utc[1], "site": ms.site_at(0), "n_observations": int(len(ms)),
             "span_minutes": float(np.ptp(minutes)), "ra_deg": float(np.degrees(ra0) % 360.0),
-            "dec_deg": float(np.degrees(dec0)), "ra_cos_dec_rate_arcsec_min": east, "dec_rate_arcsec_min": north,
-            "rate_arcsec_min": total, "rate_deg_day": total * 1440.0 / 3600.0,
-            "position_angle_deg": float(np.degrees(np.arctan2(east, north)) % 360.0)}
+            "dec_deg": float(np.degrees(dec0)), "ra_cos_dec_rate_arcsec_min": east if moved else None,
+            "dec_rate_arcsec_min": north if moved else None, "rate_arcsec_min": total if moved else None,
+            "rate_deg_day": total * 1440.0 / 3600.0 if moved else None,
+            "position_angle_deg": float(np.degrees(np.arctan2(east, north)) % 360.0) if moved else None}
 
 
 def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch, curve: dict | None = None) -> dict:

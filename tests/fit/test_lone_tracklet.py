@@ -117,6 +117,12 @@ def test_sky_motion_of_a_straight_track():
     assert sky["span_minutes"] == pytest.approx(30.0) and sky["n_observations"] == 3
 
 
+def test_one_exposure_measures_no_motion():
+    """It had been printed as 0 "/min with a position angle of 0 deg."""
+    sky = sky_motion(_set([0.0], ["711"]), units.parse_utc("2026-01-01T00:00:00Z"))
+    assert sky["n_observations"] == 1 and sky["rate_arcsec_min"] is None and sky["position_angle_deg"] is None
+
+
 def test_a_gross_outlier_in_the_tracklet_is_named(tmp_path):
     """The ranging IOD's curve through the exposures (a parabola for 4 or more) flags one 180" off."""
     rows = [r.split("|") for r in ROWS]
