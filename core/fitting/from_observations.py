@@ -255,6 +255,10 @@ def _split_settings(items: Iterable[str] | None) -> tuple[dict[str, Any], dict[s
         raise ConfigError(f"--set {fixed[0]}: cistrack fit sets the scenario's epoch, duration_days and name from "
                           "the observations (epoch: 30 min before the first, duration: to past the last); "
                           "fit.epoch=first|middle|last chooses where the state is estimated")
+    if isinstance(settings.get("sensor"), dict) and "measurement" in settings["sensor"]:
+        raise ConfigError(f"--set sensor.measurement={quoted(settings['sensor']['measurement'])}: cistrack fit sets what "
+                          "the sensor measures from the observations themselves (RA/Dec or azimuth/elevation, as the "
+                          "files give them)")
     unused = sorted(k for k in ("truth", "schedule") if k in settings)
     if unused:
         raise ConfigError(f"--set {unused[0]}.*: cistrack fit simulates nothing, so [{unused[0]}] (a simulated "

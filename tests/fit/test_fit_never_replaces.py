@@ -100,3 +100,10 @@ def test_a_refit_of_another_arcs_form_does_not_leave_the_earlier_beside_it(tmp_p
     assert [p.name for p in (tmp_path / "f").glob("arc-*")] == ["arc-2026-03-01"]
     assert main(["fit", str(OBSERVATIONS), "--out", out, "--quiet"]) == 2
     assert "1 folder(s) of a fit of each arc (arc-2026-03-01)" in capsys.readouterr().err
+
+
+def test_what_the_sensor_measures_is_not_a_setting_of_a_fit(tmp_path, capsys):
+    """The files say it; an RA/Dec file with sensor.measurement=azel had run the IOD twice and then failed."""
+    assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", "sensor.measurement=azel"]) == 2
+    assert "--set sensor.measurement='azel': cistrack fit sets what the sensor measures" in capsys.readouterr().err
+    assert not (tmp_path / "f").exists()
