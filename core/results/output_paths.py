@@ -76,10 +76,22 @@ def check_output_dir(directory: str | Path, where: str, records: tuple[str, ...]
                               "merges and --overwrite replace; give a directory outside that run")
         if d.is_dir() and not any(_is_cistrack_record(d / name) for name in records) and not _holds_no_results(d):
             raise ConfigError(f"{where} {d}: is not empty and holds no cistrack {' or '.join(records)}; results "
-                              "go to a new or empty directory, or replace an earlier run's results directory")
+                              "go to a new or empty directory, or replace an earlier run's results directory"
+                              + _several_fits_hint(d, where))
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot look there ({exc.strerror or exc})") from None
     return _create_writable(d, where)
+
+
+def _several_fits_hint(d: Path, where: str) -> str:
+    """What to give instead when ``d`` holds the fits of several objects (``fit-<designation>``
+    folders, each with its fit.json), "" otherwise."""
+    fits = sorted(p.name for p in d.glob("fit-*") if _is_cistrack_record(p / "fit.json"))
+    if not fits:
+        return ""
+    shown = ", ".join(fits[:4]) + (f" and {len(fits) - 4} more" if len(fits) > 4 else "")
+    return (f" (it holds the fits of several objects, one folder each: {shown}; to fit one of them again, give "
+            f"{where} {d}/fit-<designation>, e.g. {d / fits[0]}, or the same files as before with {where} {d})")
 
 
 def _run_owning_parts_of(d: Path) -> Path | None:

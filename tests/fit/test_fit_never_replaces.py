@@ -107,3 +107,15 @@ def test_what_the_sensor_measures_is_not_a_setting_of_a_fit(tmp_path, capsys):
     assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", "sensor.measurement=azel"]) == 2
     assert "--set sensor.measurement='azel': cistrack fit sets what the sensor measures" in capsys.readouterr().err
     assert not (tmp_path / "f").exists()
+
+
+def test_a_folder_of_several_objects_fits_names_where_one_of_them_goes(tmp_path, capsys):
+    """Refitting one object into the --out of a several-object fit had been refused as holding no
+    cistrack results, with no way forward."""
+    for name in ("fit-a", "fit-b"):
+        (tmp_path / "both" / name).mkdir(parents=True)
+        (tmp_path / "both" / name / "fit.json").write_text('{"format": "cistrack-fit"}')
+    assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "both"), "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "it holds the fits of several objects, one folder each: fit-a, fit-b" in err
+    assert f"give --out {tmp_path / 'both'}/fit-<designation>" in err
