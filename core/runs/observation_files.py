@@ -63,10 +63,32 @@ def read_observations(path: str | PathLike, epoch: str | datetime, format: str |
                       registry: Registry | None = None, **params: Any) -> MeasurementSet:
     """Read an observation file with the reader ``format`` (or the one matching its suffix);
     ``params`` are the reader's parameters (default sigmas, explicit sites, ...)."""
+    if not isinstance(path, (str, PathLike)):
+        raise MeasurementError(f"path={type(path).__name__}: give the path of one observation file (a str or a "
+                               "path); read several with one call each")
     return reader_for(path, format, registry, **params).read(path, epoch)
 
 
 def write_observations(path: str | PathLike, measurements: MeasurementSet, epoch: str | datetime,
                        format: str | None = None, registry: Registry | None = None, **params: Any) -> None:
-    """Write ``measurements`` with the reader ``format`` (or the one matching the suffix)."""
+    """Write ``measurements`` with the reader ``format`` (or the one matching the suffix). Their
+    times are counted from ``epoch``: MeasurementError when the set records another epoch (its
+    ``meta["epoch"]``, as readers set it), whose times would all be shifted by the difference."""
+    _check_same_epoch(measurements, epoch)
     reader_for(path, format, registry, **params).write(path, measurements, epoch)
+
+
+def _check_same_epoch(measurements: MeasurementSet, epoch: str | datetime) -> None:
+    from cistrack import units
+
+    own = (getattr(measurements, "meta", None) or {}).get("epoch")
+    if own is None:
+        return
+    try:
+        same = units.parse_utc(own) == units.parse_utc(epoch)
+    except (TypeError, ValueError):
+        return  # an unreadable epoch is the writer's to refuse, naming it
+    if not same:
+        raise MeasurementError(f"epoch={epoch!s}: the measurements' times are counted from {own} (their meta['epoch'], "
+                               f"as they were read); writing them from another epoch would shift every time by the "
+                               f"difference; pass epoch={own!r}")
