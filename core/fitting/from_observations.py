@@ -163,6 +163,11 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
         why = fit_option_problem(key, value)
         if why:
             raise ConfigError(f"--set fit.{key}={value!r}: {why}")
+    damping = FitOptions(**{k: v for k, v in opts.items() if k in ("damping", "max_damping")})
+    if damping.max_damping <= damping.damping:
+        raise ConfigError(f"--set fit.max_damping={damping.max_damping!r}: must exceed fit.damping "
+                          f"({damping.damping!r}): the iteration stops once the damping passes it, so it would stop "
+                          "before its first step")
     return FitChoices(epoch, prior, FitOptions(**opts), None if lov == "auto" else float(lov), arcs, span)
 
 
@@ -288,10 +293,20 @@ def _data_span(obs: ObjectObservations) -> tuple[str, float]:
     return units.format_utc(start), math.ceil(days * 1e4) / 1e4
 
 
+def _check_range_used(choices: FitChoices, obs: ObjectObservations) -> None:
+    """ConfigError when ``fit.use_range`` is asked of observations that measure no range."""
+    if choices.options.use_range and "range" not in tuple(obs.measurements.names):
+        raise ConfigError(f"--set fit.use_range=true: the observations of {obs.designation} "
+                          f"({', '.join(Path(f).name for f in obs.files)}) measure no range, so there is none to use")
+
+
 def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
-                      registry: Registry) -> Scenario:
+                      registry: Registry, choices: FitChoices | None = None) -> Scenario:
     """:func:`_scenario`, whose refusal of the epoch the observations set (e.g. outside the
-    ephemeris' years) names the files and the observations' span: the data, not a setting, is at fault."""
+    ephemeris' years) names the files and the observations' span: the data, not a setting, is at
+    fault; with ``choices``, the fit settings checked against the observations too."""
+    if choices is not None:
+        _check_range_used(choices, obs)
     try:
         return _scenario(obs, obs_file, settings, registry)
     except ConfigError as exc:
@@ -682,7 +697,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
     for obs, d in plans:  # validate every scenario and directory before the first run
-        _checked_scenario(obs, d / "observations.psv", scen_settings, reg)
+        _checked_scenario(obs, d / "observations.psv", scen_settings, reg, choices)
         replaced = check_fit_replacing(d, obs.designation, where, overwrite, words)
         if replaced:
             say(f"{words.overwrite}: replacing {replaced} in {d}")

@@ -66,3 +66,8 @@ def test_the_old_default_reach_of_the_line_still_imports_with_a_deprecation_warn
     with pytest.warns(DeprecationWarning, match="AUTO_DELTA_CHI2"):
         from cistrack.fitting.from_observations import AUTO_LOV_SIGMAS
     assert AUTO_LOV_SIGMAS == 3.0
+
+
+def test_a_largest_damping_below_the_first_is_refused_naming_both():
+    with pytest.raises(ConfigError, match=r"fit\.max_damping=1e-09: must exceed fit\.damping \(0\.001\)"):
+        fit_choices({"max_damping": 1e-9})

@@ -119,3 +119,8 @@ def test_a_folder_of_several_objects_fits_names_where_one_of_them_goes(tmp_path,
     err = " ".join(capsys.readouterr().err.split())
     assert "it holds the fits of several objects, one folder each: fit-a, fit-b" in err
     assert f"give --out {tmp_path / 'both'}/fit-<designation>" in err
+
+
+def test_using_the_range_of_observations_that_measure_none_is_refused(tmp_path, capsys):
+    assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", "fit.use_range=true"]) == 2
+    assert "measure no range, so there is none to use" in capsys.readouterr().err and not (tmp_path / "f").exists()
