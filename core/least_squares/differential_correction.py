@@ -19,6 +19,7 @@ convergence, the fixed point is the least-squares solution of the model ``propag
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Any
@@ -400,9 +401,11 @@ def _goodness(w: np.ndarray, used: np.ndarray, say: list[str], unknowns: int = 6
     return chi2, rms, float("nan")
 
 
-def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: list[str]) -> bool:
+def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: list[str],
+             row_chi2: np.ndarray | None = None) -> bool:
     """Whether the fit converged to an orbit that fits (weighted RMS at most ``opts.max_rms``);
-    adds the closing messages and puts the summary first."""
+    adds the closing messages and puts the summary first. ``row_chi2`` (K,): each observation's
+    chi-square at the estimate, to say when the rejection cap kept some above the threshold."""
     converged = p.converged
     if converged and rms > opts.max_rms:
         converged = False
@@ -410,8 +413,12 @@ def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: 
                    "(a wrong local minimum from a poor start, or a wrong model or sensor); start closer "
                    "to the truth or check the data")
     if int(p.rejected.sum()):
+        at_cap = int(p.rejected.sum()) >= math.floor(opts.max_reject_fraction * len(p.rejected))
+        kept = int(np.sum(row_chi2[~p.rejected] > p.threshold)) if at_cap and row_chi2 is not None else 0
+        capped = (f"; {kept} more exceed it but are kept: at most {opts.max_reject_fraction:g} of the observations "
+                  "are rejected (fit.max_reject_fraction)") if kept else ""
         say.append(f"{int(p.rejected.sum())} of {len(p.rejected)} observations rejected "
-                   f"(chi-square > {p.threshold:.4g})")
+                   f"(chi-square > {p.threshold:.4g}{capped})")
     say.insert(0, ("converged" if converged else "NOT converged") + f" after {p.iterations} iterations; "
                f"weighted RMS {rms:.4g}, noise scale {noise_scale:.4g}")
     return converged
@@ -501,7 +508,7 @@ def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, x: np
         warnings.warn(f"fit: {unobservable}", UnobservableWarning, stacklevel=3)
     table = _table(model, measurements, states, p.rejected)
     chi2, rms, noise_scale = _goodness(w, used, say, prob.n)
-    converged = _verdict(p, rms, noise_scale, opts, say)
+    converged = _verdict(p, rms, noise_scale, opts, say, np.sum(w ** 2, axis=1))
     extra = {} if params is None else {"parameter_names": params.names, "parameters": p.x[6:].copy(),
                                         "full_covariance": cov}
     return FitResult(state=p.x[:6], covariance=cov[:6, :6], epoch=t0, residuals=table, rms=rms, chi2=chi2,
