@@ -88,6 +88,7 @@ def quoted(value: object) -> str:
 
 def shown(text: str) -> str:
     """``text`` as a message shows an argument it names unquoted (``--site 568``): as it is when
-    short, else shortened as :func:`quoted` shortens it."""
+    short and printable, else quoted (control characters escaped, so that none acts on the
+    terminal) and shortened as :func:`quoted` does."""
     text = str(text)
-    return text if len(text) <= QUOTED_CHARACTERS + 20 else quoted(text)
+    return text if len(text) <= QUOTED_CHARACTERS + 20 and text.isprintable() else quoted(text)

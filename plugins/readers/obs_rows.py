@@ -117,6 +117,11 @@ def one_object(path, rows: list[ObsRow], designation: str | None) -> tuple[list[
     when they name several objects. Rows naming no object are those of the one object the file
     names; beside several they are refused (:func:`_refuse_unnamed`), never left out."""
     rows = _linked(rows)
+    bad = next((r for r in rows if not (r.obj.isprintable() and r.alias.isprintable())), None)
+    if bad is not None:  # a designation is printed: a control character in it would act on the terminal
+        name = bad.obj if not bad.obj.isprintable() else bad.alias
+        raise FieldError(path, bad.line, "(object)", f"{show_field(name)}: a designation must be printable "
+                                                     "characters (no control characters)")
     objects = list(dict.fromkeys(r.obj for r in rows if r.obj))
     _refuse_unnamed(path, rows, objects)
     if designation is not None:
