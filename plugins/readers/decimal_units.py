@@ -23,9 +23,10 @@ _UNIT = {"rad": Decimal(1), "deg": _CTX.divide(_PI, Decimal(180)),
 
 def plain_float(text: str) -> float:
     """The number written in ``text`` (decimal or exponent notation, as ``float`` reads it);
-    ValueError for anything else, including digits grouped with underscores (``1_08.5``), which
-    Python's ``float`` and ``Decimal`` would read but no observation format allows."""
-    if not isinstance(text, str) or "_" in text:
+    ValueError for anything else, including digits grouped with underscores (``1_08.5``) and
+    digits of other scripts (a full-width ``８``), which Python's ``float`` and ``Decimal`` would read
+    but no observation format allows."""
+    if not isinstance(text, str) or "_" in text or not text.isascii():
         raise ValueError("not a number")
     return float(text)
 
@@ -33,9 +34,9 @@ def plain_float(text: str) -> float:
 def to_rad(text: str, unit: str, scale: float = 1.0) -> float:
     """Radians of the decimal ``text`` in ``unit`` ("deg", "arcsec", "hour", "rad"), divided
     by ``scale``; ValueError when the text is not a finite decimal number (underscores between
-    digits are refused)."""
+    digits and digits other than ASCII's are refused)."""
     try:
-        if "_" in text:
+        if "_" in text or not text.isascii():
             raise decimal.InvalidOperation
         d = Decimal(text.strip())
     except (decimal.InvalidOperation, AttributeError, TypeError):

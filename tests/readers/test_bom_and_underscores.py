@@ -88,3 +88,18 @@ def test_a_file_of_no_known_format_says_so(tmp_path):
     p.write_text("root:x:0:0:root:/root:/bin/bash\n")
     with pytest.raises(MeasurementError, match="not an observation file of any known format"):
         reader_for(p)
+
+
+WIDE = [("ades-psv", ".psv", PSV.format(ra="\uff1102.5"), "ra"),
+        ("ades-xml", ".xml", XML.format(ra="\uff1102.5"), "ra"),
+        ("tdm", ".tdm", TDM.format(ra="\uff1102.5"), "ANGLE_1"),
+        ("csv", ".csv", CSV.format(ra="\uff1101.2"), "azimuth_deg")]
+
+
+@pytest.mark.parametrize("fmt, suffix, text, field", WIDE, ids=[u[0] for u in WIDE])
+def test_numbers_with_digits_of_another_script_are_refused(tmp_path, fmt, suffix, text, field):
+    """A full-width digit (U+FF11) reads as 1 to Python's float and Decimal; no format allows it."""
+    p = tmp_path / f"obs{suffix}"
+    p.write_text(text, encoding="utf-8")
+    with pytest.raises(MeasurementError, match=field):
+        read_observations(p, EPOCH)
