@@ -12,10 +12,11 @@ from xml.parsers import expat
 
 from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
-from cistrack.interfaces.reader import FieldError, read_text_lines
+from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
 from .ades_records import (POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped,
                            say_tiny_sigmas)
+from .ades_psv import ADES_VERSIONS
 from .obs_rows import build_set, parse_epoch
 from .site_params import SiteReader
 
@@ -41,16 +42,17 @@ class _OpticalCollector:
         self.buf: list[str] = []
         self.fline = 0
         self.skipped: dict[str, int] = {}  # other ADES observation elements (<radar>, ...) by name
+        self.stack: list[str] = []  # the open elements
 
     def start(self, name, attrs) -> None:
         line = self.parser.CurrentLineNumber
         if self.root is None:
-            self.root = name
-            if name != "ades":
-                raise FieldError(self.path, line, "<ades>", f"the root element is <{name[:40]}>, not <ades>")
-            if attrs.get("xmlns"):  # ADES elements have no namespace: another vocabulary's <ades>
-                raise FieldError(self.path, line, "<ades>", f"in the namespace {attrs['xmlns'][:80]!r}; ADES elements "
-                                                             "have none")
+            self._root(name, attrs, line)
+        parent = self.stack[-1] if self.stack else None
+        self.stack.append(name)
+        if name in _PARENT and parent != _PARENT[name]:
+            raise FieldError(self.path, line, f"<{name}>", f"inside <{(parent or '(none)')[:40]}>; an ADES <{name}> "
+                                                           f"belongs in <{_PARENT[name]}>")
         if name == "optical":
             if self.rec is not None:
                 raise FieldError(self.path, line, "<optical>", "an <optical> element inside another")
@@ -60,9 +62,25 @@ class _OpticalCollector:
         elif self.rec is not None:
             if self.field is not None:
                 raise FieldError(self.path, line, self.field, f"contains an element <{name[:40]}>; ADES fields are text")
+            if attrs:  # <ra unit="rad"> would be read as degrees
+                raise FieldError(self.path, line, name, f"has attributes ({', '.join(a[:40] for a in attrs)}); ADES fields "
+                                                        "take none: their units are fixed (degrees, arcsec, ...)")
             self.field, self.buf, self.fline = name, [], line
 
+    def _root(self, name: str, attrs: dict, line: int) -> None:
+        self.root = name
+        if name != "ades":
+            raise FieldError(self.path, line, "<ades>", f"the root element is <{name[:40]}>, not <ades>")
+        if attrs.get("xmlns"):  # ADES elements have no namespace: another vocabulary's <ades>
+            raise FieldError(self.path, line, "<ades>", f"in the namespace {attrs['xmlns'][:80]!r}; ADES elements "
+                                                         "have none")
+        version = attrs.get("version")
+        if version is not None and version.strip() not in ADES_VERSIONS:
+            raise FieldError(self.path, line, "version", f"{show_field(version)}: ADES versions "
+                                                         f"{' and '.join(ADES_VERSIONS)} are read")
+
     def end(self, name) -> None:
+        self.stack.pop()
         if name == "optical":
             self.out.append((self.line, self.rec))
             self.rec = None
@@ -81,6 +99,8 @@ class _OpticalCollector:
                          "DTDs and entity declarations are not allowed")
 
 
+_PARENT = {"obsBlock": "ades", "obsData": "obsBlock", "optical": "obsData"}
+"""Where each structural ADES element belongs."""
 OTHER_OBSERVATIONS = ("radar", "offset", "occultation")
 """ADES observation elements that are not optical astrometry: counted and said, not read."""
 
