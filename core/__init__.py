@@ -10,18 +10,26 @@ the entry-point group ``cistrack`` exactly like third-party ones.
 Python; :mod:`cistrack.api` holds every public name (see docs/python-api.md).
 """
 import sys as _sys
-import types as _types
-from importlib import metadata as _md
 
-try:
-    __version__ = _md.version("cistrack")
-except _md.PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0+unknown"
+try:  # Ctrl-C while the ``cistrack`` command is still loading its first modules: one line, status 130
+    import types as _types
+    from importlib import metadata as _md
 
-from cistrack import _moved
-from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
-                             MeasurementError, ParameterError, UnknownComponentError)
-from cistrack.plugin.hookspecs import hookimpl
+    try:
+        __version__ = _md.version("cistrack")
+    except _md.PackageNotFoundError:  # pragma: no cover - running from a source tree
+        __version__ = "0+unknown"
+
+    from cistrack import _moved
+    from cistrack.errors import (CistrackError, ConfigError, DuplicateComponentError, FilterError, IODError,
+                                 MeasurementError, ParameterError, UnknownComponentError)
+    from cistrack.plugin.hookspecs import hookimpl
+except KeyboardInterrupt:
+    if not (_sys.argv[:1] == ["-m"] or _sys.argv[0].rsplit("/", 1)[-1] == "cistrack"):
+        raise  # imported from Python: the caller's interrupt, as it came
+    from cistrack.interrupts import exit_interrupted_while_starting
+
+    exit_interrupted_while_starting()
 
 _moved.install()  # old import paths of moved modules keep working, with a DeprecationWarning
 

@@ -11,7 +11,8 @@ try:
 except KeyboardInterrupt:  # Ctrl-C while the command is still loading (before its handlers exist)
     if _sys.argv[:1] != ["-m"]:  # imported from Python: the caller's interrupt, as it came
         raise
-    _sys.stderr.write("cistrack: interrupted (SIGINT) while starting; nothing was done\n")
-    raise SystemExit(130) from None
+    from cistrack.interrupts import exit_interrupted_while_starting
+
+    exit_interrupted_while_starting()
 
 __all__ = ["console_main", "main"]

@@ -490,8 +490,12 @@ def _configure_logging(quiet: bool) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    _configure_logging(bool(getattr(args, "quiet", False)))
+    try:  # building the parser imports the commands' modules: a Ctrl-C may come while it does
+        args = build_parser().parse_args(argv)
+        _configure_logging(bool(getattr(args, "quiet", False)))
+    except KeyboardInterrupt:
+        _eprint("cistrack: interrupted (SIGINT) while starting; nothing was done")
+        return 130
     previous = install_signal_handlers()
     try:
         return int(args.func(args) or 0)

@@ -3,7 +3,8 @@
 A SIGTERM (``kill``, a batch scheduler, a container stop) or SIGHUP (a closed terminal) raises
 :class:`~cistrack.errors.RunInterrupted` where it arrives; the run then merges its completed
 steps and records "interrupted (SIGTERM)" in its manifest, and the CLI exits with 128 + the
-signal number.
+signal number. Each interrupt is noted (:mod:`cistrack.interrupts`), so that one lost where it was
+raised (inside a ctypes callback) is raised again between the run's steps.
 """
 from __future__ import annotations
 
@@ -11,19 +12,20 @@ import signal
 import threading
 
 from cistrack.errors import RunInterrupted
+from cistrack.interrupts import clear, note
 
 __all__ = ["install_signal_handlers"]
 
 
 def _raise_interrupted(signum, frame) -> None:
-    raise RunInterrupted(signal.Signals(signum).name)
+    raise note(RunInterrupted(signal.Signals(signum).name))
 
 
 def _raise_ctrl_c(signum, frame) -> None:
     """Ctrl-C as Python raises it (an empty message: "SIGINT, Ctrl-C" in the manifest), but as a
     RunInterrupted, so that code that catches a plugin's own KeyboardInterrupt (the registry,
     loading plugins) still stops for a real one."""
-    raise RunInterrupted()
+    raise note(RunInterrupted())
 
 
 def install_signal_handlers() -> dict:
@@ -31,6 +33,7 @@ def install_signal_handlers() -> dict:
     and Ctrl-C raises a RunInterrupted (where Python's own handler is in place); only in the main
     thread of the process running ``main``. Returns the previous handlers."""
     old = {}
+    clear()
     if threading.current_thread() is threading.main_thread():
         for name in ("SIGTERM", "SIGHUP"):
             sig = getattr(signal, name, None)

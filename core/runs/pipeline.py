@@ -26,6 +26,7 @@ from cistrack.evaluation.custody import CustodyMetric, Verdict
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
+from cistrack.interrupts import raise_pending
 from cistrack.errors import CistrackError, ConfigError, FilterError, PluginError, exception_text
 from cistrack.interfaces.component import component_name
 from cistrack.model.measurement import StackedMeasurement
@@ -354,7 +355,9 @@ def _steps(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, even
     notify(pm, "cistrack_run_started", run=ctx)
     _observe(ctx, pm, metrics, pending.pop(), "predicted")
     for k, (t, group) in enumerate(events, start=1):
+        raise_pending()  # a Ctrl-C lost inside the compiler's ctypes callback stops the run here
         _event(ctx, pm, metrics, k, t, group)  # no step outlives its call: its belief is free before the next predict
+    raise_pending()
 
 
 def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: int, t: float, group: tuple) -> None:

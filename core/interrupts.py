@@ -1,0 +1,47 @@
+"""Interrupts that could not stop the program where they arrived, raised again where it can stop.
+
+:func:`exit_interrupted_while_starting` ends the command when a Ctrl-C comes before any handler
+exists (while its first modules load). A signal handler raises where Python happens to be. Inside a ctypes callback (numba's compiler
+calls back into Python through llvmlite while it writes its object cache) an exception is printed
+as "ignored" and lost, and a Ctrl-C there let a run finish and exit 0. The handlers
+(:mod:`cistrack.cli.signals`) :func:`note` each interrupt they raise; the run calls
+:func:`raise_pending` between its steps, which raises one that was lost.
+"""
+from __future__ import annotations
+
+import os
+import sys
+
+from cistrack.errors import RunInterrupted
+
+__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting"]
+
+_PENDING: list[RunInterrupted] = []
+
+
+def note(exc: RunInterrupted) -> RunInterrupted:
+    """Remember ``exc`` (about to be raised by a signal handler); returns it."""
+    _PENDING.append(exc)
+    return exc
+
+
+def raise_pending() -> None:
+    """Raise the interrupt noted last, if any (once: the record is cleared)."""
+    if _PENDING:
+        exc = _PENDING[-1]
+        _PENDING.clear()
+        raise exc
+
+
+def clear() -> None:
+    """Forget the interrupts noted so far (a new command starts, or one was handled)."""
+    _PENDING.clear()
+
+
+def exit_interrupted_while_starting() -> None:
+    """End the ``cistrack`` command interrupted before its handlers exist: one line, status 130
+    (``os._exit``, not SystemExit: under ``python -m`` the interpreter turned that into a death by
+    SIGINT)."""
+    sys.stderr.write("cistrack: interrupted (SIGINT) while starting; nothing was done\n")
+    sys.stderr.flush()
+    os._exit(130)
