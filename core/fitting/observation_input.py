@@ -352,8 +352,9 @@ def _merge(sets: list[MeasurementSet], files: list[str],
         else ("angle_1", "angle_2")
     meta = dict(sets[0].meta)
     meta["source"] = ", ".join(files)
-    meta["default_sigma_count"] = int(sum(min(ms.meta.get("default_sigma_count", 0),
-                                              int(np.count_nonzero(r.source == k))) for k, ms in enumerate(sets)))
+    for key in ("default_sigma_count", "default_sigma_partial"):
+        meta[key] = int(sum(min(ms.meta.get(key, 0), int(np.count_nonzero(r.source == k)))
+                            for k, ms in enumerate(sets)))
     if (drop >= 0).any():
         meta["duplicates_dropped"] = int(np.count_nonzero(drop >= 0))
     ms = MeasurementSet(r.times, r.values, r.sigmas, names, meta, sites=r.sites, kinds=r.kinds, site_table=table)

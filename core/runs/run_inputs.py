@@ -73,9 +73,16 @@ def weights_note(measurements: MeasurementSet) -> str:
         return ""
     if n == 0:
         return f"weights: the file's own uncertainties for all {len(measurements)} observations"
-    return (f"weights: {n} of {len(measurements)} observations have no uncertainty in the file: "
-            f"the {fmt} reader's default sigma_arcsec = {meta.get('default_sigma_arcsec'):g} arcsec on "
-            f"the sky (RA x cos(Dec), Dec) applies; set [measurements] reader.sigma_arcsec to your data's noise")
+    partial, sigma = int(meta.get("default_sigma_partial", 0)), meta.get("default_sigma_arcsec")
+    default = (f"the {fmt} reader's default sigma_arcsec = {sigma:g} arcsec on the sky (RA x cos(Dec), Dec) "
+               "applies")
+    if partial == n:
+        return (f"weights: {n} of {len(measurements)} observations state the uncertainty of one angle only: "
+                f"the file's is used for it, and for the other {default}; set [measurements] "
+                "reader.sigma_arcsec to your data's noise")
+    half = f" ({partial} of them state one angle's and take the default for the other)" if partial else ""
+    return (f"weights: {n} of {len(measurements)} observations have no uncertainty in the file{half}: "
+            f"{default}; set [measurements] reader.sigma_arcsec to your data's noise")
 
 
 def _utc(scenario: Scenario, t: float) -> str:

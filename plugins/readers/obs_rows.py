@@ -154,7 +154,8 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
 
     Rows without sigmas get the reader's default ``sigma_arcsec`` on the sky: on Dec, and on
     RA x cos(Dec) (so sigma_arcsec / cos(Dec) on RA itself; az/el: on each angle). The set's meta
-    records ``default_sigma_arcsec`` and ``default_sigma_count`` (observations that took it)."""
+    records ``default_sigma_arcsec``, ``default_sigma_count`` (observations that took it on
+    either angle) and ``default_sigma_partial`` (those that stated one angle's sigma only)."""
     if not rows:
         raise FieldError(path, 1, "(observations)", "the file has no observations")
     rows, obj = one_object(path, rows, designation)
@@ -172,9 +173,11 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     sigmas = np.array([[r.sigma_a if r.sigma_a is not None else _default_first(r, sigma_arcsec, default),
                         r.sigma_b if r.sigma_b is not None else default] for r in rows])
     defaulted = sum(r.sigma_a is None or r.sigma_b is None for r in rows)
+    partial = sum((r.sigma_a is None) != (r.sigma_b is None) for r in rows)
     used = {r.site for r in rows}
     return MeasurementSet(times, values, sigmas, names,
                           {"source": str(path), "epoch": format_utc(epoch), **(meta or {}),
-                           "default_sigma_arcsec": float(sigma_arcsec), "default_sigma_count": int(defaulted)},
+                           "default_sigma_arcsec": float(sigma_arcsec), "default_sigma_count": int(defaulted),
+                           "default_sigma_partial": int(partial)},
                           sites=np.array([r.site for r in rows]), kinds=np.array([r.kind for r in rows]),
                           site_table={k: v for k, v in site_table.items() if k in used})
