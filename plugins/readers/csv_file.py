@@ -35,6 +35,7 @@ from cistrack.units import ARCSEC_RAD, LU_KM, format_utc, parse_utc, tu_to_utc, 
 
 from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
+from .obs_rows import say_below_horizon
 from .site_params import parse_sites, resolve_site
 
 __all__ = ["CsvReader", "read_measurements", "write_measurements", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS"]
@@ -282,6 +283,7 @@ def read_measurements(path: str | PathLike, epoch: str | datetime, *, sigma_arcs
     _say_tiny_sigmas(p, parser.tiny)
     if not times:
         raise MeasurementError(f"{p}: the file has a header but no measurements")
+    say_below_horizon(p, [v[1] for v in values], [line for line, _ in rows[1:]])
 
     has_range = "range_km" in col
     names = ("azimuth", "elevation", "range") if has_range else ("azimuth", "elevation")

@@ -148,6 +148,27 @@ def _refuse_repeats(path, rows: list[ObsRow]) -> None:
                              f"line {first.line}; one site observes once at a time (other sites may share the time)")
 
 
+LOWEST_SEEN_ELEVATION_DEG = -5.0
+"""Elevations below this (degrees) are warned of: a ground telescope sees nothing that far under
+its horizon (refraction lifts a star by about 0.6 degrees there, a mountain site's horizon dips by
+about 2); such angles are most likely another quantity, or another sign, by mistake."""
+
+
+def say_below_horizon(path, elevations_rad, lines) -> None:
+    """Warn (logger ``cistrack.readers``, once per file) of az/el observations whose elevation lies
+    below :data:`LOWEST_SEEN_ELEVATION_DEG`, naming the first one's line; they are used as given."""
+    el = np.degrees(np.asarray(elevations_rad, dtype=float))
+    below = np.nonzero(el < LOWEST_SEEN_ELEVATION_DEG)[0]
+    if below.size:
+        import logging
+
+        k = int(below[0])
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}, line {lines[k]}: {below.size} of {el.size} elevations lie more than "
+            f"{-LOWEST_SEEN_ELEVATION_DEG:g} degrees below the horizon (this one {el[k]:.4g} deg), where a ground "
+            "telescope sees nothing: are the angles another quantity, or of another sign? They are used as given")
+
+
 def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, Site],
               sigma_arcsec: float, meta: dict | None = None, designation: str | None = None) -> MeasurementSet:
     """The MeasurementSet of ``rows`` in time order (TU elapsed since ``epoch``, leap seconds counted).
@@ -172,6 +193,8 @@ def build_set(path, rows: list[ObsRow], epoch: datetime, site_table: dict[str, S
     values = np.array([[r.a, r.b] for r in rows])
     sigmas = np.array([[r.sigma_a if r.sigma_a is not None else _default_first(r, sigma_arcsec, default),
                         r.sigma_b if r.sigma_b is not None else default] for r in rows])
+    azel = [r for r in rows if r.kind == "azel"]
+    say_below_horizon(path, [r.b for r in azel], [r.line for r in azel])
     defaulted = sum(r.sigma_a is None or r.sigma_b is None for r in rows)
     partial = sum((r.sigma_a is None) != (r.sigma_b is None) for r in rows)
     used = {r.site for r in rows}

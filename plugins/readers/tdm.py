@@ -151,11 +151,14 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
     _check_mode_and_path(path, meta)
     _check_quality_and_timetag(path, meta, seg.line)
     kind = at.lower()
-    if kind == "radec":
-        rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
-        if rf not in _RADEC_FRAMES:
-            raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
-                                                          f"{', '.join(sorted(_RADEC_FRAMES))}")
+    rf, rl = meta.get("REFERENCE_FRAME", ("", ln))
+    if kind == "radec" and rf not in _RADEC_FRAMES:
+        raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
+                                                      f"{', '.join(sorted(_RADEC_FRAMES))}")
+    if kind == "azel" and rf:
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}, line {rl}: REFERENCE_FRAME = {show_field(rf)} applies to RADEC angles; the AZEL angles of "
+            f"the segment starting at line {seg.line} are read as azimuth and elevation at the site")
     return kind
 
 
