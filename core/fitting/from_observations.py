@@ -55,7 +55,7 @@ from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.fitting.maneuver_search import add_maneuvers
 from cistrack.fitting.arcs import ArcSettings, arc_settings
-from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, copies_read_quietly, data_kind,
+from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, copies_read_quietly, data_kind, distinct_names,
                                                 read_object_observations, write_merged)
 from cistrack.least_squares.options import FitOptions, fit_option_problem
 from cistrack.least_squares.result import FitResult
@@ -297,7 +297,7 @@ def _check_range_used(choices: FitChoices, obs: ObjectObservations) -> None:
     """ConfigError when ``fit.use_range`` is asked of observations that measure no range."""
     if choices.options.use_range and "range" not in tuple(obs.measurements.names):
         raise ConfigError(f"--set fit.use_range=true: the observations of {obs.designation} "
-                          f"({', '.join(Path(f).name for f in obs.files)}) measure no range, so there is none to use")
+                          f"({', '.join(distinct_names(obs.files))}) measure no range, so there is none to use")
 
 
 def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
@@ -325,7 +325,7 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
     epoch, days = _data_span(obs)
     raw = dict(template.raw)
     raw.update({"name": f"fit-{_slug(obs.designation)}", "epoch": epoch, "duration_days": days,
-                "description": f"cistrack fit of {obs.designation} from {', '.join(Path(f).name for f in obs.files)}",
+                "description": f"cistrack fit of {obs.designation} from {', '.join(distinct_names(obs.files))}",
                 "measurements": {"file": str(obs_file.resolve())}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
     raw = _ranging_defaults(merge_settings(raw, settings))

@@ -40,7 +40,8 @@ from cistrack.runs.run_inputs import weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
            "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC",
-           "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly"]
+           "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly",
+           "distinct_names"]
 
 READ_EPOCH = "2000-01-01T00:00:00Z"
 """UTC epoch the files are read against (times TU since it) before the fit's own epoch is known."""
@@ -324,13 +325,27 @@ def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
     return drop
 
 
+def distinct_names(paths: list[str | Path]) -> list[str]:
+    """Each path as its last parts, as few as tell it from the other paths (``a/obs.psv`` and
+    ``b/obs.psv``, not ``obs.psv`` twice); the same path given twice is named alike."""
+    parts = [Path(p).parts or (str(p),) for p in paths]
+    names = []
+    for k, mine in enumerate(parts):
+        others = [o for j, o in enumerate(parts) if j != k and o != mine]
+        n = 1
+        while n < len(mine) and any(o[-n:] == mine[-n:] for o in others):
+            n += 1
+        names.append(str(Path(*mine[-n:])))
+    return names
+
+
 def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.ndarray) -> list[str]:
     """One line per file that lost observations as duplicates (``drop`` from :func:`_duplicates`)."""
-    notes = []
+    notes, shown = [], distinct_names(files)
     for k in sorted(set(rows.source[drop >= 0].tolist())):
         mine = (drop >= 0) & (rows.source == k)
-        kept = ", ".join(Path(files[m]).name for m in sorted(set(drop[mine].tolist())))
-        notes.append(f"{Path(files[k]).name}: {int(np.count_nonzero(mine))} observations dropped as duplicates of "
+        kept = ", ".join(shown[m] for m in sorted(set(drop[mine].tolist())))
+        notes.append(f"{shown[k]}: {int(np.count_nonzero(mine))} observations dropped as duplicates of "
                      f"those in {kept} (same site and type, times within {tol_s[k]:g} s, positions within "
                      f"{DUPLICATE_ARCSEC:g} arcsec); each observation is used once")
     return notes
@@ -389,7 +404,7 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
     notes: dict[str, list[str]] = {}
     per_file = _SharedParams(params, registry).per_file(paths) if len(paths) > 1 and not params.get("name") \
         else [params] * len(paths)
-    for p, file_params in zip(paths, per_file):
+    for p, file_params, shown in zip(paths, per_file, distinct_names(paths)):
         path = Path(p)
         found, resolution = _read_file(path, file_params, registry)
         _require_sites(path, found)
@@ -400,7 +415,7 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
             files.append(str(path))
             resolutions.append(max(resolution, data_time_resolution(ms)))
             note = weights_note(ms)
-            notes.setdefault(obj, []).append(f"{path.name}: {len(ms)} observations of {obj}"
+            notes.setdefault(obj, []).append(f"{shown}: {len(ms)} observations of {obj}"
                                              + (f"; {note}" if note else ""))
             say(notes[obj][-1])
     out = []

@@ -76,6 +76,18 @@ def test_a_file_without_a_known_suffix_is_read_by_its_content(tmp_path):
     assert len(objs[0].measurements) == 65
 
 
+def test_files_of_one_name_in_different_folders_are_told_apart_in_the_notes(tmp_path):
+    copies = []
+    for folder in ("night1", "night2"):
+        (tmp_path / folder).mkdir()
+        copies.append(tmp_path / folder / "observations.psv")
+        copies[-1].write_text((DATA / "observations.psv").read_text())
+    notes = read_object_observations(copies, default_registry())[0].notes
+    assert notes[0].startswith("night1/observations.psv: 65 observations of cis0001")
+    assert notes[-1].startswith("night2/observations.psv: 65 observations dropped as duplicates of those in "
+                                "night1/observations.psv")
+
+
 def test_a_file_no_reader_reads_is_refused_with_each_readers_reason(tmp_path):
     p = tmp_path / "notes.txt"
     p.write_text("hello\n")
