@@ -318,12 +318,13 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
         res = run_scenario(scen, seed=seed, registry=reg, observers=observers, progress=progress, log=log)
         return Run(res.summary, None, tuple(res.rows))
     from cistrack.results.dir_lock import run_lock
-    from cistrack.results.earlier_run import PYTHON_WORDS, check_replacing
+    from cistrack.results.earlier_run import PYTHON_WORDS, check_replacing, clear_replaced_fit
 
     directory = Path(out)
     check_output_dir(directory, "out")
     with run_lock(directory, "out"):  # one run at a time in a results directory, as cistrack run
-        check_replacing(directory, scen, seed, "out", overwrite=overwrite, words=PYTHON_WORDS)
+        if check_replacing(directory, scen, seed, "out", overwrite=overwrite, words=PYTHON_WORDS):
+            clear_replaced_fit(directory)
         res = run_scenario(scen, seed=seed, registry=reg, observers=observers, output_dir=directory,
                            progress=progress, log=log, residual_figure=True)
     return Run(res.summary, directory, tuple(res.rows))

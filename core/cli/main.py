@@ -51,7 +51,7 @@ def _fmt(v, nd=3) -> str:
 def cmd_run(args) -> int:
     from cistrack.plugin.registry import default_registry
     from cistrack.results.dir_lock import run_lock
-    from cistrack.results.earlier_run import check_recording_path, check_replacing
+    from cistrack.results.earlier_run import check_recording_path, check_replacing, clear_replaced_fit
     from cistrack.runs.run_id import scenario_run_id
     from cistrack.runs.input_checks import check_run_inputs
     from cistrack.scenario.loading import load_scenario
@@ -73,6 +73,8 @@ def cmd_run(args) -> int:
     try:
         with run_lock(out, where):  # one run at a time in a results directory
             replaced = check_replacing(out, scen, seed, where, overwrite=args.overwrite)
+            if replaced:
+                clear_replaced_fit(out)
             res, recorder = _run_into(args, reg, scen, seed, out, replaced)
     except CistrackError:  # refused before the run (e.g. its --rerun file): leave no directory it made
         if made:

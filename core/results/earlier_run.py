@@ -32,7 +32,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
-           "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS"]
+           "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS", "clear_replaced_fit"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -187,6 +187,28 @@ FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observ
 """A fit's own records in its results directory (beside the run's)."""
 FIT_PLOTS = ("residuals-*.png", "residuals-*.svg")
 """A fit's residual plots in its results directory (one per site)."""
+
+
+def clear_replaced_fit(directory: str | Path) -> list[Path]:
+    """Remove what a ``cistrack fit`` leaves in ``directory`` beside its filter run's results (its
+    merged observation files, its start marker, the ``arc-*`` folders of a fit of each arc), for a
+    run that replaces it (``--overwrite``): they would describe another orbit beside the run's
+    results. Nothing is removed from a directory no fit wrote; returns the paths removed."""
+    import shutil
+
+    from cistrack.results.output_paths import FIT_STARTED
+
+    d = Path(directory)
+    if not ((d / "fit.json").is_file() or (d / FIT_STARTED).is_file()):
+        return []
+    gone = [p for p in sorted(d.glob("observations*.*")) if p.suffix in (".psv", ".tdm") and p.is_file()]
+    gone += [d / FIT_STARTED] if (d / FIT_STARTED).is_file() else []
+    for p in gone:
+        p.unlink()
+    arcs = [p for p in sorted(d.glob("arc-*")) if p.is_dir() and not p.is_symlink() and (p / "fit.json").is_file()]
+    for p in arcs:
+        shutil.rmtree(p)
+    return gone + arcs
 
 
 def _in_part_folders(path: Path, d: Path) -> bool:

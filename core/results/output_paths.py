@@ -30,11 +30,12 @@ __all__ = ["check_output_dir", "check_study_dir", "recorded_study", "is_same_stu
            "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv",
-                   "sky-*.csv", "sky-*.png")
+                   "sky-*.csv", "sky-*.png", "residuals.svg")
 """Files that describe an earlier run or fit of a results directory and that a new run there does
 not itself replace: its exports (``cistrack export``'s default ``estimate.<format>``), its sky
-predictions (``cistrack predict``'s default ``sky-<CODE>.csv`` and ``.png``) and a fit's
-record, residuals, residual plots and line of variations. A run that starts in the directory
+predictions (``cistrack predict``'s default ``sky-<CODE>.csv`` and ``.png``), a filter run's
+residual figure (drawn again at the end of a run that draws one; a fit's run does not) and a
+fit's record, residuals, residual plots and line of variations. A run that starts in the directory
 removes them (:func:`clear_earlier_results`), so that an export or a check never mixes the new
 run with the old one's files (the fit's own files are written again when its fit ends)."""
 

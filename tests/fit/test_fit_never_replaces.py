@@ -47,6 +47,29 @@ def test_overwrite_names_what_it_replaces(run_dir, tmp_path):
     assert "cistrack run" in check_fit_replacing(copy, "C2RLB52", "--out", overwrite=True)
 
 
+@pytest.fixture(scope="module")
+def fit_over_run(run_dir, tmp_path_factory) -> Path:
+    """The run's folder after ``cistrack fit --overwrite`` of the shipped observations into it."""
+    out = tmp_path_factory.mktemp("fit") / "r"
+    shutil.copytree(run_dir, out)
+    assert (out / "residuals.svg").is_file()
+    assert main(["fit", str(OBSERVATIONS), "--out", str(out), "--overwrite", "--quiet"]) == 0
+    return out
+
+
+def test_a_fit_with_overwrite_leaves_nothing_of_the_run_it_replaced(fit_over_run):
+    assert (fit_over_run / "fit.json").is_file()
+    assert not (fit_over_run / "residuals.svg").exists()  # the run's figure, of the other orbit
+
+
+def test_a_run_with_overwrite_leaves_nothing_of_the_fit_it_replaced(fit_over_run, tmp_path):
+    out = tmp_path / "r"
+    shutil.copytree(fit_over_run, out)
+    assert main(["run", "quick", "--set", "duration_days=1.5", "--out", str(out), "--overwrite", "--quiet"]) == 0
+    left = sorted(p.name for p in out.iterdir() if p.name.startswith(("observations", "fit", "residuals-", ".fit-")))
+    assert left == [] and (out / "residuals.svg").is_file()
+
+
 def _one_tracklet_each(path: Path, designations: list[str]) -> Path:
     """An ADES PSV file: the first two observations of the shipped example for each designation
     (one short tracklet each: every fit stops before its filter run and writes its fit.json)."""
