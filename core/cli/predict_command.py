@@ -290,6 +290,7 @@ def _bent_line_note(run_dir, sky) -> str:
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
+    from cistrack.results.dir_lock import check_no_writer
     from cistrack.plugin.registry import default_registry
 
     site = _site(args.site)
@@ -301,6 +302,7 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
+    check_no_writer(args.run, "prediction")  # a fit or run may have started in the directory since it was read
     csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}",
                            keep_other=not (args.out or args.overwrite))
     if not args.quiet:

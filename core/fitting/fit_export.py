@@ -47,6 +47,7 @@ from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
+from cistrack.results.dir_lock import check_no_writer
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
@@ -192,6 +193,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     opts, params = _split_keywords(options, params)
     days = _checked_request(opts, path, format, words)
     d = Path(run_dir)
+    check_no_writer(d, "export")
     record = read_fit_record(d)
     refusal = _refusal(d, record, opts.force, words)
     reg = registry or default_registry()
@@ -221,6 +223,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
+    check_no_writer(d, "export")  # a fit or run may have started in the directory since it was read
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
                  words=words)
     return out

@@ -356,11 +356,13 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     from cistrack.fitting.fit_export import _result as fit_result
     from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
     from cistrack.fitting.fit_record import read_fit_record
+    from cistrack.results.dir_lock import check_no_writer
     from cistrack.runs.export import scenario_of
 
     d = Path(directory)
     if not d.is_dir():
         raise ConfigError(f"{d}: no such directory; give the --out directory of 'cistrack fit' or 'cistrack run'")
+    check_no_writer(d, "prediction")
     reg = registry or default_registry()
     rec = read_fit_record(d) if is_fit_directory(d) else None
     why = fit_refusal(rec) if rec is not None else None

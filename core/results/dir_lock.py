@@ -20,7 +20,8 @@ from cistrack.errors import CistrackError
 from cistrack.results.atomic_files import remove_stale_temporaries
 from cistrack.results.output_paths import FIT_LOCK, RUN_LOCK
 
-__all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK"]
+__all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK",
+           "check_no_writer"]
 
 
 class RunBusy(CistrackError):
@@ -107,3 +108,24 @@ def fit_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
         remove_stale_temporaries(d)
         yield
 
+
+
+def check_no_writer(directory: str | Path, doing: str) -> None:
+    """Refuse (:class:`RunBusy`) to read ``directory``'s results for ``doing`` (e.g. "export") while a
+    ``cistrack fit`` or ``cistrack run`` holds its lock: they are being replaced, and what was read
+    would describe the old orbit beside the new results. Takes and releases a shared lock; a lock
+    file that cannot be opened is passed over."""
+    d = Path(directory)
+    for name, who in ((FIT_LOCK, "cistrack fit"), (RUN_LOCK, "cistrack run")):
+        try:
+            fd = os.open(d / name, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            free = try_lock(fd, shared=True)
+            holder = "" if free else lock_holder(fd)
+        finally:
+            os.close(fd)
+        if not free:
+            raise RunBusy(f"{d}: a '{who}'{holder} is writing its results in this directory; no {doing} of it "
+                          "until it ends (it would describe the orbit being replaced)")

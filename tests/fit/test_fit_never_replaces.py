@@ -147,3 +147,14 @@ def test_a_folder_of_several_objects_fits_names_where_one_of_them_goes(tmp_path,
 def test_using_the_range_of_observations_that_measure_none_is_refused(tmp_path, capsys):
     assert main(["fit", str(OBSERVATIONS), "--out", str(tmp_path / "f"), "--quiet", "--set", "fit.use_range=true"]) == 2
     assert "measure no range, so there is none to use" in capsys.readouterr().err and not (tmp_path / "f").exists()
+
+
+@pytest.mark.parametrize("command", [["export", "{d}", "--overwrite"], ["predict", "{d}", "--site", "568"]])
+def test_export_and_predict_are_refused_while_a_fit_writes_in_the_folder(fit_over_run, capsys, command):
+    from cistrack.results.dir_lock import fit_lock
+
+    with fit_lock(fit_over_run):  # a refit of the folder under way (the lock any 'cistrack fit' there holds)
+        assert main([a.format(d=fit_over_run) for a in command]) == 2
+    err = capsys.readouterr().err
+    assert "a 'cistrack fit'" in err and "is writing its results in this directory" in err
+    assert not any(p.name.startswith(("estimate.", "sky-")) for p in fit_over_run.iterdir())
