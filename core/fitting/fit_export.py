@@ -27,6 +27,7 @@ and then the file says why in a COMMENT.
 """
 from __future__ import annotations
 
+import csv
 import dataclasses
 import math
 import os
@@ -38,13 +39,15 @@ from typing import Any, Callable
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import CistrackError, ConfigError
+from cistrack.errors import CistrackError, ConfigError, PropagationError, StateError
 from cistrack.fitting.fit_record import read_fit_record
 from cistrack.least_squares.area_to_mass import joint_covariances
 from cistrack.least_squares.events import prediction_end
+from cistrack.least_squares.line_of_variations import REACH_DELTA_CHI2, widened_to_hold
 from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.trajectory import ensemble_arc_states
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
 from cistrack.results.dir_lock import check_no_writer
@@ -52,7 +55,7 @@ from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
-           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings"]
+           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -209,11 +212,12 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     dynamics = _dynamics(scen, reg, record)
     times, impact = prediction_end(dynamics, result, times, epoch=scen.epoch)  # an impact ends the file
     n_arc = min(n_arc, times.size)
-    pred = _prediction(result, dynamics, times, opts.covariance)
+    pred, held = _holding_line(_prediction(result, dynamics, times, opts.covariance), line_states(d, record),
+                               dynamics, result.epoch, times)
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
-    comments = _comments(record, name, opts, pred, utc, n_arc, refusal, propagated=format != "opm")
+    comments = _comments(record, name, opts, pred, utc, n_arc, refusal, propagated=format != "opm", held=held)
     warned = prediction_warnings(record, times, n_arc, impact, scen.epoch)
     comments += [f"WARNING: {w}" for w in warned]
     if impact is not None:
@@ -261,6 +265,43 @@ def _prediction(result: FitResult, dynamics, times: np.ndarray, covariance: str)
         return predict_orbit(result, dynamics, times, covariance=covariance)
     pred = predict_orbit(result, dynamics, times, covariance="linear")  # its states; not its covariances
     return pred._replace(covariances=joint[0], linear=joint[1])
+
+
+def line_states(d: Path, rec: dict[str, Any]) -> np.ndarray | None:
+    """The states (M, 6) [LU, VU, synodic, at the fit epoch] of ``d``'s ``lov.csv`` within the
+    reach of the lowest chi-square (:data:`REACH_DELTA_CHI2` times :func:`covariance_scale`) when
+    fit.json says the line is not linear; None otherwise, or when the file is missing or unreadable."""
+    lov = rec.get("line_of_variations")
+    if not isinstance(lov, dict) or lov.get("linear", True) or not isinstance(lov.get("file"), str):
+        return None
+    try:
+        with (Path(d) / Path(lov["file"]).name).open(newline="") as fh:
+            rows = [(float(r["chi2"]), [float(r[c]) for c in ("x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")])
+                    for r in csv.DictReader(fh)]
+    except (OSError, KeyError, TypeError, ValueError, csv.Error):
+        return None
+    chi2 = np.array([c for c, _ in rows])
+    if chi2.size == 0 or not np.all(np.isfinite(chi2)):
+        return None
+    states = units.state_from_km(np.array([x for _, x in rows]))
+    keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * covariance_scale(rec)
+    return states[keep] if np.all(np.isfinite(states[keep])) else None
+
+
+def _holding_line(pred, line: np.ndarray | None, dynamics, t0: float, times: np.ndarray):
+    """(``pred`` with each covariance widened to hold the orbits ``line`` (M, 6) at ``t0`` TU within
+    3 sigma at its time (:func:`widened_to_hold`), True), or (``pred``, False) when there is no line
+    or none of its orbits can be carried over the times (those that hit a body are left out)."""
+    if line is None:
+        return pred, False
+    try:
+        states, alive = ensemble_arc_states(dynamics, line, t0, times)   # (K, M, 6), (M,)
+    except (PropagationError, StateError):
+        return pred, False
+    if not np.any(alive):
+        return pred, False
+    offsets = states[:, alive] - np.asarray(pred.states)[:, None, :]
+    return pred._replace(covariances=np.array([widened_to_hold(c, o) for c, o in zip(pred.covariances, offsets)])), True
 
 
 def _estimated_area_to_mass(record: dict[str, Any]) -> dict[str, Any] | None:
@@ -366,10 +407,11 @@ def _estimates(times: np.ndarray, n_arc: int, utc: np.ndarray, pred) -> Estimate
 
 
 def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, utc: np.ndarray, n_arc: int,
-              refusal: str | None, propagated: bool = True) -> list[str]:
+              refusal: str | None, propagated: bool = True, held: bool = False) -> list[str]:
     """The file's COMMENT lines: the arc and fit, the covariance's scale and propagation (none when
     not ``propagated``: the one state at the fit epoch), the prediction span, and first, when
-    forced, why the fit is not a converged orbit."""
+    forced, why the fit is not a converged orbit, and whether the covariances were widened to
+    hold a line of variations that bends (``held``) or understate it."""
     arc = record["arc"]
     comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
                 f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
@@ -382,7 +424,11 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")
     doubt = covariance_doubt(record)
-    if doubt is not None:
+    if held:
+        comments.insert(0, "WARNING: the fit's line of variations bends away from the linear covariance (a poorly "
+                           "determined orbit; fit.json, lov.csv): each covariance here is widened to hold every "
+                           "orbit along the line within 3 sigma")
+    elif doubt is not None:
         comments.insert(0, "WARNING: the fit's line of variations " + ("bends away from this covariance"
                            if doubt == "bends" else "could not be followed")
                         + ": the covariance understates the uncertainty (a poorly determined orbit; fit.json, lov.csv)")

@@ -270,6 +270,8 @@ def _holding_line(sky: SkyEphemeris, orbit: "DirectoryOrbit", tt: np.ndarray, re
     propagated over the times (it hits a body) is left out."""
     from dataclasses import replace
 
+    from cistrack.least_squares.line_of_variations import widened_to_hold
+
     radec, _ = _sensors(sky.site, units.parse_utc(orbit.epoch), registry or default_registry())
     try:
         states, alive = ensemble_arc_states(orbit.dynamics, orbit.line, orbit.t0, tt)   # (K, M, 6), (M,)
@@ -281,28 +283,8 @@ def _holding_line(sky: SkyEphemeris, orbit: "DirectoryOrbit", tt: np.ndarray, re
     z = radec.measure(states[:, alive].reshape(k * m, 6), np.repeat(tt, m)).reshape(k, m, -1)
     ra, dec = np.radians(sky.ra_deg)[:, None], np.radians(sky.dec_deg)[:, None]
     d = np.stack([_wrapped(z[:, :, 0] - ra) * np.cos(dec), z[:, :, 1] - dec], 2) * _ARCSEC   # (K, M, 2) arcsec
-    cov = np.array([_widened(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
+    cov = np.array([widened_to_hold(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
     return replace(sky, covariance_arcsec2=cov, line_reach_arcsec=np.max(np.linalg.norm(d, axis=2), axis=1))
-
-
-def _widened(cov: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """C + s M (2, 2): M the mean of d d^T over the offsets d (M, 2), s >= 0 the least (to 1 %) with
-    every d^T (C + s M)^-1 d <= 9."""
-    m = np.einsum("mi,mj->ij", d, d) / len(d)
-
-    def inside(s: float) -> bool:
-        return bool(np.max(np.einsum("mi,ij,mj->m", d, np.linalg.inv(cov + s * m), d)) <= 9.0)
-
-    if inside(0.0):
-        return cov
-    hi = 1.0
-    while not inside(hi) and hi < 1e12:
-        hi *= 4.0
-    lo = hi / 4.0 if hi > 1.0 else 0.0
-    while hi - lo > 0.01 * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if inside(mid) else (mid, hi)
-    return cov + hi * m
 
 
 def _sky(dynamics: Dynamics, start: tuple, predicted: tuple, tt: np.ndarray, site: Site, epoch: datetime | str,
@@ -354,7 +336,7 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     directory (the filter's estimate at its last step, when the run finished without diverging:
     what `cistrack export` exports); ConfigError naming the directory otherwise."""
     from cistrack.fitting.fit_export import _result as fit_result
-    from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory
+    from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory, line_states
     from cistrack.fitting.fit_record import read_fit_record
     from cistrack.results.dir_lock import check_no_writer
     from cistrack.runs.export import scenario_of
@@ -379,31 +361,8 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
             fit = fit_result(rec)                                         # and its uncertainty
         return DirectoryOrbit(np.asarray(rec["state"], dtype=float), cov, float(rec["epoch_tu"]), scen.epoch, dyn,
                               str(rec.get("designation") or scen.name), "least-squares fit", fit,
-                              _bent_line(d, rec, covariance_scale(rec)))
+                              line_states(d, rec))
     return _run_orbit(d, scen, dyn)
-
-
-def _bent_line(d: Path, rec: dict, scale: float) -> np.ndarray | None:
-    """The states (M, 6) [LU, VU] of ``d``'s ``lov.csv`` within 3 sigma (:data:`DirectoryOrbit.line`;
-    ``scale``: the covariance's, :func:`cistrack.fitting.fit_export.covariance_scale`) when fit.json
-    says the line is not linear; None otherwise, or when the file is missing or unreadable."""
-    from cistrack.least_squares.line_of_variations import REACH_DELTA_CHI2
-
-    lov = rec.get("line_of_variations")
-    if not isinstance(lov, dict) or lov.get("linear", True) or not isinstance(lov.get("file"), str):
-        return None
-    try:
-        with (d / Path(lov["file"]).name).open(newline="") as fh:
-            rows = [(float(r["chi2"]), [float(r[c]) for c in ("x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")])
-                    for r in csv.DictReader(fh)]
-    except (OSError, KeyError, TypeError, ValueError, csv.Error):
-        return None
-    chi2 = np.array([c for c, _ in rows])
-    if chi2.size == 0 or not np.all(np.isfinite(chi2)):
-        return None
-    states = units.state_from_km(np.array([x for _, x in rows]))
-    keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * scale
-    return states[keep] if np.all(np.isfinite(states[keep])) else None
 
 
 def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:

@@ -41,7 +41,7 @@ from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["LovPoint", "weakest_direction", "line_of_variations", "line_weights", "sample_line", "line_summary",
-           "line_minima", "line_reach", "REACH_DELTA_CHI2"]
+           "line_minima", "line_reach", "REACH_DELTA_CHI2", "widened_to_hold"]
 
 REACH_DELTA_CHI2 = 9.0
 """The line's points within this chi-square of its lowest are the orbits the data allow at 3 sigma
@@ -259,3 +259,26 @@ def line_reach(points: list[LovPoint], delta_chi2: float = REACH_DELTA_CHI2) -> 
     return {"sigma_range": [float(points[inside[0]].sigma), float(points[inside[-1]].sigma)],
             "max_offset_km": max(km_apart(points[k].state, best) for k in inside),
             "open": bool(inside[0] == 0 or inside[-1] == len(points) - 1)}
+
+
+def widened_to_hold(cov: np.ndarray, offsets: np.ndarray, bound: float = 9.0) -> np.ndarray:
+    """C + s M (n, n): ``cov`` C widened along the ``offsets`` d (M, n) from its mean (the orbits of
+    a line of variations that bends away from C), M the mean of d d^T and s >= 0 the least (to 1 %)
+    that puts every d within the ellipsoid d^T (C + s M)^-1 d <= ``bound`` (9: 3 sigma along d);
+    C itself when it already holds them all."""
+    d = np.asarray(offsets, dtype=float)
+    m = np.einsum("mi,mj->ij", d, d) / len(d)
+
+    def inside(s: float) -> bool:
+        return bool(np.max(np.einsum("mi,ij,mj->m", d, np.linalg.inv(cov + s * m), d)) <= bound)
+
+    if inside(0.0):
+        return cov
+    hi = 1.0
+    while not inside(hi) and hi < 1e12:
+        hi *= 4.0
+    lo = hi / 4.0 if hi > 1.0 else 0.0
+    while hi - lo > 0.01 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if inside(mid) else (mid, hi)
+    return cov + hi * m

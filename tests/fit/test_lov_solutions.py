@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 
 import numpy as np
 import pytest
 
 from cistrack.cli.main import main
 from cistrack.fitting.lov_solutions import AUTO_DELTA_CHI2
-from cistrack.fitting.sky_ephemeris import _widened
+from cistrack.least_squares.line_of_variations import widened_to_hold
 from cistrack.least_squares.line_of_variations import LovPoint, line_minima, line_reach
 
 NIGHT = """# version=2022
@@ -97,14 +98,14 @@ def test_the_reach_holds_the_points_within_9_of_the_lowest_and_says_when_it_is_o
 def test_a_widened_sky_covariance_holds_every_offset_at_3_sigma():
     cov = np.diag([4.0, 1.0])
     d = np.array([[300.0, 40.0], [-120.0, -10.0], [5.0, 1.0]])
-    wide = _widened(cov, d)
+    wide = widened_to_hold(cov, d)
     assert np.max(np.einsum("mi,ij,mj->m", d, np.linalg.inv(wide), d)) <= 9.0
     assert np.max(np.einsum("mi,ij,mj->m", d, np.linalg.inv(wide), d)) > 8.5  # no wider than needed
 
 
 def test_a_sky_covariance_that_already_holds_the_line_is_kept():
     cov = np.diag([4.0, 1.0])
-    assert _widened(cov, np.array([[2.0, 1.0]])) is cov
+    assert widened_to_hold(cov, np.array([[2.0, 1.0]])) is cov
 
 
 def test_the_horizon_is_drawn_along_the_line_and_is_shorter_than_the_covariances(fitted):
@@ -132,3 +133,21 @@ def test_an_export_predicted_past_the_horizon_warns_on_the_terminal_and_in_the_f
     assert said in capsys.readouterr().out and said in " ".join(oem.read_text().split())
     assert main(["export", str(d), "--format", "oem", "--predict", "0.25", "--out", str(tmp_path / "q.oem")]) == 0
     assert "horizon" not in capsys.readouterr().out
+
+
+def _first_position_variance_km2(oem) -> float:
+    lines = oem.read_text().splitlines()
+    return float(lines[lines.index("COVARIANCE_START") + 2])
+
+
+def test_an_export_widens_its_covariances_to_hold_the_line(fitted, tmp_path):
+    d, _ = fitted
+    assert main(["export", str(d), "--format", "oem", "--out", str(tmp_path / "w.oem")]) == 0
+    text = " ".join((tmp_path / "w.oem").read_text().split())
+    assert "each covariance here is widened to hold every orbit along the line within 3 sigma" in text
+    linear = tmp_path / "linear"
+    shutil.copytree(d, linear)
+    (linear / "lov.csv").unlink()  # no line to hold: the linear covariance, with the warning that it understates
+    assert main(["export", str(linear), "--format", "oem", "--out", str(tmp_path / "l.oem")]) == 0
+    assert "the covariance understates the uncertainty" in " ".join((tmp_path / "l.oem").read_text().split())
+    assert _first_position_variance_km2(tmp_path / "w.oem") > 4 * _first_position_variance_km2(tmp_path / "l.oem")
