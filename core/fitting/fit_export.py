@@ -217,7 +217,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
-    comments = _comments(record, name, opts, pred, utc, n_arc, refusal, propagated=format != "opm", held=held)
+    comments = _warnings(record, refusal, held) + _comments(record, name, opts, pred, utc, n_arc,
+                                                            propagated=format != "opm")
     warned = prediction_warnings(record, times, n_arc, impact, scen.epoch)
     comments += [f"WARNING: {w}" for w in warned]
     if impact is not None:
@@ -406,12 +407,27 @@ def _estimates(times: np.ndarray, n_arc: int, utc: np.ndarray, pred) -> Estimate
                      covariances_km=[(covs[i] * np.multiply.outer(KM_SCALE, KM_SCALE))[None] for i in range(k)])
 
 
+def _warnings(record: dict[str, Any], refusal: str | None, held: bool) -> list[str]:
+    """The file's first COMMENT lines: when forced, why the fit is not a converged orbit; whether
+    the covariances were widened to hold a line of variations that bends (``held``) or understate it."""
+    out = [] if refusal is None else [
+        f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}"]
+    doubt = covariance_doubt(record)
+    if held:
+        out.append("WARNING: the fit's line of variations bends away from the linear covariance (a poorly "
+                   "determined orbit; fit.json, lov.csv): each covariance here is widened to hold every "
+                   "orbit along the line within 3 sigma")
+    elif doubt is not None:
+        out.append("WARNING: the fit's line of variations " + ("bends away from this covariance" if doubt == "bends"
+                   else "could not be followed") + ": the covariance understates the uncertainty (a poorly "
+                   "determined orbit; fit.json, lov.csv)")
+    return out
+
+
 def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, utc: np.ndarray, n_arc: int,
-              refusal: str | None, propagated: bool = True, held: bool = False) -> list[str]:
-    """The file's COMMENT lines: the arc and fit, the covariance's scale and propagation (none when
-    not ``propagated``: the one state at the fit epoch), the prediction span, and first, when
-    forced, why the fit is not a converged orbit, and whether the covariances were widened to
-    hold a line of variations that bends (``held``) or understate it."""
+              propagated: bool = True) -> list[str]:
+    """The file's COMMENT lines after :func:`_warnings`: the arc and fit, the covariance's scale and
+    propagation (none when not ``propagated``: the one state at the fit epoch), the prediction span."""
     arc = record["arc"]
     comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
                 f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
@@ -423,17 +439,6 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")
-    doubt = covariance_doubt(record)
-    if held:
-        comments.insert(0, "WARNING: the fit's line of variations bends away from the linear covariance (a poorly "
-                           "determined orbit; fit.json, lov.csv): each covariance here is widened to hold every "
-                           "orbit along the line within 3 sigma")
-    elif doubt is not None:
-        comments.insert(0, "WARNING: the fit's line of variations " + ("bends away from this covariance"
-                           if doubt == "bends" else "could not be followed")
-                        + ": the covariance understates the uncertainty (a poorly determined orbit; fit.json, lov.csv)")
-    if refusal is not None:
-        comments.insert(0, f"WARNING: exported with --force although the fit is not a converged orbit: {refusal}")
     return comments
 
 

@@ -57,7 +57,8 @@ def test_a_poorly_determined_fit_draws_its_line_of_variations_by_default(tmp_pat
     assert not record["line_of_variations"]["linear"]
     assert main(["export", str(tmp_path / "fit"), "--format", "oem", "--quiet"]) == 0
     head = (tmp_path / "fit" / "estimate.oem").read_text().splitlines()[:4]
-    assert any("WARNING: the fit's line of variations bends away from this covariance" in line for line in head)
+    assert any("WARNING: the fit's line of variations bends away from the linear covariance" in line
+               and "widened to hold every orbit along the line" in line for line in head)
 
 
 def test_predict_warns_when_the_fits_bent_line_cannot_be_read(tmp_path, capsys):
