@@ -216,15 +216,36 @@ def _check_plugin(reg, args) -> int:
     """``cistrack plugins --check NAME [--param KEY=VALUE ...]``: each check's line as soon as it ends."""
     from cistrack.testing import check_registered
 
+    import tempfile
+
     params = _check_params(args.param or [])
     _check_param_names(reg, args.check, args.kind, params)
     advice = (f"if it needs settings, give them with --param KEY=VALUE, VALUE in TOML syntax, e.g. cistrack plugins "
               f"--check {args.check} --param path=\"out.rrd\"; cistrack plugins {args.check} lists its parameters")
-    results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None,
-                               on_result=_print_check, advice=advice)
+    with tempfile.TemporaryDirectory(prefix="cistrack-check-") as scratch:
+        params = params or _recorder_sink(reg, args.check, args.kind, scratch)
+        results = check_registered(args.check, kind=args.kind, registry=reg, params=params or None,
+                                   on_result=_print_check, advice=advice)
     failed = sum(not r.passed for r in results)
     print(f"{len(results) - failed} passed, {failed} failed")
     return 1 if failed else 0
+
+
+def _recorder_sink(reg, name: str, kind: str | None, scratch: str) -> dict:
+    """For a recorder that takes a ``path`` (checked without ``--param``): ``{"path": a file in the
+    temporary folder scratch}``, said on the terminal (a recorder has nothing to record to without
+    one, as a test gives pytest's tmp_path); {} otherwise."""
+    from cistrack.interfaces.component import param_specs
+
+    if kind not in (None, "recorder") or ("recorder", name) not in reg:
+        return {}
+    factory = reg.get("recorder", name).factory
+    if not isinstance(factory, type) or "path" not in param_specs(factory):
+        return {}
+    path = os.path.join(scratch, f"check-{name}.rrd")
+    print(wrap_lines(f"checking recorder {name!r} with path = {path!r}, a temporary file removed afterwards "
+                     "(--param path=... to choose another)"))
+    return {"path": path}
 
 
 def _check_params(items: list[str]) -> dict:

@@ -213,7 +213,7 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
         except Exception as exc:
             how = f"with {params}" if params else "with its default parameters"
             failed = CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
-                                 f"{describe_exception(exc)}")
+                                 f"{describe_exception(exc)} ({advice})")
             if on_result is not None:
                 on_result(failed)
             return [failed]

@@ -1,6 +1,8 @@
 """`cistrack plugins` refuses arguments it would otherwise ignore or blame on the plugin."""
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from cistrack.cli.main import main
@@ -21,10 +23,18 @@ def test_a_parameter_the_component_takes_is_checked_as_before(capsys):
     assert capsys.readouterr().out.rstrip().endswith("0 failed")
 
 
-def test_a_component_that_needs_a_parameter_is_told_the_command_lines_option(capsys):
-    """The built-in rerun recorder needs somewhere to record: the advice is --param, not Python."""
-    assert main(["plugins", "--check", "rerun"]) == 1
+def test_a_recorder_checked_without_parameters_records_to_a_temporary_file_it_then_removes(capsys):
+    """The built-in rerun recorder needs somewhere to record; its own conformance check had failed."""
+    assert main(["plugins", "--check", "rerun"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "checking recorder 'rerun' with path = '" in out and out.endswith("0 failed")
+    path = out.split("with path = '")[1].split("'")[0]
+    assert not os.path.exists(path) and not os.path.exists(os.path.dirname(path))
+
+
+def test_a_component_that_cannot_be_built_is_told_the_command_lines_option(capsys):
+    """Given parameters that leave the rerun recorder nothing to record to: the advice is --param, not Python."""
+    assert main(["plugins", "--check", "rerun", "--param", "spawn=false"]) == 1
     out = capsys.readouterr().out
     assert 'cistrack plugins --check rerun --param path="out.rrd"' in " ".join(out.split())
     assert "check_plugin(" not in out and "check_registered(" not in out
-
