@@ -110,13 +110,13 @@ def fit_lock(directory: str | Path, where: str = "--out") -> Iterator[None]:
 
 
 
-def check_no_writer(directory: str | Path, doing: str) -> None:
+def check_no_writer(directory: str | Path, doing: str, runs: bool = True) -> None:
     """Refuse (:class:`RunBusy`) to read ``directory``'s results for ``doing`` (e.g. "export") while a
-    ``cistrack fit`` or ``cistrack run`` holds its lock: they are being replaced, and what was read
-    would describe the old orbit beside the new results. Takes and releases a shared lock; a lock
-    file that cannot be opened is passed over."""
+    ``cistrack fit`` or (``runs``) a ``cistrack run`` holds its lock: they are being replaced, and
+    what was read would describe the old orbit beside the new results. Takes and releases a shared
+    lock; a lock file that cannot be opened is passed over."""
     d = Path(directory)
-    for name, who in ((FIT_LOCK, "cistrack fit"), (RUN_LOCK, "cistrack run")):
+    for name, who in ((FIT_LOCK, "cistrack fit"), (RUN_LOCK, "cistrack run"))[:2 if runs else 1]:
         try:
             fd = os.open(d / name, os.O_RDONLY)
         except OSError:

@@ -127,7 +127,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
         raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
                           "no such directory") + "); give the --out directory of a 'cistrack run'")
-    check_no_writer(d, "export")
+    check_no_writer(d, "export", runs=False)  # a running run: export_refusal's, which --force passes
     refusal = export_refusal(d)
     if refusal is not None and not force:
         raise CistrackError(f"{d}: not exported: {refusal}. Export only finished runs, or {words.force} to "
@@ -148,7 +148,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if refusal is not None:
         meta["comments"] = [f"WARNING: exported with --force although run {run_id} is not a finished, "
                             f"converged run: {refusal}"]
-    check_no_writer(d, "export")  # a fit or run may have started in the directory since it was read
+    check_no_writer(d, "export", runs=False)  # a fit may have started in the directory since it was read
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite, words=words)
     return out
 
