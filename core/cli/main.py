@@ -523,7 +523,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except CistrackError as exc:
-        _eprint(f"cistrack: error: {exc}")
+        _eprint(error_text(exc, sys.stderr))
         return 2
     except KeyboardInterrupt as exc:
         why = str(exc) or "SIGINT"
@@ -540,6 +540,15 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def error_text(exc: BaseException, stream: object) -> str:
+    """``cistrack: error: MESSAGE``, wrapped within 120 columns under its label when ``stream`` is a
+    terminal (a person reads it); on one line otherwise (a log, a pipe, a script that greps it). A
+    word longer than the line (a path) is never broken."""
+    text = f"cistrack: error: {exc}"
+    isatty = getattr(stream, "isatty", None)
+    return "\n".join(wrap_labelled(text)) if callable(isatty) and isatty() else text
 
 
 _INTERRUPTED = {

@@ -20,10 +20,10 @@ _ELLIPSIS = "..."  # ASCII: a terminal that cannot show Unicode still shows it i
 
 def wrap_row(lead: str, text: str, width: int = MAX_WIDTH) -> list[str]:
     """``lead`` (a padded name column) then ``text`` wrapped to ``width`` columns, each further
-    line indented to where ``text`` starts."""
+    line indented to where ``text`` starts. A word longer than the line (a path) is never broken."""
     indent = " " * len(lead)
     lines = textwrap.wrap(text, width=width, initial_indent=lead, subsequent_indent=indent,
-                          break_on_hyphens=False)
+                          break_on_hyphens=False, break_long_words=False)
     return lines or [lead.rstrip()]
 
 
@@ -42,7 +42,7 @@ def fit_row(lead: str, text: str, width: int = MAX_WIDTH) -> str:
 
 def wrap_lines(text: str, width: int = MAX_WIDTH) -> str:
     """``text`` with each line wider than ``width`` wrapped, its continuation lines indented like
-    it (plus two spaces)."""
+    it (plus two spaces); a word longer than the line (a path) is never broken."""
     out: list[str] = []
     for line in text.splitlines():
         if len(line) <= width:
@@ -50,7 +50,7 @@ def wrap_lines(text: str, width: int = MAX_WIDTH) -> str:
             continue
         indent = line[:len(line) - len(line.lstrip())]
         out += textwrap.wrap(line.strip(), width=width, initial_indent=indent, subsequent_indent=indent + "  ",
-                             break_on_hyphens=False)
+                             break_on_hyphens=False, break_long_words=False)
     return "\n".join(out)
 
 
