@@ -55,7 +55,8 @@ from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
-           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states"]
+           "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states",
+           "after_last_burn", "BURN_MARGIN_SIGMAS"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -141,6 +142,28 @@ def fit_grid(first_tu: float, last_tu: float, epoch, predict_days: float = 0.0,
     return (grid, n_arc) if leaps is None else (grid + leaps / units.TU_S, n_arc)
 
 
+BURN_MARGIN_SIGMAS = 3.0
+"""The states of a fit with burns start this many of the last burn's time sigmas after it."""
+
+
+def after_last_burn(record: dict[str, Any], times: np.ndarray, n_arc: int) -> tuple[np.ndarray, int]:
+    """``times`` (K,) TU and ``n_arc`` (those covering the arc) without the times before the last
+    burn of ``record["maneuvers"]`` plus :data:`BURN_MARGIN_SIGMAS` of its time's sigma (never past
+    the fit epoch): the fitted orbit is the one flown after the burns, and before them the object
+    was elsewhere. Unchanged for a fit without burns."""
+    burns = [m for m in record.get("maneuvers") or [] if isinstance(m, dict) and "t_burn_days" in m]
+    if not burns:
+        return times, n_arc
+    last = max(burns, key=lambda m: float(m["t_burn_days"]))
+    start = float(units.days_to_tu(float(last["t_burn_days"])
+                                   + BURN_MARGIN_SIGMAS * float(last.get("t_burn_sigma_days") or 0.0)))
+    start = min(start, float(record["epoch_tu"]))
+    keep = times >= start - 1e-12
+    if not np.any(keep[:n_arc]):  # the fit epoch lies past the grid's arc part: start at the first time after it
+        keep = times >= times[min(int(np.searchsorted(times, start)), times.size - 1)]
+    return times[keep], int(np.count_nonzero(keep[:n_arc]))
+
+
 def _scenario(d: Path, reg: Registry):
     import sys
 
@@ -208,7 +231,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if format == "opm":
         times, n_arc = np.array([result.epoch]), 1
     else:
-        times, n_arc = fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days)
+        times, n_arc = after_last_burn(record, *fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days))
     dynamics = _dynamics(scen, reg, record)
     times, impact = prediction_end(dynamics, result, times, epoch=scen.epoch)  # an impact ends the file
     n_arc = min(n_arc, times.size)
@@ -435,11 +458,24 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
                 f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
     comments += _covariance_comments(record, opts.covariance if propagated else None, pred.linear, utc)
     comments += _area_to_mass_comments(record)[:None if propagated else 1]  # at the epoch: nothing carried
+    comments += _burn_comments(record, utc) if propagated else []
     if len(utc) > n_arc:
         days = 0.0 if opts.predict_days is None else opts.predict_days
         comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
                         f"({days:g} days)")
     return comments
+
+
+def _burn_comments(record: dict[str, Any], utc: np.ndarray) -> list[str]:
+    """Where the states of a fit with burns start (:func:`after_last_burn`), and why; none without burns."""
+    burns = [m for m in record.get("maneuvers") or [] if isinstance(m, dict) and "t_burn_days" in m]
+    if not burns or not len(utc):
+        return []
+    last = max(burns, key=lambda m: float(m["t_burn_days"]))
+    return [f"the fit found {len(burns)} impulsive burn(s) (fit.json maneuvers); the states start at "
+            f"{utc[0][:19]}Z, {BURN_MARGIN_SIGMAS:g} sigma after the last ({str(last.get('t_burn_utc', '?'))[:19]}Z "
+            f"+- {24.0 * float(last.get('t_burn_sigma_days') or 0.0):.2g} h, {float(last['delta_v_ms']):.3g} m/s) or "
+            "at the fit epoch: before it the object flew another orbit"]
 
 
 def _covariance_comments(record: dict[str, Any], covariance: str | None, linear: np.ndarray,

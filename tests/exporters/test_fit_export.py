@@ -230,3 +230,22 @@ def test_python_names_its_keywords_when_the_path_exists(fit_dir, tmp_path):
     with pytest.raises(CistrackError, match=r"path='.*taken.oem': already exists; give another file, or pass "
                                             r"overwrite=True"):
         export_fit(fit_dir, "oem", tmp_path / "taken.oem")
+
+
+def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_path):
+    """Before its last burn the object flew another orbit than the fitted one: the states start
+    3 sigma of the burn's time after it, and a COMMENT says why."""
+    d = tmp_path / "burned"
+    shutil.copytree(fit_dir, d)
+    rec = json.loads((d / "fit.json").read_text())
+    t_burn = 0.5 * (rec["arc"]["first_tu"] + rec["arc"]["last_tu"]) * TU_S / 86400.0
+    rec["maneuvers"] = [{"t_burn_days": t_burn, "t_burn_sigma_days": 0.05, "t_burn_utc": "2026-03-09T00:00:00Z",
+                         "delta_v_ms": 0.3}]
+    (d / "fit.json").write_text(json.dumps(rec))
+    text = export_fit(d, "oem", tmp_path / "b.oem").read_text()
+    rows = list(_read(tmp_path / "b.oem").states)
+    whole = list(_read(export_fit(fit_dir, "oem", tmp_path / "a.oem")).states)
+    first_days = (rows[0].epoch - whole[0].epoch).to_value("s") / 86400.0 + rec["arc"]["first_tu"] * TU_S / 86400.0
+    assert t_burn + 0.15 <= first_days + 1e-6 <= t_burn + 0.15 + GRID_MINUTES / 1440.0
+    assert rows[-1].epoch == whole[-1].epoch and len(rows) < len(whole)
+    assert "the fit found 1 impulsive burn(s) (fit.json maneuvers); the states start at" in " ".join(text.split())
