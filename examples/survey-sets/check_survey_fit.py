@@ -13,14 +13,21 @@ Each SET_DIR holds ``observations.psv`` and ``truth.csv`` (``make_survey_sets.py
 - observations in the fit (used or rejected: ``residuals.csv``) of those in the file (a fit of
   the latest arc only leaves the others out);
 - post-fit RMS (arcsec, both angles, observations used), outliers rejected / injected, clean
-  observations rejected (the rest of the rejections), and the wall time of the fit (s).
+  observations rejected (the rest of the rejections), and the wall time of the fit (s);
+- for a set whose object made a burn (``make_survey_sets.py --burn-ms``; ``set.json`` ``burn``):
+  the burns ``fit.json`` reports, and for the one nearest the truth's time its time's z-score,
+  its magnitude's and the vector's Mahalanobis distance squared (3 dof; 14.2 at 99.7 %). Such a
+  fit's OEM starts after the burn, and the truth is propagated from its first ``truth.csv`` row
+  after the burn.
 
 The truth is the first row of ``truth.csv`` propagated with the fit's own dynamics and mapped
 into the OEM's frame with the export's transform, as ``examples/real-data/check_fit.py`` does.
 Exit status 0 when every set converged with Mahalanobis^2 <= 22.5 at every arc epoch, all
 injected outliers rejected and at most ``max_clean_rejected`` clean observations rejected (one,
 or 5 % of them if more: at the 3-sigma chi-square threshold a clean observation is rejected with
-probability 0.3 %) and every observation of the file in the fit, 1 otherwise.
+probability 0.3 %) and every observation of the file in the fit, and, for a burn of 0.3 m/s or
+more, one burn reported with its time and magnitude within 3 sigma of the truth (no burn for a
+set without one); 1 otherwise.
 """
 from __future__ import annotations
 
@@ -70,6 +77,9 @@ class Row:
 
     n_observations: int = 0
     n_fitted: int = 0
+    burn_ms: float = 0.0
+    burns: str = "-"
+    burn_ok: bool = True
 
     @property
     def clean_rejected(self) -> int:
@@ -83,7 +93,7 @@ class Row:
     def ok(self) -> bool:
         return (self.outcome == "converged" and self.max_m2 <= MAHALANOBIS2_BOUND
                 and self.rejected_injected == self.injected and self.clean_rejected <= self.max_clean_rejected
-                and self.n_fitted == self.n_observations)
+                and self.n_fitted == self.n_observations and self.burn_ok)
 
 
 def run_cli(*args: str) -> tuple[int, float, str]:
@@ -93,8 +103,10 @@ def run_cli(*args: str) -> tuple[int, float, str]:
     return proc.returncode, time.perf_counter() - t0, proc.stdout + proc.stderr
 
 
-def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tuple[np.ndarray, np.ndarray, object]:
-    """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function)."""
+def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
+                        after_utc: str | None = None) -> tuple[np.ndarray, np.ndarray, object]:
+    """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function): the truth
+    propagated with the fit's dynamics from the first ``truth.csv`` row (after ``after_utc``, a burn)."""
     from cistrack.fitting.fit_export import _scenario
     from cistrack.plugin.registry import default_registry
 
@@ -103,6 +115,8 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tu
     dyn = scen.build("dynamics", reg)
     frame = scen.build("sensor", reg).inertial_frame()
     rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
+    if after_utc is not None:
+        rows = [r for r in rows if units.parse_utc(r[0]) > units.parse_utc(after_utc)]
     t0 = units.utc_to_tu(scen.epoch, units.parse_utc(rows[0][0]))
     x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
 
@@ -121,11 +135,33 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str]) -> tu
     return t, frame.from_synodic(truth_at(t), t), truth_at
 
 
-def _score(row: Row, fit_dir: Path, truth_csv: Path, outliers: list[dict]) -> None:
-    """Fill the row's error, Mahalanobis, RMS and rejections from a converged, exported fit."""
+def _score_burn(row: Row, rec: dict, burn: dict | None) -> None:
+    """The row's ``burns`` and ``burn_ok`` from fit.json's ``maneuvers`` against the set's ``burn``."""
+    found = rec.get("maneuvers") or []
+    row.burn_ms = float(burn["delta_v_ms"]) if burn else 0.0
+    if not burn:
+        row.burns, row.burn_ok = (f"{len(found)} spurious" if found else "none"), not found
+        return
+    if not found:
+        row.burns, row.burn_ok = "missed", row.burn_ms < 0.3
+        return
+    t_true = units.parse_utc(burn["utc"])
+    m = min(found, key=lambda e: abs((units.parse_utc(e["t_burn_utc"]) - t_true).total_seconds()))
+    z_t = (units.parse_utc(m["t_burn_utc"]) - t_true).total_seconds() / 86400.0 / max(m["t_burn_sigma_days"], 1e-12)
+    z_dv = (m["delta_v_ms"] - row.burn_ms) / max(m["delta_v_sigma_ms"], 1e-12)
+    d = np.asarray(m["delta_v_vector_ms"]) - np.asarray(burn["delta_v_vector_ms"])
+    m2 = float(d @ np.linalg.solve(np.asarray(m["delta_v_covariance_ms2"]), d))
+    row.burns = (f"{len(found)}: {m['delta_v_ms']:.3g} +- {m['delta_v_sigma_ms']:.2g} m/s, time z {z_t:+.1f}, "
+                 f"size z {z_dv:+.1f}, vector M^2 {m2:.1f}")
+    row.burn_ok = len(found) == 1 and abs(z_t) <= 3 and abs(z_dv) <= 3 or row.burn_ms < 0.3
+
+
+def _score(row: Row, fit_dir: Path, truth_csv: Path, outliers: list[dict], burn: dict | None = None) -> None:
+    """Fill the row's error, Mahalanobis, RMS, rejections and burns from a converged, exported fit."""
     rec = json.loads((fit_dir / "fit.json").read_text())
+    _score_burn(row, rec, burn)
     epochs, states, covs = _read_oem()(fit_dir / "estimate.oem")
-    t, truth, truth_at = _truth_in_oem_frame(fit_dir, truth_csv, epochs)
+    t, truth, truth_at = _truth_in_oem_frame(fit_dir, truth_csv, epochs, burn["utc"] if burn else None)
     m2 = np.array([float((truth[k] - states[k]) @ np.linalg.solve(covs[k], truth[k] - states[k]))
                    for k in range(len(t))])
     arc = t <= rec["arc"]["last_tu"] + 600.0 / units.TU_S
@@ -167,19 +203,19 @@ def check_set(set_dir: Path, out: Path) -> Row:
     if rc != 0:
         row.outcome, row.failure = "export failed", text.strip()[-300:]
         return row
-    _score(row, fit_dir, set_dir / "truth.csv", outliers)
+    _score(row, fit_dir, set_dir / "truth.csv", outliers, info.get("burn"))
     return row
 
 
 def table(rows: list[Row]) -> str:
     """Markdown table of the rows (failures listed below it)."""
     out = ["| data set | obs. fitted / in file | format | method | outcome | error at last obs. (km) | max M^2 (<= 22.5) "
-           "| RMS (\") | outliers rejected / injected | clean rejected | time (s) |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]
+           "| RMS (\") | outliers rejected / injected | clean rejected | burns reported | time (s) |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         out.append(f"| {r.name} | {r.n_fitted} / {r.n_observations} | {r.format} | {r.method} | {r.outcome} | {r.error_km:.2f} | "
                    f"{r.max_m2:.2f} | {r.rms_arcsec:.3f} | {r.rejected_injected} / {r.injected} | {r.clean_rejected} | "
-                   f"{r.seconds:.1f} |")
+                   f"{r.burns} | {r.seconds:.1f} |")
     out += [f"- {r.name}: {r.failure}" for r in rows if r.failure]
     return "\n".join(out)
 

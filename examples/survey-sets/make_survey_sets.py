@@ -33,6 +33,12 @@ the Earth, below the IOD's default range floor of 84,328 km). The DRO and NRHO s
 CR3BP catalog are placed in the real Earth-Moon frame as they are (as the ``real-data`` scenario
 does) and then follow the ephemeris model.
 
+With ``--burn-ms DV`` the object makes one impulsive burn of DV m/s in an isotropic random
+direction (synodic frame) at a time drawn evenly between the last observation of its second night
+and the first of its last night (so between nights or, now and then, within one); the observations
+and ``truth.csv`` are of the orbit flown with it, and ``set.json`` gives it as ``burn``
+(``utc``, ``delta_v_ms``, ``delta_v_vector_ms``). Without the option the sets are as before.
+
 Every random draw comes from ``numpy.random.default_rng(seed)`` (one stream per set, split
 per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds looked at while
 building: 1-3 (tests/fit/test_survey_sets.py uses 1 and 2); seeds 101-110 are kept unseen for
@@ -52,7 +58,9 @@ from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
 from cistrack.astro.site_network import merge_sites
 from cistrack.astro.sites import observatory
+from cistrack.interfaces.maneuvers import Impulse
 from cistrack.plugin.registry import default_registry
+from cistrack.propagation.impulses import ImpulsiveDynamics
 from cistrack.runs.observation_files import write_observations
 from cistrack.scenario.loading import load_scenario
 from cistrack.units import ARCSEC_RAD
@@ -263,12 +271,33 @@ def _nights(times: dict[str, list[np.ndarray]]) -> set[int]:
     return set(np.floor((starts - starts[0]) * units.TU_S / 86400.0 + 0.5).astype(int).tolist())
 
 
-def make(out: Path, family: str, seed: int) -> dict:
-    """Simulate one set into ``out``; returns its description (also written as set.json)."""
-    streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(4)
-    choose_rng, plan_rng, noise_rng, outlier_rng = (np.random.default_rng(s) for s in streams)
+def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: float, epoch) -> tuple[Impulse, dict]:
+    """One burn of ``dv_ms`` in an isotropic direction, at a time drawn evenly between the last
+    observation of the second night and the first of the last night; (the impulse, its record)."""
+    tracklets = sorted((tr for trs in times.values() for tr in trs), key=lambda tr: tr[0])
+    starts = np.array([tr[0] for tr in tracklets])
+    night = np.floor((starts - starts[0]) * units.TU_S / 86400.0 + 0.5).astype(int)
+    second, last = np.unique(night)[1], night.max()
+    lo = max(float(tr[-1]) for tr, n in zip(tracklets, night) if n == second)
+    hi = min(float(tr[0]) for tr, n in zip(tracklets, night) if n == last)
+    t_burn = float(rng.uniform(lo, hi))
+    u = rng.standard_normal(3)
+    dv = u / np.linalg.norm(u) * dv_ms
+    record = {"utc": units.format_utc(units.tu_to_utc(epoch, t_burn)), "delta_v_ms": float(dv_ms),
+              "delta_v_vector_ms": [float(v) for v in dv], "frame": "synodic"}
+    return Impulse(t_burn, dv / (units.vu_to_kms(1.0) * 1000.0), "burn"), record
+
+
+def make(out: Path, family: str, seed: int, burn_ms: float = 0.0) -> dict:
+    """Simulate one set into ``out`` (with ``burn_ms`` > 0: the object makes one burn of that many
+    m/s, :func:`_burn`); returns its description (also written as set.json)."""
+    streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(5)
+    choose_rng, plan_rng, noise_rng, outlier_rng, burn_rng = (np.random.default_rng(s) for s in streams)
     reg = default_registry()
     info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg)
+    if burn_ms > 0:
+        impulse, info["burn"] = _burn(burn_rng, times, burn_ms, scen.epoch)
+        dyn = ImpulsiveDynamics(dyn, [impulse])
     parts = []
     for code, tracklets in times.items():
         t = np.sort(np.concatenate(tracklets))
@@ -320,13 +349,15 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--family", nargs="+", default=list(FAMILIES), choices=FAMILIES)
     ap.add_argument("--seed", type=int, nargs="+", default=[1])
+    ap.add_argument("--burn-ms", type=float, default=0.0, help="one impulsive burn of this many m/s (default: none)")
     a = ap.parse_args()
     for fam in a.family:
         for seed in a.seed:
-            info = make(a.out / f"{fam}-s{seed}", fam, seed)
+            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms)
+            burn = f"; a {a.burn_ms:g} m/s burn at {info['burn']['utc'][:16]}" if "burn" in info else ""
             print(f"{fam} seed {seed}: {info['n_observations']} observations, {info['tracklets']} tracklets over "
                   f"{info['nights']} nights from {', '.join(info['sites'])}; first night {info['first_night_exposures']} "
-                  f"exposures at {info['range_km_first']:.0f} km; {len(info['outliers'])} outliers")
+                  f"exposures at {info['range_km_first']:.0f} km; {len(info['outliers'])} outliers{burn}")
 
 
 if __name__ == "__main__":

@@ -64,6 +64,18 @@ def test_generator_keeps_the_survey_cadence(tmp_path, family):
     assert (tmp_path / "again" / "observations.psv").read_bytes() == (tmp_path / family / "observations.psv").read_bytes()
 
 
+def test_a_burned_set_is_the_same_set_until_its_burn_and_another_orbit_after_it(tmp_path):
+    plain, burned = make(tmp_path / "plain", "nrho", 1), make(tmp_path / "burned", "nrho", 1, burn_ms=0.5)
+    assert "burn" not in plain and burned["burn"]["delta_v_ms"] == 0.5
+    assert np.linalg.norm(burned["burn"]["delta_v_vector_ms"]) == pytest.approx(0.5)
+    a, b = (read_observations(tmp_path / d / "observations.psv", _EPOCH) for d in ("plain", "burned"))
+    t_burn = units.utc_to_tu(units.parse_utc(_EPOCH), units.parse_utc(burned["burn"]["utc"]))
+    before, after = a.times < t_burn, a.times > t_burn
+    assert before.sum() >= 2 and after.sum() >= 2  # a night or more on each side
+    np.testing.assert_array_equal(a.values[before], b.values[before])
+    assert np.all(np.abs(a.values[after] - b.values[after]).max(axis=1) > 0)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("family", FAMILIES)
 def test_fit_recovers_each_family(tmp_path, family):
