@@ -43,7 +43,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
+__all__ = ["suspicion", "end_night_bias", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK"]
 
@@ -103,10 +103,47 @@ def suspicion(result: FitResult) -> str:
     if block >= max(BLOCK_MIN, BLOCK_SHARE * rejected.size):
         return (f"it rejects a contiguous block of {block} of {rejected.size} observations "
                 f"({100.0 * block / rejected.size:.0f} %)")
+    bias = end_night_bias(result)
+    if bias:
+        return bias
     if result.rms > MAX_RMS:
         return f"its weighted RMS is {result.rms:.2f} (1 when the residuals are noise)"
     if not result.converged:
         return "it did not converge"
+    return ""
+
+
+END_BIAS_CHI2 = 18.42
+"""The chi-square (2 degrees of freedom, false alarm 1e-4) beyond which the mean normalised
+residual of the first or the last night of an arc is a bias, not noise (:func:`end_night_bias`)."""
+END_NIGHT_GAP_HOURS = 6.0
+"""Observations closer than this belong to one night (:func:`end_night_bias`)."""
+
+
+def end_night_bias(result: FitResult) -> str:
+    """Why the first or the last night of ``result``'s arc sits off the fit together, in words (""
+    when neither does): the median normalised residual of its observations (used or rejected, at
+    least 3; the median, so that a gross outlier among them does not count), n |median|^2 / (pi/2)
+    (the median's variance in noise) beyond :data:`END_BIAS_CHI2`. After a burn the observations
+    that follow are off the ballistic orbit together; a fit of sparse survey tracklets can follow
+    both sides but for the last night, rejecting some of its exposures and keeping others, so that
+    no contiguous block shows it (a 0.5 m/s burn the night before an arc's last tracklet: three of
+    its four exposures rejected, all four 2-3.4 arcsec off in Dec, 6 sigma)."""
+    t = np.asarray(result.residuals.times, dtype=float)
+    z = np.asarray(result.residuals.normalised, dtype=float)
+    order = np.argsort(t, kind="stable")
+    t, z = t[order], z[order]
+    cuts = np.flatnonzero(np.diff(t) >= units.hours_to_tu(END_NIGHT_GAP_HOURS)) + 1
+    if cuts.size == 0:
+        return ""
+    for name, part in (("first", slice(0, cuts[0])), ("last", slice(cuts[-1], t.size))):
+        zk = z[part]
+        zk = zk[np.all(np.isfinite(zk), axis=1)]
+        if len(zk) >= 3:
+            stat = float(len(zk) * np.sum(np.median(zk, axis=0) ** 2) / (0.5 * np.pi))
+            if stat > END_BIAS_CHI2:
+                return (f"the {len(zk)} observations of its {name} night sit off it together: their median residual "
+                        f"is {np.sqrt(stat):.1f} sigma")
     return ""
 
 

@@ -16,9 +16,9 @@ Each SET_DIR holds ``observations.psv`` and ``truth.csv`` (``make_survey_sets.py
   observations rejected (the rest of the rejections), and the wall time of the fit (s);
 - for a set whose object made a burn (``make_survey_sets.py --burn-ms``; ``set.json`` ``burn``):
   the burns ``fit.json`` reports, and for the one nearest the truth's time its time's z-score,
-  its magnitude's and the vector's Mahalanobis distance squared (3 dof; 14.2 at 99.7 %). Such a
-  fit's OEM starts after the burn, and the truth is propagated from its first ``truth.csv`` row
-  after the burn.
+  its magnitude's and the vector's Mahalanobis distance squared (3 dof; 14.2 at 99.7 %). The truth
+  after the burn is propagated from the first ``truth.csv`` row after it (a fit with the burn
+  exports the orbit after it only).
 
 The truth is the first row of ``truth.csv`` propagated with the fit's own dynamics and mapped
 into the OEM's frame with the export's transform, as ``examples/real-data/check_fit.py`` does.
@@ -103,10 +103,28 @@ def run_cli(*args: str) -> tuple[int, float, str]:
     return proc.returncode, time.perf_counter() - t0, proc.stdout + proc.stderr
 
 
+def _truth_rows(truth_csv: Path) -> list[list[str]]:
+    return [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
+
+
+def _propagated(dyn, t0: float, x0: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """States (K, 6) at ``t`` of the orbit ``x0`` at ``t0`` (TU), forward and backward of it."""
+    out = np.empty((len(t), 6))
+    for side in (t >= t0, t < t0):
+        if np.any(side):
+            ts = t[side]
+            order = np.argsort(ts) if ts[0] >= t0 else np.argsort(-ts)
+            res = np.empty((len(ts), 6))
+            res[order] = dyn.propagate(x0[None], t0, ts[order]).states[:, 0, :]
+            out[side] = res
+    return out
+
+
 def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
-                        after_utc: str | None = None) -> tuple[np.ndarray, np.ndarray, object]:
+                        burn_utc: str | None = None) -> tuple[np.ndarray, np.ndarray, object]:
     """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function): the truth
-    propagated with the fit's dynamics from the first ``truth.csv`` row (after ``after_utc``, a burn)."""
+    propagated with the fit's dynamics from the first ``truth.csv`` row, and after ``burn_utc`` (a
+    burn) from the first row after it."""
     from cistrack.fitting.fit_export import _scenario
     from cistrack.plugin.registry import default_registry
 
@@ -114,21 +132,19 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
     scen = _scenario(fit_dir, reg)
     dyn = scen.build("dynamics", reg)
     frame = scen.build("sensor", reg).inertial_frame()
-    rows = [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
-    if after_utc is not None:
-        rows = [r for r in rows if units.parse_utc(r[0]) > units.parse_utc(after_utc)]
-    t0 = units.utc_to_tu(scen.epoch, units.parse_utc(rows[0][0]))
-    x0 = units.state_from_km(np.array([float(v) for v in rows[0][1:]]))
+    rows = _truth_rows(truth_csv)
+    anchors = [rows[0]] + ([next(r for r in rows if units.parse_utc(r[0]) > units.parse_utc(burn_utc))]
+                           if burn_utc else [])
+    starts = [(units.utc_to_tu(scen.epoch, units.parse_utc(r[0])), units.state_from_km(np.array([float(v) for v in r[1:]])))
+              for r in anchors]
+    t_burn = units.utc_to_tu(scen.epoch, units.parse_utc(burn_utc)) if burn_utc else np.inf
 
     def truth_at(t: np.ndarray) -> np.ndarray:
         out = np.empty((len(t), 6))
-        for side in (t >= t0, t < t0):
-            if np.any(side):
-                ts = t[side]
-                order = np.argsort(ts) if ts[0] >= t0 else np.argsort(-ts)
-                res = np.empty((len(ts), 6))
-                res[order] = dyn.propagate(x0[None], t0, ts[order]).states[:, 0, :]
-                out[side] = res
+        after = t >= t_burn
+        for k, part in enumerate((~after, after)):
+            if np.any(part):
+                out[part] = _propagated(dyn, *starts[k], t[part])
         return out
 
     t = np.array([units.utc_to_tu(scen.epoch, units.parse_utc(e + "Z")) for e in epochs])
