@@ -503,8 +503,8 @@ def _configure_logging(quiet: bool) -> None:
     import logging
 
     class _Stderr(logging.Handler):  # looks sys.stderr up at each message (tests swap it)
-        def emit(self, record: logging.LogRecord) -> None:  # within 120 columns, like the rest
-            _eprint("\n".join(wrap_labelled(f"cistrack: {record.getMessage()}")))
+        def emit(self, record: logging.LogRecord) -> None:  # within 120 columns on a terminal, like errors
+            _eprint(for_stream(f"cistrack: {record.getMessage()}", sys.stderr))
 
     logger = logging.getLogger("cistrack")
     if not any(type(h).__name__ == "_Stderr" for h in logger.handlers):
@@ -543,10 +543,14 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def error_text(exc: BaseException, stream: object) -> str:
-    """``cistrack: error: MESSAGE``, wrapped within 120 columns under its label when ``stream`` is a
-    terminal (a person reads it); on one line otherwise (a log, a pipe, a script that greps it). A
-    word longer than the line (a path) is never broken."""
-    text = f"cistrack: error: {exc}"
+    """``cistrack: error: MESSAGE`` as :func:`for_stream` shows it on ``stream``."""
+    return for_stream(f"cistrack: error: {exc}", stream)
+
+
+def for_stream(text: str, stream: object) -> str:
+    """``text`` (an error or warning line) wrapped within 120 columns under its label when
+    ``stream`` is a terminal (a person reads it); on one line otherwise (a log, a pipe, a script
+    that greps it). A word longer than the line (a path) is never broken."""
     isatty = getattr(stream, "isatty", None)
     return "\n".join(wrap_labelled(text)) if callable(isatty) and isatty() else text
 

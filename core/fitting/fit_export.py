@@ -294,20 +294,29 @@ def _prediction(result: FitResult, dynamics, times: np.ndarray, covariance: str)
 def line_states(d: Path, rec: dict[str, Any]) -> np.ndarray | None:
     """The states (M, 6) [LU, VU, synodic, at the fit epoch] of ``d``'s ``lov.csv`` within the
     reach of the lowest chi-square (:data:`REACH_DELTA_CHI2` times :func:`covariance_scale`) when
-    fit.json says the line is not linear; None otherwise, or when the file is missing or unreadable."""
+    fit.json says the line is not linear; None otherwise, or when the file is missing, not a regular
+    file, unreadable, or holds a state no orbit of the fit's has (beyond 3e6 km or 100 km/s)."""
+    from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
+    from cistrack.interfaces.reader import not_a_file
+
     lov = rec.get("line_of_variations")
     if not isinstance(lov, dict) or lov.get("linear", True) or not isinstance(lov.get("file"), str):
         return None
+    path = Path(d) / Path(lov["file"]).name
+    if not_a_file(path) is not None:  # a pipe or a device is never opened
+        return None
     try:
-        with (Path(d) / Path(lov["file"]).name).open(newline="") as fh:
+        with path.open(newline="") as fh:
             rows = [(float(r["chi2"]), [float(r[c]) for c in ("x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")])
                     for r in csv.DictReader(fh)]
     except (OSError, KeyError, TypeError, ValueError, csv.Error):
         return None
-    chi2 = np.array([c for c, _ in rows])
-    if chi2.size == 0 or not np.all(np.isfinite(chi2)):
+    chi2, km = np.array([c for c, _ in rows]), np.array([x for _, x in rows]).reshape(-1, 6)
+    if chi2.size == 0 or not np.all(np.isfinite(chi2)) or not np.all(np.isfinite(km)):
         return None
-    states = units.state_from_km(np.array([x for _, x in rows]))
+    if np.any(np.linalg.norm(km[:, :3], axis=1) > MAX_DISTANCE_KM) or np.any(np.linalg.norm(km[:, 3:], axis=1) > MAX_SPEED_KMS):
+        return None  # not an orbit of the fit's (a damaged file): the linear covariance, with its warning
+    states = units.state_from_km(km)
     keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * covariance_scale(rec)
     return states[keep] if np.all(np.isfinite(states[keep])) else None
 
@@ -325,7 +334,10 @@ def _holding_line(pred, line: np.ndarray | None, dynamics, t0: float, times: np.
     if not np.any(alive):
         return pred, False
     offsets = states[:, alive] - np.asarray(pred.states)[:, None, :]
-    return pred._replace(covariances=np.array([widened_to_hold(c, o) for c, o in zip(pred.covariances, offsets)])), True
+    try:
+        return pred._replace(covariances=np.array([widened_to_hold(c, o) for c, o in zip(pred.covariances, offsets)])), True
+    except np.linalg.LinAlgError:  # a covariance the offsets make singular: the linear one, with its warning
+        return pred, False
 
 
 def _estimated_area_to_mass(record: dict[str, Any]) -> dict[str, Any] | None:

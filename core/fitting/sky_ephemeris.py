@@ -283,7 +283,10 @@ def _holding_line(sky: SkyEphemeris, orbit: "DirectoryOrbit", tt: np.ndarray, re
     z = radec.measure(states[:, alive].reshape(k * m, 6), np.repeat(tt, m)).reshape(k, m, -1)
     ra, dec = np.radians(sky.ra_deg)[:, None], np.radians(sky.dec_deg)[:, None]
     d = np.stack([_wrapped(z[:, :, 0] - ra) * np.cos(dec), z[:, :, 1] - dec], 2) * _ARCSEC   # (K, M, 2) arcsec
-    cov = np.array([widened_to_hold(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
+    try:
+        cov = np.array([widened_to_hold(c, dk) for c, dk in zip(sky.covariance_arcsec2, d)])
+    except np.linalg.LinAlgError:
+        return sky
     return replace(sky, covariance_arcsec2=cov, line_reach_arcsec=np.max(np.linalg.norm(d, axis=2), axis=1))
 
 

@@ -32,7 +32,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
-           "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS", "clear_replaced_fit"]
+           "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS", "clear_replaced_fit", "FIT_INPUTS"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
 """The files a run writes in its results directory (and their temporary ``NAME.*`` files)."""
@@ -189,11 +189,16 @@ FIT_PLOTS = ("residuals-*.png", "residuals-*.svg")
 """A fit's residual plots in its results directory (one per site)."""
 
 
+FIT_INPUTS = ("observations.psv", "observations.tdm", "observations-early.psv", "observations-early.tdm")
+"""The merged observation files a ``cistrack fit`` writes into its directory before its records."""
+
+
 def clear_replaced_fit(directory: str | Path) -> list[Path]:
     """Remove what a ``cistrack fit`` leaves in ``directory`` beside its filter run's results (its
-    merged observation files, its start marker, the ``arc-*`` folders of a fit of each arc), for a
-    run that replaces it (``--overwrite``): they would describe another orbit beside the run's
-    results. Nothing is removed from a directory no fit wrote; returns the paths removed."""
+    merged observation files :data:`FIT_INPUTS`, its start marker, and the ``arc-YYYY-MM-DD``
+    folders of a fit of each arc, those holding nothing but what such a fit writes), for a run
+    that replaces it (``--overwrite``): they would describe another orbit beside the run's results.
+    Nothing else is removed, and nothing from a directory no fit wrote; returns the paths removed."""
     import shutil
 
     from cistrack.results.output_paths import FIT_STARTED
@@ -201,14 +206,35 @@ def clear_replaced_fit(directory: str | Path) -> list[Path]:
     d = Path(directory)
     if not ((d / "fit.json").is_file() or (d / FIT_STARTED).is_file()):
         return []
-    gone = [p for p in sorted(d.glob("observations*.*")) if p.suffix in (".psv", ".tdm") and p.is_file()]
-    gone += [d / FIT_STARTED] if (d / FIT_STARTED).is_file() else []
+    gone = [d / n for n in FIT_INPUTS + (FIT_STARTED,) if (d / n).is_file() and not (d / n).is_symlink()]
     for p in gone:
         p.unlink()
-    arcs = [p for p in sorted(d.glob("arc-*")) if p.is_dir() and not p.is_symlink() and (p / "fit.json").is_file()]
+    arcs = [p for p in sorted(d.glob("arc-*")) if _a_fits_arc_folder(p)]
     for p in arcs:
         shutil.rmtree(p)
     return gone + arcs
+
+
+def _a_fits_arc_folder(p: Path) -> bool:
+    """Whether ``p`` is an ``arc-YYYY-MM-DD`` folder of a fit of each arc: a real folder holding a
+    cistrack fit record and nothing a fit does not write (a user's own file there keeps it)."""
+    import re
+
+    from cistrack.results.output_paths import EARLIER_RESULTS, FIT_LOCK, RUN_LOCK
+
+    if not re.fullmatch(r"arc-\d{4}-\d{2}-\d{2}", p.name) or p.is_symlink() or not p.is_dir():
+        return False
+    if not _is_fit_record(p / "fit.json"):
+        return False
+    ours = set(RESULT_FILES + RESULT_FOLDERS + FIT_INPUTS) | {FIT_LOCK, RUN_LOCK, ".fit-started"}
+    return all(e.name in ours or any(fnmatch.fnmatch(e.name, g) for g in EARLIER_RESULTS) for e in p.iterdir())
+
+
+def _is_fit_record(path: Path) -> bool:
+    try:
+        return json.loads(path.read_text(encoding="utf-8")).get("format") == "cistrack-fit"
+    except (OSError, ValueError, AttributeError):
+        return False
 
 
 def _in_part_folders(path: Path, d: Path) -> bool:

@@ -155,10 +155,6 @@ def _segment_kind(path, seg: _Segment, ln: int) -> str:
     if kind == "radec" and rf not in _RADEC_FRAMES:
         raise FieldError(path, rl, "REFERENCE_FRAME", f"{show_field(rf)}: RADEC angles need one of "
                                                       f"{', '.join(sorted(_RADEC_FRAMES))}")
-    if kind == "azel" and rf:
-        logging.getLogger("cistrack.readers").warning(
-            f"{path}, line {rl}: REFERENCE_FRAME = {show_field(rf)} applies to RADEC angles; the AZEL angles of "
-            f"the segment starting at line {seg.line} are read as azimuth and elevation at the site")
     return kind
 
 
@@ -317,7 +313,8 @@ def _segment_context(path, seg: _Segment, ln: int, table: dict, sites: dict) -> 
     name = _participant_site(path, seg, declared, table, sites)
     return {"kind": kind, "site": name, "sig": sig, "sig_text": sig_text,
             "object": seg.meta.get("PARTICIPANT_2", ("", ln))[0], "shift": _integration_shift(path, seg.meta),
-            "degraded": seg.meta.get("DATA_QUALITY", ("", 0))[0] == "DEGRADED"}
+            "degraded": seg.meta.get("DATA_QUALITY", ("", 0))[0] == "DEGRADED",
+            "frame_ignored": seg.meta["REFERENCE_FRAME"] if kind == "azel" and "REFERENCE_FRAME" in seg.meta else None}
 
 
 class _TdmParse:
@@ -336,6 +333,7 @@ class _TdmParse:
         self.pending: dict[datetime, tuple[str, float, int]] = {}  # epoch -> (keyword, angle, line)
         self.ctx: dict = {}
         self.degraded: list[int] = []  # lines of observations in DATA_QUALITY = DEGRADED segments
+        self.frames_ignored: list[tuple[str, int]] = []  # (REFERENCE_FRAME, line) of AZEL segments
         self.tiny_sigmas: list[tuple[int, float]] = []  # (line, arcsec) of sigma comments below 1 mas
 
     def run(self, lines: list[str]) -> None:
@@ -376,6 +374,8 @@ class _TdmParse:
     def _meta(self, word: str, text: str, ln: int) -> None:
         if word == "META_STOP":
             self.ctx = _segment_context(self.path, self.seg, ln, self.table, self.sites)
+            if self.ctx["frame_ignored"] is not None:
+                self.frames_ignored.append(self.ctx["frame_ignored"])
             self.tiny_sigmas += filter(None, [_tiny_comment_sigma(self.seg)])
             self.ctx["span"] = _segment_span(self.path, self.seg)
             self.state = "between"
@@ -450,6 +450,16 @@ class _TdmParse:
             self.degraded.append(min(ln, pl))
 
 
+def _say_frames_ignored(path, frames: list[tuple[str, int]]) -> None:
+    """Warn (logger ``cistrack.readers``, once per file) of REFERENCE_FRAME given in AZEL segments."""
+    if frames:
+        (rf, rl), n = frames[0], len(frames)
+        more = f" (and in {n - 1} more AZEL segment(s))" if n > 1 else ""
+        logging.getLogger("cistrack.readers").warning(
+            f"{path}, line {rl}: REFERENCE_FRAME = {show_field(rf)}{more} applies to RADEC angles; AZEL angles are "
+            "read as azimuth and elevation at the site")
+
+
 def _say_degraded(path, lines: list[int]) -> None:
     """Warn (logger ``cistrack.readers``) that the observations at ``lines`` are DEGRADED data."""
     if lines:
@@ -509,6 +519,7 @@ class TdmReader(SiteReader):
         parse = _TdmParse(path, self._sites)
         parse.run(read_text_lines(path))
         _say_degraded(path, parse.degraded)
+        _say_frames_ignored(path, parse.frames_ignored)
         _say_tiny_sigmas(path, parse.tiny_sigmas)
         if self.check_degrees:
             _check_degrees(path, parse.rows)

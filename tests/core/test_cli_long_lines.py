@@ -61,14 +61,45 @@ def site(tmp_path: Path) -> Path:
                        {"badhook": "cistrack_badhook_plugin"})
 
 
-def test_a_plugin_load_warning_is_one_message_wrapped_within_120_columns(site, tmp_path):
+def _plugins_listing(site: Path, tmp_path: Path, stderr_on_terminal: bool) -> tuple[str, str]:
+    """(stdout, stderr) of ``cistrack plugins --kind filter`` with the bad plugin on the path; stderr
+    a pseudo-terminal or a pipe."""
+    import pty
+
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")]).rstrip(os.pathsep))
     env.pop("CISTRACK_DISABLE_PLUGIN_AUTOLOAD", None)
-    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "plugins", "--kind", "filter"], capture_output=True,
-                          text=True, env=env, cwd=tmp_path, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    warning = proc.stderr.splitlines()
+    argv = [sys.executable, "-m", "cistrack.cli", "plugins", "--kind", "filter"]
+    if not stderr_on_terminal:
+        proc = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout, proc.stderr
+    master, slave = pty.openpty()
+    proc = subprocess.run(argv, stdout=subprocess.PIPE, stderr=slave, text=True, env=env, cwd=tmp_path, timeout=300)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 65536)
+        except OSError:  # the terminal's other end closed: all was read
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(master)
+    assert proc.returncode == 0
+    return proc.stdout, b"".join(chunks).decode().replace("\r\n", "\n")
+
+
+def test_a_plugin_load_warning_on_a_terminal_is_one_message_wrapped_within_120_columns(site, tmp_path):
+    out, err = _plugins_listing(site, tmp_path, stderr_on_terminal=True)
+    warning = err.splitlines()
     assert warning[0].startswith("cistrack: warning: plugin cistrack-badhook: entry point 'badhook' failed: ")
     assert "PluginValidationError" in warning[0] and len(warning) > 1
-    assert all(line.startswith(" " * len("cistrack: ")) for line in warning[1:]), proc.stderr
-    assert _too_wide(proc.stderr) == [] and _too_wide(proc.stdout) == []
+    assert all(line.startswith(" " * len("cistrack: ")) for line in warning[1:]), err
+    assert _too_wide(err) == [] and _too_wide(out) == []
+
+
+def test_a_plugin_load_warning_to_a_pipe_is_one_line(site, tmp_path):
+    _, err = _plugins_listing(site, tmp_path, stderr_on_terminal=False)
+    (warning,) = err.splitlines()
+    assert warning.startswith("cistrack: warning: plugin cistrack-badhook: entry point 'badhook' failed: ")

@@ -158,3 +158,15 @@ def test_export_and_predict_are_refused_while_a_fit_writes_in_the_folder(fit_ove
     err = capsys.readouterr().err
     assert "a 'cistrack fit'" in err and "is writing its results in this directory" in err
     assert not any(p.name.startswith(("estimate.", "sky-")) for p in fit_over_run.iterdir())
+
+
+def test_a_run_with_overwrite_keeps_the_users_own_files_in_a_fit_folder(fit_over_run, tmp_path):
+    out = tmp_path / "r"
+    shutil.copytree(fit_over_run, out)
+    (out / "observations-from-telescope.tdm").write_text("mine\n")
+    (out / "arc-notes").mkdir()
+    shutil.copy(out / "fit.json", out / "arc-notes" / "fit.json")
+    (out / "arc-notes" / "mynotes.txt").write_text("mine\n")
+    assert main(["run", "quick", "--set", "duration_days=1.5", "--out", str(out), "--overwrite", "--quiet"]) == 0
+    assert (out / "observations-from-telescope.tdm").read_text() == "mine\n"
+    assert (out / "arc-notes" / "mynotes.txt").is_file() and not (out / "observations.psv").exists()

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -151,3 +154,27 @@ def test_an_export_widens_its_covariances_to_hold_the_line(fitted, tmp_path):
     assert main(["export", str(linear), "--format", "oem", "--out", str(tmp_path / "l.oem")]) == 0
     assert "the covariance understates the uncertainty" in " ".join((tmp_path / "l.oem").read_text().split())
     assert _first_position_variance_km2(tmp_path / "w.oem") > 4 * _first_position_variance_km2(tmp_path / "l.oem")
+
+
+def _damaged(d, tmp_path, how):
+    out = tmp_path / how
+    shutil.copytree(d, out)
+    lov = out / "lov.csv"
+    if how == "huge":
+        lines = lov.read_text().splitlines()
+        cells = lines[2].split(",")
+        cells[3] = "1e30"
+        lov.write_text("\n".join(lines[:2] + [",".join(cells)] + lines[3:]) + "\n")
+    else:
+        lov.unlink()
+        os.mkfifo(lov) if how == "fifo" else lov.symlink_to("/dev/zero")
+    return out
+
+
+@pytest.mark.parametrize("how", ["huge", "fifo", "zero"])
+def test_a_damaged_line_file_leaves_the_linear_covariance_with_its_warning(fitted, tmp_path, how):
+    d = _damaged(fitted[0], tmp_path, how)
+    proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "export", str(d), "--format", "oem"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert "the covariance understates the uncertainty" in " ".join((d / "estimate.oem").read_text().split())

@@ -54,3 +54,13 @@ def test_a_reference_frame_beside_azel_angles_is_said_not_to_apply(tmp_path, cap
     with caplog.at_level("WARNING", logger="cistrack.readers"):
         read_observations(path, EPOCH)
     assert f"{path}, line 9: REFERENCE_FRAME = 'ICRF' applies to RADEC angles" in caplog.text, caplog.text
+
+
+def test_a_reference_frame_in_many_azel_segments_is_said_once(tmp_path, caplog):
+    path = _tdm(tmp_path, [20.0, 21.0], frame="REFERENCE_FRAME = ICRF\n")
+    one = path.read_text()
+    head, seg = one[:len(TDM_HEAD)], one[len(TDM_HEAD):]
+    path.write_text(head + seg + seg.replace("T01:", "T03:").replace("T02:", "T04:"))
+    with caplog.at_level("WARNING", logger="cistrack.readers"):
+        read_observations(path, EPOCH)
+    assert caplog.text.count("applies to RADEC angles") == 1 and "(and in 1 more AZEL segment(s))" in caplog.text
