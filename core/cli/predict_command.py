@@ -268,13 +268,14 @@ def _bent_line_note(run_dir, sky) -> str:
     widened to hold it (``sky.line_reach_arcsec``), or, when the line could not be followed or read,
     a warning that the ellipses drawn from the covariance understate where to look."""
     from cistrack.errors import CistrackError
-    from cistrack.fitting.fit_export import covariance_doubt, is_fit_directory
+    from cistrack.fitting.fit_export import covariance_doubt, is_fit_directory, line_drawn_short
     from cistrack.fitting.fit_record import read_fit_record
 
     if not is_fit_directory(run_dir):
         return ""
     try:
-        doubt = covariance_doubt(read_fit_record(Path(run_dir)))
+        rec = read_fit_record(Path(run_dir))
+        doubt = covariance_doubt(rec)
     except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no note is no harm
         return ""
     if doubt is None:
@@ -282,7 +283,8 @@ def _bent_line_note(run_dir, sky) -> str:
     if doubt == "bends" and sky.line_reach_arcsec is not None:
         return ("note: the fit's line of variations bends away from its covariance: the 3-sigma ellipses are widened "
                 "to hold the orbits along it within 3 sigma (up to "
-                f"{float(np.max(sky.line_reach_arcsec)):,.0f} arcsec from the predicted position; line_reach_arcsec)")
+                f"{float(np.max(sky.line_reach_arcsec)):,.0f} arcsec from the predicted position; line_reach_arcsec)"
+                + line_drawn_short(rec))
     return ("warning: the fit's line of variations " + ("bends away from" if doubt == "bends" else
             "could not check") + " its covariance: the 3-sigma ellipses understate where to look")
 
@@ -290,12 +292,13 @@ def _bent_line_note(run_dir, sky) -> str:
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
-    from cistrack.results.dir_lock import check_no_writer
+    from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
     from cistrack.plugin.registry import default_registry
 
     site = _site(args.site)
     prefix = _prefix(args)
     reg = default_registry()
+    stamp = results_stamp(args.run)
     orbit = orbit_of_directory(args.run, reg)
     times, impact_note = _until_impact(_times(args, orbit), orbit)
     if not args.quiet:
@@ -303,6 +306,7 @@ def cmd_predict(args) -> int:
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
     check_no_writer(args.run, "prediction")  # a fit or run may have started in the directory since it was read
+    check_unchanged(args.run, stamp, "prediction")  # ... or started and ended
     csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}",
                            keep_other=not (args.out or args.overwrite))
     if not args.quiet:

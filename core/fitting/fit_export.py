@@ -50,13 +50,13 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import ensemble_arc_states
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
-from cistrack.results.dir_lock import check_no_writer
+from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
            "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states",
-           "after_last_burn", "BURN_MARGIN_SIGMAS"]
+           "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -220,6 +220,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     days = _checked_request(opts, path, format, words)
     d = Path(run_dir)
     check_no_writer(d, "export")
+    stamp = results_stamp(d)
     record = read_fit_record(d)
     refusal = _refusal(d, record, opts.force, words)
     reg = registry or default_registry()
@@ -252,6 +253,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
     check_no_writer(d, "export")  # a fit or run may have started in the directory since it was read
+    check_unchanged(d, stamp, "export")  # ... or started and ended
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
                  words=words)
     return out
@@ -319,6 +321,19 @@ def line_states(d: Path, rec: dict[str, Any]) -> np.ndarray | None:
     states = units.state_from_km(km)
     keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * covariance_scale(rec)
     return states[keep] if np.all(np.isfinite(states[keep])) else None
+
+
+def line_drawn_short(rec: dict[str, Any]) -> str:
+    """``, as far as it was drawn (...)`` when fit.json's line of variations ends inside its 3-sigma
+    reach (``reach.open``: the orbits the data allow go on beyond its drawn end, e.g. a short
+    ``fit.lov = N``), so that what holds "every orbit along the line" says it holds the drawn part
+    only; "" otherwise."""
+    lov = rec.get("line_of_variations")
+    reach = lov.get("reach") if isinstance(lov, dict) else None
+    if not isinstance(reach, dict) or not reach.get("open"):
+        return ""
+    return (", as far as it was drawn: the orbits the data allow go on beyond its end (draw it further with "
+            "fit.lov = \"auto\" or a larger number of sigmas)")
 
 
 def _holding_line(pred, line: np.ndarray | None, dynamics, t0: float, times: np.ndarray):
@@ -451,7 +466,7 @@ def _warnings(record: dict[str, Any], refusal: str | None, held: bool) -> list[s
     if held:
         out.append("WARNING: the fit's line of variations bends away from the linear covariance (a poorly "
                    "determined orbit; fit.json, lov.csv): each covariance here is widened to hold every "
-                   "orbit along the line within 3 sigma")
+                   "orbit along the line within 3 sigma" + line_drawn_short(record))
     elif doubt is not None:
         out.append("WARNING: the fit's line of variations " + ("bends away from this covariance" if doubt == "bends"
                    else "could not be followed") + ": the covariance understates the uncertainty (a poorly "

@@ -21,7 +21,7 @@ from cistrack.results.atomic_files import remove_stale_temporaries
 from cistrack.results.output_paths import FIT_LOCK, RUN_LOCK
 
 __all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK",
-           "check_no_writer"]
+           "check_no_writer", "results_stamp", "check_unchanged"]
 
 
 class RunBusy(CistrackError):
@@ -129,3 +129,29 @@ def check_no_writer(directory: str | Path, doing: str, runs: bool = True) -> Non
         if not free:
             raise RunBusy(f"{d}: a '{who}'{holder} is writing its results in this directory; no {doing} of it "
                           "until it ends (it would describe the orbit being replaced)")
+
+
+_RECORDS = ("fit.json", "manifest.json")
+"""The records whose change says a results directory was written again (:func:`results_stamp`)."""
+
+
+def results_stamp(directory: str | Path) -> tuple:
+    """What identifies the results of ``directory`` now: (name, inode, size, mtime in ns) of its
+    ``fit.json`` and ``manifest.json`` (None for one that is missing)."""
+    out = []
+    for name in _RECORDS:
+        try:
+            st = os.stat(Path(directory) / name)
+            out.append((name, st.st_ino, st.st_size, st.st_mtime_ns))
+        except OSError:
+            out.append((name, None))
+    return tuple(out)
+
+
+def check_unchanged(directory: str | Path, stamp: tuple, doing: str) -> None:
+    """Refuse (:class:`RunBusy`) to write ``doing``'s file when ``directory``'s results are no longer
+    those of ``stamp`` (:func:`results_stamp`, taken when they were read): a fit or run wrote them
+    again meanwhile, and the file would describe the orbit it replaced."""
+    if results_stamp(directory) != stamp:
+        raise RunBusy(f"{directory}: its results were written again while the {doing} was made (a new 'cistrack fit' "
+                      f"or 'cistrack run' there); nothing was written: run the {doing} again")

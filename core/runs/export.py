@@ -22,7 +22,7 @@ from typing import Any, Callable
 
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
-from cistrack.results.dir_lock import check_no_writer
+from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
 from cistrack.results.estimates import read_estimates
 from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
@@ -128,6 +128,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
         raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
                           "no such directory") + "); give the --out directory of a 'cistrack run'")
     check_no_writer(d, "export", runs=False)  # a running run: export_refusal's, which --force passes
+    stamp = results_stamp(d)
     refusal = export_refusal(d)
     if refusal is not None and not force:
         raise CistrackError(f"{d}: not exported: {refusal}. Export only finished runs, or {words.force} to "
@@ -149,6 +150,8 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
         meta["comments"] = [f"WARNING: exported with --force although run {run_id} is not a finished, "
                             f"converged run: {refusal}"]
     check_no_writer(d, "export", runs=False)  # a fit may have started in the directory since it was read
+    if not force:  # a forced export of a running run reads a manifest that changes as it runs
+        check_unchanged(d, stamp, "export")
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite, words=words)
     return out
 

@@ -170,3 +170,19 @@ def test_a_run_with_overwrite_keeps_the_users_own_files_in_a_fit_folder(fit_over
     assert main(["run", "quick", "--set", "duration_days=1.5", "--out", str(out), "--overwrite", "--quiet"]) == 0
     assert (out / "observations-from-telescope.tdm").read_text() == "mine\n"
     assert (out / "arc-notes" / "mynotes.txt").is_file() and not (out / "observations.psv").exists()
+
+
+def test_an_export_or_prediction_whose_fit_was_written_again_meanwhile_writes_nothing(fit_over_run, tmp_path):
+    """A refit that starts and ends while an export or prediction computes (the lock check at their
+    start and end sees no writer) changes fit.json: the file they would write describes the old orbit."""
+    from cistrack.results.dir_lock import RunBusy, check_unchanged, results_stamp
+
+    d = tmp_path / "r"
+    shutil.copytree(fit_over_run, d)
+    stamp = results_stamp(d)
+    check_unchanged(d, stamp, "export")  # nothing written meanwhile: no refusal
+    record = (d / "fit.json").read_text()
+    (d / "fit.json").unlink()
+    (d / "fit.json").write_text(record)  # the same text, written again: another file
+    with pytest.raises(RunBusy, match="results were written again while the export was made"):
+        check_unchanged(d, stamp, "export")

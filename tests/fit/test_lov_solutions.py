@@ -178,3 +178,16 @@ def test_a_damaged_line_file_leaves_the_linear_covariance_with_its_warning(fitte
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert "the covariance understates the uncertainty" in " ".join((d / "estimate.oem").read_text().split())
+
+
+def test_a_line_drawn_short_of_its_reach_is_said_to_be_held_only_as_far_as_it_was_drawn(fitted, tmp_path):
+    """A short fit.lov = N ends the line inside its 3-sigma reach (fit.json reach.open): the widened
+    covariance holds the drawn part only, and the export says so."""
+    d = tmp_path / "short"
+    shutil.copytree(fitted[0], d)
+    rec = json.loads((d / "fit.json").read_text())
+    rec["line_of_variations"]["reach"]["open"] = True
+    (d / "fit.json").write_text(json.dumps(rec))
+    assert main(["export", str(d), "--format", "oem", "--quiet"]) == 0
+    text = " ".join((d / "estimate.oem").read_text().replace("\nCOMMENT ", " ").split())
+    assert "within 3 sigma, as far as it was drawn: the orbits the data allow go on beyond its end" in text
