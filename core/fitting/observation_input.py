@@ -325,6 +325,22 @@ def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
     return drop
 
 
+def _refuse_same_file_twice(paths: list[str | Path]) -> None:
+    """ConfigError naming two of ``paths`` that are one file (the same path, or two spellings or a
+    link of it): every observation in it would be read twice and the copy dropped as a duplicate."""
+    seen: list[tuple[str | Path, tuple[int, int]]] = []
+    for p in paths:
+        try:
+            st = os.stat(p)
+        except OSError:
+            continue  # a missing file is the reader's to name
+        key = (st.st_dev, st.st_ino)
+        first = next((q for q, k in seen if k == key), None)
+        if first is not None:
+            raise ConfigError(f"{p}: the same file as {first}, given before it; give each file once")
+        seen.append((p, key))
+
+
 def distinct_names(paths: list[str | Path]) -> list[str]:
     """Each path as its last parts, as few as tell it from the other paths (``a/obs.psv`` and
     ``b/obs.psv``, not ``obs.psv`` twice); the same path given twice is named alike."""
@@ -399,6 +415,7 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
         raise ConfigError("no observation files given; give one or more files (ADES .psv/.xml, MPC 80-column, "
                           "CCSDS .tdm, cistrack .csv)")
     check_file_sizes(paths)
+    _refuse_same_file_twice(paths)
     params = dict(reader_params or {})
     by_object: dict[str, tuple[list[MeasurementSet], list[str], list[float]]] = {}
     notes: dict[str, list[str]] = {}

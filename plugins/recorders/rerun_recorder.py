@@ -171,6 +171,10 @@ class RerunRecorder(Component):
         if path is not None and not isinstance(path, (str, os.PathLike)):
             self._fail("path", path, "must be a file path (str) or None")
         self.path = None if path is None else os.fspath(path)
+        special = _not_a_file_to_write(self.path)
+        if special:
+            self._fail("path", self.path, f"{special}, which a recording is never written to; give the path of a file "
+                                          "or a directory")
         for name, value in (("serve", serve), ("spawn", spawn), ("overwrite", overwrite)):
             if not isinstance(value, (bool, np.bool_)):
                 self._fail(name, value, "must be true or false")
@@ -555,3 +559,22 @@ def _log_numbers(rec: rr.RecordingStream, prefix: str, values: dict) -> None:
 @hookimpl
 def cistrack_register(registry) -> None:
     registry.add("recorder", "rerun", RerunRecorder)
+
+
+def _not_a_file_to_write(path: str | None) -> str:
+    """Why ``path`` (which exists) cannot take a recording: a pipe (opening it to write waits for a
+    reader), a device such as /dev/full, a socket; "" for a regular file, a directory, a path that
+    does not exist yet, or None."""
+    import stat
+
+    if path is None or "{run_id}" in path:
+        return ""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return ""
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return ""
+    kind = ("a named pipe" if stat.S_ISFIFO(mode) else "a character device" if stat.S_ISCHR(mode)
+            else "a block device" if stat.S_ISBLK(mode) else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    return f"is {kind}, not a regular file"

@@ -88,6 +88,19 @@ def test_files_of_one_name_in_different_folders_are_told_apart_in_the_notes(tmp_
                                 "night1/observations.psv")
 
 
+@pytest.mark.parametrize("second", ["same", "spelled", "link"])
+def test_one_file_given_twice_is_refused_naming_both(tmp_path, monkeypatch, second):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "night").mkdir()
+    first = tmp_path / "night" / "obs.psv"
+    first.write_text((DATA / "observations.psv").read_text())
+    if second == "link":
+        (tmp_path / "link.psv").symlink_to(first)
+    other = {"same": first, "spelled": "./night/../night/obs.psv", "link": "link.psv"}[second]
+    with pytest.raises(ConfigError, match=f"{other}: the same file as {first}, given before it; give each file once"):
+        read_object_observations([first, other], default_registry())
+
+
 def test_a_file_no_reader_reads_is_refused_with_each_readers_reason(tmp_path):
     p = tmp_path / "notes.txt"
     p.write_text("hello\n")
