@@ -146,15 +146,20 @@ BURN_MARGIN_SIGMAS = 3.0
 """The states of a fit with burns start this many of the last burn's time sigmas after it."""
 
 
+def _burns(record: dict[str, Any]) -> tuple[list[dict], dict | None]:
+    """(the ``maneuvers`` entries of fit.json that give a burn time, the latest of them or None)."""
+    burns = [m for m in record.get("maneuvers") or [] if isinstance(m, dict) and "t_burn_days" in m]
+    return burns, max(burns, key=lambda m: float(m["t_burn_days"])) if burns else None
+
+
 def after_last_burn(record: dict[str, Any], times: np.ndarray, n_arc: int) -> tuple[np.ndarray, int]:
     """``times`` (K,) TU and ``n_arc`` (those covering the arc) without the times before the last
     burn of ``record["maneuvers"]`` plus :data:`BURN_MARGIN_SIGMAS` of its time's sigma (never past
     the fit epoch): the fitted orbit is the one flown after the burns, and before them the object
     was elsewhere. Unchanged for a fit without burns."""
-    burns = [m for m in record.get("maneuvers") or [] if isinstance(m, dict) and "t_burn_days" in m]
+    burns, last = _burns(record)
     if not burns:
         return times, n_arc
-    last = max(burns, key=lambda m: float(m["t_burn_days"]))
     start = float(units.days_to_tu(float(last["t_burn_days"])
                                    + BURN_MARGIN_SIGMAS * float(last.get("t_burn_sigma_days") or 0.0)))
     start = min(start, float(record["epoch_tu"]))
@@ -495,10 +500,9 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
 
 def _burn_comments(record: dict[str, Any], utc: np.ndarray) -> list[str]:
     """Where the states of a fit with burns start (:func:`after_last_burn`), and why; none without burns."""
-    burns = [m for m in record.get("maneuvers") or [] if isinstance(m, dict) and "t_burn_days" in m]
+    burns, last = _burns(record)
     if not burns or not len(utc):
         return []
-    last = max(burns, key=lambda m: float(m["t_burn_days"]))
     return [f"the fit found {len(burns)} impulsive burn(s) (fit.json maneuvers); the states start at "
             f"{utc[0][:19]}Z, {BURN_MARGIN_SIGMAS:g} sigma after the last ({str(last.get('t_burn_utc', '?'))[:19]}Z "
             f"+- {24.0 * float(last.get('t_burn_sigma_days') or 0.0):.2g} h, {float(last['delta_v_ms']):.3g} m/s) or "

@@ -107,25 +107,13 @@ def _truth_rows(truth_csv: Path) -> list[list[str]]:
     return [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
 
 
-def _propagated(dyn, t0: float, x0: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """States (K, 6) at ``t`` of the orbit ``x0`` at ``t0`` (TU), forward and backward of it."""
-    out = np.empty((len(t), 6))
-    for side in (t >= t0, t < t0):
-        if np.any(side):
-            ts = t[side]
-            order = np.argsort(ts) if ts[0] >= t0 else np.argsort(-ts)
-            res = np.empty((len(ts), 6))
-            res[order] = dyn.propagate(x0[None], t0, ts[order]).states[:, 0, :]
-            out[side] = res
-    return out
-
-
 def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
                         burn_utc: str | None = None) -> tuple[np.ndarray, np.ndarray, object]:
     """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function): the truth
     propagated with the fit's dynamics from the first ``truth.csv`` row, and after ``burn_utc`` (a
     burn) from the first row after it."""
     from cistrack.fitting.fit_export import _scenario
+    from cistrack.least_squares.trajectory import arc_states
     from cistrack.plugin.registry import default_registry
 
     reg = default_registry()
@@ -144,7 +132,7 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
         after = t >= t_burn
         for k, part in enumerate((~after, after)):
             if np.any(part):
-                out[part] = _propagated(dyn, *starts[k], t[part])
+                out[part] = arc_states(dyn, starts[k][1], starts[k][0], t[part])
         return out
 
     t = np.array([units.utc_to_tu(scen.epoch, units.parse_utc(e + "Z")) for e in epochs])

@@ -91,16 +91,21 @@ def test_a_run_on_a_tdm_without_uncertainties_prints_the_default_it_applies(tmp_
     assert "tdm reader's default sigma_arcsec = 1 arcsec on the sky" in line
 
 
+def _said_reading_ades(p) -> list[str]:
+    """What a real-data run says as it reads the ADES PSV file ``p``."""
+    scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "ades-psv"}}})
+    reg = default_registry()
+    said: list[str] = []
+    read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
+    return said
+
+
 def test_a_run_on_ades_with_its_own_uncertainties_says_it_uses_them(tmp_path):
     p = tmp_path / "obs.psv"
     p.write_text("# version=2017\n"
                  "trkSub |mode|stn |obsTime                 |ra         |dec        |rmsRA|rmsDec|astCat\n"
                  "cis0001|CCD |568 |2026-03-01T04:20:00.000Z|150.0      |60.0       |0.5  |0.5   |Gaia3\n")
-    scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "ades-psv"}}})
-    reg = default_registry()
-    said: list[str] = []
-    read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
-    assert "weights: the file's own uncertainties for all 1 observations" in said
+    assert "weights: the file's own uncertainties for all 1 observations" in _said_reading_ades(p)
 
 
 def test_a_run_on_ades_with_rmsra_but_no_rmsdec_says_the_file_gives_one_angle_and_the_default_the_other(tmp_path):
@@ -109,11 +114,7 @@ def test_a_run_on_ades_with_rmsra_but_no_rmsdec_says_the_file_gives_one_angle_an
                  "trkSub |mode|stn |obsTime                 |ra         |dec        |rmsRA|astCat\n"
                  "cis0001|CCD |568 |2026-03-01T04:20:00.000Z|150.0      |60.0       |0.5  |Gaia3\n"
                  "cis0001|CCD |568 |2026-03-01T04:30:00.000Z|150.1      |60.1       |0.5  |Gaia3\n")
-    scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "ades-psv"}}})
-    reg = default_registry()
-    said: list[str] = []
-    read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
-    line = next(s for s in said if s.startswith("weights:"))
+    line = next(s for s in _said_reading_ades(p) if s.startswith("weights:"))
     assert "2 of 2 observations state the uncertainty of one angle only" in line
     assert "have no uncertainty" not in line
 
