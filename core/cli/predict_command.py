@@ -293,7 +293,7 @@ def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
     from cistrack.errors import ConfigError
-    from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
+    from cistrack.results.dir_lock import check_still_as_read, results_stamp
     from cistrack.plugin.registry import default_registry
 
     site = _site(args.site)
@@ -306,14 +306,12 @@ def cmd_predict(args) -> int:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
-    check_no_writer(args.run, "prediction")  # a fit or run may have started in the directory since it was read
-    check_unchanged(args.run, stamp, "prediction")  # ... or started and ended
+    check_still_as_read(args.run, stamp, "prediction")  # a fit or run may have started (and ended) meanwhile
     try:
         csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}",
                                keep_other=not (args.out or args.overwrite))
     except ConfigError:  # a fit or run starting in the folder sweeps away temporary files: say that, if so
-        check_no_writer(args.run, "prediction")
-        check_unchanged(args.run, stamp, "prediction")
+        check_still_as_read(args.run, stamp, "prediction")
         raise
     if not args.quiet:
         print("\n".join(table_lines(sky)))

@@ -50,7 +50,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import ensemble_arc_states
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
-from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
+from cistrack.results.dir_lock import check_no_writer, check_still_as_read, results_stamp
 from cistrack.results.estimates import KM_SCALE, Estimates
 from cistrack.results.inertial_frame import to_inertial
 
@@ -257,8 +257,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
     meta = _metadata(name, comments, format != "opm")
     meta.update(_area_to_mass_user_defined(record))
-    check_no_writer(d, "export")  # a fit or run may have started in the directory since it was read
-    check_unchanged(d, stamp, "export")  # ... or started and ended
+    check_still_as_read(d, stamp, "export")  # a fit or run may have started (and ended) since it was read
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
                  words=words)
     return out

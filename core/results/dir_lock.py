@@ -21,7 +21,7 @@ from cistrack.results.atomic_files import remove_stale_temporaries
 from cistrack.results.output_paths import FIT_LOCK, RUN_LOCK
 
 __all__ = ["RunBusy", "run_lock", "fit_lock", "holding", "try_lock", "open_lock", "lock_holder", "note_holder", "RUN_LOCK",
-           "check_no_writer", "results_stamp", "check_unchanged"]
+           "check_no_writer", "results_stamp", "check_unchanged", "check_still_as_read"]
 
 
 class RunBusy(CistrackError):
@@ -155,3 +155,10 @@ def check_unchanged(directory: str | Path, stamp: tuple, doing: str) -> None:
     if results_stamp(directory) != stamp:
         raise RunBusy(f"{directory}: its results were written again while the {doing} was made (a new 'cistrack fit' "
                       f"or 'cistrack run' there); nothing was written: run the {doing} again")
+
+
+def check_still_as_read(directory: str | Path, stamp: tuple, doing: str) -> None:
+    """Before ``doing``'s file is written: no fit or run writes in ``directory`` now
+    (:func:`check_no_writer`), and none wrote its results since ``stamp`` was taken (:func:`check_unchanged`)."""
+    check_no_writer(directory, doing)
+    check_unchanged(directory, stamp, doing)
