@@ -9,10 +9,12 @@ cannot call a ``LazyJit`` itself; it calls :attr:`LazyJit.dispatcher`, the numba
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import os
 import pickle
+import sys
 import threading
 from typing import Any, Callable
 
@@ -36,6 +38,27 @@ def _damaged_file(exc: BaseException, cache_file: Any) -> str:
     return str(getattr(cache_file, "_index_path", "?"))
 
 
+@contextlib.contextmanager
+def _quiet_buffer_release():
+    """While a cache file is unpickled, the interpreter's report of a buffer freed while still
+    exported (a garbled pickle's bytearray: CPython prints it through ``sys.excepthook`` itself,
+    as a bare "SystemError: deallocated bytearray object has exported buffers" line) is left
+    unsaid: the damaged file is named by the warning that follows."""
+    before = sys.excepthook
+
+    def hook(kind, value, tb):
+        if kind is SystemError and "exported buffers" in str(value):
+            logging.getLogger("cistrack.lazy").debug("while reading numba's cache: %s", value)
+        else:
+            before(kind, value, tb)
+
+    sys.excepthook = hook
+    try:
+        yield
+    finally:
+        sys.excepthook = before
+
+
 def tolerate_damaged_cache() -> None:
     """Make numba treat an unreadable entry of its on-disk cache as absent: the function is compiled
     again (and its entry rewritten), with a warning naming the file (logger ``cistrack.lazy``).
@@ -54,7 +77,8 @@ def tolerate_damaged_cache() -> None:
         @functools.wraps(load)
         def tolerant_load(self, key):
             try:
-                return load(self, key)
+                with _quiet_buffer_release():
+                    return load(self, key)
             except _DAMAGE as exc:
                 logging.getLogger("cistrack.lazy").warning(
                     "numba's cache file %s is damaged (%s: %s); compiling the function again",

@@ -68,3 +68,16 @@ def test_a_data_file_whose_unpickling_runs_out_of_memory_is_damage_too(tmp_path)
         f.write_bytes(b"\x80\x04\x8e" + (2 ** 62).to_bytes(8, "little"))
     proc = _call(tmp_path)
     assert proc.stdout.split() == ["3.0"] and "MemoryError" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_a_data_file_that_leaves_a_buffer_exported_prints_no_bare_system_error(tmp_path):
+    """A pickle's BYTEARRAY8 opcode with a length of exabytes: the unpickler's bytearray is freed
+    while still exported, and CPython printed "SystemError: deallocated bytearray object has
+    exported buffers" itself, a bare line before the warning that names the file."""
+    (tmp_path / "cached_fn.py").write_text(MODULE)
+    assert _call(tmp_path).stdout.split() == ["3.0"]
+    for f in (tmp_path / "nb").rglob("*.nbc"):
+        f.write_bytes(b"\x96" + (0x4D3A76D0BD77D5EB).to_bytes(8, "little"))
+    proc = _call(tmp_path)
+    assert proc.stdout.split() == ["3.0"] and ".nbc is damaged" in " ".join(proc.stderr.split()), proc.stderr
+    assert "SystemError" not in proc.stderr, proc.stderr
