@@ -268,7 +268,8 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
     """What a reader of the predicted states (``times`` (K,) TU past the first ``n_arc``) must be
     told: that they end at an ``impact`` before the span asked, and that they run past the fit's
     horizon (``record["determination"]["horizon_days"]``), where the orbits the fit allows leave a
-    1-degree field and the covariance may no longer hold the object."""
+    1-degree field and the covariance may no longer hold the object, or past its covariance
+    horizon (``covariance_horizon_days``, when sooner), where the covariance understates their spread."""
     if times.size <= n_arc:
         return []
     out = []
@@ -283,6 +284,13 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
         out.append(f"the predicted states run {span:.3g} days past the last observation, beyond the fit's horizon of "
                    f"{horizon:g} days ({when}Z): after it the orbits the fit allows leave a 1-degree field, and its "
                    "covariance may no longer hold the object; observe again before then")
+    held = (record.get("determination") or {}).get("covariance_horizon_days")
+    if isinstance(held, (int, float)) and math.isfinite(held) and span > held and not (
+            isinstance(horizon, (int, float)) and held >= horizon):
+        when = units.format_utc(units.tu_to_utc(epoch, last + float(units.days_to_tu(held))))[:19]
+        out.append(f"the covariances understate the spread of the orbits the fit allows from {held:g} days past the "
+                   f"last observation ({when}Z): more than 2 % of them lie outside the 99 % ellipsoid after it "
+                   "(the flow bends across the covariance); treat its probabilities as optimistic there")
     return out
 
 
