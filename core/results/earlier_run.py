@@ -180,7 +180,28 @@ def _check_recording_path(recording: str | Path, directory: str | Path, where: s
     if special is not None and special.startswith("is not a regular file"):  # opening a pipe to write waits for a reader
         raise ConfigError(f"{where} {recording}: {special}, which a recording is never written to; give the path of a "
                           "file (e.g. run.rrd)")
+    _check_recording_name(recording, r, directory, where)
     _check_writable(Path(recording))
+
+
+def _check_recording_name(recording: str | Path, r: Path, directory: str | Path, where: str) -> None:
+    """Refuse a recording path that does not end in .rrd, or an existing file that is not a recording."""
+    if not str(recording).lower().endswith(".rrd"):
+        raise ConfigError(f"{where} {recording}: a recording's file name ends in .rrd (cistrack view and the rerun "
+                          f"viewer read it by that name); e.g. {Path(directory) / 'recording.rrd'}"
+                          + (" (standard output is not supported)" if str(recording) == "-" else ""))
+    if r.is_file() and not _recording_or_empty(r):
+        raise ConfigError(f"{where} {recording}: exists and is not a rerun recording; --overwrite replaces results "
+                          "and recordings, never another file: give a new file name ending in .rrd")
+
+
+def _recording_or_empty(path: Path) -> bool:
+    """Whether ``path`` starts with rerun's recording header (``RRF``) or is empty."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(3) in (b"", b"RRF")
+    except OSError:
+        return False
 
 
 FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")

@@ -123,6 +123,21 @@ LOW_FREE_BYTES = 16_000_000
 closed while its last batch still fits; the run goes on and says so), before rerun's file
 writer meets a full disk."""
 
+RECORDING_MAGIC = b"RRF"
+"""The first bytes of a rerun recording file (``RRF2`` for rerun 0.2x's)."""
+
+
+def is_recording_or_empty(path: str | os.PathLike) -> bool:
+    """Whether the file at ``path`` is a rerun recording (it starts with :data:`RECORDING_MAGIC`) or
+    empty: the only files a recorder with ``overwrite`` replaces. False when it cannot be read."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(RECORDING_MAGIC))
+    except OSError:
+        return False
+    return head in (b"", RECORDING_MAGIC)
+
+
 class RerunRecorder(Component):
     """Record a run for the rerun viewer (3-D synodic scene, clouds, ellipsoids, metrics).
 
@@ -204,18 +219,7 @@ class RerunRecorder(Component):
                        f"127.0.0.1:{self.serve_port} is already in use (another viewer or run?); stop "
                        "that process or give another serve_port (cistrack run --rerun-port N)")
         if self.path is not None:
-            target = Path(self.path)
-            folder = target if target.is_dir() else target.parent  # a directory: one file per run
-            if not folder.is_dir() or not os.access(folder, os.W_OK):
-                self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
-                           "not writable")
-            free = _free_bytes(folder)
-            if free < MIN_FREE_BYTES:
-                self._fail("path", self.path, f"only {free / 1e6:.3g} MB free on the disk of {folder}; a recording "
-                           f"needs room (Example 1: about 4 MB) and rerun's file writer cannot report a full disk "
-                           f"(it waits for ever), so at least {MIN_FREE_BYTES / 1e6:g} MB free are asked for")
-            if "{run_id}" not in self.path and not target.is_dir():
-                self._refuse_existing(self.path)
+            self._check_path()
         self._rec: rr.RecordingStream | None = None
         self._viewer: subprocess.Popen | None = None
         self._event = 0
@@ -306,11 +310,37 @@ class RerunRecorder(Component):
             self.close()
 
     # -- internals --------------------------------------------------------------------------------
+    def _check_path(self) -> None:
+        """Refuse, before a run computes anything, a ``path`` that is not an .rrd file or a directory,
+        whose folder cannot be written or has no room, or an existing file :meth:`_refuse_existing` refuses."""
+        target = Path(self.path)
+        if not target.is_dir() and not self.path.lower().endswith(".rrd"):
+            self._fail("path", self.path, "must end in .rrd (the rerun viewer and cistrack view read recordings "
+                       "by that name), or name a directory for one recording per run")
+        folder = target if target.is_dir() else target.parent  # a directory: one file per run
+        if not folder.is_dir() or not os.access(folder, os.W_OK):
+            self._fail("path", self.path, f"cannot be written: directory {folder} does not exist or is "
+                       "not writable")
+        free = _free_bytes(folder)
+        if free < MIN_FREE_BYTES:
+            self._fail("path", self.path, f"only {free / 1e6:.3g} MB free on the disk of {folder}; a recording "
+                       f"needs room (Example 1: about 4 MB) and rerun's file writer cannot report a full disk "
+                       f"(it waits for ever), so at least {MIN_FREE_BYTES / 1e6:g} MB free are asked for")
+        if "{run_id}" not in self.path and not target.is_dir():
+            self._refuse_existing(self.path)
+
     def _refuse_existing(self, target: str) -> None:
-        """Refuse to replace an existing file ``target`` unless ``overwrite`` is on."""
-        if not self.overwrite and os.path.lexists(target):
+        """Refuse to replace an existing file ``target`` unless ``overwrite`` is on, and with it a
+        file that is not a rerun recording (a scenario or observation file given as the path by
+        mistake: ``overwrite`` replaces recordings, never other files)."""
+        if not os.path.lexists(target):
+            return
+        if not self.overwrite:
             self._fail("path", target, "already exists; give another file, or overwrite=true "
                        "(cistrack run --overwrite) to replace it")
+        if not is_recording_or_empty(target):
+            self._fail("path", target, "already exists and is not a rerun recording (it does not start with rerun's "
+                       "RRF header): overwrite=true replaces recordings only; give another file name ending in .rrd")
 
     def _file_for(self, run_id: str) -> str | None:
         if self.path is None:
