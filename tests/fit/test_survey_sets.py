@@ -140,3 +140,17 @@ def test_a_burn_in_a_gap_the_first_screen_ranks_below_a_nights_gap_is_placed_in_
     assert info["burn"]["delta_v_ms"] == 0.5
     assert row.burns.startswith("1:") and row.burn_ok, row.burns  # one burn, time and size within 3 sigma
     assert max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+
+
+@pytest.mark.slow
+def test_a_burn_fitted_a_night_early_that_leaves_eight_rejected_is_not_reported(tmp_path):
+    """nrho seed 143 with a 0.5 m/s burn: the search kept 3.7 +- 0.6 m/s a night before the truth and
+    the fit with it rejected 8 of 75 observations; it had been reported converged and clean, the
+    truth at Mahalanobis^2 515,846. More rejections than outliers explain make it not clean."""
+    set_dir = tmp_path / "nrho-s143"
+    make(set_dir, "nrho", seed=143, burn_ms=0.5)
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "failed"
+    record = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())
+    assert not record["converged"] and not record.get("maneuvers")
+    assert any("it still rejects" in m for m in record["messages"]), record["messages"]
