@@ -127,7 +127,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
         raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
                           "no such directory") + "); give the --out directory of a 'cistrack run'")
-    check_no_writer(d, "export", runs=False)  # a running run: export_refusal's, which --force passes
+    _check_not_being_replaced(d)
     stamp = results_stamp(d)
     refusal = export_refusal(d)
     if refusal is not None and not force:
@@ -154,6 +154,23 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
         check_unchanged(d, stamp, "export")
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=overwrite, words=words)
     return out
+
+
+def _check_not_being_replaced(d: Path) -> None:
+    """Refuse while a fit holds ``d``'s lock, or a run does while the manifest is not that run's
+    ("running"): a ``cistrack run --overwrite`` replacing a finished run holds the lock before it
+    writes its manifest, and the export would have written the orbit being replaced. A running
+    run's own estimate is refused by :func:`export_refusal` unless ``force``."""
+    check_no_writer(d, "export", runs=False)
+    try:
+        check_no_writer(d, "export")
+    except CistrackError:
+        try:
+            running = run_status(d)[0] == "running"
+        except (OSError, ValueError, CistrackError):
+            running = False
+        if not running:
+            raise
 
 
 def _what_is_written(exporter: Any, ie: InertialEstimates) -> str:
