@@ -23,7 +23,8 @@ from cistrack.interfaces.reader import not_a_file
 from cistrack.results.estimates import _PARTS as ESTIMATE_PARTS
 from cistrack.results.estimates import ESTIMATES
 from cistrack.results.fingerprint import scenario_fingerprint
-from cistrack.results.output_paths import EARLIER_RESULTS, RUN_LOCK
+from cistrack.results.output_paths import (EARLIER_RESULTS, FIT_LOCK, FIT_STARTED, RUN_LOCK, STUDY_LOCK,
+                                           STUDY_RUNS_LOCK)
 from cistrack.results.store import MANIFEST, PARTS, STEPS
 
 if sys.version_info >= (3, 11):
@@ -204,6 +205,9 @@ def _recording_or_empty(path: Path) -> bool:
         return False
 
 
+CONTROL_FILES = (RUN_LOCK, FIT_LOCK, FIT_STARTED, STUDY_LOCK, STUDY_RUNS_LOCK)
+"""The lock and start-marker files of results folders: never an export's or a prediction's output."""
+
 FIT_FILES = ("fit.json", "residuals.csv", "lov.csv", "observations.psv", "observations-early.psv")
 """A fit's own records in its results directory (beside the run's)."""
 FIT_PLOTS = ("residuals-*.png", "residuals-*.svg")
@@ -280,6 +284,14 @@ def check_export_path(out: str | Path, directory: str | Path, where: str = "--ou
     if o == d or plot or _named_as(o, d, RESULT_FILES + FIT_FILES) or _in_part_folders(o, d):
         raise ConfigError(f"{where} {out}: is one of the results of {directory} (or among them); {by} would "
                           f"replace them: " + instead.format(directory=Path(directory)))
+    if o.name in CONTROL_FILES:
+        raise ConfigError(f"{where} {out}: is the name of a file cistrack keeps in a results folder to know who "
+                          f"writes there ({', '.join(CONTROL_FILES)}); {by} would replace a running process's lock: "
+                          + instead.format(directory=Path(directory)))
+    holder = o.parent
+    if holder != d and o.name in RESULT_FILES + FIT_FILES and any((holder / n).is_file() for n in ("fit.json", MANIFEST)):
+        raise ConfigError(f"{where} {out}: is one of the results of {holder}; {by} would replace them: "
+                          + instead.format(directory=Path(directory)))
 
 
 def _check_writable(recording: Path) -> None:
