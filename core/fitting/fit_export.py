@@ -170,16 +170,11 @@ def after_last_burn(record: dict[str, Any], times: np.ndarray, n_arc: int) -> tu
 
 
 def _scenario(d: Path, reg: Registry):
-    import sys
+    from cistrack.scenario.loading import recorded_scenario
 
-    from cistrack.scenario.loading import parse_scenario
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
     p = d / "scenario.toml"
     try:
-        return parse_scenario(tomllib.loads(p.read_text()), str(p), reg)
+        return recorded_scenario(p, reg)
     except FileNotFoundError:
         raise ConfigError(f"{d}: not a fit directory (no scenario.toml); run 'cistrack fit FILE --out DIR' first") from None
 

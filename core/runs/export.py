@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 from pathlib import Path
 from typing import Any, Callable
 
@@ -27,11 +26,6 @@ from cistrack.results.estimates import read_estimates
 from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
 from cistrack.plugin.registry import Registry, default_registry
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["export_run", "export_refusal", "run_inertial_estimates", "scenario_of"]
 
@@ -46,11 +40,11 @@ def scenario_of(run_dir: str | Path, reg: Registry | None = None):
 
 
 def _scenario_of(run_dir: Path, reg: Registry):
-    from cistrack.scenario.loading import parse_scenario
+    from cistrack.scenario.loading import parse_scenario, recorded_scenario
     toml_path, json_path = run_dir / "scenario.toml", run_dir / "scenario.json"
-    if toml_path.exists():
-        raw = tomllib.loads(toml_path.read_text())
-    elif json_path.exists():
+    if os.path.lexists(toml_path):
+        return recorded_scenario(toml_path, reg)
+    if json_path.exists():
         raw = json.loads(json_path.read_text())
     else:
         raise ConfigError(f"{run_dir}: not a cistrack run directory (no scenario.toml); run "

@@ -35,6 +35,7 @@ Every error names the file, the table and the key, and what is allowed.
 from __future__ import annotations
 
 import copy
+import os
 import sys
 from dataclasses import dataclass, field
 from datetime import datetime
@@ -63,7 +64,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Scenario", "ComponentSpec", "CustodyRule", "load_scenario", "parse_scenario", "relative_base",
+__all__ = ["Scenario", "ComponentSpec", "CustodyRule", "load_scenario", "parse_scenario", "relative_base", "recorded_scenario",
            "builtin_scenarios", "builtin_scenario_path", "COMPONENT_TABLES"]
 
 COMPONENT_TABLES: dict[str, str] = {
@@ -180,6 +181,20 @@ def load_scenario(path_or_name: str | Path, registry: Registry | None = None,
     if scen.measurements_file is not None and not scen.measurements_file.is_absolute():
         scen.measurements_file = (relative_base(p) / scen.measurements_file).resolve()
     return scen
+
+
+def recorded_scenario(p: Path, registry: Any = None) -> "Scenario":
+    """The scenario a run or fit recorded in its results folder (``p``, its ``scenario.toml``),
+    parsed: ConfigError naming the file when it is damaged (not TOML, not a file, not UTF-8, a
+    scenario no longer valid), never a parser's traceback. FileNotFoundError when it is missing."""
+    if not os.path.lexists(p):
+        raise FileNotFoundError(p)
+    try:
+        data = toml_input.loads(toml_input.read_file(p), str(p))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: the results folder's record of its scenario is damaged (not valid TOML: {exc}); "
+                          "run the scenario again into the folder with --overwrite") from None
+    return parse_scenario(data, str(p), registry)
 
 
 def relative_base(p: Path) -> Path:
