@@ -291,6 +291,8 @@ def read_fit_record(run_dir: str | Path) -> dict[str, Any]:
                           "first") from None
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{p}: cannot be read ({exc})") from None
+    except RecursionError:
+        raise ConfigError(f"{p}: cannot be read (nested deeper than a fit record ever is)") from None
     if not isinstance(data, dict) or data.get("format") != _FORMAT:
         raise ConfigError(f"{p}: not a cistrack fit record (no \"format\": \"{_FORMAT}\")")
     for key in UNDEFINED_NUMBERS:

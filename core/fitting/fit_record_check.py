@@ -4,8 +4,10 @@ A record edited by hand or by another program must give a clear error naming the
 field, never a traceback from numpy or datetime, and never predictions or an OEM full of NaN: the
 state six finite numbers, the covariance a finite, symmetric, positive semi-definite 6 x 6 matrix,
 the epoch a finite time within about a thousand years of the scenario's epoch, the noise scale
-positive (or NaN: undefined), the counts whole numbers, and an estimated area-to-mass ratio a finite
-value with its finite, symmetric 7 x 7 joint covariance.
+positive (or NaN: undefined), the counts whole numbers, an estimated area-to-mass ratio a finite
+value with its finite, symmetric 7 x 7 joint covariance, the arc a table of its first and last
+times, and each burn of ``maneuvers`` a finite time up to the fit's epoch with a positive time sigma,
+a finite delta-v and its covariance.
 """
 from __future__ import annotations
 
@@ -27,9 +29,9 @@ MAX_SPEED_KMS = 100.0
 """The fastest fitted state (km/s in the synodic frame; an object falling to the Earth's surface
 from the Moon's distance reaches about 11)."""
 
-MAX_EPOCH_TU = 1.0e5
-"""The largest |epoch_tu| accepted (about 1,190 years from the scenario's epoch, within the dates
-Python can represent)."""
+MAX_EPOCH_TU = 4.0e3
+"""The largest |epoch_tu| accepted (about 47 years from the scenario's epoch: a fit's epoch lies in
+its arc, and its exports' frames need the DE421 ephemeris, 1899-2053)."""
 
 _NUMBERS = ("rms", "chi2", "condition_number")
 _COUNTS = ("n_used", "n_rejected", "iterations")
@@ -98,6 +100,51 @@ def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:
         raise _fail(p, "converged", "true or false", record.get("converged"))
     _array(p, "weakest_direction_km", record.get("weakest_direction_km"), (6,), "6 finite numbers")
     _check_area_to_mass(p, record.get("area_to_mass"))
+    _check_spread(p, record.get("covariance"))
+    _check_arc(p, record.get("arc"))
+    _check_maneuvers(p, record.get("maneuvers"), epoch)
+
+
+def _check_spread(p: Path, cov: Any) -> None:
+    """A covariance whose sigmas reach beyond :data:`MAX_DISTANCE_KM` or :data:`MAX_SPEED_KMS` is no fit's."""
+    sig = units.state_to_km(np.sqrt(np.diag(np.asarray(cov, dtype=float))))
+    if np.max(sig[:3]) > MAX_DISTANCE_KM or np.max(sig[3:]) > MAX_SPEED_KMS:
+        raise _fail(p, "covariance", f"a covariance whose sigmas stay within {MAX_DISTANCE_KM:.3g} km and "
+                    f"{MAX_SPEED_KMS:g} km/s", f"sigmas {sig.tolist()}")
+
+
+def _check_arc(p: Path, arc: Any) -> None:
+    if not isinstance(arc, dict):
+        raise _fail(p, "arc", "a table of the arc's first_tu and last_tu", arc)
+    first, last = (_number(p, f"arc.{k}", arc.get(k)) for k in ("first_tu", "last_tu"))
+    if not (math.isfinite(first) and math.isfinite(last) and first <= last and abs(last) <= MAX_EPOCH_TU
+            and abs(first) <= MAX_EPOCH_TU):
+        raise _fail(p, "arc", f"finite first_tu <= last_tu within {MAX_EPOCH_TU:g} TU", arc)
+
+
+_BURN_NUMBERS = ("t_days", "t_burn_days", "t_burn_sigma_days", "delta_v_ms", "delta_v_sigma_ms")
+
+
+def _check_maneuvers(p: Path, burns: Any, epoch_tu: float) -> None:
+    """Each burn: finite numbers, a positive time sigma, a time up to the fit's epoch, a finite
+    delta-v vector (3) and a covariance (3 x 3, symmetric, positive semi-definite)."""
+    if burns is None:
+        return
+    if not isinstance(burns, list):
+        raise _fail(p, "maneuvers", "a list of burns", burns)
+    for k, b in enumerate(burns):
+        where = f"maneuvers[{k}]"
+        if not isinstance(b, dict):
+            raise _fail(p, where, "a table", b)
+        values = {n: _number(p, f"{where}.{n}", b.get(n)) for n in _BURN_NUMBERS}
+        if not all(math.isfinite(v) for v in values.values()) or min(
+                values[n] for n in ("t_burn_sigma_days", "delta_v_ms", "delta_v_sigma_ms")) < 0.0:
+            raise _fail(p, where, "finite times, and non-negative sigmas and sizes", b)
+        if not (values["t_burn_sigma_days"] > 0.0 and math.isfinite(values["t_burn_days"])
+                and values["t_burn_days"] <= float(units.tu_to_days(epoch_tu)) + 1e-9):
+            raise _fail(p, f"{where}.t_burn_days", "a finite time up to the fit's epoch, with a positive sigma", b)
+        _array(p, f"{where}.delta_v_vector_ms", b.get("delta_v_vector_ms"), (3,), "3 finite numbers (m/s)")
+        _covariance(p, f"{where}.delta_v_covariance_ms2", b.get("delta_v_covariance_ms2"), 3)
 
 
 def _check_area_to_mass(p: Path, amr: Any) -> None:

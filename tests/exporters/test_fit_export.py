@@ -239,8 +239,9 @@ def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_pa
     shutil.copytree(fit_dir, d)
     rec = json.loads((d / "fit.json").read_text())
     t_burn = 0.5 * (rec["arc"]["first_tu"] + rec["arc"]["last_tu"]) * TU_S / 86400.0
-    rec["maneuvers"] = [{"t_burn_days": t_burn, "t_burn_sigma_days": 0.05, "t_burn_utc": "2026-03-09T00:00:00Z",
-                         "delta_v_ms": 0.3}]
+    rec["maneuvers"] = [{"t_days": t_burn + 0.1, "t_burn_days": t_burn, "t_burn_sigma_days": 0.05,
+                         "t_burn_utc": "2026-03-09T00:00:00Z", "delta_v_ms": 0.3, "delta_v_sigma_ms": 0.03,
+                         "delta_v_vector_ms": [0.3, 0.0, 0.0], "delta_v_covariance_ms2": np.diag([9e-4] * 3).tolist()}]
     (d / "fit.json").write_text(json.dumps(rec))
     text = export_fit(d, "oem", tmp_path / "b.oem").read_text()
     rows = list(_read(tmp_path / "b.oem").states)

@@ -20,7 +20,13 @@ def _record() -> dict:
             "covariance": cov.tolist(), "epoch_tu": 1.05, "epoch_utc": "2026-03-06T12:02:32.999088Z",
             "noise_scale": 1.1, "rms": 1.07, "chi2": 150.6, "condition_number": 445.7, "n_used": 65,
             "n_rejected": 0, "iterations": 5, "converged": True, "weakest_direction_km": [2.3, -0.3, -0.5, 0, 0, 0],
-            "area_to_mass": {"estimated": False}}
+            "area_to_mass": {"estimated": False}, "arc": {"first_tu": 0.0, "last_tu": 1.05},
+            "maneuvers": [_burn()]}
+
+
+def _burn() -> dict:
+    return {"t_days": 2.1, "t_burn_days": 2.0, "t_burn_sigma_days": 0.05, "delta_v_ms": 0.5, "delta_v_sigma_ms": 0.05,
+            "delta_v_vector_ms": [0.3, 0.4, 0.0], "delta_v_covariance_ms2": (np.eye(3) * 0.0025).tolist()}
 
 
 def _written(tmp_path, record: dict):
@@ -102,3 +108,51 @@ def test_a_fit_refused_as_not_cislunar_keeps_its_far_state_readable(tmp_path):
     rec = _tampered("state", [8.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     rec["converged"] = False
     assert read_fit_record(_written(tmp_path, rec))["state"][0] == 8.0
+
+
+@pytest.mark.parametrize("value", [None, 12345, "garbage", [0.0, 1.0], {"first_tu": 2.0, "last_tu": 1.0},
+                                   {"first_tu": "x", "last_tu": 1.0}])
+def test_an_arc_that_is_not_a_table_of_its_times_is_refused(tmp_path, value):
+    rec = _record()
+    if value is None:
+        del rec["arc"]
+    else:
+        rec["arc"] = value
+    with pytest.raises(ConfigError, match="field 'arc"):
+        read_fit_record(_written(tmp_path, rec))
+
+
+@pytest.mark.parametrize("edit", [{"t_burn_sigma_days": -1.0}, {"t_burn_sigma_days": 0.0}, {"t_burn_days": float("nan")},
+                                  {"t_burn_days": 9.0}, {"t_days": "x"}, {"delta_v_vector_ms": [1.0]},
+                                  {"delta_v_covariance_ms2": [[1.0]]}, {"delta_v_ms": -0.5}])
+def test_a_burn_that_no_fit_writes_is_refused(tmp_path, edit):
+    """Burn times up to the fit's epoch (1.05 TU, 4.56 days) with a positive sigma: a negative one had
+    made the OEM start three days before the burn."""
+    rec = _record()
+    rec["maneuvers"] = [{**_burn(), **edit}]
+    with pytest.raises(ConfigError, match="field 'maneuvers"):
+        read_fit_record(_written(tmp_path, json.loads(json.dumps(rec).replace("NaN", "NaN"))))
+
+
+def test_maneuvers_that_are_not_a_list_are_refused(tmp_path):
+    with pytest.raises(ConfigError, match="field 'maneuvers' must be a list of burns"):
+        read_fit_record(_written(tmp_path, _tampered("maneuvers", 12345)))
+
+
+def test_a_covariance_whose_sigmas_reach_beyond_cislunar_space_is_refused(tmp_path):
+    """Finite and positive definite, 1e300 on its diagonal: propagation had divided by zero."""
+    rec = _record()
+    rec["covariance"] = (np.eye(6) * 1e300).tolist()
+    with pytest.raises(ConfigError, match="sigmas stay within"):
+        read_fit_record(_written(tmp_path, rec))
+
+
+def test_an_epoch_beyond_the_ephemeris_is_refused(tmp_path):
+    with pytest.raises(ConfigError, match="field 'epoch_tu'"):
+        read_fit_record(_written(tmp_path, _tampered("epoch_tu", 9.0e4)))
+
+
+def test_a_record_nested_beyond_any_fit_record_is_refused(tmp_path):
+    (tmp_path / "fit.json").write_text("[" * 100000)
+    with pytest.raises(ConfigError, match="cannot be read"):
+        read_fit_record(tmp_path)
