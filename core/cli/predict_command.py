@@ -117,6 +117,33 @@ def _until_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:
                                               f"{times.size - before.size} prediction times after it are left out")))
 
 
+def _after_burns(times: np.ndarray, run_dir, orbit) -> tuple[np.ndarray, str]:
+    """The prediction ``times`` from 3 sigma after a fit's last burn on
+    (:func:`cistrack.fitting.fit_export.after_burns_tu`: before it the object flew another orbit than
+    the fitted one), and a note on those left out ("" when none); ConfigError naming --start when
+    none is left. Unchanged for a run or a fit without burns."""
+    from pathlib import Path
+
+    from cistrack import units
+    from cistrack.errors import ConfigError
+    from cistrack.fitting.fit_export import after_burns_tu
+    from cistrack.fitting.fit_record import read_fit_record
+
+    if times.size == 0 or not (Path(run_dir) / "fit.json").is_file():
+        return times, ""
+    start = after_burns_tu(read_fit_record(run_dir))
+    if start is None or times[0] >= start - 1e-12:
+        return times, ""
+    when = units.format_utc(units.tu_to_utc(orbit.epoch, start))[:19] + "Z"
+    after = times[times >= start - 1e-12]
+    if after.size == 0:
+        raise ConfigError(f"--start/--stop: every prediction time is before {when}, 3 sigma after the fit's last burn "
+                          "(fit.json maneuvers): before it the object flew another orbit than the fitted one; give "
+                          "a --start after it")
+    return after, (f"note: the fitted orbit is the one flown after the fit's last burn; the {times.size - after.size} "
+                   f"prediction times before {when} (3 sigma after the burn) are left out")
+
+
 def _after_backward_impact(times: np.ndarray, orbit) -> tuple[np.ndarray, str]:
     """The prediction ``times`` after the body the orbit, carried back from its epoch, meets first
     (a body it came from), and a note on those left out ("" when none); ConfigError naming --start
@@ -301,7 +328,9 @@ def cmd_predict(args) -> int:
     reg = default_registry()
     stamp = results_stamp(args.run)
     orbit = orbit_of_directory(args.run, reg)
-    times, impact_note = _until_impact(_times(args, orbit), orbit)
+    times, burn_note = _after_burns(_times(args, orbit), args.run, orbit)
+    times, impact_note = _until_impact(times, orbit)
+    impact_note = "\n".join(filter(None, (burn_note, impact_note)))
     if not args.quiet:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")

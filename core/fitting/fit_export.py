@@ -152,17 +152,26 @@ def _burns(record: dict[str, Any]) -> tuple[list[dict], dict | None]:
     return burns, max(burns, key=lambda m: float(m["t_burn_days"])) if burns else None
 
 
+def after_burns_tu(record: dict[str, Any]) -> float | None:
+    """The first time (TU) the fitted orbit describes the object: the last burn of
+    ``record["maneuvers"]`` plus :data:`BURN_MARGIN_SIGMAS` of its time's sigma, never past the fit
+    epoch; None for a fit without burns."""
+    burns, last = _burns(record)
+    if not burns:
+        return None
+    start = float(units.days_to_tu(float(last["t_burn_days"])
+                                   + BURN_MARGIN_SIGMAS * float(last.get("t_burn_sigma_days") or 0.0)))
+    return min(start, float(record["epoch_tu"]))
+
+
 def after_last_burn(record: dict[str, Any], times: np.ndarray, n_arc: int) -> tuple[np.ndarray, int]:
     """``times`` (K,) TU and ``n_arc`` (those covering the arc) without the times before the last
     burn of ``record["maneuvers"]`` plus :data:`BURN_MARGIN_SIGMAS` of its time's sigma (never past
     the fit epoch): the fitted orbit is the one flown after the burns, and before them the object
     was elsewhere. Unchanged for a fit without burns."""
-    burns, last = _burns(record)
-    if not burns:
+    start = after_burns_tu(record)
+    if start is None:
         return times, n_arc
-    start = float(units.days_to_tu(float(last["t_burn_days"])
-                                   + BURN_MARGIN_SIGMAS * float(last.get("t_burn_sigma_days") or 0.0)))
-    start = min(start, float(record["epoch_tu"]))
     keep = times >= start - 1e-12
     if not np.any(keep[:n_arc]):  # the fit epoch lies past the grid's arc part: start at the first time after it
         keep = times >= times[min(int(np.searchsorted(times, start)), times.size - 1)]

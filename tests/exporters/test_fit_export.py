@@ -3,6 +3,7 @@ arc, optionally predicted beyond it, read back by the independent `oem` package.
 shipped example (1,000 particles in the IOD and filter) serves every test."""
 from __future__ import annotations
 
+import csv
 import json
 import shutil
 
@@ -232,10 +233,8 @@ def test_python_names_its_keywords_when_the_path_exists(fit_dir, tmp_path):
         export_fit(fit_dir, "oem", tmp_path / "taken.oem")
 
 
-def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_path):
-    """Before its last burn the object flew another orbit than the fitted one: the states start
-    3 sigma of the burn's time after it, and a COMMENT says why."""
-    d = tmp_path / "burned"
+def _burned(fit_dir, d):
+    """A copy of ``fit_dir`` whose fit.json says a burn (0.05-day sigma) halfway through its arc; its time, days."""
     shutil.copytree(fit_dir, d)
     rec = json.loads((d / "fit.json").read_text())
     t_burn = 0.5 * (rec["arc"]["first_tu"] + rec["arc"]["last_tu"]) * TU_S / 86400.0
@@ -243,6 +242,14 @@ def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_pa
                          "t_burn_utc": "2026-03-09T00:00:00Z", "delta_v_ms": 0.3, "delta_v_sigma_ms": 0.03,
                          "delta_v_vector_ms": [0.3, 0.0, 0.0], "delta_v_covariance_ms2": np.diag([9e-4] * 3).tolist()}]
     (d / "fit.json").write_text(json.dumps(rec))
+    return rec, t_burn
+
+
+def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_path):
+    """Before its last burn the object flew another orbit than the fitted one: the states start
+    3 sigma of the burn's time after it, and a COMMENT says why."""
+    d = tmp_path / "burned"
+    rec, t_burn = _burned(fit_dir, d)
     text = export_fit(d, "oem", tmp_path / "b.oem").read_text()
     rows = list(_read(tmp_path / "b.oem").states)
     whole = list(_read(export_fit(fit_dir, "oem", tmp_path / "a.oem")).states)
@@ -250,3 +257,24 @@ def test_a_fit_with_a_burn_exports_the_orbit_flown_after_it_only(fit_dir, tmp_pa
     assert t_burn + 0.15 <= first_days + 1e-6 <= t_burn + 0.15 + GRID_MINUTES / 1440.0
     assert rows[-1].epoch == whole[-1].epoch and len(rows) < len(whole)
     assert "the fit found 1 impulsive burn(s) (fit.json maneuvers); the states start at" in " ".join(text.split())
+
+
+def test_a_prediction_of_a_fit_with_a_burn_starts_after_it(fit_dir, tmp_path, capsys):
+    """predict had given the post-burn orbit before the burn, with a 0.7-arcsec ellipse 44 sigma from
+    the object's own observation there; the times before the burn + 3 sigma are left out, and a
+    span wholly before it is refused naming --start."""
+    from cistrack import units
+    from cistrack.cli.main import main
+
+    d = tmp_path / "burned"
+    rec, t_burn = _burned(fit_dir, d)
+    epoch = units.parse_utc(rec["scenario_epoch_utc"])
+    at = lambda days: units.format_utc(units.tu_to_utc(epoch, float(units.days_to_tu(days))))[:19] + "Z"  # noqa: E731
+    common = ["predict", str(d), "--site", "568", "--step", "60", "--out", str(tmp_path / "sky"), "--overwrite"]
+    assert main(common + ["--start", at(t_burn - 0.2), "--stop", at(t_burn + 0.3)]) == 0
+    assert "prediction times before" in capsys.readouterr().out
+    with open(tmp_path / "sky.csv") as fh:
+        first = next(csv.DictReader(fh))["utc"]
+    assert units.parse_utc(first) >= units.parse_utc(at(t_burn + 0.15))
+    assert main(common + ["--start", at(t_burn - 0.3), "--stop", at(t_burn - 0.1)]) == 2
+    assert "--start/--stop: every prediction time is before" in capsys.readouterr().err
