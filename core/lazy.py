@@ -91,6 +91,50 @@ def tolerate_damaged_cache() -> None:
 
         tolerant_load._cistrack_tolerant = True
         cls.load = tolerant_load
+        _tolerate_foreign_entries(caching)
+
+
+def _tolerate_foreign_entries(caching: Any) -> None:
+    """Make numba treat a cache entry that unpickles but is not the function's compiled code (a
+    well-formed pickle of something else, another function's entry copied over it) as absent, with a
+    warning: its rebuild had raised a TypeError traceback, or the run had called another function's
+    code ("dense_kernel expected 13 arguments, got 3"). Wraps ``Cache._load_overload`` once."""
+    cls = getattr(caching, "Cache", None)
+    load = getattr(cls, "_load_overload", None)
+    if load is None or getattr(load, "_cistrack_tolerant", False):
+        return
+
+    @functools.wraps(load)
+    def checked_load(self, sig, target_context):
+        try:
+            data = load(self, sig, target_context)
+        except _DAMAGE as exc:
+            return _recompiled(self, f"cannot be rebuilt ({type(exc).__name__}: {str(exc)[:80]})")
+        if data is not None and not _compiled_for(data, self, sig):
+            return _recompiled(self, "holds another function's compiled code")
+        return data
+
+    checked_load._cistrack_tolerant = True
+    cls._load_overload = checked_load
+
+
+def _compiled_for(data: Any, cache: Any, sig: Any) -> bool:
+    """Whether the rebuilt ``data`` is the cache's function compiled for ``sig``."""
+    from numba.core import sigutils
+
+    try:
+        args, _ = sigutils.normalize_signature(sig)
+        same_args = tuple(data.signature.args) == tuple(args)
+        name = getattr(getattr(data, "fndesc", None), "qualname", None)
+        return same_args and (name is None or name == cache._py_func.__qualname__)
+    except Exception:  # noqa: BLE001 - anything unreadable in a cache entry is damage
+        return False
+
+
+def _recompiled(cache: Any, why: str) -> None:
+    logging.getLogger("cistrack.lazy").warning("numba's cache entry of %s %s; compiling the function again",
+                                               getattr(cache, "_name", "?"), why)
+    return None
 
 
 class LazyJit:

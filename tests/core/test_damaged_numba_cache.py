@@ -81,3 +81,40 @@ def test_a_data_file_that_leaves_a_buffer_exported_prints_no_bare_system_error(t
     proc = _call(tmp_path)
     assert proc.stdout.split() == ["3.0"] and ".nbc is damaged" in " ".join(proc.stderr.split()), proc.stderr
     assert "SystemError" not in proc.stderr, proc.stderr
+
+
+def test_a_well_formed_pickle_of_something_else_is_compiled_again(tmp_path):
+    """It unpickles, so the data file's loader passes it; numba's rebuild then raised a TypeError
+    traceback (CompileResult._rebuild() missing 6 required positional arguments)."""
+    import pickle
+
+    (tmp_path / "cached_fn.py").write_text(MODULE)
+    assert _call(tmp_path).stdout.split() == ["3.0"]
+    for f in (tmp_path / "nb").rglob("*.nbc"):
+        f.write_bytes(pickle.dumps(("x", 1, None)))
+    proc = _call(tmp_path)
+    assert proc.stdout.split() == ["3.0"] and "cannot be rebuilt" in proc.stderr and "Traceback" not in proc.stderr
+
+
+TWO = MODULE + textwrap.dedent("""
+    @lazy_njit(cache=True)
+    def add(x, y, z):
+        return x + y + z
+""")
+
+
+def test_another_functions_entry_copied_over_is_compiled_again(tmp_path):
+    """A mixed or stale cache: the run had called the other function's code ("dense_kernel expected
+    13 arguments, got 3")."""
+    (tmp_path / "cached_fn.py").write_text(TWO)
+    call = CALL.replace("print(cached_fn.plus_one(2.0))", "print(cached_fn.plus_one(2.0), cached_fn.add(1.0, 2.0, 3.0))")
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PATH": "/usr/bin:/bin"}
+    run = lambda: subprocess.run([sys.executable, "-c", call.format(where=str(tmp_path))], capture_output=True,  # noqa: E731
+                                 text=True, timeout=300, env=env)
+    assert run().stdout.split() == ["3.0", "6.0"]
+    add = next((tmp_path / "nb").rglob("*add*.nbc"))
+    for f in (tmp_path / "nb").rglob("*plus_one*.nbc"):
+        f.write_bytes(add.read_bytes())
+    proc = run()
+    assert proc.stdout.split() == ["3.0", "6.0"], proc.stderr[-2000:]
+    assert "holds another function's compiled code" in proc.stderr
