@@ -30,7 +30,7 @@ import numpy as np
 from cistrack.errors import ConfigError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.atomic_files import atomic_target
-from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
+from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_checked, read_parts, write_checked
 from cistrack.units import LU_KM, VU_KMS
 
 __all__ = ["EstimateWriter", "Estimates", "read_estimates", "ESTIMATES", "KM_SCALE"]
@@ -103,7 +103,7 @@ class EstimateWriter:
         if parts:
             table = read_parts(self.directory / _PARTS)
             with atomic_target(self.directory / ESTIMATES, ESTIMATES + ".tmp") as tmp:  # no partial file on a full disk
-                _arrow()[1].write_table(table, tmp)
+                write_checked(table, tmp)
             for p in parts:
                 p.unlink()
             try:
@@ -165,7 +165,7 @@ def _read_tables(files: list[Path]):
     tables = []
     for f in files:
         try:
-            tables.append(pq.ParquetFile(f).read())
+            tables.append(read_checked(f))
         except (OSError, pa.ArrowException) as exc:  # ArrowInvalid: empty, truncated or not parquet
             size = f.stat().st_size if f.exists() else 0
             raise ConfigError(f"{f}: not a readable estimates table ({size} bytes: {exc}); write it again with "

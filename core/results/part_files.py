@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # pyarrow is imported on use (~35 ms that listing the registry never needs)
     import pyarrow as pa
 
-__all__ = ["PartWriter", "ROWS_PER_PART", "SECONDS_PER_PART", "read_parts"]
+__all__ = ["PartWriter", "ROWS_PER_PART", "SECONDS_PER_PART", "read_parts", "write_checked", "read_checked"]
 
 ROWS_PER_PART = 1000
 """Rows per part file by default."""
@@ -74,9 +74,7 @@ class PartWriter:
         final = self.directory / f"part-{self._first:09d}.parquet"
         tmp = final.with_suffix(".tmp")
         try:
-            import pyarrow.parquet as pq
-
-            pq.write_table(_table(rows), tmp)
+            write_checked(_table(rows), tmp)
             os.replace(tmp, final)
         except BaseException:
             tmp.unlink(missing_ok=True)
@@ -103,7 +101,22 @@ def read_parts(directory: str | Path) -> pa.Table | None:
     if not parts:
         return None
     import pyarrow as pa
+
+    return pa.concat_tables([read_checked(p) for p in parts], promote_options="default")
+
+
+def write_checked(table: pa.Table, path: str | Path) -> None:
+    """Write ``table`` as Parquet with a checksum on every page, so that a flipped bit is found on
+    reading (:func:`read_checked`) rather than read as another number."""
+    import pyarrow.parquet as pq
+
+    pq.write_table(table, path, write_page_checksum=True)
+
+
+def read_checked(path: str | Path) -> pa.Table:
+    """The Parquet table at ``path``, its page checksums verified (where it was written with them):
+    pyarrow raises ArrowException (OSError) for a page whose bytes changed."""
     import pyarrow.parquet as pq
 
     # ParquetFile.read: pq.read_table imports pyarrow.dataset (~0.1 s) for a plain file
-    return pa.concat_tables([pq.ParquetFile(p).read() for p in parts], promote_options="default")
+    return pq.ParquetFile(path, page_checksum_verification=True).read()

@@ -36,7 +36,7 @@ from cistrack.results.strict_json import finite_or_null
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.output_paths import clear_earlier_results
-from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_parts
+from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_checked, read_parts, write_checked
 from cistrack.results.step_table import is_table_step, row_of
 
 __all__ = ["ResultsWriter", "read_steps", "steps_readable", "read_manifest", "results_line", "write_json_atomic", "versions"]
@@ -192,7 +192,7 @@ class ResultsWriter:
             try:
                 table = read_parts(self.directory / PARTS)
                 with atomic_target(self.directory / STEPS, STEPS + ".tmp") as tmp:
-                    pq.write_table(table, tmp)
+                    write_checked(table, tmp)
                 for p in parts:
                     p.unlink()
             except OSError as exc:
@@ -239,7 +239,7 @@ def read_steps(directory: str | Path) -> pa.Table:
     d = Path(directory)
     if (d / STEPS).exists():
         try:
-            return pq.read_table(d / STEPS)
+            return read_checked(d / STEPS)
         except (pa.ArrowException, OSError) as exc:
             raise CistrackError(f"{d / STEPS}: not a readable step table ({exc}); run the scenario again into "
                                 f"{d} (a study reruns it)") from None

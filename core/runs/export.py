@@ -64,9 +64,14 @@ def run_inertial_estimates(run_dir: str | Path, registry: Registry | None = None
                             f"in an inertial frame (Sensor.inertial_frame() is None); cannot export")
     try:
         est = read_estimates(d)
+        return to_inertial(est, frame), scen
     except FileNotFoundError as exc:
         raise CistrackError(str(exc)) from None
-    return to_inertial(est, frame), scen
+    except CistrackError:
+        raise
+    except (ValueError, TypeError, IndexError) as exc:  # a table that reads but holds what no run writes
+        raise CistrackError(f"{d}: its estimates are damaged ({str(exc)[:120]}); run the scenario again into "
+                            f"{d} with --overwrite") from None
 
 
 def export_refusal(run_dir: str | Path) -> str | None:
