@@ -47,7 +47,7 @@ from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["suspicion", "end_night_bias", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST",
-           "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK"]
+           "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
 MIN_GAP_HOURS = 0.2
 """Gaps between observations at least this long (12 minutes) are candidate burn intervals: between
@@ -367,3 +367,77 @@ def rival_time(arc: BurnArc, ballistic: FitResult, found: ManeuverSearch, burn: 
         if cost <= RIVAL_COST and chi2 > limit and (rival is None or cost < rival.cost_delta):
             rival = RivalTime(float(tb), dv, cost, chi2)
     return rival
+
+
+NIGHT_GAP_HOURS = 3.0
+"""A gap between observations at least this long separates observing sessions (nights)."""
+
+
+def _neighbour_times(times: np.ndarray, window: tuple[float, float]) -> np.ndarray:
+    """:data:`GAP_POINTS` burn times (TU) in ``window`` and in the nearest night's gap (at least
+    :data:`NIGHT_GAP_HOURS`) before and after it: a burn between two tracklets of a night may as
+    well lie after the night's last."""
+    gaps = _gaps(times, [])
+    k = next((i for i, g in enumerate(gaps) if np.isclose(g[0], window[0]) and np.isclose(g[1], window[1])), None)
+    if k is None:
+        return np.zeros(0)
+    night = [i for i, g in enumerate(gaps) if g[1] - g[0] >= units.hours_to_tu(NIGHT_GAP_HOURS)]
+    near = [max([i for i in night if i < k], default=k), k, min([i for i in night if i > k], default=k)]
+    fr = (np.arange(GAP_POINTS) + 0.5) / GAP_POINTS
+    return np.array([gaps[i][0] + f * (gaps[i][1] - gaps[i][0]) for i in sorted(set(near)) for f in fr])
+
+
+def times_allowed(arc: BurnArc, found: ManeuverSearch) -> tuple[ManeuverSearch, str]:
+    """``found`` with each burn's time and delta-v uncertainty widened to reach the other times the
+    arc allows as well, and "" ; or ``found`` and why its burn times are not the best, in words.
+
+    :data:`GAP_POINTS` times in each burn's gap and in the nearest night's gap before and after it
+    are fitted in full (the other burns held). Those whose fit costs at most
+    :data:`RIVAL_COST` more than the search's (the profile's two-sigma interval) and lie beyond
+    three of the burn's time sigmas are allowed times: the time sigma becomes half the distance to
+    the farthest, and the delta-v covariance takes d d^T / 4, d the allowed fit's delta-v minus the
+    estimate's, for the d farthest in the estimate's covariance (each allowed time two sigmas away).
+    A time whose fit costs more than :data:`RIVAL_COST` less means the search did not find the
+    burn's time. The profile about the search's time can be a narrow minimum of several: an unseen
+    survey set (0.5 m/s) had its burn timed 4.4 hours early +- 11 minutes (z -24.7) between two
+    tracklets of a night, a burn after the night's last fitting as well."""
+    burns, times = list(found.burns), np.asarray(arc.measurements.times, dtype=float)
+    base = capped_cost(found.result, arc.prior)
+    for k, (b, window) in enumerate(zip(found.burns, found.windows)):
+        allowed, why = _allowed_times(arc, found, b, window, times, base)
+        if why:
+            return found, why
+        if allowed:
+            burns[k] = _widened(b, allowed)
+    return replace(found, burns=burns), ""
+
+
+def _allowed_times(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, window: tuple[float, float],
+                   times: np.ndarray, base: float) -> tuple[list[tuple[float, np.ndarray]], str]:
+    """([(time TU, delta-v m/s (3,))] the arc allows for burn ``b`` as well, far from its time), or
+    ([], why) when a time fits clearly better (:func:`times_allowed`)."""
+    others = [x.t for x in found.burns if x is not b]
+    allowed = []
+    for tb in _neighbour_times(times, window):
+        try:
+            one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, float(tb)])
+        except (FitError, PropagationError, np.linalg.LinAlgError):
+            continue
+        cost = capped_cost(one.fit, arc.prior) - base
+        if cost < -RIVAL_COST:
+            return [], (f"a burn at {_utc_days(float(tb)):.3f} d fits the arc better than the search's at "
+                        f"{_utc_days(b.t):.3f} d (its cost {-cost:.1f} lower): the burn's time is not determined")
+        if cost <= RIVAL_COST and abs(tb - b.t) > 3.0 * b.t_sigma:
+            allowed.append((float(tb), next(x.delta_v_ms for x in one.burns if x.t == float(tb))))
+    return allowed, ""
+
+
+def _widened(b: BurnEstimate, allowed: list[tuple[float, np.ndarray]]) -> BurnEstimate:
+    """``b`` with each allowed (time, delta-v) two sigmas from its estimate (:func:`times_allowed`)."""
+    sigma = max(b.t_sigma, max(abs(t - b.t) for t, _ in allowed) / 2.0)
+    d = [np.asarray(dv, dtype=float) - b.delta_v_ms for _, dv in allowed]
+    try:
+        far = max(d, key=lambda x: float(x @ np.linalg.solve(b.covariance_ms2, x)))
+    except np.linalg.LinAlgError:
+        far = max(d, key=lambda x: float(x @ x))
+    return replace(b, covariance_ms2=b.covariance_ms2 + np.outer(far, far) / 4.0, t_sigma=sigma)

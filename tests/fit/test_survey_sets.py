@@ -154,3 +154,15 @@ def test_a_burn_fitted_a_night_early_that_leaves_eight_rejected_is_not_reported(
     record = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())
     assert not record["converged"] and not record.get("maneuvers")
     assert any("it still rejects" in m for m in record["messages"]), record["messages"]
+
+
+@pytest.mark.slow
+def test_a_burn_timed_in_a_narrow_minimum_has_a_sigma_that_reaches_the_time_the_arc_allows(tmp_path):
+    """nrho seed 99 with a 0.5 m/s burn after a night's last tracklet: the search timed it between
+    the night's two tracklets, 4.4 hours early +- 11 minutes (z -24.7); a burn after the night's
+    last fits as well, and the time's sigma now reaches it."""
+    set_dir = tmp_path / "nrho-s99"
+    make(set_dir, "nrho", seed=99, burn_ms=0.5)
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert row.burns.startswith("1:") and row.burn_ok, row.burns
