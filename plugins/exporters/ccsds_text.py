@@ -51,7 +51,9 @@ def comment_lines(meta: dict) -> list[str]:
 def kvn_text(exporter: str, lines: list[str]) -> str:
     """The file's text; ConfigError naming the keyword when a line is longer than :data:`MAX_LINE`
     (a value such as OBJECT_NAME too long for the format: refused, not cut short, as a shortened
-    name would no longer identify the object)."""
+    name would no longer identify the object). A CCSDS KVN message is ASCII: any other character (a
+    designation such as "δρο") is written as its Python escape (``\u03b4``), which reads back to it."""
+    lines = [line.encode("ascii", "backslashreplace").decode("ascii") for line in lines]
     for line in lines:
         if len(line) > MAX_LINE:
             key, _, value = line.partition(" = ")
