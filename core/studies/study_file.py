@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import json
+import re
 from collections import Counter
 import sys
 from importlib import resources
@@ -323,6 +324,6 @@ def sweep_error(message: str, study: Path, combo: tuple, scenario_name: str,
     if _unknown_setting(rest, key):
         return (f"{where} does not apply to scenario {scenario_name!r} ({scenario_source}: {rest}); give its "
                 f"entry as a table {{name = \"{scenario_name}\", sweep = false}} or sweep = [the settings that apply]")
-    marker = f"'{key.rsplit('.', 1)[-1]}' = {value!r}"
-    why = rest.split(marker, 1)[1].strip().removeprefix("is invalid:").strip() if marker in rest else rest
+    said = re.search(re.escape(f"'{key.rsplit('.', 1)[-1]}' = ") + r"\S+", rest)  # the value as the scenario wrote it (-1.0 for -1)
+    why = rest[said.end():].strip().removeprefix("is invalid:").strip() if said else rest
     return f"{where}: value {value!r} is invalid: {why} (scenario {scenario_name!r}, {scenario_source})"

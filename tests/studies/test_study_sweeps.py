@@ -189,3 +189,11 @@ def test_a_swept_parameter_the_scenarios_component_does_not_take_does_not_apply_
     text = str(exc.value)
     assert text.startswith(f"{p}: key 'sweep', setting 'filter.no_such_parameter' does not apply to scenario 'quick'")
     assert "unknown parameter 'no_such_parameter'" in text and '{name = "quick", sweep = false}' in text
+
+
+def test_a_whole_number_swept_into_a_float_setting_is_refused_in_plain_words(tmp_path):
+    """The scenario writes -1 as -1.0: the refusal had read "value -1 is invalid: .0 must be ..."."""
+    p = _quick_study(tmp_path, '{ duration_days = [-1, 2] }')
+    with pytest.raises(ConfigError) as exc:
+        plan_runs(p, tmp_path / "out")
+    assert f"{p}: key 'sweep', setting 'duration_days': value -1 is invalid: must be a finite number > 0" in str(exc.value)
