@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import os
 from datetime import timedelta
 from pathlib import Path
@@ -318,6 +319,7 @@ def _bent_line_note(run_dir, sky) -> str:
 
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
+    from cistrack.cli.main import for_stream
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
     from cistrack.errors import ConfigError
     from cistrack.results.dir_lock import check_still_as_read, results_stamp
@@ -346,7 +348,8 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        for line in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run, sky))):
-            print(line)
+        for note in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run, sky))):
+            for line in note.splitlines():
+                print(for_stream(line, sys.stdout))  # within 120 columns on a terminal
         print(f"wrote {csv_path}\nwrote {png}")
     return 0

@@ -278,3 +278,22 @@ def test_a_prediction_of_a_fit_with_a_burn_starts_after_it(fit_dir, tmp_path, ca
     assert units.parse_utc(first) >= units.parse_utc(at(t_burn + 0.15))
     assert main(common + ["--start", at(t_burn - 0.3), "--stop", at(t_burn - 0.1)]) == 2
     assert "--start/--stop: every prediction time is before" in capsys.readouterr().err
+
+
+def test_predicts_notes_fit_within_120_columns_on_a_terminal(fit_dir, tmp_path, capsys, monkeypatch):
+    """A note of predict had been one 206-character line on a 120-column terminal."""
+    import sys
+
+    from cistrack import units
+    from cistrack.cli.main import main
+
+    d = tmp_path / "burned"
+    rec, t_burn = _burned(fit_dir, d)
+    epoch = units.parse_utc(rec["scenario_epoch_utc"])
+    at = lambda days: units.format_utc(units.tu_to_utc(epoch, float(units.days_to_tu(days))))[:19] + "Z"  # noqa: E731
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    assert main(["predict", str(d), "--site", "568", "--step", "60", "--out", str(tmp_path / "sky"), "--start",
+                 at(t_burn - 0.2), "--stop", at(t_burn + 0.3)]) == 0
+    out = capsys.readouterr().out
+    assert "prediction times before" in " ".join(out.split())
+    assert max(len(line) for line in out.splitlines()) <= 120
