@@ -328,7 +328,7 @@ add("export-missing-run", argv=["export", "no-run"], words=("no-run",))
 add("export-out-exists", argv=["export", "no-run", "--out", "e.oem"], files={"e.oem": "an earlier export\n"},
     words=("--out", "e.oem", "already exists", "--overwrite"))
 add("rerun-file-exists", argv=["run", "s.toml", "--rerun", "rec.rrd", "--quiet"],
-    files={"s.toml": scenario(), "rec.rrd": b"an earlier recording"}, words=("rec.rrd", "already exists", "--overwrite"))
+    files={"s.toml": scenario(), "rec.rrd": b"RRF2 an earlier recording"}, words=("rec.rrd", "already exists", "--overwrite"))
 add("rerun-file-is-a-link", argv=["run", "s.toml", "--rerun", "rec.rrd", "--quiet"],
     files={"s.toml": scenario(), "_LINK rec.rrd": "elsewhere.rrd"}, words=("rec.rrd", "already exists"))
 # -- issue 27: up-front limits on work ------------------------------------------------------------
@@ -407,7 +407,7 @@ add("ok-seed-zero-flag", **run_case(argv=("s.toml", "--seed", "0"), expect="run"
 add("ok-seed-max-flag", **run_case(argv=("s.toml", "--seed", str(2 ** 63 - 1)), expect="run"))
 add("ok-name-with-spaces", **run_case(expect="run", top__name="my case 1"))
 add("ok-rerun-overwrite", argv=["run", "s.toml", "--rerun", "rec.rrd", "--overwrite", "--quiet"],
-    files={"s.toml": scenario(), "rec.rrd": b"an earlier recording"}, expect="run")
+    files={"s.toml": scenario(), "rec.rrd": b"RRF2 an earlier recording"}, expect="run")
 add("ok-enkf-filter-without-components", **run_case(expect="run", filter__name="enkf", filter__n_components=DROP))
 
 

@@ -29,7 +29,7 @@ from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
-from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
+from cistrack.cli.text_width import cap_help_width, fit_row, for_stream, wrap_labelled, wrap_lines, wrap_row
 from cistrack.runs.progress import eprint as _eprint
 
 if sys.version_info >= (3, 11):
@@ -545,14 +545,6 @@ def main(argv: list[str] | None = None) -> int:
 def error_text(exc: BaseException, stream: object) -> str:
     """``cistrack: error: MESSAGE`` as :func:`for_stream` shows it on ``stream``."""
     return for_stream(f"cistrack: error: {exc}", stream)
-
-
-def for_stream(text: str, stream: object) -> str:
-    """``text`` (an error or warning line) wrapped within 120 columns under its label when
-    ``stream`` is a terminal (a person reads it); on one line otherwise (a log, a pipe, a script
-    that greps it). A word longer than the line (a path) is never broken."""
-    isatty = getattr(stream, "isatty", None)
-    return "\n".join(wrap_labelled(text)) if callable(isatty) and isatty() else text
 
 
 _INTERRUPTED = {

@@ -319,7 +319,7 @@ def _bent_line_note(run_dir, sky) -> str:
 
 def cmd_predict(args) -> int:
     """``cistrack predict``: see the module docstring."""
-    from cistrack.cli.main import for_stream
+    from cistrack.cli.text_width import for_stream
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
     from cistrack.errors import ConfigError
     from cistrack.results.dir_lock import check_still_as_read, results_stamp

@@ -11,7 +11,7 @@ import re
 import shutil
 import textwrap
 
-__all__ = ["MAX_WIDTH", "wrap_row", "fit_row", "wrap_lines", "wrap_labelled", "cap_help_width"]
+__all__ = ["MAX_WIDTH", "wrap_row", "fit_row", "wrap_lines", "wrap_labelled", "cap_help_width", "for_stream"]
 
 #: the widest line the command prints, in characters
 MAX_WIDTH = 120
@@ -93,3 +93,11 @@ def cap_help_width(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
             for sub in set(action.choices.values()):
                 cap_help_width(sub)
     return parser
+
+
+def for_stream(text: str, stream: object) -> str:
+    """``text`` (an error or warning line) wrapped within 120 columns under its label when
+    ``stream`` is a terminal (a person reads it); on one line otherwise (a log, a pipe, a script
+    that greps it). A word longer than the line (a path) is never broken."""
+    isatty = getattr(stream, "isatty", None)
+    return "\n".join(wrap_labelled(text)) if callable(isatty) and isatty() else text
