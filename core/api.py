@@ -160,7 +160,10 @@ class Run:
         if self.directory is not None:
             from cistrack.results.store import read_steps
 
-            return read_steps(self.directory)
+            try:
+                return read_steps(self.directory)
+            except FileNotFoundError as exc:  # the folder's tables were removed since the run was read
+                raise ConfigError(f"{exc}; the run's step table is gone from its folder") from None
         return pa.table({})
 
     @property

@@ -6,11 +6,12 @@
 """
 from __future__ import annotations
 
-from datetime import datetime
+from datetime import datetime, timezone
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
+from cistrack import units
 from cistrack.errors import MeasurementError
 # Defined beside the Reader interface (what reader plugins import); re-exported for this module's callers.
 from cistrack.interfaces.reader import FieldError, SeveralObjectsError, field_error, read_text_lines, show_field
@@ -66,7 +67,21 @@ def read_observations(path: str | PathLike, epoch: str | datetime, format: str |
     if not isinstance(path, (str, PathLike)):
         raise MeasurementError(f"path={type(path).__name__}: give the path of one observation file (a str or a "
                                "path); read several with one call each")
+    _check_epoch_years(epoch)
     return reader_for(path, format, registry, **params).read(path, epoch)
+
+
+def _check_epoch_years(epoch: Any) -> None:
+    """Refuse an ``epoch`` outside the years cistrack supports (a scenario's, 1800-2200), naming it;
+    one that is not a time is left to the reader, which names it."""
+    from cistrack.scenario.work_limits import check_epoch_span
+
+    try:
+        when = units.parse_utc(epoch) if isinstance(epoch, str) else epoch
+    except (ValueError, TypeError):
+        return
+    if isinstance(when, datetime):
+        check_epoch_span(when if when.tzinfo else when.replace(tzinfo=timezone.utc), 0.0, "epoch")
 
 
 def write_observations(path: str | PathLike, measurements: MeasurementSet, epoch: str | datetime,

@@ -77,3 +77,12 @@ def test_a_fit_from_python_into_another_objects_fit_is_refused_naming_the_keywor
     (d / "fit.json").write_text(json.dumps({"designation": "2025-010D"}))
     with pytest.raises(ConfigError, match=r"another object, '2025-010D'.*pass overwrite=True"):
         ct.fit(OBSERVATIONS, out=d, progress=False)
+
+
+def test_a_read_run_whose_step_table_is_gone_says_so_by_name(tmp_path):
+    """ct.read_run on a folder with its manifest but no steps had raised a bare FileNotFoundError."""
+    ct.run("quick", settings=SHORT, out=tmp_path / "r")
+    (tmp_path / "r" / "steps.parquet").unlink()
+    run = ct.read_run(tmp_path / "r")
+    with pytest.raises(ConfigError, match="no results .*step table is gone"):
+        run.table()
