@@ -225,7 +225,11 @@ def _checked(dynamics: Dynamics, times, epoch: datetime | str) -> np.ndarray:
     if getattr(dynamics, "frame", None) is None:
         raise ConfigError(f"sky predictions need dynamics in the real Earth-Moon frame ('ephemeris'); these are "
                           f"'{getattr(dynamics, 'name', type(dynamics).__name__)}', whose orbit has no place on the real sky")
-    tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
+    try:
+        tt = np.atleast_1d(np.asarray(times, dtype=float)).reshape(-1)
+    except (TypeError, ValueError):
+        raise StateError(f"sky predictions: times must be one or more finite numbers (TU since the scenario's "
+                         f"epoch), got {str(times)[:60]}") from None
     if tt.size == 0 or not np.all(np.isfinite(tt)):
         raise StateError("sky predictions: times must be one or more finite numbers (TU)")
     when = units.parse_utc(epoch)

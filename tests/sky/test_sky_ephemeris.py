@@ -110,3 +110,11 @@ def test_a_cr3bp_orbit_is_refused_naming_the_dynamics():
     dyn = default_registry().create("dynamics", "cr3bp")
     with pytest.raises(ConfigError, match="real Earth-Moon frame"):
         sky_ephemeris(dyn, np.r_[1.02, 0, -0.18, 0, -0.1, 0], np.eye(6) * 1e-12, 0.0, [0.1], observatory("711"), EPOCH)
+
+
+@pytest.mark.parametrize("times", [["a"], "2026-03-01", [[1.0], [2.0, 3.0]]])
+def test_times_that_are_not_numbers_are_refused_naming_times(case, times):
+    """A list of strings had raised numpy's "could not convert string to float", naming nothing."""
+    dyn, x, cov, _, _ = case
+    with pytest.raises(StateError, match="times must be one or more finite numbers"):
+        sky_ephemeris(dyn, x, cov, 0.0, times, observatory("568"), EPOCH)
