@@ -27,6 +27,21 @@ MemoryError: a length field read as gigabytes)."""
 _TOLERANT = threading.Lock()
 
 
+_DAMAGE_SAID = threading.Event()
+
+
+def _say_damage(message: str, *args: Any) -> None:
+    """The first damaged cache entry of a process as a warning (saying that later ones are recompiled
+    without a word), the rest at debug level: a damaged cache had printed one warning per kernel, 16
+    to 18 lines for one run."""
+    log = logging.getLogger("cistrack.lazy")
+    if _DAMAGE_SAID.is_set():
+        log.debug(message, *args)
+        return
+    _DAMAGE_SAID.set()
+    log.warning(message + " (other damaged entries of this cache are compiled again without a word)", *args)
+
+
 def _damaged_file(exc: BaseException, cache_file: Any) -> str:
     """The file whose unpickling raised ``exc``: the data file (``_load_data``'s ``path``) when that
     is where it failed, else the cache's index."""
@@ -80,9 +95,8 @@ def tolerate_damaged_cache() -> None:
                 with _quiet_buffer_release():
                     return load(self, key)
             except _DAMAGE as exc:
-                logging.getLogger("cistrack.lazy").warning(
-                    "numba's cache file %s is damaged (%s: %s); compiling the function again",
-                    _damaged_file(exc, self), type(exc).__name__, str(exc)[:80])
+                _say_damage("numba's cache file %s is damaged (%s: %s); compiling the function again",
+                            _damaged_file(exc, self), type(exc).__name__, str(exc)[:80])
                 try:
                     self.flush()  # an empty index: the compiled function's entry is written afresh
                 except OSError:
@@ -132,8 +146,7 @@ def _compiled_for(data: Any, cache: Any, sig: Any) -> bool:
 
 
 def _recompiled(cache: Any, why: str) -> None:
-    logging.getLogger("cistrack.lazy").warning("numba's cache entry of %s %s; compiling the function again",
-                                               getattr(cache, "_name", "?"), why)
+    _say_damage("numba's cache entry of %s %s; compiling the function again", getattr(cache, "_name", "?"), why)
     return None
 
 

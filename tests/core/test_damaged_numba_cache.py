@@ -118,3 +118,18 @@ def test_another_functions_entry_copied_over_is_compiled_again(tmp_path):
     proc = run()
     assert proc.stdout.split() == ["3.0", "6.0"], proc.stderr[-2000:]
     assert "holds another function's compiled code" in proc.stderr
+
+
+def test_many_damaged_entries_are_one_warning(tmp_path):
+    """A damaged cache had printed a warning per kernel (16-18 lines for one run); the first is
+    said, with the others recompiled without a word."""
+    (tmp_path / "cached_fn.py").write_text(TWO)
+    call = CALL.replace("print(cached_fn.plus_one(2.0))", "print(cached_fn.plus_one(2.0), cached_fn.add(1.0, 2.0, 3.0))")
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PATH": "/usr/bin:/bin"}
+    run = lambda: subprocess.run([sys.executable, "-c", call.format(where=str(tmp_path))], capture_output=True,  # noqa: E731
+                                 text=True, timeout=300, env=env)
+    assert run().stdout.split() == ["3.0", "6.0"]
+    for f in (tmp_path / "nb").rglob("*.nbc"):
+        f.write_bytes(b"garbage")
+    proc = run()
+    assert proc.stdout.split() == ["3.0", "6.0"] and proc.stderr.count("numba's cache") == 1, proc.stderr
