@@ -103,14 +103,19 @@ TWO = MODULE + textwrap.dedent("""
 """)
 
 
-def test_another_functions_entry_copied_over_is_compiled_again(tmp_path):
-    """A mixed or stale cache: the run had called the other function's code ("dense_kernel expected
-    13 arguments, got 3")."""
+def _two_functions(tmp_path):
+    """A module of two cached functions in ``tmp_path``, and a call of both in a fresh process."""
     (tmp_path / "cached_fn.py").write_text(TWO)
     call = CALL.replace("print(cached_fn.plus_one(2.0))", "print(cached_fn.plus_one(2.0), cached_fn.add(1.0, 2.0, 3.0))")
     env = {"NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PATH": "/usr/bin:/bin"}
-    run = lambda: subprocess.run([sys.executable, "-c", call.format(where=str(tmp_path))], capture_output=True,  # noqa: E731
-                                 text=True, timeout=300, env=env)
+    return lambda: subprocess.run([sys.executable, "-c", call.format(where=str(tmp_path))], capture_output=True,
+                                  text=True, timeout=300, env=env)
+
+
+def test_another_functions_entry_copied_over_is_compiled_again(tmp_path):
+    """A mixed or stale cache: the run had called the other function's code ("dense_kernel expected
+    13 arguments, got 3")."""
+    run = _two_functions(tmp_path)
     assert run().stdout.split() == ["3.0", "6.0"]
     add = next((tmp_path / "nb").rglob("*add*.nbc"))
     for f in (tmp_path / "nb").rglob("*plus_one*.nbc"):
@@ -123,11 +128,7 @@ def test_another_functions_entry_copied_over_is_compiled_again(tmp_path):
 def test_many_damaged_entries_are_one_warning(tmp_path):
     """A damaged cache had printed a warning per kernel (16-18 lines for one run); the first is
     said, with the others recompiled without a word."""
-    (tmp_path / "cached_fn.py").write_text(TWO)
-    call = CALL.replace("print(cached_fn.plus_one(2.0))", "print(cached_fn.plus_one(2.0), cached_fn.add(1.0, 2.0, 3.0))")
-    env = {"NUMBA_CACHE_DIR": str(tmp_path / "nb"), "PATH": "/usr/bin:/bin"}
-    run = lambda: subprocess.run([sys.executable, "-c", call.format(where=str(tmp_path))], capture_output=True,  # noqa: E731
-                                 text=True, timeout=300, env=env)
+    run = _two_functions(tmp_path)
     assert run().stdout.split() == ["3.0", "6.0"]
     for f in (tmp_path / "nb").rglob("*.nbc"):
         f.write_bytes(b"garbage")
