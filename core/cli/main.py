@@ -29,7 +29,8 @@ from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
-from cistrack.cli.text_width import cap_help_width, fit_row, for_stream, wrap_labelled, wrap_lines, wrap_row
+from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
+from cistrack.cli.text_width import for_stream as _for_stream
 from cistrack.runs.progress import eprint as _eprint
 
 if sys.version_info >= (3, 11):
@@ -504,7 +505,7 @@ def _configure_logging(quiet: bool) -> None:
 
     class _Stderr(logging.Handler):  # looks sys.stderr up at each message (tests swap it)
         def emit(self, record: logging.LogRecord) -> None:  # within 120 columns on a terminal, like errors
-            _eprint(for_stream(f"cistrack: {record.getMessage()}", sys.stderr))
+            _eprint(_for_stream(f"cistrack: {record.getMessage()}", sys.stderr))
 
     logger = logging.getLogger("cistrack")
     if not any(type(h).__name__ == "_Stderr" for h in logger.handlers):
@@ -543,8 +544,20 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def error_text(exc: BaseException, stream: object) -> str:
-    """``cistrack: error: MESSAGE`` as :func:`for_stream` shows it on ``stream``."""
-    return for_stream(f"cistrack: error: {exc}", stream)
+    """``cistrack: error: MESSAGE`` as :func:`cistrack.cli.text_width.for_stream` shows it on ``stream``."""
+    return _for_stream(f"cistrack: error: {exc}", stream)
+
+
+def __getattr__(name: str):
+    """``for_stream``, moved to :mod:`cistrack.cli.text_width`, still imports from here, with a
+    DeprecationWarning."""
+    if name == "for_stream":
+        import warnings
+
+        warnings.warn("cistrack.cli.main.for_stream moved to cistrack.cli.text_width.for_stream; import it from "
+                      "there", DeprecationWarning, stacklevel=2)
+        return _for_stream
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 _INTERRUPTED = {
