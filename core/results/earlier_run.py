@@ -32,7 +32,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["check_replacing", "check_recording_path", "recording_or_empty", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
+__all__ = ["check_replacing", "check_recording_path", "check_export_path", "RESULT_FILES", "RESULT_FOLDERS",
            "FIT_FILES", "FIT_PLOTS", "OptionWords", "CLI_WORDS", "PYTHON_WORDS", "clear_replaced_fit", "FIT_INPUTS"]
 
 RESULT_FILES = (MANIFEST, STEPS, ESTIMATES, "scenario.toml", "scenario.json", RUN_LOCK)
@@ -191,15 +191,13 @@ def _check_recording_name(recording: str | Path, r: Path, directory: str | Path,
         raise ConfigError(f"{where} {recording}: a recording's file name ends in .rrd (cistrack view and the rerun "
                           f"viewer read it by that name); e.g. {Path(directory) / 'recording.rrd'}"
                           + (" (standard output is not supported)" if str(recording) == "-" else ""))
-    if r.is_file() and not recording_or_empty(r):
+    if r.is_file() and not _recording_or_empty(r):
         raise ConfigError(f"{where} {recording}: exists and is not a rerun recording; --overwrite replaces results "
                           "and recordings, never another file: give a new file name ending in .rrd")
 
 
-def recording_or_empty(path: str | Path) -> bool:
-    """Whether the file at ``path`` starts with rerun's recording header (``RRF``) or is empty: the
-    only files a recording replaces (``--rerun`` and the rerun recorder's ``path``). False when it
-    cannot be read."""
+def _recording_or_empty(path: Path) -> bool:
+    """Whether ``path`` starts with rerun's recording header (``RRF``) or is empty."""
     try:
         with open(path, "rb") as fh:
             return fh.read(3) in (b"", b"RRF")

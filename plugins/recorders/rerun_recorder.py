@@ -64,7 +64,6 @@ from cistrack.interfaces.component import Component, check_int, check_positive
 from cistrack.errors import ParameterError
 from cistrack.api import hookimpl
 from cistrack.lazy import LazyModule
-from cistrack.results.earlier_run import recording_or_empty
 from cistrack.units import LU_KM, parse_utc
 
 from .blueprint import APPLICATION_ID
@@ -123,6 +122,21 @@ LOW_FREE_BYTES = 16_000_000
 """Free disk space below which a recording to a file stops between two steps (flushed and
 closed while its last batch still fits; the run goes on and says so), before rerun's file
 writer meets a full disk."""
+
+RECORDING_MAGIC = b"RRF"
+"""The first bytes of a rerun recording file (``RRF2`` for rerun 0.2x's)."""
+
+
+def is_recording_or_empty(path: str | os.PathLike) -> bool:
+    """Whether the file at ``path`` is a rerun recording (it starts with :data:`RECORDING_MAGIC`) or
+    empty: the only files a recorder with ``overwrite`` replaces. False when it cannot be read."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(RECORDING_MAGIC))
+    except OSError:
+        return False
+    return head in (b"", RECORDING_MAGIC)
+
 
 class RerunRecorder(Component):
     """Record a run for the rerun viewer (3-D synodic scene, clouds, ellipsoids, metrics).
@@ -324,7 +338,7 @@ class RerunRecorder(Component):
         if not self.overwrite:
             self._fail("path", target, "already exists; give another file, or overwrite=true "
                        "(cistrack run --overwrite) to replace it")
-        if not recording_or_empty(target):
+        if not is_recording_or_empty(target):
             self._fail("path", target, "already exists and is not a rerun recording (it does not start with rerun's "
                        "RRF header): overwrite=true replaces recordings only; give another file name ending in .rrd")
 
