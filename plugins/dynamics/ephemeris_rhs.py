@@ -28,6 +28,8 @@ impact bodies, -1 when the Moon is not an impact body).
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from cistrack.astro.ephemeris import ChebyshevSeries
@@ -227,6 +229,18 @@ def ephemeris_body_position(t, p, b, body_pos):
     return body_pos[b, 0], body_pos[b, 1], body_pos[b, 2]
 
 
+@lru_cache(maxsize=8)
+def _chebyshev_to_power(ncheb: int) -> np.ndarray:
+    """(ncheb, ncheb) read-only: row n holds T_n in powers of x (numpy's conversion, made once per
+    size: a least-squares fit builds the ephemeris parameters thousands of times)."""
+    to_power = np.zeros((ncheb, ncheb))
+    for n in range(ncheb):
+        row = np.polynomial.chebyshev.cheb2poly(np.eye(ncheb)[n])
+        to_power[n, :row.size] = row
+    to_power.flags.writeable = False
+    return to_power
+
+
 def resample_power_basis(series: ChebyshevSeries, start_s: float, length_s: float, nrec: int,
                          drop_below_km: float) -> np.ndarray:
     """Re-express a Chebyshev series on a finer grid of records, in the power basis.
@@ -238,12 +252,7 @@ def resample_power_basis(series: ChebyshevSeries, start_s: float, length_s: floa
     below ``drop_below_km`` are dropped. Returns (nrec, C, 3) coefficients, km.
     """
     cheb = np.asarray(series.coefficients, dtype=np.float64)
-    ncheb = cheb.shape[2]
-    to_power = np.zeros((ncheb, ncheb))  # row n: T_n in powers of x
-    for n in range(ncheb):
-        row = np.polynomial.chebyshev.cheb2poly(np.eye(ncheb)[n])
-        to_power[n, :row.size] = row
-    parent = np.einsum("rac,cn->ran", cheb, to_power)
+    parent = np.einsum("rac,cn->ran", cheb, _chebyshev_to_power(cheb.shape[2]))
     mid = start_s + (np.arange(nrec) + 0.5) * length_s
     k = np.floor((mid - series.start_s) / series.length_s).astype(np.int64)
     if np.any(k < 0) or np.any(k >= cheb.shape[0]):
