@@ -29,6 +29,10 @@ _UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min
           + "deg".rjust(7) * 3 + "arcsec".rjust(9) * 2 + "deg".rjust(6))
 
 
+MAX_STEP_MINUTES = 1e7
+"""The longest --step, minutes (a larger one overflowed the UTC grid's arithmetic)."""
+
+
 def _minutes(text: str) -> float:
     try:
         v = float(text)
@@ -36,6 +40,9 @@ def _minutes(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of minutes") from None
     if not (math.isfinite(v) and v > 0):
         raise argparse.ArgumentTypeError(f"{text!r}: give a number of minutes > 0")
+    if v > MAX_STEP_MINUTES:
+        raise argparse.ArgumentTypeError(f"{text!r}: give at most {MAX_STEP_MINUTES:,.0f} minutes (about 19 years; "
+                                         "DE421 spans 1900-2050)")
     return v
 
 
@@ -291,6 +298,23 @@ def _write(sky, prefix: Path, title: str, keep_other: bool = False) -> tuple[Pat
     return csv_path, png
 
 
+def _horizon_note(run_dir, times: np.ndarray, orbit) -> str:
+    """Notes when the prediction ``times`` (TU) run past a fit's horizon or its covariance horizon,
+    as an export of the same orbit says (:func:`cistrack.fitting.fit_export.prediction_warnings`);
+    "" for a run, or within them."""
+    from cistrack.errors import CistrackError
+    from cistrack.fitting.fit_export import is_fit_directory, prediction_warnings
+    from cistrack.fitting.fit_record import read_fit_record
+
+    if times.size == 0 or not is_fit_directory(run_dir):
+        return ""
+    try:
+        warned = prediction_warnings(read_fit_record(Path(run_dir)), times, 0, None, orbit.epoch)
+    except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no note is no harm
+        return ""
+    return "\n".join(f"note: {w}" for w in warned)
+
+
 def _bent_line_note(run_dir, sky) -> str:
     """A note when the fit's line of variations bends away from its covariance: the ellipses were
     widened to hold it (``sky.line_reach_arcsec``), or, when the line could not be followed or read,
@@ -348,7 +372,8 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
         if np.any(sky.linear):
             print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        for note in filter(None, (impact_note, _lost_note(sky), _bent_line_note(args.run, sky))):
+        notes = (impact_note, _horizon_note(args.run, times, orbit), _lost_note(sky), _bent_line_note(args.run, sky))
+        for note in filter(None, notes):
             for line in note.splitlines():
                 print(for_stream(line, sys.stdout))  # within 120 columns on a terminal
         print(f"wrote {csv_path}\nwrote {png}")

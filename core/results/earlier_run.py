@@ -289,7 +289,8 @@ def check_export_path(out: str | Path, directory: str | Path, where: str = "--ou
                           f"writes there ({', '.join(CONTROL_FILES)}); {by} would replace a running process's lock: "
                           + instead.format(directory=Path(directory)))
     holder = o.parent
-    if holder != d and o.name in RESULT_FILES + FIT_FILES and any((holder / n).is_file() for n in ("fit.json", MANIFEST)):
+    theirs = o.name in RESULT_FILES + FIT_FILES or any(fnmatch.fnmatch(o.name, p) for p in FIT_PLOTS)
+    if holder != d and theirs and any((holder / n).is_file() for n in ("fit.json", MANIFEST)):
         raise ConfigError(f"{where} {out}: is one of the results of {holder}; {by} would replace them: "
                           + instead.format(directory=Path(directory)))
 

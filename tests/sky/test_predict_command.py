@@ -18,7 +18,7 @@ def test_refusals_name_what_is_wrong(tmp_path, capsys, argv, words):
     assert words in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("option, value", [("--step", "0"), ("--step", "x"), ("--start", "tomorrow")])
+@pytest.mark.parametrize("option, value", [("--step", "0"), ("--step", "x"), ("--step", "1e15"), ("--start", "tomorrow")])
 def test_bad_option_values_are_refused_by_the_parser(tmp_path, capsys, option, value):
     with pytest.raises(SystemExit) as exc:
         main(["predict", str(tmp_path), "--site", "568", option, value])
@@ -126,6 +126,33 @@ def test_an_out_prefix_over_the_fits_own_results_is_refused(fitted, tmp_path, ca
     if replaced:
         assert f"--out {d / prefix}: {d / replaced}: is one of the results of {d}" in err and "sky-568" in err
     assert {p.name: p.read_bytes() for p in d.iterdir() if p.name in before} == before
+
+
+def test_times_past_the_covariance_horizon_get_the_note_an_export_gives(fitted, tmp_path, capsys):
+    """The shipped fit's covariance holds its orbits for 3.75 days past the last observation
+    (2026-03-06T12:03Z), its orbits a 1-degree field for 10.5: predicted 5 days on, the ellipses
+    understate the spread, and the note says so as the OEM's COMMENT WARNING does."""
+    window = ["--start", "2026-03-11T12:00:00Z", "--stop", "2026-03-11T18:00:00Z", "--step", "360"]
+    assert main(["predict", str(fitted), "--site", "568", *window, "--out", str(tmp_path / "late")]) == 0
+    out = capsys.readouterr().out
+    assert "note: the covariances understate the spread of the orbits the fit allows from 3.75 days" in out
+    assert "beyond the fit's horizon" not in out
+    early = ["--start", "2026-03-07T00:00:00Z", "--stop", "2026-03-07T06:00:00Z", "--step", "360"]
+    assert main(["predict", str(fitted), "--site", "568", *early, "--out", str(tmp_path / "early")]) == 0
+    assert "understate" not in capsys.readouterr().out
+
+
+def test_an_out_prefix_over_another_fits_residual_plot_is_refused_even_with_overwrite(fitted, tmp_path, capsys):
+    import shutil
+
+    other = tmp_path / "other"
+    shutil.copytree(fitted, other)
+    plot = next(other.glob("residuals-*.png"))
+    before = plot.read_bytes()
+    out = other / plot.stem
+    assert main(["predict", str(fitted), "--site", "568", "--out", str(out), "--overwrite", "--quiet"]) == 2
+    assert f"is one of the results of {other}" in capsys.readouterr().err
+    assert plot.read_bytes() == before and not out.with_suffix(".csv").exists()
 
 
 def test_a_refit_in_the_directory_removes_the_sky_prediction_of_the_earlier_orbit(fitted, tmp_path, capsys):
