@@ -35,7 +35,7 @@ from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
 from cistrack.plugin.registry import Registry
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.output_paths import FIT_STARTED
-from cistrack.runs.observation_files import SeveralObjectsError, reader_for, write_observations
+from cistrack.runs.observation_files import SeveralObjectsError, read_checked, reader_for, write_observations
 from cistrack.runs.run_inputs import weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
@@ -212,14 +212,14 @@ def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> tuple[
     if done is not None:
         return done, resolution
     try:
-        return [reader.read(path, READ_EPOCH)], resolution
+        return [read_checked(reader, path, READ_EPOCH)], resolution
     except SeveralObjectsError as exc:
         name = params.get("name") or type(reader).__name__
         out = []
         for obj in exc.objects:
             one = registry.create("reader", _registered_name(reader, registry, name), **{**_params(params),
                                                                                          "designation": obj})
-            out.append(one.read(path, READ_EPOCH))
+            out.append(read_checked(one, path, READ_EPOCH))
         return out, resolution
 
 

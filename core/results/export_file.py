@@ -75,12 +75,29 @@ def write_export(exporter: Any, out: Path, estimates: Any, meta: dict[str, Any],
     export is refused (:class:`ConfigError`, nothing changed) unless ``overwrite``."""
     try:
         with atomic_target(out) as tmp:  # a full disk leaves no partial file under the final name
-            exporter.write(tmp, estimates, meta)
+            _write_checked(exporter, tmp, estimates, meta, format)
             if not named and not overwrite:
                 _check_default_file(out, tmp, words)
     except OSError as exc:
         raise CistrackError((words.option("path", str(out)) if named else str(out)) + f": cannot write the {format} file "
                             f"({exc.strerror or exc}); nothing was written there") from None
+
+
+def _write_checked(exporter: Any, tmp: Path, estimates: Any, meta: dict[str, Any], format: str) -> None:
+    """``exporter.write``, an exporter that breaks its contract named (:class:`PluginError`): one
+    that raises what is neither cistrack's error nor the system's, calls ``sys.exit``, or writes
+    nothing."""
+    from cistrack.errors import PluginError, exception_text
+
+    who = f"exporter {format!r} ({type(exporter).__module__})"
+    try:
+        exporter.write(tmp, estimates, meta)
+    except (CistrackError, OSError):
+        raise
+    except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's fault, named (never KeyboardInterrupt)
+        raise PluginError(f"{who} failed: {exception_text(exc)}; nothing was written") from exc
+    if not tmp.is_file() or tmp.stat().st_size == 0:
+        raise PluginError(f"{who} wrote nothing; nothing was written")
 
 
 def _check_default_file(out: Path, new: Path, words: ExportWords) -> None:

@@ -18,7 +18,7 @@ from cistrack.interfaces.reader import FieldError, SeveralObjectsError, field_er
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry, default_registry
 
-__all__ = ["read_observations", "write_observations", "reader_for", "create_checked", "FieldError", "SeveralObjectsError", "field_error",
+__all__ = ["read_observations", "write_observations", "reader_for", "read_checked", "create_checked", "FieldError", "SeveralObjectsError", "field_error",
            "show_field", "read_text_lines"]
 
 
@@ -68,7 +68,26 @@ def read_observations(path: str | PathLike, epoch: str | datetime, format: str |
         raise MeasurementError(f"path={type(path).__name__}: give the path of one observation file (a str or a "
                                "path); read several with one call each")
     _check_epoch_years(epoch)
-    return reader_for(path, format, registry, **params).read(path, epoch)
+    return read_checked(reader_for(path, format, registry, **params), path, epoch)
+
+
+def read_checked(reader: Any, path: str | PathLike, epoch: str | datetime) -> MeasurementSet:
+    """``reader.read(path, epoch)``, a reader that breaks its contract named (:class:`PluginError`):
+    one that raises what is neither cistrack's error nor the system's, calls ``sys.exit``, or
+    returns something other than a :class:`MeasurementSet`."""
+    from cistrack.errors import CistrackError, PluginError, exception_text
+
+    who = f"reader {getattr(reader, 'name', None) or type(reader).__name__!r} ({type(reader).__module__})"
+    try:
+        out = reader.read(path, epoch)
+    except (CistrackError, OSError):
+        raise
+    except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's fault, named (never KeyboardInterrupt)
+        raise PluginError(f"{who} failed on {path}: {exception_text(exc)}") from exc
+    if not isinstance(out, MeasurementSet):
+        raise PluginError(f"{who} returned {type(out).__name__} for {path}, not a MeasurementSet (docs/plugins.md, "
+                          "Readers)")
+    return out
 
 
 def _check_epoch_years(epoch: Any) -> None:

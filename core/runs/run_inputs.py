@@ -39,7 +39,7 @@ def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Regist
                                say: Callable[[str], None]) -> tuple[MeasurementSet, Any]:
     """The observations of ``scenario``'s ``[measurements] file`` and the sensor that took them
     (the scenario's sensor placed at each site, for files from several observatories)."""
-    from cistrack.runs.observation_files import reader_for
+    from cistrack.runs.observation_files import read_checked, reader_for
 
     path = scenario.measurements_file
     say(f"reading measurements from {path}")
@@ -48,7 +48,7 @@ def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Regist
         reader = spec.build(registry) if spec is not None else reader_for(path, registry=registry)
     except MeasurementError as exc:
         raise ConfigError(f"{scenario.source}: [measurements]: key 'file': {exc}") from None
-    measurements = reader.read(path, scenario.epoch)
+    measurements = read_checked(reader, path, scenario.epoch)
     if weights_note(measurements):
         say(weights_note(measurements))
     check_observation_span(scenario, measurements)
