@@ -317,6 +317,11 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
                           f"start {epoch[:10]} (span {days:.3g} d), which the fit cannot model: {exc}") from None
 
 
+_OWN_READERS = {".psv": "ades-psv", ".tdm": "tdm"}
+"""The reader of the fit's own copy of the observations, by the suffix it was written with: named,
+so that a third party's reader claiming the same suffix cannot make the copy ambiguous."""
+
+
 def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any], registry: Registry,
               early: bool = False) -> Scenario:
     """The template's scenario for ``obs`` (read from ``obs_file``) with ``settings``; ``early``:
@@ -326,7 +331,7 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
     raw = dict(template.raw)
     raw.update({"name": f"fit-{_slug(obs.designation)}", "epoch": epoch, "duration_days": days,
                 "description": f"cistrack fit of {obs.designation} from {', '.join(distinct_names(obs.files))}",
-                "measurements": {"file": str(obs_file.resolve())}})
+                "measurements": {"file": str(obs_file.resolve()), "reader": {"name": _OWN_READERS[obs_file.suffix]}}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
     raw = _ranging_defaults(merge_settings(raw, settings))
     if early:
