@@ -433,6 +433,19 @@ class StudyResult:
         return f"StudyResult({self.name!r}, {len(self.runs)} runs: {counts or 'none'}, directory={str(self.directory)!r})"
 
 
+def _checked_study_counts(n_seeds: Any, first_seed: Any, workers: Any) -> None:
+    """Refuse :func:`study`'s counts by their keyword names (the study's own checks name the
+    command line's options)."""
+    from cistrack.scenario.limits import check_count, check_seed
+
+    if n_seeds is not None:
+        check_count(n_seeds, "n_seeds", 1, 1_000_000)
+    if first_seed is not None:
+        check_seed(first_seed, "first_seed")
+    if workers is not None:
+        check_count(workers, "workers", 1, 1024)
+
+
 def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | None = None,
           settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
           workers: int | None = None, progress: bool = False, log: Callable[[str], None] | None = None) -> StudyResult:
@@ -453,6 +466,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     from cistrack.studies.study_table import study_rows
 
     _checked_arguments(study=study, out=out, log=log, progress=progress)
+    _checked_study_counts(n_seeds, first_seed, workers)
     items = _setting_items(settings) or None
     res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
                     first_seed=first_seed, n_seeds=n_seeds)

@@ -81,3 +81,12 @@ def test_the_study_figure_has_a_median_per_filter_and_the_nees_band(small_study)
 
 def test_study_is_on_the_package():
     assert ct.study.__module__ == "cistrack.api" and ct.StudyResult is StudyResult
+
+
+@pytest.mark.parametrize("kwargs, words", [({"n_seeds": 0}, "n_seeds: 0 is out of range"),
+                                           ({"workers": 0}, "workers: 0 is out of range"),
+                                           ({"first_seed": -5}, "first_seed: seed -5 is out of range")])
+def test_bad_counts_are_refused_by_their_keyword_names(tmp_path, kwargs, words):
+    with pytest.raises(ct.ConfigError) as exc:
+        ct.study("quick-comparison", out=tmp_path / "s", **kwargs)
+    assert str(exc.value).startswith(words) and "--" not in str(exc.value)
