@@ -39,6 +39,17 @@ def scenario_of(run_dir: str | Path, reg: Registry | None = None):
     return _scenario_of(Path(run_dir), reg or default_registry())
 
 
+def _fit_begun(d: Path) -> str:
+    """What ``d`` is when it holds a fit's start marker but no scenario (a fit stopped before its
+    filter run began), in words; "" otherwise."""
+    from cistrack.results.output_paths import FIT_STARTED
+
+    if not (Path(d) / FIT_STARTED).is_file():
+        return ""
+    return (f"{d}: a 'cistrack fit' began here and stopped before its filter run started (no scenario.toml): "
+            "there is no orbit yet; run 'cistrack fit' into it again")
+
+
 def _scenario_of(run_dir: Path, reg: Registry):
     from cistrack.scenario.loading import parse_scenario, recorded_scenario
     toml_path, json_path = run_dir / "scenario.toml", run_dir / "scenario.json"
@@ -47,8 +58,8 @@ def _scenario_of(run_dir: Path, reg: Registry):
     if json_path.exists():
         raw = json.loads(json_path.read_text())
     else:
-        raise ConfigError(f"{run_dir}: not a cistrack run directory (no scenario.toml); run "
-                          f"'cistrack run ... --out DIR' first")
+        raise ConfigError(_fit_begun(run_dir) or f"{run_dir}: not a cistrack run directory (no scenario.toml); run "
+                          "'cistrack run ... --out DIR' first")
     return parse_scenario(raw, str(toml_path), reg)
 
 
@@ -124,8 +135,8 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
                           f"{words.overwrite} to replace it")
     d = Path(run_dir)
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
-        raise ConfigError(f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir() else
-                          "no such directory") + "); give the --out directory of a 'cistrack run'")
+        raise ConfigError(_fit_begun(d) or f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir()
+                          else "no such directory") + "); give the --out directory of a 'cistrack run'")
     _check_not_being_replaced(d)
     stamp = results_stamp(d)
     refusal = export_refusal(d)

@@ -112,6 +112,15 @@ def test_covariance_maps_through_the_frame_jacobian_as_sampled_states_do(run_dir
     np.testing.assert_allclose(emp / np.outer(sd, sd), ie.covariance_km[k] / np.outer(sd, sd), atol=0.05)
 
 
+def test_a_fit_stopped_before_its_filter_run_is_named_as_such(tmp_path):
+    from cistrack.results.output_paths import FIT_STARTED
+
+    (tmp_path / FIT_STARTED).write_text("")
+    for call in (lambda: export_run(tmp_path), lambda: run_inertial_estimates(tmp_path)):
+        with pytest.raises(ConfigError, match="a 'cistrack fit' began here and stopped before its filter run"):
+            call()
+
+
 def test_cli_export_writes_the_file_and_refuses_a_non_run(run_dir, tmp_path):
     out, _ = run_dir
     p = subprocess.run([sys.executable, "-m", "cistrack.cli", "export", str(out), "--format", "opm",
