@@ -33,6 +33,9 @@ MAX_EPOCH_TU = 4.0e3
 """The largest |epoch_tu| accepted (about 47 years from the scenario's epoch: a fit's epoch lies in
 its arc, and its exports' frames need the DE421 ephemeris, 1899-2053)."""
 
+MAX_BURN_MS = 1000.0
+"""The largest burn a fit reports, m/s (:data:`cistrack.least_squares.burn_search.MAX_BURN_MS`)."""
+
 _NUMBERS = ("rms", "chi2", "condition_number")
 _COUNTS = ("n_used", "n_rejected", "iterations")
 
@@ -103,6 +106,19 @@ def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:
     _check_spread(p, record.get("covariance"))
     _check_arc(p, record.get("arc"))
     _check_maneuvers(p, record.get("maneuvers"), epoch)
+    _check_determination(p, record.get("determination", {}))
+
+
+def _check_determination(p: Path, det: Any) -> None:
+    """The verdict's table (absent for fits that made none): its horizons are days >= 0, or null
+    (never left within the grid, or not measured); exports and predictions warn by them."""
+    if not isinstance(det, dict):
+        raise _fail(p, "determination", "a table (the fit's verdict)", det)
+    for field in ("horizon_days", "covariance_horizon_days"):
+        value = det.get(field)
+        if value is not None and not (not isinstance(value, bool) and isinstance(value, (int, float))
+                                      and math.isfinite(value) and value >= 0.0):
+            raise _fail(p, f"determination.{field}", "a number of days >= 0, or null", value)
 
 
 def _check_spread(p: Path, cov: Any) -> None:
@@ -143,8 +159,27 @@ def _check_maneuvers(p: Path, burns: Any, epoch_tu: float) -> None:
         if not (values["t_burn_sigma_days"] > 0.0 and math.isfinite(values["t_burn_days"])
                 and values["t_burn_days"] <= float(units.tu_to_days(epoch_tu)) + 1e-9):
             raise _fail(p, f"{where}.t_burn_days", "a finite time up to the fit's epoch, with a positive sigma", b)
+        if values["delta_v_ms"] > MAX_BURN_MS:
+            raise _fail(p, f"{where}.delta_v_ms", f"a burn of at most {MAX_BURN_MS:g} m/s (larger is no burn a fit "
+                        "reports)", values["delta_v_ms"])
+        _check_burn_text(p, where, b)
         _array(p, f"{where}.delta_v_vector_ms", b.get("delta_v_vector_ms"), (3,), "3 finite numbers (m/s)")
         _covariance(p, f"{where}.delta_v_covariance_ms2", b.get("delta_v_covariance_ms2"), 3)
+
+
+def _check_burn_text(p: Path, where: str, b: dict) -> None:
+    """A burn's UTC time (quoted in exports' comments) an ISO-8601 time, its gap a time order."""
+    utc = b.get("t_burn_utc")
+    if utc is not None:
+        try:
+            units.parse_utc(utc)
+        except (TypeError, ValueError):
+            raise _fail(p, f"{where}.t_burn_utc", "an ISO-8601 UTC time", utc) from None
+    window = b.get("t_burn_window_days")
+    if window is not None:
+        w = _array(p, f"{where}.t_burn_window_days", window, (2,), "two finite days, the first not after the second")
+        if w[0] > w[1]:
+            raise _fail(p, f"{where}.t_burn_window_days", "two finite days, the first not after the second", window)
 
 
 def _check_area_to_mass(p: Path, amr: Any) -> None:

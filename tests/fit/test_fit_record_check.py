@@ -124,7 +124,8 @@ def test_an_arc_that_is_not_a_table_of_its_times_is_refused(tmp_path, value):
 
 @pytest.mark.parametrize("edit", [{"t_burn_sigma_days": -1.0}, {"t_burn_sigma_days": 0.0}, {"t_burn_days": float("nan")},
                                   {"t_burn_days": 9.0}, {"t_days": "x"}, {"delta_v_vector_ms": [1.0]},
-                                  {"delta_v_covariance_ms2": [[1.0]]}, {"delta_v_ms": -0.5}])
+                                  {"delta_v_covariance_ms2": [[1.0]]}, {"delta_v_ms": -0.5}, {"delta_v_ms": 1e300},
+                                  {"t_burn_utc": "junk"}, {"t_burn_window_days": [2.5, 1.5]}])
 def test_a_burn_that_no_fit_writes_is_refused(tmp_path, edit):
     """Burn times up to the fit's epoch (1.05 TU, 4.56 days) with a positive sigma: a negative one had
     made the OEM start three days before the burn."""
@@ -132,6 +133,26 @@ def test_a_burn_that_no_fit_writes_is_refused(tmp_path, edit):
     rec["maneuvers"] = [{**_burn(), **edit}]
     with pytest.raises(ConfigError, match="field 'maneuvers"):
         read_fit_record(_written(tmp_path, json.loads(json.dumps(rec).replace("NaN", "NaN"))))
+
+
+@pytest.mark.parametrize("value", [None, "x", [1]])
+def test_a_verdict_that_is_not_a_table_is_refused(tmp_path, value):
+    with pytest.raises(ConfigError, match="field 'determination' must be a table"):
+        read_fit_record(_written(tmp_path, _tampered("determination", value)))
+
+
+@pytest.mark.parametrize("field", ["horizon_days", "covariance_horizon_days"])
+@pytest.mark.parametrize("value", [-5, "x", [1], 1e400])
+def test_a_horizon_that_is_not_days_is_refused(tmp_path, field, value):
+    """Exports and predictions warn past the horizons: a NaN or text one had silently dropped the warning."""
+    rec = {**_record(), "determination": {"horizon_days": 8.0, "covariance_horizon_days": 3.0, field: value}}
+    with pytest.raises(ConfigError, match=f"field 'determination.{field}'"):
+        read_fit_record(_written(tmp_path, rec))
+
+
+def test_a_verdict_with_unmeasured_horizons_is_read(tmp_path):
+    rec = {**_record(), "determination": {"horizon_days": None, "covariance_horizon_days": None}}
+    assert read_fit_record(_written(tmp_path, rec))["determination"]["horizon_days"] is None
 
 
 def test_maneuvers_that_are_not_a_list_are_refused(tmp_path):
