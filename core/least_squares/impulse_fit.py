@@ -61,6 +61,8 @@ class BurnEstimate:
     t_sigma : float                TU, one sigma of the burn time (0 when not assessed)
     dv_dt : (3,) float or None     d dv / d t_b, (m/s) / TU, measured by :func:`with_time_uncertainty`
                                    (the term g g^T t_sigma^2 of ``covariance_ms2``); None when not assessed
+    widened : bool                 ``t_sigma`` and ``covariance_ms2`` were widened to reach other times
+                                   the arc allows (full fits there, not the linear term g)
     """
 
     t: float
@@ -68,6 +70,7 @@ class BurnEstimate:
     covariance_ms2: np.ndarray
     t_sigma: float = 0.0
     dv_dt: np.ndarray | None = None
+    widened: bool = False
 
     def refitted(self, later: "BurnEstimate") -> "BurnEstimate":
         """``later`` (a joint refit of this burn at the same time, with another burn added: its
@@ -77,7 +80,7 @@ class BurnEstimate:
             return later
         g = np.asarray(self.dv_dt, dtype=float)
         return BurnEstimate(later.t, later.delta_v_ms, later.covariance_ms2 + np.outer(g, g) * self.t_sigma ** 2,
-                            self.t_sigma, g)
+                            self.t_sigma, g, self.widened)
 
     @property
     def magnitude_ms(self) -> float:
