@@ -190,3 +190,15 @@ def test_when_every_seed_fits_far_above_the_noise_the_one_nearest_it_is_kept_and
     cloud = iod.estimate(ms, sensor, np.random.default_rng(3))
     assert "ranging from tracklet 2" in cloud.meta["why"]
     assert "no seed fitted its observations: this one's residuals are 60 times the stated noise" in cloud.meta["why"]
+
+
+def test_the_seed_uses_at_most_fifty_evenly_spaced_observations_of_a_tracklet():
+    """A file whose tracklets held 2,000 exposures each spent over 15 minutes in the seed's fits."""
+    from cistrack.plugins.iod.tracklet_ranging import SEED_ROWS_PER_TRACKLET, _thinned
+
+    few = np.arange(10, 15)
+    assert _thinned(few) is few
+    many = np.arange(100, 2100)
+    kept = _thinned(many)
+    assert kept.size == SEED_ROWS_PER_TRACKLET == 50 and kept[0] == 100 and kept[-1] == 2099
+    assert np.ptp(np.diff(kept)) <= 1  # evenly spaced
