@@ -104,7 +104,21 @@ class Registry:
                 f"{kind} '{name}' is registered twice: by {old.source} and by {reg.source}")
         if isinstance(factory, type) and hasattr(factory, "registry_name") and not factory.__dict__.get("registry_name"):
             factory.registry_name = name
+        if kind == "reader":
+            self._warn_shared_suffixes(reg)
         self._entries[kind][name] = reg
+
+    def _warn_shared_suffixes(self, reg: Registration) -> None:
+        """Warn when reader ``reg`` claims a file-name suffix that a reader of another distribution
+        claims: files ending so must then be read with the format named (``reader.name``)."""
+        mine = {str(x).lower() for x in getattr(reg.factory, "suffixes", ())}
+        for other in self._entries["reader"].values():
+            shared = sorted(mine & {str(x).lower() for x in getattr(other.factory, "suffixes", ())})
+            if shared and other.distribution != reg.distribution:
+                logging.getLogger("cistrack").warning(
+                    f"warning: reader '{reg.name}' ({reg.source}) claims {', '.join(shared)}, as reader "
+                    f"'{other.name}' ({other.source}) does: files ending so must be read with the format named "
+                    f"(--set measurements.reader.name=...)")
 
     def load_entry_points(self, autoload_third_party: bool | None = None) -> "Registry":
         """Load every entry point of the group ``cistrack``, each on its own."""

@@ -94,3 +94,30 @@ def test_an_unmarked_hook_beside_a_marked_one_fails_the_plugin_naming_it(tmp_pat
     failed = [str(f) for f in reg.failures if f.entry_point == module]
     assert len(failed) == 1 and "has cistrack_step_updated but it is not marked @cistrack.hookimpl" in failed[0]
     assert "half-marked-filter" not in reg.names("filter")
+
+
+def test_a_reader_claiming_a_suffix_another_distributions_reader_claims_is_warned_about(caplog):
+    from cistrack.plugins.readers.ades_psv import AdesPsvReader
+
+    class OtherPsv(AdesPsvReader):
+        """Another format whose files end in .psv."""
+
+    reg = Registry()
+    reg.add("reader", "ades-psv", AdesPsvReader, distribution="cistrack")
+    with caplog.at_level("WARNING", logger="cistrack"):
+        reg.add("reader", "other-psv", OtherPsv, distribution="otherplug")
+    assert "reader 'other-psv' (otherplug" in caplog.text and "claims .psv, as reader 'ades-psv'" in caplog.text
+    assert "measurements.reader.name" in caplog.text
+
+
+def test_readers_of_one_distribution_sharing_a_suffix_are_not_warned_about(caplog):
+    from cistrack.plugins.readers.ades_psv import AdesPsvReader
+
+    class Again(AdesPsvReader):
+        """The same distribution's second reading of .psv."""
+
+    reg = Registry()
+    reg.add("reader", "ades-psv", AdesPsvReader, distribution="mine")
+    with caplog.at_level("WARNING", logger="cistrack"):
+        reg.add("reader", "again", Again, distribution="mine")
+    assert caplog.text == ""
