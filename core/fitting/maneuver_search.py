@@ -188,12 +188,19 @@ def least_significance(fit, k: int, burn: BurnEstimate) -> float:
 def _at_time_covariance(fit, k: int, burn: BurnEstimate) -> np.ndarray:
     """(3, 3) (m/s)^2: burn ``k``'s delta-v covariance in ``fit`` (its time held fixed), else the
     burn's own."""
+    block = _dv_block(fit, k)
+    return np.asarray(burn.covariance_ms2, dtype=float) if block is None else block
+
+
+def _dv_block(fit, k: int) -> np.ndarray | None:
+    """(3, 3) (m/s)^2: the block of burn ``k``'s delta-v in ``fit``'s full covariance, found by its
+    parameter names (None when the fit holds none)."""
     from cistrack.least_squares.impulse_fit import dv_names
 
     names = tuple(getattr(fit, "parameter_names", ()) or ())
     full = getattr(fit, "full_covariance", None)
     if full is None or not set(dv_names(k)) <= set(names):
-        return np.asarray(burn.covariance_ms2, dtype=float)
+        return None
     idx = [6 + names.index(n) for n in dv_names(k)]
     return np.asarray(full, dtype=float)[np.ix_(idx, idx)]
 
@@ -285,9 +292,7 @@ def _time_sensitivity(fit, flown_dynamics, ballistic, burn) -> np.ndarray:
 
 def _plain(found, k: int) -> np.ndarray:
     """Burn ``k``'s covariance from the search's fit itself (without the burn time's part)."""
-    cov = np.asarray(found.result.full_covariance, dtype=float)
-    off = 6 + 3 * k  # the burns' delta-v come first among the parameters (the ratio, if any, last)
-    return cov[off:off + 3, off:off + 3]
+    return _dv_block(found.result, k)
 
 
 def fit_options(fit):

@@ -388,9 +388,8 @@ FAR_POINTS = 3
 """Burn times fitted in each night's gap farther from a burn than its neighbours
 (:func:`times_allowed`)."""
 
-def _trial_times(times: np.ndarray, window: tuple[float, float],
-                 taken: list[tuple[float, float]]) -> list[tuple[float, tuple[float, float]]]:
-    """(burn time TU, its gap): :data:`GAP_POINTS` times in ``window`` and in the nearest night's gap
+def _trial_times(times: np.ndarray, window: tuple[float, float], taken: list[tuple[float, float]]) -> list[float]:
+    """Burn times (TU): :data:`GAP_POINTS` times in ``window`` and in the nearest night's gap
     (at least :data:`NIGHT_GAP_HOURS`) before and after it (a burn between two tracklets of a night
     may as well lie after the night's last), and :data:`FAR_POINTS` in every other night's gap but
     those ``taken`` by other burns; empty when ``window`` is no gap of ``times``."""
@@ -403,7 +402,7 @@ def _trial_times(times: np.ndarray, window: tuple[float, float],
     out = []
     for i, (a, b) in enumerate(gaps):
         n = GAP_POINTS if i in near else FAR_POINTS if i in night and (a, b) not in taken else 0
-        out += [(a + f * (b - a), (a, b)) for f in (np.arange(n) + 0.5) / max(n, 1)]
+        out += [float(a + f * (b - a)) for f in (np.arange(n) + 0.5) / max(n, 1)]
     return out
 
 
@@ -444,7 +443,7 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
     others = [x.t for x in found.burns if x is not b]
     taken = [w for w in found.windows if w != window]
     allowed, best = [], None
-    for tb, _gap in _trial_times(times, window, taken):
+    for tb in _trial_times(times, window, taken):
         try:
             one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, float(tb)])
         except (FitError, PropagationError, np.linalg.LinAlgError):
