@@ -9,7 +9,7 @@ from cistrack.interfaces.dynamics import Dynamics, Propagation
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["FreeParticle", "LinearSensor", "free_particle_stm"]
+__all__ = ["FreeParticle", "LinearSensor", "PositionSensor", "free_particle_stm", "burned_free_particle"]
 
 
 def free_particle_stm(dt: float) -> np.ndarray:
@@ -64,3 +64,18 @@ class LinearSensor(Sensor):
         z = self.measure(states, times)
         return MeasurementSet(times, z + self.sigma * rng.standard_normal(z.shape), self.sigmas(states, times),
                               self.names)
+
+
+class PositionSensor(LinearSensor):
+    """z = position + noise: the three position components of the state."""
+
+    def __init__(self, sigma: float = 1e-6):
+        super().__init__(sigma=sigma)
+        self.matrix = np.hstack([np.eye(3), np.zeros((3, 3))])
+
+
+def burned_free_particle(x0: np.ndarray, dv: np.ndarray, tb: float, t: float) -> np.ndarray:
+    """The state (6,) at ``t`` of a free particle from ``x0`` at 0 that changed its velocity by ``dv``
+    at ``tb``."""
+    x = x0 @ free_particle_stm(t).T
+    return x + np.concatenate([dv * (t - tb), dv]) if t > tb else x

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .linear_components import FreeParticle, LinearSensor, free_particle_stm
+from .linear_components import FreeParticle, PositionSensor, burned_free_particle
 from cistrack.least_squares import fit_orbit
 from cistrack.least_squares.burn_search import ManeuverSearch, flown, rival_time
 from cistrack.least_squares.impulse_fit import BurnArc, fit_impulses
@@ -21,20 +21,13 @@ TIMES = np.array([0.0, 2.0, 2.1, 2.2, 4.0, 4.1, 4.2, 6.0, 6.1, 6.2])
 
 
 def _truth(t):
-    x = X0 @ free_particle_stm(t).T
-    return x + np.concatenate([DV * (t - TB), DV]) if t > TB else x
-
-
-class _PositionSensor(LinearSensor):
-    def __init__(self):
-        super().__init__(sigma=1e-6)
-        self.matrix = np.hstack([np.eye(3), np.zeros((3, 3))])
+    return burned_free_particle(X0, DV, TB, t)
 
 
 def _judged(v_sigma, tb):
     """rival_time of a burn fitted at ``tb`` with its fixed-time covariance (t_sigma 0.1), the
     prior's velocity sigma ``v_sigma`` (VU); noise-free positions, pass 2.0-2.2 with sigma 1."""
-    sen = _PositionSensor()
+    sen = PositionSensor()
     ms = sen.simulate(np.array([_truth(t) for t in TIMES]), TIMES, np.random.default_rng(1))
     sig = np.array(ms.sigmas, dtype=float)
     sig[1:4] = 1.0
