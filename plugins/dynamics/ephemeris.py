@@ -333,10 +333,8 @@ class EphemerisDynamics(CompiledDynamics):
         self._ensure_window(float(span.min()), float(span.max()))
         inertial = self.to_inertial(arr, float(t0)) if arr.shape[0] else arr
         prop = CompiledDynamics.propagate(self, inertial, t0, t_out, rtol=rtol, atol=atol, steps=steps)
-        out = np.empty_like(prop.states)
-        for k, tk in enumerate(t_out):
-            if arr.shape[0]:
-                out[k] = self.from_inertial(prop.states[k], tk)
+        out = self.frame.gcrs_to_synodic_each(prop.states, t_out, unit="lu") if arr.shape[0] \
+            else np.empty_like(prop.states)
         dead = ~prop.alive
         if np.any(dead):
             idx = np.nonzero(dead)[0]

@@ -181,3 +181,25 @@ def test_a_pickled_frame_leaves_its_kept_axes_behind_and_gives_the_same_ones(not
     assert "_kept" not in frame.__getstate__()
     copy = pickle.loads(pickle.dumps(frame))
     assert all(np.array_equal(a, b) for a, b in zip(vars(copy.axes(2.0)).values(), vars(before).values()))
+
+
+@pytest.mark.parametrize("kept", [3, 4096])
+def test_states_at_many_times_convert_as_at_each_time_alone(monkeypatch, nothing_kept, rng, kept):
+    """Beyond AXES_KEPT times (here 3, then the default) the frames are evaluated in blocks: the
+    same conversion as one time at a time, to rounding."""
+    monkeypatch.setattr(nothing_kept, "AXES_KEPT", kept)
+    monkeypatch.setattr(nothing_kept, "SET_SIZE_KEPT", 4)
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    times = np.linspace(0.0, 2.0, 11)
+    s = rng.normal(size=(times.size, 2, 6)) * 0.5 + np.array([1.0, 0, 0, 0, 0, 0])
+    each = np.stack([frame.gcrs_to_synodic(s[k], t, unit="lu") for k, t in enumerate(times)])
+    np.testing.assert_allclose(frame.gcrs_to_synodic_each(s, times, unit="lu"), each, rtol=1e-13, atol=1e-14)
+
+
+def test_states_at_many_times_refuse_a_non_finite_one(monkeypatch, nothing_kept):
+    monkeypatch.setattr(nothing_kept, "AXES_KEPT", 1)
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    s = np.ones((2, 1, 6))
+    s[1, 0, 2] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        frame.gcrs_to_synodic_each(s, np.array([0.0, 0.1]))
