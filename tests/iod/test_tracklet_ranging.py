@@ -202,3 +202,43 @@ def test_the_seed_uses_at_most_fifty_evenly_spaced_observations_of_a_tracklet():
     kept = _thinned(many)
     assert kept.size == SEED_ROWS_PER_TRACKLET == 50 and kept[0] == 100 and kept[-1] == 2099
     assert np.ptp(np.diff(kept)) <= 1  # evenly spaced
+
+
+def _dense_last_night(dro):
+    """The DRO's first two nights, then 120 exposures over 15 minutes on the third."""
+    dyn, sensor, x0, _, _ = dro
+    starts = np.array([2.0, 26.5])
+    times = np.concatenate([(starts[:, None] + np.array([0.0, 1 / 12, 1 / 6, 1 / 4])[None]).reshape(-1),
+                            75.0 + np.linspace(0.0, 0.25, 120)]) * H
+    truth = dyn.propagate(x0[None], 0.0, times).states[:, 0]
+    return sensor.simulate(truth, times, np.random.default_rng(7)), times
+
+
+def _ranged(dro, ms):
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dro[0], arc="all", n_particles=200,
+                                    n_range=80, n_rate=24)
+    return iod.estimate(ms, dro[1], np.random.default_rng(3))
+
+
+def test_the_extension_over_a_long_arc_thins_its_long_tracklets_and_still_finds_the_dro(dro, monkeypatch):
+    """An arc longer than EXTENSION_ROWS (here 100): the extension fits 50 of the last night's
+    120 exposures, its first and last among them (a file whose 12 tracklets held 2,000 each had
+    refitted all 24,000 at every step of the extension, for minutes, silent), and says so."""
+    from cistrack.plugins.iod import tracklet_ranging
+
+    monkeypatch.setattr(tracklet_ranging, "EXTENSION_ROWS", 100)
+    ms, times = _dense_last_night(dro)
+    cloud = _ranged(dro, ms)
+    used = np.asarray(cloud.meta["rows_used"])
+    last_night = used[used >= 8]
+    assert last_night.size == 50 and last_night[0] == 8 and last_night[-1] == 127
+    assert used[used < 8].tolist() == list(range(8))
+    assert "long tracklets thinned to 50 observations each: 58 of 128 observations" in cloud.meta["extension"][-1]
+    e = np.asarray(cloud.meta["best_state"]) - _truth_at(dro[0], dro[2], times[-1])
+    assert cloud.epoch == pytest.approx(times[-1])
+    assert np.linalg.norm(e[:3]) * LU_KM < 200.0
+
+
+def test_the_extension_over_an_arc_of_at_most_extension_rows_uses_every_observation(dro):
+    ms, _ = _dense_last_night(dro)
+    assert len(_ranged(dro, ms).meta["rows_used"]) == 128
