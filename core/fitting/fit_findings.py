@@ -26,6 +26,7 @@ from cistrack.fitting.arc_fit import ArcFit, latest_arc_fit
 from cistrack.fitting.arcs import arc_sets, in_time_base
 from cistrack.fitting.determination import determination, is_lone_tracklet
 from cistrack.fitting.observation_input import READ_EPOCH, ObjectObservations
+from cistrack.least_squares.burn_sensitivity import burn_sensitivity
 from cistrack.least_squares.events import fit_events
 from cistrack.plugin.registry import Registry
 
@@ -95,7 +96,8 @@ def kept_observations(obs: ObjectObservations, report: ArcFit) -> ObjectObservat
 
 
 def add_findings(one, registry: Registry, say: Callable[[str], None]) -> None:
-    """``one.determination`` and ``one.events`` of a converged fit (nothing otherwise)."""
+    """``one.determination``, ``one.events`` and ``one.burn_sensitivity`` of a converged fit
+    (nothing otherwise)."""
     if not one.ok or one.run is None:
         return
     ctx = one.run.context
@@ -103,3 +105,4 @@ def add_findings(one, registry: Registry, say: Callable[[str], None]) -> None:
     say(f"{one.designation}: how well the orbit is determined; impacts and closest approaches")
     one.determination = determination(one.result, dynamics, ctx.sensor, ctx.measurements)
     one.events = fit_events(dynamics, one.result, epoch=one.scenario.epoch)
+    one.burn_sensitivity = burn_sensitivity(one.result, dynamics, ctx.sensor, ctx.measurements)

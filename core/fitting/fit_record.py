@@ -184,7 +184,27 @@ def _context_record(one) -> dict[str, Any]:
         from cistrack.least_squares.events import FIT_EVENT_DAYS
 
         out["events"] = {"days": FIT_EVENT_DAYS, "list": [e.as_dict() for e in events]}
+    gaps = getattr(one, "burn_sensitivity", None)
+    if gaps is not None:
+        out["burn_sensitivity"] = burn_sensitivity_record(gaps, one.scenario.epoch)
     return out
+
+
+def burn_sensitivity_record(gaps, epoch) -> dict[str, Any]:
+    """``fit.json``'s ``burn_sensitivity``: ``sigmas`` (a burn that raises the refitted chi-square by
+    less than its square would not show) and, per gap between observing sessions, its ``start_utc``
+    and ``end_utc`` (the observations either side), ``largest_hidden_ms`` (m/s; null: a burn there
+    is not determined at all), and that burn's ``t_worst_utc`` and ``direction_synodic`` (a unit
+    vector, sign arbitrary) (:mod:`cistrack.least_squares.burn_sensitivity`)."""
+    from cistrack.least_squares.burn_sensitivity import HIDDEN_SIGMAS
+
+    def utc(t: float) -> str:
+        return units.format_utc(units.tu_to_utc(epoch, t))
+
+    return {"sigmas": HIDDEN_SIGMAS, "gaps": [
+        {"start_utc": utc(g.start), "end_utc": utc(g.end),
+         "largest_hidden_ms": g.largest_hidden_ms if np.isfinite(g.largest_hidden_ms) else None,
+         "t_worst_utc": utc(g.t_worst), "direction_synodic": [float(v) for v in g.direction]} for g in gaps]}
 
 
 def _lov_csv(points, fit) -> str:

@@ -10,6 +10,8 @@ words, with the tracklet's motion and admissible region.
 """
 from __future__ import annotations
 
+import math
+
 __all__ = ["summary_lines", "short_lines"]
 
 
@@ -28,7 +30,23 @@ def _arcs_and_events(one) -> list[str]:
         from cistrack.least_squares.events import event_lines
 
         lines += event_lines(one.events)
+    if one.ok and getattr(one, "burn_sensitivity", None):
+        lines.append(_hidden_burn_line(one.burn_sensitivity[-1], one.scenario.epoch))
     return lines
+
+
+def _hidden_burn_line(gap, epoch) -> str:
+    """What a burn in the last gap between observing sessions could do unseen."""
+    from cistrack import units
+
+    def utc(t: float) -> str:
+        return units.format_utc(units.tu_to_utc(epoch, t))[:16]
+
+    size = ("a burn of any size" if not math.isfinite(gap.largest_hidden_ms)
+            else f"a burn of up to {gap.largest_hidden_ms:.2g} m/s")
+    return (f"  maneuvers: {size} between {utc(gap.start)} and {utc(gap.end)} (the last gap between sessions) "
+            "would not show in these observations, and the orbit after it assumes none (fit.json "
+            "burn_sensitivity: every gap)")
 
 
 def _wrapped(lines: list[str], width: int = 118) -> list[str]:

@@ -193,6 +193,8 @@ class ObjectFit:
     arcs : ArcFit or None       the arcs left out and their residual ladder (:mod:`.fit_findings`)
     determination : Determination or None  how well the orbit is determined, in words
     events : list of OrbitEvent or None    impacts and closest approaches after the fit epoch
+    burn_sensitivity : list of GapSensitivity or None   the largest burn each gap between observing
+                                sessions would hide (:mod:`cistrack.least_squares.burn_sensitivity`)
     undetermined : dict         for observations that cannot determine an orbit (one lone
                                 tracklet): why, in words, and what they give (the tracklet's place
                                 and rates on the sky, the admissible region's ranges and range
@@ -216,6 +218,7 @@ class ObjectFit:
     arcs: Any = None
     determination: Any = None
     events: Any = None
+    burn_sensitivity: Any = None
     undetermined: dict = field(default_factory=dict)
     filter_rows: int = 0
 

@@ -18,7 +18,8 @@ Each SET_DIR holds ``observations.psv`` and ``truth.csv`` (``make_survey_sets.py
   the burns ``fit.json`` reports, and for the one nearest the truth's time its time's z-score,
   its magnitude's and the vector's Mahalanobis distance squared (3 dof; 14.2 at 99.7 %). The truth
   after the burn is propagated from the first ``truth.csv`` row after it (a fit with the burn
-  exports the orbit after it only).
+  exports the orbit after it only). A burn the fit missed is shown with the largest burn that
+  ``fit.json``'s ``burn_sensitivity`` says its gap hides ("disclosed" when that covers it).
 
 The truth is the first row of ``truth.csv`` propagated with the fit's own dynamics and mapped
 into the OEM's frame with the export's transform, as ``examples/real-data/check_fit.py`` does.
@@ -139,6 +140,18 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
     return t, frame.from_synodic(truth_at(t), t), truth_at
 
 
+def _hidden_in_gap(rec: dict, burn: dict) -> str:
+    """'' or, for a burn the fit missed, what ``fit.json``'s ``burn_sensitivity`` says of its gap:
+    the largest burn there the observations would not show."""
+    t = units.parse_utc(burn["utc"])
+    for gap in (rec.get("burn_sensitivity") or {}).get("gaps", []):
+        if units.parse_utc(gap["start_utc"]) < t < units.parse_utc(gap["end_utc"]):
+            size = gap["largest_hidden_ms"]
+            bound = "any size" if size is None else f"up to {size:.2g} m/s"
+            return f" (its gap hides {bound}: {'disclosed' if size is None or size >= burn['delta_v_ms'] else 'showable'})"
+    return ""
+
+
 def _score_burn(row: Row, rec: dict, burn: dict | None) -> None:
     """The row's ``burns`` and ``burn_ok`` from fit.json's ``maneuvers`` against the set's ``burn``."""
     found = rec.get("maneuvers") or []
@@ -147,7 +160,7 @@ def _score_burn(row: Row, rec: dict, burn: dict | None) -> None:
         row.burns, row.burn_ok = (f"{len(found)} spurious" if found else "none"), not found
         return
     if not found:
-        row.burns, row.burn_ok = "missed", row.burn_ms < 0.3
+        row.burns, row.burn_ok = "missed" + _hidden_in_gap(rec, burn), row.burn_ms < 0.3
         return
     t_true = units.parse_utc(burn["utc"])
     m = min(found, key=lambda e: abs((units.parse_utc(e["t_burn_utc"]) - t_true).total_seconds()))

@@ -1,0 +1,72 @@
+"""The largest burn a fit's observations would not show, gap by gap
+(cistrack.least_squares.burn_sensitivity), on a linear problem where least squares is exact: a
+force-free particle whose position is measured in three sessions. The burn it reports, added to
+noise-free observations, raises the ballistic refit's chi-square by exactly 9 (3 sigma); twice
+as large, by 36."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from .linear_components import FreeParticle, PositionSensor, burned_free_particle
+from cistrack.least_squares import FitOptions, fit_orbit
+from cistrack.least_squares.burn_sensitivity import HIDDEN_SIGMAS, burn_sensitivity
+from cistrack.least_squares.impulse_fit import MS_PER_VU
+from cistrack.model.measurement import MeasurementSet
+
+X0 = np.array([0.3, -0.2, 0.1, 0.01, 0.02, -0.03])
+SESSIONS = (0.0, 1.0, 2.0)   # TU; a session is 4 exposures over 0.03 TU (3 hours apart is 0.028 TU)
+SIGMA = 1e-6
+NO_REJECTION = FitOptions(reject_outliers=False)
+
+
+def _times(last: int = 4) -> np.ndarray:
+    return np.concatenate([s + np.linspace(0.0, 0.009, 4 if k < 2 else last) for k, s in enumerate(SESSIONS)])
+
+
+def _measured(times: np.ndarray, dv: np.ndarray = np.zeros(3), tb: float = 0.5) -> MeasurementSet:
+    sen = PositionSensor(sigma=SIGMA)
+    ms = sen.simulate(np.array([burned_free_particle(X0, dv, tb, t) for t in times]), times,
+                      np.random.default_rng(0))
+    exact = np.array([burned_free_particle(X0, dv, tb, t)[:3] for t in times])
+    return MeasurementSet(ms.times, exact, ms.sigmas, ms.names, dict(ms.meta), ms.sites, ms.kinds,
+                          dict(ms.site_table))
+
+
+def _ballistic_fit(ms: MeasurementSet):
+    return fit_orbit(FreeParticle(), PositionSensor(sigma=SIGMA), ms, X0, float(ms.times[-1]), options=NO_REJECTION)
+
+
+@pytest.fixture(scope="module")
+def gaps():
+    times = _times()
+    ms = _measured(times)
+    return times, burn_sensitivity(_ballistic_fit(ms), FreeParticle(), PositionSensor(sigma=SIGMA), ms)
+
+
+def test_each_gap_between_sessions_is_reported(gaps):
+    times, out = gaps
+    assert [(g.start, g.end) for g in out] == [(times[3], times[4]), (times[7], times[8])]
+    assert all(g.start < g.t_worst < g.end for g in out)
+
+
+@pytest.mark.parametrize("times_size, cost", [(1.0, HIDDEN_SIGMAS ** 2), (2.0, 4.0 * HIDDEN_SIGMAS ** 2)])
+def test_the_reported_burn_raises_the_ballistic_refits_chi_square_by_nine(gaps, times_size, cost):
+    times, out = gaps
+    for g in out:
+        dv = g.direction * g.largest_hidden_ms * times_size / MS_PER_VU
+        refit = _ballistic_fit(_measured(times, dv, g.t_worst))
+        assert refit.chi2 == pytest.approx(cost, rel=1e-3)
+
+
+def test_a_gap_followed_by_fewer_exposures_hides_larger_burns(gaps):
+    """One exposure after the last gap instead of four."""
+    short = _times(last=1)
+    ms = _measured(short)
+    out = burn_sensitivity(_ballistic_fit(ms), FreeParticle(), PositionSensor(sigma=SIGMA), ms)
+    assert out[-1].largest_hidden_ms > 1.2 * gaps[1][-1].largest_hidden_ms
+
+
+def test_one_session_has_no_gap():
+    ms = _measured(np.linspace(0.0, 0.009, 6))
+    assert burn_sensitivity(_ballistic_fit(ms), FreeParticle(), PositionSensor(sigma=SIGMA), ms) == []
