@@ -26,6 +26,7 @@ from cistrack.fitting.arc_fit import ArcFit, latest_arc_fit
 from cistrack.fitting.arcs import arc_sets, in_time_base
 from cistrack.fitting.determination import determination, is_lone_tracklet
 from cistrack.fitting.observation_input import READ_EPOCH, ObjectObservations
+from cistrack.fitting.residual_ladder import fitted_dynamics
 from cistrack.least_squares.burn_sensitivity import burn_sensitivity
 from cistrack.least_squares.events import fit_events
 from cistrack.plugin.registry import Registry
@@ -105,4 +106,5 @@ def add_findings(one, registry: Registry, say: Callable[[str], None]) -> None:
     say(f"{one.designation}: how well the orbit is determined; impacts and closest approaches")
     one.determination = determination(one.result, dynamics, ctx.sensor, ctx.measurements)
     one.events = fit_events(dynamics, one.result, epoch=one.scenario.epoch)
-    one.burn_sensitivity = burn_sensitivity(one.result, dynamics, ctx.sensor, ctx.measurements)
+    one.burn_sensitivity = burn_sensitivity(one.result, fitted_dynamics(dynamics, one.result), ctx.sensor,
+                                            ctx.measurements)

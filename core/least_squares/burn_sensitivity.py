@@ -64,11 +64,10 @@ def _gaps(times: np.ndarray) -> list[tuple[float, float]]:
     return [(float(a), float(b)) for a, b in zip(t[:-1], t[1:]) if b - a > cut]
 
 
-def _hidden(a_state: np.ndarray, a_dv: np.ndarray) -> tuple[float, np.ndarray]:
+def _hidden(q: np.ndarray, a_dv: np.ndarray) -> tuple[float, np.ndarray]:
     """(HIDDEN_SIGMAS / sqrt(lambda_min(S)) in m/s, its eigenvector), S the delta-v's information
-    left after the state is estimated: a_dv's part orthogonal to a_state's columns (whitened rows),
-    squared."""
-    q, _ = np.linalg.qr(a_state)
+    left after the state is estimated: a_dv's part orthogonal to the state's partials (whitened
+    rows; ``q`` an orthonormal basis of them), squared."""
     rest = a_dv - q @ (q.T @ a_dv)
     lam, vec = np.linalg.eigh(rest.T @ rest)
     size = float(HIDDEN_SIGMAS / np.sqrt(lam[0]) * MS_PER_VU) if lam[0] > 0.0 else float("inf")
@@ -78,8 +77,8 @@ def _hidden(a_state: np.ndarray, a_dv: np.ndarray) -> tuple[float, np.ndarray]:
 def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> list[GapSensitivity]:
     """The largest hidden burn of each gap between the observing sessions of ``fit`` (module
     docstring); ``measurements`` are the observations it was fitted to (TU, its rejected rows left
-    out here), ``dynamics`` flies its orbit (with its solve-for parameters, held fixed here) and
-    ``sensor`` predicts them. Empty for one session."""
+    out here), ``dynamics`` flies its orbit (with the fit's solve-for parameters set, and held
+    fixed here) and ``sensor`` predicts them. Empty for one session."""
     used = measurements.subset(~np.asarray(fit.residuals.rejected, dtype=bool))
     gaps = _gaps(used.times)
     if not gaps:
@@ -92,8 +91,8 @@ def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> lis
     n = times.size
     scale = max(1.0, float(fit.noise_scale)) if np.isfinite(fit.noise_scale) else 1.0
     h = model.jacobian(states[:n]) / (model.sigmas * scale)[:, :, None]
-    a_state = np.einsum("kmj,kjl->kml", h, stms[:n]).reshape(-1, 6)
-    tried = [_hidden(a_state, _dv_partials(stms[:n], stms[n + k], h, times, float(fit.epoch),
+    q, _ = np.linalg.qr(np.einsum("kmj,kjl->kml", h, stms[:n]).reshape(-1, 6))
+    tried = [_hidden(q, _dv_partials(stms[:n], stms[n + k], h, times, float(fit.epoch),
                                            float(tb)).reshape(-1, 3)) for k, tb in enumerate(inside)]
     out = []
     for g, (a, b) in enumerate(gaps):

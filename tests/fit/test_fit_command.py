@@ -145,3 +145,15 @@ def test_an_export_predicted_past_the_impact_says_where_it_ends(fitted, capsys, 
     said = "the predicted states end at the Moon's surface (impact at 2026-03-17T"
     assert f"note: {said}" in capsys.readouterr().out
     assert f"COMMENT WARNING: {said}" in oem.read_text()
+
+
+def test_fit_json_gives_the_largest_hidden_burn_of_each_gap_between_sessions(fitted):
+    """Five sessions, four gaps; the summary names the last one's."""
+    rec = json.loads((fitted[0] / "fit.json").read_text())["burn_sensitivity"]
+    gaps = rec["gaps"]
+    assert rec["sigmas"] == 3.0 and len(gaps) == 4
+    assert all(g["start_utc"] < g["t_worst_utc"] < g["end_utc"] for g in gaps)
+    assert all(0.0 < g["largest_hidden_ms"] < 100.0 for g in gaps)
+    assert all(abs(np.linalg.norm(g["direction_synodic"]) - 1.0) < 1e-9 for g in gaps)
+    assert (f"maneuvers: a burn of up to {gaps[-1]['largest_hidden_ms']:.2g} m/s between "
+            f"{gaps[-1]['start_utc'][:16]} and {gaps[-1]['end_utc'][:16]}") in " ".join(fitted[2].split())
