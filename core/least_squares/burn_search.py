@@ -46,7 +46,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["suspicion", "end_night_bias", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
-           "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST",
+           "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
 MIN_GAP_HOURS = 0.2
@@ -72,6 +72,11 @@ MAX_RMS = 1.5
 RIVAL_COST = 4.0
 """A burn time whose fit costs at most this much more than the estimate's is one the measurements
 allow (:func:`rival_time`): the two-sigma interval of the time's profile (1 dof)."""
+ALLOWED_COST = 9.0
+"""A burn time whose full fit costs at most this much more than the estimate's is one the arc
+allows (:func:`times_allowed`): the profile's three-sigma interval (1 dof). One costing c more
+lies max(2, sqrt(c)) of the widened time sigmas away. An unseen survey set's 0.5 m/s burn lay in a
+gap whose full fit cost 4.3 more than the one reported (time z -13.4, the fit called clean)."""
 RIVAL_FALSE_ALARM = 1e-4
 """The level of :func:`rival_time`'s test that another burn time's delta-v lies outside the
 estimate's covariance."""
@@ -411,11 +416,11 @@ def times_allowed(arc: BurnArc, found: ManeuverSearch) -> tuple[ManeuverSearch, 
     arc allows as well, and "" ; or ``found`` and why its burn times are not the best, in words.
 
     Times in each burn's gap and in every night's gap (:func:`_trial_times`) are fitted in full (the
-    other burns held). Those whose fit costs at most :data:`RIVAL_COST` more than the search's (the
-    profile's two-sigma interval) and lie beyond three of the burn's time sigmas are allowed times:
-    the time sigma becomes half the distance to the farthest, and the delta-v covariance takes
-    d d^T / 4, d the allowed fit's delta-v minus the estimate's, for the d farthest in the
-    estimate's covariance (each allowed time two sigmas away). A time whose fit costs more than
+    other burns held). Those whose fit costs at most :data:`ALLOWED_COST` more than the search's
+    (c; the profile's three-sigma interval) and lie beyond three of the burn's time sigmas are
+    allowed times, each m = max(2, sqrt(c)) sigmas away: the time sigma becomes the largest of
+    distance / m, and the delta-v covariance takes d d^T / m^2, d the allowed fit's delta-v minus
+    the estimate's, for the d farthest in the estimate's covariance. A time whose fit costs more than
     :data:`RIVAL_COST` less means the search did not find the burn's time. The profile about the
     search's time can be a narrow minimum of several: an unseen survey set (0.5 m/s) had its burn
     timed 4.4 hours early +- 11 minutes (z -24.7) between two tracklets of a night, a burn after the
@@ -442,7 +447,7 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
     b, window = burn
     others = [x.t for x in found.burns if x is not b]
     taken = [w for w in found.windows if w != window]
-    allowed, best = [], None
+    allowed, best = [], None  # (time TU, delta-v m/s (3,), sigmas away)
     for tb in _trial_times(times, window, taken):
         try:
             one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, float(tb)])
@@ -451,20 +456,21 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
         cost = capped_cost(one.fit, arc.prior) - base
         if cost < -RIVAL_COST and (best is None or cost < best[0]):
             best = (cost, float(tb))
-        if cost <= RIVAL_COST and abs(tb - b.t) > 3.0 * b.t_sigma:
-            allowed.append((float(tb), next(x.delta_v_ms for x in one.burns if x.t == float(tb))))
+        if cost <= ALLOWED_COST and abs(tb - b.t) > 3.0 * b.t_sigma:
+            allowed.append((float(tb), next(x.delta_v_ms for x in one.burns if x.t == float(tb)),
+                            max(2.0, float(np.sqrt(max(cost, 0.0))))))
     if best is not None:
         return [], (f"a burn at {_utc_days(best[1]):.3f} d fits the arc better than the search's at "
                     f"{_utc_days(b.t):.3f} d (its cost {-best[0]:.1f} lower): the burn's time is not determined")
     return allowed, ""
 
 
-def _widened(b: BurnEstimate, allowed: list[tuple[float, np.ndarray]]) -> BurnEstimate:
-    """``b`` with each allowed (time, delta-v) two sigmas from its estimate (:func:`times_allowed`)."""
-    sigma = max(b.t_sigma, max(abs(t - b.t) for t, _ in allowed) / 2.0)
-    d = [np.asarray(dv, dtype=float) - b.delta_v_ms for _, dv in allowed]
+def _widened(b: BurnEstimate, allowed: list[tuple[float, np.ndarray, float]]) -> BurnEstimate:
+    """``b`` with each allowed (time, delta-v, m) m sigmas from its estimate (:func:`times_allowed`)."""
+    sigma = max(b.t_sigma, max(abs(t - b.t) / m for t, _, m in allowed))
+    d = [(np.asarray(dv, dtype=float) - b.delta_v_ms) / m for _, dv, m in allowed]
     try:
         far = max(d, key=lambda x: float(x @ np.linalg.solve(b.covariance_ms2, x)))
     except np.linalg.LinAlgError:
         far = max(d, key=lambda x: float(x @ x))
-    return replace(b, covariance_ms2=b.covariance_ms2 + np.outer(far, far) / 4.0, t_sigma=sigma, widened=True)
+    return replace(b, covariance_ms2=b.covariance_ms2 + np.outer(far, far), t_sigma=sigma, widened=True)

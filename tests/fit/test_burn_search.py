@@ -100,3 +100,18 @@ def test_a_block_of_rejections_between_accepted_observations_is_bad_data_not_a_m
     would be off the ballistic orbit, so a block with accepted observations after it is no burn's."""
     n = len(clean_fit.residuals.rejected)
     assert suspicion(_with_rejected(clean_fit, np.arange(n // 2, n // 2 + 10))) == ""
+
+
+@pytest.mark.parametrize("cost, sigmas_away", [(1.0, 2.0), (4.0, 2.0), (6.25, 2.5), (9.0, 3.0)])
+def test_an_allowed_time_whose_fit_costs_c_more_lies_max_2_sqrt_c_sigmas_away(cost, sigmas_away):
+    """The time's profile: a time costing 9 more is three sigmas away, one costing 4 or less two
+    (the widening before times costing 4-9 more were allowed)."""
+    from cistrack.least_squares.burn_search import _widened
+    from cistrack.least_squares.impulse_fit import BurnEstimate
+
+    b = BurnEstimate(1.0, np.array([0.5, 0.0, 0.0]), np.eye(3) * 1e-4, 0.01)
+    m = max(2.0, np.sqrt(cost))
+    w = _widened(b, [(1.3, np.array([0.8, 0.0, 0.0]), m)])
+    assert m == pytest.approx(sigmas_away)
+    assert w.t_sigma == pytest.approx(0.3 / sigmas_away) and w.widened
+    assert w.covariance_ms2[0, 0] == pytest.approx(1e-4 + (0.3 / sigmas_away) ** 2)
