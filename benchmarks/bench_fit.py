@@ -11,6 +11,7 @@ Mahalanobis-normalised by the new fit's covariance (sqrt(d^T P^-1 d), d in km an
 
     .venv/bin/python benchmarks/bench_fit.py FILE [FILE ...] [--save before.json] [--before before.json]
     .venv/bin/python benchmarks/bench_fit.py --make-arc /tmp/arc3      # then fit /tmp/arc3/observations.psv
+    .venv/bin/python benchmarks/bench_fit.py --make-dense /tmp/dense    # 24,000 observations, 12 tracklets
     PYTHONPATH=/tmp/old-tree .venv/bin/python benchmarks/bench_fit.py FILE ... --save before.json
 
 (the second form measures another copy of the package, e.g. the commit before a change;
@@ -57,6 +58,35 @@ def make_arc(directory: Path) -> Path:
     reg = default_registry()
     [obs] = read_object_observations(parts, reg, {}, lambda m: None)
     write_merged(directory / "observations", obs.measurements, obs.designation, reg)
+    return directory / "observations.psv"
+
+
+def make_dense(directory: Path, per: int = 2000, seed: int = 146, family: str = "dro") -> Path:
+    """The survey set ``family`` seed ``seed`` (examples/survey-sets/make_survey_sets.py: its nights,
+    sites and noise) with each tracklet resampled to ``per`` exposures over its span, written to
+    ``directory/observations.psv``: 12 tracklets, 24,000 observations for the defaults."""
+    import importlib.util
+
+    from cistrack.astro.site_network import merge_sites
+    from cistrack.plugin.registry import default_registry
+    from cistrack.runs.observation_files import write_observations
+
+    spec = importlib.util.spec_from_file_location("mss", ROOT / "examples" / "survey-sets" / "make_survey_sets.py")
+    mss = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mss)
+    streams = np.random.SeedSequence([seed, mss.FAMILIES.index(family)]).spawn(5)
+    choose, plan, noise = (np.random.default_rng(s) for s in streams[:3])
+    reg = default_registry()
+    _info, scen, dyn, x0, times = mss._draw(family, seed, (choose, plan), reg)
+    parts = []
+    for code, tracklets in times.items():
+        t = np.sort(np.concatenate([np.linspace(tr[0], tr[-1], per) for tr in tracklets]))
+        sensor, site = mss._sensor(scen, reg, code)
+        parts.append((code, site, sensor.simulate(dyn.propagate(x0[None], 0.0, t).states[:, 0, :], t, noise)))
+    ms = merge_sites(parts)
+    ms.meta["object"] = f"dense{family}"
+    directory.mkdir(parents=True, exist_ok=True)
+    write_observations(directory / "observations.psv", ms, scen.epoch, format="ades-psv")
     return directory / "observations.psv"
 
 
@@ -152,6 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*")
     ap.add_argument("--make-arc", metavar="DIR", help="write the 3-site, 10-night arc (make_arc) into DIR and stop")
+    ap.add_argument("--make-dense", metavar="DIR", help="write 12 tracklets of 2,000 exposures (make_dense) into DIR "
+                    "and stop")
     ap.add_argument("--save", help="write the fits' CPU times, states and covariances to this JSON file")
     ap.add_argument("--before", help="compare with a JSON file written by --save")
     ap.add_argument("--no-reference", action="store_true", help="skip the cistrack run example-1 reference")
@@ -159,6 +191,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.make_arc:
         print(f"wrote {make_arc(Path(args.make_arc))}")
+        return 0
+    if args.make_dense:
+        print(f"wrote {make_dense(Path(args.make_dense))}")
         return 0
     before = {r["file"]: r for r in json.loads(Path(args.before).read_text())["rows"]} if args.before else {}
     with tempfile.TemporaryDirectory(prefix="bench-fit-") as tmp:

@@ -10,7 +10,6 @@ words, with the tracklet's motion and admissible region.
 """
 from __future__ import annotations
 
-import math
 
 __all__ = ["summary_lines", "short_lines"]
 
@@ -35,6 +34,11 @@ def _arcs_and_events(one) -> list[str]:
     return lines
 
 
+HIDDEN_ANY_SIZE_MS = 100.0
+"""A hidden burn larger than this (m/s) is said to be of any size: beyond it the linear figure
+means little (the fit absorbs such burns by rejecting the observations after them)."""
+
+
 def _hidden_burn_line(gap, epoch) -> str:
     """What a burn in the last gap between observing sessions could do unseen."""
     from cistrack import units
@@ -42,11 +46,15 @@ def _hidden_burn_line(gap, epoch) -> str:
     def utc(t: float) -> str:
         return units.format_utc(units.tu_to_utc(epoch, t))[:16]
 
-    size = ("a burn of any size" if not math.isfinite(gap.largest_hidden_ms)
-            else f"a burn of up to {gap.largest_hidden_ms:.2g} m/s")
-    return (f"  maneuvers: {size} between {utc(gap.start)} and {utc(gap.end)} (the last gap between sessions) "
-            "would not show in these observations, and the orbit after it assumes none (fit.json "
-            "burn_sensitivity: every gap)")
+    x = gap.largest_hidden_ms
+    where = f"between {utc(gap.start)} and {utc(gap.end)} (the last gap between sessions)"
+    if not x <= HIDDEN_ANY_SIZE_MS:
+        return (f"  maneuvers: a burn of any size {where} could go unseen in these observations; the orbit after it "
+                "assumes none (fit.json burn_sensitivity: every gap)")
+    size = f"{x:.0f}" if x >= 10.0 else f"{x:.2g}"
+    return (f"  maneuvers: a burn of {size} m/s {where}, at its worst time and direction, would not show in these "
+            "observations (nor some larger ones, whose observations the fit would reject); the orbit after it assumes "
+            "none (fit.json burn_sensitivity: every gap)")
 
 
 def _wrapped(lines: list[str], width: int = 118) -> list[str]:

@@ -8,12 +8,21 @@ estimated (the Schur complement of the joint normal matrix of the state and the 
 linearised about the fit, in its weights: the observations' sigmas times the noise scale when it
 exceeds 1). A burn that raises it by less than HIDDEN_SIGMAS^2 (9) would not show in the
 residuals; the largest such burn, in its worst direction, is HIDDEN_SIGMAS / sqrt(lambda_min(S)).
-Each gap reports the largest over :data:`TIMES_PER_GAP` times spread inside it.
+Each gap reports the largest over :data:`GAP_FRACTIONS` of it: a burn hides best just before the
+session after it, or just after the one before (a first version tried five times evenly inside
+the gaps and understated the largest tenfold on a probe's survey sets: 21 m/s where the gap's end
+hid 201).
+
+The figure is linear and counts every observation the fit used: a burn that shows does move the
+fit, which then rejects the observations that show it most, so some larger burns can hide too (on
+a probe's set, burns twice and four times a last gap's figure were absorbed, the fit rejecting two
+and three of the observations after them). It is a size that hides, not a size beyond which every
+burn shows.
 
 Measured on survey sets of objects that burned 0.5 m/s and whose fits saw no burn (unseen seeds
-159-160): the gap holding the burn hid burns of up to 10.6 and 8.3 m/s, the other gaps of those
-arcs as little as 0.03 m/s. A gap followed by one short tracklet hides the most: the fit's
-predictions after it hold only if the object did not maneuver there.
+159-160): the gap holding the burn hid burns of 166 and 10 m/s, the other gaps of dro-s159 as
+little as 0.03 m/s. A gap followed by one short tracklet hides the most: the fit's predictions
+after it hold only if the object did not maneuver there.
 """
 from __future__ import annotations
 
@@ -27,13 +36,13 @@ from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["GapSensitivity", "burn_sensitivity", "HIDDEN_SIGMAS", "TIMES_PER_GAP", "SESSION_GAP_HOURS"]
+__all__ = ["GapSensitivity", "burn_sensitivity", "HIDDEN_SIGMAS", "GAP_FRACTIONS", "SESSION_GAP_HOURS"]
 
 HIDDEN_SIGMAS = 3.0
 """A burn that raises the refitted cost by less than this squared would not show (3 sigma, the size
 test a burn the fit reports must pass: :data:`cistrack.fitting.maneuver_search.MIN_BURN_SIGMAS`)."""
-TIMES_PER_GAP = 5
-"""Burn times tried in each gap, evenly spaced strictly inside it."""
+GAP_FRACTIONS = (1e-4, 1e-3, 0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.9, 0.97, 0.99, 0.999, 0.9999)
+"""Burn times tried in each gap, as fractions of it from the observation before: dense at its ends."""
 SESSION_GAP_HOURS = 3.0
 """A gap between observations longer than this (hours) separates two observing sessions."""
 
@@ -44,8 +53,8 @@ class GapSensitivity:
 
     start, end : float          TU, the last observation before the gap and the first after it
     largest_hidden_ms : float   m/s, the largest burn inside it that the observations would not
-                                show (worst time and direction; inf: a burn there is not
-                                determined at all)
+                                show, linearly (worst time and direction; inf: a burn there is
+                                not determined at all)
     t_worst : float             TU, the time of that burn
     direction : (3,) float      its direction, a unit vector in the fit's frame (synodic); its
                                 sign is arbitrary
@@ -85,7 +94,7 @@ def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> lis
         return []
     model = MeasurementModel(sensor, used)
     times = np.asarray(model.times, dtype=float)
-    inside = np.array([a + (b - a) * (k + 1) / (TIMES_PER_GAP + 1) for a, b in gaps for k in range(TIMES_PER_GAP)])
+    inside = np.array([a + (b - a) * f for a, b in gaps for f in GAP_FRACTIONS])
     states, stms = arc_states_and_stms(dynamics, np.asarray(fit.state, dtype=float), float(fit.epoch),
                                        np.concatenate([times, inside]))
     n = times.size
@@ -94,8 +103,8 @@ def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> lis
     q, _ = np.linalg.qr(np.einsum("kmj,kjl->kml", h, stms[:n]).reshape(-1, 6))
     tried = [_hidden(q, _dv_partials(stms[:n], stms[n + k], h, times, float(fit.epoch),
                                            float(tb)).reshape(-1, 3)) for k, tb in enumerate(inside)]
-    out = []
+    m, out = len(GAP_FRACTIONS), []
     for g, (a, b) in enumerate(gaps):
-        k = g * TIMES_PER_GAP + max(range(TIMES_PER_GAP), key=lambda j: tried[g * TIMES_PER_GAP + j][0])
+        k = g * m + max(range(m), key=lambda j: tried[g * m + j][0])
         out.append(GapSensitivity(a, b, tried[k][0], float(inside[k]), tried[k][1]))
     return out

@@ -147,7 +147,7 @@ def _hidden_in_gap(rec: dict, burn: dict) -> str:
     for gap in (rec.get("burn_sensitivity") or {}).get("gaps", []):
         if units.parse_utc(gap["start_utc"]) < t < units.parse_utc(gap["end_utc"]):
             size = gap["largest_hidden_ms"]
-            bound = "any size" if size is None else f"up to {size:.2g} m/s"
+            bound = "any size" if size is None else f"{size:.0f} m/s" if size >= 10 else f"{size:.2g} m/s"
             return f" (its gap hides {bound}: {'disclosed' if size is None or size >= burn['delta_v_ms'] else 'showable'})"
     return ""
 

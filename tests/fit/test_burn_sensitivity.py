@@ -70,3 +70,16 @@ def test_a_gap_followed_by_fewer_exposures_hides_larger_burns(gaps):
 def test_one_session_has_no_gap():
     ms = _measured(np.linspace(0.0, 0.009, 6))
     assert burn_sensitivity(_ballistic_fit(ms), FreeParticle(), PositionSensor(sigma=SIGMA), ms) == []
+
+
+@pytest.mark.parametrize("size, words", [(0.512, "a burn of 0.51 m/s between"), (25.01, "a burn of 25 m/s between"),
+                                         (4069.0, "a burn of any size between"), (np.inf, "a burn of any size between")])
+def test_the_summary_says_the_last_gaps_figure_in_plain_numbers_and_any_size_beyond_100_m_s(size, words):
+    from datetime import datetime, timezone
+
+    from cistrack.fitting.fit_summary import _hidden_burn_line
+    from cistrack.least_squares.burn_sensitivity import GapSensitivity
+
+    line = _hidden_burn_line(GapSensitivity(1.0, 1.2, size, 1.19, np.array([1.0, 0.0, 0.0])),
+                             datetime(2026, 1, 1, tzinfo=timezone.utc))
+    assert words in line and "e+" not in line

@@ -155,5 +155,6 @@ def test_fit_json_gives_the_largest_hidden_burn_of_each_gap_between_sessions(fit
     assert all(g["start_utc"] < g["t_worst_utc"] < g["end_utc"] for g in gaps)
     assert all(0.0 < g["largest_hidden_ms"] < 100.0 for g in gaps)
     assert all(abs(np.linalg.norm(g["direction_synodic"]) - 1.0) < 1e-9 for g in gaps)
-    assert (f"maneuvers: a burn of up to {gaps[-1]['largest_hidden_ms']:.2g} m/s between "
-            f"{gaps[-1]['start_utc'][:16]} and {gaps[-1]['end_utc'][:16]}") in " ".join(fitted[2].split())
+    assert (f"maneuvers: a burn of {gaps[-1]['largest_hidden_ms']:.0f} m/s between {gaps[-1]['start_utc'][:16]} and "
+            f"{gaps[-1]['end_utc'][:16]} (the last gap between sessions), at its worst time and direction, would not "
+            "show") in " ".join(fitted[2].split())
