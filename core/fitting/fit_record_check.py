@@ -88,8 +88,7 @@ def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:
     epoch = _number(p, "epoch_tu", record.get("epoch_tu"))
     if not (math.isfinite(epoch) and abs(epoch) <= MAX_EPOCH_TU):
         raise _fail(p, "epoch_tu", f"a finite time within {MAX_EPOCH_TU:g} TU of the scenario's epoch", epoch)
-    if not isinstance(record.get("epoch_utc"), str):
-        raise _fail(p, "epoch_utc", "a UTC time as text", record.get("epoch_utc"))
+    _check_epoch_utc(p, record, epoch)
     scale = _number(p, "noise_scale", record.get("noise_scale"))
     if not (math.isnan(scale) or (math.isfinite(scale) and scale > 0.0)):
         raise _fail(p, "noise_scale", "a positive number (NaN: undefined)", scale)
@@ -139,6 +138,22 @@ def _check_arc(p: Path, arc: Any) -> None:
 
 
 _BURN_NUMBERS = ("t_days", "t_burn_days", "t_burn_sigma_days", "delta_v_ms", "delta_v_sigma_ms")
+
+
+def _check_epoch_utc(p: Path, record: dict[str, Any], epoch_tu: float) -> None:
+    """``epoch_utc``: UTC text, the scenario's epoch (``scenario_epoch_utc``, where given) plus
+    ``epoch_tu`` to within a millisecond. An edited one (even 2026-13-45T99:00:00Z) had been exported
+    as the OEM's stated fit epoch, its states from the other two."""
+    text = record.get("epoch_utc")
+    what = "a UTC time as text, the scenario's epoch (scenario_epoch_utc) plus epoch_tu"
+    try:
+        when = units.parse_utc(text) if isinstance(text, str) else None
+        start = record.get("scenario_epoch_utc")
+        expected = units.tu_to_utc(units.parse_utc(start), epoch_tu) if isinstance(start, str) else when
+    except (ValueError, TypeError, OverflowError):
+        raise _fail(p, "epoch_utc", what, text) from None
+    if when is None or abs((when - expected).total_seconds()) > 1e-3:
+        raise _fail(p, "epoch_utc", what, text)
 
 
 def _check_maneuvers(p: Path, burns: Any, epoch_tu: float) -> None:

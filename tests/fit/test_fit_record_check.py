@@ -75,6 +75,7 @@ def test_fit_json_numbers_are_strict_json():
     ("epoch_tu", "x", "'epoch_tu'"),
     ("epoch_tu", 1e6, "'epoch_tu'"),
     ("epoch_utc", None, "'epoch_utc'"),
+    ("epoch_utc", "2026-13-45T99:00:00Z", "'epoch_utc'"),
     ("noise_scale", "x", "'noise_scale'"),
     ("noise_scale", -2.0, "'noise_scale'"),
     ("noise_scale", float("inf"), "'noise_scale'"),
@@ -177,3 +178,22 @@ def test_a_record_nested_beyond_any_fit_record_is_refused(tmp_path):
     (tmp_path / "fit.json").write_text("[" * 100000)
     with pytest.raises(ConfigError, match="cannot be read"):
         read_fit_record(tmp_path)
+
+
+def _with_scenario_epoch(epoch_utc: str) -> dict:
+    from cistrack import units
+
+    rec = _record()
+    start = units.tu_to_utc(units.parse_utc(rec["epoch_utc"]), -rec["epoch_tu"])
+    rec["scenario_epoch_utc"], rec["epoch_utc"] = units.format_utc(start), epoch_utc
+    return rec
+
+
+def test_an_epoch_utc_that_is_the_scenarios_epoch_plus_epoch_tu_is_read(tmp_path):
+    assert read_fit_record(_written(tmp_path, _with_scenario_epoch("2026-03-06T12:02:32.999088Z")))
+
+
+def test_an_epoch_utc_that_the_scenarios_epoch_and_epoch_tu_contradict_is_refused(tmp_path):
+    """An edited epoch_utc a year later had been exported as the OEM's stated fit epoch."""
+    with pytest.raises(ConfigError, match="field 'epoch_utc' must be a UTC time as text, the scenario's epoch"):
+        read_fit_record(_written(tmp_path, _with_scenario_epoch("2027-03-06T12:02:32.999088Z")))
