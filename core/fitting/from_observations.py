@@ -58,6 +58,7 @@ from cistrack.fitting.arcs import ArcSettings, arc_settings
 from cistrack.fitting.observation_input import (READ_EPOCH, ObjectObservations, copies_read_quietly, data_kind, distinct_names,
                                                 read_object_observations, write_merged)
 from cistrack.least_squares.options import FitOptions, fit_option_problem
+from cistrack.least_squares.progress import reported_to
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
@@ -433,8 +434,9 @@ def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Reg
         return None, None, f"the filter run failed before its first step: {exc}", ""
     if log:
         log(f"  least squares over the {len(run.context.measurements)} observations")
-    seeded = _fit_from_iod(run.context, choices)
-    return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
+    with reported_to(log):
+        seeded = _fit_from_iod(run.context, choices)
+        return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
 
 
 def _attempt_early(one: ObjectFit, early: Scenario, registry: Registry, progress: bool,
@@ -464,7 +466,8 @@ def _attempt_early(one: ObjectFit, early: Scenario, registry: Registry, progress
         log(f"  least squares over the {len(ms)} observations from the filter's estimate after the first {n_early}")
     for start in early_starts(run.context.filter.belief):
         try:
-            result = _least_squares(run.context, one.choices, start)
+            with reported_to(log):
+                result = _least_squares(run.context, one.choices, start)
         except (FitError, PropagationError):
             continue
         if result.converged and not suspicion(result):

@@ -33,6 +33,7 @@ from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.observability import observability
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.outliers import update_rejections
+from cistrack.least_squares.progress import tell
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.solve_for_parameters import SolveFor, solve_for as _solve_for
@@ -220,6 +221,8 @@ def _one_pass(prob: _Problem, x: np.ndarray, used: np.ndarray, opts: FitOptions,
                 accepted = True
                 rel = (cost - new_cost) / max(cost, 1e-300)
                 x, w, cost = x + dx, w_new, new_cost
+                tell(len(prob.model.times), f"    least squares iteration {its}: chi-square {cost:.6g} over "
+                                            f"{int(np.sum(used))} observations")
                 lam_was = lam
                 lam = max(lam / opts.damping_factor, 1e-12)
                 small_change = lam_was <= opts.damping and 0.5 * rel < opts.rms_tolerance
@@ -326,6 +329,7 @@ def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str])
         if np.array_equal(new, p.rejected):
             break
         _say_pass(say, len(seen) + 1, new, p.rejected, p.threshold)
+        tell(k, f"    least squares: {say[-1]}; fitting again")
         if any(np.array_equal(new, s) for s in seen):
             say.append("the rejected set cycles between passes: stopped at the last one")
             p.converged = False
