@@ -18,14 +18,25 @@ __all__ = ["install_signal_handlers"]
 
 
 def _raise_interrupted(signum, frame) -> None:
-    raise note(RunInterrupted(signal.Signals(signum).name))
+    _raise_unless_lost(note(RunInterrupted(signal.Signals(signum).name)), frame)
 
 
 def _raise_ctrl_c(signum, frame) -> None:
     """Ctrl-C as Python raises it (an empty message: "SIGINT, Ctrl-C" in the manifest), but as a
     RunInterrupted, so that code that catches a plugin's own KeyboardInterrupt (the registry,
     loading plugins) still stops for a real one."""
-    raise note(RunInterrupted())
+    _raise_unless_lost(note(RunInterrupted()), frame)
+
+
+def _raise_unless_lost(exc: RunInterrupted, frame) -> None:
+    """Raise ``exc`` (noted) unless the signal arrived in a callback that Python would print it from
+    as "Exception ignored" and drop: importlib's module-lock callback (a Ctrl-C during a lazy import
+    had printed that traceback under the run's progress bar). There it stays noted and is raised
+    between the run's steps (:func:`cistrack.interrupts.raise_pending`)."""
+    code = getattr(frame, "f_code", None)
+    if code is not None and code.co_name == "cb" and code.co_filename.startswith("<frozen importlib"):
+        return
+    raise exc
 
 
 def install_signal_handlers() -> dict:

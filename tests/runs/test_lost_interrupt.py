@@ -30,3 +30,34 @@ def test_a_pending_interrupt_is_raised_once():
     with pytest.raises(RunInterrupted, match="SIGTERM"):
         raise_pending()
     raise_pending()  # nothing left: returns
+
+
+def _in_a_frame_named(code_name: str, filename: str, handler):
+    """Call the signal ``handler`` (SIGINT) from a frame with that function and file name."""
+    import signal as _signal
+
+    ns: dict = {}
+    src = f"def {code_name}(h, s):\n    import sys\n    return h(s, sys._getframe())\n"
+    exec(compile(src, filename, "exec"), ns)
+    return ns[code_name](handler, _signal.SIGINT)
+
+
+def test_a_ctrl_c_in_importlibs_module_lock_callback_is_kept_for_later_not_raised_there():
+    """There Python prints the exception as "ignored" with its traceback and drops it (a Ctrl-C
+    during a lazy import did so under a run's progress bar); it is noted, and raised between the
+    run's steps."""
+    from cistrack.cli.signals import _raise_ctrl_c
+
+    clear()
+    _in_a_frame_named("cb", "<frozen importlib._bootstrap>", _raise_ctrl_c)
+    with pytest.raises(RunInterrupted):
+        raise_pending()
+
+
+def test_a_ctrl_c_anywhere_else_is_raised_where_it_arrives():
+    from cistrack.cli.signals import _raise_ctrl_c
+
+    clear()
+    with pytest.raises(RunInterrupted):
+        _in_a_frame_named("cb", "mine.py", _raise_ctrl_c)
+    clear()
