@@ -441,13 +441,13 @@ def times_allowed(arc: BurnArc, found: ManeuverSearch) -> tuple[ManeuverSearch, 
 
 
 def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate, tuple[float, float]],
-                   times: np.ndarray, base: float) -> tuple[list[tuple[float, np.ndarray]], str]:
-    """([(time TU, delta-v m/s (3,))] the arc allows for ``burn`` (estimate, gap) as well, far from
-    its time), ""; or ([], why) when a time fits clearly better (:func:`times_allowed`)."""
+                   times: np.ndarray, base: float) -> tuple[list[tuple[float, np.ndarray, float]], str]:
+    """([(time TU, delta-v m/s (3,), sigmas away)] the arc allows for ``burn`` (estimate, gap) as
+    well, far from its time), ""; or ([], why) when a time fits clearly better (:func:`times_allowed`)."""
     b, window = burn
     others = [x.t for x in found.burns if x is not b]
     taken = [w for w in found.windows if w != window]
-    allowed, best = [], None  # (time TU, delta-v m/s (3,), sigmas away)
+    allowed, best = [], None
     for tb in _trial_times(times, window, taken):
         try:
             one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, float(tb)])

@@ -36,15 +36,13 @@ from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["GapSensitivity", "burn_sensitivity", "HIDDEN_SIGMAS", "GAP_FRACTIONS", "SESSION_GAP_HOURS"]
+__all__ = ["GapSensitivity", "burn_sensitivity", "HIDDEN_SIGMAS", "GAP_FRACTIONS"]
 
 HIDDEN_SIGMAS = 3.0
 """A burn that raises the refitted cost by less than this squared would not show (3 sigma, the size
 test a burn the fit reports must pass: :data:`cistrack.fitting.maneuver_search.MIN_BURN_SIGMAS`)."""
 GAP_FRACTIONS = (1e-4, 1e-3, 0.01, 0.03, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.9, 0.97, 0.99, 0.999, 0.9999)
 """Burn times tried in each gap, as fractions of it from the observation before: dense at its ends."""
-SESSION_GAP_HOURS = 3.0
-"""A gap between observations longer than this (hours) separates two observing sessions."""
 
 
 @dataclass(frozen=True)
@@ -67,10 +65,13 @@ class GapSensitivity:
     direction: np.ndarray
 
 
-def _gaps(times: np.ndarray) -> list[tuple[float, float]]:
-    t = np.unique(np.asarray(times, dtype=float))
-    cut = float(units.hours_to_tu(SESSION_GAP_HOURS))
-    return [(float(a), float(b)) for a, b in zip(t[:-1], t[1:]) if b - a > cut]
+def _session_gaps(times: np.ndarray) -> list[tuple[float, float]]:
+    """The gaps between observing sessions: the burn search's gaps of at least
+    :data:`~cistrack.least_squares.burn_search.NIGHT_GAP_HOURS`."""
+    from cistrack.least_squares.burn_search import NIGHT_GAP_HOURS, _gaps
+
+    night = float(units.hours_to_tu(NIGHT_GAP_HOURS))
+    return [(a, b) for a, b in _gaps(times, []) if b - a >= night]
 
 
 def _hidden(q: np.ndarray, a_dv: np.ndarray) -> tuple[float, np.ndarray]:
@@ -89,7 +90,7 @@ def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> lis
     out here), ``dynamics`` flies its orbit (with the fit's solve-for parameters set, and held
     fixed here) and ``sensor`` predicts them. Empty for one session."""
     used = measurements.subset(~np.asarray(fit.residuals.rejected, dtype=bool))
-    gaps = _gaps(used.times)
+    gaps = _session_gaps(used.times)
     if not gaps:
         return []
     model = MeasurementModel(sensor, used)
