@@ -377,7 +377,9 @@ def _covariance(n: np.ndarray, obs: Any) -> np.ndarray:
 def _unobservable_text(obs: Any, opts: FitOptions) -> str | None:
     """Why the arc leaves a direction nearly unobservable, or None when it does not."""
     weak_km = float(np.linalg.norm(obs.weakest_direction_km[:3]))
-    if not (obs.condition > opts.max_condition or weak_km > opts.max_weak_sigma_km):
+    sized = np.isfinite(obs.condition)   # a singular matrix's direction has no one-sigma size
+    ill_conditioned = obs.condition > opts.max_condition and not (sized and weak_km <= opts.min_weak_sigma_km)
+    if not (ill_conditioned or weak_km > opts.max_weak_sigma_km):
         return None
     return (f"the arc leaves a direction nearly unobservable: condition number {obs.condition:.3g} "
             f"(limit {opts.max_condition:.3g}), one sigma along the weakest direction "
@@ -473,7 +475,8 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     definite, or when the orbit cannot be propagated over the arc; :class:`cistrack.errors.StateError`
     and :class:`cistrack.errors.MeasurementError` for malformed input. Warns
     :class:`cistrack.least_squares.UnobservableWarning` when the condition number exceeds
-    ``options.max_condition`` or the weakest direction's one sigma ``options.max_weak_sigma_km``.
+    ``options.max_condition`` (while the weakest direction's one sigma exceeds
+    ``options.min_weak_sigma_km``) or that sigma exceeds ``options.max_weak_sigma_km``.
     """
     opts, x, t0, pri = _checked_inputs(state, t0, prior, options)
     names = () if solve_for is None else ((solve_for,) if isinstance(solve_for, str) else tuple(solve_for))

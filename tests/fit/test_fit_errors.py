@@ -2,6 +2,8 @@
 leaves a direction unobservable gives a warning naming it."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -76,6 +78,39 @@ def test_a_nearly_unobservable_direction_warns_and_is_reported_in_km():
     assert res.unobservable and res.condition_number > 1e7
     w = res.weakest_direction_km
     assert abs(w[2]) > 10 * np.max(np.abs(np.delete(w, [2, 5])))   # the z/vz direction
+
+
+def _correlated_but_precise_arc() -> tuple[LinearSensor, MeasurementSet]:
+    """z and vz separated only weakly (condition number 3.9e8) but measured so precisely that the
+    weakest direction is known to 0.05 km: the geometry of a dense arc, not a short one."""
+    times = np.linspace(-1.0, 1.0, 5)
+    sen = _degenerate_sensor(1.0)
+    sen.matrix[0, 2] = 1e-4
+    sen.sigma = 1e-14
+    ms = sen.simulate(np.zeros((5, 6)), times, np.random.default_rng(1))
+    return sen, MeasurementSet(times, ms.values, ms.sigmas, ms.names)
+
+
+def test_a_high_condition_number_with_the_weakest_direction_known_to_metres_is_not_flagged():
+    sen, ms = _correlated_but_precise_arc()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnobservableWarning)
+        res = fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0)
+    assert res.condition_number > 1e7 > 0
+    assert np.linalg.norm(res.weakest_direction_km[:3]) < 0.1
+    assert not res.unobservable
+
+
+def test_min_weak_sigma_zero_lets_the_condition_number_flag_alone():
+    sen, ms = _correlated_but_precise_arc()
+    with pytest.warns(UnobservableWarning, match="condition number"):
+        res = fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0, options=FitOptions(min_weak_sigma_km=0.0))
+    assert res.unobservable
+
+
+def test_a_negative_min_weak_sigma_is_refused_naming_the_option():
+    with pytest.raises(ParameterError, match="min_weak_sigma_km.*>= 0"):
+        FitOptions(min_weak_sigma_km=-1.0)
 
 
 def test_an_unobservable_direction_with_no_information_is_refused():
