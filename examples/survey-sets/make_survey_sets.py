@@ -38,6 +38,9 @@ direction (synodic frame) at a time drawn evenly between the last observation of
 and the first of its last night (so between nights or, now and then, within one); the observations
 and ``truth.csv`` are of the orbit flown with it, and ``set.json`` gives it as ``burn``
 (``utc``, ``delta_v_ms``, ``delta_v_vector_ms``). Without the option the sets are as before.
+With ``--exposures N`` every tracklet holds N exposures (a dense file: N = 6,000 gave 11
+tracklets, 66,000 observations); the 3-5 is still drawn, but the jitter draws N values, so the
+schedule after the first tracklet differs from the default set's of that seed.
 
 Every random draw comes from ``numpy.random.default_rng(seed)`` (one stream per set, split
 per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds looked at while
@@ -146,15 +149,17 @@ def _sensor(scen, reg, code: str):
     return reg.create("sensor", "real-telescope", **params), site
 
 
-def _tracklet(rng: np.random.Generator, start: float) -> np.ndarray:
-    """Times (TU) of one tracklet: 3-5 exposures evenly over 10-30 minutes, jittered by <= 20 s."""
+def _tracklet(rng: np.random.Generator, start: float, exposures: int | None = None) -> np.ndarray:
+    """Times (TU) of one tracklet: 3-5 exposures (or ``exposures``) evenly over 10-30 minutes,
+    jittered by <= 20 s."""
     n = int(rng.integers(3, 6))
+    n = n if exposures is None else exposures
     span_min = rng.uniform(10.0, 30.0)
     t_min = np.linspace(0.0, span_min, n) + rng.uniform(-1.0 / 3.0, 1.0 / 3.0, n) * (np.arange(n) > 0)
     return start + np.sort(t_min) * 60.0 / units.TU_S
 
 
-def _night_tracklets(rng: np.random.Generator, pas, count: int) -> list[np.ndarray]:
+def _night_tracklets(rng: np.random.Generator, pas, count: int, exposures: int | None = None) -> list[np.ndarray]:
     """Up to ``count`` tracklets inside the pass ``pas``, starts at least 45 min apart."""
     step = 45.0 * 60.0 / units.TU_S
     last_start = pas.end - 30.0 * 60.0 / units.TU_S
@@ -165,7 +170,7 @@ def _night_tracklets(rng: np.random.Generator, pas, count: int) -> list[np.ndarr
     for s in starts:
         if not kept or s - kept[-1] >= step:
             kept.append(float(s))
-    return [_tracklet(rng, s) for s in kept]
+    return [_tracklet(rng, s, exposures) for s in kept]
 
 
 def _passes(scen, reg, sites: tuple[str, ...], grid: np.ndarray, truth: np.ndarray) -> list[tuple[str, object]]:
@@ -177,19 +182,21 @@ def _passes(scen, reg, sites: tuple[str, ...], grid: np.ndarray, truth: np.ndarr
     return sorted(out, key=lambda cp: cp[1].start)
 
 
-def plan(rng: np.random.Generator, passes, span_days: float, first_ok=None) -> dict[str, list[np.ndarray]] | None:
+def plan(rng: np.random.Generator, passes, span_days: float, first_ok=None,
+         exposures: int | None = None) -> dict[str, list[np.ndarray]] | None:
     """Tracklet times per site: the first night's lone tracklet, then uneven nights.
 
     ``passes``: (site, pass) by start time (TU); ``span_days``: the campaign's length after the
     first night. The first night is the first pass of at least 40 minutes (for which
-    ``first_ok(pass)`` holds, if given). None when there is no such pass."""
+    ``first_ok(pass)`` holds, if given); ``exposures``: every tracklet's (None: 3-5 drawn). None
+    when there is no such pass."""
     long_enough = [(c, p) for c, p in passes if (p.end - p.start) * units.TU_S >= 2400.0]
     firsts = [(c, p) for c, p in long_enough if first_ok is None or first_ok(p)]
     if not firsts:
         return None
     site0, p0 = firsts[0]
     start = p0.start + rng.uniform(0.0, 0.5) * (p0.end - p0.start - 1800.0 / units.TU_S)
-    out: dict[str, list[np.ndarray]] = {site0: [_tracklet(rng, start)]}
+    out: dict[str, list[np.ndarray]] = {site0: [_tracklet(rng, start, exposures)]}
     day = 86400.0 / units.TU_S
     for k in range(1, int(math.ceil(span_days))):
         if rng.uniform() > 0.55:
@@ -199,7 +206,7 @@ def plan(rng: np.random.Generator, passes, span_days: float, first_ok=None) -> d
         if not tonight:
             continue
         code, pas = tonight[int(rng.integers(len(tonight)))]
-        out.setdefault(code, []).extend(_night_tracklets(rng, pas, int(rng.integers(1, 4))))
+        out.setdefault(code, []).extend(_night_tracklets(rng, pas, int(rng.integers(1, 4)), exposures))
     return out
 
 
@@ -248,7 +255,7 @@ def _first_night_rule(family: str, grid: np.ndarray, truth: np.ndarray):
     return lambda p: float(np.interp(p.start, grid, r_km)) < HEO_FIRST_NIGHT_MAX_KM
 
 
-def _draw(family: str, seed: int, rngs, reg):
+def _draw(family: str, seed: int, rngs, reg, exposures: int | None = None):
     """Draw epochs, sites and schedules until one gives at least ``MIN_NIGHTS`` nights (and, for
     the HEO, a first night inside the range floor); at most ``MAX_DRAWS`` draws."""
     choose_rng, plan_rng = rngs
@@ -260,7 +267,7 @@ def _draw(family: str, seed: int, rngs, reg):
             continue
         dyn, x0, grid, truth = made
         times = plan(plan_rng, _passes(scen, reg, tuple(info["sites"]), grid, truth), info["span_days"],
-                     _first_night_rule(family, grid, truth))
+                     _first_night_rule(family, grid, truth), exposures)
         if times is not None and len(_nights(times)) >= MIN_NIGHTS:
             return info, scen, dyn, x0, times
     raise SystemExit(f"make_survey_sets: no acceptable {family} campaign in {MAX_DRAWS} draws for seed {seed}")
@@ -288,13 +295,14 @@ def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: f
     return Impulse(t_burn, dv / (units.vu_to_kms(1.0) * 1000.0), "burn"), record
 
 
-def make(out: Path, family: str, seed: int, burn_ms: float = 0.0) -> dict:
+def make(out: Path, family: str, seed: int, burn_ms: float = 0.0, exposures: int | None = None) -> dict:
     """Simulate one set into ``out`` (with ``burn_ms`` > 0: the object makes one burn of that many
-    m/s, :func:`_burn`); returns its description (also written as set.json)."""
+    m/s, :func:`_burn`; with ``exposures``, every tracklet holds that many); returns its description
+    (also written as set.json)."""
     streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(5)
     choose_rng, plan_rng, noise_rng, outlier_rng, burn_rng = (np.random.default_rng(s) for s in streams)
     reg = default_registry()
-    info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg)
+    info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg, exposures)
     if burn_ms > 0:
         impulse, info["burn"] = _burn(burn_rng, times, burn_ms, scen.epoch)
         dyn = ImpulsiveDynamics(dyn, [impulse])
@@ -350,10 +358,12 @@ def main() -> None:
     ap.add_argument("--family", nargs="+", default=list(FAMILIES), choices=FAMILIES)
     ap.add_argument("--seed", type=int, nargs="+", default=[1])
     ap.add_argument("--burn-ms", type=float, default=0.0, help="one impulsive burn of this many m/s (default: none)")
+    ap.add_argument("--exposures", type=int, default=None,
+                    help="exposures in every tracklet (default: 3-5 drawn); the schedule is then another one")
     a = ap.parse_args()
     for fam in a.family:
         for seed in a.seed:
-            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms)
+            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms, a.exposures)
             burn = f"; a {a.burn_ms:g} m/s burn at {info['burn']['utc'][:16]}" if "burn" in info else ""
             print(f"{fam} seed {seed}: {info['n_observations']} observations, {info['tracklets']} tracklets over "
                   f"{info['nights']} nights from {', '.join(info['sites'])}; first night {info['first_night_exposures']} "

@@ -239,12 +239,22 @@ class TrackletRangingIOD(IODMethod):
         return admissible_states(att, n_range=self.n_range, n_rate=self.n_rate, range_min_km=self.range_min_km,
                                  range_max_km=self.range_max_km, max_c3=self.max_c3)
 
-    def _seed_fit(self, dyn: Dynamics, sensor: Sensor, ms: MeasurementSet, atts: list[Attributable],
-                  k: int, options: FitOptions = _SEED_OPTIONS) -> tuple[FitResult | None, np.ndarray, dict]:
-        """(fit, rows, record) of the ranging from tracklet ``k`` scored on the next tracklets."""
+    def _scoring(self, atts: list[Attributable], k: int, near_only: bool = False) -> list[int]:
+        """The tracklets that score the seed ``k``: the next :attr:`score_tracklets` (later ones
+        first, nearest first); with ``near_only``, those of them within :data:`NEAR_DAYS`."""
         others = [j for j in range(len(atts)) if j != k]
         others.sort(key=lambda j: (atts[j].t < atts[k].t, abs(atts[j].t - atts[k].t)))
         score_with = others[:self.score_tracklets]
+        if near_only:
+            score_with = [j for j in score_with if abs(atts[j].t - atts[k].t) <= NEAR_DAYS * 86400.0 / TU_S]
+        return score_with
+
+    def _seed_fit(self, dyn: Dynamics, sensor: Sensor, ms: MeasurementSet, atts: list[Attributable],
+                  k: int, options: FitOptions = _SEED_OPTIONS,
+                  score_with: list[int] | None = None) -> tuple[FitResult | None, np.ndarray, dict]:
+        """(fit, rows, record) of the ranging from tracklet ``k`` scored on ``score_with`` (None:
+        the next tracklets, :meth:`_scoring`)."""
+        score_with = self._scoring(atts, k) if score_with is None else score_with
         rows = np.sort(np.concatenate([_thinned(atts[j].indices) for j in [k, *score_with]]))
         states, rho = self._grid(atts[k])
         score = score_states(dyn, sensor, ms, np.setdiff1d(rows, _thinned(atts[k].indices)), states, atts[k].t)
@@ -280,28 +290,46 @@ class TrackletRangingIOD(IODMethod):
             return self._lone(atts[0], rng)
         return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
 
+    def _seed_trials(self, atts: list[Attributable], order: list[int]):
+        """(options, seed, scoring tracklets) in the order :meth:`_first_seed` tries them: the first
+        :attr:`seeds` seeds with :data:`_SEED_OPTIONS`, then with :data:`_PATIENT_OPTIONS`, then
+        those whose scoring tracklets include one beyond :data:`NEAR_DAYS`, scored on the nearer
+        ones alone (:data:`_PATIENT_OPTIONS`). A grid propagated over 11 days to a survey's fourth
+        tracklet resolved no orbit (three tracklets of a halo orbit on three nights, one more 11.6
+        days on: 8 seeds, 48 fits, none converged); the two nearer tracklets gave it, and the
+        extension over the arc took the far one."""
+        seeds = order[:self.seeds]
+        for options in (_SEED_OPTIONS, _PATIENT_OPTIONS):
+            for k in seeds:
+                yield options, k, self._scoring(atts, k)
+        for k in seeds:
+            near = self._scoring(atts, k, near_only=True)
+            if near and near != self._scoring(atts, k):
+                yield _PATIENT_OPTIONS, k, near
+
     def _first_seed(self, dyn, sensor, ms, atts, order) -> tuple[int, FitResult | None, np.ndarray, dict, list]:
         """(seed, fit, rows, its record, every record) of the first seed tracklet whose ranging gives a
-        converged fit that fits its observations (noise scale below :data:`.ranging_search.CLEAN_NOISE_SCALE`):
-        with :data:`_SEED_OPTIONS`, then, when none does, again with :data:`_PATIENT_OPTIONS`; when none
-        does then either, the converged fit with the smallest noise scale (fit None when none converged).
+        converged fit that fits its observations (noise scale below :data:`.ranging_search.CLEAN_NOISE_SCALE`),
+        trying seeds, options and scoring tracklets in the order of :meth:`_seed_trials`; when none
+        does, the converged fit with the smallest noise scale (fit None when none converged).
         A converged fit far above the noise is a false minimum: one seed tracklet's fit converged with
         residuals 57 times the noise, 139,000 km from the truth, where the next seed's fit lay 5 km off."""
         records: list[dict] = []
         fallback: tuple = (-1, None, np.zeros(0, dtype=int), {})
-        for options in (_SEED_OPTIONS, _PATIENT_OPTIONS):
-            for k in order[:self.seeds]:
-                fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k, options)
-                if options is _PATIENT_OPTIONS:
-                    rec["max_iterations"] = options.max_iterations
-                records.append(rec)
-                if fit is None or not fit.converged:
-                    continue
-                rec["noise_scale"] = float(fit.noise_scale)
-                if fit.noise_scale < CLEAN_NOISE_SCALE:
-                    return k, fit, rows, rec, records
-                if fallback[1] is None or fit.noise_scale < fallback[1].noise_scale:
-                    fallback = (k, fit, rows, rec)
+        for options, k, score_with in self._seed_trials(atts, order):
+            fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k, options, score_with)
+            if options is _PATIENT_OPTIONS:
+                rec["max_iterations"] = options.max_iterations
+            if score_with != self._scoring(atts, k):
+                rec["near_only"] = True
+            records.append(rec)
+            if fit is None or not fit.converged:
+                continue
+            rec["noise_scale"] = float(fit.noise_scale)
+            if fit.noise_scale < CLEAN_NOISE_SCALE:
+                return k, fit, rows, rec, records
+            if fallback[1] is None or fit.noise_scale < fallback[1].noise_scale:
+                fallback = (k, fit, rows, rec)
         return (*fallback, records)
 
     def _ranged(self, dyn, sensor, ms, atts, order, rng, who) -> ParticleCloud:
@@ -314,6 +342,9 @@ class TrackletRangingIOD(IODMethod):
         if fit.noise_scale >= CLEAN_NOISE_SCALE:
             patient += (f"; no seed fitted its observations: this one's residuals are {fit.noise_scale:.3g} times "
                         "the stated noise, the smallest")
+        if rec.get("near_only"):
+            patient += (f"; only the tracklets within {NEAR_DAYS:g} days scored it: scored on farther ones too, "
+                        "no seed gave an orbit that fits them")
         why = (f"ranging from tracklet {k + 1} of {len(atts)} ({atts[k].indices.size} observations"
                + self._why_not_first(atts, order, k, records) + "), scored on tracklets "
                + ", ".join(str(j + 1) for j in rec["scored_on"]) + patient)

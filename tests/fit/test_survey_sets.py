@@ -106,6 +106,23 @@ def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_fourth_tracklet_eleven_days_after_the_third_does_not_stop_the_ranging(tmp_path):
+    """Halo seed 173 with 5 exposures a tracklet: three tracklets on three nights, the fourth 11.6
+    days later. Every seed scored on the other three gave no converged fit (8 seeds, 48 fits) and
+    the fit FAILED; scored on the two within 6 days, the ranging finds the orbit."""
+    set_dir = tmp_path / "halo-s173"
+    info = make(set_dir, "halo", seed=173, exposures=5)
+    assert info["tracklets"] == 4
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert row.n_fitted == row.n_observations == info["n_observations"]
+    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    assert row.rejected_injected == row.injected
+    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    assert any("only the tracklets within 6 days scored it" in m for m in messages)
+
+
+@pytest.mark.slow
 def test_mis_identified_tracklets_at_the_arcs_end_are_no_burn(tmp_path):
     """The last 7 observations of nrho seed 31 moved by 0.02 deg RA, 0.01 deg Dec (two tracklets of
     one night): the fit had kept a 532 +- 24,668 m/s burn and said "converged", the truth 3,454 km

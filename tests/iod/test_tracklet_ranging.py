@@ -161,8 +161,9 @@ def _seed_fits_far_above_the_noise(monkeypatch, iod, scales):
     the stated noise (a false minimum, as halo seed 33's first tracklet gave: 57 times, 139,000 km off)."""
     real = type(iod)._seed_fit
 
-    def seed_fit(self, dyn, sensor, ms, atts, k, options=None):
-        fit, rows, rec = real(self, dyn, sensor, ms, atts, k, *([options] if options is not None else []))
+    def seed_fit(self, dyn, sensor, ms, atts, k, options=None, score_with=None):
+        fit, rows, rec = real(self, dyn, sensor, ms, atts, k, *([options] if options is not None else []),
+                              score_with)
         if k in scales and fit is not None:
             fit = replace(fit, converged=True, noise_scale=scales[k], rms=scales[k])
         return fit, rows, rec
@@ -242,3 +243,24 @@ def test_the_extension_over_a_long_arc_thins_its_long_tracklets_and_still_finds_
 def test_the_extension_over_an_arc_of_at_most_extension_rows_uses_every_observation(dro):
     ms, _ = _dense_last_night(dro)
     assert len(_ranged(dro, ms).meta["rows_used"]) == 128
+
+
+def test_seeds_whose_scoring_reaches_past_near_days_are_tried_last_on_the_nearer_tracklets(dro):
+    """Three tracklets within 3 days and a fourth 11 days on: after every seed scored on the next
+    three (quick options, then patient ones), the seeds are tried again scored on the tracklets
+    within NEAR_DAYS only; a seed with none that near is not."""
+    from cistrack.plugins.iod import tracklet_ranging as tr
+
+    dyn, sensor, x0, ms, times = dro
+    far_times = times[-4:] + 265.0 * H
+    far = sensor.simulate(dyn.propagate(x0[None], 0.0, far_times).states[:, 0], far_times, np.random.default_rng(8))
+    both = MeasurementSet(np.concatenate([ms.times, far.times]), np.concatenate([ms.values, far.values]),
+                          np.concatenate([ms.sigmas, far.sigmas]), ms.names)
+    atts = [attributable(both, sensor, np.arange(4 * i, 4 * i + 4)) for i in range(4)]
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn)
+    trials = list(iod._seed_trials(atts, [0, 1, 2, 3]))
+    assert [(o, k) for o, k, _ in trials[:8]] == [(tr._SEED_OPTIONS, k) for k in range(4)] + [
+        (tr._PATIENT_OPTIONS, k) for k in range(4)]
+    assert [w for _o, _k, w in trials[:4]] == [[1, 2, 3], [2, 3, 0], [3, 1, 0], [2, 1, 0]]
+    assert trials[8:] == [(tr._PATIENT_OPTIONS, 0, [1, 2]), (tr._PATIENT_OPTIONS, 1, [2, 0]),
+                          (tr._PATIENT_OPTIONS, 2, [1, 0])]
