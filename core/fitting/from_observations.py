@@ -640,16 +640,19 @@ def _follow_line(one: ObjectFit, job: "_Job") -> None:
     ctx, opts = one.run.context, job.choices.options
     job.say(f"{one.designation}: line of variations " + ("until the data rule it out" if sigmas is None
                                                          else f"to +-{sigmas:g} sigma"))
-    one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, sigmas)
+    with reported_to(job.log):
+        one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, sigmas)
     if sigmas is None and job.choices.prior == "none" and not getattr(one, "maneuvers", None):
-        better = better_solution(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.lov, opts)
+        with reported_to(job.log):
+            better = better_solution(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.lov, opts)
         if better is not None:
             job.say(f"{one.designation}: {better.messages[-1]}")
             one.result = better
             _refuse_not_cislunar(one)
             add_findings(one, job.registry, job.say)
             _note_rejected_epoch(one)
-            one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
+            with reported_to(job.log):
+                one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
     _horizon_along_line(one)
 
 

@@ -35,6 +35,7 @@ from cistrack.least_squares.differential_correction import _one_pass, _Problem
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.observability import km_apart
 from cistrack.least_squares.options import FitOptions
+from cistrack.least_squares.progress import reported_to, tell
 from cistrack.least_squares.result import FitResult
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
@@ -135,7 +136,7 @@ def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: Measure
             centre = x0 + sigma * v
             prob = _Problem(dynamics, model, fit.epoch, (centre, _STIFFNESS * np.outer(normal, normal)))
             try:
-                with warnings.catch_warnings():
+                with warnings.catch_warnings(), reported_to(None):   # one line per point, below
                     warnings.simplefilter("ignore")
                     x, _, ok = _one_pass(prob, x + sign * step * v, np.ones(len(measurements), dtype=bool),
                                          opts, [])
@@ -147,6 +148,8 @@ def line_of_variations(dynamics: Dynamics, sensor: Sensor, measurements: Measure
             if cov is None or not np.isfinite(chi2) or chi2 - fit.chi2 > max_delta_chi2:
                 break
             points.append(LovPoint(sigma, x.copy(), chi2, cov))
+            tell(len(measurements), f"    line of variations at {sigma:+g} sigma: chi-square {chi2 - fit.chi2:+.4g} "
+                                    "from the fit's")
     return sorted(points, key=lambda p: p.sigma)
 
 

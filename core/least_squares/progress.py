@@ -3,8 +3,8 @@
 A fit of tens of thousands of observations takes minutes, and each iteration propagates to every
 observation time: 66,000 observations had left ``cistrack fit`` silent for 201 s. Within
 :func:`reported_to`, a least squares over at least :data:`PROGRESS_ROWS` observations says each
-accepted iteration and each pass of outlier rejection; smaller ones, which take seconds, say
-nothing more.
+accepted iteration and each pass of outlier rejection, and a line of variations each point (it had
+left the same file silent for 90 s more); smaller ones, which take seconds, say nothing more.
 """
 from __future__ import annotations
 
