@@ -264,3 +264,21 @@ def test_seeds_whose_scoring_reaches_past_near_days_are_tried_last_on_the_nearer
     assert [w for _o, _k, w in trials[:4]] == [[1, 2, 3], [2, 3, 0], [3, 1, 0], [2, 1, 0]]
     assert trials[8:] == [(tr._PATIENT_OPTIONS, 0, [1, 2]), (tr._PATIENT_OPTIONS, 1, [2, 0]),
                           (tr._PATIENT_OPTIONS, 2, [1, 0])]
+
+
+def test_the_extension_never_keeps_a_step_far_above_the_noise():
+    """An L2 Lyapunov orbit seen on three nights and once more 11 days later: the fit over the three
+    nights does not reach the fourth; the step that took it converged with residuals 91 times the
+    noise (74,000 km off) and was kept. The extension now stops before it, near the noise."""
+    reg = default_registry()
+    dyn = reg.create("dynamics", "cr3bp")
+    x0 = np.asarray(reg.create("orbit", "l2-lyapunov").state, dtype=float)
+    sensor = reg.create("sensor", "ground-telescope", sigma_arcsec=1.0, elevation_mask_deg=-90.0)
+    starts = np.array([2.0, 26.5, 75.0, 340.0])                    # hours
+    times = (starts[:, None] + np.array([0.0, 1 / 12, 1 / 6, 1 / 4])[None]).reshape(-1) * H
+    ms = sensor.simulate(dyn.propagate(x0[None], 0.0, times).states[:, 0], times, np.random.default_rng(7))
+    iod = reg.create("iod", "tracklet-ranging", dynamics=dyn, arc="all", n_particles=200)
+    cloud = iod.estimate(ms, sensor, np.random.default_rng(3))
+    assert cloud.meta["noise_scale"] < 1.5
+    assert any(s.startswith("stopped at 13 of 16 observations") for s in cloud.meta["extension"])
+    assert cloud.epoch == pytest.approx(times[12])
