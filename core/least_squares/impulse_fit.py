@@ -371,22 +371,30 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
     ``bounds`` (TU), the gap) give the full fits' cost profile: the parabola through the three
     costs moves the burn time to its vertex when that lies a half step or more away (one more fit
     there) and gives its one sigma (Delta cost = 1; ``t_sigma`` when the profile is not convex);
-    their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2. Raises
-    :class:`FitError` when ``bounds`` leave no room for the two fits (the time's uncertainty
+    their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2. A vertex
+    more than two steps away (extrapolated) that lowers the cost becomes the middle of three new
+    points, at most :data:`TIME_MOVES` times: on a survey set of an Earth orbit, one such
+    step had stopped 6.9 sigmas short of the profile's minimum, where the true burn time lay.
+    Raises :class:`FitError` when ``bounds`` leave no room for the two fits (the time's uncertainty
     cannot be measured: the burn is returned with none, t_sigma 0, never silently)."""
-    b = burn.searched
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
     h = max(float(t_sigma), float(units.seconds_to_tu(60.0)))
-    ts = _two_sides(b.t, h, lo, hi)
-    if ts is None:
+    if _two_sides(burn.searched.t, h, lo, hi) is None:
         raise FitError(f"with_time_uncertainty: the interval [{lo:.5f}, {hi:.5f}] TU leaves no room for the "
                        f"burn time's profile (step {h:.2e} TU): its uncertainty cannot be measured")
-    (c_a, f_a), (c_b, f_b) = (_fit_at(arc, burn, float(t), known) for t in ts)
     c0 = capped_cost(burn.fit, arc.prior)
-    pts = sorted([(ts[0], c_a), (b.t, c0), (ts[1], c_b)])
-    sigma, vertex = _parabola(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), float(t_sigma))
+    for _ in range(TIME_MOVES):
+        ts, (f_a, f_b), sigma, vertex = _time_profile(arc, burn, c0, known, _two_sides(burn.searched.t, h, lo, hi),
+                                                      float(t_sigma))
+        far = abs(vertex - burn.searched.t) > 2.0 * h
+        if not (far and lo <= vertex <= hi and _two_sides(vertex, h, lo, hi) is not None):
+            break
+        c_v, f_v = _fit_at(arc, burn, vertex, known)
+        if not c_v < c0:
+            break
+        burn, c0 = f_v, c_v
     best = burn
-    if abs(vertex - b.t) >= 0.5 * h and lo <= vertex <= hi:
+    if abs(vertex - burn.searched.t) >= 0.5 * h and lo <= vertex <= hi:
         c_v, f_v = _fit_at(arc, burn, vertex, known)
         best = f_v if c_v < c0 else burn
     g = (f_b.searched.delta_v_ms - f_a.searched.delta_v_ms) / (ts[1] - ts[0])
@@ -394,6 +402,20 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
     burns = list(best.burns)
     burns[best.new] = BurnEstimate(nb.t, nb.delta_v_ms, nb.covariance_ms2 + np.outer(g, g) * sigma ** 2, sigma, g)
     return ImpulseFit(burns, best.fit, best.new, burn.costs, burn.candidates)
+
+
+TIME_MOVES = 8
+"""At most this many moves of the burn time to an extrapolated vertex (:func:`with_time_uncertainty`)."""
+
+
+def _time_profile(arc: BurnArc, burn: ImpulseFit, c0: float, known: Sequence[float],
+                  ts: tuple[float, float], fallback: float):
+    """(``ts``, their fits, sigma, vertex) of the parabola through ``burn``'s capped cost ``c0``
+    and the fits at the two times ``ts`` (:func:`_two_sides` of its time and a step)."""
+    (c_a, f_a), (c_b, f_b) = (_fit_at(arc, burn, float(t), known) for t in ts)
+    pts = sorted([(ts[0], c_a), (burn.searched.t, c0), (ts[1], c_b)])
+    sigma, vertex = _parabola(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), fallback)
+    return ts, (f_a, f_b), sigma, vertex
 
 
 def _two_sides(t: float, h: float, lo: float, hi: float) -> tuple[float, float] | None:
