@@ -116,7 +116,7 @@ def _times_allowed(ctx, one, found):
     from cistrack.least_squares.impulse_fit import BurnArc
 
     opts = replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off")
-    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior), found)
+    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior, found.rejected), found)
 
 
 def _burn_doubt(fit, burns) -> str:
@@ -243,10 +243,10 @@ def _after_burns(ctx, found):
     fit = found.result
     t_last = float(np.max(ctx.measurements.times))
     if fit.epoch >= max(b.t for b in found.burns):
-        arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), found.prior)
+        arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), found.prior, found.rejected)
         return _with_burn_times(arc, fit, found.burns, found.windows), found.burns
     x = arc_states(found.dynamics, fit.state, fit.epoch, np.array([t_last]))[0]
-    arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit))
+    arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), rejected=found.rejected)
     again = fit_impulses(arc, x, t_last, [b.t for b in found.burns])
     burns = [replace(b, covariance_ms2=b.covariance_ms2 + (n.covariance_ms2 - _plain(found, k)))
              for k, (b, n) in enumerate(zip(found.burns, again.burns))]

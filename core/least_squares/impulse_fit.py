@@ -147,6 +147,8 @@ class BurnArc:
     options : FitOptions or None   of each least-squares fit
     prior : (mean (6,), covariance (6, 6)) or None   Gaussian prior on the state at the fits'
                                    epoch, LU, VU
+    rejected : (K,) bool or None   observations each fit leaves out of its first pass (the
+                                   ballistic fit's outliers; later passes may readmit them)
     """
 
     dynamics: Dynamics
@@ -154,6 +156,7 @@ class BurnArc:
     measurements: MeasurementSet
     options: FitOptions | None = None
     prior: Prior = None
+    rejected: np.ndarray | None = None
 
     @property
     def use_range(self) -> bool:
@@ -188,7 +191,7 @@ def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float]) -> Impu
     with warnings.catch_warnings():  # a trial burn time may leave a direction weak: its fit's messages say so
         warnings.simplefilter("ignore", UnobservableWarning)
         fit = fit_orbit(impulsive, arc.sensor, arc.measurements, np.asarray(state, dtype=float), t0,
-                        options=arc.options, solve_for=names, prior=arc.prior)
+                        options=arc.options, solve_for=names, prior=arc.prior, rejected=arc.rejected)
     cov = np.asarray(fit.full_covariance, dtype=float)
     burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
                           cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
