@@ -70,8 +70,7 @@ def add_maneuvers(one, say) -> None:
     residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
     explains, or that is still suspect with the burns found, is not reported as converged (and the
     burns are not reported): its messages say why."""
-    from cistrack.least_squares.burn_search import (burn_fit_options, first_pass_outliers, flown, search_maneuvers,
-                                                    suspicion)
+    from cistrack.least_squares.burn_search import flown, search_maneuvers, suspicion
 
     r = one.result
     if r is None or one.run is None:
@@ -89,8 +88,7 @@ def add_maneuvers(one, say) -> None:
             "was searched",))
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
-    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, burn_fit_options(one.choices.options), say,
-                             rejected=first_pass_outliers(r))
+    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, one.choices.options, say)
     if not found.burns:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
             f"not a clean fit: it looks like an object that maneuvered ({why}), and no impulsive burn in "
@@ -114,11 +112,11 @@ def add_maneuvers(one, say) -> None:
 
 def _times_allowed(ctx, one, found):
     """:func:`~cistrack.least_squares.burn_search.times_allowed` on the search's arc."""
-    from cistrack.least_squares.burn_search import burn_fit_options, times_allowed
+    from cistrack.least_squares.burn_search import times_allowed
     from cistrack.least_squares.impulse_fit import BurnArc
 
-    opts = burn_fit_options(replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off"))
-    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior, found.rejected), found)
+    opts = replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off")
+    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior), found)
 
 
 def _burn_doubt(fit, burns) -> str:
@@ -245,10 +243,10 @@ def _after_burns(ctx, found):
     fit = found.result
     t_last = float(np.max(ctx.measurements.times))
     if fit.epoch >= max(b.t for b in found.burns):
-        arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), found.prior, found.rejected)
+        arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), found.prior)
         return _with_burn_times(arc, fit, found.burns, found.windows), found.burns
     x = arc_states(found.dynamics, fit.state, fit.epoch, np.array([t_last]))[0]
-    arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit), rejected=found.rejected)
+    arc = BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, fit_options(fit))
     again = fit_impulses(arc, x, t_last, [b.t for b in found.burns])
     burns = [replace(b, covariance_ms2=b.covariance_ms2 + (n.covariance_ms2 - _plain(found, k)))
              for k, (b, n) in enumerate(zip(found.burns, again.burns))]
@@ -313,10 +311,9 @@ def _plain(found, k: int) -> np.ndarray:
 
 def fit_options(fit):
     """FitOptions for a refit of ``fit``: the area-to-mass ratio estimated when ``fit`` estimated it."""
-    from cistrack.least_squares.burn_search import burn_fit_options
     from cistrack.least_squares.options import FitOptions
 
-    return burn_fit_options(FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off"))
+    return FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off")
 
 
 def _without_burns(fit):

@@ -45,7 +45,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "end_night_bias", "first_pass_outliers", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
+__all__ = ["suspicion", "end_night_bias", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
@@ -167,8 +167,6 @@ class ManeuverSearch:
     notes : list of str            what the search did, in words
     prior : (mean (6,), covariance (6, 6)) or None   the prior on the state at the fit's epoch
                                    every fit of the search was made with
-    rejected : (K,) bool or None   the observations every fit of the search left out of its first
-                                   pass (:func:`first_pass_outliers`)
     """
 
     result: FitResult
@@ -177,44 +175,6 @@ class ManeuverSearch:
     windows: list[tuple[float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     prior: Any = None
-    rejected: Any = None
-
-
-BURN_ITERATIONS = 100
-"""Levenberg-Marquardt iterations per pass, at least, of every fit with a burn that ``cistrack
-fit`` makes (:func:`burn_fit_options`; the ballistic fit's default is 30): a survey fit with the right 1 m/s burn (halo-s186, condition number 1e7)
-stopped at 30 iterations with weighted RMS 0.88, not converged, and was not kept. A fit that
-converges within 30 is the same fit."""
-
-
-def burn_fit_options(options: FitOptions) -> FitOptions:
-    """``options`` with at least :data:`BURN_ITERATIONS` iterations per pass."""
-    return replace(options, max_iterations=max(options.max_iterations, BURN_ITERATIONS))
-
-
-def first_pass_outliers(ballistic: FitResult) -> np.ndarray | None:
-    """The observations (K,) bool the ballistic fit rejected, but for the runs of at least
-    :data:`BLOCK_MIN` of them that reach an end of the arc (time order), or None when that
-    leaves none: outliers, which every fit of ``cistrack fit``'s burn search leaves out of its
-    first pass. One 30-300 arcsec outlier among the 12 observations
-    after a 1 m/s burn (survey set dro-s164) had pulled the first pass of every burn fit to a
-    delta-v that misfit the last night, whose 8 observations were then rejected (not converged,
-    no burn reported; the outlier was the arc's last observation); without it in the first pass the
-    fit in the right gap converged with none rejected. A longer run reaching an end is the far side
-    of a burn, which the fit must see."""
-    rejected = np.asarray(ballistic.residuals.rejected, dtype=bool)
-    order = np.argsort(np.asarray(ballistic.residuals.times, dtype=float), kind="stable")
-    r = rejected[order]
-    kept = np.flatnonzero(~r)
-    if kept.size == 0:
-        return None
-    if kept[0] >= BLOCK_MIN:
-        r[:kept[0]] = False
-    if r.size - 1 - kept[-1] >= BLOCK_MIN:
-        r[kept[-1] + 1:] = False
-    out = np.zeros_like(rejected)
-    out[order] = r
-    return out if out.any() else None
 
 
 def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -299,16 +259,14 @@ def _better(best, one, margin: float = 0.0):
 
 def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, ballistic: FitResult,
                      options: FitOptions, say: Callable[[str], None] = lambda m: None,
-                     prior: Any = None, rejected: Any = None) -> ManeuverSearch:
+                     prior: Any = None) -> ManeuverSearch:
     """Burns that explain the arc ``ms`` better than the ``ballistic`` fit (module docstring).
     ``options`` are the fit's; the area-to-mass ratio is estimated with the burns only when the
     ballistic fit estimated it. ``prior``: (mean (6,), covariance (6, 6)) on the state at the
-    ballistic fit's epoch, the one that fit was made with (None: none). ``rejected`` (K,) bool:
-    observations every fit with a burn leaves out of its first pass (:func:`first_pass_outliers`;
-    None: none)."""
+    ballistic fit's epoch, the one that fit was made with (None: none)."""
     opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
-    arc = BurnArc(dynamics, sensor, ms, opts, prior, rejected)
-    found = ManeuverSearch(ballistic, dynamics, prior=prior, rejected=rejected)
+    arc = BurnArc(dynamics, sensor, ms, opts, prior)
+    found = ManeuverSearch(ballistic, dynamics, prior=prior)
     for _ in range(MAX_BURNS):
         step = _next_burn(arc, found)
         if step is None:
@@ -336,7 +294,7 @@ def _add_burn(arc: BurnArc, found: ManeuverSearch, fit: ImpulseFit, window: tupl
     windows = found.windows + [window]
     order = np.argsort([x.t for x in found.burns] + [t_new], kind="stable")
     return ManeuverSearch(fit.fit, flown(arc.dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
-                          found.notes, found.prior, found.rejected)
+                          found.notes, found.prior)
 
 
 def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -268,17 +268,6 @@ def _checked_inputs(state: Any, t0: Any, prior: Any, options: Any
     return opts, x, t0, _check_prior(prior)
 
 
-def _check_rejected(rejected: Any, k: int) -> np.ndarray | None:
-    """``rejected`` as a (K,) bool array (None stays None); StateError naming its shape otherwise."""
-    if rejected is None:
-        return None
-    r = np.asarray(rejected)
-    if r.shape != (k,) or r.dtype != bool:
-        raise StateError(f"fit: rejected must be {k} true/false values, one per observation; got "
-                         f"{r.dtype} of shape {r.shape}")
-    return r.copy()
-
-
 def _problem(dynamics: Dynamics, model: MeasurementModel, x: np.ndarray, t0: float,
              prior: tuple[np.ndarray, np.ndarray] | None, params: SolveFor | None = None) -> _Problem:
     """The fit's problem, once there are enough numbers for the unknowns and the initial unknowns
@@ -319,15 +308,12 @@ def _pass_start(prob: _Problem, initial: np.ndarray, last: np.ndarray, used: np.
     return initial if prob.cost(w0, initial, used) < prob.cost(w1, last, used) else last
 
 
-def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str],
-                first_out: np.ndarray | None = None) -> _Passes:
-    """Fit, reject outliers, refit, until the rejected set settles (at most ``opts.max_passes``);
-    the first pass without the rows ``first_out`` (K,) bool when given."""
+def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str]) -> _Passes:
+    """Fit, reject outliers, refit, until the rejected set settles (at most ``opts.max_passes``)."""
     k, m = len(prob.model.times), prob.model.m
-    min_rows = 0 if prob.prior is not None else int(np.ceil(prob.n / m))
-    keep_all = first_out is None or k - int(first_out.sum()) < min_rows
-    p = _Passes(x, np.zeros(k, dtype=bool) if keep_all else first_out.copy())
+    p = _Passes(x, np.zeros(k, dtype=bool))
     seen: list[np.ndarray] = []
+    min_rows = 0 if prob.prior is not None else int(np.ceil(prob.n / m))
     for _ in range(opts.max_passes):
         p.x = _pass_start(prob, x, p.x, ~p.rejected)
         p.x, its, p.converged = _one_pass(prob, p.x, ~p.rejected, opts, say)
@@ -458,7 +444,7 @@ def _state_information(n: np.ndarray) -> np.ndarray:
 
 def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state: Any, t0: float, *,
               prior: tuple[Any, Any] | None = None, options: FitOptions | None = None,
-              solve_for: Any = None, rejected: Any = None) -> FitResult:
+              solve_for: Any = None) -> FitResult:
     """Least-squares orbit from ``measurements``, starting at ``state`` (6,) at epoch ``t0``.
 
     Parameters
@@ -481,9 +467,6 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     solve_for : str or tuple of str, optional
         Names of dynamics parameters estimated with the state, started at the dynamics' own
         values (:mod:`cistrack.least_squares.solve_for_parameters`); adds to ``area_to_mass``.
-    rejected : (K,) bool, optional
-        Observations left out of the first pass (known outliers); the passes of outlier rejection
-        after it may readmit them. Default: none (every observation in the first pass).
 
     Returns
     -------
@@ -496,45 +479,32 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     ``options.min_weak_sigma_km``) or that sigma exceeds ``options.max_weak_sigma_km``.
     """
     opts, x, t0, pri = _checked_inputs(state, t0, prior, options)
-    first_out = _check_rejected(rejected, len(measurements))
     names = () if solve_for is None else ((solve_for,) if isinstance(solve_for, str) else tuple(solve_for))
     if opts.area_to_mass == "auto":
         from cistrack.least_squares.area_to_mass import fit_area_to_mass_auto
 
         def fit(start: np.ndarray, options: FitOptions) -> FitResult:
             return fit_orbit(dynamics, sensor, measurements, start, t0, prior=prior, options=options,
-                             solve_for=names or None, rejected=rejected)
+                             solve_for=names or None)
 
         return fit_area_to_mass_auto(fit, dynamics, measurements, x, options=opts)
     if opts.area_to_mass == "solve":
         from cistrack.least_squares.area_to_mass import forced_decision
 
         names = names if AREA_TO_MASS in names else names + (AREA_TO_MASS,)
-        return forced_decision(_fit(dynamics, sensor, measurements, _Start(x, t0, pri, first_out), opts,
-                                    _solve_for(dynamics, names)))
-    return _fit(dynamics, sensor, measurements, _Start(x, t0, pri, first_out), opts, _solve_for(dynamics, names))
+        return forced_decision(_fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names)))
+    return _fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names))
 
 
-class _Start(NamedTuple):
-    """Where a fit starts: the state (6,) LU, VU at the epoch ``t0`` (TU), the prior (mean,
-    inverse covariance) or None, and the rows left out of the first pass (K,) bool or None."""
-
-    x: np.ndarray
-    t0: float
-    pri: tuple[np.ndarray, np.ndarray] | None
-    first_out: np.ndarray | None
-
-
-def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, start: _Start, opts: FitOptions,
-         params: SolveFor | None) -> FitResult:
-    """:func:`fit_orbit` on checked inputs: the unknowns are the state ``start.x`` (6,) and ``params``."""
-    x, t0, pri, first_out = start
+def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, x: np.ndarray, t0: float,
+         pri: tuple[np.ndarray, np.ndarray] | None, opts: FitOptions, params: SolveFor | None) -> FitResult:
+    """:func:`fit_orbit` on checked inputs: the unknowns are the state ``x`` (6,) and ``params``."""
     model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
     if params is not None:
         x = np.concatenate([x, params.initial()])
     prob = _problem(dynamics, model, x, t0, pri, params)
     say: list[str] = []
-    p = _fit_passes(prob, x, opts, say, first_out)
+    p = _fit_passes(prob, x, opts, say)
     used = ~p.rejected
     w, states, n = _at_estimate(prob, p.x, used)
     obs = observability(_state_information(n))

@@ -147,8 +147,6 @@ class BurnArc:
     options : FitOptions or None   of each least-squares fit
     prior : (mean (6,), covariance (6, 6)) or None   Gaussian prior on the state at the fits'
                                    epoch, LU, VU
-    rejected : (K,) bool or None   observations each fit leaves out of its first pass (the
-                                   ballistic fit's outliers; later passes may readmit them)
     """
 
     dynamics: Dynamics
@@ -156,7 +154,6 @@ class BurnArc:
     measurements: MeasurementSet
     options: FitOptions | None = None
     prior: Prior = None
-    rejected: np.ndarray | None = None
 
     @property
     def use_range(self) -> bool:
@@ -191,7 +188,7 @@ def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float]) -> Impu
     with warnings.catch_warnings():  # a trial burn time may leave a direction weak: its fit's messages say so
         warnings.simplefilter("ignore", UnobservableWarning)
         fit = fit_orbit(impulsive, arc.sensor, arc.measurements, np.asarray(state, dtype=float), t0,
-                        options=arc.options, solve_for=names, prior=arc.prior, rejected=arc.rejected)
+                        options=arc.options, solve_for=names, prior=arc.prior)
     cov = np.asarray(fit.full_covariance, dtype=float)
     burns = [BurnEstimate(t, np.asarray(fit.parameters[3 * k:3 * k + 3], dtype=float),
                           cov[6 + 3 * k:9 + 3 * k, 6 + 3 * k:9 + 3 * k]) for k, t in enumerate(ts)]
@@ -376,11 +373,8 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
     there) and gives its one sigma (Delta cost = 1; ``t_sigma`` when the profile is not convex);
     their delta-v give g = d dv / d t_b, and the covariance becomes C + g g^T sigma_t^2. A vertex
     more than two steps away (extrapolated) that lowers the cost becomes the middle of three new
-    points, and so does the lower side point where the three are not convex and the cost falls
-    that way, each move lowering the cost by more than :data:`MOVE_DROP`, at most
-    :data:`TIME_MOVES` times: on a survey set of an Earth orbit one vertex
-    step had stopped 6.9 sigmas short of the profile's minimum, where the true burn time lay; on
-    one of an NRHO a concave triple had kept the time 4.5 steps from it (time z -6.7).
+    points, at most :data:`TIME_MOVES` times: on a survey set of an Earth orbit, one such
+    step had stopped 6.9 sigmas short of the profile's minimum, where the true burn time lay.
     Raises :class:`FitError` when ``bounds`` leave no room for the two fits (the time's uncertainty
     cannot be measured: the burn is returned with none, t_sigma 0, never silently)."""
     lo, hi = bounds if bounds is not None else (-np.inf, np.inf)
@@ -389,23 +383,16 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
         raise FitError(f"with_time_uncertainty: the interval [{lo:.5f}, {hi:.5f}] TU leaves no room for the "
                        f"burn time's profile (step {h:.2e} TU): its uncertainty cannot be measured")
     c0 = capped_cost(burn.fit, arc.prior)
-    for move in range(TIME_MOVES + 1):
-        ts, (f_a, f_b), (c_a, c_b), sigma, vertex = _time_profile(arc, burn, c0, known,
-                                                                  _two_sides(burn.searched.t, h, lo, hi), float(t_sigma))
-        if move == TIME_MOVES:
-            break
-        if vertex is None and min(c_a, c_b) < c0 - MOVE_DROP:
-            burn, c0 = (f_a, c_a) if c_a < c_b else (f_b, c_b)   # not convex, falling: a step down
-            continue
-        vertex = burn.searched.t if vertex is None else vertex
-        if not (abs(vertex - burn.searched.t) > 2.0 * h and lo <= vertex <= hi
-                and _two_sides(vertex, h, lo, hi) is not None):
+    for _ in range(TIME_MOVES):
+        ts, (f_a, f_b), sigma, vertex = _time_profile(arc, burn, c0, known, _two_sides(burn.searched.t, h, lo, hi),
+                                                      float(t_sigma))
+        far = abs(vertex - burn.searched.t) > 2.0 * h
+        if not (far and lo <= vertex <= hi and _two_sides(vertex, h, lo, hi) is not None):
             break
         c_v, f_v = _fit_at(arc, burn, vertex, known)
-        if not c_v < c0 - MOVE_DROP:
+        if not c_v < c0:
             break
         burn, c0 = f_v, c_v
-    vertex = burn.searched.t if vertex is None else vertex
     best = burn
     if abs(vertex - burn.searched.t) >= 0.5 * h and lo <= vertex <= hi:
         c_v, f_v = _fit_at(arc, burn, vertex, known)
@@ -419,20 +406,16 @@ def with_time_uncertainty(arc: BurnArc, burn: ImpulseFit, t_sigma: float, *, kno
 
 TIME_MOVES = 8
 """At most this many moves of the burn time to an extrapolated vertex (:func:`with_time_uncertainty`)."""
-MOVE_DROP = 1.0
-"""Such a move is made only when it lowers the capped cost by more than this (one sigma of the
-time's profile): on a profile flat to 0.1 across its points (a 0.3 m/s burn at a gap's end), steps
-down its noise had moved the time 3 sigmas away from where it was, and from the truth."""
 
 
 def _time_profile(arc: BurnArc, burn: ImpulseFit, c0: float, known: Sequence[float],
                   ts: tuple[float, float], fallback: float):
-    """(``ts``, their fits, their costs, sigma, vertex or None where not convex) of the parabola through ``burn``'s capped cost ``c0``
+    """(``ts``, their fits, sigma, vertex) of the parabola through ``burn``'s capped cost ``c0``
     and the fits at the two times ``ts`` (:func:`_two_sides` of its time and a step)."""
     (c_a, f_a), (c_b, f_b) = (_fit_at(arc, burn, float(t), known) for t in ts)
     pts = sorted([(ts[0], c_a), (burn.searched.t, c0), (ts[1], c_b)])
-    sigma, vertex, convex = _parabola(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), fallback)
-    return ts, (f_a, f_b), (c_a, c_b), sigma, (vertex if convex else None)
+    sigma, vertex = _parabola(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), fallback)
+    return ts, (f_a, f_b), sigma, vertex
 
 
 def _two_sides(t: float, h: float, lo: float, hi: float) -> tuple[float, float] | None:
@@ -447,11 +430,11 @@ def _two_sides(t: float, h: float, lo: float, hi: float) -> tuple[float, float] 
     return None
 
 
-def _parabola(t: np.ndarray, c: np.ndarray, fallback: float) -> tuple[float, float, bool]:
-    """(one sigma (Delta cost = 1), vertex, True) of the parabola through three (t, cost) points;
-    (``fallback``, the middle point, False) when it is not convex."""
+def _parabola(t: np.ndarray, c: np.ndarray, fallback: float) -> tuple[float, float]:
+    """(one sigma (Delta cost = 1), vertex) of the parabola through three (t, cost) points;
+    (``fallback``, the middle point) when it is not convex."""
     f01, f12 = (c[1] - c[0]) / (t[1] - t[0]), (c[2] - c[1]) / (t[2] - t[1])
     a = (f12 - f01) / (t[2] - t[0])  # Newton's form: c0 + f01 (t - t0) + a (t - t0)(t - t1)
     if not a > 0:
-        return fallback, float(t[1]), False
-    return float(1.0 / np.sqrt(a)), float(0.5 * (t[0] + t[1]) - f01 / (2.0 * a)), True
+        return fallback, float(t[1])
+    return float(1.0 / np.sqrt(a)), float(0.5 * (t[0] + t[1]) - f01 / (2.0 * a))

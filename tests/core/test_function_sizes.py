@@ -39,9 +39,6 @@ EXCEPTIONS: dict[str, str] = {
     "core/runs/export.py::export_run": "the Python twin of `cistrack export` on a run: one argument per "
                                        "option of the command (path is --out), as docs/export.md shows them, "
                                        "with the registry, the stage log and the words its refusals use",
-    "core/least_squares/differential_correction.py::fit_orbit": "the public least squares: the problem "
-        "(dynamics, sensor, measurements, start state and epoch) and four keyword-only choices, each "
-        "documented (prior, options, solve_for, rejected)",
 }
 
 

@@ -115,25 +115,3 @@ def test_an_allowed_time_whose_fit_costs_c_more_lies_max_2_sqrt_c_sigmas_away(co
     assert m == pytest.approx(sigmas_away)
     assert w.t_sigma == pytest.approx(0.3 / sigmas_away) and w.widened
     assert w.covariance_ms2[0, 0] == pytest.approx(1e-4 + (0.3 / sigmas_away) ** 2)
-
-
-def _as_time_order(fit, mask):
-    order = np.argsort(fit.residuals.times, kind="stable")
-    return np.asarray(mask)[order]
-
-
-def test_isolated_rejections_are_left_out_of_every_burn_fits_first_pass(clean_fit):
-    from cistrack.least_squares.burn_search import first_pass_outliers
-
-    n = len(clean_fit.residuals.rejected)
-    out = first_pass_outliers(_with_rejected(clean_fit, np.array([5, n // 2, n - 1])))
-    assert np.flatnonzero(_as_time_order(clean_fit, out)).tolist() == [5, n // 2, n - 1]
-
-
-def test_a_block_of_rejections_that_ends_the_arc_is_not_left_out_it_is_the_far_side_of_a_burn(clean_fit):
-    from cistrack.least_squares.burn_search import BLOCK_MIN, first_pass_outliers
-
-    n = len(clean_fit.residuals.rejected)
-    out = first_pass_outliers(_with_rejected(clean_fit, np.r_[np.arange(0, BLOCK_MIN), [n // 2]]))
-    assert np.flatnonzero(_as_time_order(clean_fit, out)).tolist() == [n // 2]
-    assert first_pass_outliers(_with_rejected(clean_fit, np.arange(n - BLOCK_MIN, n))) is None

@@ -141,29 +141,3 @@ def test_an_iod_that_finds_no_orbit_says_what_it_tried_in_words(tmp_path, capsys
                  "measurements.reader.sites={809={latitude_deg=0,longitude_deg=0,height_m=0}}"]) == 3
     err = capsys.readouterr().err
     assert "8 tried: tracklet 1 scored on 2, 3, 4:" in err and "{'seed'" not in err
-
-
-def test_observations_left_out_of_the_first_pass_are_not_in_a_fit_without_rejection():
-    """Without outlier rejection there is one pass: the fit with rows left out of it is the fit
-    of the other rows (a linear problem, so both are the exact least squares)."""
-    times = np.linspace(-1.0, 1.0, 8)
-    sen = LinearSensor()
-    ms = sen.simulate(np.zeros((8, 6)), times, np.random.default_rng(3))
-    ms = MeasurementSet(times, ms.values, ms.sigmas, ms.names)
-    ms.values[2] += 1e-3                                   # a gross outlier (1,000 sigma)
-    out = np.zeros(8, dtype=bool)
-    out[2] = True
-    opts = FitOptions(reject_outliers=False)
-    res = fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0, options=opts, rejected=out)
-    ref = fit_orbit(FreeParticle(), sen, ms.subset(~out), np.zeros(6), 0.0, options=opts)
-    np.testing.assert_allclose(res.state, ref.state, rtol=0, atol=1e-12)
-    assert res.n_rejected == 1 and bool(res.residuals.rejected[2])
-
-
-def test_a_first_pass_mask_of_the_wrong_length_is_refused_naming_it():
-    times = np.linspace(-1.0, 1.0, 8)
-    sen = LinearSensor()
-    ms = sen.simulate(np.zeros((8, 6)), times, np.random.default_rng(3))
-    with pytest.raises(StateError, match="rejected must be 8 true/false values"):
-        fit_orbit(FreeParticle(), sen, MeasurementSet(times, ms.values, ms.sigmas, ms.names), np.zeros(6), 0.0,
-                  rejected=np.zeros(7, dtype=bool))
