@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from cistrack import units
-from cistrack.least_squares.burn_search import MAX_BURN_MS  # the largest burn a fit reports, m/s
 from cistrack.errors import ConfigError
+from cistrack.least_squares.burn_search import MAX_BURN_MS  # the largest burn a fit reports, m/s
 
 __all__ = ["check_orbit_fields", "MAX_EPOCH_TU", "MAX_DISTANCE_KM", "MAX_SPEED_KMS"]
 
@@ -33,7 +33,6 @@ from the Moon's distance reaches about 11)."""
 MAX_EPOCH_TU = 4.0e3
 """The largest |epoch_tu| accepted (about 47 years from the scenario's epoch: a fit's epoch lies in
 its arc, and its exports' frames need the DE421 ephemeris, 1899-2053)."""
-
 
 _NUMBERS = ("rms", "chi2", "condition_number")
 _COUNTS = ("n_used", "n_rejected", "iterations")

@@ -10,7 +10,6 @@ words, with the tracklet's motion and admissible region.
 """
 from __future__ import annotations
 
-
 __all__ = ["summary_lines", "short_lines"]
 
 

@@ -642,17 +642,15 @@ def _follow_line(one: ObjectFit, job: "_Job") -> None:
                                                          else f"to +-{sigmas:g} sigma"))
     with reported_to(job.log):
         one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, sigmas)
-    if sigmas is None and job.choices.prior == "none" and not getattr(one, "maneuvers", None):
-        with reported_to(job.log):
-            better = better_solution(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.lov, opts)
+        better = (better_solution(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.lov, opts)
+                  if sigmas is None and job.choices.prior == "none" and not getattr(one, "maneuvers", None) else None)
         if better is not None:
             job.say(f"{one.designation}: {better.messages[-1]}")
             one.result = better
             _refuse_not_cislunar(one)
             add_findings(one, job.registry, job.say)
             _note_rejected_epoch(one)
-            with reported_to(job.log):
-                one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
+            one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
     _horizon_along_line(one)
 
 

@@ -291,7 +291,7 @@ class TrackletRangingIOD(IODMethod):
         return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
 
     def _seed_trials(self, atts: list[Attributable], order: list[int]):
-        """(options, seed, scoring tracklets) in the order :meth:`_first_seed` tries them: the first
+        """(options, seed, scoring tracklets, whether only the near ones) in the order :meth:`_first_seed` tries them: the first
         :attr:`seeds` seeds with :data:`_SEED_OPTIONS`, then with :data:`_PATIENT_OPTIONS`, then
         those whose scoring tracklets include one beyond :data:`NEAR_DAYS`, scored on the nearer
         ones alone (:data:`_PATIENT_OPTIONS`). A grid propagated over 11 days to a survey's fourth
@@ -299,13 +299,14 @@ class TrackletRangingIOD(IODMethod):
         days on: 8 seeds, 48 fits, none converged); the two nearer tracklets gave it, and the
         extension over the arc took the far one."""
         seeds = order[:self.seeds]
+        scoring = {k: self._scoring(atts, k) for k in seeds}
         for options in (_SEED_OPTIONS, _PATIENT_OPTIONS):
             for k in seeds:
-                yield options, k, self._scoring(atts, k)
+                yield options, k, scoring[k], False
         for k in seeds:
             near = self._scoring(atts, k, near_only=True)
-            if near and near != self._scoring(atts, k):
-                yield _PATIENT_OPTIONS, k, near
+            if near and near != scoring[k]:
+                yield _PATIENT_OPTIONS, k, near, True
 
     def _first_seed(self, dyn, sensor, ms, atts, order) -> tuple[int, FitResult | None, np.ndarray, dict, list]:
         """(seed, fit, rows, its record, every record) of the first seed tracklet whose ranging gives a
@@ -316,11 +317,11 @@ class TrackletRangingIOD(IODMethod):
         residuals 57 times the noise, 139,000 km from the truth, where the next seed's fit lay 5 km off."""
         records: list[dict] = []
         fallback: tuple = (-1, None, np.zeros(0, dtype=int), {})
-        for options, k, score_with in self._seed_trials(atts, order):
+        for options, k, score_with, near_only in self._seed_trials(atts, order):
             fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k, options, score_with)
             if options is _PATIENT_OPTIONS:
                 rec["max_iterations"] = options.max_iterations
-            if score_with != self._scoring(atts, k):
+            if near_only:
                 rec["near_only"] = True
             records.append(rec)
             if fit is None or not fit.converged:

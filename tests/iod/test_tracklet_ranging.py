@@ -259,11 +259,12 @@ def test_seeds_whose_scoring_reaches_past_near_days_are_tried_last_on_the_nearer
     atts = [attributable(both, sensor, np.arange(4 * i, 4 * i + 4)) for i in range(4)]
     iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn)
     trials = list(iod._seed_trials(atts, [0, 1, 2, 3]))
-    assert [(o, k) for o, k, _ in trials[:8]] == [(tr._SEED_OPTIONS, k) for k in range(4)] + [
+    assert [(o, k) for o, k, _w, _n in trials[:8]] == [(tr._SEED_OPTIONS, k) for k in range(4)] + [
         (tr._PATIENT_OPTIONS, k) for k in range(4)]
-    assert [w for _o, _k, w in trials[:4]] == [[1, 2, 3], [2, 3, 0], [3, 1, 0], [2, 1, 0]]
-    assert trials[8:] == [(tr._PATIENT_OPTIONS, 0, [1, 2]), (tr._PATIENT_OPTIONS, 1, [2, 0]),
-                          (tr._PATIENT_OPTIONS, 2, [1, 0])]
+    assert [w for _o, _k, w, _n in trials[:4]] == [[1, 2, 3], [2, 3, 0], [3, 1, 0], [2, 1, 0]]
+    assert [(o, k, w) for o, k, w, near in trials[8:] if near] == [
+        (tr._PATIENT_OPTIONS, 0, [1, 2]), (tr._PATIENT_OPTIONS, 1, [2, 0]), (tr._PATIENT_OPTIONS, 2, [1, 0])]
+    assert not any(near for *_x, near in trials[:8]) and len(trials) == 11
 
 
 def test_the_extension_never_keeps_a_step_far_above_the_noise():
