@@ -1,4 +1,5 @@
-"""The ``cistrack`` executable: BLAS libraries loaded with one thread, then the command.
+"""The ``cistrack`` executable: BLAS libraries loaded with one thread, the collector paused while
+its modules load, then the command.
 
 Every run does its linear algebra with one BLAS thread (``blas_threads``, default 1, of
 :func:`cistrack.runs.pipeline.run_scenario`: many small matrices), and a least-squares fit's
@@ -11,9 +12,18 @@ s against 0.282 s). So before anything imports numpy this module sets ``$OPENBLA
 ``$MKL_NUM_THREADS`` and ``$BLIS_NUM_THREADS`` to 1 where they are unset; a variable the user set
 is left as it is. Worker processes of a study inherit them. Importing :mod:`cistrack.cli` from
 Python changes nothing in the process's environment: only the executable does this.
+
+The cyclic garbage collector is paused while the command's modules load, and the objects they
+made are then frozen (:func:`gc.freeze`) before it resumes: module-level objects live as long as
+the process, yet every full collection walked them again. In a ``cistrack run example-1`` process
+the collector's passes took 0.084 s (``gc.callbacks``: about 290 collections, one full one of
+0.041 s early in the run), 0.046 s with this; the whole process's CPU fell by about 6 %. The
+command itself runs with the collector on; a frozen object is never collected, which for the
+modules' own objects changes nothing.
 """
 from __future__ import annotations
 
+import gc
 import os
 import sys
 
@@ -29,9 +39,13 @@ def console_main() -> None:
     for name in BLAS_THREAD_VARIABLES:
         if not os.environ.get(name, "").strip():
             os.environ[name] = "1"
+    gc.disable()
     try:
         from cistrack.cli.main import console_main as command
     except KeyboardInterrupt:  # Ctrl-C while the command is still loading (before its handlers exist)
         sys.stderr.write("cistrack: interrupted (SIGINT) while starting; nothing was done\n")
         raise SystemExit(130) from None
+    finally:
+        gc.freeze()
+        gc.enable()
     command()
