@@ -45,7 +45,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "end_night_bias", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
+__all__ = ["suspicion", "end_night_bias", "end_night_rejected", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
@@ -97,8 +97,9 @@ def _end_block(rejected: np.ndarray) -> int:
 
 def suspicion(result: FitResult) -> str:
     """Why the ballistic ``result`` looks like an object that maneuvered, in words ("" when it
-    does not): a contiguous block of rejections at the start or the end of the arc, a large RMS,
-    or no convergence.
+    does not): a contiguous block of rejections at the start or the end of the arc, a first or
+    last night rejected whole (:func:`end_night_rejected`) or off the fit together
+    (:func:`end_night_bias`), a large RMS, or no convergence.
 
     The block must reach an end of the arc: after a burn every later observation is off the
     ballistic orbit, so a fit that follows one side rejects the other side to the arc's end. A
@@ -110,7 +111,7 @@ def suspicion(result: FitResult) -> str:
     if block >= max(BLOCK_MIN, BLOCK_SHARE * rejected.size):
         return (f"it rejects a contiguous block of {block} of {rejected.size} observations "
                 f"({100.0 * block / rejected.size:.0f} %)")
-    bias = end_night_bias(result)
+    bias = end_night_rejected(result) or end_night_bias(result)
     if bias:
         return bias
     if result.rms > MAX_RMS:
@@ -127,6 +128,31 @@ END_NIGHT_GAP_HOURS = 6.0
 """Observations closer than this belong to one night (:func:`end_night_bias`)."""
 
 
+def _end_nights(times: np.ndarray) -> list[tuple[str, slice]]:
+    """The first and the last night of the time-sorted ``times`` (TU) as slices, observations closer
+    than :data:`END_NIGHT_GAP_HOURS` making one night; none when the arc is one night."""
+    cuts = np.flatnonzero(np.diff(times) >= units.hours_to_tu(END_NIGHT_GAP_HOURS)) + 1
+    if cuts.size == 0:
+        return []
+    return [("first", slice(0, int(cuts[0]))), ("last", slice(int(cuts[-1]), times.size))]
+
+
+def end_night_rejected(result: FitResult) -> str:
+    """Why ``result`` rejects the whole first or last night of its arc, in words ("" when it does
+    not): every observation of that night, at least two. Independent outliers take a whole night
+    only by chance; a burn before the last night (or after the first) takes it together. Too short a
+    night for :data:`BLOCK_MIN` or :func:`end_night_bias` had hidden that: a survey fit rejected
+    its last tracklet, two exposures after a 10 m/s burn, and reported "converged" with its state
+    propagated two days past the last observation it used, the truth 10^9 in Mahalanobis^2 away."""
+    order = np.argsort(result.residuals.times, kind="stable")
+    t = np.asarray(result.residuals.times, dtype=float)[order]
+    rejected = np.asarray(result.residuals.rejected, dtype=bool)[order]
+    for name, part in _end_nights(t):
+        if rejected[part].size >= 2 and rejected[part].all():
+            return f"it rejects all {rejected[part].size} observations of its {name} night"
+    return ""
+
+
 def end_night_bias(result: FitResult) -> str:
     """Why the first or the last night of ``result``'s arc sits off the fit together, in words (""
     when neither does): the median normalised residual of its observations (used or rejected, at
@@ -140,10 +166,7 @@ def end_night_bias(result: FitResult) -> str:
     z = np.asarray(result.residuals.normalised, dtype=float)
     order = np.argsort(t, kind="stable")
     t, z = t[order], z[order]
-    cuts = np.flatnonzero(np.diff(t) >= units.hours_to_tu(END_NIGHT_GAP_HOURS)) + 1
-    if cuts.size == 0:
-        return ""
-    for name, part in (("first", slice(0, cuts[0])), ("last", slice(cuts[-1], t.size))):
+    for name, part in _end_nights(t):
         zk = z[part]
         zk = zk[np.all(np.isfinite(zk), axis=1)]
         if len(zk) >= 3:
