@@ -70,7 +70,7 @@ def add_maneuvers(one, say) -> None:
     residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
     explains, or that is still suspect with the burns found, is not reported as converged (and the
     burns are not reported): its messages say why."""
-    from cistrack.least_squares.burn_search import flown, search_maneuvers, suspicion
+    from cistrack.least_squares.burn_search import burn_fit_options, flown, search_maneuvers, suspicion
 
     r = one.result
     if r is None or one.run is None:
@@ -88,7 +88,7 @@ def add_maneuvers(one, say) -> None:
             "was searched",))
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
-    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, one.choices.options, say)
+    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, burn_fit_options(one.choices.options), say)
     if not found.burns:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
             f"not a clean fit: it looks like an object that maneuvered ({why}), and no impulsive burn in "
@@ -112,10 +112,10 @@ def add_maneuvers(one, say) -> None:
 
 def _times_allowed(ctx, one, found):
     """:func:`~cistrack.least_squares.burn_search.times_allowed` on the search's arc."""
-    from cistrack.least_squares.burn_search import times_allowed
+    from cistrack.least_squares.burn_search import burn_fit_options, times_allowed
     from cistrack.least_squares.impulse_fit import BurnArc
 
-    opts = replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off")
+    opts = burn_fit_options(replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off"))
     return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior), found)
 
 
@@ -311,9 +311,10 @@ def _plain(found, k: int) -> np.ndarray:
 
 def fit_options(fit):
     """FitOptions for a refit of ``fit``: the area-to-mass ratio estimated when ``fit`` estimated it."""
+    from cistrack.least_squares.burn_search import burn_fit_options
     from cistrack.least_squares.options import FitOptions
 
-    return FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off")
+    return burn_fit_options(FitOptions(area_to_mass="solve" if "area_to_mass_m2_kg" in fit.parameter_names else "off"))
 
 
 def _without_burns(fit):
