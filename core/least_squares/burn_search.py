@@ -71,12 +71,6 @@ right 1 m/s burn (heo-s198: cost 41,384 below the ballistic fit's, weighted RMS 
 30 iterations not converged along the ill-conditioned valley of state and delta-v, and the burn
 was not kept. A fit that converges within 30 is the same fit."""
 
-
-def burn_fit_options(options: FitOptions) -> FitOptions:
-    """``options`` with at least :data:`BURN_ITERATIONS` iterations per pass."""
-    return replace(options, max_iterations=max(options.max_iterations, BURN_ITERATIONS))
-
-
 MAX_BURN_MS = 1000.0
 """The largest burn the search keeps, m/s (a lunar orbit insertion's size): a larger one fitted
 between observations of a cislunar object explains outliers or another object, not a maneuver."""
@@ -97,6 +91,11 @@ RIVAL_SCREEN_SLACK = 3.0
 """:func:`rival_time` fits in full the candidate times whose linearised screen cost lies within
 :data:`RIVAL_COST` plus this of the screen's best (the screen about the ballistic fit is within a
 few units of the full fits' costs near a 1 m/s burn)."""
+
+
+def burn_fit_options(options: FitOptions) -> FitOptions:
+    """``options`` with at least :data:`BURN_ITERATIONS` iterations per pass."""
+    return replace(options, max_iterations=max(options.max_iterations, BURN_ITERATIONS))
 
 
 def _end_block(rejected: np.ndarray) -> int:
