@@ -12,6 +12,7 @@ import numpy as np
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.model.belief import Belief
 from cistrack.results.step_table import is_table_step
+from cistrack.numerics.special_functions import chi2_cdf
 from cistrack.units import LU_KM, VU_KMS
 
 __all__ = ["step_metrics", "entropy", "nees", "hdr_level", "LOG_JACOBIAN_KM", "BeliefMetric", "PassIndexMetric", "pass_index"]
@@ -97,9 +98,7 @@ def hdr_level(belief: Belief, lp_truth: float, lp_samples: np.ndarray, nees_trut
     ``lp_truth`` and ``lp_samples`` (N,) are log densities under ``belief.mixture``."""
     mix = belief.mixture
     if mix.n_components == 1:
-        from scipy.special import gammainc  # on use: importing scipy.special costs ~0.1-0.3 s
-
-        return float(gammainc(0.5 * mix.dim, 0.5 * max(nees_truth, 0.0)))
+        return chi2_cdf(max(nees_truth, 0.0), mix.dim)
     w = belief.samples.weights
     above = (lp_samples > lp_truth).astype(float)
     return float(above.mean() if w is None else w @ above)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cistrack.numerics.special_functions import logsumexp
 from cistrack.model.mixture_density import _by_rows, _row_logsumexp, _whitened_logpdf, whitened_kernel  # noqa: F401
 
 __all__ = ["ParticleCloud", "GaussianMixture", "Belief", "sample_covariance", "regularize_covariance", "read_only_view"]
@@ -246,8 +247,6 @@ class GaussianMixture:
         """Posterior component probabilities of each point, (N, M)."""
         with np.errstate(divide="ignore"):
             a = self.component_logpdf(x) + np.log(self.weights)
-        from scipy.special import logsumexp  # imported on use: scipy.special is slow to import
-
         return np.exp(a - logsumexp(a, axis=1, keepdims=True))
 
     def sample(self, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

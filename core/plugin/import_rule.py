@@ -23,7 +23,7 @@ __all__ = ["ALLOWED", "TESTS_ALSO", "PLUGINS", "plugin_family", "imports_in_sour
 
 ALLOWED: tuple[str, ...] = (
     "cistrack.api", "cistrack.errors", "cistrack.units", "cistrack.lazy", "cistrack.threads",
-    "cistrack.model", "cistrack.interfaces", "cistrack.propagation", "cistrack.astro",
+    "cistrack.numerics", "cistrack.model", "cistrack.interfaces", "cistrack.propagation", "cistrack.astro",
     "cistrack.least_squares",
 )
 """The packages and modules (with everything below them) any plugin module may import."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from cistrack.errors import FilterError
+from cistrack.numerics.special_functions import logsumexp
 
 __all__ = ["normalize_log_weights", "effective_sample_size", "systematic_resample"]
 
@@ -17,9 +18,7 @@ def normalize_log_weights(logw: np.ndarray, who: str) -> tuple[np.ndarray, float
     logw = np.asarray(logw, dtype=float)
     if np.any(np.isnan(logw)) or not np.any(np.isfinite(logw)):
         raise FilterError(f"filter '{who}': every weight is zero or NaN; the belief cannot continue")
-    from scipy.special import logsumexp  # on use: scipy.special is slow to import
-
-    total = float(logsumexp(logw))
+    total = logsumexp(logw)
     return logw - total, total
 
 

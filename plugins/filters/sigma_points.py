@@ -7,13 +7,15 @@ a dozen lines of arithmetic. ``tests/filters/test_sigma_points.py`` checks them 
 filterpy's bit for bit.
 
 With lambda = alpha^2 (n + kappa) - n and U the upper Cholesky factor of (n + lambda) P
-(``scipy.linalg.cholesky``): the 2n + 1 points are x, x + U[k], x - U[k] (rows k of U); the
-mean weights are lambda / (n + lambda) for x and 1 / (2 (n + lambda)) for the others, and the
+(``scipy.linalg.cholesky``'s numbers, from :func:`cistrack.numerics.cholesky.upper_cholesky`):
+the 2n + 1 points are x, x + U[k], x - U[k] (rows k of U); the mean weights are lambda / (n + lambda) for x and 1 / (2 (n + lambda)) for the others, and the
 covariance weights add 1 - alpha^2 + beta to the first.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from cistrack.numerics.cholesky import upper_cholesky
 
 __all__ = ["MerweSigmaPoints", "merwe_points"]
 
@@ -39,22 +41,18 @@ class MerweSigmaPoints:
 
     def sigma_points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """Points (2n+1, n) of mean ``x`` (n,) and covariance ``P`` (n, n)."""
-        from scipy.linalg import cholesky  # already loaded by numba's BLAS bindings in a run
-
         n = self.n
         x = np.asarray(x, dtype=float).reshape(n)
         lam = self.alpha ** 2 * (n + self.kappa) - n
-        return merwe_points(x, cholesky((lam + n) * np.atleast_2d(P)))
+        return merwe_points(x, upper_cholesky((lam + n) * np.atleast_2d(P)))
 
     def sigma_points_batch(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """Points (M, 2n+1, n) of M Gaussians of means ``x`` (M, n) and covariances ``P`` (M, n, n):
         each as :meth:`sigma_points` gives it."""
-        from scipy.linalg import cholesky
-
         n = self.n
         x = np.asarray(x, dtype=float).reshape(-1, n)
         lam = self.alpha ** 2 * (n + self.kappa) - n
-        U = cholesky((lam + n) * np.asarray(P, dtype=float).reshape(-1, n, n))
+        U = upper_cholesky((lam + n) * np.asarray(P, dtype=float).reshape(-1, n, n))
         sigmas = np.empty((x.shape[0], 2 * n + 1, n))
         sigmas[:, 0] = x
         sigmas[:, 1:n + 1] = np.subtract(x[:, None, :], -U)

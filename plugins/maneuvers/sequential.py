@@ -37,6 +37,7 @@ from cistrack.errors import FilterError, MeasurementError, ParameterError
 from cistrack.interfaces.component import check_int, check_range
 from cistrack.interfaces.maneuvers import Detection, ManeuverDetector
 from cistrack.model.measurement import Measurement, StackedMeasurement
+from cistrack.numerics.special_functions import gamma_q
 
 __all__ = ["SequentialDetector", "chi2_log10_sf", "measurement_group", "LOOKBACK_WINDOWS"]
 
@@ -53,22 +54,13 @@ def chi2_log10_sf(x: float, dof: float) -> float:
     """log10 of the chi-square tail probability P(X >= x), X ~ chi2(dof), finite even where the
     probability underflows (then from the leading term of the upper incomplete gamma function,
     Gamma(s, y) ~ y^(s-1) e^-y)."""
-    from scipy.special import gammaincc, gammaln  # imported on use: scipy.special is slow to import
-
     if not x > 0:
         return 0.0
     s, y = 0.5 * dof, 0.5 * x
-    p = float(gammaincc(s, y))
+    p = gamma_q(s, y)
     if p > 1e-290:
         return math.log10(p)
-    return (-y + (s - 1.0) * math.log(y) - float(gammaln(s))) / _LN10
-
-
-def chi2_upper_quantile(alpha: float, dof: float) -> float:
-    """x with P(chi2(dof) >= x) = alpha, accurate for tiny alpha (no 1 - alpha rounding)."""
-    from scipy.special import gammainccinv
-
-    return float(2.0 * gammainccinv(0.5 * dof, alpha))
+    return (-y + (s - 1.0) * math.log(y) - math.lgamma(s)) / _LN10
 
 
 def measurement_group(measurements) -> list[Measurement]:

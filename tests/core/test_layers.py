@@ -18,7 +18,7 @@ from source_imports import CORE, PLUGINS, ROOT, import_statements, module_name, 
 
 #: Lowest first. A module may import its own layer and the layers before it.
 LAYERS: list[tuple[str, ...]] = [
-    ("cistrack.errors", "cistrack.units", "cistrack.lazy", "cistrack.threads", "cistrack._moved", "cistrack.env_flags",
+    ("cistrack.errors", "cistrack.units", "cistrack.lazy", "cistrack.threads", "cistrack.numerics", "cistrack._moved", "cistrack.env_flags",
      "cistrack.interrupts",
      "cistrack.scenarios", "cistrack.data"),  # the last two hold data files only
     ("cistrack.model",),

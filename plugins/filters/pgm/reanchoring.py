@@ -48,6 +48,7 @@ from cistrack.interfaces import Dynamics, Sensor
 from cistrack.interfaces.pgm_steps import ReanchorRun
 from cistrack.model.belief import GaussianMixture
 from cistrack.model.measurement import Measurement, MeasurementSet
+from cistrack.numerics.special_functions import chi2_ppf
 
 from ..measured_components import MeasuredComponents
 from .measurement_sharpness import measurement_quadratic
@@ -113,11 +114,8 @@ class _DifferencedDynamics:
 
 
 def _chi2_limit(dof: int) -> float:
-    """The 99.9 % point of chi-square with ``dof`` degrees of freedom (scipy.special: scipy.stats
-    costs a second to import)."""
-    from scipy.special import gammaincinv
-
-    return float(2.0 * gammaincinv(0.5 * max(dof, 1), 0.999))
+    """The 99.9 % point of chi-square with ``dof`` degrees of freedom (at least 1)."""
+    return chi2_ppf(0.999, max(dof, 1))
 
 
 class Reanchoring(ReanchorRun):
