@@ -217,6 +217,8 @@ def _initial_step(t, y, f0, direction, params, rtol, atol, ytmp, f1, span):
     else:
         h0 = 0.01 * d0 / d1
     h0 = min(h0, span)
+    if not (h0 > 0.0):  # a derivative that overflows (d1 = inf): start small, the error control decides
+        h0 = 1e-6 * span
     for j in range(DIM):
         ytmp[j] = y[j] + direction * h0 * f0[j]
     rhs(t + direction * h0, ytmp, params, f1)

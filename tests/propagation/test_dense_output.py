@@ -94,3 +94,18 @@ def test_times_outside_the_span_are_refused_with_the_span_named():
 def test_more_than_one_state_is_refused():
     with pytest.raises(StateError, match="one state"):
         CR3BP().dense_trajectory(np.stack([NRHO.state, NRHO.state]), 0.0, 0.5)
+
+
+def test_a_state_whose_derivative_overflows_the_step_heuristic_is_integrated():
+    """At 1e144 LU with no velocity the rotating frame's acceleration is ~1e144 LU/TU^2: the
+    starting step's derivative norm overflows, which had left a zero first step and a division
+    by zero. Gravity is nothing there, so the object moves in a straight line in the inertial
+    frame: in the rotating frame x = r (cos t + t sin t), y = r (t cos t - sin t)."""
+    r, t = 2.6e144, 1.0
+    x0 = np.array([r, 0.0, 0.0, 0.0, 0.0, 0.0])
+    expected = r * np.array([np.cos(t) + t * np.sin(t), t * np.cos(t) - np.sin(t)])
+    dyn = CR3BP()
+    ensemble = dyn.propagate(np.stack([x0, NRHO.state]), 0.0, t).states[0]
+    dense = dyn.dense_trajectory(x0, 0.0, t).states(np.array([t]))
+    for got in (ensemble[0, :2], dense[0, :2]):
+        assert np.allclose(got, expected, rtol=1e-9, atol=0.0)
