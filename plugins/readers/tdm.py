@@ -257,13 +257,18 @@ def _segment_comments(path, seg: _Segment) -> tuple[dict[str, Site], tuple, str]
     absent) with ANGLE_1's sigma text."""
     declared: dict[str, Site] = {}
     sig, sig_text = (None, None), ""
+    seen: dict[str, int] = {}  # what each comment declares -> its line
     for text, cl in seg.comments:
-        m = _SITE_RE.match(text)
+        m = _SITE_RE.match(text) or _SIGMA_RE.match(text)
         if m:
+            what = f"cistrack site {m.group(1)}" if m.re is _SITE_RE else "cistrack sigma_arcsec"
+            if what in seen:
+                raise FieldError(path, cl, f"COMMENT {what}", f"given again: line {seen[what]} of this metadata "
+                                 f"block (from line {seg.line}) gives it already; each is given once")
+            seen[what] = cl
+        if m and m.re is _SITE_RE:
             declared[m.group(1)] = _declared_site(path, m, cl)
-            continue
-        m = _SIGMA_RE.match(text)
-        if m:
+        elif m:
             sig, sig_text = _comment_sigmas(path, m, cl)
         elif text.split()[:1] == ["cistrack"]:
             raise FieldError(path, cl, "COMMENT cistrack", f"{show_field(text[:60])} is not one this reader knows: "

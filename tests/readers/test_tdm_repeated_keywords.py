@@ -1,5 +1,5 @@
-"""A TDM metadata keyword given twice in one META block is refused naming both lines (it had
-silently taken the last value)."""
+"""A TDM metadata keyword, or one of cistrack's comments (a sigma, a site), given twice in one
+META block is refused naming both lines (each had silently taken the last value)."""
 from __future__ import annotations
 
 import re
@@ -30,6 +30,17 @@ def test_a_keyword_given_twice_in_one_block_is_refused_naming_both_lines(tmp_pat
                                                rf"line {first} of this metadata block \(from line 4\) gives it already"):
         read_observations(path, EPOCH)
 
+
+@pytest.mark.parametrize("extra, what", [
+    ("COMMENT cistrack sigma_arcsec ANGLE_1=1 ANGLE_2=1\nCOMMENT cistrack sigma_arcsec ANGLE_1=100 ANGLE_2=100\n",
+     "cistrack sigma_arcsec"),
+    ("COMMENT cistrack site S latitude_deg=10 longitude_deg=20 height_m=0\n"
+     "COMMENT cistrack site S latitude_deg=11 longitude_deg=20 height_m=0\n", "cistrack site S")])
+def test_a_cistrack_comment_given_twice_in_one_block_is_refused_naming_both_lines(tmp_path, extra, what):
+    path = _tdm(tmp_path, extra)
+    with pytest.raises(MeasurementError, match=rf"{re.escape(str(path))}, line 10, field COMMENT {what}: given "
+                                               r"again: line 9 of this metadata block \(from line 4\) gives it already"):
+        read_observations(path, EPOCH)
 
 
 def test_a_header_keyword_given_twice_is_refused_naming_both_lines(tmp_path):
