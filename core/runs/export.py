@@ -110,7 +110,10 @@ def export_refusal(run_dir: str | Path) -> str | None:
         return f"it was interrupted or killed before it finished{why}; its estimate stops where it stopped"
     if status != "finished":
         return f"it did not finish (status '{status}'{why}); its estimate stops where the run stopped"
-    verdict = (man.get("summary") or {}).get("verdict") or {}
+    summary = man.get("summary") or {}
+    verdict = summary.get("verdict") or {} if isinstance(summary, dict) else None
+    if not isinstance(verdict, dict):
+        return "its manifest.json's summary or verdict is not a table, so the run's verdict is unknown"
     if verdict.get("kind") == "diverged":
         return "its filter diverged" + (f" ({verdict['reason']})" if verdict.get("reason") else "") + \
             "; the estimate is not a usable orbit"

@@ -102,7 +102,8 @@ def _put(node: dict[str, Any], path: tuple[str, ...], value: Any, item: str,
             _put(old, path + (k,), v, item, given)
         return
     if old is not None and not _same_value(old, value):
-        first = next(given[path[:n]] for n in range(len(path), 0, -1) if path[:n] in given)
+        first = ([given[path[:n]] for n in range(len(path), 0, -1) if path[:n] in given]  # it or a table above
+                 + [v for p, v in given.items() if p[:len(path)] == path])[0]  # a key inside it: a table there
         raise ConfigError(f"--set {_shown(first)} and --set {_shown(item)}: two values for {'.'.join(path)}; "
                           "give one")
     node[key] = value

@@ -1,6 +1,8 @@
 """--set TABLE.KEY=VALUE: parsed as TOML values, merged into tables, validated like a file."""
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from cistrack.errors import ConfigError
@@ -78,6 +80,14 @@ def test_one_key_given_the_same_value_twice_is_taken():
 
 def test_one_number_written_as_an_integer_and_as_a_float_is_one_value():
     assert parse_settings(["duration_days=1", "duration_days=1.0"]) == {"duration_days": 1.0}
+
+
+@pytest.mark.parametrize("items", [["filter.n_particles=300", "filter=5"], ["truth.orbit='x'", "truth=1"]])
+def test_a_table_set_key_by_key_then_given_a_value_is_refused_naming_both(items):
+    first, second = items
+    with pytest.raises(ConfigError, match=rf"--set {re.escape(first)} and --set {re.escape(second)}: two values for "
+                                          rf"{first.split('.')[0]}; give one"):
+        parse_settings(items)
 
 
 def test_true_and_1_are_two_values():

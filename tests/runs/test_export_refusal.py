@@ -81,6 +81,21 @@ def test_a_failed_or_diverged_run_is_refused_unless_force_and_then_the_file_says
     assert len(list(oem.OrbitEphemerisMessage.open(str(out)).segments[0].states)) > 0  # still a valid OEM
 
 
+@pytest.mark.parametrize("summary", ["x", {"verdict": "x"}, [1, 2]])
+def test_a_manifest_whose_summary_or_verdict_is_not_a_table_is_refused_unless_force(runs, tmp_path, summary, capsys):
+    import json
+    import shutil
+
+    d = tmp_path / "edited"
+    shutil.copytree(runs["finished"], d)
+    manifest = json.loads((d / "manifest.json").read_text())
+    (d / "manifest.json").write_text(json.dumps({**manifest, "summary": summary}))
+    assert main(["export", str(d), "--out", str(tmp_path / "x.oem")]) == 2
+    err = capsys.readouterr().err
+    assert "summary or verdict is not a table" in err and "--force" in err and "Traceback" not in err
+    assert main(["export", str(d), "--out", str(tmp_path / "x.oem"), "--force"]) == 0
+
+
 def test_a_running_then_killed_run_is_refused_unless_force(tmp_path, capsys):
     run = tmp_path / "r"
     proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(run), "--quiet",
