@@ -259,12 +259,12 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
 
 
 def _checked_arguments(**given: Any) -> None:
-    """TypeError naming the argument when ``out``, ``log``, ``registry``, ``directory`` or ``study``
-    has a type the API does not take (before anything is read or run)."""
+    """TypeError naming the argument when ``out``, ``log``, ``registry``, ``directory``, ``study``,
+    ``progress`` or ``overwrite`` has a type the API does not take (before anything is read or run)."""
     for name, value in given.items():
-        if name == "progress":
-            if not isinstance(value, bool):
-                raise TypeError(f"progress={value!r}: give True or False")
+        if name in ("progress", "overwrite"):
+            if not isinstance(value, bool):  # "no" would be true
+                raise TypeError(f"{name}={value!r}: give True or False")
         elif name == "registry":
             if value is not None and not isinstance(value, Registry):
                 raise TypeError(f"registry={value!r}: give a cistrack Registry (cistrack.api.default_registry() or "
@@ -313,7 +313,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.runs.observers import checked_observers
 
     observers = checked_observers(observers, "observers")
-    _checked_arguments(out=out, log=log, registry=registry, progress=progress)
+    _checked_arguments(out=out, log=log, registry=registry, progress=progress, overwrite=overwrite)
     reg = registry or default_registry()
     scen = load_scenario(scenario, settings=settings, registry=reg)
     seed = scen.seed if seed is None else check_seed(seed, "seed")
@@ -352,7 +352,7 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     from cistrack.fitting.from_observations import fit_files
     from cistrack.results.earlier_run import PYTHON_WORDS
 
-    _checked_arguments(out=out, log=log, registry=registry, progress=progress)
+    _checked_arguments(out=out, log=log, registry=registry, progress=progress, overwrite=overwrite)
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")

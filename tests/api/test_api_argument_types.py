@@ -27,6 +27,8 @@ import cistrack as ct
     (lambda: ct.fit("ok.psv", registry={}), "registry={}"),
     (lambda: ct.fit("ok.psv", progress="no"), "progress='no'"),
     (lambda: ct.run("quick", progress=1), "progress=1"),
+    (lambda: ct.run("quick", out="somewhere", overwrite="no"), "overwrite='no'"),  # a true string: had replaced
+    (lambda: ct.fit("ok.psv", overwrite="false"), "overwrite='false'"),
 ])
 def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
     with pytest.raises(TypeError, match=argument.replace("[", r"\[").replace("]", r"\]")):
