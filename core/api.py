@@ -448,7 +448,8 @@ def _checked_study_counts(n_seeds: Any, first_seed: Any, workers: Any) -> None:
 
 def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | None = None,
           settings: Mapping[str, Any] | Iterable[str] | None = None, out: str | Path | None = None,
-          workers: int | None = None, progress: bool = False, log: Callable[[str], None] | None = None) -> StudyResult:
+          workers: int | None = None, progress: bool = False, log: Callable[[str], None] | None = None,
+          overwrite: bool = False) -> StudyResult:
     """Run every missing run of a study, as ``cistrack study run`` does, and return its :class:`StudyResult`.
 
     ``study``: a built-in study name (``cistrack scenarios``), a study TOML file or a study folder.
@@ -458,18 +459,20 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     runs already done there are not run again. ``workers``: local processes (default: one per
     core). ``progress``: a progress bar on stderr. ``log``: receives the line ``cistrack study run``
     prints when the study ends (runs completed, already done, failed; the folder). Lost runs
-    raise (none finished) or warn.
+    raise (none finished) or warn. ``overwrite``: run again the finished runs in ``out`` that the
+    study now plans otherwise (another scenario, settings, seed or input file), replacing their
+    results (a ConfigError naming them otherwise, as ``cistrack study run`` without ``--overwrite``).
     """
     from cistrack.evaluation.run_summary import RunSummary
     from cistrack.studies.lost_runs import say_lost_runs
     from cistrack.studies.study import run_study
     from cistrack.studies.study_table import study_rows
 
-    _checked_arguments(study=study, out=out, log=log, progress=progress)
+    _checked_arguments(study=study, out=out, log=log, progress=progress, overwrite=overwrite)
     _checked_study_counts(n_seeds, first_seed, workers)
     items = _setting_items(settings) or None
     res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
-                    first_seed=first_seed, n_seeds=n_seeds)
+                    first_seed=first_seed, n_seeds=n_seeds, overwrite=overwrite)
     if log is not None:
         log(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
             f"{res['failed']} failed -> {res['out_dir']}")

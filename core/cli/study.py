@@ -16,7 +16,7 @@ def cmd_study(args) -> int:
         check_environment()  # before the study's directory: its workers would each fail on it
         res = study.run_study(args.study, out_dir=args.out, workers=args.workers, dask=args.dask,
                               progress=not args.quiet, rerun_dir=args.rerun, settings=args.set,
-                              first_seed=args.first_seed, n_seeds=args.n_seeds)
+                              first_seed=args.first_seed, n_seeds=args.n_seeds, overwrite=args.overwrite)
         if not args.quiet:
             print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
                   f"{res['failed']} failed -> {res['out_dir']}")
@@ -74,6 +74,9 @@ def add_study_parser(subparsers) -> None:
                     help="override a value in every run (after the study's own overrides and variants), "
                          "validated like a scenario file; the default study directory names the settings")
     sr.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    sr.add_argument("--overwrite", action="store_true",
+                    help="run again finished runs the study now plans otherwise (another scenario, settings, seed "
+                         "or input file), replacing their results; refused without it")
     _seed_arguments(sr)
     sr.set_defaults(func=cmd_study)
     srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")

@@ -387,6 +387,8 @@ class StudyOptions:
     rerun_dir : str, Path or None       write one rerun recording per run there, ``<run id>.rrd``
     settings : list of str or None      ``--set`` items applied to every run (see :func:`plan_runs`)
     first_seed, n_seeds : int or None   other seeds than the study file's (see :func:`plan_runs`)
+    overwrite : bool                    run again finished runs the study file now plans otherwise
+                                        (their results replaced); refused without it
     """
 
     workers: int | None = None
@@ -397,6 +399,7 @@ class StudyOptions:
     settings: list[str] | None = None
     first_seed: int | None = None
     n_seeds: int | None = None
+    overwrite: bool = False
 
 
 def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args: Any,
@@ -407,7 +410,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args
 
     ``options`` (a :class:`StudyOptions`), each field of which may also be given as a keyword
     (a keyword wins) or positionally after ``out_dir``: ``workers``, ``dask``, ``executor``,
-    ``progress``, ``rerun_dir``, ``settings``, ``first_seed``, ``n_seeds``.
+    ``progress``, ``rerun_dir``, ``settings``, ``first_seed``, ``n_seeds``, ``overwrite``.
 
     The study directory must be new, empty or this study's own
     (:func:`cistrack.results.output_paths.check_study_dir`), and only one study process at a time
@@ -431,9 +434,11 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args
     check_study_dir(out, name, source, where)
     specs = _with_rerun_paths(specs, opts.rerun_dir)
     with study_lock(out, where):
+        states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
+        if not opts.overwrite:
+            _refuse_replacing(specs, states, out, where)
         _write_study_record(out, where, {"source": source, **data, "name": name, "settings": list(settings or []),
                                          "run_seeds": sorted({sp.seed for sp in specs})})
-        states = {s.run_id: run_state(s.out_dir, s.fingerprint) for s in specs}
         todo = [s for s in specs if states[s.run_id] != "done"]
         _say_rerun(specs, states)
         said = _run_todo(todo, opts, name)
@@ -508,6 +513,17 @@ def _run_todo(todo: list[RunSpec], opts: StudyOptions, name: str) -> dict[str, s
             shutdown(ex, cancel=not ended)
             close_dask_client(ex)
     return said
+
+
+def _refuse_replacing(specs: list[RunSpec], states: dict[str, str], out: Path, where: str) -> None:
+    """ConfigError when finished runs in ``out`` were made with another scenario, seed or input
+    file than the study now plans for them (running them again would replace their results)."""
+    stale = [s.run_id for s in specs if states[s.run_id] == "stale"]
+    if stale:
+        raise ConfigError(f"{where} {out}: {len(stale)} finished run(s) there were made with another scenario, "
+                          f"settings, seed or input file than the study now gives them ({', '.join(stale[:3])}"
+                          + (" ..." if len(stale) > 3 else "") + "); add --overwrite (overwrite=True) to run them "
+                          "again, replacing their results, or give another --out")
 
 
 def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:

@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+from cistrack.errors import ConfigError
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.runs.pipeline import run_scenario
@@ -155,7 +156,7 @@ duration_days = {days}
 """
 
 
-def test_a_study_reruns_a_finished_run_whose_scenario_changed(tmp_path, capsys):
+def test_a_study_whose_scenario_changed_reruns_a_finished_run_only_with_overwrite(tmp_path, capsys):
     p = tmp_path / "fp.toml"
     p.write_text(STUDY.format(days=1.4))
     out = tmp_path / "out"
@@ -165,8 +166,13 @@ def test_a_study_reruns_a_finished_run_whose_scenario_changed(tmp_path, capsys):
     assert (again["completed"], again["skipped"]) == (0, 1)
     run_dir = next((out / "runs").iterdir())
     fp_before = read_manifest(run_dir)["fingerprint"]
+    record = (out / "study.json").read_text()
     p.write_text(STUDY.format(days=1.3))
-    changed = run_study(p, out_dir=out, workers=1, progress=False)
+    with pytest.raises(ConfigError, match=rf"1 finished run\(s\) there were made with another scenario.*"
+                                          rf"\({run_dir.name}\); add --overwrite"):
+        run_study(p, out_dir=out, workers=1, progress=False)
+    assert read_manifest(run_dir)["fingerprint"] == fp_before and (out / "study.json").read_text() == record
+    changed = run_study(p, out_dir=out, workers=1, progress=False, overwrite=True)
     assert (changed["completed"], changed["skipped"]) == (1, 0)
     assert "fingerprint changed" in capsys.readouterr().err
     assert read_manifest(run_dir)["fingerprint"] != fp_before
