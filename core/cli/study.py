@@ -81,7 +81,9 @@ def add_study_parser(subparsers) -> None:
     sr.set_defaults(func=cmd_study)
     srep = stsub.add_parser("report", help="summarise a study (terminal, CSV, Markdown, PNG)")
     srep.add_argument("study", help="study TOML file, built-in study name or study results directory (its own seeds and --set values)")
-    srep.add_argument("--out", type=path_text("--out"), default=None)
+    srep.add_argument("--out", type=path_text("--out"), default=None,
+                      help="the study directory 'study run --out' wrote (default studies_out/<name>); the report "
+                           "goes into its report/ folder")
     srep.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                       help="report the study run with these --set values")
     _seed_arguments(srep)

@@ -244,7 +244,13 @@ def _scenario_runs(entry: Any, p: Path, grid: _Grid, reg) -> list[RunSpec]:
     from cistrack.scenario.loading import load_scenario
 
     sc, keys = scenario_entry(entry, p, [k for k, _ in grid.sweep])
-    base = load_scenario(_scenario_source(sc, p), reg)
+    source = _scenario_source(sc, p)
+    try:
+        base = load_scenario(source, reg)
+    except ConfigError as exc:
+        if not isinstance(source, str):  # a scenario file: its own error names it
+            raise
+        raise ConfigError(f"{p}: key 'scenarios', entry {sc!r}: {exc}") from None
     names = sweep_names([k for k, _ in grid.sweep])
     specs: list[RunSpec] = []
     for combo in _combinations(grid.sweep, keys):

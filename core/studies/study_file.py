@@ -114,12 +114,30 @@ def _checked(data: dict, p: Path) -> dict:
         if key in data and not (isinstance(data[key], list) and data[key]):
             raise ConfigError(f"{p}: key {key!r} = {data[key]!r}: give a list of at least one name or table, "
                               f"or leave {key!r} out to keep each scenario's own")
+    _check_component_overrides(data, p)
     if "seeds" in data and ("n_seeds" in data or "first_seed" in data):
         raise ConfigError(f"{p}: give 'seeds', or 'n_seeds' (and optionally 'first_seed'), not both")
     keys = [k for k, _ in study_sweep(data, p)]
     for sc in data["scenarios"]:
         scenario_entry(sc, p, keys)
     return data
+
+
+def _check_component_overrides(data: dict, p: Path) -> None:
+    """ConfigError naming the study file and its ``[overrides]`` when that is not a table, or when
+    its ``filter`` or ``iod`` is neither a table of the component's parameters nor (without the
+    study's list of them) a component's name: a list would otherwise replace it unseen."""
+    ov = data.get("overrides", {})
+    if not isinstance(ov, dict):
+        raise ConfigError(f"{p}: key 'overrides' = {ov!r}: give a table of scenario settings")
+    for table, key in (("filter", "filters"), ("iod", "iod")):
+        value = ov.get(table)
+        if value is None or isinstance(value, dict) or (isinstance(value, str) and key not in data):
+            continue
+        why = (f"the study's key {key!r} chooses the components, so give only their parameters, as a table"
+               if isinstance(value, str) else "give a table of the component's parameters, or its name")
+        raise ConfigError(f"{p}: key 'overrides', setting {table} = {value!r}: {why} "
+                          f"([overrides.{table}] KEY = VALUE)")
 
 
 _SWEEP_VALUE = (bool, int, float, str)

@@ -71,3 +71,29 @@ def test_a_bad_override_of_a_filter_named_by_a_filters_entry_is_refused_naming_t
     study = _with_filters(tmp_path, "filter = { n_particles = -5 }")
     with pytest.raises(ConfigError, match=r"mine\.toml: key 'overrides', setting filter\.n_particles = -5 .*must be >= 100"):
         plan_runs(study, tmp_path / "out")
+
+
+def _study_text(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "mine.toml"
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("lists, value, words", [
+    ('filters = ["pgm"]\n', "5", "give a table of the component's parameters, or its name"),
+    ('filters = ["pgm"]\n', '"ukf"', "the study's key 'filters' chooses the components"),
+    ("", "5", "give a table of the component's parameters, or its name"),
+])
+def test_a_filter_override_that_is_no_table_is_refused_naming_the_study_file(tmp_path, lists, value, words):
+    # with a 'filters' list the entry had silently replaced it: the run flew another filter than written
+    study = _study_text(tmp_path, f'name = "mine"\nscenarios = ["quick"]\n{lists}seeds = [1]\n\n'
+                                  f"[overrides]\nfilter = {value}\n")
+    with pytest.raises(ConfigError, match=rf"^{tmp_path}/mine\.toml: key 'overrides', setting filter = .*{words}"):
+        plan_runs(study, tmp_path / "out")
+
+
+def test_an_unknown_built_in_scenario_names_the_study_file_and_its_key(tmp_path):
+    study = _study_text(tmp_path, 'name = "mine"\nscenarios = ["nosuch"]\nseeds = [1]\n')
+    with pytest.raises(ConfigError, match=rf"^{tmp_path}/mine\.toml: key 'scenarios', entry 'nosuch': no built-in "
+                                          r"scenario 'nosuch'"):
+        plan_runs(study, tmp_path / "out")
