@@ -12,7 +12,10 @@ waited forever for more. So each worker, in :func:`init_worker`:
   has not ended it within :data:`GRACE_S` s;
 * handles SIGTERM by ending the run in progress like Ctrl-C (:class:`~cistrack.errors.RunInterrupted`:
   its completed steps merged and its manifest "interrupted", so a later ``study run`` runs it
-  again) and then ending the process; an idle worker ends at once.
+  again) and then ending the process; an idle worker ends at once;
+* ignores SIGINT: a terminal's Ctrl-C reaches every process of the group, and a worker that
+  stopped its run on it was then stopped again by the study's SIGTERM while it wrote its
+  manifest, leaving it "running"; the study process alone takes the Ctrl-C and stops its workers.
 
 :func:`run_spec` is what the study submits: one run (:func:`execute_run`) under the study's runs
 lock (:func:`cistrack.studies.study_lock.hold_runs_lock`).
@@ -56,6 +59,7 @@ def init_worker(threads: int, parent_pid: int) -> None:
     if os.name != "posix":  # pragma: no cover (Windows ends a pool's workers through their pipes)
         return
     signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the study process stops us
     _parent_death_signal(signal.SIGTERM)
     threading.Thread(target=_watch, args=(_parent,), name="cistrack-parent-watch", daemon=True).start()
     if os.getppid() != _parent:  # the parent ended before the kernel was asked to tell us

@@ -254,6 +254,22 @@ def test_a_disk_too_full_for_the_study_record_is_refused_and_leaves_nothing_to_b
     assert _statuses(out) == ["finished"]
 
 
+def _sigint_disposition() -> str:
+    return "ignored" if signal.getsignal(signal.SIGINT) is signal.SIG_IGN else "handled"
+
+
+def test_a_study_worker_leaves_ctrl_c_to_the_study_process():
+    """A terminal's Ctrl-C reaches every process of the group: a worker that stopped its run on it
+    was stopped again by the study's SIGTERM while writing its manifest, which stayed "running"."""
+    from cistrack.studies.study import make_executor
+
+    ex = make_executor(workers=1)
+    try:
+        assert ex.submit(_sigint_disposition).result(timeout=120) == "ignored"
+    finally:
+        ex.shutdown()
+
+
 @needs_proc
 def test_ctrl_c_ends_a_study_at_once_with_no_worker_left_and_the_next_run_completes_it(tmp_path):
     study = _study(tmp_path, seeds="[1, 2, 3, 4]", days=6.0)
@@ -280,6 +296,7 @@ def test_ctrl_c_ends_a_study_at_once_with_no_worker_left_and_the_next_run_comple
             if _alive(k):
                 os.kill(k, signal.SIGKILL)
     assert "interrupted (SIGINT); finished runs are kept" in (tmp_path / "study.log").read_text()
+    assert "running" not in _statuses(out)  # a worker that took the Ctrl-C itself was stopped mid-write
     again = _cli("study", "run", str(study), "--out", str(out), "--workers", "2", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert _statuses(out) == ["finished"] * 4
