@@ -11,6 +11,7 @@ from __future__ import annotations
 import inspect
 from abc import ABC
 import math
+import numbers
 import typing
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -134,12 +135,20 @@ class Component(ABC):
         raise ParameterError(f"{self._label()}: parameter '{name}' = {quoted(value)} is invalid: {allowed}")
 
 
+def _invalid(owner: Component | None, name: str, value: Any, allowed: str) -> None:
+    """The ParameterError of ``owner``'s parameter ``name`` (one naming the parameter alone when a
+    check is called with no component, e.g. ``check_int(None, "n", v)``)."""
+    if owner is not None and hasattr(owner, "_fail"):
+        owner._fail(name, value, allowed)
+    raise ParameterError(f"parameter '{name}' = {quoted(value)} is invalid: {allowed}")
+
+
 def _real(owner: Component, name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        owner._fail(name, value, "must be a number")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy's scalars are Real
+        _invalid(owner, name, value, "must be a number")
     v = float(value)
     if not math.isfinite(v):
-        owner._fail(name, value, "must be finite")
+        _invalid(owner, name, value, "must be finite")
     return v
 
 
@@ -147,7 +156,7 @@ def check_positive(owner: Component, name: str, value: Any) -> float:
     """Return ``value`` as float; raise ParameterError unless it is finite and > 0."""
     v = _real(owner, name, value)
     if v <= 0:
-        owner._fail(name, value, "must be > 0")
+        _invalid(owner, name, value, "must be > 0")
     return v
 
 
@@ -171,7 +180,7 @@ def check_sigma_arcsec(owner: Component, name: str, value: Any) -> float:
     v = _real(owner, name, value)
     problem = sigma_arcsec_problem(v)
     if problem:
-        owner._fail(name, value, problem)
+        _invalid(owner, name, value, problem)
     return v
 
 
@@ -179,40 +188,43 @@ def check_nonnegative(owner: Component, name: str, value: Any) -> float:
     """Return ``value`` as float; raise ParameterError unless it is finite and >= 0."""
     v = _real(owner, name, value)
     if v < 0:
-        owner._fail(name, value, "must be >= 0")
+        _invalid(owner, name, value, "must be >= 0")
     return v
 
 
 def check_range(owner: Component, name: str, value: Any, lo: float, hi: float,
                 *, lo_open: bool = False, hi_open: bool = False) -> float:
     """Return ``value`` as float; raise ParameterError unless lo <= value <= hi (or open ends)."""
+    if math.isnan(lo) or math.isnan(hi):  # every comparison with NaN is false: nothing would be refused
+        raise ValueError(f"check_range for '{name}': the bounds must be numbers, got {lo!r} and {hi!r}")
     v = _real(owner, name, value)
     bad = (v < lo or v > hi or (lo_open and v == lo) or (hi_open and v == hi))
     if bad:
         left = "(" if lo_open else "["
         right = ")" if hi_open else "]"
-        owner._fail(name, value, f"must lie in {left}{lo}, {hi}{right}")
+        _invalid(owner, name, value, f"must lie in {left}{lo}, {hi}{right}")
     return v
 
 
 def check_int(owner: Component, name: str, value: Any, minimum: int | None = None,
               maximum: int | None = None) -> int:
     """Return ``value`` as int; raise ParameterError unless it is an integer within bounds."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):  # numpy's integers are Integral
+        if isinstance(value, numbers.Real) and not isinstance(value, bool) and float(value).is_integer():
+            value = int(float(value))
         else:
-            owner._fail(name, value, "must be an integer")
+            _invalid(owner, name, value, "must be an integer")
     if minimum is not None and value < minimum:
-        owner._fail(name, value, f"must be >= {minimum}")
+        _invalid(owner, name, value, f"must be >= {minimum}")
     if maximum is not None and value > maximum:
-        owner._fail(name, value, f"must be <= {maximum}")
+        _invalid(owner, name, value, f"must be <= {maximum}")
     return int(value)
 
 
 def check_choice(owner: Component, name: str, value: Any, choices: typing.Iterable[str]) -> str:
-    """Return ``value``; raise ParameterError unless it is one of ``choices``."""
-    choices = list(choices)
+    """Return ``value``; raise ParameterError unless it is one of ``choices`` (one string is one
+    choice, not its letters)."""
+    choices = [choices] if isinstance(choices, str) else list(choices)
     if value not in choices:
-        owner._fail(name, value, f"must be one of {', '.join(map(repr, choices))}")
+        _invalid(owner, name, value, f"must be one of {', '.join(map(repr, choices))}")
     return value

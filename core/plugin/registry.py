@@ -198,8 +198,17 @@ class Registry:
         return f"{kind} {name!r} ({got.distribution}{' ' + got.version if got.version else ''})"
 
     def create(self, kind: str, name: str, **params: Any) -> Any:
-        """Build ``kind``/``name`` with ``params`` (validated by the component itself)."""
+        """Build ``kind``/``name`` with ``params`` (validated by the component itself); a parameter
+        its constructor does not take is a ParameterError naming the ones it takes."""
         factory = self.get(kind, name).factory
+        if isinstance(factory, type) and params and not _takes_any_keyword(factory):
+            from cistrack.interfaces.component import param_specs
+
+            known = param_specs(factory)
+            unknown = sorted(k for k in params if k not in known)
+            if unknown:
+                raise ParameterError(f"{self.describe(kind, name)}: unknown parameter {unknown[0]!r}; its parameters: "
+                                     f"{', '.join(known) or '(none)'}")
         if isinstance(factory, type) or callable(factory):
             return factory(**params)
         if params:
@@ -277,6 +286,17 @@ def _dist_identity(ep: metadata.EntryPoint, cache: dict) -> tuple[str, str]:
         name = (meta["Name"] or "<unknown>").lower().replace("_", "-")
         cache[key] = (name, meta["Version"] or "")
     return cache[key]
+
+
+def _takes_any_keyword(cls: type) -> bool:
+    """Whether ``cls``'s constructor takes ``**kwargs`` (then any parameter name may be its)."""
+    import inspect
+
+    try:
+        init = getattr(cls, "__init__")
+        return any(p.kind is p.VAR_KEYWORD for p in inspect.signature(init).parameters.values())
+    except (TypeError, ValueError):  # no signature to read: leave the check to the constructor
+        return True
 
 
 _DEFAULT: Registry | None = None

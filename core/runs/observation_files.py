@@ -45,19 +45,16 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
 
 
 def create_checked(reg: Registry, kind: str, name: str, params: dict[str, Any]) -> Any:
-    """``reg.create(kind, name, **params)``, first refusing a parameter the component does not take
-    (a ConfigError naming it and the parameters it takes, not a TypeError from its constructor)."""
-    from cistrack.errors import ConfigError
-    from cistrack.interfaces.component import param_specs
+    """``reg.create(kind, name, **params)``, a parameter the component does not take refused as a
+    ConfigError naming it and the parameters it takes (not a TypeError from its constructor)."""
+    from cistrack.errors import ConfigError, ParameterError
 
-    factory = reg.get(kind, name).factory
-    if params and isinstance(factory, type):
-        known = param_specs(factory)
-        unknown = sorted(k for k in params if k not in known)
-        if unknown:
-            raise ConfigError(f"{kind} {name!r}: unknown parameter {unknown[0]!r}; its parameters: "
-                              f"{', '.join(known) or '(none)'}")
-    return reg.create(kind, name, **params)
+    try:
+        return reg.create(kind, name, **params)
+    except ParameterError as exc:
+        if "unknown parameter" not in str(exc):
+            raise
+        raise ConfigError(str(exc)) from None
 
 
 def read_observations(path: str | PathLike, epoch: str | datetime, format: str | None = None,
