@@ -124,6 +124,9 @@ class Registry:
         """Load every entry point of the group ``cistrack``, each on its own."""
         if autoload_third_party is None:
             autoload_third_party = not env_flag(AUTOLOAD_ENV)  # refused by name unless a yes/no spelling
+        elif not isinstance(autoload_third_party, bool):
+            raise TypeError(f"autoload_third_party={autoload_third_party!r}: give True, False or None (None: "
+                            f"as ${AUTOLOAD_ENV} says)")
         pm = pluggy.PluginManager(hookspecs.PROJECT)
         pm.add_hookspecs(hookspecs.CistrackSpecs)
         idents: dict = {}

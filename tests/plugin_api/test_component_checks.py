@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cistrack.api import check_choice, check_int, check_positive, check_range, default_registry
+from cistrack.api import check_choice, check_int, check_positive, check_range, default_registry, load_registry
 from cistrack.errors import ParameterError
 
 
@@ -47,3 +47,8 @@ def test_one_string_of_choices_is_one_choice_not_its_letters():
 def test_a_check_called_without_a_component_names_the_parameter():
     with pytest.raises(ParameterError, match=r"^parameter 'x' = -1 is invalid: must be > 0$"):
         check_positive(None, "x", -1)
+
+
+def test_a_registry_told_to_autoload_something_other_than_yes_or_no_refuses():
+    with pytest.raises(TypeError, match=r"autoload_third_party=5: give True, False or None"):
+        load_registry(5)
