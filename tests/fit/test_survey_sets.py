@@ -105,6 +105,23 @@ def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
     assert any("tracklet 1's fit converged with residuals" in m and "a false minimum" in m for m in messages)
 
 
+def test_an_observation_at_the_threshold_that_cycles_between_passes_is_kept_rejected(tmp_path):
+    """nrho seed 208 (unseen until session 40): one observation was rejected in one pass and
+    readmitted in the next (chi-square just above, then just below the threshold), the rejected
+    set cycled, and the fit was reported not converged (RMS 1.06) and FAILED as a possible maneuver.
+    Kept rejected, the fit converges; the injected outlier is rejected too."""
+    set_dir = tmp_path / "nrho-s208"
+    info = make(set_dir, "nrho", seed=208)
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert row.n_fitted == row.n_observations == info["n_observations"]
+    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    assert row.rejected_injected == row.injected
+    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    assert any("1 observation(s) at the threshold, rejected in one pass and readmitted in the next, are kept "
+               "rejected" in m for m in messages)
+
+
 @pytest.mark.slow
 def test_a_fourth_tracklet_eleven_days_after_the_third_does_not_stop_the_ranging(tmp_path):
     """Halo seed 173 with 5 exposures a tracklet: three tracklets on three nights, the fourth 11.6
