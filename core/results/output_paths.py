@@ -184,6 +184,7 @@ def _create_writable(d: Path, where: str) -> Path:
     except UnicodeEncodeError:
         raise ConfigError(f"{where} {str(d)!r}: the path is not valid UTF-8 (bytes no character has), which the "
                           "results' own records cannot hold; give a name in UTF-8") from None
+    _check_path_room(d, where)
     if d.is_symlink() and not d.exists():
         target = os.readlink(d)
         if os.path.lexists(d.parent / target):
@@ -195,6 +196,28 @@ def _create_writable(d: Path, where: str) -> Path:
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot write there ({exc.strerror or exc})") from None
     return d
+
+
+INSIDE_PATH_BYTES = 64
+"""Room kept for the longest path a results directory writes inside itself (``steps/`` parts,
+``.manifest.json.<hex>.tmp`` and the like, under 40 bytes)."""
+
+
+def _check_path_room(d: Path, where: str) -> None:
+    """ConfigError when the files a results directory holds would pass the system's limit on a
+    path's length: a 4,070-byte --out had been made, the run's IOD done, and its first record
+    then refused by the system (a half-made directory left behind)."""
+    full = os.fsencode(os.path.abspath(d))
+    existing = Path(os.path.abspath(d))
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    try:
+        limit = os.pathconf(existing, "PC_PATH_MAX")
+    except (OSError, ValueError, AttributeError):
+        limit = 4096
+    if len(full) + INSIDE_PATH_BYTES > limit:
+        raise ConfigError(f"{where} {str(d)[:60]}...: the path is {len(full)} bytes long, and the results' own files "
+                          f"inside it would pass the system's limit of {limit} bytes a path; give a shorter path")
 
 
 def recorded_study(record: Path) -> tuple[str | None, str | None]:
