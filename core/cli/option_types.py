@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Callable
 
-__all__ = ["path_text", "count", "port"]
+__all__ = ["path_text", "count", "port", "OnceOnly"]
 
 
 def path_text(option: str) -> Callable[[str], str]:
@@ -44,3 +44,20 @@ def port(default: int) -> Callable[[str], int]:
                                              f"to {PORT_MAX} (default {default})")
         return int(text)
     return convert
+
+
+class OnceOnly(argparse.Action):
+    """An option given at most once (argparse would keep the last of several silently): a second,
+    different value is refused naming both, with what to do instead (``once_hint``)."""
+
+    def __init__(self, *args, once_hint: str = "", **kwargs):
+        self.once_hint = once_hint
+        super().__init__(*args, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        seen = getattr(namespace, f"_{self.dest}_given", None)
+        if seen is not None and seen != values:
+            parser.error(f"{option_string} given twice ({seen} and {values}): it takes one value"
+                         + (f"; {self.once_hint}" if self.once_hint else ""))
+        setattr(namespace, f"_{self.dest}_given", values)
+        setattr(namespace, self.dest, values)

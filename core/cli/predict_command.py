@@ -63,14 +63,15 @@ def _utc(text: str):
 
 def add_predict_parser(sub) -> None:
     """Add ``cistrack predict`` to the sub-command parsers ``sub``."""
-    from cistrack.cli.option_types import path_text
+    from cistrack.cli.option_types import OnceOnly, path_text
 
     p = sub.add_parser("predict", help="where to point: RA/Dec, rates and the 1/3-sigma sky ellipse from an MPC site",
                        description="Sky predictions of the orbit of a 'cistrack fit' directory (the least-squares "
                                    "fit) or a 'cistrack run' directory (the filter's last estimate), seen from an "
                                    "MPC observatory: docs/sky-predictions.md.")
     p.add_argument("run", metavar="DIR", help="a fit or run results directory")
-    p.add_argument("--site", required=True, metavar="CODE",
+    p.add_argument("--site", required=True, metavar="CODE", action=OnceOnly,
+                   once_hint="one site a prediction: run 'cistrack predict' once per site",
                    help="MPC observatory code, e.g. 568, 711, J04; or LAT,LON,HEIGHT_M (WGS84 degrees, metres; "
                         "--site=-29.26,289.27,2345 for a southern latitude)")
     p.add_argument("--start", type=_utc, default=None, metavar="UTC", help="first time (default: the orbit's epoch)")

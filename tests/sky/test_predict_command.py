@@ -25,6 +25,13 @@ def test_bad_option_values_are_refused_by_the_parser(tmp_path, capsys, option, v
     assert exc.value.code == 2 and option in capsys.readouterr().err
 
 
+def test_two_different_sites_are_refused_rather_than_the_first_dropped(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["predict", str(tmp_path), "--site", "568", "--site", "J04"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "--site given twice (568 and J04)" in err and "once per site" in err
+
+
 @pytest.mark.slow
 def test_predict_prints_writes_csv_and_plot_for_a_fit(tmp_path, capsys):
     from cistrack.fitting.from_observations import fit_files
