@@ -52,9 +52,12 @@ def test_predict_prints_writes_csv_and_plot_for_a_fit(tmp_path, capsys):
     assert (tmp_path / "fit" / "sky-568.png").stat().st_size > 10_000
     assert main(["predict", d, "--site", "568", "--start", "2026-03-08T00:00:00Z", "--stop", "2026-03-07T00:00:00Z"]) == 2
     assert "--stop" in capsys.readouterr().err
-    (tmp_path / "taken.csv").mkdir()  # the table's path is a folder: the write fails
+    (tmp_path / "taken.csv").mkdir()  # the table's path is a folder
     assert main(["predict", d, "--site", "568", "--out", str(tmp_path / "taken")]) == 2
     err = capsys.readouterr().err
+    assert "taken.csv already exists" in err and "--overwrite" in err and "Traceback" not in err
+    assert main(["predict", d, "--site", "568", "--out", str(tmp_path / "taken"), "--overwrite"]) == 2
+    err = capsys.readouterr().err  # asked to replace it, the write fails: said, not a traceback
     assert "cannot write" in err and "taken.csv" in err and "Traceback" not in err
 
 
