@@ -242,7 +242,10 @@ def _site(code: str):
     from cistrack.astro.sites import observatory
     from cistrack.errors import ConfigError, MeasurementError, shown
 
-    if len(code.split(",")) == 3:
+    if "," in code:  # coordinates (an MPC code has no comma): three of them, or told so
+        if len(code.split(",")) != 3:
+            raise ConfigError(f"--site {shown(code)}: LAT,LON,HEIGHT_M must be three numbers (degrees, degrees, "
+                              f"metres), got {len(code.split(','))}")
         return _given_site(code)
     try:
         return observatory(code)

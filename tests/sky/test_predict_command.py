@@ -25,6 +25,15 @@ def test_bad_option_values_are_refused_by_the_parser(tmp_path, capsys, option, v
     assert exc.value.code == 2 and option in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("site, count", [("45,10", 2), ("45,10,0,5", 4)])
+def test_coordinates_of_the_wrong_count_are_told_as_coordinates_not_as_an_unknown_code(tmp_path, capsys, site, count):
+    from cistrack.cli.predict_command import _site
+    from cistrack.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=rf"--site {site}: LAT,LON,HEIGHT_M must be three numbers .* got {count}"):
+        _site(site)
+
+
 def test_two_different_sites_are_refused_rather_than_the_first_dropped(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["predict", str(tmp_path), "--site", "568", "--site", "J04"])
