@@ -200,7 +200,8 @@ def _check_year(option: str, t) -> None:
 
 
 def _prefix(args) -> Path:
-    """The --out PREFIX (default DIR/sky-CODE; a folder given as PREFIX gets FOLDER/sky-CODE);
+    """The --out PREFIX (default DIR/sky-CODE; a folder given as PREFIX gets FOLDER/sky-CODE; a
+    PREFIX ending .csv or .png, one of the two files' names, is taken without it);
     ConfigError when its folder does not exist, when
     PREFIX.csv or PREFIX.png would replace one of the directory's own results (fit.json, ...), or
     when a given PREFIX's files exist without --overwrite."""
@@ -211,6 +212,8 @@ def _prefix(args) -> Path:
     prefix = Path(args.out) if args.out else default
     if args.out and (args.out.endswith(("/", os.sep)) or prefix.is_dir()):  # a folder: the files go inside it
         prefix = prefix / default.name
+    elif args.out and prefix.suffix.lower() in (".csv", ".png"):  # the table's or the plot's name: its PREFIX
+        prefix = prefix.with_suffix("")
     if args.out and not prefix.parent.is_dir():
         raise ConfigError(f"--out {args.out}: the folder {prefix.parent} does not exist; give a PREFIX in an "
                           "existing folder")

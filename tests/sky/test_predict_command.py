@@ -250,6 +250,13 @@ def test_a_site_given_by_coordinates_predicts_as_its_mpc_code_does(fitted, tmp_p
     assert [r["elevation_deg"] for r in by_code] == [r["elevation_deg"] for r in by_place]
 
 
+@pytest.mark.parametrize("named", ["sky.csv", "sky.png", "sky.CSV"])
+def test_an_out_naming_one_of_the_two_files_is_taken_as_their_prefix(fitted, tmp_path, capsys, named):
+    window = ["--start", "2026-03-07T00:00:00Z", "--stop", "2026-03-07T02:00:00Z", "--quiet"]
+    assert main(["predict", str(fitted), "--site", "809", "--out", str(tmp_path / named), *window]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sky.csv", "sky.png"]  # not sky.csv.csv
+
+
 def test_a_different_prediction_does_not_replace_the_default_files_unasked(fitted, capsys):
     at = ["predict", str(fitted), "--site", "G96", "--quiet", "--step", "360"]
     assert main(at) == 0
