@@ -90,6 +90,16 @@ def test_fit_recovers_each_family(tmp_path, family):
     assert json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["converged"]
 
 
+def _clean_fit(set_dir, info: dict, tmp_path) -> tuple:
+    """(row, fit.json's messages) of ``cistrack fit`` on the set, asserted converged with every
+    observation fitted and the truth within :data:`MAHALANOBIS2_BOUND` at each epoch."""
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "converged", row.failure
+    assert row.n_fitted == row.n_observations == info["n_observations"]
+    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    return row, json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+
+
 @pytest.mark.slow
 def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
     """Halo seed 33 (a 3-exposure first night, then tracklets two and three days later): the first
@@ -97,11 +107,7 @@ def test_halo_seed_33_is_not_seeded_from_a_false_minimum(tmp_path):
     seed the fit ended FAILED (weighted RMS 289,069); the next seed's fit is clean."""
     set_dir = tmp_path / "halo-s33"
     info = make(set_dir, "halo", seed=33)
-    row = check_set(set_dir, tmp_path / "fits")
-    assert row.outcome == "converged", row.failure
-    assert row.n_fitted == row.n_observations == info["n_observations"]
-    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
-    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    row, messages = _clean_fit(set_dir, info, tmp_path)
     assert any("tracklet 1's fit converged with residuals" in m and "a false minimum" in m for m in messages)
 
 
@@ -112,12 +118,8 @@ def test_an_observation_at_the_threshold_that_cycles_between_passes_is_kept_reje
     Kept rejected, the fit converges; the injected outlier is rejected too."""
     set_dir = tmp_path / "nrho-s208"
     info = make(set_dir, "nrho", seed=208)
-    row = check_set(set_dir, tmp_path / "fits")
-    assert row.outcome == "converged", row.failure
-    assert row.n_fitted == row.n_observations == info["n_observations"]
-    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    row, messages = _clean_fit(set_dir, info, tmp_path)
     assert row.rejected_injected == row.injected
-    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
     assert any("1 observation(s) at the threshold, rejected in one pass and readmitted in the next, are kept "
                "rejected" in m for m in messages)
 
@@ -130,12 +132,8 @@ def test_a_fourth_tracklet_eleven_days_after_the_third_does_not_stop_the_ranging
     set_dir = tmp_path / "halo-s173"
     info = make(set_dir, "halo", seed=173, exposures=5)
     assert info["tracklets"] == 4
-    row = check_set(set_dir, tmp_path / "fits")
-    assert row.outcome == "converged", row.failure
-    assert row.n_fitted == row.n_observations == info["n_observations"]
-    assert len(row.m2) > 0 and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+    row, messages = _clean_fit(set_dir, info, tmp_path)
     assert row.rejected_injected == row.injected
-    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
     assert any("only the tracklets within 6 days scored it" in m for m in messages)
 
 
