@@ -152,7 +152,9 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     say(f"reading the estimates of {d} and carrying them into the sensor's inertial frame")
     ie, scen = run_inertial_estimates(d, reg)
     out = Path(path) if path is not None else d / f"estimate{exporter.suffix}"
-    say(f"writing {_what_is_written(exporter, ie)} as {format} to {out}")
+    what = _what_is_written(exporter, ie)
+    if what is not None:  # a step the run lacks: the exporter refuses it, naming the steps there are
+        say(f"writing {what} as {format} to {out}")
     manifest = d / "manifest.json"
     try:
         run_id = json.loads(manifest.read_text()).get("run_id", scen.name) if manifest.exists() else scen.name
@@ -186,10 +188,12 @@ def _check_not_being_replaced(d: Path) -> None:
             raise
 
 
-def _what_is_written(exporter: Any, ie: InertialEstimates) -> str:
+def _what_is_written(exporter: Any, ie: InertialEstimates) -> str | None:
     """``15 estimates``, or for an exporter of one step (its ``step`` parameter, -1 the last)
-    ``step 3``."""
+    ``step 3``; None for a step the run does not have."""
     step = getattr(exporter, "step", None)
     if isinstance(step, int) and not isinstance(step, bool) and len(ie.step):
+        if step != -1 and step not in {int(s) for s in ie.step}:
+            return None
         return f"step {int(ie.step[-1]) if step == -1 else step}"
     return f"{len(ie.t_tu)} estimates"

@@ -33,6 +33,13 @@ def test_cistrack_export_shows_its_stages_on_stderr(run_dir, capsys):
                    f"cistrack: writing {n} estimates as oem to {run_dir / 'estimate.oem'}"]
 
 
+def test_cistrack_export_of_a_step_the_run_lacks_refuses_it_without_saying_it_writes_it(run_dir, capsys):
+    assert main(["export", str(run_dir), "--format", "opm", "--step", "99999", "--out", str(run_dir / "s.opm")]) == 2
+    err = capsys.readouterr().err
+    assert "no step 99999" in err and "writing" not in err
+    assert not (run_dir / "s.opm").exists()
+
+
 def test_cistrack_export_quiet_prints_nothing(run_dir, capsys):
     assert main(["export", str(run_dir), "--format", "opm", "--quiet"]) == 0
     assert capsys.readouterr() == ("", "")
