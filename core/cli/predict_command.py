@@ -207,7 +207,10 @@ def _prefix(args) -> Path:
     when a given PREFIX's files exist without --overwrite."""
     from cistrack.errors import ConfigError
     from cistrack.results.earlier_run import check_export_path
+    from cistrack.results.output_paths import check_printable_path
 
+    if args.out:
+        check_printable_path(args.out, "--out")
     default = Path(args.run) / f"sky-{args.site}"
     prefix = Path(args.out) if args.out else default
     if args.out and (args.out.endswith(("/", os.sep)) or prefix.is_dir()):  # a folder: the files go inside it

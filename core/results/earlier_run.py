@@ -24,7 +24,7 @@ from cistrack.results.estimates import _PARTS as ESTIMATE_PARTS
 from cistrack.results.estimates import ESTIMATES
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.results.output_paths import (EARLIER_RESULTS, FIT_LOCK, FIT_STARTED, RUN_LOCK, STUDY_LOCK,
-                                           STUDY_RUNS_LOCK)
+                                           STUDY_RUNS_LOCK, check_printable_path)
 from cistrack.results.store import MANIFEST, PARTS, STEPS
 
 if sys.version_info >= (3, 11):
@@ -279,6 +279,7 @@ def check_export_path(out: str | Path, directory: str | Path, where: str = "--ou
     made from: the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records and
     residual plots, or a path inside the part folders of ``directory``. ``instead``: what to do,
     said in the refusal (``{directory}`` is replaced by the directory)."""
+    check_printable_path(out, where)
     o, d = Path(os.path.abspath(out)).resolve(), Path(os.path.abspath(directory)).resolve()
     plot = o.parent == d and any(fnmatch.fnmatch(o.name, p) for p in FIT_PLOTS)
     if o == d or plot or _named_as(o, d, RESULT_FILES + FIT_FILES) or _in_part_folders(o, d):

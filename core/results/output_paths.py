@@ -184,6 +184,7 @@ def _create_writable(d: Path, where: str) -> Path:
     except UnicodeEncodeError:
         raise ConfigError(f"{where} {str(d)!r}: the path is not valid UTF-8 (bytes no character has), which the "
                           "results' own records cannot hold; give a name in UTF-8") from None
+    check_printable_path(d, where)
     _check_path_room(d, where)
     if d.is_symlink() and not d.exists():
         target = os.readlink(d)
@@ -196,6 +197,17 @@ def _create_writable(d: Path, where: str) -> Path:
     except OSError as exc:
         raise ConfigError(f"{where} {d}: cannot write there ({exc.strerror or exc})") from None
     return d
+
+
+def check_printable_path(d: str | Path, where: str) -> None:
+    """ConfigError for a path holding a control character (a newline, tab, escape...): legal for
+    the system, but every message, log line and record naming the results would show it broken
+    (a newline in --out had been taken, and the run's lines split in two)."""
+    text = str(d)
+    bad = next((i for i, ch in enumerate(text) if ord(ch) < 32 or ord(ch) == 127), None)
+    if bad is not None:
+        raise ConfigError(f"{where} {text!r}: the path holds a control character ({text[bad]!r} at position {bad}), "
+                          "which messages and records naming it would show broken; give a name without one")
 
 
 INSIDE_PATH_BYTES = 64
