@@ -36,6 +36,7 @@ from cistrack.least_squares.outliers import update_rejections
 from cistrack.least_squares.progress import tell
 from cistrack.least_squares.residual_table import residual_table
 from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.impulse_partials import delta_v_state_partials, impulse_columns
 from cistrack.least_squares.solve_for_parameters import SolveFor, solve_for as _solve_for
 from cistrack.least_squares.options import AREA_TO_MASS
 from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
@@ -126,17 +127,28 @@ class _Problem:
         return self._kept_or_computed("jacobian", x, lambda: (self._jacobian(x),))[0]
 
     def _jacobian(self, x: np.ndarray) -> np.ndarray:
-        states, stms = arc_states_and_stms(self._dynamics(x), x[:6], self.t0, self.model.times)
-        h = self.model.jacobian(states)
-        a = np.einsum("kmj,kjl->kml", h, stms) / self.model.sigmas[:, :, None]
+        """The state's columns from the transition matrices; a burn's delta-v from them too
+        (:mod:`cistrack.least_squares.impulse_partials`, the burn times among the outputs), every
+        other parameter by central differences."""
+        dyn, k = self._dynamics(x), self.model.times.size
+        burns = {} if self.solve_for is None else impulse_columns(dyn, self.solve_for.names)
+        burn_t = np.array(sorted({tb for tb, _ in burns.values()}))
+        states, stms = arc_states_and_stms(dyn, x[:6], self.t0, np.concatenate([self.model.times, burn_t]))
+        h = self.model.jacobian(states[:k])
+        a = np.einsum("kmj,kjl->kml", h, stms[:k]) / self.model.sigmas[:, :, None]
         if self.solve_for is None:
             return a
+        dp = np.empty(a.shape[:2] + (self.solve_for.size,))
+        rest = [j for j in range(self.solve_for.size) if j not in burns]
+        if rest:
+            def predicted(dyn: Dynamics) -> np.ndarray:  # minus the residuals: wrapped like them
+                return -self.model.residuals(arc_states(dyn, x[:6], self.t0, self.model.times))
 
-        def predicted(dyn: Dynamics) -> np.ndarray:  # minus the residuals: wrapped like them
-            return -self.model.residuals(arc_states(dyn, x[:6], self.t0, self.model.times))
-
-        dp = self.solve_for.partials(predicted, x[6:]) / self.model.sigmas[:, :, None]
-        return np.concatenate([a, dp], axis=2)
+            dp[:, :, rest] = self.solve_for.partials(predicted, x[6:], only=rest)
+        if burns:
+            dx = delta_v_state_partials(self.model.times, self.t0, stms[:k], dict(zip(burn_t.tolist(), stms[k:])), burns)
+            dp[:, :, list(burns)] = np.einsum("kmj,kjp->kmp", h, dx)
+        return np.concatenate([a, dp / self.model.sigmas[:, :, None]], axis=2)
 
     def normal(self, a: np.ndarray, w: np.ndarray, x: np.ndarray, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Normal matrix (6 + P, 6 + P) and right-hand side (6 + P,) over the used rows."""

@@ -19,6 +19,7 @@ it with a step ten times smaller.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -81,12 +82,13 @@ class SolveFor:
             self._cache = (key, dyn)
         return self._cache[1]
 
-    def partials(self, predict: Any, values: np.ndarray) -> np.ndarray:
+    def partials(self, predict: Any, values: np.ndarray, only: Sequence[int] | None = None) -> np.ndarray:
         """Central differences d z / d p (K, m, P) of ``predict(dynamics) -> (K, m)`` (the
         measurements predicted with a model; angle differences wrapped by the caller's function)
-        at ``values`` (P,)."""
+        at ``values`` (P,); with ``only``, of those parameters' indices alone (K, m, len(only))."""
         cols = []
-        for j, h in enumerate(self.steps):
+        for j in range(self.size) if only is None else only:
+            h = self.steps[j]
             e = np.zeros(self.size)
             e[j] = h
             up = predict(self.dynamics(values + e))

@@ -289,8 +289,9 @@ class ImpulsiveDynamics(Dynamics):
         own = tuple(n for k in range(len(self.impulses)) for n in delta_v_parameter_names(k))
         return tuple(getattr(self.base, "solve_for_parameters", ())) + own
 
-    def _impulse_axis(self, name: str) -> tuple[int, int] | None:
-        """(impulse index, axis) of a ``delta_v_{k}_{axis}_ms`` name of this model, else None."""
+    def impulse_axis(self, name: str) -> tuple[int, int] | None:
+        """(impulse index into :attr:`impulses`, axis 0-2) of a ``delta_v_{k}_{axis}_ms`` name of
+        this model, else None."""
         parts = name.split("_")
         if (len(parts) != 5 or parts[:2] != ["delta", "v"] or parts[4] != "ms" or parts[3] not in _AXES
                 or not parts[2].isdigit()):
@@ -307,7 +308,7 @@ class ImpulsiveDynamics(Dynamics):
     def parameter(self, name: str) -> float:
         """The value of solve-for parameter ``name``: an impulse's synodic component in m/s, or
         the base's parameter."""
-        ka = self._impulse_axis(name)
+        ka = self.impulse_axis(name)
         if ka is not None:
             return float(self.impulses[ka[0]].dv[ka[1]] * MS_PER_VU)
         if name in tuple(getattr(self.base, "solve_for_parameters", ())):
@@ -321,7 +322,7 @@ class ImpulsiveDynamics(Dynamics):
         dvs = [imp.dv.copy() for imp in self.impulses]
         for_base = {}
         for name, v in values.items():
-            ka = self._impulse_axis(name)
+            ka = self.impulse_axis(name)
             if ka is None and name not in base_names:
                 raise self._unknown(name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not np.isfinite(v):
