@@ -94,8 +94,12 @@ def add_maneuvers(one, say) -> None:
             f"not a clean fit: it looks like an object that maneuvered ({why}), and no impulsive burn in "
             "the gaps between the observations explains it",))
         return
+    say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
+        "(full fits in each night's gap)")
     found, doubt = _times_allowed(ctx, one, found)
-    fit, burns, failed = _completed(ctx, found)
+    if not doubt:
+        say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
+    fit, burns, failed = (None, [], "") if doubt else _completed(ctx, found)
     doubt = doubt or failed or _burn_doubt(fit, burns)
     if doubt:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
@@ -108,6 +112,10 @@ def add_maneuvers(one, say) -> None:
                      for m in one.maneuvers)
     one.result = replace(_without_burns(fit), messages=tuple(fit.messages) + (
         f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}",))
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
 def _times_allowed(ctx, one, found):
