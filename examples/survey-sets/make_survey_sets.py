@@ -210,9 +210,9 @@ def plan(rng: np.random.Generator, passes, span_days: float, first_ok=None,
     return out
 
 
-def _displace(rng: np.random.Generator, ms, first_night: int) -> list[int]:
-    """Move 3 % of the measurements (at least one; none of the first ``first_night``) by 30-300"."""
-    n = max(1, int(round(OUTLIER_FRACTION * len(ms))))
+def _displace(rng: np.random.Generator, ms, first_night: int, fraction: float = OUTLIER_FRACTION) -> list[int]:
+    """Move ``fraction`` of the measurements (at least one; none of the first ``first_night``) by 30-300"."""
+    n = max(1, int(round(fraction * len(ms))))
     rows = np.sort(first_night + rng.choice(len(ms) - first_night, size=n, replace=False))
     for i in rows:
         d = rng.uniform(30.0, 300.0) * ARCSEC_RAD
