@@ -41,6 +41,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError, StateError
 from cistrack.fitting.fit_record import read_fit_record
+from cistrack.fitting.fit_record_check import covariance_scale
 from cistrack.least_squares.area_to_mass import joint_covariances
 from cistrack.least_squares.events import prediction_end
 from cistrack.least_squares.line_of_variations import REACH_DELTA_CHI2, widened_to_hold
@@ -92,12 +93,6 @@ def covariance_doubt(record: dict[str, Any]) -> str | None:
     if not isinstance(lov, dict) or lov.get("linear", True):
         return None
     return "bends" if lov.get("followed", True) else "unfollowed"
-
-
-def covariance_scale(record: dict[str, Any]) -> float:
-    """max(1, noise scale)^2 of a fit record (1 when the noise scale is undefined)."""
-    s = float(record.get("noise_scale", float("nan")))
-    return s * s if math.isfinite(s) and s > 1.0 else 1.0
 
 
 def _result(record: dict[str, Any]) -> FitResult:

@@ -10,6 +10,7 @@ import shutil
 import numpy as np
 import pytest
 
+from cistrack import units
 from cistrack.cli.main import main
 from cistrack.errors import CistrackError
 from cistrack.fitting.fit_export import GRID_MINUTES, export_fit
@@ -239,7 +240,9 @@ def _burned(fit_dir, d):
     rec = json.loads((d / "fit.json").read_text())
     t_burn = 0.5 * (rec["arc"]["first_tu"] + rec["arc"]["last_tu"]) * TU_S / 86400.0
     rec["maneuvers"] = [{"t_days": t_burn + 0.1, "t_burn_days": t_burn, "t_burn_sigma_days": 0.05,
-                         "t_burn_utc": "2026-03-09T00:00:00Z", "delta_v_ms": 0.3, "delta_v_sigma_ms": 0.03,
+                         "t_burn_utc": units.format_utc(units.tu_to_utc(units.parse_utc(rec["scenario_epoch_utc"]),
+                                                                         t_burn * 86400.0 / TU_S)),
+                         "delta_v_ms": 0.3, "delta_v_sigma_ms": 0.03,
                          "delta_v_vector_ms": [0.3, 0.0, 0.0], "delta_v_covariance_ms2": np.diag([9e-4] * 3).tolist()}]
     (d / "fit.json").write_text(json.dumps(rec))
     return rec, t_burn

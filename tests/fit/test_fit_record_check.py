@@ -13,14 +13,21 @@ from cistrack.fitting.fit_record import read_fit_record
 
 
 def _record() -> dict:
-    """The orbit fields of a fit record as a fit writes them (a correlated, positive-definite covariance)."""
+    """The orbit fields of a fit record as a fit writes them (a correlated, positive-definite covariance;
+    the UTC times the scenario's epoch plus their TU)."""
+    from cistrack import units
+
     a = np.arange(36, dtype=float).reshape(6, 6) / 36.0
     cov = 1e-10 * (a @ a.T + np.eye(6))
+    start = units.tu_to_utc(units.parse_utc("2026-03-06T12:02:32.999088Z"), -1.05)
     return {"format": "cistrack-fit", "designation": "C2RLB52", "state": [1.02, 0.0, -0.18, 0.0, -0.1, 0.0],
             "covariance": cov.tolist(), "epoch_tu": 1.05, "epoch_utc": "2026-03-06T12:02:32.999088Z",
+            "scenario_epoch_utc": units.format_utc(start),
             "noise_scale": 1.1, "rms": 1.07, "chi2": 150.6, "condition_number": 445.7, "n_used": 65,
             "n_rejected": 0, "iterations": 5, "converged": True, "weakest_direction_km": [2.3, -0.3, -0.5, 0, 0, 0],
-            "area_to_mass": {"estimated": False}, "arc": {"first_tu": 0.0, "last_tu": 1.05},
+            "area_to_mass": {"estimated": False},
+            "arc": {"first_tu": 0.0, "last_tu": 1.05, "first_utc": units.format_utc(start),
+                    "last_utc": "2026-03-06T12:02:32.999088Z"},
             "maneuvers": [_burn()]}
 
 
