@@ -57,7 +57,7 @@ from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
            "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states",
-           "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short"]
+           "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short", "check_scenario_epoch"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -173,14 +173,33 @@ def after_last_burn(record: dict[str, Any], times: np.ndarray, n_arc: int) -> tu
     return times[keep], int(np.count_nonzero(keep[:n_arc]))
 
 
-def _scenario(d: Path, reg: Registry):
+def _scenario(d: Path, reg: Registry, record: dict[str, Any] | None = None):
+    """The fit's scenario (``scenario.toml``); with ``record`` (its fit.json), checked to count from
+    the epoch the record's times count from (:func:`check_scenario_epoch`)."""
     from cistrack.scenario.loading import recorded_scenario
 
     p = d / "scenario.toml"
     try:
-        return recorded_scenario(p, reg)
+        scen = recorded_scenario(p, reg)
     except FileNotFoundError:
         raise ConfigError(f"{d}: not a fit directory (no scenario.toml); run 'cistrack fit FILE --out DIR' first") from None
+    if record is not None:
+        check_scenario_epoch(d, record, scen)
+    return scen
+
+
+def check_scenario_epoch(d: str | Path, record: dict[str, Any], scen) -> None:
+    """Refuse (ConfigError naming both files) a fit directory ``d`` whose ``scenario.toml`` epoch is
+    not fit.json's ``scenario_epoch_utc`` (to a millisecond): the fit's TU times count from the latter,
+    and an edited scenario.toml had silently shifted every exported state and prediction."""
+    from cistrack.fitting.fit_record_check import UTC_TOLERANCE_S
+
+    recorded = units.parse_utc(record["scenario_epoch_utc"])  # checked by read_fit_record
+    if abs((scen.epoch - recorded).total_seconds()) > UTC_TOLERANCE_S:
+        raise ConfigError(f"{Path(d) / 'scenario.toml'}: epoch {units.format_utc(scen.epoch)} is not "
+                          f"the scenario epoch {record['scenario_epoch_utc']} of {Path(d) / 'fit.json'} "
+                          "(scenario_epoch_utc), which the fit's times count from: the folder was edited after the "
+                          "fit; fit the observations again")
 
 
 @dataclass(frozen=True)
@@ -229,7 +248,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     refusal = _refusal(d, record, opts.force, words)
     reg = registry or default_registry()
     exporter = reg.create("exporter", format, **params)
-    scen = _scenario(d, reg)
+    scen = _scenario(d, reg, record)
     frame = _inertial_frame(d, scen, reg)
     result = _result(record)
     arc = record["arc"]

@@ -343,7 +343,7 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     directory (the filter's estimate at its last step, when the run finished without diverging:
     what `cistrack export` exports); ConfigError naming the directory otherwise."""
     from cistrack.fitting.fit_export import _result as fit_result
-    from cistrack.fitting.fit_export import covariance_scale, fit_refusal, is_fit_directory, line_states
+    from cistrack.fitting.fit_export import check_scenario_epoch, covariance_scale, fit_refusal, is_fit_directory, line_states
     from cistrack.fitting.fit_record import read_fit_record
     from cistrack.results.dir_lock import check_no_writer
     from cistrack.runs.export import scenario_of
@@ -360,6 +360,7 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
     scen = scenario_of(d, reg)
     dyn = scen.build("dynamics", reg)
     if rec is not None:
+        check_scenario_epoch(d, rec, scen)
         cov = np.asarray(rec["covariance"], dtype=float) * covariance_scale(rec)
         amr = rec.get("area_to_mass")
         fit = None

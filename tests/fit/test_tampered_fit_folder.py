@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from datetime import timedelta
 
 import pytest
 
@@ -142,3 +143,16 @@ def test_a_burn_time_in_utc_that_agrees_with_its_days_is_exported(fit_dir, tmp_p
     d = _copy(fit_dir, tmp_path, lambda r: r.update(maneuvers=[_burn(r)]))
     assert main(["export", str(d), "--format", "oem", "--quiet"]) == 0
     assert "impulsive burn(s)" in (d / "estimate.oem").read_text()
+
+
+def test_a_scenario_epoch_that_fit_json_contradicts_is_refused_naming_both_files(fit_dir, tmp_path, capsys):
+    """The fit's TU times count from fit.json's scenario_epoch_utc: an edited scenario.toml epoch had
+    silently shifted every exported state and prediction by ten days."""
+    d = _copy(fit_dir, tmp_path)
+    toml = d / "scenario.toml"
+    epoch = json.loads((d / "fit.json").read_text())["scenario_epoch_utc"]
+    later = units.format_utc(units.parse_utc(epoch) + timedelta(days=10))
+    toml.write_text(toml.read_text().replace(f'epoch = "{epoch}"', f'epoch = "{later}"'))
+    err = _refused(d, capsys)
+    assert (f"scenario.toml: epoch {later} is not the scenario epoch {epoch} of {d / 'fit.json'} "
+            "(scenario_epoch_utc), which the fit's times count from") in err
