@@ -14,7 +14,8 @@ from cistrack.errors import ConfigError
 from cistrack.results.earlier_run import CLI_WORDS, OptionWords
 from cistrack.results.store import MANIFEST
 
-__all__ = ["check_fit_replacing", "check_fit_form", "other_form_results", "remove_other_form", "FIT_RECORD"]
+__all__ = ["check_fit_replacing", "check_fit_form", "check_several_objects_dir", "other_form_results", "remove_other_form",
+           "FIT_RECORD"]
 
 FIT_RECORD = "fit.json"
 """The record a finished fit writes last in its directory."""
@@ -78,6 +79,22 @@ def check_fit_form(directory: str | Path, each: bool, where: str = "--out", over
     raise ConfigError(f"{where} {directory}: holds {what} from an earlier fit with another fit.arcs; this fit would "
                       f"leave it beside its own results: give another {words.out}, remove it, or {words.add_overwrite} "
                       "to remove it")
+
+
+def check_several_objects_dir(directory: str | Path, where: str = "--out", overwrite: bool = False,
+                              words: OptionWords = CLI_WORDS) -> list[Path]:
+    """Refuse (:class:`ConfigError`) a fit of several objects into ``directory`` (each object into its
+    ``fit-<designation>`` folder there) when ``directory`` holds a fit of one object (a top-level
+    fit.json), unless ``overwrite``: then returns it, to remove with :func:`remove_other_form`. Left
+    beside the new folders, that stale fit had been what export and predict of ``directory`` read."""
+    d = Path(directory)
+    stale = [d / FIT_RECORD] if (d / FIT_RECORD).is_file() else []
+    if not stale or overwrite:
+        return stale
+    raise ConfigError(f"{where} {d}: holds the fit of one object ({FIT_RECORD}); this fit of several objects writes "
+                      f"a folder for each (fit-<designation>) and would leave it beside them, where export and "
+                      f"predict of {d} would still read it: give another {words.out}, remove it, or "
+                      f"{words.add_overwrite} to remove it")
 
 
 def remove_other_form(directory: str | Path, stale: list[Path]) -> None:

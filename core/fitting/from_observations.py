@@ -62,7 +62,8 @@ from cistrack.least_squares.progress import reported_to
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.plugin.registry import Registry, default_registry
-from cistrack.fitting.fit_replacing import FIT_RECORD, check_fit_form, check_fit_replacing, remove_other_form
+from cistrack.fitting.fit_replacing import (FIT_RECORD, check_fit_form, check_fit_replacing, check_several_objects_dir,
+                                            remove_other_form)
 from cistrack.results.earlier_run import CLI_WORDS, OptionWords
 from cistrack.results.dir_lock import fit_lock
 from cistrack.results.output_paths import check_output_dir, distinct_stems
@@ -723,11 +724,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     scen_settings, fit_table, reader_params = _split_settings(settings)
     choices = fit_choices(fit_table)
     objects = read_object_observations(list(files), reg, reader_params, say)
-    plans = []
-    for obs, slug in zip(objects, _directory_names([o.designation for o in objects])):
-        d = Path(out) if out is not None and len(objects) == 1 else (Path(out) / slug if out is not None
-                                                                       else Path("runs") / slug)
-        plans.append((obs, d))
+    plans, top_stale = _plans(objects, out, overwrite, words)
     where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
     for obs, d in plans:  # validate every scenario and directory before the first run
@@ -736,6 +733,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         if replaced:
             say(f"{words.overwrite}: replacing {replaced} in {d}")
         stale_of[d] = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite, words)
+    if top_stale:
+        remove_other_form(Path(out), top_stale)
+        say(f"{words.overwrite}: removed the earlier fit of one object in {out} ({FIT_RECORD} and its files)")
     results = []
     for obs, d in plans:
         stale = stale_of[d]
@@ -749,6 +749,21 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             check_fit_replacing(d, obs.designation, where, overwrite, words)
             results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
+
+
+def _plans(objects: list[ObjectObservations], out: str | Path | None, overwrite: bool,
+           words: OptionWords) -> tuple[list[tuple[ObjectObservations, Path]], list[Path]]:
+    """(each object with its results directory: ``out``, or with several objects ``out/fit-<designation>``,
+    default ``runs/fit-<designation>``), and the top-level fit of one object in ``out`` that a fit of
+    several objects removes with ``overwrite`` (refused without: :func:`check_several_objects_dir`)."""
+    plans = []
+    for obs, slug in zip(objects, _directory_names([o.designation for o in objects])):
+        d = Path(out) if out is not None and len(objects) == 1 else (Path(out) / slug if out is not None
+                                                                       else Path("runs") / slug)
+        plans.append((obs, d))
+    if out is None or len(objects) == 1:
+        return plans, []
+    return plans, check_several_objects_dir(out, words.out.rstrip("="), overwrite, words)
 
 
 @dataclass(frozen=True)

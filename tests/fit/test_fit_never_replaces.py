@@ -186,3 +186,27 @@ def test_an_export_or_prediction_whose_fit_was_written_again_meanwhile_writes_no
     (d / "fit.json").write_text(record)  # the same text, written again: another file
     with pytest.raises(RunBusy, match="results were written again while the export was made"):
         check_unchanged(d, stamp, "export")
+
+
+def test_a_fit_of_several_objects_into_a_one_object_fits_folder_is_refused_without_overwrite(tmp_path, capsys):
+    """Each object's fit goes to OUT/fit-<designation>: the one-object fit at OUT's top had been left
+    beside them (exit 0), and predict OUT had then used its stale orbit."""
+    out = tmp_path / "out"
+    assert main(["fit", str(_one_tracklet_each(tmp_path / "one.psv", ["C2RLB52"])), "--out", str(out), "--quiet"]) == 3
+    before = (out / "fit.json").read_bytes()
+    two = _one_tracklet_each(tmp_path / "two.psv", ["A1", "B2"])
+    capsys.readouterr()
+    assert main(["fit", str(two), "--out", str(out), "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"--out {out}: holds the fit of one object (fit.json); this fit of several objects writes a folder for "
+            "each (fit-<designation>) and would leave it beside them") in err and "add --overwrite to remove it" in err
+    assert (out / "fit.json").read_bytes() == before and not list(out.glob("fit-*"))
+
+
+def test_a_fit_of_several_objects_with_overwrite_removes_the_one_object_fit_at_the_top(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["fit", str(_one_tracklet_each(tmp_path / "one.psv", ["C2RLB52"])), "--out", str(out), "--quiet"]) == 3
+    two = _one_tracklet_each(tmp_path / "two.psv", ["A1", "B2"])
+    assert main(["fit", str(two), "--out", str(out), "--quiet", "--overwrite"]) == 3  # one tracklet each
+    assert not (out / "fit.json").exists() and not list(out.glob("observations*"))
+    assert sorted(p.name for p in out.glob("fit-*")) == ["fit-A1", "fit-B2"]
