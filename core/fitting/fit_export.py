@@ -31,6 +31,7 @@ import csv
 import dataclasses
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from datetime import timedelta
 from pathlib import Path
@@ -326,31 +327,71 @@ def _prediction(result: FitResult, dynamics, times: np.ndarray, covariance: str)
 def line_states(d: Path, rec: dict[str, Any]) -> np.ndarray | None:
     """The states (M, 6) [LU, VU, synodic, at the fit epoch] of ``d``'s ``lov.csv`` within the
     reach of the lowest chi-square (:data:`REACH_DELTA_CHI2` times :func:`covariance_scale`) when
-    fit.json says the line is not linear; None otherwise, or when the file is missing, not a regular
-    file, unreadable, or holds a state no orbit of the fit's has (beyond 3e6 km or 100 km/s)."""
-    from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
+    fit.json says the line is not linear; None otherwise, or when the file is missing. A damaged one
+    (not a regular file, unreadable, a cell that is not a finite number, a column missing, no point,
+    or a state no orbit of the fit's has: beyond 3e6 km or 100 km/s) is ignored too, with a warning
+    naming it and what is wrong: the covariance is then the linear one, with its own warning."""
     from cistrack.interfaces.reader import not_a_file
 
     lov = rec.get("line_of_variations")
     if not isinstance(lov, dict) or lov.get("linear", True) or not isinstance(lov.get("file"), str):
         return None
     path = Path(d) / Path(lov["file"]).name
-    if not_a_file(path) is not None:  # a pipe or a device is never opened
+    why = not_a_file(path)  # a pipe or a device is never opened
+    if why == "no such file":
         return None
     try:
-        with path.open(newline="") as fh:
-            rows = [(float(r["chi2"]), [float(r[c]) for c in ("x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")])
-                    for r in csv.DictReader(fh)]
-    except (OSError, KeyError, TypeError, ValueError, csv.Error):
+        if why is not None:
+            raise ValueError(why)
+        chi2, km = _line_points(path)
+    except ValueError as exc:
+        warnings.warn(f"{path}: {exc}; the line of variations is ignored (fit the observations again to draw it anew)",
+                      stacklevel=2)
         return None
-    chi2, km = np.array([c for c, _ in rows]), np.array([x for _, x in rows]).reshape(-1, 6)
-    if chi2.size == 0 or not np.all(np.isfinite(chi2)) or not np.all(np.isfinite(km)):
-        return None
-    if np.any(np.linalg.norm(km[:, :3], axis=1) > MAX_DISTANCE_KM) or np.any(np.linalg.norm(km[:, 3:], axis=1) > MAX_SPEED_KMS):
-        return None  # not an orbit of the fit's (a damaged file): the linear covariance, with its warning
-    states = units.state_from_km(km)
     keep = chi2 <= chi2.min() + REACH_DELTA_CHI2 * covariance_scale(rec)
-    return states[keep] if np.all(np.isfinite(states[keep])) else None
+    return units.state_from_km(km)[keep]
+
+
+_LINE_COLUMNS = ("chi2", "x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")
+"""The columns of lov.csv a prediction reads."""
+
+
+def _line_points(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(chi-square (M,), states (M, 6) km and km/s) of the points of a lov.csv; ValueError saying
+    what is wrong when it cannot be read or holds what no fit writes."""
+    from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
+
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            missing = [c for c in _LINE_COLUMNS if c not in (reader.fieldnames or ())]
+            if missing:
+                raise ValueError(f"has no column {missing[0]!r} (a fit writes {', '.join(_LINE_COLUMNS)} and more)")
+            rows = np.array([[_line_cell(r, c, n) for c in _LINE_COLUMNS] for n, r in enumerate(reader, 2)])
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise ValueError(f"cannot be read ({exc})") from None
+    if rows.size == 0:
+        raise ValueError("holds no point of the line (its header only)")
+    km = rows[:, 1:]
+    if (np.max(np.abs(km[:, :3])) > MAX_DISTANCE_KM or np.max(np.linalg.norm(km[:, :3], axis=1)) > MAX_DISTANCE_KM
+            or np.max(np.abs(km[:, 3:])) > MAX_SPEED_KMS or np.max(np.linalg.norm(km[:, 3:], axis=1)) > MAX_SPEED_KMS):
+        raise ValueError(f"holds a state no orbit of the fit's has (beyond {MAX_DISTANCE_KM:.3g} km or "
+                         f"{MAX_SPEED_KMS:g} km/s)")
+    return rows[:, 0], km
+
+
+def _line_cell(row: dict, column: str, line: int) -> float:
+    """The finite number in ``column`` of a lov.csv ``row`` (on ``line``); ValueError naming both."""
+    text = row.get(column)
+    if text is None:
+        raise ValueError(f"line {line} is short of column {column}")
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"line {line}, column {column}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise ValueError(f"line {line}, column {column}: {text!r} is not a finite number")
+    return value
 
 
 def line_drawn_short(rec: dict[str, Any]) -> str:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import warnings
 from datetime import timedelta
 
 import pytest
@@ -156,3 +157,51 @@ def test_a_scenario_epoch_that_fit_json_contradicts_is_refused_naming_both_files
     err = _refused(d, capsys)
     assert (f"scenario.toml: epoch {later} is not the scenario epoch {epoch} of {d / 'fit.json'} "
             "(scenario_epoch_utc), which the fit's times count from") in err
+
+
+def _with_lov(fit_dir, tmp_path, content: bytes | None):
+    """A copy of the fit folder whose lov.csv holds ``content`` (None: no lov.csv)."""
+    d = _copy(fit_dir, tmp_path)
+    if content is None:
+        (d / "lov.csv").unlink()
+    else:
+        (d / "lov.csv").write_bytes(content)
+    return d
+
+
+def _lov_edited(fit_dir, row: int, column: str, value: str) -> bytes:
+    lines = (fit_dir / "lov.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    lines[row] = ",".join(cells)
+    return ("\n".join(lines) + "\n").encode()
+
+
+@pytest.mark.parametrize("damage, told", [
+    (lambda f: _lov_edited(f, 3, "x_km", "nan"), "line 4, column x_km: 'nan' is not a finite number"),
+    (lambda f: _lov_edited(f, 3, "chi2", "abc"), "line 4, column chi2: 'abc' is not a number"),
+    (lambda f: _lov_edited(f, 3, "x_km", "1e300"), "holds a state no orbit of the fit's has (beyond 3e+06 km or 100 km/s)"),
+    (lambda f: (f / "lov.csv").read_bytes().splitlines(keepends=True)[0], "holds no point of the line (its header only)"),
+    (lambda f: b"sigma,chi2,x_km\n0.0,1.0,2.0\n", "has no column 'y_km'"),
+    (lambda f: b"\xff\xfe\x00garbage", "cannot be read"),
+])
+def test_a_damaged_line_of_variations_is_ignored_with_a_warning_naming_lov_csv(fit_dir, tmp_path, damage, told):
+    """As a missing lov.csv, it is not used (the linear covariance), but not silently: a NaN or text cell,
+    a missing column or garbage had been dropped without a word, and 1e300 had printed numpy's
+    'overflow encountered in multiply'."""
+    without = _with_lov(fit_dir, tmp_path / "a", None)
+    assert _warned(["predict", str(without), "--site", "568", "--quiet"]) == []
+    d = _with_lov(fit_dir, tmp_path / "b", damage(fit_dir))
+    for argv in (["predict", str(d), "--site", "568", "--quiet"], ["export", str(d), "--format", "oem", "--quiet"]):
+        [warned] = _warned(argv)   # that one only: no numpy warning
+        assert warned.startswith(f"{d / 'lov.csv'}: {told}") and "the line of variations is ignored" in warned
+    assert (d / "sky-568.csv").read_bytes() == (without / "sky-568.csv").read_bytes()
+
+
+def _warned(argv: list[str]) -> list[str]:
+    """The warnings (every kind) of the command ``argv``, once it exited 0."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(argv) == 0
+    return [str(w.message) for w in caught]
