@@ -58,7 +58,8 @@ from cistrack.results.inertial_frame import to_inertial
 
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
            "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states",
-           "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short", "check_scenario_epoch"]
+           "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short", "check_scenario_epoch",
+           "refuse_non_finite"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -263,6 +264,8 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     pred, held = _holding_line(_prediction(result, dynamics, times, opts.covariance), line_states(d, record),
                                dynamics, result.epoch, times)
     utc = np.array([units.format_utc(units.tu_to_utc(scen.epoch, float(t))) for t in times])
+    refuse_non_finite(np.concatenate([pred.states, pred.covariances.reshape(times.size, -1)], axis=1), utc,
+                      f"{d}: the states and covariances to export")
     ie = to_inertial(_estimates(times, n_arc, utc, pred), frame)
     name = str(record.get("designation") or scen.name)
     comments = _warnings(record, refusal, held) + _comments(record, name, opts, pred, utc, n_arc,
@@ -392,6 +395,19 @@ def _line_cell(row: dict, column: str, line: int) -> float:
     if not math.isfinite(value):
         raise ValueError(f"line {line}, column {column}: {text!r} is not a finite number")
     return value
+
+
+def refuse_non_finite(values: np.ndarray, utc: Any, what: str) -> None:
+    """Raise ConfigError naming ``what`` when ``values`` (K, ...), a row per time ``utc`` (K,), holds
+    NaN or an infinity: no OEM or predictions CSV is written with one (a fit.json edited to a noise
+    scale of 1e300 had given both, with exit status 0)."""
+    if len(utc) == 0:
+        return
+    bad = ~np.all(np.isfinite(np.asarray(values, dtype=float).reshape(len(utc), -1)), axis=1)
+    if np.any(bad):
+        raise ConfigError(f"{what}: {int(np.sum(bad))} of {len(utc)} times hold a value that is not a finite number "
+                          f"(NaN or infinite), the first at {str(utc[int(np.argmax(bad))])[:19]}Z; nothing was written: "
+                          "the orbit of fit.json is not one a fit writes; fit the observations again")
 
 
 def line_drawn_short(rec: dict[str, Any]) -> str:

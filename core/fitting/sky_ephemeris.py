@@ -104,12 +104,19 @@ class SkyEphemeris:
                 for k in range(len(self.utc))]
 
     def write_csv(self, path: str | Path) -> Path:
-        """Write :meth:`rows` to ``path`` (CSV with a header of :data:`CSV_COLUMNS`)."""
+        """Write :meth:`rows` to ``path`` (CSV with a header of :data:`CSV_COLUMNS`); ConfigError, nothing
+        written, when a number of them is NaN or infinite
+        (:func:`cistrack.fitting.fit_export.refuse_non_finite`)."""
+        from cistrack.fitting.fit_export import refuse_non_finite
+
+        rows = self.rows()
+        refuse_non_finite(np.array([[v for v in r.values() if isinstance(v, float)] for r in rows]), self.utc,
+                          "the sky predictions")
         p = Path(path)
         with p.open("w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=CSV_COLUMNS)
             w.writeheader()
-            for row in self.rows():
+            for row in rows:
                 w.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in row.items()})
         return p
 

@@ -5,16 +5,21 @@ COMMENT that the states contradict. One real fit of the shipped example (C_R A/m
 of variations drawn: every part of fit.json an export reads) serves every test; each edits a copy."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import warnings
 from datetime import timedelta
 
+import numpy as np
 import pytest
 
 from cistrack import units
+from cistrack.astro.sites import observatory
 from cistrack.cli.main import main
+from cistrack.errors import ConfigError
 from cistrack.fitting.from_observations import fit_files
+from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
 from cistrack.scenario.loading import builtin_scenario_path
 
 DATA = builtin_scenario_path("real-data").parent / "real_data"
@@ -205,3 +210,26 @@ def _warned(argv: list[str]) -> list[str]:
         warnings.simplefilter("always")
         assert main(argv) == 0
     return [str(w.message) for w in caught]
+
+
+def test_sky_predictions_holding_a_value_that_is_not_finite_are_not_written(fit_dir, tmp_path):
+    """The last guard behind fit.json's checks: a NaN or infinite ellipse is refused, never written as 'nan'."""
+    orbit = orbit_of_directory(fit_dir)
+    sky = sky_ephemeris_of(orbit, orbit.t0 + np.linspace(0.0, 0.2, 3), observatory("568"))
+    cov = sky.covariance_arcsec2.copy()
+    cov[1] = np.inf
+    with pytest.raises(ConfigError, match=r"the sky predictions: 1 of 3 times hold a value that is not a finite number "
+                                          r"\(NaN or infinite\), the first at .*; nothing was written"):
+        dataclasses.replace(sky, covariance_arcsec2=cov).write_csv(tmp_path / "sky.csv")
+    assert not (tmp_path / "sky.csv").exists()
+    assert sky.write_csv(tmp_path / "sky.csv").is_file()
+
+
+def test_states_or_covariances_to_export_that_are_not_finite_are_refused_naming_the_first_time():
+    from cistrack.fitting.fit_export import refuse_non_finite   # export_fit's last guard behind fit.json's checks
+
+    values = np.ones((3, 42))
+    values[2, 40] = np.nan
+    with pytest.raises(ConfigError, match=r"FIT: 1 of 3 times hold a value that is not a finite number \(NaN or "
+                                          r"infinite\), the first at 2026-03-02T00:20:00Z; nothing was written"):
+        refuse_non_finite(values, ["2026-03-02T00:00:00Z", "2026-03-02T00:10:00Z", "2026-03-02T00:20:00Z"], "FIT")
