@@ -91,6 +91,9 @@ def _times(args, orbit) -> np.ndarray:
     from cistrack.errors import ConfigError
 
     start = args.start or units.tu_to_utc(orbit.epoch, orbit.t0)
+    if args.start is None:  # the orbit's own epoch: the directory is at fault, not an option
+        _check_year(f"{args.run}: the orbit's epoch ({_epoch_field(args.run)}, the default --start)", start,
+                    "the directory does not hold an orbit cistrack can predict: fit the observations again")
     _check_year("--start", start)
     stop = args.stop or start + timedelta(days=1)
     _check_year("--stop", stop)
@@ -189,14 +192,22 @@ def _lost_note(sky) -> str:
             f"(up to {np.nanmax(major):.3g}): the orbit does not give the sky position there")
 
 
-def _check_year(option: str, t) -> None:
-    """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need."""
+def _epoch_field(run_dir) -> str:
+    """Where a results directory states its orbit's epoch: fit.json's epoch_utc, or a run's last estimate."""
+    from cistrack.fitting.fit_export import is_fit_directory
+
+    return "fit.json epoch_utc" if is_fit_directory(run_dir) else "the run's last estimate"
+
+
+def _check_year(option: str, t, advice: str = "give a time within them") -> None:
+    """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need,
+    naming ``option`` (what gave the time) and ending with ``advice``."""
     from cistrack.errors import ConfigError
     from cistrack.fitting.sky_ephemeris import FIRST_YEAR, LAST_YEAR
 
     if not FIRST_YEAR <= t.year <= LAST_YEAR:
         raise ConfigError(f"{option} {t.year:04d}-{t.month:02d}-{t.day:02d}: sky predictions need the DE421 "
-                          f"ephemeris, which covers the years {FIRST_YEAR} to {LAST_YEAR}; give a time within them")
+                          f"ephemeris, which covers the years {FIRST_YEAR} to {LAST_YEAR}; {advice}")
 
 
 def _prefix(args) -> Path:
