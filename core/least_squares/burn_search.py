@@ -52,6 +52,12 @@ __all__ = ["suspicion", "end_night_bias", "end_night_rejected", "burn_fit_option
 MIN_GAP_HOURS = 0.2
 """Gaps between observations at least this long (12 minutes) are candidate burn intervals: between
 nights, and between the tracklets or exposures of one night."""
+DENSE_WINDOW_HOURS = 1.0
+"""A stretch of observations each closer than :data:`MIN_GAP_HOURS` to the next that spans at least
+this long (a pass of a dense follow-up campaign; a survey's tracklet spans 10-30 minutes) is a
+candidate burn interval as a whole (:func:`_windows`): a burn among its observations had had only
+the gaps around it to be placed in (a 0.71 m/s burn of a three-site campaign, observed every few
+minutes, placed an hour early, eight of its time sigmas)."""
 MAX_BURNS = 3
 """At most this many burns are searched for in one arc."""
 FALSE_ALARM = 1e-4
@@ -218,6 +224,27 @@ def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[floa
     return [(float(a), float(b)) for a, b in zip(t[:-1], t[1:]) if b - a >= dt and (float(a), float(b)) not in done]
 
 
+def _windows(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The candidate burn intervals (TU) in time order but those ``done``: every gap of at least
+    :data:`MIN_GAP_HOURS` between observations, and every stretch of closer observations spanning
+    at least :data:`DENSE_WINDOW_HOURS` (from its first observation to its last)."""
+    t = np.unique(np.asarray(times, dtype=float))
+    dt, dense = units.hours_to_tu(MIN_GAP_HOURS), units.hours_to_tu(DENSE_WINDOW_HOURS)
+    out: list[tuple[float, float]] = []
+    start = None
+    for a, b in zip(t[:-1].tolist(), t[1:].tolist()):
+        if b - a < dt:
+            start = a if start is None else start
+            continue
+        if start is not None and a - start >= dense:
+            out.append((start, a))
+        start = None
+        out.append((a, b))
+    if start is not None and t[-1] - start >= dense:
+        out.append((start, float(t[-1])))
+    return [w for w in out if w not in done]
+
+
 def flown(dynamics: Dynamics, burns: list[BurnEstimate]) -> Dynamics:
     """``dynamics`` flying the estimated ``burns`` (itself when there are none)."""
     if not burns:
@@ -249,7 +276,7 @@ def _next_burn(arc: BurnArc, found: ManeuverSearch) -> tuple[ImpulseFit, tuple[f
     between two neighbouring gaps): survey set dro-s90 (seed 90, 0.5 m/s) had its burn placed between two tracklets of a
     night 1.4 days after it, the true four-day gap not among the first screen's two best, a fit
     there costing 32 less."""
-    gaps = _gaps(arc.measurements.times, found.windows)
+    gaps = _windows(arc.measurements.times, found.windows)
     if not gaps:
         return None
     flown = replace(arc, dynamics=found.dynamics)  # the burns found so far flown
@@ -378,7 +405,7 @@ class RivalTime:
 def _candidates(times: np.ndarray, latest: float) -> np.ndarray:
     """:data:`GAP_POINTS` burn times (TU) inside each gap between ``times``, up to ``latest``."""
     fr = (np.arange(GAP_POINTS) + 0.5) / GAP_POINTS
-    ts = np.array([a + f * (b - a) for a, b in _gaps(times, []) for f in fr])
+    ts = np.array([a + f * (b - a) for a, b in _windows(times, []) for f in fr])
     return ts[ts <= latest]
 
 
@@ -433,11 +460,11 @@ def _trial_times(times: np.ndarray, window: tuple[float, float], taken: list[tup
     (at least :data:`NIGHT_GAP_HOURS`) before and after it (a burn between two tracklets of a night
     may as well lie after the night's last), and :data:`FAR_POINTS` in every other night's gap but
     those ``taken`` by other burns; empty when ``window`` is no gap of ``times``."""
-    gaps = _gaps(times, [])
+    gaps, between = _windows(times, []), set(_gaps(times, []))
     k = next((i for i, g in enumerate(gaps) if np.isclose(g[0], window[0]) and np.isclose(g[1], window[1])), None)
     if k is None:
         return []
-    night = [i for i, g in enumerate(gaps) if g[1] - g[0] >= units.hours_to_tu(NIGHT_GAP_HOURS)]
+    night = [i for i, g in enumerate(gaps) if g in between and g[1] - g[0] >= units.hours_to_tu(NIGHT_GAP_HOURS)]
     near = {max([i for i in night if i < k], default=k), k, min([i for i in night if i > k], default=k)}
     out = []
     for i, (a, b) in enumerate(gaps):
