@@ -86,6 +86,18 @@ def _broadcast(states, t) -> tuple[np.ndarray, np.ndarray, bool]:
     return s, np.broadcast_to(tt, (s.shape[0],)) if tt.size > 1 else tt, single
 
 
+def _to_synodic_each(s: np.ndarray, stack: tuple[np.ndarray, ...], mul_r: float, mul_v: float) -> np.ndarray:
+    """GCRS states (K, N, 6) and the frame at each of their K times (rotation (K, 3, 3), origin,
+    origin velocity, omega (K, 3)) -> synodic (K, N, 6): one pass of the compiled loop over all
+    K N states, each with its time's frame (the same operations as one time at a time)."""
+    k, n = s.shape[0], s.shape[1]
+    flat = np.ascontiguousarray(s).reshape(k * n, 6)
+    rot, origin, origin_v, omega = (np.repeat(a, n, axis=0) if n != 1 else a for a in stack)
+    out = np.empty_like(flat)
+    gcrs_to_synodic_into(flat, mul_r, mul_v, rot, origin, origin_v, omega, units.LU_KM, units.VU_KMS, out)
+    return out.reshape(s.shape)
+
+
 def _unit_scales(unit: str) -> tuple[float, float]:
     """(position, velocity) km per unit of GCRS states given in ``unit`` ("km" or "lu")."""
     if unit == "km":
@@ -105,6 +117,10 @@ frames at its arc's measurement times at every iteration and Jacobian column).""
 SET_SIZE_KEPT = 2048
 """The longest vector of times kept (about 350 kB of axes); longer ones are evaluated each time."""
 
+STACKS_KEPT = 16
+"""Vectors of times (at most :data:`AXES_KEPT`) whose kept single-time frames
+:meth:`EarthMoonFrame.gcrs_to_synodic_each` keeps stacked (up to about 600 kB each)."""
+
 FRAMES_SHARED = 8
 """(epoch, ephemeris) pairs whose kept times are shared by all their frames (the oldest dropped
 first)."""
@@ -118,6 +134,7 @@ class _KeptAxes:
     ephemeris: object
     singles: dict
     sets: dict
+    stacks: dict
 
 
 _kept_by_frame: dict[tuple, _KeptAxes] = {}
@@ -130,8 +147,8 @@ its id is not reused while the entry lives."""
 def _shared_kept(epoch_tdb: tuple[float, float], ephemeris) -> _KeptAxes:
     """The kept axes of every frame with this epoch and ephemeris."""
     entry = kept_or_evaluated(_kept_by_frame, (epoch_tdb, id(ephemeris)), FRAMES_SHARED,
-                              lambda: _KeptAxes(ephemeris, {}, {}))
-    return entry if entry.ephemeris is ephemeris else _KeptAxes(ephemeris, {}, {})
+                              lambda: _KeptAxes(ephemeris, {}, {}, {}))
+    return entry if entry.ephemeris is ephemeris else _KeptAxes(ephemeris, {}, {}, {})
 
 
 class EarthMoonFrame:
@@ -239,28 +256,39 @@ class EarthMoonFrame:
 
     def gcrs_to_synodic_each(self, states, times, *, unit: str = "km") -> np.ndarray:
         """GCRS states (K, N, 6) at ``times`` (K,) TU (N states at each) -> synodic (K, N, 6) [LU,
-        VU], as :meth:`gcrs_to_synodic` at each time. Up to :data:`AXES_KEPT` times the frame of
-        each is kept for the next request (a filter's stops, a least squares' measurement times);
-        beyond, more than can be kept, the frames are evaluated :data:`SET_SIZE_KEPT` times at once
-        (rounded a few ulp differently from one at a time): 24,000 observation times had each
-        evaluated DE421 alone at every propagation of a fit, 10 s a propagation."""
+        VU], as :meth:`gcrs_to_synodic` at each time, bit for bit. Up to :data:`AXES_KEPT` times the
+        frame of each is kept for the next request (a filter's stops, a least squares' measurement
+        times), and their stack as well (:data:`STACKS_KEPT` vectors of times): a fit of 881
+        observations converts at every one at each propagation, and converting time by time had
+        been half its run time. Beyond, more than can be kept, the frames are evaluated
+        :data:`SET_SIZE_KEPT` times at once (rounded a few ulp differently from one at a time)."""
+        scale_r, scale_v = _unit_scales(unit)
         s = np.asarray(states, dtype=float)
         tt = np.asarray(times, dtype=float).reshape(-1)
-        out = np.empty_like(s)
-        if tt.size <= AXES_KEPT:
-            for k, tk in enumerate(tt):
-                out[k] = self.gcrs_to_synodic(s[k], tk, unit=unit)
-            return out
+        if s.ndim != 3 or s.shape[0] != tt.size or s.shape[-1] != 6:
+            raise ValueError(f"states must have shape (K, N, 6) with K = {tt.size} times, got {s.shape}")
         if not (np.all(np.isfinite(s)) and np.all(np.isfinite(tt))):
             raise ValueError("states and times must be finite")
-        scale_r, scale_v = _unit_scales(unit)
+        if tt.size <= AXES_KEPT:
+            stack = kept_or_evaluated(self._kept.stacks, tt.tobytes(), STACKS_KEPT, lambda: self._stacked(tt))
+            return _to_synodic_each(s, stack, scale_r, scale_v)
+        out = np.empty_like(s)
         for lo in range(0, tt.size, SET_SIZE_KEPT):
             ax = self._evaluate_axes(tt[lo:lo + SET_SIZE_KEPT])
-            for j in range(ax.distance.size):
-                one = slice(j, j + 1)
-                gcrs_to_synodic_into(s[lo + j], scale_r, scale_v, ax.rotation[one], ax.origin[one],
-                                     ax.origin_velocity[one], ax.omega[one], units.LU_KM, units.VU_KMS, out[lo + j])
+            part = slice(lo, lo + ax.distance.size)
+            out[part] = _to_synodic_each(s[part], (ax.rotation, ax.origin, ax.origin_velocity, ax.omega),
+                                         scale_r, scale_v)
         return out
+
+    def _stacked(self, tt: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(rotation (K, 3, 3), origin, origin velocity, omega (K, 3)): the frame of each of the
+        times ``tt`` (K,) as :meth:`axes` gives it for that time alone, stacked (read-only)."""
+        each = [self.axes(float(t)) for t in tt]
+        stack = tuple(np.concatenate([getattr(a, name) for a in each])
+                      for name in ("rotation", "origin", "origin_velocity", "omega"))
+        for arr in stack:
+            arr.setflags(write=False)
+        return stack
 
     # -- pulsating states (CR3BP-like: Earth and Moon fixed) ----------------------------------
     def pulsating_to_gcrs(self, states, t) -> np.ndarray:

@@ -196,6 +196,24 @@ def test_states_at_many_times_convert_as_at_each_time_alone(monkeypatch, nothing
     np.testing.assert_allclose(frame.gcrs_to_synodic_each(s, times, unit="lu"), each, rtol=1e-13, atol=1e-14)
 
 
+@pytest.mark.parametrize("per_time", [1, 3])
+def test_states_at_kept_times_convert_bit_for_bit_as_at_each_time_alone(nothing_kept, rng, per_time):
+    """Up to AXES_KEPT times each time's own frame converts its states: the numbers a fit gets do
+    not depend on how its propagations group their output times."""
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    times = np.linspace(0.0, 2.0, 11)
+    s = rng.normal(size=(times.size, per_time, 6)) * 0.5 + np.array([1.0, 0, 0, 0, 0, 0])
+    each = np.stack([frame.gcrs_to_synodic(s[k], t, unit="lu") for k, t in enumerate(times)])
+    np.testing.assert_array_equal(frame.gcrs_to_synodic_each(s, times, unit="lu"), each)
+    np.testing.assert_array_equal(frame.gcrs_to_synodic_each(s, times, unit="lu"), each)  # the kept stack
+
+
+def test_states_at_many_times_must_have_one_row_per_time(nothing_kept):
+    frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
+    with pytest.raises(ValueError, match=r"\(K, N, 6\) with K = 3"):
+        frame.gcrs_to_synodic_each(np.ones((2, 1, 6)), np.array([0.0, 0.1, 0.2]))
+
+
 def test_states_at_many_times_refuse_a_non_finite_one(monkeypatch, nothing_kept):
     monkeypatch.setattr(nothing_kept, "AXES_KEPT", 1)
     frame = EarthMoonFrame.from_utc("2026-01-01T00:00:00Z")
