@@ -71,6 +71,7 @@ from cistrack.results.store import MANIFEST
 from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 from cistrack.scenario.loading import Scenario, load_scenario, parse_scenario
 from cistrack.scenario.settings import merge_settings, parse_settings
+from cistrack.threads import library_thread_limit
 
 __all__ = ["fit_files", "ObjectFit", "FitChoices", "fit_choices", "TEMPLATE", "EPOCH_LEAD_MINUTES",
            "SPAN_MARGIN_HOURS", "RANGING_IOD", "SHORT_ARC_HOURS", "seeding_text"]
@@ -744,8 +745,9 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             say(f"{words.overwrite}: removed the earlier fit of another fit.arcs in {d} "
                 f"({', '.join(p.name for p in stale)})")
         check_output_dir(d, where, records=(MANIFEST, FIT_RECORD))
-        with fit_lock(d, where), copies_read_quietly():  # one fit at a time in a directory; what it
-            # replaces checked again under it; the reader's warnings were given for the user's files
+        with fit_lock(d, where), copies_read_quietly(), library_thread_limit(blas=1):  # one fit at a time
+            # in a directory; what it replaces checked again under it; the reader's warnings were given
+            # for the user's files; one BLAS thread for the least squares' small matrices, as in a run
             check_fit_replacing(d, obs.designation, where, overwrite, words)
             results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
     return results
