@@ -39,7 +39,7 @@ from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.impulse_partials import delta_v_state_partials, impulse_columns
 from cistrack.least_squares.solve_for_parameters import SolveFor, solve_for as _solve_for
 from cistrack.least_squares.options import AREA_TO_MASS
-from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms
+from cistrack.least_squares.trajectory import arc_states, arc_states_and_stms, arc_states_stms_and_sensitivity
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
@@ -128,23 +128,35 @@ class _Problem:
 
     def _jacobian(self, x: np.ndarray) -> np.ndarray:
         """The state's columns from the transition matrices; a burn's delta-v from them too
-        (:mod:`cistrack.least_squares.impulse_partials`, the burn times among the outputs), every
-        other parameter by central differences."""
+        (:mod:`cistrack.least_squares.impulse_partials`, the burn times among the outputs); a
+        parameter whose sensitivity the model integrates with them (its ``sensitivity_parameters``:
+        the ephemeris model's radiation pressure) from that; every other parameter by central
+        differences."""
         dyn, k = self._dynamics(x), self.model.times.size
         burns = {} if self.solve_for is None else impulse_columns(dyn, self.solve_for.names)
         burn_t = np.array(sorted({tb for tb, _ in burns.values()}))
-        states, stms = arc_states_and_stms(dyn, x[:6], self.t0, np.concatenate([self.model.times, burn_t]))
+        rest = [] if self.solve_for is None else [j for j in range(self.solve_for.size) if j not in burns]
+        known = set(getattr(dyn, "sensitivity_parameters", ()))
+        integrated = next((j for j in rest if self.solve_for.names[j] in known), None)
+        times = np.concatenate([self.model.times, burn_t])
+        if integrated is None:
+            states, stms = arc_states_and_stms(dyn, x[:6], self.t0, times)
+        else:
+            states, stms, sens = arc_states_stms_and_sensitivity(dyn, x[:6], self.t0, times,
+                                                                 self.solve_for.names[integrated])
         h = self.model.jacobian(states[:k])
         a = np.einsum("kmj,kjl->kml", h, stms[:k]) / self.model.sigmas[:, :, None]
         if self.solve_for is None:
             return a
         dp = np.empty(a.shape[:2] + (self.solve_for.size,))
-        rest = [j for j in range(self.solve_for.size) if j not in burns]
+        rest = [j for j in rest if j != integrated]
         if rest:
             def predicted(dyn: Dynamics) -> np.ndarray:  # minus the residuals: wrapped like them
                 return -self.model.residuals(arc_states(dyn, x[:6], self.t0, self.model.times))
 
             dp[:, :, rest] = self.solve_for.partials(predicted, x[6:], only=rest)
+        if integrated is not None:
+            dp[:, :, integrated] = np.einsum("kmj,kj->km", h, sens[:k])
         if burns:
             dx = delta_v_state_partials(self.model.times, self.t0, stms[:k], dict(zip(burn_t.tolist(), stms[k:])), burns)
             dp[:, :, list(burns)] = np.einsum("kmj,kjp->kmp", h, dx)

@@ -11,7 +11,7 @@ import numpy as np
 from cistrack.errors import PropagationError
 from cistrack.interfaces.dynamics import Dynamics
 
-__all__ = ["arc_states", "arc_states_and_stms", "ensemble_arc_states"]
+__all__ = ["arc_states", "arc_states_and_stms", "arc_states_stms_and_sensitivity", "ensemble_arc_states"]
 
 
 def _sides(t0: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
@@ -75,25 +75,38 @@ def arc_states_and_stms(dynamics: Dynamics, state: np.ndarray, t0: float,
                         times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """States (K, 6) and transition matrices (K, 6, 6) d x(t_k) / d x(t0) over ``times`` (K,) TU,
     from the dynamics' ``propagate_with_stm`` (variational equations where the model has them)."""
+    return _arc_variational(dynamics, state, t0, times, dynamics.propagate_with_stm)[:2]
+
+
+def arc_states_stms_and_sensitivity(dynamics: Dynamics, state: np.ndarray, t0: float, times: np.ndarray,
+                                    name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`arc_states_and_stms`, and d x(t_k) / d p (K, 6) of the model's parameter ``name``
+    (the state at ``t0`` held), from its ``propagate_with_sensitivity``."""
+    return _arc_variational(dynamics, state, t0, times,
+                            lambda x, t, side: dynamics.propagate_with_sensitivity(x, t, side, name))
+
+
+def _arc_variational(dynamics: Dynamics, state: np.ndarray, t0: float, times: np.ndarray,
+                     propagate) -> tuple[np.ndarray, ...]:
+    """States (K, 6), transition matrices (K, 6, 6) and, where ``propagate`` gives them,
+    sensitivities (K, 6) over ``times``: each side of ``t0`` one call of ``propagate(x, t0, side)``."""
     uniq, inv, (at, after, before) = _sides(t0, times)
-    states = {}
-    stms = {}
+    got: dict[float, tuple[np.ndarray, ...]] = {}
     x = np.asarray(state, dtype=float).reshape(6)
     for t in at:
-        states[float(t)], stms[float(t)] = x, np.eye(6)
+        got[float(t)] = (x, np.eye(6), np.zeros(6))
     for side in (after, before):
         if side.size == 0:
             continue
-        s, phi = dynamics.propagate_with_stm(x, t0, side)
-        s, phi = np.asarray(s, dtype=float), np.asarray(phi, dtype=float)
+        out = [np.asarray(a, dtype=float) for a in propagate(x, t0, side)]
+        s, phi = out[0], out[1]
         if s.shape != (side.size, 6) or phi.shape != (side.size, 6, 6):
             raise PropagationError(f"{_label(dynamics)}: propagate_with_stm returned shapes {s.shape} and "
                                    f"{phi.shape} for {side.size} times; expected (K, 6) and (K, 6, 6)")
         for k, t in enumerate(side):
-            states[float(t)], stms[float(t)] = s[k], phi[k]
-    st = np.array([states[float(t)] for t in uniq])
-    ph = np.array([stms[float(t)] for t in uniq])
-    if not (np.all(np.isfinite(st)) and np.all(np.isfinite(ph))):
+            got[float(t)] = tuple(a[k] for a in out) + ((np.zeros(6),) if len(out) == 2 else ())
+    arrays = [np.array([got[float(t)][i] for t in uniq]) for i in range(3)]
+    if not all(np.all(np.isfinite(a)) for a in arrays):
         raise PropagationError(f"{_label(dynamics)}: the state or its transition matrix is not finite "
                                "over the arc")
-    return st[inv], ph[inv]
+    return tuple(a[inv] for a in arrays)

@@ -224,29 +224,63 @@ class ImpulsiveDynamics(Dynamics):
         x, t0, t_out = check_stm_request(self._label(), state, t0, times)
         if not self._crossed(t0, float(t_out[-1])):
             return self.base.propagate_with_stm(x, t0, t_out)
+        out_x, out_phi, _ = self._chained(x, t0, t_out, None)
+        return out_x, out_phi
+
+    @property
+    def sensitivity_parameters(self) -> tuple[str, ...]:
+        """The base's parameters whose d x / d p :meth:`propagate_with_sensitivity` integrates."""
+        return tuple(getattr(self.base, "sensitivity_parameters", ()))
+
+    def propagate_with_sensitivity(self, state: np.ndarray, t0: float, times: Any,
+                                   name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`propagate_with_stm`, and d x / d p (K, 6) of the base's parameter ``name``
+        chained across the burns: s(t) = Phi(t, t_j) s(t_j) + s_j(t) on each segment (the delta-v
+        does not depend on the parameter). Raises ``StateError`` when the base has no such
+        sensitivity."""
+        x, t0, t_out = check_stm_request(self._label(), state, t0, times)
+        if name not in self.sensitivity_parameters:
+            raise StateError(f"{self._label()}: the base model gives no sensitivity of {name!r}")
+        if not self._crossed(t0, float(t_out[-1])):
+            return self.base.propagate_with_sensitivity(x, t0, t_out, name)
+        return self._chained(x, t0, t_out, name)
+
+    def _chained(self, x: np.ndarray, t0: float, t_out: np.ndarray,
+                 name: str | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """States, STMs and (with a parameter ``name``) sensitivities at ``t_out``, segment by
+        segment between the burns."""
         out_x = np.empty((t_out.size, 6))
         out_phi = np.empty((t_out.size, 6, 6))
-        phi = np.eye(6)
+        out_s = None if name is None else np.empty((t_out.size, 6))
+        phi, sens = np.eye(6), np.zeros(6)
         t_cur, k = t0, 0
         for j, t_end, dv in self._segments(t0, t_out):
             ts = _with_end(t_out[k:j], t_end)
-            xs, stms = self._stm_segment(x, t_cur, ts)
+            xs, stms, ss = self._stm_segment(x, t_cur, ts, name)
             out_x[k:j] = xs[: j - k]
             out_phi[k:j] = stms[: j - k] @ phi
+            if out_s is not None:
+                out_s[k:j] = stms[: j - k] @ sens + ss[: j - k]
+                sens = stms[-1] @ sens + ss[-1]
             x, phi = xs[-1].copy(), stms[-1] @ phi
             if dv is not None:
                 x = x.copy()
                 x[3:] += dv
             t_cur, k = t_end, j
-        return out_x, out_phi
+        return out_x, out_phi, out_s
 
-    def _stm_segment(self, x: np.ndarray, t_cur: float, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _stm_segment(self, x: np.ndarray, t_cur: float, ts: np.ndarray,
+                     name: str | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         xs = np.repeat(x[None], ts.size, axis=0)
         stms = np.repeat(np.eye(6)[None], ts.size, axis=0)
+        ss = np.zeros((ts.size, 6))
         same = int(np.sum(ts == t_cur))
         if ts.size > same:
-            xs[same:], stms[same:] = self.base.propagate_with_stm(x, t_cur, ts[same:])
-        return xs, stms
+            if name is None:
+                xs[same:], stms[same:] = self.base.propagate_with_stm(x, t_cur, ts[same:])
+            else:
+                xs[same:], stms[same:], ss[same:] = self.base.propagate_with_sensitivity(x, t_cur, ts[same:], name)
+        return xs, stms, ss
 
     @property
     def dense_trajectory(self):

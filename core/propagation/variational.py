@@ -21,7 +21,7 @@ from cistrack.interfaces.transition_matrix import check_stm_request
 from cistrack.propagation.compiled import CompiledDynamics
 from cistrack.propagation.kernels import kernels_for
 
-__all__ = ["propagate_variational", "STM_DIM"]
+__all__ = ["propagate_variational", "propagate_variational_with", "STM_DIM"]
 
 STM_DIM = 42
 """Length of the augmented state: 6 state components and the 36 entries of the STM."""
@@ -36,21 +36,40 @@ def propagate_variational(dynamics: CompiledDynamics, stm_rhs: Any, state: Any, 
     model's. Raises :class:`StateError` for malformed input and :class:`PropagationError` when
     the trajectory hits a body, reaches the step limit or its step size underflows.
     """
+    states, stms, _ = propagate_variational_with(dynamics, stm_rhs, state, t0, times, 0, rtol=rtol, atol=atol)
+    return states, stms
+
+
+def propagate_variational_with(dynamics: CompiledDynamics, stm_rhs: Any, state: Any, t0: float, times: Any,
+                               extra: int, *, rtol: float | None = None,
+                               atol: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`propagate_variational`, with ``extra`` more components after the STM, zero at
+    ``t0`` (a parameter's sensitivity d x / d p: ``stm_rhs`` on 42 + ``extra`` components writes
+    their derivatives) -> (states (K, 6), STMs (K, 6, 6), extras (K, extra))."""
     label = dynamics._label()
     x, t0, t_out = check_stm_request(label, state, t0, times)
     if stm_rhs is None or not hasattr(stm_rhs, "py_func"):
         raise StateError(f"{label}: the variational right-hand side must be a numba @njit function")
-    y0 = np.concatenate([x, np.eye(6).reshape(-1)])[None]
-    out = np.empty((t_out.size, 1, STM_DIM))
+    dim = STM_DIM + int(extra)
+    y0 = np.concatenate([x, np.eye(6).reshape(-1), np.zeros(int(extra))])[None]
+    out = np.empty((t_out.size, 1, dim))
     impact_body = np.full(1, -1, dtype=np.int64)
     impact_time = np.full(1, np.inf)
     status = np.zeros(1, dtype=np.int64)
     pos, rad = dynamics._bodies_arrays()
-    mod = kernels_for(stm_rhs, STM_DIM, type(dynamics).body_motion)
+    mod = kernels_for(stm_rhs, dim, type(dynamics).body_motion)
     mod.propagate_kernel(0, 1, np.ascontiguousarray(y0), dynamics._params(), t0, np.ascontiguousarray(t_out),
                          float(dynamics.rtol if rtol is None else rtol),
                          float(dynamics.atol if atol is None else atol), pos, rad,
                          int(dynamics.max_steps), np.zeros(1), out, impact_body, impact_time, status)
+    _check_status(dynamics, label, status, impact_body, impact_time, t_out)
+    y = out[:, 0, :]
+    return y[:, :6].copy(), y[:, 6:STM_DIM].reshape(-1, 6, 6).copy(), y[:, STM_DIM:].copy()
+
+
+def _check_status(dynamics: CompiledDynamics, label: str, status: np.ndarray, impact_body: np.ndarray,
+                  impact_time: np.ndarray, t_out: np.ndarray) -> None:
+    """PropagationError when the kernel stopped short (step limit, step-size underflow, impact)."""
     if status[0] >= 2:
         why = "the step limit max_steps" if status[0] == 2 else "a step-size underflow"
         raise PropagationError(f"{label}: the state and its transition matrix did not reach t={t_out[-1]:g} TU "
@@ -61,5 +80,3 @@ def propagate_variational(dynamics: CompiledDynamics, stm_rhs: Any, state: Any, 
         name = bodies[b].name if b < len(bodies) else f"body {b}"
         raise PropagationError(f"{label}: the trajectory hits the {name} at t={float(impact_time[0]):.6g} TU; "
                                "no state transition matrix beyond an impact")
-    y = out[:, 0, :]
-    return y[:, :6].copy(), y[:, 6:].reshape(-1, 6, 6).copy()

@@ -355,6 +355,23 @@ class EphemerisDynamics(CompiledDynamics):
 
         return synodic_stm(self, state, t0, times)
 
+    sensitivity_parameters = ("area_to_mass_m2_kg",)
+    """Solve-for parameters whose d x / d p :meth:`propagate_with_sensitivity` integrates."""
+
+    def propagate_with_sensitivity(self, state: np.ndarray, t0: float, times,
+                                   name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`propagate_with_stm`, and d x(t_k) / d p (K, 6) (LU, VU per m^2/kg) of the
+        solve-for parameter ``name`` ("area_to_mass_m2_kg", the total C_R A/m), the state at
+        ``t0`` held: variational equations with the radiation pressure's sensitivity
+        (:func:`.ephemeris_variational.synodic_srp_sensitivity`). Raises ``StateError`` for
+        another name, and ``PropagationError`` when the trajectory hits a body."""
+        from .ephemeris_variational import synodic_srp_sensitivity  # compiles numba code: first use only
+
+        if name not in self.sensitivity_parameters:
+            raise StateError(f"{self._label()}: no sensitivity of {name!r}; known: {', '.join(self.sensitivity_parameters)}")
+        states, stms, sens = synodic_srp_sensitivity(self, state, t0, times)
+        return states, stms, sens * (SOLAR_PRESSURE_N_M2 / 1000.0 * units.TU_S ** 2 / units.LU_KM)
+
     def dense_trajectory(self, state: np.ndarray, t0: float, t1: float, *,
                          rtol: float | None = None, atol: float | None = None):
         """As :meth:`cistrack.propagation.CompiledDynamics.dense_trajectory` for a synodic

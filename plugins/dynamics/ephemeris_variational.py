@@ -31,22 +31,22 @@ import numpy as np
 from numba import njit
 
 from cistrack.interfaces.transition_matrix import check_stm_request
-from cistrack.propagation.variational import propagate_variational
+from cistrack.propagation.variational import propagate_variational_with
 
 from .ephemeris_rhs import AU, EARTH_SHARE, GM_E, GM_M, GM_S, J2, KX, KY, KZ, P_SRP, R_E
 from .ephemeris_rhs import bodies_position as _lazy_bodies_position
 from .ephemeris_rhs import ephemeris_rhs as _lazy_ephemeris_rhs
 
-__all__ = ["ephemeris_stm_rhs", "synodic_stm"]
+__all__ = ["ephemeris_stm_rhs", "ephemeris_stm_srp_rhs", "synodic_stm", "synodic_srp_sensitivity"]
 
 _bodies_position = _lazy_bodies_position.dispatcher  # compiled code calls the numba functions themselves
 _ephemeris_rhs = _lazy_ephemeris_rhs.dispatcher
 
 
 @njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
-def ephemeris_stm_rhs(t, y, p, out):
-    """State + STM derivative: y (42,) = state (6) then Phi (6x6 row-major) -> out (42,)."""
-    _ephemeris_rhs(t, y, p, out)
+def _gravity_gradient(t, y, p):
+    """G = d a / d r at the kernel state y[0:3] (its six distinct entries gxx, gyy, gzz, gxy, gxz,
+    gyz), then the Moon's and the Sun's positions (mx, my, mz, sx, sy, sz) at ``t``."""
     mx, my, mz, sx, sy, sz = _bodies_position(p, t)
     x = y[0]
     yy = y[1]
@@ -111,6 +111,20 @@ def ephemeris_stm_rhs(t, y, p, out):
         gxy += e * wx * yy + cj * (x * (qk * ky + qr * yy) + 2.0 * kx * ky)
         gxz += e * wx * z + cj * (x * (qk * kz + qr * z) + 2.0 * kx * kz)
         gyz += e * wy * z + cj * (yy * (qk * kz + qr * z) + 2.0 * ky * kz)
+    return gxx, gyy, gzz, gxy, gxz, gyz, mx, my, mz, sx, sy, sz
+
+
+@njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
+def ephemeris_stm_rhs(t, y, p, out):
+    """State + STM derivative: y (42,) = state (6) then Phi (6x6 row-major) -> out (42,)."""
+    _ephemeris_rhs(t, y, p, out)
+    gxx, gyy, gzz, gxy, gxz, gyz, _, _, _, _, _, _ = _gravity_gradient(t, y, p)
+    _stm_columns(y, out, gxx, gyy, gzz, gxy, gxz, gyz)
+
+
+@njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
+def _stm_columns(y, out, gxx, gyy, gzz, gxy, gxz, gyz):
+    """out[6:42] = A Phi, A = [[0, I], [G, 0]], Phi = y[6:42] row-major."""
     for col in range(6):
         p0 = y[6 + col]
         p1 = y[12 + col]
@@ -123,17 +137,61 @@ def ephemeris_stm_rhs(t, y, p, out):
         out[36 + col] = gxz * p0 + gyz * p1 + gzz * p2
 
 
+@njit(cache=True)  # no fast-math: bit-reproducible (cistrack.propagation.dop853_source.DEFAULT_FASTMATH)
+def ephemeris_stm_srp_rhs(t, y, p, out):
+    """State + STM + radiation-pressure sensitivity: y (48,) = state, Phi (6x6 row-major), then
+    s = d x / d P (6,), P the pressure coefficient ``p[P_SRP]`` -> out (48,): as
+    :func:`ephemeris_stm_rhs`, and ds/dt = A s + [0; d a / d P], d a / d P = -AU^2 u / |u|^3
+    (u = Sun - r: the radiation pressure is linear in P)."""
+    _ephemeris_rhs(t, y, p, out)
+    gxx, gyy, gzz, gxy, gxz, gyz, mx, my, mz, sx, sy, sz = _gravity_gradient(t, y, p)
+    _stm_columns(y, out, gxx, gyy, gzz, gxy, gxz, gyz)
+    f = p[EARTH_SHARE]
+    ux = sx + f * mx - y[0]
+    uy = sy + f * my - y[1]
+    uz = sz + f * mz - y[2]
+    u2 = ux * ux + uy * uy + uz * uz
+    c = -p[AU] * p[AU] / (u2 * np.sqrt(u2))
+    s0 = y[42]
+    s1 = y[43]
+    s2 = y[44]
+    out[42] = y[45]
+    out[43] = y[46]
+    out[44] = y[47]
+    out[45] = gxx * s0 + gxy * s1 + gxz * s2 + c * ux
+    out[46] = gxy * s0 + gyy * s1 + gyz * s2 + c * uy
+    out[47] = gxz * s0 + gyz * s1 + gzz * s2 + c * uz
+
+
 def synodic_stm(dyn: Any, state: Any, t0: float, times: Any) -> tuple[np.ndarray, np.ndarray]:
     """States (K, 6) and STMs (K, 6, 6) in the real rotating frame (LU, VU) of a synodic ``state``
     (6,) propagated by the ephemeris model ``dyn`` from ``t0`` to ``times`` (K,) TU."""
+    states, stms, _ = _synodic(dyn, ephemeris_stm_rhs, 0, state, t0, times)
+    return states, stms
+
+
+def synodic_srp_sensitivity(dyn: Any, state: Any, t0: float,
+                            times: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`synodic_stm`, and d x(t_k) / d P (K, 6) in the real rotating frame (LU, VU per
+    unit of the kernel's pressure coefficient ``P_SRP``, LU^3 / TU^2 per AU^2), the state at
+    ``t0`` held: the variational equations of :func:`ephemeris_stm_srp_rhs`."""
+    return _synodic(dyn, ephemeris_stm_srp_rhs, 6, state, t0, times)
+
+
+def _synodic(dyn: Any, rhs: Any, extra: int, state: Any, t0: float,
+             times: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(states, STMs, extras (K, extra)) of ``rhs`` integrated in GCRS, carried into the real
+    rotating frame: states by the map, STMs by B(t_k) Phi A(t0), the extras (sensitivities of the
+    GCRS state to a parameter, zero at ``t0``) by B(t_k)."""
     x, t0, t_out = check_stm_request(dyn._label(), state, t0, times)
     span = np.concatenate(([t0], t_out))
     dyn._ensure_window(float(span.min()), float(span.max()))
     basis = np.vstack([np.zeros(6), np.eye(6)])                      # (7, 6): origin, unit vectors
     to_in = dyn.to_inertial(basis, t0)
     a0 = (to_in[1:] - to_in[0]).T                                    # d gcrs / d synodic at t0
-    s_in, phi_in = propagate_variational(dyn, ephemeris_stm_rhs, dyn.to_inertial(x[None], t0)[0], t0, t_out)
+    s_in, phi_in, e_in = propagate_variational_with(dyn, rhs, dyn.to_inertial(x[None], t0)[0], t0, t_out, extra)
     k = t_out.size
     back = dyn.from_inertial(np.tile(basis, (k, 1)), np.repeat(t_out, 7)).reshape(k, 7, 6)
     b = np.transpose(back[:, 1:] - back[:, :1], (0, 2, 1))           # (K, 6, 6) d synodic / d gcrs
-    return dyn.from_inertial(s_in, t_out), np.einsum("kij,kjl,lm->kim", b, phi_in, a0)
+    extras = np.einsum("kij,kj->ki", b, e_in) if extra else e_in
+    return dyn.from_inertial(s_in, t_out), np.einsum("kij,kjl,lm->kim", b, phi_in, a0), extras

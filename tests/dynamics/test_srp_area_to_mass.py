@@ -134,3 +134,41 @@ def test_the_propagated_effect_agrees_with_scipy_at_tight_tolerance():
     assert np.linalg.norm(effect_ref[-1]) > 1.0                       # km: a real effect
     assert np.abs(effect_mine - effect_ref).max() * 1000.0 < 1.0, (effect_mine, effect_ref)
     assert np.abs(mine[0][:, :3] - with_srp[:, :3]).max() * 1000.0 < 10.0
+
+
+NRHO = np.array([1.02, 0.0, -0.18, 0.0, -0.1, 0.0])
+
+
+def _central_difference(make, p0: float, times: np.ndarray, h: float = 1e-4) -> np.ndarray:
+    """d x / d p (K, 6) of models ``make(p)`` built afresh, by a central difference of step ``h``."""
+    from cistrack.least_squares.trajectory import arc_states
+
+    up, down = (arc_states(make(p0 + s * h), NRHO, 0.0, times) for s in (1.0, -1.0))
+    return (up - down) / (2.0 * h)
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_the_integrated_sensitivity_to_area_to_mass_matches_a_central_difference(direction):
+    times = direction * np.linspace(0.1, 6.0, 12)
+    make = lambda p: EphemerisDynamics(epoch=EPOCH, area_to_mass_m2_kg=p)  # noqa: E731
+    _, _, sens = make(0.006).propagate_with_sensitivity(NRHO, 0.0, times, "area_to_mass_m2_kg")
+    want = _central_difference(make, 0.006, times)
+    assert np.abs(want).max() > 1e-3  # LU per m^2/kg: about 400 km per m^2/kg over 6 TU
+    np.testing.assert_allclose(sens, want, rtol=0, atol=1e-5 * np.abs(want).max())
+
+
+def test_the_sensitivity_is_carried_across_an_impulsive_burn():
+    from cistrack.interfaces.maneuvers import Impulse
+    from cistrack.propagation.impulses import ImpulsiveDynamics
+
+    times = np.linspace(0.1, 6.0, 12)
+    burn = [Impulse(2.05, np.array([0.0, 2e-3, 1e-3]), "burn 1")]
+    make = lambda p: ImpulsiveDynamics(EphemerisDynamics(epoch=EPOCH, area_to_mass_m2_kg=p), burn)  # noqa: E731
+    _, _, sens = make(0.0).propagate_with_sensitivity(NRHO, 0.0, times, "area_to_mass_m2_kg")
+    np.testing.assert_allclose(sens, _central_difference(make, 0.0, times), rtol=0,
+                               atol=1e-5 * np.abs(sens).max())
+
+
+def test_a_parameter_without_an_integrated_sensitivity_is_refused_by_name():
+    with pytest.raises(CistrackError, match="no sensitivity of 'gm_moon'"):
+        EphemerisDynamics(epoch=EPOCH).propagate_with_sensitivity(NRHO, 0.0, np.array([1.0]), "gm_moon")
