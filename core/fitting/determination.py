@@ -52,6 +52,7 @@ import numpy as np
 from cistrack import units
 from cistrack.fitting.residual_ladder import fitted_dynamics
 from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.result import sigma_factor
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
 
@@ -116,8 +117,8 @@ class Determination:
 
 
 def _scaled(fit):
-    s = float(fit.noise_scale)
-    return replace(fit, covariance=fit.covariance * s * s) if np.isfinite(s) and s > 1 else fit
+    s = sigma_factor(fit.noise_scale)
+    return replace(fit, covariance=fit.covariance * s * s) if s > 1.0 else fit
 
 
 def _sessions(times: np.ndarray) -> int:

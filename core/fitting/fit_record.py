@@ -35,6 +35,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.fitting.fit_record_check import check_orbit_fields
+from cistrack.least_squares.result import sigma_factor
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.strict_json import finite_or_null
 
@@ -90,7 +91,7 @@ def area_to_mass_record(result) -> dict[str, Any] | None:
                            "parameter": "C_R A/m of the cannonball radiation pressure, m^2/kg"}
     if est is not None:
         j = result.parameter_names.index(AREA_TO_MASS)
-        scale = float(result.noise_scale) if np.isfinite(result.noise_scale) and result.noise_scale > 1 else 1.0
+        scale = sigma_factor(result.noise_scale)
         out.update({"value_m2_kg": est[0], "sigma_m2_kg": est[1], "sigma_scaled_m2_kg": est[1] * scale,
                     "correlations_with_state": [float(c) for c in result.parameter_correlations[j]],
                     "full_covariance": np.asarray(result.full_covariance).tolist()})

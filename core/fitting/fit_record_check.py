@@ -23,6 +23,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import ConfigError
 from cistrack.least_squares.burn_search import MAX_BURN_MS  # the largest burn a fit reports, m/s
+from cistrack.least_squares.result import sigma_factor
 
 __all__ = ["check_orbit_fields", "covariance_scale", "MAX_EPOCH_TU", "MAX_DISTANCE_KM", "MAX_SPEED_KMS",
            "MAX_ARC_DAYS"]
@@ -89,8 +90,8 @@ def _number(path: Path, field: str, value: Any) -> float:
 
 def covariance_scale(record: dict[str, Any]) -> float:
     """max(1, noise scale)^2 of a fit record (1 when the noise scale is undefined)."""
-    s = float(record.get("noise_scale", float("nan")))
-    return s * s if math.isfinite(s) and s > 1.0 else 1.0
+    s = sigma_factor(record.get("noise_scale", float("nan")))
+    return s * s
 
 
 def check_orbit_fields(path: str | Path, record: dict[str, Any]) -> None:

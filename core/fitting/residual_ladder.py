@@ -32,6 +32,7 @@ from cistrack.least_squares.chi_square import chi2_ppf
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.prediction import predict_orbit
 from cistrack.least_squares.residual_table import residual_table
+from cistrack.least_squares.result import sigma_factor
 from cistrack.model.measurement import MeasurementSet
 
 __all__ = ["Rung", "fitted_dynamics", "ladder_rung", "residual_ladder", "ladder_table", "ladder_json", "LINK_TAIL", "LOST_SKY_RAD"]
@@ -84,8 +85,8 @@ def fitted_dynamics(dynamics, fit) -> Any:
 
 
 def _scaled(fit) -> Any:
-    s = float(fit.noise_scale)
-    return replace(fit, covariance=fit.covariance * s * s) if np.isfinite(s) and s > 1 else fit
+    s = sigma_factor(fit.noise_scale)
+    return replace(fit, covariance=fit.covariance * s * s) if s > 1.0 else fit
 
 
 def _misses(model: MeasurementModel, sub: MeasurementSet, states: np.ndarray,

@@ -32,7 +32,7 @@ import numpy as np
 from cistrack.errors import MeasurementError, ParameterError, PropagationError
 from cistrack.least_squares.errors import FitError
 from cistrack.least_squares.options import AREA_TO_MASS, FitOptions
-from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.result import FitResult, sigma_factor
 from cistrack.units import TU_S
 
 __all__ = ["fit_area_to_mass_auto", "area_to_mass_verdict", "estimate_doubt", "forced_decision", "joint_covariances", "MIN_ARC_DAYS", "MIN_SIGNIFICANCE",
@@ -60,7 +60,7 @@ def estimate_doubt(seven: FitResult) -> str | None:
     """Why the ratio ``seven`` estimated says nothing about the object (not significant, or not
     physical), or None."""
     value, sigma = seven.parameter(AREA_TO_MASS)
-    scaled = sigma * max(1.0, float(seven.noise_scale) if np.isfinite(seven.noise_scale) else 1.0)
+    scaled = sigma * sigma_factor(seven.noise_scale)
     what = f"estimate {value:.4g} +- {scaled:.2g} m^2/kg"
     if abs(value) < MIN_SIGNIFICANCE * scaled:
         return f"{what} is not significant (|A/m| / sigma {abs(value) / scaled:.2f} < {MIN_SIGNIFICANCE:g})"
@@ -88,7 +88,7 @@ def area_to_mass_verdict(six: FitResult, seven: FitResult) -> str | None:
     if doubt is not None:
         return doubt
     value, sigma = seven.parameter(AREA_TO_MASS)
-    scaled = sigma * max(1.0, float(seven.noise_scale) if np.isfinite(seven.noise_scale) else 1.0)
+    scaled = sigma * sigma_factor(seven.noise_scale)
     what = f"estimate {value:.4g} +- {scaled:.2g} m^2/kg"
     drop = _chi2_drop(six, seven)
     if drop < MIN_CHI2_DROP:

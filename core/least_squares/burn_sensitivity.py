@@ -33,6 +33,7 @@ import numpy as np
 from cistrack import units
 from cistrack.least_squares.impulse_fit import MS_PER_VU, _dv_partials
 from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.result import sigma_factor
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
 
@@ -99,7 +100,7 @@ def burn_sensitivity(fit, dynamics, sensor, measurements: MeasurementSet) -> lis
     states, stms = arc_states_and_stms(dynamics, np.asarray(fit.state, dtype=float), float(fit.epoch),
                                        np.concatenate([times, inside]))
     n = times.size
-    scale = max(1.0, float(fit.noise_scale)) if np.isfinite(fit.noise_scale) else 1.0
+    scale = sigma_factor(fit.noise_scale)
     h = model.jacobian(states[:n]) / (model.sigmas * scale)[:, :, None]
     q, _ = np.linalg.qr(np.einsum("kmj,kjl->kml", h, stms[:n]).reshape(-1, 6))
     tried = [_hidden(q, _dv_partials(stms[:n], stms[n + k], h, times, float(fit.epoch),

@@ -441,9 +441,10 @@ def fit_events(dynamics: Dynamics, result, *, days: float = FIT_EVENT_DAYS,
     over ``days`` after its epoch, the covariance scaled as it is exported (by the noise scale
     squared when that exceeds 1), with the solve-for parameters it estimated (the area-to-mass
     ratio) set in ``dynamics``. ``epoch``: the UTC of t = 0 (default the dynamics' own)."""
+    from cistrack.least_squares.result import sigma_factor
     from cistrack.least_squares.solve_for_parameters import fitted_dynamics
 
-    scale = max(1.0, float(result.noise_scale)) ** 2 if np.isfinite(result.noise_scale) else 1.0
+    scale = sigma_factor(result.noise_scale) ** 2
     t0 = float(result.epoch)
     return orbit_events(fitted_dynamics(dynamics, result), result.state, _spread_of(result, scale), t0,
                         t0 + float(units.days_to_tu(days)), epoch=epoch)

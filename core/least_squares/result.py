@@ -1,6 +1,7 @@
 """The result of a least-squares orbit fit."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -8,7 +9,15 @@ import numpy as np
 from cistrack.least_squares.observability import to_km
 from cistrack.least_squares.residual_table import ResidualTable
 
-__all__ = ["FitResult"]
+__all__ = ["FitResult", "sigma_factor"]
+
+
+def sigma_factor(noise_scale: float) -> float:
+    """The factor a fit's sigmas are widened by when its residuals say the stated noise was too
+    small: ``max(1, noise_scale)`` (dimensionless; 1 when the noise scale is undefined, NaN or
+    infinite). Its square scales the covariance, as exported and predicted; a fit is never narrowed."""
+    s = float(noise_scale)
+    return s if math.isfinite(s) and s > 1.0 else 1.0
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from cistrack.interfaces import Dynamics, IODMethod, Sensor
 from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.least_squares import FitOptions, FitResult
+from cistrack.least_squares.result import sigma_factor
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
@@ -361,7 +362,7 @@ class TrackletRangingIOD(IODMethod):
         t_last = float(ms.times[rows].max())
         states, stms = arc_states_and_stms(dyn, fit.state, fit.epoch, np.array([t_last]))
         cov = stms[0] @ fit.covariance @ stms[0].T
-        cov = 0.5 * (cov + cov.T) * max(1.0, float(fit.noise_scale)) ** 2
+        cov = 0.5 * (cov + cov.T) * sigma_factor(fit.noise_scale) ** 2
         draws = rng.multivariate_normal(states[0], cov, size=self.n_particles, method="eigh")
         meta = {"method": "tracklet-ranging", "arc": self.arc, **info, "rows_used": [int(i) for i in rows],
                 "fit_rms": float(fit.rms), "noise_scale": float(fit.noise_scale), "n_rejected": int(fit.n_rejected),
