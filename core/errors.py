@@ -34,7 +34,15 @@ class MeasurementError(CistrackError, ValueError):
 
 
 class IODError(CistrackError, RuntimeError):
-    """Initial orbit determination could not produce the requested cloud."""
+    """Initial orbit determination could not produce the requested cloud.
+
+    ``settings``: the IOD's own parameters that the message's advice names (``lower
+    min_fit/order``), by those names; a caller whose user sets them otherwise than as the
+    scenario's ``[iod]`` keys (``cistrack fit``: ``--set iod.NAME=VALUE``) adds how."""
+
+    def __init__(self, *args: object, settings: tuple[str, ...] = ()) -> None:
+        super().__init__(*args)
+        self.settings = tuple(settings)
 
 
 class FilterError(CistrackError, RuntimeError):

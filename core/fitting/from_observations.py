@@ -427,21 +427,40 @@ def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResu
 
 
 def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Registry, progress: bool,
-             log: Callable[[str], None] | None) -> tuple[Any, FitResult | None, str, str]:
+             log: Callable[[str], None] | None, fallback: bool = False) -> tuple[Any, FitResult | None, str, str]:
     """(run or None, fit or None, failure, start): the scenario run into ``directory``, then the
-    least squares from the filter (:func:`_fit_from_filter`)."""
+    least squares from the filter (:func:`_fit_from_filter`). ``fallback``: the scenario's IOD is
+    the ranging IOD the fit fell back on, not the user's (its settings are set after choosing it)."""
     from cistrack.runs.pipeline import run_scenario
 
     try:
         run = run_scenario(scen, registry=registry, output_dir=directory, progress=progress,
                            log=(lambda m: log(f"  {m}")) if log else None)
     except CistrackError as exc:
-        return None, None, f"the filter run failed before its first step: {exc}", ""
+        return None, None, f"the filter run failed before its first step: {_iod_advice(exc, scen, registry, fallback)}", ""
     if log:
         log(f"  least squares over the {len(run.context.measurements)} observations")
     with reported_to(log):
         seeded = _fit_from_iod(run.context, choices)
         return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
+
+
+def _iod_advice(exc: CistrackError, scen: Scenario, registry: Registry, fallback: bool) -> str:
+    """``exc``'s message, and when it is the IOD's advising some of its parameters
+    (:attr:`cistrack.errors.IODError.settings`), how ``cistrack fit`` sets them: ``--set
+    iod.NAME=...`` (after ``--set iod.name=...`` for the IOD the fit fell back on), where the
+    message names them as the ``[iod]`` keys of a scenario file."""
+    from cistrack.errors import IODError
+    from cistrack.interfaces.component import param_specs
+
+    iod = scen.components["iod"].name
+    own = param_specs(registry.get("iod", iod).factory) if isinstance(exc, IODError) else {}
+    names = [n for n in getattr(exc, "settings", ()) if n in own]
+    if not names:
+        return str(exc)
+    options = (f"--set iod.name={iod} " if fallback else "") + ", ".join(f"--set iod.{n}=..." for n in names)
+    text = str(exc)
+    return f"{text[:-1] if text.endswith('.') else text} (in cistrack fit: {options})" + "." * text.endswith(".")
 
 
 def _attempt_early(one: ObjectFit, early: Scenario, registry: Registry, progress: bool,
@@ -571,7 +590,7 @@ def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callabl
         say(f"{one.designation}: {first}; falling back on the IOD '{RANGING_IOD}'")
         one.scenario = _ranging_scenario(one.scenario, registry)
         one.run, one.result, one.failure, one.start = _attempt(one.scenario, one.choices, one.directory,
-                                                               registry, progress, log)
+                                                               registry, progress, log, fallback=True)
         if one.failure:
             one.failure += f" (before it, with the template's IOD: {first})"
     if one.start:

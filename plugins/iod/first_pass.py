@@ -57,7 +57,7 @@ def select_fit_indices(times, *, pass_gap_hours: float = 3.0, fit_fraction: floa
             f"the first pass has {n_pass} measurement(s) over {span:.2f} h (before the first gap "
             f"longer than {pass_gap_hours} h); IOD needs at least {need} (min_fit = {min_fit}, "
             f"polynomial order {order} needs {order + 1}). Task more measurements in the first "
-            f"pass or lower min_fit/order.")
+            f"pass or lower min_fit/order.", settings=("min_fit", "order"))
     n_fit = math.ceil(fit_fraction * n_pass - 1e-9)
     n_fit = int(min(max(n_fit, min_fit), max_fit, n_pass))
     if n_fit < order + 1:  # max_fit < order + 1 is refused by the component; kept as a guard

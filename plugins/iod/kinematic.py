@@ -261,7 +261,8 @@ class KinematicFitIOD(IODMethod):
                 f"{self.range_min_km:g}-{self.range_max_km:g} km"
                 + (f", {self.speed_frame} speed <= {self.max_speed_kms:g} km/s"
                    if self.max_speed_kms is not None else "")
-                + "). Raise max_oversampling, relax the bounds, or check the measurements.")
+                + "). Raise max_oversampling, relax the bounds, or check the measurements.",
+                settings=("max_oversampling", "range_min_km", "range_max_km", "max_speed_kms"))
         states = out
         meta = {
             "method": self._label_name(),

@@ -286,7 +286,7 @@ class TrackletRangingIOD(IODMethod):
         if not order:
             raise IODError(f"{who}: no tracklet has {self.min_tracklet} observations (tracklets: "
                            f"{[int(a.indices.size) for a in atts]}; a gap over {self.gap_hours:g} h or a site "
-                           "change ends one); lower min_tracklet or observe longer")
+                           "change ends one); lower min_tracklet or observe longer", settings=("min_tracklet",))
         if len(atts) == 1:
             return self._lone(atts[0], rng)
         return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
@@ -338,7 +338,7 @@ class TrackletRangingIOD(IODMethod):
         k, fit, rows, rec, records = self._first_seed(dyn, sensor, ms, atts, order)
         if fit is None:
             raise IODError(f"{who}: no seed tracklet gave an orbit that fits its neighbours ({len(records)} tried: "
-                           f"{_tried_text(records)}); " + _failure_advice(ms))
+                           f"{_tried_text(records)}); " + _failure_advice(ms), settings=("range_min_km", "range_max_km"))
         patient = (f"; its least squares needed more than {_SEED_OPTIONS.max_iterations} iterations (given "
                    f"{_PATIENT_OPTIONS.max_iterations})") if "max_iterations" in rec else ""
         if fit.noise_scale >= CLEAN_NOISE_SCALE:
