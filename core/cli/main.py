@@ -344,7 +344,7 @@ def cmd_export(args) -> int:
     args.format = _exporter_name(args.format)
     _check_step_option(args.format, args.step)
     if args.out:
-        check_export_path(args.out, args.run)
+        check_export_path(args.out, args.run, overwrite=args.overwrite)
     _check_out_suffix(args.format, args.out)
     if is_fit_export(args):  # a 'cistrack fit' directory (--predict DAYS): the fitted orbit
         return cmd_export_fit(args)
@@ -479,7 +479,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("--out", type=path_text("--out"), default=None, help="file to write (default RUN/estimate.<format>)")
     ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file, or a different export "
-                    "(other --step, --predict) in the default RUN/estimate.<format> (refused otherwise)")
+                    "(other --step, --predict) in the default RUN/estimate.<format>, or write into the folder of another "
+                    "run, fit or study (refused otherwise)")
     ex.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")
     ex.add_argument("--force", action="store_true", help="export a run that did not finish, was killed or diverged "
                     "(refused otherwise); the file then says so in a COMMENT")

@@ -81,7 +81,8 @@ def add_predict_parser(sub) -> None:
                    "(default DIR/sky-<CODE>; a folder: FOLDER/sky-<CODE>)")
     p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
     p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing --out PREFIX.csv/.png, or a different earlier prediction in DIR/sky-<CODE>")
+                   help="replace an existing --out PREFIX.csv/.png, or a different earlier prediction in DIR/sky-<CODE>, "
+                        "or write into the folder of another run, fit or study")
     p.set_defaults(func=cmd_predict)
 
 
@@ -234,7 +235,7 @@ def _prefix(args) -> Path:
     for suffix in (".csv", ".png"):
         path = prefix.with_name(prefix.name + suffix)
         check_export_path(path, args.run, f"--out {args.out}:", by="the prediction",
-                          instead=f"give another PREFIX (default {default})")
+                          instead=f"give another PREFIX (default {default})", overwrite=args.overwrite)
         if args.out and not args.overwrite and os.path.lexists(path):
             raise ConfigError(f"--out {args.out}: {path} already exists; give another PREFIX, or add --overwrite to "
                               "replace it")

@@ -24,7 +24,7 @@ from cistrack.results.estimates import _PARTS as ESTIMATE_PARTS
 from cistrack.results.estimates import ESTIMATES
 from cistrack.results.fingerprint import scenario_fingerprint
 from cistrack.results.output_paths import (EARLIER_RESULTS, FIT_LOCK, FIT_STARTED, RUN_LOCK, STUDY_LOCK,
-                                           STUDY_RUNS_LOCK, check_printable_path)
+                                           STUDY_RUNS_LOCK, check_printable_path, held_results)
 from cistrack.results.store import MANIFEST, PARTS, STEPS
 
 if sys.version_info >= (3, 11):
@@ -273,12 +273,15 @@ def _named_as(path: Path, d: Path, names: tuple[str, ...]) -> bool:
 
 
 def check_export_path(out: str | Path, directory: str | Path, where: str = "--out", *, by: str = "the export",
-                      instead: str = "give another file (default {directory}/estimate.<format>)") -> None:
+                      instead: str = "give another file (default {directory}/estimate.<format>)",
+                      overwrite: bool = False) -> None:
     """Refuse (:class:`ConfigError` naming ``where``) a file written from ``directory`` (by an
     export, or ``by`` another writer such as a sky prediction) that is one of the results it is
     made from: the run's files (``manifest.json``, ``steps.parquet``, ...), a fit's records and
-    residual plots, or a path inside the part folders of ``directory``. ``instead``: what to do,
-    said in the refusal (``{directory}`` is replaced by the directory)."""
+    residual plots, or a path inside the part folders of ``directory``; and, unless
+    ``overwrite``, one in the folder of other cistrack results (another run, fit or study:
+    :func:`~cistrack.results.output_paths.held_results`), where it would be taken for theirs.
+    ``instead``: what to do, said in the refusal (``{directory}`` is replaced by the directory)."""
     check_printable_path(out, where)
     o, d = Path(os.path.abspath(out)).resolve(), Path(os.path.abspath(directory)).resolve()
     plot = o.parent == d and any(fnmatch.fnmatch(o.name, p) for p in FIT_PLOTS)
@@ -294,6 +297,11 @@ def check_export_path(out: str | Path, directory: str | Path, where: str = "--ou
     if holder != d and theirs and any((holder / n).is_file() for n in ("fit.json", MANIFEST)):
         raise ConfigError(f"{where} {out}: is one of the results of {holder}; {by} would replace them: "
                           + instead.format(directory=Path(directory)))
+    other = "" if overwrite or holder == d else held_results(holder)
+    if other:
+        raise ConfigError(f"{where} {out}: its folder {holder} holds {other}, not those of {directory}; {by} "
+                          f"written there would be taken for one of theirs: {instead.format(directory=Path(directory))}, "
+                          "or add --overwrite to write it there all the same")
 
 
 def _check_writable(recording: Path) -> None:

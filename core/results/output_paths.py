@@ -26,7 +26,7 @@ from pathlib import Path
 
 from cistrack.errors import ConfigError
 
-__all__ = ["check_output_dir", "check_study_dir", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
+__all__ = ["check_output_dir", "check_study_dir", "held_results", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
            "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv",
@@ -107,17 +107,37 @@ def _run_owning_parts_of(d: Path) -> Path | None:
 def _is_cistrack_record(path: Path) -> bool:
     """Whether ``path`` is a record cistrack wrote: a run's manifest (a JSON object with a ``run_id``
     and ``versions`` naming cistrack) or a fit's record (``"format": "cistrack-fit"``)."""
-    if not path.is_file():
-        return False
+    return _cistrack_record(path) is not None
+
+
+def _cistrack_record(path: Path) -> dict | None:
+    """The record of :func:`_is_cistrack_record` at ``path``, or None when it is not one."""
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
     except (OSError, ValueError):
-        return False
+        return None
     if not isinstance(data, dict):
-        return False
+        return None
     versions = data.get("versions")
-    return data.get("format") == "cistrack-fit" or (isinstance(data.get("run_id"), str) and isinstance(versions, dict)
+    ours = data.get("format") == "cistrack-fit" or (isinstance(data.get("run_id"), str) and isinstance(versions, dict)
                                                     and "cistrack" in versions)
+    return data if ours else None
+
+
+def held_results(directory: str | Path) -> str:
+    """What cistrack results the folder ``directory`` holds, in words for a message ("" when none
+    or not a folder): a fit (its ``fit.json``), a run (its ``manifest.json``) or a study (its
+    ``study.json``)."""
+    d = Path(directory)
+    fit, run = _cistrack_record(d / "fit.json"), _cistrack_record(d / "manifest.json")
+    if fit is not None:
+        return f"the fit of {fit.get('designation')!r} (fit.json)"
+    if run is not None:
+        return f"the results of the run {run.get('run_id')!r} (manifest.json)"
+    try:
+        return f"the study {recorded_study(d / STUDY_RECORD)[0]!r} ({STUDY_RECORD})"
+    except (OSError, ValueError):
+        return ""
 
 
 def _holds_no_results(d: Path) -> bool:

@@ -152,6 +152,22 @@ def test_an_existing_out_file_is_kept_unless_overwrite_is_given(run_dir, tmp_pat
     assert target.read_text().startswith("CCSDS_OEM_VERS")
 
 
+def test_an_out_file_in_the_folder_of_another_run_is_refused_naming_its_run_unless_overwrite(run_dir, tmp_path, capsys):
+    """It had been written there beside that run's own results, to be taken for its export."""
+    import json
+    import shutil
+
+    from cistrack.cli.main import main
+    other = shutil.copytree(run_dir[0], tmp_path / "other")
+    run_id = json.loads((other / "manifest.json").read_text())["run_id"]
+    assert main(["export", str(run_dir[0]), "--out", str(other / "e.oem")]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"its folder {other} holds the results of the run {run_id!r} (manifest.json), not those of {run_dir[0]}" in err
+    assert "add --overwrite" in err and not (other / "e.oem").exists()
+    assert main(["export", str(run_dir[0]), "--out", str(other / "e.oem"), "--overwrite", "--quiet"]) == 0
+    assert (other / "e.oem").read_text().startswith("CCSDS_OEM_VERS")
+
+
 @pytest.fixture
 def run_copy(run_dir, tmp_path):
     import shutil

@@ -312,3 +312,19 @@ def test_a_folder_given_as_the_prefix_gets_the_files_inside_it(fitted, tmp_path)
                      "--overwrite"]) == 0
     assert sorted(p.name for p in (tmp_path / "sky").iterdir()) == ["sky-568.csv", "sky-568.png"]
     assert not (tmp_path / "sky.csv").exists()
+
+
+
+def test_an_out_folder_holding_another_fits_results_is_refused_naming_it_unless_overwrite(fitted, tmp_path, capsys):
+    """Its sky-568 files had been written among the other fit's results, to be taken for its own prediction."""
+    import shutil
+
+    other = shutil.copytree(fitted, tmp_path / "other", ignore=shutil.ignore_patterns("sky-*"))
+    assert main(["predict", str(fitted), "--site", "568", "--quiet", "--step", "360", "--out", str(other)]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"its folder {other} holds the fit of 'cis0001' (fit.json), not those of {fitted}; the prediction "
+            "written there would be taken for one of theirs" in err and "add --overwrite" in err)
+    assert not list(other.glob("sky-*"))
+    assert main(["predict", str(fitted), "--site", "568", "--quiet", "--step", "360", "--out", str(other),
+                 "--overwrite"]) == 0
+    assert sorted(p.name for p in other.glob("sky-*")) == ["sky-568.csv", "sky-568.png"]
