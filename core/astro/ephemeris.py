@@ -29,7 +29,7 @@ import numpy as np
 from cistrack.lazy import lazy_njit
 
 __all__ = ["DE421", "ChebyshevSeries", "chebyshev_position", "chebyshev_state", "de421",
-           "DAY_S", "J2000_JD", "check_de421_epoch"]
+           "DAY_S", "J2000_JD", "check_de421_epoch", "DE421_YEARS"]
 
 DAY_S: float = 86_400.0
 J2000_JD: float = 2_451_545.0
@@ -303,9 +303,15 @@ def de421() -> DE421:
     return DE421()
 
 
+DE421_YEARS = (1900, 2052)
+"""The whole UTC years cistrack takes from DE421 (first, last): the ephemeris spans 1899-07-29 to
+2053-10-09 (Folkner, Williams & Boggs 2009)."""
+
+
 def check_de421_epoch(owner, value, year: int) -> None:
     """Refuse a component's ``epoch`` parameter (``value``, in ``year``) outside DE421's whole
-    years, 1900 to 2052, with the component's ParameterError (``owner._fail``)."""
-    if not 1900 <= year <= 2052:
-        owner._fail("epoch", value, "must lie within DE421's span (years 1900 to 2052; a scenario's top-level "
+    years (:data:`DE421_YEARS`), with the component's ParameterError (``owner._fail``)."""
+    first, last = DE421_YEARS
+    if not first <= year <= last:
+        owner._fail("epoch", value, f"must lie within DE421's span (years {first} to {last}; a scenario's top-level "
                                     "'epoch' sets it)")

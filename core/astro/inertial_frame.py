@@ -31,6 +31,9 @@ class InertialFrame:
     from_synodic: Callable[[np.ndarray, np.ndarray], np.ndarray]
     ccsds: bool = False
     center: str = "EARTH"
+    years: tuple[int, int] | None = None
+    """The whole UTC years (first, last) within which ``from_synodic`` holds, when it is drawn from
+    an ephemeris of limited span (the real Earth-Moon frame: DE421's); None: at any time."""
 
     def jacobian(self, state: np.ndarray, t: float) -> np.ndarray:
         """d(inertial km, km/s)/d(synodic km, km/s) at ``state`` (6,) nondimensional: (6, 6)."""

@@ -258,6 +258,7 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
         times, n_arc = np.array([result.epoch]), 1
     else:
         times, n_arc = after_last_burn(record, *fit_grid(arc["first_tu"], arc["last_tu"], scen.epoch, days))
+    _check_frame_years(d, frame, scen.epoch, result.epoch, times, days, words)
     dynamics = _dynamics(scen, reg, record)
     times, impact = prediction_end(dynamics, result, times, epoch=scen.epoch)  # an impact ends the file
     n_arc = min(n_arc, times.size)
@@ -283,6 +284,31 @@ def export_fit(run_dir: str | Path, format: str = "oem", path: str | Path | None
     write_export(exporter, out, ie, meta, format=format, named=path is not None, overwrite=opts.overwrite,
                  words=words)
     return out
+
+
+def _check_frame_years(d: Path, frame: Any, epoch: Any, fit_epoch: float, times: np.ndarray, days: float,
+                       words: ExportWords) -> None:
+    """Refuse (:class:`ConfigError`) states to export at ``times`` (TU since ``epoch``) outside the
+    years its inertial ``frame`` holds for (``frame.years``: the real Earth-Moon frame's are DE421's),
+    naming what put them there: fit.json's epoch_utc (the fit's epoch ``fit_epoch``), the
+    prediction span (``days``, ``words.predict``), or fit.json's arc."""
+    if frame.years is None:
+        return
+    first, last = frame.years
+    ends = (float(times.min()), float(times.max())) if times.size else ()
+    at = {t: units.tu_to_utc(epoch, t) for t in (float(fit_epoch), *ends)}
+    bad = next((t for t in at if not first <= at[t].year <= last), None)
+    if bad is None:
+        return
+    need = (f"its states in {frame.name} need the ephemeris of that frame ({frame.description}), which covers the "
+            f"years {first} to {last}")
+    again = "the directory does not hold an orbit cistrack can export: fit the observations again"
+    if bad == fit_epoch:
+        raise ConfigError(f"{d}: the orbit's epoch (fit.json epoch_utc) {at[bad]:%Y-%m-%d}: {need}; {again}")
+    if days > 0 and bad == ends[1]:
+        raise ConfigError(f"{words.option('predict', f'{days:g}')}: the states to export reach {at[bad]:%Y-%m-%d}: "
+                          f"{need}; give a shorter {words.predict}")
+    raise ConfigError(f"{d}: the fit's arc (fit.json arc) reaches {at[bad]:%Y-%m-%d}: {need}; {again}")
 
 
 def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, impact: Any,

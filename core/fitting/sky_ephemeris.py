@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from cistrack import units
+from cistrack.astro.ephemeris import DE421_YEARS
 from cistrack.astro.sites import Site
 from cistrack.errors import ConfigError, PropagationError, StateError
 from cistrack.interfaces.dynamics import Dynamics
@@ -41,7 +42,7 @@ from cistrack.plugin.registry import Registry, default_registry
 __all__ = ["SkyEphemeris", "sky_ephemeris", "sky_ephemeris_of", "predicted_orbit", "DirectoryOrbit", "orbit_of_directory", "CSV_COLUMNS",
            "RATE_SECONDS", "FIRST_YEAR", "LAST_YEAR"]
 
-FIRST_YEAR, LAST_YEAR = 1900, 2052
+FIRST_YEAR, LAST_YEAR = DE421_YEARS
 """The whole years of the DE421 ephemeris (prediction times must lie within them)."""
 RATE_SECONDS = 30.0
 """Half-width of the central differences of the rates, seconds."""

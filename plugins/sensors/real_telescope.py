@@ -28,7 +28,7 @@ from cistrack.api import hookimpl
 from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.observer import ObserverGeometry, neu_basis
-from cistrack.astro.ephemeris import check_de421_epoch
+from cistrack.astro.ephemeris import DE421_YEARS, check_de421_epoch
 from cistrack.astro.sites import Site
 from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
@@ -193,7 +193,7 @@ class RealTelescope(Sensor):
         from cistrack.astro.inertial_frame import InertialFrame
         return InertialFrame(name="GCRF", ccsds=True, from_synodic=self._frame.synodic_to_gcrs,
                              description="GCRS: Earth-centred, ICRF-aligned axes; from the real "
-                                         "Earth-Moon rotating frame (DE421)")
+                                         "Earth-Moon rotating frame (DE421)", years=DE421_YEARS)
 
     def __getstate__(self):
         state = dict(self.__dict__)

@@ -235,14 +235,26 @@ def test_states_or_covariances_to_export_that_are_not_finite_are_refused_naming_
         refuse_non_finite(values, ["2026-03-02T00:00:00Z", "2026-03-02T00:10:00Z", "2026-03-02T00:20:00Z"], "FIT")
 
 
+def _moved_to_2061(rec: dict) -> None:
+    """The fit's epoch moved 36 years on (2061, beyond DE421), its arc and UTC times with it."""
+    rec["epoch_tu"], rec["epoch_utc"] = 3000.0, _utc_after(rec, 3000.0)
+    rec["arc"].update(first_tu=2999.0, last_tu=3000.0, first_utc=_utc_after(rec, 2999.0), last_utc=_utc_after(rec, 3000.0))
+
+
 def test_a_fit_epoch_beyond_the_ephemeris_is_blamed_on_fit_json_not_on_an_option_not_given(fit_dir, tmp_path, capsys):
     """Moved 36 years on (2061, its arc and UTC times with it), the default --start had been blamed."""
-    def edit(rec):
-        rec["epoch_tu"], rec["epoch_utc"] = 3000.0, _utc_after(rec, 3000.0)
-        rec["arc"].update(first_tu=2999.0, last_tu=3000.0, first_utc=_utc_after(rec, 2999.0),
-                          last_utc=_utc_after(rec, 3000.0))
-    d = _copy(fit_dir, tmp_path, edit)
+    d = _copy(fit_dir, tmp_path, _moved_to_2061)
     assert main(["predict", str(d), "--site", "568", "--quiet"]) == 2
     err = " ".join(capsys.readouterr().err.split())
     assert (f"{d}: the orbit's epoch (fit.json epoch_utc, the default --start) 2061-" in err
             and "sky predictions need the DE421 ephemeris" in err and "--start 2061" not in err)
+
+
+def test_a_fit_epoch_beyond_the_ephemeris_is_not_exported_in_the_frame_placed_by_it(fit_dir, tmp_path, capsys):
+    """The OEM's GCRF states come from the real Earth-Moon frame, placed by DE421's Moon at each time:
+    a 2061 fit had been exported (exit 0) with the Moon read beyond the years cistrack takes from DE421."""
+    d = _copy(fit_dir, tmp_path, _moved_to_2061)
+    assert main(["export", str(d), "--format", "oem", "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"{d}: the orbit's epoch (fit.json epoch_utc) 2061-" in err and "from the real Earth-Moon rotating frame "
+            "(DE421)), which covers the years 1900 to 2052" in err and not (d / "estimate.oem").exists())
