@@ -118,7 +118,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     else:
         from cistrack.astro.site_network import one_per_time
         iod_measurements, iod_sensor = one_per_time(measurements, sensor, say)  # the IOD: one site per time
-    cloud = estimate_iod(scenario, iod, iod_measurements, iod_sensor, rngs["iod"], truth is not None)
+    cloud = estimate_iod(scenario, iod, iod_measurements, iod_sensor, rngs["iod"], truth is not None, reg)
     say(iod_message(scenario.components["iod"].name, cloud, len(measurements)))
     rid = run_id or scenario_run_id(scenario, seed)
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,

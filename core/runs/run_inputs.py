@@ -7,7 +7,7 @@
 - :func:`plan_measurement_times`: the schedule's times, with its refusals (too many times to
   plan) named as the scenario's ``[schedule]`` table.
 - :func:`estimate_iod`: the IOD, whose failure on measurements simulated from a ``state_km``
-  truth points at that state.
+  truth points at that state, and whose own exception or wrong result (not a ParticleCloud) names it.
 - :func:`simulate_measurements`: the sensor's simulated measurements, its refusals naming the sensor.
 
 Every refusal is a :class:`~cistrack.errors.CistrackError` naming the scenario file and key.
@@ -20,16 +20,17 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
-from cistrack.errors import ConfigError, IODError, MeasurementError, ParameterError
+from cistrack.errors import CistrackError, ConfigError, IODError, MeasurementError, ParameterError, exception_text
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.schedule import checked_plan
+from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry
 from cistrack.scenario.loading import Scenario
 from cistrack.scenario.work_limits import check_steps
 
 __all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod",
-           "simulate_measurements"]
+           "checked_iod_cloud", "simulate_measurements"]
 
 _SPAN_TOLERANCE_TU = 1e-9
 """Observations this close to the span's ends (about 0.4 ms) count as inside."""
@@ -125,11 +126,14 @@ def plan_measurement_times(scenario: Scenario, schedule: Any, passes: list, rng:
 
 
 def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sensor: Any,
-                 rng: np.random.Generator, simulated: bool) -> Any:
+                 rng: np.random.Generator, simulated: bool, registry: Registry | None = None) -> ParticleCloud:
     """The IOD's cloud. When the measurements were simulated from a ``[truth] state_km`` and the
-    IOD finds no orbit, the message points at that state (where the target is from Earth)."""
+    IOD finds no orbit, the message points at that state (where the target is from Earth). An IOD
+    that raises its own exception (not an IODError), or returns anything but a ParticleCloud, is an
+    IODError naming it (and its distribution, from ``registry``)."""
+    who = registry.describe("iod", component_name(iod)) if registry is not None else f"iod '{component_name(iod)}'"
     try:
-        return iod.estimate(measurements, sensor, rng)
+        cloud = iod.estimate(measurements, sensor, rng)
     except IODError as exc:
         if not simulated or scenario.truth_state is None:
             raise
@@ -138,6 +142,20 @@ def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sen
         where = f" (it puts the target {r_km:,.0f} km from Earth at t = 0)"
         raise IODError(f"{exc} The measurements were simulated from {scenario.source}: [truth]: key "
                        f"'state_km'{where}: check that state, which the IOD's bounds must admit.") from None
+    except (CistrackError, MemoryError):
+        raise
+    except (Exception, SystemExit) as exc:  # the plugin's own bug: named, never a traceback
+        raise IODError(f"{who}: estimate() raised {exception_text(exc)}") from exc
+    return checked_iod_cloud(cloud, measurements, who)
+
+
+def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> ParticleCloud:
+    """``cloud``, what the IOD ``who`` returned for ``measurements``, unless it is not a
+    ParticleCloud: IODError naming ``who`` then."""
+    if not isinstance(cloud, ParticleCloud):
+        raise IODError(f"{who}: estimate() returned {type(cloud).__name__}, not a ParticleCloud (cistrack.api."
+                       "ParticleCloud: (N, 6) states at the epoch of the last measurement it used)")
+    return cloud
 
 
 def simulate_measurements(sensor: Any, states: np.ndarray, times: np.ndarray, rng: np.random.Generator,
