@@ -7,7 +7,8 @@
 - :func:`plan_measurement_times`: the schedule's times, with its refusals (too many times to
   plan) named as the scenario's ``[schedule]`` table.
 - :func:`estimate_iod`: the IOD, whose failure on measurements simulated from a ``state_km``
-  truth points at that state, and whose own exception or wrong result (not a ParticleCloud) names it.
+  truth points at that state, and whose own exception or wrong result (not a ParticleCloud, or
+  one dated outside the measurements it was given) names it.
 - :func:`simulate_measurements`: the sensor's simulated measurements, its refusals naming the sensor.
 
 Every refusal is a :class:`~cistrack.errors.CistrackError` naming the scenario file and key.
@@ -129,8 +130,9 @@ def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sen
                  rng: np.random.Generator, simulated: bool, registry: Registry | None = None) -> ParticleCloud:
     """The IOD's cloud. When the measurements were simulated from a ``[truth] state_km`` and the
     IOD finds no orbit, the message points at that state (where the target is from Earth). An IOD
-    that raises its own exception (not an IODError), or returns anything but a ParticleCloud, is an
-    IODError naming it (and its distribution, from ``registry``)."""
+    that raises its own exception (not an IODError), or returns anything but a ParticleCloud at
+    the time of one of ``measurements``, is an IODError naming it (and its distribution, from
+    ``registry``)."""
     who = registry.describe("iod", component_name(iod)) if registry is not None else f"iod '{component_name(iod)}'"
     try:
         cloud = iod.estimate(measurements, sensor, rng)
@@ -151,10 +153,22 @@ def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sen
 
 def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> ParticleCloud:
     """``cloud``, what the IOD ``who`` returned for ``measurements``, unless it is not a
-    ParticleCloud: IODError naming ``who`` then."""
+    ParticleCloud or its epoch (TU) lies outside the measurements' times (to 1e-9 TU relative): an
+    IOD's cloud is at the epoch of the last measurement it used, so inside the run. IODError
+    naming ``who`` otherwise."""
     if not isinstance(cloud, ParticleCloud):
         raise IODError(f"{who}: estimate() returned {type(cloud).__name__}, not a ParticleCloud (cistrack.api."
                        "ParticleCloud: (N, 6) states at the epoch of the last measurement it used)")
+    times = np.asarray(measurements.times, dtype=float)
+    if times.size == 0:
+        return cloud
+    first, last, t = float(times.min()), float(times.max()), float(cloud.epoch)
+    slack = 1e-9 * max(1.0, abs(first), abs(last))
+    if not first - slack <= t <= last + slack:
+        raise IODError(f"{who}: estimate() returned a cloud at t = {units.tu_to_days(t):,.3f} d, outside the "
+                       f"{times.size} measurements it was given ({units.tu_to_days(first):.3f} d to "
+                       f"{units.tu_to_days(last):.3f} d); an IOD's cloud is at the epoch of the last measurement "
+                       "it used")
     return cloud
 
 

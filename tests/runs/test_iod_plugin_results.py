@@ -49,3 +49,10 @@ def test_an_iod_raising_its_own_exception_is_an_iod_error_naming_it_and_the_exce
     with pytest.raises(IODError, match=r"^iod 'h-iod' \(hplug 0\.1\): estimate\(\) raised ZeroDivisionError: "
                                        r"division by zero in the plugin$"):
         _run("raise")
+
+
+def test_an_iod_cloud_dated_after_its_measurements_is_an_iod_error_naming_it_and_their_times():
+    with pytest.raises(IODError, match=r"^iod 'h-iod' \(hplug 0\.1\): estimate\(\) returned a cloud at t = 4,343\.993 d, "
+                                       r"outside the 17 measurements it was given \(0\.816 d to 1\.991 d\); an IOD's "
+                                       r"cloud is at the epoch of the last measurement it used$"):
+        _run("late")
