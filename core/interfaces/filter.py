@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from abc import abstractmethod
-from typing import ClassVar, TypedDict
+from typing import Any, ClassVar, TypedDict
 
 import numpy as np
 
@@ -13,7 +13,8 @@ from cistrack.model.measurement import Measurement
 from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 
-__all__ = ["Filter", "FilterBase", "Diagnostics", "DIAGNOSTIC_PREFIX", "diagnostic_column"]
+__all__ = ["Filter", "FilterBase", "Diagnostics", "DIAGNOSTIC_PREFIX", "diagnostic_column", "DOCUMENTED_DIAGNOSTICS",
+           "DIAGNOSTICS_RULE", "bad_diagnostic"]
 
 
 class Diagnostics(TypedDict, total=False):
@@ -45,6 +46,28 @@ DIAGNOSTIC_PREFIX = "diag_"
 def diagnostic_column(key: str) -> str:
     """The step-table column of diagnostic ``key``: ``diag_ess_before_resampling``."""
     return DIAGNOSTIC_PREFIX + key
+
+
+DOCUMENTED_DIAGNOSTICS: tuple[str, ...] = tuple(Diagnostics.__annotations__)
+"""The diagnostics whose meaning the framework relies on: each a count or size, finite and >= 0."""
+
+DIAGNOSTICS_RULE = (f"a documented diagnostic (cistrack.interfaces.filter.Diagnostics: {', '.join(DOCUMENTED_DIAGNOSTICS)}) "
+                    "is a count or size: a finite number >= 0")
+"""What :data:`DOCUMENTED_DIAGNOSTICS` must be, as messages state it."""
+
+
+def bad_diagnostic(diagnostics: dict) -> tuple[str, Any] | None:
+    """(key, value) of the first of ``diagnostics`` that is one of :data:`DOCUMENTED_DIAGNOSTICS`
+    and not a finite number >= 0 (:data:`DIAGNOSTICS_RULE`); None when they all keep the rule
+    (other keys are the filter's own)."""
+    for key in DOCUMENTED_DIAGNOSTICS:
+        if key not in diagnostics:
+            continue
+        value = diagnostics[key]
+        number = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+        if not (number and np.isfinite(value) and value >= 0):
+            return key, value
+    return None
 
 
 class Filter(Component):

@@ -29,6 +29,7 @@ from cistrack.scenario.limits import check_seed
 from cistrack.interrupts import raise_pending
 from cistrack.errors import CistrackError, ConfigError, FilterError, PluginError, exception_text
 from cistrack.interfaces.component import component_name
+from cistrack.interfaces.filter import DIAGNOSTICS_RULE, bad_diagnostic
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
@@ -395,11 +396,24 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
     get the belief with read-only arrays: the filter's state is safe from them."""
     step.belief = read_only_belief(step.belief)
     if is_table_step(event, step):
-        step.diagnostics = dict(ctx.filter.diagnostics)
+        step.diagnostics = _diagnostics(ctx.filter, step)
         metrics.timed(ctx, step, event)
     else:
         metrics.measure(ctx, step, event)
     notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
+
+
+def _diagnostics(filt, step: Step) -> dict:
+    """The diagnostics of ``filt`` after ``step``; a FilterError naming the filter, the key, the value
+    and the step when one of the documented ones is not a finite number >= 0 (the verdict reads
+    them, and the table would hold the NaN or negative count as if it were measured)."""
+    diag = dict(filt.diagnostics)
+    bad = bad_diagnostic(diag)
+    if bad is not None:
+        after = {"initial": "initialize"}.get(step.kind, step.kind)
+        raise FilterError(f"filter '{component_name(filt)}': diagnostic {bad[0]!r} = {bad[1]!r} after {after} at step "
+                          f"{step.index} (t = {float(units.tu_to_days(step.t)):.3f} d); {DIAGNOSTICS_RULE}")
+    return diag
 
 
 def _judging_rule(rule, measurements):

@@ -1,6 +1,7 @@
 """The run holds a filter to its belief after every predict and update: a belief that is not at
-the step's time, or whose mean or covariance is NaN or infinite, stops the run as "filter-failed"
-naming the filter and the step, rather than measuring a stale or undefined belief against the
+the step's time, or whose mean or covariance is NaN or infinite, or a documented diagnostic (a
+count or size) that is not a finite number >= 0, stops the run as "filter-failed" naming the
+filter and the step, rather than measuring a stale or undefined belief against the
 truth (custody had stayed 1.0 on rows of NaN and the divergence had been dated ten steps late)."""
 from __future__ import annotations
 
@@ -16,12 +17,16 @@ from cistrack.runs.run_context import Step
 from cistrack.scenario.loading import load_scenario
 
 
-class LateNaN(UKFFilter):
-    """A UKF whose belief mean turns NaN from its third update on."""
+class Counting(UKFFilter):
+    """A UKF counting its updates in ``_n``."""
 
     def update(self, m):
         super().update(m)
         self._n = getattr(self, "_n", 0) + 1
+
+
+class LateNaN(Counting):
+    """A UKF whose belief mean turns NaN from its third update on."""
 
     @property
     def belief(self):
@@ -32,18 +37,33 @@ class LateNaN(UKFFilter):
         return Belief(b.epoch, GaussianMixture(g.weights, g.means * np.nan, g.covariances), b.samples)
 
 
-class Stale(UKFFilter):
+class Stale(Counting):
     """A UKF whose belief stops at the epoch of its third update."""
 
     def update(self, m):
         super().update(m)
-        self._n = getattr(self, "_n", 0) + 1
         if self._n == 3:
             self._frozen = super().belief
 
     @property
     def belief(self):
         return getattr(self, "_frozen", None) or super().belief
+
+
+class NaNCount(Counting):
+    """A UKF whose diagnostics give a NaN particle count from its second update on."""
+
+    @property
+    def diagnostics(self):
+        return {**super().diagnostics, "n_particles": float("nan") if getattr(self, "_n", 0) >= 2 else 13.0}
+
+
+class NegativeCount(UKFFilter):
+    """A UKF whose diagnostics give a negative particle count."""
+
+    @property
+    def diagnostics(self):
+        return {**super().diagnostics, "n_particles": -5.0}
 
 
 def _run(cls):
@@ -66,6 +86,22 @@ def test_a_belief_left_at_an_earlier_time_stops_the_run_naming_both_times():
     assert res.summary.status == "filter-failed"
     assert res.summary.failure.startswith("FilterError: filter 'h-mine': belief epoch 1.161 d after predict to "
                                           "1.196 d (step 4)")
+
+
+def test_a_nan_documented_diagnostic_stops_the_run_as_filter_failed_naming_the_key_value_and_step():
+    res = _run(NaNCount)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine': diagnostic 'n_particles' = nan after update at "
+                                          "step 2 (t = 1.122 d); a documented diagnostic")
+    assert [r["step"] for r in res.rows] == [0, 1]
+
+
+def test_a_negative_documented_diagnostic_stops_the_run_before_its_first_row():
+    res = _run(NegativeCount)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine': diagnostic 'n_particles' = -5.0 after "
+                                          "initialize at step 0")
+    assert res.rows == []
 
 
 def _update_step(**metrics) -> Step:
