@@ -150,14 +150,25 @@ def _print_outcome(s, out: Path, quiet: bool, out_) -> None:
     say(f"run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
     if quiet and s.status != "finished":
         _eprint(f"cistrack: error: run {s.run_id}: {s.status}" + (f" ({s.failure})" if s.failure else ""))
-    ended = s.status in ("finished", "filter-failed")  # a failed run has no verdict to give
-    for line in (verdict_lines(s, out, _fmt) if ended else ["  verdict: none (the run did not finish; see its status above)"]):
+    ended = s.status in ("finished", "filter-failed")  # a failed run was not judged at its end
+    for line in (verdict_lines(s, out, _fmt) if ended else _unfinished_verdict_lines(s, out)):
         say(line)
     for line in count_lines(s) + maneuver_lines(s):
         say(line)
     for line in final_lines(s.final, _fmt):  # velocities in m/s throughout
         say(line)
     say(results_line(out))  # only files that exist (a full disk may have kept some from being written)
+
+
+def _unfinished_verdict_lines(s, out: Path) -> list[str]:
+    """The stored verdict of a run that did not finish (docs/running.md): ``none``, or ``lost`` (with
+    custody) when custody was lost before it stopped."""
+    from cistrack.evaluation.verdicts import verdict_lines
+
+    if s.verdict.kind == "none":
+        return ["  verdict: none (the run did not finish; see its status above)"]
+    head, *rest = verdict_lines(s, out, _fmt)
+    return [f"{head} (before the run stopped; see its status above)", *rest]
 
 
 def _serve_until_interrupted(recorder, out_) -> None:

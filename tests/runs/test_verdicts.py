@@ -183,3 +183,15 @@ def test_a_consistent_filter_of_a_1e_4_arcsec_sensor_is_tracking_not_collapsed()
     sc = load_scenario("quick").with_overrides({"sensor": {"sigma_arcsec": 1e-4}})
     res = run_scenario(sc, seed=1)
     assert res.summary.verdict.kind == "tracking", res.summary.verdict.reason
+
+
+def test_the_command_prints_the_stored_lost_verdict_of_a_run_that_failed_after_losing_custody(tmp_path, capsys):
+    from cistrack.cli.main import _print_outcome
+    from cistrack.evaluation.run_summary import RunSummary
+
+    lost = Verdict("lost", "truth log-likelihood -7290.6 < -100", 1, 1.06)
+    _print_outcome(RunSummary("quick__h__seed1", 1, status="failed", failure="hplug: boom", verdict=lost),
+                   tmp_path, False, print)
+    out = capsys.readouterr().out
+    assert "  verdict: lost at step 1 (t = 1.06 d): truth log-likelihood -7290.6 < -100 (before the run stopped" in out
+    assert "verdict: none" not in out and "  custody: LOST at step 1 (t = 1.06 d)" in out
