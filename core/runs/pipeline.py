@@ -125,7 +125,8 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     ctx = RunContext(run_id=rid, scenario=scenario, seed=seed, epoch=scenario.epoch, dynamics=dynamics,
                      sensor=sensor, schedule=schedule, iod=iod, filter=filt, truth_times=grid,
                      truth_states=grid_states, passes=passes, measurements=measurements, iod_cloud=cloud,
-                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth, truth_impulses=truth_impulses)
+                     output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth, truth_impulses=truth_impulses,
+                     registry=reg)
     return ctx, rngs
 
 
@@ -290,20 +291,20 @@ def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
     except (CistrackError, KeyboardInterrupt, MemoryError):
         raise
     except Exception as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
-        raise FilterError(f"filter '{component_name(ctx.filter)}' failed while starting from the IOD's cloud: "
+        raise FilterError(f"{_filter_who(ctx)} failed while starting from the IOD's cloud: "
                           f"{type(exc).__name__}: {exc}") from exc
-    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", _check_belief(ctx.filter, belief, ctx.iod_cloud.epoch, 0,
+    step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", _check_belief(ctx, belief, ctx.iod_cloud.epoch, 0,
                                                                           "initialize"))
     step0.timings["initialize"] = time.perf_counter() - t0
     return step0
 
 
-def _check_belief(filt, belief, t: float, k: int, after: str):
-    """``belief``, the filter's after ``after`` ("initialize", "predict", "update") at step ``k``,
+def _check_belief(ctx: RunContext, belief, t: float, k: int, after: str):
+    """``belief``, the filter's (of ``ctx``) after ``after`` ("initialize", "predict", "update") at step ``k``,
     time ``t`` (TU); a FilterError naming the filter and the step unless it is at ``t`` (to 1e-9 TU
     relative) with a finite mean and covariance: metrics would compare a stale belief with the
     truth at a later time, or carry NaN as if it were a track."""
-    who, days = f"filter '{component_name(filt)}'", float(units.tu_to_days(t))
+    who, days = _filter_who(ctx), float(units.tu_to_days(t))
     try:
         epoch, gm = float(belief.epoch), belief.mixture
         finite = bool(np.isfinite(gm.means).all() and np.isfinite(gm.covariances).all())
@@ -318,6 +319,28 @@ def _check_belief(filt, belief, t: float, k: int, after: str):
         raise FilterError(f"{who}: the belief's mean or covariance is NaN or infinite after {after} at step {k} "
                           f"(t = {days:.3f} d)")
     return belief
+
+
+def _filter_who(ctx: RunContext) -> str:
+    """The run's filter as messages name it: ``filter 'pgm'``, with its distribution when a third
+    party's (``filter 'h-mine' (hplug 0.1)``)."""
+    name = component_name(ctx.filter)
+    return ctx.registry.describe("filter", name) if ctx.registry is not None else f"filter '{name}'"
+
+
+def _filter_call(ctx: RunContext, method: str, k: int, t: float, call: Callable[..., Any], *args: Any) -> Any:
+    """``call(*args)``, the filter's ``method`` at step ``k``, time ``t`` (TU). The filter's own
+    exception (a bug of a third party's filter: KeyError, ValueError, ``sys.exit`` ...) becomes a
+    FilterError naming the filter, the method and the step, so that the run ends "filter-failed"
+    (``cistrack_run_failed`` is told); cistrack's errors, numerical failures (LinAlgError,
+    FloatingPointError), MemoryError and interrupts pass as they are."""
+    try:
+        return call(*args)
+    except (CistrackError, np.linalg.LinAlgError, FloatingPointError, MemoryError):
+        raise
+    except (Exception, SystemExit) as exc:
+        raise FilterError(f"{_filter_who(ctx)} raised {exception_text(exc)} in {method} at step {k} "
+                          f"(t = {float(units.tu_to_days(t)):.3f} d)") from exc
 
 
 def _two_times(a: float, b: float) -> tuple[str, str]:
@@ -365,10 +388,10 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
     """Step ``k``: predict to ``t``; with measurements (indices ``group``) hand on the prior, then update."""
     filt = ctx.filter
     tp = time.perf_counter()
-    filt.predict(t)
-    prior = filt.belief  # timed with the prediction (forming the belief is part of it)
+    _filter_call(ctx, "predict", k, t, filt.predict, t)
+    prior = _filter_call(ctx, "belief", k, t, getattr, filt, "belief")  # timed with the prediction (forming it is part of it)
     t_pred = time.perf_counter() - tp
-    _check_belief(filt, prior, t, k, "predict")
+    _check_belief(ctx, prior, t, k, "predict")
     if not group:
         step = _step(ctx, k, t, "predict", prior)
         step.timings["predict"] = t_pred
@@ -377,12 +400,13 @@ def _event(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, k: i
     ms = tuple(_angles(ctx.measurements[i]) for i in group)
     _observe(ctx, pm, metrics, _step(ctx, k, t, "update", prior, ms), "predicted")
     if ctx.maneuvers is not None:
-        _watch(ctx, t, prior, ms)
+        _watch(ctx, k, t, prior, ms)
     del prior  # the prior's particles need not outlive its hook
     tu = time.perf_counter()
     for m in ((StackedMeasurement(ms),) if len(ms) > 1 and filt.stacked_updates else ms):
-        filt.update(m)  # several sites at one time: one stacked update, or one after another
-    step = _step(ctx, k, t, "update", _check_belief(filt, filt.belief, t, k, "update"), ms)
+        _filter_call(ctx, "update", k, t, filt.update, m)  # several sites at one time: one stacked update, or one after another
+    posterior = _filter_call(ctx, "belief", k, t, getattr, filt, "belief")
+    step = _step(ctx, k, t, "update", _check_belief(ctx, posterior, t, k, "update"), ms)
     if ctx.maneuvers is not None:
         ctx.maneuvers.after_update(t, step.belief)
     step.timings.update({"predict": t_pred, "update": time.perf_counter() - tu})
@@ -396,22 +420,22 @@ def _observe(ctx: RunContext, pm: pluggy.PluginManager, metrics: MetricStage, st
     get the belief with read-only arrays: the filter's state is safe from them."""
     step.belief = read_only_belief(step.belief)
     if is_table_step(event, step):
-        step.diagnostics = _diagnostics(ctx.filter, step)
+        step.diagnostics = _diagnostics(ctx, step)
         metrics.timed(ctx, step, event)
     else:
         metrics.measure(ctx, step, event)
     notify(pm, "cistrack_step_updated" if event == "updated" else "cistrack_step_predicted", run=ctx, step=step)
 
 
-def _diagnostics(filt, step: Step) -> dict:
-    """The diagnostics of ``filt`` after ``step``; a FilterError naming the filter, the key, the value
+def _diagnostics(ctx: RunContext, step: Step) -> dict:
+    """The diagnostics of the run's filter after ``step``; a FilterError naming the filter, the key, the value
     and the step when one of the documented ones is not a finite number >= 0 (the verdict reads
     them, and the table would hold the NaN or negative count as if it were measured)."""
-    diag = dict(filt.diagnostics)
+    diag = _filter_call(ctx, "diagnostics", step.index, step.t, lambda: dict(ctx.filter.diagnostics))
     bad = bad_diagnostic(diag)
     if bad is not None:
         after = {"initial": "initialize"}.get(step.kind, step.kind)
-        raise FilterError(f"filter '{component_name(filt)}': diagnostic {bad[0]!r} = {bad[1]!r} after {after} at step "
+        raise FilterError(f"{_filter_who(ctx)}: diagnostic {bad[0]!r} = {bad[1]!r} after {after} at step "
                           f"{step.index} (t = {float(units.tu_to_days(step.t)):.3f} d); {DIAGNOSTICS_RULE}")
     return diag
 
@@ -454,14 +478,15 @@ def _say_if_detector_idle(watch: ManeuverWatch, events: list, say) -> None:
             "updates of this run; it can detect nothing (lower [maneuvers.detector] warmup)")
 
 
-def _watch(ctx: RunContext, t: float, prior, ms: tuple) -> None:
-    """The maneuver watch's look at the measurements ``ms`` at ``t`` under ``prior``; when its response
+def _watch(ctx: RunContext, k: int, t: float, prior, ms: tuple) -> None:
+    """The maneuver watch's look at the measurements ``ms`` of step ``k`` at ``t`` under ``prior``; when its response
     hands back a cloud, the filter starts again from it (before it takes ``ms``)."""
     cloud = ctx.maneuvers.before_update(ctx, t, prior, ms)
     if cloud is not None:
         ctx.maneuvers.say(f"maneuver detected at {units.tu_to_days(t):.3f} d; the filter starts again from the "
                 f"response's cloud ({len(cloud)} particles)")
-        ctx.filter.initialize(cloud, ctx.dynamics, ctx.sensor, ctx.maneuvers.filter_rng)
+        _filter_call(ctx, "initialize", k, t, ctx.filter.initialize, cloud, ctx.dynamics, ctx.sensor,
+                     ctx.maneuvers.filter_rng)
 
 
 def _angles(m):

@@ -93,6 +93,8 @@ class RunContext:
     measurements : MeasurementSet     all measurements, including any IOD-only range
     iod_cloud : ParticleCloud         the IOD result (epoch = last fitted measurement)
     output_dir : Path or None         where results of this run are written
+    registry : Registry or None       the registry its components came from (messages name a third
+                                      party's distribution from it)
     """
 
     run_id: str
@@ -114,6 +116,7 @@ class RunContext:
     truth: Truth | None = field(default=None, repr=False)
     truth_impulses: list = field(default_factory=list)
     maneuvers: Any = field(default=None, repr=False)
+    registry: Any = field(default=None, repr=False)
 
     @property
     def has_truth(self) -> bool:

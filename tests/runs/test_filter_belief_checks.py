@@ -1,8 +1,9 @@
 """The run holds a filter to its belief after every predict and update: a belief that is not at
 the step's time, or whose mean or covariance is NaN or infinite, or a documented diagnostic (a
 count or size) that is not a finite number >= 0, stops the run as "filter-failed" naming the
-filter and the step, rather than measuring a stale or undefined belief against the
-truth (custody had stayed 1.0 on rows of NaN and the divergence had been dated ten steps late)."""
+filter and the step, rather than measuring a stale or undefined belief against the truth (custody
+had stayed 1.0 on rows of NaN and the divergence had been dated ten steps late). So does a filter
+that raises its own exception, naming the method too (it had ended "failed" naming neither)."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.model.belief import Belief, GaussianMixture
+from cistrack.plugin.hookspecs import hookimpl
 from cistrack.plugin.registry import load_registry
 from cistrack.plugins.filters.ukf import UKFFilter
 from cistrack.runs.pipeline import run_scenario
@@ -66,17 +68,37 @@ class NegativeCount(UKFFilter):
         return {**super().diagnostics, "n_particles": -5.0}
 
 
-def _run(cls):
+class RaisesInUpdate(Counting):
+    """A UKF whose second update raises its own KeyError (a bug of the plugin)."""
+
+    def update(self, m):
+        super().update(m)
+        if self._n == 2:
+            raise KeyError("nope")
+
+
+class ToldOfFailures:
+    """An observer keeping the errors cistrack_run_failed tells it."""
+
+    def __init__(self):
+        self.errors = []
+
+    @hookimpl
+    def cistrack_run_failed(self, run, step_index, error):
+        self.errors.append(error)
+
+
+def _run(cls, **options):
     reg = load_registry(autoload_third_party=False)
     reg.add("filter", "h-mine", cls, "hplug", "0.1", "hplug")
     scen = load_scenario("quick", reg, overrides={"duration_days": 2.0, "filter": {"name": "h-mine"}})
-    return run_scenario(scen, seed=1, registry=reg)
+    return run_scenario(scen, seed=1, registry=reg, **options)
 
 
 def test_a_belief_that_turns_nan_stops_the_run_as_filter_failed_at_that_step_naming_the_filter():
     res = _run(LateNaN)
     assert res.summary.status == "filter-failed"
-    assert res.summary.failure == ("FilterError: filter 'h-mine': the belief's mean or covariance is NaN or infinite "
+    assert res.summary.failure == ("FilterError: filter 'h-mine' (hplug 0.1): the belief's mean or covariance is NaN or infinite "
                                    "after update at step 3 (t = 1.161 d)")
     assert [r["step"] for r in res.rows] == [0, 1, 2]
 
@@ -84,14 +106,14 @@ def test_a_belief_that_turns_nan_stops_the_run_as_filter_failed_at_that_step_nam
 def test_a_belief_left_at_an_earlier_time_stops_the_run_naming_both_times():
     res = _run(Stale)
     assert res.summary.status == "filter-failed"
-    assert res.summary.failure.startswith("FilterError: filter 'h-mine': belief epoch 1.161 d after predict to "
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine' (hplug 0.1): belief epoch 1.161 d after predict to "
                                           "1.196 d (step 4)")
 
 
 def test_a_nan_documented_diagnostic_stops_the_run_as_filter_failed_naming_the_key_value_and_step():
     res = _run(NaNCount)
     assert res.summary.status == "filter-failed"
-    assert res.summary.failure.startswith("FilterError: filter 'h-mine': diagnostic 'n_particles' = nan after update at "
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine' (hplug 0.1): diagnostic 'n_particles' = nan after update at "
                                           "step 2 (t = 1.122 d); a documented diagnostic")
     assert [r["step"] for r in res.rows] == [0, 1]
 
@@ -99,9 +121,23 @@ def test_a_nan_documented_diagnostic_stops_the_run_as_filter_failed_naming_the_k
 def test_a_negative_documented_diagnostic_stops_the_run_before_its_first_row():
     res = _run(NegativeCount)
     assert res.summary.status == "filter-failed"
-    assert res.summary.failure.startswith("FilterError: filter 'h-mine': diagnostic 'n_particles' = -5.0 after "
+    assert res.summary.failure.startswith("FilterError: filter 'h-mine' (hplug 0.1): diagnostic 'n_particles' = -5.0 after "
                                           "initialize at step 0")
     assert res.rows == []
+
+
+def test_a_filter_raising_its_own_exception_ends_the_run_filter_failed_naming_it_the_method_and_the_step():
+    res = _run(RaisesInUpdate)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure == ("FilterError: filter 'h-mine' (hplug 0.1) raised KeyError: 'nope' in update at step 2 "
+                                   "(t = 1.122 d)")
+
+
+def test_observers_are_told_through_cistrack_run_failed_when_the_filter_raises():
+    told = ToldOfFailures()
+    _run(RaisesInUpdate, observers=[told])
+    assert told.errors == ["FilterError: filter 'h-mine' (hplug 0.1) raised KeyError: 'nope' in update at step 2 "
+                           "(t = 1.122 d)"]
 
 
 def _update_step(**metrics) -> Step:
