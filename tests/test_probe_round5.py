@@ -109,18 +109,17 @@ class _BadClusterer(Clusterer):
 
 @pytest.mark.parametrize("how, said", [("huge", "not whole numbers from 0 to"), ("half", "not whole numbers"),
                                        ("text", "not labels"), ("short", "shape"),
-                                       ("raise", "failed while starting from the IOD's cloud: ValueError: the "
-                                                 "plugin's own bug")])
+                                       ("raise", r"cluster\(\) raised ValueError: the plugin's own bug")])
 def test_a_clusterer_breaking_its_contract_is_named_at_the_filters_start(how, said, tmp_path, capsys):
     """The PGM clusters the IOD's cloud as it starts: a clusterer's bad labels or its own exception
-    end the command with the filter named, never a traceback."""
+    end the command with the clusterer named (not only the filter), never a traceback."""
     reg = load_registry()
     reg.add("clustering", "bad-clusterer", _BadClusterer)
     scen = load_scenario("quick", reg, overrides={"filter": {"clusterer": {"name": "bad-clusterer", "how": how},
                                                              "n_components": 2}})
     with pytest.raises(FilterError, match=said) as info:
         run_scenario(scen, seed=1, registry=reg, output_dir=tmp_path / "out")
-    assert ("clusterer 'bad-clusterer'" if how != "raise" else "filter 'pgm'") in str(info.value)
+    assert str(info.value).startswith("filter 'pgm': clusterer 'bad-clusterer': cluster() ")
 
 
 def test_a_clusterer_keeping_its_contract_runs():

@@ -1,7 +1,8 @@
 """The PGM hands its clusterer the particles read-only (a view, not a copy): a clusterer that
 writes into its input fails the filter naming the clusterer, instead of moving the filter's
 particles (a clusterer centring its input in place had sent every particle to the barycentre, and
-the run had blamed the PGM: "every particle hit a body")."""
+the run had blamed the PGM: "every particle hit a body"). A clusterer that raises its own exception
+is named the same way (the run had blamed the PGM for it)."""
 from __future__ import annotations
 
 import numpy as np
@@ -32,6 +33,18 @@ class RecordsWriteable(KMeansClusterer):
         return super().cluster(x, rng)
 
 
+class RaisesLater(KMeansClusterer):
+    """k-means that raises its own RuntimeError from its third call on."""
+
+    calls = 0
+
+    def cluster(self, x, rng):
+        type(self).calls += 1
+        if type(self).calls >= 3:
+            raise RuntimeError("clusterer bug")
+        return super().cluster(x, rng)
+
+
 def _run(cls):
     reg = load_registry(autoload_third_party=False)
     reg.add("clustering", "h-clusterer", cls, "hplug", "0.1", "hplug")
@@ -53,3 +66,11 @@ def test_the_clusterer_is_handed_read_only_particles_at_every_step():
     res = _run(RecordsWriteable)
     assert res.summary.status == "finished"
     assert RecordsWriteable.seen and not np.any(RecordsWriteable.seen)
+
+
+def test_a_clusterer_raising_its_own_exception_mid_run_ends_it_filter_failed_naming_the_clusterer():
+    RaisesLater.calls = 0
+    res = _run(RaisesLater)
+    assert res.summary.status == "filter-failed"
+    assert res.summary.failure.startswith("FilterError: filter 'pgm': clusterer 'h-clusterer': cluster() raised "
+                                          "RuntimeError: clusterer bug")
