@@ -14,7 +14,7 @@ import sys
 
 from cistrack.errors import RunInterrupted
 
-__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting"]
+__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting", "interrupt_text"]
 
 _PENDING: list[RunInterrupted] = []
 
@@ -31,6 +31,12 @@ def raise_pending() -> None:
         exc = _PENDING[-1]
         _PENDING.clear()
         raise exc
+
+
+def interrupt_text(exc: BaseException) -> str:
+    """How a run's summary and manifest record the interrupt ``exc``: ``interrupted (SIGTERM)``, or
+    ``interrupted (SIGINT, Ctrl-C)`` for a Ctrl-C (whose exception has no message)."""
+    return f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)"
 
 
 def clear() -> None:

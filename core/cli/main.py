@@ -573,7 +573,8 @@ def __getattr__(name: str):
 
 
 _INTERRUPTED = {
-    "run": "; completed steps are kept and the manifest says 'interrupted' (when the run had started)",
+    "run": ("; completed steps are kept, and the manifest says 'interrupted' unless the run had not started or had "
+            "already finished"),
     "fit": ("; a fit is complete only once its fit.json is written (its filter run may have finished): "
             "run 'cistrack fit' into the same directory again"),
     "study": "; finished runs are kept: 'cistrack study run' with the same options runs the rest",

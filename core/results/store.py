@@ -31,6 +31,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from cistrack.errors import CistrackError
+from cistrack.interrupts import interrupt_text
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.strict_json import finite_or_null
 from cistrack.results.fingerprint import scenario_fingerprint
@@ -174,13 +175,36 @@ class ResultsWriter:
         """Write the waiting rows, merge the parts into steps.parquet and record the status. If
         writing fails (a full disk) the parts written stay (``read_steps`` reads them), the
         manifest says "failed" and why, and the error is raised again (after the manifest is
-        written) so that the run's summary says so too."""
-        status, extra, problems = summary.status, {}, []
+        written) so that the run's summary says so too. An interrupt (Ctrl-C, SIGTERM) while it
+        merges leaves the parts too, and the manifest says "interrupted" before it is raised again."""
+        status, extra, problems, interrupt = summary.status, {}, [], None
         if not self._manifest:  # the run failed before this observer saw it start (another observer's start)
             self.directory.mkdir(parents=True, exist_ok=True)
             self._manifest = {"run_id": run.run_id, "scenario": run.scenario.name, "seed": int(run.seed),
                               "versions": versions(self.registry), "started_unix": time.time()}
             self._t0 = time.perf_counter()
+        try:
+            self._merge_parts(extra, problems)
+        except KeyboardInterrupt as exc:
+            interrupt, status = exc, "interrupted"
+            problems.append(f"{interrupt_text(exc)} while merging the steps into {STEPS}: they stay in {PARTS}/")
+        data = summary.to_dict()
+        if problems:
+            status = "failed" if status == "finished" else status
+            data["failure"] = "; ".join(([data["failure"]] if data.get("failure") else []) + problems)
+        data["status"] = status
+        self._manifest.update({"status": status, "summary": data, **extra,
+                               "wall_time_s": time.perf_counter() - self._t0,
+                               "finished_unix": time.time()})
+        write_json_atomic(self.directory / MANIFEST, self._manifest)
+        if interrupt is not None:
+            raise interrupt
+        if problems:
+            raise OSError(f"{self.directory}: " + "; ".join(problems))
+
+    def _merge_parts(self, extra: dict, problems: list[str]) -> None:
+        """Write the waiting rows and merge the part files into steps.parquet; what fails (OSError)
+        is added to ``extra`` (manifest key -> text) and ``problems``."""
         try:
             self._parts.flush()
         except OSError as exc:
@@ -199,17 +223,6 @@ class ResultsWriter:
                 extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the completed steps stay in the "
                                           f"{len(parts)} files {PARTS}/part-*.parquet")
                 problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
-        data = summary.to_dict()
-        if problems:
-            status = "failed" if status == "finished" else status
-            data["failure"] = "; ".join(([data["failure"]] if data.get("failure") else []) + problems)
-        data["status"] = status
-        self._manifest.update({"status": status, "summary": data, **extra,
-                               "wall_time_s": time.perf_counter() - self._t0,
-                               "finished_unix": time.time()})
-        write_json_atomic(self.directory / MANIFEST, self._manifest)
-        if problems:
-            raise OSError(f"{self.directory}: " + "; ".join(problems))
 
 
 def steps_readable(directory: str | Path) -> bool:

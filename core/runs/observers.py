@@ -9,6 +9,7 @@ from typing import Any, Iterable
 import pluggy
 
 from cistrack.errors import ConfigError, PluginError, exception_text
+from cistrack.interrupts import interrupt_text
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.information_bound import InformationBoundMetric
 from cistrack.evaluation.metric_stage import MetricStage, StepMetric
@@ -21,7 +22,7 @@ from cistrack.runs.run_context import RunContext, RunOptions
 from cistrack.scenario.limits import check_count
 
 __all__ = ["make_plugin_manager", "finish_observers", "run_observers", "builtin_metrics", "metric_stage",
-           "checked_observers", "notify"]
+           "checked_observers", "notify", "interrupted_late"]
 
 _LIFECYCLE = ("cistrack_run_started", "cistrack_step_predicted", "cistrack_step_updated",
               "cistrack_run_failed", "cistrack_run_finished", "cistrack_metric_stages")
@@ -143,9 +144,11 @@ def finish_observers(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSumm
     (results writers declare ``trylast``, so they come last), so that one failing observer (a
     recorder, a full disk) never keeps the completed steps from being merged; an observer's
     failure turns a finished run into "failed" with the reason, and every later observer is handed
-    that summary."""
+    that summary. An interrupt (Ctrl-C, SIGTERM) in one makes the run "interrupted"
+    (:func:`interrupted_late`) for the observers after it (the results writer comes last, and
+    records it in the manifest), and is raised again once they have all been called."""
     errors: list[str] = []
-    told = 0  # errors already in the summary
+    told, interrupt = 0, None  # errors already in the summary; the first interrupt
     for impl in reversed(pm.hook.cistrack_run_finished.get_hookimpls()):  # pluggy's call order
         if len(errors) > told:
             summary = dataclasses.replace(
@@ -157,8 +160,23 @@ def finish_observers(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSumm
             impl.function(*[args[a] for a in impl.argnames])
         except (Exception, SystemExit) as exc:  # sys.exit in a plugin is that plugin's failure, not the process's end
             errors.append(f"{impl.plugin_name}: {exception_text(exc)}")
+        except KeyboardInterrupt as exc:
+            interrupt, summary = interrupt or exc, interrupted_late(summary, exc)
     if len(errors) > told:  # the last observers failed: say so in the summary returned
         summary = dataclasses.replace(
             summary, status="failed" if summary.status == "finished" else summary.status,
             failure="; ".join(([summary.failure] if summary.failure else []) + errors[told:]))
+    if interrupt is not None:
+        raise interrupt
     return summary
+
+
+def interrupted_late(summary: RunSummary, exc: BaseException) -> RunSummary:
+    """``summary`` of a run interrupted (``exc``) after its last step, while its burns were
+    estimated or its observers finished: status "interrupted", the interrupt added to its failure
+    (``interrupted (SIGINT, Ctrl-C) after the last step``), the verdict judged at its end kept. As it
+    is when it already says "interrupted"."""
+    if summary.status == "interrupted":
+        return summary
+    text = f"{interrupt_text(exc)} after the last step"
+    return dataclasses.replace(summary, status="interrupted", failure="; ".join(filter(None, (summary.failure, text))))

@@ -26,7 +26,7 @@ from cistrack.evaluation.custody import CustodyMetric, Verdict
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
-from cistrack.interrupts import raise_pending
+from cistrack.interrupts import interrupt_text, raise_pending
 from cistrack.errors import CistrackError, ConfigError, FilterError, PluginError, exception_text
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.filter import DIAGNOSTICS_RULE, bad_diagnostic
@@ -35,8 +35,8 @@ from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
 from cistrack.runs.iod_message import iod_message
 from cistrack.runs.maneuver_watch import ManeuverMetric, ManeuverWatch
-from cistrack.runs.observers import (builtin_metrics, finish_observers, make_plugin_manager, metric_stage, notify,
-                                     run_observers)
+from cistrack.runs.observers import (builtin_metrics, finish_observers, interrupted_late, make_plugin_manager,
+                                     metric_stage, notify, run_observers)
 from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
 from cistrack.runs.run_inputs import (estimate_iod, plan_measurement_times, read_scenario_observations,
@@ -257,21 +257,37 @@ def _run_timed(scenario: Scenario, opts: RunOptions, clock: CompileClock) -> Run
         pm.register(ProgressBar(ctx.run_id, len(events), custody), name="observer-progress-ProgressBar")
     pending = [_initial_step(ctx, rngs["filter"])]  # handed on, not kept here: its particles go with its hooks
     status, failure, abort = _guarded(pm, ctx, collector, lambda: _steps(ctx, pm, metrics, events, pending))
-    verdict = final_verdict(custody.verdict, collector.rows, _judging_rule(scenario.custody, ctx.measurements),
-                            ctx.truth is not None,
-                            custody.earth_distance_km, custody.truth_earth_distance_km) \
-        if status in ("finished", "filter-failed") else _unfinished_verdict(custody.verdict, status)
-    summary = summarize(ctx, collector.rows, verdict, status, failure,
-                        time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
-    if watch is not None:
-        summary.maneuvers = watch.records(ctx)
-    summary = finish_observers(pm, ctx, summary)
+    times, summary = (t_start, t_prepare, clock), None
+    try:  # a Ctrl-C while the run is judged or its burns estimated is recorded like one between steps
+        summary = _judged(ctx, custody, collector, (status, failure), times)
+        if watch is not None:
+            summary.maneuvers = watch.records(ctx)
+    except KeyboardInterrupt as exc:
+        abort = abort or exc
+        summary = (_judged(ctx, custody, collector, ("interrupted", interrupt_text(exc)), times) if summary is None
+                   else interrupted_late(summary, exc))
+    summary = finish_observers(pm, ctx, summary)  # an interrupt there is recorded, then raised again
     if opts.output_dir is not None and opts.residual_figure:  # drawn from the merged steps.parquet: after the results writer
         from cistrack.runs.residual_figure import write_run_residual_figure
         write_run_residual_figure(ctx, opts.output_dir, summary.status)
     if abort is not None:
         raise abort
     return RunResult(ctx, collector.rows, summary, collector.steps)
+
+
+def _judged(ctx: RunContext, custody: CustodyMetric, collector: RowCollector, ended: tuple[str, str],
+            times: tuple[float, float, CompileClock]) -> RunSummary:
+    """The run's summary: its verdict, judged at the end when it ``ended`` (status, failure) finished
+    or filter-failed, else :func:`_unfinished_verdict`; ``times``: its start (perf_counter s), its
+    preparation (s) and its compile clock."""
+    status, failure = ended
+    t_start, t_prepare, clock = times
+    verdict = final_verdict(custody.verdict, collector.rows, _judging_rule(ctx.scenario.custody, ctx.measurements),
+                            ctx.truth is not None,
+                            custody.earth_distance_km, custody.truth_earth_distance_km) \
+        if status in ("finished", "filter-failed") else _unfinished_verdict(custody.verdict, status)
+    return summarize(ctx, collector.rows, verdict, status, failure,
+                     time.perf_counter() - t_start - clock.seconds, t_prepare, clock.seconds)
 
 
 def _unfinished_verdict(custody: Verdict, status: str) -> Verdict:
@@ -366,7 +382,7 @@ def _guarded(pm: pluggy.PluginManager, ctx: RunContext, collector: RowCollector,
             return "failed", f"{failure}; then {obs_exc}", None
         return "filter-failed", failure, None
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
-        return "interrupted", f"interrupted ({exc})" if str(exc) else "interrupted (SIGINT, Ctrl-C)", exc
+        return "interrupted", interrupt_text(exc), exc
     except (Exception, SystemExit) as exc:  # a results writer (full disk), a component's sys.exit, or anything else
         return "failed", exception_text(exc), None
     return "finished", "", None

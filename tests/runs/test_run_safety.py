@@ -58,6 +58,24 @@ def test_ctrl_c_ends_the_run_interrupted_with_completed_steps_merged(tmp_path):
     assert (out / "steps.parquet").exists() and read_steps(out).num_rows >= 2
 
 
+class InterruptedWhileFinishing:
+    """An observer whose cistrack_run_finished is where a Ctrl-C arrives (a recorder flushing)."""
+
+    @hookimpl
+    def cistrack_run_finished(self, run, summary):
+        raise KeyboardInterrupt()
+
+
+def test_ctrl_c_while_an_observer_finishes_the_run_leaves_an_interrupted_manifest_with_steps_merged(tmp_path):
+    out = tmp_path / "r"
+    with pytest.raises(KeyboardInterrupt):
+        run_scenario(_small(), seed=1, output_dir=out, observers=[InterruptedWhileFinishing()])
+    man = read_manifest(out)
+    assert man["status"] == "interrupted" == man["summary"]["status"]
+    assert man["summary"]["failure"] == "interrupted (SIGINT, Ctrl-C) after the last step"
+    assert (out / "steps.parquet").exists() and not list((out / "steps").glob("part-*"))
+
+
 def test_sigterm_to_the_cli_leaves_an_interrupted_manifest_and_readable_steps(tmp_path):
     out = tmp_path / "term"
     proc = subprocess.Popen([sys.executable, "-m", "cistrack.cli", "run", "quick", "--out", str(out), "--quiet",
