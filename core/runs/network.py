@@ -18,7 +18,7 @@ from cistrack.astro.site_network import SiteNetwork, merge_sites
 from cistrack.errors import ConfigError
 from cistrack.interfaces import Pass
 from cistrack.model.measurement import MeasurementSet
-from cistrack.runs.run_inputs import plan_measurement_times, simulate_measurements
+from cistrack.runs.run_inputs import in_table, plan_measurement_times, simulate_measurements
 
 __all__ = ["NetworkObservations", "simulate_network", "skip_pass_in_progress", "iod_input"]
 
@@ -51,14 +51,15 @@ def simulate_network(scenario, registry, truth, grid: np.ndarray, grid_states: n
     noise_rngs = rngs["measurements"].spawn(len(keys))
     members, parts, by_key = {}, [], {}
     for key, s_rng, n_rng in zip(keys, sched_rngs, noise_rngs):
-        sensor = scenario.observers[key].build(registry)
-        members[key] = sensor
-        passes = skip_pass_in_progress(sensor.passes(grid, grid_states), float(grid[0]), say, f" for {key!r}")
-        by_key[key] = passes
-        times = plan_measurement_times(scenario, scenario.build("schedule", registry), passes, s_rng)
-        say(f"observer {key!r}: {len(passes)} passes, {times.size} measurements scheduled")
-        if times.size:
-            parts.append((key, None, simulate_measurements(sensor, truth.states_at(times), times, n_rng, registry)))
+        with in_table(scenario, scenario.observers[key].where):  # which of several alike observers failed
+            sensor = scenario.observers[key].build(registry)
+            members[key] = sensor
+            passes = skip_pass_in_progress(sensor.passes(grid, grid_states), float(grid[0]), say, f" for {key!r}")
+            by_key[key] = passes
+            times = plan_measurement_times(scenario, scenario.build("schedule", registry), passes, s_rng)
+            say(f"observer {key!r}: {len(passes)} passes, {times.size} measurements scheduled")
+            if times.size:
+                parts.append((key, None, simulate_measurements(sensor, truth.states_at(times), times, n_rng, registry)))
     if not parts:
         raise ConfigError(f"{scenario.source}: no observer saw the target in {scenario.duration_days:g} days "
                           f"(observers: {', '.join(keys)})")

@@ -15,6 +15,8 @@ Every refusal is a :class:`~cistrack.errors.CistrackError` naming the scenario f
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, Callable
 
 import numpy as np
@@ -31,7 +33,7 @@ from cistrack.scenario.loading import Scenario
 from cistrack.scenario.work_limits import check_steps
 
 __all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod",
-           "checked_iod_cloud", "simulate_measurements"]
+           "checked_iod_cloud", "in_table", "simulate_measurements"]
 
 _SPAN_TOLERANCE_TU = 1e-9
 """Observations this close to the span's ends (about 0.4 ms) count as inside."""
@@ -170,6 +172,21 @@ def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> Par
                        f"{units.tu_to_days(last):.3f} d); an IOD's cloud is at the epoch of the last measurement "
                        "it used")
     return cloud
+
+
+@contextmanager
+def in_table(scenario: Scenario, where: str) -> Iterator[None]:
+    """Within it, a ConfigError or MeasurementError whose message does not name the scenario file
+    (a sensor's own: "sensor 'space-telescope': the observer's orbit hits Earth ...") is raised again
+    naming the file and ``where``, the table it comes from (``[sensors.dro2]``, or with the file
+    already: a component spec's ``where``)."""
+    source = str(scenario.source)
+    try:
+        yield
+    except (ConfigError, MeasurementError) as exc:
+        if str(exc).startswith(source):
+            raise
+        raise type(exc)(f"{where if where.startswith(source) else f'{source}: {where}'}: {exc}") from None
 
 
 def simulate_measurements(sensor: Any, states: np.ndarray, times: np.ndarray, rng: np.random.Generator,

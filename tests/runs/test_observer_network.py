@@ -97,3 +97,14 @@ def test_an_iod_observer_that_measured_nothing_is_named_with_its_default_and_the
                                           r"first \[sensors\] table\), which took no measurements; .*set \[run\] "
                                           r"iod_observer = 'dro'"):
         prepare_run(scenario, seed=2)
+
+
+def test_a_space_telescope_whose_orbit_hits_earth_is_named_by_its_file_and_table_among_alike_ones():
+    raw = load_scenario("example-1-ground-space").raw
+    dro = {k: v for k, v in raw["sensors"]["dro"].items() if k not in ("orbit", "phase")}
+    sensors = {**raw["sensors"], "dro2": {**dro, "state_km": [0.0] * 6}}  # at the barycentre, inside the Earth
+    scenario = load_scenario("example-1-ground-space", overrides={**SMALL, "sensors": sensors})
+    with pytest.raises(ConfigError, match=r"\[sensors\.dro2\]: sensor 'space-telescope': the observer's orbit hits "
+                                          r"Earth at t = 0\.000 days") as info:
+        prepare_run(scenario, seed=2)
+    assert str(info.value).startswith(f"{scenario.source}: [sensors.dro2]: ")
