@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from cistrack.errors import ConfigError
+from cistrack.errors import ConfigError, shown
 from cistrack.plugin.component_tables import ComponentSpec, component_spec
 from cistrack.plugin.registry import Registry
 from cistrack.scenario.limits import check_path_component
@@ -47,8 +47,8 @@ def observer_specs(data: dict, source: str, reg: Registry, epoch_text: Any,
                           f"file name their sites and use one [sensor]")
     out: dict[str, ComponentSpec] = {}
     for key, table in tables.items():
-        check_path_component(key, f"{source}: [sensors.{key}]")
-        out[key] = component_spec(table, "sensor", f"[sensors.{key}]", source, reg, epoch_text=epoch_text,
+        check_path_component(key, f"{source}: [sensors.{shown(key)}]")  # a long key shortened, as values are
+        out[key] = component_spec(table, "sensor", f"[sensors.{shown(key)}]", source, reg, epoch_text=epoch_text,
                                   dynamics_table=moving)
     first_key = next(iter(out))
     names = _names(out[first_key])

@@ -30,3 +30,10 @@ def test_predict_site_error_quotes_a_long_code_shortened():
     with pytest.raises(ConfigError) as err:
         _site(LONG)
     assert len(str(err.value)) < 400 and "(100,000 characters)" in str(err.value)
+
+
+def test_an_error_about_a_long_sensors_key_names_its_table_shortened():
+    raw = load_scenario("example-1-ground-space").raw
+    with pytest.raises(ConfigError) as err:
+        load_scenario("example-1-ground-space", overrides={"sensors": {"x" * 5000: raw["sensors"]["dro"]}})
+    assert len(str(err.value)) < 700 and f"[sensors.'{'x' * 40}...' (5,000 characters)]" in str(err.value)
