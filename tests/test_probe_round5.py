@@ -5,6 +5,7 @@ pipeline."""
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -104,6 +105,10 @@ class _BadClusterer(Clusterer):
             return labels[:-1]
         if self.how == "raise":
             raise ValueError("the plugin's own bug")
+        if self.how == "nan":
+            return np.full(x.shape[0], np.nan)
+        if self.how == "nothing":
+            return None
         return labels
 
 
@@ -120,6 +125,28 @@ def test_a_clusterer_breaking_its_contract_is_named_at_the_filters_start(how, sa
     with pytest.raises(FilterError, match=said) as info:
         run_scenario(scen, seed=1, registry=reg, output_dir=tmp_path / "out")
     assert str(info.value).startswith("filter 'pgm': clusterer 'bad-clusterer': cluster() ")
+
+
+def _clustered_with(how: str) -> FilterError:
+    reg = load_registry()
+    reg.add("clustering", "bad-clusterer", _BadClusterer)
+    scen = load_scenario("quick", reg, overrides={"filter": {"clusterer": {"name": "bad-clusterer", "how": how},
+                                                             "n_components": 2}})
+    with pytest.raises(FilterError) as info:
+        run_scenario(scen, seed=1, registry=reg)
+    return info.value
+
+
+def test_a_clusterer_returning_none_is_said_to_have_returned_none():
+    assert "cluster() returned None, not labels (a (N,) array of whole numbers)" in str(_clustered_with("nothing"))
+
+
+def test_nan_labels_are_refused_without_numpys_all_nan_warning_before_the_error():
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        error = _clustered_with("nan")
+    assert "not whole numbers from 0 to 999 (none of them finite)" in str(error)
+    assert not [w for w in seen if "All-NaN" in str(w.message)]
 
 
 def test_a_clusterer_keeping_its_contract_runs():

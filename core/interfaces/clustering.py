@@ -37,14 +37,23 @@ def checked_labels(labels, n: int, who: str) -> np.ndarray:
     except (TypeError, ValueError):
         values = None
     if values is None:
-        raise FilterError(f"{who}: cluster() returned {type(labels).__name__} of {getattr(raw, 'dtype', '?')}, "
-                          "not labels (a (N,) array of whole numbers)")
+        raise FilterError(f"{who}: cluster() returned {_what(labels)}, not labels (a (N,) array of whole numbers)")
     if values.shape != (n,):
         raise FilterError(f"{who}: cluster() returned labels of shape {values.shape} for {n} particles; "
                           f"expected ({n},)")
     if n and not (np.all(np.isfinite(values)) and np.all(values == np.floor(values))
                   and values.min() >= 0 and values.max() < n):
+        finite = values[np.isfinite(values)]  # (numpy warns "All-NaN slice" on nanmin of NaN alone)
+        span = f"from {finite.min():g} to {finite.max():g}" if finite.size else "none of them finite"
         raise FilterError(f"{who}: cluster() returned labels that are not whole numbers from 0 to {n - 1} "
-                          f"(from {np.nanmin(values):g} to {np.nanmax(values):g})")
+                          f"({span}{', some NaN or infinite' if 0 < finite.size < n else ''})")
     return raw.astype(np.intp)
+
+
+def _what(value) -> str:
+    """``value`` as a message names what it is: ``None``, ``ndarray of <U1``, ``str``."""
+    if value is None:
+        return "None"
+    dtype = getattr(value, "dtype", None)
+    return type(value).__name__ + (f" of {dtype}" if dtype is not None else "")
 
