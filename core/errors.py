@@ -94,6 +94,21 @@ def quoted(value: object) -> str:
     return f"{text[:QUOTED_CHARACTERS]}... ({len(text):,} characters as written)"
 
 
+UNPRINTABLE_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
+"""Unicode categories refused in names and labels: control, format (bidirectional overrides and
+isolates, zero-width characters), surrogate, private-use and unassigned characters, line and
+paragraph separators. They would make a name that reads differently from what it is, or turn a
+terminal's line around."""
+
+
+def invisible_character(text: str) -> str | None:
+    """The first character of ``text`` in :data:`UNPRINTABLE_CATEGORIES`, as ``U+202E``; None when
+    it has none."""
+    import unicodedata
+
+    return next((f"U+{ord(c):04X}" for c in text if unicodedata.category(c) in UNPRINTABLE_CATEGORIES), None)
+
+
 def shown(text: str) -> str:
     """``text`` as a message shows an argument it names unquoted (``--site 568``): as it is when
     short and printable, else quoted (control characters escaped, so that none acts on the

@@ -9,10 +9,9 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import unicodedata
 from typing import Any
 
-from cistrack.errors import ConfigError, quoted
+from cistrack.errors import ConfigError, invisible_character, quoted
 from cistrack.interfaces.limits import PORT_MAX, PORT_MIN, check_port  # defined where components reach them
 
 __all__ = ["SEED_MAX", "PORT_MIN", "PORT_MAX", "check_seed", "check_path_component", "check_count",
@@ -42,12 +41,6 @@ def check_count(value: Any, where: str, minimum: int = 1, maximum: int | None = 
     return int(value)
 
 
-_UNPRINTABLE = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
-"""Unicode categories refused in names: control, format (bidirectional overrides and isolates,
-zero-width characters), surrogate, private-use and unassigned characters, line and paragraph
-separators. They would make a folder name that reads differently from what it is."""
-
-
 #: The rule of :func:`check_path_component`, as its messages state it.
 PATH_COMPONENT_RULE = ("no '/', '\\', control or invisible characters; not '.' or '..'; not starting with '.', '-' "
                        "or a space, nor ending with a space; at most 100 characters")
@@ -70,10 +63,9 @@ def check_path_component(value: Any, where: str) -> str:
         bad = "contains a path separator"
     elif value.startswith((".", "-")) or value != value.strip():
         bad = "starts with '.' or '-' or has leading/trailing spaces"
-    elif any(unicodedata.category(c) in _UNPRINTABLE for c in value):
-        c = next(c for c in value if unicodedata.category(c) in _UNPRINTABLE)
-        bad = (f"contains a control or invisible formatting character (U+{ord(c):04X}; control characters, "
-               "bidirectional overrides and zero-width characters are refused)")
+    elif invisible_character(value):
+        bad = (f"contains a control or invisible formatting character ({invisible_character(value)}; control "
+               "characters, bidirectional overrides and zero-width characters are refused)")
     if bad:
         raise ConfigError(f"{where}: {quoted(value)} {bad}; it names a directory, so it must be one path component "
                           f"({PATH_COMPONENT_RULE})")

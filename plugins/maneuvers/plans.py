@@ -23,7 +23,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.api import hookimpl
-from cistrack.errors import ConfigError, ParameterError
+from cistrack.errors import ConfigError, ParameterError, invisible_character
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics
@@ -34,6 +34,8 @@ __all__ = ["ImpulsePlan", "BurnsPlan", "StationKeepingPlan", "BurnSpec", "resolv
 
 _BURN_KEYS = ("t_days", "delta_v_ms", "direction", "frame", "vector_ms", "label")
 
+MAX_LABEL_CHARACTERS = 100
+"""Longest burn label: a name for reports, printed on the run's log lines."""
 MAX_DELTA_V_MS = 10_000.0
 """The largest burn a plan takes, m/s: more than any cislunar transfer needs (a larger one is a unit
 mistake, km/s or cm/s for m/s)."""
@@ -139,7 +141,7 @@ class ImpulsePlan(ManeuverPlan):
         instead of delta_v_ms and direction (giving both forms is refused); empty (the default)
         to use them.
     label : str
-        A name for reports (default: burn).
+        A name for reports (default: burn): at most 100 printable characters.
     """
 
     def __init__(self, t_days: float = 1.0, delta_v_ms: float = 1.0, direction: str = "in-track",
@@ -150,8 +152,10 @@ class ImpulsePlan(ManeuverPlan):
         _check_burn_frame(self, frame, self.vector_ms, direction)
         _check_one_burn_form(self, self.vector_ms, self.delta_v_ms, direction)
         self.direction, self.frame = direction, frame
-        if not isinstance(label, str) or any(ord(c) < 32 or ord(c) == 127 for c in label):
-            self._fail("label", label, "must be a string of printable characters (no line breaks or tabs)")
+        if not isinstance(label, str) or len(label) > MAX_LABEL_CHARACTERS or invisible_character(label):
+            self._fail("label", label, f"must be a string of at most {MAX_LABEL_CHARACTERS} printable characters (no "
+                                       "line breaks, tabs or invisible formatting characters such as bidirectional "
+                                       "overrides)")
         self.label = label
 
     def burn(self, default_label: str = "burn") -> BurnSpec:

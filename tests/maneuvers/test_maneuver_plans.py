@@ -157,6 +157,17 @@ def test_a_burn_label_with_a_line_break_is_refused():
         ImpulsePlan(t_days=1.0, label="x\ny")
 
 
+def test_a_burn_label_with_a_right_to_left_override_is_refused_naming_the_character_class():
+    with pytest.raises(ParameterError, match="invisible formatting characters such as bidirectional overrides"):
+        ImpulsePlan(label="burn\u202e1")
+
+
+def test_a_burn_label_longer_than_100_characters_is_refused_and_quoted_shortened():
+    with pytest.raises(ParameterError, match=r"'L{40}\.\.\.' \(100,000 characters\) is invalid: must be a string of "
+                                             r"at most 100 printable characters"):
+        ImpulsePlan(label="L" * 100_000)
+
+
 def test_fly_plan_refuses_a_plan_that_returns_burns_outside_the_span(cr3bp):
     class Bad(ImpulsePlan):
         def impulses(self, dynamics, x0, t0, t_end):
