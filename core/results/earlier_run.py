@@ -3,7 +3,8 @@
 ``cistrack run`` replaces an earlier run of the same scenario, settings and seed in its results
 directory (the same fingerprint, :mod:`cistrack.results.fingerprint`: running it again is how a
 killed or changed run is redone), but never, unless told to (``--overwrite``), the results of
-another scenario, other settings or another seed: :func:`check_replacing` refuses, naming the
+another scenario, other settings or another seed, nor a fit's (``cistrack fit``'s least-squares
+results, even by a run of the fit's own ``scenario.toml``): :func:`check_replacing` refuses, naming the
 directory, what is there and how the two differ. :func:`check_recording_path` refuses a
 recording (``--rerun FILE``) that would be written over one of the run's own result files.
 """
@@ -121,10 +122,14 @@ def check_replacing(directory: str | Path, scenario: Any, seed: int, where: str 
                     overwrite: bool = False, words: OptionWords = CLI_WORDS) -> str:
     """Refuse (:class:`ConfigError` naming ``where`` and the directory) a run of ``scenario`` and
     ``seed`` in ``directory`` that holds the step table of a run with another fingerprint (or an
-    unreadable manifest), unless ``overwrite``. Returns a description of the results that will be
+    unreadable manifest), or a fit's results (its ``fit.json``, whatever the fingerprint of its
+    filter run), unless ``overwrite``. Returns a description of the results that will be
     replaced (for a note when ``overwrite`` allowed it), or "" when nothing of another run is there.
     ``words``: the caller's options, as the refusal names them (:data:`CLI_WORDS`, :data:`PYTHON_WORDS`)."""
     d = Path(directory)
+    fit = _fit_there(d)
+    if fit:
+        return _replacing_a_fit(d, fit, where, overwrite, words)
     if not (d / MANIFEST).is_file() or not _has_results(d):
         return ""
     try:
@@ -142,6 +147,25 @@ def check_replacing(directory: str | Path, scenario: Any, seed: int, where: str 
     raise ConfigError(f"{where} {d}: holds {what}. A run never replaces the results of another scenario, "
                       f"other settings or another seed: give another {words.out}, remove {d}, or "
                       f"{words.add_overwrite} to replace them")
+
+
+def _fit_there(d: Path) -> str:
+    """The fit ``d`` holds (its ``fit.json``), in words for a refusal, or "" when it holds none."""
+    if not (d / "fit.json").is_file():
+        return ""
+    return held_results(d) or "a fit record (fit.json) that cannot be read"
+
+
+def _replacing_a_fit(d: Path, fit: str, where: str, overwrite: bool, words: OptionWords) -> str:
+    """Refuse a run into the folder of a fit unless ``overwrite``; else return what it replaces.
+    The fit's filter run has the fingerprint of the fit's own scenario.toml, but a run of it is
+    not the fit again: it would remove the least-squares results (fit.json, residuals, plots)."""
+    what = f"{fit}, the least-squares orbit of cistrack fit with its filter run"
+    if overwrite:
+        return what
+    raise ConfigError(f"{where} {d}: holds {what}. A run never replaces a fit's results, not even a run of the "
+                      f"fit's own scenario.toml: give another {words.out}, remove {d}, or {words.add_overwrite} "
+                      "to replace them")
 
 
 def check_recording_path(recording: str | Path, directory: str | Path, where: str = "--rerun") -> None:

@@ -70,6 +70,16 @@ def test_a_run_with_overwrite_leaves_nothing_of_the_fit_it_replaced(fit_over_run
     assert left == [] and (out / "residuals.svg").is_file()
 
 
+def test_a_run_of_a_fits_own_scenario_into_its_folder_is_refused_and_leaves_the_fit(fit_over_run, tmp_path, capsys):
+    out = tmp_path / "f"
+    shutil.copytree(fit_over_run, out)
+    before = (out / "fit.json").read_bytes()
+    assert main(["run", str(out / "scenario.toml"), "--out", str(out), "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"--out {out}: holds the fit of " in err and "A run never replaces a fit's results" in err
+    assert (out / "fit.json").read_bytes() == before and (out / "residuals.csv").is_file()
+
+
 def _one_tracklet_each(path: Path, designations: list[str]) -> Path:
     """An ADES PSV file: the first two observations of the shipped example for each designation
     (one short tracklet each: every fit stops before its filter run and writes its fit.json)."""
