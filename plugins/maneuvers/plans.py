@@ -23,7 +23,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.api import hookimpl
-from cistrack.errors import ConfigError, ParameterError, invisible_character
+from cistrack.errors import ConfigError, ParameterError, invisible_character, quoted
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics
@@ -92,13 +92,24 @@ def _check_delta_v(owner, value: Any) -> float:
     return check_range(owner, "delta_v_ms", value, 0.0, MAX_DELTA_V_MS)
 
 
-def _check_one_burn_form(owner, vector_ms: list[float], delta_v_ms: float, direction: str) -> None:
-    """vector_ms replaces delta_v_ms and direction: giving both forms (other than their defaults)
-    is refused, since one would be dropped."""
-    if vector_ms and (delta_v_ms != 1.0 or direction != "in-track"):
-        owner._fail("vector_ms", vector_ms, f"gives the burn's components, and delta_v_ms = {delta_v_ms:g} with "
-                                            f"direction = {direction!r} give it too; give one form (vector_ms, or "
-                                            "delta_v_ms and direction)")
+DEFAULT_DELTA_V_MS = 1.0
+"""A burn's size when neither delta_v_ms nor vector_ms is given, m/s."""
+DEFAULT_DIRECTION = "in-track"
+"""A burn's direction when neither direction nor vector_ms is given."""
+
+
+def _check_one_burn_form(owner, vector_ms: list[float], delta_v_ms: Any, direction: Any) -> None:
+    """vector_ms replaces delta_v_ms and direction: giving both forms is refused, whatever their
+    values (a default value written out included), since one would be dropped."""
+    given = [f"{k} = {quoted(v)}" for k, v in (("delta_v_ms", delta_v_ms), ("direction", direction)) if v is not None]
+    if vector_ms and given:
+        owner._fail("vector_ms", vector_ms, f"gives the burn's components, and {' with '.join(given)} "
+                                            f"give{'s' if len(given) == 1 else ''} it too; give one form (vector_ms, "
+                                            "or delta_v_ms and direction). A --set cannot remove a key the scenario "
+                                            "file writes (example-1-burn writes delta_v_ms and direction): give "
+                                            "vector_ms in a copy of the file without them, or set a plan of another "
+                                            "name, which replaces the whole table: --set 'truth.maneuvers={name="
+                                            "\"burns\", burns=[{t_days=T, vector_ms=[X, Y, Z]}]}'")
 
 
 def _outside(specs: list[BurnSpec], t0: float, t_end: float) -> list[str]:
@@ -108,7 +119,8 @@ def _outside(specs: list[BurnSpec], t0: float, t_end: float) -> list[str]:
 
 def _check_burn_frame(owner, frame: Any, vector_ms: list[float], direction: Any) -> None:
     check_choice(owner, "frame", frame, FRAMES)
-    check_choice(owner, "direction", direction, DIRECTIONS)
+    if direction is not None:
+        check_choice(owner, "direction", direction, DIRECTIONS)
     if frame == "synodic" and not vector_ms:
         owner._fail("frame", frame, "a burn in the synodic frame is given by vector_ms (x, y, z in m/s); "
                                     "or use a local frame: " + ", ".join(f for f in FRAMES if f != "synodic"))
@@ -128,30 +140,33 @@ class ImpulsePlan(ManeuverPlan):
     t_days : float
         Time of the burn, days since the scenario epoch (> 0; a burn after the run's end is not flown).
     delta_v_ms : float
-        Size of the burn, m/s (0 to 10,000).
+        Size of the burn, m/s (0 to 10,000); unset (None), 1 m/s unless vector_ms gives the burn.
     direction : str
         Direction of the burn in its frame: one of in-track, anti-in-track, radial, anti-radial,
-        cross-track, anti-cross-track.
+        cross-track, anti-cross-track; unset (None), in-track unless vector_ms gives the burn.
     frame : str
         The local frame: rtn-moon (radial, in-track, cross-track about the Moon, in the synodic
         frame), rtn-earth (the same about the Earth), vnb (velocity, normal, binormal of the
         synodic velocity) or synodic (needs vector_ms).
     vector_ms : list of float
         The burn as 3 components in m/s along the frame's axes (R, T, N; V, N, B; or x, y, z),
-        instead of delta_v_ms and direction (giving both forms is refused); empty (the default)
-        to use them.
+        instead of delta_v_ms and direction (giving it with either of them is refused, whatever
+        their values); empty (the default) to use them.
     label : str
         A name for reports (default: burn): at most 100 printable characters.
     """
 
-    def __init__(self, t_days: float = 1.0, delta_v_ms: float = 1.0, direction: str = "in-track",
+    def __init__(self, t_days: float = 1.0, delta_v_ms: float | None = None, direction: str | None = None,
                  frame: str = "rtn-moon", vector_ms: list[float] | None = None, label: str = "") -> None:
         self.t_days = check_positive(self, "t_days", t_days)
-        self.delta_v_ms = _check_delta_v(self, delta_v_ms)
+        size = None if delta_v_ms is None else _check_delta_v(self, delta_v_ms)
         self.vector_ms = _check_vector(self, vector_ms)
         _check_burn_frame(self, frame, self.vector_ms, direction)
-        _check_one_burn_form(self, self.vector_ms, self.delta_v_ms, direction)
-        self.direction, self.frame = direction, frame
+        _check_one_burn_form(self, self.vector_ms, delta_v_ms, direction)
+        vector_form = bool(self.vector_ms)  # the form not given stays None (get_params rebuilds the plan)
+        self.delta_v_ms = None if vector_form else (DEFAULT_DELTA_V_MS if size is None else size)
+        self.direction = None if vector_form else (DEFAULT_DIRECTION if direction is None else direction)
+        self.frame = frame
         if not isinstance(label, str) or len(label) > MAX_LABEL_CHARACTERS or invisible_character(label):
             self._fail("label", label, f"must be a string of at most {MAX_LABEL_CHARACTERS} printable characters (no "
                                        "line breaks, tabs or invisible formatting characters such as bidirectional "

@@ -63,6 +63,15 @@ def test_bad_maneuver_tables_are_refused_naming_the_table_and_key(item, words):
         assert w in str(err.value)
 
 
+def test_a_set_vector_over_example_1_burns_delta_v_is_refused_saying_how_to_give_it():
+    with pytest.raises(ConfigError) as err:
+        apply_settings(load_scenario("example-1-burn"), ["truth.maneuvers.vector_ms=[0, 0, 1]"])
+    text = " ".join(str(err.value).split())
+    assert "[truth.maneuvers]" in text and "give one form" in text
+    assert "A --set cannot remove a key the scenario file writes" in text
+    assert """--set 'truth.maneuvers={name="burns", burns=[{t_days=T, vector_ms=[X, Y, Z]}]}'""" in text
+
+
 def test_example_1_burn_truth_jumps_by_the_burn_and_the_filter_model_stays_ballistic():
     lines: list[str] = []
     ctx, _ = prepare_run(_scenario("example-1-burn"), log=lines.append)

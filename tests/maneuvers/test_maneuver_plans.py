@@ -205,6 +205,24 @@ def test_bad_parameters_are_refused_naming_the_parameter_and_what_is_allowed(cls
         assert "rtn-moon" in str(err.value) or "in-track" in str(err.value)
 
 
+@pytest.mark.parametrize("cls, params", [
+    (ImpulsePlan, {"t_days": 1.0, "vector_ms": [0.0, 0.0, 0.2], "delta_v_ms": 1.0}),
+    (ImpulsePlan, {"t_days": 1.0, "vector_ms": [0.0, 0.0, 0.2], "direction": "in-track"}),
+    (BurnsPlan, {"burns": [{"t_days": 1.0, "vector_ms": [0.0, 0.0, 0.2], "delta_v_ms": 1.0, "direction": "in-track"}]}),
+])
+def test_both_burn_forms_are_refused_even_at_the_default_values(cls, params):
+    """vector_ms with delta_v_ms = 1.0 or direction = "in-track" written out had flown the vector and
+    dropped them in silence."""
+    with pytest.raises(ParameterError, match="'vector_ms'.* give(s)? it too; give one form"):
+        cls(**params)
+
+
+def test_a_vector_burn_rebuilds_from_its_parameters():
+    plan = ImpulsePlan(t_days=1.0, vector_ms=[0.0, 0.0, 0.2])
+    assert (plan.delta_v_ms, plan.direction) == (None, None)
+    assert ImpulsePlan(**plan.get_params()).burn().vector_ms.tolist() == [0.0, 0.0, 0.2]
+
+
 @pytest.mark.parametrize("cls", [ImpulsePlan, BurnsPlan, StationKeepingPlan])
 def test_the_plans_follow_the_parameter_conventions_and_document_every_parameter(cls):
     """The conformance suite's parameter checks (the suite has no maneuver-plan kind yet) and the
