@@ -30,7 +30,7 @@ from cistrack.studies.terminal_table import terminal_table, wrap_lines
 from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
 from cistrack.evaluation.run_summary import RunSummary
 from cistrack.studies.study import plan_runs
-from cistrack.studies.resume import is_done
+from cistrack.studies.resume import is_done, run_state
 
 __all__ = ["report_study"]
 
@@ -198,20 +198,24 @@ def _check_same_study(out: Path, data: dict, path_or_name, where: str) -> None:
                           f"'cistrack study report {out}' (the directory alone), or give this study's own directory")
 
 
-def _finished_runs(specs) -> tuple[dict, dict, list[str]]:
-    """(scenario, iod, filter) -> the finished runs' summaries, and -> their step tables; and the
-    ids of the runs not finished."""
+def _finished_runs(specs) -> tuple[dict, dict, list[str], list[str]]:
+    """(scenario, iod, filter) -> the finished runs' summaries, and -> their step tables; the ids of
+    the runs not finished; and the ids of the finished runs made otherwise than the study now plans
+    them (another scenario, settings, seed or input file: their fingerprint differs, as ``study
+    run`` finds them), which are not reported either."""
     groups: dict[tuple[str, str, str], list[RunSummary]] = {}
     tables: dict[tuple[str, str, str], list] = {}
     missing_ids: list[str] = []
+    stale_ids: list[str] = []
     for s in specs:
-        if not is_done(s.out_dir):
-            missing_ids.append(s.run_id)
+        state = run_state(s.out_dir, s.fingerprint)
+        if state != "done":
+            (stale_ids if state == "stale" else missing_ids).append(s.run_id)
             continue
         man = read_manifest(s.out_dir)
         groups.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(RunSummary.from_dict(man["summary"]))
         tables.setdefault((s.scenario_name, s.iod_label, s.filter_label), []).append(read_steps(s.out_dir))
-    return groups, tables, missing_ids
+    return groups, tables, missing_ids, stale_ids
 
 
 def _summary_columns(counted: tuple[str, ...], study_has_truth: bool) -> list[str]:
@@ -307,13 +311,22 @@ def _verdict_line(r: dict) -> str:
     return f"- {r['filter']} with {r['iod']} IOD on {r['scenario']} kept custody in all {r['runs']} runs."
 
 
-def _title(name: str, n_runs: int, missing_ids: list[str]) -> str:
-    missing = len(missing_ids)
-    title = f"Study '{name}': {n_runs - missing} of {n_runs} runs complete"
-    if missing:
-        shown = ", ".join(missing_ids[:8]) + (f", ... ({missing - 8} more)" if missing > 8 else "")
-        title += f" (not finished: {shown}; 'cistrack study run' with the same options runs them)"
+def _ids(ids: list[str], shown: int = 8) -> str:
+    """The first ``shown`` run ids, and how many more."""
+    return ", ".join(ids[:shown]) + (f", ... ({len(ids) - shown} more)" if len(ids) > shown else "")
+
+
+def _title(name: str, n_runs: int, missing_ids: list[str], stale_ids: list[str]) -> str:
+    title = f"Study '{name}': {n_runs - len(missing_ids) - len(stale_ids)} of {n_runs} runs complete"
+    if missing_ids:
+        title += f" (not finished: {_ids(missing_ids)}; 'cistrack study run' with the same options runs them)"
+    if stale_ids:
+        title += f" ({_STALE}: {_ids(stale_ids)})"
     return title
+
+
+_STALE = ("not reported, made with another scenario, settings, seed or input file than the study now gives them; "
+          "'cistrack study run' with the same options and --overwrite runs them again")
 
 
 def _flagged_title(has_truth: bool) -> str:
@@ -415,18 +428,16 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     directory, a full disk).
     """
     data, specs, out = _plan(path_or_name, out_dir, settings, first_seed, n_seeds)
-    groups, tables, missing_ids = _finished_runs(specs)
+    groups, tables, missing_ids, stale_ids = _finished_runs(specs)
     name = str(data.get("name", out.name))
     if not groups:
-        raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
-                          f"in {out / 'runs'}. Run it first: cistrack study run {path_or_name}"
-                          + (f" --out {out_dir}" if out_dir else ""))
+        _nothing_to_report(name, specs, out, path_or_name, out_dir, stale_ids)
     rep_dir = _report_dir(out, name)
     draft = rep_dir.parent / f".{rep_dir.name}.draft-{os.getpid()}"
     try:
         shutil.rmtree(draft, ignore_errors=True)
         draft.mkdir()
-        answer = _write_report(draft, name, specs, (groups, tables, missing_ids))
+        answer = _write_report(draft, name, specs, (groups, tables, missing_ids, stale_ids))
         _replace_report(rep_dir, draft)
     except OSError as exc:
         shutil.rmtree(draft, ignore_errors=True)
@@ -434,6 +445,19 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         raise ConfigError(f"study '{name}': cannot write the report: {where}: {exc.strerror or exc}; the "
                           f"report in {rep_dir} is left as it was (an earlier one, or none)") from None
     return _moved(answer, draft, rep_dir)
+
+
+def _nothing_to_report(name: str, specs, out: Path, path_or_name, out_dir, stale_ids: list[str]) -> None:
+    """The ConfigError of a report with no run to report (none finished, or only runs made otherwise)."""
+    again = f"cistrack study run {path_or_name}" + (f" --out {out_dir}" if out_dir else "")
+    if stale_ids:
+        raise ConfigError(f"study '{name}': nothing to report: the {len(stale_ids)} finished run(s) in {out / 'runs'} "
+                          f"({_ids(stale_ids, 3)}) were made with another scenario, settings, seed or input file "
+                          f"than the study now gives them (check --set, --first-seed and --n-seeds: a study "
+                          f"directory alone is reported with the values it was run with, 'cistrack study report "
+                          f"{out}'), or run them again: {again} --overwrite, with the same --set, --first-seed and --n-seeds")
+    raise ConfigError(f"study '{name}': nothing to report: none of its {len(specs)} runs has finished "
+                      f"in {out / 'runs'}. Run it first: {again}")
 
 
 def _replace_report(rep_dir: Path, draft: Path) -> None:
@@ -466,9 +490,9 @@ def _report_dir(out: Path, name: str) -> Path:
     return rep_dir
 
 
-def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, list[str]]) -> dict:
+def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, list[str], list[str]]) -> dict:
     """Write the report's files into ``rep_dir``; returns :func:`report_study`'s answer."""
-    groups, tables, missing_ids = finished
+    groups, tables, missing_ids, stale_ids = finished
     study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
     counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
     arch = architectures_of(specs)
@@ -480,12 +504,13 @@ def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, l
     has_truth = any(r["custody_kept"] is not None for r in rows)
     verdicts = [_verdict_line(r) for r in rows]
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
-    title = _title(name, len(specs), missing_ids)
-    man_rows = _maneuver_rows(specs, groups, tables)
+    title = _title(name, len(specs), missing_ids, stale_ids)
+    man_rows = _maneuver_rows([sp for sp in specs if sp.run_id not in {*missing_ids, *stale_ids}], groups, tables)
     man_md, man_text, man_files = _maneuver_report(man_rows, rep_dir, name)
     write_text_atomic(rep_dir / "summary.md",
                       _summary_markdown(title, rows, has_truth, counted, arch, verdicts, flagged) + man_md + "\n")
     files.append(rep_dir / "summary.md")
     text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv") + man_text
     files += _figures(groups, tables, rows, rep_dir, name) + man_files
-    return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids), "maneuver_rows": man_rows}
+    return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids), "stale": len(stale_ids),
+            "maneuver_rows": man_rows}

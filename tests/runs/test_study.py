@@ -207,6 +207,30 @@ def test_report_names_the_runs_that_did_not_finish(tiny_study, tmp_path):
     assert "not finished:" in rep["text"] and "seed2" in rep["text"]
 
 
+def test_a_report_with_other_settings_than_the_runs_were_made_with_reports_none_of_them(tiny_study, tmp_path, capsys):
+    """`study report DIR --set ...` had reported the runs made without it as complete."""
+    from cistrack.cli.main import main
+
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=1)
+    assert main(["study", "report", str(out), "--set", "duration_days=1.2"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "nothing to report: the 1 finished run(s)" in err and "made with another scenario, settings" in err
+    assert not (out / "report").exists()
+
+
+def test_a_finished_run_the_study_now_plans_otherwise_is_named_and_not_reported(tiny_study, tmp_path):
+    out = tmp_path / "out"
+    run_study(tiny_study, out_dir=out, workers=1, n_seeds=2)
+    other = sorted((out / "runs").iterdir())[0]
+    manifest = json.loads((other / "manifest.json").read_text())
+    (other / "manifest.json").write_text(json.dumps({**manifest, "fingerprint": "made-otherwise"}))
+    rep = report_study(tiny_study, out_dir=out, n_seeds=2)
+    assert (rep["missing"], rep["stale"]) == (0, 1) and {r["runs"] for r in rep["rows"]} == {1}
+    text = " ".join(rep["text"].split())
+    assert "1 of 2 runs complete (not reported, made with another scenario" in text and other.name in text
+
+
 def test_a_run_whose_step_table_was_overwritten_is_reported_missing_and_run_again(tiny_study, tmp_path):
     out = tmp_path / "out"
     run_study(tiny_study, out_dir=out, workers=1, n_seeds=2)
