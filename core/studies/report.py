@@ -29,7 +29,7 @@ from cistrack.studies.efficiency import efficiency_text, group_efficiency
 from cistrack.studies.terminal_table import terminal_table, wrap_lines
 from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdown, custody_text, flagged_line, flagged_runs, write_custody_by_filter, write_runs_csv)
 from cistrack.evaluation.run_summary import RunSummary
-from cistrack.studies.study import plan_runs
+from cistrack.studies.study import REPORT_FOLDER, plan_runs
 from cistrack.studies.resume import is_done, run_state
 
 __all__ = ["report_study"]
@@ -480,7 +480,7 @@ def _report_dir(out: Path, name: str) -> Path:
     """``out/report``, created; ConfigError naming it when no file can be made there."""
     from cistrack.results.output_paths import make_writable_dir
 
-    rep_dir = out / "report"
+    rep_dir = out / REPORT_FOLDER
     try:
         make_writable_dir(rep_dir)
     except OSError as exc:

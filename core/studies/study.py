@@ -447,6 +447,7 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args
                                          "run_seeds": sorted({sp.seed for sp in specs})})
         todo = [s for s in specs if states[s.run_id] != "done"]
         _say_rerun(specs, states)
+        _remove_report_of_replaced_runs(out, specs, states)
         said = _run_todo(todo, opts, name)
         problems = run_problems(specs, said)  # from disk, not from what the workers said
     bad = {rid for rid, _ in problems}
@@ -547,6 +548,26 @@ def _say_rerun(specs: list[RunSpec], states: dict[str, str]) -> None:
     if gone:
         _notice(f"{len(gone)} run(s) were left 'running' by a process that is gone (interrupted, e.g. "
                 f"killed) and are run again: {', '.join(gone[:5])}" + (" ..." if len(gone) > 5 else ""))
+
+
+REPORT_FOLDER = "report"
+"""The folder of a study directory that ``cistrack study report`` writes (:mod:`cistrack.studies.report`)."""
+
+
+def _remove_report_of_replaced_runs(out: Path, specs: list[RunSpec], states: dict[str, str]) -> None:
+    """Remove ``out/report`` before finished runs made otherwise are run again (``--overwrite``): it
+    describes the runs they replace, as a run's exports describe it (a run removes those)."""
+    import shutil
+
+    report = out / REPORT_FOLDER
+    if not any(states[s.run_id] == "stale" for s in specs) or not report.is_dir():
+        return
+    if report.is_symlink():
+        report.unlink()  # the link only, as a report replaces it
+    else:
+        shutil.rmtree(report)
+    _notice(f"the report in {report} described the runs replaced now and is removed; 'cistrack study report' "
+            "writes it again")
 
 
 def _notice(text: str, width: int = 120) -> None:

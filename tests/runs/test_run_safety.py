@@ -196,6 +196,22 @@ def test_a_study_whose_scenario_changed_reruns_a_finished_run_only_with_overwrit
     assert read_manifest(run_dir)["fingerprint"] != fp_before
 
 
+def test_a_study_that_replaces_runs_removes_the_report_that_described_them(tmp_path, capsys):
+    from cistrack.studies.report import report_study
+
+    p = tmp_path / "fp.toml"
+    p.write_text(STUDY.format(days=1.4))
+    out = tmp_path / "out"
+    run_study(p, out_dir=out, workers=1, progress=False)
+    report_study(p, out_dir=out)
+    assert (out / "report" / "runs.csv").is_file()
+    p.write_text(STUDY.format(days=1.3))
+    run_study(p, out_dir=out, workers=1, progress=False, overwrite=True)
+    assert not (out / "report").exists()
+    assert f"the report in {out / 'report'} described the runs replaced now and is removed" in " ".join(
+        capsys.readouterr().err.split())
+
+
 def test_a_study_resumes_an_interrupted_run(tmp_path):
     p = tmp_path / "fp.toml"
     p.write_text(STUDY.format(days=1.4))
