@@ -260,7 +260,8 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
 
 def _checked_arguments(**given: Any) -> None:
     """TypeError naming the argument when ``out``, ``log``, ``registry``, ``directory``, ``study``,
-    ``progress`` or ``overwrite`` has a type the API does not take (before anything is read or run)."""
+    ``progress`` or ``overwrite`` has a type the API does not take, and ConfigError when a path
+    (``out``, ``directory``, ``study``) is blank text (before anything is read or run)."""
     for name, value in given.items():
         if name in ("progress", "overwrite"):
             if not isinstance(value, bool):  # "no" would be true
@@ -275,6 +276,9 @@ def _checked_arguments(**given: Any) -> None:
         elif not (isinstance(value, (str, os.PathLike)) or (value is None and name == "out")):
             allowed = "a path (str or pathlib.Path)" + (" or None" if name == "out" else "")
             raise TypeError(f"{name}={value!r}: give {allowed}")
+        elif isinstance(value, str) and not value.strip():  # as the command's --out '': not the current folder
+            raise ConfigError(f"{name}={value!r} is empty; give a path" + (", or leave out out (None) for the default"
+                                                                             if name == "out" else ""))
 
 
 def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,

@@ -35,6 +35,21 @@ def test_a_wrong_argument_type_is_a_type_error_naming_it(call, argument):
         call()
 
 
+@pytest.mark.parametrize("call, argument", [
+    (lambda: ct.run("quick", out=""), "out=''"),
+    (lambda: ct.fit("ok.psv", out=" "), "out=' '"),
+    (lambda: ct.study("quick-comparison", out=""), "out=''"),
+    (lambda: ct.read_run(""), "directory=''"),
+])
+def test_a_blank_path_is_refused_naming_it_not_taken_for_the_current_or_default_folder(call, argument, tmp_path,
+                                                                                    monkeypatch):
+    """out='' had written a run's or fit's results into the current folder, and a study into its default one."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ct.ConfigError, match=f"^{argument} is empty; give a path"):
+        call()
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_settings_as_a_mapping_or_a_list_of_strings_are_taken():
     assert ct.load_scenario("quick", settings={"duration_days": 1.5}).duration_days == 1.5
     assert ct.load_scenario("quick", settings=["duration_days=1.5"]).duration_days == 1.5
