@@ -44,8 +44,8 @@ from cistrack.errors import CistrackError, ConfigError
 from cistrack.studies.lost_runs import refuse_in_a_starting_worker
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.fingerprint import scenario_fingerprint
-from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, scenario_entry,
-                                         study_source, study_sweep)
+from cistrack.studies.study_file import (_study_seeds, builtin_studies, load_study, recorded_settings, scenario_base,
+                                         scenario_entry, study_source, study_sweep)
 from cistrack.studies.resume import run_state
 from cistrack.scenario.limits import check_count, check_path_component
 from cistrack.scenario.settings import describe_settings
@@ -102,13 +102,20 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     from cistrack.plugin.registry import default_registry
     from cistrack.scenario.settings import parse_settings
 
-    data, p = load_study(path_or_name)
+    data, p = load_study(path_or_name)  # p: the study file, or a study directory's study.json
     recorded = recorded_settings(path_or_name)  # a study results directory: its own runs, in place
+    from_record = ""
     if recorded is not None:
+        from_record = f"{p}: key 'settings'" if settings is None or list(settings) == recorded else ""
         settings = recorded if settings is None else settings
         out_dir = path_or_name if out_dir is None else out_dir
     name = check_path_component(data.get("name", p.stem), f"{p}: key 'name'")
-    extra = parse_settings(settings)
+    try:
+        extra = parse_settings(settings)
+    except ConfigError as exc:
+        if not from_record:
+            raise
+        raise ConfigError(f"{from_record}: {exc}") from None
     out = Path(out_dir) if out_dir else Path("studies_out") / (name + _settings_suffix(settings))
     seeds = _study_seeds(data, p, first_seed, n_seeds)
     sweep = tuple((k, tuple(v)) for k, v in study_sweep(data, p))
@@ -116,7 +123,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     grid = _Grid(filters=[_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])],
                  iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
                  overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out,
-                 sweep=sweep, study=p)
+                 sweep=sweep, study=p, base=scenario_base(path_or_name, p), settings_from=from_record)
     reg = default_registry()
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
@@ -162,7 +169,12 @@ class _Grid:
     sweep: tuple = ()
     """The study's sweep: ((dotted setting, (values...)), ...)."""
     study: Path = Path()
-    """The study file (named in errors)."""
+    """The study file, or a study directory's study.json (named in errors)."""
+    base: Path = Path()
+    """The file beside which relative scenario paths are read (:func:`scenario_base`)."""
+    settings_from: str = ""
+    """Where ``settings`` come from when a study directory's record gives them (named in errors
+    instead of ``--set``), else ""."""
 
 
 def _scenario_source(sc: str, p: Path) -> str | Path:
@@ -244,7 +256,7 @@ def _scenario_runs(entry: Any, p: Path, grid: _Grid, reg) -> list[RunSpec]:
     from cistrack.scenario.loading import load_scenario
 
     sc, keys = scenario_entry(entry, p, [k for k, _ in grid.sweep])
-    source = _scenario_source(sc, p)
+    source = _scenario_source(sc, grid.base)
     try:
         base = load_scenario(source, reg)
     except ConfigError as exc:
@@ -329,7 +341,8 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entr
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "
                     f"{base.name!r})")
         if grid.extra:
-            msg += f" (with {describe_settings(grid.settings)})"
+            msg += (f" (with {grid.settings_from} = {grid.settings!r})" if grid.settings_from
+                    else f" (with {describe_settings(grid.settings)})")
         if msg == str(exc):
             raise
         raise ConfigError(msg) from None

@@ -20,7 +20,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["builtin_studies", "load_study", "recorded_settings", "study_source", "STUDY_KEYS", "study_sweep",
+__all__ = ["builtin_studies", "load_study", "recorded_settings", "scenario_base", "study_source", "STUDY_KEYS", "study_sweep",
            "scenario_entry", "overrides_error", "variant_error", "sweep_error"]
 
 STUDY_KEYS = {"name", "description", "scenarios", "filters", "iod", "seeds", "n_seeds", "first_seed", "overrides",
@@ -78,23 +78,37 @@ def study_source(path_or_name: str | Path) -> str:
 
 
 def recorded_settings(path_or_name: str | Path) -> list[str] | None:
-    """The ``--set`` items a study results directory was run with; None for a study file or name."""
+    """The ``--set`` items a study results directory was run with (ConfigError naming its
+    ``study.json`` when they are not a list of texts); None for a study file or name."""
     p = Path(path_or_name)
-    return [str(s) for s in _recorded(p).get("settings") or []] if p.is_dir() else None
+    if not p.is_dir():
+        return None
+    settings = _recorded(p).get("settings") or []
+    if not isinstance(settings, list) or not all(isinstance(s, str) for s in settings):
+        raise ConfigError(f"{p / 'study.json'}: key 'settings' = {settings!r}: not a list of the TABLE.KEY=VALUE "
+                          "texts the study was run with (--set)")
+    return settings
+
+
+def scenario_base(path_or_name: str | Path, p: Path) -> Path:
+    """The file beside which a study's relative scenario paths are read: the study file ``p``, or
+    for a study results directory the study file its record names (its ``study.json`` ``p`` when
+    that file is gone)."""
+    src = Path(study_source(path_or_name))
+    return src if src.is_file() else p
 
 
 def load_study(path_or_name: str | Path) -> tuple[dict, Path]:
     """Read and check a study file, or the definition recorded in a study results directory (its
-    seeds are then the ones run). Returns (data, the study file's path)."""
+    seeds are then the ones run). Returns (data, the file it was read from: the study file, or the
+    directory's ``study.json``, which errors in the definition name)."""
     p = _study_path(path_or_name)
     if p.is_dir():
-        rec = _recorded(p)
+        rec, where = _recorded(p), p / "study.json"
         data = {k: v for k, v in rec.items() if k in _STUDY_KEYS and k not in ("n_seeds", "first_seed")}
-        data["seeds"] = rec["run_seeds"]
+        data["seeds"] = _study_seeds({"seeds": rec["run_seeds"]}, where, key="run_seeds")
         data.setdefault("name", p.name)
-        src = Path(str(rec.get("source", "")))
-        src = src if src.is_file() else p / "study.json"  # relative scenario paths resolve beside it
-        return _checked(data, src), src
+        return _checked(data, where), where
     try:
         data = toml_input.loads(toml_input.read_file(p), str(p))
     except tomllib.TOMLDecodeError as exc:
@@ -234,17 +248,19 @@ def scenario_entry(entry: object, p: Path, sweep_keys: list[str]) -> tuple[str, 
     return entry["name"], [k for k in sweep_keys if k in which]
 
 
-def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: int | None = None) -> list[int]:
+def _study_seeds(data: dict, p: Path, first_seed: int | None = None, n_seeds: int | None = None,
+                 key: str = "seeds") -> list[int]:
     """The study's seeds: its ``seeds`` list, or ``n_seeds`` seeds from ``first_seed`` (default 1);
     ``first_seed`` / ``n_seeds`` given here (the CLI's ``--first-seed`` / ``--n-seeds``) replace the
-    file's, and turn a ``seeds`` list into consecutive seeds from its first."""
+    file's, and turn a ``seeds`` list into consecutive seeds from its first. ``key``: the name the
+    file ``p`` gives the list (a study record's ``run_seeds``), for errors."""
     if "seeds" in data:
         if not isinstance(data["seeds"], list) or not data["seeds"]:
-            raise ConfigError(f"{p}: key 'seeds' must be a non-empty list of integers from 0 to 2**63-1")
-        seeds = [check_seed(s, f"{p}: key 'seeds'") for s in data["seeds"]]
+            raise ConfigError(f"{p}: key {key!r} must be a non-empty list of integers from 0 to 2**63-1")
+        seeds = [check_seed(s, f"{p}: key {key!r}") for s in data["seeds"]]
         repeated = sorted(s for s, n in Counter(seeds).items() if n > 1)
         if repeated:
-            raise ConfigError(f"{p}: key 'seeds' repeats seed(s) {', '.join(map(str, repeated))}; each seed "
+            raise ConfigError(f"{p}: key {key!r} repeats seed(s) {', '.join(map(str, repeated))}; each seed "
                               "must appear once (a seed names its runs)")
         if first_seed is None and n_seeds is None:
             return seeds

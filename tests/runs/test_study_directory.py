@@ -3,9 +3,13 @@ it holds, with the seeds and --set values they were run with."""
 from __future__ import annotations
 
 import concurrent.futures as cf
+import json
+
+import pytest
 
 from cistrack.cli.main import main
-from cistrack.studies.study import run_study
+from cistrack.errors import ConfigError
+from cistrack.studies.study import load_study, run_study
 from cistrack.studies.report import report_study
 
 SETTINGS = ["filter.n_particles=250"]
@@ -34,3 +38,24 @@ def test_report_of_a_directory_that_holds_no_study_is_refused_naming_it(tmp_path
     assert main(["study", "report", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert str(tmp_path) in err and "no study.json" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("edit, words", [
+    ({"run_seeds": ["1"]}, "key 'run_seeds': seed '1' must be an integer"),
+    ({"name": "../../etc"}, "key 'name': '../../etc' contains a path separator"),
+    ({"settings": ["duration_days=nan"]}, "(with {record}: key 'settings' = ['duration_days=nan'])"),
+    ({"settings": ["garbage"]}, "{record}: key 'settings': --set 'garbage': expected TABLE.KEY=VALUE"),
+    ({"settings": "duration_days=2"}, "{record}: key 'settings' = 'duration_days=2': not a list"),
+])
+def test_a_damaged_value_in_a_study_directorys_record_is_blamed_on_that_record(tiny_study, tmp_path, edit, words):
+    """The study file the record names had been blamed for the record's own values."""
+    out = tmp_path / "s"
+    out.mkdir()
+    record = {"source": str(tiny_study), **load_study(tiny_study)[0], "settings": [], "run_seeds": [1]}
+    (out / "study.json").write_text(json.dumps({**record, **edit}))
+    with pytest.raises(ConfigError) as refused:
+        report_study(out)
+    text = str(refused.value)
+    assert words.format(record=out / "study.json") in text and str(tiny_study) not in text
+    if "{record}" not in words:
+        assert text.startswith(f"{out / 'study.json'}: ")
