@@ -100,10 +100,23 @@ def _write_checked(exporter: Any, tmp: Path, estimates: Any, meta: dict[str, Any
         raise PluginError(f"{who} wrote nothing; nothing was written")
 
 
+def _object_ids(data: bytes) -> list[str]:
+    """The values of a CCSDS KVN file's ``OBJECT_ID`` lines (none for another kind of file)."""
+    return [line.partition(b"=")[2].strip().decode("utf-8", "replace") for line in data.splitlines()
+            if line.lstrip().startswith(b"OBJECT_ID") and b"=" in line]
+
+
 def _check_default_file(out: Path, new: Path, words: ExportWords) -> None:
-    """Refuse replacing the default file ``out`` with ``new`` when they differ."""
-    if not out.is_file() or same_export(out.read_bytes(), new.read_bytes()):
+    """Refuse replacing the default file ``out`` with ``new`` when they differ, saying whether the
+    file there is of another object (another orbit's export written there by name) or of this one."""
+    if not out.is_file():
         return
-    raise ConfigError(f"{out}: already holds a different export (made with other options, e.g. another {words.step} or "
-                      f"{words.predict}); {words.give_path} to write this one beside it, or {words.overwrite} to "
-                      "replace it")
+    old_bytes, new_bytes = out.read_bytes(), new.read_bytes()
+    if same_export(old_bytes, new_bytes):
+        return
+    there, here = _object_ids(old_bytes), _object_ids(new_bytes)
+    what = (f"an export of another object (OBJECT_ID = {there[0]} there, {here[0]} here), written there by name, "
+            f"not the export of {out.parent}" if there and here and there != here else
+            f"a different export (made with other options, e.g. another {words.step} or {words.predict})")
+    raise ConfigError(f"{out}: already holds {what}; {words.give_path} to write this one beside it, or "
+                      f"{words.overwrite} to replace it")

@@ -168,6 +168,23 @@ def test_an_out_file_in_the_folder_of_another_run_is_refused_naming_its_run_unle
     assert (other / "e.oem").read_text().startswith("CCSDS_OEM_VERS")
 
 
+def test_a_default_export_that_holds_another_objects_export_is_refused_saying_so(run_dir, tmp_path, capsys):
+    """Another run's export written there with --out DIR/estimate.oem --overwrite had been called an export of
+    this run "made with other options"."""
+    import re
+    import shutil
+
+    from cistrack.cli.main import main
+    mine = shutil.copytree(run_dir[0], tmp_path / "mine", ignore=shutil.ignore_patterns("estimate.*"))
+    assert main(["export", str(mine), "--quiet"]) == 0
+    own = (mine / "estimate.oem").read_text()
+    (mine / "estimate.oem").write_text(re.sub(r"OBJECT_ID = .*", "OBJECT_ID = someone-else", own))
+    assert main(["export", str(mine), "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "already holds an export of another object (OBJECT_ID = someone-else there, " in err
+    assert "other options" not in err
+
+
 @pytest.fixture
 def run_copy(run_dir, tmp_path):
     import shutil
