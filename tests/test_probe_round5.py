@@ -208,6 +208,21 @@ def test_a_scenario_listed_twice_is_refused_naming_it_and_the_run_id(tmp_path):
         plan_runs(_study_file(tmp_path, 'scenarios = ["quick", "quick"]\n'), tmp_path / "out")
 
 
+@pytest.mark.parametrize("filters, label", [
+    ('[{name = "enkf", n_particles = 100}, {name = "enkf", n_particles = 200}]', "enkf"),
+    ('[{name = "enkf", label = "x"}, {name = "pgm", label = "x"}]', "x"),
+])
+def test_two_filters_entries_that_label_their_runs_alike_are_refused_saying_to_give_a_label(tmp_path, filters, label):
+    """Two PGM sizes had been refused as "scenario 'quick' is listed twice", which it was not."""
+    from cistrack.studies.study import plan_runs
+
+    p = tmp_path / "st.toml"
+    p.write_text(f'name = "st"\nseeds = [0]\nscenarios = ["quick"]\nfilters = {filters}\n')
+    with pytest.raises(ConfigError, match=rf"st.toml: entries 1 and 2 of 'filters' both label their runs '{label}'.*"
+                                          r"give each a distinct 'label'"):
+        plan_runs(p, tmp_path / "out")
+
+
 def test_sweep_values_that_are_the_same_number_are_a_repeat(tmp_path):
     from cistrack.studies.study_file import load_study
 

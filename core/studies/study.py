@@ -124,12 +124,29 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
                  iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
                  overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out,
                  sweep=sweep, study=p, base=scenario_base(path_or_name, p), settings_from=from_record)
+    for key, entries in (("filters", grid.filters), ("iod", grid.iods)):
+        _check_distinct_labels(entries, key, p)
     reg = default_registry()
     specs: list[RunSpec] = []
     for sc in data["scenarios"]:
         specs += _scenario_runs(sc, p, grid, reg)
     _check_distinct_ids(specs, p)
     return data, specs, out
+
+
+def _check_distinct_labels(entries: list[tuple[str, dict | None]], key: str, p: Path) -> None:
+    """Refuse two entries of the study's ``filters`` or ``iod`` list that label their runs alike
+    (two tables of one component without a ``label``, or the same ``label``): their runs would share
+    ids, hence results directories."""
+    seen: dict[str, int] = {}
+    for i, (label, table) in enumerate(entries):
+        j = seen.setdefault(label, i)
+        if j == i or table is None:
+            continue
+        raise ConfigError(f"{p}: entries {j + 1} and {i + 1} of {key!r} both label their runs {label!r}, so their runs "
+                          f"would share ids and results directories; give each a distinct 'label' (e.g. "
+                          f"{{ name = {json.dumps(str(table.get('name')))}, label = {json.dumps(label + '-2')}, ... }}), or "
+                          "list it once")
 
 
 def _check_distinct_ids(specs: list[RunSpec], p: Path) -> None:
