@@ -336,13 +336,16 @@ def _check_step_option(format: str, step: int | None) -> None:
 
 
 def _exporter_name(format: str) -> str:
-    """The registered exporter ``--format`` names in any case (OEM: oem); as given when none or
-    several match (an unknown --format is refused by name where the exporter is made)."""
+    """The registered exporter ``--format`` names in any case (OEM: oem); as given when several
+    match. An unknown one is refused here, naming it (before ``--out`` is judged by the format)."""
     from cistrack.plugin.registry import default_registry
 
-    names = default_registry().names("exporter")
+    reg = default_registry()
+    names = reg.names("exporter")
     same = [n for n in names if n.lower() == format.lower()]
-    return same[0] if format not in names and len(same) == 1 else format
+    name = same[0] if format not in names and len(same) == 1 else format
+    reg.get("exporter", name)  # UnknownComponentError: "unknown exporter ''; ... Did you mean 'oem'?"
+    return name
 
 
 def cmd_export(args) -> int:

@@ -35,3 +35,12 @@ def test_another_folders_results_are_no_export_target(finished, tmp_path, capsys
 
 def test_a_plain_file_elsewhere_is_written(finished, tmp_path):
     assert main(["export", str(finished), "--out", str(tmp_path / "orbit.oem")]) == 0
+
+
+@pytest.mark.parametrize("format, hint", [("", ""), ("oem ", ". Did you mean 'oem'?")])
+def test_an_unknown_format_is_refused_by_its_name_before_the_out_name_is_judged_by_it(finished, tmp_path, capsys,
+                                                                                    format, hint):
+    """The --out name had been blamed: "--out x.oem: named for OEM, but --format oem  writes OEM "."""
+    assert main(["export", str(finished), "--format", format, "--out", str(tmp_path / "x.oem")]) == 2
+    err = capsys.readouterr().err
+    assert f"unknown exporter {format!r}; available: " in err and hint in err and "--out" not in err
