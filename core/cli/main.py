@@ -165,7 +165,7 @@ def _unfinished_verdict_lines(s, out: Path) -> list[str]:
     custody) when custody was lost before it stopped."""
     from cistrack.evaluation.verdicts import verdict_lines
 
-    if s.verdict.kind == "none":
+    if s.verdict.kind != "lost":  # judged only at the end: what it held before it stopped is no verdict
         return ["  verdict: none (the run did not finish; see its status above)"]
     head, *rest = verdict_lines(s, out, _fmt)
     return [f"{head} (before the run stopped; see its status above)", *rest]
