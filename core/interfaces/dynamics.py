@@ -159,3 +159,23 @@ class Dynamics(Component):
         from cistrack.interfaces.transition_matrix import stm_by_central_differences
 
         return stm_by_central_differences(self, state, t0, times)
+
+    sensitivity_parameters: tuple[str, ...] = ()
+    """Solve-for parameters whose d x / d p :meth:`propagate_with_sensitivity` integrates (optional;
+    none by default: the least squares then differences the others centrally)."""
+
+    def propagate_with_sensitivity(self, state: np.ndarray, t0: float, times,
+                                   name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`propagate_with_stm`, and d states[k] / d p (K, 6) of the solve-for parameter
+        ``name`` (one of :attr:`sensitivity_parameters`; LU, VU per unit of the parameter), the
+        state at ``t0`` held.
+
+        Optional: a model whose variational equations carry a parameter's sensitivity overrides
+        it and names the parameter in :attr:`sensitivity_parameters`; the batch least squares then
+        takes that parameter's partials from it instead of two more propagations of the arc per
+        iteration. The default refuses every name with :class:`cistrack.errors.StateError`.
+        """
+        from cistrack.errors import StateError
+
+        raise StateError(f"{self._label()}: no integrated "
+                         f"sensitivity of {name!r} (sensitivity_parameters is empty)")

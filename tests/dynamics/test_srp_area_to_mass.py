@@ -172,3 +172,12 @@ def test_the_sensitivity_is_carried_across_an_impulsive_burn():
 def test_a_parameter_without_an_integrated_sensitivity_is_refused_by_name():
     with pytest.raises(CistrackError, match="no sensitivity of 'gm_moon'"):
         EphemerisDynamics(epoch=EPOCH).propagate_with_sensitivity(NRHO, 0.0, np.array([1.0]), "gm_moon")
+
+
+def test_a_model_without_integrated_sensitivities_refuses_them_by_default():
+    from cistrack.plugin.registry import default_registry
+
+    cr3bp = default_registry().create("dynamics", "cr3bp")
+    assert cr3bp.sensitivity_parameters == ()
+    with pytest.raises(CistrackError, match="no integrated sensitivity of 'area_to_mass_m2_kg'"):
+        cr3bp.propagate_with_sensitivity(NRHO, 0.0, np.array([1.0]), "area_to_mass_m2_kg")
