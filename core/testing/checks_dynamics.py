@@ -171,6 +171,33 @@ def check_rejects_malformed_states(dyn) -> None:
         require(False, f"propagate() accepted states with {what}")
 
 
+SENSITIVITY_TU = float(hours_to_tu(48.0))
+"""Span of the sensitivity check: 2 days (a radiation pressure moves an orbit about 60 km per m^2/kg)."""
+SENSITIVITY_RTOL = 1e-3
+"""Agreement required between an integrated sensitivity and a central difference of the parameter
+(relative to its largest component: the difference's own error, truncation and the integration's
+tolerance over twice its step, is of order 1e-5 of it)."""
+
+
+def check_sensitivities_match_differences(dyn) -> None:
+    """Each of ``sensitivity_parameters``: ``propagate_with_sensitivity``'s d x / d p against a
+    central difference of ``propagate`` with the parameter moved by ``with_parameters``."""
+    x = nrho_states(1)[0]
+    times = np.linspace(SENSITIVITY_TU / 4.0, SENSITIVITY_TU, 4)
+    for name in tuple(getattr(dyn, "sensitivity_parameters", ())):
+        p0 = float(dyn.parameter(name))
+        h = 1e-4 * max(1.0, abs(p0))
+        _, _, sens = dyn.propagate_with_sensitivity(x, 0.0, times, name)
+        up, down = (_propagate(dyn.with_parameters(**{name: p0 + s * h}), x[None], 0.0, times).states[:, 0]
+                    for s in (1.0, -1.0))
+        want = (up - down) / (2.0 * h)
+        scale = float(np.abs(want).max())
+        ok, diff = close(np.asarray(sens, dtype=float), want, 0.0, SENSITIVITY_RTOL * scale)
+        require(np.shape(sens) == (times.size, 6) and ok,
+                f"propagate_with_sensitivity of {name!r} differs from a central difference of step {h:g} by "
+                f"{diff:.3g} (largest component {scale:.3g})")
+
+
 DYNAMICS_CHECKS = [
     ("is_dynamics", check_is_dynamics),
     ("derivatives_shape_and_units", check_derivatives_shape_and_units),
@@ -184,4 +211,5 @@ DYNAMICS_CHECKS = [
     ("deterministic", check_deterministic),
     ("same_after_pickle", check_same_after_pickle),
     ("rejects_malformed_states", check_rejects_malformed_states),
+    ("sensitivities_match_differences", check_sensitivities_match_differences),
 ]
