@@ -133,6 +133,9 @@ def _check_noise_scale(p: Path, record: dict[str, Any]) -> None:
     if not (math.isnan(scale) or (math.isfinite(scale) and scale > 0.0)):
         raise _fail(p, "noise_scale", "a positive number (NaN: undefined)", scale)
     sig = units.state_to_km(np.sqrt(np.diag(np.asarray(record.get("covariance"), dtype=float))))
+    if record.get("converged") is False:  # a fit refused as undetermined keeps its wide covariance
+        _check_finite_scaled(p, record, sig)
+        return
     limits = f"within {MAX_DISTANCE_KM:.3g} km and {MAX_SPEED_KMS:g} km/s"
     if np.max(sig[:3]) > MAX_DISTANCE_KM or np.max(sig[3:]) > MAX_SPEED_KMS:
         raise _fail(p, "covariance", f"a covariance whose sigmas stay {limits}", f"sigmas {sig.tolist()}")
@@ -140,6 +143,16 @@ def _check_noise_scale(p: Path, record: dict[str, Any]) -> None:
     if np.max(sig[:3]) > MAX_DISTANCE_KM / factor or np.max(sig[3:]) > MAX_SPEED_KMS / factor:
         raise _fail(p, "noise_scale", "a positive number (NaN: undefined) small enough that the covariance scaled "
                     f"by its square (when above 1) keeps its sigmas {limits}", scale)
+
+
+def _check_finite_scaled(p: Path, record: dict[str, Any], sig: np.ndarray) -> None:
+    """The sigmas (km, km/s) of a fit that did not converge, times the noise scale, squared: finite."""
+    scaled = sig * math.sqrt(covariance_scale(record))
+    with np.errstate(over="ignore"):
+        finite = bool(np.all(np.isfinite(scaled * scaled)))
+    if not finite:
+        raise _fail(p, "covariance", "a covariance whose sigmas, scaled by the noise scale, stay finite",
+                    f"sigmas {sig.tolist()}")
 
 
 def _scenario_epoch(p: Path, record: dict[str, Any]):

@@ -49,9 +49,10 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError, quoted
-from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM
+from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
 from cistrack.fitting.lov_solutions import AUTO_DELTA_CHI2
 from cistrack.least_squares.errors import FitError, UnobservableWarning
+from cistrack.least_squares.result import sigma_factor
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.fitting.maneuver_search import add_maneuvers
 from cistrack.fitting.arcs import ArcSettings, arc_settings
@@ -945,12 +946,31 @@ def _refuse_not_cislunar(one: ObjectFit) -> None:
         "distant body, or observations of different objects?)",))
 
 
+def _refuse_unconfined(one: ObjectFit) -> None:
+    """``one.result`` not converged, saying why, when its 1-sigma position (km) or velocity (km/s),
+    scaled by the noise scale where above 1, exceeds :data:`MAX_DISTANCE_KM` or :data:`MAX_SPEED_KMS`:
+    the observations' stated uncertainties are too large to confine the orbit to cislunar space, and
+    ``cistrack export`` and ``predict`` read no converged fit with such a covariance."""
+    r = one.result
+    if r is None or not r.converged:
+        return
+    sig = np.asarray(r.sigmas_km, dtype=float) * sigma_factor(r.noise_scale)
+    pos, vel = float(np.max(sig[:3])), float(np.max(sig[3:]))
+    if pos <= MAX_DISTANCE_KM and vel <= MAX_SPEED_KMS:
+        return
+    one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+        f"not a determined orbit: its 1-sigma position is {pos:.3g} km and velocity {vel:.3g} km/s (a fit "
+        f"is reported only within {MAX_DISTANCE_KM:.0e} km and {MAX_SPEED_KMS:g} km/s); the observations' "
+        "stated uncertainties (ADES rmsRA/rmsDec, or the reader's sigma_arcsec) are too large to confine it",))
+
+
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
     from cistrack.fitting.fit_record import write_fit_outputs
 
     _refuse_not_cislunar(one)
+    _refuse_unconfined(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
     _follow_line(one, job)

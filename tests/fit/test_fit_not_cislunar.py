@@ -7,6 +7,7 @@ from __future__ import annotations
 import io
 import json
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -76,3 +77,27 @@ def test_such_a_fit_is_not_exported_and_the_refusal_gives_the_reason(star_fit, c
     d = star_fit[3]
     assert main(["export", str(d / "fit"), "--out", str(d / "star.oem")]) == 2
     assert "not exported: the fit is not a cislunar orbit" in capsys.readouterr().err
+
+
+def test_a_fit_whose_sigmas_reach_beyond_cislunar_space_is_not_converged_and_says_why():
+    """Observations with legal but huge uncertainties (648000 arcsec) had "converged" to a fit whose
+    1-sigma position, 3.5e6 km, export and predict then refused to read."""
+    from types import SimpleNamespace
+
+    from cistrack.fitting.from_observations import _refuse_unconfined
+
+    state = [1.02, 0.0, -0.18, 0.0, -0.1, 0.0]
+    wide = SimpleNamespace(result=replace(_fit_at(state), covariance=np.eye(6) * 1e2))  # sigma 10 LU, 3.8e6 km
+    _refuse_unconfined(wide)
+    assert not wide.result.converged
+    assert wide.result.messages[-1].startswith("not a determined orbit: its 1-sigma position is 3.84e+06 km")
+
+
+def test_a_fit_whose_sigmas_stay_within_cislunar_space_stays_converged():
+    from types import SimpleNamespace
+
+    from cistrack.fitting.from_observations import _refuse_unconfined
+
+    near = SimpleNamespace(result=_fit_at([1.02, 0.0, -0.18, 0.0, -0.1, 0.0]))
+    _refuse_unconfined(near)
+    assert near.result.converged

@@ -176,6 +176,21 @@ def test_a_covariance_whose_sigmas_reach_beyond_cislunar_space_is_refused(tmp_pa
         read_fit_record(_written(tmp_path, rec))
 
 
+def test_a_fit_refused_as_undetermined_keeps_its_wide_covariance_readable(tmp_path):
+    """The fit writes such a record (not converged: sigmas beyond 3e6 km); export and predict then
+    say why it is not an orbit rather than calling the file one cistrack did not write."""
+    rec = _record()
+    rec["covariance"], rec["converged"] = (np.eye(6) * 1e2).tolist(), False
+    assert read_fit_record(_written(tmp_path, rec))["converged"] is False
+
+
+def test_a_covariance_that_overflows_is_refused_even_when_the_fit_did_not_converge(tmp_path):
+    rec = _record()
+    rec["covariance"], rec["converged"] = (np.eye(6) * 1e300).tolist(), False
+    with pytest.raises(ConfigError, match="stay finite"):
+        read_fit_record(_written(tmp_path, rec))
+
+
 def test_an_epoch_beyond_the_ephemeris_is_refused(tmp_path):
     with pytest.raises(ConfigError, match="field 'epoch_tu'"):
         read_fit_record(_written(tmp_path, _tampered("epoch_tu", 9.0e4)))
