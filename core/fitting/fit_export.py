@@ -388,7 +388,7 @@ _LINE_COLUMNS = ("chi2", "x_km", "y_km", "z_km", "vx_kms", "vy_kms", "vz_kms")
 def _line_points(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """(chi-square (M,), states (M, 6) km and km/s) of the points of a lov.csv; ValueError saying
     what is wrong when it cannot be read or holds what no fit writes."""
-    from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
+    from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS, within_reach
 
     try:
         with path.open(newline="", encoding="utf-8") as fh:
@@ -402,8 +402,7 @@ def _line_points(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if rows.size == 0:
         raise ValueError("holds no point of the line (its header only)")
     km = rows[:, 1:]
-    if (np.max(np.abs(km[:, :3])) > MAX_DISTANCE_KM or np.max(np.linalg.norm(km[:, :3], axis=1)) > MAX_DISTANCE_KM
-            or np.max(np.abs(km[:, 3:])) > MAX_SPEED_KMS or np.max(np.linalg.norm(km[:, 3:], axis=1)) > MAX_SPEED_KMS):
+    if not np.all(within_reach(km)):
         raise ValueError(f"holds a state no orbit of the fit's has (beyond {MAX_DISTANCE_KM:.3g} km or "
                          f"{MAX_SPEED_KMS:g} km/s)")
     return rows[:, 0], km

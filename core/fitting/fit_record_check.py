@@ -25,7 +25,7 @@ from cistrack.errors import ConfigError
 from cistrack.least_squares.burn_search import MAX_BURN_MS  # the largest burn a fit reports, m/s
 from cistrack.least_squares.result import sigma_factor
 
-__all__ = ["check_orbit_fields", "covariance_scale", "MAX_EPOCH_TU", "MAX_DISTANCE_KM", "MAX_SPEED_KMS",
+__all__ = ["check_orbit_fields", "covariance_scale", "within_reach", "MAX_EPOCH_TU", "MAX_DISTANCE_KM", "MAX_SPEED_KMS",
            "MAX_ARC_DAYS"]
 
 MAX_DISTANCE_KM = 3.0e6
@@ -48,6 +48,17 @@ UTC_TOLERANCE_S = 1e-3
 ``scenario_epoch_utc`` give: the rounding of a written time."""
 BURN_UTC_TOLERANCE_S = 1.0
 """How far (seconds) a burn's ``t_burn_utc`` may lie from ``scenario_epoch_utc`` plus ``t_burn_days``."""
+
+def within_reach(km: np.ndarray) -> np.ndarray:
+    """Whether each state (M, 6) [km, km/s, synodic] lies within :data:`MAX_DISTANCE_KM` of the
+    Earth-Moon barycentre and moves slower than :data:`MAX_SPEED_KMS` (each component and the norm):
+    the states a fit's files may hold. Returns (M,) bool."""
+    km = np.atleast_2d(np.asarray(km, dtype=float))
+    pos, vel = km[:, :3], km[:, 3:]
+    with np.errstate(over="ignore"):  # a norm of 1e300 is inf, beyond either way
+            return ((np.max(np.abs(pos), axis=1) <= MAX_DISTANCE_KM) & (np.linalg.norm(pos, axis=1) <= MAX_DISTANCE_KM)
+                & (np.max(np.abs(vel), axis=1) <= MAX_SPEED_KMS) & (np.linalg.norm(vel, axis=1) <= MAX_SPEED_KMS))
+
 
 _NUMBERS = ("rms", "chi2", "condition_number")
 _COUNTS = ("n_used", "n_rejected", "iterations")

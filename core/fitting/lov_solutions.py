@@ -24,14 +24,16 @@ from dataclasses import replace
 import numpy as np
 
 from cistrack.errors import MeasurementError, PropagationError
+from cistrack.fitting.fit_record_check import within_reach
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.line_of_variations import LovPoint, line_of_variations
-from cistrack.least_squares.observability import km_apart
+from cistrack.least_squares.observability import km_apart, to_km
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 
-__all__ = ["AUTO_DELTA_CHI2", "AUTO_MAX_SIGMAS", "BETTER_BY", "LOV_STEP", "follow_line", "better_solution"]
+__all__ = ["AUTO_DELTA_CHI2", "AUTO_MAX_SIGMAS", "BETTER_BY", "LOV_STEP", "follow_line", "better_solution",
+           "within_cislunar_reach"]
 
 AUTO_DELTA_CHI2 = 16.0
 """A side of the default line ends at its first point whose chi-square exceeds the nominal one by
@@ -56,8 +58,21 @@ def follow_line(dynamics, sensor, measurements, result: FitResult, options: FitO
     used = measurements.subset(~np.asarray(result.residuals.rejected, dtype=bool))
     opts = replace(options, reject_outliers=False, max_iterations=max(options.max_iterations, MIN_ITERATIONS))
     far, rise = (AUTO_MAX_SIGMAS, AUTO_DELTA_CHI2) if sigmas is None else (sigmas, float("inf"))
-    return line_of_variations(dynamics, sensor, used, result, step=LOV_STEP, max_sigma=far, max_delta_chi2=rise,
-                              options=opts)
+    return within_cislunar_reach(line_of_variations(dynamics, sensor, used, result, step=LOV_STEP, max_sigma=far,
+                                                    max_delta_chi2=rise, options=opts))
+
+
+def within_cislunar_reach(points: list[LovPoint]) -> list[LovPoint]:
+    """``points`` cut, each side of the nominal solution, before the first state beyond 3e6 km or
+    100 km/s (:func:`cistrack.fitting.fit_record_check.within_reach`): export and predict read no
+    lov.csv with such a state, and a line through one is no cislunar orbit's."""
+    if not points:
+        return points
+    ok = within_reach(to_km(np.array([p.state for p in points])))
+    sig = np.array([p.sigma for p in points], dtype=float)
+    hi = min((s for s, good in zip(sig, ok) if s > 0 and not good), default=np.inf)
+    lo = max((s for s, good in zip(sig, ok) if s < 0 and not good), default=-np.inf)
+    return [p for p, s in zip(points, sig) if lo < s < hi]
 
 
 def better_solution(dynamics, sensor, measurements, result: FitResult, points: list[LovPoint],

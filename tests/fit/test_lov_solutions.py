@@ -191,3 +191,13 @@ def test_a_line_drawn_short_of_its_reach_is_said_to_be_held_only_as_far_as_it_wa
     assert main(["export", str(d), "--format", "oem", "--quiet"]) == 0
     text = " ".join((d / "estimate.oem").read_text().replace("\nCOMMENT ", " ").split())
     assert "within 3 sigma, as far as it was drawn: the orbits the data allow go on beyond its end" in text
+
+
+def test_the_line_is_cut_each_side_before_its_first_state_beyond_cislunar_space():
+    """Huge stated uncertainties (1e5 arcsec) had drawn a line out to 4e7 km, which export and
+    predict then refused as a damaged lov.csv; the fit writes only the part they read."""
+    from cistrack.fitting.lov_solutions import within_cislunar_reach
+
+    x_lu = {-2: -9.0, -1: -3.0, 0: 1.0, 1: 5.0, 2: 8.0, 3: 2.0}  # 3e6 km is 7.8 LU from the barycentre
+    points = [LovPoint(float(k), np.array([x, 0, 0, 0, 0, 0]), 0.0, np.eye(6)) for k, x in x_lu.items()]
+    assert [p.sigma for p in within_cislunar_reach(points)] == [-1.0, 0.0, 1.0]
