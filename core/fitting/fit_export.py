@@ -48,7 +48,7 @@ from cistrack.least_squares.events import prediction_end
 from cistrack.least_squares.line_of_variations import REACH_DELTA_CHI2, widened_to_hold
 from cistrack.least_squares.prediction import COVARIANCE_METHODS, predict_orbit
 from cistrack.least_squares.residual_table import residual_table
-from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.result import FitResult, noise_scale_text
 from cistrack.least_squares.trajectory import ensemble_arc_states
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
@@ -593,7 +593,7 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
     arc = record["arc"]
     comments = [f"least-squares orbit of {name} from {arc['n_observations']} observations "
                 f"({arc['first_utc'][:19]}Z to {arc['last_utc'][:19]}Z, sites {', '.join(arc['sites'])}): "
-                f"weighted RMS {record['rms']:.4g}, noise scale {record['noise_scale']:.4g}, "
+                f"weighted RMS {record['rms']:.4g}, noise scale {noise_scale_text(record['noise_scale'])}, "
                 f"{record['n_rejected']} rejected; fit epoch {record['epoch_utc'][:19]}Z"]
     comments += _covariance_comments(record, opts.covariance if propagated else None, pred.linear, utc)
     comments += _area_to_mass_comments(record)[:None if propagated else 1]  # at the epoch: nothing carried

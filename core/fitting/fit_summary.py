@@ -10,6 +10,8 @@ words, with the tracklet's motion and admissible region.
 """
 from __future__ import annotations
 
+import math
+
 __all__ = ["summary_lines", "short_lines"]
 
 
@@ -124,7 +126,7 @@ def _header_lines(one) -> list[str]:
 def summary_lines(one) -> list[str]:
     """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
     from cistrack import units
-    from cistrack.fitting.fit_record import area_to_mass_summary, noise_summary
+    from cistrack.fitting.fit_record import area_to_mass_summary
 
     if getattr(one, "undetermined", None):
         return _undetermined_lines(one)
@@ -140,11 +142,7 @@ def summary_lines(one) -> list[str]:
     lines.append(f"  least squares at {epoch} ({one.choices.epoch} observation): {len(ms)} observations, "
                  f"{r.n_used} used, {r.n_rejected} rejected; weighted RMS {r.rms:.3f}, chi-square {r.chi2:.1f} "
                  f"for {2 * r.n_used - 6 - len(r.parameter_names)} degrees of freedom")
-    for name, v in noise_summary(ms, r).items():
-        unit = "km" if name.endswith("_km") else "arcsec"
-        label = name.rsplit("_", 1)[0].replace("ra_cos_dec", "RA cos(Dec)").replace("declination", "Dec")
-        lines.append(f"  {label}: assumed noise {v['assumed']:.3g} {unit}, estimated {v['estimated']:.3g} {unit} "
-                     f"(noise scale {r.noise_scale:.3f}), post-fit RMS {v['post_fit_rms']:.3g} {unit}")
+    lines += _noise_lines(ms, r)
     sig = r.sigmas_km
     lines.append("  1-sigma at the fit epoch (synodic): position " + " / ".join(f"{v:.3g}" for v in sig[:3])
                  + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; condition number "
@@ -169,6 +167,23 @@ def summary_lines(one) -> list[str]:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
                      "(--set measurements.reader.sigma_arcsec=...) or the data")
     return _wrapped(lines)
+
+
+def _noise_lines(ms, r) -> list[str]:
+    """Per measured quantity: the assumed noise, the noise estimated from the residuals (the assumed
+    one times the noise scale; in words when the scale is undetermined), the post-fit RMS (km or arcsec)."""
+    from cistrack.fitting.fit_record import noise_summary
+    from cistrack.least_squares.result import noise_scale_text
+
+    lines = []
+    for name, v in noise_summary(ms, r).items():
+        unit = "km" if name.endswith("_km") else "arcsec"
+        label = name.rsplit("_", 1)[0].replace("ra_cos_dec", "RA cos(Dec)").replace("declination", "Dec")
+        estimated = (f"estimated {v['estimated']:.3g} {unit} (noise scale {r.noise_scale:.3f})"
+                     if math.isfinite(r.noise_scale) else f"not estimated: the noise scale is {noise_scale_text(r.noise_scale)}")
+        lines.append(f"  {label}: assumed noise {v['assumed']:.3g} {unit}, {estimated}, "
+                     f"post-fit RMS {v['post_fit_rms']:.3g} {unit}")
+    return lines
 
 
 def _lov_lines(points: list, r) -> list[str]:

@@ -35,7 +35,7 @@ from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.outliers import update_rejections
 from cistrack.least_squares.progress import tell
 from cistrack.least_squares.residual_table import residual_table
-from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.result import FitResult, noise_scale_text
 from cistrack.least_squares.impulse_partials import delta_v_state_partials, impulse_columns
 from cistrack.least_squares.solve_for_parameters import SolveFor, solve_for as _solve_for
 from cistrack.least_squares.options import AREA_TO_MASS
@@ -462,7 +462,7 @@ def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: 
         say.append(f"{int(p.rejected.sum())} of {len(p.rejected)} observations rejected "
                    f"(chi-square > {p.threshold:.4g}{capped})")
     say.insert(0, ("converged" if converged else "NOT converged") + f" after {p.iterations} iterations; "
-               f"weighted RMS {rms:.4g}, noise scale {noise_scale:.4g}")
+               f"weighted RMS {rms:.4g}, noise scale {noise_scale_text(noise_scale)}")
     return converged
 
 

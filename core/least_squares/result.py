@@ -9,7 +9,11 @@ import numpy as np
 from cistrack.least_squares.observability import to_km
 from cistrack.least_squares.residual_table import ResidualTable
 
-__all__ = ["FitResult", "sigma_factor"]
+__all__ = ["FitResult", "sigma_factor", "noise_scale_text", "UNDETERMINED_NOISE_SCALE"]
+
+UNDETERMINED_NOISE_SCALE = "undetermined (no degrees of freedom)"
+"""How a noise scale that cannot be computed (NaN: as many fitted parameters as observed components)
+is written, in words, wherever a fit states its noise scale."""
 
 
 def sigma_factor(noise_scale: float) -> float:
@@ -18,6 +22,13 @@ def sigma_factor(noise_scale: float) -> float:
     infinite). Its square scales the covariance, as exported and predicted; a fit is never narrowed."""
     s = float(noise_scale)
     return s if math.isfinite(s) and s > 1.0 else 1.0
+
+
+def noise_scale_text(noise_scale: float, spec: str = ".4g") -> str:
+    """The noise scale (dimensionless) formatted with ``spec``, or :data:`UNDETERMINED_NOISE_SCALE`
+    when it is not finite: never "nan"."""
+    s = float(noise_scale)
+    return format(s, spec) if math.isfinite(s) else UNDETERMINED_NOISE_SCALE
 
 
 @dataclass(frozen=True)
