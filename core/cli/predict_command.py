@@ -29,6 +29,9 @@ _UNITS = ("".ljust(20) + "".rjust(11) + "".rjust(10) + '"/min'.rjust(9) + '"/min
           + "deg".rjust(7) * 3 + "arcsec".rjust(9) * 2 + "deg".rjust(6))
 
 
+MIN_STEP_MINUTES = 1.0 / 60.0
+"""The shortest --step, minutes: one second, the resolution of the UTC times predict writes (a shorter
+step had written rows with repeated time stamps)."""
 MAX_STEP_MINUTES = 1e7
 """The longest --step, minutes (a larger one overflowed the UTC grid's arithmetic)."""
 
@@ -40,6 +43,9 @@ def _minutes(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of minutes") from None
     if not (math.isfinite(v) and v > 0):
         raise argparse.ArgumentTypeError(f"{text!r}: give a number of minutes > 0")
+    if v < MIN_STEP_MINUTES:
+        raise argparse.ArgumentTypeError(f"{text!r}: give at least {MIN_STEP_MINUTES:.4g} minutes (1 second: "
+                                         "the predictions' UTC times are written to the second)")
     if v > MAX_STEP_MINUTES:
         raise argparse.ArgumentTypeError(f"{text!r}: give at most {MAX_STEP_MINUTES:,.0f} minutes (about 19 years; "
                                          "DE421 spans 1900-2050)")

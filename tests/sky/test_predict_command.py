@@ -25,6 +25,15 @@ def test_bad_option_values_are_refused_by_the_parser(tmp_path, capsys, option, v
     assert exc.value.code == 2 and option in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("value", ["0.0001", "0.0166"])
+def test_a_step_under_the_second_the_times_are_written_to_is_refused(tmp_path, capsys, value):
+    """0.0001 minutes had written 10,001 rows under 61 distinct (rounded) time stamps."""
+    with pytest.raises(SystemExit) as exc:
+        main(["predict", str(tmp_path), "--site", "568", "--step", value])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "--step" in err and "at least 0.01667 minutes (1 second" in err
+
+
 @pytest.mark.parametrize("site, count", [("45,10", 2), ("45,10,0,5", 4)])
 def test_coordinates_of_the_wrong_count_are_told_as_coordinates_not_as_an_unknown_code(tmp_path, capsys, site, count):
     from cistrack.cli.predict_command import _site
