@@ -151,18 +151,20 @@ def scenario_template(name: str = "my-scenario", registry: Registry | None = Non
 
 
 def template_path(name: str | None) -> Path:
-    """The file ``cistrack init NAME`` writes: NAME, with ``.toml`` added when it has no such suffix.
+    """The file ``cistrack init NAME`` writes: NAME, with ``.toml`` added when it has no such suffix
+    (in any case: ``x.TOML`` is written as it is).
 
     ConfigError for a NAME whose file name (without ``.toml``), the scenario's name, could not name
     the scenario's run folders: the rule of :func:`~cistrack.scenario.limits.check_path_component`,
     stated in the message. Any other character is taken (``cistrack init "x y;z"`` writes
     ``x y;z.toml``)."""
     p = Path("my-scenario" if name is None else name)
+    has_suffix = p.suffix.lower() == ".toml"
     try:
-        check_path_component(p.name.removesuffix(".toml"), f"cistrack init NAME {name!r}: the scenario name")
+        check_path_component(p.stem if has_suffix else p.name, f"cistrack init NAME {name!r}: the scenario name")
     except ConfigError as exc:
         raise ConfigError(f"{exc}; give a name such as my-scenario (optionally in a folder: runs/my-scenario)") from None
-    return p if p.suffix == ".toml" else p.with_name(p.name + ".toml")
+    return p if has_suffix else p.with_name(p.name + ".toml")
 
 
 def write_scenario_template(name: str | None = None, registry: Registry | None = None) -> Path:

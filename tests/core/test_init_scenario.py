@@ -94,3 +94,10 @@ def test_cistrack_run_runs_the_written_file_as_written(written, tmp_path):
                            "--out", str(tmp_path / "run")], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "run" / "manifest.json").is_file()
+
+
+def test_an_upper_case_toml_suffix_is_taken_as_the_suffix():
+    """``init x.TOML`` had written x.TOML.toml, a scenario named "x.TOML"."""
+    from cistrack.scenario.template import template_path
+
+    assert str(template_path("sub/x.TOML")) == "sub/x.TOML"
