@@ -24,12 +24,20 @@ from importlib import resources
 from cistrack.errors import MeasurementError, quoted
 from cistrack.astro.primaries import EARTH_RADIUS_KM
 
-__all__ = ["Site", "observatory", "observatory_codes", "site_from_parallax", "EARTH_EQUATORIAL_RADIUS_KM"]
+__all__ = ["Site", "observatory", "observatory_codes", "site_from_parallax", "EARTH_EQUATORIAL_RADIUS_KM",
+           "MIN_HEIGHT_M", "MAX_HEIGHT_M"]
 
 EARTH_EQUATORIAL_RADIUS_KM = EARTH_RADIUS_KM
 """WGS84 equatorial radius, km (also the unit of the MPC parallax constants)."""
 _F = 1.0 / 298.257223563
 _E2 = _F * (2.0 - _F)
+
+
+MIN_HEIGHT_M = -12_000.0
+"""The lowest site height accepted, metres above the WGS84 ellipsoid: the MPC's rounded parallax
+constants put some bundled observatories (506 Bendestorf, -9,254 m) kilometres below it."""
+MAX_HEIGHT_M = 100_000.0
+"""The highest site height accepted, metres (the edge of space)."""
 
 
 @dataclass(frozen=True)
@@ -55,8 +63,9 @@ class Site:
             raise MeasurementError(f"site {self.name!r}: latitude_deg {self.latitude_deg} is outside [-90, 90]")
         if not -360.0 <= self.longitude_deg <= 360.0:
             raise MeasurementError(f"site {self.name!r}: longitude_deg {self.longitude_deg} is outside [-360, 360]")
-        if not -12_000.0 <= self.height_m <= 100_000.0:
-            raise MeasurementError(f"site {self.name!r}: height_m {self.height_m} is outside [-12000, 100000]")
+        if not MIN_HEIGHT_M <= self.height_m <= MAX_HEIGHT_M:
+            raise MeasurementError(f"site {self.name!r}: height_m {self.height_m} is outside "
+                                   f"[{MIN_HEIGHT_M:.0f}, {MAX_HEIGHT_M:.0f}]")
 
     def ecef_km(self) -> tuple[float, float, float]:
         """Earth-fixed (WGS84) position, km."""

@@ -15,6 +15,7 @@ import numpy as np
 from cistrack.interfaces.component import check_choice, check_range, check_sigma_arcsec
 from cistrack.errors import MeasurementError
 from cistrack.api import hookimpl
+from cistrack.astro.sites import MAX_HEIGHT_M, MIN_HEIGHT_M
 from cistrack.interfaces import Pass, Sensor
 from cistrack.interfaces.sensor import passes_from_mask
 from cistrack.model.measurement import MeasurementSet
@@ -83,7 +84,7 @@ class GroundTelescope(Sensor):
                  visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
-        self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
+        self.height_m = check_range(self, "height_m", height_m, MIN_HEIGHT_M, MAX_HEIGHT_M)
         self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         if not isinstance(measure_range, bool):
             self._fail("measure_range", measure_range, "must be true or false")

@@ -29,7 +29,7 @@ from cistrack.interfaces import Sensor
 from cistrack.model.measurement import MeasurementSet
 from cistrack.astro.observer import ObserverGeometry, neu_basis
 from cistrack.astro.ephemeris import DE421_YEARS, check_de421_epoch
-from cistrack.astro.sites import Site
+from cistrack.astro.sites import MAX_HEIGHT_M, MIN_HEIGHT_M, Site
 from cistrack.astro.sky import (SkyCorrections, apparent_azel, astrometric_radec, standard_pressure_hpa, unit_vectors_gcrs)
 from cistrack.units import ARCSEC_RAD, LU_KM, TU_S, VU_KMS, parse_utc
 
@@ -110,7 +110,7 @@ class RealTelescope(Sensor):
                  wavelength_um: float = 0.55, visibility: dict | None = None) -> None:
         self.latitude_deg = check_range(self, "latitude_deg", latitude_deg, -90.0, 90.0)
         self.longitude_deg = check_range(self, "longitude_deg", longitude_deg, -360.0, 360.0)
-        self.height_m = check_range(self, "height_m", height_m, -1_000.0, 100_000.0)
+        self.height_m = check_range(self, "height_m", height_m, MIN_HEIGHT_M, MAX_HEIGHT_M)
         self.measurement = check_choice(self, "measurement", measurement, _MEASUREMENTS)
         self.sigma_arcsec = check_sigma_arcsec(self, "sigma_arcsec", sigma_arcsec)
         self.measure_range = self._bool("measure_range", measure_range)

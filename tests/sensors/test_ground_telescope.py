@@ -278,3 +278,10 @@ def test_a_pickled_sensor_measures_as_the_original():
     x = np.array([[1.0221, 0.0, -0.1821, 0.0, -0.1033, 0.0]])
     s.measure(x, 0.3)
     assert np.array_equal(pickle.loads(pickle.dumps(s)).measure(x, 0.5), s.measure(x, 0.5))
+
+
+def test_the_sites_height_range_is_the_sensors():
+    """One range for a site's height wherever it is given ([-12000, 100000] m; bundled MPC sites reach -9254)."""
+    assert GroundTelescope(height_m=-11_000.0).height_m == -11_000.0
+    with pytest.raises(ParameterError, match="height_m"):
+        GroundTelescope(height_m=-12_001.0)

@@ -166,3 +166,15 @@ def test_the_real_sky_sensor_works_with_the_network_unreachable():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "offline-ok" in out.stdout
+
+
+def test_a_bundled_observatory_far_below_the_ellipsoid_is_a_valid_site_for_the_sensor():
+    """The site checks and the sensor share one height range: observatory 506's rounded parallax
+    constants put it 9,254 m below the ellipsoid, and predict --site 506 had failed on the sensor's
+    narrower [-1000, 100000]."""
+    from cistrack.astro.sites import observatory
+
+    site = observatory("506")
+    sensor = RealTelescope(latitude_deg=site.latitude_deg, longitude_deg=site.longitude_deg, height_m=site.height_m)
+    assert sensor.height_m == site.height_m < -9000.0
+
