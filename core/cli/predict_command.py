@@ -103,6 +103,9 @@ def _times(args, orbit) -> np.ndarray:
                     "the directory does not hold an orbit cistrack can predict: fit the observations again")
     _check_year("--start", start)
     stop = args.stop or start + timedelta(days=1)
+    if args.stop is None:  # not given: say which time it is, and how to move it
+        _check_year("the default --stop (one day after --start)", stop, "give an earlier --start or an explicit --stop",
+                    shown=units.format_utc(stop)[:16] + "Z")
     _check_year("--stop", stop)
     if stop < start:
         raise ConfigError(f"--stop {units.format_utc(stop)[:19]}Z is before --start {units.format_utc(start)[:19]}Z")
@@ -206,14 +209,16 @@ def _epoch_field(run_dir) -> str:
     return "fit.json epoch_utc" if is_fit_directory(run_dir) else "the run's last estimate"
 
 
-def _check_year(option: str, t, advice: str = "give a time within them") -> None:
-    """Refuse a prediction time outside the years of the DE421 ephemeris the sky positions need,
-    naming ``option`` (what gave the time) and ending with ``advice``."""
+def _check_year(option: str, t, advice: str = "give a time within them", shown: str | None = None) -> None:
+    """Refuse a prediction time ``t`` (UTC datetime) outside the years of the DE421 ephemeris the sky
+    positions need, naming ``option`` (what gave the time), showing ``shown`` (default its date) and
+    ending with ``advice``."""
     from cistrack.errors import ConfigError
     from cistrack.fitting.sky_ephemeris import FIRST_YEAR, LAST_YEAR
 
     if not FIRST_YEAR <= t.year <= LAST_YEAR:
-        raise ConfigError(f"{option} {t.year:04d}-{t.month:02d}-{t.day:02d}: sky predictions need the DE421 "
+        shown = shown or f"{t.year:04d}-{t.month:02d}-{t.day:02d}"
+        raise ConfigError(f"{option} {shown}: sky predictions need the DE421 "
                           f"ephemeris, which covers the years {FIRST_YEAR} to {LAST_YEAR}; {advice}")
 
 

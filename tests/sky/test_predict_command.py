@@ -25,6 +25,21 @@ def test_bad_option_values_are_refused_by_the_parser(tmp_path, capsys, option, v
     assert exc.value.code == 2 and option in capsys.readouterr().err
 
 
+def test_a_default_stop_beyond_de421_is_named_as_the_default_with_its_time():
+    """--start 2052-12-31T12:00Z alone had been refused as '--stop 2053-01-01', an option not given."""
+    from types import SimpleNamespace
+
+    from cistrack import units
+    from cistrack.cli.predict_command import _times
+    from cistrack.errors import ConfigError
+
+    args = SimpleNamespace(run="fit", start=units.parse_utc("2052-12-31T12:00:00Z"), stop=None, step=60.0)
+    with pytest.raises(ConfigError) as err:
+        _times(args, orbit=None)
+    assert str(err.value).startswith("the default --stop (one day after --start) 2053-01-01T12:00Z:")
+    assert "give an earlier --start or an explicit --stop" in str(err.value)
+
+
 @pytest.mark.parametrize("value", ["0.0001", "0.0166"])
 def test_a_step_under_the_second_the_times_are_written_to_is_refused(tmp_path, capsys, value):
     """0.0001 minutes had written 10,001 rows under 61 distinct (rounded) time stamps."""
