@@ -322,10 +322,14 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
 
 
 def _check_step_option(format: str, step: int | None) -> None:
-    """Refuse ``--step`` for an exporter that writes every step (it has no ``step`` parameter)."""
+    """Refuse a ``--step`` below -1 (-1: the last step), and any ``--step`` for an exporter that writes
+    every step (it has no ``step`` parameter)."""
     from cistrack.interfaces.component import param_specs
     from cistrack.plugin.registry import default_registry
 
+    if step is not None and step < -1:
+        raise ConfigError(f"--step {step}: give a step number of the run, 0 or more, or -1 for the last step "
+                          "(the default)")
     reg = default_registry()
     if step is None or format not in reg.names("exporter"):
         return  # an unknown --format is refused by name where the exporter is made
@@ -491,7 +495,8 @@ def build_parser() -> argparse.ArgumentParser:
     ex.add_argument("run", help="a run directory (written by 'cistrack run --out DIR')")
     ex.add_argument("--format", default="oem", help="a registered exporter: oem (default) or opm (either case)")
     ex.add_argument("--out", type=path_text("--out"), default=None, help="file to write (default RUN/estimate.<format>)")
-    ex.add_argument("--step", type=int, default=None, help="opm: the step to write (default the last)")
+    ex.add_argument("--step", type=int, default=None, help="opm: the step number to write, from 0; -1 or none: the "
+                    "last step")
     ex.add_argument("--overwrite", action="store_true", help="replace an existing --out file, or a different export "
                     "(other --step, --predict) in the default RUN/estimate.<format>, or write into the folder of another "
                     "run, fit or study (refused otherwise)")

@@ -220,3 +220,12 @@ def test_export_run_from_python_names_its_keywords_when_the_path_exists(run_dir,
     with pytest.raises(ConfigError, match=r"path='.*taken.oem': already exists; give another file, or pass "
                                           r"overwrite=True"):
         export_run(out, "oem", tmp_path / "taken.oem")
+
+
+def test_a_step_below_minus_one_is_refused_naming_step_and_what_it_takes(run_copy, capsys):
+    """--step -5 had been refused as "exporter 'opm': parameter 'step' = -5 ... must be >= -1"."""
+    from cistrack.cli.main import main
+    assert main(["export", str(run_copy), "--format", "opm", "--step", "-5", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "--step -5: give a step number of the run, 0 or more, or -1 for the last step" in err
+    assert "parameter 'step'" not in err
