@@ -40,7 +40,7 @@ from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.strict_json import finite_or_null
 
 __all__ = ["write_fit_outputs", "read_fit_record", "UNDEFINED_NUMBERS", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
-           "area_to_mass_record", "area_to_mass_summary"]
+           "area_to_mass_record", "area_to_mass_summary", "outputs_text"]
 
 FIT_RECORD = "fit.json"
 RESIDUALS = "residuals.csv"
@@ -272,6 +272,15 @@ def write_fit_outputs(one, obs) -> list[Path]:
                             f"was written, so {d} does not hold a finished fit: make room and run "
                             "'cistrack fit' again") from None
     return written
+
+
+def outputs_text(one) -> str:
+    """The files :func:`write_fit_outputs` writes for ``one``, in words ("fit.json" alone when the fit
+    has no orbit: no residuals, plots or line of variations)."""
+    names = [RESIDUALS, "the residual plots"] if one.result is not None else []
+    names += [LOV] if one.result is not None and one.lov else []
+    names = [FIT_RECORD, *names]
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
 def _artefacts(one, obs, d: Path) -> list[tuple[Path, Callable[[Path], list[Path]]]]:

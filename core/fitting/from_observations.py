@@ -967,13 +967,13 @@ def _refuse_unconfined(one: ObjectFit) -> None:
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
-    from cistrack.fitting.fit_record import write_fit_outputs
+    from cistrack.fitting.fit_record import outputs_text, write_fit_outputs
 
     _refuse_not_cislunar(one)
     _refuse_unconfined(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
     _follow_line(one, job)
-    job.say(f"{obs.designation}: writing fit.json, residuals.csv and the residual plots to {one.directory}")
+    job.say(f"{obs.designation}: writing {outputs_text(one)} to {one.directory}")
     write_fit_outputs(one, obs)
     return one

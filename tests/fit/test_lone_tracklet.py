@@ -79,6 +79,16 @@ def test_one_tracklet_is_reported_undetermined(tmp_path, n):
     assert f"{lo:,.0f}" in out and f"{hi:,.0f}" in out
 
 
+def test_the_log_says_only_fit_json_is_written(tmp_path, capsys):
+    """It had said "writing fit.json, residuals.csv and the residual plots", and wrote fit.json alone."""
+    f = tmp_path / "lone.psv"
+    f.write_text(HEADER + "\n".join(ROWS[:3]) + "\n")
+    assert main(["fit", str(f), "--out", str(tmp_path / "out")]) == 3
+    said = capsys.readouterr()
+    assert f"writing fit.json to {tmp_path / 'out'}" in said.out + said.err
+    assert not (tmp_path / "out" / "residuals.csv").exists()
+
+
 def test_a_refused_export_names_the_reason(tmp_path):
     rc, _out, _rec = _fit(tmp_path, ROWS)
     assert rc == 3
