@@ -52,6 +52,7 @@ import numpy as np
 from cistrack import units
 from cistrack.fitting.residual_ladder import fitted_dynamics
 from cistrack.least_squares.measurement_model import MeasurementModel
+from cistrack.least_squares.observability import condition_text
 from cistrack.least_squares.result import sigma_factor
 from cistrack.least_squares.trajectory import arc_states_and_stms
 from cistrack.model.measurement import MeasurementSet
@@ -289,7 +290,7 @@ def determination(fit, dynamics, sensor, measurements: MeasurementSet,
     if cov_days < days:
         parts.append(_covariance_words(cov_days))
     if fit.unobservable:
-        parts.append(f"condition number {fit.condition_number:.3g}")
+        parts.append(condition_text(fit.condition_number))
     sentence = ("poorly determined: " if poor else "well determined: ") + "; ".join(parts)
     return Determination(not poor, sentence, sessions, sites, arc_days, rng_km, sigma, days, note,
                          float(fit.condition_number), cov_days)

@@ -127,6 +127,7 @@ def summary_lines(one) -> list[str]:
     """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
     from cistrack import units
     from cistrack.fitting.fit_record import area_to_mass_summary
+    from cistrack.least_squares.observability import condition_text
 
     if getattr(one, "undetermined", None):
         return _undetermined_lines(one)
@@ -145,8 +146,8 @@ def summary_lines(one) -> list[str]:
     lines += _noise_lines(ms, r)
     sig = r.sigmas_km
     lines.append("  1-sigma at the fit epoch (synodic): position " + " / ".join(f"{v:.3g}" for v in sig[:3])
-                 + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; condition number "
-                 f"{r.condition_number:.3g}")
+                 + " km; velocity " + " / ".join(f"{1e5 * v:.3g}" for v in sig[3:]) + " cm/s; "
+                 + condition_text(r.condition_number))
     lines += area_to_mass_summary(r)
     if r.noise_scale > 1.0:
         lines.append(f"  the exported covariance is this one times the noise scale squared ({r.noise_scale ** 2:.3g}): "

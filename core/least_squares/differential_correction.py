@@ -30,7 +30,7 @@ from cistrack.astro.kept_by_time import kept_or_evaluated
 from cistrack.errors import MeasurementError, PropagationError, StateError
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.measurement_model import MeasurementModel
-from cistrack.least_squares.observability import observability
+from cistrack.least_squares.observability import condition_text, observability
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.outliers import update_rejections
 from cistrack.least_squares.progress import tell
@@ -400,8 +400,7 @@ def _covariance(n: np.ndarray, obs: Any) -> np.ndarray:
         cov = np.linalg.inv(np.linalg.cholesky(n / np.outer(d, d)))
         cov = (cov.T @ cov) / np.outer(d, d)
     except (np.linalg.LinAlgError, FloatingPointError):
-        raise FitError(f"fit: the normal matrix is not positive definite (condition number "
-                       f"{obs.condition:.3g}); the arc does not determine the direction "
+        raise FitError(f"fit: the normal matrix is not positive definite ({condition_text(obs.condition)}); the arc does not determine the direction "
                        f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s): "
                        "add observations over a longer arc or a prior") from None
     cov = 0.5 * (cov + cov.T)
@@ -417,7 +416,7 @@ def _unobservable_text(obs: Any, opts: FitOptions) -> str | None:
     ill_conditioned = obs.condition > opts.max_condition and not (sized and weak_km <= opts.min_weak_sigma_km)
     if not (ill_conditioned or weak_km > opts.max_weak_sigma_km):
         return None
-    return (f"the arc leaves a direction nearly unobservable: condition number {obs.condition:.3g} "
+    return (f"the arc leaves a direction nearly unobservable: {condition_text(obs.condition)} "
             f"(limit {opts.max_condition:.3g}), one sigma along the weakest direction "
             f"{np.array2string(obs.weakest_direction_km, precision=4)} (km, km/s), {weak_km:.4g} km in "
             f"position (limit {opts.max_weak_sigma_km:.4g} km); observe over a longer arc or add a prior")

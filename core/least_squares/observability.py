@@ -12,7 +12,7 @@ import numpy as np
 
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["Observability", "observability", "to_km", "km_apart"]
+__all__ = ["Observability", "observability", "to_km", "km_apart", "condition_text"]
 
 _KM = np.array([LU_KM] * 3 + [VU_KMS] * 3)
 
@@ -31,6 +31,13 @@ class Observability:
         self.condition = condition
         self.weakest_direction_km = weakest_direction_km
         self.eigenvalues = eigenvalues
+
+
+def condition_text(condition: float) -> str:
+    """"condition number 6.47e+03" (dimensionless), or in words when it is not finite: "singular
+    (no finite condition number)"; never "inf" or "nan"."""
+    c = float(condition)
+    return f"condition number {c:.3g}" if np.isfinite(c) else "singular (no finite condition number)"
 
 
 def km_apart(a: np.ndarray, b: np.ndarray) -> float:

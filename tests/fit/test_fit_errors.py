@@ -121,6 +121,16 @@ def test_an_unobservable_direction_with_no_information_is_refused():
         fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0)
 
 
+def test_a_singular_normal_matrix_is_called_singular_in_words_not_an_infinite_condition_number():
+    """The refusal had read "not positive definite (condition number inf)"."""
+    times = np.linspace(-1.0, 1.0, 5)
+    sen = _degenerate_sensor(0.0)
+    ms = sen.simulate(np.zeros((5, 6)), times, np.random.default_rng(1))
+    with pytest.raises(FitError, match=r"not positive definite \(singular \(no finite condition number\)\)") as err:
+        fit_orbit(FreeParticle(), sen, ms, np.zeros(6), 0.0)
+    assert "inf" not in str(err.value).replace("information", "")
+
+
 def test_a_fit_settling_far_above_the_noise_is_reported_as_not_converged():
     arc = cr3bp_arc()
     ms = arc.noisy(1)
