@@ -192,14 +192,27 @@ LOST_DEG = 10.0
 """A 3-sigma ellipse longer than this (degrees) says the orbit no longer gives the sky position."""
 
 
+WHOLE_SKY_DEG = 180.0
+"""A 3-sigma semi-axis longer than this (degrees) covers the whole sky: the table says so in words."""
+
+
 def _lost_note(sky) -> str:
-    """A note on the times whose 3-sigma ellipse is longer than :data:`LOST_DEG` ("" if none)."""
+    """A note on the times whose 3-sigma ellipse is longer than :data:`LOST_DEG` ("" if none), its
+    largest semi-major axis in degrees, or "the whole sky" beyond :data:`WHOLE_SKY_DEG`."""
     major = 3.0 * sky.ellipse()[0] / 3600.0
     lost = np.flatnonzero(~(major <= LOST_DEG))
     if lost.size == 0:
         return ""
+    most = np.nanmax(major)
+    upto = (f"up to {most:.3g} degrees" if most <= WHOLE_SKY_DEG else
+            f"up to the whole sky: semi-major axes beyond {WHOLE_SKY_DEG:g} degrees, the sky position unbounded")
     return (f"note: at {lost.size} of {major.size} times the 3-sigma ellipse is longer than {LOST_DEG:g} degrees "
-            f"(up to {np.nanmax(major):.3g}): the orbit does not give the sky position there")
+            f"({upto}): the orbit does not give the sky position there")
+
+
+def _axis_cell(arcsec: float) -> str:
+    """A 3-sigma semi-axis (arcsec) for the 9-character table column; "all sky" beyond :data:`WHOLE_SKY_DEG`."""
+    return f"{'all sky':>9}" if not arcsec <= WHOLE_SKY_DEG * 3600.0 else f"{arcsec:>9.3g}"
 
 
 def _epoch_field(run_dir) -> str:
@@ -260,8 +273,8 @@ def table_lines(sky) -> list[str]:
     for k, utc in enumerate(sky.utc):
         lines.append(f"{utc[:19]:<20}{sky.ra_deg[k]:>11.5f}{sky.dec_deg[k]:>10.5f}{sky.ra_rate_arcsec_min[k]:>9.2f}"
                      f"{sky.dec_rate_arcsec_min[k]:>9.2f}{sky.range_km[k]:>10.0f}{sky.elevation_deg[k]:>7.1f}"
-                     f"{sky.solar_elongation_deg[k]:>7.1f}{sky.lunar_distance_deg[k]:>7.1f}{3 * a[k]:>9.3g}"
-                     f"{3 * b[k]:>9.3g}{pa[k]:>6.0f}")
+                     f"{sky.solar_elongation_deg[k]:>7.1f}{sky.lunar_distance_deg[k]:>7.1f}{_axis_cell(3 * a[k])}"
+                     f"{_axis_cell(3 * b[k])}{pa[k]:>6.0f}")
     return lines
 
 

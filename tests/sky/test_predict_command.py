@@ -156,6 +156,34 @@ def test_times_far_from_the_fit_say_the_orbit_no_longer_gives_the_sky_position(f
     assert "3-sigma ellipse is longer than 10 degrees" in capsys.readouterr().out
 
 
+def _sky_with_major_axes(arcsec: list[float]):
+    """A stand-in sky ephemeris whose 1-sigma ellipses have these semi-major axes (arcsec)."""
+    from types import SimpleNamespace
+
+    a = np.asarray(arcsec, dtype=float)
+    return SimpleNamespace(ellipse=lambda: (a, a / 10.0, np.zeros_like(a)))
+
+
+def test_an_ellipse_beyond_the_sky_is_told_as_the_whole_sky_with_no_number_of_degrees():
+    """Six years before the arc the note had read "longer than 10 degrees (up to 1.55e+06)", with no unit."""
+    from cistrack.cli.predict_command import _lost_note
+
+    note = _lost_note(_sky_with_major_axes([1.86e9, 60.0]))
+    assert "up to the whole sky: semi-major axes beyond 180 degrees" in note and "e+06" not in note
+
+
+def test_an_ellipse_within_the_sky_gives_its_length_in_degrees():
+    from cistrack.cli.predict_command import _lost_note
+
+    assert "(up to 45 degrees)" in _lost_note(_sky_with_major_axes([15.0 * 3600.0, 60.0]))
+
+
+def test_the_table_shows_all_sky_for_an_axis_beyond_180_degrees():
+    from cistrack.cli.predict_command import _axis_cell
+
+    assert _axis_cell(5.58e9) == "  all sky" and _axis_cell(5.99e3) == " 5.99e+03"
+
+
 @pytest.mark.parametrize("prefix, replaced", [("residuals", "residuals.csv"), ("residuals-711", "residuals-711.png"),
                                               ("steps/x", "steps/x.csv"), ("fit", None)])
 def test_an_out_prefix_over_the_fits_own_results_is_refused(fitted, tmp_path, capsys, prefix, replaced):
