@@ -109,7 +109,7 @@ def _positive_mb(text: str) -> float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of MB") from None
     if not (v > 0 and v != float("inf")):
-        raise argparse.ArgumentTypeError(f"{text!r}: give a number of MB > 0")
+        raise argparse.ArgumentTypeError(f"{text!r}: give a finite number of MB > 0")
     return v
 
 

@@ -112,7 +112,7 @@ def max_file_mb() -> float:
     except ValueError:
         value = float("nan")
     if not (value > 0 and math.isfinite(value)):
-        raise ConfigError(f"environment variable {MAX_FILE_MB_ENV}={text!r}: must be a positive number of MB "
+        raise ConfigError(f"environment variable {MAX_FILE_MB_ENV}={text!r}: must be a finite, positive number of MB "
                           f"(default {MAX_FILE_MB:g})")
     return value
 

@@ -128,5 +128,16 @@ def test_a_file_just_over_the_limit_shows_a_size_that_differs_from_it(tmp_path, 
 
 def test_a_limit_that_is_not_a_positive_number_is_refused_naming_the_variable(tmp_path, monkeypatch):
     monkeypatch.setenv(MAX_FILE_MB_ENV, "lots")
-    with pytest.raises(ConfigError, match="CISTRACK_MAX_FILE_MB='lots': must be a positive number"):
+    with pytest.raises(ConfigError, match="CISTRACK_MAX_FILE_MB='lots': must be a finite, positive number"):
         read_object_observations([DATA / "observations.psv"], default_registry())
+
+
+def test_an_infinite_limit_is_refused_as_not_finite(tmp_path, monkeypatch, capsys):
+    """inf had been refused as if it were not positive ("give a number of MB > 0")."""
+    monkeypatch.setenv(MAX_FILE_MB_ENV, "inf")
+    with pytest.raises(ConfigError, match="CISTRACK_MAX_FILE_MB='inf': must be a finite, positive number of MB"):
+        read_object_observations([DATA / "observations.psv"], default_registry())
+    monkeypatch.delenv(MAX_FILE_MB_ENV)
+    with pytest.raises(SystemExit):
+        main(["fit", str(DATA / "observations.psv"), "--out", str(tmp_path / "fit"), "--max-file-mb", "inf"])
+    assert "'inf': give a finite number of MB > 0" in capsys.readouterr().err
