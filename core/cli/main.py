@@ -29,6 +29,7 @@ from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
+from cistrack.cli.suggesting_parser import SuggestingParser, closest_choice
 from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
 from cistrack.cli.text_width import for_stream as _for_stream
 from cistrack.runs.progress import eprint as _eprint
@@ -303,8 +304,6 @@ def _check_param_names(reg, name: str, kind: str | None, params: dict) -> None:
 
 def _describe(reg, name: str, kinds: list[str]) -> int:
     """``cistrack plugins NAME``: every parameter of each component called NAME."""
-    import difflib
-
     from cistrack.interfaces import KINDS
     from cistrack.plugin.param_docs import describe_component
 
@@ -314,8 +313,8 @@ def _describe(reg, name: str, kinds: list[str]) -> int:
     if not found:
         every = sorted({n for kind in kinds for n in reg.names(kind)})
         msg = f"no component named {name!r}"
-        close = difflib.get_close_matches(name, every, n=1, cutoff=0.5)
-        msg += f"; did you mean {close[0]!r}?" if close else f"; components: {', '.join(every)}"
+        close = closest_choice(name, every)
+        msg += f"; did you mean {close!r}?" if close else f"; components: {', '.join(every)}"
         raise ConfigError(msg + " (cistrack plugins lists them all)")
     print(wrap_lines("\n\n".join(describe_component(e.kind, e.name, e.factory, e.source) for e in found)))
     return 0
@@ -460,7 +459,7 @@ def build_parser() -> argparse.ArgumentParser:
     from cistrack import __version__
     from cistrack.cli.option_types import count, path_text, port
 
-    p = argparse.ArgumentParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
+    p = SuggestingParser(prog="cistrack", description="Probabilistic IOD and OD in cislunar space.")
     p.add_argument("--version", action="version", version=f"cistrack {__version__}")
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="run a scenario (default: the built-in 'example-1')")

@@ -38,3 +38,16 @@ def test_a_component_that_cannot_be_built_is_told_the_command_lines_option(capsy
     out = capsys.readouterr().out
     assert 'cistrack plugins --check rerun --param path="out.rrd"' in " ".join(out.split())
     assert "check_plugin(" not in out and "check_registered(" not in out
+
+
+def test_a_component_name_in_another_case_gets_did_you_mean(capsys):
+    """`plugins PGM` had listed all 60 components, though `plugins pgn` got "did you mean 'pgm'?"."""
+    assert main(["plugins", "PGM"]) == 2
+    assert "no component named 'PGM'; did you mean 'pgm'?" in capsys.readouterr().err
+
+
+def test_a_mistyped_subcommand_gets_did_you_mean(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["fitt", "x"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and "invalid choice: 'fitt'" in err and err.rstrip().endswith("did you mean 'fit'?")
