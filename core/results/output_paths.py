@@ -27,7 +27,8 @@ from pathlib import Path
 from cistrack.errors import ConfigError
 
 __all__ = ["check_output_dir", "check_study_dir", "held_results", "recorded_study", "is_same_study", "check_writable_dir", "make_writable_dir", "clear_earlier_results", "EARLIER_RESULTS",
-           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems"]
+           "STUDY_RECORD", "STUDY_LOCK", "STUDY_RUNS_LOCK", "RUN_LOCK", "FIT_LOCK", "FIT_STARTED", "PART_FOLDERS", "distinct_stems",
+           "fit_folders_inside"]
 
 EARLIER_RESULTS = ("estimate.*", "fit.json", "residuals.csv", "residuals-*.png", "residuals-*.svg", "lov.csv",
                    "sky-*.csv", "sky-*.png", "residuals.svg")
@@ -84,10 +85,16 @@ def check_output_dir(directory: str | Path, where: str, records: tuple[str, ...]
     return _create_writable(d, where)
 
 
+def fit_folders_inside(d: str | Path, pattern: str) -> list[str]:
+    """The names, sorted, of ``d``'s folders matching ``pattern`` (``fit-*``: one per object;
+    ``arc-*``: one per arc of ``fit.arcs=each``) that hold a fit record cistrack wrote."""
+    return sorted(p.name for p in Path(d).glob(pattern) if _is_cistrack_record(p / "fit.json"))
+
+
 def _several_fits_hint(d: Path, where: str) -> str:
     """What to give instead when ``d`` holds the fits of several objects (``fit-<designation>``
     folders, each with its fit.json), "" otherwise."""
-    fits = sorted(p.name for p in d.glob("fit-*") if _is_cistrack_record(p / "fit.json"))
+    fits = fit_folders_inside(d, "fit-*")
     if not fits:
         return ""
     shown = ", ".join(fits[:4]) + (f" and {len(fits) - 4} more" if len(fits) > 4 else "")

@@ -50,6 +50,21 @@ def _fit_begun(d: Path) -> str:
             "there is no orbit yet; run 'cistrack fit' into it again")
 
 
+def _not_a_run(d: Path, advice: str) -> str:
+    """Why ``d`` is not a run directory (no scenario), ending with ``advice``; when it holds fits one
+    folder each (several objects: ``fit-*``; ``fit.arcs=each``: ``arc-*``) it names them instead."""
+    from cistrack.results.output_paths import fit_folders_inside
+
+    for pattern, what in (("arc-*", "one fit per arc (fit.arcs=each)"), ("fit-*", "the fits of several objects")):
+        fits = fit_folders_inside(d, pattern) if d.is_dir() else []
+        if fits:
+            shown = ", ".join(fits[:4]) + (f" and {len(fits) - 4} more" if len(fits) > 4 else "")
+            return (f"{d}: holds {what}, one folder each ({shown}), not one orbit: give one of them, "
+                    f"e.g. {d / fits[-1]}")
+    return _fit_begun(d) or f"{d}: not a cistrack run directory (" + (
+        "no scenario.toml" if d.is_dir() else "no such directory") + f"); {advice}"
+
+
 def _scenario_of(run_dir: Path, reg: Registry):
     from cistrack.scenario.loading import parse_scenario, recorded_scenario
     toml_path, json_path = run_dir / "scenario.toml", run_dir / "scenario.json"
@@ -58,8 +73,7 @@ def _scenario_of(run_dir: Path, reg: Registry):
     if json_path.exists():
         raw = json.loads(json_path.read_text())
     else:
-        raise ConfigError(_fit_begun(run_dir) or f"{run_dir}: not a cistrack run directory (no scenario.toml); run "
-                          "'cistrack run ... --out DIR' first")
+        raise ConfigError(_not_a_run(run_dir, "run 'cistrack run ... --out DIR' first"))
     return parse_scenario(raw, str(toml_path), reg)
 
 
@@ -138,8 +152,7 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
                           f"{words.overwrite} to replace it")
     d = Path(run_dir)
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
-        raise ConfigError(_fit_begun(d) or f"{d}: not a cistrack run directory (" + ("no scenario.toml" if d.is_dir()
-                          else "no such directory") + "); give the --out directory of a 'cistrack run'")
+        raise ConfigError(_not_a_run(d, "give the --out directory of a 'cistrack run'"))
     _check_not_being_replaced(d)
     stamp = results_stamp(d)
     refusal = export_refusal(d)

@@ -102,3 +102,15 @@ def test_the_december_nights_are_fitted_and_called_poorly_determined(each):
     rec = json.loads((each[0] / "arc-2025-12-21" / "fit.json").read_text())
     assert rec["converged"] is True and rec["n_used"] + rec["n_rejected"] == 12
     assert rec["determination"]["sentence"].startswith("poorly determined")
+
+
+@pytest.mark.parametrize("command", [["export"], ["predict", "--site", "568"]])
+def test_export_or_predict_of_the_folder_of_each_arc_names_the_arc_folders(tmp_path, capsys, command):
+    """The --out of fit.arcs=each had been refused as "not a cistrack run directory (no scenario.toml)"."""
+    for name in ("arc-2026-03-01", "arc-2029-03-01"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "fit.json").write_text(json.dumps({"format": "cistrack-fit"}))
+    assert main([command[0], str(tmp_path), *command[1:]]) == 2
+    err = capsys.readouterr().err
+    assert "holds one fit per arc (fit.arcs=each), one folder each (arc-2026-03-01, arc-2029-03-01)" in err
+    assert f"e.g. {tmp_path / 'arc-2029-03-01'}" in err and "scenario.toml" not in err
