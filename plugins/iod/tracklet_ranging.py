@@ -279,17 +279,30 @@ class TrackletRangingIOD(IODMethod):
             raise IODError(f"{who}: needs observations at {self.min_tracklet} or more distinct times (one "
                            f"observation per time is used); these are at {n_times} time{'s' * (n_times != 1)}")
         sites = np.array([ms.site_at(i) for i in range(len(ms))])
-        groups = [g for g in split_tracklets(ms.times, sites, self.gap_hours) if g.size >= 2]
-        atts = [attributable(ms, sensor, g) for g in groups]
+        every = split_tracklets(ms.times, sites, self.gap_hours)
+        atts = [attributable(ms, sensor, g) for g in every if g.size >= 2]
         order = [k for k in sorted(range(len(atts)), key=lambda k: self._seed_rank(atts, k))
                  if atts[k].indices.size >= self.min_tracklet]
         if not order:
-            raise IODError(f"{who}: no tracklet has {self.min_tracklet} observations (tracklets: "
-                           f"{[int(a.indices.size) for a in atts]}; a gap over {self.gap_hours:g} h or a site "
-                           "change ends one); lower min_tracklet or observe longer", settings=("min_tracklet",))
+            raise self._no_seed(who, [int(g.size) for g in every])
         if len(atts) == 1:
             return self._lone(atts[0], rng)
         return self._ranged(self._model(sensor), sensor, ms, atts, order, rng, who)
+
+    def _no_seed(self, who: str, sizes: list[int]) -> IODError:
+        """The error when no tracklet (of ``sizes`` observations each) has ``min_tracklet``: their
+        sizes in words, and advice that can be followed (min_tracklet is lowered only above 2)."""
+        counts = sorted(set(sizes), reverse=True)
+        obs = [f"{n} observation{'s' * (n != 1)}" for n in counts]
+        told = (f"{len(sizes)} tracklet{'s' * (len(sizes) != 1)}, " + ("each of " * (len(sizes) > 1)) + obs[0]
+                if len(counts) == 1 else f"{len(sizes)} tracklets: "
+                + ", ".join(f"{sizes.count(n)} of {o}" for n, o in zip(counts, obs)))
+        head = (f"{who}: no tracklet has {self.min_tracklet} observations ({told}; a gap over "
+                f"{self.gap_hours:g} h or a site change ends one)")
+        if self.min_tracklet > 2:
+            return IODError(f"{head}; lower min_tracklet or observe longer", settings=("min_tracklet",))
+        return IODError(f"{head}; observe longer: a seed needs {self.min_tracklet} observations of one site within "
+                        f"{self.gap_hours:g} h of each other")
 
     def _seed_trials(self, atts: list[Attributable], order: list[int]):
         """(options, seed, scoring tracklets, whether only the near ones) in the order :meth:`_first_seed` tries them: the first

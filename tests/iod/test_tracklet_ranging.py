@@ -116,6 +116,23 @@ def test_too_short_tracklets_are_refused(dro):
         iod.estimate(ms, sensor, np.random.default_rng(1))
 
 
+def test_the_refusal_counts_every_tracklet_and_offers_to_lower_min_tracklet_above_its_minimum(dro):
+    """Three 4-exposure tracklets had been listed as "tracklets: [4, 4, 4]"; one-exposure ones as "[]"."""
+    dyn, sensor, _, ms, _ = dro
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, min_tracklet=5)
+    with pytest.raises(IODError, match=r"\(3 tracklets, each of 4 observations; .*\); lower min_tracklet or observe longer$"):
+        iod.estimate(ms, sensor, np.random.default_rng(1))
+
+
+def test_one_exposure_tracklets_are_counted_and_the_advice_is_to_observe_longer_at_the_minimum(dro):
+    dyn, sensor, _, ms, _ = dro
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, min_tracklet=2)
+    with pytest.raises(IODError, match=r"\(3 tracklets, each of 1 observation; .*\); observe longer: a seed needs 2 "
+                                       r"observations of one site within 1.5 h") as err:
+        iod.estimate(ms.subset(np.array([0, 4, 8])), sensor, np.random.default_rng(1))
+    assert "lower min_tracklet" not in str(err.value) and err.value.settings == ()
+
+
 def test_parameters_are_checked():
     reg = default_registry()
     with pytest.raises(Exception, match="arc"):
