@@ -215,8 +215,14 @@ class GaussIOD(IODMethod):
         Particles wanted.
     max_oversampling : float
         Give up after drawing this multiple of n_particles when samples have no valid root.
-    pass_gap_hours, fit_fraction, min_fit, max_fit : as for the kinematic fit; Gauss uses the
+    pass_gap_hours : float
+        A gap between measurements longer than this ends the first pass, hours (as for the
+        kinematic fit).
+    fit_fraction : float
+        Fraction of the first pass's measurements in the window (the earliest ones); Gauss uses the
         first, middle and last measurement of that window.
+    min_fit, max_fit : int
+        Bounds on the number of measurements in the window.
     mu : float
         Mass ratio of the synodic frame (the Earth's GM is 1 - mu in LU^3/TU^2).
     """

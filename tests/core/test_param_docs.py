@@ -57,6 +57,15 @@ def test_every_builtin_parameter_has_a_whole_plain_meaning(entry):
         assert not re.search(r"``|:[a-z]+:`|`", p.meaning), f"{entry.name}.{p.name}: markup left in"
 
 
+def test_gauss_describes_each_window_parameter_in_full():
+    """Each had read only "first, middle and last measurement of that window.": the words on the
+    grouped names' line stood where numpydoc puts the type, which the parser rightly skips."""
+    meaning = {p.name: p.meaning for p in param_docs(REG.get("iod", "gauss").factory)}
+    assert meaning["pass_gap_hours"].startswith("A gap between measurements longer than this ends the first pass")
+    assert meaning["fit_fraction"].startswith("Fraction of the first pass's measurements")
+    assert meaning["min_fit"] == meaning["max_fit"] == "Bounds on the number of measurements in the window."
+
+
 @pytest.mark.parametrize("entry", BUILTINS, ids=lambda e: f"{e.kind}-{e.name}")
 def test_the_listing_summary_is_a_whole_plain_sentence(entry):
     assert entry.summary.endswith((".", ")")), f"{entry.name}: {entry.summary!r} is cut"
