@@ -29,6 +29,7 @@ from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
 from cistrack.cli.signals import install_signal_handlers
+from cistrack.cli.plot_config import set_plot_config_dir
 from cistrack.cli.suggesting_parser import SuggestingParser, closest_choice
 from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
 from cistrack.cli.text_width import for_stream as _for_stream
@@ -533,6 +534,7 @@ def _configure_logging(quiet: bool) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    set_plot_config_dir()  # before any plot is drawn: matplotlib reads it on import
     try:  # building the parser imports the commands' modules: a Ctrl-C may come while it does
         args = build_parser().parse_args(argv)
         _configure_logging(bool(getattr(args, "quiet", False)))

@@ -81,13 +81,19 @@ def kernel_cache_dir() -> Path:
     return base / "cistrack" / "kernels"
 
 
-def _home_is_blank() -> bool:
-    """The default cache would hang off ``$HOME``, and ``$HOME`` is set but empty (Python then takes
-    the root directory for the home)."""
+def _home_problem() -> str:
+    """Why the default cache, which hangs off ``$HOME``, has no home to go in ("" when it has, or
+    does not hang off it): ``$HOME`` set but empty (Python then takes the root directory for the
+    home), or naming a directory that does not exist (cistrack does not create a home)."""
     if os.environ.get("CISTRACK_KERNEL_DIR") or os.path.isabs(os.environ.get("XDG_CACHE_HOME", "")):
-        return False
+        return ""
     home = os.environ.get("HOME")
-    return home is not None and not home.strip()
+    if home is not None and not home.strip():
+        return ("the environment variable HOME is empty, so there is no home directory to keep the cache in (it "
+                "would have gone to /.cache)")
+    if home is not None and not os.path.lexists(home):
+        return f"the home directory HOME={home} does not exist, and cistrack does not create one"
+    return ""
 
 
 def secure_cache_dir(directory: Path | None = None) -> Path:
@@ -99,9 +105,9 @@ def secure_cache_dir(directory: Path | None = None) -> Path:
     """
     path = Path(directory) if directory is not None else kernel_cache_dir()
     where = f"kernel cache directory {path} (set CISTRACK_KERNEL_DIR to choose another)"
-    if directory is None and _home_is_blank():
-        raise OSError(errno.ENOENT, "the environment variable HOME is empty, so there is no home directory to keep "
-                      "the cache in (it would have gone to /.cache)")
+    problem = _home_problem() if directory is None else ""
+    if problem:
+        raise OSError(errno.ENOENT, problem)
     if not path.exists():
         path.mkdir(mode=0o700, parents=True, exist_ok=True)
     st = path.stat()

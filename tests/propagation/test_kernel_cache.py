@@ -107,3 +107,27 @@ def test_an_empty_home_gives_no_cache_directory_rather_than_one_at_the_root(monk
     monkeypatch.setenv("HOME", "")
     with pytest.raises(OSError, match="HOME is empty"):
         secure_cache_dir()
+
+
+def test_a_home_that_does_not_exist_is_not_created_for_the_cache(monkeypatch, tmp_path):
+    """HOME=/nonexistent had made /nonexistent/.cache/cistrack/kernels (as root, a top-level folder)."""
+    from cistrack.propagation.kernels import secure_cache_dir
+
+    monkeypatch.delenv("CISTRACK_KERNEL_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path / "nonexistent"))
+    with pytest.raises(OSError, match="does not exist, and cistrack does not create one"):
+        secure_cache_dir()
+    assert not (tmp_path / "nonexistent").exists()
+
+
+def test_plots_keep_matplotlib_out_of_a_home_that_does_not_exist(monkeypatch, tmp_path):
+    """matplotlib had made $HOME/.config and $HOME/.cache, and for a HOME that is a file printed its
+    own "mkdir -p failed" and MPLCONFIGDIR advice."""
+    from cistrack.cli.plot_config import set_plot_config_dir
+
+    monkeypatch.setenv("MPLCONFIGDIR", "")  # unset for the call; restored after the test
+    monkeypatch.setenv("HOME", str(tmp_path / "nonexistent"))
+    set_plot_config_dir()
+    folder = os.environ["MPLCONFIGDIR"]
+    assert os.path.isdir(folder) and not folder.startswith(str(tmp_path / "nonexistent"))
