@@ -131,7 +131,7 @@ def add_fit_parser(sub, export_parser=None) -> None:
                    help="change a default (repeatable): a scenario key (filter.n_particles=8000), a reader "
                         "parameter (measurements.reader.sigma_arcsec=0.5) or a fit setting (fit.epoch=middle, "
                         "fit.reject_sigma=4)")
-    f.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
+    f.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors (the exit status tells the outcome)")
     f.add_argument("--overwrite", action="store_true",
                    help="replace a cistrack run's results or another object's fit in --out (an earlier fit "
                         "of the same object is always redone)")

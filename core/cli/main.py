@@ -481,7 +481,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                    help="override a scenario value, validated like the file (repeatable), "
                         "e.g. --set filter.n_particles=20000 --set duration_days=2")
-    r.add_argument("--quiet", action="store_true", help="print nothing but errors (the exit status tells the outcome)")
+    r.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors (the exit status tells the outcome)")
     r.set_defaults(func=cmd_run)
     pl = sub.add_parser("plugins", help="list registered components, describe one, or check one")
     pl.add_argument("name", nargs="?", default=None,

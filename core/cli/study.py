@@ -73,7 +73,7 @@ def add_study_parser(subparsers) -> None:
     sr.add_argument("--set", action="append", metavar="TABLE.KEY=VALUE",
                     help="override a value in every run (after the study's own overrides and variants), "
                          "validated like a scenario file; the default study directory names the settings")
-    sr.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    sr.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")
     sr.add_argument("--overwrite", action="store_true",
                     help="run again finished runs the study now plans otherwise (another scenario, settings, seed "
                          "or input file), replacing their results; refused without it")

@@ -122,6 +122,20 @@ def secure_cache_dir(directory: Path | None = None) -> Path:
     return path
 
 
+_WARNED: set[str] = set()
+
+
+def _warn_uncached(exc: OSError) -> None:
+    """Warn, once per process and cause, that the kernel cache directory cannot be used (``exc``
+    says why) and kernels are compiled in memory: each kernel compiled had repeated it."""
+    message = (f"cistrack: kernel cache directory {kernel_cache_dir()} is not usable ({exc}); compiling "
+               "propagation kernels in memory (set CISTRACK_KERNEL_DIR to a writable directory of yours to cache them)")
+    if message in _WARNED:
+        return
+    _WARNED.add(message)
+    warnings.warn(message, RuntimeWarning, stacklevel=3)
+
+
 def _importable_name(rhs: Any) -> tuple[str, str] | None:
     """(module, name) if ``rhs`` can be imported back as ``from module import name``."""
     func = getattr(rhs, "py_func", None)
@@ -216,10 +230,7 @@ def kernels_for(rhs: Any, dim: int = 6, body_motion: Any = None) -> ModuleType:
                 if not _numba_cached(path):
                     _announce_compile(f"{where[0]}.{where[1]}")
             except OSError as exc:  # unwritable home, read-only file system: compile in memory
-                warnings.warn(f"cistrack: kernel cache directory {kernel_cache_dir()} is not usable "
-                              f"({exc}); compiling propagation kernels in memory (set "
-                              "CISTRACK_KERNEL_DIR to a writable directory of yours to cache them)",
-                              RuntimeWarning, stacklevel=2)
+                _warn_uncached(exc)
         if mod is None:  # not importable or no writable directory: in memory
             body, names = _lanes_body(rhs)
             src = dop853_source.generate_source("", dim, cache=False, title="(in memory)",

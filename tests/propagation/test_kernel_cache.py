@@ -131,3 +131,15 @@ def test_plots_keep_matplotlib_out_of_a_home_that_does_not_exist(monkeypatch, tm
     set_plot_config_dir()
     folder = os.environ["MPLCONFIGDIR"]
     assert os.path.isdir(folder) and not folder.startswith(str(tmp_path / "nonexistent"))
+
+
+def test_an_unusable_cache_is_warned_about_once_per_cause():
+    """Each kernel compiled had repeated the warning: a fit printed it twice."""
+    import warnings
+
+    kernels._WARNED.clear()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(3):
+            kernels._warn_uncached(NotADirectoryError(20, "Not a directory", "/x/.cache"))
+    assert len(caught) == 1 and "compiling propagation kernels in memory" in str(caught[0].message)
