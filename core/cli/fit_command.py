@@ -14,8 +14,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import sys
 
-from cistrack.cli.text_width import wrap_lines
+from cistrack.cli.text_width import for_stream, wrap_lines
 from cistrack.fitting.fit_summary import summary_lines
 from cistrack.runs.progress import eprint as _eprint
 
@@ -70,6 +71,11 @@ def cmd_fit(args) -> int:
     return 0 if all(one.ok for one in results) else 3
 
 
+def _print_wrapped(line: str) -> None:
+    """Print one line of the export's log, within 120 columns when stdout is a terminal."""
+    print(for_stream(line, sys.stdout))
+
+
 def cmd_export_fit(args) -> int:
     """``cistrack export`` on a fit directory: the fitted orbit (see :mod:`cistrack.fitting.fit_export`)."""
     from cistrack.fitting.fit_export import export_fit
@@ -87,7 +93,7 @@ def cmd_export_fit(args) -> int:
     quiet = getattr(args, "quiet", False)
     out = export_fit(args.run, args.format, args.out, overwrite=args.overwrite, force=getattr(args, "force", False),
                      predict_days=getattr(args, "predict", None), words=CLI_EXPORT_WORDS,
-                     log=None if quiet else print, **params)
+                     log=None if quiet else _print_wrapped, **params)
     if not quiet:
         print(f"wrote {out}")
     return 0

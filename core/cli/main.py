@@ -609,9 +609,9 @@ def console_main() -> None:
 def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """How the command shows a Python warning: ``cistrack: warning: <message>`` on stderr (above a
     progress bar), without the source file and line that Python's default adds (they mean nothing
-    to a person running the command)."""
+    to a person running the command); within 120 columns when stderr is a terminal."""
     text = str(message)
-    _eprint(f"cistrack: warning: {text.removeprefix('cistrack: ')}")
+    _eprint(_for_stream(f"cistrack: warning: {text.removeprefix('cistrack: ')}", sys.stderr))
 
 
 class NamedOutput:

@@ -300,3 +300,27 @@ def test_predicts_notes_fit_within_120_columns_on_a_terminal(fit_dir, tmp_path, 
     out = capsys.readouterr().out
     assert "prediction times before" in " ".join(out.split())
     assert max(len(line) for line in out.splitlines()) <= 120
+
+
+def test_exports_notes_fit_within_120_columns_on_a_terminal(fit_dir, tmp_path, capsys, monkeypatch):
+    """export's notes past the fit's horizon had been single lines of 258 and 280 characters."""
+    import sys
+
+    from cistrack.cli.main import main
+
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    assert main(["export", str(fit_dir), "--format", "oem", "--predict", "30", "--out", str(tmp_path / "e.oem")]) == 0
+    out = capsys.readouterr().out
+    assert "note: " in out and max(len(line) for line in out.splitlines()) <= 120
+
+
+def test_a_warning_fits_within_120_columns_on_a_terminal(capsys, monkeypatch):
+    """A warning (the kernel cache's, lov.csv's) had been one line of up to 297 characters."""
+    import sys
+
+    from cistrack.cli.main import show_warning
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    show_warning(UserWarning("cistrack: " + "a long reason " * 20), UserWarning, "x.py", 1)
+    err = capsys.readouterr().err
+    assert err.startswith("cistrack: warning: a long reason") and max(len(line) for line in err.splitlines()) <= 120
