@@ -600,8 +600,9 @@ def _comments(record: dict[str, Any], name: str, opts: FitExportOptions, pred, u
     comments += _burn_comments(record, utc) if propagated else []
     if len(utc) > n_arc:
         days = 0.0 if opts.predict_days is None else opts.predict_days
-        comments.append(f"states after {utc[n_arc - 1][:19]}Z are predicted beyond the last observation "
-                        f"({days:g} days)")
+        comments.append(f"states after {arc['last_utc'][:19]}Z are predicted beyond the last observation (made at "
+                        f"that time): the grid runs {days:g} days past {utc[n_arc - 1][:19]}Z, its first state at or "
+                        f"after that observation, in whole {GRID_MINUTES:g}-minute steps, to {utc[-1][:19]}Z")
     return comments
 
 

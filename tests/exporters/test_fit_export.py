@@ -71,6 +71,18 @@ def test_predict_extends_the_grid_by_the_days_asked_with_growing_covariance(fit_
     assert "predicted beyond the last observation" in (tmp_path / "p.oem").read_text()
 
 
+def test_the_predicted_states_are_said_to_start_after_the_last_observation_itself(fit_dir, tmp_path):
+    """The COMMENT had named the arc's last grid state (up to 10 minutes after the last observation,
+    itself predicted) as where the prediction starts."""
+    import json
+
+    last = json.loads((fit_dir / "fit.json").read_text())["arc"]["last_utc"][:19]
+    text = (export_fit(fit_dir, "oem", tmp_path / "p.oem", predict_days=0.0001)).read_text()
+    comments = " ".join(line.removeprefix("COMMENT ") for line in text.splitlines() if line.startswith("COMMENT"))
+    assert f"states after {last}Z are predicted beyond the last observation (made at that time)" in comments
+    assert "in whole 10-minute steps" in comments
+
+
 def test_cli_export_of_a_fit_directory_writes_the_fitted_orbit(fit_dir, tmp_path, capsys):
     d = tmp_path / "copy"
     shutil.copytree(fit_dir, d)
