@@ -691,7 +691,7 @@ def _follow_line(one: ObjectFit, job: "_Job") -> None:
         if better is not None:
             job.say(f"{one.designation}: {better.messages[-1]}")
             one.result = better
-            _refuse_not_cislunar(one)
+            _refuse_unreportable(one)
             add_findings(one, job.registry, job.say)
             _note_rejected_epoch(one)
             one.lov = follow_line(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, opts, None) if one.ok else []
@@ -964,13 +964,20 @@ def _refuse_unconfined(one: ObjectFit) -> None:
         "stated uncertainties (ADES rmsRA/rmsDec, or the reader's sigma_arcsec) are too large to confine it",))
 
 
+def _refuse_unreportable(one: ObjectFit) -> None:
+    """The checks every fit reported passes, the first and one found along its line of variations
+    alike: an orbit within cislunar space (:func:`_refuse_not_cislunar`) that its observations
+    confine (:func:`_refuse_unconfined`)."""
+    _refuse_not_cislunar(one)
+    _refuse_unconfined(one)
+
+
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
     from cistrack.fitting.fit_record import outputs_text, write_fit_outputs
 
-    _refuse_not_cislunar(one)
-    _refuse_unconfined(one)
+    _refuse_unreportable(one)
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
     _follow_line(one, job)
