@@ -161,6 +161,7 @@ def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> Par
     if not isinstance(cloud, ParticleCloud):
         raise IODError(f"{who}: estimate() returned {type(cloud).__name__}, not a ParticleCloud (cistrack.api."
                        "ParticleCloud: (N, 6) states at the epoch of the last measurement it used)")
+    _check_cloud_states(cloud, who)
     times = np.asarray(measurements.times, dtype=float)
     if times.size == 0:
         return cloud
@@ -172,6 +173,18 @@ def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> Par
                        f"{units.tu_to_days(last):.3f} d); an IOD's cloud is at the epoch of the last measurement "
                        "it used")
     return cloud
+
+
+def _check_cloud_states(cloud: ParticleCloud, who: str) -> None:
+    """IODError naming ``who`` unless the cloud holds at least one state of 6 components, all finite:
+    the filter would otherwise be blamed for the IOD's cloud."""
+    n, d = cloud.states.shape
+    if d != 6 or n == 0:
+        raise IODError(f"{who}: estimate() returned a cloud with states of shape {cloud.states.shape}; a ParticleCloud "
+                       "holds (N, 6) synodic states, N >= 1")
+    bad = int(np.sum(~np.all(np.isfinite(cloud.states), axis=1)))
+    if bad:
+        raise IODError(f"{who}: estimate() returned a cloud whose states are not all finite ({bad} of {n} hold NaN or inf)")
 
 
 @contextmanager

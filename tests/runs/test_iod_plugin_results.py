@@ -17,7 +17,7 @@ from cistrack.scenario.loading import load_scenario
 class WrongIOD(IODMethod):
     """An IOD giving ``how`` instead of a cloud at the last measurement: "array" (its states as a
     bare array), "raise" (its own ZeroDivisionError), "late" (a cloud 1000 TU after the last
-    measurement)."""
+    measurement), "nan" (a cloud with a NaN state), "width" (states of 4 components)."""
 
     def __init__(self, how: str = "array") -> None:
         self.how = how
@@ -29,6 +29,11 @@ class WrongIOD(IODMethod):
             return states
         if self.how == "raise":
             raise ZeroDivisionError("division by zero in the plugin")
+        if self.how == "nan":
+            states[3, 2] = np.nan
+            return ParticleCloud(states, t)
+        if self.how == "width":
+            return ParticleCloud(states[:, :4], t)
         return ParticleCloud(states, t + 1000.0)
 
 
@@ -56,3 +61,10 @@ def test_an_iod_cloud_dated_after_its_measurements_is_an_iod_error_naming_it_and
                                        r"outside the 17 measurements it was given \(0\.816 d to 1\.991 d\); an IOD's "
                                        r"cloud is at the epoch of the last measurement it used$"):
         _run("late")
+
+
+@pytest.mark.parametrize("how, what", [("nan", r"whose states are not all finite \(1 of 100 hold NaN or inf\)"),
+                                       ("width", r"with states of shape \(100, 4\)")])
+def test_an_iod_cloud_the_filter_cannot_start_from_is_an_iod_error_naming_the_iod(how, what):
+    with pytest.raises(IODError, match=rf"^iod 'h-iod' \(hplug 0\.1\): estimate\(\) returned a cloud {what}"):
+        _run(how)
