@@ -39,7 +39,7 @@ from cistrack.runs.observers import (builtin_metrics, finish_observers, interrup
                                      metric_stage, notify, run_observers)
 from cistrack.runs.run_context import RunContext, RunOptions, Step
 from cistrack.runs.run_id import scenario_run_id
-from cistrack.runs.run_inputs import (estimate_iod, plan_measurement_times, read_scenario_observations,
+from cistrack.runs.run_inputs import (estimate_iod, in_table, plan_measurement_times, read_scenario_observations,
                                       simulate_measurements)
 from cistrack.evaluation.run_summary import RunSummary, summarize
 from cistrack.scenario.loading import Scenario
@@ -135,7 +135,8 @@ def _one_sensor(scenario, components, truth, grids, rngs, say):
     progress at t = 0 skipped), the schedule's times in them, noisy measurements at those times.
     ``components``: (sensor, schedule, registry); ``grids``: the truth's (times, states)."""
     (sensor, schedule, reg), (grid, grid_states) = components, grids
-    passes = sensor.passes(grid, grid_states)
+    with in_table(scenario, scenario.components["sensor"].where):  # its orbit's or site's own error names the table
+        passes = sensor.passes(grid, grid_states)
     skipped = ""
     if passes and passes[0].start <= grid[0] + 1e-12:
         # A pass already in progress at t = 0 is cut short; the target is acquired at its

@@ -108,3 +108,15 @@ def test_a_space_telescope_whose_orbit_hits_earth_is_named_by_its_file_and_table
                                           r"Earth at t = 0\.000 days") as info:
         prepare_run(scenario, seed=2)
     assert str(info.value).startswith(f"{scenario.source}: [sensors.dro2]: ")
+
+
+def test_a_lone_space_telescope_whose_orbit_hits_earth_is_named_by_its_file_and_table(tmp_path):
+    path = tmp_path / "one_space.toml"
+    path.write_text('name = "one-space"\nepoch = "2026-01-01T00:00:00Z"\nseed = 1\nduration_days = 2.0\n'
+                    '[truth]\norbit = "nrho-9-2"\n[dynamics]\nname = "cr3bp"\n'
+                    '[sensor]\nname = "space-telescope"\nstate_km = [0, 0, 0, 0, 0, 0]\nmeasure_range = true\n'
+                    '[schedule]\nname = "paper-example-1"\n[iod]\nname = "noisy-range"\nn_particles = 200\n'
+                    '[filter]\nname = "pgm"\nn_particles = 200\nn_components = 2\n')
+    with pytest.raises(ConfigError, match=r"\[sensor\]: sensor 'space-telescope': the observer's orbit hits Earth") as info:
+        prepare_run(load_scenario(str(path)), seed=2)
+    assert str(info.value).startswith(f"{path}: [sensor]: ")
