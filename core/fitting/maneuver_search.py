@@ -96,7 +96,7 @@ def add_maneuvers(one, say) -> None:
         return
     say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
         "(full fits in each night's gap)")
-    found, doubt = _times_allowed(ctx, one, found)
+    found, doubt = _times_allowed(ctx, one, found, say)
     if not doubt:
         say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
     fit, burns, failed = (None, [], "") if doubt else _completed(ctx, found)
@@ -110,21 +110,23 @@ def add_maneuvers(one, say) -> None:
     one.dynamics = flown(ctx.dynamics, burns)
     text = "; ".join(f"a burn of {m['delta_v_ms']:.3f} +- {m['delta_v_sigma_ms']:.3f} m/s at {m['t_burn_utc'][:16]}"
                      for m in one.maneuvers)
+    moves = [n for n in found.notes if n.startswith("the time check moved")]
     one.result = replace(_without_burns(fit), messages=tuple(fit.messages) + (
-        f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}",))
+        f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}",
+        *moves))
 
 
 def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def _times_allowed(ctx, one, found):
+def _times_allowed(ctx, one, found, say):
     """:func:`~cistrack.least_squares.burn_search.times_allowed` on the search's arc."""
     from cistrack.least_squares.burn_search import burn_fit_options, times_allowed
     from cistrack.least_squares.impulse_fit import BurnArc
 
     opts = burn_fit_options(replace(one.choices.options, area_to_mass="solve" if one.result.parameter_names else "off"))
-    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior), found)
+    return times_allowed(BurnArc(ctx.dynamics, ctx.sensor, ctx.measurements, opts, found.prior), found, say)
 
 
 def _burn_doubt(fit, burns) -> str:

@@ -25,6 +25,7 @@ nights, or between tracklets of one night):
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
@@ -36,13 +37,15 @@ from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.maneuvers import Impulse
 from cistrack.interfaces.sensor import Sensor
 from cistrack.least_squares.chi_square import chi2_ppf
-from cistrack.least_squares.errors import FitError
+from cistrack.least_squares.differential_correction import fit_orbit
+from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnArc, BurnEstimate, ImpulseFit, burn_evidence,
                                                 burn_time_profile, capped_cost, fit_impulse, fit_impulses,
                                                 screen_burn_times, with_time_uncertainty)
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
 from cistrack.model.measurement import MeasurementSet
+from cistrack.least_squares.trajectory import arc_states
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
@@ -473,39 +476,128 @@ def _trial_times(times: np.ndarray, window: tuple[float, float], taken: list[tup
     return out
 
 
-def times_allowed(arc: BurnArc, found: ManeuverSearch) -> tuple[ManeuverSearch, str]:
+def times_allowed(arc: BurnArc, found: ManeuverSearch,
+                  say: Callable[[str], None] = lambda m: None) -> tuple[ManeuverSearch, str]:
     """``found`` with each burn's time and delta-v uncertainty widened to reach the other times the
     arc allows as well, and "" ; or ``found`` and why its burn times are not the best, in words.
+    ``say`` is told of a move (below) before the second check.
 
     Times in each burn's gap and in every night's gap (:func:`_trial_times`) are fitted in full (the
     other burns held). Those whose fit costs at most :data:`ALLOWED_COST` more than the search's
     (c; the profile's three-sigma interval) and lie beyond three of the burn's time sigmas are
     allowed times, each m = max(2, sqrt(c)) sigmas away: the time sigma becomes the largest of
     distance / m, and the delta-v covariance takes d d^T / m^2, d the allowed fit's delta-v minus
-    the estimate's, for the d farthest in the estimate's covariance. A time whose fit costs more than
-    :data:`RIVAL_COST` less means the search did not find the burn's time. The profile about the
-    search's time can be a narrow minimum of several: an unseen survey set (0.5 m/s) had its burn
-    timed 4.4 hours early +- 11 minutes (z -24.7) between two tracklets of a night, a burn after the
-    night's last fitting as well; another (heo, seed 90) had its burn placed after the first night
-    at 3.2 m/s, time z -16.9, where a burn in the five-day gap holding the true one fitted with a
-    cost 29 lower. The burn is not moved to such a time: a fit from the search's state does not
-    reliably reach the true time's minimum (an unseen set moved so was reported clean at another
-    wrong time)."""
-    burns, times = list(found.burns), np.asarray(arc.measurements.times, dtype=float)
-    base = capped_cost(found.result, arc.prior)
+    the estimate's, for the d farthest in the estimate's covariance.
+
+    A time whose fit costs more than :data:`RIVAL_COST` less means the search did not find the
+    burn's time. The profile about the search's time can be a narrow minimum of several: an unseen
+    survey set (0.5 m/s) had its burn timed 4.4 hours early +- 11 minutes (z -24.7) between two
+    tracklets of a night, a burn after the night's last fitting as well; another (heo, seed 90) had
+    its burn placed after the first night at 3.2 m/s, time z -16.9, where a burn in the five-day
+    gap holding the true one fitted with a cost 29 lower. The burn is then moved there once
+    (:func:`_moved`: refitted at the time the linearised profile about that better fit gives in
+    its gap, its time's uncertainty measured again) and every burn is checked again from the moved
+    fit; a time clearly better than the moved burn's as well means the time is not determined (the
+    fit is not clean). A fit from the search's state does not reliably reach the true time's
+    minimum (a burn moved without the second check had an unseen survey set reported clean at
+    another wrong time)."""
+    times = np.asarray(arc.measurements.times, dtype=float)
+    checked, better = _checked(arc, found, times)
+    if better is None:
+        return checked, ""
+    told = _told(found, *better)
+    moved = _moved(arc, found, better, times)
+    if moved is None:
+        return found, f"{told}, and the fit with the burn moved there cannot be made: the burn's time is not determined"
+    k, kept = better[0], {b.t for i, b in enumerate(found.burns) if i != better[0]}
+    t_new = next(b.t for b in moved.burns if b.t not in kept)
+    there, alone = f"{_utc_days(t_new):.3f} d", _sides_undetermined(arc, moved, t_new)
+    if alone:
+        return found, f"{told}, and moved there {alone}: the burn's time is not determined"
+    say(f"{told}: the burn moved there, its time checked again")
+    again, still = _checked(arc, moved, times)
+    if still is not None:
+        return found, f"{told}; moved there, {_told(moved, *still, 'the moved one')}: the burn's time is not determined"
+    drop = capped_cost(found.result, arc.prior) - capped_cost(moved.result, arc.prior)
+    found.notes.append(f"the time check moved burn {k + 1} from {_utc_days(found.burns[k].t):.3f} d to {there} "
+                       f"(its fit's cost {drop:.1f} lower)")
+    return again, ""
+
+
+def _sides_undetermined(arc: BurnArc, moved: ManeuverSearch, tb: float) -> str:
+    """"" when the observations before the burn at ``tb`` (TU) and those after it, each fitted
+    alone as a ballistic arc from ``moved``'s orbit, converge with every direction observable; else
+    which side does not, in words. Where both sides determine their orbits, the burn's time and
+    delta-v are where those orbits meet, and the cost's profile over burn times has one clear
+    minimum; where one does not, the profile over a long gap can have several at delta-v of any
+    size (an unseen survey set's 0.5 m/s burn, two tracklets before it and three nights after, both
+    sides unobservable: moved to a time 11.8 cheaper, 0.83 m/s, 9 of its time sigmas early)."""
+    ms = arc.measurements
+    for side, sel, edge in (("before", ms.times < tb, -1), ("after", ms.times > tb, 0)):
+        sub = ms.subset(sel)
+        if sub.times.size == 0:
+            return f"no observation lies {side} it"
+        t0 = float(sub.times[edge])
+        try:
+            x = arc_states(moved.dynamics, moved.result.state, moved.result.epoch, np.array([t0]))[0]
+            with warnings.catch_warnings():  # the weak direction is this check's answer, not a warning
+                warnings.simplefilter("ignore", UnobservableWarning)
+                fit = fit_orbit(arc.dynamics, arc.sensor, sub, x, t0, options=arc.options)
+        except (FitError, PropagationError, np.linalg.LinAlgError) as exc:
+            return f"the {sub.times.size} observations {side} it cannot be fitted alone ({exc})"
+        if not fit.converged or fit.unobservable:
+            return (f"the {sub.times.size} observations {side} it do not determine an orbit alone "
+                    f"({'a direction unobservable' if fit.converged else 'their fit does not converge'})")
+    return ""
+
+
+def _told(found: ManeuverSearch, k: int, better: tuple[float, float, ImpulseFit], whose: str = "the search's") -> str:
+    """In words: burn ``k`` of ``found`` (``whose``) has a ``better`` (cost, time TU, fit) trial time."""
+    return (f"a burn at {_utc_days(better[1]):.3f} d fits the arc better than {whose} at "
+            f"{_utc_days(found.burns[k].t):.3f} d (its cost {-better[0]:.1f} lower)")
+
+
+def _checked(arc: BurnArc, found: ManeuverSearch, times: np.ndarray):
+    """(``found`` with its burns widened to the times allowed, None); or (``found``, (k, (cost,
+    time TU, fit))) for the first burn k that a trial time fits more than :data:`RIVAL_COST`
+    better."""
+    burns, base = list(found.burns), capped_cost(found.result, arc.prior)
     for k, (b, window) in enumerate(zip(found.burns, found.windows)):
-        allowed, why = _allowed_times(arc, found, (b, window), times, base)
-        if why:
-            return found, why
+        allowed, better = _allowed_times(arc, found, (b, window), times, base)
+        if better is not None:
+            return found, (k, better)
         if allowed:
             burns[k] = _widened(b, allowed)
-    return replace(found, burns=burns), ""
+    return replace(found, burns=burns), None
+
+
+def _moved(arc: BurnArc, found: ManeuverSearch, better: tuple[int, tuple[float, float, ImpulseFit]],
+           times: np.ndarray) -> ManeuverSearch | None:
+    """``found`` with burn k moved into the gap of its ``better`` trial (k, (cost, time TU, fit)):
+    fitted at that time and at the time the linearised profile about the trial's orbit gives in
+    its gap, the better kept, its time refined and measured (:func:`_add_burn`); None when no fit
+    can be made."""
+    k, (_, tb, trial) = better
+    window = next((w for w in _windows(times, []) if w[0] <= tb <= w[1]), None)
+    if window is None:
+        return None
+    others = [b for i, b in enumerate(found.burns) if i != k]
+    rest = ManeuverSearch(found.result, flown(arc.dynamics, others), others,
+                          [w for i, w in enumerate(found.windows) if i != k], found.notes, found.prior)
+    about = replace(found.result, state=trial.fit.state)
+    try:
+        t_p, t_sigma = burn_time_profile(replace(arc, dynamics=rest.dynamics), about, *window)
+        fit = fit_impulse(arc, trial.fit.state, trial.fit.epoch, np.unique([t_p, tb]), known=[b.t for b in others])
+    except (FitError, PropagationError, np.linalg.LinAlgError):
+        return None
+    return _add_burn(arc, rest, fit, window, t_sigma)
 
 
 def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate, tuple[float, float]],
-                   times: np.ndarray, base: float) -> tuple[list[tuple[float, np.ndarray, float]], str]:
+                   times: np.ndarray, base: float):
     """([(time TU, delta-v m/s (3,), sigmas away)] the arc allows for ``burn`` (estimate, gap) as
-    well, far from its time), ""; or ([], why) when a time fits clearly better (:func:`times_allowed`)."""
+    well, far from its time, None); or ([], (cost, time TU, fit)) of the trial time that fits best
+    when one fits more than :data:`RIVAL_COST` better (:func:`times_allowed`)."""
     b, window = burn
     others = [x.t for x in found.burns if x is not b]
     taken = [w for w in found.windows if w != window]
@@ -517,14 +609,13 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
             continue
         cost = capped_cost(one.fit, arc.prior) - base
         if cost < -RIVAL_COST and (best is None or cost < best[0]):
-            best = (cost, float(tb))
+            best = (cost, float(tb), one)
         if cost <= ALLOWED_COST and abs(tb - b.t) > 3.0 * b.t_sigma:
             allowed.append((float(tb), next(x.delta_v_ms for x in one.burns if x.t == float(tb)),
                             max(2.0, float(np.sqrt(max(cost, 0.0))))))
     if best is not None:
-        return [], (f"a burn at {_utc_days(best[1]):.3f} d fits the arc better than the search's at "
-                    f"{_utc_days(b.t):.3f} d (its cost {-best[0]:.1f} lower): the burn's time is not determined")
-    return allowed, ""
+        return [], best
+    return allowed, None
 
 
 def _widened(b: BurnEstimate, allowed: list[tuple[float, np.ndarray, float]]) -> BurnEstimate:

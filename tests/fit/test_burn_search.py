@@ -2,6 +2,8 @@
 nights: found in the right gap, its delta-v within 3 sigma, nothing found without a burn."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -115,3 +117,70 @@ def test_an_allowed_time_whose_fit_costs_c_more_lies_max_2_sqrt_c_sigmas_away(co
     assert m == pytest.approx(sigmas_away)
     assert w.t_sigma == pytest.approx(0.3 / sigmas_away) and w.widened
     assert w.covariance_ms2[0, 0] == pytest.approx(1e-4 + (0.3 / sigmas_away) ** 2)
+
+
+def _placed_a_night_early(b):
+    """A search's burn put (fitted in full) in the night's gap before the one holding the burn."""
+    from cistrack import units
+    from cistrack.least_squares.burn_search import ManeuverSearch, _windows, burn_fit_options, flown
+    from cistrack.least_squares.impulse_fit import BurnArc, fit_impulses
+
+    arc = BurnArc(b.dynamics, b.sensor, b.measurements, burn_fit_options(OPTS))
+    nights = [w for w in _windows(b.measurements.times, []) if w[1] - w[0] > units.hours_to_tu(3.0)]
+    k = next(i for i, (lo, hi) in enumerate(nights) if lo <= b.t_burn <= hi)
+    t0, gap = float(b.measurements.times[-1]), nights[k - 1]
+    one = fit_impulses(arc, truth_state(b, t0), t0, [0.5 * (gap[0] + gap[1])])
+    burn = replace(one.burns[0], t_sigma=float(units.hours_to_tu(1.0)))
+    return arc, ManeuverSearch(one.fit, flown(b.dynamics, [burn]), [burn], [gap], [], None)
+
+
+def test_a_burn_the_time_check_finds_clearly_better_elsewhere_is_moved_there_and_checked_again(burn_03):
+    """The time check's trial fit in the true night's gap costs 210 less than the misplaced burn's:
+    the burn is moved there, refitted and its time measured, and no time beats it again."""
+    from cistrack.least_squares.burn_search import times_allowed
+
+    b = burn_03[0]
+    arc, found = _placed_a_night_early(b)
+    out, why = times_allowed(arc, found)
+    assert why == ""
+    est = out.burns[0]
+    assert abs(est.t - b.t_burn) <= 3 * est.t_sigma
+    assert abs(est.magnitude_ms - np.linalg.norm(b.dv_ms)) <= 3 * est.magnitude_sigma_ms
+    assert any(n.startswith("the time check moved burn 1") for n in out.notes)
+
+
+def test_a_moved_burn_that_a_trial_time_beats_again_leaves_the_time_undetermined(burn_03, monkeypatch):
+    """With every trial time counted as clearly better (the rival margin set below any cost), the
+    second check beats the moved burn too: the search comes back as it was, its time not determined."""
+    from cistrack.least_squares import burn_search
+
+    arc, found = _placed_a_night_early(burn_03[0])
+    monkeypatch.setattr(burn_search, "RIVAL_COST", -1e12)
+    out, why = burn_search.times_allowed(arc, found)
+    assert "; moved there, " in why and "than the moved one" in why and why.endswith("the burn's time is not determined")
+    assert out is found
+
+
+def _burn_arc(b):
+    from cistrack.least_squares.burn_search import burn_fit_options
+    from cistrack.least_squares.impulse_fit import BurnArc
+
+    return BurnArc(b.dynamics, b.sensor, b.measurements, burn_fit_options(OPTS))
+
+
+def test_the_observations_either_side_of_the_found_burn_each_determine_an_orbit(burn_03):
+    from cistrack.least_squares.burn_search import _sides_undetermined
+
+    b, _, found = burn_03
+    assert _sides_undetermined(_burn_arc(b), found, found.burns[0].t) == ""
+
+
+def test_a_burn_time_after_the_first_few_exposures_leaves_the_side_before_it_undetermined(burn_03):
+    """Four exposures over minutes do not determine an orbit alone: a burn moved after them could
+    trade its size against the orbit before it, and is not moved there."""
+    from cistrack.least_squares.burn_search import _sides_undetermined
+
+    b, _, found = burn_03
+    t = np.asarray(b.measurements.times, dtype=float)
+    why = _sides_undetermined(_burn_arc(b), found, 0.5 * (t[3] + t[4]))
+    assert why.startswith("the 4 observations before it")
