@@ -23,6 +23,7 @@ from pathlib import Path
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.cli.study import add_study_parser
 from cistrack.cli.init_scenario import add_init_parser
+from cistrack.cli.output_streams import NamedOutput
 from cistrack.cli.fit_command import add_fit_parser, cmd_export_fit, is_fit_export
 from cistrack.cli.predict_command import add_predict_parser
 from cistrack.scenario.limits import check_seed
@@ -602,6 +603,8 @@ def console_main() -> None:
             reconfigure(errors="backslashreplace")
     if sys.stdout is not None:
         sys.stdout = NamedOutput(sys.stdout, "standard output")
+    if sys.stderr is not None:  # its reader gone (`2>&1 | head`): the messages stop, the work goes on
+        sys.stderr = NamedOutput(sys.stderr, "standard error", drop_all_errors=True)
     warnings.showwarning = show_warning
     exit_process(main())
 
@@ -612,32 +615,6 @@ def show_warning(message, category, filename, lineno, file=None, line=None) -> N
     to a person running the command); within 120 columns when stderr is a terminal."""
     text = str(message)
     _eprint(_for_stream(f"cistrack: warning: {text.removeprefix('cistrack: ')}", sys.stderr))
-
-
-class NamedOutput:
-    """A text stream whose write and flush errors name it (``standard output: No space left on
-    device``, where the bare OSError named nothing). A closed pipe stays a BrokenPipeError;
-    everything else is the stream's own."""
-
-    def __init__(self, stream, label: str):
-        self._stream, self._label = stream, label
-
-    def write(self, text: str) -> int:
-        return self._named(self._stream.write, text)
-
-    def flush(self) -> None:
-        self._named(self._stream.flush)
-
-    def _named(self, call, *args):
-        try:
-            return call(*args)
-        except BrokenPipeError:
-            raise
-        except OSError as exc:
-            raise OSError(exc.errno, exc.strerror or str(exc), self._label) from exc
-
-    def __getattr__(self, name: str):
-        return getattr(self._stream, name)
 
 
 if __name__ == "__main__":
