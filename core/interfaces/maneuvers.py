@@ -51,9 +51,10 @@ class Impulse:
 
     def __post_init__(self) -> None:
         dv = np.asarray(self.dv, dtype=float).reshape(-1)
-        if dv.shape != (3,) or not np.all(np.isfinite(dv)) or not np.isfinite(self.t):
-            raise ValueError(f"impulse {self.label or ''}: t must be finite and dv 3 finite numbers, "
-                             f"got t={self.t!r}, dv={self.dv!r}")
+        if not np.isfinite(self.t):
+            raise ValueError(f"impulse {self.label!r}: t = {float(self.t)!r} TU is not a finite number")
+        if dv.shape != (3,) or not np.all(np.isfinite(dv)):
+            raise ValueError(f"impulse {self.label!r}: dv = {dv.tolist()} is not 3 finite numbers (synodic VU)")
         object.__setattr__(self, "dv", dv)
 
 

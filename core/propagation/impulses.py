@@ -33,7 +33,8 @@ from typing import Any
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import ConfigError, StateError
+from cistrack.errors import CistrackError, ConfigError, StateError, exception_text
+from cistrack.interfaces.component import component_name
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation, check_output_times
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.interfaces.transition_matrix import check_stm_request
@@ -432,22 +433,18 @@ class ImpulsiveTrajectory:
 
 
 def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: float, t_end: float,
-             say: Any = None, where: str = "maneuver plan") -> tuple[Dynamics, list[Impulse]]:
+             say: Any = None, where: str = "maneuver plan", who: str | None = None) -> tuple[Dynamics, list[Impulse]]:
     """The truth model that flies ``plan``'s burns from ``x0`` (6,) at ``t0`` over ``(t0, t_end]``
     (TU), and the impulses: ``dynamics`` wrapped in :class:`ImpulsiveDynamics`, or ``dynamics``
     itself (and no impulse) when there is no plan or it makes no burn there. ``say`` (a callable)
     gets one line per burn (:func:`describe_impulse`). Raises ConfigError, prefixed by ``where``,
-    when the plan fails or returns anything but impulses inside the span."""
+    when the plan fails or returns anything but impulses inside the span; a plan that raises its
+    own exception (a burn with a NaN or 4-component dv, say) is named by ``who`` (default: its
+    kind and registered name; the pipeline adds its distribution)."""
     if plan is None:
         return dynamics, []
     try:
-        impulses = list(plan.impulses(dynamics, np.asarray(x0, dtype=float).reshape(6), float(t0), float(t_end)))
-        for imp in impulses:
-            if not isinstance(imp, Impulse):
-                raise ConfigError(f"the plan returned a {type(imp).__name__}, not an Impulse")
-            if not t0 < imp.t <= t_end:
-                raise ConfigError(f"impulse {imp.label!r} at t = {imp.t:g} TU lies outside the run's span "
-                                  f"({t0:g}, {t_end:g}] TU")
+        impulses = _planned(plan, dynamics, (x0, t0, t_end), who or f"maneuver-plan '{component_name(plan)}'")
     except ConfigError as exc:
         raise ConfigError(f"{where}: {exc}") from None
     flown = ImpulsiveDynamics(dynamics, impulses) if impulses else dynamics
@@ -460,6 +457,27 @@ def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: 
     if not impulses and say is not None:
         say(f"{where}: no burn inside the run ({days:g} days); the truth is ballistic")
     return flown, impulses
+
+
+def _planned(plan: ManeuverPlan, dynamics: Dynamics, start: tuple, who: str) -> list[Impulse]:
+    """``plan.impulses(dynamics, x0, t0, t_end)`` (``start``: x0 (6,), t0, t_end TU), each an
+    Impulse inside ``(t0, t_end]``; ConfigError naming the plan ``who`` otherwise."""
+    x0, t0, t_end = start
+    try:
+        got = plan.impulses(dynamics, np.asarray(x0, dtype=float).reshape(6), float(t0), float(t_end))
+    except CistrackError:
+        raise
+    except (Exception, SystemExit) as exc:  # the plugin's own bug: named, never a traceback
+        raise ConfigError(f"{who}: impulses() raised {exception_text(exc)}") from exc
+    if not isinstance(got, (list, tuple)):
+        raise ConfigError(f"{who}: impulses() returned {type(got).__name__}, not a list of Impulse")
+    for imp in got:
+        if not isinstance(imp, Impulse):
+            raise ConfigError(f"{who}: impulses() returned a {type(imp).__name__} among its burns, not an Impulse")
+        if not t0 < imp.t <= t_end:
+            raise ConfigError(f"{who}: impulse {imp.label!r} at t = {units.tu_to_days(imp.t):.6g} days lies outside "
+                              f"the run's span ({units.tu_to_days(t0):g}, {units.tu_to_days(t_end):.6g}] days")
+    return list(got)
 
 
 def describe_impulse(impulse: Impulse, k: int) -> str:

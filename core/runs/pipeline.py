@@ -93,9 +93,7 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     else:
         initial = scenario.initial_truth(reg)
         _compile_ahead(dynamics, initial)
-        from cistrack.propagation.impulses import fly_plan
-        plan = scenario.truth_maneuvers.build(reg) if scenario.truth_maneuvers else None  # the truth's burns only
-        truth_dyn, truth_impulses = fly_plan(plan, truth_dyn, initial, 0, duration, say, f"{scenario.source}: [truth.maneuvers]")
+        truth_dyn, truth_impulses = _fly_truth_plan(scenario, reg, truth_dyn, initial, say)
         truth = Truth(truth_dyn, initial, t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)
@@ -128,6 +126,17 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
                      output_dir=output_dir, truth_dynamics=truth_dyn, truth=truth, truth_impulses=truth_impulses,
                      registry=reg)
     return ctx, rngs
+
+
+def _fly_truth_plan(scenario: Scenario, reg: Registry, truth_dyn, initial, say):
+    """The truth's dynamics flying the scenario's ``[truth.maneuvers]`` plan (the truth's burns
+    only), and its impulses (:func:`cistrack.propagation.impulses.fly_plan`); a failing plan is
+    named with its distribution."""
+    from cistrack.propagation.impulses import fly_plan
+
+    plan = scenario.truth_maneuvers.build(reg) if scenario.truth_maneuvers else None
+    who = reg.describe("maneuver-plan", component_name(plan)) if plan is not None else None
+    return fly_plan(plan, truth_dyn, initial, 0, scenario.duration, say, f"{scenario.source}: [truth.maneuvers]", who)
 
 
 def _one_sensor(scenario, components, truth, grids, rngs, say):

@@ -238,3 +238,52 @@ def test_the_plans_follow_the_parameter_conventions_and_document_every_parameter
     for p in param_docs(cls):
         assert p.meaning and p.meaning.endswith((".", ")")) and not re.search(r"`", p.meaning), p.name
     assert summary_of(cls).endswith(".") and "`" not in summary_of(cls)
+
+
+class PluginPlan(ImpulsePlan):
+    """A third party's plan whose impulses() does ``how``: "raise" (its own RuntimeError), "nan" (a
+    burn with a NaN dv), "width" (a burn with a 4-component dv), "none" (returns None)."""
+
+    how = "raise"
+
+    def impulses(self, dynamics, x0, t0, t_end):
+        dv = {"nan": [np.nan, 0.0, 0.0], "width": [0.0, 1e-3, 0.0, 0.0]}.get(self.how)
+        if dv is not None:
+            return [Impulse(0.5 * (t0 + t_end), np.array(dv), "b")]
+        if self.how == "none":
+            return None
+        raise RuntimeError("cannot plan")
+
+
+def _scenario_with_plan(how: str):
+    from cistrack.plugin.registry import load_registry
+    from cistrack.scenario.loading import load_scenario
+    from cistrack.scenario.settings import apply_settings
+
+    reg = load_registry(autoload_third_party=False)
+    reg.add("maneuver-plan", "h-plan", type("HPlan", (PluginPlan,), {"how": how}), "hplug", "0.1", "hplug")
+    scen = load_scenario("quick", reg)
+    return apply_settings(scen, ["duration_days=1.4", 'truth.maneuvers={name="h-plan"}'], reg), reg
+
+
+@pytest.mark.parametrize("how, what", [
+    ("raise", r"impulses\(\) raised RuntimeError: cannot plan"),
+    ("nan", r"impulses\(\) raised ValueError: impulse 'b': dv = \[nan, 0\.0, 0\.0\] is not 3 finite numbers"),
+    ("width", r"impulses\(\) raised ValueError: impulse 'b': dv = \[0\.0, 0\.001, 0\.0, 0\.0\] is not 3 finite"),
+    ("none", r"impulses\(\) returned NoneType, not a list of Impulse"),
+])
+def test_a_plugin_plan_that_fails_is_a_config_error_naming_the_table_the_plan_and_its_distribution(how, what):
+    from cistrack.runs.pipeline import run_scenario
+
+    scen, reg = _scenario_with_plan(how)
+    with pytest.raises(ConfigError, match=r"\[truth\.maneuvers\]: maneuver-plan 'h-plan' \(hplug 0\.1\): " + what):
+        run_scenario(scen, seed=1, registry=reg)
+
+
+def test_a_burn_outside_the_run_is_refused_in_days(cr3bp):
+    class Bad(ImpulsePlan):
+        def impulses(self, dynamics, x0, t0, t_end):
+            return [Impulse(float(units.days_to_tu(20.0)), np.ones(3) * 1e-4, "late")]
+
+    with pytest.raises(ConfigError, match=r"impulse 'late' at t = 20 days lies outside the run's span \(0, 9\.55\d*\] days"):
+        fly_plan(Bad(), cr3bp, NRHO, 0.0, SPAN)
