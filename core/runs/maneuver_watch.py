@@ -34,9 +34,11 @@ from cistrack import units
 from cistrack.errors import PropagationError
 from cistrack.interfaces.maneuvers import (Detection, ManeuverDetector, ManeuverResponse, ResponseHistory,
                                            SettledPosterior)
+from cistrack.interfaces.component import component_name
 from cistrack.interfaces.metric import StepMetric
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.options import FitOptions
+from cistrack.runs.maneuver_contract import checked_observation, checked_response_cloud, plugin_call
 
 __all__ = ["ManeuverWatch", "ManeuverMetric", "PRE_DAYS", "POST_DAYS", "EPISODE_DAYS", "SETTLED_KM", "episodes"]
 
@@ -77,16 +79,27 @@ class ManeuverWatch:
     statistic: float = float("nan")
     fired: bool = False
     posteriors: list[_Posterior] = field(default_factory=list)
+    names: tuple[str, str] = ("", "")
+    """The detector and the response as messages name them (kind, name and distribution, e.g.
+    ``maneuver-detector 'mine' (hplug 0.1)``); default: kind and name."""
+    first_t: float | None = None
 
     def start(self) -> None:
         self.detector.reset()
         self.detections.clear()
         self.posteriors.clear()
+        self.first_t = None
 
-    def before_update(self, ctx: Any, t: float, prior: Any, measurements: tuple) -> Any:
-        """The detector's verdict on ``measurements`` at ``t`` (TU) under ``prior``; returns the
-        response's cloud (the filter starts again from it) or None."""
-        self.statistic, detection = self.detector.observe(t, prior, measurements, ctx.sensor)
+    def before_update(self, ctx: Any, t: float, prior: Any, measurements: tuple, step: int | None = None) -> Any:
+        """The detector's verdict on ``measurements`` at ``t`` (TU) under ``prior`` (update ``step``);
+        returns the response's cloud (the filter starts again from it) or None. A detector or
+        response that raises or breaks its contract is a PluginError naming it
+        (:mod:`cistrack.runs.maneuver_contract`)."""
+        detector_who, response_who = self._who()
+        where = f"at {'' if step is None else f'step {step}, '}t = {float(units.tu_to_days(t)):.3f} d"
+        self.first_t = float(t) if self.first_t is None else self.first_t
+        out = plugin_call(detector_who, where, self.detector.observe, t, prior, measurements, ctx.sensor)
+        self.statistic, detection = checked_observation(out, t, self.first_t, detector_who, where)
         self.fired = detection is not None
         if detection is None:
             return None
@@ -96,10 +109,14 @@ class ManeuverWatch:
         self.detections.append(detection)
         if self.response is None:
             return None
-        if not getattr(self.response, "needs_history", False):
-            return self.response.respond(detection, prior, ctx.dynamics, self.rng)
-        history = self.history(ctx, detection, before)
-        return self.response.respond(detection, prior, ctx.dynamics, self.rng, history=history)
+        extra = {"history": self.history(ctx, detection, before)} if getattr(self.response, "needs_history", False) else {}
+        cloud = plugin_call(response_who, where, self.response.respond, detection, prior, ctx.dynamics, self.rng, **extra)
+        return checked_response_cloud(cloud, detection, response_who)
+
+    def _who(self) -> tuple[str, str]:
+        """(detector, response) as messages name them: :attr:`names`, else kind and name."""
+        return (self.names[0] or f"maneuver-detector '{component_name(self.detector)}'",
+                self.names[1] or f"maneuver-response '{component_name(self.response)}'")
 
     def history(self, ctx: Any, d: Detection, before: float = -np.inf) -> ResponseHistory:
         """What the run saw before the detection ``d``: the measurements before ``d.t`` (TU), the

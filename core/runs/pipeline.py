@@ -491,7 +491,10 @@ def _maneuver_watch(scenario: Scenario, reg: Registry) -> ManeuverWatch | None:
     if settings.detector is None:
         return None
     response = settings.response.build(reg) if settings.response is not None else None
-    return ManeuverWatch(settings.detector.build(reg), response, settings.estimate)
+    detector = settings.detector.build(reg)
+    names = (reg.describe("maneuver-detector", component_name(detector)),
+             reg.describe("maneuver-response", component_name(response)) if response is not None else "")
+    return ManeuverWatch(detector, response, settings.estimate, names=names)
 
 
 def _say_if_detector_idle(watch: ManeuverWatch, events: list, say) -> None:
@@ -507,7 +510,7 @@ def _say_if_detector_idle(watch: ManeuverWatch, events: list, say) -> None:
 def _watch(ctx: RunContext, k: int, t: float, prior, ms: tuple) -> None:
     """The maneuver watch's look at the measurements ``ms`` of step ``k`` at ``t`` under ``prior``; when its response
     hands back a cloud, the filter starts again from it (before it takes ``ms``)."""
-    cloud = ctx.maneuvers.before_update(ctx, t, prior, ms)
+    cloud = ctx.maneuvers.before_update(ctx, t, prior, ms, k)
     if cloud is not None:
         ctx.maneuvers.say(f"maneuver detected at {units.tu_to_days(t):.3f} d; the filter starts again from the "
                 f"response's cloud ({len(cloud)} particles)")
