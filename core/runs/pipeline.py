@@ -33,6 +33,7 @@ from cistrack.interfaces.filter import DIAGNOSTICS_RULE, bad_diagnostic
 from cistrack.model.measurement import StackedMeasurement
 from cistrack.plugin.registry import Registry, default_registry
 from cistrack.runs.compile_clock import CompileClock
+from cistrack.runs.dynamics_contract import checked_dynamics
 from cistrack.runs.iod_message import iod_message
 from cistrack.runs.maneuver_watch import ManeuverMetric, ManeuverWatch
 from cistrack.runs.observers import (builtin_metrics, finish_observers, interrupted_late, make_plugin_manager,
@@ -76,12 +77,12 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     seed = scenario.seed if seed is None else check_seed(seed, "seed")
     rngs = _streams(seed)
     say = log or (lambda msg: None)
-    dynamics = scenario.build("dynamics", reg)
+    dynamics = checked_dynamics(scenario.build("dynamics", reg), reg)  # a third party's: checked at each call
     sensor = scenario.build("sensor", reg)
     schedule = scenario.build("schedule", reg)
     iod = scenario.build("iod", reg)
     filt = scenario.build("filter", reg)
-    truth_dyn = scenario.truth_dynamics.build(reg) if scenario.truth_dynamics else dynamics
+    truth_dyn = checked_dynamics(scenario.truth_dynamics.build(reg), reg) if scenario.truth_dynamics else dynamics
     duration = scenario.duration
 
     if scenario.measurements_file is not None:  # real observations, through a registered reader
