@@ -117,4 +117,7 @@ def close(a: np.ndarray, b: np.ndarray, rtol: float, atol: float) -> tuple[bool,
 
 
 def describe_exception(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
+    """``RuntimeError: boom``; for ``sys.exit``: ``SystemExit: it called sys.exit(7)``."""
+    from cistrack.errors import exception_text
+
+    return exception_text(exc) if isinstance(exc, SystemExit) else f"{type(exc).__name__}: {exc}"

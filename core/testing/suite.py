@@ -101,7 +101,7 @@ class BoundCheck:
             return component
         try:
             return fresh(component)
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             how = "with its default parameters" if isinstance(component, type) else "from get_params()"
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(component)}': could not "
                                    f"construct it {how}: {describe_exception(exc)} ({self.advice})") from exc
@@ -113,7 +113,7 @@ class BoundCheck:
             self.func(instance)
         except ConformanceError as exc:
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': {exc}") from None
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # sys.exit in a plugin fails its check; the others still run
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': it raised "
                                    f"{describe_exception(exc)}") from exc
 
@@ -210,7 +210,7 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
     if params or (not isinstance(factory, type) and callable(factory) and kind not in ("orbit", "recorder")):
         try:
             factory = registry.create(kind, name, **(params or {}))
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             how = f"with {params}" if params else "with its default parameters"
             failed = CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
                                  f"{describe_exception(exc)} ({advice})")

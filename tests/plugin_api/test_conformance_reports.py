@@ -187,3 +187,24 @@ def test_a_misspelt_recorder_hook_is_reported():
 
     _, why = _failure(Recorder(), "implements_lifecycle_hooks")
     assert "cistrack_step_update" in why
+
+
+class ExitingClusterer(HalvesClusterer):
+    """Calls sys.exit(7) from cluster()."""
+
+    def cluster(self, x, rng):
+        raise SystemExit(7)
+
+
+def test_a_component_calling_sys_exit_fails_each_check_that_calls_it_and_the_suite_goes_on():
+    """The suite had ended with the plugin's exit status, without a FAIL line or a summary."""
+    results = check_registered("exiting", registry=_registry_with(ExitingClusterer))
+    failed = [r for r in results if not r.passed]
+    assert failed and all("it raised SystemExit: it called sys.exit(7)" in r.message for r in failed)
+    assert len(results) == len(list(iter_checks(ExitingClusterer, "clustering")))  # every check ran
+
+
+def _registry_with(cls) -> Registry:
+    reg = Registry()
+    reg.add("clustering", "exiting", cls)
+    return reg
