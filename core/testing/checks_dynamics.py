@@ -27,6 +27,11 @@ CONSISTENT_ATOL = 1e-9
 def _propagate(dyn: Dynamics, x: np.ndarray, t0: float, times) -> Propagation:
     p = dyn.propagate(x, t0, times)
     require(isinstance(p, Propagation), f"propagate() returned {type(p).__name__}, not cistrack.interfaces.Propagation")
+    states = np.asarray(p.states)
+    if not (np.issubdtype(states.dtype, np.number) and np.all(np.isfinite(states))):
+        bad = np.size(states) - int(np.count_nonzero(np.isfinite(states))) if np.issubdtype(states.dtype, np.number) else "some"
+        require(False, f"propagate() returned NaN or infinite states ({bad} of {np.size(states)} values) for {len(x)} "
+                       f"finite states on the 9:2 NRHO from t0 = {t0:g} TU; an impacting particle keeps its impact state")
     return p
 
 
@@ -179,6 +184,18 @@ SENSITIVITY_RTOL = 1e-3
 tolerance over twice its step, is of order 1e-5 of it)."""
 
 
+def check_transition_matrices_finite(dyn) -> None:
+    """``propagate_with_stm(state (6,), t0, times (K,))`` (what ``cistrack fit`` calls) gives finite
+    states (K, 6) and transition matrices (K, 6, 6)."""
+    times = np.array([0.5, 1.0]) * SHORT_TU
+    states, stms = dyn.propagate_with_stm(nrho_states(1)[0], 0.0, times)
+    require(np.shape(states) == (2, 6) and np.shape(stms) == (2, 6, 6),
+            f"propagate_with_stm returned states of shape {np.shape(states)} and matrices of shape {np.shape(stms)}, "
+            "expected (K, 6) and (K, 6, 6) = (2, 6) and (2, 6, 6)")
+    require(np.all(np.isfinite(states)) and np.all(np.isfinite(stms)),
+            "propagate_with_stm returned NaN or infinite states or transition matrices on the 9:2 NRHO over 6 hours")
+
+
 def check_sensitivities_match_differences(dyn) -> None:
     """Each of ``sensitivity_parameters``: ``propagate_with_sensitivity``'s d x / d p against a
     central difference of ``propagate`` with the parameter moved by ``with_parameters``."""
@@ -211,5 +228,6 @@ DYNAMICS_CHECKS = [
     ("deterministic", check_deterministic),
     ("same_after_pickle", check_same_after_pickle),
     ("rejects_malformed_states", check_rejects_malformed_states),
+    ("transition_matrices_finite", check_transition_matrices_finite),
     ("sensitivities_match_differences", check_sensitivities_match_differences),
 ]

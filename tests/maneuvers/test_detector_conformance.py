@@ -132,3 +132,27 @@ def test_each_check_fails_the_detector_that_breaks_its_rule(cls, failing):
 def test_the_rule_breakers_pass_everything_else_when_fixed():
     assert check_plugin(_Base).passed
     assert math.isclose(-math.log10(_Base().false_alarm), 4.0)
+
+
+class _NanStatistic(_Base):
+    def _surprise(self, *args):
+        return float("nan")
+
+
+def _failed(cls) -> dict[str, str]:
+    with pytest.raises(ConformanceError) as err:
+        check_plugin(cls)
+    return {r.name: r.message for r in err.value.results if not r.passed}
+
+
+def test_a_nan_statistic_is_reported_as_not_finite_and_not_as_randomness_or_memory():
+    """NaN != NaN had made 'deterministic' and 'reset_forgets' fail with false advice."""
+    failed = _failed(_NanStatistic)
+    assert "the statistic nan is not a finite float" in failed["observe_returns_a_statistic_and_a_detection_or_none"]
+    assert "deterministic" not in failed and "reset_forgets" not in failed
+
+
+def test_a_burn_window_after_the_step_is_reported_in_plain_numbers():
+    why = _failed(_BoundsAfterTheBurn)["detects_a_step_within_five_updates"]
+    assert re.search(r"t_burn_bounds \(\d\.\d+, \d\.\d+\) starts after \d\.\d+, the last update", why), why
+    assert "np.float64" not in why
