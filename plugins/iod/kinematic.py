@@ -80,7 +80,7 @@ import numpy as np
 
 from cistrack.model.belief import ParticleCloud
 from cistrack.interfaces.component import check_choice, check_int, check_positive, check_range, MemoryNeed, IOD_CHUNK_BYTES
-from cistrack.errors import IODError
+from cistrack.errors import IODError, PluginError
 from cistrack.interfaces import IODMethod, RangePrior, Sensor
 from cistrack.interfaces.iod import check_iod_particles
 from cistrack.model.measurement import MeasurementSet
@@ -196,7 +196,7 @@ class KinematicFitIOD(IODMethod):
 
         def ranges(c: int, g: np.random.Generator) -> np.ndarray:
             shape = (c, k) if self.range_sampling == "per-measurement" else (c, 1)
-            return np.broadcast_to(prior.draw(fit.ranges, shape, g), (c, k))
+            return _checked_ranges(prior, prior.draw(fit.ranges, shape, g), shape, (c, k))
 
         return draw_in_chunks(n, rng, angles, ranges, self._chunk)
 
@@ -280,3 +280,22 @@ class KinematicFitIOD(IODMethod):
             "pruned": pruned,
         }
         return ParticleCloud(states, fit.epoch, meta=meta)
+
+
+def _checked_ranges(prior: RangePrior, drawn: object, shape: tuple[int, int], full: tuple[int, int]) -> np.ndarray:
+    """The range prior's draw for ``shape`` as (n, K) LU (``full``), unless it is not numbers that
+    broadcast there or holds NaN or inf: a PluginError naming the prior (NaN had been dropped as
+    pruned without a word, and a wrong shape blamed on the IOD)."""
+    who = f"range-prior '{getattr(prior, 'registry_name', '') or type(prior).__name__}'"
+    try:
+        ranges = np.asarray(drawn, dtype=float)
+        out = np.broadcast_to(ranges, full)
+    except (TypeError, ValueError):
+        raise PluginError(f"{who}: draw() for shape {shape} returned {type(drawn).__name__} of shape {np.shape(drawn)}, "
+                       f"not ranges (LU) that broadcast to {full}") from None
+    bad = int(np.count_nonzero(~np.isfinite(ranges)))
+    if bad:
+        raise PluginError(f"{who}: draw() returned {bad} NaN or infinite ranges of {ranges.size}; ranges must be "
+                       "finite numbers (LU)")
+    return out
+

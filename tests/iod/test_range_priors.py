@@ -42,3 +42,32 @@ def test_a_scenario_composes_the_range_prior_as_a_nested_table(registry):
 @pytest.mark.parametrize("name", ["noisy", "uniform"])
 def test_range_priors_pass_the_conformance_suite(registry, name):
     check_plugin(registry.get("range-prior", name).factory)  # raises, naming the failing checks
+
+
+class BrokenRange(UniformRange):
+    """Uniform ranges, broken by ``how``: "nan" (every second range NaN) or "short" (half the rows)."""
+
+    how, registry_name = "nan", "h-range"
+
+    def draw(self, measured_lu, shape, rng):
+        r = np.array(super().draw(measured_lu, shape, rng), dtype=float)
+        if self.how == "nan":
+            r[::2] = np.nan
+            return r
+        return r[: shape[0] // 2]
+
+
+@pytest.mark.parametrize("how, what", [
+    ("nan", r"range-prior 'h-range': draw\(\) returned \d+ NaN or infinite ranges of \d+; ranges must be finite"),
+    ("short", r"range-prior 'h-range': draw\(\) for shape \(\d+, \d+\) returned ndarray of shape \(\d+, \d+\), not "
+              r"ranges \(LU\) that broadcast to \(\d+, \d+\)"),
+])
+def test_a_range_prior_drawing_nan_or_the_wrong_shape_is_refused_naming_it(scenario, how, what):
+    """NaN ranges had been dropped as pruned draws without a word; a wrong shape blamed the IOD."""
+    from cistrack.errors import PluginError
+
+    prior = BrokenRange()
+    prior.how = how
+    ms = scenario.simulate(np.random.default_rng(3))
+    with pytest.raises(PluginError, match=what):
+        KinematicFitIOD(n_particles=300, range_prior=prior).estimate(ms, scenario.sensor, np.random.default_rng(11))
