@@ -254,7 +254,7 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
                         "(str or pathlib.Path) or a Scenario from load_scenario")
     _checked_arguments(registry=registry)
     reg = registry or default_registry()
-    scen = scenario if isinstance(scenario, Scenario) else _load(scenario, reg)
+    scen = scenario if isinstance(scenario, Scenario) else _load(_expanded(scenario), reg)
     return apply_settings(scen, _setting_items(settings), reg)
 
 
@@ -279,6 +279,17 @@ def _checked_arguments(**given: Any) -> None:
         elif isinstance(value, str) and not value.strip():  # as the command's --out '': not the current folder
             raise ConfigError(f"{name}={value!r} is empty; give a path" + (", or leave out out (None) for the default"
                                                                              if name == "out" else ""))
+
+
+def _expanded(path: Any) -> Any:
+    """``path`` with a leading ``~`` or ``~user`` expanded, as the shell expands it on the command line
+    (a str stays a str, a path becomes a Path); anything else as it is. ``out="~/x"`` had made a
+    folder literally named ``~`` in the current directory."""
+    if isinstance(path, str):
+        return os.path.expanduser(path)
+    if isinstance(path, os.PathLike):
+        return Path(os.path.expanduser(os.fspath(path)))
+    return path
 
 
 def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None = None,
@@ -327,7 +338,7 @@ def run(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *, seed: int | None 
     from cistrack.results.dir_lock import run_lock
     from cistrack.results.earlier_run import PYTHON_WORDS, check_replacing, clear_replaced_fit
 
-    directory = Path(out)
+    directory = _expanded(Path(out))
     check_output_dir(directory, "out")
     with run_lock(directory, "out"):  # one run at a time in a results directory, as cistrack run
         if check_replacing(directory, scen, seed, "out", overwrite=overwrite, words=PYTHON_WORDS):
@@ -360,7 +371,7 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
-    return fit_files(paths, out=out, settings=_setting_items(settings), registry=registry, log=log, progress=progress,
+    return fit_files([_expanded(p) for p in paths], out=_expanded(out), settings=_setting_items(settings), registry=registry, log=log, progress=progress,
                      overwrite=overwrite, words=PYTHON_WORDS)
 
 
@@ -370,7 +381,7 @@ def read_run(directory: str | Path) -> Run:
     from cistrack.results.store import read_manifest
 
     _checked_arguments(directory=directory)
-    d = Path(directory)
+    d = _expanded(Path(directory))
     if not d.is_dir():
         raise ConfigError(f"{d}: not a run's results folder ({'a file' if d.exists() else 'no such directory'})")
     try:
@@ -475,7 +486,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     _checked_arguments(study=study, out=out, log=log, progress=progress, overwrite=overwrite)
     _checked_study_counts(n_seeds, first_seed, workers)
     items = _setting_items(settings) or None
-    res = run_study(study, out_dir=out, workers=workers, progress=progress, settings=items,
+    res = run_study(_expanded(study), out_dir=_expanded(out), workers=workers, progress=progress, settings=items,
                     first_seed=first_seed, n_seeds=n_seeds, overwrite=overwrite)
     if log is not None:
         log(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
