@@ -29,7 +29,9 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterable, Mapping
+import re
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -199,8 +201,6 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
                         "'TABLE.KEY=VALUE' strings")
     if not isinstance(settings, Mapping):
         return list(settings)
-    import tomli_w
-
     items: list[str] = []
 
     def add(prefix: str, value: Any) -> None:
@@ -212,7 +212,7 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
         if isinstance(plain, float) and not math.isfinite(plain):
             raise ConfigError(f"settings[{prefix!r}] = {quoted(value)}: a setting must be a finite number")
         try:
-            text = tomli_w.dumps({"v": plain}).partition("=")[2].strip()
+            text = _inline_toml(plain)
         except TypeError:
             raise ConfigError(f"settings[{prefix!r}] = {quoted(value)}: not a setting value (give a number, string, "
                               "boolean, path, list or table)") from None
@@ -220,6 +220,37 @@ def _setting_items(settings: Mapping[str, Any] | Iterable[str] | None) -> list[s
 
     add("", settings)
     return items
+
+
+def _inline_toml(value: Any) -> str:
+    """``value`` in TOML syntax on one line: ``[1, 2]``, ``{t_days = 1.0, delta_v_ms = 0.5}`` (a
+    list had been written over several lines, and messages quoted it with literal newlines).
+    TypeError for a value TOML cannot hold."""
+    import tomli_w
+
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{tomli_w.dumps({str(k): 0}).rpartition(' = ')[0]} = {_inline_toml(v)}"
+                               for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_inline_toml(v) for v in value) + "]"
+    return tomli_w.dumps({"v": value}).partition("=")[2].strip()
+
+
+_SET_ITEM = re.compile(r"--set ([A-Za-z_][\w-]*(?:\.[\w-]+)*)")
+
+
+@contextmanager
+def _python_words() -> Iterator[None]:
+    """A ConfigError's message as the Python API's caller reads it: a ``--set KEY`` the command line
+    would have been given names ``settings['KEY']``, and ``with --set`` says ``with settings`` (no
+    --set was given: the settings came as an argument)."""
+    try:
+        yield
+    except ConfigError as exc:
+        text = _SET_ITEM.sub(lambda m: f"settings[{m.group(1)!r}]", str(exc)).replace("with --set)", "with settings)")
+        if text == str(exc):
+            raise
+        raise type(exc)(text) from None
 
 
 def _plain_value(value: Any) -> Any:
@@ -255,7 +286,8 @@ def load_scenario(scenario: str | Path | Scenario = DEFAULT_SCENARIO, *,
     _checked_arguments(registry=registry)
     reg = registry or default_registry()
     scen = scenario if isinstance(scenario, Scenario) else _load(_expanded(scenario), reg)
-    return apply_settings(scen, _setting_items(settings), reg)
+    with _python_words():
+        return apply_settings(scen, _setting_items(settings), reg)
 
 
 def _checked_arguments(**given: Any) -> None:
@@ -371,8 +403,9 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     paths = [files] if isinstance(files, (str, os.PathLike)) else files
     if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
         raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
-    return fit_files([_expanded(p) for p in paths], out=_expanded(out), settings=_setting_items(settings), registry=registry, log=log, progress=progress,
-                     overwrite=overwrite, words=PYTHON_WORDS)
+    with _python_words():
+        return fit_files([_expanded(p) for p in paths], out=_expanded(out), settings=_setting_items(settings),
+                         registry=registry, log=log, progress=progress, overwrite=overwrite, words=PYTHON_WORDS)
 
 
 def read_run(directory: str | Path) -> Run:
@@ -486,8 +519,9 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     _checked_arguments(study=study, out=out, log=log, progress=progress, overwrite=overwrite)
     _checked_study_counts(n_seeds, first_seed, workers)
     items = _setting_items(settings) or None
-    res = run_study(_expanded(study), out_dir=_expanded(out), workers=workers, progress=progress, settings=items,
-                    first_seed=first_seed, n_seeds=n_seeds, overwrite=overwrite)
+    with _python_words():
+        res = run_study(_expanded(study), out_dir=_expanded(out), workers=workers, progress=progress, settings=items,
+                        first_seed=first_seed, n_seeds=n_seeds, overwrite=overwrite)
     if log is not None:
         log(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
             f"{res['failed']} failed -> {res['out_dir']}")
