@@ -8,7 +8,7 @@ from typing import Any, Iterable
 
 import pluggy
 
-from cistrack.errors import ConfigError, PluginError, exception_text
+from cistrack.errors import ConfigError, PluginError, RunInterrupted, exception_text
 from cistrack.interrupts import interrupt_text
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.information_bound import InformationBoundMetric
@@ -110,10 +110,17 @@ def _short(value: Any) -> str:
 def notify(pm: pluggy.PluginManager, hook: str, **kwargs: Any) -> None:
     """Call every implementation of the lifecycle ``hook`` with ``kwargs``, in pluggy's order (the
     last registered first). One that raises, or calls ``sys.exit``, stops the run with a
-    :class:`~cistrack.errors.PluginError` naming its plugin and the hook (KeyboardInterrupt passes)."""
+    :class:`~cistrack.errors.PluginError` naming its plugin and the hook. A KeyboardInterrupt
+    passes, the run ends "interrupted"; one that is not a signal's (:class:`RunInterrupted`, which
+    the command's handlers raise) says where it was raised, as the hook may have raised it itself
+    (it had been reported as "interrupted (SIGINT, Ctrl-C)")."""
     for impl in reversed(getattr(pm.hook, hook).get_hookimpls()):
         try:
             impl.function(*[kwargs[a] for a in impl.argnames])
+        except RunInterrupted:
+            raise
+        except KeyboardInterrupt as exc:
+            raise KeyboardInterrupt(f"{exception_text(exc)} raised in {impl.plugin_name}: {hook}") from exc
         except (Exception, SystemExit) as exc:
             raise PluginError(f"{impl.plugin_name}: {hook} raised {exception_text(exc)}{_read_only_hint(exc)}") from exc
 

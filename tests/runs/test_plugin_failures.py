@@ -5,6 +5,7 @@ traceback reaches the person running it."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -195,3 +196,14 @@ def test_an_observer_calling_sys_exit_at_the_end_fails_the_run_naming_it_and_the
     assert res.summary.status == "failed"
     assert res.summary.failure.endswith("-ExitsWhenFinished: SystemExit: it called sys.exit(4)")
     assert json.loads((tmp_path / "run" / "manifest.json").read_text())["status"] == "failed"
+
+
+def test_an_observer_raising_keyboard_interrupt_itself_is_named_not_reported_as_a_ctrl_c(tmp_path):
+    """It had been recorded as 'interrupted (SIGINT, Ctrl-C)', as if someone had pressed Ctrl-C."""
+    with pytest.raises(KeyboardInterrupt):
+        run_scenario(_small(), seed=1, observers=[ObserverRaises(KeyboardInterrupt("stop"))],
+                     output_dir=tmp_path / "run")
+    manifest = json.loads((tmp_path / "run" / "manifest.json").read_text())
+    assert manifest["status"] == "interrupted"
+    assert re.fullmatch(r"interrupted \(KeyboardInterrupt: stop raised in observer-\d-ObserverRaises: "
+                        r"cistrack_step_updated\)", manifest["summary"]["failure"])
