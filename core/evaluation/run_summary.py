@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from cistrack.propagation.impulses import BURN_LINES, burns_summary
 from cistrack.evaluation.custody import Verdict
 
 __all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines", "final_lines", "maneuver_lines"]
@@ -191,7 +192,9 @@ def maneuver_lines(s: RunSummary) -> list[str]:
     """The truth's burns and the maneuvers the run detected (``summary.maneuvers``), one line
     each: when detected, and the burn's least-squares estimate (m/s, days since the epoch) or
     why there is none. No lines for a ballistic run without detections."""
-    lines = [f"  truth burn: {b['delta_v_ms']:.3g} m/s at {b['t_days']:.3f} d" for b in s.truth_maneuvers]
+    burns = s.truth_maneuvers
+    lines = ([f"  truth burn: {b['delta_v_ms']:.3g} m/s at {b['t_days']:.3f} d" for b in burns] if len(burns) <= BURN_LINES
+             else ["  " + burns_summary([b["t_days"] for b in burns], [b["delta_v_ms"] for b in burns])])
     for k, m in enumerate(s.maneuvers, 1):
         head = f"  maneuver {k}: detected at {m['t_days']:.3f} d"
         if m.get("confirmed"):

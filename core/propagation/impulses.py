@@ -449,8 +449,8 @@ def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: 
         raise ConfigError(f"{where}: {exc}") from None
     flown = ImpulsiveDynamics(dynamics, impulses) if impulses else dynamics
     impulses = list(flown.impulses) if impulses else []
-    for k, imp in enumerate(impulses, 1):
-        (say or (lambda line: None))(describe_impulse(imp, k))
+    for line in burn_lines(impulses):
+        (say or (lambda text: None))(line)
     days = float(units.tu_to_days(t_end - t0))
     for text in (plan.burns_outside(float(t0), float(t_end)) if say is not None else []):
         say(f"{where}: outside the run (0 to {days:g} days), not flown: {text}")
@@ -480,11 +480,34 @@ def _planned(plan: ManeuverPlan, dynamics: Dynamics, start: tuple, who: str) -> 
     return list(got)
 
 
+BURN_LINES = 5
+"""Most burns a run's log describes one line each; more are summarised in one line (a plan of
+1,000 burns had written 1,000 lines before the run and 1,000 in its summary)."""
+
+
+def burn_lines(impulses: Sequence[Impulse]) -> list[str]:
+    """The log's lines on the truth's burns: one each (:func:`describe_impulse`) up to
+    :data:`BURN_LINES`, else one line with their count, time span and sizes."""
+    if len(impulses) <= BURN_LINES:
+        return [describe_impulse(imp, k) for k, imp in enumerate(impulses, 1)]
+    days = [float(units.tu_to_days(imp.t)) for imp in impulses]
+    sizes = [float(np.linalg.norm(imp.dv)) * MS_PER_VU for imp in impulses]
+    return [burns_summary(days, sizes)]
+
+
+def burns_summary(days: Sequence[float], sizes_ms: Sequence[float]) -> str:
+    """One line on many truth burns at ``days`` (since the epoch) of ``sizes_ms`` (m/s)."""
+    return (f"truth burns: {len(days):,} from {min(days):.4f} to {max(days):.4f} days, {min(sizes_ms):.4g} to "
+            f"{max(sizes_ms):.4g} m/s each, {sum(sizes_ms):.4g} m/s in all (one line each for up to {BURN_LINES})")
+
+
 def describe_impulse(impulse: Impulse, k: int) -> str:
     """One line on impulse ``k`` (1-based) for a run's log: time in days, size in m/s, its label
     and its synodic direction."""
     size = float(np.linalg.norm(impulse.dv))
-    unit = impulse.dv / size if size > 0 else np.zeros(3)
     label = f", {impulse.label}" if impulse.label else ""
-    return (f"truth burn {k} at {float(units.tu_to_days(impulse.t)):.4f} days: |dv| = {size * MS_PER_VU:.4g} m/s{label}; "
-            f"synodic direction ({unit[0]:+.3f}, {unit[1]:+.3f}, {unit[2]:+.3f})")
+    head = f"truth burn {k} at {float(units.tu_to_days(impulse.t)):.4f} days: |dv| = {size * MS_PER_VU:.4g} m/s{label}"
+    if size == 0:
+        return f"{head}; a zero burn, not flown"
+    unit = impulse.dv / size
+    return f"{head}; synodic direction ({unit[0]:+.3f}, {unit[1]:+.3f}, {unit[2]:+.3f})"

@@ -127,9 +127,9 @@ def _check_burn_frame(owner, frame: Any, vector_ms: list[float], direction: Any)
 
 
 def _describe(vector_ms: list[float], delta_v_ms: float, direction: str, frame: str) -> str:
-    if vector_ms:
-        return f"[{', '.join(f'{v:g}' for v in vector_ms)}] m/s ({frame})"
-    return f"{delta_v_ms:g} m/s {direction} ({frame})"
+    if vector_ms:  # + 0.0: a zero given as -0.0 is said "0", not "-0"
+        return f"[{', '.join(f'{v + 0.0:g}' for v in vector_ms)}] m/s ({frame})"
+    return f"{delta_v_ms + 0.0:g} m/s {direction} ({frame})"
 
 
 class ImpulsePlan(ManeuverPlan):

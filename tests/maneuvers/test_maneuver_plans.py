@@ -287,3 +287,21 @@ def test_a_burn_outside_the_run_is_refused_in_days(cr3bp):
 
     with pytest.raises(ConfigError, match=r"impulse 'late' at t = 20 days lies outside the run's span \(0, 9\.55\d*\] days"):
         fly_plan(Bad(), cr3bp, NRHO, 0.0, SPAN)
+
+
+def test_a_plan_of_many_burns_is_logged_in_one_summary_line(cr3bp):
+    """1,000 burns had written 1,000 lines before the run (and 1,000 more in its summary)."""
+    lines = []
+    plan = BurnsPlan(burns=[{"t_days": 0.1 * k, "delta_v_ms": 0.01} for k in range(1, 21)])
+    _, imps = fly_plan(plan, cr3bp, NRHO, 0.0, SPAN, lines.append)
+    assert len(imps) == 20
+    assert lines == ["truth burns: 20 from 0.1000 to 2.0000 days, 0.01 to 0.01 m/s each, 0.2 m/s in all "
+                     "(one line each for up to 5)"]
+
+
+def test_a_zero_burn_given_as_minus_zero_says_zero_and_not_flown(cr3bp):
+    """It had said "burn: -0 m/s in-track" and an empty synodic direction (+0.000, +0.000, +0.000)."""
+    lines = []
+    fly_plan(ImpulsePlan(t_days=1.0, delta_v_ms=-0.0), cr3bp, NRHO, 0.0, SPAN, lines.append)
+    assert lines == ["truth burn 1 at 1.0000 days: |dv| = 0 m/s, burn: 0 m/s in-track (rtn-moon); a zero burn, "
+                     "not flown"]
