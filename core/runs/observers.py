@@ -119,8 +119,9 @@ def notify(pm: pluggy.PluginManager, hook: str, **kwargs: Any) -> None:
             impl.function(*[kwargs[a] for a in impl.argnames])
         except RunInterrupted:
             raise
-        except KeyboardInterrupt as exc:
-            raise KeyboardInterrupt(f"{exception_text(exc)} raised in {impl.plugin_name}: {hook}") from exc
+        except KeyboardInterrupt as exc:  # without a message it may be Python's own Ctrl-C (no handlers: the API)
+            what = exception_text(exc) if str(exc) else "a Ctrl-C (SIGINT) or a KeyboardInterrupt"
+            raise KeyboardInterrupt(f"{what} raised in {impl.plugin_name}: {hook}") from exc
         except (Exception, SystemExit) as exc:
             raise PluginError(f"{impl.plugin_name}: {hook} raised {exception_text(exc)}{_read_only_hint(exc)}") from exc
 
