@@ -622,26 +622,34 @@ def _trial(arc: BurnArc, found: ManeuverSearch, others: list[float], tb: float, 
     return tb, capped_cost(one.fit, arc.prior) - base, one
 
 
-PROFILE_SIGMAS = (4.0, 8.0, 16.0, 32.0)
-"""Trial burn times this many of the burn's time sigmas either side of it (:func:`_walked`)."""
+WALK_SIGMAS = 4.0
+"""The first trial times of :func:`_walked` lie this many of the burn's time sigmas either side of it."""
+WALK_MIN_MINUTES = 5.0
+"""... or this many minutes, when that is farther."""
+WALK_STEPS = 12
+"""At most this many trial times each side, each twice as far as the one before."""
 
 
 def _walked(arc: BurnArc, found: ManeuverSearch, others: list[float], b: BurnEstimate,
             window: tuple[float, float], base: float) -> list:
-    """[(time TU, cost, fit)] of :func:`_trial` at :data:`PROFILE_SIGMAS` of ``b``'s time sigma
-    either side of it (kept inside ``window``), each side until a fit costs more than
-    :data:`ALLOWED_COST` or the window ends.
+    """[(time TU, cost, fit)] of :func:`_trial` either side of ``b``'s time, the first
+    max(:data:`WALK_SIGMAS` time sigmas, :data:`WALK_MIN_MINUTES`) away and each next twice as
+    far (kept inside ``window``), each side until a fit costs more than :data:`ALLOWED_COST`, the
+    window ends or :data:`WALK_STEPS` were made.
 
     The time sigma comes from a parabola through three fits within about a sigma of the time
     (:func:`~cistrack.least_squares.impulse_fit.with_time_uncertainty`); where the cost's profile is
     flatter farther out, times many of those sigmas away are allowed too. The night gaps'
     :func:`_trial_times` are hours apart and do not see it: an unseen survey set's 1 m/s burn
     (heo) was timed +- 7.7 minutes and reported clean 40 minutes (5.3 sigmas) early, the fit at
-    twelve sigmas costing 4.3 more, the truth far outside the orbit's covariance."""
+    twelve sigmas costing 4.3 more, the truth far outside the orbit's covariance; another's (halo,
+    0.5 m/s) +- 0.013 s, two hours early, from a parabola through costs that differed by their
+    convergence's noise."""
     out = []
-    for side in (-1.0, 1.0) if b.t_sigma > 0 else ():
-        for m in PROFILE_SIGMAS:
-            tb = float(min(max(b.t + side * m * b.t_sigma, window[0]), window[1]))
+    first = max(WALK_SIGMAS * b.t_sigma, float(units.seconds_to_tu(60.0 * WALK_MIN_MINUTES))) if b.t_sigma > 0 else 0.0
+    for side in (-1.0, 1.0) if first > 0 else ():
+        for j in range(WALK_STEPS):
+            tb = float(min(max(b.t + side * first * 2.0 ** j, window[0]), window[1]))
             if tb == b.t:  # the burn sits at the window's edge: no room on this side
                 break
             got = _trial(arc, found, others, tb, base)

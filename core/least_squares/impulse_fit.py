@@ -89,13 +89,21 @@ class BurnEstimate:
 
     @property
     def magnitude_sigma_ms(self) -> float:
-        """One sigma of |dv| by linear mapping along dv's direction, m/s (the largest axis sigma
-        when dv is zero)."""
+        """One sigma of |dv|, m/s, to second order in its covariance C (the largest axis sigma when
+        dv is zero): sqrt(u^T C u + tr((P C P)^2) / (2 |dv|^2)), u = dv / |dv|, P = I - u u^T.
+
+        The linear term alone is the sigma along dv; where the uncertainty across dv is comparable
+        to sqrt(|dv| sigma along it) the size varies by the curvature of |dv| too. An unseen dense
+        campaign's 0.806 m/s burn came out 0.775 +- 0.0052 m/s (size z -5.9) with the true vector
+        inside its covariance (Mahalanobis^2 3.9): 0.21 m/s across it shortens |dv| by 0.03 m/s.
+        With the second-order term the sigma is 0.0135 m/s (a Monte Carlo of the Gaussian: 0.0131)."""
         n = self.magnitude_ms
+        c = np.asarray(self.covariance_ms2, dtype=float)
         if n == 0.0:
-            return float(np.sqrt(np.max(np.diag(self.covariance_ms2))))
+            return float(np.sqrt(np.max(np.diag(c))))
         u = self.delta_v_ms / n
-        return float(np.sqrt(max(u @ self.covariance_ms2 @ u, 0.0)))
+        across = c - np.outer(u, u @ c) - np.outer(c @ u, u) + np.outer(u, u) * (u @ c @ u)  # P C P
+        return float(np.sqrt(max(u @ c @ u, 0.0) + np.sum(across * across) / (2.0 * n * n)))
 
     @property
     def significance(self) -> float:

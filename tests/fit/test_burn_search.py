@@ -186,10 +186,10 @@ def test_a_burn_time_after_the_first_few_exposures_leaves_the_side_before_it_und
     assert why.startswith("the 4 observations before it")
 
 
-def test_the_time_check_walks_out_from_the_burn_time_by_its_sigma_until_the_cost_exceeds_the_allowed(burn_03):
-    """Trial times 4, 8, 16, 32 time sigmas either side of the burn, each side stopping at the
-    first fit costing more than ALLOWED_COST (or at the gap's edge)."""
-    from cistrack.least_squares.burn_search import ALLOWED_COST, PROFILE_SIGMAS, _walked
+def test_the_time_check_walks_out_from_the_burn_time_doubling_until_the_cost_exceeds_the_allowed(burn_03):
+    """Trial times max(4 time sigmas, 5 minutes) either side of the burn and each next twice as far,
+    each side stopping at the first fit costing more than ALLOWED_COST or at the gap's edge."""
+    from cistrack.least_squares.burn_search import ALLOWED_COST, WALK_STEPS, _walked
     from cistrack.least_squares.impulse_fit import capped_cost
 
     b, _, found = burn_03
@@ -197,6 +197,8 @@ def test_the_time_check_walks_out_from_the_burn_time_by_its_sigma_until_the_cost
     walked = _walked(arc, found, [], est, found.windows[0], capped_cost(found.result, arc.prior))
     for side, edge in ((-1.0, found.windows[0][0]), (1.0, found.windows[0][1])):
         mine = [w for w in walked if np.sign(w[0] - est.t) == side]
-        assert len(mine) <= len(PROFILE_SIGMAS) and (mine or est.t == edge)
+        assert len(mine) <= WALK_STEPS and (mine or est.t == edge)
         assert all(c <= ALLOWED_COST for _, c, _ in mine[:-1])
-        assert not mine or mine[-1][1] > ALLOWED_COST or mine[-1][0] == edge or len(mine) == len(PROFILE_SIGMAS)
+        assert not mine or mine[-1][1] > ALLOWED_COST or mine[-1][0] == edge or len(mine) == WALK_STEPS
+        gaps = np.abs([t - est.t for t, _, _ in mine])
+        assert np.allclose(gaps[1:] / gaps[:-1], 2.0) or mine[-1][0] == edge
