@@ -282,7 +282,7 @@ def _with_burn_times(arc, fit, burns, windows):
     extra = np.zeros((6, 6))
     for k, (b, window) in enumerate(zip(burns, windows)):
         if b.t_sigma > 0:
-            extra += _time_spread(arc, fit, [x.t for x in burns], k, window, b.t_sigma)
+            extra += _time_spread(arc, fit, burns, k, window, b.t_sigma)
     if not extra.any():
         return fit
     full = np.array(fit.full_covariance, dtype=float)
@@ -290,7 +290,7 @@ def _with_burn_times(arc, fit, burns, windows):
     return replace(fit, covariance=np.asarray(fit.covariance, dtype=float) + extra, full_covariance=full)
 
 
-def _time_spread(arc, fit, times: list[float], k: int, window: tuple[float, float], t_sigma: float) -> np.ndarray:
+def _time_spread(arc, fit, burns, k: int, window: tuple[float, float], t_sigma: float) -> np.ndarray:
     """(6, 6): the unscented second moment of the state at ``fit``'s epoch about its own over burn
     ``k``'s time (:func:`_with_burn_times`); one side's point stands for both when the other's
     refit cannot be made (a time that flies into the Moon), and a FitError is raised when neither can."""
@@ -299,11 +299,12 @@ def _time_spread(arc, fit, times: list[float], k: int, window: tuple[float, floa
     from cistrack.least_squares.impulse_fit import fit_impulses
 
     lo, hi = window
+    times, starts = [b.t for b in burns], [b.delta_v_ms for b in burns]  # each delta-v starts from its estimate
     moved = []
     for side in (-1.0, 1.0):
         t = min(max(times[k] + side * TIME_POINT * t_sigma, lo), hi)
         try:
-            x = fit_impulses(arc, fit.state, fit.epoch, [*times[:k], t, *times[k + 1:]]).fit.state
+            x = fit_impulses(arc, fit.state, fit.epoch, [*times[:k], t, *times[k + 1:]], starts).fit.state
         except (FitError, PropagationError):
             continue
         d = np.asarray(x, dtype=float) - np.asarray(fit.state, dtype=float)

@@ -600,10 +600,9 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
     when one fits more than :data:`RIVAL_COST` better (:func:`times_allowed`). The trial times are
     :func:`_trial_times` and those of :func:`_walked`."""
     b, window = burn
-    others = [x.t for x in found.burns if x is not b]
     taken = [w for w in found.windows if w != window]
-    tried = [t for t in (_trial(arc, found, others, float(tb), base) for tb in _trial_times(times, window, taken)) if t]
-    tried += _walked(arc, found, others, b, window, base)
+    tried = [t for t in (_trial(arc, found, b, float(tb), base) for tb in _trial_times(times, window, taken)) if t]
+    tried += _walked(arc, found, b, window, base)
     better = [t for t in tried if t[1] < -RIVAL_COST]
     if better:
         tb, cost, one = min(better, key=lambda t: t[1])
@@ -612,11 +611,16 @@ def _allowed_times(arc: BurnArc, found: ManeuverSearch, burn: tuple[BurnEstimate
             for tb, cost, one in tried if cost <= ALLOWED_COST and abs(tb - b.t) > 3.0 * b.t_sigma], None
 
 
-def _trial(arc: BurnArc, found: ManeuverSearch, others: list[float], tb: float, base: float):
-    """(``tb``, the capped cost of the arc's fit with the burn moved to ``tb`` (TU) minus ``base``,
-    that fit), the ``others`` burns held; None when the fit cannot be made."""
+def _trial(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, tb: float, base: float):
+    """(``tb``, the capped cost of the arc's fit with ``found``'s burn ``b`` moved to ``tb`` (TU)
+    minus ``base``, that fit), the other burns held at their times; None when the fit cannot be
+    made. Every delta-v starts from ``found``'s: from zero, fits with a halo orbit's 0.5 m/s burn
+    moved by five minutes had run off to 40 m/s at costs of 1e10, and the check saw no time but
+    the search's (a survey set reported clean with its burn two hours off)."""
+    rest = [x for x in found.burns if x is not b]
     try:
-        one = fit_impulses(arc, found.result.state, found.result.epoch, [*others, tb])
+        one = fit_impulses(arc, found.result.state, found.result.epoch, [*(x.t for x in rest), tb],
+                           [*(x.delta_v_ms for x in rest), b.delta_v_ms])
     except (FitError, PropagationError, np.linalg.LinAlgError):
         return None
     return tb, capped_cost(one.fit, arc.prior) - base, one
@@ -630,8 +634,8 @@ WALK_STEPS = 12
 """At most this many trial times each side, each twice as far as the one before."""
 
 
-def _walked(arc: BurnArc, found: ManeuverSearch, others: list[float], b: BurnEstimate,
-            window: tuple[float, float], base: float) -> list:
+def _walked(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, window: tuple[float, float],
+            base: float) -> list:
     """[(time TU, cost, fit)] of :func:`_trial` either side of ``b``'s time, the first
     max(:data:`WALK_SIGMAS` time sigmas, :data:`WALK_MIN_MINUTES`) away and each next twice as
     far (kept inside ``window``), each side until a fit costs more than :data:`ALLOWED_COST`, the
@@ -652,7 +656,7 @@ def _walked(arc: BurnArc, found: ManeuverSearch, others: list[float], b: BurnEst
             tb = float(min(max(b.t + side * first * 2.0 ** j, window[0]), window[1]))
             if tb == b.t:  # the burn sits at the window's edge: no room on this side
                 break
-            got = _trial(arc, found, others, tb, base)
+            got = _trial(arc, found, b, tb, base)
             if got is None:
                 break
             out.append(got)

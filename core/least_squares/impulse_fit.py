@@ -184,14 +184,20 @@ def capped_cost(fit: FitResult, prior: Prior = None) -> float:
     return float(np.sum(np.minimum(np.where(np.isfinite(chi), chi, cap), cap))) + _prior_cost(fit, prior)
 
 
-def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float]) -> ImpulseFit:
+def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float],
+                 start_ms: Sequence[np.ndarray] | None = None) -> ImpulseFit:
     """The orbit and one impulsive burn at each of ``times`` (TU) fitted jointly to the arc's
     measurements from ``state`` (6,) at ``t0`` (TU; before, between or after the burns), with the
-    arc's prior on the state at ``t0``. Raises :class:`FitError` when the fit cannot be made."""
-    ts = sorted(float(t) for t in times)
-    if not ts or not all(np.isfinite(ts)):
-        raise FitError(f"fit_impulses: burn times must be finite numbers (TU), got {list(times)}")
-    impulsive = ImpulsiveDynamics(arc.dynamics, [Impulse(t, np.zeros(3), f"burn {k + 1}") for k, t in enumerate(ts)])
+    arc's prior on the state at ``t0``; each burn's delta-v starts from ``start_ms`` (one (3,)
+    synodic m/s per time, in the order of ``times``; None: zero). Raises :class:`FitError` when
+    the fit cannot be made."""
+    starts = [np.zeros(3)] * len(times) if start_ms is None else [np.asarray(v, dtype=float) for v in start_ms]
+    pairs = sorted(zip((float(t) for t in times), starts), key=lambda p: p[0])
+    ts = [t for t, _ in pairs]
+    if not ts or not all(np.isfinite(ts)) or len(starts) != len(ts):
+        raise FitError(f"fit_impulses: burn times must be finite numbers (TU), one start each, got {list(times)}")
+    impulsive = ImpulsiveDynamics(arc.dynamics, [Impulse(t, v / MS_PER_VU, f"burn {k + 1}")
+                                                 for k, (t, v) in enumerate(pairs)])
     names = tuple(n for k in range(len(ts)) for n in dv_names(k))
     with warnings.catch_warnings():  # a trial burn time may leave a direction weak: its fit's messages say so
         warnings.simplefilter("ignore", UnobservableWarning)
@@ -365,8 +371,11 @@ def burn_time_profile(arc: BurnArc, fit: FitResult, lo: float, hi: float, n: int
 
 
 def _fit_at(arc: BurnArc, burn: ImpulseFit, tb: float, known: Sequence[float]) -> tuple[float, ImpulseFit]:
-    """(capped cost, fit) of the arc with the searched burn moved to ``tb``."""
-    one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb])
+    """(capped cost, fit) of the arc with the searched burn moved to ``tb``, every delta-v starting
+    from ``burn``'s."""
+    by_t = {x.t: x.delta_v_ms for x in burn.burns}
+    starts = [by_t.get(t, np.zeros(3)) for t in known] + [burn.searched.delta_v_ms]
+    one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb], starts)
     new = next(k for k, x in enumerate(one.burns) if x.t == tb)
     return capped_cost(one.fit, arc.prior), ImpulseFit(one.burns, one.fit, new, burn.costs, burn.candidates)
 

@@ -194,7 +194,7 @@ def test_the_time_check_walks_out_from_the_burn_time_doubling_until_the_cost_exc
 
     b, _, found = burn_03
     arc, est = _burn_arc(b), found.burns[0]
-    walked = _walked(arc, found, [], est, found.windows[0], capped_cost(found.result, arc.prior))
+    walked = _walked(arc, found, est, found.windows[0], capped_cost(found.result, arc.prior))
     for side, edge in ((-1.0, found.windows[0][0]), (1.0, found.windows[0][1])):
         mine = [w for w in walked if np.sign(w[0] - est.t) == side]
         assert len(mine) <= WALK_STEPS and (mine or est.t == edge)

@@ -169,7 +169,9 @@ def test_an_estimated_burn_is_recorded_with_the_covariance_of_its_delta_v_vector
     cov = np.asarray(m["delta_v_covariance_ms2"])
     assert cov.shape == (3, 3) and np.allclose(cov, cov.T) and np.all(np.linalg.eigvalsh(cov) > 0)
     u = np.asarray(m["delta_v_vector_ms"]) / m["delta_v_ms"]
-    assert np.sqrt(u @ cov @ u) == pytest.approx(m["delta_v_sigma_ms"], rel=1e-9)  # the magnitude's sigma is its projection
+    across = (np.eye(3) - np.outer(u, u)) @ cov @ (np.eye(3) - np.outer(u, u))
+    size_variance = u @ cov @ u + np.sum(across * across) / (2.0 * m["delta_v_ms"] ** 2)  # along dv, and |dv|'s curvature
+    assert np.sqrt(size_variance) == pytest.approx(m["delta_v_sigma_ms"], rel=1e-9)
 
 
 def test_the_default_watch_of_a_run_too_short_for_it_says_nothing():
