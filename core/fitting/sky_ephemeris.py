@@ -382,7 +382,7 @@ def orbit_of_directory(directory: str | Path, registry: Registry | None = None) 
 
 
 def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:
-    from cistrack.results.estimates import KM_SCALE, read_estimates
+    from cistrack.results.estimates import KM_SCALE, usable_estimates
     from cistrack.runs.export import export_refusal
 
     why = export_refusal(d)  # the rule 'cistrack export' follows: no orbit from a run that did not finish
@@ -390,7 +390,7 @@ def _run_orbit(d: Path, scen, dyn) -> DirectoryOrbit:
         raise ConfigError(f"{d}: no orbit to predict from: {why}")
 
     try:
-        est = read_estimates(d)
+        est = usable_estimates(d)
     except FileNotFoundError:
         raise ConfigError(f"{d}: neither fit.json nor estimates.parquet; give the --out directory of 'cistrack fit' "
                           "or 'cistrack run'") from None

@@ -33,7 +33,7 @@ from cistrack.results.atomic_files import atomic_target
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_checked, read_parts, write_checked
 from cistrack.units import LU_KM, VU_KMS
 
-__all__ = ["EstimateWriter", "Estimates", "read_estimates", "ESTIMATES", "KM_SCALE"]
+__all__ = ["EstimateWriter", "Estimates", "read_estimates", "usable_estimates", "ESTIMATES", "KM_SCALE"]
 
 ESTIMATES = "estimates.parquet"
 _PARTS = "estimates-parts"
@@ -157,6 +157,39 @@ def read_estimates(directory: str | Path) -> Estimates:
         raise FileNotFoundError(f"{d}: no estimates ({ESTIMATES}); was the run written by cistrack "
                                 f"with an output directory?")
     return _estimates_of(_read_tables(files))
+
+
+def usable_estimates(directory: str | Path) -> Estimates:
+    """The estimates of a run directory (:func:`read_estimates`) when they hold an orbit to export
+    or predict from: ConfigError naming the file when the table has no rows, or naming the directory
+    when a step appears twice or a time, mean, covariance or mixture value is NaN or infinite (a run
+    never writes one: it ends ``filter-failed`` first). FileNotFoundError as :func:`read_estimates`."""
+    d = Path(directory)
+    est = read_estimates(d)
+    again = f"run the scenario again into {d} with --overwrite"
+    if len(est) == 0:
+        where = d / ESTIMATES if (d / ESTIMATES).exists() else d / _PARTS
+        raise ConfigError(f"{where}: holds no estimates; {again}")
+    steps, counts = np.unique(est.step, return_counts=True)
+    bad = f"step {int(steps[counts > 1][0])} appears {int(counts.max())} times" if counts.max() > 1 else \
+        _first_not_finite(est)
+    if bad:
+        raise ConfigError(f"{d}: its estimates are damaged ({bad}; a run writes each step once, with finite "
+                          f"states and times); {again}")
+    return est
+
+
+def _first_not_finite(est: Estimates) -> str:
+    """``step 12's covariance_km holds NaN or inf``, naming the first step and column of ``est``
+    holding a value that is not finite; "" when all are finite."""
+    per_step = {"t_tu": est.t_tu.reshape(len(est), 1), "mean_km": est.mean_km.reshape(len(est), -1),
+                "covariance_km": est.covariance_km.reshape(len(est), -1)}
+    for k in range(len(est)):
+        mixture = {"weights": est.weights[k], "means_km": est.means_km[k], "covariances_km": est.covariances_km[k]}
+        for name, values in (*((n, v[k]) for n, v in per_step.items()), *mixture.items()):
+            if not np.isfinite(values).all():
+                return f"step {int(est.step[k])}'s {name} holds NaN or inf"
+    return ""
 
 
 def _read_tables(files: list[Path]):

@@ -22,7 +22,7 @@ from typing import Any, Callable
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.export_file import PYTHON_EXPORT_WORDS, ExportWords, write_export
 from cistrack.results.dir_lock import check_no_writer, check_unchanged, results_stamp
-from cistrack.results.estimates import read_estimates
+from cistrack.results.estimates import usable_estimates
 from cistrack.results.run_status import run_status
 from cistrack.results.inertial_frame import InertialEstimates, to_inertial
 from cistrack.plugin.registry import Registry, default_registry
@@ -88,7 +88,7 @@ def run_inertial_estimates(run_dir: str | Path, registry: Registry | None = None
         raise CistrackError(f"{d}: sensor '{scen.components['sensor'].name}' does not place its synodic frame "
                             f"in an inertial frame (Sensor.inertial_frame() is None); cannot export")
     try:
-        est = read_estimates(d)
+        est = usable_estimates(d)
         return to_inertial(est, frame), scen
     except FileNotFoundError as exc:
         raise CistrackError(str(exc)) from None

@@ -1,0 +1,83 @@
+"""`cistrack export` and `cistrack predict` refuse a run whose estimates table holds no rows,
+a NaN mean or covariance, or a step twice, naming the file or folder and what is wrong: never a
+traceback, a hidden temporary file, a blamed dynamics component, or `nan` written into an OEM
+with exit 0 (probe H1, H2, H3). Real run of the quick scenario, its table edited with pyarrow."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cistrack.cli.main import main
+from cistrack.runs.pipeline import run_scenario
+from cistrack.scenario.loading import load_scenario
+
+SMALL = {"duration_days": 1.4, "filter": {"n_particles": 300, "n_components": 2}, "iod": {"n_particles": 300}}
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("runs") / "finished"
+    run_scenario(load_scenario("quick").with_overrides(SMALL), seed=1, output_dir=d)
+    return d
+
+
+def _edited(finished: Path, tmp_path: Path, edit) -> Path:
+    """A copy of ``finished`` whose estimates table is ``edit(table)``."""
+    import pyarrow.parquet as pq
+
+    d = tmp_path / "run"
+    shutil.copytree(finished, d, ignore=shutil.ignore_patterns(".run.lock"))
+    pq.write_table(edit(pq.read_table(d / "estimates.parquet")), d / "estimates.parquet")
+    return d
+
+
+def _last_row_nan(column: str):
+    def edit(table):
+        import pyarrow as pa
+
+        rows = table.to_pylist()
+        rows[-1][column] = [float("nan")] * len(rows[-1][column])
+        return pa.Table.from_pylist(rows, schema=table.schema)
+    return edit
+
+
+def _refusals(d: Path, tmp_path: Path, capsys) -> list[str]:
+    """The error lines of export and predict on ``d``; both must exit 2 and write nothing."""
+    assert main(["export", str(d), "--out", str(tmp_path / "x.oem")]) == 2
+    assert main(["predict", str(d), "--site", "711", "--out", str(tmp_path / "pr")]) == 2
+    assert not (tmp_path / "x.oem").exists() and not (tmp_path / "pr").exists()
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and ".tmp" not in err
+    return [line for line in err.splitlines() if "error:" in line]
+
+
+def test_an_empty_estimates_table_is_refused_by_export_and_predict_naming_the_file(finished, tmp_path, capsys):
+    d = _edited(finished, tmp_path, lambda t: t.slice(0, 0))
+    for line in _refusals(d, tmp_path, capsys):
+        assert f"{d / 'estimates.parquet'}: holds no estimates; run the scenario again into {d} with --overwrite" in line
+
+
+@pytest.mark.parametrize("column", ["mean_km", "covariance_km", "weights"])
+def test_a_nan_in_the_estimates_is_refused_as_damaged_never_written_as_nan(finished, tmp_path, column, capsys):
+    d = _edited(finished, tmp_path, _last_row_nan(column))
+    lines = _refusals(d, tmp_path, capsys)
+    assert len(lines) == 2
+    for line in lines:
+        assert f"{d}: its estimates are damaged (step " in line and f"'s {column} holds NaN or inf" in line
+        assert "dynamics" not in line and "fit.json" not in line
+
+
+def test_a_step_written_twice_is_refused_rather_than_exported_with_a_wrong_count(finished, tmp_path, capsys):
+    import pyarrow as pa
+
+    d = _edited(finished, tmp_path, lambda t: t.take(pa.array([*range(t.num_rows), t.num_rows - 1])))
+    for line in _refusals(d, tmp_path, capsys):
+        assert "its estimates are damaged (step " in line and "appears 2 times" in line
+
+
+def test_the_unedited_run_still_exports_finite_numbers(finished, tmp_path):
+    out = tmp_path / "x.oem"
+    assert main(["export", str(finished), "--out", str(out)]) == 0
+    assert "nan" not in out.read_text().lower()
