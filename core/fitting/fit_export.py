@@ -432,7 +432,8 @@ def refuse_non_finite(values: np.ndarray, utc: Any, what: str) -> None:
     if np.any(bad):
         raise ConfigError(f"{what}: {int(np.sum(bad))} of {len(utc)} times hold a value that is not a finite number "
                           f"(NaN or infinite), the first at {str(utc[int(np.argmax(bad))])[:19]}Z; nothing was written: "
-                          "the orbit of fit.json is not one a fit writes; fit the observations again")
+                          "the orbit it starts from (a fit.json, or a run's last estimate) is not one cistrack writes; "
+                          "write that folder again ('cistrack fit' or 'cistrack run' into it with --overwrite)")
 
 
 def line_drawn_short(rec: dict[str, Any]) -> str:

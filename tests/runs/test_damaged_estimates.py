@@ -7,6 +7,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cistrack.cli.main import main
@@ -81,3 +82,13 @@ def test_the_unedited_run_still_exports_finite_numbers(finished, tmp_path):
     out = tmp_path / "x.oem"
     assert main(["export", str(finished), "--out", str(out)]) == 0
     assert "nan" not in out.read_text().lower()
+
+
+def test_a_non_finite_prediction_advises_writing_the_folder_again_not_only_refitting_a_fit_json():
+    from cistrack.errors import ConfigError
+    from cistrack.fitting.fit_export import refuse_non_finite
+
+    with pytest.raises(ConfigError) as err:
+        refuse_non_finite(np.array([[1.0], [np.inf]]), ["2026-01-03T00:00:00", "2026-01-03T01:00:00"], "the sky predictions")
+    assert "1 of 2 times" in str(err.value) and "a run's last estimate" in str(err.value)
+    assert "'cistrack run' into it with --overwrite" in str(err.value)
