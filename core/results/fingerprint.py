@@ -11,7 +11,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-__all__ = ["scenario_fingerprint"]
+__all__ = ["scenario_fingerprint", "tables_as_run"]
 
 
 def _file_digest(path: Path) -> str:
@@ -25,10 +25,17 @@ def _file_digest(path: Path) -> str:
     return h.hexdigest()
 
 
+def tables_as_run(raw: dict[str, Any], seed: int) -> dict[str, Any]:
+    """The scenario tables ``raw`` with the ``seed`` actually run (``--seed``, a study's seed) in
+    place of the file's: what a run records as its ``scenario.toml``, so that running that file
+    again reproduces the run. ``raw`` itself when the file's seed (0 when not given) is that seed."""
+    return raw if raw.get("seed", 0) == int(seed) else {**raw, "seed": int(seed)}
+
+
 def scenario_fingerprint(scenario: Any, seed: int) -> str:
-    """sha256 (hex, 16 characters) of the scenario's resolved tables (after overrides), the seed
-    and the content of its measurement file, if any."""
-    data = {"scenario": scenario.raw, "seed": int(seed)}
+    """sha256 (hex, 16 characters) of the scenario's resolved tables as run (after overrides, with
+    the seed run: :func:`tables_as_run`), the seed and the content of its measurement file, if any."""
+    data = {"scenario": tables_as_run(scenario.raw, seed), "seed": int(seed)}
     meas = getattr(scenario, "measurements_file", None)
     if meas is not None:
         data["measurements_sha256"] = _file_digest(Path(meas))

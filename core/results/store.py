@@ -6,7 +6,7 @@ Layout of a run directory::
                          "filter-failed", "failed" or "interrupted", with the reason in
                          summary.failure), the running process (host, pid: a "running" run
                          whose process is gone reads as interrupted, see cistrack.results.run_status)
-    scenario.toml        the scenario as run (tables after overrides)
+    scenario.toml        the scenario as run (tables after overrides, with the seed run)
     steps.parquet        one row per step (written when the run finishes)
     steps/part-*.parquet the rows while running, many steps per part (see
                          :mod:`cistrack.results.part_files`: a part per ``rows_per_part`` steps or per
@@ -34,7 +34,7 @@ from cistrack.errors import CistrackError
 from cistrack.interrupts import interrupt_text
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
 from cistrack.results.strict_json import finite_or_null
-from cistrack.results.fingerprint import scenario_fingerprint
+from cistrack.results.fingerprint import scenario_fingerprint, tables_as_run
 from cistrack.plugin.hookspecs import hookimpl
 from cistrack.results.output_paths import clear_earlier_results
 from cistrack.results.part_files import ROWS_PER_PART, SECONDS_PER_PART, PartWriter, read_checked, read_parts, write_checked
@@ -145,13 +145,7 @@ class ResultsWriter:
         }
         # the manifest first: a folder a failed write left without it holds nothing a retry must keep
         write_json_atomic(self.directory / MANIFEST, self._manifest)
-        try:
-            import tomli_w  # optional: nicer record of the scenario as run
-            text = tomli_w.dumps(scen.raw)
-        except Exception:  # not installed, or a value TOML cannot hold: JSON instead
-            write_text_atomic(self.directory / "scenario.json", json.dumps(scen.raw, indent=2, default=str))
-        else:  # a failing write (full disk) is raised, never hidden behind the JSON fallback
-            write_text_atomic(self.directory / "scenario.toml", text)
+        _write_scenario(self.directory, tables_as_run(scen.raw, run.seed))
 
     @hookimpl
     def cistrack_step_updated(self, run, step) -> None:
@@ -223,6 +217,20 @@ class ResultsWriter:
                 extra["merge_failure"] = (f"{type(exc).__name__}: {exc}; the completed steps stay in the "
                                           f"{len(parts)} files {PARTS}/part-*.parquet")
                 problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
+
+
+def _write_scenario(directory: Path, tables: dict) -> None:
+    """``scenario.toml`` of ``tables`` (``scenario.json`` when tomli_w is not installed or a value
+    cannot be TOML), removing the other one an earlier run may have left."""
+    try:
+        import tomli_w  # optional: nicer record of the scenario as run
+        name, text = "scenario.toml", tomli_w.dumps(tables)
+    except Exception:  # not installed, or a value TOML cannot hold: JSON instead
+        name, text = "scenario.json", json.dumps(tables, indent=2, default=str)
+    write_text_atomic(directory / name, text)  # a failing write (full disk) is raised, never hidden
+    stale = directory / ("scenario.json" if name == "scenario.toml" else "scenario.toml")
+    if stale.is_file():
+        stale.unlink()
 
 
 def steps_readable(directory: str | Path) -> bool:
