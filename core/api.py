@@ -423,6 +423,7 @@ def read_run(directory: str | Path) -> Run:
         raise ConfigError(f"{d}: not a run's results folder (no manifest.json)") from None
     except ValueError as exc:  # truncated, or not JSON
         raise ConfigError(f"{d}/manifest.json: cannot be read ({exc}); not a manifest cistrack finished writing") from None
+    _check_status(d, manifest.get("status"))
     summary = manifest.get("summary")
     if not isinstance(summary, dict):
         raise ConfigError(f"{d}/manifest.json: holds no run summary (the run was killed, or is still running, before "
@@ -433,6 +434,16 @@ def read_run(directory: str | Path) -> Run:
         return Run(RunSummary.from_dict(summary), d)
     except ValueError as exc:  # a damaged summary: no run_id, a seed that is not a number
         raise ConfigError(f"{d}/manifest.json: {exc}; not a manifest cistrack wrote") from None
+
+
+def _check_status(d: Path, status: Any) -> None:
+    """ConfigError unless ``status``, a manifest's, is one a run writes (as ``cistrack export``
+    refuses a run whose status is missing or unknown)."""
+    from cistrack.results.run_status import RUN_STATUSES
+
+    if status not in RUN_STATUSES:
+        raise ConfigError(f"{d}/manifest.json: its status is {status!r}, not one a run writes "
+                          f"({', '.join(RUN_STATUSES)}); not a manifest cistrack finished writing")
 
 
 @dataclass(frozen=True)

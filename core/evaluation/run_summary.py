@@ -6,15 +6,16 @@ earlier versions wrote (``custody_kept``, ``custody_lost_step``, ...) plus ``ver
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from cistrack.propagation.impulses import BURN_LINES, burns_summary
-from cistrack.evaluation.custody import Verdict
+from cistrack.evaluation.custody import VERDICT_KINDS, Verdict
 
-__all__ = ["RunSummary", "FINAL_KEYS", "summarize", "count_lines", "final_lines", "maneuver_lines"]
+__all__ = ["RunSummary", "RECORDED_VERDICT_KINDS", "FINAL_KEYS", "summarize", "count_lines", "final_lines", "maneuver_lines"]
 
 FINAL_KEYS: tuple[str, ...] = (
     "sigma_x_km", "sigma_y_km", "sigma_z_km", "sigma_vx_cms", "sigma_vy_cms", "sigma_vz_cms",
@@ -111,20 +112,37 @@ class RunSummary:
         """Inverse of :meth:`to_dict`; also reads summaries written before ``verdict`` existed.
         ValueError saying what is missing when ``data`` is not a run summary (a damaged manifest)."""
         _check_summary(data)
-        if "verdict" in data and isinstance(data["verdict"], dict):
-            verdict = Verdict.from_dict(data["verdict"])
-        elif data.get("custody_kept", True):
-            verdict = Verdict()
-        else:
-            failed = data.get("status") == "filter-failed"
-            verdict = Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
-                              data.get("custody_lost_step"), data.get("custody_lost_t_days"))
+        verdict = _recorded_verdict(data["verdict"]) if "verdict" in data else _verdict_before_kinds(data)
         names = ("n_steps", "n_updates", "n_measurements", "n_passes", "n_passes_observed",
                  "n_measurements_before_iod", "consistency", "final", "pass_end", "wall_time_s", "prepare_time_s", "compile_time_s",
                  "status", "failure", "maneuvers", "truth_maneuvers")
         has_truth = bool(data.get("has_truth", verdict.kind != "no-truth"))  # older manifests: from the verdict
         return cls(run_id=data["run_id"], seed=int(data["seed"]), verdict=verdict, has_truth=has_truth,
                    **{k: data[k] for k in names if k in data})
+
+
+RECORDED_VERDICT_KINDS: tuple[str, ...] = (*VERDICT_KINDS, "none")
+"""The verdict kinds a run's summary holds: the final ones, and "none" for a run that did not finish."""
+
+
+def _recorded_verdict(data: Any) -> Verdict:
+    """The :class:`Verdict` of a summary's ``verdict`` table; ValueError when it is not a table
+    (null included) or its kind is not one a run records: never a verdict the run did not have."""
+    if not isinstance(data, dict):
+        raise ValueError(f"its verdict is {json.dumps(data, default=str)}, not a table, so the run's verdict is unknown")
+    if data.get("kind") not in RECORDED_VERDICT_KINDS:
+        raise ValueError(f"its verdict kind {data.get('kind')!r} is not one a run records "
+                         f"({', '.join(RECORDED_VERDICT_KINDS)})")
+    return Verdict.from_dict(data)
+
+
+def _verdict_before_kinds(data: dict[str, Any]) -> Verdict:
+    """The verdict of a summary written before ``verdict`` existed, from its flat custody keys."""
+    if data.get("custody_kept", True):
+        return Verdict()
+    failed = data.get("status") == "filter-failed"
+    return Verdict("filter-failed" if failed else "lost", data.get("failure", "") if failed else "",
+                   data.get("custody_lost_step"), data.get("custody_lost_t_days"))
 
 
 def _check_summary(data: Any) -> None:

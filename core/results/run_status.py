@@ -15,7 +15,10 @@ from pathlib import Path
 
 from cistrack.results.store import read_manifest
 
-__all__ = ["run_status", "process_gone"]
+__all__ = ["run_status", "process_gone", "RUN_STATUSES"]
+
+RUN_STATUSES: tuple[str, ...] = ("running", "finished", "filter-failed", "failed", "interrupted")
+"""The statuses a run writes into its manifest."""
 
 
 def process_gone(process: dict | None) -> bool:

@@ -124,12 +124,24 @@ def export_refusal(run_dir: str | Path) -> str | None:
         return f"it was interrupted or killed before it finished{why}; its estimate stops where it stopped"
     if status != "finished":
         return f"it did not finish (status '{status}'{why}); its estimate stops where the run stopped"
-    summary = man.get("summary") or {}
-    verdict = summary.get("verdict") or {} if isinstance(summary, dict) else None
-    if not isinstance(verdict, dict):
+    return _verdict_refusal(man.get("summary"))
+
+
+def _verdict_refusal(summary: Any) -> str | None:
+    """Why a finished run's manifest ``summary`` is not exported: it is missing or damaged (the
+    reading :func:`cistrack.read_run` refuses too), or its filter diverged; None otherwise."""
+    from cistrack.evaluation.run_summary import RunSummary
+
+    if summary is None:
+        return "its manifest.json holds no run summary, so the run's verdict is unknown"
+    if not isinstance(summary, dict) or ("verdict" in summary and not isinstance(summary["verdict"], dict)):
         return "its manifest.json's summary or verdict is not a table, so the run's verdict is unknown"
-    if verdict.get("kind") == "diverged":
-        return "its filter diverged" + (f" ({verdict['reason']})" if verdict.get("reason") else "") + \
+    try:
+        verdict = RunSummary.from_dict(summary).verdict
+    except ValueError as exc:
+        return f"its manifest.json's summary is not one a run writes ({exc}), so the run's verdict is unknown"
+    if verdict.kind == "diverged":
+        return "its filter diverged" + (f" ({verdict.reason})" if verdict.reason else "") + \
             "; the estimate is not a usable orbit"
     return None
 

@@ -105,3 +105,16 @@ def open_tmp():
         if p.is_dir() and not p.is_symlink():
             p.chmod(0o755)
     shutil.rmtree(d)
+
+
+@pytest.fixture(scope="module")
+def finished_quick_run(tmp_path_factory) -> Path:
+    """A finished run of the quick scenario (1.4 days, 300 particles, seed 1), once per test module;
+    tests copy it before editing it."""
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+
+    small = {"duration_days": 1.4, "filter": {"n_particles": 300, "n_components": 2}, "iod": {"n_particles": 300}}
+    d = tmp_path_factory.mktemp("runs") / "finished"
+    run_scenario(load_scenario("quick").with_overrides(small), seed=1, output_dir=d)
+    return d

@@ -11,17 +11,7 @@ import numpy as np
 import pytest
 
 from cistrack.cli.main import main
-from cistrack.runs.pipeline import run_scenario
-from cistrack.scenario.loading import load_scenario
 
-SMALL = {"duration_days": 1.4, "filter": {"n_particles": 300, "n_components": 2}, "iod": {"n_particles": 300}}
-
-
-@pytest.fixture(scope="module")
-def finished(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("runs") / "finished"
-    run_scenario(load_scenario("quick").with_overrides(SMALL), seed=1, output_dir=d)
-    return d
 
 
 def _edited(finished: Path, tmp_path: Path, edit) -> Path:
@@ -54,15 +44,15 @@ def _refusals(d: Path, tmp_path: Path, capsys) -> list[str]:
     return [line for line in err.splitlines() if "error:" in line]
 
 
-def test_an_empty_estimates_table_is_refused_by_export_and_predict_naming_the_file(finished, tmp_path, capsys):
-    d = _edited(finished, tmp_path, lambda t: t.slice(0, 0))
+def test_an_empty_estimates_table_is_refused_by_export_and_predict_naming_the_file(finished_quick_run, tmp_path, capsys):
+    d = _edited(finished_quick_run, tmp_path, lambda t: t.slice(0, 0))
     for line in _refusals(d, tmp_path, capsys):
         assert f"{d / 'estimates.parquet'}: holds no estimates; run the scenario again into {d} with --overwrite" in line
 
 
 @pytest.mark.parametrize("column", ["mean_km", "covariance_km", "weights"])
-def test_a_nan_in_the_estimates_is_refused_as_damaged_never_written_as_nan(finished, tmp_path, column, capsys):
-    d = _edited(finished, tmp_path, _last_row_nan(column))
+def test_a_nan_in_the_estimates_is_refused_as_damaged_never_written_as_nan(finished_quick_run, tmp_path, column, capsys):
+    d = _edited(finished_quick_run, tmp_path, _last_row_nan(column))
     lines = _refusals(d, tmp_path, capsys)
     assert len(lines) == 2
     for line in lines:
@@ -70,17 +60,17 @@ def test_a_nan_in_the_estimates_is_refused_as_damaged_never_written_as_nan(finis
         assert "dynamics" not in line and "fit.json" not in line
 
 
-def test_a_step_written_twice_is_refused_rather_than_exported_with_a_wrong_count(finished, tmp_path, capsys):
+def test_a_step_written_twice_is_refused_rather_than_exported_with_a_wrong_count(finished_quick_run, tmp_path, capsys):
     import pyarrow as pa
 
-    d = _edited(finished, tmp_path, lambda t: t.take(pa.array([*range(t.num_rows), t.num_rows - 1])))
+    d = _edited(finished_quick_run, tmp_path, lambda t: t.take(pa.array([*range(t.num_rows), t.num_rows - 1])))
     for line in _refusals(d, tmp_path, capsys):
         assert "its estimates are damaged (step " in line and "appears 2 times" in line
 
 
-def test_the_unedited_run_still_exports_finite_numbers(finished, tmp_path):
+def test_the_unedited_run_still_exports_finite_numbers(finished_quick_run, tmp_path):
     out = tmp_path / "x.oem"
-    assert main(["export", str(finished), "--out", str(out)]) == 0
+    assert main(["export", str(finished_quick_run), "--out", str(out)]) == 0
     assert "nan" not in out.read_text().lower()
 
 
