@@ -219,6 +219,10 @@ class ResultsWriter:
                 problems.append(f"merging into {STEPS}: {extra['merge_failure']}")
 
 
+STEP_KEYS = ("step", "t_days")
+"""Columns of every step table (:func:`read_steps` refuses one without them)."""
+
+
 def _write_scenario(directory: Path, tables: dict) -> None:
     """``scenario.toml`` of ``tables`` (``scenario.json`` when tomli_w is not installed or a value
     cannot be TOML), removing the other one an earlier run may have left."""
@@ -260,14 +264,24 @@ def read_steps(directory: str | Path) -> pa.Table:
     d = Path(directory)
     if (d / STEPS).exists():
         try:
-            return read_checked(d / STEPS)
+            return _in_step_order(read_checked(d / STEPS), d / STEPS)
         except (pa.ArrowException, OSError) as exc:
             raise CistrackError(f"{d / STEPS}: not a readable step table ({exc}); run the scenario again into "
                                 f"{d} (a study reruns it)") from None
     table = read_parts(d / PARTS)
     if table is None:
         raise FileNotFoundError(f"{d}: no results (neither {STEPS} nor {PARTS}/part-*.parquet)")
-    return table
+    return _in_step_order(table, d / PARTS)
+
+
+def _in_step_order(table: pa.Table, where: Path) -> pa.Table:
+    """``table``'s rows in step order; CistrackError naming ``where`` when it lacks a column every
+    step table has (``step``, ``t_days``: an edited or foreign table)."""
+    missing = [c for c in STEP_KEYS if c not in table.column_names]
+    if missing:
+        raise CistrackError(f"{where}: not a steps table (no column {', '.join(missing)}); run the scenario again "
+                            f"into {where.parent} (a study reruns it)")
+    return table.sort_by("step")
 
 
 def _stale_note(path: Path) -> str:

@@ -68,7 +68,9 @@ def plot_run(steps: Any, summary: dict[str, Any], title: str = "") -> Any:
     import matplotlib.pyplot as plt
     from matplotlib.figure import Figure
 
-    if "t_days" not in steps.columns or len(steps) == 0:
+    if "t_days" not in steps.columns:
+        raise CistrackError("the steps to plot are not a steps table (no column t_days)")
+    if len(steps) == 0:
         raise CistrackError("the run has no steps to plot (it ended before its first step was written)")
     steps = steps.sort_values("t_days", kind="stable")
     t = np.asarray(steps["t_days"].to_numpy(dtype=float), dtype=float)
