@@ -286,16 +286,18 @@ def _scenario_runs(entry: Any, p: Path, grid: _Grid, reg) -> list[RunSpec]:
         label = check_path_component(sweep_label(base.name, combo, names), f"{p}: key 'sweep': the run label")
         for flabel, ftable in grid.filters:
             for ilabel, itable in grid.iods:
-                specs += _variant_runs(base, label, combo, (flabel, ftable, ilabel, itable), grid, reg)
+                specs += _variant_runs(base, label, combo, (flabel, ftable, ilabel, itable), grid, reg, entry=str(sc))
     return specs
 
 
-def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _Grid, reg) -> list[RunSpec]:
+def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _Grid, reg,
+                  entry: str = "") -> list[RunSpec]:
     """The runs (one per seed) of scenario ``base`` under the sweep combination ``combo`` (its label
-    ``label``) with one filter and IOD variant ``(filter label, table, IOD label, table)``."""
+    ``label``) with one filter and IOD variant ``(filter label, table, IOD label, table)``; ``entry``:
+    the study's ``scenarios`` entry, as written, that named ``base``."""
     flabel, ftable, ilabel, itable = variant_tables
     ov = _variant_overrides(grid, base, ftable, itable, combo)
-    variant = _validated_variant(base, ov, grid, reg, combo, {"filter": ftable, "iod": itable})
+    variant = _validated_variant(base, ov, grid, reg, combo, {"filter": ftable, "iod": itable}, entry)
     fl = flabel or variant.components["filter"].name
     il = ilabel or variant.components["iod"].name
     scen_path = str(Path(base.source).resolve())
@@ -342,16 +344,18 @@ def _variant_overrides(grid: _Grid, base, ftable: dict | None, itable: dict | No
     return ov
 
 
-def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entries: dict | None = None):
+def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entries: dict | None = None,
+                       entry: str = ""):
     """The scenario ``base`` with the overrides ``ov``, validated now; a ConfigError names the
     study file's key behind a bad setting (``overrides``, or the ``filters``/``iod`` entry among
-    ``entries``), the sweep combination and the ``--set`` items when there are any."""
+    ``entries``), the sweep combination and the ``--set`` items when there are any; advice quotes
+    the ``scenarios`` entry as written (``entry``, default the scenario's name)."""
     try:
         return base.with_overrides(ov, reg)
     except ConfigError as exc:
         from cistrack.studies.study_file import overrides_error, sweep_error, variant_error
 
-        swept = sweep_error(str(exc), grid.study, combo, base.name, base.source)
+        swept = sweep_error(str(exc), grid.study, combo, base.name, base.source, entry or base.name)
         msg = (swept or overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source)
                or variant_error(str(exc), grid.study, entries or {}, base.name, base.source) or str(exc))
         if combo and not swept:

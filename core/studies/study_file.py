@@ -344,11 +344,12 @@ def _unknown_setting(rest: str, key: str) -> bool:
 
 
 def sweep_error(message: str, study: Path, combo: tuple, scenario_name: str,
-                scenario_source: str | Path) -> str | None:
+                scenario_source: str | Path, entry: str = "") -> str | None:
     """A scenario's error about a setting of the sweep combination ``combo`` (pairs of dotted
     setting and value) told against the study file: the key ``sweep``, the setting and its value
     with why it is refused; where the scenario does not know the setting, that it does not apply
-    there and how to leave the scenario out of it. None when the error names none of the settings."""
+    there and how to leave the scenario out of it (its ``scenarios`` entry as written, ``entry``:
+    a file's path, not the scenario's inner name). None when the error names none of the settings."""
     hit = _named_setting(message, combo)
     if hit is None:
         return None
@@ -357,7 +358,7 @@ def sweep_error(message: str, study: Path, combo: tuple, scenario_name: str,
     where = f"{study}: key 'sweep', setting {key!r}"
     if _unknown_setting(rest, key):
         return (f"{where} does not apply to scenario {scenario_name!r} ({scenario_source}: {rest}); give its "
-                f"entry as a table {{name = \"{scenario_name}\", sweep = false}} or sweep = [the settings that apply]")
+                f"entry as a table {{name = {json.dumps(entry or scenario_name)}, sweep = false}} or sweep = [the settings that apply]")
     said = re.search(re.escape(f"'{key.rsplit('.', 1)[-1]}' = ") + r"\S+", rest)  # the value as the scenario wrote it (-1.0 for -1)
     why = rest[said.end():].strip().removeprefix("is invalid:").strip() if said else rest
     return f"{where}: value {value!r} is invalid: {why} (scenario {scenario_name!r}, {scenario_source})"

@@ -197,3 +197,19 @@ def test_a_whole_number_swept_into_a_float_setting_is_refused_in_plain_words(tmp
     with pytest.raises(ConfigError) as exc:
         plan_runs(p, tmp_path / "out")
     assert f"{p}: key 'sweep', setting 'duration_days': value -1 is invalid: must be a finite number > 0" in str(exc.value)
+
+
+def test_the_advice_for_a_scenario_file_the_sweep_does_not_apply_to_quotes_its_entry_and_works(tmp_path):
+    from importlib import resources
+
+    text = resources.files("cistrack.scenarios").joinpath("example-1.toml").read_text()
+    scenario = tmp_path / "mine.toml"
+    scenario.write_text(text.replace('name = "example-1"', 'name = "inner-name"', 1))
+    p = _study(tmp_path, f'["example-1-burn", "{scenario}"]')
+    with pytest.raises(ConfigError) as exc:
+        plan_runs(p, tmp_path / "out")
+    advice = f'{{name = "{scenario}", sweep = false}}'
+    assert "does not apply to scenario 'inner-name'" in str(exc.value) and advice in str(exc.value)
+    p.write_text(p.read_text().replace(f'"{scenario}"]', f"{advice}]"))  # the advice, followed literally
+    _, specs, _ = plan_runs(p, tmp_path / "out")
+    assert {s.scenario_name.split("[")[0] for s in specs} == {"example-1-burn", "inner-name"}
