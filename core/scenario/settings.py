@@ -5,7 +5,9 @@ Each setting is a dotted path into the scenario's TOML tables and a value in TOM
 that is not valid TOML is taken as a string (``filter.name=ukf``). Settings are merged into the
 scenario's tables and the result is validated exactly like a file, so a wrong key or value is
 refused with the table and key named. Setting a component's ``name`` to another component
-replaces that component's table (its other keys belonged to the old component).
+(``filter.name=sir``) replaces that component's table (its other keys belonged to the old
+component), with a warning naming the parameters dropped; the new component's own sub-table
+(``[filter.sir]``) is kept, and parameters given with ``--set`` too apply to it.
 """
 from __future__ import annotations
 
@@ -144,6 +146,50 @@ def _yield_to(old: dict[str, Any], value: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _warn_replaced(tables: dict[str, Any], settings: dict[str, Any], registry=None) -> None:
+    """A UserWarning for each component table of ``tables`` whose component ``settings`` switch to
+    another (``filter.name=sir``), naming the parameters of the old table that are dropped with it
+    (those the settings do not set again) and how to keep them."""
+    import warnings
+
+    from cistrack.plugin.registry import default_registry
+    from cistrack.scenario.loading import COMPONENT_TABLES
+
+    reg = registry or default_registry()
+    for table, kind in COMPONENT_TABLES.items():
+        old, value = tables.get(table), settings.get(table)
+        name = value.get("name") if isinstance(value, dict) else None
+        if not isinstance(old, dict) or not isinstance(name, str) or name == old.get("name"):
+            continue
+        choices = set(reg.names(kind))
+        dropped = [k for k in old if k != "name" and k not in value and k not in choices]
+        if dropped:
+            warnings.warn(UserWarning(f"--set {table}.name={name} replaces the scenario's [{table}] ({kind} "
+                                      f"{old.get('name')!r}): {_dropped_advice(table, name, old, dropped, reg, kind)}"),
+                          stacklevel=3)
+
+
+def _dropped_advice(table: str, name: str, old: dict[str, Any], dropped: list[str], reg, kind: str) -> str:
+    """``n_particles = 200, n_components = 2 dropped with it; 'sir' takes n_particles too: add --set
+    filter.n_particles=200 to keep it`` (or that the new component takes none of them)."""
+    from cistrack.interfaces.component import param_specs
+
+    factory = reg.get(kind, name).factory if name in reg.names(kind) else None
+    takes = [k for k in dropped if isinstance(factory, type) and k in param_specs(factory)]
+    said = f"{', '.join(f'{k} = {_toml(old[k])}' for k in dropped)} dropped with it"
+    if not takes:
+        return f"{said} ({name!r} takes none of them)"
+    keep = " ".join(f"--set {table}.{k}={_toml(old[k])}" for k in takes)
+    return f"{said}; {name!r} takes {', '.join(takes)} too: add {keep} to keep {'it' if len(takes) == 1 else 'them'}"
+
+
+def _toml(value: Any) -> str:
+    """``value`` as TOML writes it (an inline table or value), for a message."""
+    import json
+
+    return json.dumps(value) if not isinstance(value, dict) else "{...}"
+
+
 def describe_settings(items: Iterable[str] | None) -> str:
     """The ``--set`` items as a message names them, a long value shortened."""
     return " ".join(f"--set {_shown(i)}" for i in items or [])
@@ -157,6 +203,7 @@ def apply_settings(scenario, items: Iterable[str] | None, registry=None):
     if not settings:
         return scenario
     source = f"{scenario.source} ({describe_settings(items)})"
+    _warn_replaced(scenario.raw, settings, registry)
     new = parse_scenario(merge_settings(scenario.raw, settings), source, registry)
     new.source = scenario.source  # errors above named the settings; the run records the merged tables
     if new.measurements_file is not None and not new.measurements_file.is_absolute():
