@@ -276,6 +276,14 @@ def is_same_study(recorded: tuple[str | None, str | None], name: str, source: st
     return rec_name == name if rec_name is not None else rec_source == source
 
 
+def single_results(d: Path) -> str:
+    """What ``d`` holds when it is one run's or one fit's results folder, in words (``the results
+    of a single run (manifest.json)``, ``a fit's results (fit.json)``); "" otherwise."""
+    if (d / "fit.json").is_file():
+        return "a fit's results (fit.json)"
+    return "the results of a single run (manifest.json)" if (d / "manifest.json").is_file() else ""
+
+
 def check_study_dir(directory: str | Path, name: str, source: str, where: str) -> Path:
     """Create the study directory ``directory`` or check that study ``name`` (from the study file
     ``source``) may write there; return it.
@@ -294,9 +302,8 @@ def check_study_dir(directory: str | Path, name: str, source: str, where: str) -
             raise ConfigError(f"{where} {d}: exists and is not a directory; {allowed}")
         if d.is_dir():
             record = d / STUDY_RECORD
-            if (d / "manifest.json").is_file():
-                raise ConfigError(f"{where} {d}: holds the results of a single run (manifest.json), not a "
-                                  f"study; {allowed}")
+            if single_results(d):
+                raise ConfigError(f"{where} {d}: holds {single_results(d)}, not a study; {allowed}")
             if record.is_file():
                 try:
                     rec_name, rec_source = recorded_study(record)

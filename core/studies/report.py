@@ -24,6 +24,7 @@ from cistrack.studies.architectures import architectures_of
 from cistrack.studies.calibration import LEVEL, group_calibration
 from cistrack.errors import ConfigError
 from cistrack.results.atomic_files import atomic_target, write_text_atomic
+from cistrack.results.output_paths import single_results
 from cistrack.results.store import read_manifest, read_steps
 from cistrack.studies.efficiency import efficiency_text, group_efficiency
 from cistrack.studies.terminal_table import terminal_table, wrap_lines
@@ -428,8 +429,11 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     directory, a full disk).
     """
     data, specs, out = _plan(path_or_name, out_dir, settings, first_seed, n_seeds)
-    groups, tables, missing_ids, stale_ids = _finished_runs(specs)
     name = str(data.get("name", out.name))
+    if single_results(out):  # as 'study run' refuses it: never advise a run that is then refused
+        raise ConfigError(f"--out {out}: holds {single_results(out)}, not study '{name}'s; give the --out "
+                          f"directory the study was run into")
+    groups, tables, missing_ids, stale_ids = _finished_runs(specs)
     if not groups:
         _nothing_to_report(name, specs, out, path_or_name, out_dir, stale_ids)
     rep_dir = _report_dir(out, name)

@@ -59,3 +59,17 @@ def test_a_damaged_value_in_a_study_directorys_record_is_blamed_on_that_record(t
     assert words.format(record=out / "study.json") in text and str(tiny_study) not in text
     if "{record}" not in words:
         assert text.startswith(f"{out / 'study.json'}: ")
+
+
+@pytest.mark.parametrize("holds, words", [("manifest.json", "the results of a single run (manifest.json)"),
+                                          ("fit.json", "a fit's results (fit.json)")])
+def test_report_into_a_run_or_fit_folder_says_what_it_holds_as_study_run_does(tiny_study, tmp_path, holds, words,
+                                                                               capsys):
+    folder = tmp_path / "single"
+    folder.mkdir()
+    (folder / "manifest.json").write_text("{}")
+    (folder / holds).write_text("{}")
+    for command in ("report", "run"):
+        assert main(["study", command, str(tiny_study), "--out", str(folder)]) == 2
+        err = capsys.readouterr().err
+        assert f"--out {folder}: holds {words}, not " in err and "Run it first" not in err
