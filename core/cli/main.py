@@ -550,7 +550,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:
         why = str(exc) or "SIGINT"
-        _eprint(f"cistrack: interrupted ({why}){_INTERRUPTED.get(getattr(args, 'cmd', ''), '')}")
+        _eprint(f"cistrack: interrupted ({why}){_interrupted_advice(args)}")
         sig = getattr(signal, why, None) if why.startswith("SIG") else None
         return 128 + int(sig) if sig is not None else 130
     except BrokenPipeError:  # the reader closed our stdout (e.g. `cistrack scenarios | head`)
@@ -588,8 +588,17 @@ _INTERRUPTED = {
     "fit": ("; a fit is complete only once its fit.json is written (its filter run may have finished): "
             "run 'cistrack fit' into the same directory again"),
     "study": "; finished runs are kept: 'cistrack study run' with the same options runs the rest",
+    "study report": "; study report interrupted: no report was written (the runs are untouched)",
 }
-"""What an interrupted command leaves, by command (nothing said for the others)."""
+"""What an interrupted command leaves, by command (``study report`` by its subcommand; nothing
+said for the others)."""
+
+
+def _interrupted_advice(args: argparse.Namespace) -> str:
+    """What the interrupted command ``args`` leaves, in words (:data:`_INTERRUPTED`)."""
+    cmd = getattr(args, "cmd", "")
+    sub = f"{cmd} {getattr(args, 'study_cmd', '')}"
+    return _INTERRUPTED.get(sub, _INTERRUPTED.get(cmd, ""))
 
 
 def console_main() -> None:

@@ -443,6 +443,9 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
         draft.mkdir()
         answer = _write_report(draft, name, specs, (groups, tables, missing_ids, stale_ids))
         _replace_report(rep_dir, draft)
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: no half-written draft left beside the report
+        shutil.rmtree(draft, ignore_errors=True)
+        raise
     except OSError as exc:
         shutil.rmtree(draft, ignore_errors=True)
         where = str(exc.filename or rep_dir).replace(str(draft), str(rep_dir))
