@@ -589,19 +589,21 @@ REPORT_FOLDER = "report"
 
 
 def _remove_report_of_replaced_runs(out: Path, specs: list[RunSpec], states: dict[str, str]) -> None:
-    """Remove ``out/report`` before finished runs made otherwise are run again (``--overwrite``): it
-    describes the runs they replace, as a run's exports describe it (a run removes those)."""
+    """Remove ``out/report`` before any run is made: before finished runs made otherwise are run
+    again (``--overwrite``) it describes the runs they replace, as a run's exports describe it (a
+    run removes those); before runs are added or resumed it counts fewer runs than there will be."""
     import shutil
 
     report = out / REPORT_FOLDER
-    if not any(states[s.run_id] == "stale" for s in specs) or not report.is_dir():
+    if all(states[s.run_id] == "done" for s in specs) or not report.is_dir():
         return
     if report.is_symlink():
         report.unlink()  # the link only, as a report replaces it
     else:
         shutil.rmtree(report)
-    _notice(f"the report in {report} described the runs replaced now and is removed; 'cistrack study report' "
-            "writes it again")
+    why = ("described the runs replaced now" if any(states[s.run_id] == "stale" for s in specs)
+           else "counted the runs done before this study run")
+    _notice(f"the report in {report} {why} and is removed; 'cistrack study report' writes it again")
 
 
 def _notice(text: str, width: int = 120) -> None:

@@ -225,3 +225,22 @@ def test_a_study_resumes_an_interrupted_run(tmp_path):
     again = run_study(p, out_dir=out, workers=1, progress=False)
     assert (again["completed"], again["skipped"]) == (1, 0)
     assert read_manifest(run_dir)["status"] == "finished"
+
+
+def test_a_study_run_that_adds_runs_removes_the_report_that_counted_fewer(tmp_path, capsys):
+    import shutil
+
+    from study_files import write_study
+
+    from cistrack.studies.report import report_study
+
+    p = write_study(tmp_path, seeds="[1, 2]")
+    out = tmp_path / "out"
+    run_study(p, out_dir=out, workers=1, progress=False)
+    shutil.rmtree(next((out / "runs").iterdir()))  # as if the study had been interrupted before it
+    report_study(p, out_dir=out)
+    assert "1 of 2 runs complete" in (out / "report" / "summary.md").read_text()
+    run_study(p, out_dir=out, workers=1, progress=False)  # resumed: runs the missing one
+    assert not (out / "report").exists()
+    assert f"the report in {out / 'report'} counted the runs done before this study run and is removed" in " ".join(
+        capsys.readouterr().err.split())
