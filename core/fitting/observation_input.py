@@ -36,7 +36,7 @@ from cistrack.plugin.registry import Registry
 from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.output_paths import FIT_STARTED
 from cistrack.runs.observation_files import SeveralObjectsError, read_checked, reader_for, write_observations
-from cistrack.runs.run_inputs import weights_note
+from cistrack.runs.run_inputs import reading_own_copies, weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
            "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC",
@@ -145,7 +145,8 @@ def copies_read_quietly() -> Iterator[None]:
         return False
     logger.addFilter(drop)
     try:
-        yield
+        with reading_own_copies():  # nor does the run on them speak of the copies' weights
+            yield
     finally:
         logger.removeFilter(drop)
 

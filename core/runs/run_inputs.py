@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any, Callable
 
 import numpy as np
@@ -32,7 +33,7 @@ from cistrack.plugin.registry import Registry
 from cistrack.scenario.loading import Scenario
 from cistrack.scenario.work_limits import check_steps
 
-__all__ = ["read_scenario_observations", "weights_note", "check_observation_span", "plan_measurement_times", "estimate_iod",
+__all__ = ["read_scenario_observations", "weights_note", "reading_own_copies", "check_observation_span", "plan_measurement_times", "estimate_iod",
            "checked_iod_cloud", "in_table", "simulate_measurements"]
 
 _SPAN_TOLERANCE_TU = 1e-9
@@ -53,7 +54,7 @@ def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Regist
     except MeasurementError as exc:
         raise ConfigError(f"{scenario.source}: [measurements]: key 'file': {exc}") from None
     measurements = read_checked(reader, path, scenario.epoch)
-    if weights_note(measurements):
+    if weights_note(measurements) and not _OWN_COPIES.get():
         say(weights_note(measurements))
     check_observation_span(scenario, measurements)
     groups = measurements.time_groups()
@@ -64,6 +65,22 @@ def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Regist
         sensor = build_site_network(scenario.components["sensor"], registry, measurements)
         say(f"{len(measurements)} measurements from sites {', '.join(measurements.site_keys())}")
     return measurements, sensor
+
+
+_OWN_COPIES: ContextVar[bool] = ContextVar("cistrack_own_copies", default=False)
+
+
+@contextmanager
+def reading_own_copies() -> Iterator[None]:
+    """Within it, reading a scenario's observations says nothing of their weights: the file is a
+    copy cistrack wrote (``cistrack fit``'s ``observations-early.psv``), its uncertainties those the
+    user's files had or the reader's default filled in, and the weights were told of the user's
+    files when they were read (a file without uncertainties had been said to have its own)."""
+    token = _OWN_COPIES.set(True)
+    try:
+        yield
+    finally:
+        _OWN_COPIES.reset(token)
 
 
 def weights_note(measurements: MeasurementSet) -> str:

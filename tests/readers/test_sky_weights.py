@@ -127,3 +127,19 @@ def test_the_real_telescope_simulates_radec_noise_on_the_sky():
     s = sensor.sigmas(x, 0.1)
     np.testing.assert_allclose(s[:, 0] * np.cos(z[:, 1]) / ARCSEC_RAD, 0.5, rtol=1e-14)
     np.testing.assert_allclose(s[:, 1] / ARCSEC_RAD, 0.5, rtol=1e-15)
+
+
+def test_a_run_on_cistrack_fit_s_own_copy_of_the_observations_says_nothing_of_their_weights(tmp_path):
+    """The copy holds the default filled in; its weights were told of the user's file (probe H12)."""
+    from cistrack.runs.run_inputs import reading_own_copies
+
+    p = tmp_path / "obs.tdm"
+    _tdm(p)
+    scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "tdm"}}})
+    reg = default_registry()
+    said: list[str] = []
+    with reading_own_copies():
+        read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
+    assert not [s for s in said if s.startswith("weights:")]
+    read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)  # and outside it, as before
+    assert [s for s in said if s.startswith("weights:")]
