@@ -408,6 +408,21 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
                          registry=registry, log=log, progress=progress, overwrite=overwrite, words=PYTHON_WORDS)
 
 
+def _what_it_holds(d: Path) -> str:
+    """For a folder without a run's manifest: what it holds instead, in words ("" when nothing
+    cistrack wrote): the fits of several objects (read_run of each ``fit-*`` folder) or a study's
+    runs."""
+    from cistrack.results.output_paths import fit_folders_inside
+
+    fits = fit_folders_inside(d, "fit-*")
+    if fits:
+        return (f"; it holds the fits of several objects, one folder each ({', '.join(fits[:4])}"
+                f"{' ...' if len(fits) > 4 else ''}): read_run one of those, e.g. read_run({str(d / fits[0])!r})")
+    if (d / "study.json").is_file():
+        return "; it holds a study's runs (study.json): read_run one of its runs' folders, or ct.study for the study"
+    return ""
+
+
 def read_run(directory: str | Path) -> Run:
     """A finished (or interrupted) run read back from its results folder."""
     from cistrack.evaluation.run_summary import RunSummary
@@ -420,7 +435,7 @@ def read_run(directory: str | Path) -> Run:
     try:
         manifest = read_manifest(d)
     except FileNotFoundError:
-        raise ConfigError(f"{d}: not a run's results folder (no manifest.json)") from None
+        raise ConfigError(f"{d}: not a run's results folder (no manifest.json){_what_it_holds(d)}") from None
     except ValueError as exc:  # truncated, or not JSON
         raise ConfigError(f"{d}/manifest.json: cannot be read ({exc}); not a manifest cistrack finished writing") from None
     _check_status(d, manifest.get("status"))
