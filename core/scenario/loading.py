@@ -38,7 +38,7 @@ import copy
 import os
 import sys
 from dataclasses import dataclass, field
-from datetime import datetime
+from datetime import date, datetime
 from pathlib import Path
 from typing import Any
 
@@ -242,13 +242,23 @@ def _check_tables(data: Any, source: str, reg: Registry) -> None:
                               f"e.g. name = {example_name(reg, COMPONENT_TABLES[table])!r})")
 
 
+
+def _epoch_value(value: Any, source: str) -> Any:
+    """The scenario's ``epoch`` as written (an ISO-8601 UTC string or a TOML date-time); a TOML date
+    without a time (``epoch = 2026-01-01``) is refused naming the forms that are taken."""
+    if isinstance(value, date) and not isinstance(value, datetime):
+        raise ConfigError(f"{source}: top level: key 'epoch' = {value.isoformat()} is a date without a time of "
+                          f"day; give a UTC date-time: epoch = \"{value.isoformat()}T00:00:00Z\" (or the TOML date-time "
+                          f"{value.isoformat()}T00:00:00Z)")
+    return typed(value, (str, datetime), source, "top level", "epoch")
+
 def _top_level(data: dict, source: str) -> tuple[dict[str, Any], Any]:
     """The top-level keys as Scenario fields (name, description, epoch, seed, duration_days), and
     the epoch as written (components that take an epoch are given it)."""
     name = check_path_component(typed(data.get("name", Path(source).stem), str, source, "top level", "name"),
                                 f"{source}: top level: key 'name'")
     description = typed(data.get("description", ""), str, source, "top level", "description")
-    epoch_text = typed(data.get("epoch", "2026-01-01T00:00:00Z"), (str, datetime), source, "top level", "epoch")
+    epoch_text = _epoch_value(data.get("epoch", "2026-01-01T00:00:00Z"), source)
     try:
         epoch = units.parse_utc(epoch_text)
     except ValueError:

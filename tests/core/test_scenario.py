@@ -103,6 +103,13 @@ def test_bad_epoch_is_reported(tmp_path):
     assert "'epoch'" in msg and "ISO-8601" in msg
 
 
+def test_an_epoch_given_as_a_toml_date_without_a_time_says_which_forms_are_taken(tmp_path):
+    """It had been quoted as datetime.date(2026, 1, 1), 'expected str or datetime' (probe H13)."""
+    msg = _error(tmp_path, GOOD.replace('"2026-01-01T00:00:00Z"', "2026-01-01"))
+    assert "'epoch' = 2026-01-01 is a date without a time of day" in msg
+    assert 'epoch = "2026-01-01T00:00:00Z"' in msg and "datetime.date" not in msg
+
+
 def test_sensor_table_may_not_set_the_epoch(tmp_path):
     msg = _error(tmp_path, GOOD.replace('name = "ground-telescope"', 'name = "ground-telescope"\nepoch = "2026-01-01T00:00:00Z"'))
     assert "[sensor]" in msg and "top-level 'epoch'" in msg
