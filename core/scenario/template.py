@@ -159,6 +159,9 @@ def template_path(name: str | None) -> Path:
     stated in the message. Any other character is taken (``cistrack init "x y;z"`` writes
     ``x y;z.toml``)."""
     p = Path("my-scenario" if name is None else name)
+    if name is not None and (p.name in ("", ".", "..") or name.endswith(("/", "\\"))):
+        raise ConfigError(f"cistrack init NAME {name!r}: names a folder, not a scenario file; give a file name "
+                          f"such as {(p / 'my-scenario').as_posix()}")
     has_suffix = p.suffix.lower() == ".toml"
     try:
         check_path_component(p.stem if has_suffix else p.name, f"cistrack init NAME {name!r}: the scenario name")

@@ -89,6 +89,16 @@ def test_a_refused_name_is_told_the_rule_that_is_applied(tmp_path, capsys, monke
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("name, example", [(".", "my-scenario"), ("runs/", "runs/my-scenario"), ("..", "../my-scenario")])
+def test_a_folder_given_as_the_name_is_told_to_name_a_file_in_it(tmp_path, capsys, monkeypatch, name, example):
+    """init . had quoted the empty name '' as 'empty or a relative directory' (probe H13)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["init", name]) == 2
+    err = capsys.readouterr().err
+    assert f"cistrack init NAME {name!r}: names a folder, not a scenario file; give a file name such as {example}" in err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cistrack_run_runs_the_written_file_as_written(written, tmp_path):
     proc = subprocess.run([sys.executable, "-m", "cistrack.cli", "run", str(written), "--quiet",
                            "--out", str(tmp_path / "run")], capture_output=True, text=True, timeout=600)
