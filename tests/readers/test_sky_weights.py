@@ -79,13 +79,19 @@ def test_a_tdm_written_from_a_set_with_sky_sigmas_reads_back_bit_for_bit_in_one_
     assert np.array_equal(back.sigmas, ms.sigmas) and np.array_equal(back.values, ms.values)
 
 
-def test_a_run_on_a_tdm_without_uncertainties_prints_the_default_it_applies(tmp_path):
+def _said_reading_tdm(tmp_path) -> list[str]:
+    """What a real-data run says as it reads a TDM file without uncertainties."""
     p = tmp_path / "obs.tdm"
     _tdm(p)
     scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "tdm"}}})
     reg = default_registry()
     said: list[str] = []
     read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
+    return said
+
+
+def test_a_run_on_a_tdm_without_uncertainties_prints_the_default_it_applies(tmp_path):
+    said = _said_reading_tdm(tmp_path)
     line = next(s for s in said if s.startswith("weights:"))
     assert "2 of 2 observations have no uncertainty in the file" in line
     assert "tdm reader's default sigma_arcsec = 1 arcsec on the sky" in line
@@ -133,13 +139,7 @@ def test_a_run_on_cistrack_fit_s_own_copy_of_the_observations_says_nothing_of_th
     """The copy holds the default filled in; its weights were told of the user's file (probe H12)."""
     from cistrack.runs.run_inputs import reading_own_copies
 
-    p = tmp_path / "obs.tdm"
-    _tdm(p)
-    scen = load_scenario("real-data").with_overrides({"measurements": {"file": str(p), "reader": {"name": "tdm"}}})
-    reg = default_registry()
-    said: list[str] = []
     with reading_own_copies():
-        read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)
-    assert not [s for s in said if s.startswith("weights:")]
-    read_scenario_observations(scen, scen.build("sensor", reg), reg, said.append)  # and outside it, as before
-    assert [s for s in said if s.startswith("weights:")]
+        said = _said_reading_tdm(tmp_path)
+    assert said and not [s for s in said if s.startswith("weights:")]
+    assert [s for s in _said_reading_tdm(tmp_path) if s.startswith("weights:")]  # and outside it, as before
