@@ -151,10 +151,9 @@ def _one_sensor(scenario, components, truth, grids, rngs, say):
     if passes and passes[0].start <= grid[0] + 1e-12:
         # A pass already in progress at t = 0 is cut short; the target is acquired at its
         # first rise, so tasking (and the IOD's "first pass") starts with the next pass.
-        hours = units.tu_to_hours(passes[0].end - grid[0])
-        say(f"skipping the pass in progress at t = 0 (visible for its first {hours:.1f} h only)")
-        skipped = (f"; the pass in progress at t = 0 ({hours:.1f} h"
-                   f"{', the whole run: the target never sets' if passes[0].end >= grid[-1] - 1e-12 else ''})"
+        say(f"skipping the pass in progress at t = 0 (visible for its first {_pass_length(passes[0].end - grid[0])} only)")
+        skipped = (f"; the pass in progress at t = 0 ({_pass_length(passes[0].end - grid[0])}"
+                   f"{', the whole run: the target does not set within it' if passes[0].end >= grid[-1] - 1e-12 else ''})"
                    " is never tasked, as the target is acquired at its first rise")
         passes = passes[1:]
     times = plan_measurement_times(scenario, schedule, passes, rngs["schedule"])
@@ -163,6 +162,13 @@ def _one_sensor(scenario, components, truth, grids, rngs, say):
                           f"({len(passes)} visibility passes in {scenario.duration_days:g} days{skipped})")
     say(f"{len(passes)} passes, {times.size} measurements scheduled")
     return simulate_measurements(sensor, truth.states_at(times), times, rngs["measurements"], reg), passes
+
+
+def _pass_length(tu: float) -> str:
+    """A pass's length in words: hours, or seconds under six minutes (a run of 1e-6 days had said
+    '0.0 h, the whole run: the target never sets')."""
+    hours = float(units.tu_to_hours(tu))
+    return f"{hours:.1f} h" if hours >= 0.1 else f"{hours * 3600.0:.3g} s"
 
 
 def _compile_ahead(dynamics, state) -> None:

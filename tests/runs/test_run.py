@@ -154,5 +154,17 @@ def test_a_target_that_never_sets_is_refused_with_the_reason():
     from cistrack.scenario.loading import load_scenario
 
     scen = load_scenario("quick").with_overrides({"sensor": {"elevation_mask_deg": -90.0}})
-    with pytest.raises(ConfigError, match=r"the whole run: the target never sets\) is never tasked"):
+    with pytest.raises(ConfigError, match=r"the whole run: the target does not set within it\) is never tasked"):
+        run_scenario(scen, seed=1)
+
+
+def test_a_run_shorter_than_a_tenth_of_an_hour_states_its_pass_in_seconds():
+    """duration_days = 1e-6 had said '(0.0 h, the whole run: the target never sets)' (probe H13)."""
+    from cistrack.errors import ConfigError
+    from cistrack.runs.pipeline import run_scenario
+    from cistrack.scenario.loading import load_scenario
+
+    scen = load_scenario("quick").with_overrides({"duration_days": 1e-6})
+    with pytest.raises(ConfigError, match=r"the pass in progress at t = 0 \(0\.0864 s, the whole run: the target "
+                                          r"does not set within it\)"):
         run_scenario(scen, seed=1)
