@@ -40,7 +40,7 @@ from cistrack.least_squares.chi_square import chi2_ppf
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnArc, BurnEstimate, ImpulseFit, burn_evidence,
-                                                burn_time_profile, capped_cost, fit_impulse, fit_impulses,
+                                                burn_time_profile, capped_cost, fit_impulse, fit_impulses, fit_moved,
                                                 screen_burn_times, with_time_uncertainty)
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
@@ -617,10 +617,9 @@ def _trial(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, tb: float, base
     made. Every delta-v starts from ``found``'s: from zero, fits with a halo orbit's 0.5 m/s burn
     moved by five minutes had run off to 40 m/s at costs of 1e10, and the check saw no time but
     the search's (a survey set reported clean with its burn two hours off)."""
-    rest = [x for x in found.burns if x is not b]
+    k = next(i for i, x in enumerate(found.burns) if x is b)
     try:
-        one = fit_impulses(arc, found.result.state, found.result.epoch, [*(x.t for x in rest), tb],
-                           [*(x.delta_v_ms for x in rest), b.delta_v_ms])
+        one = fit_moved(arc, found.result.state, found.result.epoch, found.burns, k, tb)
     except (FitError, PropagationError, np.linalg.LinAlgError):
         return None
     return tb, capped_cost(one.fit, arc.prior) - base, one

@@ -37,7 +37,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["BurnArc", "BurnEstimate", "ImpulseFit", "BurnEvidence", "fit_impulse", "fit_impulses", "burn_evidence",
-           "capped_cost", "dv_names", "MS_PER_VU", "screen_burn_times", "burn_time_profile", "with_time_uncertainty"]
+           "capped_cost", "dv_names", "fit_moved", "MS_PER_VU", "screen_burn_times", "burn_time_profile", "with_time_uncertainty"]
 
 MS_PER_VU = float(units.vu_to_kms(1.0)) * 1000.0
 
@@ -209,6 +209,14 @@ def fit_impulses(arc: BurnArc, state, t0: float, times: Sequence[float],
     return ImpulseFit(burns, fit)
 
 
+def fit_moved(arc: BurnArc, state, t0: float, burns: Sequence[BurnEstimate], k: int, tb: float) -> ImpulseFit:
+    """:func:`fit_impulses` with burn ``k`` of ``burns`` moved to ``tb`` (TU), the others at their
+    times, every delta-v starting from its estimate: from zero, fits with a halo orbit's 0.5 m/s
+    burn moved by five minutes had run off to 40 m/s at costs of 1e10."""
+    times = [tb if i == k else b.t for i, b in enumerate(burns)]
+    return fit_impulses(arc, state, t0, times, [b.delta_v_ms for b in burns])
+
+
 def fit_impulse(arc: BurnArc, state, t0: float, candidates: Sequence[float], *,
                 known: Sequence[float] = ()) -> ImpulseFit:
     """The orbit and one more impulsive burn fitted to the arc: each of the ``candidates`` (TU) is
@@ -373,9 +381,7 @@ def burn_time_profile(arc: BurnArc, fit: FitResult, lo: float, hi: float, n: int
 def _fit_at(arc: BurnArc, burn: ImpulseFit, tb: float, known: Sequence[float]) -> tuple[float, ImpulseFit]:
     """(capped cost, fit) of the arc with the searched burn moved to ``tb``, every delta-v starting
     from ``burn``'s."""
-    by_t = {x.t: x.delta_v_ms for x in burn.burns}
-    starts = [by_t.get(t, np.zeros(3)) for t in known] + [burn.searched.delta_v_ms]
-    one = fit_impulses(arc, burn.fit.state, burn.fit.epoch, [*known, tb], starts)
+    one = fit_moved(arc, burn.fit.state, burn.fit.epoch, burn.burns, burn.new, tb)
     new = next(k for k, x in enumerate(one.burns) if x.t == tb)
     return capped_cost(one.fit, arc.prior), ImpulseFit(one.burns, one.fit, new, burn.costs, burn.candidates)
 
