@@ -296,14 +296,14 @@ def _time_spread(arc, fit, burns, k: int, window: tuple[float, float], t_sigma: 
     refit cannot be made (a time that flies into the Moon), and a FitError is raised when neither can."""
     from cistrack.errors import PropagationError
     from cistrack.least_squares.errors import FitError
-    from cistrack.least_squares.impulse_fit import fit_moved
+    from cistrack.least_squares.impulse_fit import refit_moved
 
     lo, hi = window
     moved = []
     for side in (-1.0, 1.0):
         t = min(max(burns[k].t + side * TIME_POINT * t_sigma, lo), hi)
         try:
-            x = fit_moved(arc, fit.state, fit.epoch, burns, k, t).fit.state
+            x = refit_moved(arc, fit, burns, k, t).fit.state
         except (FitError, PropagationError):
             continue
         d = np.asarray(x, dtype=float) - np.asarray(fit.state, dtype=float)

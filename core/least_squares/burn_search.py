@@ -40,7 +40,7 @@ from cistrack.least_squares.chi_square import chi2_ppf
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.errors import FitError, UnobservableWarning
 from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnArc, BurnEstimate, ImpulseFit, burn_evidence,
-                                                burn_time_profile, capped_cost, fit_impulse, fit_impulses, fit_moved,
+                                                burn_time_profile, capped_cost, fit_impulse, fit_impulses, refit_moved,
                                                 screen_burn_times, with_time_uncertainty)
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
@@ -619,7 +619,7 @@ def _trial(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, tb: float, base
     the search's (a survey set reported clean with its burn two hours off)."""
     k = next(i for i, x in enumerate(found.burns) if x is b)
     try:
-        one = fit_moved(arc, found.result.state, found.result.epoch, found.burns, k, tb)
+        one = refit_moved(arc, found.result, found.burns, k, tb)
     except (FitError, PropagationError, np.linalg.LinAlgError):
         return None
     return tb, capped_cost(one.fit, arc.prior) - base, one

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -332,12 +332,15 @@ def _pass_start(prob: _Problem, initial: np.ndarray, last: np.ndarray, used: np.
     return initial if prob.cost(w0, initial, used) < prob.cost(w1, last, used) else last
 
 
-def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str]) -> _Passes:
-    """Fit, reject outliers, refit, until the rejected set settles (at most ``opts.max_passes``)."""
+def _fit_passes(prob: _Problem, x: np.ndarray, opts: FitOptions, say: list[str],
+                first_out: np.ndarray | None = None) -> _Passes:
+    """Fit, reject outliers, refit, until the rejected set settles (at most ``opts.max_passes``);
+    the first pass without the ``first_out`` rows (K,) when given and outliers are rejected."""
     k, m = len(prob.model.times), prob.model.m
-    p = _Passes(x, np.zeros(k, dtype=bool))
     seen: list[np.ndarray] = []
     min_rows = 0 if prob.prior is not None else int(np.ceil(prob.n / m))
+    start = first_out if first_out is not None and opts.reject_outliers else np.zeros(k, dtype=bool)
+    p = _Passes(x, start.copy() if k - int(start.sum()) >= min_rows else np.zeros(k, dtype=bool))
     for _ in range(opts.max_passes):
         p.x = _pass_start(prob, x, p.x, ~p.rejected)
         p.x, its, p.converged = _one_pass(prob, p.x, ~p.rejected, opts, say)
@@ -479,7 +482,7 @@ def _state_information(n: np.ndarray) -> np.ndarray:
 
 def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, state: Any, t0: float, *,
               prior: tuple[Any, Any] | None = None, options: FitOptions | None = None,
-              solve_for: Any = None) -> FitResult:
+              solve_for: Any = None, rejected: Any = None) -> FitResult:
     """Least-squares orbit from ``measurements``, starting at ``state`` (6,) at epoch ``t0``.
 
     Parameters
@@ -502,6 +505,9 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     solve_for : str or tuple of str, optional
         Names of dynamics parameters estimated with the state, started at the dynamics' own
         values (:mod:`cistrack.least_squares.solve_for_parameters`); adds to ``area_to_mass``.
+    rejected : (K,) bool, optional
+        Observations left out of the first pass (the outliers of an earlier fit of these
+        measurements); the passes after it readmit those that fit. Default: none.
 
     Returns
     -------
@@ -514,32 +520,55 @@ def fit_orbit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, 
     ``options.min_weak_sigma_km``) or that sigma exceeds ``options.max_weak_sigma_km``.
     """
     opts, x, t0, pri = _checked_inputs(state, t0, prior, options)
+    first_out = _first_rejected(rejected, len(measurements.times))
     names = () if solve_for is None else ((solve_for,) if isinstance(solve_for, str) else tuple(solve_for))
     if opts.area_to_mass == "auto":
         from cistrack.least_squares.area_to_mass import fit_area_to_mass_auto
 
         def fit(start: np.ndarray, options: FitOptions) -> FitResult:
             return fit_orbit(dynamics, sensor, measurements, start, t0, prior=prior, options=options,
-                             solve_for=names or None)
+                             solve_for=names or None, rejected=first_out)
 
         return fit_area_to_mass_auto(fit, dynamics, measurements, x, options=opts)
     if opts.area_to_mass == "solve":
         from cistrack.least_squares.area_to_mass import forced_decision
 
         names = names if AREA_TO_MASS in names else names + (AREA_TO_MASS,)
-        return forced_decision(_fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names)))
-    return _fit(dynamics, sensor, measurements, x, t0, pri, opts, _solve_for(dynamics, names))
+        return forced_decision(_fit(dynamics, sensor, measurements, _Start(x, t0, first_out), pri, opts,
+                                    _solve_for(dynamics, names)))
+    return _fit(dynamics, sensor, measurements, _Start(x, t0, first_out), pri, opts, _solve_for(dynamics, names))
 
 
-def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, x: np.ndarray, t0: float,
+def _first_rejected(rejected: Any, k: int) -> np.ndarray | None:
+    """``fit_orbit``'s ``rejected`` as (K,) bool (None: none), or a FitError naming what it got."""
+    if rejected is None:
+        return None
+    out = np.asarray(rejected)
+    if out.shape != (k,) or out.dtype != bool:
+        raise FitError(f"fit_orbit: rejected must be a ({k},) bool array, one flag per measurement; got "
+                       f"shape {out.shape}, dtype {out.dtype}")
+    return out.copy()
+
+
+class _Start(NamedTuple):
+    """Where a fit starts: the state (6,) LU, VU at the epoch ``t0`` TU, and the rows (K,) bool its
+    first pass leaves out (None: none)."""
+
+    x: np.ndarray
+    t0: float
+    first_out: np.ndarray | None
+
+
+def _fit(dynamics: Dynamics, sensor: Sensor, measurements: MeasurementSet, start: _Start,
          pri: tuple[np.ndarray, np.ndarray] | None, opts: FitOptions, params: SolveFor | None) -> FitResult:
-    """:func:`fit_orbit` on checked inputs: the unknowns are the state ``x`` (6,) and ``params``."""
+    """:func:`fit_orbit` on checked inputs: the unknowns are the state ``start.x`` (6,) and ``params``."""
+    x, t0, first_out = start
     model = MeasurementModel(sensor, measurements, use_range=opts.use_range, steps=opts.sensor_steps)
     if params is not None:
         x = np.concatenate([x, params.initial()])
     prob = _problem(dynamics, model, x, t0, pri, params)
     say: list[str] = []
-    p = _fit_passes(prob, x, opts, say)
+    p = _fit_passes(prob, x, opts, say, first_out)
     used = ~p.rejected
     w, states, n = _at_estimate(prob, p.x, used)
     obs = observability(_state_information(n))

@@ -38,6 +38,9 @@ EXCEPTIONS: dict[str, str] = {
                         "the command (overwrite is --overwrite), as a user reads them in the docs",
     "core/api.py::study": "the Python twin of `cistrack study run`: one keyword-only argument per option "
                           "of the command (overwrite is --overwrite), as docs/python-api.md lists them",
+    "core/least_squares/differential_correction.py::fit_orbit": "the least-squares entry point: the model, "
+        "the data, the start and its epoch, then one keyword-only argument per option of the fit (prior, "
+        "options, solve-for parameters, the first pass's left-out rows), as its docstring lists them",
     "core/runs/export.py::export_run": "the Python twin of `cistrack export` on a run: one argument per "
                                        "option of the command (path is --out), as docs/export.md shows them, "
                                        "with the registry, the stage log and the words its refusals use",

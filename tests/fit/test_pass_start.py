@@ -90,3 +90,43 @@ def test_halo_seed_23_converges_with_the_truth_inside(tmp_path):
     assert row.rejected_injected == row.injected and row.clean_rejected == 0
     record = json.loads((tmp_path / "fits" / "halo-s23" / "fit.json").read_text())
     assert record["determination"]["sentence"].startswith("poorly determined")
+
+
+def test_an_observation_left_out_of_the_first_pass_is_readmitted_when_it_fits(arc):
+    dyn, sensor, ms, bad, clean, truth, t_last = arc
+    out_first = np.zeros(len(ms), dtype=bool)
+    out_first[3] = True
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = fit_orbit(dyn, sensor, ms, truth, t_last, options=FitOptions(max_reject_fraction=0.1),
+                        rejected=out_first)
+    assert out.converged and not bool(out.residuals.rejected[3])
+    assert bool(out.residuals.rejected[bad]) and out.n_rejected == 1
+
+
+def test_an_outlier_left_out_of_the_first_pass_never_pulls_the_fit(arc):
+    """From the clean fit with the outlier left out, the first pass starts at its optimum and the
+    rejected set is settled: no iteration moves the state along the weak direction."""
+    dyn, sensor, ms, bad, clean, truth, t_last = arc
+    opts = FitOptions(max_reject_fraction=0.1)
+    out_first = np.zeros(len(ms), dtype=bool)
+    out_first[bad] = True
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = fit_orbit(dyn, sensor, clean, truth, t_last, options=opts)
+        out = fit_orbit(dyn, sensor, ms, ref.state, t_last, options=opts, rejected=out_first)
+        pulled = fit_orbit(dyn, sensor, ms, ref.state, t_last, options=opts)
+    assert out.converged and out.n_rejected == 1 and bool(out.residuals.rejected[bad])
+    assert out.iterations < pulled.iterations, (out.iterations, pulled.iterations)
+    sig = np.sqrt(np.diag(ref.covariance))
+    assert np.all(np.abs(out.state - ref.state) < 1e-3 * sig)
+
+
+def test_rejected_flags_of_the_wrong_shape_are_refused_by_name(arc):
+    from cistrack.least_squares import FitError
+
+    dyn, sensor, ms, bad, clean, truth, t_last = arc
+    with pytest.raises(FitError, match=rf"rejected must be a \({len(ms)},\) bool array"):
+        fit_orbit(dyn, sensor, ms, truth, t_last, rejected=np.zeros(3, dtype=bool))
+    with pytest.raises(FitError, match="rejected must be"):
+        fit_orbit(dyn, sensor, ms, truth, t_last, rejected=np.zeros(len(ms)))

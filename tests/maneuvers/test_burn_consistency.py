@@ -147,9 +147,13 @@ def test_a_100_ms_burn_split_over_two_burns_is_not_confirmed_with_a_zero_time_si
 
 
 def test_a_100_ms_burn_whose_fit_leaves_large_residuals_is_not_confirmed():
-    """example-1-burn seed 2 at 100 m/s: had been confirmed as 111 +- 0.65 m/s (17 sigma off)."""
+    """example-1-burn seed 2 at 100 m/s: had been confirmed as 111 +- 0.65 m/s (17 sigma off). With
+    the time profile's fits started from the estimate's rejected observations the search goes on to
+    split the change over two burns (87 m/s at 3.557 d, 16 m/s at 3.990 d); either reason leaves it
+    unconfirmed."""
     m = _big_burn_run(2)
-    assert not m["confirmed"] and m["unconfirmed_reason"].startswith("the fit with the burn does not fit")
+    assert not m["confirmed"]
+    assert m["unconfirmed_reason"].startswith(("the fit with the burn does not fit", "the search split the change"))
 
 
 def test_a_burn_before_the_arcs_start_is_not_confirmed_in_a_later_gap():
