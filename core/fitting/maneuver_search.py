@@ -68,9 +68,11 @@ def add_maneuvers(one, say) -> None:
     in it, their delta-v no longer among its parameters: every later step predicts forward of the
     burns with the run's ballistic model); ``one.dynamics`` is the model with the burns (for the
     residuals of the whole arc) and ``one.maneuvers`` their records. A suspect fit that no burn
-    explains, or that is still suspect with the burns found, is not reported as converged (and the
-    burns are not reported): its messages say why."""
-    from cistrack.least_squares.burn_search import burn_fit_options, flown, search_maneuvers, suspicion
+    explains, or that is still suspect with the burns found, is searched once more with each burn
+    started where the orbits fitted to either side of a gap meet
+    (:mod:`cistrack.least_squares.split_start`); when that is not clean either, it is not reported
+    as converged (and the burns are not reported): its messages say the first search's reason."""
+    from cistrack.least_squares.burn_search import flown, suspicion
 
     r = one.result
     if r is None or one.run is None:
@@ -88,19 +90,12 @@ def add_maneuvers(one, say) -> None:
             "was searched",))
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
-    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, r, burn_fit_options(one.choices.options), say)
-    if not found.burns:
-        one.result = replace(r, converged=False, messages=tuple(r.messages) + (
-            f"not a clean fit: it looks like an object that maneuvered ({why}), and no impulsive burn in "
-            "the gaps between the observations explains it",))
-        return
-    say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
-        "(full fits in each night's gap)")
-    found, doubt = _times_allowed(ctx, one, found, say)
-    if not doubt:
-        say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
-    fit, burns, failed = (None, [], "") if doubt else _completed(ctx, found)
-    doubt = doubt or failed or _burn_doubt(fit, burns)
+    found, fit, burns, doubt = _measured(ctx, one, say)
+    if doubt:
+        say(f"{one.designation}: not measured ({doubt}); searching again with each burn started where the orbits "
+            "fitted to either side of a gap meet")
+        again = _measured(ctx, one, say, split=True)
+        found, fit, burns, doubt = (found, fit, burns, doubt) if again[3] else again
     if doubt:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
             f"not a clean fit: it looks like an object that maneuvered ({why}), and {doubt}",))
@@ -114,6 +109,26 @@ def add_maneuvers(one, say) -> None:
     one.result = replace(_without_burns(fit), messages=tuple(fit.messages) + (
         f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}",
         *moves))
+
+
+def _measured(ctx, one, say, split: bool = False):
+    """(search, fit, burns, doubt) of the burn search on ``one``'s ballistic fit (with ``split``,
+    its fits started where the orbits of a gap's two sides meet too), the burn times checked and
+    their uncertainty carried into the fit (:func:`_completed`); ``doubt`` says in words why the
+    burns are not reported ("" when they are)."""
+    from cistrack.least_squares.burn_search import burn_fit_options, search_maneuvers
+
+    found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, one.result,
+                             burn_fit_options(one.choices.options), say, split=split)
+    if not found.burns:
+        return found, None, [], "no impulsive burn in the gaps between the observations explains it"
+    say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
+        "(full fits in each night's gap)")
+    found, doubt = _times_allowed(ctx, one, found, say)
+    if not doubt:
+        say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
+    fit, burns, failed = (None, [], "") if doubt else _completed(ctx, found)
+    return found, fit, burns, doubt or failed or _burn_doubt(fit, burns)
 
 
 def _count(n: int, noun: str) -> str:

@@ -19,6 +19,10 @@ nights, or between tracklets of one night):
    (:func:`cistrack.least_squares.impulse_fit.burn_evidence`, false alarm :data:`FALSE_ALARM`);
    then the search goes on for another burn (at most :data:`MAX_BURNS`), all delta-v refitted jointly.
 
+With ``split=True`` each step also fits the burn from where the orbits of a gap's two sides,
+each fitted alone, meet (:mod:`cistrack.least_squares.split_start`): ``cistrack fit`` searches so
+again when the search above leaves the arc unexplained.
+
 ``cistrack fit`` records each burn kept in ``fit.json``'s ``maneuvers``
 (:mod:`cistrack.fitting.maneuver_search`); a run's maneuver watch in ``summary.maneuvers``
 (:mod:`cistrack.runs.maneuver_watch`).
@@ -44,6 +48,7 @@ from cistrack.least_squares.impulse_fit import (MS_PER_VU, BurnArc, BurnEstimate
                                                 screen_burn_times, with_time_uncertainty)
 from cistrack.least_squares.options import FitOptions
 from cistrack.least_squares.result import FitResult
+from cistrack.least_squares.split_start import SPLIT_GAPS, split_candidates, split_fit
 from cistrack.model.measurement import MeasurementSet
 from cistrack.least_squares.trajectory import arc_states
 from cistrack.propagation.impulses import ImpulsiveDynamics
@@ -265,7 +270,8 @@ def _screen_gaps(flown: BurnArc, about: FitResult, gaps: list) -> np.ndarray:
     return costs.reshape(len(gaps), GAP_POINTS).min(axis=1)
 
 
-def _next_burn(arc: BurnArc, found: ManeuverSearch) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+def _next_burn(arc: BurnArc, found: ManeuverSearch,
+               split: bool = False) -> tuple[ImpulseFit, tuple[float, float], float] | None:
     """The best fit with one more burn, its gap and its time's one sigma (TU); None when no gap
     gives a fit.
 
@@ -278,10 +284,21 @@ def _next_burn(arc: BurnArc, found: ManeuverSearch) -> tuple[ImpulseFit, tuple[f
     choice when its fit costs more than :data:`RIVAL_COST` less (a clear preference, not noise
     between two neighbouring gaps): survey set dro-s90 (seed 90, 0.5 m/s) had its burn placed between two tracklets of a
     night 1.4 days after it, the true four-day gap not among the first screen's two best, a fit
-    there costing 32 less."""
+    there costing 32 less.
+
+    With ``split`` the gaps whose two sides determine their orbits alone are fitted in full from
+    where those orbits meet too (:mod:`cistrack.least_squares.split_start`), and the best of all
+    the fits is kept."""
     gaps = _windows(arc.measurements.times, found.windows)
     if not gaps:
         return None
+    best = _screened_burn(arc, found, gaps)
+    return _better(best, _split_burn(arc, found, gaps)) if split else best
+
+
+def _screened_burn(arc: BurnArc, found: ManeuverSearch,
+                   gaps: list[tuple[float, float]]) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+    """:func:`_next_burn`'s fits in the gaps the linearised screen ranks best."""
     flown = replace(arc, dynamics=found.dynamics)  # the burns found so far flown
     best = None
     for _ in range(2):
@@ -298,6 +315,26 @@ def _next_burn(arc: BurnArc, found: ManeuverSearch) -> tuple[ImpulseFit, tuple[f
             best = _better(best, _gap_fit(arc, flown, about, found, gaps[g], spread=again), RIVAL_COST if again else 0.0)
         if best is None:
             return None
+    return best
+
+
+def _split_burn(arc: BurnArc, found: ManeuverSearch,
+                gaps: list[tuple[float, float]]) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+    """(fit, gap, time sigma) of the best fit started where the orbits of a gap's two sides meet
+    (:data:`~cistrack.least_squares.split_start.SPLIT_GAPS` gaps, nearest meeting first); None when
+    no gap's sides determine their orbits or no fit can be made. The time's sigma is the linearised
+    profile's about the fit's orbit with the new burn left out (a fifth of the gap when that fails)."""
+    best = None
+    for sp in split_candidates(arc, found.result, found.dynamics, gaps, lambda f: f.rms <= MAX_RMS)[:SPLIT_GAPS]:
+        fit = split_fit(arc, found.result, found.dynamics, sp, found.burns)
+        if fit is None:
+            continue
+        try:
+            _, t_sigma = burn_time_profile(replace(arc, dynamics=found.dynamics),
+                                           replace(found.result, state=fit.fit.state), *sp.gap)
+        except (FitError, PropagationError):
+            t_sigma = (sp.gap[1] - sp.gap[0]) / 5.0
+        best = _better(best, (fit, sp.gap, t_sigma))
     return best
 
 
@@ -324,16 +361,17 @@ def _better(best, one, margin: float = 0.0):
 
 def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, ballistic: FitResult,
                      options: FitOptions, say: Callable[[str], None] = lambda m: None,
-                     prior: Any = None) -> ManeuverSearch:
+                     prior: Any = None, split: bool = False) -> ManeuverSearch:
     """Burns that explain the arc ``ms`` better than the ``ballistic`` fit (module docstring).
     ``options`` are the fit's; the area-to-mass ratio is estimated with the burns only when the
     ballistic fit estimated it. ``prior``: (mean (6,), covariance (6, 6)) on the state at the
-    ballistic fit's epoch, the one that fit was made with (None: none)."""
+    ballistic fit's epoch, the one that fit was made with (None: none). ``split``: fit each burn
+    from where the orbits of its gap's two sides meet too (:func:`_next_burn`; slower)."""
     opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
     arc = BurnArc(dynamics, sensor, ms, opts, prior)
     found = ManeuverSearch(ballistic, dynamics, prior=prior)
     for _ in range(MAX_BURNS):
-        step = _next_burn(arc, found)
+        step = _next_burn(arc, found, split)
         if step is None:
             break
         fit, window, t_sigma = step
