@@ -10,13 +10,44 @@ as "ignored" and lost, and a Ctrl-C there let a run finish and exit 0. The handl
 from __future__ import annotations
 
 import os
+import signal
 import sys
+from collections.abc import Callable
 
 from cistrack.errors import RunInterrupted
 
-__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting", "interrupt_text"]
+__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting", "interrupt_text",
+           "ctrl_c_handler", "from_signal", "plugin_fault"]
 
 _PENDING: list[RunInterrupted] = []
+_CTRL_C_HANDLERS: list[Callable] = []
+
+
+def ctrl_c_handler(handler: Callable) -> Callable:
+    """Mark ``handler`` (returned as it is) as a SIGINT handler that raises a RunInterrupted for a
+    Ctrl-C: while it is installed, a plain KeyboardInterrupt comes from code, not from a signal."""
+    _CTRL_C_HANDLERS.append(handler)
+    return handler
+
+
+def from_signal(exc: BaseException) -> bool:
+    """Whether ``exc`` is an interrupt a signal raised: a RunInterrupted (the command's handlers),
+    or a KeyboardInterrupt where Python's own Ctrl-C handler is in place (the API), which cannot be
+    told from one that code raised. A KeyboardInterrupt raised while the command's Ctrl-C handler is
+    installed is code's own (a plugin's ``raise KeyboardInterrupt``), not a signal."""
+    if isinstance(exc, RunInterrupted):
+        return True
+    if not isinstance(exc, KeyboardInterrupt):
+        return False
+    return signal.getsignal(signal.SIGINT) not in _CTRL_C_HANDLERS
+
+
+def plugin_fault(exc: BaseException) -> bool:
+    """Whether ``exc``, raised from a plugin's code, is that plugin's failure (named, the run
+    "failed", never a traceback): every exception, BaseExceptions such as SystemExit, GeneratorExit
+    and a KeyboardInterrupt no signal raised included; only an interrupt from a signal
+    (:func:`from_signal`) stops the command as an interrupt (probe I1)."""
+    return not from_signal(exc)
 
 
 def note(exc: RunInterrupted) -> RunInterrupted:

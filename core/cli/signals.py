@@ -12,7 +12,7 @@ import signal
 import threading
 
 from cistrack.errors import RunInterrupted
-from cistrack.interrupts import clear, note
+from cistrack.interrupts import clear, ctrl_c_handler, note
 
 __all__ = ["install_signal_handlers"]
 
@@ -21,6 +21,7 @@ def _raise_interrupted(signum, frame) -> None:
     _raise_unless_lost(note(RunInterrupted(signal.Signals(signum).name)), frame)
 
 
+@ctrl_c_handler
 def _raise_ctrl_c(signum, frame) -> None:
     """Ctrl-C as Python raises it (an empty message: "SIGINT, Ctrl-C" in the manifest), but as a
     RunInterrupted, so that code that catches a plugin's own KeyboardInterrupt (the registry,

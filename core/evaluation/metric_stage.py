@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from cistrack.errors import CistrackError, ConfigError, PluginError, exception_text
+from cistrack.interrupts import plugin_fault
 from cistrack.interfaces.metric import EVENTS, StepMetric
 
 __all__ = ["StepMetric", "ReadOnlyMetrics", "MetricStage", "order_metrics", "EVENTS"]
@@ -129,7 +130,9 @@ class MetricStage:
             return getattr(stage, method)(*args)
         except _PASS_THROUGH:
             raise
-        except (Exception, SystemExit) as exc:
+        except BaseException as exc:  # GeneratorExit, a KeyboardInterrupt no signal raised too (probe I1)
+            if not plugin_fault(exc):
+                raise
             hint = (" (the step's belief is read-only: a stage measures it and must not modify it)"
                     if isinstance(exc, ValueError) and "read-only" in str(exc) else "")
             raise self._error(stage, f": {method}() raised {exception_text(exc)}{hint}") from exc

@@ -22,6 +22,7 @@ from typing import Any
 from cistrack import units
 from cistrack.interfaces.component import Component, param_specs
 from cistrack.errors import CistrackError, ConfigError, ParameterError, UnknownComponentError, exception_text, quoted
+from cistrack.interrupts import plugin_fault
 from cistrack.plugin.registry import Registry
 
 __all__ = ["ComponentSpec", "component_spec", "check_keys", "typed", "example_name"]
@@ -202,7 +203,9 @@ def _build(spec: ComponentSpec, reg: Registry) -> Any:
         raise
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"{spec.where}: {spec.kind} {spec.name!r} rejected its parameters: {exc}") from None
-    except (Exception, SystemExit) as exc:  # a plugin's own failure (a missing optional library, a bug, sys.exit)
+    except BaseException as exc:  # a plugin's own failure (a missing optional library, a bug, sys.exit)
+        if not plugin_fault(exc):
+            raise
         raise ConfigError(f"{spec.where}: {reg.describe(spec.kind, spec.name)}: could not be constructed: "
                           f"{exception_text(exc)}") from exc
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, StateError, exception_text
+from cistrack.interrupts import plugin_fault
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.dynamics import Body, Dynamics, Propagation, check_output_times
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
@@ -467,7 +468,9 @@ def _planned(plan: ManeuverPlan, dynamics: Dynamics, start: tuple, who: str) -> 
         got = plan.impulses(dynamics, np.asarray(x0, dtype=float).reshape(6), float(t0), float(t_end))
     except CistrackError:
         raise
-    except (Exception, SystemExit) as exc:  # the plugin's own bug: named, never a traceback
+    except BaseException as exc:  # the plugin's own bug: named, never a traceback
+        if not plugin_fault(exc):
+            raise
         raise ConfigError(f"{who}: impulses() raised {exception_text(exc)}") from exc
     if not isinstance(got, (list, tuple)):
         raise ConfigError(f"{who}: impulses() returned {type(got).__name__}, not a list of Impulse")

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from cistrack.errors import CistrackError, ConfigError
+from cistrack.interrupts import plugin_fault
 from cistrack.results.atomic_files import atomic_target
 
 __all__ = ["write_export", "same_export", "ExportWords", "CLI_EXPORT_WORDS", "PYTHON_EXPORT_WORDS"]
@@ -94,7 +95,9 @@ def _write_checked(exporter: Any, tmp: Path, estimates: Any, meta: dict[str, Any
         exporter.write(tmp, estimates, meta)
     except (CistrackError, OSError):
         raise
-    except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's fault, named (never KeyboardInterrupt)
+    except BaseException as exc:  # a plugin's fault, named (a KeyboardInterrupt only from a signal)
+        if not plugin_fault(exc):
+            raise
         raise PluginError(f"{who} failed: {exception_text(exc)}; nothing was written") from exc
     if not tmp.is_file() or tmp.stat().st_size == 0:
         raise PluginError(f"{who} wrote nothing; nothing was written")

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from cistrack.errors import CistrackError, PluginError, exception_text
+from cistrack.interrupts import plugin_fault
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.dynamics import Propagation, check_output_times
 from cistrack.plugin.registry import BUILTIN_DISTRIBUTION, Registry
@@ -56,7 +57,9 @@ def _checking(propagate: Any, who: str) -> Any:
             out = propagate(states, t0, times, *args, **kwargs)
         except (CistrackError, MemoryError):
             raise
-        except (Exception, SystemExit) as exc:  # the plugin's own bug: named, never the filter's
+        except BaseException as exc:  # the plugin's own bug: named, never the filter's
+            if not plugin_fault(exc):
+                raise
             raise PluginError(f"{who}: propagate() raised {exception_text(exc)}") from exc
         fault = propagation_fault(out, np.shape(states), t0, times)
         if fault:

@@ -15,6 +15,7 @@ import numpy as np
 from cistrack import units
 from cistrack.errors import CistrackError, PluginError, exception_text
 from cistrack.interfaces.maneuvers import Detection
+from cistrack.interrupts import plugin_fault
 from cistrack.model.belief import ParticleCloud
 
 __all__ = ["plugin_call", "checked_observation", "checked_response_cloud"]
@@ -25,15 +26,20 @@ def _days(t: float) -> str:
 
 
 def plugin_call(who: str, where: str, call: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
-    """``call(*args, **kwargs)``; the plugin's own exception (or ``sys.exit``) becomes a PluginError
+    """``call(*args, **kwargs)``; the plugin's own exception (``sys.exit``, GeneratorExit and a
+    KeyboardInterrupt that no signal raised included) becomes a PluginError
     ``"{who}: {method}() raised {Type}: {message} {where}"``, ``where`` saying when (the step).
-    cistrack's errors, numerical failures (LinAlgError, FloatingPointError), MemoryError and
-    interrupts pass as they are."""
+    cistrack's errors, numerical failures (LinAlgError, FloatingPointError) and interrupts from
+    signals pass as they are; a MemoryError stays one, naming the plugin (probe I1)."""
     try:
         return call(*args, **kwargs)
-    except (CistrackError, np.linalg.LinAlgError, FloatingPointError, MemoryError):
+    except (CistrackError, np.linalg.LinAlgError, FloatingPointError):
         raise
-    except (Exception, SystemExit) as exc:
+    except MemoryError as exc:
+        raise MemoryError(f"{who}: {call.__name__}() ran out of memory {where} ({exception_text(exc)})") from exc
+    except BaseException as exc:
+        if not plugin_fault(exc):
+            raise
         raise PluginError(f"{who}: {call.__name__}() raised {exception_text(exc)} {where}") from exc
 
 

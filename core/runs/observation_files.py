@@ -13,6 +13,7 @@ from typing import Any
 
 from cistrack import units
 from cistrack.errors import MeasurementError
+from cistrack.interrupts import plugin_fault
 # Defined beside the Reader interface (what reader plugins import); re-exported for this module's callers.
 from cistrack.interfaces.reader import FieldError, SeveralObjectsError, field_error, read_text_lines, show_field
 from cistrack.model.measurement import MeasurementSet
@@ -79,7 +80,9 @@ def read_checked(reader: Any, path: str | PathLike, epoch: str | datetime) -> Me
         out = reader.read(path, epoch)
     except (CistrackError, OSError):
         raise
-    except (Exception, SystemExit) as exc:  # noqa: BLE001 - a plugin's fault, named (never KeyboardInterrupt)
+    except BaseException as exc:  # a plugin's fault, named (a KeyboardInterrupt only from a signal)
+        if not plugin_fault(exc):
+            raise
         raise PluginError(f"{who} failed on {path}: {exception_text(exc)}") from exc
     if not isinstance(out, MeasurementSet):
         raise PluginError(f"{who} returned {type(out).__name__} for {path}, not a MeasurementSet (docs/plugins.md, "

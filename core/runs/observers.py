@@ -9,7 +9,7 @@ from typing import Any, Iterable
 import pluggy
 
 from cistrack.errors import ConfigError, PluginError, RunInterrupted, exception_text
-from cistrack.interrupts import interrupt_text
+from cistrack.interrupts import interrupt_text, plugin_fault
 from cistrack.evaluation.custody import CustodyMetric
 from cistrack.evaluation.information_bound import InformationBoundMetric
 from cistrack.evaluation.metric_stage import MetricStage, StepMetric
@@ -89,7 +89,9 @@ def _stages_of(impl: Any, scenario: Any) -> list[StepMetric]:
     who = f"{impl.plugin_name}: cistrack_metric_stages"
     try:
         found = impl.function(*[{"scenario": scenario}[a] for a in impl.argnames])
-    except (Exception, SystemExit) as exc:
+    except BaseException as exc:  # GeneratorExit, a KeyboardInterrupt no signal raised too (probe I1)
+        if not plugin_fault(exc):
+            raise
         raise ConfigError(f"{who} raised {exception_text(exc)}") from exc
     if found is None:
         return []
@@ -119,10 +121,10 @@ def notify(pm: pluggy.PluginManager, hook: str, **kwargs: Any) -> None:
             impl.function(*[kwargs[a] for a in impl.argnames])
         except RunInterrupted:
             raise
-        except KeyboardInterrupt as exc:  # without a message it may be Python's own Ctrl-C (no handlers: the API)
-            what = exception_text(exc) if str(exc) else "a Ctrl-C (SIGINT) or a KeyboardInterrupt"
-            raise KeyboardInterrupt(f"{what} raised in {impl.plugin_name}: {hook}") from exc
-        except (Exception, SystemExit) as exc:
+        except BaseException as exc:  # GeneratorExit, a KeyboardInterrupt no signal raised too (probe I1)
+            if not plugin_fault(exc):  # without a message it may be Python's own Ctrl-C (no handlers: the API)
+                what = exception_text(exc) if str(exc) else "a Ctrl-C (SIGINT) or a KeyboardInterrupt"
+                raise KeyboardInterrupt(f"{what} raised in {impl.plugin_name}: {hook}") from exc
             raise PluginError(f"{impl.plugin_name}: {hook} raised {exception_text(exc)}{_read_only_hint(exc)}") from exc
 
 
@@ -166,10 +168,11 @@ def finish_observers(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSumm
         try:
             args = {"run": ctx, "summary": summary}
             impl.function(*[args[a] for a in impl.argnames])
-        except (Exception, SystemExit) as exc:  # sys.exit in a plugin is that plugin's failure, not the process's end
-            errors.append(f"{impl.plugin_name}: {exception_text(exc)}")
-        except KeyboardInterrupt as exc:
-            interrupt, summary = interrupt or exc, interrupted_late(summary, exc)
+        except BaseException as exc:  # sys.exit, GeneratorExit in a plugin: its failure, not the process's end
+            if plugin_fault(exc):
+                errors.append(f"{impl.plugin_name}: {exception_text(exc)}")
+            else:
+                interrupt, summary = interrupt or exc, interrupted_late(summary, exc)
     if len(errors) > told:  # the last observers failed: say so in the summary returned
         summary = dataclasses.replace(
             summary, status="failed" if summary.status == "finished" else summary.status,

@@ -26,7 +26,7 @@ from cistrack.evaluation.custody import CustodyMetric, Verdict
 from cistrack.evaluation.metric_stage import MetricStage
 from cistrack.evaluation.verdicts import final_verdict
 from cistrack.scenario.limits import check_seed
-from cistrack.interrupts import interrupt_text, raise_pending
+from cistrack.interrupts import interrupt_text, plugin_fault, raise_pending
 from cistrack.errors import CistrackError, ConfigError, FilterError, PluginError, exception_text
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.filter import DIAGNOSTICS_RULE, bad_diagnostic
@@ -321,11 +321,13 @@ def _initial_step(ctx: RunContext, rng: np.random.Generator) -> Step:
     try:
         ctx.filter.initialize(ctx.iod_cloud, ctx.dynamics, ctx.sensor, rng)
         belief = ctx.filter.belief
-    except (CistrackError, KeyboardInterrupt, MemoryError):
+    except (CistrackError, MemoryError):
         raise
-    except Exception as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
+    except BaseException as exc:  # a plugin's own bug (its filter's, its clusterer's): named, not a traceback
+        if not plugin_fault(exc):
+            raise
         raise FilterError(f"{_filter_who(ctx)} failed while starting from the IOD's cloud: "
-                          f"{type(exc).__name__}: {exc}") from exc
+                          f"{exception_text(exc)}") from exc
     step0 = _step(ctx, 0, ctx.iod_cloud.epoch, "initial", _check_belief(ctx, belief, ctx.iod_cloud.epoch, 0,
                                                                           "initialize"))
     step0.timings["initialize"] = time.perf_counter() - t0
@@ -371,7 +373,9 @@ def _filter_call(ctx: RunContext, method: str, k: int, t: float, call: Callable[
         return call(*args)
     except (CistrackError, np.linalg.LinAlgError, FloatingPointError, MemoryError):
         raise
-    except (Exception, SystemExit) as exc:
+    except BaseException as exc:  # GeneratorExit, or a KeyboardInterrupt no signal raised, too (probe I1)
+        if not plugin_fault(exc):
+            raise
         raise FilterError(f"{_filter_who(ctx)} raised {exception_text(exc)} in {method} at step {k} "
                           f"(t = {float(units.tu_to_days(t)):.3f} d)") from exc
 
@@ -400,7 +404,7 @@ def _guarded(pm: pluggy.PluginManager, ctx: RunContext, collector: RowCollector,
         return "filter-failed", failure, None
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM/SIGHUP through the CLI's handler
         return "interrupted", interrupt_text(exc), exc
-    except (Exception, SystemExit) as exc:  # a results writer (full disk), a component's sys.exit, or anything else
+    except BaseException as exc:  # a results writer (full disk), a component's sys.exit or GeneratorExit, anything
         return "failed", exception_text(exc), None
     return "finished", "", None
 

@@ -24,9 +24,11 @@ import numpy as np
 
 from cistrack import units
 from cistrack.astro.primaries import MU_EARTH_MOON
-from cistrack.errors import CistrackError, ConfigError, IODError, MeasurementError, ParameterError, exception_text
+from cistrack.errors import (CistrackError, ConfigError, IODError, MeasurementError, ParameterError, PluginError,
+                             exception_text)
 from cistrack.interfaces.component import component_name
 from cistrack.interfaces.schedule import checked_plan
+from cistrack.interrupts import plugin_fault
 from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
 from cistrack.plugin.registry import Registry
@@ -139,6 +141,13 @@ def plan_measurement_times(scenario: Scenario, schedule: Any, passes: list, rng:
         planned = schedule.plan(passes, scenario.duration, rng)
     except ParameterError as exc:
         raise ConfigError(f"{scenario.source}: [schedule]: {exc}") from None
+    except (CistrackError, MemoryError):
+        raise
+    except BaseException as exc:  # the plugin's own bug (a KeyboardInterrupt no signal raised too): named
+        if not plugin_fault(exc):
+            raise
+        raise PluginError(f"{scenario.source}: [schedule] '{component_name(schedule)}': plan() raised "
+                          f"{exception_text(exc)}") from exc
     return checked_plan(planned, passes, scenario.duration,
                         f"{scenario.source}: [schedule] '{component_name(schedule)}': plan()")
 
@@ -165,7 +174,9 @@ def estimate_iod(scenario: Scenario, iod: Any, measurements: MeasurementSet, sen
                        f"'state_km'{where}: check that state, which the IOD's bounds must admit.") from None
     except (CistrackError, MemoryError):
         raise
-    except (Exception, SystemExit) as exc:  # the plugin's own bug: named, never a traceback
+    except BaseException as exc:  # the plugin's own bug (GeneratorExit, a KeyboardInterrupt no signal raised): named
+        if not plugin_fault(exc):
+            raise
         raise IODError(f"{who}: estimate() raised {exception_text(exc)}") from exc
     return checked_iod_cloud(cloud, measurements, who)
 

@@ -117,7 +117,8 @@ def close(a: np.ndarray, b: np.ndarray, rtol: float, atol: float) -> tuple[bool,
 
 
 def describe_exception(exc: BaseException) -> str:
-    """``RuntimeError: boom``; for ``sys.exit``: ``SystemExit: it called sys.exit(7)``."""
+    """``RuntimeError: boom``; for ``sys.exit``: ``SystemExit: it called sys.exit(7)``; the type
+    alone when the message is empty (``GeneratorExit``)."""
     from cistrack.errors import exception_text
 
-    return exception_text(exc) if isinstance(exc, SystemExit) else f"{type(exc).__name__}: {exc}"
+    return exception_text(exc)

@@ -5,6 +5,7 @@ import time
 from typing import Any, Callable, Iterable, Iterator
 
 from cistrack.errors import ParameterError, UnknownComponentError
+from cistrack.interrupts import plugin_fault
 from cistrack.interfaces import KINDS
 from cistrack.interfaces.orbit import ReferenceOrbit
 from cistrack.testing.check_support import describe_exception, fresh
@@ -101,7 +102,9 @@ class BoundCheck:
             return component
         try:
             return fresh(component)
-        except (Exception, SystemExit) as exc:
+        except BaseException as exc:  # GeneratorExit, a KeyboardInterrupt no signal raised too (probe I1)
+            if not plugin_fault(exc):
+                raise
             how = "with its default parameters" if isinstance(component, type) else "from get_params()"
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(component)}': could not "
                                    f"construct it {how}: {describe_exception(exc)} ({self.advice})") from exc
@@ -113,7 +116,9 @@ class BoundCheck:
             self.func(instance)
         except ConformanceError as exc:
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': {exc}") from None
-        except (Exception, SystemExit) as exc:  # sys.exit in a plugin fails its check; the others still run
+        except BaseException as exc:  # sys.exit in a plugin fails its check; the others still run
+            if not plugin_fault(exc):
+                raise
             raise ConformanceError(f"check '{self.name}' failed for {self.kind} '{label(target)}': it raised "
                                    f"{describe_exception(exc)}") from exc
 
@@ -210,7 +215,9 @@ def check_registered(name: str, kind: str | None = None, registry: Any = None,
     if params or (not isinstance(factory, type) and callable(factory) and kind not in ("orbit", "recorder")):
         try:
             factory = registry.create(kind, name, **(params or {}))
-        except (Exception, SystemExit) as exc:
+        except BaseException as exc:  # GeneratorExit, a KeyboardInterrupt no signal raised too (probe I1)
+            if not plugin_fault(exc):
+                raise
             how = f"with {params}" if params else "with its default parameters"
             failed = CheckResult("constructs_with_defaults", False, f"could not construct {kind} '{name}' {how}: "
                                  f"{describe_exception(exc)} ({advice})")

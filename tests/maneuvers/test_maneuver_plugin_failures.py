@@ -22,7 +22,7 @@ FIRES_AT = 6
 
 class HDetector(ManeuverDetector):
     """Statistic 1.0 at each update; fires at update :data:`FIRES_AT`. ``how`` breaks it: "raise",
-    "none" (returns None), "nan" (a NaN statistic), "text" (the statistic "high"), "future" (a
+    "genexit" (raises GeneratorExit), "memory" (raises MemoryError), "none" (returns None), "nan" (a NaN statistic), "text" (the statistic "high"), "future" (a
     burn window after the detection), "late" (a detection dated 3 TU after its update)."""
 
     def __init__(self, how: str = "ok") -> None:
@@ -36,6 +36,10 @@ class HDetector(ManeuverDetector):
         self._seen += 1
         if self.how == "raise" and self._seen == FIRES_AT:
             raise KeyError("lost its key")
+        if self.how == "genexit" and self._seen == FIRES_AT:
+            raise GeneratorExit()  # a BaseException, like SystemExit: a generator helper can leak one
+        if self.how == "memory" and self._seen == FIRES_AT:
+            raise MemoryError("pretends to be out of memory")
         stat = {"nan": float("nan"), "text": "high"}.get(self.how, 1.0)
         if self.how == "none":
             return None
@@ -87,6 +91,7 @@ RESPONSE = "maneuver-response 'h-resp' (hplug 0.1): "
 
 @pytest.mark.parametrize("plugin, how, what", [
     ("detector", "raise", r"observe\(\) raised KeyError: 'lost its key' at step \d+, t = \d\.\d{3} d$"),
+    ("detector", "genexit", r"observe\(\) raised GeneratorExit at step \d+, t = \d\.\d{3} d$"),
     ("detector", "none", r"observe\(\) at step \d+, t = \d\.\d{3} d returned NoneType, not \(statistic, Detection or None\)$"),
     ("detector", "nan", r"observe\(\) at step \d+, t = \d\.\d{3} d returned the statistic nan: NaN or infinite, not a finite"),
     ("detector", "text", r"observe\(\) at step \d+, t = \d\.\d{3} d returned the statistic 'high': a str, not a finite"),
@@ -103,3 +108,10 @@ def test_a_detector_or_response_breaking_its_contract_fails_the_run_naming_it_an
     assert summary.status == "failed"  # not "filter-failed": the filter is not at fault
     assert summary.failure.startswith(DETECTOR if plugin == "detector" else RESPONSE)
     assert re.search(what, summary.failure), summary.failure
+
+
+def test_a_detector_running_out_of_memory_fails_the_run_with_a_memory_error_naming_it_and_the_step():
+    summary = _run(detector="memory")
+    assert summary.status == "failed"
+    assert summary.failure.startswith(f"MemoryError: {DETECTOR}observe() ran out of memory at step "), summary.failure
+    assert summary.failure.endswith("(MemoryError: pretends to be out of memory)")

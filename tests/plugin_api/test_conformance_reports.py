@@ -204,6 +204,21 @@ def test_a_component_calling_sys_exit_fails_each_check_that_calls_it_and_the_sui
     assert len(results) == len(list(iter_checks(ExitingClusterer, "clustering")))  # every check ran
 
 
+class GeneratorExitClusterer(HalvesClusterer):
+    """Raises GeneratorExit (a BaseException a generator helper can leak) from cluster()."""
+
+    def cluster(self, x, rng):
+        raise GeneratorExit()
+
+
+def test_a_component_raising_generator_exit_fails_each_check_that_calls_it_and_the_suite_goes_on():
+    """The suite had ended in a traceback, without a FAIL line or a summary (probe I1)."""
+    results = check_registered("exiting", registry=_registry_with(GeneratorExitClusterer))
+    failed = [r for r in results if not r.passed]
+    assert failed and all(r.message.endswith("it raised GeneratorExit") for r in failed)
+    assert len(results) == len(list(iter_checks(GeneratorExitClusterer, "clustering")))
+
+
 def _registry_with(cls) -> Registry:
     reg = Registry()
     reg.add("clustering", "exiting", cls)

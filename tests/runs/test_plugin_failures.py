@@ -6,10 +6,12 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 
 import numpy as np
 import pytest
 
+from cistrack.cli.signals import install_signal_handlers
 from cistrack.errors import ConfigError
 from cistrack.evaluation.metric_stage import StepMetric
 from cistrack.plugin.hookspecs import hookimpl
@@ -95,6 +97,26 @@ def test_a_stage_that_calls_sys_exit_fails_the_run_and_completes_its_manifest(tm
     failure = _failure_with([Raises(SystemExit(5))], output_dir=tmp_path / "run")
     assert failure.startswith("metric stage 'hmetric': compute() raised SystemExit: it called sys.exit(5)")
     assert json.loads((tmp_path / "run" / "manifest.json").read_text())["status"] == "failed"
+
+
+def test_a_stage_raising_generator_exit_fails_the_run_naming_the_stage_and_completes_its_manifest(tmp_path):
+    """GeneratorExit is a BaseException, like SystemExit; it had ended the run in a traceback and left
+    its manifest "running" (probe I1)."""
+    failure = _failure_with([Raises(GeneratorExit())], output_dir=tmp_path / "run")
+    assert failure.startswith("metric stage 'hmetric': compute() raised GeneratorExit")
+    assert json.loads((tmp_path / "run" / "manifest.json").read_text())["status"] == "failed"
+
+
+def test_a_keyboard_interrupt_a_stage_raises_under_the_commands_handlers_fails_the_run_naming_the_stage():
+    """While the command's handlers are installed a Ctrl-C raises a RunInterrupted, so a plain
+    KeyboardInterrupt is the plugin's own: not reported as a signal (probe I1)."""
+    old = install_signal_handlers()
+    try:
+        failure = _failure_with([Raises(KeyboardInterrupt("the stage's own"))])
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+    assert failure.startswith("metric stage 'hmetric': compute() raised KeyboardInterrupt: the stage's own")
 
 
 class ObserverRaises:

@@ -22,6 +22,7 @@ import sys
 import numpy as np
 
 from cistrack.errors import CistrackError, FilterError, exception_text
+from cistrack.interrupts import plugin_fault
 from cistrack.interfaces import Clusterer, Dynamics, Sensor
 from cistrack.interfaces.component import (MemoryNeed, check_choice, check_int, check_nonnegative, check_positive,
                                            check_range, component_name, param_specs)
@@ -459,14 +460,18 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
         who = f"filter '{self._who()}': clusterer '{component_name(clusterer)}'"
         try:
             labels = clusterer.cluster(read_only_view(self._x), rng)
-        except (CistrackError, MemoryError):
+        except CistrackError:
             raise
+        except MemoryError as exc:  # still out of memory, with the clusterer named (probe I1)
+            raise MemoryError(f"{who}: cluster() ran out of memory ({exception_text(exc)})") from exc
         except ValueError as exc:
             if "read-only" not in str(exc):
                 raise FilterError(f"{who}: cluster() raised {exception_text(exc)}") from exc
             raise FilterError(f"{who}: cluster() tried to write into the particles it was given ({exc}); a "
                               "clusterer must not change its input (work on a copy)") from exc
-        except (Exception, SystemExit) as exc:  # the clusterer's own bug: named, not blamed on the filter
+        except BaseException as exc:  # the clusterer's own bug: named, not blamed on the filter
+            if not plugin_fault(exc):
+                raise
             raise FilterError(f"{who}: cluster() raised {exception_text(exc)}") from exc
         return checked_labels(labels, self._x.shape[0], who)
 
