@@ -30,6 +30,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import ConfigError, MeasurementError
+from cistrack.fitting.fit_replacing import FIT_RECORD
 from cistrack.interfaces.reader import not_a_file
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
 from cistrack.plugin.registry import Registry
@@ -451,6 +452,9 @@ def write_merged(path: Path, measurements: MeasurementSet, designation: str, reg
     marker = path.parent / FIT_STARTED  # first: a fit stopped before its records may be retried here
     if not marker.is_file():
         write_text_atomic(marker, f"cistrack fit of {designation}\n")
+    # then the record of an earlier fit here goes: stopped after these observations replaced its own,
+    # a redo had left it beside them, and export and predict used its orbit (probe I2)
+    (path.parent / FIT_RECORD).unlink(missing_ok=True)
     ms = measurements.subset(np.ones(len(measurements), dtype=bool))
     ms.meta["object"] = designation
     kinds = {ms.kind_at(i) for i in range(len(ms))}

@@ -5,6 +5,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cistrack.cli.main import main
@@ -220,3 +221,23 @@ def test_a_fit_of_several_objects_with_overwrite_removes_the_one_object_fit_at_t
     assert main(["fit", str(two), "--out", str(out), "--quiet", "--overwrite"]) == 3  # one tracklet each
     assert not (out / "fit.json").exists() and not list(out.glob("observations*"))
     assert sorted(p.name for p in out.glob("fit-*")) == ["fit-A1", "fit-B2"]
+
+
+def test_a_redo_stopped_once_its_new_observations_are_written_leaves_no_earlier_fit_for_export_or_predict(
+        fit_over_run, tmp_path, capsys):
+    """An interrupted redo had left the earlier fit.json beside the new observations, and export
+    and predict used its orbit without a word (probe I2): the redo removes it before it writes them."""
+    from cistrack.fitting.observation_input import read_object_observations, write_merged
+    from cistrack.plugin.registry import default_registry
+
+    d = tmp_path / "r"
+    shutil.copytree(fit_over_run, d)
+    registry = default_registry()
+    obj = read_object_observations([OBSERVATIONS], registry)[0]
+    write_merged(d / "observations", obj.measurements.subset(np.arange(len(obj.measurements)) % 2 == 0),
+                 obj.designation, registry)  # the redo's first write; then it is stopped
+    assert not (d / "fit.json").exists()
+    for command in (["export", str(d), "--out", str(tmp_path / "x.oem")], ["predict", str(d), "--site", "568"]):
+        assert main(command) == 2
+        assert "did not complete" in capsys.readouterr().err
+    assert not (tmp_path / "x.oem").exists()
