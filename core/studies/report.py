@@ -32,6 +32,7 @@ from cistrack.studies.report_verdicts import (custody_by_filter, custody_markdow
 from cistrack.evaluation.run_summary import RunSummary
 from cistrack.studies.study import REPORT_FOLDER, plan_runs
 from cistrack.studies.resume import is_done, run_state
+from cistrack.studies.study_lock import running_study
 
 __all__ = ["report_study"]
 
@@ -317,10 +318,18 @@ def _ids(ids: list[str], shown: int = 8) -> str:
     return ", ".join(ids[:shown]) + (f", ... ({len(ids) - shown} more)" if len(ids) > shown else "")
 
 
-def _title(name: str, n_runs: int, missing_ids: list[str], stale_ids: list[str]) -> str:
+def _title(name: str, n_runs: int, missing_ids: list[str], stale_ids: list[str], running: str | None = None) -> str:
+    """The report's first line; ``running``: the holder of a ``study run`` running in the directory
+    as the report is written (:func:`~cistrack.studies.study_lock.running_study`), or None."""
     title = f"Study '{name}': {n_runs - len(missing_ids) - len(stale_ids)} of {n_runs} runs complete"
+    if running is not None:  # probe I3: a report of a study still running had read like the final one
+        title += (f", reported while a 'cistrack study run'{running} was still running in this directory: runs were "
+                  "in progress, and that study run removes this report when it ends ('cistrack study report' "
+                  "then reports every run)")
     if missing_ids:
-        title += f" (not finished: {_ids(missing_ids)}; 'cistrack study run' with the same options runs them)"
+        rerun = "that study run is running them" if running is not None else \
+            "'cistrack study run' with the same options runs them"
+        title += f" (not finished: {_ids(missing_ids)}; {rerun})"
     if stale_ids:
         title += f" ({_STALE}: {_ids(stale_ids)})"
     return title
@@ -441,7 +450,7 @@ def report_study(path_or_name: str | Path, out_dir: str | Path | None = None,
     try:
         shutil.rmtree(draft, ignore_errors=True)
         draft.mkdir()
-        answer = _write_report(draft, name, specs, (groups, tables, missing_ids, stale_ids))
+        answer = _write_report(draft, name, specs, (groups, tables, missing_ids, stale_ids), running_study(out))
         _replace_report(rep_dir, draft)
     except KeyboardInterrupt:  # Ctrl-C, SIGTERM: no half-written draft left beside the report
         shutil.rmtree(draft, ignore_errors=True)
@@ -497,8 +506,10 @@ def _report_dir(out: Path, name: str) -> Path:
     return rep_dir
 
 
-def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, list[str], list[str]]) -> dict:
-    """Write the report's files into ``rep_dir``; returns :func:`report_study`'s answer."""
+def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, list[str], list[str]],
+                  running: str | None = None) -> dict:
+    """Write the report's files into ``rep_dir``; returns :func:`report_study`'s answer (``running``:
+    the holder of a study run running in the directory, or None, as :func:`_title` says it)."""
     groups, tables, missing_ids, stale_ids = finished
     study_has_truth = any(x.has_truth for sums in groups.values() for x in sums)
     counted = _COUNTED if study_has_truth else _COUNTED_TRUTHLESS
@@ -511,7 +522,7 @@ def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, l
     has_truth = any(r["custody_kept"] is not None for r in rows)
     verdicts = [_verdict_line(r) for r in rows]
     flagged = [flagged_line(f) for f in flagged_runs(groups)]
-    title = _title(name, len(specs), missing_ids, stale_ids)
+    title = _title(name, len(specs), missing_ids, stale_ids, running)
     man_rows = _maneuver_rows([sp for sp in specs if sp.run_id not in {*missing_ids, *stale_ids}], groups, tables)
     man_md, man_text, man_files = _maneuver_report(man_rows, rep_dir, name)
     write_text_atomic(rep_dir / "summary.md",
@@ -520,4 +531,4 @@ def _write_report(rep_dir: Path, name: str, specs, finished: tuple[dict, dict, l
     text = _terminal_text(title, rows, has_truth, counted, verdicts, flagged, rep_dir / "runs.csv") + man_text
     files += _figures(groups, tables, rows, rep_dir, name) + man_files
     return {"text": text, "rows": rows, "files": files, "missing": len(missing_ids), "stale": len(stale_ids),
-            "maneuver_rows": man_rows}
+            "maneuver_rows": man_rows, "study_running": running is not None}

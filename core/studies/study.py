@@ -484,6 +484,8 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args
         _remove_report_of_replaced_runs(out, specs, states)
         said = _run_todo(todo, opts, name)
         problems = run_problems(specs, said)  # from disk, not from what the workers said
+        if todo:
+            _remove_report_written_meanwhile(out)
     bad = {rid for rid, _ in problems}
     return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
             "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
@@ -604,6 +606,23 @@ def _remove_report_of_replaced_runs(out: Path, specs: list[RunSpec], states: dic
     why = ("described the runs replaced now" if any(states[s.run_id] == "stale" for s in specs)
            else "counted the runs done before this study run")
     _notice(f"the report in {report} {why} and is removed; 'cistrack study report' writes it again")
+
+
+def _remove_report_written_meanwhile(out: Path) -> None:
+    """Remove ``out/report`` at the end of a study run that ran runs: it removed any report when it
+    began, so one there now was written by 'cistrack study report' while runs were still to come, and
+    counts fewer than the study holds now (probe I3: it had been left in place, reading like the final one)."""
+    import shutil
+
+    report = out / REPORT_FOLDER
+    if not (report.is_dir() or report.is_symlink()):
+        return
+    if report.is_symlink():
+        report.unlink()
+    else:
+        shutil.rmtree(report, ignore_errors=True)
+    _notice(f"the report in {report} was written while this study ran, before its runs were all done, and is "
+            "removed; 'cistrack study report' writes it again")
 
 
 def _notice(text: str, width: int = 120) -> None:

@@ -25,7 +25,7 @@ from cistrack.errors import CistrackError
 from cistrack.results.dir_lock import holding, lock_holder, open_lock, try_lock
 from cistrack.results.output_paths import STUDY_LOCK, STUDY_RUNS_LOCK
 
-__all__ = ["StudyBusy", "study_lock", "hold_runs_lock", "RUNS_LOCK"]
+__all__ = ["StudyBusy", "study_lock", "hold_runs_lock", "running_study", "RUNS_LOCK"]
 
 RUNS_LOCK = STUDY_RUNS_LOCK
 """Shared-locked by every run while it writes into the study directory."""
@@ -84,5 +84,20 @@ def hold_runs_lock(study_dir: str | Path) -> Iterator[None]:
             import fcntl
             fcntl.flock(fd, fcntl.LOCK_SH)
         yield
+    finally:
+        os.close(fd)
+
+
+def running_study(directory: str | Path) -> str | None:
+    """Whether a ``cistrack study run`` holds the lock of the study ``directory`` now: its holder in
+    :func:`~cistrack.results.dir_lock.lock_holder`'s words (`` (process PID on HOST)``, or "" when
+    unknown), or None when none does. Looks without creating the lock file; a shared lock taken and
+    given back at once, so that a study starting at the same instant is not kept out for longer."""
+    try:
+        fd = os.open(Path(directory) / STUDY_LOCK, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        return None if _try_lock(fd, shared=True) else _holder(fd)
     finally:
         os.close(fd)

@@ -2,6 +2,7 @@
 steps merged and a manifest that says what happened; a study reruns what changed."""
 from __future__ import annotations
 
+import concurrent.futures as cf
 import signal
 import socket
 import subprocess
@@ -244,3 +245,53 @@ def test_a_study_run_that_adds_runs_removes_the_report_that_counted_fewer(tmp_pa
     assert not (out / "report").exists()
     assert f"the report in {out / 'report'} counted the runs done before this study run and is removed" in " ".join(
         capsys.readouterr().err.split())
+
+
+class ReportsAfterTheFirstRun(cf.ThreadPoolExecutor):
+    """A one-thread executor that takes 'cistrack study report' of the study as soon as its first run
+    has ended, while the others still wait: the report of someone looking at a study still running."""
+
+    def __init__(self, study, out):
+        super().__init__(1)
+        self.study, self.out, self.reports = study, out, []
+
+    def submit(self, fn, /, *args, **kwargs):
+        def then_report(*a, **k):
+            summary = fn(*a, **k)
+            if not self.reports:
+                from cistrack.studies.report import report_study
+
+                self.reports.append(report_study(self.study, out_dir=self.out))
+                self.reports.append((self.out / "report" / "summary.md").read_text())
+            return summary
+        return super().submit(then_report, *args, **kwargs)
+
+
+@pytest.fixture
+def reported_while_running(tmp_path, capsys):
+    """(the report taken after the study's first run, its summary.md then, the study directory, the
+    study's stderr with its lines joined)."""
+    from study_files import write_study
+
+    p = write_study(tmp_path, seeds="[1, 2]")
+    out = tmp_path / "out"
+    ex = ReportsAfterTheFirstRun(p, out)
+    run_study(p, out_dir=out, executor=ex, progress=False)
+    ex.shutdown()
+    return ex.reports[0], ex.reports[1], out, " ".join(capsys.readouterr().err.split())
+
+
+def test_a_report_taken_while_a_study_run_runs_says_so_in_its_title(reported_while_running):
+    """It had read like the final report of a study that was still running (probe I3)."""
+    answer, summary_md, *_ = reported_while_running
+    assert answer["study_running"]
+    said = "1 of 2 runs complete, reported while a 'cistrack study run' (process "
+    assert said in " ".join(answer["text"].split()) and said in summary_md
+    assert "that study run removes this report when it ends" in summary_md
+
+
+def test_a_study_run_removes_at_its_end_a_report_taken_while_it_ran(reported_while_running):
+    """A report of 1 of 2 runs had been left in place after the study had run both (probe I3)."""
+    *_, out, err = reported_while_running
+    assert not (out / "report").exists()
+    assert f"the report in {out / 'report'} was written while this study ran" in err
