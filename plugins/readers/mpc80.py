@@ -3,8 +3,10 @@
 One observation per 80-column line (columns counted from 1):
 
 =======  ===============================================================================
-1-5      packed minor-planet number (or blank)
-6-12     provisional or temporary designation
+1-5      packed minor-planet number (or blank): the designation when given
+6-12     provisional or temporary designation: the designation of a line without a number; on a
+         line with one it links the lines that give it alone to that number (as an ADES provID
+         beside a permID)
 13       discovery asterisk
 14       note 1
 15       note 2: observation type. Optical types are read (blank, C, B, P, T, A, ...);
@@ -153,7 +155,11 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     ra = _ra(s[32:44], path, ln)
     dec = _dec(s[44:56], path, ln)
     code = _site_code(s[77:80], path, ln, explicit, table)
-    return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)", s[0:12].strip())
+    number, provisional = s[0:5].strip(), s[5:12].strip()
+    # the number names the object when given (as the MPC does), its provisional designation then links
+    # the lines that give that alone; the two fields together are no designation (probe I6)
+    return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)", number or provisional,
+                  provisional if number and provisional != number else "")
 
 
 def _format(t: datetime, ra: float, dec: float, code: str, desig: str) -> str:
