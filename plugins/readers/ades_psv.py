@@ -3,7 +3,8 @@
 A PSV file: header lines starting with ``#`` (``# version=2022``, ``# observatory`` blocks) or
 ``!`` (their keywords), then a line of field names separated by ``|``, then one observation per
 line with the same number of ``|``-separated fields (values may be padded with spaces). A new
-``#`` block may start a new field-name line. Fields read and written: see
+``#`` block may start a new field-name line; a ``#`` or ``!`` line followed by data rows (a comment
+between them) is read past, the rows going on under the field names in force. Fields read and written: see
 :mod:`cistrack.plugins.readers.ades_records`. Times round-trip to 1 microsecond, angles and
 sigmas bit for bit.
 """
@@ -38,6 +39,16 @@ def _check_version(path, line: int, text: str) -> None:
                                                 f"{' and '.join(ADES_VERSIONS)} are read")
 
 
+_HEADER_WORDS = _KNOWN_FIELDS_MIN | {"permID", "provID", "artSat", "trkSub", "mode", "rmsRA", "rmsDec", "astCat"}
+"""Field names of which one, among a line's cells, makes it a field-name line (no value is one)."""
+
+
+def _names_fields(cells: list[str]) -> bool:
+    """Whether a line after a ``#``/``!`` block is a new field-name line rather than a data row that
+    goes on under the header in force (a comment between data rows)."""
+    return any(c in _HEADER_WORDS for c in cells)
+
+
 class AdesPsvReader(SiteReader):
     """IAU ADES optical astrometry (RA/Dec), pipe-separated.
 
@@ -59,7 +70,7 @@ class AdesPsvReader(SiteReader):
         ep = parse_epoch(path, epoch)
         lines = read_text_lines(path)
         header: list[str] | None = None
-        header_line = 0
+        header_line, after_block = 0, False
         rows, table, radar = [], {}, 0
         for i, raw in enumerate(lines, start=1):
             text = raw.strip()
@@ -67,10 +78,10 @@ class AdesPsvReader(SiteReader):
                 continue
             if text.startswith("#") or text.startswith("!"):
                 _check_version(path, i, text)
-                header = None  # a new block may bring a new field-name line
+                after_block = True  # a new block may bring a new field-name line
                 continue
             cells = [c.strip() for c in text.split("|")]
-            if header is None:
+            if header is None or (after_block and _names_fields(cells)):
                 missing = sorted(_KNOWN_FIELDS_MIN - set(cells))
                 if missing:
                     raise FieldError(path, i, missing[0], f"the field-name line lacks {', '.join(missing)} "
@@ -78,8 +89,9 @@ class AdesPsvReader(SiteReader):
                 dup = sorted({c for c in cells if cells.count(c) > 1})
                 if dup:
                     raise FieldError(path, i, dup[0], "field named twice in the header")
-                header, header_line = cells, i
+                header, header_line, after_block = cells, i, False
                 continue
+            after_block = False  # a comment between data rows (probe I7): the rows go on under the same header
             if len(cells) != len(header):
                 raise FieldError(path, i, "(field count)", f"{len(cells)} fields, the header of line "
                                                             f"{header_line} has {len(header)}")

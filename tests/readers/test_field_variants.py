@@ -27,6 +27,23 @@ permID |provID     |trkSub  |mode|stn |obsTime                 |ra         |dec 
 """
 
 
+PSV_COMMENTED = """# version=2022
+trkSub|mode|stn|obsTime|ra|dec|rmsRA|rmsDec|astCat
+CIS01|CCD|705|2026-03-01T03:40:00Z|101.2|-12.3|0.5|0.5|Gaia3
+{comment}
+CIS01|CCD|705|2026-03-01T03:50:00Z|101.3|-12.4|0.5|0.5|Gaia3
+"""
+
+
+@pytest.mark.parametrize("comment", ["# mid comment", "! line note", "# mid comment\n"])
+def test_ades_psv_comment_lines_between_data_rows_are_read_past(tmp_path, comment):
+    """The data row after a comment had been refused as a field-name line that lacks dec, obsTime,
+    ra and stn (probe I7)."""
+    p = tmp_path / "commented.psv"
+    p.write_text(PSV_COMMENTED.format(comment=comment))
+    assert len(AdesPsvReader().read(p, EPOCH)) == 2
+
+
 def test_ades_psv_with_observatory_blocks_padding_and_a_second_header(tmp_path):
     p = tmp_path / "field.psv"
     p.write_text(PSV)
