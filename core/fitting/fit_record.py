@@ -70,11 +70,17 @@ def noise_summary(measurements, result) -> dict[str, dict[str, float]]:
     return out
 
 
-def _options_record(options) -> dict[str, Any]:
+def _options_record(options, reject_fraction: float | None = None) -> dict[str, Any]:
     """The fit options as recorded: all but ``sensor_steps``, and ``area_to_mass`` only when it
-    is not "off" (so that a fit without it writes the same record as before the option existed)."""
-    return {k: getattr(options, k) for k in options.__dataclass_fields__
-            if k != "sensor_steps" and not (k == "area_to_mass" and getattr(options, k) == "off")}
+    is not "off" (so that a fit without it writes the same record as before the option existed);
+    ``max_reject_fraction`` the share the fit's least squares applied (``reject_fraction`` when
+    given: from the ranging IOD's orbit, where it had recorded the setting's 0.5 beside the 0.1
+    applied, probe I5)."""
+    record = {k: getattr(options, k) for k in options.__dataclass_fields__
+              if k != "sensor_steps" and not (k == "area_to_mass" and getattr(options, k) == "off")}
+    if reject_fraction is not None:
+        record["max_reject_fraction"] = reject_fraction
+    return record
 
 
 def area_to_mass_record(result) -> dict[str, Any] | None:
@@ -122,7 +128,7 @@ def _fit_dict(one, obs) -> dict[str, Any]:
         "scenario_epoch_utc": units.format_utc(scen.epoch) if scen is not None else None,
         "settings": {"epoch": one.choices.epoch, "prior": one.choices.prior,
                      "lov": "auto" if one.choices.lov is None else one.choices.lov,
-                     "options": _options_record(one.choices.options)},
+                     "options": _options_record(one.choices.options, getattr(one, "reject_fraction", None))},
         "converged": bool(r.converged) if r is not None else False,
         "failure": one.failure,
         "least_squares_start": one.start or ("none: no orbit" if getattr(one, "undetermined", None)

@@ -90,7 +90,7 @@ SEEDED_ITERATIONS = 200
 IOD's orbit."""
 SEEDED_REJECT_FRACTION = 0.1
 """At most this share of the observations is rejected by the least squares started from the ranging
-IOD's orbit (the ``--set fit.max_reject_fraction`` when smaller)."""
+IOD's orbit, unless ``--set fit.max_reject_fraction`` gives the share (:func:`seeded_reject_fraction`)."""
 SHORT_ARC_HOURS = 24.0
 """A fit over observations spanning less than this says that the orbit is poorly determined."""
 _EPOCHS = ("last", "middle", "first")
@@ -130,6 +130,19 @@ class FitChoices:
     lov: float | None = None
     arcs: ArcSettings = field(default_factory=ArcSettings)
     filter_span: str = "early"
+    reject_fraction_set: bool = False
+    """Whether ``fit.max_reject_fraction`` was set (then it applies everywhere, the least squares
+    from the ranging IOD's orbit included: :func:`seeded_reject_fraction`)."""
+
+
+def seeded_reject_fraction(choices: FitChoices) -> float:
+    """The share of the observations the least squares started from the ranging IOD's orbit rejects
+    at most: the ``fit.max_reject_fraction`` set, else its default capped at
+    :data:`SEEDED_REJECT_FRACTION`. (The cap had held a setting above it too, while the fit's note
+    named the setting as the way to reject more: probe I5.)"""
+    if choices.reject_fraction_set:
+        return choices.options.max_reject_fraction
+    return min(choices.options.max_reject_fraction, SEEDED_REJECT_FRACTION)
 
 
 def fit_choices(table: dict[str, Any]) -> FitChoices:
@@ -172,7 +185,8 @@ def fit_choices(table: dict[str, Any]) -> FitChoices:
         raise ConfigError(f"--set fit.max_damping={damping.max_damping!r}: must exceed fit.damping "
                           f"({damping.damping!r}): the iteration stops once the damping passes it, so it would stop "
                           "before its first step")
-    return FitChoices(epoch, prior, FitOptions(**opts), None if lov == "auto" else float(lov), arcs, span)
+    return FitChoices(epoch, prior, FitOptions(**opts), None if lov == "auto" else float(lov), arcs, span,
+                      "max_reject_fraction" in opts)
 
 
 @dataclass
@@ -208,6 +222,9 @@ class ObjectFit:
                                 took the first hours only (:mod:`.early_seed`); 0: all of them
     searched : bool             the burn search was made and its burns kept while seeding
                                 (:func:`_burns_explain`): it is not made again
+    reject_fraction : float or None  the share of the observations the fit's least squares could
+                                reject at most, when not ``choices.options.max_reject_fraction``
+                                (from the ranging IOD's orbit: :func:`seeded_reject_fraction`)
     """
 
     designation: str
@@ -228,6 +245,7 @@ class ObjectFit:
     undetermined: dict = field(default_factory=dict)
     filter_rows: int = 0
     searched: bool = False
+    reject_fraction: float | None = None
 
     @property
     def ok(self) -> bool:
@@ -428,22 +446,26 @@ def _fit_from_filter(ctx, choices: FitChoices, directory: Path) -> tuple[FitResu
 
 
 def _attempt(scen: Scenario, choices: FitChoices, directory: Path, registry: Registry, progress: bool,
-             log: Callable[[str], None] | None, fallback: bool = False) -> tuple[Any, FitResult | None, str, str]:
-    """(run or None, fit or None, failure, start): the scenario run into ``directory``, then the
-    least squares from the filter (:func:`_fit_from_filter`). ``fallback``: the scenario's IOD is
-    the ranging IOD the fit fell back on, not the user's (its settings are set after choosing it)."""
+             log: Callable[[str], None] | None, fallback: bool = False) -> tuple[Any, FitResult | None, str, str, bool]:
+    """(run or None, fit or None, failure, start, seeded): the scenario run into ``directory``, then the
+    least squares from the ranging IOD's orbit (``seeded``: :func:`_fit_from_iod`) or from the filter
+    (:func:`_fit_from_filter`). ``fallback``: the scenario's IOD is the ranging IOD the fit fell back
+    on, not the user's (its settings are set after choosing it)."""
     from cistrack.runs.pipeline import run_scenario
 
     try:
         run = run_scenario(scen, registry=registry, output_dir=directory, progress=progress,
                            log=(lambda m: log(f"  {m}")) if log else None)
     except CistrackError as exc:
-        return None, None, f"the filter run failed before its first step: {_iod_advice(exc, scen, registry, fallback)}", ""
+        return (None, None, f"the filter run failed before its first step: {_iod_advice(exc, scen, registry, fallback)}",
+                "", False)
     if log:
         log(f"  least squares over the {len(run.context.measurements)} observations")
     with reported_to(log):
         seeded = _fit_from_iod(run.context, choices)
-        return (run, seeded, "", "") if seeded is not None else (run, *_fit_from_filter(run.context, choices, directory))
+        if seeded is not None:
+            return run, seeded, "", "", True
+        return (run, *_fit_from_filter(run.context, choices, directory), False)
 
 
 def _iod_advice(exc: CistrackError, scen: Scenario, registry: Registry, fallback: bool) -> str:
@@ -562,9 +584,9 @@ def _fit_from_iod(ctx, choices: FitChoices) -> FitResult | None:
     # them in, Levenberg-Marquardt can crawl (178 iterations measured on a 17-observation NRHO set):
     # at least SEEDED_ITERATIONS per pass; and on a weakly determined arc it pulls the first pass so
     # far that the robust threshold let whole clean tracklets go (10 of 23, 55 km off): at most
-    # SEEDED_REJECT_FRACTION rejected.
+    # SEEDED_REJECT_FRACTION rejected, unless fit.max_reject_fraction says how many.
     opts = replace(choices.options, max_iterations=max(choices.options.max_iterations, SEEDED_ITERATIONS),
-                   max_reject_fraction=min(choices.options.max_reject_fraction, SEEDED_REJECT_FRACTION))
+                   max_reject_fraction=seeded_reject_fraction(choices))
     try:
         result = _least_squares(ctx, replace(choices, options=opts), start)
     except (FitError, PropagationError):
@@ -583,17 +605,18 @@ def _fit_object(one: ObjectFit, registry: Registry, progress: bool, log: Callabl
     attempt = _attempt_early(one, early, registry, progress, log) if early is not None else None
     if attempt is None and early is not None:
         Path(early.measurements_file).unlink(missing_ok=True)
-    one.run, one.result, one.failure, one.start = attempt or _attempt(one.scenario, one.choices, one.directory,
-                                                                      registry, progress, log)
+    one.run, one.result, one.failure, one.start, seeded = (*attempt, False) if attempt else _attempt(
+        one.scenario, one.choices, one.directory, registry, progress, log)
     first = ""
     if not one.ok and one.scenario.components["iod"].name != RANGING_IOD:
         first = one.failure or (one.result.messages[0] if one.result is not None else "no fit")
         say(f"{one.designation}: {first}; falling back on the IOD '{RANGING_IOD}'")
         one.scenario = _ranging_scenario(one.scenario, registry)
-        one.run, one.result, one.failure, one.start = _attempt(one.scenario, one.choices, one.directory,
-                                                               registry, progress, log, fallback=True)
+        one.run, one.result, one.failure, one.start, seeded = _attempt(one.scenario, one.choices, one.directory,
+                                                                       registry, progress, log, fallback=True)
         if one.failure:
             one.failure += f" (before it, with the template's IOD: {first})"
+    one.reject_fraction = seeded_reject_fraction(one.choices) if seeded else None
     if one.start:
         say(f"{one.designation}: least squares restarted from {one.start}")
     elif one.run is not None and len(one.run.context.measurements) > one.filter_rows > 0:
