@@ -196,4 +196,22 @@ def test_a_fit_of_observations_the_ephemeris_cannot_model_names_the_file_not_the
     old.write_text(text.replace("|2026-", "|1850-"))
     assert main(["fit", str(old), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert str(old) in err and "start 1850-03-01" in err and "which the fit cannot model" in err
+    assert str(old) in err and "run from 1850-03-01" in err and "which the fit cannot model" in err
+
+
+def test_a_refused_fit_quotes_the_first_observations_date_not_the_epoch_before_it(tmp_path, capsys):
+    """A file whose first observation is 1900-01-01T00:00 had been said to 'start 1899-12-31', the
+    fit's epoch 30 minutes before it (probe I4)."""
+    from cistrack.cli.main import main
+    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
+
+    lines = (builtin_scenario_path("real-data").parent / "real_data" / "observations.psv").read_text().splitlines()
+    row = next(i for i, line in enumerate(lines) if "|2026-" in line)
+    f = lines[row].split("|")
+    f[next(j for j, c in enumerate(f) if c.strip().startswith("2026-"))] = "1900-01-01T00:00:00Z"
+    lines[row] = "|".join(f)
+    typo = tmp_path / "y1900.psv"
+    typo.write_text("\n".join(lines) + "\n")
+    assert main(["fit", str(typo), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "observations of" in err and "run from 1900-01-01T00:00:00" in err and "start 1899" not in err

@@ -341,8 +341,15 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
         if "'epoch'" not in str(exc):
             raise
         epoch, days = _data_span(obs)
+        base = units.parse_utc(READ_EPOCH)
+        first, last = (units.format_utc(units.tu_to_utc(base, float(t)))
+                       for t in (obs.measurements.times[0], obs.measurements.times[-1]))
+        # the observations' own dates, not the scenario's epoch (30 minutes before the first): a file
+        # whose first observation is 1900-01-01T00:00 had been said to start 1899-12-31 (probe I4)
         raise ConfigError(f"{', '.join(str(f) for f in obs.files)}: the observations of {obs.designation} "
-                          f"start {epoch[:10]} (span {days:.3g} d), which the fit cannot model: {exc}") from None
+                          f"run from {first} to {last} ({days:.3g} d with the fit's margins; its epoch "
+                          f"{epoch} lies {EPOCH_LEAD_MINUTES:g} minutes before the first), which the fit "
+                          f"cannot model: {exc}") from None
 
 
 _OWN_READERS = {".psv": "ades-psv", ".tdm": "tdm"}
