@@ -64,15 +64,19 @@ def _get(rec, name, path, line, required=True):
     return None, line
 
 
-def _angle(rec, name, path, line, lo, hi, scale=1.0, unit="deg"):
+def _angle(rec, name, path, line, bounds: tuple[float, float, str], scale=1.0, unit="deg"):
+    """The angle ``name`` (rad) inside ``bounds`` (lo, hi, "]" or ")": degrees, hi included or not:
+    RA's 360 is 0); the refusal quotes the interval checked (RA's had said [0.0, 360.0] while 360
+    was refused apart: probe I8)."""
+    lo, hi, end = bounds
     text, ln = _get(rec, name, path, line)
     try:
         v = to_rad(text, unit, scale)
     except ValueError as exc:
         raise FieldError(path, ln, name, f"{show_field(text)} is {exc}") from None
     lo_r, hi_r = math.radians(lo), math.radians(hi)
-    if unit == "deg" and not lo_r <= v <= hi_r:
-        raise FieldError(path, ln, name, f"{show_field(text)} is outside [{lo}, {hi}] degrees")
+    if unit == "deg" and not (lo_r <= v < hi_r if end == ")" else lo_r <= v <= hi_r):
+        raise FieldError(path, ln, name, f"{show_field(text)} is outside [{lo:g}, {hi:g}{end} degrees")
     return v
 
 
@@ -275,10 +279,8 @@ def record_to_row(rec: dict, path, line: int, explicit: dict[str, Site], table: 
         t = parse_iso_utc(text)
     except ValueError as exc:
         raise FieldError(path, tln, "obsTime", f"{show_field(text)}: {exc}") from None
-    ra = _angle(rec, "ra", path, line, 0.0, 360.0)
-    if ra >= 2.0 * math.pi:
-        raise FieldError(path, rec["ra"][1], "ra", f"{show_field(rec['ra'][0])} must be below 360 degrees")
-    dec = _angle(rec, "dec", path, line, -90.0, 90.0)
+    ra = _angle(rec, "ra", path, line, (0.0, 360.0, ")"))
+    dec = _angle(rec, "dec", path, line, (-90.0, 90.0, "]"))
     s_ra = _sigma(rec, "rmsRA", path, line, scale=math.cos(dec))
     s_dec = _sigma(rec, "rmsDec", path, line)
     site = _site(rec, path, line, explicit, table)

@@ -196,6 +196,16 @@ def test_malformed_file_is_refused_naming_line_and_field(tmp_path, fmt, reader, 
     assert "SECRETX" not in msg, msg
 
 
+@pytest.mark.parametrize("ra", ["360.0", "-31.2"])
+def test_an_ades_ra_outside_its_range_is_refused_quoting_the_half_open_interval(tmp_path, ra):
+    """360 had been refused as 'must be below 360 degrees', other RAs as outside [0.0, 360.0], a
+    closed interval holding 360 (probe I8)."""
+    p = tmp_path / "ra.psv"
+    p.write_text(psv(f"SECRETX|CCD|705|2026-03-01T02:00:00Z|{ra}|-7.5|1.0|1.0|Gaia3"))
+    with pytest.raises(MeasurementError, match=rf"'{ra}' is outside \[0, 360\) degrees"):
+        AdesPsvReader().read(p, EPOCH)
+
+
 def test_an_ades_xml_file_of_radar_records_only_says_optical_astrometry_is_read(tmp_path):
     p = tmp_path / "radar.xml"
     p.write_text(xml(GOOD_FIELDS).replace("<optical>", "<radar>").replace("</optical>", "</radar>"))
