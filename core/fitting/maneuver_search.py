@@ -8,6 +8,7 @@ of ``fit.json``'s ``maneuvers`` (:func:`maneuver_record`) and the fit the one wi
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -91,12 +92,12 @@ def add_maneuvers(one, say) -> None:
             "was searched",))
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
-    found, fit, burns, doubt = _measured(ctx, one, say)
-    if doubt:
-        say(f"{one.designation}: not measured ({doubt}); searching again with each burn started where the orbits "
-            "fitted to either side of a gap meet")
-        again = _measured(ctx, one, say, split=True)
-        found, fit, burns, doubt = (found, fit, burns, doubt) if again[3] else again
+    outcome = _measured(ctx, one, say)
+    if outcome.doubt:
+        say(f"{one.designation}: not measured ({outcome.doubt}); searching again with each burn started where the "
+            "orbits fitted to either side of a gap meet")
+        outcome = _retried(ctx, one, outcome, say)
+    found, fit, burns, doubt, _ = outcome
     if doubt:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
             f"not a clean fit: it looks like an object that maneuvered ({why}), and {doubt}",))
@@ -113,24 +114,80 @@ def add_maneuvers(one, say) -> None:
         *moves))
 
 
-def _measured(ctx, one, say, split: bool = False):
-    """(search, fit, burns, doubt) of the burn search on ``one``'s ballistic fit (with ``split``,
-    its fits started where the orbits of a gap's two sides meet too), the burn times checked and
-    their uncertainty carried into the fit (:func:`_completed`); ``doubt`` says in words why the
-    burns are not reported ("" when they are)."""
+class _Outcome(NamedTuple):
+    """One burn search of ``cistrack fit`` with its burn times checked (:func:`_measured`)."""
+
+    found: Any                      # the ManeuverSearch
+    fit: Any                        # the fit with the burns' time uncertainty carried (None when doubted early)
+    burns: list                     # the burns with those covariances
+    doubt: str                      # why they are not reported, in words ("" when they are)
+    untimed: list = []              # gaps (TU) whose burn time the time check could not settle
+
+
+def _measured(ctx, one, say, split: bool = False) -> _Outcome:
+    """The burn search on ``one``'s ballistic fit (with ``split``, its fits started where the
+    orbits of a gap's two sides meet too), the burn times checked and their uncertainty carried
+    into the fit (:func:`_completed`)."""
     from cistrack.least_squares.burn_search import burn_fit_options, search_maneuvers
 
     found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, one.result,
                              burn_fit_options(one.choices.options), say, split=split)
     if not found.burns:
-        return found, None, [], "no impulsive burn in the gaps between the observations explains it"
+        return _Outcome(found, None, [], "no impulsive burn in the gaps between the observations explains it")
     say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
         "(full fits in each night's gap)")
     found, doubt = _times_allowed(ctx, one, found, say)
-    if not doubt:
-        say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
-    fit, burns, failed = (None, [], "") if doubt else _completed(ctx, found)
-    return found, fit, burns, doubt or failed or _burn_doubt(fit, burns)
+    if doubt:
+        return _Outcome(found, None, [], doubt, list(found.windows))
+    say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
+    fit, burns, failed = _completed(ctx, found)
+    return _Outcome(found, fit, burns, failed or _burn_doubt(fit, burns))
+
+
+def _retried(ctx, one, first: _Outcome, say) -> _Outcome:
+    """The search again with each burn started where the orbits of a gap's two sides meet
+    (:func:`_measured` with ``split``), or ``first`` (the first search's) when that is not clean
+    either or clashes with it (:func:`_clash`; the first's doubt then says so)."""
+    again = _measured(ctx, one, say, split=True)
+    if again.doubt:
+        return first
+    clash = _clash(first, again)
+    return first._replace(doubt=f"{first.doubt}; {clash}") if clash else again
+
+
+RIVAL_DV_M2 = 14.16
+"""Mahalanobis^2 (3 dof, 99.7 %) beyond which another search's delta-v lies outside a burn's (:func:`_clash`)."""
+
+
+def _clash(first: _Outcome, again: _Outcome) -> str:
+    """Words when the ``again`` search's burns cannot replace the ``first``'s ("" when they can):
+    a burn of ``again`` lies in a gap where the first search's time check found the cost with
+    several minima (an unseen NRHO survey set's 1 m/s burn in a five-day gap: the first search
+    timed it at 6.9 d and found 3.6 d cheaper; started where the sides meet, a 5.8 m/s burn at 2.9 d
+    cheaper still was reported clean, its time 140 sigma off, while the truth's fit is cheaper
+    again), or a burn of the first search fits within
+    :data:`~cistrack.least_squares.burn_search.ALLOWED_COST` of ``again``'s fit and lies outside 3
+    sigma of its burn in time or delta-v."""
+    from cistrack.least_squares.burn_search import ALLOWED_COST
+    from cistrack.least_squares.impulse_fit import capped_cost
+
+    same = [b for b, w in zip(again.found.burns, again.found.windows) if w in first.untimed]
+    if same:
+        return (f"started where the sides of a gap meet, a burn of {same[0].magnitude_ms:.3g} m/s at "
+                f"{_days(same[0].t):.3f} d fits, in the gap whose burn time the first search's check found "
+                "undetermined: the cost has several minima there")
+    f, a = first.found, again.found
+    if not f.burns or capped_cost(f.result, f.prior) > capped_cost(a.result, a.prior) + ALLOWED_COST:
+        return ""
+    for b in f.burns:
+        near = min(a.burns, key=lambda x: abs(x.t - b.t))
+        e = np.asarray(b.delta_v_ms, dtype=float) - np.asarray(near.delta_v_ms, dtype=float)
+        if abs(b.t - near.t) > 3.0 * near.t_sigma or e @ np.linalg.solve(near.covariance_ms2, e) > RIVAL_DV_M2:
+            return (f"started where the sides of a gap meet, a burn of {near.magnitude_ms:.3g} m/s at "
+                    f"{_days(near.t):.3f} d fits as well as one of {b.magnitude_ms:.3g} m/s at {_days(b.t):.3f} d "
+                    f"(its cost within {ALLOWED_COST:g}) and lies outside that burn's 3 sigma: the arc does not "
+                    "determine which")
+    return ""
 
 
 def _count(n: int, noun: str) -> str:
