@@ -24,9 +24,11 @@ __all__ = ["ALLOWED", "TESTS_ALSO", "PLUGINS", "plugin_family", "imports_in_sour
 ALLOWED: tuple[str, ...] = (
     "cistrack.api", "cistrack.errors", "cistrack.units", "cistrack.lazy", "cistrack.threads",
     "cistrack.numerics", "cistrack.model", "cistrack.interfaces", "cistrack.propagation", "cistrack.astro",
-    "cistrack.least_squares",
+    "cistrack.least_squares", "cistrack.interrupts",
 )
-"""The packages and modules (with everything below them) any plugin module may import."""
+"""The packages and modules (with everything below them) any plugin module may import
+(:mod:`cistrack.interrupts` for ``plugin_fault``: a plugin that calls another plugin, as the PGM
+calls its clusterer, names that plugin's failure the way the pipeline does)."""
 
 TESTS_ALSO: tuple[str, ...] = ("cistrack.testing",)
 """Allowed in a plugin's tests only: the conformance suite and reference systems."""
