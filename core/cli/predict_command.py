@@ -247,6 +247,7 @@ def _prefix(args) -> Path:
 
     if args.out:
         check_printable_path(args.out, "--out")
+        _not_special(args.out)
     default = Path(args.run) / f"sky-{args.site}"
     prefix = Path(args.out) if args.out else default
     if args.out and (args.out.endswith(("/", os.sep)) or prefix.is_dir()):  # a folder: the files go inside it
@@ -264,6 +265,18 @@ def _prefix(args) -> Path:
             raise ConfigError(f"--out {args.out}: {path} already exists; give another PREFIX, or add --overwrite to "
                               "replace it")
     return prefix
+
+
+def _not_special(out: str) -> None:
+    """ConfigError when ``--out`` names something that is neither a file nor a folder (a device
+    such as /dev/null, a pipe): PREFIX.csv and PREFIX.png would have been written beside it (into
+    /dev), as export refuses such a path."""
+    from cistrack.errors import ConfigError
+
+    path = Path(out)
+    if os.path.exists(path) and not (path.is_file() or path.is_dir()):
+        raise ConfigError(f"--out {out}: names a device or pipe, not a file or folder; give a PREFIX for the two "
+                          "files PREFIX.csv and PREFIX.png (or a folder for them)")
 
 
 def table_lines(sky) -> list[str]:

@@ -199,6 +199,17 @@ def test_an_out_prefix_over_the_fits_own_results_is_refused(fitted, tmp_path, ca
     assert {p.name: p.read_bytes() for p in d.iterdir() if p.name in before} == before
 
 
+def test_an_out_naming_a_pipe_or_device_is_refused_and_nothing_is_written_beside_it(fitted, tmp_path, capsys):
+    """Probe I8: `predict --out /dev/null` had written /dev/null.csv and /dev/null.png."""
+    import os
+
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    assert main(["predict", str(fitted), "--site", "568", "--out", str(pipe), "--quiet"]) == 2
+    assert "names a device or pipe, not a file or folder" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]
+
+
 def test_times_past_the_covariance_horizon_get_the_note_an_export_gives(fitted, tmp_path, capsys):
     """The shipped fit's covariance holds its orbits for 3.75 days past the last observation
     (2026-03-06T12:03Z), its orbits a 1-degree field for 10.5: predicted 5 days on, the ellipses
