@@ -2,7 +2,7 @@
 
 The burn search's fits start from the ballistic fit's orbit with the delta-v at zero
 (:mod:`cistrack.least_squares.burn_search`). Where that orbit follows neither side of the burn, the
-joint fit from there can run off (a halo orbit's 1 m/s burn three days into a 20-day arc: from the
+joint fit from there can run off (a halo orbit's 1 m/s burn 13.7 days into a 20-day arc: from the
 ballistic start, weighted RMS 5,695 at the burn's true time), and the linearised screen that ranks
 the gaps about it can miss the right one. Split at a gap instead:
 
@@ -17,7 +17,8 @@ the gaps about it can miss the right one. Split at a gap instead:
    with those the sides rejected left out of its first pass, and the cheaper fit is kept (a gross
    outlier in the first pass had pulled a joint fit along the delta-v's weak direction until a
    whole night of the other side was rejected, from the truth itself; the other way, a first
-   night left out of the first pass was not readmitted).
+   night left out of the first pass was not readmitted); a fit that stops unconverged is fitted
+   once more from where it stopped (:func:`_continued`).
 
 Each side fit costs about as much as one full fit, so the search makes these fits only when its
 ordinary fits leave the arc unexplained (:func:`cistrack.least_squares.burn_search.search_maneuvers`
