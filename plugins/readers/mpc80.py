@@ -199,6 +199,10 @@ def _designation_problem(desig: str) -> str | None:
     return None
 
 
+DOS_EOF = "\x1a"
+"""The end-of-file byte (Ctrl-Z) some DOS-era tools append to a text file; read as its end."""
+
+
 class Mpc80Reader(SiteReader):
     """MPC 80-column optical astrometry (RA/Dec; no uncertainties in the format).
 
@@ -220,6 +224,7 @@ class Mpc80Reader(SiteReader):
         ep = parse_epoch(path, epoch)
         rows, table = [], {}
         for i, text in enumerate(read_text_lines(path), start=1):
+            text = text.rstrip(DOS_EOF)  # a DOS file's end-of-file byte (Ctrl-Z) ends it, on its own line or the last
             if not text.strip() or text.startswith("#") or is_header_line(text):
                 continue
             rows.append(_parse(text, path, i, self._sites, table))

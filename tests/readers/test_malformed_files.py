@@ -220,3 +220,14 @@ def test_radar_records_beside_optical_ones_are_said_to_be_left_out(tmp_path, cap
     with caplog.at_level("WARNING", logger="cistrack.readers"):
         assert len(AdesXmlReader().read(p, EPOCH)) == 1
     assert "1 <radar> records are not read" in caplog.text
+
+
+@pytest.mark.parametrize("tail", ["\x1a\n", "\x1a"])
+def test_an_mpc_file_ending_in_a_dos_end_of_file_byte_reads_as_without_it(tmp_path, tail):
+    """Probe I8: the byte on its own line had been refused as "line 2, field (line length): 1 characters"."""
+    clean, dos = tmp_path / "clean.obs", tmp_path / "dos.obs"
+    clean.write_text(MPC_OK + "\n")
+    dos.write_text(MPC_OK + ("\n" if tail.endswith("\n") else "") + tail)
+    a = Mpc80Reader().read(clean, "2026-03-01T00:00:00Z")
+    b = Mpc80Reader().read(dos, "2026-03-01T00:00:00Z")
+    assert len(b) == len(a) == 1 and (b.values == a.values).all()
