@@ -162,6 +162,9 @@ def export_run(run_dir: str | Path, format: str = "oem", path: str | Path | None
     if path is not None and not overwrite and os.path.lexists(path):
         raise ConfigError(f"{words.option('path', str(path))}: already exists; give another file, or "
                           f"{words.overwrite} to replace it")
+    if path is not None and not Path(path).parent.is_dir():  # said before a word of "writing ..." (probe I8)
+        raise ConfigError(f"{words.option('path', str(path))}: the folder {Path(path).parent} does not exist; give a "
+                          "file in an existing folder")
     d = Path(run_dir)
     if not d.is_dir() or not ((d / "scenario.toml").is_file() or (d / "scenario.json").is_file()):
         raise ConfigError(_not_a_run(d, "give the --out directory of a 'cistrack run'"))

@@ -214,6 +214,14 @@ def test_the_log_of_an_opm_export_names_the_step_it_writes(run_copy, capsys):
     assert "writing step 3 as opm to" in capsys.readouterr().err
 
 
+def test_an_export_into_a_missing_folder_is_refused_before_it_says_writing(run_copy, tmp_path, capsys):
+    """Probe I8: it had printed "writing 12 estimates as oem to .../nope/x.oem" and then failed."""
+    from cistrack.cli.main import main
+    assert main(["export", str(run_copy), "--format", "oem", "--out", str(tmp_path / "nope" / "x.oem")]) == 2
+    err = capsys.readouterr().err
+    assert "the folder" in err and "does not exist" in err and "writing" not in err
+
+
 def test_export_run_from_python_names_its_keywords_when_the_path_exists(run_dir, tmp_path):
     out, _ = run_dir
     (tmp_path / "taken.oem").write_text("")
