@@ -121,7 +121,7 @@ class _Outcome(NamedTuple):
     fit: Any                        # the fit with the burns' time uncertainty carried (None when doubted early)
     burns: list                     # the burns with those covariances
     doubt: str                      # why they are not reported, in words ("" when they are)
-    untimed: list = []              # gaps (TU) whose burn time the time check could not settle
+    untimed: tuple = ()             # gaps (TU) whose burn time the time check could not settle
 
 
 def _measured(ctx, one, say, split: bool = False) -> _Outcome:
@@ -138,7 +138,7 @@ def _measured(ctx, one, say, split: bool = False) -> _Outcome:
         "(full fits in each night's gap)")
     found, doubt = _times_allowed(ctx, one, found, say)
     if doubt:
-        return _Outcome(found, None, [], doubt, list(found.windows))
+        return _Outcome(found, None, [], doubt, tuple(found.windows))
     say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
     fit, burns, failed = _completed(ctx, found)
     return _Outcome(found, fit, burns, failed or _burn_doubt(fit, burns))

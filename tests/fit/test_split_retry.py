@@ -22,7 +22,7 @@ def _search(t: float, dv_ms: float, windows):
 def test_a_burn_in_the_gap_the_first_time_check_left_undetermined_clashes():
     """An unseen NRHO set: the first search's check found two times in a five-day gap; a 5.8 m/s
     burn started where the sides meet fitted at a third, 140 sigma from the truth."""
-    first = _Outcome(_search(1.2, 1.4, [GAP]), None, [], "the burn's time is not determined", [GAP])
+    first = _Outcome(_search(1.2, 1.4, [GAP]), None, [], "the burn's time is not determined", (GAP,))
     again = _Outcome(_search(0.6, 5.8, [GAP]), None, [], "")
     assert "the cost has several minima there" in _clash(first, again)
 
