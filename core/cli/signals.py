@@ -32,12 +32,19 @@ def _raise_ctrl_c(signum, frame) -> None:
 def _raise_unless_lost(exc: RunInterrupted, frame) -> None:
     """Raise ``exc`` (noted) unless the signal arrived in a callback that Python would print it from
     as "Exception ignored" and drop: importlib's module-lock callback (a Ctrl-C during a lazy import
-    had printed that traceback under the run's progress bar). There it stays noted and is raised
+    had printed that traceback under the run's progress bar) and llvmlite's (:data:`_C_CALLBACKS`). There it stays noted and is raised
     between the run's steps (:func:`cistrack.interrupts.raise_pending`)."""
     code = getattr(frame, "f_code", None)
-    if code is not None and code.co_name == "cb" and code.co_filename.startswith("<frozen importlib"):
+    if code is not None and (code.co_name == "cb" and code.co_filename.startswith("<frozen importlib")
+                             or _C_CALLBACKS in code.co_filename.replace("\\", "/")):
         return
     raise exc
+
+
+_C_CALLBACKS = "/llvmlite/binding/"
+"""Where llvmlite's ctypes callbacks live (its object cache's notify, while numba compiles): a
+Ctrl-C raised there is printed as "Exception ignored" with a traceback (a clean-clone CI, Ctrl-C at
+0.6 s), so it too stays noted and is raised between the run's steps."""
 
 
 def install_signal_handlers() -> dict:
