@@ -122,33 +122,39 @@ class _Outcome(NamedTuple):
     burns: list                     # the burns with those covariances
     doubt: str                      # why they are not reported, in words ("" when they are)
     untimed: tuple = ()             # gaps (TU) whose burn time the time check could not settle
+    searched: tuple = ()            # the search's burns before their times were checked (burn_key)
 
 
-def _measured(ctx, one, say, split: bool = False) -> _Outcome:
-    """The burn search on ``one``'s ballistic fit (with ``split``, its fits started where the
-    orbits of a gap's two sides meet too), the burn times checked and their uncertainty carried
-    into the fit (:func:`_completed`)."""
-    from cistrack.least_squares.burn_search import burn_fit_options, search_maneuvers
+def _measured(ctx, one, say, first: _Outcome | None = None) -> _Outcome:
+    """The burn search on ``one``'s ballistic fit, the burn times checked and their uncertainty
+    carried into the fit (:func:`_completed`). Given the ``first`` search's outcome, the search
+    again with its fits started where the orbits of a gap's two sides meet too, reusing the first's
+    screened fits; when it finds the same burns the checks would repeat the first's: ``first``."""
+    from cistrack.least_squares.burn_search import burn_fit_options, burn_key, search_maneuvers
 
     found = search_maneuvers(ctx.dynamics, ctx.sensor, ctx.measurements, one.result,
-                             burn_fit_options(one.choices.options), say, split=split)
+                             burn_fit_options(one.choices.options), say, again=None if first is None else first.found)
+    searched = burn_key(found.burns)
+    if first is not None and searched == first.searched:
+        say("the same burns as the first search: its verdict stands")
+        return first
     if not found.burns:
         return _Outcome(found, None, [], "no impulsive burn in the gaps between the observations explains it")
     say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
         "(full fits in each night's gap)")
     found, doubt = _times_allowed(ctx, one, found, say)
     if doubt:
-        return _Outcome(found, None, [], doubt, tuple(found.windows))
+        return _Outcome(found, None, [], doubt, tuple(found.windows), searched)
     say("carrying the burn times' uncertainty into the orbit's covariance (two fits a burn)")
     fit, burns, failed = _completed(ctx, found)
-    return _Outcome(found, fit, burns, failed or _burn_doubt(fit, burns))
+    return _Outcome(found, fit, burns, failed or _burn_doubt(fit, burns), (), searched)
 
 
 def _retried(ctx, one, first: _Outcome, say) -> _Outcome:
     """The search again with each burn started where the orbits of a gap's two sides meet
-    (:func:`_measured` with ``split``), or ``first`` (the first search's) when that is not clean
+    (:func:`_measured` given ``first``), or ``first`` (the first search's) when that is not clean
     either or clashes with it (:func:`_clash`; the first's doubt then says so)."""
-    again = _measured(ctx, one, say, split=True)
+    again = _measured(ctx, one, say, first)
     if again.doubt:
         return first
     clash = _clash(first, again)

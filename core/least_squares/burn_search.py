@@ -19,9 +19,9 @@ nights, or between tracklets of one night):
    (:func:`cistrack.least_squares.impulse_fit.burn_evidence`, false alarm :data:`FALSE_ALARM`);
    then the search goes on for another burn (at most :data:`MAX_BURNS`), all delta-v refitted jointly.
 
-With ``split=True`` each step also fits the burn from where the orbits of a gap's two sides,
-each fitted alone, meet (:mod:`cistrack.least_squares.split_start`): ``cistrack fit`` searches so
-again when the search above leaves the arc unexplained.
+Searching ``again`` after a first search, each step also fits the burn from where the orbits of a
+gap's two sides, each fitted alone, meet (:mod:`cistrack.least_squares.split_start`): ``cistrack
+fit`` searches so when the search above leaves the arc unexplained, reusing its screened fits.
 
 ``cistrack fit`` records each burn kept in ``fit.json``'s ``maneuvers``
 (:mod:`cistrack.fitting.maneuver_search`); a run's maneuver watch in ``summary.maneuvers``
@@ -53,7 +53,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.least_squares.trajectory import arc_states
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
+__all__ = ["suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "burn_key", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
@@ -216,6 +216,9 @@ class ManeuverSearch:
     notes : list of str            what the search did, in words
     prior : (mean (6,), covariance (6, 6)) or None   the prior on the state at the fit's epoch
                                    every fit of the search was made with
+    screened : dict                the screened step (:func:`_screened_burn`'s result and notes) for
+                                   each set of burns found so far (:func:`burn_key`): a second search
+                                   of the same ballistic fit given it reuses those fits
     """
 
     result: FitResult
@@ -224,6 +227,12 @@ class ManeuverSearch:
     windows: list[tuple[float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     prior: Any = None
+    screened: dict = field(default_factory=dict, repr=False)
+
+
+def burn_key(burns: list[BurnEstimate]) -> tuple:
+    """The burns' times (TU) and delta-v (m/s) as a hashable key: equal only for the same burns."""
+    return tuple((float(b.t), *np.asarray(b.delta_v_ms, dtype=float).tolist()) for b in burns)
 
 
 def _gaps(times: np.ndarray, done: list[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -292,8 +301,23 @@ def _next_burn(arc: BurnArc, found: ManeuverSearch,
     gaps = _windows(arc.measurements.times, found.windows)
     if not gaps:
         return None
-    best = _screened_burn(arc, found, gaps)
+    best = _screened_once(arc, found, gaps)
     return _better(best, _split_burn(arc, found, gaps)) if split else best
+
+
+def _screened_once(arc: BurnArc, found: ManeuverSearch,
+                   gaps: list[tuple[float, float]]) -> tuple[ImpulseFit, tuple[float, float], float] | None:
+    """:func:`_screened_burn`, or its result (and notes) kept in ``found.screened`` for the same
+    burns: the second search ``cistrack fit`` makes begins with the same fits as the first."""
+    key = burn_key(found.burns)
+    if key in found.screened:
+        best, notes = found.screened[key]
+        found.notes.extend(notes)
+        return best
+    n = len(found.notes)
+    best = _screened_burn(arc, found, gaps)
+    found.screened[key] = (best, found.notes[n:])
+    return best
 
 
 def _screened_burn(arc: BurnArc, found: ManeuverSearch,
@@ -361,17 +385,19 @@ def _better(best, one, margin: float = 0.0):
 
 def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, ballistic: FitResult,
                      options: FitOptions, say: Callable[[str], None] = lambda m: None,
-                     prior: Any = None, split: bool = False) -> ManeuverSearch:
+                     prior: Any = None, again: ManeuverSearch | None = None) -> ManeuverSearch:
     """Burns that explain the arc ``ms`` better than the ``ballistic`` fit (module docstring).
     ``options`` are the fit's; the area-to-mass ratio is estimated with the burns only when the
     ballistic fit estimated it. ``prior``: (mean (6,), covariance (6, 6)) on the state at the
-    ballistic fit's epoch, the one that fit was made with (None: none). ``split``: fit each burn
-    from where the orbits of its gap's two sides meet too (:func:`_next_burn`; slower)."""
+    ballistic fit's epoch, the one that fit was made with (None: none). ``again``: an earlier
+    search of the same arc, ballistic fit, options and prior; this one then searches again with
+    each burn fitted from where the orbits of its gap's two sides meet too (:func:`_next_burn`;
+    slower), reusing that search's screened fits (:attr:`ManeuverSearch.screened`)."""
     opts = replace(options, area_to_mass="solve" if ballistic.parameter_names else "off")
     arc = BurnArc(dynamics, sensor, ms, opts, prior)
-    found = ManeuverSearch(ballistic, dynamics, prior=prior)
+    found = ManeuverSearch(ballistic, dynamics, prior=prior, screened={} if again is None else again.screened)
     for _ in range(MAX_BURNS):
-        step = _next_burn(arc, found, split)
+        step = _next_burn(arc, found, split=again is not None)
         if step is None:
             break
         fit, window, t_sigma = step
@@ -397,7 +423,7 @@ def _add_burn(arc: BurnArc, found: ManeuverSearch, fit: ImpulseFit, window: tupl
     windows = found.windows + [window]
     order = np.argsort([x.t for x in found.burns] + [t_new], kind="stable")
     return ManeuverSearch(fit.fit, flown(arc.dynamics, fit.burns), fit.burns, [windows[int(i)] for i in order],
-                          found.notes, found.prior)
+                          found.notes, found.prior, found.screened)
 
 
 def _timed(arc: BurnArc, fit: ImpulseFit, t_sigma: float, found: ManeuverSearch,
@@ -621,7 +647,7 @@ def _moved(arc: BurnArc, found: ManeuverSearch, better: tuple[int, tuple[float, 
         return None
     others = [b for i, b in enumerate(found.burns) if i != k]
     rest = ManeuverSearch(found.result, flown(arc.dynamics, others), others,
-                          [w for i, w in enumerate(found.windows) if i != k], found.notes, found.prior)
+                          [w for i, w in enumerate(found.windows) if i != k], found.notes, found.prior, found.screened)
     about = replace(found.result, state=trial.fit.state)
     try:
         t_p, t_sigma = burn_time_profile(replace(arc, dynamics=rest.dynamics), about, *window)

@@ -22,7 +22,7 @@ the gaps about it can miss the right one. Split at a gap instead:
 
 Each side fit costs about as much as one full fit, so the search makes these fits only when its
 ordinary fits leave the arc unexplained (:func:`cistrack.least_squares.burn_search.search_maneuvers`
-with ``split=True``).
+searching ``again``).
 """
 from __future__ import annotations
 

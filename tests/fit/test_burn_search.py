@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from .burn_campaigns import burned, truth_state
-from cistrack.least_squares.burn_search import search_maneuvers, suspicion
+from cistrack.least_squares.burn_search import burn_key, search_maneuvers, suspicion
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.options import FitOptions
 
@@ -67,6 +67,30 @@ def test_the_state_after_the_burn_lies_inside_the_covariance(burn_03):
     r = found.result
     e = r.state - truth_state(b, float(r.epoch))
     assert e @ np.linalg.solve(r.covariance, e) <= 22.5
+
+
+def test_each_screened_step_is_kept_under_the_burns_found_before_it(burn_03):
+    """The first step screens with no burn found; the second, which kept none, with the one burn."""
+    _, _, found = burn_03
+    assert set(found.screened) == {(), burn_key(found.burns)}
+
+
+def test_a_search_made_again_reuses_the_first_ones_screened_steps(burn_03):
+    """Searching again adds fits from where a gap's sides meet; the screened steps of the burns
+    the first search found are not made again."""
+    b, ballistic, found = burn_03
+    steps = dict(found.screened)
+    again = search_maneuvers(b.dynamics, b.sensor, b.measurements, ballistic, OPTS, again=replace(found))
+    assert all(again.screened[k] is v for k, v in steps.items())
+    assert len(again.burns) == 1 and abs(again.burns[0].t - b.t_burn) <= 3 * again.burns[0].t_sigma
+
+
+def test_the_burn_key_tells_burns_apart_by_time_and_by_delta_v(burn_03):
+    _, _, found = burn_03
+    b = found.burns[0]
+    assert burn_key([b]) == burn_key([replace(b)])
+    assert burn_key([b]) != burn_key([replace(b, t=b.t + 1e-9)])
+    assert burn_key([b]) != burn_key([replace(b, delta_v_ms=np.asarray(b.delta_v_ms) * (1 + 1e-12))])
 
 
 @pytest.mark.slow
