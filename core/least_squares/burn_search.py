@@ -53,7 +53,7 @@ from cistrack.model.measurement import MeasurementSet
 from cistrack.least_squares.trajectory import arc_states
 from cistrack.propagation.impulses import ImpulsiveDynamics
 
-__all__ = ["suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "burn_key", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
+__all__ = ["suspicion", "screen_suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "burn_key", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
            "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
 
@@ -145,6 +145,31 @@ def suspicion(result: FitResult) -> str:
     if not result.converged:
         return "it did not converge"
     return ""
+
+
+def screen_suspicion(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, result: FitResult,
+                     options: FitOptions) -> str:
+    """Why a ballistic ``result`` that :func:`suspicion` passes still looks like an object that
+    maneuvered, in words ("" when it does not): the linearised screen of a burn in each gap
+    (:func:`_screen_gaps`, about ``result``, made with ``dynamics``) lowers its capped cost by more
+    than a burn's test needs (chi-square of 4 dof at :data:`FALSE_ALARM`). A ballistic orbit can
+    follow both sides of a long gap within the noise: an unseen survey set of an Earth orbit with a
+    0.3 m/s burn in a six-day gap fitted with weighted RMS 1.16, nothing rejected but the injected
+    outliers, its truth at Mahalanobis^2 4.6e6; a burn in that gap lowers the cost by 72 (23.5
+    needed), while on 24 maneuver-free sets the largest drop was 12."""
+    gaps = _windows(ms.times, [])
+    if not gaps:
+        return ""
+    opts = replace(options, area_to_mass="solve" if result.parameter_names else "off")
+    try:
+        drops = capped_cost(result, None) - _screen_gaps(BurnArc(dynamics, sensor, ms, opts, None), result, gaps)
+    except (PropagationError, FitError, np.linalg.LinAlgError):
+        return ""
+    k, limit = int(np.argmax(drops)), chi2_ppf(1.0 - FALSE_ALARM, 4)
+    if not drops[k] > limit:
+        return ""
+    return (f"a burn in the gap {_utc_days(gaps[k][0]):.2f}-{_utc_days(gaps[k][1]):.2f} d lowers its cost by "
+            f"{drops[k]:.0f} in a linearised screen (a burn's test needs {limit:.1f})")
 
 
 END_BIAS_CHI2 = 18.42

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from .burn_campaigns import burned, truth_state
-from cistrack.least_squares.burn_search import burn_key, search_maneuvers, suspicion
+from cistrack.least_squares.burn_search import burn_key, screen_suspicion, search_maneuvers, suspicion
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.options import FitOptions
 
@@ -91,6 +91,23 @@ def test_the_burn_key_tells_burns_apart_by_time_and_by_delta_v(burn_03):
     assert burn_key([b]) == burn_key([replace(b)])
     assert burn_key([b]) != burn_key([replace(b, t=b.t + 1e-9)])
     assert burn_key([b]) != burn_key([replace(b, delta_v_ms=np.asarray(b.delta_v_ms) * (1 + 1e-12))])
+
+
+def test_the_screen_passes_the_ballistic_fit_of_an_object_that_did_not_maneuver():
+    b = burned(0.0)
+    ballistic = _ballistic(b)
+    assert screen_suspicion(b.dynamics, b.sensor, b.measurements, ballistic, OPTS) == ""
+
+
+def test_the_screen_names_a_gap_where_a_burn_the_ballistic_fit_absorbed_lowers_its_cost():
+    """1 cm/s: the ballistic fit passes every symptom (weighted RMS 1.01), yet a burn in a gap lowers
+    its cost by more than a burn's test needs (chi-square 23.5, 4 dof at 1e-4)."""
+    b = burned(0.01)
+    ballistic = _ballistic(b)
+    assert suspicion(ballistic) == ""
+    why = screen_suspicion(b.dynamics, b.sensor, b.measurements, ballistic, OPTS)
+    drop = float(why.split("lowers its cost by ")[1].split()[0])
+    assert drop > 23.5, why
 
 
 @pytest.mark.slow
