@@ -201,14 +201,17 @@ def test_a_fit_of_observations_the_ephemeris_cannot_model_names_the_file_not_the
 
 def test_a_refused_fit_quotes_the_first_observations_date_not_the_epoch_before_it(tmp_path, capsys):
     """A file whose first observation is 1900-01-01T00:00 had been said to 'start 1899-12-31', the
-    fit's epoch 30 minutes before it (probe I4)."""
+    fit's epoch 30 minutes before it (probe I4). The whole arc is moved to January 1900: one
+    observation alone outside the ephemeris' years is set aside, not refused
+    (tests/fit/test_arcs_outside_ephemeris.py)."""
     from cistrack.cli.main import main
     from cistrack.scenario.builtin_scenarios import builtin_scenario_path
 
-    lines = (builtin_scenario_path("real-data").parent / "real_data" / "observations.psv").read_text().splitlines()
-    row = next(i for i, line in enumerate(lines) if "|2026-" in line)
+    text = (builtin_scenario_path("real-data").parent / "real_data" / "observations.psv").read_text()
+    lines = text.replace("|2026-03-0", "|1900-01-0").splitlines()
+    row = next(i for i, line in enumerate(lines) if "|1900-" in line)
     f = lines[row].split("|")
-    f[next(j for j, c in enumerate(f) if c.strip().startswith("2026-"))] = "1900-01-01T00:00:00Z"
+    f[next(j for j, c in enumerate(f) if c.strip().startswith("1900-"))] = "1900-01-01T00:00:00Z"
     lines[row] = "|".join(f)
     typo = tmp_path / "y1900.psv"
     typo.write_text("\n".join(lines) + "\n")

@@ -774,12 +774,12 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     say = log or (lambda m: None)
     scen_settings, fit_table, reader_params = _split_settings(settings)
     choices = fit_choices(fit_table)
-    objects = read_object_observations(list(files), reg, reader_params, say)
+    job = _Job(scen_settings, choices, reg, progress, log)
+    objects, aside = _modelled_objects(read_object_observations(list(files), reg, reader_params, say), job)
     plans, top_stale = _plans(objects, out, overwrite, words)
     where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
-    for obs, d in plans:  # validate every scenario and directory before the first run
-        _checked_scenario(obs, d / "observations.psv", scen_settings, reg, choices)
+    for obs, d in plans:  # validate every directory before the first run (the scenarios were: _modelled_arcs)
         replaced = check_fit_replacing(d, obs.designation, where, overwrite, words)
         if replaced:
             say(f"{words.overwrite}: replacing {replaced} in {d}")
@@ -799,7 +799,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
             # in a directory; what it replaces checked again under it; the reader's warnings were given
             # for the user's files; one BLAS thread for the least squares' small matrices, as in a run
             check_fit_replacing(d, obs.designation, where, overwrite, words)
-            results += _fit_arcs(obs, d, _Job(scen_settings, choices, reg, progress, log))
+            results += _fit_arcs(obs, d, job, aside[obs.designation])
     return results
 
 
@@ -833,14 +833,70 @@ class _Job:
             self.log(message)
 
 
-def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
+def _outside_arc(part: ObjectObservations, obs_file: Path, job: _Job) -> str:
+    """Why the fit cannot model the arc ``part`` (its epoch outside the years of the dynamics or
+    the sensor, e.g. DE421's), in words; "" when it can."""
+    try:
+        _scenario(part, obs_file, job.settings, job.registry)
+    except ConfigError as exc:
+        if "'epoch'" not in str(exc):
+            raise
+        found = re.search(r"(\w+ '[^']+'): parameter 'epoch' = '[^']*' is invalid: (.*)$", str(exc), re.S)
+        return f"{found[1]}: the epoch {found[2]}" if found else str(exc)
+    return ""
+
+
+def _modelled_arcs(obs: ObjectObservations, job: _Job) -> tuple[ObjectObservations, str]:
+    """(``obs`` without the long-gap arcs the fit cannot model (:func:`_outside_arc`) and does not fit,
+    a note saying which and why, "" for none). Only the arc that is fitted (``fit.arcs``: the latest
+    that determines an orbit, every arc, or all of them) is refused when it lies outside
+    (:func:`_checked_scenario`): one observation with a mistyped year 1899 had refused the whole
+    file, while the same typo dated 1901 was set aside as an earlier arc (probe I4).
+    The scenarios are checked only, before any run: their observation file is not written yet."""
+    from cistrack.fitting.fit_findings import arcs_to_fit, latest_determined_arc
+
+    arcs, choices, obs_file = job.choices.arcs, job.choices, Path("observations.psv")
+    if arcs.arcs == "all":
+        _checked_scenario(obs, obs_file, job.settings, job.registry, choices)
+        return obs, ""
+    parts = arcs_to_fit(obs, "each", arcs.arc_gap_days)
+    fitted = latest_determined_arc(obs, arcs.arc_gap_days)[1] if arcs.arcs == "latest" else None
+    end = float(fitted.measurements.times[0]) if fitted is not None else math.inf
+    why = {i: _outside_arc(p, obs_file, job) for i, p in enumerate(parts) if float(p.measurements.times[0]) < end}
+    out = [i for i, w in why.items() if w]
+    if len(out) == len(parts):
+        _checked_scenario(obs, obs_file, job.settings, job.registry, choices)
+    times = np.asarray(obs.measurements.times, dtype=float)
+    keep = ~np.isin(times, np.concatenate([parts[i].measurements.times for i in out])) if out else times == times
+    kept = replace(obs, measurements=obs.measurements.subset(keep))
+    _checked_scenario(fitted or kept, obs_file, job.settings, job.registry, choices)
+    if not out:
+        return kept, ""
+    first = parts[out[0]].measurements
+    when = units.tu_to_utc(units.parse_utc(READ_EPOCH), float(first.times[0]))
+    note = (f"{int((~keep).sum())} observation(s) in {len(out)} arc(s) more than {arcs.arc_gap_days:g} days from the "
+            f"others (the first from site {first.site_at(0)} on {when:%Y-%m-%d}) are not fitted: outside the years "
+            f"the fit can model ({why[out[0]]})")
+    job.say(f"{obs.designation}: {note}")
+    return kept, note
+
+
+def _modelled_objects(objects: list[ObjectObservations], job: _Job) -> tuple[list[ObjectObservations], dict[str, str]]:
+    """(each object's observations the fit can model, the note on those set aside by designation):
+    :func:`_modelled_arcs` of each."""
+    modelled = [_modelled_arcs(o, job) for o in objects]
+    return [o for o, _ in modelled], {o.designation: note for o, note in modelled}
+
+
+def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job, aside: str = "") -> list[ObjectFit]:
     """The fits of one object: its latest arc (default), each arc in ``d/arc-<first date>``, or all
-    of it at once (``fit.arcs``); each written to its directory."""
+    of it at once (``fit.arcs``); each written to its directory. ``aside``: a note on the arcs set
+    aside (:func:`_modelled_arcs`), which every fit's messages give."""
     from cistrack.fitting.fit_findings import arcs_to_fit
 
     arcs = job.choices.arcs
     if arcs.arcs == "latest":
-        return [_fit_latest_determined(obs, d, job)]
+        return [_fit_latest_determined(obs, d, job, aside)]
     sets = arcs_to_fit(obs, arcs.arcs, arcs.arc_gap_days)
     if arcs.arcs == "all":
         return [_finish(_fit_latest(obs, sets[0], d, job), sets[0], job)]
@@ -849,24 +905,30 @@ def _fit_arcs(obs: ObjectObservations, d: Path, job: _Job) -> list[ObjectFit]:
         first = units.tu_to_utc(units.parse_utc(READ_EPOCH), float(part.measurements.times[0]))
         sub = d / f"arc-{first:%Y-%m-%d}"
         check_output_dir(sub, "the arc's results directory", records=(MANIFEST, FIT_RECORD))
-        out.append(_finish(_fit_run(part, sub, job), part, job))
+        out.append(_finish(_noted(_fit_run(part, sub, job), aside), part, job))
     return out
 
 
-def _fit_latest_determined(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
+def _noted(one: ObjectFit, note: str) -> ObjectFit:
+    """``one`` with ``note`` in its fit's messages, or in its failure when there is no fit."""
+    if note and one.result is not None:
+        one.result = _with_messages(one.result, [note])
+    elif note:
+        one.failure = f"{one.failure}; {note}" if one.failure else note
+    return one
+
+
+def _fit_latest_determined(obs: ObjectObservations, d: Path, job: _Job, aside: str = "") -> ObjectFit:
     """The fit of the latest arc that determines an orbit (lone tracklets after it are left out,
-    and the fit says so: :func:`cistrack.fitting.fit_findings.latest_determined_arc`)."""
+    and the fit says so: :func:`cistrack.fitting.fit_findings.latest_determined_arc`); ``aside``:
+    a note on the earlier arcs set aside, given with it."""
     from cistrack.fitting.fit_findings import latest_determined_arc
 
     upto, arc, note = latest_determined_arc(obs, job.choices.arcs.arc_gap_days)
     if note:
         job.say(f"{obs.designation}: {note}")
     one = _fit_latest(upto, arc, d, job)
-    if note and one.result is not None:
-        one.result = _with_messages(one.result, [note])
-    elif note:
-        one.failure = f"{one.failure}; {note}" if one.failure else note
-    return _finish(one, arc, job)
+    return _finish(_noted(one, "; ".join(n for n in (aside, note) if n)), arc, job)
 
 
 def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
