@@ -15,6 +15,7 @@ second (23:59:60.x UTC) has no Python ``datetime``: it is written as 23:59:59.99
 """
 from __future__ import annotations
 
+import calendar
 import re
 from datetime import datetime, timedelta, timezone
 from functools import lru_cache
@@ -125,10 +126,33 @@ def utc_problem(text: str, example: str = "2026-01-01T00:00:00Z") -> str:
     return LEAP_SECOND_PROBLEM if is_leap_second(text) else f"is not an ISO-8601 UTC time (e.g. '{example}')"
 
 
+_DATE = re.compile(r"\s*([+-]?\d{4})-(\d{2})-(\d{2})(?:[T ]|$)")
+
+
+def date_problem(text: str) -> str:
+    """Why ``text``, an ISO-8601 time whose date is well formed (YYYY-MM-DD), names no date, in
+    words ("2026-02-30 is not a date: February has 28 days in 2026"); "" when the date exists or
+    is not so written (then the text is no ISO-8601 time at all)."""
+    found = _DATE.match(str(text))
+    if not found:
+        return ""
+    year, month, day = (int(g) for g in found.groups())
+    shown = "-".join(found.groups())
+    if not 1 <= year <= 9999:
+        return f"{shown} is not a date: years run from 0001 to 9999"
+    if not 1 <= month <= 12:
+        return f"{shown} is not a date: there is no month {found[2]} (01 to 12)"
+    days = calendar.monthrange(year, month)[1]
+    if not 1 <= day <= days:
+        return f"{shown} is not a date: {calendar.month_name[month]} has {days} days in {year}"
+    return ""
+
+
 def parse_utc(text: str | datetime) -> datetime:
     """Parse an ISO-8601 UTC timestamp ('2026-01-01T00:00:00Z'); naive times are taken as UTC.
 
-    Raises ValueError with the offending text when it is not a timestamp.
+    Raises ValueError with the offending text when it is not a timestamp, saying so when its
+    well-formed date does not exist (:func:`date_problem`).
     """
     if isinstance(text, datetime):
         dt = text
@@ -139,7 +163,8 @@ def parse_utc(text: str | datetime) -> datetime:
         try:
             dt = datetime.fromisoformat(s)
         except ValueError as exc:
-            raise ValueError(f"not an ISO-8601 UTC time: {text!r}") from exc
+            why = date_problem(s)
+            raise ValueError(f"{text!r}: {why}" if why else f"not an ISO-8601 UTC time: {text!r}") from exc
     if dt.tzinfo is None:
         dt = dt.replace(tzinfo=timezone.utc)
     return dt.astimezone(timezone.utc)

@@ -16,7 +16,7 @@ import numpy as np
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet
 from cistrack.interfaces.reader import FieldError, SeveralObjectsError, show_field
 from cistrack.astro.sites import Site
-from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, format_utc, is_leap_second, parse_utc, utc_to_tu
+from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, date_problem, format_utc, is_leap_second, parse_utc, utc_to_tu
 
 from .decimal_units import to_rad
 
@@ -74,7 +74,10 @@ def parse_iso_utc(text: str) -> datetime:
         raise ValueError("not " + TIME_FIELD_HELP)
     if is_leap_second(s):
         raise ValueError(LEAP_SECOND_PROBLEM)
-    dt = parse_utc(s)
+    try:
+        dt = parse_utc(s)
+    except ValueError:  # the caller quotes the text: say why once, not the text again
+        raise ValueError(date_problem(s) or "not " + TIME_FIELD_HELP) from None
     if not s.endswith("Z"):
         raise ValueError("must be UTC (end in Z)")
     return dt.astimezone(timezone.utc)

@@ -89,3 +89,15 @@ def test_occultation_astrometry_is_an_optical_mode(tmp_path, caplog):
     with caplog.at_level("WARNING", logger="cistrack.readers"):
         assert len(read_observations(_psv(tmp_path, ("OCC", ""), ("CCD", "")), EPOCH)) == 2
     assert "not an optical mode" not in caplog.text
+
+
+# -- obsTime ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("when, why", [("2026-02-30T00:00:00Z", "2026-02-30 is not a date: February has 28 days in 2026"),
+                                       ("2026-13-01T00:00:00Z", "2026-13-01 is not a date: there is no month 13")])
+def test_a_well_formed_date_that_does_not_exist_is_said_so_quoting_the_value_once(tmp_path, when, why):
+    path = _psv(tmp_path, ("CCD", "0"), ("CCD", "0"))
+    path.write_text(path.read_text().replace("2026-03-01T03:00:00Z", when))
+    with pytest.raises(MeasurementError) as info:
+        read_observations(path, EPOCH)
+    assert f"line 4, field obsTime: '{when}': {why}" in str(info.value) and str(info.value).count(when) == 1
