@@ -134,6 +134,21 @@ def _line_of(text: str) -> int:
     return len(_LINE_BREAK.findall(text)) + 1
 
 
+_XML_ENCODING = re.compile(rb"""\A(?:\xef\xbb\xbf)?\s*<\?xml[^>]*?\bencoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
+
+
+def _declared_encoding(data: bytes) -> str:
+    """For a file that is not UTF-8: what its XML declaration says of that ("" for none, or one
+    declaring UTF-8). An ADES XML file declaring ISO-8859-1 (valid XML) had been told only "not
+    UTF-8 text (invalid start byte)"."""
+    found = _XML_ENCODING.match(data[:1024])
+    name = found[1].decode("ascii") if found else ""
+    if not name or name.lower().replace("_", "-") in ("utf-8", "utf8"):
+        return ""
+    return (f": the file declares encoding=\"{name}\", and cistrack reads XML observation files (ADES XML) in "
+            f"UTF-8 only; convert it, e.g. iconv -f {name} -t UTF-8, and declare encoding=\"UTF-8\"")
+
+
 def read_text_lines(path: str | PathLike) -> list[str]:
     """The lines of a UTF-8 text file (a leading byte-order mark is dropped; lines end at LF, CR LF
     or CR: :func:`split_lines`), with a MeasurementError naming the file if it is not a regular
@@ -150,7 +165,7 @@ def read_text_lines(path: str | PathLike) -> list[str]:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = _line_of(data[:exc.start].decode("utf-8-sig", errors="replace"))
-        raise FieldError(p, line, "(encoding)", f"not UTF-8 text ({exc.reason})") from None
+        raise FieldError(p, line, "(encoding)", f"not UTF-8 text ({exc.reason}){_declared_encoding(data)}") from None
     if "\x00" in text:
         raise FieldError(p, _line_of(text[:text.index("\x00")]), "(encoding)", "contains a NUL byte: not a text file")
     return split_lines(text)

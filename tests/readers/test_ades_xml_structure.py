@@ -38,3 +38,13 @@ def test_what_ades_does_not_allow_is_refused_naming_it(tmp_path, text, words):
     with pytest.raises(FieldError, match="line") as err:
         _read(tmp_path, text)
     assert words in str(err.value)
+
+
+def test_a_file_declaring_another_encoding_is_told_that_ades_xml_is_read_in_utf8_only(tmp_path):
+    p = tmp_path / "obs.xml"
+    text = _xml("<!-- M\u00fcller -->" + GOOD).replace('encoding="UTF-8"', 'encoding="ISO-8859-1"')
+    p.write_bytes(text.encode("latin-1"))
+    with pytest.raises(FieldError, match=r'obs\.xml, line 3, field \(encoding\): not UTF-8 text \(invalid start '
+                                         r'byte\): the file declares encoding="ISO-8859-1", and cistrack reads XML '
+                                         r"observation files \(ADES XML\) in UTF-8 only"):
+        read_observations(p, "2026-03-01T00:00:00Z")
