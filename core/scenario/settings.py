@@ -146,27 +146,38 @@ def _yield_to(old: dict[str, Any], value: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _warn_replaced(tables: dict[str, Any], settings: dict[str, Any], registry=None) -> None:
+NESTED_COMPONENT_TABLES: dict[str, str] = {"truth.dynamics": "dynamics", "truth.maneuvers": "maneuver-plan"}
+"""Component tables inside other tables (dotted path -> registry kind), besides the top-level
+ones (:data:`cistrack.scenario.loading.COMPONENT_TABLES`)."""
+
+
+def _warn_replaced(tables: dict[str, Any], settings: dict[str, Any], registry=None, where: str = "") -> None:
     """A UserWarning for each component table of ``tables`` whose component ``settings`` switch to
-    another (``filter.name=sir``), naming the parameters of the old table that are dropped with it
-    (those the settings do not set again) and how to keep them."""
+    another (``filter.name=sir``, ``truth.maneuvers.name=burns``: any table with a ``name``, at any
+    depth), naming the parameters of the old table that are dropped with it (those the settings do
+    not set again) and how to keep them. ``where``: the dotted path of ``tables`` ("" at the top).
+    (``truth.maneuvers.name=burns`` had dropped the burn's keys without a word: probe I8.)"""
     import warnings
 
     from cistrack.plugin.registry import default_registry
     from cistrack.scenario.loading import COMPONENT_TABLES
 
     reg = registry or default_registry()
-    for table, kind in COMPONENT_TABLES.items():
-        old, value = tables.get(table), settings.get(table)
-        name = value.get("name") if isinstance(value, dict) else None
-        if not isinstance(old, dict) or not isinstance(name, str) or name == old.get("name"):
+    for key, value in settings.items():
+        table, old = f"{where}{key}", tables.get(key)
+        if not isinstance(old, dict) or not isinstance(value, dict):
             continue
-        choices = set(reg.names(kind))
+        name = value.get("name")
+        if not isinstance(name, str) or name == old.get("name"):
+            _warn_replaced(old, value, reg, f"{table}.")
+            continue
+        kind = COMPONENT_TABLES.get(table) or NESTED_COMPONENT_TABLES.get(table)
+        choices = set(reg.names(kind)) if kind else set()
         dropped = [k for k in old if k != "name" and k not in value and k not in choices]
         if dropped:
-            warnings.warn(UserWarning(f"--set {table}.name={name} replaces the scenario's [{table}] ({kind} "
-                                      f"{old.get('name')!r}): {_dropped_advice(table, name, old, dropped, reg, kind)}"),
-                          stacklevel=3)
+            what = f"{kind} {old.get('name')!r}" if kind else f"{old.get('name')!r}"
+            warnings.warn(UserWarning(f"--set {table}.name={name} replaces the scenario's [{table}] ({what}): "
+                                      f"{_dropped_advice(table, name, old, dropped, reg, kind)}"), stacklevel=3)
 
 
 def _dropped_advice(table: str, name: str, old: dict[str, Any], dropped: list[str], reg, kind: str) -> str:
@@ -174,11 +185,11 @@ def _dropped_advice(table: str, name: str, old: dict[str, Any], dropped: list[st
     filter.n_particles=200 to keep it`` (or that the new component takes none of them)."""
     from cistrack.interfaces.component import param_specs
 
-    factory = reg.get(kind, name).factory if name in reg.names(kind) else None
+    factory = reg.get(kind, name).factory if kind and name in reg.names(kind) else None
     takes = [k for k in dropped if isinstance(factory, type) and k in param_specs(factory)]
     said = f"{', '.join(f'{k} = {_toml(old[k])}' for k in dropped)} dropped with it"
     if not takes:
-        return f"{said} ({name!r} takes none of them)"
+        return f"{said} ({name!r} takes none of them)" if factory is not None else said
     keep = " ".join(f"--set {table}.{k}={_toml(old[k])}" for k in takes)
     return f"{said}; {name!r} takes {', '.join(takes)} too: add {keep} to keep {'it' if len(takes) == 1 else 'them'}"
 

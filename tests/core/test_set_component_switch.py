@@ -37,3 +37,14 @@ def test_setting_a_parameter_of_the_same_filter_warns_nothing(quick):
         warnings.simplefilter("error")
         scen = apply_settings(quick, ["filter.name=pgm", "filter.n_particles=300"])
     assert scen.components["filter"].params["n_components"] == 2
+
+
+def test_switching_the_truths_burn_plan_warns_naming_the_burns_keys_dropped():
+    """``truth.maneuvers.name=burns`` had dropped the burn's keys without a word, and the run flew
+    no burn (probe I8)."""
+    with pytest.warns(UserWarning) as said:
+        apply_settings(load_scenario("example-1-burn"), ["truth.maneuvers.name=burns"])
+    (text,) = [str(w.message) for w in said]
+    assert text.startswith("--set truth.maneuvers.name=burns replaces the scenario's [truth.maneuvers] "
+                           "(maneuver-plan 'impulse'): t_days = 3.62, delta_v_ms = 1.0, direction = \"in-track\", "
+                           "frame = \"rtn-moon\" dropped with it")

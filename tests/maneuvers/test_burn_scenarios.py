@@ -37,7 +37,8 @@ def test_set_changes_the_plan_and_a_new_name_replaces_its_table():
     s = apply_settings(load_scenario("example-1-burn"), ["truth.maneuvers.delta_v_ms=0.3", "truth.maneuvers.t_days=2"])
     assert s.truth_maneuvers.params["delta_v_ms"] == 0.3 and s.truth_maneuvers.params["t_days"] == 2.0
     assert s.truth_orbit == "nrho-9-2"                               # the rest of [truth] is kept
-    s = apply_settings(load_scenario("example-1-burn"), ['truth.maneuvers.name="station-keeping"'])
+    with pytest.warns(UserWarning, match=r"t_days = 3\.62, .* dropped with it"):  # the burn's keys, said
+        s = apply_settings(load_scenario("example-1-burn"), ['truth.maneuvers.name="station-keeping"'])
     assert s.truth_maneuvers.name == "station-keeping" and "t_days" not in s.truth_maneuvers.params
     s = apply_settings(load_scenario("example-1"), ['truth.maneuvers.name="impulse"', "truth.maneuvers.t_days=1.5"])
     assert s.truth_maneuvers.params == {"t_days": 1.5}
