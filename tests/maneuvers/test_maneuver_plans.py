@@ -2,6 +2,8 @@
 the truth flown with the earlier burns, apolune search and parameter validation."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -203,6 +205,15 @@ def test_bad_parameters_are_refused_naming_the_parameter_and_what_is_allowed(cls
     assert f"'{name}'" in str(err.value)
     if name in ("direction", "frame"):
         assert "rtn-moon" in str(err.value) or "in-track" in str(err.value)
+
+
+def test_a_vector_whose_size_overflows_is_refused_without_a_numpy_warning():
+    """numpy's norm of [1e308, 1e308, 0] had printed "overflow encountered in dot" before the
+    refusal (probe I8)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ParameterError, match=r"'vector_ms'.*the burn's size must be at most"):
+            ImpulsePlan(t_days=1.0, vector_ms=[1e308, 1e308, 0.0], frame="synodic")
 
 
 @pytest.mark.parametrize("cls, params", [
