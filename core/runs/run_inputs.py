@@ -204,12 +204,16 @@ def checked_iod_cloud(cloud: Any, measurements: MeasurementSet, who: str) -> Par
 
 
 def _check_cloud_states(cloud: ParticleCloud, who: str) -> None:
-    """IODError naming ``who`` unless the cloud holds at least one state of 6 components, all finite:
-    the filter would otherwise be blamed for the IOD's cloud."""
+    """IODError naming ``who`` unless the cloud holds at least two states of 6 components, all finite:
+    the filter would otherwise be blamed for the IOD's cloud (a cloud of 1 particle had been
+    "filter 'pgm': the initial cloud has 1 particle": probe I8)."""
     n, d = cloud.states.shape
     if d != 6 or n == 0:
         raise IODError(f"{who}: estimate() returned a cloud with states of shape {cloud.states.shape}; a ParticleCloud "
-                       "holds (N, 6) synodic states, N >= 1")
+                       "holds (N, 6) synodic states, N >= 2")
+    if n == 1:
+        raise IODError(f"{who}: estimate() returned a cloud of 1 particle; a filter starts from a spread of states "
+                       "(N >= 2: the orbits the measurements allow)")
     bad = int(np.sum(~np.all(np.isfinite(cloud.states), axis=1)))
     if bad:
         raise IODError(f"{who}: estimate() returned a cloud whose states are not all finite ({bad} of {n} hold NaN or inf)")

@@ -17,7 +17,8 @@ from cistrack.scenario.loading import load_scenario
 class WrongIOD(IODMethod):
     """An IOD giving ``how`` instead of a cloud at the last measurement: "array" (its states as a
     bare array), "raise" (its own ZeroDivisionError), "late" (a cloud 1000 TU after the last
-    measurement), "nan" (a cloud with a NaN state), "width" (states of 4 components)."""
+    measurement), "nan" (a cloud with a NaN state), "width" (states of 4 components), "one" (a cloud
+    of 1 particle)."""
 
     def __init__(self, how: str = "array") -> None:
         self.how = how
@@ -34,6 +35,8 @@ class WrongIOD(IODMethod):
             return ParticleCloud(states, t)
         if self.how == "width":
             return ParticleCloud(states[:, :4], t)
+        if self.how == "one":
+            return ParticleCloud(states[:1], t)
         return ParticleCloud(states, t + 1000.0)
 
 
@@ -64,7 +67,8 @@ def test_an_iod_cloud_dated_after_its_measurements_is_an_iod_error_naming_it_and
 
 
 @pytest.mark.parametrize("how, what", [("nan", r"whose states are not all finite \(1 of 100 hold NaN or inf\)"),
-                                       ("width", r"with states of shape \(100, 4\)")])
+                                       ("width", r"with states of shape \(100, 4\)"),
+                                       ("one", r"of 1 particle; a filter starts from a spread of states")])
 def test_an_iod_cloud_the_filter_cannot_start_from_is_an_iod_error_naming_the_iod(how, what):
     with pytest.raises(IODError, match=rf"^iod 'h-iod' \(hplug 0\.1\): estimate\(\) returned a cloud {what}"):
         _run(how)
