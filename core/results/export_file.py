@@ -9,6 +9,7 @@ file is refused. The comparison skips CCSDS's ``CREATION_DATE`` line (the time o
 """
 from __future__ import annotations
 
+import errno
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -84,16 +85,27 @@ def write_export(exporter: Any, out: Path, estimates: Any, meta: dict[str, Any],
                             f"({exc.strerror or exc}); nothing was written there") from None
 
 
+_NOT_A_FILE = (errno.EEXIST, errno.EISDIR, errno.ENOTDIR)
+"""What an exporter meets making a directory or a link at the temporary file it is given."""
+
+
 def _write_checked(exporter: Any, tmp: Path, estimates: Any, meta: dict[str, Any], format: str) -> None:
     """``exporter.write``, an exporter that breaks its contract named (:class:`PluginError`): one
-    that raises what is neither cistrack's error nor the system's, calls ``sys.exit``, or writes
-    nothing."""
+    that raises what is neither cistrack's error nor the system's, calls ``sys.exit``, writes
+    nothing, or makes something else than a file at ``tmp`` (which exists, empty: a directory or a
+    link made there fails "File exists", which had been said of ``--out``: probe I8)."""
     from cistrack.errors import PluginError, exception_text
 
     who = f"exporter {format!r} ({type(exporter).__module__})"
     try:
         exporter.write(tmp, estimates, meta)
-    except (CistrackError, OSError):
+    except OSError as exc:
+        if exc.errno in _NOT_A_FILE and tmp in [Path(f) for f in (exc.filename, exc.filename2) if f]:
+            raise PluginError(f"{who} failed: {exception_text(exc)}: it must write a regular file at the path it is "
+                              "given (a temporary file beside the export, which exists empty); nothing was "
+                              "written") from exc
+        raise
+    except CistrackError:
         raise
     except BaseException as exc:  # a plugin's fault, named (a KeyboardInterrupt only from a signal)
         if not plugin_fault(exc):

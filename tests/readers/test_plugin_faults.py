@@ -3,6 +3,8 @@ that raises something other than cistrack's or the system's errors, calls sys.ex
 is not a MeasurementSet, or (an exporter) writes nothing. Nothing is written then."""
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from cistrack.errors import MeasurementError, PluginError
@@ -55,6 +57,10 @@ class _Exporter:
             raise SystemExit(3)
         if self.mode == "ok":
             path.write_text("x\n")
+        if self.mode == "dir":
+            os.makedirs(path, exist_ok=True)
+        if self.mode == "link":
+            os.symlink("/etc/passwd", path)
 
 
 @pytest.mark.parametrize("mode, words", [("raise", "failed: ValueError: boom"), ("exit", "sys.exit(3)"),
@@ -64,6 +70,16 @@ def test_an_exporter_that_breaks_its_contract_is_named_and_leaves_no_file(tmp_pa
     with pytest.raises(PluginError, match="exporter 'evx'") as exc:
         write_export(_Exporter(mode), out, None, {}, format="evx", named=True, overwrite=False)
     assert words in str(exc.value) and not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("mode", ["dir", "link"])
+def test_an_exporter_that_makes_a_directory_or_link_at_its_path_is_named_not_the_out_path(tmp_path, mode):
+    """It had been "--out q.evx: cannot write the evx file (File exists)" (probe I8)."""
+    out = tmp_path / "q.evx"
+    with pytest.raises(PluginError, match=r"^exporter 'evx' \(.*\) failed: FileExistsError: .*it must write a regular "
+                                          r"file at the path it is given") as exc:
+        write_export(_Exporter(mode), out, None, {}, format="evx", named=True, overwrite=False)
+    assert "--out" not in str(exc.value) and list(tmp_path.iterdir()) == []
 
 
 def test_an_exporter_that_writes_is_renamed_into_place(tmp_path):
