@@ -15,7 +15,7 @@ import numpy as np
 from cistrack import units
 from cistrack.least_squares.impulse_fit import BurnEstimate
 
-__all__ = ["maneuver_record", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
+__all__ = ["maneuver_record", "capped_outliers", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
 
 MIN_BURN_SIGMAS = 3.0
 """A burn the fit reports with fewer than two nights of observations on one side
@@ -92,7 +92,7 @@ def add_maneuvers(one, say) -> None:
         return
     if span < MIN_SEARCH_ARC_DAYS:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
-            f"not a clean fit: it looks like an object that maneuvered ({why}); an arc of {span * 24.0:.3g} h "
+            f"{_unclean(one, r, why)}; an arc of {span * 24.0:.3g} h "
             f"(under {MIN_SEARCH_ARC_DAYS * 24.0:g} h) cannot tell a burn from outliers or wrong weights, so no burn "
             "was searched",))
         return
@@ -109,7 +109,7 @@ def add_maneuvers(one, say) -> None:
     found, fit, burns, doubt = outcome.found, outcome.fit, outcome.burns, outcome.doubt
     if doubt:
         one.result = replace(r, converged=False, messages=tuple(r.messages) + (
-            f"not a clean fit: it looks like an object that maneuvered ({why}), and {doubt}",))
+            f"{_unclean(one, r, why)}, and {doubt}",))
         return
     one.maneuvers = [maneuver_record(b, w, float(times[times > b.t][0]), one.scenario.epoch)
                      for b, w in zip(burns, found.windows)]
@@ -135,6 +135,30 @@ def _suspected(ctx, one, span: float) -> tuple[str, bool]:
         return why, False
     why = screen_suspicion(ctx.dynamics, ctx.sensor, ctx.measurements, one.result, one.choices.options)
     return why, bool(why)
+
+
+def capped_outliers(result) -> int:
+    """How many observations ``result`` uses although their chi-square exceeds its rejection
+    threshold: the cap on rejections (``max_reject_fraction``) kept them."""
+    res = result.residuals
+    chi2 = np.asarray(res.chi2, dtype=float)[~np.asarray(res.rejected, dtype=bool)]
+    return int(np.sum(chi2 > result.rejection_threshold))
+
+
+def _unclean(one, r, why: str) -> str:
+    """The opening words of the message that ``r``, the ballistic fit of ``one`` that looks like a
+    maneuver for ``why``, is not a clean fit: when the cap on rejections kept observations above the
+    threshold, those (probe I5: one outlier kept by the cap pulled a maneuver-free fit off its first
+    night, which was reported as "an object that maneuvered")."""
+    kept = capped_outliers(r)
+    if not kept:
+        return f"not a clean fit: it looks like an object that maneuvered ({why})"
+    share = one.reject_fraction if one.reject_fraction is not None else one.choices.options.max_reject_fraction
+    one_kept = kept == 1
+    return (f"not a clean fit: {_count(kept, 'observation')} above the chi-square threshold "
+            f"({r.rejection_threshold:.4g}) {'is' if one_kept else 'are'} kept because fit.max_reject_fraction "
+            f"({share:g} applied) lets at most that share of the observations be rejected; {'it' if one_kept else 'they'} "
+            f"may be what pulls the fit ({why})")
 
 
 class _Outcome(NamedTuple):

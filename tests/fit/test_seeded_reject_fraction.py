@@ -53,3 +53,14 @@ def test_fit_json_records_the_rejected_share_applied_and_a_raised_one_rejects_th
     record = json.loads((out / "fit.json").read_text())
     assert record["settings"]["options"]["max_reject_fraction"] == applied
     assert record["converged"] is ok
+
+
+def test_an_outlier_kept_by_the_cap_is_named_as_what_pulls_the_fit_not_a_maneuver(shifted_set, tmp_path):
+    """The genuine outlier kept by the 0.1 cap pulled the orbit off the first night, which the fit
+    had reported as "an object that maneuvered"."""
+    assert main(["fit", str(shifted_set), "--out", str(tmp_path / "fit"), "--quiet"]) == 3
+    messages = json.loads((tmp_path / "fit" / "fit.json").read_text())["messages"]
+    note = next(m for m in messages if m.startswith("not a clean fit"))
+    assert "1 observation above the chi-square threshold" in note and "is kept because fit.max_reject_fraction" in note
+    assert f"({SEEDED_REJECT_FRACTION:g} applied)" in note and "it may be what pulls the fit" in note
+    assert "maneuvered" not in note
