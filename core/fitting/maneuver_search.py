@@ -16,7 +16,7 @@ from cistrack import units
 from cistrack.least_squares.options import AREA_TO_MASS
 from cistrack.least_squares.impulse_fit import BurnEstimate
 
-__all__ = ["maneuver_record", "capped_outliers", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
+__all__ = ["maneuver_record", "capped_outliers", "site_left_out", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
 
 MIN_BURN_SIGMAS = 3.0
 """A burn the fit reports with fewer than two nights of observations on one side
@@ -107,8 +107,9 @@ def add_maneuvers(one, say) -> None:
         outcome = _retried(ctx, one, outcome, say)
     found, fit, burns, doubt = outcome.found, outcome.fit, outcome.burns, outcome.doubt
     if doubt:
+        site = site_left_out(ctx, one, r)
         one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
-            f"{_unclean(one, r, why)}, and {doubt}",))
+            f"{_unclean(one, r, why)}, and {doubt}" + (f"; {site}" if site else ""),))
         return
     fit, burns = _ratio_as_set(ctx, one, found, fit, burns)
     one.maneuvers = [maneuver_record(b, w, float(times[times > b.t][0]), one.scenario.epoch)
@@ -196,6 +197,41 @@ def capped_outliers(result) -> int:
     res = result.residuals
     chi2 = np.asarray(res.chi2, dtype=float)[~np.asarray(res.rejected, dtype=bool)]
     return int(np.sum(chi2 > result.rejection_threshold))
+
+
+SITE_SPAN_SHARE = 0.9
+"""A site is left out (:func:`site_left_out`) only when the others' observations span at least this
+share of the arc: a site that alone saw one end of it would take a burn with it."""
+
+
+def site_left_out(ctx, one, r) -> str:
+    """Words naming the one site without whose observations the rest fit cleanly ("" when none or
+    several do): each site with three observations or more left out in turn, the others (spanning
+    :data:`SITE_SPAN_SHARE` of the arc) fitted from ``r``'s orbit with the fit's options, clean when
+    converged with nothing :func:`~cistrack.least_squares.burn_search.suspicion` names. One site's
+    30 s clock offset, or a wrong site code, had been reported only as "an object that maneuvered"."""
+    from cistrack.errors import CistrackError
+    from cistrack.least_squares.burn_search import suspicion
+    from cistrack.least_squares.differential_correction import fit_orbit
+
+    ms = ctx.measurements
+    t, sites = np.asarray(ms.times, dtype=float), np.asarray(ms.sites).astype(str)
+    clean = []
+    for x in [x for x in np.unique(sites) if x and np.sum(sites == x) >= 3]:
+        keep = sites != x
+        if keep.sum() < 6 or np.ptp(t[keep]) < SITE_SPAN_SHARE * np.ptp(t):
+            continue
+        try:
+            f = fit_orbit(ctx.dynamics, ctx.sensor, ms.subset(keep), r.state, r.epoch, options=one.choices.options)
+        except (CistrackError, np.linalg.LinAlgError):
+            continue
+        if f.converged and not suspicion(f):
+            clean.append((x, int(np.sum(~keep)), f.rms))
+    if len(clean) != 1:
+        return ""
+    x, n, rms = clean[0]
+    return (f"without site {x}'s {n} observations the others fit cleanly (weighted RMS {rms:.2f}): a clock or "
+            f"position error at {x}?")
 
 
 def _unclean(one, r, why: str) -> str:

@@ -292,6 +292,21 @@ def test_a_ratio_kept_in_a_fit_that_is_not_clean_says_it_may_be_absorbing_a_mane
 
 
 @pytest.mark.slow
+def test_a_site_given_a_wrong_code_is_named_beside_the_maneuver_it_looks_like(tmp_path):
+    """nrho seed 1200, no burn, every observation of 711 labelled 568 (Maunakea): the fit is not
+    clean and had been blamed only on "an object that maneuvered"; without 568's observations the
+    others fit cleanly, and the note says so."""
+    set_dir = tmp_path / "nrho-s1200"
+    make(set_dir, "nrho", seed=1200)
+    psv = set_dir / "observations.psv"
+    psv.write_text(psv.read_text().replace("|711|", "|568|"))
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "failed"
+    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    assert any("without site 568's" in m and "clock or position error at 568" in m for m in messages), messages
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("family, seed", [("halo", 255), ("heo", 251)])
 def test_a_burn_the_ballistic_start_cannot_reach_is_fitted_from_where_its_sides_meet(tmp_path, family, seed):
     """Both with a 1 m/s burn, both reported "not clean" before. halo seed 255: 13.7 days into a
