@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 from cistrack.errors import RunInterrupted
 
-__all__ = ["note", "raise_pending", "clear", "exit_interrupted_while_starting", "interrupt_text",
+__all__ = ["note", "raise_pending", "take_pending", "clear", "exit_interrupted_while_starting", "interrupt_text",
            "ctrl_c_handler", "from_signal", "plugin_fault"]
 
 _PENDING: list[RunInterrupted] = []
@@ -62,6 +62,13 @@ def raise_pending() -> None:
         exc = _PENDING[-1]
         _PENDING.clear()
         raise exc
+
+
+def take_pending() -> RunInterrupted | None:
+    """The interrupt noted last, or None; the record is cleared."""
+    exc = _PENDING[-1] if _PENDING else None
+    _PENDING.clear()
+    return exc
 
 
 def interrupt_text(exc: BaseException) -> str:

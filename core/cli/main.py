@@ -29,7 +29,8 @@ from cistrack.cli.predict_command import add_predict_parser
 from cistrack.scenario.limits import check_seed
 from cistrack.results.output_paths import check_output_dir
 from cistrack.cli.process_exit import allow_quick_exit, exit_process
-from cistrack.cli.signals import install_signal_handlers
+from cistrack.cli.signals import install_signal_handlers, interrupts_prevail
+from cistrack.interrupts import clear as clear_interrupts
 from cistrack.cli.plot_config import set_plot_config_dir
 from cistrack.cli.suggesting_parser import SuggestingParser, closest_choice
 from cistrack.cli.text_width import cap_help_width, fit_row, wrap_labelled, wrap_lines, wrap_row
@@ -191,7 +192,7 @@ def _wait_for_ctrl_c(close) -> None:
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:
-        pass
+        clear_interrupts()  # handled: the command ends as asked, not as interrupted
     finally:
         close()
 
@@ -544,7 +545,8 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     previous = install_signal_handlers()
     try:
-        return int(args.func(args) or 0)
+        with interrupts_prevail():  # an ImportError a Ctrl-C caused, or a Ctrl-C lost, ends as the Ctrl-C
+            return int(args.func(args) or 0)
     except CistrackError as exc:
         _eprint(error_text(exc, sys.stderr))
         return 2

@@ -405,6 +405,7 @@ def cmd_predict(args) -> int:
     from cistrack.cli.text_width import for_stream
     from cistrack.fitting.sky_ephemeris import orbit_of_directory, sky_ephemeris_of
     from cistrack.errors import ConfigError
+    from cistrack.interrupts import raise_pending
     from cistrack.results.dir_lock import check_still_as_read, results_stamp
     from cistrack.plugin.registry import default_registry
 
@@ -421,6 +422,7 @@ def cmd_predict(args) -> int:
                 f"({site.name or 'site'}) ...")
     sky = sky_ephemeris_of(orbit, times, site, reg)
     check_still_as_read(args.run, stamp, "prediction")  # a fit or run may have started (and ended) meanwhile
+    raise_pending()  # a Ctrl-C lost while numba loaded: no files (probe J1)
     try:
         csv_path, png = _write(sky, prefix, f"{orbit.name} from {args.site} {site.name}: {orbit.source}",
                                keep_other=not (args.out or args.overwrite))

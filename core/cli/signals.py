@@ -8,13 +8,16 @@ raised (inside a ctypes callback) is raised again between the run's steps.
 """
 from __future__ import annotations
 
+import contextlib
 import signal
+import sys
 import threading
+from collections.abc import Iterator
 
 from cistrack.errors import RunInterrupted
-from cistrack.interrupts import clear, ctrl_c_handler, note
+from cistrack.interrupts import clear, ctrl_c_handler, note, raise_pending, take_pending
 
-__all__ = ["install_signal_handlers"]
+__all__ = ["install_signal_handlers", "interrupts_prevail"]
 
 
 def _raise_interrupted(signum, frame) -> None:
@@ -61,3 +64,30 @@ def install_signal_handlers() -> dict:
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             old[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_ctrl_c)
     return old
+
+
+@contextlib.contextmanager
+def interrupts_prevail() -> Iterator[None]:
+    """Run a command so that an interrupt noted while it ran ends it as that interrupt: an exception
+    of any kind it raises meanwhile is the interrupt's doing (a Ctrl-C while numba's C extension
+    imports ``numba._devicearray`` comes out as ``ImportError: numba._devicearray failed to import``,
+    probe J1), and one noted but never raised (lost in a callback) is raised when it returns. The
+    traceback such a C import prints of the RunInterrupted (through :data:`sys.excepthook`) is not
+    shown: the command says "interrupted" instead."""
+    previous_hook = sys.excepthook
+
+    def hook(kind, value, tb) -> None:
+        if not isinstance(value, RunInterrupted):
+            previous_hook(kind, value, tb)
+
+    sys.excepthook = hook
+    try:
+        yield
+    except Exception as exc:
+        interrupt = take_pending()
+        if interrupt is None:
+            raise
+        raise interrupt from exc
+    finally:
+        sys.excepthook = previous_hook
+    raise_pending()

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from cistrack.errors import CistrackError, ConfigError
-from cistrack.interrupts import plugin_fault
+from cistrack.interrupts import plugin_fault, raise_pending
 from cistrack.results.atomic_files import atomic_target
 
 __all__ = ["write_export", "same_export", "ExportWords", "CLI_EXPORT_WORDS", "PYTHON_EXPORT_WORDS"]
@@ -80,6 +80,7 @@ def write_export(exporter: Any, out: Path, estimates: Any, meta: dict[str, Any],
             _write_checked(exporter, tmp, estimates, meta, format)
             if not named and not overwrite:
                 _check_default_file(out, tmp, words)
+            raise_pending()  # a Ctrl-C lost while the export was computed: nothing written (probe J1)
     except OSError as exc:
         raise CistrackError((words.option("path", str(out)) if named else str(out)) + f": cannot write the {format} file "
                             f"({exc.strerror or exc}); nothing was written there") from None
