@@ -11,13 +11,15 @@ A scenario's ``[truth.maneuvers]`` table names one (docs/maneuvers.md)::
 
 Each plan turns its burns into :class:`~cistrack.interfaces.maneuvers.Impulse` objects (synodic
 VU) along the truth: a burn given in a local frame is resolved at its time on the trajectory
-flown with the earlier burns (the base model wrapped in
-:class:`~cistrack.propagation.impulses.ImpulsiveDynamics`), at the pre-burn state. Burns outside
-the run's span ``(t0, t_end]`` are not flown.
+flown with the earlier burns, at the pre-burn state, in one sweep (each burn's state flown by the
+base model from the state just after the burn before it). Burns outside the run's span
+``(t0, t_end]`` are not flown.
 """
 from __future__ import annotations
 
+import logging
 import math
+import time
 from typing import Any
 
 import numpy as np
@@ -27,7 +29,7 @@ from cistrack.api import hookimpl
 from cistrack.errors import ConfigError, ParameterError, invisible_character, quoted
 from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
-from cistrack.propagation.impulses import MS_PER_VU, ImpulsiveDynamics
+from cistrack.propagation.impulses import MS_PER_VU
 
 from .local_frames import DIRECTIONS, FRAMES, body_position, direction_vector, frame_axes
 
@@ -49,30 +51,55 @@ class BurnSpec:
         self.t, self.vector_ms, self.frame, self.label = float(t), np.asarray(vector_ms, dtype=float), frame, label
 
 
-def _flown(dynamics, earlier: list[Impulse]):
-    """``dynamics`` with the impulses already planned (itself when there are none)."""
-    return ImpulsiveDynamics(dynamics, earlier) if earlier else dynamics
-
-
-def _pre_burn_state(dynamics, earlier: list[Impulse], x0: np.ndarray, t0: float, t: float) -> np.ndarray:
-    prop = _flown(dynamics, earlier).propagate(np.asarray(x0, dtype=float)[None], t0, t)
+def _flown_to(dynamics, x: np.ndarray, t: float, t_burn: float) -> np.ndarray:
+    """The state (6,) at ``t_burn`` of ``x`` (6,) flown by ``dynamics`` from ``t``; ConfigError when
+    it hits a body on the way."""
+    prop = dynamics.propagate(x[None], t, t_burn)
     if not prop.alive[0]:
         raise ConfigError(f"the truth hits a body at t = {units.tu_to_days(prop.impact_time[0]):.3f} days, "
-                          f"before the burn at {units.tu_to_days(t):.3f} days")
-    return prop.final[0]
+                          f"before the burn at {units.tu_to_days(t_burn):.3f} days")
+    return np.array(prop.final[0], dtype=float)
 
 
 def resolve_burns(dynamics, x0: np.ndarray, t0: float, t_end: float, burns: list[BurnSpec]) -> list[Impulse]:
     """The impulses (synodic VU, sorted by time) of ``burns`` inside ``(t0, t_end]``, each resolved
-    in its frame at the pre-burn state of the truth flown with the earlier ones."""
+    in its frame at the pre-burn state of the truth flown with the earlier ones (burns at one time
+    all at the state before the first of them). One sweep, each burn's state flown from the one
+    before it: 10,000 burns had each been flown from ``t0`` through all the earlier ones, which
+    took minutes (probe J3); a plan of many burns says how far it has got."""
+    inside = sorted((b for b in burns if t0 < b.t <= t_end), key=lambda b: b.t)
+    return _sweep(dynamics, np.asarray(x0, dtype=float), float(t0), inside)[0]
+
+
+def _sweep(dynamics, x0: np.ndarray, t0: float, burns: list[BurnSpec]) -> tuple[list[Impulse], np.ndarray, float]:
+    """(impulses, state just after the last, its time) of ``burns`` (in time order, after ``t0``)
+    resolved along ``x0`` (6,) flown from ``t0``, each from the state after the one before."""
     out: list[Impulse] = []
-    for b in sorted(burns, key=lambda b: b.t):
-        if not t0 < b.t <= t_end:
-            continue
-        x_b = _pre_burn_state(dynamics, out, x0, t0, b.t)
+    x, t, x_b = x0.copy(), t0, None
+    progress = _Progress(len(burns))
+    for b in burns:
+        if x_b is None or b.t != t:
+            x_b = _flown_to(dynamics, x, t, b.t)
+            x, t = x_b.copy(), b.t
         dv = frame_axes(b.frame, x_b, b.t, dynamics) @ b.vector_ms / MS_PER_VU
+        x[3:] += dv
         out.append(Impulse(b.t, dv, b.label))
-    return out
+        progress.step(len(out))
+    return out, x, t
+
+
+class _Progress:
+    """A line on the ``cistrack`` logger every 10 s while a long plan of burns is resolved."""
+
+    every_s = 10.0
+
+    def __init__(self, total: int) -> None:
+        self.total, self.next = total, time.monotonic() + self.every_s
+
+    def step(self, done: int) -> None:
+        if done < self.total and time.monotonic() >= self.next:
+            logging.getLogger("cistrack").info(f"resolving the truth's burns: {done:,} of {self.total:,} ...")
+            self.next = time.monotonic() + self.every_s
 
 
 def _check_vector(owner, value: Any) -> list[float]:
@@ -269,13 +296,14 @@ class StationKeepingPlan(ManeuverPlan):
         vec = direction_vector(self.frame, self.direction, self.delta_v_ms)
         what = _describe([], self.delta_v_ms, self.direction, self.frame)
         out: list[Impulse] = []
+        x, t = np.asarray(x0, dtype=float), float(t0)  # the truth just after the last burn (one sweep: probe J3)
         t_from = max(t0, t0 + float(units.days_to_tu(self.first_after_days)))
         for k in range(self.n_burns):
-            t_b = next_apolune(_flown(dynamics, out), x0, t0, t_from, t_end, self.search_step_tu)
+            t_b = next_apolune(dynamics, x, t, t_from, t_end, self.search_step_tu)
             if t_b is None:
                 break
-            out += resolve_burns(_flown(dynamics, out), x0, t0, t_end,
-                                 [BurnSpec(t_b, vec, self.frame, f"station-keeping {k + 1}: {what}")])
+            burn, x, t = _sweep(dynamics, x, t, [BurnSpec(t_b, vec, self.frame, f"station-keeping {k + 1}: {what}")])
+            out += burn
             t_from = t_b + self.search_step_tu
         self._found = (len(out), float(t0), float(t_end))
         return out
