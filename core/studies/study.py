@@ -356,7 +356,7 @@ def _validated_variant(base, ov: dict, grid: _Grid, reg, combo: tuple = (), entr
         from cistrack.studies.study_file import overrides_error, sweep_error, variant_error
 
         swept = sweep_error(str(exc), grid.study, combo, base.name, base.source, entry or base.name)
-        msg = (swept or overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source)
+        msg = (swept or overrides_error(str(exc), grid.study, grid.overrides, base.name, base.source, base.raw)
                or variant_error(str(exc), grid.study, entries or {}, base.name, base.source) or str(exc))
         if combo and not swept:
             msg += (f" ({grid.study}: key 'sweep': {' '.join(sweep_item(k, v) for k, v in combo)} on scenario "

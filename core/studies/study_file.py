@@ -297,17 +297,46 @@ def _without_source(message: str, scenario_source: str | Path) -> str:
 
 
 def overrides_error(message: str, study: Path, overrides: dict, scenario_name: str,
-                    scenario_source: str | Path) -> str | None:
+                    scenario_source: str | Path, scenario_raw: dict | None = None) -> str | None:
     """A scenario's error under the study's ``[overrides]`` told against the study file: the file,
     the key ``overrides``, the setting(s) and the scenario they were applied to; None when the
-    error is about none of the overrides (the scenario's own file, a variant, a sweep, --set)."""
-    blamed = _blamed_settings(message, _flat(overrides or {}))
+    error is about none of the overrides (the scenario's own file, a variant, a sweep, --set). A
+    table given whole (``foo = {bar = 1}``, ``truth = {maneuvers = ...}``) is blamed as given, with
+    the keys of the scenario's own table (``scenario_raw``) it dropped by replacing it (probe J4:
+    both had been blamed on the scenario file)."""
+    blamed = _blamed_settings(message, _flat(overrides or {})) or _whole_tables(message, overrides or {})
     if not blamed:
         return None
     rest = _without_source(message, scenario_source)
     shown = ", ".join(f"{k} = {v!r}" for k, v in blamed)
     return (f"{study}: key 'overrides', setting {shown} (applied to scenario {scenario_name!r}, "
-            f"{scenario_source}): {rest}")
+            f"{scenario_source}): {rest}{_dropped_note(blamed, scenario_raw or {})}")
+
+
+def _whole_tables(message: str, overrides: dict) -> list[tuple[str, Any]]:
+    """The tables of ``overrides`` given whole that a scenario error ``message`` names: as a key at
+    the top level (``top level: unknown key 'foo'``) or as its table (``[truth] needs ...``)."""
+    top = ": top level: " in message
+    return [(k, v) for k, v in overrides.items()
+            if isinstance(v, dict) and (f"'{k}'" in message if top else f": [{k}] " in message)]
+
+
+def _dropped_note(blamed: list[tuple[str, Any]], scenario_raw: dict) -> str:
+    """What the overrides' tables among ``blamed`` dropped of the scenario's own tables, which they
+    replace whole (all but the component tables, whose keys merge), in words; "" for nothing."""
+    from cistrack.scenario.loading import COMPONENT_TABLES
+
+    notes = []
+    for key, value in blamed:
+        own = scenario_raw.get(key)
+        if key in COMPONENT_TABLES or not isinstance(value, dict) or not isinstance(own, dict):
+            continue
+        dropped = [f"{k} = {v!r}" for k, v in own.items() if k not in value]
+        if dropped:
+            notes.append(f"; the override replaces the scenario's whole [{key}] table, so its {', '.join(dropped)} "
+                         f"{'is' if len(dropped) == 1 else 'are'} dropped: give {'it' if len(dropped) == 1 else 'them'} "
+                         f"in the override's {key} table too")
+    return "".join(notes)
 
 
 def variant_error(message: str, study: Path, entries: dict, scenario_name: str,

@@ -97,3 +97,23 @@ def test_an_unknown_built_in_scenario_names_the_study_file_and_its_key(tmp_path)
     with pytest.raises(ConfigError, match=rf"^{tmp_path}/mine\.toml: key 'scenarios', entry 'nosuch': no built-in "
                                           r"scenario 'nosuch'"):
         plan_runs(study, tmp_path / "out")
+
+
+def test_an_unknown_table_names_the_study_file_and_the_table_as_given(tmp_path):
+    """Both had been blamed on the scenario file (probe J4)."""
+    study = _study(tmp_path, "foo = { bar = 1 }")
+    with pytest.raises(ConfigError) as err:
+        plan_runs(study, tmp_path / "out")
+    msg = str(err.value)
+    assert msg.startswith(f"{study}: key 'overrides', setting foo = {{'bar': 1}} (applied to scenario 'quick'")
+    assert "unknown key 'foo'" in msg
+
+
+def test_a_truth_table_that_replaces_the_scenarios_says_what_it_dropped(tmp_path):
+    study = _study(tmp_path, 'truth = { maneuvers = { name = "impulse", t_days = 0.5 } }')
+    with pytest.raises(ConfigError) as err:
+        plan_runs(study, tmp_path / "out")
+    msg = str(err.value)
+    assert msg.startswith(f"{study}: key 'overrides', setting truth = {{'maneuvers': ") and "[truth] needs 'orbit'" in msg
+    assert "the override replaces the scenario's whole [truth] table, so its orbit = " in msg
+    assert "in the override's truth table too" in msg
