@@ -559,12 +559,38 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except OSError as exc:  # a path the system refuses where no check caught it first: said, not a traceback
-        where = f"{exc.filename}: " if exc.filename else ""
-        _eprint(f"cistrack: error: {where}{exc.strerror or exc}")
+        _eprint(os_error_text(exc))
         return 2
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def os_error_text(exc: OSError) -> str:
+    """``cistrack: error: PATH: WHY`` for an OSError no check caught first; when the current folder
+    was deleted (a path without a name, or a relative one, fails there), that, with the folder's path:
+    ``cistrack fit`` there had said only "No such file or directory" (probe J7)."""
+    name = str(exc.filename) if exc.filename else ""
+    gone = _deleted_current_folder() if not os.path.isabs(name) else None
+    if gone is not None:
+        tried = f" ({name})" if name else ""
+        return (f"cistrack: error: the current folder {gone} no longer exists (it was deleted), so the relative "
+                f"paths{tried} there cannot be used (the default --out among them): cd to an existing folder, or "
+                f"give absolute paths ({exc.strerror or exc})")
+    return f"cistrack: error: {name + ': ' if name else ''}{exc.strerror or exc}"
+
+
+def _deleted_current_folder() -> str | None:
+    """The path of the current folder when it no longer exists ("?" when it cannot be told), else None."""
+    try:
+        os.getcwd()
+        return None
+    except FileNotFoundError:
+        pass
+    try:
+        return os.readlink("/proc/self/cwd").removesuffix(" (deleted)")
+    except OSError:
+        return os.environ.get("PWD") or "?"
 
 
 def error_text(exc: BaseException, stream: object) -> str:
