@@ -353,8 +353,20 @@ def _write(sky, prefix: Path, title: str, keep_other: bool = False) -> tuple[Pat
             sky_figure(sky, title).savefig(tmp_png, dpi=110, format="png")
     except OSError as exc:
         raise ConfigError(f"--out {prefix}: cannot write {path} ({exc.strerror or exc}); neither {csv_path.name} nor "
-                          f"{png.name} was written; give a PREFIX in a folder you can write to, with room") from None
+                          f"{png.name} was written; {_write_advice(exc.errno)}") from None
     return csv_path, png
+
+
+def _write_advice(errno_: int | None) -> str:
+    """What to do when PREFIX.csv or PREFIX.png cannot be written for the reason ``errno_``: a name
+    too long is not a folder's room or permissions (probe J8 had been told "with room")."""
+    import errno
+
+    if errno_ == errno.ENAMETOOLONG:
+        return "the name is too long for the file system: give a shorter PREFIX"
+    if errno_ in (errno.ENOSPC, errno.EDQUOT):
+        return "the disk or quota is full: give a PREFIX in a folder with room, or free some"
+    return "give a PREFIX in a folder you can write to"
 
 
 def _horizon_note(run_dir, times: np.ndarray, orbit) -> str:

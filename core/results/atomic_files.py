@@ -4,7 +4,8 @@ a rename over the target.
 A write that fails half-way (a full disk, a quota, a killed process) would otherwise leave a
 truncated or 0-byte file under the final name, which later commands read as a result, or which
 blocks the next attempt (an existing ``--out`` file is refused). Here the data first goes to a
-hidden temporary file beside the target (``.NAME.XXXX.tmp``: same file system, so the rename
+hidden temporary file beside the target (``.NAME.XXXX.tmp``, NAME shortened to keep it within the
+file system's limit on a name; same file system, so the rename
 cannot fail half-way), which is removed again when writing fails, and only a complete file is
 renamed (:func:`os.replace`) onto the target.
 """
@@ -61,13 +62,33 @@ def _new_file(target: Path) -> Path:
     """Create an empty, new file beside ``target`` with the permissions an ordinary ``open`` would
     give it (0o666 less the umask; ``tempfile.mkstemp`` would make it private)."""
     for _ in range(100):
-        tmp = target.parent / f".{target.name}.{secrets.token_hex(4)}.tmp"
+        tmp = target.parent / f".{_name_part(target)}.{secrets.token_hex(4)}.tmp"
         try:
             os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
             return tmp
         except FileExistsError:
             continue
     raise FileExistsError(f"{target.parent}: no free temporary name for {target.name}")
+
+
+_TEMPORARY_EXTRA = len("..12345678.tmp")
+"""How much longer a temporary file's name is than the part of the target's name it keeps."""
+
+
+def _name_part(target: Path) -> str:
+    """As much of ``target``'s name as a temporary name beside it can keep within the folder's
+    limit on a name's length (255 bytes where it cannot be asked): a target's name of 242 to 255
+    bytes, which the file system takes, had made a temporary name too long, and the write was refused
+    with "File name too long" (probe J8)."""
+    try:
+        limit = os.pathconf(target.parent if str(target.parent) else ".", "PC_NAME_MAX")
+    except (OSError, ValueError):
+        limit = 255
+    room = max(1, (limit if limit and limit > 0 else 255) - _TEMPORARY_EXTRA)
+    encoded = os.fsencode(target.name)
+    if len(encoded) <= room:
+        return target.name
+    return encoded[:room].decode("utf-8", "ignore") or "x"
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:

@@ -5,6 +5,10 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
+from cistrack.results.atomic_files import write_text_atomic
+
 
 def test_a_write_that_fails_names_the_file_and_leaves_nothing_behind(tmp_path):
     target = tmp_path / "fit.json"
@@ -29,3 +33,18 @@ def test_taking_a_run_directorys_lock_removes_what_a_killed_writer_left_half_wri
     with run_lock(tmp_path):
         pass
     assert sorted(p.name for p in tmp_path.iterdir()) == [".run.lock", "notes.tmp"]
+
+
+@pytest.mark.parametrize("length", [240, 244, 250, 255])
+def test_a_target_whose_name_the_file_system_takes_is_written_whatever_its_length(tmp_path, length):
+    """Its temporary name beside it had been 14 characters longer: names of 242 to 255 characters
+    were refused with "File name too long" (probe J8)."""
+    target = tmp_path / ("e" * (length - 4) + ".oem")
+    write_text_atomic(target, "data")
+    assert target.read_text() == "data" and sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+
+
+def test_the_shortened_temporary_name_of_a_long_unicode_name_is_whole_characters(tmp_path):
+    target = tmp_path / ("é" * 120 + ".oem")  # 244 bytes in UTF-8
+    write_text_atomic(target, "data")
+    assert target.read_text() == "data"

@@ -391,3 +391,17 @@ def test_an_out_folder_holding_another_fits_results_is_refused_naming_it_unless_
     assert main(["predict", str(fitted), "--site", "568", "--quiet", "--step", "360", "--out", str(other),
                  "--overwrite"]) == 0
     assert sorted(p.name for p in other.glob("sky-*")) == ["sky-568.csv", "sky-568.png"]
+
+
+@pytest.mark.parametrize("reason, advice", [
+    ("ENAMETOOLONG", "the name is too long for the file system: give a shorter PREFIX"),
+    ("ENOSPC", "the disk or quota is full: give a PREFIX in a folder with room, or free some"),
+    ("EACCES", "give a PREFIX in a folder you can write to"),
+])
+def test_a_prediction_that_cannot_be_written_is_advised_by_the_reason(reason, advice):
+    """A name too long had been told to find a folder "you can write to, with room" (probe J8)."""
+    import errno
+
+    from cistrack.cli.predict_command import _write_advice
+
+    assert _write_advice(getattr(errno, reason)) == advice
