@@ -27,7 +27,7 @@ import numpy as np
 from cistrack import units
 from cistrack.api import hookimpl
 from cistrack.errors import ConfigError, ParameterError, invisible_character, quoted
-from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_positive, check_range
+from cistrack.interfaces.component import check_choice, check_int, check_nonnegative, check_range
 from cistrack.interfaces.maneuvers import Impulse, ManeuverPlan
 from cistrack.propagation.impulses import MS_PER_VU
 
@@ -117,6 +117,20 @@ def _check_vector(owner, value: Any) -> list[float]:
     return [float(v) for v in value]
 
 
+EARLIEST_BURN_DAYS = 1.0 / 86400.0
+"""The earliest burn a plan takes, days after the scenario epoch (1 second): a burn at the epoch is
+the initial state's velocity, and one 1e-300 days after it, accepted where 0 was refused, had been
+listed in the manifest "at t_days 0.0" (probe J9)."""
+
+
+def _check_t_days(owner, value: Any) -> float:
+    v = check_range(owner, "t_days", value, -math.inf, math.inf)  # a finite number
+    if v < EARLIEST_BURN_DAYS:
+        owner._fail("t_days", value, f"must be at least 1 second ({EARLIEST_BURN_DAYS:.5g} days) after the scenario "
+                                     "epoch (a burn at the epoch is the initial state's velocity: give it in [truth])")
+    return v
+
+
 def _check_delta_v(owner, value: Any) -> float:
     return check_range(owner, "delta_v_ms", value, 0.0, MAX_DELTA_V_MS)
 
@@ -167,7 +181,8 @@ class ImpulsePlan(ManeuverPlan):
     Parameters
     ----------
     t_days : float
-        Time of the burn, days since the scenario epoch (> 0; a burn after the run's end is not flown).
+        Time of the burn, days since the scenario epoch: at least 1 second (1.1574e-05 days) after it
+        (a burn after the run's end is not flown).
     delta_v_ms : float
         Size of the burn, m/s (0 to 10,000); unset (None), 1 m/s unless vector_ms gives the burn.
     direction : str
@@ -187,7 +202,7 @@ class ImpulsePlan(ManeuverPlan):
 
     def __init__(self, t_days: float = 1.0, delta_v_ms: float | None = None, direction: str | None = None,
                  frame: str = "rtn-moon", vector_ms: list[float] | None = None, label: str = "") -> None:
-        self.t_days = check_positive(self, "t_days", t_days)
+        self.t_days = _check_t_days(self, t_days)
         size = None if delta_v_ms is None else _check_delta_v(self, delta_v_ms)
         self.vector_ms = _check_vector(self, vector_ms)
         _check_burn_frame(self, frame, self.vector_ms, direction)

@@ -316,3 +316,15 @@ def test_a_zero_burn_given_as_minus_zero_says_zero_and_not_flown(cr3bp):
     fly_plan(ImpulsePlan(t_days=1.0, delta_v_ms=-0.0), cr3bp, NRHO, 0.0, SPAN, lines.append)
     assert lines == ["truth burn 1 at 1.0000 days: |dv| = 0 m/s, burn: 0 m/s in-track (rtn-moon); a zero burn, "
                      "not flown"]
+
+
+@pytest.mark.parametrize("t_days", [0.0, 1e-300, 1e-6, -1.0])
+def test_a_burn_earlier_than_a_second_after_the_epoch_is_refused_saying_what_is_allowed(t_days):
+    """1e-300 days had been taken where 0 was refused, and listed at t_days 0.0 (probe J9)."""
+    with pytest.raises(ParameterError, match=r"'t_days'.*must be at least 1 second \(1.1574e-05 days\) after the "
+                                             r"scenario epoch"):
+        ImpulsePlan(t_days=t_days)
+
+
+def test_a_burn_a_second_after_the_epoch_is_taken():
+    assert ImpulsePlan(t_days=1.0 / 86400.0).t_days == pytest.approx(1.1574e-05, rel=1e-4)
