@@ -138,12 +138,17 @@ def _checked(data: dict, p: Path) -> dict:
 
 
 def _check_component_overrides(data: dict, p: Path) -> None:
-    """ConfigError naming the study file and its ``[overrides]`` when that is not a table, or when
+    """ConfigError naming the study file and its ``[overrides]`` when that is not a table, sets the
+    seed (the study's seeds would replace it), or when
     its ``filter`` or ``iod`` is neither a table of the component's parameters nor (without the
     study's list of them) a component's name: a list would otherwise replace it unseen."""
     ov = data.get("overrides", {})
     if not isinstance(ov, dict):
         raise ConfigError(f"{p}: key 'overrides' = {ov!r}: give a table of scenario settings")
+    if "seed" in ov:  # each run's seed is the study's: this one had been dropped without a word (probe J9)
+        raise ConfigError(f"{p}: key 'overrides', setting seed = {ov['seed']!r}: a study's runs take their seeds from "
+                          "its key 'seeds' (or 'n_seeds' and 'first_seed', or --first-seed and --n-seeds), never from "
+                          f"a scenario's seed; give seeds = [{ov['seed']!r}] instead")
     for table, key in (("filter", "filters"), ("iod", "iod")):
         value = ov.get(table)
         if value is None or isinstance(value, dict) or (isinstance(value, str) and key not in data):

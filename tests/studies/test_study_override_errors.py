@@ -117,3 +117,13 @@ def test_a_truth_table_that_replaces_the_scenarios_says_what_it_dropped(tmp_path
     assert msg.startswith(f"{study}: key 'overrides', setting truth = {{'maneuvers': ") and "[truth] needs 'orbit'" in msg
     assert "the override replaces the scenario's whole [truth] table, so its orbit = " in msg
     assert "in the override's truth table too" in msg
+
+
+def test_a_seed_in_the_overrides_is_refused_naming_the_studys_seeds(tmp_path):
+    """It had been dropped without a word: the runs used the study's seeds (probe J9)."""
+    study = _study(tmp_path, "seed = 5")
+    with pytest.raises(ConfigError) as err:
+        plan_runs(study, tmp_path / "out")
+    msg = str(err.value)
+    assert msg.startswith(f"{study}: key 'overrides', setting seed = 5: a study's runs take their seeds from its key "
+                          "'seeds'") and "give seeds = [5] instead" in msg
