@@ -400,12 +400,28 @@ def fit(files: str | Path | Iterable[str | Path], *, settings: Mapping[str, Any]
     from cistrack.results.earlier_run import PYTHON_WORDS
 
     _checked_arguments(out=out, log=log, registry=registry, progress=progress, overwrite=overwrite)
-    paths = [files] if isinstance(files, (str, os.PathLike)) else files
-    if not isinstance(paths, (list, tuple)) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
-        raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty list of paths")
+    paths = _fit_paths(files)
     with _python_words():
         return fit_files([_expanded(p) for p in paths], out=_expanded(out), settings=_setting_items(settings),
                          registry=registry, log=log, progress=progress, overwrite=overwrite, words=PYTHON_WORDS)
+
+
+def _fit_paths(files: Any) -> list:
+    """``files`` of :func:`fit` as a list of paths: one path, or any iterable of them (a list, a
+    generator, a numpy array of strings: the signature's ``Iterable``, which had been refused for
+    all but a list or tuple, probe J9); TypeError for anything else or none."""
+    if isinstance(files, (str, os.PathLike)):
+        return [files]
+    paths = None
+    if isinstance(files, Iterable) and not isinstance(files, (bytes, bytearray, Mapping)):
+        try:
+            paths = list(files)
+        except TypeError:  # a 0-d numpy array says it is iterable, and is not
+            paths = None
+    if not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):
+        raise TypeError(f"files={files!r}: give a path (str or pathlib.Path) or a non-empty iterable of paths "
+                        "(a list, a tuple, a generator)")
+    return paths
 
 
 def _what_it_holds(d: Path) -> str:

@@ -73,3 +73,24 @@ def test_a_path_setting_is_taken_as_its_string():
 def test_a_setting_that_is_no_value_is_refused_saying_what_is_taken(value):
     with pytest.raises(ct.ConfigError, match=r"settings\['duration_days'\] = .*: not a setting value \(give a number"):
         ct.load_scenario("quick", settings={"duration_days": value})
+
+
+@pytest.mark.parametrize("files", [
+    lambda: (p for p in ["missing.psv"]),
+    lambda: np.array(["missing.psv"]),
+    lambda: iter([Path("missing.psv")]),
+])
+def test_fit_takes_any_iterable_of_paths_as_its_signature_says(files, tmp_path, monkeypatch):
+    """A generator or a numpy array of paths had been a TypeError (probe J9): here they reach the
+    file, which is missing."""
+    from cistrack.errors import ConfigError
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError, match="observation file missing.psv: no such file"):
+        ct.fit(files(), progress=False)
+
+
+@pytest.mark.parametrize("files", [{"a.psv": 1}, [b"a.psv"], (p for p in [])])
+def test_fit_refuses_a_mapping_bytes_or_an_empty_iterable_naming_files(files):
+    with pytest.raises(TypeError, match="files=.*: give a path .* or a non-empty iterable of paths"):
+        ct.fit(files)
