@@ -5,7 +5,9 @@
 FIT_DIR is a ``cistrack fit --out`` directory, exported with ``cistrack export FIT_DIR --format
 oem`` (the OEM read is FIT_DIR/estimate.oem unless ``--oem``). The truth (first row of truth.csv,
 synodic km and km/s at its UTC) is propagated with the fit scenario's dynamics to every epoch of
-the OEM and mapped into the OEM's frame with the same transform as the export. Printed:
+the OEM and mapped into the OEM's frame with the same transform as the export. A survey set whose
+object made a burn (``set.json`` ``burn``) is refused: use ``examples/survey-sets/check_survey_fit.py``.
+Printed:
 
 - the largest Mahalanobis distance squared of the truth under the exported covariance over the
   epochs inside the arc (chi-square with 6 degrees of freedom if the covariance is right; 99 %
@@ -69,6 +71,23 @@ def read_oem(path: Path) -> tuple[list[str], np.ndarray, np.ndarray]:
     return epochs, np.array(states), np.array(covs)
 
 
+def refuse_burned_set(truth_csv: Path) -> None:
+    """SystemExit for a survey set whose object made a burn (its ``set.json`` beside ``truth_csv``
+    names one): the truth is flown here from its first row, across the burn, and every such set had
+    been reported as failing (probe J9). check_survey_fit.py takes the truth after the burn from the
+    first row after it."""
+    info_path = truth_csv.parent / "set.json"
+    try:
+        burn = json.loads(info_path.read_text()).get("burn") if info_path.is_file() else None
+    except (OSError, ValueError, AttributeError):
+        return
+    if burn:
+        raise SystemExit(f"check_fit: {info_path} names a burn at {burn.get('utc', '?')}: this script flies the truth "
+                         "from its first row and does not handle burned sets; use "
+                         "examples/survey-sets/check_survey_fit.py, which takes the truth after the burn from the "
+                         "first row after it")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("fit", type=Path)
@@ -89,6 +108,7 @@ def main() -> int:
     oem_path = a.oem or a.fit / "estimate.oem"
     if not truth_csv.is_file():
         raise SystemExit(f"check_fit: no truth file {truth_csv}; give --truth TRUTH.csv (make_observations.py writes one)")
+    refuse_burned_set(truth_csv)
     if not oem_path.is_file():
         raise SystemExit(f"check_fit: no {oem_path}; run 'cistrack export {a.fit} --format oem' first, or give --oem FILE")
     reg = default_registry()
