@@ -130,8 +130,8 @@ def _ratio_unclean(r):
     its sigmas, on a survey set with a 1 m/s burn and no radiation pressure)."""
     if AREA_TO_MASS not in r.parameter_names:
         return r
-    return replace(r, area_to_mass_decision=f"{r.area_to_mass_decision}; in a fit that is not clean: the ratio may "
-                                            "be absorbing what the ballistic orbit does not explain (a maneuver)")
+    words = "in a fit that is not clean: the ratio may be absorbing what the ballistic orbit does not explain (a maneuver)"
+    return replace(r, area_to_mass_decision="; ".join(x for x in (r.area_to_mass_decision, words) if x))
 
 
 def _ratio_as_set(ctx, one, found, fit, burns):
@@ -144,7 +144,9 @@ def _ratio_as_set(ctx, one, found, fit, burns):
     (when that refit fails or leaves a burn in doubt, the fit with the ratio stays, saying so)."""
     from cistrack.least_squares.area_to_mass import estimate_doubt
 
-    if AREA_TO_MASS not in fit.parameter_names or one.choices.options.area_to_mass != "auto":
+    if AREA_TO_MASS not in fit.parameter_names:  # the ballistic fit's decision not to estimate it stands
+        return replace(fit, area_to_mass_decision=fit.area_to_mass_decision or one.result.area_to_mass_decision), burns
+    if one.choices.options.area_to_mass != "auto":
         return fit, burns
     doubt = estimate_doubt(fit)
     value, sigma = fit.parameter(AREA_TO_MASS)
@@ -207,11 +209,13 @@ share of the arc: a site that alone saw one end of it would take a burn with it.
 def site_left_out(ctx, one, r) -> str:
     """Words naming the one site without whose observations the rest fit cleanly ("" when none or
     several do): each site with three observations or more left out in turn, the others (spanning
-    :data:`SITE_SPAN_SHARE` of the arc) fitted from ``r``'s orbit with the fit's options, clean when
-    converged with nothing :func:`~cistrack.least_squares.burn_search.suspicion` names. One site's
-    30 s clock offset, or a wrong site code, had been reported only as "an object that maneuvered"."""
+    :data:`SITE_SPAN_SHARE` of the arc, from two sites or more) fitted from ``r``'s orbit with the
+    fit's options, clean when converged with nothing :func:`~cistrack.least_squares.burn_search.suspicion`
+    or :func:`~cistrack.least_squares.burn_search.screen_suspicion` names. One site's 30 s clock
+    offset, or a wrong site code, had been reported only as "an object that maneuvered"; and one
+    site's ballistic fit had absorbed a real 1 m/s burn, blaming the other site's lone tracklet."""
     from cistrack.errors import CistrackError
-    from cistrack.least_squares.burn_search import suspicion
+    from cistrack.least_squares.burn_search import screen_suspicion, suspicion
     from cistrack.least_squares.differential_correction import fit_orbit
 
     ms = ctx.measurements
@@ -219,19 +223,22 @@ def site_left_out(ctx, one, r) -> str:
     clean = []
     for x in [x for x in np.unique(sites) if x and np.sum(sites == x) >= 3]:
         keep = sites != x
-        if keep.sum() < 6 or np.ptp(t[keep]) < SITE_SPAN_SHARE * np.ptp(t):
+        if keep.sum() < 6 or len(set(sites[keep])) < 2 or np.ptp(t[keep]) < SITE_SPAN_SHARE * np.ptp(t):
             continue
         try:
-            f = fit_orbit(ctx.dynamics, ctx.sensor, ms.subset(keep), r.state, r.epoch, options=one.choices.options)
+            sub = ms.subset(keep)
+            f = fit_orbit(ctx.dynamics, ctx.sensor, sub, r.state, r.epoch, options=one.choices.options)
+            ok = f.converged and not suspicion(f) and not screen_suspicion(ctx.dynamics, ctx.sensor, sub, f,
+                                                                            one.choices.options)
         except (CistrackError, np.linalg.LinAlgError):
             continue
-        if f.converged and not suspicion(f):
+        if ok:
             clean.append((x, int(np.sum(~keep)), f.rms))
     if len(clean) != 1:
         return ""
     x, n, rms = clean[0]
-    return (f"without site {x}'s {n} observations the others fit cleanly (weighted RMS {rms:.2f}): a clock or "
-            f"position error at {x}?")
+    return (f"without site {x}'s {n} observations the others fit cleanly (weighted RMS {rms:.2f}): a clock, position or "
+            f"stated-uncertainty error at {x}?")
 
 
 def _unclean(one, r, why: str) -> str:
