@@ -336,7 +336,9 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
     if choices is not None:
         _check_range_used(choices, obs)
     try:
-        return _scenario(obs, obs_file, settings, registry)
+        scen = _scenario(obs, obs_file, settings, registry)
+        _scenario(_last_observation(obs), obs_file, settings, registry)  # the arc's end inside those years too
+        return scen
     except ConfigError as exc:
         if "'epoch'" not in str(exc):
             raise
@@ -833,11 +835,21 @@ class _Job:
             self.log(message)
 
 
+def _last_observation(obs: ObjectObservations) -> ObjectObservations:
+    """``obs`` with its last observation only: a scenario started there checks that the arc's end
+    lies inside the years the dynamics and sensor model (an arc from 2026 to a row dated 2060 had
+    been fitted over 34 years, past DE421's 2052)."""
+    keep = np.zeros(len(obs.measurements.times), dtype=bool)
+    keep[int(np.argmax(obs.measurements.times))] = True
+    return replace(obs, measurements=obs.measurements.subset(keep))
+
+
 def _outside_arc(part: ObjectObservations, obs_file: Path, job: _Job) -> str:
-    """Why the fit cannot model the arc ``part`` (its epoch outside the years of the dynamics or
-    the sensor, e.g. DE421's), in words; "" when it can."""
+    """Why the fit cannot model the arc ``part`` (its start or end outside the years of the dynamics
+    or the sensor, e.g. DE421's), in words; "" when it can."""
     try:
         _scenario(part, obs_file, job.settings, job.registry)
+        _scenario(_last_observation(part), obs_file, job.settings, job.registry)
     except ConfigError as exc:
         if "'epoch'" not in str(exc):
             raise

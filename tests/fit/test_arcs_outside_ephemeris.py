@@ -44,3 +44,12 @@ def test_the_latest_arc_outside_the_ephemeris_refuses_the_file_with_its_own_date
     assert main(["fit", str(later), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = " ".join(capsys.readouterr().err.split())
     assert "run from 2060-03-05" in err and "which the fit cannot model" in err and "years 1900 to 2052" in err
+
+
+def test_one_fit_over_every_arc_refuses_observations_that_end_past_the_ephemeris(tmp_path, capsys):
+    """fit.arcs=all with the last row dated 2060: the fit had run over 34 years, past DE421's 2052
+    (probe K7); its start alone lies inside."""
+    typo = _with_dates(tmp_path, "y2060.psv", {64: "2060-03-06T23:58:59.988305Z"})
+    code = main(["fit", str(typo), "--out", str(tmp_path / "out"), "--set", "fit.arcs=all", "--quiet"])
+    err = " ".join(capsys.readouterr().err.split())
+    assert code == 2 and "to 2060-03-06" in err and "which the fit cannot model" in err and "2052" in err, err
