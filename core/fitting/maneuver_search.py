@@ -201,6 +201,25 @@ def capped_outliers(result) -> int:
     return int(np.sum(chi2 > result.rejection_threshold))
 
 
+def _capped_alone(result) -> int:
+    """:func:`capped_outliers`, or 0 when one of them shares its night (observations within
+    :data:`~cistrack.least_squares.burn_search.END_NIGHT_GAP_HOURS`) with observations whose median
+    chi-square is above the threshold too: a whole night off is a maneuver's or a site's sign, not
+    outliers the cap kept (a 3 m/s burn's first night sat 126 sigma off; its 2 kept observations had
+    been named first as what may pull the fit)."""
+    from cistrack.least_squares.burn_search import END_NIGHT_GAP_HOURS
+
+    res = result.residuals
+    t, chi2 = np.asarray(res.times, dtype=float), np.asarray(res.chi2, dtype=float)
+    kept = np.flatnonzero(~np.asarray(res.rejected, dtype=bool) & (chi2 > result.rejection_threshold))
+    night = units.hours_to_tu(END_NIGHT_GAP_HOURS)
+    for k in kept:
+        mates = (np.abs(t - t[k]) < night) & (np.arange(t.size) != k)
+        if mates.any() and np.median(chi2[mates]) > result.rejection_threshold:
+            return 0
+    return int(kept.size)
+
+
 SITE_SPAN_SHARE = 0.9
 """A site is left out (:func:`site_left_out`) only when the others' observations span at least this
 share of the arc: a site that alone saw one end of it would take a burn with it."""
@@ -244,9 +263,10 @@ def site_left_out(ctx, one, r) -> str:
 def _unclean(one, r, why: str) -> str:
     """The opening words of the message that ``r``, the ballistic fit of ``one`` that looks like a
     maneuver for ``why``, is not a clean fit: when the cap on rejections kept observations above the
-    threshold, those (probe I5: one outlier kept by the cap pulled a maneuver-free fit off its first
-    night, which was reported as "an object that maneuvered")."""
-    kept = capped_outliers(r)
+    threshold, each alone in its night (:func:`_capped_alone`), those (probe I5: one outlier kept by
+    the cap pulled a maneuver-free fit off its first night, which was reported as "an object that
+    maneuvered")."""
+    kept = _capped_alone(r)
     if not kept:
         return f"not a clean fit: it looks like an object that maneuvered ({why})"
     share = one.reject_fraction if one.reject_fraction is not None else one.choices.options.max_reject_fraction
