@@ -34,6 +34,7 @@ def _arcs_and_events(one) -> list[str]:
         lines += event_lines(one.events)
     if one.ok and getattr(one, "burn_sensitivity", None):
         lines.append(_hidden_burn_line(one.burn_sensitivity[-1], one.scenario.epoch))
+        lines += _earlier_gap_line(one.burn_sensitivity[:-1], one.scenario.epoch)
     return lines
 
 
@@ -42,22 +43,45 @@ HIDDEN_ANY_SIZE_MS = 100.0
 means little (the fit absorbs such burns by rejecting the observations after them)."""
 
 
-def _hidden_burn_line(gap, epoch) -> str:
-    """What a burn in the last gap between observing sessions could do unseen."""
+def _utc(epoch, t: float) -> str:
     from cistrack import units
 
-    def utc(t: float) -> str:
-        return units.format_utc(units.tu_to_utc(epoch, t))[:16]
+    return units.format_utc(units.tu_to_utc(epoch, t))[:16]
 
+
+def _size_words(x: float) -> str:
+    """A hidden burn's size in words: "of any size" beyond :data:`HIDDEN_ANY_SIZE_MS`, else "of N m/s"."""
+    if not x <= HIDDEN_ANY_SIZE_MS:
+        return "of any size"
+    return f"of {x:.0f} m/s" if x >= 10.0 else f"of {x:.2g} m/s"
+
+
+def _hidden_burn_line(gap, epoch) -> str:
+    """What a burn in the last gap between observing sessions could do unseen."""
     x = gap.largest_hidden_ms
-    where = f"between {utc(gap.start)} and {utc(gap.end)} (the last gap between sessions)"
+    where = f"between {_utc(epoch, gap.start)} and {_utc(epoch, gap.end)} (the last gap between sessions)"
     if not x <= HIDDEN_ANY_SIZE_MS:
         return (f"  maneuvers: a burn of any size {where} could go unseen in these observations; the orbit after it "
                 "assumes none (fit.json burn_sensitivity: every gap)")
-    size = f"{x:.0f}" if x >= 10.0 else f"{x:.2g}"
-    return (f"  maneuvers: a burn of {size} m/s {where}, at its worst time and direction, would not show in these "
+    return (f"  maneuvers: a burn {_size_words(x)} {where}, at its worst time and direction, would not show in these "
             "observations (nor some larger ones, whose observations the fit would reject); the orbit after it assumes "
             "none (fit.json burn_sensitivity: every gap)")
+
+
+def _earlier_gap_line(gaps, epoch) -> list[str]:
+    """The earlier gap (before the last) that hides the largest burn, as one line ([] for none): a
+    survey fit left "converged" by a 0.3 m/s burn in a six-day gap had named only the last gap, the
+    burn's gap only in fit.json."""
+    if not gaps:
+        return []
+    blind = [g for g in gaps if not g.largest_hidden_ms <= HIDDEN_ANY_SIZE_MS]
+    if len(blind) > 1:
+        return [f"    before it, {len(blind)} of the {len(gaps)} earlier gaps could hide a burn of any size too (the first "
+                f"between {_utc(epoch, blind[0].start)} and {_utc(epoch, blind[0].end)})"]
+    worst = blind[0] if blind else max(gaps, key=lambda g: g.largest_hidden_ms)
+    return [f"    before it, the gap between {_utc(epoch, worst.start)} and {_utc(epoch, worst.end)} hides the largest: "
+            f"a burn {_size_words(worst.largest_hidden_ms)} there, at its worst time and direction, would not show "
+            "either"]
 
 
 def _wrapped(lines: list[str], width: int = 118) -> list[str]:

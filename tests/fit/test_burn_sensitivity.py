@@ -83,3 +83,20 @@ def test_the_summary_says_the_last_gaps_figure_in_plain_numbers_and_any_size_bey
     line = _hidden_burn_line(GapSensitivity(1.0, 1.2, size, 1.19, np.array([1.0, 0.0, 0.0])),
                              datetime(2026, 1, 1, tzinfo=timezone.utc))
     assert words in line and "e+" not in line
+
+
+def test_the_summary_names_the_earlier_gap_that_hides_the_largest_burn():
+    """A survey fit left "converged" by a 0.3 m/s burn in a six-day gap had named only the last gap."""
+    from datetime import datetime, timezone
+
+    from cistrack.fitting.fit_summary import _earlier_gap_line
+    from cistrack.least_squares.burn_sensitivity import GapSensitivity
+
+    epoch = datetime(2026, 1, 1, tzinfo=timezone.utc)
+    gaps = [GapSensitivity(a, a + 0.5, x, a + 0.4, np.array([1.0, 0.0, 0.0])) for a, x in ((1.0, 0.1), (2.0, 12.0), (3.0, 0.5))]
+    line, = _earlier_gap_line(gaps, epoch)
+    assert "a burn of 12 m/s there" in line and line.count("2026-01-") == 2
+    assert _earlier_gap_line([], epoch) == []
+    blind = [GapSensitivity(a, a + 0.5, np.inf, a + 0.4, np.zeros(3)) for a in (4.0, 5.0)]
+    assert "a burn of any size there" in _earlier_gap_line(gaps + blind[:1], epoch)[0]
+    assert "2 of the 5 earlier gaps could hide a burn of any size" in _earlier_gap_line(gaps + blind, epoch)[0]
