@@ -38,7 +38,7 @@ _moved.install()  # old import paths of moved modules keep working, with a Depre
 _LAZY = {"Belief": "model.belief", "GaussianMixture": "model.belief", "ParticleCloud": "model.belief",
          "Measurement": "model.measurement", "MeasurementSet": "model.measurement",
          "run": "api", "read_run": "api", "load_scenario": "api", "Run": "api",
-         "study": "api", "StudyResult": "api", "fit": "api", "ObjectFit": "api"}
+         "study": "api", "StudyResult": "api", "fit": "api", "ObjectFit": "api", "read_fit": "api"}
 #: Submodules that are also documented as attributes of the package (``ct.api.default_registry()``).
 _LAZY_MODULES = ("api",)
 

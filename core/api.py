@@ -65,7 +65,7 @@ if TYPE_CHECKING:
 __all__ = [
     # running scenarios
     "run", "read_run", "load_scenario", "Run", "Scenario", "RunSummary", "Verdict", "study", "StudyResult", "fit",
-    "ObjectFit",
+    "ObjectFit", "read_fit",
     # the registry
     "Registry", "default_registry", "load_registry", "KINDS",
     # writing plugins: interfaces, parameters, hooks, beliefs, measurements, propagation
@@ -465,6 +465,28 @@ def read_run(directory: str | Path) -> Run:
         return Run(RunSummary.from_dict(summary), d)
     except ValueError as exc:  # a damaged summary: no run_id, a seed that is not a number
         raise ConfigError(f"{d}/manifest.json: {exc}; not a manifest cistrack wrote") from None
+
+
+def read_fit(directory: str | Path) -> dict[str, Any]:
+    """The orbit fit read back from a ``cistrack fit`` results folder: its ``fit.json`` as a dict
+    (``converged``, ``epoch_utc``, ``state_km`` (6,) km and km/s and ``covariance_km`` (6, 6) in the
+    frame ``frame``, ``rms``, ``maneuvers``, ``area_to_mass``, ``messages``, ...; docs/real-data.md),
+    checked as ``cistrack export`` and ``predict`` check it; undefined numbers are NaN. A folder of
+    several objects' fits names them; ``read_run`` reads the filter run the fit started from."""
+    from cistrack.fitting.fit_record import FIT_RECORD, read_fit_record
+    from cistrack.results.output_paths import fit_folders_inside
+
+    _checked_arguments(directory=directory)
+    d = _expanded(Path(directory))
+    if not d.is_dir():
+        raise ConfigError(f"{d}: not a fit's results folder ({'a file' if d.exists() else 'no such directory'})")
+    if not (d / FIT_RECORD).is_file():
+        fits = fit_folders_inside(d, "fit-*")
+        if fits:
+            raise ConfigError(f"{d}: holds the fits of several objects, one folder each ({', '.join(fits[:4])}"
+                              f"{' ...' if len(fits) > 4 else ''}): read_fit one of those, e.g. "
+                              f"read_fit({str(d / fits[0])!r})")
+    return read_fit_record(d)
 
 
 def _check_status(d: Path, status: Any) -> None:
