@@ -317,7 +317,9 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
     told: that they end at an ``impact`` before the span asked, and that they run past the fit's
     horizon (``record["determination"]["horizon_days"]``), where the orbits the fit allows leave a
     1-degree field and the covariance may no longer hold the object, or past its covariance
-    horizon (``covariance_horizon_days``, when sooner), where the covariance understates their spread."""
+    horizon (``covariance_horizon_days``, when sooner), where the covariance understates their spread;
+    and that they run farther before the first observation than that horizon (a prediction 140 days
+    back had carried no word)."""
     if times.size <= n_arc:
         return []
     out = []
@@ -333,6 +335,7 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
                    f"{horizon:g} days ({when}Z): after it the orbits the fit allows leave a 1-degree field, and its "
                    "covariance may no longer hold the object; observe again before then")
     held = (record.get("determination") or {}).get("covariance_horizon_days")
+    out += _backward_warning(record, times[n_arc:], horizon, held)
     if isinstance(held, (int, float)) and math.isfinite(held) and span > held and not (
             isinstance(horizon, (int, float)) and held >= horizon):
         when = units.format_utc(units.tu_to_utc(epoch, last + float(units.days_to_tu(held))))[:19]
@@ -340,6 +343,26 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
                    f"last observation ({when}Z): more than 2 % of them lie outside the 99 % ellipsoid after it "
                    "(the flow bends across the covariance); treat its probabilities as optimistic there")
     return out
+
+
+def _backward_warning(record: dict[str, Any], times: np.ndarray, horizon: Any, held: Any) -> list[str]:
+    """The words for predicted ``times`` (TU) farther before the first observation than the fit's
+    horizons reach forward (the covariance's, else the field's, else the
+    :data:`~cistrack.fitting.determination.HORIZON_DAYS` they were checked to): nothing was checked
+    backward, and a prediction 140 days back had carried no word."""
+    from cistrack.fitting.determination import HORIZON_DAYS
+
+    first = (record.get("arc") or {}).get("first_tu")
+    if not isinstance(first, (int, float)) or times.size == 0:
+        return []
+    back = float(units.tu_to_days(float(first) - float(np.min(times))))
+    finite = [float(x) for x in (held, horizon) if isinstance(x, (int, float)) and math.isfinite(x)]
+    limit = min(finite) if finite else HORIZON_DAYS
+    if not back > limit:
+        return []
+    return [f"the predicted states run {back:.3g} days before the first observation, farther back than the {limit:g} "
+            "days the fit's orbits and covariance were checked for forward: the covariance may understate their spread "
+            "there"]
 
 
 def _prediction(result: FitResult, dynamics, times: np.ndarray, covariance: str):

@@ -148,3 +148,16 @@ def test_a_covariance_horizon_past_the_reacquisition_horizon_adds_no_second_warn
     record = {"arc": {"last_tu": 0.0}, "determination": {"horizon_days": 0.5, "covariance_horizon_days": 1.0}}
     said = prediction_warnings(record, days_to_tu(np.array([0.0, 2.0])), 1, None, parse_utc("2026-01-01T00:00:00Z"))
     assert len(said) == 1 and "horizon of 0.5 days" in said[0]
+
+
+def test_a_prediction_farther_back_than_the_horizon_says_so():
+    from cistrack.fitting.fit_export import prediction_warnings
+
+    record = {"arc": {"first_tu": 0.0, "last_tu": days_to_tu(5.0)}, "determination": {"horizon_days": 30.0}}
+    said = " ".join(prediction_warnings(record, days_to_tu(np.array([-140.0, -100.0])), 0, None,
+                                        parse_utc("2026-01-01T00:00:00Z")))
+    assert "140 days before the first observation, farther back than the 30 days" in said
+    assert prediction_warnings(record, days_to_tu(np.array([-20.0, 1.0])), 0, None, None) == []
+    record["determination"] = {"horizon_days": None, "covariance_horizon_days": 8.75}  # the field's beyond 30 days
+    said = " ".join(prediction_warnings(record, days_to_tu(np.array([-20.0])), 0, None, parse_utc("2026-01-01T00:00:00Z")))
+    assert "farther back than the 8.75 days" in said
