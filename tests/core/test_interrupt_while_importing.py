@@ -13,6 +13,8 @@ import sys
 
 import pytest
 
+from real_data_fit import fitted_example  # tests/ is on sys.path
+
 from cistrack.cli.signals import install_signal_handlers, interrupts_prevail
 from cistrack.errors import RunInterrupted
 from cistrack.interrupts import clear
@@ -31,14 +33,7 @@ console_main()
 
 @pytest.fixture(scope="module")
 def fitted(tmp_path_factory):
-    from cistrack.fitting.from_observations import fit_files
-    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
-
-    obs = builtin_scenario_path("real-data").parent / "real_data" / "observations.psv"
-    out = tmp_path_factory.mktemp("fit") / "fit"
-    [one] = fit_files([obs], out=out)
-    assert one.ok
-    return out
+    return fitted_example(tmp_path_factory)
 
 
 def _predict(fitted, tmp_path, action: str) -> subprocess.CompletedProcess:

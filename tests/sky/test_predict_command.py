@@ -4,6 +4,8 @@ import csv
 import numpy as np
 import pytest
 
+from real_data_fit import fitted_example  # tests/ is on sys.path
+
 from cistrack.cli.main import main
 
 
@@ -112,15 +114,7 @@ def test_predict_takes_a_runs_last_filter_estimate(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def fitted(tmp_path_factory):
-    """The shipped real-data example fitted (its orbit hits the Moon on 2026-03-17 at 00:56 UTC)."""
-    from cistrack.fitting.from_observations import fit_files
-    from cistrack.scenario.builtin_scenarios import builtin_scenario_path
-
-    obs = builtin_scenario_path("real-data").parent / "real_data" / "observations.psv"
-    out = tmp_path_factory.mktemp("fit") / "fit"
-    [one] = fit_files([obs], out=out)
-    assert one.ok
-    return out
+    return fitted_example(tmp_path_factory)
 
 
 def _predicted(fitted, tmp_path, capsys, site: str, start: str, stop: str, step: str) -> tuple[str, list[dict]]:
