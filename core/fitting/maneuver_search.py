@@ -16,7 +16,7 @@ from cistrack import units
 from cistrack.least_squares.options import AREA_TO_MASS
 from cistrack.least_squares.impulse_fit import BurnEstimate
 
-__all__ = ["maneuver_record", "capped_outliers", "site_left_out", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
+__all__ = ["maneuver_record", "site_left_out", "least_significance", "MIN_SEARCH_ARC_DAYS", "MIN_BURN_SIGMAS", "MAX_TIME_TRADE"]
 
 MIN_BURN_SIGMAS = 3.0
 """A burn the fit reports with fewer than two nights of observations on one side
@@ -193,16 +193,10 @@ def _suspected(ctx, one, span: float) -> tuple[str, bool]:
     return why, bool(why)
 
 
-def capped_outliers(result) -> int:
-    """How many observations ``result`` uses although their chi-square exceeds its rejection
-    threshold: the cap on rejections (``max_reject_fraction``) kept them."""
-    res = result.residuals
-    chi2 = np.asarray(res.chi2, dtype=float)[~np.asarray(res.rejected, dtype=bool)]
-    return int(np.sum(chi2 > result.rejection_threshold))
-
-
 def _capped_alone(result) -> int:
-    """:func:`capped_outliers`, or 0 when one of them shares its night (observations within
+    """How many observations ``result`` uses although their chi-square exceeds its rejection
+    threshold (the cap on rejections, ``max_reject_fraction``, kept them), or 0 when one of them
+    shares its night (observations within
     :data:`~cistrack.least_squares.burn_search.END_NIGHT_GAP_HOURS`) with observations whose median
     chi-square is above the threshold too: a whole night off is a maneuver's or a site's sign, not
     outliers the cap kept (a 3 m/s burn's first night sat 126 sigma off; its 2 kept observations had
