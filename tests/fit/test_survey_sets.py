@@ -11,6 +11,7 @@ pass, so these fits start from the tracklet-ranging IOD that `cistrack fit` fall
 from __future__ import annotations
 
 import json
+from datetime import datetime, timedelta
 import sys
 from pathlib import Path
 
@@ -291,6 +292,13 @@ def test_a_ratio_kept_in_a_fit_that_is_not_clean_says_it_may_be_absorbing_a_mane
     assert "in a fit that is not clean" in ratio["decision"], ratio
 
 
+def _failed_fit_messages(set_dir: Path, tmp_path: Path) -> list[str]:
+    """The messages of ``cistrack fit`` on ``set_dir``'s observations, a fit that must be failed."""
+    row = check_set(set_dir, tmp_path / "fits")
+    assert row.outcome == "failed", row
+    return json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+
+
 @pytest.mark.slow
 def test_a_site_given_a_wrong_code_is_named_beside_the_maneuver_it_looks_like(tmp_path):
     """nrho seed 1200, no burn, every observation of 711 labelled 568 (Maunakea): the fit is not
@@ -300,10 +308,43 @@ def test_a_site_given_a_wrong_code_is_named_beside_the_maneuver_it_looks_like(tm
     make(set_dir, "nrho", seed=1200)
     psv = set_dir / "observations.psv"
     psv.write_text(psv.read_text().replace("|711|", "|568|"))
-    row = check_set(set_dir, tmp_path / "fits")
-    assert row.outcome == "failed"
-    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    messages = _failed_fit_messages(set_dir, tmp_path)
     assert any("without site 568's" in m and "stated-uncertainty error at 568" in m for m in messages), messages
+
+
+def _shifted(row: str, seconds: float) -> str:
+    """An ADES PSV data row with its obsTime ``seconds`` later."""
+    cells = row.split("|")
+    t = datetime.fromisoformat(cells[3].strip().replace("Z", "+00:00")) + timedelta(seconds=seconds)
+    cells[3] = t.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+    return "|".join(cells)
+
+
+@pytest.mark.slow
+def test_a_clock_offset_at_the_site_with_most_observations_is_named(tmp_path):
+    """nrho seed 1301, no burn, every time of M22 (37 of 67 rows) 30 s late: the note blamed only "an
+    object that maneuvered" (probe K1): the others' fit had been started from the pulled orbit with a
+    looser reject cap than the fit's own, and rejected a contiguous block of 8."""
+    set_dir = tmp_path / "nrho-s1301"
+    make(set_dir, "nrho", seed=1301)
+    psv = set_dir / "observations.psv"
+    lines = psv.read_text().splitlines()
+    psv.write_text("\n".join(lines[:2] + [_shifted(r, 30.0) if r.split("|")[2] == "M22" else r for r in lines[2:]]) + "\n")
+    messages = _failed_fit_messages(set_dir, tmp_path)
+    assert any("without site M22's 37 observations" in m for m in messages), messages
+
+
+@pytest.mark.slow
+def test_a_site_filed_under_another_code_is_named_when_the_pulled_orbit_is_no_start(tmp_path):
+    """heo seed 1300, no burn, 568's rows filed as 711: the ballistic fit sits at RMS 780, the other
+    sites' fit from it does not converge, and no site had been named (probe K1); their own IOD fits
+    them cleanly."""
+    set_dir = tmp_path / "heo-s1300"
+    make(set_dir, "heo", seed=1300)
+    psv = set_dir / "observations.psv"
+    psv.write_text(psv.read_text().replace("|568|", "|711|"))
+    messages = _failed_fit_messages(set_dir, tmp_path)
+    assert any("without site 711's" in m for m in messages), messages
 
 
 @pytest.mark.slow
