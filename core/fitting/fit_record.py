@@ -71,13 +71,12 @@ def noise_summary(measurements, result) -> dict[str, dict[str, float]]:
 
 
 def _options_record(options, reject_fraction: float | None = None) -> dict[str, Any]:
-    """The fit options as recorded: all but ``sensor_steps``, and ``area_to_mass`` only when it
-    is not "off" (so that a fit without it writes the same record as before the option existed);
+    """The fit options as recorded: all but ``sensor_steps`` (``area_to_mass`` "off" too, which had
+    been left out, so that a fit told "off" read as one that was never told);
     ``max_reject_fraction`` the share the fit's least squares applied (``reject_fraction`` when
     given: from the ranging IOD's orbit, where it had recorded the setting's 0.5 beside the 0.1
     applied, probe I5)."""
-    record = {k: getattr(options, k) for k in options.__dataclass_fields__
-              if k != "sensor_steps" and not (k == "area_to_mass" and getattr(options, k) == "off")}
+    record = {k: getattr(options, k) for k in options.__dataclass_fields__ if k != "sensor_steps"}
     if reject_fraction is not None:
         record["max_reject_fraction"] = reject_fraction
     return record
