@@ -77,7 +77,9 @@ def add_maneuvers(one, say) -> None:
     as converged (and the burns are not reported): its messages say the first search's reason.
     A fit suspect only by the linearised screen (:func:`~cistrack.least_squares.burn_search.screen_suspicion`)
     is searched once, and stays as it was unless that search measures its burns, its messages saying
-    why (a dense campaign's 1 cm/s burn: 0.07 +- 0.06 m/s 1.7 days before it passes the burn test)."""
+    why (a dense campaign's 1 cm/s burn: 0.07 +- 0.06 m/s 1.7 days before it passes the burn test).
+    First, a fit that one site's clock offset explains (:func:`~cistrack.fitting.site_clock.clock_off`)
+    is not clean, its words naming the site and the offset, and no burn is searched."""
     from cistrack.least_squares.burn_search import flown
 
     r = one.result
@@ -86,14 +88,10 @@ def add_maneuvers(one, say) -> None:
     ctx = one.run.context
     times = np.asarray(ctx.measurements.times, dtype=float)
     span = _days(float(times.max() - times.min())) if times.size else 0.0
-    why, screened = _suspected(ctx, one, span)
-    if not why:
+    if _clock_explains(ctx, one, r):
         return
-    if span < MIN_SEARCH_ARC_DAYS:
-        one.result = replace(r, converged=False, messages=tuple(r.messages) + (
-            f"{_unclean(one, r, why)}; an arc of {span * 24.0:.3g} h "
-            f"(under {MIN_SEARCH_ARC_DAYS * 24.0:g} h) cannot tell a burn from outliers or wrong weights, so no burn "
-            "was searched",))
+    why, screened = _suspected(ctx, one, span)
+    if not why or _too_short(one, r, why, span):
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
     outcome = _measured(ctx, one, say)
@@ -122,6 +120,30 @@ def add_maneuvers(one, say) -> None:
         f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}"
         + _size_words(fit, burns),
         *moves))
+
+
+def _clock_explains(ctx, one, r) -> bool:
+    """Whether one site's clock offset explains ``r``, the ballistic fit of ``one``
+    (:func:`~cistrack.fitting.site_clock.clock_off`): then ``one.result`` is ``r``, not clean, saying so."""
+    from cistrack.fitting.site_clock import clock_off
+
+    clock = clock_off(ctx, one, r)
+    if clock:
+        one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
+            f"not a clean fit: {clock}",))
+    return bool(clock)
+
+
+def _too_short(one, r, why: str, span: float) -> bool:
+    """Whether the arc of ``span`` days is too short to search for burns: then ``one.result`` is
+    ``r`` (suspect for ``why``), not clean, saying so."""
+    if span >= MIN_SEARCH_ARC_DAYS:
+        return False
+    one.result = replace(r, converged=False, messages=tuple(r.messages) + (
+        f"{_unclean(one, r, why)}; an arc of {span * 24.0:.3g} h "
+        f"(under {MIN_SEARCH_ARC_DAYS * 24.0:g} h) cannot tell a burn from outliers or wrong weights, so no burn "
+        "was searched",))
+    return True
 
 
 def _ratio_unclean(r):
