@@ -319,12 +319,11 @@ region), so no orbit is determined and ``cistrack fit`` makes none."""
 
 
 def is_lone_tracklet(measurements: MeasurementSet) -> bool:
-    """Whether ``measurements`` are one tracklet: RA/Dec of one site spanning at most
-    :data:`LONE_TRACKLET_HOURS` (two sites the same night see a parallax: not one tracklet)."""
+    """Whether ``measurements`` are one tracklet: angles of one site (RA/Dec or azimuth/elevation
+    alike: either is two angles) spanning at most :data:`LONE_TRACKLET_HOURS` (two sites the same
+    night see a parallax: not one tracklet)."""
     ms = measurements
     if len(ms) == 0 or len(set(ms.site_at(i) for i in range(len(ms)))) > 1:
-        return False
-    if any(ms.kind_at(i) != "radec" for i in range(len(ms))):
         return False
     # a span of exactly LONE_TRACKLET_HOURS reads back from TU a few picoseconds longer: a millisecond of slack
     return float(units.tu_to_hours(float(ms.times[-1] - ms.times[0]))) <= LONE_TRACKLET_HOURS + 1e-3 / 3600.0
@@ -335,8 +334,11 @@ def sky_motion(measurements: MeasurementSet, epoch) -> dict:
     RA and Dec (deg) at its mean time and their rates (a straight line in time through the
     observations, RA unwrapped): RA x cos(Dec) and Dec in arcsec per minute, the total rate (arcsec
     per minute and deg per day) and its position angle (deg, east of north); the rates and the angle
-    are None when every observation has the same time (no motion is measured)."""
+    are None when every observation has the same time (no motion is measured). ``angles`` is
+    ``"radec"``; an azimuth/elevation tracklet gives :func:`_local_sky` instead."""
     ms = measurements
+    if any(ms.kind_at(i) == "azel" for i in range(len(ms))):
+        return _local_sky(ms, epoch)
     t = np.asarray(ms.times, dtype=float)
     minutes = float(units.tu_to_hours(1.0)) * 60.0 * (t - t.mean())
     ra, dec = np.unwrap(ms.values[:, 0]), ms.values[:, 1]
@@ -350,11 +352,26 @@ def sky_motion(measurements: MeasurementSet, epoch) -> dict:
     utc = [units.format_utc(units.tu_to_utc(epoch, float(v))) for v in (t[0], t[-1])]
     moved = bool(np.ptp(minutes) > 0)  # one time: a place, no motion (the rates are None)
     return {"first_utc": utc[0], "last_utc": utc[1], "site": ms.site_at(0), "n_observations": int(len(ms)),
-            "span_minutes": float(np.ptp(minutes)), "ra_deg": float(np.degrees(ra0) % 360.0),
+            "angles": "radec", "span_minutes": float(np.ptp(minutes)), "ra_deg": float(np.degrees(ra0) % 360.0),
             "dec_deg": float(np.degrees(dec0)), "ra_cos_dec_rate_arcsec_min": east if moved else None,
             "dec_rate_arcsec_min": north if moved else None, "rate_arcsec_min": total if moved else None,
             "rate_deg_day": total * 1440.0 / 3600.0 if moved else None,
             "position_angle_deg": float(np.degrees(np.arctan2(east, north)) % 360.0) if moved else None}
+
+
+def _local_sky(ms: MeasurementSet, epoch) -> dict:
+    """:func:`sky_motion`'s keys for an azimuth/elevation tracklet: ``angles`` ``"azel"``,
+    ``azimuth_deg`` and ``elevation_deg`` (deg) at its mean time, and no RA/Dec or rates (None): the
+    rates of azimuth and elevation mix the Earth's rotation with the object's own motion."""
+    t = np.asarray(ms.times, dtype=float)
+    az, el = np.unwrap(ms.values[:, 0]), ms.values[:, 1]
+    utc = [units.format_utc(units.tu_to_utc(epoch, float(v))) for v in (t[0], t[-1])]
+    span = float(units.tu_to_hours(1.0)) * 60.0 * float(np.ptp(t))
+    return {"first_utc": utc[0], "last_utc": utc[1], "site": ms.site_at(0), "n_observations": int(len(ms)),
+            "angles": "azel", "span_minutes": span, "azimuth_deg": float(np.degrees(az.mean()) % 360.0),
+            "elevation_deg": float(np.degrees(el.mean())), "ra_deg": None, "dec_deg": None,
+            "ra_cos_dec_rate_arcsec_min": None, "dec_rate_arcsec_min": None, "rate_arcsec_min": None,
+            "rate_deg_day": None, "position_angle_deg": None}
 
 
 def lone_tracklet_report(measurements: MeasurementSet, region: dict, epoch, curve: dict | None = None) -> dict:

@@ -97,12 +97,22 @@ def _wrapped(lines: list[str], width: int = 118) -> list[str]:
 
 def _motion_line(sky: dict) -> str:
     """The tracklet's motion on the sky, or that one time measures none."""
+    if sky.get("angles") == "azel":
+        return ("  motion: not given for azimuth/elevation (their rates mix the Earth's rotation with the object's "
+                "own motion)")
     if sky["rate_arcsec_min"] is None:
         return (f"  motion: not measured ({'one exposure' if sky['n_observations'] == 1 else 'every exposure at one time'}"
                 "; a tracklet's motion needs two times at least)")
     return (f"  motion: RA cos(Dec) {sky['ra_cos_dec_rate_arcsec_min']:+.3g} \"/min, Dec {sky['dec_rate_arcsec_min']:+.3g} "
             f"\"/min ({sky['rate_arcsec_min']:.3g} \"/min = {sky['rate_deg_day']:.3g} deg/day, position angle "
             f"{sky['position_angle_deg']:.1f} deg)")
+
+
+def _place(sky: dict) -> str:
+    """The tracklet's two angles at its mean time, named as measured (RA/Dec or azimuth/elevation)."""
+    if sky.get("angles") == "azel":
+        return f"azimuth {sky['azimuth_deg']:.4f} deg, elevation {sky['elevation_deg']:+.4f} deg"
+    return f"RA {sky['ra_deg']:.4f} deg, Dec {sky['dec_deg']:+.4f} deg"
 
 
 def _undetermined_lines(one) -> list[str]:
@@ -114,7 +124,7 @@ def _undetermined_lines(one) -> list[str]:
              f"  results in {one.directory}",
              f"  tracklet: {sky['n_observations']} observations from {sky['first_utc'][:19]}Z to "
              f"{sky['last_utc'][11:19]}Z ({sky['span_minutes']:.0f} min), site {sky['site'] or '(the sensor)'}; "
-             f"RA {sky['ra_deg']:.4f} deg, Dec {sky['dec_deg']:+.4f} deg at its mean time",
+             f"{_place(sky)} at its mean time",
              _motion_line(sky)]
     if "range_km" in region:
         lo, hi = region["range_km"]

@@ -172,3 +172,34 @@ def test_a_lone_tracklet_too_fast_for_any_orbit_is_undetermined_with_the_reason(
     assert "UNDETERMINED: one tracklet does not determine an orbit" in out
     assert "admits no orbit" in out and "near-Earth object, or exposures with wrong times" in out
     assert "state" not in rec
+
+
+AZEL_ROWS = """time_utc,azimuth_deg,elevation_deg,site
+2026-03-01T22:35:00.000000Z,74.6056622,10.6168784,809
+2026-03-01T23:32:15.702808Z,66.6783880,22.1667394,809
+2026-03-02T00:14:46.637630Z,59.6543432,30.3121698,809
+"""
+
+
+def test_a_lone_azel_tracklet_is_undetermined_like_a_radec_one(tmp_path, capsys):
+    """Probe L1: the real-data campaign's first three 809 observations as azimuth/elevation (CSV) had
+    been fitted "converged; poorly determined" with 0 degrees of freedom and an Earth impact; the same
+    three as RA/Dec were UNDETERMINED. Two angles are two angles: one tracklet, no orbit."""
+    f = tmp_path / "azel.csv"
+    f.write_text(AZEL_ROWS)
+    assert main(["fit", str(f), "--out", str(tmp_path / "out")]) == 3
+    out = capsys.readouterr().out
+    rec = json.loads((tmp_path / "out" / "fit.json").read_text())
+    assert "UNDETERMINED: one tracklet does not determine an orbit" in out and "converged" not in out
+    assert "state" not in rec and rec["failure"].startswith("one tracklet does not determine an orbit")
+    sky = rec["undetermined"]["tracklet"]
+    assert sky["angles"] == "azel" and sky["ra_deg"] is None and sky["rate_arcsec_min"] is None
+    assert 59.6 < sky["azimuth_deg"] < 74.7 and 10.6 < sky["elevation_deg"] < 30.4
+    assert "azimuth 66." in out
+
+
+def test_an_azel_tracklet_counts_as_one_tracklet():
+    ms = _set([0.0, 0.1, 0.2], ["711"] * 3)
+    azel = MeasurementSet(ms.times, ms.values, np.full((3, 2), 1e-6), ("azimuth", "elevation"),
+                          sites=np.asarray(["711"] * 3), kinds=np.full(3, "azel"), site_table=ms.site_table)
+    assert is_lone_tracklet(azel)
