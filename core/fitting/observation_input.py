@@ -9,7 +9,9 @@ files (the same site and type, times within the coarser file's time resolution: 
 e.g. 0.0864 s for MPC 80-column, or the step its times are rounded to, e.g. a whole second;
 positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
 time resolution, and the files' notes say how many copies were dropped; two such observations
-whose positions differ more are refused naming both files.
+whose positions differ more are refused naming both files. The same rule holds within one file, with
+times within :data:`REPEAT_S`: the later repeat is dropped
+and the file's note says how many (two such rows further apart on the sky are both kept).
 
 Times are TU elapsed since a working epoch (:data:`READ_EPOCH`, leap seconds counted): the fit
 moves them to its own epoch (:func:`cistrack.fitting.arcs.in_time_base`, bit for bit the clock
@@ -40,7 +42,7 @@ from cistrack.runs.observation_files import SeveralObjectsError, read_checked, r
 from cistrack.runs.run_inputs import reading_own_copies, weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
-           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC",
+           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC", "REPEAT_S",
            "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly",
            "distinct_names"]
 
@@ -60,6 +62,12 @@ DUPLICATE_ARCSEC = 5.0
 """Largest angle (arcsec) between two observations of one site at (nearly) the same time in two
 files for them to be the same observation given twice: well above the 0.015 arcsec rounding of
 MPC 80-column angles and the motion of a cislunar object in a rounded time (0.04 s)."""
+
+REPEAT_S = 0.25
+"""Largest time apart (s) of two observations of one site in one file, positions within
+:data:`DUPLICATE_ARCSEC`, for the later to be a repeat of the earlier (the same night submitted
+twice, from two reductions): shorter than the exposure and readout of a cislunar survey, and than
+the 0.4 s between exposures of ``benchmarks/bench_fit.py --make-dense`` (2,000 per tracklet)."""
 
 
 @dataclass
@@ -281,11 +289,12 @@ class _Rows:
 
 
 def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
-    """Pairs (i, j) of rows from different sets with the same site and type whose times differ by
-    at most the coarser of their sets' time resolutions ``tol_s`` (s, per set)."""
+    """Pairs (i, j) of rows with the same site and type whose times differ by at most the coarser
+    of their sets' time resolutions ``tol_s`` (s, per set), or, in one set, by at most
+    :data:`REPEAT_S` (its distinct times are distinct whatever they are rounded to); j is the later row."""
     secs = units.tu_to_seconds(rows.times)
     order = np.lexsort((secs, rows.sites))
-    widest = float(tol_s.max()) * (1 + 1e-9) + 1e-9
+    widest = max(float(tol_s.max()), REPEAT_S) * (1 + 1e-9) + 1e-9
     pairs: list[tuple[int, int]] = []
     for shift in range(1, len(order)):
         a, b = order[:-shift], order[shift:]
@@ -293,8 +302,10 @@ def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
         near = (rows.sites[a] == rows.sites[b]) & (dt <= widest)
         if not near.any():
             break
-        tol = np.maximum(tol_s[rows.source[a]], tol_s[rows.source[b]]) * (1 + 1e-9) + 1e-9
-        hit = near & (dt <= tol) & (rows.kinds[a] == rows.kinds[b]) & (rows.source[a] != rows.source[b])
+        same = rows.source[a] == rows.source[b]
+        tol = np.maximum(tol_s[rows.source[a]], tol_s[rows.source[b]])
+        tol = np.where(same, REPEAT_S, tol) * (1 + 1e-9) + 1e-9
+        hit = near & (dt <= tol) & (rows.kinds[a] == rows.kinds[b])
         pairs += [(int(i), int(j)) for i, j in zip(a[hit], b[hit])]
     return pairs
 
@@ -309,11 +320,16 @@ def _separation_arcsec(rows: _Rows, i: int, j: int) -> float:
 def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
     """Per row, the set index of the copy kept in its place, -1 for a row kept: of each observation
     given in two files (:func:`_close_pairs`, positions within :data:`DUPLICATE_ARCSEC`) the copy
-    from the file of coarser time resolution (the later file when equal) is dropped.
-    MeasurementError naming both files when the positions differ more."""
+    from the file of coarser time resolution (the later file when equal) is dropped; of a repeat
+    within one file the later row (its own set index). MeasurementError naming both files when the
+    positions of two files' copies differ more (two rows of one file that do are both kept)."""
     drop = np.full(len(rows.times), -1, dtype=int)
     for i, j in _close_pairs(rows, tol_s):
         sep = _separation_arcsec(rows, i, j)
+        if rows.source[i] == rows.source[j]:
+            if sep <= DUPLICATE_ARCSEC and drop[i] < 0:
+                drop[j] = rows.source[j]
+            continue
         fi, fj = files[rows.source[i]], files[rows.source[j]]
         if sep > DUPLICATE_ARCSEC:
             when = units.format_utc(units.tu_to_utc(units.parse_utc(READ_EPOCH), float(rows.times[i])))[:23]
@@ -358,10 +374,19 @@ def distinct_names(paths: list[str | Path]) -> list[str]:
 
 
 def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.ndarray) -> list[str]:
-    """One line per file that lost observations as duplicates (``drop`` from :func:`_duplicates`)."""
+    """One line per file that lost observations as duplicates (``drop`` from :func:`_duplicates`):
+    first its repeats within itself, then its copies of other files' observations."""
     notes, shown = [], distinct_names(files)
     for k in sorted(set(rows.source[drop >= 0].tolist())):
-        mine = (drop >= 0) & (rows.source == k)
+        again = (drop == k) & (rows.source == k)
+        if again.any():
+            notes.append(f"{shown[k]}: {int(np.count_nonzero(again))} observations dropped as repeats within the "
+                         f"file (the same site and type as an earlier row, times within "
+                         f"{REPEAT_S:g} s, positions within {DUPLICATE_ARCSEC:g} arcsec: the same "
+                         "observation given twice?); each observation is used once")
+        mine = (drop >= 0) & (drop != k) & (rows.source == k)
+        if not mine.any():
+            continue
         kept = ", ".join(shown[m] for m in sorted(set(drop[mine].tolist())))
         notes.append(f"{shown[k]}: {int(np.count_nonzero(mine))} observations dropped as duplicates of "
                      f"those in {kept} (same site and type, times within {tol_s[k]:g} s, positions within "
@@ -372,12 +397,12 @@ def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.
 def _merge(sets: list[MeasurementSet], files: list[str],
            time_resolutions: list[float] | None = None) -> tuple[MeasurementSet, list[str]]:
     """:func:`merge_sets` and one note per file whose duplicates were dropped."""
-    if len(sets) == 1:
-        return sets[0], []
-    table = _site_table(sets, files)
     tol_s = np.asarray(time_resolutions if time_resolutions is not None else [0.0] * len(sets), dtype=float)
     rows = _Rows.of(sets)
     drop = _duplicates(rows, files, tol_s)
+    if len(sets) == 1 and not (drop >= 0).any():
+        return sets[0], []
+    table = _site_table(sets, files)
     notes = _duplicate_notes(rows, drop, files, tol_s)
     kept = rows.take(np.nonzero(drop < 0)[0])
     r = kept.take(np.lexsort((kept.sites, kept.times)))
@@ -400,7 +425,8 @@ def merge_sets(sets: list[MeasurementSet], files: list[str],
 
     An observation given in two files (same site and type, times within the coarser file's
     ``time_resolutions`` entry, s per set; 0 s when absent; positions within
-    :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer time resolution; meta
+    :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer time resolution, and so is one
+    repeated within a set (times within :data:`REPEAT_S`: the later row is dropped); meta
     ``duplicates_dropped`` counts the copies dropped. Refuses such a pair whose positions differ
     more, and a site key given two positions (MeasurementError naming the files)."""
     return _merge(sets, files, time_resolutions)[0]

@@ -134,3 +134,35 @@ def test_a_reader_parameter_no_reader_of_the_files_takes_is_refused_by_name():
     with pytest.raises(ConfigError, match="reader parameter 'range_alpha': no reader of the files given takes it"):
         read_object_observations([DATA / "observations.psv", DATA / "observations.tdm"], default_registry(),
                                  reader_params={"range_alpha": 0.1})
+
+
+def _shifted(row: str, seconds: float) -> str:
+    f = row.split("|")
+    f[3] = (datetime.strptime(f[3], "%Y-%m-%dT%H:%M:%S.%fZ") + timedelta(seconds=seconds)).strftime(
+        "%Y-%m-%dT%H:%M:%S.%fZ")
+    return "|".join(f)
+
+
+def test_observations_repeated_within_one_file_are_used_once_and_the_repeats_counted(tmp_path):
+    """Probe L5: every row given again 0.2 s later in the same file had been used twice without a word
+    (the cross-file duplicate rule did not look inside one file); now the later copy is dropped and
+    a note names the file, the count and the rule."""
+    lines = _psv_lines()
+    header, rows = lines[:2], [r for r in lines[2:] if r]
+    p = tmp_path / "twice.psv"
+    p.write_text("\n".join(header + rows + [_shifted(r, 0.2) for r in rows]) + "\n")
+    objs = read_object_observations([p], default_registry())
+    whole = read_object_observations([DATA / "observations.psv"], default_registry())[0].measurements
+    np.testing.assert_array_equal(objs[0].measurements.times, whole.times)
+    assert objs[0].measurements.meta["duplicates_dropped"] == 65
+    assert ("twice.psv: 65 observations dropped as repeats within the file (the same site and type as an earlier "
+            "row, times within 0.25 s, positions within 5 arcsec") in objs[0].notes[-1]
+
+
+def test_rows_of_one_file_a_second_apart_are_not_repeats(tmp_path):
+    lines = _psv_lines()
+    header, rows = lines[:2], [r for r in lines[2:] if r]
+    p = tmp_path / "later.psv"
+    p.write_text("\n".join(header + rows + [_shifted(r, 1.0) for r in rows]) + "\n")
+    objs = read_object_observations([p], default_registry())
+    assert len(objs[0].measurements) == 130 and not any("repeat" in n for n in objs[0].notes)
