@@ -17,10 +17,9 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
-from .ades_records import (POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped,
+from .ades_records import (POS_FIELDS, WRITE_FIELDS, AdesReader, is_radar, record_to_row, rows_for_writing, say_skipped,
                            say_tiny_sigmas)
 from .obs_rows import build_set, parse_epoch
-from .site_params import SiteReader
 
 __all__ = ["AdesPsvReader"]
 
@@ -49,7 +48,7 @@ def _names_fields(cells: list[str]) -> bool:
     return any(c in _HEADER_WORDS for c in cells)
 
 
-class AdesPsvReader(SiteReader):
+class AdesPsvReader(AdesReader):
     """IAU ADES optical astrometry (RA/Dec), pipe-separated.
 
     Parameters
@@ -61,6 +60,9 @@ class AdesPsvReader(SiteReader):
         Explicit sites for station codes outside the bundled MPC list: CODE ->
         {latitude_deg, longitude_deg, height_m[, name]} or {longitude_deg, rho_cos_phi,
         rho_sin_phi[, name]}.
+    check_degrees : bool
+        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708] (radians,
+        where ADES has degrees); false reads it as degrees.
     """
 
     suffixes = (".psv",)
@@ -105,7 +107,8 @@ class AdesPsvReader(SiteReader):
                                                                   "(obsTime|ra|dec|stn|...) found")
         say_skipped(path, {"mode RAD": radar} if radar else {}, bool(rows))
         say_tiny_sigmas(path, rows)
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-psv"}, self.designation)
+        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec, {"format": "ades-psv"},
+                         self.designation)
 
     def write(self, path, measurements, epoch) -> None:
         who = f"reader 'ades-psv' writing {path}"

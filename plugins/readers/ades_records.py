@@ -41,10 +41,10 @@ from cistrack.astro.sites import Site, observatory
 from cistrack.units import ARCSEC_RAD, format_utc, tu_to_utc
 
 from .decimal_units import from_rad, plain_float, to_rad
-from .obs_rows import ObsRow, parse_iso_utc
-from .site_params import place_text, replaced_code, resolve_site
+from .obs_rows import ObsRow, check_degrees, parse_iso_utc
+from .site_params import SiteReader, place_text, replaced_code, resolve_site
 
-__all__ = ["record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "OPTICAL_MODES", "is_radar",
+__all__ = ["AdesReader", "record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "OPTICAL_MODES", "is_radar",
            "say_skipped", "say_tiny_sigmas", "SMALLEST_PLAUSIBLE_ARCSEC"]
 
 WRITE_FIELDS = ("trkSub", "mode", "stn", "obsTime", "ra", "dec", "rmsRA", "rmsDec", "astCat")
@@ -231,6 +231,43 @@ def _stated_arcsec(row: ObsRow) -> dict[str, float]:
     if row.sigma_b is not None:
         out["rmsDec"] = row.sigma_b / ARCSEC_RAD
     return out
+
+
+class AdesReader(SiteReader):
+    """What the ADES readers (PSV, XML) share: :class:`SiteReader`'s parameters and ``check_degrees``.
+
+    Parameters
+    ----------
+    sigma_arcsec : float
+        Sigma on the sky (arcsec: on RA x cos(Dec), like rmsRA, and on Dec) for observations
+        without rmsRA / rmsDec.
+    sites : dict or None
+        Explicit sites for station codes outside the bundled MPC list: CODE ->
+        {latitude_deg, longitude_deg, height_m[, name]} or {longitude_deg, rho_cos_phi,
+        rho_sin_phi[, name]}.
+    designation : str or None
+        Read only the observations of this object (permID / provID / artSat / trkSub); None:
+        all, refused when the file names several objects.
+    check_degrees : bool
+        Refuse a file of two or more observations whose every ra lies in [0, 6.2832] and every
+        dec in [-1.5708, 1.5708] (angles written in radians, where ADES has degrees; as the tdm
+        reader does); false reads such a file as degrees (an object within 6.3 deg of RA 0 and
+        1.6 deg of the equator).
+    """
+
+    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
+                 designation: str | None = None, check_degrees: bool = True) -> None:
+        super().__init__(sigma_arcsec, sites, designation)
+        if not isinstance(check_degrees, bool):
+            self._fail("check_degrees", check_degrees, "must be true or false")
+        self.check_degrees = check_degrees
+
+    def checked_rows(self, path, rows: list[ObsRow]) -> list[ObsRow]:
+        """``rows`` of ``path``, refused when their angles read as radians (``check_degrees``;
+        probe L8: such a file had been fitted and its misfit blamed on a maneuver)."""
+        if self.check_degrees:
+            check_degrees(path, rows, ("ra", "dec"), "ADES", self.registry_name or "ades")
+        return rows
 
 
 def say_tiny_sigmas(path, rows: list[ObsRow]) -> None:

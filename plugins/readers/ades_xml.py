@@ -14,11 +14,10 @@ from cistrack.api import hookimpl
 from cistrack.model.measurement import MeasurementSet
 from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 
-from .ades_records import (POS_FIELDS, WRITE_FIELDS, is_radar, record_to_row, rows_for_writing, say_skipped,
+from .ades_records import (POS_FIELDS, WRITE_FIELDS, AdesReader, is_radar, record_to_row, rows_for_writing, say_skipped,
                            say_tiny_sigmas)
 from .ades_psv import ADES_VERSIONS
 from .obs_rows import build_set, parse_epoch
-from .site_params import SiteReader
 
 __all__ = ["AdesXmlReader"]
 
@@ -122,7 +121,7 @@ def _records(path, text: str) -> tuple[list[tuple[int, dict]], dict[str, int]]:
     return collector.out, collector.skipped
 
 
-class AdesXmlReader(SiteReader):
+class AdesXmlReader(AdesReader):
     """IAU ADES optical astrometry (RA/Dec), XML.
 
     Parameters
@@ -132,6 +131,9 @@ class AdesXmlReader(SiteReader):
         without rmsRA / rmsDec.
     sites : dict or None
         Explicit sites for station codes outside the bundled MPC list (as for ades-psv).
+    check_degrees : bool
+        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708] (radians,
+        where ADES has degrees); false reads it as degrees.
     """
 
     suffixes = (".xml",)
@@ -150,7 +152,8 @@ class AdesXmlReader(SiteReader):
             rows.append(record_to_row(rec, path, line, self._sites, table))
         say_skipped(path, skipped, bool(rows))
         say_tiny_sigmas(path, rows)
-        return build_set(path, rows, ep, table, self.sigma_arcsec, {"format": "ades-xml"}, self.designation)
+        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec, {"format": "ades-xml"},
+                         self.designation)
 
     def write(self, path, measurements, epoch) -> None:
         ep = parse_epoch(path, epoch)

@@ -20,7 +20,7 @@ from cistrack.units import ARCSEC_RAD, LEAP_SECOND_PROBLEM, date_problem, format
 
 from .decimal_units import to_rad
 
-__all__ = ["ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "year_problem", "TIME_FIELD_HELP",
+__all__ = ["check_degrees", "ObsRow", "build_set", "one_object", "parse_epoch", "parse_iso_utc", "year_problem", "TIME_FIELD_HELP",
            "FIRST_YEAR", "LAST_YEAR", "is_leap_second", "LEAP_SECOND_PROBLEM"]
 
 TIME_FIELD_HELP = "an ISO-8601 UTC time such as 2026-03-01T03:40:00.000000Z"
@@ -56,6 +56,23 @@ class ObsRow:
     alias: str = ""
     """Another designation the row gives the same object (ADES: the provID of a row named by its
     permID), linking rows that name it only that way."""
+
+
+def check_degrees(path, rows: list[ObsRow], fields: tuple[str, str], standard: str, reader: str) -> None:
+    """Refuse angles that read as radians (FieldError naming ``path``, the first row's line and the
+    ``fields``): two or more observations, every first angle within [0, 2 pi] and every second within
+    [-pi/2, pi/2] (values as written, degrees by the ``standard``: "TDM", "ADES"); the message names
+    the ``reader``'s parameter ``check_degrees`` that reads such a file as degrees."""
+    if len(rows) < 2:
+        return
+    deg = math.pi / 180.0
+    if all(r.a <= 2.0 * math.pi * deg and abs(r.b) <= 0.5 * math.pi * deg for r in rows):
+        one, two = fields
+        raise FieldError(path, rows[0].line, f"{one}/{two} values",
+                         f"all {len(rows)} observations have {one} within [0, 6.2832] and {two} within "
+                         f"[-1.5708, 1.5708]: these look like radians, but {standard} angles are degrees; write the "
+                         f"angles in degrees (radians x 57.29578), or set the {reader} reader's check_degrees = false "
+                         "(--set measurements.reader.check_degrees=false) if they are degrees")
 
 
 def parse_epoch(path, epoch) -> datetime:

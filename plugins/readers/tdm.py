@@ -53,7 +53,7 @@ from cistrack.units import format_utc, tu_to_utc
 
 from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
-from .obs_rows import ObsRow, build_set, parse_epoch
+from .obs_rows import ObsRow, build_set, check_degrees, parse_epoch
 from .site_params import SiteReader, resolve_site
 
 __all__ = ["TdmReader"]
@@ -473,20 +473,6 @@ def _say_degraded(path, lines: list[int]) -> None:
             "DEGRADED (data with quality problems); they are used: look at their residuals")
 
 
-def _check_degrees(path, rows: list[ObsRow]) -> None:
-    """Refuse angles that read as radians: two or more observations, every ANGLE_1 value within
-    [0, 2 pi] and every ANGLE_2 within [-pi/2, pi/2] (values as written, degrees by the standard)."""
-    if len(rows) < 2:
-        return
-    deg = math.pi / 180.0
-    if all(r.a <= 2.0 * math.pi * deg and abs(r.b) <= 0.5 * math.pi * deg for r in rows):
-        raise FieldError(path, rows[0].line, "ANGLE_1/ANGLE_2 values",
-                         f"all {len(rows)} observations have ANGLE_1 within [0, 6.2832] and ANGLE_2 within "
-                         "[-1.5708, 1.5708]: these look like radians, but TDM angles are degrees; write the angles "
-                         "in degrees (radians x 57.29578), or set the tdm reader's check_degrees = false "
-                         "(--set measurements.reader.check_degrees=false) if they are degrees")
-
-
 class TdmReader(SiteReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
@@ -527,7 +513,7 @@ class TdmReader(SiteReader):
         _say_frames_ignored(path, parse.frames_ignored)
         _say_tiny_sigmas(path, parse.tiny_sigmas)
         if self.check_degrees:
-            _check_degrees(path, parse.rows)
+            check_degrees(path, parse.rows, ("ANGLE_1", "ANGLE_2"), "TDM", "tdm")
         return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
 
     # -- writing ---------------------------------------------------------------------------------

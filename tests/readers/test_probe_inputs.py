@@ -82,6 +82,31 @@ def test_check_degrees_false_reads_such_a_file_as_degrees(tmp_path):
     assert len(ms) == 65 and float(np.max(ms.values[:, 0])) < math.radians(2 * math.pi)
 
 
+def _ades_in_radians(tmp_path, fmt: str):
+    """The shipped ADES observations with every ra and dec written in radians, as ``fmt`` (ades-psv, ades-xml)."""
+    ms = read_observations(DATA / "observations.psv", EPOCH)
+    ms.values[:, :2] = np.radians(ms.values[:, :2])
+    path = tmp_path / f"radians.{fmt.split('-')[1]}"
+    write_observations(path, ms, EPOCH, format=fmt)
+    return path
+
+
+@pytest.mark.parametrize("fmt", ["ades-psv", "ades-xml"])
+def test_an_ades_file_whose_angles_are_radians_is_refused_as_the_tdm_one_is(tmp_path, fmt):
+    """Probe L8: such a file had been read without a word and its fit's misfit blamed on a maneuver."""
+    path = _ades_in_radians(tmp_path, fmt)
+    with pytest.raises(MeasurementError, match=rf"{re.escape(path.name)}, line \d+, field ra/dec values: all 65 "
+                                               r"observations have ra within \[0, 6\.2832\] and dec within "
+                                               rf"\[-1\.5708, 1\.5708\]: these look like radians, but ADES angles "
+                                               rf"are degrees; .* the {fmt} reader's check_degrees = false"):
+        read_observations(path, EPOCH)
+
+
+def test_check_degrees_false_reads_such_an_ades_file_as_degrees(tmp_path):
+    ms = read_observations(_ades_in_radians(tmp_path, "ades-psv"), EPOCH, check_degrees=False)
+    assert len(ms) == 65 and float(np.max(ms.values[:, 0])) < math.radians(2 * math.pi)
+
+
 # -- an az/el CSV without sites ----------------------------------------------------------------------
 
 def test_an_azel_csv_without_a_site_column_is_refused_naming_the_file_and_the_column(tmp_path, capsys):
