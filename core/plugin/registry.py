@@ -142,6 +142,7 @@ class Registry:
                 module = ep.load()
                 pm.register(module, name=f"{dist}:{ep.name}")
                 _require_marked_hooks(pm, module)
+                _require_known_hooks(pm, module)
                 impls = [i for i in pm.hook.cistrack_register.get_hookimpls() if i.plugin is module]
                 for impl in impls:
                     impl.function(registry=bound)
@@ -249,7 +250,8 @@ def _short_repr(value: Any) -> str:
 
 
 class _UnmarkedHooks(ParameterError):
-    """A plugin module whose hook functions are not marked ``@cistrack.hookimpl``."""
+    """A plugin module whose hook functions are not marked ``@cistrack.hookimpl``, or whose marked
+    functions are named after no cistrack hook."""
 
 
 def _require_marked_hooks(pm: pluggy.PluginManager, module: Any) -> None:
@@ -263,6 +265,27 @@ def _require_marked_hooks(pm: pluggy.PluginManager, module: Any) -> None:
         raise _UnmarkedHooks(f"its module {getattr(module, '__name__', module)!s} has {', '.join(unmarked)} but {it} "
                              "not marked @cistrack.hookimpl (from cistrack.api import hookimpl), so cistrack never "
                              f"calls {them}")
+
+
+def _require_known_hooks(pm: pluggy.PluginManager, module: Any) -> None:
+    """Refuse (:class:`_UnmarkedHooks`) a plugin module with a function marked ``@cistrack.hookimpl``
+    whose name is no cistrack hook (a misspelt ``cistrack_run_finish``): pluggy would never call it
+    (its ``check_pending`` raises ``PluginValidationError`` for exactly this); the message names it,
+    the closest hook and every hook (probe L9)."""
+    import difflib
+
+    unknown = sorted(c.name for c in pm.get_hookcallers(module) or [] if c.name not in _HOOK_NAMES
+                     and not all(i.optionalhook for i in c.get_hookimpls() if i.plugin is module))
+    if not unknown:
+        return
+    words = []
+    for name in unknown:
+        close = difflib.get_close_matches(name, _HOOK_NAMES, n=1, cutoff=0.6)
+        words.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+    raise _UnmarkedHooks(f"its module {getattr(module, '__name__', module)!s} marks @cistrack.hookimpl "
+                         f"{', '.join(words)}, which {'is' if len(unknown) == 1 else 'are'} no cistrack hook, so "
+                         f"cistrack never calls {'it' if len(unknown) == 1 else 'them'}; the hooks are: "
+                         f"{', '.join(_HOOK_NAMES)}")
 
 
 def _describe_failure(exc: BaseException) -> str:

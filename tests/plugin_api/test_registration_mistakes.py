@@ -97,6 +97,39 @@ def test_an_unmarked_hook_beside_a_marked_one_fails_the_plugin_naming_it(tmp_pat
 
 
 
+MISSPELT = '''
+from cistrack.api import hookimpl
+from cistrack.plugins.filters.ukf import UKFFilter
+
+
+class Mine(UKFFilter):
+    """A filter registered beside an observer hook whose name its author misspelt."""
+
+
+@hookimpl
+def cistrack_register(registry):
+    registry.add("filter", "misspelt-hook-filter", Mine)
+
+
+@hookimpl
+def cistrack_run_finish(run, summary):
+    pass
+'''
+
+
+def test_a_marked_function_named_after_no_hook_fails_the_plugin_naming_it_and_the_hook_meant(tmp_path, monkeypatch):
+    """Probe L9: ``cistrack_run_finish`` (for cistrack_run_finished) marked @hookimpl was never called,
+    without a word; pluggy's check_pending refuses exactly this."""
+    module = _plugin_on_path(tmp_path, monkeypatch, MISSPELT)
+    reg = load_registry()
+    failed = [str(f) for f in reg.failures if f.entry_point == module]
+    assert len(failed) == 1
+    assert (f"its module {module} marks @cistrack.hookimpl 'cistrack_run_finish' (did you mean "
+            "'cistrack_run_finished'?), which is no cistrack hook, so cistrack never calls it") in failed[0]
+    assert "the hooks are: cistrack_register, " in failed[0]
+    assert "misspelt-hook-filter" not in reg.names("filter") and "ukf" in reg.names("filter")
+
+
 @pytest.mark.parametrize("second, warned", [("otherplug", True), ("cistrack", False)])
 def test_a_reader_claiming_a_suffix_another_distributions_reader_claims_is_warned_about(caplog, second, warned):
     """Files ending so can then be read only with the format named; one distribution's own two
