@@ -41,7 +41,7 @@ import numpy as np
 
 from cistrack import units
 from cistrack.errors import CistrackError, ConfigError, PropagationError, StateError
-from cistrack.fitting.fit_record import read_fit_record
+from cistrack.fitting.fit_record import read_fit_record, unsound_reason
 from cistrack.fitting.fit_record_check import covariance_scale
 from cistrack.least_squares.area_to_mass import joint_covariances
 from cistrack.least_squares.events import prediction_end
@@ -79,11 +79,8 @@ def fit_refusal(record: dict[str, Any]) -> str | None:
     if "state" not in record:
         return "it has no fitted orbit (" + (record.get("failure") or "the fit was not made") + ")"
     if not record.get("converged"):
-        messages = [str(m) for m in record.get("messages", [])]
-        verdict = [m for m in messages if m.startswith("not a ")]  # a converged least squares judged unsound
-        if verdict:
-            return f"the fit is {verdict[-1]}"
-        return "its least squares did not converge (" + "; ".join(messages[:2]) + ")"
+        why = unsound_reason(record.get("messages", []))
+        return f"the fit is {why}" if why.startswith("not a ") else why
     return None
 
 

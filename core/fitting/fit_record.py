@@ -40,7 +40,7 @@ from cistrack.results.atomic_files import write_text_atomic
 from cistrack.results.strict_json import finite_or_null
 
 __all__ = ["write_fit_outputs", "read_fit_record", "UNDEFINED_NUMBERS", "FIT_RECORD", "RESIDUALS", "LOV", "noise_summary",
-           "area_to_mass_record", "area_to_mass_summary", "outputs_text"]
+           "area_to_mass_record", "area_to_mass_summary", "outputs_text", "unsound_reason"]
 
 FIT_RECORD = "fit.json"
 RESIDUALS = "residuals.csv"
@@ -68,6 +68,17 @@ def noise_summary(measurements, result) -> dict[str, dict[str, float]]:
         out[name] = {"assumed": assumed, "estimated": assumed * float(result.noise_scale),
                      "post_fit_rms": float(rms[j])}
     return out
+
+
+def unsound_reason(messages) -> str:
+    """Why a least-squares fit with ``messages`` (its messages in order, str) is not reported as
+    converged: the last verdict that judged it unsound ("not a clean fit: ...", "not a cislunar
+    orbit: ...", ...), else "the least squares did not converge (" its first two messages ")"."""
+    messages = [str(m) for m in messages]
+    verdict = [m for m in messages if m.startswith("not a ")]  # a converged least squares judged unsound
+    if verdict:
+        return verdict[-1]
+    return "the least squares did not converge (" + "; ".join(messages[:2]) + ")"
 
 
 def _options_record(options, reject_fraction: float | None = None) -> dict[str, Any]:

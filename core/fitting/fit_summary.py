@@ -154,7 +154,7 @@ def _header_lines(one) -> list[str]:
                      f"{one.scenario.components['iod'].name}: {s.status}"
                      + (f" ({s.failure})" if s.failure else "")
                      + (f"; verdict {s.verdict.kind}" if getattr(s.verdict, "kind", None) else ""))
-    if one.failure:
+    if one.failure and one.result is None:  # a fit's own failure is among its notes, with the warning
         lines.append(f"  error: {one.failure}")
     return lines
 

@@ -200,7 +200,10 @@ class ObjectFit:
     scenario : Scenario         the scenario the filter ran (epoch = t 0 of every TU time)
     run : Any                   the filter run (:class:`cistrack.runs.pipeline.RunResult`), or None
     result : FitResult or None  the least-squares fit (None when it could not be made)
-    failure : str               why there is no fit, or "" (the fit's own messages are in ``result``)
+    failure : str               why there is no fit, or why the fit made is not reported as
+                                converged (:func:`cistrack.fitting.fit_record.unsound_reason`: "not
+                                a clean fit: ...", "the least squares did not converge (...)"); ""
+                                for a converged fit (its own messages are in ``result``)
     notes : list of str         the files and their weights
     lov : list of LovPoint      the line of variations (``--set fit.lov=N``), or empty
     start : str                 "" when the least squares started from the filter's final
@@ -1076,6 +1079,16 @@ def _refuse_unreportable(one: ObjectFit) -> None:
     _refuse_unconfined(one)
 
 
+def _name_failure(one: ObjectFit) -> None:
+    """``one.failure``, when empty, says why a fit made is not reported as converged
+    (:func:`cistrack.fitting.fit_record.unsound_reason`): a FAILED fit had carried ``failure`` ""
+    and the one-line reason "converged after 14 iterations" (probe L6)."""
+    from cistrack.fitting.fit_record import unsound_reason
+
+    if one.result is not None and not one.result.converged and not one.failure:
+        one.failure = unsound_reason(one.result.messages)
+
+
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     """Determination, events and the line of variations of a converged fit; the results files."""
     from cistrack.fitting.fit_findings import add_findings
@@ -1085,6 +1098,7 @@ def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:
     add_findings(one, job.registry, job.say)
     _note_rejected_epoch(one)
     _follow_line(one, job)
+    _name_failure(one)
     job.say(f"{obs.designation}: writing {outputs_text(one)} to {one.directory}")
     write_fit_outputs(one, obs)
     return one

@@ -101,3 +101,35 @@ def test_a_fit_whose_sigmas_stay_within_cislunar_space_stays_converged():
     near = SimpleNamespace(result=_fit_at([1.02, 0.0, -0.18, 0.0, -0.1, 0.0]))
     _refuse_unconfined(near)
     assert near.result.converged
+
+
+def test_a_fit_not_reported_as_converged_says_why_in_its_failure_and_its_repr(tmp_path):
+    """Probe L6: such a fit had ``failure`` "" (in the ObjectFit and fit.json) and the one-line reason
+    "FAILED: converged after 5 iterations"; the reason it is not reported now fills both."""
+    from cistrack.fitting.from_observations import ObjectFit, _name_failure, _refuse_unreportable
+    from cistrack.scenario.loading import load_scenario
+
+    far = _fit_at([500.0, 0.0, 0.0, 0.0, 3.0, 0.0])
+    one = ObjectFit("far", tmp_path, load_scenario("real-data"), result=replace(far, messages=(
+        "converged after 5 iterations",)))
+    _refuse_unreportable(one)
+    _name_failure(one)
+    assert not one.ok and one.failure.startswith("not a cislunar orbit: the fitted state lies")
+    assert repr(one).startswith("<ObjectFit far: FAILED: not a cislunar orbit") and "converged after" not in repr(one)
+
+
+def test_a_least_squares_that_did_not_converge_says_so_in_its_failure(tmp_path):
+    from cistrack.fitting.from_observations import ObjectFit, _name_failure
+    from cistrack.scenario.loading import load_scenario
+
+    r = replace(_fit_at([1.02, 0.0, -0.18, 0.0, -0.1, 0.0]), converged=False,
+                messages=("no convergence within 30 iterations",))
+    one = ObjectFit("slow", tmp_path, load_scenario("real-data"), result=r)
+    _name_failure(one)
+    assert one.failure == "the least squares did not converge (no convergence within 30 iterations)"
+
+
+@pytest.mark.slow
+def test_the_fit_json_of_such_a_fit_gives_the_reason_as_its_failure(star_fit):
+    rec = star_fit[2]
+    assert rec["failure"].startswith("not a cislunar orbit") and rec["failure"] in rec["messages"]
