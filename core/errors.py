@@ -94,6 +94,15 @@ def quoted(value: object) -> str:
     return f"{text[:QUOTED_CHARACTERS]}... ({len(text):,} characters as written)"
 
 
+def clipped(name: str) -> str:
+    """``name`` (a designation, as a file gives it) as a message shows it: whole, or, when longer than
+    :data:`QUOTED_CHARACTERS` + 20 characters, its start and its length, e.g. ``AAAA... (100,000
+    characters)``, so that no message or progress line grows with it (probe L10)."""
+    if len(name) <= QUOTED_CHARACTERS + 20:
+        return name
+    return f"{name[:QUOTED_CHARACTERS]}... ({len(name):,} characters)"
+
+
 UNPRINTABLE_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})
 """Unicode categories refused in names and labels: control, format (bidirectional overrides and
 isolates, zero-width characters), surrogate, private-use and unassigned characters, line and

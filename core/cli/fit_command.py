@@ -17,6 +17,7 @@ import os
 import sys
 
 from cistrack.cli.text_width import for_stream, wrap_lines
+from cistrack.errors import clipped
 from cistrack.fitting.fit_summary import summary_lines
 from cistrack.runs.progress import eprint as _eprint
 
@@ -65,7 +66,7 @@ def cmd_fit(args) -> int:
     else:
         for one in results:
             if not one.ok:
-                _eprint(f"cistrack: error: fit {one.designation} failed: " + (one.failure or "; ".join(
+                _eprint(f"cistrack: error: fit {clipped(one.designation)} failed: " + (one.failure or "; ".join(
                     one.result.messages[:1] if one.result else [])))
     allow_quick_exit()  # every results file written and closed; no recorder to flush at exit
     return 0 if all(one.ok for one in results) else 3

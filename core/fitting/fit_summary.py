@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from cistrack.errors import clipped
+
 __all__ = ["summary_lines", "short_lines"]
 
 
@@ -120,7 +122,7 @@ def _undetermined_lines(one) -> list[str]:
     tracklet is and how it moves on the sky, and the admissible region's ranges."""
     u = one.undetermined
     sky, region = u["tracklet"], u["admissible_region"]
-    lines = [f"fit {one.designation}: UNDETERMINED: one tracklet does not determine an orbit",
+    lines = [f"fit {clipped(one.designation)}: UNDETERMINED: one tracklet does not determine an orbit",
              f"  results in {one.directory}",
              f"  tracklet: {sky['n_observations']} observations from {sky['first_utc'][:19]}Z to "
              f"{sky['last_utc'][11:19]}Z ({sky['span_minutes']:.0f} min), site {sky['site'] or '(the sensor)'}; "
@@ -143,10 +145,10 @@ def _header_lines(one) -> list[str]:
     """The verdict (with how well the orbit is determined), the results folder, the filter run."""
     det = getattr(one, "determination", None)
     if det is None or not one.ok:
-        lines = [f"fit {one.designation}: " + ("converged" if one.ok else "FAILED")]
+        lines = [f"fit {clipped(one.designation)}: " + ("converged" if one.ok else "FAILED")]
     else:  # never a bare "converged": how well the orbit is determined, and why, on the next line
         kind, _, why = det.sentence.partition(": ")
-        lines = [f"fit {one.designation}: converged; {kind}", f"  {why}"]
+        lines = [f"fit {clipped(one.designation)}: converged; {kind}", f"  {why}"]
     lines.append(f"  results in {one.directory}")
     if one.run is not None:
         s = one.run.summary
@@ -318,7 +320,7 @@ def short_lines(one) -> list[str]:
     fit epoch and the results folder."""
     from cistrack import units
 
-    lines = [f"<ObjectFit {one.designation}: {_outcome(one)}"]
+    lines = [f"<ObjectFit {clipped(one.designation)}: {_outcome(one)}"]
     scen = one.scenario
     if scen is not None:
         iod = (one.seeding or {}).get("method") or scen.components["iod"].name

@@ -48,7 +48,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import CistrackError, ConfigError, PropagationError, quoted
+from cistrack.errors import CistrackError, ConfigError, PropagationError, clipped, quoted
 from cistrack.fitting.fit_record_check import MAX_DISTANCE_KM, MAX_SPEED_KMS
 from cistrack.fitting.lov_solutions import AUTO_DELTA_CHI2
 from cistrack.least_squares.errors import FitError, UnobservableWarning
@@ -327,7 +327,7 @@ def _data_span(obs: ObjectObservations) -> tuple[str, float]:
 def _check_range_used(choices: FitChoices, obs: ObjectObservations) -> None:
     """ConfigError when ``fit.use_range`` is asked of observations that measure no range."""
     if choices.options.use_range and "range" not in tuple(obs.measurements.names):
-        raise ConfigError(f"--set fit.use_range=true: the observations of {obs.designation} "
+        raise ConfigError(f"--set fit.use_range=true: the observations of {clipped(obs.designation)} "
                           f"({', '.join(distinct_names(obs.files))}) measure no range, so there is none to use")
 
 
@@ -351,7 +351,7 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
                        for t in (obs.measurements.times[0], obs.measurements.times[-1]))
         # the observations' own dates, not the scenario's epoch (30 minutes before the first): a file
         # whose first observation is 1900-01-01T00:00 had been said to start 1899-12-31 (probe I4)
-        raise ConfigError(f"{', '.join(str(f) for f in obs.files)}: the observations of {obs.designation} "
+        raise ConfigError(f"{', '.join(str(f) for f in obs.files)}: the observations of {clipped(obs.designation)} "
                           f"run from {first} to {last} ({days:.3g} d with the fit's margins; its epoch "
                           f"{epoch} lies {EPOCH_LEAD_MINUTES:g} minutes before the first), which the fit "
                           f"cannot model: {exc}") from None
@@ -370,7 +370,7 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
     epoch, days = _data_span(obs)
     raw = dict(template.raw)
     raw.update({"name": f"fit-{_slug(obs.designation)}", "epoch": epoch, "duration_days": days,
-                "description": f"cistrack fit of {obs.designation} from {', '.join(distinct_names(obs.files))}",
+                "description": f"cistrack fit of {clipped(obs.designation)} from {', '.join(distinct_names(obs.files))}",
                 "measurements": {"file": str(obs_file.resolve()), "reader": {"name": _OWN_READERS[obs_file.suffix]}}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
     raw = _ranging_defaults(merge_settings(raw, settings))
@@ -773,14 +773,12 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     in its ObjectFit (``failure``, ``result.converged``).
     """
     reg = registry or default_registry()
-    if progress and log is None:
-        from cistrack.runs.progress import stage_log
-        log = stage_log()
+    log, long_names = _clipping(log, progress)
     say = log or (lambda m: None)
     scen_settings, fit_table, reader_params = _split_settings(settings)
     choices = fit_choices(fit_table)
     job = _Job(scen_settings, choices, reg, progress, log)
-    objects, aside = _modelled_objects(read_object_observations(list(files), reg, reader_params, say), job)
+    objects, aside = _modelled_objects(_read_named(list(files), reg, reader_params, say, long_names), job)
     plans, top_stale = _plans(objects, out, overwrite, words)
     where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
@@ -821,6 +819,35 @@ def _plans(objects: list[ObjectObservations], out: str | Path | None, overwrite:
     if out is None or len(objects) == 1:
         return plans, []
     return plans, check_several_objects_dir(out, words.out.rstrip("="), overwrite, words)
+
+
+def _clipping(log: Callable[[str], None] | None, progress: bool) -> tuple[Callable[[str], None] | None, list[str]]:
+    """(the ``log`` a fit says its stages to, the designations too long to show whole): ``log`` (or,
+    with ``progress`` and no ``log``, the stage lines on stderr) with each of those designations cut
+    in every line (:func:`cistrack.errors.clipped`; the list is filled once the files are read:
+    :func:`_read_named`). A 100,000-character trkSub had been echoed whole in each line (probe L10)."""
+    if progress and log is None:
+        from cistrack.runs.progress import stage_log
+        log = stage_log()
+    names: list[str] = []
+    if log is None:
+        return None, names
+    shown = log
+
+    def say(message: str) -> None:
+        for name in names:
+            message = message.replace(name, clipped(name))
+        shown(message)
+    return say, names
+
+
+def _read_named(files: list, registry: Registry, reader_params: dict[str, Any], say: Callable[[str], None],
+                long_names: list[str]) -> list[ObjectObservations]:
+    """:func:`read_object_observations` of ``files``, adding to ``long_names`` the designations a
+    message cuts (:func:`_clipping`)."""
+    read = read_object_observations(files, registry, reader_params, say)
+    long_names += [o.designation for o in read if clipped(o.designation) != o.designation]
+    return read
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from cistrack import units
-from cistrack.errors import ConfigError, MeasurementError
+from cistrack.errors import ConfigError, MeasurementError, clipped
 from cistrack.fitting.fit_replacing import FIT_RECORD
 from cistrack.interfaces.reader import not_a_file
 from cistrack.model.measurement import KIND_NAMES, MeasurementSet, kind_of_names
@@ -460,7 +460,7 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
             files.append(str(path))
             resolutions.append(max(resolution, data_time_resolution(ms)))
             note = weights_note(ms)
-            notes.setdefault(obj, []).append(f"{shown}: {len(ms)} observations of {obj}"
+            notes.setdefault(obj, []).append(f"{shown}: {len(ms)} observations of {clipped(obj)}"
                                              + (f"; {note}" if note else ""))
             say(notes[obj][-1])
     out = []

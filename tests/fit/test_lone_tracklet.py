@@ -203,3 +203,16 @@ def test_an_azel_tracklet_counts_as_one_tracklet():
     azel = MeasurementSet(ms.times, ms.values, np.full((3, 2), 1e-6), ("azimuth", "elevation"),
                           sites=np.asarray(["711"] * 3), kinds=np.full(3, "azel"), site_table=ms.site_table)
     assert is_lone_tracklet(azel)
+
+
+def test_a_designation_of_100000_characters_is_cut_in_every_line_said(tmp_path, capsys):
+    """Probe L10: such a trkSub had been echoed whole about six times (611,867 bytes of output); the
+    fit.json keeps it whole."""
+    name = "A" * 100_000
+    f = tmp_path / "long.psv"
+    f.write_text(HEADER + "\n".join(name + r[4:] for r in ROWS[:3]) + "\n")
+    assert main(["fit", str(f), "--out", str(tmp_path / "out")]) == 3
+    said = capsys.readouterr()
+    assert "A" * 41 not in said.out + said.err
+    assert f"fit {'A' * 40}... (100,000 characters): UNDETERMINED" in said.out
+    assert json.loads((tmp_path / "out" / "fit.json").read_text())["designation"] == name
