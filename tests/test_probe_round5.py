@@ -109,11 +109,15 @@ class _BadClusterer(Clusterer):
             return np.full(x.shape[0], np.nan)
         if self.how == "nothing":
             return None
+        if self.how == "gappy":  # {0, 2}: the value 1 unused (probe L10)
+            return labels * 2
         return labels
 
 
 @pytest.mark.parametrize("how, said", [("huge", "not whole numbers from 0 to"), ("half", "not whole numbers"),
                                        ("text", "not labels"), ("short", "shape"),
+                                       ("gappy", r"leave 1 of the values from 0 to 2 unused \(e\.g\. 1\); labels must "
+                                                 r"use every value in \[0, M\)"),
                                        ("raise", r"cluster\(\) raised ValueError: the plugin's own bug")])
 def test_a_clusterer_breaking_its_contract_is_named_at_the_filters_start(how, said, tmp_path, capsys):
     """The PGM clusters the IOD's cloud as it starts: a clusterer's bad labels or its own exception

@@ -30,7 +30,8 @@ class Clusterer(Component):
 def checked_labels(labels, n: int, who: str) -> np.ndarray:
     """A clusterer's ``labels`` for ``n`` particles as a (n,) intp array, refused (FilterError naming
     ``who``) unless they are what :meth:`Clusterer.cluster` promises: n whole numbers from 0 to n - 1
-    (whole-valued floats are taken as they are)."""
+    that use every value from 0 to their largest, M - 1 (whole-valued floats are taken as they are),
+    as the conformance suite requires: labels {0, 2} had been renumbered silently (probe L10)."""
     try:
         raw = np.asarray(labels)
         values = raw.astype(float) if raw.dtype.kind in "biuf" else None
@@ -47,7 +48,13 @@ def checked_labels(labels, n: int, who: str) -> np.ndarray:
         span = f"from {finite.min():g} to {finite.max():g}" if finite.size else "none of them finite"
         raise FilterError(f"{who}: cluster() returned labels that are not whole numbers from 0 to {n - 1} "
                           f"({span}{', some NaN or infinite' if 0 < finite.size < n else ''})")
-    return raw.astype(np.intp)
+    out = raw.astype(np.intp)
+    unused = np.flatnonzero(np.bincount(out) == 0) if n else out[:0]
+    if unused.size:
+        raise FilterError(f"{who}: cluster() returned labels that leave {unused.size} of the values from 0 to "
+                          f"{out.max()} unused (e.g. {unused[0]}); labels must use every value in [0, M), M the "
+                          "number of clusters (renumber them without gaps)")
+    return out
 
 
 def _what(value) -> str:
