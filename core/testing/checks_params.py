@@ -26,7 +26,8 @@ def check_parameters_declared(component: Any) -> None:
     params = list(inspect.signature(init).parameters.values())[1:]
     for p in params:
         require(p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD),
-                f"__init__ takes *{p.name}/**{p.name}: declare every parameter by name so scenario files can be validated")
+                f"__init__ takes {'*' if p.kind is p.VAR_POSITIONAL else '**'}{p.name}: declare every parameter by name "
+                "so scenario files can be validated")
         require(p.kind != p.POSITIONAL_ONLY, f"parameter '{p.name}' is positional-only; parameters are passed by keyword")
     for name, spec in _specs(component).items():
         require(not spec.required, f"parameter '{name}' has no default; every parameter needs one")

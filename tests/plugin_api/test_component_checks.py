@@ -3,6 +3,8 @@ third party would: numpy's scalars are numbers, a misspelt parameter is named wi
 component takes, and a helper misused (NaN bounds, one string of choices, no component) says so."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -52,3 +54,31 @@ def test_a_check_called_without_a_component_names_the_parameter():
 def test_a_registry_told_to_autoload_something_other_than_yes_or_no_refuses():
     with pytest.raises(TypeError, match=r"autoload_third_party=5: give True, False or None"):
         load_registry(5)
+
+
+
+def _loose(star: str):
+    """A clusterer whose constructor takes ``*args`` (``star`` "*") or ``**kwargs`` (``star`` "**")."""
+    from cistrack.api import Clusterer
+
+    class Loose(Clusterer):
+        def __init__(self, n_components: int = 2, *args, **kwargs):
+            self.n_components = n_components
+
+        def cluster(self, x, rng):
+            return np.zeros(len(x), dtype=np.intp)
+
+    if star == "**":
+        def init(self, n_components: int = 2, **kwargs):
+            self.n_components = n_components
+        Loose.__init__ = init
+    return Loose()
+
+
+@pytest.mark.parametrize("star, name", [("*", "args"), ("**", "kwargs")])
+def test_the_conformance_check_names_a_catch_all_parameter_as_written(star, name):
+    """Probe L10: ``**kwargs`` had been named ``*kwargs/**kwargs``."""
+    from cistrack.testing.checks_params import check_parameters_declared
+
+    with pytest.raises(AssertionError, match=rf"^__init__ takes {re.escape(star + name)}: declare every parameter"):
+        check_parameters_declared(_loose(star))
