@@ -300,3 +300,17 @@ def test_the_extension_never_keeps_a_step_far_above_the_noise():
     assert cloud.meta["noise_scale"] < 1.5
     assert any(s.startswith("stopped at 13 of 16 observations") for s in cloud.meta["extension"])
     assert cloud.epoch == pytest.approx(times[12])
+
+
+def test_a_large_arc_says_up_front_that_each_range_trial_is_slow(dro, monkeypatch, caplog):
+    """A 35 MB file's tracklet sat in the range trials' least squares for minutes with no word (probe
+    L7); here the size at which it speaks is lowered to the case's 12 observations."""
+    from cistrack.plugins.iod import ranging_search
+
+    dyn, sensor, _, ms, _ = dro
+    monkeypatch.setattr(ranging_search, "LARGE_FIT_ROWS", 12)
+    iod = default_registry().create("iod", "tracklet-ranging", dynamics=dyn, arc="all", n_particles=200,
+                                    n_range=80, n_rate=24)
+    with caplog.at_level("INFO", logger="cistrack"):
+        iod.estimate(ms, sensor, np.random.default_rng(3))
+    assert any("each range trial is a least squares over 12 observations" in r.getMessage() for r in caplog.records)
