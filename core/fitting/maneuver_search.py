@@ -78,8 +78,9 @@ def add_maneuvers(one, say) -> None:
     A fit suspect only by the linearised screen (:func:`~cistrack.least_squares.burn_search.screen_suspicion`)
     is searched once, and stays as it was unless that search measures its burns, its messages saying
     why (a dense campaign's 1 cm/s burn: 0.07 +- 0.06 m/s 1.7 days before it passes the burn test).
-    First, a fit that one site's clock offset explains (:func:`~cistrack.fitting.site_clock.clock_off`)
-    is not clean, its words naming the site and the offset, and no burn is searched."""
+    First, a fit that one site's clock offset explains (:func:`_clock_explains`) is not searched:
+    not clean, its words naming the site and the offset, unless the offset moves a clean fit's orbit
+    within its covariance."""
     from cistrack.least_squares.burn_search import flown
 
     r = one.result
@@ -88,10 +89,8 @@ def add_maneuvers(one, say) -> None:
     ctx = one.run.context
     times = np.asarray(ctx.measurements.times, dtype=float)
     span = _days(float(times.max() - times.min())) if times.size else 0.0
-    if _clock_explains(ctx, one, r):
-        return
     why, screened = _suspected(ctx, one, span)
-    if not why or _too_short(one, r, why, span):
+    if _clock_explains(ctx, one, r, why) or not why or _too_short(one, r, why, span):
         return
     say(f"{one.designation}: the ballistic fit looks like a maneuver ({why}); searching for burns")
     outcome = _measured(ctx, one, say)
@@ -122,16 +121,24 @@ def add_maneuvers(one, say) -> None:
         *moves))
 
 
-def _clock_explains(ctx, one, r) -> bool:
+def _clock_explains(ctx, one, r, why: str) -> bool:
     """Whether one site's clock offset explains ``r``, the ballistic fit of ``one``
-    (:func:`~cistrack.fitting.site_clock.clock_off`): then ``one.result`` is ``r``, not clean, saying so."""
-    from cistrack.fitting.site_clock import clock_off
+    (:func:`~cistrack.fitting.site_clock.clock_off`). Then ``one.result`` is ``r`` with the words:
+    not clean when ``r`` looks like a maneuver (``why``) or the correction moves its orbit beyond
+    :data:`~cistrack.fitting.site_clock.MOVED_BOUND` in its covariance; else kept, the clock a note."""
+    from cistrack.fitting.site_clock import MOVED_BOUND, clock_off
 
-    clock = clock_off(ctx, one, r)
-    if clock:
+    finding = clock_off(ctx, one, r)
+    if finding is None:
+        return False
+    if why or finding.moved_m2 > MOVED_BOUND:
+        also = f"; it looks like an object that maneuvered too ({why}): no burn was searched" if why else ""
         one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
-            f"not a clean fit: {clock}",))
-    return bool(clock)
+            f"not a clean fit: {finding.words}{also}",))
+    else:
+        one.result = replace(r, messages=tuple(r.messages) + (
+            f"{finding.words}, within the {MOVED_BOUND:g} it allows: the fit is kept as it is",))
+    return True
 
 
 def _too_short(one, r, why: str, span: float) -> bool:

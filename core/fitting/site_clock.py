@@ -3,43 +3,66 @@ sites (:mod:`cistrack.least_squares.site_timing`) and confirmed by the fit with 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["clock_off"]
+__all__ = ["ClockFinding", "clock_off", "MOVED_BOUND"]
+
+MOVED_BOUND = 22.5
+"""Mahalanobis^2 (6 dof, about 1e-3) of the orbit with a site's times corrected, in the covariance
+of the fit without the correction, beyond which that covariance misses the clock error: the fit
+is not clean. Within it the clock is worth a word, not a refusal (the development set of 2025-010D:
+P13's times about 11 s late, a chi-square of 17, the orbit moved well within its sigmas)."""
 
 
-def clock_off(ctx, one, r) -> str:
-    """Words saying that one site's clock explains what ``r`` (the ballistic fit of ``one``, an
-    :class:`~cistrack.fitting.from_observations.ObjectFit`) leaves, "" when none does: the site whose
-    offset removes the most chi-square, beyond :func:`~cistrack.least_squares.site_timing.timing_limit`,
+class ClockFinding(NamedTuple):
+    """One site's clock offset that explains a fit: in words, and how far correcting it moves the
+    orbit (Mahalanobis^2 in the uncorrected fit's covariance, times the noise scale squared above 1)."""
+
+    words: str
+    moved_m2: float
+
+
+def clock_off(ctx, one, r) -> ClockFinding | None:
+    """The clock offset of one site that explains what ``r`` (the ballistic fit of ``one``, an
+    :class:`~cistrack.fitting.from_observations.ObjectFit`) leaves, or None: the site whose offset
+    removes the most chi-square, beyond :func:`~cistrack.least_squares.site_timing.timing_limit`,
     and the fit with its times corrected clean (converged, nothing
     :func:`~cistrack.least_squares.burn_search.suspicion` or
     :func:`~cistrack.least_squares.burn_search.screen_suspicion` names)."""
     from cistrack.errors import CistrackError
+    from cistrack.least_squares.result import sigma_factor
     from cistrack.least_squares.site_timing import site_timings, timing_limit
 
     try:
         timings = site_timings(ctx.dynamics, ctx.sensor, ctx.measurements, r)
     except (CistrackError, np.linalg.LinAlgError):
-        return ""
+        return None
     if not timings or not timings[0].drop > timing_limit():
-        return ""
+        return None
     best = timings[0]
     fixed = _corrected_fit(ctx, one, r, best)
     if fixed is None:
-        return ""
+        return None
     f, offset, sigma = fixed
+    d = np.asarray(f.state, dtype=float) - np.asarray(r.state, dtype=float)
+    moved = float(d @ np.linalg.solve(np.asarray(r.covariance) * sigma_factor(r.noise_scale) ** 2, d))
     when = "late" if offset > 0 else "early"
-    return (f"site {best.site}'s times look {abs(offset):.3g} +- {sigma:.2g} s {when} against the other sites' "
-            f"(the offset removes a chi-square of {best.drop:.0f}; {timing_limit():.1f} is noise at 1e-4): a clock "
-            f"error at {best.site}? With its times {abs(offset):.3g} s {'earlier' if offset > 0 else 'later'} the fit "
-            f"is clean (weighted RMS {f.rms:.2f}); correct them in the file, or leave {best.site}'s observations out")
+    other = (f"site {timings[1].site}'s (with two sites only their difference is measured: or {timings[1].site}'s "
+             f"{'early' if offset > 0 else 'late'} by as much)" if len(timings) == 2 else "the other sites'")
+    words = (f"site {best.site}'s times look {abs(offset):.3g} +- {sigma:.2g} s {when} against {other} (the "
+             f"offset removes a chi-square of {best.drop:.0f}; {timing_limit():.1f} is noise at 1e-4): a clock error at "
+             f"{best.site}, or times of the exposure's start rather than its middle? With its times {abs(offset):.3g} s "
+             f"{'earlier' if offset > 0 else 'later'} the fit is clean (weighted RMS {f.rms:.2f}) and its orbit moves "
+             f"by Mahalanobis^2 {moved:.3g} in this fit's covariance")
+    return ClockFinding(words, moved)
 
 
 def _corrected_fit(ctx, one, r, timing):
     """(fit, offset s, sigma s) of ``one``'s observations with ``timing.site``'s times corrected by
-    the offset (refined once at the corrected fit), when that fit is clean; else None."""
+    the offset (refined once at the corrected fit), its epoch ``r``'s, when that fit is clean;
+    else None."""
     from cistrack.errors import CistrackError
     from cistrack.least_squares.burn_search import screen_suspicion, suspicion
     from cistrack.least_squares.differential_correction import fit_orbit

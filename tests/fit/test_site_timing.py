@@ -72,6 +72,21 @@ def test_one_site_alone_gives_no_test():
     assert site_timings(c.dynamics, c.sensor, one, fit) == []
 
 
+def test_a_site_weeks_from_every_other_is_not_tested():
+    """568's observations made 20 days before the others': its clock would be an along-track shift
+    across the gap, which the dynamics model's errors mimic."""
+    c, ms = _campaign(None)
+    apart = with_site_times_shifted(ms, "568", -20.0 * 86400.0)
+    x0 = np.asarray(c.truth_at(np.array([0.0]))[0], dtype=float)
+    z = MeasurementModel(c.sensor, apart).predict(arc_states(c.dynamics, x0, 0.0, apart.times))
+    apart = MeasurementSet(apart.times, z, apart.sigmas, apart.names, dict(apart.meta), apart.sites, apart.kinds,
+                           dict(apart.site_table))
+    t0 = float(apart.times[-1])
+    fit = fit_orbit(c.dynamics, c.sensor, apart, arc_states(c.dynamics, x0, 0.0, np.array([t0]))[0], t0,
+                    options=FitOptions(area_to_mass="off"))
+    assert {t.site for t in site_timings(c.dynamics, c.sensor, apart, fit)} == {"711", "809"}
+
+
 def test_shifting_a_sites_times_moves_only_its_rows_and_keeps_time_order():
     _, ms = _campaign(None)
     moved = with_site_times_shifted(ms, "568", 3600.0)
