@@ -240,7 +240,7 @@ def refit_moved(arc: BurnArc, fit: FitResult, burns: Sequence[BurnEstimate], k: 
 
 
 def fit_impulse(arc: BurnArc, state, t0: float, candidates: Sequence[float], *,
-                known: Sequence[float] = ()) -> ImpulseFit:
+                known: Sequence[float] = (), rejected: np.ndarray | None = None) -> ImpulseFit:
     """The orbit and one more impulsive burn fitted to the arc: each of the ``candidates`` (TU) is
     tried as its time (with burns at the ``known`` times too, all dv estimated jointly) and the fit
     of the smallest capped cost kept.
@@ -252,6 +252,7 @@ def fit_impulse(arc: BurnArc, state, t0: float, candidates: Sequence[float], *,
     t0 : float                 TU, the epoch of the estimated state
     candidates : (C,) float    times tried for the new burn, TU
     known : (B,) float         times of burns already found, TU
+    rejected : (K,) bool       observations left out of each candidate's first pass (None: none)
 
     Raises :class:`FitError` when no candidate can be fitted.
     """
@@ -262,7 +263,7 @@ def fit_impulse(arc: BurnArc, state, t0: float, candidates: Sequence[float], *,
     costs = np.full(ts.size, np.inf)
     for k, tb in enumerate(ts):
         try:
-            one = fit_impulses(arc, state, t0, [*known, tb])
+            one = fit_impulses(arc, state, t0, [*known, tb], rejected=rejected)
         except (FitError, PropagationError):
             continue
         costs[k] = capped_cost(one.fit, arc.prior)
