@@ -1,6 +1,7 @@
 """Where the burn search's full fits start (cistrack.least_squares.burn_search): a gap's fit is made
 with the ballistic fit's rejections out of its first pass as well as with every observation in it,
-and an unconverged one is fitted once more."""
+an unconverged one is fitted once more, and the time check fits the burn's own gap from the ballistic
+fit too."""
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -100,3 +101,28 @@ def test_a_converged_gap_fit_is_not_fitted_again_and_a_dearer_continuation_is_dr
     assert burn_search._continued(ARC, done) is done
     stopped = _fit(85.8, converged=False)
     assert burn_search._continued(ARC, stopped) is stopped
+
+
+def test_the_time_check_fits_the_burns_gap_from_the_ballistic_fit_its_delta_v_from_zero(monkeypatch):
+    """Trial times refitted from the search's fit stay in its minimum: the burn's own gap is fitted
+    at GAP_POINTS times from the ballistic fit too (its rejections out of the first pass: refit_moved),
+    the burn's delta-v from zero, the other burns' from theirs."""
+    calls = []
+
+    def refit(arc, fit, burns, k, tb):
+        calls.append((fit, [b.delta_v_ms.copy() for b in burns], k, tb))
+        return _fit(30.0, t=tb)
+
+    monkeypatch.setattr(burn_search, "refit_moved", refit)
+    other = BurnEstimate(5.0, np.array([0.0, 1.0, 0.0]), np.eye(3))
+    b = BurnEstimate(1.5, np.array([0.9, 0.0, 0.0]), np.eye(3))
+    ballistic = SimpleNamespace(name="ballistic")
+    found = burn_search.ManeuverSearch(None, None, [b, other], [(1.0, 2.0), (4.0, 6.0)], ballistic=ballistic)
+    got = burn_search._from_ballistic(ARC, found, b, (1.0, 2.0), 50.0)
+    n = burn_search.GAP_POINTS
+    assert [c[3] for c in calls] == pytest.approx(1.0 + (np.arange(n) + 0.5) / n)
+    assert all(c[0] is ballistic and c[2] == 0 for c in calls)
+    assert all(np.all(c[1][0] == 0.0) and np.all(c[1][1] == other.delta_v_ms) for c in calls)
+    assert [g[1] for g in got] == pytest.approx([-20.0] * n)
+    assert burn_search._from_ballistic(ARC, burn_search.ManeuverSearch(None, None, [b], [(1.0, 2.0)]), b,
+                                       (1.0, 2.0), 50.0) == []
