@@ -367,10 +367,15 @@ def _measured(ctx, one, say, first: _Outcome | None = None) -> _Outcome:
 def _retried(ctx, one, first: _Outcome, say) -> _Outcome:
     """The search again with each burn started where the orbits of a gap's two sides meet
     (:func:`_measured` given ``first``), or ``first`` (the first search's) when that is not clean
-    either or clashes with it (:func:`_clash`; the first's doubt then says so)."""
+    either or clashes with it (:func:`_clash`); the first's doubt then says so, and, when the
+    second search found other burns, why they are not reported either (the first's words alone
+    had been quoted for a retry doubted for another reason)."""
     again = _measured(ctx, one, say, first)
-    if again.doubt:
+    if again is first:
         return first
+    if again.doubt:
+        return first._replace(doubt=f"{first.doubt}; searched again from where the orbits of a gap's two sides meet, "
+                                    f"{again.doubt}")
     clash = _clash(first, again)
     return first._replace(doubt=f"{first.doubt}; {clash}") if clash else again
 

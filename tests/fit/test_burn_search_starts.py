@@ -1,7 +1,7 @@
 """Where the burn search's full fits start (cistrack.least_squares.burn_search): a gap's fit is made
 with the ballistic fit's rejections out of its first pass as well as with every observation in it,
-an unconverged one is fitted once more, and the time check fits the burn's own gap from the ballistic
-fit too."""
+an unconverged one is fitted once more, the time check fits the burn's own gap from the ballistic
+fit too, and a retry doubted for its own reason says so (cistrack.fitting.maneuver_search._retried)."""
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -126,3 +126,17 @@ def test_the_time_check_fits_the_burns_gap_from_the_ballistic_fit_its_delta_v_fr
     assert [g[1] for g in got] == pytest.approx([-20.0] * n)
     assert burn_search._from_ballistic(ARC, burn_search.ManeuverSearch(None, None, [b], [(1.0, 2.0)]), b,
                                        (1.0, 2.0), 50.0) == []
+
+
+def test_a_retry_doubted_for_its_own_reason_says_so_beside_the_first_searchs(monkeypatch):
+    """The retry's reason had never reached fit.json: the first search's words alone were quoted."""
+    from cistrack.fitting import maneuver_search as ms
+
+    first = ms._Outcome(None, None, [], "the burn the search kept (5.26 +- 14.4 m/s) is within 3 sigma of none")
+    again = ms._Outcome(None, None, [], "the burn the search kept (0.204 +- 0.248 m/s) is within 2 sigma of none")
+    monkeypatch.setattr(ms, "_measured", lambda ctx, one, say, f: again)
+    got = ms._retried(None, None, first, lambda m: None)
+    assert got.doubt.startswith(first.doubt) and got.doubt.endswith(again.doubt)
+    assert "searched again" in got.doubt
+    monkeypatch.setattr(ms, "_measured", lambda ctx, one, say, f: f)  # the same burns: the first's verdict stands
+    assert ms._retried(None, None, first, lambda m: None) is first
