@@ -120,6 +120,7 @@ def plan_runs(path_or_name: str | Path, out_dir: str | Path | None = None,
     seeds = _study_seeds(data, p, first_seed, n_seeds)
     sweep = tuple((k, tuple(v)) for k, v in study_sweep(data, p))
     _check_settings_against_sweep(settings, sweep, p)
+    _check_settings_against_study(settings, data, p)
     grid = _Grid(filters=[_label_and_table(f, "filters", p) for f in (data.get("filters") or [None])],
                  iods=[_label_and_table(f, "iod", p) for f in (data.get("iod") or [None])],
                  overrides=data.get("overrides", {}), extra=extra, settings=settings, seeds=seeds, out=out,
@@ -257,6 +258,22 @@ def _check_settings_against_sweep(settings: list[str] | None, sweep: tuple, p: P
         if hit:
             raise ConfigError(f"{describe_settings([item])}: {p}: key 'sweep' already varies {hit[0]!r}; change the study's "
                               "sweep (or use a study file without it) instead of setting it for every run")
+
+
+def _check_settings_against_study(settings: list[str] | None, data: dict, p: Path) -> None:
+    """Refuse a ``--set`` item that sets what the study itself chooses for each run: the seed, and
+    the filter's or IOD's name (or whole table) when the study lists them. ``--set filter.name=ukf``
+    had run the UKF in every entry, filed and reported under the entries' names ("pgm", "enkf",
+    identical numbers), and ``--set seed=5`` had been ignored (probe M6)."""
+    for item in settings or []:
+        key = ".".join(part.strip() for part in item.partition("=")[0].split("."))
+        if key == "seed":
+            raise ConfigError(f"{describe_settings([item])}: a study's runs take their seeds from {p}'s key 'seeds' "
+                              "(or 'n_seeds' and 'first_seed'); give --first-seed and --n-seeds instead")
+        for table, listed in (("filter", "filters"), ("iod", "iod")):
+            if listed in data and key in (table, f"{table}.name"):
+                raise ConfigError(f"{describe_settings([item])}: {p}: key {listed!r} chooses the {table} of each run; "
+                                  f"change it there (or set the {table}'s parameters with --set {table}.KEY=VALUE)")
 
 
 def _combinations(sweep: tuple, keys: list[str]) -> list[tuple]:

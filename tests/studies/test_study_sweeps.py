@@ -157,6 +157,28 @@ def test_a_set_item_on_a_swept_setting_is_refused(tmp_path):
             plan_runs(p, tmp_path / "out", settings=[item])
 
 
+@pytest.mark.parametrize("item", ["filter.name=ukf", 'filter={name="ukf"}'])
+def test_a_set_item_naming_the_filter_of_a_study_that_lists_its_filters_is_refused(tmp_path, item):
+    """--set filter.name=ukf had run the UKF in every entry, filed under the entries' names (probe M6)."""
+    p = tmp_path / "m6.toml"
+    p.write_text('name = "m6"\nscenarios = ["quick"]\nfilters = ["pgm", "enkf"]\nseeds = [1]\n')
+    with pytest.raises(ConfigError, match="key 'filters' chooses the filter of each run"):
+        plan_runs(p, tmp_path / "out", settings=[item])
+
+
+def test_a_set_seed_is_refused_naming_the_studys_seeds(tmp_path):
+    """--set seed=5 had been accepted and ignored (probe M6)."""
+    p = _study(tmp_path, '["example-1-burn"]')
+    with pytest.raises(ConfigError, match="--first-seed and --n-seeds"):
+        plan_runs(p, tmp_path / "out", settings=["seed=5"])
+
+
+def test_a_set_item_on_a_filter_parameter_is_still_taken(tmp_path):
+    p = tmp_path / "m6.toml"
+    p.write_text('name = "m6"\nscenarios = ["quick"]\nfilters = ["pgm", "enkf"]\nseeds = [1]\n')
+    plan_runs(p, tmp_path / "out", settings=["filter.n_particles=300"])
+
+
 def _quick_study(tmp_path: Path, sweep: str, filters: str = "") -> Path:
     p = tmp_path / "t13.toml"
     p.write_text(f'name = "t13"\nscenarios = ["quick"]\n{filters}seeds = [1]\nsweep = {sweep}\n')
