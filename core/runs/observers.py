@@ -142,11 +142,25 @@ def make_plugin_manager(observers: Iterable[Any], registry: Registry) -> pluggy.
     pm = pluggy.PluginManager(hookspecs.PROJECT)
     pm.add_hookspecs(hookspecs.CistrackSpecs)
     for dist, ep, module in registry.plugins:
-        if any(hasattr(module, h) for h in _LIFECYCLE):
+        if _lifecycle_hooks(module):
             pm.register(module, name=f"{dist}:{ep}")
     for i, obs in enumerate(observers):
         pm.register(obs, name=f"observer-{i}-{type(obs).__name__}")
     return pm
+
+
+def _lifecycle_hooks(module: Any) -> list[str]:
+    """The lifecycle hooks (or ``cistrack_metric_stages``) ``module`` implements: by a function's
+    name, or by a ``@hookimpl(specname=...)`` under another name, which had left such a plugin
+    unregistered and its hook never called (probe M11)."""
+    marker = f"{hookspecs.PROJECT}_impl"
+    found = [h for h in _LIFECYCLE if hasattr(module, h)]
+    for name in dir(module):
+        opts = getattr(getattr(module, name, None), marker, None)
+        spec = opts.get("specname") if isinstance(opts, dict) else None
+        if spec in _LIFECYCLE and spec not in found:
+            found.append(spec)
+    return found
 
 
 def finish_observers(pm: pluggy.PluginManager, ctx: RunContext, summary: RunSummary) -> RunSummary:

@@ -145,3 +145,23 @@ def test_a_reader_claiming_a_suffix_another_distributions_reader_claims_is_warne
         reg.add("reader", "other-psv", OtherPsv, distribution=second)
     said = f"reader 'other-psv' ({second}" in caplog.text and "claims .psv, as reader 'ades-psv'" in caplog.text
     assert said == warned and ("measurements.reader.name" in caplog.text) == warned
+
+
+SPECNAMED = '''
+from cistrack.api import hookimpl
+
+
+@hookimpl(specname="cistrack_run_finished")
+def on_finish(run, summary):
+    return None
+'''
+
+
+def test_a_lifecycle_hook_given_by_specname_under_another_name_is_registered(tmp_path, monkeypatch):
+    """@hookimpl(specname="cistrack_run_finished") on a function named otherwise had left its plugin
+    unregistered, its hook never called, without a word (probe M11)."""
+    from cistrack.runs.observers import make_plugin_manager
+
+    module = _plugin_on_path(tmp_path, monkeypatch, SPECNAMED)
+    pm = make_plugin_manager([], load_registry())
+    assert any(getattr(i.plugin, "__name__", "") == module for i in pm.hook.cistrack_run_finished.get_hookimpls())
