@@ -272,12 +272,12 @@ def _require_known_hooks(pm: pluggy.PluginManager, module: Any) -> None:
     whose name is no cistrack hook (a misspelt ``cistrack_run_finish``): pluggy would never call it
     (its ``check_pending`` raises ``PluginValidationError`` for exactly this); the message names it,
     the closest hook and every hook (probe L9)."""
-    import difflib
-
     unknown = sorted(c.name for c in pm.get_hookcallers(module) or [] if c.name not in _HOOK_NAMES
                      and not all(i.optionalhook for i in c.get_hookimpls() if i.plugin is module))
     if not unknown:
         return
+    import difflib  # only for a plugin that fails: listing components keeps its start lean
+
     words = []
     for name in unknown:
         close = difflib.get_close_matches(name, _HOOK_NAMES, n=1, cutoff=0.6)
