@@ -96,11 +96,12 @@ def quoted(value: object) -> str:
 
 def clipped(name: str) -> str:
     """``name`` (a designation, as a file gives it) as a message shows it: whole, or, when longer than
-    :data:`QUOTED_CHARACTERS` + 20 characters, its start and its length, e.g. ``AAAA... (100,000
-    characters)``, so that no message or progress line grows with it (probe L10)."""
+    :data:`QUOTED_CHARACTERS` + 20 characters, its start, its last 10 characters and its length, e.g.
+    ``AAAA...AAAB (100,000 characters)``, so that no message or progress line grows with it (probe L10)
+    and two names that differ only near their end still read apart (probe M10)."""
     if len(name) <= QUOTED_CHARACTERS + 20:
         return name
-    return f"{name[:QUOTED_CHARACTERS]}... ({len(name):,} characters)"
+    return f"{name[:QUOTED_CHARACTERS - 10]}...{name[-10:]} ({len(name):,} characters)"
 
 
 UNPRINTABLE_CATEGORIES = frozenset({"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"})

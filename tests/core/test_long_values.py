@@ -37,3 +37,13 @@ def test_an_error_about_a_long_sensors_key_names_its_table_shortened():
     with pytest.raises(ConfigError) as err:
         load_scenario("example-1-ground-space", overrides={"sensors": {"x" * 5000: raw["sensors"]["dro"]}})
     assert len(str(err.value)) < 700 and f"[sensors.'{'x' * 40}...' (5,000 characters)]" in str(err.value)
+
+
+def test_two_long_designations_that_differ_only_at_their_end_are_shown_apart():
+    """Designations differing after character 60 had printed alike, so a verdict could not be told
+    from the other object's (probe M10)."""
+    from cistrack.errors import clipped
+
+    a, b = "D" * 80 + "-one", "D" * 80 + "-two"
+    assert clipped(a) != clipped(b) and clipped(a).endswith("-one (84 characters)")
+    assert len(clipped(a)) < 70 and clipped("C/2026 A1") == "C/2026 A1"

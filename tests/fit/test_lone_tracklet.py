@@ -214,5 +214,5 @@ def test_a_designation_of_100000_characters_is_cut_in_every_line_said(tmp_path, 
     assert main(["fit", str(f), "--out", str(tmp_path / "out")]) == 3
     said = capsys.readouterr()
     assert "A" * 41 not in said.out + said.err
-    assert f"fit {'A' * 40}... (100,000 characters): UNDETERMINED" in said.out
+    assert f"fit {'A' * 30}...{'A' * 10} (100,000 characters): UNDETERMINED" in said.out
     assert json.loads((tmp_path / "out" / "fit.json").read_text())["designation"] == name
