@@ -41,8 +41,8 @@ from cistrack.astro.sites import Site, observatory
 from cistrack.units import ARCSEC_RAD, format_utc, tu_to_utc
 
 from .decimal_units import from_rad, plain_float, to_rad
-from .obs_rows import ObsRow, check_degrees, parse_iso_utc
-from .site_params import SiteReader, place_text, replaced_code, resolve_site
+from .obs_rows import ObsRow, parse_iso_utc
+from .site_params import DegreesCheckedReader, place_text, replaced_code, resolve_site
 
 __all__ = ["AdesReader", "record_to_row", "rows_for_writing", "WRITE_FIELDS", "POS_FIELDS", "OPTICAL_MODES", "is_radar",
            "say_skipped", "say_tiny_sigmas", "SMALLEST_PLAUSIBLE_ARCSEC"]
@@ -233,7 +233,7 @@ def _stated_arcsec(row: ObsRow) -> dict[str, float]:
     return out
 
 
-class AdesReader(SiteReader):
+class AdesReader(DegreesCheckedReader):
     """What the ADES readers (PSV, XML) share: :class:`SiteReader`'s parameters and ``check_degrees``.
 
     Parameters
@@ -255,19 +255,10 @@ class AdesReader(SiteReader):
         1.6 deg of the equator).
     """
 
-    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
-                 designation: str | None = None, check_degrees: bool = True) -> None:
-        super().__init__(sigma_arcsec, sites, designation)
-        if not isinstance(check_degrees, bool):
-            self._fail("check_degrees", check_degrees, "must be true or false")
-        self.check_degrees = check_degrees
-
     def checked_rows(self, path, rows: list[ObsRow]) -> list[ObsRow]:
         """``rows`` of ``path``, refused when their angles read as radians (``check_degrees``;
         probe L8: such a file had been fitted and its misfit blamed on a maneuver)."""
-        if self.check_degrees:
-            check_degrees(path, rows, ("ra", "dec"), "ADES", self.registry_name or "ades")
-        return rows
+        return self.checked_angles(path, rows, ("ra", "dec"), "ADES", self.registry_name or "ades")
 
 
 def say_tiny_sigmas(path, rows: list[ObsRow]) -> None:

@@ -138,3 +138,26 @@ class SiteReader(Reader):
         if designation is not None and (not isinstance(designation, str) or not designation.strip()):
             self._fail("designation", designation, "must be an object designation (non-empty text) or absent")
         self.designation = None if designation is None else designation.strip()
+
+
+class DegreesCheckedReader(SiteReader):
+    """A :class:`SiteReader` whose angles must be degrees (ADES, TDM), with ``check_degrees``:
+    true refuses a file whose angles all read as radians
+    (:func:`~cistrack.plugins.readers.obs_rows.check_degrees`)."""
+
+    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
+                 designation: str | None = None, check_degrees: bool = True) -> None:
+        super().__init__(sigma_arcsec, sites, designation)
+        if not isinstance(check_degrees, bool):
+            self._fail("check_degrees", check_degrees, "must be true or false")
+        self.check_degrees = check_degrees
+
+    def checked_angles(self, path, rows: list, fields: tuple[str, str], standard: str, name: str) -> list:
+        """``rows`` of ``path``, refused when ``check_degrees`` is on and their angles ``fields``
+        read as radians where ``standard`` has degrees (``name``: the reader, as messages say it)."""
+        from .obs_rows import check_degrees
+
+        if self.check_degrees:
+            check_degrees(path, rows, fields, standard, name)
+        return rows
+

@@ -53,8 +53,8 @@ from cistrack.units import format_utc, tu_to_utc
 
 from .ades_records import SMALLEST_PLAUSIBLE_ARCSEC
 from .decimal_units import from_rad, plain_float, to_rad
-from .obs_rows import ObsRow, build_set, check_degrees, parse_epoch
-from .site_params import SiteReader, resolve_site
+from .obs_rows import ObsRow, build_set, parse_epoch
+from .site_params import DegreesCheckedReader, resolve_site
 
 __all__ = ["TdmReader"]
 
@@ -473,7 +473,7 @@ def _say_degraded(path, lines: list[int]) -> None:
             "DEGRADED (data with quality problems); they are used: look at their residuals")
 
 
-class TdmReader(SiteReader):
+class TdmReader(DegreesCheckedReader):
     """CCSDS TDM (KVN) angle data: ANGLE_1/ANGLE_2 in AZEL or RADEC, several stations.
 
     Parameters
@@ -497,13 +497,6 @@ class TdmReader(SiteReader):
     suffixes = (".tdm", ".kvn")
     measurement_kinds = ("azel", "radec")
 
-    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None,
-                 designation: str | None = None, check_degrees: bool = True) -> None:
-        super().__init__(sigma_arcsec, sites, designation)
-        if not isinstance(check_degrees, bool):
-            self._fail("check_degrees", check_degrees, "must be true or false")
-        self.check_degrees = check_degrees
-
     # -- reading ---------------------------------------------------------------------------------
     def read(self, path, epoch) -> MeasurementSet:
         ep = parse_epoch(path, epoch)
@@ -512,8 +505,7 @@ class TdmReader(SiteReader):
         _say_degraded(path, parse.degraded)
         _say_frames_ignored(path, parse.frames_ignored)
         _say_tiny_sigmas(path, parse.tiny_sigmas)
-        if self.check_degrees:
-            check_degrees(path, parse.rows, ("ANGLE_1", "ANGLE_2"), "TDM", "tdm")
+        self.checked_angles(path, parse.rows, ("ANGLE_1", "ANGLE_2"), "TDM", "tdm")
         return build_set(path, parse.rows, ep, parse.table, self.sigma_arcsec, {"format": "tdm"}, self.designation)
 
     # -- writing ---------------------------------------------------------------------------------
