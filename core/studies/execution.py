@@ -59,8 +59,13 @@ def run_all(ex: cf.Executor, todo: Sequence[Any], fn: Callable[[Any], Any], bar:
     return said
 
 
-STOP_SECONDS = 5.0
-"""How long an interrupted study waits for a terminated worker process before killing it."""
+STOP_SECONDS = 30.0
+"""How long an interrupted study waits at most for a terminated worker to record its run as
+interrupted (merge its completed steps, write its manifest) before killing it. A worker takes well
+under a second on an idle machine and several on a loaded one; one killed before it has written its
+manifest leaves its run "running"."""
+_SAY_AFTER_S = 2.0
+"""Seconds of waiting on stopped workers after which the study says what it is waiting for."""
 
 
 def shutdown(ex: cf.Executor, cancel: bool) -> None:
@@ -80,13 +85,21 @@ def shutdown(ex: cf.Executor, cancel: bool) -> None:
 
 
 def _stop_workers(ex: cf.ProcessPoolExecutor) -> None:
+    """Terminate the pool's workers, give each up to :data:`STOP_SECONDS` s to record its run as
+    interrupted (saying so when that takes longer than :data:`_SAY_AFTER_S` s), then kill it."""
     procs = list((getattr(ex, "_processes", None) or {}).values())  # CPython's pool keeps them here
     for p in procs:
         if p.is_alive():
             p.terminate()
     ex.shutdown(wait=False, cancel_futures=True)
     for p in procs:
-        p.join(timeout=STOP_SECONDS)
+        p.join(timeout=_SAY_AFTER_S)
+    alive = [p for p in procs if p.is_alive()]
+    if alive:
+        eprint(f"waiting for {len(alive)} stopped worker(s) to record their runs as interrupted "
+               f"(at most {STOP_SECONDS:.0f} s)")
+    for p in alive:
+        p.join(timeout=STOP_SECONDS - _SAY_AFTER_S)
         if p.is_alive():
             p.kill()
             p.join(timeout=STOP_SECONDS)
