@@ -61,8 +61,9 @@ class AdesPsvReader(AdesReader):
         {latitude_deg, longitude_deg, height_m[, name]} or {longitude_deg, rho_cos_phi,
         rho_sin_phi[, name]}.
     check_degrees : bool
-        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708] (radians,
-        where ADES has degrees); false reads it as degrees.
+        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708], or one
+        site's rows all so while the object's other rows are not (radians, where ADES has
+        degrees); false reads it as degrees.
     """
 
     suffixes = (".psv",)

@@ -250,9 +250,10 @@ class AdesReader(DegreesCheckedReader):
         all, refused when the file names several objects.
     check_degrees : bool
         Refuse a file of two or more observations whose every ra lies in [0, 6.2832] and every
-        dec in [-1.5708, 1.5708] (angles written in radians, where ADES has degrees; as the tdm
-        reader does); false reads such a file as degrees (an object within 6.3 deg of RA 0 and
-        1.6 deg of the equator).
+        dec in [-1.5708, 1.5708], or whose one site's two or more rows all do while the object's
+        other rows do not (angles written in radians, where ADES has degrees; as the tdm reader
+        does); false reads such a file as degrees (an object within 6.3 deg of RA 0 and 1.6 deg
+        of the equator).
     """
 
     def checked_rows(self, path, rows: list[ObsRow]) -> list[ObsRow]:

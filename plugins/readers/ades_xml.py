@@ -132,8 +132,9 @@ class AdesXmlReader(AdesReader):
     sites : dict or None
         Explicit sites for station codes outside the bundled MPC list (as for ades-psv).
     check_degrees : bool
-        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708] (radians,
-        where ADES has degrees); false reads it as degrees.
+        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708], or one
+        site's rows all so while the object's other rows are not (radians, where ADES has
+        degrees); false reads it as degrees.
     """
 
     suffixes = (".xml",)

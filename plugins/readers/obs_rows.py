@@ -58,21 +58,47 @@ class ObsRow:
     permID), linking rows that name it only that way."""
 
 
+def _radians_box(r: ObsRow) -> bool:
+    """Whether ``r``'s angles, read as degrees, lie within [0, 2 pi] x [-pi/2, pi/2]: as radians would."""
+    deg = math.pi / 180.0
+    return r.a <= 2.0 * math.pi * deg and abs(r.b) <= 0.5 * math.pi * deg
+
+
+def _sites_in_radians(rows: list[ObsRow]) -> dict[str, list[ObsRow]]:
+    """The sites (key -> their rows of one object and type, in file order) whose two or more rows
+    all lie in the radians box while some of that object's other rows do not."""
+    groups: dict[tuple[str, str, str], list[ObsRow]] = {}
+    for r in rows:
+        groups.setdefault((r.obj, r.site, r.kind), []).append(r)
+    elsewhere = {r.obj for r in rows if not _radians_box(r)}
+    return {site: v for (obj, site, _), v in groups.items()
+            if obj in elsewhere and len(v) >= 2 and all(_radians_box(r) for r in v)}
+
+
 def check_degrees(path, rows: list[ObsRow], fields: tuple[str, str], standard: str, reader: str) -> None:
-    """Refuse angles that read as radians (FieldError naming ``path``, the first row's line and the
-    ``fields``): two or more observations, every first angle within [0, 2 pi] and every second within
-    [-pi/2, pi/2] (values as written, degrees by the ``standard``: "TDM", "ADES"); the message names
-    the ``reader``'s parameter ``check_degrees`` that reads such a file as degrees."""
+    """Refuse angles that read as radians (FieldError naming ``path``, the first such row's line and
+    the ``fields``): two or more observations, every first angle within [0, 2 pi] and every second
+    within [-pi/2, pi/2] (values as written, degrees by the ``standard``: "TDM", "ADES"), in the
+    whole file or in all of one site's rows (two or more) while other sites' rows lie elsewhere;
+    the message names the site and the ``reader``'s parameter ``check_degrees`` that reads such a
+    file as degrees."""
     if len(rows) < 2:
         return
-    deg = math.pi / 180.0
-    if all(r.a <= 2.0 * math.pi * deg and abs(r.b) <= 0.5 * math.pi * deg for r in rows):
-        one, two = fields
-        raise FieldError(path, rows[0].line, f"{one}/{two} values",
-                         f"all {len(rows)} observations have {one} within [0, 6.2832] and {two} within "
-                         f"[-1.5708, 1.5708]: these look like radians, but {standard} angles are degrees; write the "
-                         f"angles in degrees (radians x 57.29578), or set the {reader} reader's check_degrees = false "
-                         "(--set measurements.reader.check_degrees=false) if they are degrees")
+    if all(_radians_box(r) for r in rows):
+        site, site_rows, which = None, rows, f"all {len(rows)} observations have"
+    else:
+        suspect = _sites_in_radians(rows)
+        if not suspect:
+            return
+        site, site_rows = next(iter(suspect.items()))
+        which = f"all {len(site_rows)} observations of site {site} have"
+    one, two = fields
+    but = "" if site is None else " while the other sites' do not"
+    raise FieldError(path, site_rows[0].line, f"{one}/{two} values",
+                     f"{which} {one} within [0, 6.2832] and {two} within [-1.5708, 1.5708]{but}: these look "
+                     f"like radians, but {standard} angles are degrees; write the angles in degrees (radians x "
+                     f"57.29578), or set the {reader} reader's check_degrees = false "
+                     "(--set measurements.reader.check_degrees=false) if they are degrees")
 
 
 def parse_epoch(path, epoch) -> datetime:

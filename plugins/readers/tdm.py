@@ -30,7 +30,8 @@ the sky: RA x cos(Dec) and Dec) applies unless the segment has ``COMMENT cistrac
 ANGLE_1=.. ANGLE_2=..`` (arcsec; for RADEC ANGLE_1 is on RA x cos(Dec)), which the writer writes
 (one segment per run of measurements with the same site, type and sigmas). Other keywords
 (RANGE, DOPPLER, ...) are refused by name. A file whose every ANGLE_1 lies in [0, 2 pi] and
-every ANGLE_2 in [-pi/2, pi/2] is refused as angles written in radians (the parameter
+every ANGLE_2 in [-pi/2, pi/2], or in which one site's rows all do while the object's other rows
+do not, is refused as angles written in radians (the parameter
 ``check_degrees = false`` reads it as degrees). Times round-trip to 1 microsecond, angles and sigmas
 bit for bit.
 """
@@ -489,9 +490,10 @@ class TdmReader(DegreesCheckedReader):
         file names several objects.
     check_degrees : bool
         Refuse a file of two or more observations whose every ANGLE_1 lies in [0, 6.2832] and
-        every ANGLE_2 in [-1.5708, 1.5708] (angles written in radians, where TDM has degrees);
-        false reads such a file as degrees (an object within 6.3 deg of RA or azimuth 0 and 1.6
-        deg of the equator or horizon).
+        every ANGLE_2 in [-1.5708, 1.5708], or whose one site's two or more rows all do while the
+        object's other rows do not (angles written in radians, where TDM has degrees); false
+        reads such a file as degrees (an object within 6.3 deg of RA or azimuth 0 and 1.6 deg of
+        the equator or horizon).
     """
 
     suffixes = (".tdm", ".kvn")

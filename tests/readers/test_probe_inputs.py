@@ -107,6 +107,29 @@ def test_check_degrees_false_reads_such_an_ades_file_as_degrees(tmp_path):
     assert len(ms) == 65 and float(np.max(ms.values[:, 0])) < math.radians(2 * math.pi)
 
 
+def _one_site_in_radians(tmp_path, site: str = "711"):
+    """The shipped ADES observations (711 and 809) with ``site``'s ra and dec written in radians."""
+    ms = read_observations(DATA / "observations.psv", EPOCH)
+    mine = np.asarray(ms.sites) == site
+    ms.values[mine, :2] = np.radians(ms.values[mine, :2])
+    path = tmp_path / "one_site_radians.psv"
+    write_observations(path, ms, EPOCH, format="ades-psv")
+    return path
+
+
+def test_a_file_whose_one_site_is_in_radians_is_refused_naming_the_site_and_the_way_out(tmp_path):
+    """Probe M8: 568's rows in radians beside Q62's in degrees had been fitted, the misfit blamed on a maneuver."""
+    with pytest.raises(MeasurementError, match=r"one_site_radians\.psv, line \d+, field ra/dec values: all 33 "
+                                               r"observations of site 711 have ra within \[0, 6\.2832\] .*while the "
+                                               r"other sites' do not: these look like radians.*check_degrees = false"):
+        read_observations(_one_site_in_radians(tmp_path), EPOCH)
+
+
+def test_check_degrees_false_reads_a_file_with_one_site_in_radians_as_written(tmp_path):
+    ms = read_observations(_one_site_in_radians(tmp_path), EPOCH, check_degrees=False)
+    assert int(np.sum(ms.values[:, 0] < math.radians(2 * math.pi))) == 33
+
+
 # -- an az/el CSV without sites ----------------------------------------------------------------------
 
 def test_an_azel_csv_without_a_site_column_is_refused_naming_the_file_and_the_column(tmp_path, capsys):
