@@ -199,14 +199,26 @@ def summary_lines(one) -> list[str]:
     if r.unobservable:
         lines.append("  warning: part of the orbit is poorly determined by this arc (see the note above)")
     if not r.converged:
-        what = ("the least squares converged, but the fit is not a clean one (the note above)"
-                if any(str(m).startswith("not a ") for m in r.messages) else "the least squares did not converge")
+        what = _not_converged_words(r)
         lines.append(f"  warning: {what}; the orbit is not exported without --force "
                      "(docs/real-data.md, 'When a fit fails')")
     if r.noise_scale > 1.5:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
                      "(--set measurements.reader.sigma_arcsec=...) or the data")
     return _wrapped(lines)
+
+
+def _not_converged_words(r) -> str:
+    """Why the fit ``r`` is not reported as converged: its least squares did not converge (its
+    first message says so) and/or a later verdict found it not clean (a message "not a ...");
+    never "the least squares converged" of one that did not (probe M8)."""
+    unclean = any(str(m).startswith("not a ") for m in r.messages)
+    ls_converged = bool(r.messages) and str(r.messages[0]).startswith("converged")
+    if not unclean:
+        return "the least squares did not converge"
+    if ls_converged:
+        return "the least squares converged, but the fit is not a clean one (the note above)"
+    return "the least squares did not converge, and the fit is not a clean one (the note above)"
 
 
 def rejected_site_lines(table) -> list[str]:

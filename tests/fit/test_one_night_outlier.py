@@ -43,6 +43,16 @@ def test_its_warning_says_the_least_squares_converged_but_the_fit_is_not_clean(t
     assert "did not converge" not in out and "impact" not in out
 
 
+def test_a_fit_whose_least_squares_did_not_converge_never_says_it_converged(tmp_path, capsys):
+    """Probe M8: a fit that had not converged (here: its weighted RMS 49 is over fit.max_rms = 10)
+    and was not clean had been reported "the least squares converged, but the fit is not a clean one"."""
+    (tmp_path / "night.psv").write_text(ROWS)
+    assert main(["fit", str(tmp_path / "night.psv"), "--out", str(tmp_path / "fit"), "--set", "fit.max_rms=10"]) == 3
+    out = " ".join(capsys.readouterr().out.split())
+    assert "warning: the least squares did not converge, and the fit is not a clean one" in out
+    assert "the least squares converged" not in out
+
+
 CLEAN_NIGHT = "\n".join(ROWS.splitlines()[:-1]) + "\n"  # the same night without its outlier
 
 
