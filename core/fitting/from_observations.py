@@ -359,7 +359,9 @@ def _checked_scenario(obs: ObjectObservations, obs_file: Path, settings: dict[st
 
 _OWN_READERS = {".psv": "ades-psv", ".tdm": "tdm"}
 """The reader of the fit's own copy of the observations, by the suffix it was written with: named,
-so that a third party's reader claiming the same suffix cannot make the copy ambiguous."""
+so that a third party's reader claiming the same suffix cannot make the copy ambiguous. It reads
+the copy with ``check_degrees = false``: the user's files were checked (or not, as the user chose)
+when they were read, and a copy of angles near RA 0 and the equator is degrees as written."""
 
 
 def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any], registry: Registry,
@@ -371,7 +373,8 @@ def _scenario(obs: ObjectObservations, obs_file: Path, settings: dict[str, Any],
     raw = dict(template.raw)
     raw.update({"name": f"fit-{_slug(obs.designation)}", "epoch": epoch, "duration_days": days,
                 "description": f"cistrack fit of {clipped(obs.designation)} from {', '.join(distinct_names(obs.files))}",
-                "measurements": {"file": str(obs_file.resolve()), "reader": {"name": _OWN_READERS[obs_file.suffix]}}})
+                "measurements": {"file": str(obs_file.resolve()),
+                                 "reader": {"name": _OWN_READERS[obs_file.suffix], "check_degrees": False}}})
     raw["sensor"] = {**raw["sensor"], "measurement": data_kind(obs.measurements)}
     raw = _ranging_defaults(merge_settings(raw, settings))
     if early:

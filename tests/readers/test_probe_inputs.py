@@ -2,6 +2,7 @@
 radians, an az/el CSV without sites, and files larger than the stated limit."""
 from __future__ import annotations
 
+import json
 import math
 import re
 
@@ -189,3 +190,26 @@ def test_an_infinite_limit_is_refused_as_not_finite(tmp_path, monkeypatch, capsy
     with pytest.raises(SystemExit):
         main(["fit", str(DATA / "observations.psv"), "--out", str(tmp_path / "fit"), "--max-file-mb", "inf"])
     assert "'inf': give a finite number of MB > 0" in capsys.readouterr().err
+
+
+# -- check_degrees = false in cistrack fit --------------------------------------------------------------
+
+NEAR_RA_ZERO = """# version=2022
+trkSub|mode|stn|obsTime|ra|dec|rmsRA|rmsDec|astCat
+nrho|CCD|568|2026-04-29T07:30:14.099192Z|3.057058210979619|0.6083358575476927|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T07:42:20.275941Z|3.127461060279586|0.5594089501353201|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T07:55:00.136433Z|3.2006285995154826|0.5076495985767702|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:26:49.246598Z|4.365858469207637|-0.37467453386028193|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:34:22.810826Z|4.410507285833944|-0.4067805283884791|0.706|0.706|Gaia3
+nrho|CCD|568|2026-04-29T11:42:27.313984Z|4.531327386127089|-0.4595938930986243|0.706|0.706|Gaia3
+"""
+
+
+def test_fit_with_check_degrees_false_fits_observations_near_ra_zero(tmp_path, capsys):
+    """The way out the radians refusal names: the fit's own copy of such observations had been
+    refused by the run that reads it, so that check_degrees = false never reached a least squares."""
+    (tmp_path / "near0.psv").write_text(NEAR_RA_ZERO)
+    main(["fit", str(tmp_path / "near0.psv"), "--out", str(tmp_path / "fit"),
+          "--set", "measurements.reader.check_degrees=false"])
+    assert "look like radians" not in capsys.readouterr().out
+    assert json.loads((tmp_path / "fit" / "fit.json").read_text())["n_used"] == 6
