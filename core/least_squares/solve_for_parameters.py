@@ -19,6 +19,7 @@ it with a step ten times smaller.
 """
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -33,6 +34,22 @@ __all__ = ["SolveFor", "STEPS", "solve_for", "fitted_dynamics"]
 STEPS: dict[str, float] = {"area_to_mass_m2_kg": 1e-3}
 """Central-difference step of each known parameter, in its own unit."""
 DEFAULT_STEP = 1e-3
+WORDS: dict[str, tuple[str, str]] = {"area_to_mass_m2_kg": ("area-to-mass ratio (C_R A/m)", "m^2/kg")}
+"""How messages to a user name each known parameter, and its unit."""
+
+
+def _left_range(names: tuple[str, ...], values: np.ndarray, exc: ParameterError) -> FitError:
+    """The fit's failure when its iterate ``values`` (P,) of the parameters ``names`` left the
+    range the dynamics allow (``exc``: the dynamics' refusal), worded for a user: the parameter
+    by name and unit, its value and what the model allows; not the dynamics' internal words (probe
+    M12: "dynamics 'ephemeris': parameter 'area_to_mass_m2_kg' = 1251.458... is invalid")."""
+    found = re.search(r"parameter '([^']+)' = .* is invalid: (?:must be )?(.*)$", str(exc), re.S)
+    name = found[1] if found and found[1] in names else names[0]
+    allowed = found[2] if found else str(exc)
+    what, unit = WORDS.get(name, (f"parameter {name}", ""))
+    value = f"{float(values[names.index(name)]):.4g}" + (f" {unit}" if unit else "")
+    return FitError(f"the fitted {what} ran to {value}, outside what the model allows ({allowed}): these "
+                    "observations do not determine it")
 
 
 def _check_dynamics(dynamics: Dynamics, names: tuple[str, ...]) -> None:
@@ -77,8 +94,7 @@ class SolveFor:
             try:
                 dyn = self.base.with_parameters(**{n: float(v) for n, v in zip(self.names, values)})
             except ParameterError as exc:  # an iterate outside the model's range: the fit's failure, not the user's
-                shown = ", ".join(f"{n} = {float(v):.4g}" for n, v in zip(self.names, values))
-                raise FitError(f"the solve-for parameters left the model's range ({shown}): {exc}") from None
+                raise _left_range(self.names, values, exc) from None
             self._cache = (key, dyn)
         return self._cache[1]
 

@@ -69,5 +69,17 @@ def test_an_iterate_outside_the_models_range_is_the_fits_failure_not_a_settings_
     from cistrack.least_squares.errors import FitError
 
     dyn = default_registry().create("dynamics", "ephemeris", epoch=EPOCH)
-    with pytest.raises(FitError, match=r"left the model's range \(area_to_mass_m2_kg = -1\.171e\+11\)"):
+    with pytest.raises(FitError, match=r"area-to-mass ratio \(C_R A/m\) ran to -1\.171e\+11 m\^2/kg"):
         SolveFor(dyn, ("area_to_mass_m2_kg",)).dynamics(np.array([-117123731138.67]))
+
+
+def test_its_failure_is_worded_for_a_user_not_in_the_dynamics_internal_words():
+    """Probe M12: "... (area_to_mass_m2_kg = 1251): dynamics 'ephemeris': parameter 'area_to_mass_m2_kg'
+    = 1251.4581033349136 is invalid: must be ..." had reached a fit's failure text."""
+    from cistrack.least_squares.errors import FitError
+
+    dyn = default_registry().create("dynamics", "ephemeris", epoch=EPOCH)
+    with pytest.raises(FitError) as caught:
+        SolveFor(dyn, ("area_to_mass_m2_kg",)).dynamics(np.array([1251.4581033349136]))
+    assert str(caught.value) == ("the fitted area-to-mass ratio (C_R A/m) ran to 1251 m^2/kg, outside what the model "
+                                 "allows (a finite number in [-1000, 1000]): these observations do not determine it")
