@@ -11,7 +11,9 @@ positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
 time resolution, and the files' notes say how many copies were dropped; two such observations
 whose positions differ more are refused naming both files. The same rule holds within one file, with
 times within :data:`REPEAT_S`: the later repeat is dropped
-and the file's note says how many (two such rows further apart on the sky are both kept).
+and the file's note says how many (two such rows further apart on the sky are both kept). Two rows
+of one site and type at the same position (:data:`SAME_POSITION_ARCSEC`) with times within
+:data:`SAME_POSITION_S` are one measurement reduced twice, in one file or two, and used once.
 
 Times are TU elapsed since a working epoch (:data:`READ_EPOCH`, leap seconds counted): the fit
 moves them to its own epoch (:func:`cistrack.fitting.arcs.in_time_base`, bit for bit the clock
@@ -42,7 +44,7 @@ from cistrack.runs.observation_files import SeveralObjectsError, read_checked, r
 from cistrack.runs.run_inputs import reading_own_copies, weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
-           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC", "REPEAT_S",
+           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC", "REPEAT_S", "SAME_POSITION_S", "SAME_POSITION_ARCSEC",
            "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly",
            "distinct_names"]
 
@@ -68,6 +70,24 @@ REPEAT_S = 0.25
 :data:`DUPLICATE_ARCSEC`, for the later to be a repeat of the earlier (the same night submitted
 twice, from two reductions): shorter than the exposure and readout of a cislunar survey, and than
 the 0.4 s between exposures of ``benchmarks/bench_fit.py --make-dense`` (2,000 per tracklet)."""
+
+SAME_POSITION_S = 1.0
+"""Largest time apart (s) of two observations of one site and type at the same position (within
+:data:`SAME_POSITION_ARCSEC`) for the later to be a repeat of the earlier, in one file or two:
+one measurement reduced twice with its time rounded differently (to 1e-5 day, 0.864 s, as MPC
+80-column times are, or to a whole second)."""
+
+SAME_POSITION_ARCSEC = 0.001
+"""Largest angle (arcsec) between two such observations for them to be at the same position (one
+value written twice agrees to 1e-9 arcsec): two exposures' angles carry independent noise of
+some 0.1-1 arcsec, so two that agree this closely are one measurement given twice (by chance
+once in some 10^6 pairs of a stationary object at 0.5 arcsec noise; a cislunar object moves
+0.1-0.5 arcsec in a second besides)."""
+
+_PAD_S = 2e-6
+"""Slack (s) on every time comparison: times are TU since :data:`READ_EPOCH`, whose float64
+rounding moves a difference of rows 26 years after it by up to some 5e-7 s (rows exactly
+:data:`REPEAT_S` apart had been told apart by it)."""
 
 
 @dataclass
@@ -289,12 +309,14 @@ class _Rows:
 
 
 def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
-    """Pairs (i, j) of rows with the same site and type whose times differ by at most the coarser
-    of their sets' time resolutions ``tol_s`` (s, per set), or, in one set, by at most
-    :data:`REPEAT_S` (its distinct times are distinct whatever they are rounded to); j is the later row."""
+    """Pairs (i, j) of rows with the same site and type, j the later, that may be one observation:
+    their times differ by at most the coarser of their sets' time resolutions ``tol_s`` (s, per
+    set) or, in one set, by at most :data:`REPEAT_S` (its distinct times are distinct whatever they
+    are rounded to); or by at most :data:`SAME_POSITION_S` at the same position
+    (:data:`SAME_POSITION_ARCSEC`)."""
     secs = units.tu_to_seconds(rows.times)
     order = np.lexsort((secs, rows.sites))
-    widest = max(float(tol_s.max()), REPEAT_S) * (1 + 1e-9) + 1e-9
+    widest = max(float(tol_s.max()), REPEAT_S, SAME_POSITION_S) + _PAD_S
     pairs: list[tuple[int, int]] = []
     for shift in range(1, len(order)):
         a, b = order[:-shift], order[shift:]
@@ -302,19 +324,19 @@ def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
         near = (rows.sites[a] == rows.sites[b]) & (dt <= widest)
         if not near.any():
             break
-        same = rows.source[a] == rows.source[b]
         tol = np.maximum(tol_s[rows.source[a]], tol_s[rows.source[b]])
-        tol = np.where(same, REPEAT_S, tol) * (1 + 1e-9) + 1e-9
-        hit = near & (dt <= tol) & (rows.kinds[a] == rows.kinds[b])
+        timely = dt <= np.where(rows.source[a] == rows.source[b], REPEAT_S, tol) + _PAD_S
+        same_place = _separations_arcsec(rows, a, b) <= SAME_POSITION_ARCSEC
+        hit = near & (rows.kinds[a] == rows.kinds[b]) & (timely | same_place)
         pairs += [(int(i), int(j)) for i, j in zip(a[hit], b[hit])]
     return pairs
 
 
-def _separation_arcsec(rows: _Rows, i: int, j: int) -> float:
-    """Angle between rows i and j on the sky (or the az/el sphere), arcsec."""
-    (a1, b1), (a2, b2) = rows.values[i], rows.values[j]
+def _separations_arcsec(rows: _Rows, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Angles between rows ``i`` and ``j`` (index arrays) on the sky (or the az/el sphere), arcsec."""
+    (a1, b1), (a2, b2) = rows.values[i].T, rows.values[j].T
     d1 = (a1 - a2 + np.pi) % (2 * np.pi) - np.pi
-    return float(np.hypot(d1 * np.cos(0.5 * (b1 + b2)), b1 - b2) / units.ARCSEC_RAD)
+    return np.hypot(d1 * np.cos(0.5 * (b1 + b2)), b1 - b2) / units.ARCSEC_RAD
 
 
 def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
@@ -325,7 +347,7 @@ def _duplicates(rows: _Rows, files: list[str], tol_s: np.ndarray) -> np.ndarray:
     positions of two files' copies differ more (two rows of one file that do are both kept)."""
     drop = np.full(len(rows.times), -1, dtype=int)
     for i, j in _close_pairs(rows, tol_s):
-        sep = _separation_arcsec(rows, i, j)
+        sep = float(_separations_arcsec(rows, np.array([i]), np.array([j]))[0])
         if rows.source[i] == rows.source[j]:
             if sep <= DUPLICATE_ARCSEC and drop[i] < 0:
                 drop[j] = rows.source[j]
@@ -373,6 +395,11 @@ def distinct_names(paths: list[str | Path]) -> list[str]:
     return names
 
 
+_SAME_WORDS = (f"times within {REPEAT_S:g} s and positions within {DUPLICATE_ARCSEC:g} arcsec, or times within "
+               f"{SAME_POSITION_S:g} s at the same position to {SAME_POSITION_ARCSEC:g} arcsec")
+"""The rule for a repeat within one file, as a note states it."""
+
+
 def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.ndarray) -> list[str]:
     """One line per file that lost observations as duplicates (``drop`` from :func:`_duplicates`):
     first its repeats within itself, then its copies of other files' observations."""
@@ -381,16 +408,16 @@ def _duplicate_notes(rows: _Rows, drop: np.ndarray, files: list[str], tol_s: np.
         again = (drop == k) & (rows.source == k)
         if again.any():
             notes.append(f"{shown[k]}: {int(np.count_nonzero(again))} observations dropped as repeats within the "
-                         f"file (the same site and type as an earlier row, times within "
-                         f"{REPEAT_S:g} s, positions within {DUPLICATE_ARCSEC:g} arcsec: the same "
-                         "observation given twice?); each observation is used once")
+                         f"file (the same site and type as an earlier row, {_SAME_WORDS}: one observation given "
+                         "twice, or reduced twice?); the later row of each such pair is not used")
         mine = (drop >= 0) & (drop != k) & (rows.source == k)
         if not mine.any():
             continue
         kept = ", ".join(shown[m] for m in sorted(set(drop[mine].tolist())))
         notes.append(f"{shown[k]}: {int(np.count_nonzero(mine))} observations dropped as duplicates of "
-                     f"those in {kept} (same site and type, times within {tol_s[k]:g} s, positions within "
-                     f"{DUPLICATE_ARCSEC:g} arcsec); each observation is used once")
+                     f"those in {kept} (same site and type, times within {tol_s[k]:g} s and positions within "
+                     f"{DUPLICATE_ARCSEC:g} arcsec, or within {SAME_POSITION_S:g} s at the same position); the copy "
+                     "with the finer times is used")
     return notes
 
 
@@ -426,7 +453,8 @@ def merge_sets(sets: list[MeasurementSet], files: list[str],
     An observation given in two files (same site and type, times within the coarser file's
     ``time_resolutions`` entry, s per set; 0 s when absent; positions within
     :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer time resolution, and so is one
-    repeated within a set (times within :data:`REPEAT_S`: the later row is dropped); meta
+    repeated within a set (times within :data:`REPEAT_S`: the later row is dropped), and one given
+    twice at the same position (:data:`SAME_POSITION_ARCSEC`) within :data:`SAME_POSITION_S`; meta
     ``duplicates_dropped`` counts the copies dropped. Refuses such a pair whose positions differ
     more, and a site key given two positions (MeasurementError naming the files)."""
     return _merge(sets, files, time_resolutions)[0]

@@ -1,6 +1,7 @@
 """Observation files for `cistrack fit`: formats, several files merged, several objects split."""
 from __future__ import annotations
 
+import math
 from datetime import datetime, timedelta
 
 import numpy as np
@@ -136,11 +137,25 @@ def test_a_reader_parameter_no_reader_of_the_files_takes_is_refused_by_name():
                                  reader_params={"range_alpha": 0.1})
 
 
-def _shifted(row: str, seconds: float) -> str:
+def _shifted(row: str, seconds: float, dec_arcsec: float = 0.0, ra_arcsec: float = 0.0) -> str:
+    """``row`` ``seconds`` later, its dec and ra (on the sky) moved by ``dec_arcsec`` and ``ra_arcsec``."""
     f = row.split("|")
     f[3] = (datetime.strptime(f[3], "%Y-%m-%dT%H:%M:%S.%fZ") + timedelta(seconds=seconds)).strftime(
         "%Y-%m-%dT%H:%M:%S.%fZ")
+    if ra_arcsec:
+        f[4] = repr(float(f[4]) + ra_arcsec / 3600.0 / math.cos(math.radians(float(f[5]))))
+    if dec_arcsec:
+        f[5] = repr(float(f[5]) + dec_arcsec / 3600.0)
     return "|".join(f)
+
+
+def _again(tmp_path, seconds: float, dec_arcsec: float = 0.0):
+    """The shipped file (65 rows) read with every row given again ``seconds`` later, its dec moved by ``dec_arcsec``."""
+    lines = _psv_lines()
+    header, rows = lines[:2], [r for r in lines[2:] if r]
+    p = tmp_path / "again.psv"
+    p.write_text("\n".join(header + rows + [_shifted(r, seconds, dec_arcsec) for r in rows]) + "\n")
+    return read_object_observations([p], default_registry())[0]
 
 
 def test_observations_repeated_within_one_file_are_used_once_and_the_repeats_counted(tmp_path):
@@ -156,13 +171,42 @@ def test_observations_repeated_within_one_file_are_used_once_and_the_repeats_cou
     np.testing.assert_array_equal(objs[0].measurements.times, whole.times)
     assert objs[0].measurements.meta["duplicates_dropped"] == 65
     assert ("twice.psv: 65 observations dropped as repeats within the file (the same site and type as an earlier "
-            "row, times within 0.25 s, positions within 5 arcsec") in objs[0].notes[-1]
+            "row, times within 0.25 s and positions within 5 arcsec") in objs[0].notes[-1]
 
 
-def test_rows_of_one_file_a_second_apart_are_not_repeats(tmp_path):
+@pytest.mark.parametrize("seconds", [0.3, 0.864, 1.0])
+def test_rows_given_again_at_the_same_position_within_a_second_are_used_once(tmp_path, seconds):
+    """Probe M7: every row given again 0.3 s or 1 s later with the same angles (one measurement
+    reduced twice, its time rounded otherwise) had been used twice without a word, the sigmas
+    shrinking by sqrt(2)."""
+    obj = _again(tmp_path, seconds)
+    assert len(obj.measurements) == 65 and obj.measurements.meta["duplicates_dropped"] == 65
+    assert "again.psv: 65 observations dropped as repeats within the file" in obj.notes[-1]
+
+
+def test_rows_exactly_the_repeat_time_apart_are_all_repeats(tmp_path):
+    """Probe M7: at 0.25 s, with the angles 1 arcsec apart, 16 of 80 repeats had been kept (the
+    float times read the difference as a hair over 0.25 s) while the note said 65 were used once."""
+    obj = _again(tmp_path, 0.25, dec_arcsec=1.0)
+    assert len(obj.measurements) == 65 and obj.measurements.meta["duplicates_dropped"] == 65
+
+
+def test_the_repeat_note_does_not_claim_each_observation_is_used_once(tmp_path):
+    assert "each observation is used once" not in " ".join(_again(tmp_path, 0.2).notes)
+
+
+def test_rows_of_one_file_a_second_apart_at_other_positions_are_not_repeats(tmp_path):
+    """A moving object's exposures a second apart: 0.3 arcsec of motion or noise apart, both kept."""
+    obj = _again(tmp_path, 1.0, dec_arcsec=0.3)
+    assert len(obj.measurements) == 130 and not any("repeat" in n for n in obj.notes)
+
+
+def test_exposures_0_4_s_apart_of_a_moving_object_are_all_kept(tmp_path):
+    """The cadence of benchmarks/bench_fit.py --make-dense: each row's twin 0.4 s later has moved
+    0.2 arcsec in RA (0.5 arcsec/s) and carries its own 0.5 arcsec noise in dec (seeded)."""
     lines = _psv_lines()
     header, rows = lines[:2], [r for r in lines[2:] if r]
-    p = tmp_path / "later.psv"
-    p.write_text("\n".join(header + rows + [_shifted(r, 1.0) for r in rows]) + "\n")
-    objs = read_object_observations([p], default_registry())
-    assert len(objs[0].measurements) == 130 and not any("repeat" in n for n in objs[0].notes)
+    noise = np.random.default_rng(20261201).normal(0.0, 0.5, len(rows))
+    p = tmp_path / "dense.psv"
+    p.write_text("\n".join(header + rows + [_shifted(r, 0.4, float(d), 0.2) for r, d in zip(rows, noise)]) + "\n")
+    assert len(read_object_observations([p], default_registry())[0].measurements) == 130
