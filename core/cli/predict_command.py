@@ -85,7 +85,8 @@ def add_predict_parser(sub) -> None:
     p.add_argument("--step", type=_minutes, default=60.0, metavar="MINUTES", help="spacing, minutes (default 60)")
     p.add_argument("--out", type=path_text("--out"), default=None, metavar="PREFIX", help="write PREFIX.csv and PREFIX.png "
                    "(default DIR/sky-<CODE>; a folder: FOLDER/sky-<CODE>)")
-    p.add_argument("--quiet", action="store_true", help="print no table (the files are still written)")
+    p.add_argument("--quiet", action="store_true", help="print no table (the files are still written); notes and "
+                   "warnings still go to stderr")
     p.add_argument("--overwrite", action="store_true",
                    help="replace an existing --out PREFIX.csv/.png, or a different earlier prediction in DIR/sky-<CODE>, "
                         "or write into the folder of another run, fit or study")
@@ -432,7 +433,7 @@ def cmd_predict(args) -> int:
     if not args.quiet:
         _eprint(f"predicting {orbit.name} ({orbit.source}) at {times.size} times from {args.site} "
                 f"({site.name or 'site'}) ...")
-    sky = sky_ephemeris_of(orbit, times, site, reg)
+    sky = _flagged(sky_ephemeris_of(orbit, times, site, reg), args.run)
     check_still_as_read(args.run, stamp, "prediction")  # a fit or run may have started (and ended) meanwhile
     raise_pending()  # a Ctrl-C lost while numba loaded: no files (probe J1)
     try:
@@ -443,11 +444,31 @@ def cmd_predict(args) -> int:
         raise
     if not args.quiet:
         print("\n".join(table_lines(sky)))
-        if np.any(sky.linear):
-            print(f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)")
-        notes = (impact_note, _horizon_note(args.run, times, orbit), _lost_note(sky), _bent_line_note(args.run, sky))
-        for note in filter(None, notes):
-            for line in note.splitlines():
-                print(for_stream(line, sys.stdout))  # within 120 columns on a terminal
+    linear = f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)" \
+        if np.any(sky.linear) else ""
+    notes = (linear, impact_note, _horizon_note(args.run, times, orbit), _lost_note(sky), _bent_line_note(args.run, sky))
+    out = sys.stderr if args.quiet else sys.stdout  # --quiet drops the table, not what qualifies the files
+    for note in filter(None, notes):
+        for line in note.splitlines():
+            print(for_stream(line, out), file=out)  # within 120 columns on a terminal
+    if not args.quiet:
         print(f"wrote {csv_path}\nwrote {png}")
     return 0
+
+
+def _flagged(sky, run_dir):
+    """``sky`` with ``beyond_checked_horizon`` per time when ``run_dir`` is a fit's folder (its
+    record's horizons: :func:`cistrack.fitting.fit_export.beyond_checked_horizon`), else as it is."""
+    from dataclasses import replace
+
+    from cistrack.errors import CistrackError
+    from cistrack.fitting.fit_export import beyond_checked_horizon, is_fit_directory
+    from cistrack.fitting.fit_record import read_fit_record
+
+    if not is_fit_directory(run_dir):
+        return sky
+    try:
+        record = read_fit_record(Path(run_dir))
+    except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no flag is no harm
+        return sky
+    return replace(sky, beyond_checked_horizon=beyond_checked_horizon(record, sky.t_tu))

@@ -59,7 +59,7 @@ from cistrack.results.inertial_frame import to_inertial
 __all__ = ["export_fit", "FitExportOptions", "fit_refusal", "covariance_doubt", "fit_grid", "covariance_scale",
            "is_fit_directory", "GRID_MINUTES", "INTERPOLATION_DEGREE", "prediction_warnings", "line_states",
            "after_last_burn", "BURN_MARGIN_SIGMAS", "line_drawn_short", "check_scenario_epoch",
-           "refuse_non_finite"]
+           "refuse_non_finite", "checked_horizon_days", "beyond_checked_horizon"]
 
 GRID_MINUTES = 10.0
 """Spacing of the exported states, minutes."""
@@ -314,9 +314,10 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
     told: that they end at an ``impact`` before the span asked, and that they run past the fit's
     horizon (``record["determination"]["horizon_days"]``), where the orbits the fit allows leave a
     1-degree field and the covariance may no longer hold the object, or past its covariance
-    horizon (``covariance_horizon_days``, when sooner), where the covariance understates their spread;
-    and that they run farther before the first observation than that horizon (a prediction 140 days
-    back had carried no word)."""
+    horizon (``covariance_horizon_days``, when sooner), where the covariance understates their spread,
+    or, when the fit found neither, past the days it checked (:func:`checked_horizon_days`); and that
+    they run farther before the first observation than that horizon (a prediction 140 days back had
+    carried no word)."""
     if times.size <= n_arc:
         return []
     out = []
@@ -332,7 +333,7 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
                    f"{horizon:g} days ({when}Z): after it the orbits the fit allows leave a 1-degree field, and its "
                    "covariance may no longer hold the object; observe again before then")
     held = (record.get("determination") or {}).get("covariance_horizon_days")
-    out += _backward_warning(record, times[n_arc:], horizon, held)
+    out += _backward_warning(record, times[n_arc:]) + _unchecked_warning(record, span)
     if isinstance(held, (int, float)) and math.isfinite(held) and span > held and not (
             isinstance(horizon, (int, float)) and held >= horizon):
         when = units.format_utc(units.tu_to_utc(epoch, last + float(units.days_to_tu(held))))[:19]
@@ -342,19 +343,57 @@ def prediction_warnings(record: dict[str, Any], times: np.ndarray, n_arc: int, i
     return out
 
 
-def _backward_warning(record: dict[str, Any], times: np.ndarray, horizon: Any, held: Any) -> list[str]:
-    """The words for predicted ``times`` (TU) farther before the first observation than the fit's
-    horizons reach forward (the covariance's, else the field's, else the
-    :data:`~cistrack.fitting.determination.HORIZON_DAYS` they were checked to): nothing was checked
-    backward, and a prediction 140 days back had carried no word."""
+def checked_horizon_days(record: dict[str, Any]) -> float:
+    """Days from the fit's arc (after its last observation, before its first) over which its orbits
+    and covariance were checked to hold: the sooner of its horizons (``determination``'s
+    ``covariance_horizon_days`` and ``horizon_days``), else the
+    :data:`~cistrack.fitting.determination.HORIZON_DAYS` they were checked to."""
     from cistrack.fitting.determination import HORIZON_DAYS
 
+    det = record.get("determination") or {}
+    finite = [float(x) for x in (det.get("covariance_horizon_days"), det.get("horizon_days"))
+              if isinstance(x, (int, float)) and math.isfinite(x)]
+    return min(finite) if finite else HORIZON_DAYS
+
+
+def beyond_checked_horizon(record: dict[str, Any], times: np.ndarray) -> np.ndarray:
+    """Per time of ``times`` (K,) TU, whether it lies farther from the fit's arc (after its last
+    observation or before its first) than :func:`checked_horizon_days`: where the predictions'
+    covariance may understate their spread (K,) bool."""
+    t = np.asarray(times, dtype=float)
+    arc = record.get("arc") or {}
+    limit = float(units.days_to_tu(checked_horizon_days(record)))
+    out = np.zeros(t.shape, dtype=bool)
+    if isinstance(arc.get("last_tu"), (int, float)):
+        out |= t - float(arc["last_tu"]) > limit
+    if isinstance(arc.get("first_tu"), (int, float)):
+        out |= float(arc["first_tu"]) - t > limit
+    return out
+
+
+def _unchecked_warning(record: dict[str, Any], span: float) -> list[str]:
+    """The words for predicted states ``span`` days past the last observation when the fit found
+    neither horizon within the :func:`checked_horizon_days` it checked, and they run past that."""
+    det = record.get("determination") or {}
+    if any(isinstance(x, (int, float)) and math.isfinite(x)
+           for x in (det.get("covariance_horizon_days"), det.get("horizon_days"))):
+        return []
+    limit = checked_horizon_days(record)
+    if not span > limit:
+        return []
+    return [f"the predicted states run {span:.3g} days past the last observation, farther than the {limit:g} days the "
+            "fit's orbits and covariance were checked for: the covariance may understate their spread there"]
+
+
+def _backward_warning(record: dict[str, Any], times: np.ndarray) -> list[str]:
+    """The words for predicted ``times`` (TU) farther before the first observation than the fit's
+    horizons reach forward (:func:`checked_horizon_days`): nothing was checked backward, and a
+    prediction 140 days back had carried no word."""
     first = (record.get("arc") or {}).get("first_tu")
     if not isinstance(first, (int, float)) or times.size == 0:
         return []
     back = float(units.tu_to_days(float(first) - float(np.min(times))))
-    finite = [float(x) for x in (held, horizon) if isinstance(x, (int, float)) and math.isfinite(x)]
-    limit = min(finite) if finite else HORIZON_DAYS
+    limit = checked_horizon_days(record)
     if not back > limit:
         return []
     return [f"the predicted states run {back:.3g} days before the first observation, farther back than the {limit:g} "

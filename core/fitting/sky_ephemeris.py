@@ -49,7 +49,8 @@ RATE_SECONDS = 30.0
 CSV_COLUMNS = ("utc", "ra_deg", "dec_deg", "ra_rate_arcsec_min", "dec_rate_arcsec_min", "range_km", "elevation_deg",
                "solar_elongation_deg", "lunar_distance_deg", "sigma_ra_arcsec", "sigma_dec_arcsec",
                "semi_major_1sigma_arcsec", "semi_minor_1sigma_arcsec", "position_angle_deg",
-               "semi_major_3sigma_arcsec", "semi_minor_3sigma_arcsec", "linear_covariance", "line_reach_arcsec")
+               "semi_major_3sigma_arcsec", "semi_minor_3sigma_arcsec", "linear_covariance", "line_reach_arcsec",
+               "beyond_checked_horizon")
 _ARCSEC = 180.0 * 3600.0 / math.pi
 
 
@@ -60,7 +61,10 @@ class SkyEphemeris:
     ``ra_rate`` is the rate of RA cos(Dec); ``covariance_arcsec2`` (K, 2, 2) is that of
     (RA cos(Dec), Dec); ``linear`` marks the times whose state covariance is the linear one;
     ``line_reach_arcsec`` (K,) is how far from the predicted position the orbits along the fit's
-    bent line of variations lie (0 when it was not used: :func:`sky_ephemeris_of`)."""
+    bent line of variations lie (0 when it was not used: :func:`sky_ephemeris_of`);
+    ``beyond_checked_horizon`` (K,) bool marks the times farther from a fit's arc than its orbits
+    and covariance were checked for (:func:`cistrack.fitting.fit_export.beyond_checked_horizon`),
+    None when not known (an orbit that is no fit's): the CSV column is then empty."""
 
     utc: list[str]
     t_tu: np.ndarray
@@ -76,6 +80,7 @@ class SkyEphemeris:
     linear: np.ndarray
     site: Site
     line_reach_arcsec: np.ndarray | None = None
+    beyond_checked_horizon: np.ndarray | None = None
 
     def ellipse(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """1-sigma semi-major and semi-minor axes (K,) arcsec and the major axis' position angle
@@ -101,8 +106,10 @@ class SkyEphemeris:
                 self.elevation_deg, self.solar_elongation_deg, self.lunar_distance_deg, sig[:, 0], sig[:, 1], a, b, pa,
                 3 * a, 3 * b)
         reach = np.zeros(len(self.utc)) if self.line_reach_arcsec is None else self.line_reach_arcsec
-        return [dict(zip(CSV_COLUMNS, [self.utc[k]] + [float(c[k]) for c in cols] + [bool(self.linear[k]), float(reach[k])]))
-                for k in range(len(self.utc))]
+        beyond = [""] * len(self.utc) if self.beyond_checked_horizon is None else \
+            [bool(b) for b in self.beyond_checked_horizon]
+        return [dict(zip(CSV_COLUMNS, [self.utc[k]] + [float(c[k]) for c in cols]
+                         + [bool(self.linear[k]), float(reach[k]), beyond[k]])) for k in range(len(self.utc))]
 
     def write_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` to ``path`` (CSV with a header of :data:`CSV_COLUMNS`); ConfigError, nothing

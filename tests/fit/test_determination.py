@@ -161,3 +161,25 @@ def test_a_prediction_farther_back_than_the_horizon_says_so():
     record["determination"] = {"horizon_days": None, "covariance_horizon_days": 8.75}  # the field's beyond 30 days
     said = " ".join(prediction_warnings(record, days_to_tu(np.array([-20.0])), 0, None, parse_utc("2026-01-01T00:00:00Z")))
     assert "farther back than the 8.75 days" in said
+
+
+def test_a_prediction_past_the_days_checked_says_so_when_the_fit_found_no_horizon():
+    """Probe M9: a fit whose orbits held a 1-degree field and whose covariance held for all 30 days
+    checked (both horizons None, as several survey fits are) had been predicted 470 days on without a word."""
+    from cistrack.fitting.fit_export import prediction_warnings
+
+    record = {"arc": {"first_tu": 0.0, "last_tu": 0.0},
+              "determination": {"horizon_days": None, "covariance_horizon_days": None}}
+    said = " ".join(prediction_warnings(record, days_to_tu(np.array([0.0, 470.0])), 0, None,
+                                        parse_utc("2026-01-01T00:00:00Z")))
+    assert "470 days past the last observation, farther than the 30 days the fit's orbits and covariance" in said
+    assert prediction_warnings(record, days_to_tu(np.array([0.0, 29.0])), 0, None, None) == []
+
+
+def test_each_predicted_time_is_flagged_beyond_the_checked_horizon_either_side_of_the_arc():
+    from cistrack.fitting.fit_export import beyond_checked_horizon
+
+    record = {"arc": {"first_tu": days_to_tu(-2.0), "last_tu": 0.0},
+              "determination": {"horizon_days": 1.5, "covariance_horizon_days": 0.5}}
+    times = days_to_tu(np.array([-2.75, -2.25, -1.0, 0.25, 0.75]))
+    assert beyond_checked_horizon(record, times).tolist() == [True, False, False, False, True]

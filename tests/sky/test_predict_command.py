@@ -218,6 +218,24 @@ def test_times_past_the_covariance_horizon_get_the_note_an_export_gives(fitted, 
     assert "understate" not in capsys.readouterr().out
 
 
+def test_quiet_drops_the_table_but_not_the_notes_on_the_prediction(fitted, tmp_path, capsys):
+    """Probe M9: --quiet had dropped the notes too, so that predictions past the covariance horizon
+    (or a year before the arc) were written with their ellipses and no caveat."""
+    window = ["--start", "2026-03-11T12:00:00Z", "--stop", "2026-03-11T18:00:00Z", "--step", "360"]
+    assert main(["predict", str(fitted), "--site", "568", *window, "--out", str(tmp_path / "late"), "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert "2026-03-11T" not in captured.out and "wrote" not in captured.out
+    assert "note: the covariances understate the spread of the orbits the fit allows from 3.75 days" in captured.err
+
+
+def test_the_csv_flags_each_time_past_the_covariance_horizon(fitted, tmp_path, capsys):
+    """The shipped fit's last observation is 2026-03-06T12:03Z and its covariance holds for 3.75
+    days: to 2026-03-10T06:03Z. The file itself carries the caveat, row by row."""
+    _, rows = _predicted(fitted, tmp_path, capsys, "568", "2026-03-10T00:00:00Z", "2026-03-10T12:00:00Z", "360")
+    assert [(r["utc"], r["beyond_checked_horizon"]) for r in rows] == [
+        ("2026-03-10T00:00:00Z", "False"), ("2026-03-10T06:00:00Z", "False"), ("2026-03-10T12:00:00Z", "True")]
+
+
 def test_an_out_prefix_over_another_fits_residual_plot_is_refused_even_with_overwrite(fitted, tmp_path, capsys):
     import shutil
 
