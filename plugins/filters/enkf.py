@@ -27,7 +27,14 @@ from .initial_cloud import check_cloud, initial_particles
 from .measured_components import MeasuredComponents, check_epoch
 from .process_noise import check_velocity_noise, velocity_random_walk_covariance
 
-__all__ = ["EnKFFilter"]
+__all__ = ["EnKFFilter", "MIN_MEMBERS"]
+
+MIN_MEMBERS = 7
+"""Fewest ensemble members (n_particles) the EnKF takes: one more than the state's dimension (6).
+The update moves the state only within the span of the members' deviations from their mean, of
+rank at most n_particles - 1: with fewer than 7 some direction of position and velocity has no
+spread, the filter can never correct it, and its belief collapses (2 members ran to 'diverged').
+Seven is the floor of a full-rank covariance, not a recommendation: the default is 1000."""
 
 
 class EnKFFilter(ParticleFilterDeclarations, FilterBase):
@@ -36,7 +43,9 @@ class EnKFFilter(ParticleFilterDeclarations, FilterBase):
     Parameters
     ----------
     n_particles : int
-        Ensemble size (members); the IOD cloud is subsampled (or resampled) to it.
+        Ensemble size (members), at least 7 (:data:`MIN_MEMBERS`: one more than the state's 6
+        dimensions, for a full-rank ensemble covariance); the IOD cloud is subsampled (or
+        resampled) to it.
     velocity_noise_kms_per_sqrt_day : float
         Process noise Q: velocity random walk, km/s after one day (0 = none).
     n_members : int or None
@@ -52,14 +61,24 @@ class EnKFFilter(ParticleFilterDeclarations, FilterBase):
         if n_members is not None:
             if n_particles != 1000:
                 self._fail("n_members", n_members, "is the deprecated name of n_particles; give only n_particles")
-            n_members = check_int(self, "n_members", n_members, minimum=2)
+            n_members = self._members("n_members", n_members)
             warnings.warn("filter 'enkf': parameter 'n_members' is deprecated; use 'n_particles' "
                           "(the name every particle filter uses)", FutureWarning, stacklevel=2)
             n_particles = n_members
-        self.n_particles = check_int(self, "n_particles", n_particles, minimum=2)
+        self.n_particles = self._members("n_particles", n_particles)
         self.n_members = None  # the deprecated alias is folded into n_particles
         self.velocity_noise_kms_per_sqrt_day = check_velocity_noise(self, velocity_noise_kms_per_sqrt_day)
         self._enkf = None  # an enkf_batch.BatchEnKF once initialised
+
+    def _members(self, name: str, value) -> int:
+        """``value`` of the parameter ``name`` as an ensemble size; ParameterError below :data:`MIN_MEMBERS`."""
+        n = check_int(self, name, value)
+        if n < MIN_MEMBERS:
+            self._fail(name, value, f"must be >= {MIN_MEMBERS} (the state's 6 dimensions + 1): the ensemble covariance "
+                                    f"has rank at most {name} - 1, so fewer members leave a direction of position and "
+                                    "velocity that the update can never correct, and the filter collapses; the "
+                                    "default is 1000")
+        return n
 
     def initialize(self, cloud: ParticleCloud, dynamics: Dynamics, sensor: Sensor,
                    rng: np.random.Generator) -> None:

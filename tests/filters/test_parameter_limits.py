@@ -44,3 +44,27 @@ def test_state_bounds_that_no_particle_meets_are_named(tmp_path, capsys):
 
     assert main(["run", "quick", "--set", "filter.min_range_km=1e9", "--out", str(tmp_path / "r"), "--quiet"]) == 2
     assert "outside the state bounds (min_range_km = 1000000000.0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("key, value", [("n_particles", 2), ("n_particles", 6), ("n_members", 2)])
+def test_an_enkf_of_fewer_members_than_a_full_rank_ensemble_is_refused_naming_the_floor(key, value):
+    """Probe M12: n_particles = 2 had been taken and the run had ended 'diverged'. Six members span
+    at most 5 of the state's 6 dimensions."""
+    with pytest.raises(ParameterError, match=rf"'{key}' = {value} is invalid: must be >= 7 \(the state's 6 "
+                                             r"dimensions \+ 1\).*rank at most"):
+        _filter("enkf", **{key: value})
+
+
+def test_an_enkf_of_seven_members_is_taken():
+    assert _filter("enkf", n_particles=7).n_particles == 7
+
+
+def test_cistrack_run_refuses_such_an_enkf_before_running(tmp_path, capsys):
+    from cistrack.cli.main import main
+
+    out = tmp_path / "r"
+    with pytest.warns(UserWarning, match="n_components = 4 dropped"):  # quick's filter is the PGM
+        assert main(["run", "quick", "--set", "filter.name=enkf", "--set", "filter.n_particles=2", "--out", str(out),
+                     "--quiet"]) == 2
+    assert "filter 'enkf': parameter 'n_particles' = 2 is invalid: must be >= 7" in capsys.readouterr().err
+    assert not out.exists()
