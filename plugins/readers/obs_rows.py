@@ -66,13 +66,37 @@ def _radians_box(r: ObsRow) -> bool:
 
 def _sites_in_radians(rows: list[ObsRow]) -> dict[str, list[ObsRow]]:
     """The sites (key -> their rows of one object and type, in file order) whose two or more rows
-    all lie in the radians box while some of that object's other rows do not."""
+    all lie in the radians box while some of that object's other rows do not, and, for RA/Dec,
+    read as radians lie nearer the object's other rows than as written (:func:`_nearer_as_radians`:
+    a real object near RA 3 deg and the equator seen by one site stays as written)."""
     groups: dict[tuple[str, str, str], list[ObsRow]] = {}
     for r in rows:
         groups.setdefault((r.obj, r.site, r.kind), []).append(r)
     elsewhere = {r.obj for r in rows if not _radians_box(r)}
-    return {site: v for (obj, site, _), v in groups.items()
-            if obj in elsewhere and len(v) >= 2 and all(_radians_box(r) for r in v)}
+    return {site: v for (obj, site, kind), v in groups.items()
+            if obj in elsewhere and len(v) >= 2 and all(_radians_box(r) for r in v)
+            and (kind != "radec" or _nearer_as_radians(v, [r for r in rows if r.obj == obj and r.site != site
+                                                           and r.kind == kind]))}
+
+
+def _nearer_as_radians(mine: list[ObsRow], others: list[ObsRow]) -> bool:
+    """Whether the rows ``mine`` (RA/Dec), their values read as radians, lie nearer the rows of
+    ``others`` closest to them in time than as written (medians of the angles on the sky): the
+    object's other sites see it where a site's radians put it."""
+    if not others:
+        return True
+    t_other = np.array([o.t.timestamp() for o in others])
+    near = [others[int(np.argmin(np.abs(t_other - r.t.timestamp())))] for r in mine]
+    scale = 180.0 / math.pi  # a value written in radians and read as degrees is this much too small
+    as_read = np.median([_separation(r.a, r.b, o.a, o.b) for r, o in zip(mine, near)])
+    as_rad = np.median([_separation(r.a * scale, r.b * scale, o.a, o.b) for r, o in zip(mine, near)])
+    return bool(as_rad < as_read)
+
+
+def _separation(a1: float, b1: float, a2: float, b2: float) -> float:
+    """Angle (rad) between two directions given by longitude and latitude (rad)."""
+    c = math.sin(b1) * math.sin(b2) + math.cos(b1) * math.cos(b2) * math.cos(a1 - a2)
+    return math.acos(max(-1.0, min(1.0, c)))
 
 
 def check_degrees(path, rows: list[ObsRow], fields: tuple[str, str], standard: str, reader: str) -> None:

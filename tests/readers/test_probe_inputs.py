@@ -126,6 +126,21 @@ def test_a_file_whose_one_site_is_in_radians_is_refused_naming_the_site_and_the_
         read_observations(_one_site_in_radians(tmp_path), EPOCH)
 
 
+def test_one_site_seeing_a_real_object_near_ra_3_deg_and_the_equator_is_read_as_degrees(tmp_path):
+    """711's first four rows moved to RA 1.8-3.0 deg, Dec 0.5-0.9 deg (the radians box) with 809's
+    rows moved alike: read as radians they would lie 30-50 deg from 809's, as written 1-2 deg."""
+    ms = read_observations(DATA / "observations.psv", EPOCH)
+    sites = np.asarray(ms.sites)
+    keep = np.flatnonzero(sites == "809").tolist() + np.flatnonzero(sites == "711")[:4].tolist()
+    ms = ms.subset(np.sort(np.asarray(keep)))
+    ms.values[:, 0] -= math.radians(139.5)
+    ms.values[:, 1] -= math.radians(6.0)
+    path = tmp_path / "near_ra_zero.psv"
+    write_observations(path, ms, EPOCH, format="ades-psv")
+    read = read_observations(path, EPOCH)
+    assert int(np.sum(np.asarray(read.sites) == "711")) == 4
+
+
 def test_check_degrees_false_reads_a_file_with_one_site_in_radians_as_written(tmp_path):
     ms = read_observations(_one_site_in_radians(tmp_path), EPOCH, check_degrees=False)
     assert int(np.sum(ms.values[:, 0] < math.radians(2 * math.pi))) == 33
