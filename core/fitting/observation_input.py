@@ -9,11 +9,11 @@ files (the same site and type, times within the coarser file's time resolution: 
 e.g. 0.0864 s for MPC 80-column, or the step its times are rounded to, e.g. a whole second;
 positions within :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer
 time resolution, and the files' notes say how many copies were dropped; two such observations
-whose positions differ more are refused naming both files. The same rule holds within one file, with
-times within :data:`REPEAT_S`: the later repeat is dropped
-and the file's note says how many (two such rows further apart on the sky are both kept). Two rows
-of one site and type at the same position (:data:`SAME_POSITION_ARCSEC`) with times within
-:data:`SAME_POSITION_S` are one measurement reduced twice, in one file or two, and used once.
+whose positions differ more are refused naming both files. Two rows of one site and type at the
+same position (:data:`SAME_POSITION_ARCSEC`) with times within :data:`SAME_POSITION_S` are one
+measurement given or reduced twice, in one file or two: the later is dropped and the file's note
+says how many. Within one file nothing else is a repeat: exposures a fraction of a second apart
+(a dense survey, video frames) differ in their angles by the object's motion and their noise.
 
 Times are TU elapsed since a working epoch (:data:`READ_EPOCH`, leap seconds counted): the fit
 moves them to its own epoch (:func:`cistrack.fitting.arcs.in_time_base`, bit for bit the clock
@@ -44,7 +44,7 @@ from cistrack.runs.observation_files import SeveralObjectsError, read_checked, r
 from cistrack.runs.run_inputs import reading_own_copies, weights_note
 
 __all__ = ["ObjectObservations", "read_object_observations", "merge_sets", "write_merged", "data_kind",
-           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC", "REPEAT_S", "SAME_POSITION_S", "SAME_POSITION_ARCSEC",
+           "READ_EPOCH", "UNNAMED", "DUPLICATE_ARCSEC", "SAME_POSITION_S", "SAME_POSITION_ARCSEC",
            "MAX_FILE_MB", "MAX_FILE_MB_ENV", "max_file_mb", "check_file_sizes", "copies_read_quietly",
            "distinct_names"]
 
@@ -65,12 +65,6 @@ DUPLICATE_ARCSEC = 5.0
 files for them to be the same observation given twice: well above the 0.015 arcsec rounding of
 MPC 80-column angles and the motion of a cislunar object in a rounded time (0.04 s)."""
 
-REPEAT_S = 0.25
-"""Largest time apart (s) of two observations of one site in one file, positions within
-:data:`DUPLICATE_ARCSEC`, for the later to be a repeat of the earlier (the same night submitted
-twice, from two reductions): shorter than the exposure and readout of a cislunar survey, and than
-the 0.4 s between exposures of ``benchmarks/bench_fit.py --make-dense`` (2,000 per tracklet)."""
-
 SAME_POSITION_S = 1.0
 """Largest time apart (s) of two observations of one site and type at the same position (within
 :data:`SAME_POSITION_ARCSEC`) for the later to be a repeat of the earlier, in one file or two:
@@ -86,8 +80,21 @@ once in some 10^6 pairs of a stationary object at 0.5 arcsec noise; a cislunar o
 
 _PAD_S = 2e-6
 """Slack (s) on every time comparison: times are TU since :data:`READ_EPOCH`, whose float64
-rounding moves a difference of rows 26 years after it by up to some 5e-7 s (rows exactly
-:data:`REPEAT_S` apart had been told apart by it)."""
+rounding moves a difference of rows 26 years after it by up to some 5e-7 s (rows exactly a
+limit apart had been told apart by it)."""
+
+
+def __getattr__(name: str) -> Any:
+    """``REPEAT_S`` (0.25 s) with a DeprecationWarning, until the next release: rows of one file
+    that close are repeats only at the same position now (:data:`SAME_POSITION_S`)."""
+    if name == "REPEAT_S":
+        import warnings
+
+        warnings.warn("cistrack.fitting.observation_input.REPEAT_S no longer sets a rule: rows of one file are "
+                      "repeats only at the same position (SAME_POSITION_ARCSEC) within SAME_POSITION_S; the old "
+                      "value 0.25 is kept, with this warning, until the next release", DeprecationWarning, stacklevel=2)
+        return 0.25
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass
@@ -311,12 +318,11 @@ class _Rows:
 def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
     """Pairs (i, j) of rows with the same site and type, j the later, that may be one observation:
     their times differ by at most the coarser of their sets' time resolutions ``tol_s`` (s, per
-    set) or, in one set, by at most :data:`REPEAT_S` (its distinct times are distinct whatever they
-    are rounded to); or by at most :data:`SAME_POSITION_S` at the same position
-    (:data:`SAME_POSITION_ARCSEC`)."""
+    set), two sets' rows only (one set's distinct times are distinct whatever they are rounded
+    to); or by at most :data:`SAME_POSITION_S` at the same position (:data:`SAME_POSITION_ARCSEC`)."""
     secs = units.tu_to_seconds(rows.times)
     order = np.lexsort((secs, rows.sites))
-    widest = max(float(tol_s.max()), REPEAT_S, SAME_POSITION_S) + _PAD_S
+    widest = max(float(tol_s.max()), SAME_POSITION_S) + _PAD_S
     pairs: list[tuple[int, int]] = []
     for shift in range(1, len(order)):
         a, b = order[:-shift], order[shift:]
@@ -325,7 +331,7 @@ def _close_pairs(rows: _Rows, tol_s: np.ndarray) -> list[tuple[int, int]]:
         if not near.any():
             break
         tol = np.maximum(tol_s[rows.source[a]], tol_s[rows.source[b]])
-        timely = dt <= np.where(rows.source[a] == rows.source[b], REPEAT_S, tol) + _PAD_S
+        timely = (rows.source[a] != rows.source[b]) & (dt <= tol + _PAD_S)
         same_place = _separations_arcsec(rows, a, b) <= SAME_POSITION_ARCSEC
         hit = near & (rows.kinds[a] == rows.kinds[b]) & (timely | same_place)
         pairs += [(int(i), int(j)) for i, j in zip(a[hit], b[hit])]
@@ -395,8 +401,7 @@ def distinct_names(paths: list[str | Path]) -> list[str]:
     return names
 
 
-_SAME_WORDS = (f"times within {REPEAT_S:g} s and positions within {DUPLICATE_ARCSEC:g} arcsec, or times within "
-               f"{SAME_POSITION_S:g} s at the same position to {SAME_POSITION_ARCSEC:g} arcsec")
+_SAME_WORDS = f"times within {SAME_POSITION_S:g} s at the same position to {SAME_POSITION_ARCSEC:g} arcsec"
 """The rule for a repeat within one file, as a note states it."""
 
 
@@ -453,8 +458,8 @@ def merge_sets(sets: list[MeasurementSet], files: list[str],
     An observation given in two files (same site and type, times within the coarser file's
     ``time_resolutions`` entry, s per set; 0 s when absent; positions within
     :data:`DUPLICATE_ARCSEC`) is used once, from the file of finer time resolution, and so is one
-    repeated within a set (times within :data:`REPEAT_S`: the later row is dropped), and one given
-    twice at the same position (:data:`SAME_POSITION_ARCSEC`) within :data:`SAME_POSITION_S`; meta
+    given twice at the same position (:data:`SAME_POSITION_ARCSEC`) within :data:`SAME_POSITION_S`,
+    in one set or two (the later row is dropped); meta
     ``duplicates_dropped`` counts the copies dropped. Refuses such a pair whose positions differ
     more, and a site key given two positions (MeasurementError naming the files)."""
     return _merge(sets, files, time_resolutions)[0]

@@ -159,9 +159,9 @@ def _again(tmp_path, seconds: float, dec_arcsec: float = 0.0):
 
 
 def test_observations_repeated_within_one_file_are_used_once_and_the_repeats_counted(tmp_path):
-    """Probe L5: every row given again 0.2 s later in the same file had been used twice without a word
-    (the cross-file duplicate rule did not look inside one file); now the later copy is dropped and
-    a note names the file, the count and the rule."""
+    """Probe L5: every row given again 0.2 s later in the same file, its angles as they were, had been
+    used twice without a word (the cross-file duplicate rule did not look inside one file); now the
+    later copy is dropped and a note names the file, the count and the rule."""
     lines = _psv_lines()
     header, rows = lines[:2], [r for r in lines[2:] if r]
     p = tmp_path / "twice.psv"
@@ -171,7 +171,7 @@ def test_observations_repeated_within_one_file_are_used_once_and_the_repeats_cou
     np.testing.assert_array_equal(objs[0].measurements.times, whole.times)
     assert objs[0].measurements.meta["duplicates_dropped"] == 65
     assert ("twice.psv: 65 observations dropped as repeats within the file (the same site and type as an earlier "
-            "row, times within 0.25 s and positions within 5 arcsec") in objs[0].notes[-1]
+            "row, times within 1 s at the same position to 0.001 arcsec") in objs[0].notes[-1]
 
 
 @pytest.mark.parametrize("seconds", [0.3, 0.864, 1.0])
@@ -184,11 +184,24 @@ def test_rows_given_again_at_the_same_position_within_a_second_are_used_once(tmp
     assert "again.psv: 65 observations dropped as repeats within the file" in obj.notes[-1]
 
 
-def test_rows_exactly_the_repeat_time_apart_are_all_repeats(tmp_path):
-    """Probe M7: at 0.25 s, with the angles 1 arcsec apart, 16 of 80 repeats had been kept (the
-    float times read the difference as a hair over 0.25 s) while the note said 65 were used once."""
-    obj = _again(tmp_path, 0.25, dec_arcsec=1.0)
+def test_exposures_a_tenth_of_a_second_apart_at_other_positions_are_all_kept(tmp_path):
+    """Probe N12: a dense survey's or video's frames 0.1 s apart, 0.4 arcsec apart by noise, had
+    been dropped as repeats (438 of 6,000); a repeat is the same position, not a near one."""
+    obj = _again(tmp_path, 0.1, dec_arcsec=0.4)
+    assert len(obj.measurements) == 130 and not any("repeat" in n for n in obj.notes)
+
+
+def test_rows_exactly_a_second_apart_at_the_same_position_are_all_repeats(tmp_path):
+    """Probe M7: at the rule's limit the float times must not keep some pairs (at 0.25 s 16 of 80 had been kept)."""
+    obj = _again(tmp_path, 1.0)
     assert len(obj.measurements) == 65 and obj.measurements.meta["duplicates_dropped"] == 65
+
+
+def test_the_old_repeat_time_is_still_importable_with_a_deprecation_warning():
+    import cistrack.fitting.observation_input as oi
+
+    with pytest.warns(DeprecationWarning, match="REPEAT_S no longer sets a rule"):
+        assert oi.REPEAT_S == 0.25
 
 
 def test_the_repeat_note_does_not_claim_each_observation_is_used_once(tmp_path):
