@@ -577,7 +577,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
     """
     from cistrack.evaluation.run_summary import RunSummary
     from cistrack.studies.lost_runs import say_lost_runs
-    from cistrack.studies.study import run_study
+    from cistrack.studies.study import done_line, run_study
     from cistrack.studies.study_table import study_rows
 
     _checked_arguments(study=study, out=out, log=log, progress=progress, overwrite=overwrite)
@@ -587,8 +587,7 @@ def study(study: str | Path, *, n_seeds: int | None = None, first_seed: int | No
         res = run_study(_expanded(study), out_dir=_expanded(out), workers=workers, progress=progress, settings=items,
                         first_seed=first_seed, n_seeds=n_seeds, overwrite=overwrite)
     if log is not None:
-        log(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
-            f"{res['failed']} failed -> {res['out_dir']}")
+        log(done_line(res))
     specs, directory = res["specs"], Path(res["out_dir"])
     rows = study_rows(specs)
     runs = tuple(Run(RunSummary.from_dict(row["summary"]), Path(row["directory"])) for row in rows)

@@ -18,8 +18,7 @@ def cmd_study(args) -> int:
                               progress=not args.quiet, rerun_dir=args.rerun, settings=args.set,
                               first_seed=args.first_seed, n_seeds=args.n_seeds, overwrite=args.overwrite)
         if not args.quiet:
-            print(f"study '{res['name']}': {res['completed']} runs completed, {res['skipped']} already done, "
-                  f"{res['failed']} failed -> {res['out_dir']}")
+            print(study.done_line(res))
         _report_problems(res)
         return 0 if res["failed"] == 0 else 3
     if args.study_cmd == "report":

@@ -90,6 +90,13 @@ class RunSummary:
     def custody_lost_t_days(self) -> float | None:
         return self.verdict.t_days
 
+    @property
+    def ended_normally(self) -> bool:
+        """Whether the run ran to its end ("finished"): only then is ``final`` the end of the run;
+        a run whose filter raised holds the state before it raised, which a study's final-state
+        calibration and efficiency leave out."""
+        return self.status == "finished"
+
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict (the manifest's ``summary``)."""
         custody = {} if not self.has_truth else {  # no truth: no custody to speak of

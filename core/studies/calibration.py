@@ -110,16 +110,18 @@ class GroupCalibration:
 
 def group_calibration(summaries: list) -> GroupCalibration:
     """The :class:`GroupCalibration` of run summaries (:class:`cistrack.evaluation.run_summary.RunSummary`,
-    at least one): custody from their verdicts, NEES and HDR level from ``final``."""
+    at least one): custody from their verdicts, NEES and HDR level from ``final`` of the runs that
+    ended normally (``ended_normally``: not those whose filter raised)."""
     n = len(summaries)
     if n == 0:
         raise ValueError("calibration of an empty group of runs")
     kept = sum(1 for s in summaries if s.custody_kept)
     lo, hi = wilson_interval(kept, n)
-    nees = np.asarray([s.final.get("nees", math.nan) for s in summaries], dtype=float)
+    ended = [s for s in summaries if s.ended_normally]  # a filter that raised has no final state
+    nees = np.asarray([s.final.get("nees", math.nan) for s in ended], dtype=float)
     nees = nees[np.isfinite(nees)]
     a_lo, a_hi = anees_bounds(nees.size) if nees.size else (math.nan, math.nan)
-    hdr = np.asarray([s.final.get("hdr_level", math.nan) for s in summaries], dtype=float)
+    hdr = np.asarray([s.final.get("hdr_level", math.nan) for s in ended], dtype=float)
     hdr = hdr[np.isfinite(hdr)]
     ks, p = uniformity_ks(hdr)
     return GroupCalibration(

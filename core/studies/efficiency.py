@@ -48,8 +48,11 @@ def _ratio(pairs: list[tuple[Any, Any]]) -> tuple[float | None, int, float | Non
 
 
 def group_efficiency(summaries: list[Any]) -> Efficiency:
-    """The :class:`Efficiency` of run summaries (:class:`cistrack.evaluation.run_summary.RunSummary`)."""
-    final, n, bound = _ratio([(s.final.get("pos_err_km"), s.final.get("bound_pos_km")) for s in summaries])
+    """The :class:`Efficiency` of run summaries (:class:`cistrack.evaluation.run_summary.RunSummary`):
+    the final ratio over the runs that ended normally (a filter that raised has no final state),
+    the pass ends' over every run that reached them."""
+    final, n, bound = _ratio([(s.final.get("pos_err_km"), s.final.get("bound_pos_km")) for s in summaries
+                              if s.ended_normally])
     passes = sorted({int(p) for s in summaries for p in s.pass_end}, key=int)
     by_pass = {}
     for p in passes:

@@ -246,9 +246,10 @@ def _group_row(key: tuple[str, str, str], sums: list[RunSummary], tables: list, 
            "failed_runs": sum(1 for x in sums if x.status != "finished"),
            "verdicts": "/".join(str(sum(1 for x in sums if x.verdict.kind == k)) for k in counted),
            **{_count_column(k): sum(1 for x in sums if x.verdict.kind == k) for k in counted}}
+    ended = [x for x in sums if x.ended_normally]  # a filter that raised has no final state
     for k in _FINALS:
-        row[k] = _median([x.final.get(k) for x in sums])
-    row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in sums])
+        row[k] = _median([x.final.get(k) for x in ended])
+    row["pos_err_km_p5"], row["pos_err_km_p95"] = _spread([x.final.get("pos_err_km") for x in ended])
     row["anees_every_update"], row["anees_every_update_n"] = _anees(tables)
     row["wall_time_s"] = _median([x.wall_time_s for x in sums])
     row["wall_time_s_p5"], row["wall_time_s_p95"] = _spread([x.wall_time_s for x in sums])

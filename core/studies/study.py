@@ -55,7 +55,7 @@ from cistrack.runs.run_id import run_id
 
 
 __all__ = ["RunSpec", "StudyOptions", "load_study", "plan_runs", "execute_run", "run_study", "close_dask_client",
-           "builtin_studies", "make_executor", "sweep_label", "sweep_item", "base_scenario_name"]
+           "builtin_studies", "make_executor", "sweep_label", "sweep_item", "base_scenario_name", "done_line"]
 
 
 @dataclass(frozen=True)
@@ -504,9 +504,32 @@ def run_study(path_or_name: str | Path, out_dir: str | Path | None = None, *args
         if todo:
             _remove_report_written_meanwhile(out)
     bad = {rid for rid, _ in problems}
-    return {"name": name, "out_dir": out, "completed": sum(1 for s in todo if s.run_id not in bad),
+    done = [s for s in todo if s.run_id not in bad]
+    return {"name": name, "out_dir": out, "completed": len(done), "filter_failed": _filter_failed(done),
             "skipped": len(specs) - len(todo), "failed": len(problems), "total": len(specs),
             "problems": problems, "specs": specs}
+
+
+def _filter_failed(done: list) -> int:
+    """How many of the runs ``done`` (specs of runs done on disk) ended "filter-failed"."""
+    from cistrack.results.run_status import run_status
+
+    n = 0
+    for s in done:
+        try:
+            n += run_status(s.out_dir)[0] == "filter-failed"
+        except (OSError, ValueError):  # read a moment ago by run_problems: a run gone since is not counted
+            continue
+    return n
+
+
+def done_line(res: dict[str, Any]) -> str:
+    """The line a finished ``study run`` prints for :func:`run_study`'s answer ``res``: runs
+    completed (and how many of them ended with their filter raising), already done, failed."""
+    ff = res.get("filter_failed") or 0
+    raised = f" ({ff} of them filter-failed: the filter raised; the report lists them)" if ff else ""
+    return (f"study '{res['name']}': {res['completed']} runs completed{raised}, {res['skipped']} already done, "
+            f"{res['failed']} failed -> {res['out_dir']}")
 
 
 def _study_options(args: tuple, options: StudyOptions | None, keywords: dict[str, Any]) -> StudyOptions:
