@@ -6,7 +6,9 @@ One observation per 80-column line (columns counted from 1):
 1-5      packed minor-planet number (or blank): the designation when given
 6-12     provisional or temporary designation: the designation of a line without a number; on a
          line with one it links the lines that give it alone to that number (as an ADES provID
-         beside a permID)
+         beside a permID). Packed numbers and provisional designations are read in the form ADES
+         files give them ("00433" as 433, "K26F01A" as 2026 FA1: :mod:`.mpc_designations`), so
+         that one object given in both formats is one object
 13       discovery asterisk
 14       note 1
 15       note 2: observation type. Optical types are read (blank, C, B, P, T, A, ...);
@@ -26,7 +28,8 @@ an MPC submission header (``COD 568``, ``OBS ...``, ``MEA``, ``TEL``, ``NET``, `
 observation. Spaces after column 80 (a line copied from a web page) are read past. The writer writes the
 time to 1e-6 day, RA to 0.001 s and Dec to 0.01 arcsec; reading gives those rounded values
 back, and writing them again gives the same text. It writes the designation (``meta["object"]``,
-else cis0001) in columns 6-12 and refuses one that does not fit them (over 7 characters) or is blank.
+else cis0001) in columns 6-12, a provisional designation packed ("2026 FA1" as K26F01A), and
+refuses one that does not fit them (over 7 characters) or is blank.
 """
 from __future__ import annotations
 
@@ -42,6 +45,7 @@ from cistrack.interfaces.reader import FieldError, read_text_lines, show_field
 from cistrack.units import ARCSEC_RAD, tu_to_utc
 
 from .decimal_units import decimal_in, to_rad
+from .mpc_designations import pack_provisional, unpack_number, unpack_provisional
 from .obs_rows import ObsRow, build_set, parse_epoch
 from .site_params import SiteReader, resolve_site
 
@@ -155,9 +159,10 @@ def _parse(line_text: str, path, ln: int, explicit, table) -> ObsRow:
     ra = _ra(s[32:44], path, ln)
     dec = _dec(s[44:56], path, ln)
     code = _site_code(s[77:80], path, ln, explicit, table)
-    number, provisional = s[0:5].strip(), s[5:12].strip()
+    number, provisional = unpack_number(s[0:5].strip()), unpack_provisional(s[5:12].strip())
     # the number names the object when given (as the MPC does), its provisional designation then links
-    # the lines that give that alone; the two fields together are no designation (probe I6)
+    # the lines that give that alone; the two fields together are no designation (probe I6); both in
+    # the form ADES files give them, so that one object in the two formats is one object (probe N15)
     return ObsRow(t, ra, dec, None, None, code, "radec", ln, "date (columns 16-32)", number or provisional,
                   provisional if number and provisional != number else "")
 
@@ -243,6 +248,7 @@ class Mpc80Reader(SiteReader):
         if bad:
             raise MeasurementError(f"{who}: sites {bad} are not 3-character MPC observatory codes")
         desig = str(ms.meta.get("object", "cis0001"))
+        desig = pack_provisional(desig) or desig  # "2026 FA1" is written as the MPC packs it, "K26F01A"
         problem = _designation_problem(desig)
         if problem:
             raise MeasurementError(f"{who}: designation {show_field(desig)} {problem}")
