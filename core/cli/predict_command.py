@@ -446,7 +446,8 @@ def cmd_predict(args) -> int:
         print("\n".join(table_lines(sky)))
     linear = f"note: {int(np.sum(sky.linear))} times carry the linear covariance (a sigma-point orbit hit a body)" \
         if np.any(sky.linear) else ""
-    notes = (linear, impact_note, _horizon_note(args.run, times, orbit), _lost_note(sky), _bent_line_note(args.run, sky))
+    notes = (linear, impact_note, _horizon_note(args.run, times, orbit), _lost_note(sky), _bent_line_note(args.run, sky),
+             _hidden_burn_note(args.run))
     out = sys.stderr if args.quiet else sys.stdout  # --quiet drops the table, not what qualifies the files
     for note in filter(None, notes):
         for line in note.splitlines():
@@ -454,6 +455,33 @@ def cmd_predict(args) -> int:
     if not args.quiet:
         print(f"wrote {csv_path}\nwrote {png}")
     return 0
+
+
+def _hidden_burn_note(run_dir) -> str:
+    """A note when a gap between the fit's observing sessions could hide a burn of any size
+    (``burn_sensitivity``: more than :data:`~cistrack.fitting.fit_summary.HIDDEN_ANY_SIZE_MS`, or
+    not determined): the predictions, like the fit, assume none there, and their ellipses hold no
+    such burn ("" for a run, or when every gap would show a large one)."""
+    from cistrack.errors import CistrackError
+    from cistrack.fitting.fit_export import is_fit_directory
+    from cistrack.fitting.fit_record import read_fit_record
+    from cistrack.fitting.fit_summary import HIDDEN_ANY_SIZE_MS
+
+    if not is_fit_directory(run_dir):
+        return ""
+    try:
+        gaps = ((read_fit_record(Path(run_dir)).get("burn_sensitivity") or {}).get("gaps")) or []
+    except (OSError, ValueError, CistrackError):  # the orbit was read from it already: no note is no harm
+        return ""
+    blind = [g for g in gaps if isinstance(g, dict) and not (isinstance(g.get("largest_hidden_ms"), (int, float))
+                                                              and g["largest_hidden_ms"] <= HIDDEN_ANY_SIZE_MS)]
+    if not blind:
+        return ""
+    last = blind[-1]
+    more = f" (and {len(blind) - 1} earlier gaps)" if len(blind) > 1 else ""
+    return (f"note: a burn of any size between {str(last.get('start_utc'))[:16]} and {str(last.get('end_utc'))[:16]}"
+            f"{more} would not show in the fit's observations: these predictions assume none, and their ellipses "
+            "do not allow for one (fit.json burn_sensitivity)")
 
 
 def _flagged(sky, run_dir):

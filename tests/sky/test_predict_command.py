@@ -236,6 +236,27 @@ def test_the_csv_flags_each_time_past_the_covariance_horizon(fitted, tmp_path, c
         ("2026-03-10T00:00:00Z", "False"), ("2026-03-10T06:00:00Z", "False"), ("2026-03-10T12:00:00Z", "True")]
 
 
+def test_a_gap_that_could_hide_a_burn_of_any_size_is_said_beside_the_predictions(fitted, tmp_path, capsys):
+    """Probe K8: a fit whose gap hides a burn of any size (burn_sensitivity null: not determined
+    there, as before a lone tracklet) had been predicted from with ellipses and no word that they
+    assume no burn; the shipped fit's gaps hide at most 25 m/s and get no such note."""
+    import json
+    import shutil
+
+    window = ["--start", "2026-03-07T00:00:00Z", "--stop", "2026-03-07T06:00:00Z", "--step", "360"]
+    assert main(["predict", str(fitted), "--site", "568", *window, "--out", str(tmp_path / "as_fitted")]) == 0
+    assert "would not show" not in capsys.readouterr().out
+    blind = tmp_path / "blind"
+    shutil.copytree(fitted, blind)
+    rec = json.loads((blind / "fit.json").read_text())
+    rec["burn_sensitivity"]["gaps"][-1]["largest_hidden_ms"] = None
+    (blind / "fit.json").write_text(json.dumps(rec))
+    assert main(["predict", str(blind), "--site", "568", *window, "--out", str(tmp_path / "blind_p"), "--quiet"]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    assert ("note: a burn of any size between 2026-03-05T07:46 and 2026-03-06T06:40 would not show in the fit's "
+            "observations: these predictions assume none") in err
+
+
 def test_an_out_prefix_over_another_fits_residual_plot_is_refused_even_with_overwrite(fitted, tmp_path, capsys):
     import shutil
 
