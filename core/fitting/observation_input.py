@@ -223,18 +223,25 @@ def _params(params: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in params.items() if k != "name"}
 
 
-_TIME_QUANTA_S = (1.0, 0.1, 0.01, 0.001)
-"""Time steps a file may round its times to (s), coarsest first."""
+_TIME_QUANTA_S = (86.4, 8.64, 1.0, 0.864, 0.1, 0.0864, 0.01, 0.001)
+"""Time steps a file may round its times to (s), coarsest first: whole seconds and their decimals,
+and the decimals of a day (1e-3 to 1e-6 day: MPC 80-column times, written to 5 decimals of a day
+by many programs, are 0.864 s apart)."""
 
 
 def data_time_resolution(ms: MeasurementSet) -> float:
-    """The coarsest of :data:`_TIME_QUANTA_S` that every time of ``ms`` is a multiple of (s; 0 when
-    none is: times written to full precision). A file that rounds its times to whole seconds has a
-    time resolution of a second whatever its format allows, and a copy of its observations in
-    another file then differs from them by up to that much."""
+    """The coarsest of :data:`_TIME_QUANTA_S` that every time of ``ms``, counted from its UTC day's
+    midnight, is a multiple of (s; 0 when none is: times written to full precision). A file that
+    rounds its times to whole seconds, or to 1e-5 day, has that time resolution whatever its format
+    allows, and a copy of its observations in another file then differs from them by up to that much."""
     sec = np.asarray(ms.times, dtype=float) * units.TU_S
+    if sec.size < 2:
+        return 0.0
+    first = units.tu_to_utc(units.parse_utc(READ_EPOCH), float(ms.times[0]))
+    midnight = first.replace(hour=0, minute=0, second=0, microsecond=0)
+    of_day = (first - midnight).total_seconds() + (sec - sec[0])  # no leap second within a file assumed
     for q in _TIME_QUANTA_S:
-        if sec.size >= 2 and np.all(np.abs(sec - np.round(sec / q) * q) < 2e-6):
+        if np.all(np.abs(of_day - np.round(of_day / q) * q) < 2e-6):
             return q
     return 0.0
 

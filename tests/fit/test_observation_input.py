@@ -223,3 +223,25 @@ def test_exposures_0_4_s_apart_of_a_moving_object_are_all_kept(tmp_path):
     p = tmp_path / "dense.psv"
     p.write_text("\n".join(header + rows + [_shifted(r, 0.4, float(d), 0.2) for r, d in zip(rows, noise)]) + "\n")
     assert len(read_object_observations([p], default_registry())[0].measurements) == 130
+
+
+def _mpc_to_five_decimals(path) -> None:
+    """``path`` (MPC 80-column) with each time rounded to 1e-5 day, as many programs write it."""
+    lines = []
+    for line in path.read_text().splitlines():
+        day = f"{round(float(line[23:32]), 5):08.5f}"
+        lines.append(line[:23] + day + " " + line[32:])
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_a_copy_in_mpc_80_column_with_times_to_1e_5_day_is_used_once(tmp_path):
+    """Probe N (M7 across formats): the shipped ADES observations given again as MPC 80-column with
+    times rounded to 1e-5 day (0.864 s) had been used twice but for 5 of them: the format's own
+    resolution (1e-6 day) was taken for the file's."""
+    from cistrack.runs.observation_files import write_observations
+
+    ms = read_observations(DATA / "observations.psv", "2026-03-01T00:00:00Z")
+    write_observations(tmp_path / "copy.obs", ms, "2026-03-01T00:00:00Z")
+    _mpc_to_five_decimals(tmp_path / "copy.obs")
+    [obj] = read_object_observations([DATA / "observations.psv", tmp_path / "copy.obs"], default_registry())
+    assert len(obj.measurements) == len(ms) and obj.measurements.meta["duplicates_dropped"] == len(ms)
