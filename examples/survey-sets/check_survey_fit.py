@@ -108,11 +108,12 @@ def _truth_rows(truth_csv: Path) -> list[list[str]]:
     return [r for r in csv.reader(ln for ln in truth_csv.read_text().splitlines() if not ln.startswith("#"))][1:]
 
 
-def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
-                        burn_utc: str | None = None) -> tuple[np.ndarray, np.ndarray, object]:
+def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str], burn_utc: str | None = None,
+                        area_to_mass: float = 0.0) -> tuple[np.ndarray, np.ndarray, object]:
     """(OEM times TU, truth states in the OEM frame (K, 6) km, km/s, truth_at function): the truth
-    propagated with the fit's dynamics from the first ``truth.csv`` row, and after ``burn_utc`` (a
-    burn) from the first row after it."""
+    propagated with the fit's dynamics, with the truth's own ``area_to_mass`` (m^2/kg; set.json's
+    ``area_to_mass_m2_kg``, 0 when absent) whatever the fit estimated, from the first
+    ``truth.csv`` row, and after ``burn_utc`` (a burn) from the first row after it."""
     from cistrack.fitting.fit_export import _scenario
     from cistrack.least_squares.trajectory import arc_states
     from cistrack.plugin.registry import default_registry
@@ -120,6 +121,8 @@ def _truth_in_oem_frame(fit_dir: Path, truth_csv: Path, epochs: list[str],
     reg = default_registry()
     scen = _scenario(fit_dir, reg)
     dyn = scen.build("dynamics", reg)
+    if area_to_mass:  # the fit's scenario flies none: a set made with radiation pressure carries its own
+        dyn = dyn.with_parameters(area_to_mass_m2_kg=area_to_mass)
     frame = scen.build("sensor", reg).inertial_frame()
     rows = _truth_rows(truth_csv)
     anchors = [rows[0]] + ([next(r for r in rows if units.parse_utc(r[0]) > units.parse_utc(burn_utc))]
@@ -173,12 +176,15 @@ def _score_burn(row: Row, rec: dict, burn: dict | None) -> None:
     row.burn_ok = len(found) == 1 and abs(z_t) <= 3 and abs(z_dv) <= 3 or row.burn_ms < 0.3
 
 
-def _score(row: Row, fit_dir: Path, truth_csv: Path, outliers: list[dict], burn: dict | None = None) -> None:
-    """Fill the row's error, Mahalanobis, RMS, rejections and burns from a converged, exported fit."""
+def _score(row: Row, fit_dir: Path, truth_csv: Path, info: dict) -> None:
+    """Fill the row's error, Mahalanobis, RMS, rejections and burns from a converged, exported fit
+    (``info``: the set's set.json)."""
+    outliers, burn = info.get("outliers", []), info.get("burn")
     rec = json.loads((fit_dir / "fit.json").read_text())
     _score_burn(row, rec, burn)
     epochs, states, covs = _read_oem()(fit_dir / "estimate.oem")
-    t, truth, truth_at = _truth_in_oem_frame(fit_dir, truth_csv, epochs, burn["utc"] if burn else None)
+    t, truth, truth_at = _truth_in_oem_frame(fit_dir, truth_csv, epochs, burn["utc"] if burn else None,
+                                             float(info.get("area_to_mass_m2_kg", 0.0)))
     m2 = np.array([float((truth[k] - states[k]) @ np.linalg.solve(covs[k], truth[k] - states[k]))
                    for k in range(len(t))])
     arc = t <= rec["arc"]["last_tu"] + 600.0 / units.TU_S
@@ -220,7 +226,7 @@ def check_set(set_dir: Path, out: Path) -> Row:
     if rc != 0:
         row.outcome, row.failure = "export failed", text.strip()[-300:]
         return row
-    _score(row, fit_dir, set_dir / "truth.csv", outliers, info.get("burn"))
+    _score(row, fit_dir, set_dir / "truth.csv", info)
     return row
 
 

@@ -40,7 +40,10 @@ and ``truth.csv`` are of the orbit flown with it, and ``set.json`` gives it as `
 (``utc``, ``delta_v_ms``, ``delta_v_vector_ms``). Without the option the sets are as before.
 With ``--exposures N`` every tracklet holds N exposures (a dense file: N = 6,000 gave 11
 tracklets, 66,000 observations); the 3-5 is still drawn, but the jitter draws N values, so the
-schedule after the first tracklet differs from the default set's of that seed.
+schedule after the first tracklet differs from the default set's of that seed. With
+``--area-to-mass A`` the truth feels solar radiation pressure (C_R A/m = A m^2/kg, the ephemeris
+dynamics' cannonball model), and ``set.json`` gives it as ``area_to_mass_m2_kg``, which
+``check_survey_fit.py`` propagates the truth with.
 
 Every random draw comes from ``numpy.random.default_rng(seed)`` (one stream per set, split
 per use with ``SeedSequence.spawn``). Same family and seed, same files. Seeds looked at while
@@ -118,9 +121,11 @@ def _truth_table(family: str) -> dict:
     raise SystemExit(f"make_survey_sets: unknown family {family!r}; known: {', '.join(FAMILIES)}")
 
 
-def _scenario(family: str, epoch: str, days: float, sigma: float):
+def _scenario(family: str, epoch: str, days: float, sigma: float, area_to_mass: float = 0.0):
     over = {"epoch": epoch, "duration_days": days, "truth": _truth_table(family),
             "sensor": {"sigma_arcsec": sigma}}
+    if area_to_mass:  # solar radiation pressure on the truth, C_R A/m m^2/kg
+        over["dynamics"] = {"area_to_mass_m2_kg": area_to_mass}
     scen = load_scenario("real-data").with_overrides(over)
     return _ephemeris_halo(scen, days) if family == "halo" else scen
 
@@ -255,13 +260,13 @@ def _first_night_rule(family: str, grid: np.ndarray, truth: np.ndarray):
     return lambda p: float(np.interp(p.start, grid, r_km)) < HEO_FIRST_NIGHT_MAX_KM
 
 
-def _draw(family: str, seed: int, rngs, reg, exposures: int | None = None):
+def _draw(family: str, seed: int, rngs, reg, exposures: int | None = None, area_to_mass: float = 0.0):
     """Draw epochs, sites and schedules until one gives at least ``MIN_NIGHTS`` nights (and, for
     the HEO, a first night inside the range floor); at most ``MAX_DRAWS`` draws."""
     choose_rng, plan_rng = rngs
     for _k in range(MAX_DRAWS):
         info = _choose(choose_rng, family, seed)
-        scen = _scenario(family, info["epoch"], info["span_days"] + 8.0, info["sigma_arcsec"])
+        scen = _scenario(family, info["epoch"], info["span_days"] + 8.0, info["sigma_arcsec"], area_to_mass)
         made = _truth(scen, reg)
         if made is None:
             continue
@@ -295,14 +300,18 @@ def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: f
     return Impulse(t_burn, dv / (units.vu_to_kms(1.0) * 1000.0), "burn"), record
 
 
-def make(out: Path, family: str, seed: int, burn_ms: float = 0.0, exposures: int | None = None) -> dict:
+def make(out: Path, family: str, seed: int, burn_ms: float = 0.0, exposures: int | None = None,
+         area_to_mass: float = 0.0) -> dict:
     """Simulate one set into ``out`` (with ``burn_ms`` > 0: the object makes one burn of that many
-    m/s, :func:`_burn`; with ``exposures``, every tracklet holds that many); returns its description
-    (also written as set.json)."""
+    m/s, :func:`_burn`; with ``exposures``, every tracklet holds that many; with ``area_to_mass``
+    (m^2/kg, C_R A/m), the truth feels solar radiation pressure, recorded in set.json as
+    ``area_to_mass_m2_kg``); returns its description (also written as set.json)."""
     streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(5)
     choose_rng, plan_rng, noise_rng, outlier_rng, burn_rng = (np.random.default_rng(s) for s in streams)
     reg = default_registry()
-    info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg, exposures)
+    info, scen, dyn, x0, times = _draw(family, seed, (choose_rng, plan_rng), reg, exposures, area_to_mass)
+    if area_to_mass:
+        info["area_to_mass_m2_kg"] = float(area_to_mass)
     if burn_ms > 0:
         impulse, info["burn"] = _burn(burn_rng, times, burn_ms, scen.epoch)
         dyn = ImpulsiveDynamics(dyn, [impulse])
@@ -360,10 +369,12 @@ def main() -> None:
     ap.add_argument("--burn-ms", type=float, default=0.0, help="one impulsive burn of this many m/s (default: none)")
     ap.add_argument("--exposures", type=int, default=None,
                     help="exposures in every tracklet (default: 3-5 drawn); the schedule is then another one")
+    ap.add_argument("--area-to-mass", type=float, default=0.0, metavar="M2_KG",
+                    help="solar radiation pressure on the truth, C_R A/m in m^2/kg (default: none)")
     a = ap.parse_args()
     for fam in a.family:
         for seed in a.seed:
-            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms, a.exposures)
+            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms, a.exposures, a.area_to_mass)
             burn = f"; a {a.burn_ms:g} m/s burn at {info['burn']['utc'][:16]}" if "burn" in info else ""
             print(f"{fam} seed {seed}: {info['n_observations']} observations, {info['tracklets']} tracklets over "
                   f"{info['nights']} nights from {', '.join(info['sites'])}; first night {info['first_night_exposures']} "
