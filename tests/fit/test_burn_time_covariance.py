@@ -93,3 +93,26 @@ def test_a_burn_without_a_measured_time_adds_nothing():
     arc = _arc()
     one = fit_impulses(arc, _truth(EPOCH), EPOCH, [TB])
     assert _with_burn_times(arc, one.fit, [BurnEstimate(TB, one.burns[0].delta_v_ms, np.eye(3))], [GAP]) is one.fit
+
+
+def _epoch_velocity_shift(t: float, t_b: float) -> np.ndarray:
+    """Closed form: refitted with the burn at ``t`` instead of ``t_b``, the state at EPOCH moves by
+    DV (EPOCH - TB) (1 / (EPOCH - t) - 1 / (EPOCH - t_b)) in velocity and not in position (the
+    pre-burn orbit is fixed by the first two passes, the delta-v by the position at EPOCH)."""
+    d = np.zeros(6)
+    d[3:] = DV * (EPOCH - TB) * (1.0 / (EPOCH - t) - 1.0 / (EPOCH - t_b))
+    return d
+
+
+def test_a_sigma_point_beyond_its_gap_is_stood_for_by_the_other():
+    """A burn at 2.4 +- 0.3 in the gap 2.2-4.0: its earlier point (1.88) lies before the gap's start,
+    so the later one (2.92) alone gives the spread, d d^T / 3 (the rule's (d+ d+^T + d- d-^T) / 6
+    with d- = d+), not a point clipped to the gap's start."""
+    arc, t_b, sigma_t = _arc(), 2.4, 0.3
+    one = fit_impulses(arc, _truth(EPOCH), EPOCH, [t_b])
+    burn = BurnEstimate(t_b, one.burns[0].delta_v_ms, one.burns[0].covariance_ms2, sigma_t, np.zeros(3))
+    out = _with_burn_times(arc, one.fit, [burn], [GAP])
+    d = _epoch_velocity_shift(t_b + np.sqrt(3.0) * sigma_t, t_b)
+    np.testing.assert_allclose(np.asarray(out.covariance) - one.fit.covariance, np.outer(d, d) / 3.0,
+                               rtol=1e-5, atol=1e-9 * d[4] ** 2)
+
