@@ -819,11 +819,14 @@ def _walked(arc: BurnArc, found: ManeuverSearch, b: BurnEstimate, window: tuple[
 
 
 def _widened(b: BurnEstimate, allowed: list[tuple[float, np.ndarray, float]]) -> BurnEstimate:
-    """``b`` with each allowed (time, delta-v, m) m sigmas from its estimate (:func:`times_allowed`)."""
-    sigma = max(b.t_sigma, max(abs(t - b.t) / m for t, _, m in allowed))
+    """``b`` with each allowed (time, delta-v, m) m sigmas from its estimate (:func:`times_allowed`);
+    its ``reach`` the (time, m) that sets the time's sigma."""
+    t_far, _, m_far = max(allowed, key=lambda a: abs(a[0] - b.t) / a[2])
+    sigma = max(b.t_sigma, abs(t_far - b.t) / m_far)
     d = [(np.asarray(dv, dtype=float) - b.delta_v_ms) / m for _, dv, m in allowed]
     try:
         far = max(d, key=lambda x: float(x @ np.linalg.solve(b.covariance_ms2, x)))
     except np.linalg.LinAlgError:
         far = max(d, key=lambda x: float(x @ x))
-    return replace(b, covariance_ms2=b.covariance_ms2 + np.outer(far, far), t_sigma=sigma, widened=True)
+    return replace(b, covariance_ms2=b.covariance_ms2 + np.outer(far, far), t_sigma=sigma, widened=True,
+                   reach=(float(t_far), float(m_far)) if sigma > b.t_sigma else b.reach)

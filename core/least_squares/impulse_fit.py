@@ -63,6 +63,8 @@ class BurnEstimate:
                                    (the term g g^T t_sigma^2 of ``covariance_ms2``); None when not assessed
     widened : bool                 ``t_sigma`` and ``covariance_ms2`` were widened to reach other times
                                    the arc allows (full fits there, not the linear term g)
+    reach : (float, float) or None (TU, m): of those times, the one that set the widened ``t_sigma``
+                                   and how many of those sigmas it lies away (None when not widened)
     """
 
     t: float
@@ -71,6 +73,7 @@ class BurnEstimate:
     t_sigma: float = 0.0
     dv_dt: np.ndarray | None = None
     widened: bool = False
+    reach: tuple[float, float] | None = None
 
     def refitted(self, later: "BurnEstimate") -> "BurnEstimate":
         """``later`` (a joint refit of this burn at the same time, with another burn added: its
@@ -80,7 +83,7 @@ class BurnEstimate:
             return later
         g = np.asarray(self.dv_dt, dtype=float)
         return BurnEstimate(later.t, later.delta_v_ms, later.covariance_ms2 + np.outer(g, g) * self.t_sigma ** 2,
-                            self.t_sigma, g, self.widened)
+                            self.t_sigma, g, self.widened, self.reach)
 
     @property
     def magnitude_ms(self) -> float:

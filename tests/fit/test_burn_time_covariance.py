@@ -116,3 +116,28 @@ def test_a_sigma_point_beyond_its_gap_is_stood_for_by_the_other():
     np.testing.assert_allclose(np.asarray(out.covariance) - one.fit.covariance, np.outer(d, d) / 3.0,
                                rtol=1e-5, atol=1e-9 * d[4] ** 2)
 
+
+def test_a_widened_burn_carries_the_orbit_of_the_time_that_widened_it():
+    """A burn at 3.0 +- 0.1 widened to reach 3.8, 2 of its sigmas away: the state covariance takes
+    d d^T / 4 of the orbit refitted with the burn at 3.8 on top of the sigma points' spread (between
+    two minima of the cost the sigma points lie where the arc allows no burn)."""
+    arc, sigma_t = _arc(), 0.1
+    one = fit_impulses(arc, _truth(EPOCH), EPOCH, [TB])
+    burn = BurnEstimate(TB, one.burns[0].delta_v_ms, one.burns[0].covariance_ms2, sigma_t, np.zeros(3),
+                        widened=True, reach=(3.8, 2.0))
+    out = _with_burn_times(arc, one.fit, [burn], [GAP])
+    step = np.sqrt(3.0) * sigma_t
+    points = [_epoch_velocity_shift(TB + s * step, TB) for s in (-1.0, 1.0)]
+    far = _epoch_velocity_shift(3.8, TB)
+    expected = sum(np.outer(p, p) for p in points) / 6.0 + np.outer(far, far) / 4.0
+    np.testing.assert_allclose(np.asarray(out.covariance) - one.fit.covariance, expected, rtol=1e-5,
+                               atol=1e-9 * far[4] ** 2)
+
+
+def test_a_widened_burn_records_the_allowed_time_that_sets_its_sigma():
+    """Allowed at 3.5 (2 sigmas away) and at 3.2 (3 away): 3.5 sets the time's sigma, 0.25."""
+    from cistrack.least_squares.burn_search import _widened
+
+    b = BurnEstimate(TB, np.array([0.3, 0.0, 0.0]), np.eye(3) * 1e-4, 0.01, np.zeros(3))
+    out = _widened(b, [(3.5, np.array([0.4, 0.0, 0.0]), 2.0), (3.2, np.array([0.35, 0.0, 0.0]), 3.0)])
+    assert out.t_sigma == 0.25 and out.reach == (3.5, 2.0)
