@@ -44,7 +44,7 @@ from cistrack.interfaces.dynamics import Dynamics
 from cistrack.interfaces.sensor import Sensor
 from cistrack.model.measurement import MeasurementSet
 
-__all__ = ["fit_orbit"]
+__all__ = ["fit_orbit", "whitened_jacobian"]
 
 
 def _check_state(state: Any, name: str) -> np.ndarray:
@@ -174,6 +174,16 @@ class _Problem:
             n[:6, :6] += self.prior[1]
             g[:6] += self.prior[1] @ (self.prior[0] - x[:6])
         return 0.5 * (n + n.T), g
+
+
+def whitened_jacobian(dynamics: Dynamics, model: MeasurementModel, state: np.ndarray, t0: float,
+                      names: tuple[str, ...] = (), values: Any = ()) -> np.ndarray:
+    """The fit's own Jacobian (K, m, 6 + P) at the ``state`` (6,) at ``t0`` (TU) with the solve-for
+    parameters ``names`` at ``values`` (P,): d h / d (state, parameters) over the rows of ``model``,
+    each divided by its sigma (a burn's delta-v columns from the transition matrices, like the
+    fit's)."""
+    x = np.concatenate([np.asarray(state, dtype=float), np.asarray(values, dtype=float).reshape(-1)])
+    return _Problem(dynamics, model, t0, None, _solve_for(dynamics, names)).jacobian(x)
 
 
 def _diagonal_scale(n: np.ndarray) -> np.ndarray:

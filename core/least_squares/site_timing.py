@@ -17,13 +17,14 @@ relative offset. A clock 30 s late at one of two survey sites had been absorbed 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from cistrack import units
 from cistrack.least_squares.chi_square import chi2_ppf
+from cistrack.least_squares.differential_correction import whitened_jacobian
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.result import FitResult
 from cistrack.least_squares.trajectory import arc_states_and_stms
@@ -46,6 +47,10 @@ class SiteTiming:
     offset_s : float    recorded minus true time, s (positive: the site's times are late)
     sigma_s : float     its one sigma, s
     drop : float        the chi-square the offset removes (1 degree of freedom)
+    absorbed_per_s : (6 + P,) float   the linearised ``A^+ c`` per second of offset: the fit's state
+                        (at its epoch; LU, VU) and its ``also`` parameters (their units) with the
+                        offset fitted too are these minus ``absorbed_per_s * offset_s``, and their
+                        covariance grows by ``absorbed_per_s absorbed_per_s^T sigma_s^2``
     """
 
     site: str
@@ -53,6 +58,7 @@ class SiteTiming:
     offset_s: float
     sigma_s: float
     drop: float
+    absorbed_per_s: np.ndarray = field(default_factory=lambda: np.zeros(6), compare=False, repr=False)
 
 
 def timing_limit() -> float:
@@ -60,34 +66,51 @@ def timing_limit() -> float:
     return float(chi2_ppf(1.0 - TIMING_FALSE_ALARM, 1))
 
 
-def site_timings(dynamics: Any, sensor: Any, ms: MeasurementSet, result: FitResult) -> list[SiteTiming]:
+def site_timings(dynamics: Any, sensor: Any, ms: MeasurementSet, result: FitResult,
+                 also: tuple[str, ...] = ()) -> list[SiteTiming]:
     """One :class:`SiteTiming` per site with observations in the fit ``result`` of ``ms`` (times
     TU, angles rad) tied to another site's in time (:func:`_tied`), largest drop first; [] with
     fewer than two sites. Linearised at the fit (the module docstring); the solve-for parameters
-    held at their estimates."""
+    held at their estimates, except ``also`` (names among ``result.parameter_names``: a fit with
+    burns, their delta-v), whose columns the offset is projected against with the state's (what
+    the burns absorb of a site's clock is not left to it)."""
     used = ~np.asarray(result.residuals.rejected, dtype=bool)
     if ms.sites is None or len(set(np.asarray(ms.sites)[used].tolist())) < 2:
         return []
     dyn = _fitted(dynamics, result)
     model = MeasurementModel(sensor, ms)
-    states, stms = arc_states_and_stms(dyn, result.state, result.epoch, model.times)
-    a = (np.einsum("kmi,kij->kmj", model.jacobian(states), stms) / model.sigmas[..., None])[used].reshape(-1, 6)
+    states, a = _columns(dyn, model, result, tuple(also))
+    a = a[used].reshape(-1, a.shape[-1])
     r = (model.residuals(states) / model.sigmas)[used].reshape(-1)
     rate = _rates(dyn, sensor, ms, result) / model.sigmas
-    q, _ = np.linalg.qr(a)
+    q, upper = np.linalg.qr(a)
     r = r - q @ (q.T @ r)
     sites = np.asarray(ms.sites).astype(str)
     out = []
     for site in _tied(np.asarray(model.times, dtype=float)[used], sites[used]):
         c = np.where((sites == site)[:, None], -rate, 0.0)[used].reshape(-1)
-        c = c - q @ (q.T @ c)
+        absorbed = q.T @ c
+        c = c - q @ absorbed
         cc = float(c @ c)
         if not cc > 0.0:
             continue
         cr = float(c @ r)
+        per_s = np.linalg.solve(upper, absorbed) * units.days_to_tu(1.0 / 86400.0)
         out.append(SiteTiming(site, int(np.sum(used & (sites == site))), _seconds(cr / cc), _seconds(1.0 / np.sqrt(cc)),
-                              cr * cr / cc))
+                              cr * cr / cc, per_s))
     return sorted(out, key=lambda s: -s.drop)
+
+
+def _columns(dynamics: Any, model: MeasurementModel, result: FitResult, also: tuple[str, ...]):
+    """(states (K, 6), whitened Jacobian (K, m, 6 + len(also))) of the fit ``result`` along the
+    fitted ``dynamics``: the state's columns, and ``also``'s parameters' (the fit's own Jacobian,
+    :func:`~cistrack.least_squares.differential_correction.whitened_jacobian`)."""
+    states, stms = arc_states_and_stms(dynamics, result.state, result.epoch, model.times)
+    if not also:
+        return states, np.einsum("kmi,kij->kmj", model.jacobian(states), stms) / model.sigmas[..., None]
+    names = list(result.parameter_names)
+    values = [float(result.parameters[names.index(n)]) for n in also]
+    return states, whitened_jacobian(dynamics, model, result.state, result.epoch, also, values)
 
 
 def with_site_times_shifted(ms: MeasurementSet, site: str, seconds: float) -> MeasurementSet:
