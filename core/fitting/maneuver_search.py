@@ -127,7 +127,8 @@ def _clock_explains(ctx, one, r, why: str) -> bool:
     """Whether one site's clock offset explains ``r``, the ballistic fit of ``one``
     (:func:`~cistrack.fitting.site_clock.clock_off`). Then ``one.result`` is ``r`` with the words:
     not clean when ``r`` looks like a maneuver (``why``) or the correction moves its orbit beyond
-    :data:`~cistrack.fitting.site_clock.MOVED_BOUND` in its covariance; else kept, the clock a note."""
+    :data:`~cistrack.fitting.site_clock.MOVED_BOUND` in its covariance; else kept, the clock a note
+    and its covariance widened by the offset (:func:`~cistrack.fitting.site_clock.consider_spread`)."""
     from cistrack.fitting.site_clock import MOVED_BOUND, clock_off
 
     finding = clock_off(ctx, one, r)
@@ -138,9 +139,20 @@ def _clock_explains(ctx, one, r, why: str) -> bool:
         one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
             f"not a clean fit: {finding.words}{also}",))
     else:
-        one.result = replace(r, messages=tuple(r.messages) + (
-            f"{finding.words}, within the {MOVED_BOUND:g} it allows: the fit is kept as it is",))
+        one.result = replace(_widened(r, finding.spread), messages=tuple(r.messages) + (
+            f"{finding.words}, within the {MOVED_BOUND:g} it allows: the fit is kept as it is, its covariance widened "
+            "by the offset (its size and its sigma) along the orbit's sensitivity to it",))
     return True
+
+
+def _widened(r, spread: np.ndarray):
+    """``r`` with ``spread`` (6, 6) LU, VU added to its state covariance (and to that block of its
+    full covariance)."""
+    full = r.full_covariance
+    if full is not None:
+        full = np.array(full, dtype=float)
+        full[:6, :6] += spread
+    return replace(r, covariance=np.asarray(r.covariance, dtype=float) + spread, full_covariance=full)
 
 
 def _clock_passes_for_burns(ctx, one, suspect: tuple, fit, burns) -> bool:
@@ -704,11 +716,7 @@ def _with_burn_times(arc, fit, burns, windows):
             extra += _time_spread(arc, fit, burns, k, window, b.t_sigma)
         if b.reach is not None:
             extra += _reach_spread(arc, fit, burns, k)
-    if not extra.any():
-        return fit
-    full = np.array(fit.full_covariance, dtype=float)
-    full[:6, :6] += extra
-    return replace(fit, covariance=np.asarray(fit.covariance, dtype=float) + extra, full_covariance=full)
+    return _widened(fit, extra) if extra.any() else fit
 
 
 def _time_spread(arc, fit, burns, k: int, window: tuple[float, float], t_sigma: float) -> np.ndarray:

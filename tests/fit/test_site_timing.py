@@ -10,6 +10,7 @@ import pytest
 
 from .arc_campaigns import two_weeks
 from cistrack import units
+from cistrack.fitting.site_clock import consider_spread
 from cistrack.least_squares.differential_correction import fit_orbit
 from cistrack.least_squares.measurement_model import MeasurementModel
 from cistrack.least_squares.options import FitOptions
@@ -36,12 +37,16 @@ def _campaign(late_site: str | None):
     return c, made if late_site is None else with_site_times_shifted(made, late_site, LATE_S)
 
 
+def _fit(c, ms: MeasurementSet, t0: float | None = None):
+    """The least squares of ``ms`` from the truth at ``t0`` (TU; its epoch; None: its last observation)."""
+    t0 = float(ms.times[-1]) if t0 is None else t0
+    return fit_orbit(c.dynamics, c.sensor, ms, np.asarray(c.truth_at(np.array([t0]))[0], dtype=float), t0,
+                     options=FitOptions(area_to_mass="off"))
+
+
 def _timings(late_site: str | None):
     c, ms = _campaign(late_site)
-    t0 = float(ms.times[-1])
-    fit = fit_orbit(c.dynamics, c.sensor, ms, np.asarray(c.truth_at(np.array([t0]))[0], dtype=float), t0,
-                    options=FitOptions(area_to_mass="off"))
-    return site_timings(c.dynamics, c.sensor, ms, fit)
+    return site_timings(c.dynamics, c.sensor, ms, _fit(c, ms))
 
 
 @pytest.fixture(scope="module")
@@ -96,3 +101,18 @@ def test_shifting_a_sites_times_moves_only_its_rows_and_keeps_time_order():
         before = np.sort(ms.times[np.asarray(ms.sites) == site])
         after = np.sort(moved.times[np.asarray(moved.sites) == site])
         assert np.allclose(after, before + (hour if site == "568" else 0.0), rtol=0, atol=1e-12)
+
+
+def test_a_fit_widened_by_a_sites_offset_holds_the_orbit_with_that_site_corrected():
+    """809's times 30 s late: the orbit fitted with 809's times corrected by the measured offset lies
+    far outside the uncorrected fit's covariance (Mahalanobis^2 about 1,000); that covariance
+    widened by the offset as a consider parameter (its size and sigma along the state's
+    sensitivity to it) holds it at about one sigma (linearised: offset^2 / (offset^2 + sigma^2) < 1;
+    1.4 here, the corrected fit readmitting the rows the uncorrected one rejected)."""
+    c, ms = _campaign("809")
+    fit = _fit(c, ms)
+    best = site_timings(c.dynamics, c.sensor, ms, fit)[0]
+    d = _fit(c, with_site_times_shifted(ms, "809", -best.offset_s), fit.epoch).state - fit.state
+    p = np.asarray(fit.covariance, dtype=float)
+    assert d @ np.linalg.solve(p, d) > 22.5
+    assert d @ np.linalg.solve(p + consider_spread(best, best.offset_s, best.sigma_s), d) < 2.0

@@ -433,3 +433,19 @@ def test_burns_that_one_sites_clock_error_passes_for_are_not_reported(tmp_path):
     messages = _failed_fit_messages(set_dir, tmp_path)
     assert any("a clock or position error at T08" in m for m in messages), messages
 
+
+@pytest.mark.slow
+def test_a_site_offset_the_fit_keeps_is_worded_clock_or_position_and_widens_its_covariance(tmp_path):
+    """dro seed 1504 with G96's rows filed as 703, 6 km away (probe M2): read as 703's times 6.2 s
+    early, the fit was kept "well determined" with the truth at Mahalanobis^2 56. The words offer a
+    position error too, and the kept fit's covariance carries the offset as a consider parameter,
+    the truth inside it over the arc."""
+    set_dir = tmp_path / "dro-s1504"
+    make(set_dir, "dro", seed=1504)
+    psv = set_dir / "observations.psv"
+    psv.write_text(psv.read_text().replace("|G96|", "|703|"))
+    row = check_set(set_dir, tmp_path / "fits")
+    messages = json.loads((tmp_path / "fits" / set_dir.name / "fit.json").read_text())["messages"]
+    assert any("a clock or position error at 703" in m and "covariance widened" in m for m in messages), messages
+    assert row.outcome == "converged" and max(row.m2) <= MAHALANOBIS2_BOUND, row.max_m2
+
