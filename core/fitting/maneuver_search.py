@@ -330,8 +330,8 @@ share of the arc: a site that alone saw one end of it would take a burn with it.
 
 
 def site_left_out(ctx, one, r, say=None) -> str:
-    """Words naming the one site without whose observations the rest fit cleanly ("" when none or
-    several do): each site with three observations or more left out in turn, the others (spanning
+    """Words naming the one site without whose observations the rest fit cleanly, and any site that
+    could not be left out ("" when none or several do): each site with three observations or more left out in turn, the others (spanning
     :data:`SITE_SPAN_SHARE` of the arc, from two sites or more) fitted (:func:`_left_out_fit`) with
     the fit's options and the share of rejections it applied, clean when converged with nothing
     :func:`~cistrack.least_squares.burn_search.suspicion` or
@@ -339,7 +339,9 @@ def site_left_out(ctx, one, r, say=None) -> str:
     offset, or a wrong site code, had been reported only as "an object that maneuvered"; and one
     site's ballistic fit had absorbed a real 1 m/s burn, blaming the other site's lone tracklet. The
     words offer both explanations: on 3 of 34 survey sets with a real 0.3-1 m/s burn and no site
-    error the others' observations alone fit cleanly too."""
+    error the others' observations alone fit cleanly too. A site that could not be left out (the
+    others short of the span) is named beside the one that was: W68's rows filed as X03 had been
+    blamed on 809, the one site tested and the one right."""
     from cistrack.least_squares.burn_search import screen_suspicion, suspicion
 
     ms = ctx.measurements
@@ -347,10 +349,11 @@ def site_left_out(ctx, one, r, say=None) -> str:
     opts = one.choices.options
     if one.reject_fraction is not None:
         opts = replace(opts, max_reject_fraction=one.reject_fraction)
-    clean = []
+    clean, untested = [], []
     for x in [x for x in np.unique(sites) if x and np.sum(sites == x) >= 3]:
         keep = sites != x
         if keep.sum() < 6 or len(set(sites[keep])) < 2 or np.ptp(t[keep]) < SITE_SPAN_SHARE * np.ptp(t):
+            untested.append(x)
             continue
         (say or (lambda m: None))(f"{one.designation}: fitting the observations of every site but {x}")
         sub = ms.subset(keep)
@@ -360,8 +363,17 @@ def site_left_out(ctx, one, r, say=None) -> str:
     if len(clean) != 1:
         return ""
     x, n, rms = clean[0]
+    if untested:  # one of them may be the site in error: the others' fit without it was never tried
+        return (f"without site {x}'s {n} observations the others fit cleanly (weighted RMS {rms:.2f}), but "
+                f"{_sites_words(untested)} could not be left out in turn (the others' observations do not span "
+                f"{100 * SITE_SPAN_SHARE:.0f} % of the arc): a clock, position or stated-uncertainty error at "
+                f"{' or '.join([x, *untested])}, or a burn the other sites' observations alone do not show?")
     return (f"without site {x}'s {n} observations the others fit cleanly (weighted RMS {rms:.2f}): a clock, position or "
             f"stated-uncertainty error at {x}, or a burn the other sites' observations alone do not show?")
+
+
+def _sites_words(sites: list[str]) -> str:
+    return f"site {sites[0]}" if len(sites) == 1 else "sites " + ", ".join(sites)
 
 
 def _left_out_fit(ctx, sub, r, opts):

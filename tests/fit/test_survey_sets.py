@@ -466,3 +466,15 @@ def test_two_sites_with_clocks_off_are_both_measured(tmp_path):
                                                r"\+- [\d.]+ s early", said[0]).groups())
     assert abs(late - 45.0) <= 5.0 and abs(early - 20.0) <= 5.0, said[0]
 
+
+@pytest.mark.slow
+def test_a_site_the_leave_out_could_not_test_is_named_beside_the_one_it_did(tmp_path):
+    """dro seed 1501 with W68's rows filed as X03, 7.6 km away (probe M3): X03 could not be left out
+    (the others do not span 90 % of the arc) and 809, the one site tested and the one right, had
+    been named alone. The words name X03 beside it."""
+    set_dir = tmp_path / "dro-s1501"
+    make(set_dir, "dro", seed=1501)
+    psv = set_dir / "observations.psv"
+    psv.write_text(psv.read_text().replace("|W68|", "|X03|"))
+    said = [m for m in _failed_fit_messages(set_dir, tmp_path) if "stated-uncertainty error at" in m]
+    assert said and all("X03" in m.split("stated-uncertainty error at")[1] for m in said), said
