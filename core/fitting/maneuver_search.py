@@ -74,7 +74,8 @@ def add_maneuvers(one, say) -> None:
     explains, or that is still suspect with the burns found, is searched once more with each burn
     started where the orbits fitted to either side of a gap meet
     (:mod:`cistrack.least_squares.split_start`); when that is not clean either, it is not reported
-    as converged (and the burns are not reported): its messages say the first search's reason.
+    as converged (and the burns are not reported): its messages say the first search's reason, and
+    radiation pressure when that fits it cleanly too (:mod:`cistrack.fitting.pressure_rescue`).
     A fit suspect only by the linearised screen (:func:`~cistrack.least_squares.burn_search.screen_suspicion`)
     is searched once, and stays as it was unless that search measures its burns, its messages saying
     why (a dense campaign's 1 cm/s burn: 0.07 +- 0.06 m/s 1.7 days before it passes the burn test).
@@ -104,9 +105,7 @@ def add_maneuvers(one, say) -> None:
         outcome = _retried(ctx, one, outcome, say)
     found, fit, burns, doubt = outcome.found, outcome.fit, outcome.burns, outcome.doubt
     if doubt:
-        site = site_left_out(ctx, one, r, say)
-        one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
-            f"{_unclean(one, r, why)}, and {doubt}" + (f"; {site}" if site else ""),))
+        _not_measured(ctx, one, (r, why), doubt, say)
         return
     fit, burns = _ratio_as_set(ctx, one, found, fit, burns)
     if _clock_passes_for_burns(ctx, one, (r, why), fit, burns):
@@ -121,6 +120,35 @@ def add_maneuvers(one, say) -> None:
         f"the ballistic fit looked like a maneuver ({why}); fitted with {len(burns)} impulsive burn(s): {text}"
         + _size_words(fit, burns),
         *moves))
+
+
+def _not_measured(ctx, one, ballistic, doubt: str, say) -> None:
+    """``one``'s result when its ballistic fit (``ballistic``: the fit and why it looked like a
+    maneuver) is one no burn measured (``doubt``): not clean, its words naming a site whose
+    observations alone the others do not fit (:func:`site_left_out`) and radiation pressure when
+    that fits it cleanly too (:func:`_pressure_words`)."""
+    r, why = ballistic
+    site = site_left_out(ctx, one, r, say)
+    pressure = _pressure_words(ctx, one, r, say)
+    one.result = replace(_ratio_unclean(r), converged=False, messages=tuple(r.messages) + (
+        f"{_unclean(one, r, why)}, and {doubt}" + (f"; {site}" if site else "") + pressure,))
+
+
+def _pressure_words(ctx, one, r, say) -> str:
+    """"; radiation pressure ... fits it cleanly too ..." when the fit of ``one``'s observations with
+    C_R A/m solved for is clean and passes "auto"'s test (:mod:`cistrack.fitting.pressure_rescue`),
+    else "". The fit is not replaced: on a survey set with a 0.3 m/s burn the ratio fitted cleanly
+    (0.19 m^2/kg, 13 sigma) and that orbit missed the truth by Mahalanobis^2 660,000; the arc cannot
+    tell the two apart, the user can (an object's ratio is known, or fits a longer arc)."""
+    from cistrack.fitting.pressure_rescue import pressure_explains
+
+    say(f"{one.designation}: no burn measured; fitting radiation pressure (C_R A/m solved for) instead")
+    seven = pressure_explains(ctx, one, r)
+    if seven is None:
+        return ""
+    value, sigma = seven.parameter("area_to_mass_m2_kg")
+    return (f"; radiation pressure fits it cleanly too (C_R A/m = {value:.3g} +- {sigma:.2g} m^2/kg; "
+            "--set fit.area_to_mass=solve fits it so): these observations cannot tell it from a burn")
 
 
 def _clock_explains(ctx, one, r, why: str) -> bool:

@@ -50,3 +50,22 @@ def test_a_fit_of_a_radiation_pressure_set_is_scored_against_its_own_truth(sets,
     row = check_set(sets[1], tmp_path / "fits")
     assert row.outcome == "converged", row.failure
     assert row.max_m2 <= MAHALANOBIS2_BOUND and row.error_km < 50.0, (row.max_m2, row.error_km)
+
+
+@pytest.mark.slow
+def test_a_failure_that_radiation_pressure_fits_cleanly_offers_it_and_solving_it_recovers_the_ratio(tmp_path):
+    """dro seed 1640 with 0.2 m^2/kg over 8.1 days (probe N7): too short for "auto" to try the
+    ratio alone, its ballistic fit looked like a maneuver no burn measured and failed with no word
+    of the ratio; the failure now offers it, and the fit it names recovers the ratio within 3 sigma."""
+    sys.path.insert(0, str(EXAMPLES))
+    from check_survey_fit import check_set, run_cli
+    from make_survey_sets import make
+
+    make(tmp_path / "dro-s1640", "dro", seed=1640, area_to_mass=0.2)
+    row = check_set(tmp_path / "dro-s1640", tmp_path / "fits")
+    assert row.outcome == "failed" and "radiation pressure fits it cleanly too" in row.failure, row.failure
+    assert "--set fit.area_to_mass=solve fits it so" in row.failure
+    run_cli("fit", str(tmp_path / "dro-s1640" / "observations.psv"), "--out", str(tmp_path / "solved"),
+                          "--set", "fit.area_to_mass=solve")
+    amr = json.loads((tmp_path / "solved" / "fit.json").read_text())["area_to_mass"]
+    assert amr["estimated"] and abs(amr["value_m2_kg"] - 0.2) <= 3.0 * amr["sigma_m2_kg"], amr
