@@ -31,7 +31,8 @@ from cistrack.least_squares.burn_sensitivity import burn_sensitivity
 from cistrack.least_squares.events import fit_events
 from cistrack.plugin.registry import Registry
 
-__all__ = ["arcs_to_fit", "latest_determined_arc", "arc_report", "kept_observations", "add_findings", "EXPLAINED_REJECTED"]
+__all__ = ["arcs_to_fit", "latest_determined_arc", "before_arc", "left_out_note", "earlier_arcs_text",
+           "first_clause", "arc_report", "kept_observations", "add_findings", "EXPLAINED_REJECTED"]
 
 EXPLAINED_REJECTED = 0.1
 """A fit that rejects at most this share of its arc's observations explains the arc: its links
@@ -67,6 +68,55 @@ def latest_determined_arc(obs: ObjectObservations, arc_gap_days: float) -> tuple
             f"{units.tu_to_days(float(later[0].times[0]) - end):.1f} days after the arc), are not fitted: a lone "
             "tracklet determines no orbit on its own (fit.arcs=all fits one orbit over every observation)")
     return upto, arcs[k], note
+
+
+def before_arc(obs: ObjectObservations, arc: ObjectObservations) -> ObjectObservations | None:
+    """``obs`` without ``arc`` and what follows it (the earlier arcs), or None when nothing is
+    before it."""
+    start = float(arc.measurements.times[0])
+    keep = np.asarray(obs.measurements.times, dtype=float) < start
+    return dataclasses.replace(obs, measurements=obs.measurements.subset(keep)) if keep.any() else None
+
+
+def first_clause(text: str) -> str:
+    """``text`` up to its first "; " outside parentheses (a failure without its advice)."""
+    depth = 0
+    for i, c in enumerate(text):
+        depth += (c == "(") - (c == ")")
+        if depth == 0 and text.startswith("; ", i):
+            return text[:i]
+    return text
+
+
+def left_out_note(left: ObjectObservations, fitted: ObjectObservations, why: str) -> str:
+    """The note of a fit that fell back to the earlier arc ``fitted`` because the fit of the later
+    observations ``left`` failed before its first step (``why``: that failure): how many, from
+    which sites and dates, how long after the fitted arc, why (without the failure's advice, which
+    would fit an orbit to them alone), and the way to fit each arc on its own."""
+    ms, epoch = left.measurements, units.parse_utc(READ_EPOCH)
+    first, last = (units.tu_to_utc(epoch, float(ms.times[i])) for i in (0, -1))
+    after = units.tu_to_days(float(ms.times[0]) - float(fitted.measurements.times[-1]))
+    sites = ", ".join(sorted({ms.site_at(i) for i in range(len(ms))} - {""})) or "the sensor's own site"
+    reason = first_clause(why.removeprefix("the filter run failed before its first step: "))
+    return (f"{len(ms)} later observation(s) ({sites}, {first:%Y-%m-%d} to {last:%Y-%m-%d}, {float(after):.1f} days "
+            f"after the fitted arc) are not fitted: no orbit determination starts from them ({reason}); the fit "
+            "is of the latest arc before them that can be fitted (later observations that no orbit fits may be "
+            "another object's under this designation: --set fit.arcs=each fits each arc on its own)")
+
+
+def earlier_arcs_text(obs: ObjectObservations, arc: ObjectObservations, arc_gap_days: float) -> str:
+    """The arcs of ``obs`` before ``arc`` in words (count, observations, dates) with the way to fit
+    each on its own; "" when there are none."""
+    before = before_arc(obs, arc)
+    if before is None:
+        return ""
+    arcs = arcs_to_fit(before, "each", arc_gap_days)
+    epoch = units.parse_utc(READ_EPOCH)
+    told = ", ".join(f"{len(a.measurements)} observation(s) from "
+                     f"{units.tu_to_utc(epoch, float(a.measurements.times[0])):%Y-%m-%d} to "
+                     f"{units.tu_to_utc(epoch, float(a.measurements.times[-1])):%Y-%m-%d}" for a in arcs)
+    return (f"the object's {len(arcs)} earlier arc(s) ({told}) are not fitted with it, and none of them could be "
+            "fitted in its place: --set fit.arcs=each fits each arc on its own")
 
 
 def _everything(one, obs: ObjectObservations, registry: Registry):

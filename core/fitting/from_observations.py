@@ -967,13 +967,76 @@ def _fit_latest_determined(obs: ObjectObservations, d: Path, job: _Job, aside: s
     """The fit of the latest arc that determines an orbit (lone tracklets after it are left out,
     and the fit says so: :func:`cistrack.fitting.fit_findings.latest_determined_arc`); ``aside``:
     a note on the earlier arcs set aside, given with it."""
-    from cistrack.fitting.fit_findings import latest_determined_arc
+    from cistrack.fitting.fit_findings import earlier_arcs_text, latest_determined_arc
 
     upto, arc, note = latest_determined_arc(obs, job.choices.arcs.arc_gap_days)
     if note:
         job.say(f"{obs.designation}: {note}")
     one = _fit_latest(upto, arc, d, job)
+    if _no_start(one):
+        fallback = _earlier_fittable(obs, arc, one.failure, d, job)
+        if fallback is not None:
+            one, arc, note = fallback
+        else:
+            one = _fit_latest(upto, arc, d, job) if _tried_earlier(obs, arc, job) else one
+            note = "; ".join(n for n in (note, earlier_arcs_text(obs, arc, job.choices.arcs.arc_gap_days)) if n)
     return _finish(_noted(one, "; ".join(n for n in (aside, note) if n)), arc, job)
+
+
+_NO_START = "the filter run failed before its first step"
+
+
+def _no_start(one: ObjectFit) -> bool:
+    """Whether ``one`` failed before its filter's first step (no IOD started from its observations;
+    not a lone tracklet, which says so itself)."""
+    return one.run is None and one.result is None and not one.undetermined and one.failure.startswith(_NO_START)
+
+
+def _earlier_candidate(obs: ObjectObservations, failed: ObjectObservations, job: _Job):
+    """(the observations up to it, the latest arc before ``failed`` that is more than a lone
+    tracklet), or None when there is none."""
+    from cistrack.fitting.determination import is_lone_tracklet
+    from cistrack.fitting.fit_findings import before_arc, latest_determined_arc
+
+    before = before_arc(obs, failed)
+    if before is None:
+        return None
+    upto, arc, _ = latest_determined_arc(before, job.choices.arcs.arc_gap_days)
+    return None if is_lone_tracklet(arc.measurements) else (upto, arc)
+
+
+def _tried_earlier(obs: ObjectObservations, arc: ObjectObservations, job: _Job) -> bool:
+    """Whether :func:`_earlier_fittable` fitted an earlier arc into the directory (its files are
+    then replaced by the latest arc's again)."""
+    return _earlier_candidate(obs, arc, job) is not None
+
+
+def _earlier_fittable(obs: ObjectObservations, arc: ObjectObservations, why: str, d: Path,
+                      job: _Job) -> tuple[ObjectFit, ObjectObservations, str] | None:
+    """When the fit of the latest arc ``arc`` failed before its first step (``why``; e.g. two pairs
+    of observations days apart, from which no IOD starts): (the fit of the latest earlier arc that
+    starts, that arc, the note naming what is left out after it), trying the arcs latest first; None
+    when none does. A stray pair filed under an object's designation had made the fit fail on it
+    alone, its 23 earlier observations unmentioned (probe N2)."""
+    from cistrack.fitting.fit_findings import first_clause, left_out_note
+
+    failed = arc
+    while (candidate := _earlier_candidate(obs, failed, job)) is not None:
+        upto, earlier = candidate
+        job.say(f"{obs.designation}: the arc from {_day(failed)} cannot be fitted ({first_clause(why)}); fitting "
+                f"the arc before it, from {_day(earlier)}")
+        one = _fit_latest(upto, earlier, d, job)
+        if not _no_start(one):
+            end = float(earlier.measurements.times[-1])
+            left = replace(obs, measurements=obs.measurements.subset(np.asarray(obs.measurements.times) > end))
+            return one, earlier, left_out_note(left, earlier, why)
+        failed = earlier
+    return None
+
+
+def _day(part: ObjectObservations) -> str:
+    """The UTC date of ``part``'s first observation, YYYY-MM-DD."""
+    return f"{units.tu_to_utc(units.parse_utc(READ_EPOCH), float(part.measurements.times[0])):%Y-%m-%d}"
 
 
 def _fit_run(obs: ObjectObservations, d: Path, job: _Job) -> ObjectFit:
