@@ -165,6 +165,7 @@ def summary_lines(one) -> list[str]:
     """The printed summary of one :class:`~cistrack.fitting.from_observations.ObjectFit`."""
     from cistrack import units
     from cistrack.fitting.fit_record import area_to_mass_summary
+    from cistrack.fitting.stated_noise import too_small_words
     from cistrack.least_squares.observability import condition_text
 
     if getattr(one, "undetermined", None):
@@ -174,6 +175,9 @@ def summary_lines(one) -> list[str]:
     if r is None:
         lines.append("  no orbit: see docs/real-data.md, 'When a fit fails'")
         return _wrapped(lines)
+    too_small = too_small_words(r.residuals)
+    if too_small:  # first: every verdict below (a maneuver's included) is drawn with these weights
+        lines.insert(1, f"  warning: {too_small}")
     ms = one.run.context.measurements
     epoch = units.format_utc(units.tu_to_utc(one.scenario.epoch, r.epoch))[:19] + "Z"
     if one.start:
@@ -202,9 +206,10 @@ def summary_lines(one) -> list[str]:
         what = _not_converged_words(r)
         lines.append(f"  warning: {what}; the orbit is not exported without --force "
                      "(docs/real-data.md, 'When a fit fails')")
-    if r.noise_scale > 1.5:
+    if r.noise_scale > 1.5 and not too_small:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
-                     "(--set measurements.reader.sigma_arcsec=...) or the data")
+                     "(--set measurements.reader.sigma_arcsec=..., with --set measurements.reader.sigma_from_file=false "
+                     "for files that state their own rmsRA/rmsDec) or the data")
     return _wrapped(lines)
 
 

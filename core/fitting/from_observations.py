@@ -1178,8 +1178,13 @@ def _name_failure(one: ObjectFit) -> None:
     and the one-line reason "converged after 14 iterations" (probe L6)."""
     from cistrack.fitting.fit_record import unsound_reason
 
+    from cistrack.fitting.stated_noise import too_small_words
+
     if one.result is not None and not one.result.converged and not one.failure:
         one.failure = unsound_reason(one.result.messages)
+    words = too_small_words(one.result.residuals) if one.result is not None and one.failure else ""
+    if words:  # said first: the failure's verdict (a maneuver's) is drawn with weights that tight (probe N1)
+        one.failure = f"{words}; {one.failure}"
 
 
 def _finish(one: ObjectFit, obs: ObjectObservations, job: _Job) -> ObjectFit:

@@ -503,13 +503,28 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
             notes.setdefault(obj, []).append(f"{shown}: {len(ms)} observations of {clipped(obj)}"
                                              + (f"; {note}" if note else ""))
             say(notes[obj][-1])
+    unused = _unused_sigma(params, [ms for sets, _, _ in by_object.values() for ms in sets])
+    if unused:
+        say(f"warning: {unused}")
     out = []
     for obj, (sets, files, resolutions) in by_object.items():
         merged, dropped = _merge(sets, files, resolutions)
         for line in dropped:
             say(line)
-        out.append(ObjectObservations(obj, merged, files, notes[obj] + dropped))
+        out.append(ObjectObservations(obj, merged, files, notes[obj] + dropped + [unused] * bool(unused)))
     return out
+
+
+def _unused_sigma(params: dict[str, Any], sets: list[MeasurementSet]) -> str:
+    """A warning when the reader parameter ``sigma_arcsec`` was given but no observation took it
+    (every row of every file states its own uncertainties; probe N1: it was accepted and changed
+    nothing), naming the way to replace the files' own; "" otherwise."""
+    counts = [ms.meta.get("default_sigma_count") for ms in sets]
+    if "sigma_arcsec" not in params or not counts or any(n is None or n > 0 for n in counts):
+        return ""
+    return (f"measurements.reader.sigma_arcsec={params['sigma_arcsec']!r} applies to no observation: every "
+            "row states its own uncertainties (rmsRA/rmsDec), which are used; to replace them, add --set "
+            "measurements.reader.sigma_from_file=false (docs/observation-formats.md, 'Weights')")
 
 
 def write_merged(path: Path, measurements: MeasurementSet, designation: str, registry: Registry) -> str:

@@ -29,6 +29,7 @@ astCat (required by ADES) from ``meta["astCat"]`` or "Gaia3".
 """
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from datetime import datetime
@@ -254,12 +255,24 @@ class AdesReader(DegreesCheckedReader):
         other rows do not (angles written in radians, where ADES has degrees; as the tdm reader
         does); false reads such a file as degrees (an object within 6.3 deg of RA 0 and 1.6 deg
         of the equator).
+    sigma_from_file : bool
+        true (default): rows that state rmsRA / rmsDec keep them; false: every row takes
+        ``sigma_arcsec`` instead (a file whose stated uncertainties are wrong).
     """
+
+    def __init__(self, sigma_arcsec: float = 1.0, sites: dict | None = None, designation: str | None = None,
+                 check_degrees: bool = True, sigma_from_file: bool = True) -> None:
+        super().__init__(sigma_arcsec, sites, designation, check_degrees)
+        if not isinstance(sigma_from_file, bool):
+            self._fail("sigma_from_file", sigma_from_file, "must be true or false")
+        self.sigma_from_file = sigma_from_file
 
     def checked_rows(self, path, rows: list[ObsRow]) -> list[ObsRow]:
         """``rows`` of ``path``, refused when their angles read as radians (``check_degrees``;
-        probe L8: such a file had been fitted and its misfit blamed on a maneuver)."""
-        return self.checked_angles(path, rows, ("ra", "dec"), "ADES", self.registry_name or "ades")
+        probe L8: such a file had been fitted and its misfit blamed on a maneuver); without their
+        stated uncertainties when ``sigma_from_file`` is false."""
+        rows = self.checked_angles(path, rows, ("ra", "dec"), "ADES", self.registry_name or "ades")
+        return rows if self.sigma_from_file else [dataclasses.replace(r, sigma_a=None, sigma_b=None) for r in rows]
 
 
 def say_tiny_sigmas(path, rows: list[ObsRow]) -> None:

@@ -135,6 +135,9 @@ class AdesXmlReader(AdesReader):
         Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708], or one
         site's rows all so while the object's other rows are not (radians, where ADES has
         degrees); false reads it as degrees.
+    sigma_from_file : bool
+        true (default): rows that state rmsRA / rmsDec keep them; false: every row takes
+        ``sigma_arcsec`` instead (a file whose stated uncertainties are wrong).
     """
 
     suffixes = (".xml",)
