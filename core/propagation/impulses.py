@@ -27,6 +27,7 @@ each impulse ``k`` (0-based, in time order as :attr:`ImpulsiveDynamics.impulses`
 """
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import Any
 
@@ -438,9 +439,10 @@ def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: 
     """The truth model that flies ``plan``'s burns from ``x0`` (6,) at ``t0`` over ``(t0, t_end]``
     (TU), and the impulses: ``dynamics`` wrapped in :class:`ImpulsiveDynamics`, or ``dynamics``
     itself (and no impulse) when there is no plan or it makes no burn there. ``say`` (a callable)
-    gets one line per burn (:func:`describe_impulse`). Raises ConfigError, prefixed by ``where``,
-    when the plan fails or returns anything but impulses inside the span; a plan that raises its
-    own exception (a burn with a NaN or 4-component dv, say) is named by ``who`` (default: its
+    gets one line per burn (:func:`describe_impulse`) and per burn of the plan outside the span;
+    without ``say`` (a run under --quiet) the latter is a warning (logger ``cistrack.maneuvers``). Raises
+    ConfigError, prefixed by ``where``, when the plan fails or returns anything but impulses
+    inside the span; a plan that raises its own exception (a burn with a NaN or 4-component dv, say) is named by ``who`` (default: its
     kind and registered name; the pipeline adds its distribution)."""
     if plan is None:
         return dynamics, []
@@ -453,8 +455,9 @@ def fly_plan(plan: ManeuverPlan | None, dynamics: Dynamics, x0: np.ndarray, t0: 
     for line in burn_lines(impulses):
         (say or (lambda text: None))(line)
     days = float(units.tu_to_days(t_end - t0))
-    for text in (plan.burns_outside(float(t0), float(t_end)) if say is not None else []):
-        say(f"{where}: outside the run (0 to {days:g} days), not flown: {text}")
+    for text in plan.burns_outside(float(t0), float(t_end)):  # part of the user's plan is dropped: said always
+        line = f"{where}: outside the run (0 to {days:g} days), not flown: {text}"
+        say(line) if say is not None else logging.getLogger("cistrack.maneuvers").warning(f"warning: {line}")
     if not impulses and say is not None:
         say(f"{where}: no burn inside the run ({days:g} days); the truth is ballistic")
     return flown, impulses

@@ -94,7 +94,8 @@ def prepare_run(scenario: Scenario, seed: int | None = None, registry: Registry 
     else:
         initial = scenario.initial_truth(reg)
         _compile_ahead(dynamics, initial)
-        truth_dyn, truth_impulses = _fly_truth_plan(scenario, reg, truth_dyn, initial, say)
+        # with log None (--quiet) a burn the run leaves out is still said, as a warning
+        truth_dyn, truth_impulses = _fly_truth_plan(scenario, reg, truth_dyn, initial, log)
         truth = Truth(truth_dyn, initial, t_end=duration)
         n_grid = int(np.ceil(duration / float(units.hours_to_tu(scenario.truth_grid_minutes / 60.0)))) + 1
         grid = np.linspace(0.0, duration, n_grid)

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from cistrack import units
 from cistrack.errors import CistrackError, ConfigError
 from cistrack.studies.lost_runs import refuse_in_a_starting_worker
 from cistrack.results.atomic_files import write_text_atomic
@@ -315,6 +316,7 @@ def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _
     flabel, ftable, ilabel, itable = variant_tables
     ov = _variant_overrides(grid, base, ftable, itable, combo)
     variant = _validated_variant(base, ov, grid, reg, combo, {"filter": ftable, "iod": itable}, entry)
+    _refuse_unflown(variant, grid.study, reg)
     fl = flabel or variant.components["filter"].name
     il = ilabel or variant.components["iod"].name
     scen_path = str(Path(base.source).resolve())
@@ -324,6 +326,20 @@ def _variant_runs(base, label: str, combo: tuple, variant_tables: tuple, grid: _
         specs.append(RunSpec(rid, scen_path, int(seed), ov, str(grid.out / "runs" / rid), label, fl, il,
                              fingerprint=scenario_fingerprint(variant, seed), sweep=combo))
     return specs
+
+
+def _refuse_unflown(scenario, study: Any, reg) -> None:
+    """ConfigError naming the study, the scenario file and the burn when the scenario's
+    ``[truth.maneuvers]`` plan gives a burn outside its run (not flown): the study's maneuver
+    results would be reported as if it were (probe N4: '1 runs completed', nothing said)."""
+    if not scenario.truth_maneuvers:
+        return
+    days = float(units.tu_to_days(scenario.duration))
+    outside = scenario.truth_maneuvers.build(reg).burns_outside(0.0, float(scenario.duration))
+    if outside:
+        raise ConfigError(f"{study}: scenario {scenario.source}: [truth.maneuvers]: {'; '.join(outside)} lies outside "
+                          f"the run (0 to {days:g} days) and would not be flown; a study does not run a maneuver "
+                          "scenario without its burns: move the burn inside the run or lengthen duration_days")
 
 
 def _sweep_settings(combo: tuple) -> dict:
