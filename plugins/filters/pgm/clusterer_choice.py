@@ -1,10 +1,12 @@
 """The PGM's clusterer: a registry name or an instance, with the filter's n_components."""
 from __future__ import annotations
 
-from cistrack.errors import ParameterError
+import numpy as np
+
+from cistrack.errors import FilterError, ParameterError
 from cistrack.interfaces import Clusterer
 
-__all__ = ["resolve_clusterer", "split_clusterer"]
+__all__ = ["resolve_clusterer", "split_clusterer", "within_asked"]
 
 
 def resolve_clusterer(clusterer: Clusterer | str, n_components: int | None, registry=None) -> Clusterer:
@@ -55,3 +57,20 @@ def split_clusterer(clusterer: Clusterer | str, resolved: Clusterer, n_split: in
 def _params_of(cls) -> dict:
     from cistrack.interfaces.component import param_specs
     return param_specs(cls)
+
+
+def within_asked(labels: np.ndarray, clusterer: Clusterer, who: str) -> np.ndarray:
+    """``labels`` (N,) int of ``clusterer``, refused (FilterError naming ``who``) when they make more
+    clusters than its ``n_components`` asks for and it does not choose its own number
+    (``chooses_n_components``): the contract (docs/plugins.md) allows at most that many. A clusterer
+    that returned 50 for 4 had left every cluster under ``min_cluster_size``, and the PGM ran the
+    whole run with one component, without a word (probe N5)."""
+    if getattr(clusterer, "chooses_n_components", False) or "n_components" not in _params_of(type(clusterer)):
+        return labels
+    asked = clusterer.get_params()["n_components"]
+    got = int(labels.max()) + 1 if labels.size else 0
+    if isinstance(asked, int) and got > asked:
+        raise FilterError(f"{who}: cluster() returned {got} clusters where n_components = {asked} asked for at most "
+                          f"{asked}; a clusterer returns at most n_components clusters (docs/plugins.md), or "
+                          "declares chooses_n_components = True when it picks its own number")
+    return labels

@@ -43,7 +43,7 @@ from ..particle_declarations import ParticleFilterDeclarations
 from ..random_streams import independent_stream
 from ..resampling import normalize_log_weights
 from .cluster_merge import merged_cluster_targets, used_ranks
-from .clusterer_choice import resolve_clusterer, split_clusterer
+from .clusterer_choice import resolve_clusterer, split_clusterer, within_asked
 from .component_spread import shrink_components
 from .component_update import COMPONENT_LIKELIHOODS
 from .measurement_sharpness import likelihood_ess_fraction, measurement_quadratic
@@ -473,7 +473,7 @@ class PGMFilter(ParticleFilterDeclarations, FilterBase):
             if not plugin_fault(exc):
                 raise
             raise FilterError(f"{who}: cluster() raised {exception_text(exc)}") from exc
-        return checked_labels(labels, self._x.shape[0], who)
+        return within_asked(checked_labels(labels, self._x.shape[0], who), clusterer, who)
 
     def _group_mixture(self, labels: np.ndarray) -> tuple[GaussianMixture, np.ndarray]:
         """The mixture of the current particles grouped by ``labels`` (N,) (weight N_i/N, each group's
