@@ -256,14 +256,14 @@ def _read_file(path: Path, params: dict[str, Any], registry: Registry) -> tuple[
     if done is not None:
         return done, resolution
     try:
-        return [read_checked(reader, path, READ_EPOCH)], resolution
+        return [read_checked(reader, path, READ_EPOCH, registry)], resolution
     except SeveralObjectsError as exc:
         name = params.get("name") or type(reader).__name__
         out = []
         for obj in exc.objects:
             one = registry.create("reader", _registered_name(reader, registry, name), **{**_params(params),
                                                                                          "designation": obj})
-            out.append(read_checked(one, path, READ_EPOCH))
+            out.append(read_checked(one, path, READ_EPOCH, registry))
         return out, resolution
 
 

@@ -36,6 +36,10 @@ def reader_for(path: str | PathLike, format: str | None = None, registry: Regist
     name = str(path).lower()
     matches = [e.name for e in reg.entries("reader")
                if any(name.endswith(s) for s in getattr(e.factory, "suffixes", ()))]
+    if len(matches) > 1:
+        raise MeasurementError(f"{path}: several readers claim its suffix: {', '.join(reg.describe('reader', m) for m in matches)}; "
+                               "name the one that reads it: in cistrack fit --set measurements.reader.name=NAME, in a "
+                               f"scenario [measurements] reader = {{ name = \"NAME\" }} (NAME one of {', '.join(matches)})")
     if len(matches) != 1:
         known = {e.name: list(getattr(e.factory, "suffixes", ())) for e in reg.entries("reader")}
         why = ("not an observation file of any known format: no reader recognises" if not matches
@@ -66,28 +70,52 @@ def read_observations(path: str | PathLike, epoch: str | datetime, format: str |
         raise MeasurementError(f"path={type(path).__name__}: give the path of one observation file (a str or a "
                                "path); read several with one call each")
     _check_epoch_years(epoch)
-    return read_checked(reader_for(path, format, registry, **params), path, epoch)
+    return read_checked(reader_for(path, format, registry, **params), path, epoch, registry)
 
 
-def read_checked(reader: Any, path: str | PathLike, epoch: str | datetime) -> MeasurementSet:
+def read_checked(reader: Any, path: str | PathLike, epoch: str | datetime,
+                 registry: Registry | None = None) -> MeasurementSet:
     """``reader.read(path, epoch)``, a reader that breaks its contract named (:class:`PluginError`):
     one that raises what is neither cistrack's error nor the system's, calls ``sys.exit``, or
-    returns something other than a :class:`MeasurementSet`."""
+    returns something other than a :class:`MeasurementSet`. A third-party reader's own cistrack
+    error (a MeasurementSet it built with NaN values, say) is given with its name, distribution and
+    the file (probe N13: it had come out naming none of them); ``registry`` (default: the
+    installed plugins) says where the reader came from."""
     from cistrack.errors import CistrackError, PluginError, exception_text
 
-    who = f"reader {getattr(reader, 'name', None) or type(reader).__name__!r} ({type(reader).__module__})"
     try:
         out = reader.read(path, epoch)
-    except (CistrackError, OSError):
+    except SeveralObjectsError:
+        raise
+    except CistrackError as exc:
+        who, builtin = _reader_who(reader, registry)
+        if builtin:
+            raise
+        raise MeasurementError(f"{who} failed on {path}: {exc}") from exc
+    except OSError:
         raise
     except BaseException as exc:  # a plugin's fault, named (a KeyboardInterrupt only from a signal)
         if not plugin_fault(exc):
             raise
-        raise PluginError(f"{who} failed on {path}: {exception_text(exc)}") from exc
+        raise PluginError(f"{_reader_who(reader, registry)[0]} failed on {path}: {exception_text(exc)}") from exc
     if not isinstance(out, MeasurementSet):
-        raise PluginError(f"{who} returned {type(out).__name__} for {path}, not a MeasurementSet (docs/plugins.md, "
-                          "Readers)")
+        raise PluginError(f"{_reader_who(reader, registry)[0]} returned {type(out).__name__} for {path}, not a "
+                          "MeasurementSet (docs/plugins.md, Readers)")
     return out
+
+
+def _reader_who(reader: Any, registry: Registry | None) -> tuple[str, bool]:
+    """(the reader in messages: ``reader 'name' (distribution version)``, or its class and module
+    when it is not registered; whether it is one of cistrack's own)."""
+    from cistrack.plugin.registry import BUILTIN_DISTRIBUTION
+
+    name = getattr(type(reader), "registry_name", None)
+    reg = registry or default_registry()
+    entry = next((e for e in reg.entries("reader") if e.name == name), None) if name else None
+    if entry is None:
+        module = type(reader).__module__
+        return f"reader {type(reader).__name__!r} ({module})", module.startswith("cistrack.")
+    return reg.describe("reader", name), entry.distribution == BUILTIN_DISTRIBUTION
 
 
 def _check_epoch_years(epoch: Any) -> None:

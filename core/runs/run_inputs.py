@@ -55,7 +55,7 @@ def read_scenario_observations(scenario: Scenario, sensor: Any, registry: Regist
         reader = spec.build(registry) if spec is not None else reader_for(path, registry=registry)
     except MeasurementError as exc:
         raise ConfigError(f"{scenario.source}: [measurements]: key 'file': {exc}") from None
-    measurements = read_checked(reader, path, scenario.epoch)
+    measurements = read_checked(reader, path, scenario.epoch, registry)
     if weights_note(measurements) and not _OWN_COPIES.get():
         say(weights_note(measurements))
     check_observation_span(scenario, measurements)
