@@ -175,16 +175,18 @@ def _quality(fit: FitResult | None) -> float:
 
 
 def refine(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, rows: np.ndarray, grid: ScoredGrid, *,
-           tries: int, options: FitOptions) -> tuple[FitResult | None, int, int]:
+           tries: int, options: FitOptions, progress: RangingProgress | None = None) -> tuple[FitResult | None, int, int]:
     """(best fit or None, index of the grid state it started from, fits tried): the least squares
     on the observations ``rows`` from the ``tries`` best-scored grid states that lie apart in range;
     the best converged fit by weighted RMS (rejections count against it), its state at
-    ``grid.t0``. Stops early at a fit whose noise scale is below :data:`CLEAN_NOISE_SCALE`."""
+    ``grid.t0``. Stops early at a fit whose noise scale is below :data:`CLEAN_NOISE_SCALE`.
+    ``progress``: the IOD's (:class:`RangingProgress`; default one of its own)."""
     sub = ms.subset(np.asarray(rows, dtype=int))
     order = np.argsort(grid.score, kind="stable")
     order = order[np.isfinite(grid.score[order])]
     best, best_i, tried = None, -1, 0
-    progress = _Progress(len(sub), tries)
+    progress = progress or RangingProgress()
+    progress.large(len(sub), tries)
     for i in _distinct(order, grid.rho_km, tries):
         tried += 1
         fit = _one_fit(dynamics, sensor, sub, grid.states[i], grid.t0, options)
@@ -192,7 +194,7 @@ def refine(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, rows: np.ndar
             best, best_i = fit, i
         if best is not None and best.converged and best.noise_scale < CLEAN_NOISE_SCALE:
             break
-        progress.step(tried)
+        progress.step(tried, tries)
     return best, best_i, tried
 
 
@@ -201,21 +203,35 @@ LARGE_FIT_ROWS = 5000
 it is slow: a 35 MB file's tracklet of about 400,000 rows sat in it for minutes with no word."""
 
 
-class _Progress:
-    """Lines on the ``cistrack`` logger while :func:`refine` fits a large arc: one up front when a
-    trial fits :data:`LARGE_FIT_ROWS` observations or more, then one every 10 s."""
+class RangingProgress:
+    """Lines on the ``cistrack`` logger while the ranging IOD runs: what it is doing (which seed
+    tracklet, how many range trials fitted) every :attr:`every_s` seconds from its start, across
+    all its seeds (a 30-observation file had sat 22-37 s in it with no word, each seed's trials
+    under 10 s: probe N16), and one up front when a trial fits :data:`LARGE_FIT_ROWS`
+    observations or more."""
 
     every_s = 10.0
 
-    def __init__(self, rows: int, tries: int) -> None:
-        self.tries, self.next = tries, time.monotonic() + self.every_s
+    def __init__(self) -> None:
+        self.next, self.where = time.monotonic() + self.every_s, "the seed tracklets"
+
+    def large(self, rows: int, tries: int) -> None:
+        """The line up front when one trial fits ``rows`` observations (up to ``tries`` trials)."""
         if rows >= LARGE_FIT_ROWS:
             self._say(f"each range trial is a least squares over {rows:,} observations (up to {tries} trials); "
                       "a file this dense takes minutes")
 
-    def step(self, tried: int) -> None:
-        if tried < self.tries and time.monotonic() >= self.next:
-            self._say(f"{tried} of up to {self.tries} range trials fitted ...")
+    def seed(self, k: int, size: int, trial: int, trials: int) -> None:
+        """Now ranging from tracklet ``k`` (0-based; ``size`` observations), seed trial ``trial``
+        (1-based) of up to ``trials``."""
+        self.where = f"from seed tracklet {k + 1} ({size} observations; seed trial {trial} of up to {trials})"
+        self.step(0, 0)
+
+    def step(self, tried: int, tries: int) -> None:
+        """``tried`` of up to ``tries`` range trials of the current seed fitted: a line when due."""
+        if time.monotonic() >= self.next:
+            fitted = f", {tried} of up to {tries} range trials fitted" if 0 < tried < tries else ""
+            self._say(f"ranging {self.where}{fitted} ...")
             self.next = time.monotonic() + self.every_s
 
     @staticmethod

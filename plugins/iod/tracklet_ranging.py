@@ -46,7 +46,8 @@ from cistrack.model.belief import ParticleCloud
 from cistrack.model.measurement import MeasurementSet
 from cistrack.units import TU_S
 
-from .ranging_search import CLEAN_NOISE_SCALE, ScoredGrid, admissible_extent, admissible_states, refine, score_states
+from .ranging_search import (CLEAN_NOISE_SCALE, RangingProgress, ScoredGrid, admissible_extent, admissible_states, refine,
+                             score_states)
 from .ranging_arc import extend_arc, tracklet_record
 from .tracklets import Attributable, attributable, split_tracklets
 
@@ -260,7 +261,8 @@ class TrackletRangingIOD(IODMethod):
         states, rho = self._grid(atts[k])
         score = score_states(dyn, sensor, ms, np.setdiff1d(rows, _thinned(atts[k].indices)), states, atts[k].t)
         grid = ScoredGrid(states, rho, score, atts[k].t)
-        fit, best, tried = refine(dyn, sensor, ms, rows, grid, tries=self.tries, options=options)
+        fit, best, tried = refine(dyn, sensor, ms, rows, grid, tries=self.tries, options=options,
+                                  progress=getattr(self, "_progress", None))
         rec = {"seed": k, "scored_on": score_with, "grid_states": int(len(states)), "fits_tried": tried,
                "start_range_km": float(rho[best]) if best >= 0 else None,
                "converged": bool(fit is not None and fit.converged)}
@@ -331,7 +333,10 @@ class TrackletRangingIOD(IODMethod):
         residuals 57 times the noise, 139,000 km from the truth, where the next seed's fit lay 5 km off."""
         records: list[dict] = []
         fallback: tuple = (-1, None, np.zeros(0, dtype=int), {})
-        for options, k, score_with, near_only in self._seed_trials(atts, order):
+        self._progress = RangingProgress()
+        trials = list(self._seed_trials(atts, order))
+        for n, (options, k, score_with, near_only) in enumerate(trials, start=1):
+            self._progress.seed(k, int(atts[k].indices.size), n, len(trials))
             fit, rows, rec = self._seed_fit(dyn, sensor, ms, atts, k, options, score_with)
             if options is _PATIENT_OPTIONS:
                 rec["max_iterations"] = options.max_iterations
