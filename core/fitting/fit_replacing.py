@@ -2,15 +2,19 @@
 
 ``cistrack fit`` redoes an earlier fit of the same object in its directory (the way to refit after
 new observations or other settings), but never, unless told to (``--overwrite``), the results of a
-``cistrack run`` or a fit of another object: :func:`check_fit_replacing` refuses, naming the
-directory and what is there.
+``cistrack run``, a fit of another object, or a fit of the same designation that shares no
+observation with this one (another object under a reused ``trkSub``): :func:`check_fit_replacing`
+refuses, naming the directory and what is there.
 """
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-from cistrack.errors import ConfigError
+import numpy as np
+
+from cistrack import units
+from cistrack.errors import CistrackError, ConfigError
 from cistrack.results.earlier_run import CLI_WORDS, OptionWords
 from cistrack.results.store import MANIFEST
 
@@ -21,15 +25,20 @@ FIT_RECORD = "fit.json"
 """The record a finished fit writes last in its directory."""
 
 
-def _earlier(d: Path, designation: str) -> str:
-    """What ``d`` holds that a fit of ``designation`` must not replace, or "" (nothing, or a fit of it)."""
+def _earlier(d: Path, designation: str, observed: tuple[str, np.ndarray] | None = None) -> str:
+    """What ``d`` holds that a fit of ``designation`` (``observed``: see :func:`check_fit_replacing`)
+    must not replace, or ""
+    (nothing, or a fit of it that shares an observation with it: :func:`_other_observations`)."""
     record = d / FIT_RECORD
     if record.is_file():
         try:
-            earlier = json.loads(record.read_text(encoding="utf-8")).get("designation")
+            earlier = json.loads(record.read_text(encoding="utf-8"))
+            name = earlier.get("designation")
         except (OSError, ValueError, AttributeError) as exc:
             return f"a fit record that cannot be read ({exc})"
-        return "" if earlier == designation else f"the fit of another object, {earlier!r}"
+        if name != designation:
+            return f"the fit of another object, {name!r}"
+        return _other_observations(d, earlier, observed)
     if (d / MANIFEST).is_file():
         try:
             run_id = json.loads((d / MANIFEST).read_text(encoding="utf-8")).get("run_id", "?")
@@ -40,14 +49,45 @@ def _earlier(d: Path, designation: str) -> str:
     return ""
 
 
+def _other_observations(d: Path, record: dict, observed: tuple[str, np.ndarray] | None) -> str:
+    """"" when the earlier fit of the same designation in ``d`` (its ``record``, and its copy of the
+    observations there) shares an observation time (within 1 ms) with ``observed`` (UTC epoch,
+    times TU since it), or when either is unknown: a refit. A
+    fit sharing none is of other observations (a ``trkSub`` is assigned locally and reused: two
+    objects, two seasons, had replaced each other silently, probe N6); said with its files and dates."""
+    from cistrack.runs.observation_files import read_observations
+
+    copies = [p for p in (d / "observations.psv", d / "observations.tdm") if p.is_file()]
+    if observed is None or not copies:
+        return ""
+    epoch, times = observed
+    try:
+        old = np.sort(np.asarray(read_observations(copies[0], epoch).times, dtype=float))
+    except CistrackError:
+        return ""
+    new = np.asarray(times, dtype=float)
+    k = np.clip(np.searchsorted(old, new), 1, max(old.size - 1, 1))
+    near = np.minimum(np.abs(new - old[k - 1]), np.abs(new - old[np.minimum(k, old.size - 1)]))
+    if old.size == 0 or np.any(near <= 1e-3 / units.TU_S):
+        return ""
+    arc = record.get("arc") or {}
+    files = ", ".join(str(f) for f in record.get("files") or []) or "its files"
+    return (f"an earlier fit of {record.get('designation')!r} of other observations ({files}: {old.size} observations "
+            f"from {str(arc.get('first_utc', '?'))[:10]} to {str(arc.get('last_utc', '?'))[:10]}, none of them "
+            "among this fit's; another object under the same designation?)")
+
+
 def check_fit_replacing(directory: str | Path, designation: str, where: str = "--out",
-                        overwrite: bool = False, words: OptionWords = CLI_WORDS) -> str:
+                        overwrite: bool = False, words: OptionWords = CLI_WORDS,
+                        observed: tuple[str, np.ndarray] | None = None) -> str:
     """Refuse (:class:`ConfigError` naming ``where`` and the directory) a fit of ``designation`` into
-    ``directory`` when it holds a run's results or another object's fit, unless ``overwrite``.
-    Returns what will be replaced (for a note when ``overwrite`` allowed it), or "". ``words``: the
-    caller's options, as the refusal names them."""
+    ``directory`` when it holds a run's results, another object's fit, or a fit of the same
+    designation that shares no observation with this one (``observed``: the UTC epoch and this
+    fit's observation times (K,), TU since it; None: not checked), unless ``overwrite``. Returns what will be replaced (for
+    a note when ``overwrite`` allowed it), or "". ``words``: the caller's options, as the refusal
+    names them."""
     d = Path(directory)
-    what = _earlier(d, designation) if d.is_dir() else ""
+    what = _earlier(d, designation, observed) if d.is_dir() else ""
     if not what or overwrite:
         return what
     raise ConfigError(f"{where} {d}: holds {what}. A fit never replaces other results: give another {words.out}, "

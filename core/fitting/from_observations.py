@@ -786,7 +786,8 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
     where = words.out.rstrip("=") if out is not None else "the results directory"
     stale_of: dict[Path, list[Path]] = {}  # what an earlier fit of the other fit.arcs form left (--overwrite)
     for obs, d in plans:  # validate every directory before the first run (the scenarios were: _modelled_arcs)
-        replaced = check_fit_replacing(d, obs.designation, where, overwrite, words)
+        replaced = check_fit_replacing(d, obs.designation, where, overwrite, words,
+                                       (READ_EPOCH, obs.measurements.times))
         if replaced:
             say(f"{words.overwrite}: replacing {replaced} in {d}")
         stale_of[d] = check_fit_form(d, choices.arcs.arcs == "each", where, overwrite, words)
@@ -804,7 +805,7 @@ def fit_files(files: Iterable[str | Path], *, out: str | Path | None = None,
         with fit_lock(d, where), copies_read_quietly(), library_thread_limit(blas=1):  # one fit at a time
             # in a directory; what it replaces checked again under it; the reader's warnings were given
             # for the user's files; one BLAS thread for the least squares' small matrices, as in a run
-            check_fit_replacing(d, obs.designation, where, overwrite, words)
+            check_fit_replacing(d, obs.designation, where, overwrite, words, (READ_EPOCH, obs.measurements.times))
             results += _fit_arcs(obs, d, job, aside[obs.designation])
     return results
 
