@@ -97,6 +97,9 @@ def weights_note(measurements: MeasurementSet) -> str:
     if n == 0:
         return f"weights: the file's own uncertainties for all {len(measurements)} observations"
     partial, sigma = int(meta.get("default_sigma_partial", 0)), meta.get("default_sigma_arcsec")
+    if meta.get("sigma_from_file") is False:
+        return (f"weights: the {fmt} reader's sigma_arcsec = {sigma:g} arcsec on the sky for all {n} observations "
+                "(sigma_from_file = false: the file's own uncertainties are not used)")
     default = (f"the {fmt} reader's default sigma_arcsec = {sigma:g} arcsec on the sky (RA x cos(Dec), Dec) "
                "applies")
     if partial == n:

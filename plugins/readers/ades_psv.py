@@ -111,7 +111,8 @@ class AdesPsvReader(AdesReader):
                                                                   "(obsTime|ra|dec|stn|...) found")
         say_skipped(path, {"mode RAD": radar} if radar else {}, bool(rows))
         say_tiny_sigmas(path, rows)
-        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec, {"format": "ades-psv"},
+        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec,
+                         {"format": "ades-psv", **self.sigma_meta()},
                          self.designation)
 
     def write(self, path, measurements, epoch) -> None:

@@ -267,6 +267,11 @@ class AdesReader(DegreesCheckedReader):
             self._fail("sigma_from_file", sigma_from_file, "must be true or false")
         self.sigma_from_file = sigma_from_file
 
+    def sigma_meta(self) -> dict:
+        """What the set's meta records of ``sigma_from_file``: ``{"sigma_from_file": False}`` when it
+        is off (the weights line then says the file's own were replaced), else nothing."""
+        return {} if self.sigma_from_file else {"sigma_from_file": False}
+
     def checked_rows(self, path, rows: list[ObsRow]) -> list[ObsRow]:
         """``rows`` of ``path``, refused when their angles read as radians (``check_degrees``;
         probe L8: such a file had been fitted and its misfit blamed on a maneuver); without their

@@ -156,7 +156,8 @@ class AdesXmlReader(AdesReader):
             rows.append(record_to_row(rec, path, line, self._sites, table))
         say_skipped(path, skipped, bool(rows))
         say_tiny_sigmas(path, rows)
-        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec, {"format": "ades-xml"},
+        return build_set(path, self.checked_rows(path, rows), ep, table, self.sigma_arcsec,
+                         {"format": "ades-xml", **self.sigma_meta()},
                          self.designation)
 
     def write(self, path, measurements, epoch) -> None:

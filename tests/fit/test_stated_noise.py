@@ -18,6 +18,7 @@ import pytest
 
 from cistrack.cli.main import main
 from cistrack.runs.observation_files import read_observations
+from cistrack.runs.run_inputs import weights_note
 from cistrack.units import ARCSEC_RAD
 
 SHIPPED = Path(__file__).parents[2] / "core/scenarios/real_data/observations.psv"
@@ -67,3 +68,4 @@ def test_sigma_from_file_false_replaces_the_files_own_uncertainties(tmp_path):
     assert np.all(own.sigmas[:, 1] < 0.1 * ARCSEC_RAD)
     assert replaced.sigmas[:, 1] == pytest.approx(np.full(len(replaced), 0.8 * ARCSEC_RAD))
     assert replaced.meta["default_sigma_count"] == len(replaced)
+    assert "sigma_from_file = false: the file's own uncertainties are not used" in weights_note(replaced)
