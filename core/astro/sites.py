@@ -134,6 +134,13 @@ def observatory_codes() -> list[str]:
     return sorted(c for c, (lon, rc, rs, _n) in _table().items() if rc is not None and (rc, rs) != (0.0, 0.0))
 
 
+def _case_hint(code: str) -> str:
+    """" (did you mean 'G96', NAME?)" when ``code`` in upper case is a code of the list (MPC codes
+    are upper case: a lower-case 'g96' had been refused with no hint), else ""."""
+    row = _table().get(code.upper())
+    return f" (did you mean {code.upper()!r}, {row[3]}?)" if row is not None and code.upper() != code else ""
+
+
 def observatory(code: str) -> Site:
     """The ground site of MPC observatory ``code`` from the bundled list.
 
@@ -143,8 +150,8 @@ def observatory(code: str) -> Site:
         lon, rc, rs, name = _table()[str(code)]
     except KeyError:
         raise MeasurementError(f"MPC observatory code {quoted(code)} is not in the MPC list bundled with "
-                               f"cistrack ({len(_table())} codes); give its coordinates explicitly "
-                               f"(reader parameter 'sites')") from None
+                               f"cistrack ({len(_table())} codes){_case_hint(str(code))}; give its coordinates "
+                               f"explicitly (reader parameter 'sites')") from None
     if lon is None or rc is None or rs is None:
         raise MeasurementError(f"MPC observatory code {code!r} ({name}) is a roving or space-based "
                                f"observer: the MPC list gives it no fixed parallax constants, and "

@@ -47,6 +47,18 @@ def test_unknown_code_and_geocentre_are_refused_with_the_code():
         observatory("500")
 
 
+def test_a_lower_case_code_is_refused_with_the_code_it_would_be():
+    """Probe N: 'g96' had been refused as not in the MPC list, with no hint of G96."""
+    with pytest.raises(MeasurementError, match=r"'g96' is not in the MPC list .* \(did you mean 'G96', .*Mt. Lemmon"):
+        observatory("g96")
+
+
+def test_an_unknown_code_gets_no_hint():
+    with pytest.raises(MeasurementError) as err:
+        observatory("ZZ9")
+    assert "did you mean" not in str(err.value)
+
+
 def test_site_refuses_out_of_range_latitude():
     with pytest.raises(MeasurementError, match="latitude_deg"):
         Site(91.0, 0.0, 0.0, name="x")
