@@ -210,7 +210,30 @@ def summary_lines(one) -> list[str]:
         lines.append(f"  warning: the residuals are {r.noise_scale:.2g} times the assumed noise: check the weights "
                      "(--set measurements.reader.sigma_arcsec=..., with --set measurements.reader.sigma_from_file=false "
                      "for files that state their own rmsRA/rmsDec) or the data")
+    lines += _too_large_lines(r)
     return _wrapped(lines)
+
+
+TOO_LARGE_QUANTILE = 1e-4
+"""A fit's chi-square below this quantile of its chi-square distribution says that the stated
+uncertainties are too large (a consistent fit falls there once in 10^4)."""
+
+
+def _too_large_lines(r) -> list[str]:
+    """A warning when the fit ``r``'s chi-square lies below :data:`TOO_LARGE_QUANTILE` of its
+    distribution (10 degrees of freedom or more): the residuals are far below the stated noise, the
+    stated uncertainties too large and the covariance with them too wide (probe N: rmsRA = rmsDec =
+    17" on 0.85" data gave chi-square 0.1 for 38 degrees of freedom and no word)."""
+    from cistrack.numerics.special_functions import chi2_ppf
+
+    dof = 2 * r.n_used - 6 - len(r.parameter_names)
+    if dof < 10 or not r.chi2 < chi2_ppf(TOO_LARGE_QUANTILE, dof):
+        return []
+    return [f"  warning: the residuals are {r.rms:.2g} times the stated noise (chi-square {r.chi2:.3g} for {dof} "
+            f"degrees of freedom, below the {chi2_ppf(TOO_LARGE_QUANTILE, dof):.3g} a consistent fit exceeds but once "
+            "in 10^4): the stated uncertainties look too large, and the covariance with them too wide; check the "
+            "weights (--set measurements.reader.sigma_arcsec=..., with --set measurements.reader.sigma_from_file=false "
+            "for files that state their own rmsRA/rmsDec)"]
 
 
 def _not_converged_words(r) -> str:

@@ -69,3 +69,14 @@ def test_sigma_from_file_false_replaces_the_files_own_uncertainties(tmp_path):
     assert replaced.sigmas[:, 1] == pytest.approx(np.full(len(replaced), 0.8 * ARCSEC_RAD))
     assert replaced.meta["default_sigma_count"] == len(replaced)
     assert "sigma_from_file = false: the file's own uncertainties are not used" in weights_note(replaced)
+
+
+def test_uncertainties_far_too_large_are_warned_of(tmp_path, capsys):
+    """Probe N: rmsRA = rmsDec 20 times the data's scatter had given chi-square 0.1 for 38 degrees
+    of freedom and no word; the shipped file itself (its own uncertainties) gets none."""
+    assert main(["fit", str(_tight_file(tmp_path, divide=1.0 / 20.0)), "--out", str(tmp_path / "wide")]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "the stated uncertainties look too large, and the covariance with them too wide" in out
+    (tmp_path / "as").mkdir()
+    assert main(["fit", str(_tight_file(tmp_path / "as", divide=1.0)), "--out", str(tmp_path / "as_stated")]) == 0
+    assert "look too large" not in capsys.readouterr().out
