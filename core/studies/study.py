@@ -207,6 +207,20 @@ def _scenario_source(sc: str, p: Path) -> str | Path:
     return sp if sp.exists() else sc
 
 
+def _where_looked(sc: str, base: Path) -> str:
+    """For a scenario entry ``sc`` written as a file (a .toml suffix or a folder in it) that exists
+    nowhere: where it was looked for, beside the study file ``base`` and from the working folder
+    ("" for an entry written as a built-in scenario's name, whose own error lists the names)."""
+    from cistrack.scenario.loading import relative_base
+
+    if Path(sc).suffix != ".toml" and "/" not in sc:
+        return ""
+    if Path(sc).is_absolute():
+        return f"scenario file not found: {sc}"
+    return (f"scenario file not found: neither {relative_base(base) / sc} (beside the study file) nor "
+            f"{Path.cwd() / sc} (from the working folder) exists")
+
+
 _SHORT_NAMES = {"delta_v_ms": "dv", "response": "resp", "t_days": "t", "detector": "det", "n_particles": "np",
                 "duration_days": "days", "n_components": "nc", "direction": "dir"}
 """Short names of common sweep settings (by their last part) in run labels; others keep their last part."""
@@ -297,7 +311,7 @@ def _scenario_runs(entry: Any, p: Path, grid: _Grid, reg) -> list[RunSpec]:
     except ConfigError as exc:
         if not isinstance(source, str):  # a scenario file: its own error names it
             raise
-        raise ConfigError(f"{p}: key 'scenarios', entry {sc!r}: {exc}") from None
+        raise ConfigError(f"{p}: key 'scenarios', entry {sc!r}: {_where_looked(sc, grid.base) or exc}") from None
     names = sweep_names([k for k, _ in grid.sweep])
     specs: list[RunSpec] = []
     for combo in _combinations(grid.sweep, keys):

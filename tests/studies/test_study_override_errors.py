@@ -127,3 +127,14 @@ def test_a_seed_in_the_overrides_is_refused_naming_the_studys_seeds(tmp_path):
     msg = str(err.value)
     assert msg.startswith(f"{study}: key 'overrides', setting seed = 5: a study's runs take their seeds from its key "
                           "'seeds'") and "give seeds = [5] instead" in msg
+
+
+def test_a_missing_scenario_file_names_where_it_was_looked_for(tmp_path, monkeypatch):
+    """Probe N: 'scenario file not found: nope.toml' had said neither folder it was looked for in."""
+    (tmp_path / "studies").mkdir()
+    study = _study_text(tmp_path / "studies", 'name = "mine"\nscenarios = ["nope.toml"]\nseeds = [1]\n')
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError, match=rf"entry 'nope.toml': scenario file not found: neither "
+                                          rf"{tmp_path}/studies/nope\.toml \(beside the study file\) nor "
+                                          rf"{tmp_path}/nope\.toml \(from the working folder\) exists"):
+        plan_runs(study, tmp_path / "out")
