@@ -142,11 +142,10 @@ def _pressure_words(ctx, one, r, say) -> str:
     tell the two apart, the user can (an object's ratio is known, or fits a longer arc)."""
     from cistrack.fitting.pressure_rescue import pressure_explains
 
-    say(f"{one.designation}: no burn measured; fitting radiation pressure (C_R A/m solved for) instead")
-    seven = pressure_explains(ctx, one, r)
+    seven = pressure_explains(ctx, one, r, say)
     if seven is None:
         return ""
-    value, sigma = seven.parameter("area_to_mass_m2_kg")
+    value, sigma = seven.parameter(AREA_TO_MASS)
     return (f"; radiation pressure fits it cleanly too (C_R A/m = {value:.3g} +- {sigma:.2g} m^2/kg; "
             "--set fit.area_to_mass=solve fits it so): these observations cannot tell it from a burn")
 

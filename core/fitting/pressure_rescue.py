@@ -26,11 +26,12 @@ from cistrack import units
 __all__ = ["pressure_explains"]
 
 
-def pressure_explains(ctx: Any, one: Any, r: Any) -> Any | None:
+def pressure_explains(ctx: Any, one: Any, r: Any, say: Any = None) -> Any | None:
     """The fit of ``one``'s observations (``ctx``: its run's context) with the radiation pressure's
     ratio solved for, when it fits cleanly what made the ballistic fit ``r`` look like a maneuver
     (module docstring), its ``area_to_mass_decision`` saying so; None when it does not, or when the
-    ratio was not left to the fit ("auto") or is already among ``r``'s parameters."""
+    ratio was not left to the fit ("auto") or is already among ``r``'s parameters; ``say`` (a
+    function of one line, or None) is told when the fit is made."""
     from cistrack.errors import MeasurementError, PropagationError
     from cistrack.least_squares.differential_correction import fit_orbit
     from cistrack.least_squares.area_to_mass import MIN_ARC_DAYS, area_to_mass_verdict
@@ -42,6 +43,8 @@ def pressure_explains(ctx: Any, one: Any, r: Any) -> Any | None:
     if opts.area_to_mass != "auto" or AREA_TO_MASS in tuple(r.parameter_names) \
             or AREA_TO_MASS not in tuple(getattr(ctx.dynamics, "solve_for_parameters", ())):
         return None
+    if say is not None:
+        say(f"{one.designation}: no burn measured; fitting radiation pressure (C_R A/m solved for) instead")
     try:
         seven = fit_orbit(ctx.dynamics, ctx.sensor, ctx.measurements, r.state, r.epoch,
                           options=replace(opts, area_to_mass="solve"))

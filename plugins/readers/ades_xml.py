@@ -132,12 +132,10 @@ class AdesXmlReader(AdesReader):
     sites : dict or None
         Explicit sites for station codes outside the bundled MPC list (as for ades-psv).
     check_degrees : bool
-        Refuse a file whose every ra lies in [0, 6.2832] and dec in [-1.5708, 1.5708], or one
-        site's rows all so while the object's other rows are not (radians, where ADES has
-        degrees); false reads it as degrees.
+        Refuse angles that read as radians, as for ades-psv; false reads them as degrees.
     sigma_from_file : bool
-        true (default): rows that state rmsRA / rmsDec keep them; false: every row takes
-        ``sigma_arcsec`` instead (a file whose stated uncertainties are wrong).
+        Rows that state rmsRA / rmsDec keep them (true, the default), as for ades-psv; false:
+        every row takes ``sigma_arcsec``.
     """
 
     suffixes = (".xml",)
