@@ -506,12 +506,31 @@ def read_object_observations(paths: list[str | Path], registry: Registry,
     unused = _unused_sigma(params, [ms for sets, _, _ in by_object.values() for ms in sets])
     if unused:
         say(f"warning: {unused}")
+    twins = _case_twins(list(by_object))
+    for line in twins.values():
+        say(f"warning: {line}")
     out = []
     for obj, (sets, files, resolutions) in by_object.items():
         merged, dropped = _merge(sets, files, resolutions)
         for line in dropped:
             say(line)
-        out.append(ObjectObservations(obj, merged, files, notes[obj] + dropped + [unused] * bool(unused)))
+        told = [unused] * bool(unused) + ([twins[obj]] if obj in twins else [])
+        out.append(ObjectObservations(obj, merged, files, notes[obj] + dropped + told))
+    return out
+
+
+def _case_twins(names: list[str]) -> dict[str, str]:
+    """For each designation that another one equals but for letter case or surrounding blanks
+    ('dro' and 'DRO'), the words saying they are fitted as separate objects ({} when none)."""
+    groups: dict[str, list[str]] = {}
+    for name in names:
+        groups.setdefault(name.strip().casefold(), []).append(name)
+    out = {}
+    for same in (g for g in groups.values() if len(g) > 1):
+        shown = " and ".join(repr(clipped(n)) for n in same)
+        words = (f"the designations {shown} differ only in letter case or blanks: they are fitted as "
+                 f"{len(same)} separate objects; write them alike in the files if they are one")
+        out.update({n: words for n in same})
     return out
 
 

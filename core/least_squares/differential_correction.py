@@ -472,10 +472,30 @@ def _verdict(p: _Passes, rms: float, noise_scale: float, opts: FitOptions, say: 
         capped = (f"; {kept} more exceed it but are kept: at most {opts.max_reject_fraction:g} of the observations "
                   "are rejected (fit.max_reject_fraction)") if kept else ""
         say.append(f"{int(p.rejected.sum())} of {len(p.rejected)} observations rejected "
-                   f"(chi-square > {p.threshold:.4g}{capped})")
+                   f"(chi-square > {p.threshold:.4g}{_threshold_origin(opts)}{capped})")
     say.insert(0, ("converged" if converged else "NOT converged") + f" after {p.iterations} iterations; "
                f"weighted RMS {rms:.4g}, noise scale {noise_scale_text(noise_scale)}")
     return converged
+
+
+LOW_REJECT_SIGMA = 2.0
+"""A ``reject_sigma`` below this is said to reject observations that are noise (a share of
+2 (1 - Phi(s)) of them exceeds its threshold: 32 % at 1 sigma, 76 % at 0.3)."""
+
+
+def _threshold_origin(opts: FitOptions) -> str:
+    """Words naming ``fit.reject_sigma`` when it is not the default ("" when it is), with the share
+    of observations that are pure noise its threshold rejects when it is below
+    :data:`LOW_REJECT_SIGMA`."""
+    default = FitOptions.reject_sigma
+    s = float(opts.reject_sigma)
+    if s == default:
+        return ""
+    words = f", set by fit.reject_sigma = {s:g} (default {default:g})"
+    if s < LOW_REJECT_SIGMA:
+        noise = 1.0 - math.erf(s / math.sqrt(2.0))
+        words += f": {100.0 * noise:.0f} % of observations whose residuals are noise exceed it"
+    return words
 
 
 def _state_information(n: np.ndarray) -> np.ndarray:

@@ -245,3 +245,26 @@ def test_a_copy_in_mpc_80_column_with_times_to_1e_5_day_is_used_once(tmp_path):
     _mpc_to_five_decimals(tmp_path / "copy.obs")
     [obj] = read_object_observations([DATA / "observations.psv", tmp_path / "copy.obs"], default_registry())
     assert len(obj.measurements) == len(ms) and obj.measurements.meta["duplicates_dropped"] == len(ms)
+
+
+def _case_twins_file(tmp_path):
+    """The shipped file with its odd rows given for the same designation in upper case."""
+    lines = _psv_lines()
+    header, rows = lines[:2], lines[2:]
+    p = tmp_path / "case.psv"
+    p.write_text("\n".join(header + rows[::2] + [r.replace("cis0001", "CIS0001", 1) for r in rows[1::2]]) + "\n")
+    return p
+
+
+def test_designations_differing_only_in_case_are_two_objects_and_said_so(tmp_path):
+    said = []
+    objs = read_object_observations([_case_twins_file(tmp_path)], default_registry(), log=said.append)
+    assert [o.designation for o in objs] == ["cis0001", "CIS0001"]
+    assert any("'cis0001' and 'CIS0001' differ only in letter case" in m for m in said)
+    assert all(any("differ only in letter case" in n for n in o.notes) for o in objs)
+
+
+def test_distinct_designations_are_not_said_to_differ_in_case(tmp_path):
+    said = []
+    read_object_observations([_two_objects(tmp_path)], default_registry(), log=said.append)
+    assert not any("letter case" in m for m in said)
