@@ -33,8 +33,17 @@ def test_estimate_equals_the_closed_form_weighted_least_squares_solution():
     dyn, sen, ms, rows, weights, fisher = _problem()
     res = fit_orbit(dyn, sen, ms, np.zeros(6), T0)
     want = np.linalg.solve(fisher, rows.T @ (weights * ms.values.reshape(-1)))
-    assert np.all(np.abs(res.state - want) < 1e-6 * np.sqrt(np.diag(res.covariance)))
+    assert np.all(np.abs(res.state - want) < FLOOR_SIGMAS * np.sqrt(np.diag(res.covariance)))
     assert res.converged
+
+
+FLOOR_SIGMAS = 1e-4
+"""How close, in sigmas, the iteration can come to the closed form: a residual in sigmas
+(value ~0.3, sigma 1e-6) carries a rounding error of about 2.2e-16 * 0.3 / 1e-6 = 7e-11, so the
+cost (~33 for 33 components) is known to ~1e-9, and a step of s sigmas lowers it by s^2: steps
+under ~3e-5 sigma are beneath the cost's floor, where the fit stops (the stop's rule,
+``stall_step``, is 1e-2 sigma). Machines differ in those last bits (4e-6 sigma on one, under
+1e-6 on another)."""
 
 
 def test_a_prior_adds_its_information_and_pulls_the_estimate_to_the_closed_form_map():
