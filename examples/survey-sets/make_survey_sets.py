@@ -38,6 +38,9 @@ direction (synodic frame) at a time drawn evenly between the last observation of
 and the first of its last night (so between nights or, now and then, within one); the observations
 and ``truth.csv`` are of the orbit flown with it, and ``set.json`` gives it as ``burn``
 (``utc``, ``delta_v_ms``, ``delta_v_vector_ms``). Without the option the sets are as before.
+With ``--burn-before-night MINUTES`` as well, the burn lies that many minutes before the first
+observation of the first night that begins after the drawn time (the same draws: the set's
+observations are those of the same schedule, of the orbit flown with the moved burn).
 With ``--exposures N`` every tracklet holds N exposures (a dense file: N = 6,000 gave 11
 tracklets, 66,000 observations); the 3-5 is still drawn, but the jitter draws N values, so the
 schedule after the first tracklet differs from the default set's of that seed. With
@@ -283,9 +286,12 @@ def _nights(times: dict[str, list[np.ndarray]]) -> set[int]:
     return set(np.floor((starts - starts[0]) * units.TU_S / 86400.0 + 0.5).astype(int).tolist())
 
 
-def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: float, epoch) -> tuple[Impulse, dict]:
+def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: float, epoch,
+          before_night_min: float | None = None) -> tuple[Impulse, dict]:
     """One burn of ``dv_ms`` in an isotropic direction, at a time drawn evenly between the last
-    observation of the second night and the first of the last night; (the impulse, its record)."""
+    observation of the second night and the first of the last night; with ``before_night_min``,
+    that many minutes before the first observation of the first night that begins after the drawn
+    time instead; (the impulse, its record)."""
     tracklets = sorted((tr for trs in times.values() for tr in trs), key=lambda tr: tr[0])
     starts = np.array([tr[0] for tr in tracklets])
     night = np.floor((starts - starts[0]) * units.TU_S / 86400.0 + 0.5).astype(int)
@@ -293,6 +299,9 @@ def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: f
     lo = max(float(tr[-1]) for tr, n in zip(tracklets, night) if n == second)
     hi = min(float(tr[0]) for tr, n in zip(tracklets, night) if n == last)
     t_burn = float(rng.uniform(lo, hi))
+    if before_night_min is not None:
+        nxt = min(n for s, n in zip(starts, night) if s > t_burn)
+        t_burn = float(min(s for s, n in zip(starts, night) if n == nxt)) - before_night_min * 60.0 / units.TU_S
     u = rng.standard_normal(3)
     dv = u / np.linalg.norm(u) * dv_ms
     record = {"utc": units.format_utc(units.tu_to_utc(epoch, t_burn)), "delta_v_ms": float(dv_ms),
@@ -301,9 +310,10 @@ def _burn(rng: np.random.Generator, times: dict[str, list[np.ndarray]], dv_ms: f
 
 
 def make(out: Path, family: str, seed: int, burn_ms: float = 0.0, exposures: int | None = None,
-         area_to_mass: float = 0.0) -> dict:
+         area_to_mass: float = 0.0, burn_before_night: float | None = None) -> dict:
     """Simulate one set into ``out`` (with ``burn_ms`` > 0: the object makes one burn of that many
-    m/s, :func:`_burn`; with ``exposures``, every tracklet holds that many; with ``area_to_mass``
+    m/s, :func:`_burn`, ``burn_before_night`` minutes before a night's first observation when
+    given; with ``exposures``, every tracklet holds that many; with ``area_to_mass``
     (m^2/kg, C_R A/m), the truth feels solar radiation pressure, recorded in set.json as
     ``area_to_mass_m2_kg``); returns its description (also written as set.json)."""
     streams = np.random.SeedSequence([seed, FAMILIES.index(family)]).spawn(5)
@@ -313,7 +323,7 @@ def make(out: Path, family: str, seed: int, burn_ms: float = 0.0, exposures: int
     if area_to_mass:
         info["area_to_mass_m2_kg"] = float(area_to_mass)
     if burn_ms > 0:
-        impulse, info["burn"] = _burn(burn_rng, times, burn_ms, scen.epoch)
+        impulse, info["burn"] = _burn(burn_rng, times, burn_ms, scen.epoch, burn_before_night)
         dyn = ImpulsiveDynamics(dyn, [impulse])
     parts = []
     for code, tracklets in times.items():
@@ -371,10 +381,16 @@ def main() -> None:
                     help="exposures in every tracklet (default: 3-5 drawn); the schedule is then another one")
     ap.add_argument("--area-to-mass", type=float, default=0.0, metavar="M2_KG",
                     help="solar radiation pressure on the truth, C_R A/m in m^2/kg (default: none)")
+    ap.add_argument("--burn-before-night", type=float, default=None, metavar="MINUTES",
+                    help="with --burn-ms: the burn this many minutes before the first observation of the first "
+                         "night after the time drawn (default: the drawn time)")
     a = ap.parse_args()
+    if a.burn_before_night is not None and a.burn_ms <= 0:
+        ap.error("--burn-before-night needs --burn-ms")
     for fam in a.family:
         for seed in a.seed:
-            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms, a.exposures, a.area_to_mass)
+            info = make(a.out / f"{fam}-s{seed}", fam, seed, a.burn_ms, a.exposures, a.area_to_mass,
+                        a.burn_before_night)
             burn = f"; a {a.burn_ms:g} m/s burn at {info['burn']['utc'][:16]}" if "burn" in info else ""
             print(f"{fam} seed {seed}: {info['n_observations']} observations, {info['tracklets']} tracklets over "
                   f"{info['nights']} nights from {', '.join(info['sites'])}; first night {info['first_night_exposures']} "

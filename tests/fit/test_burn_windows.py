@@ -39,6 +39,8 @@ def test_a_dense_pass_is_no_nights_gap_in_the_burn_time_check():
     def count(w):
         return sum(w[0] < x < w[1] for x in trial)
 
-    assert count(last_pass) == 6 and count(near_gap) == 6                # its window and the nearest night's gap
+    assert count(last_pass) == 6 and count(near_gap) == 6 + 3            # its window and the nearest night's gap:
+    hour_before = (last_pass[0] - units.hours_to_tu(1.01), last_pass[0])  # 3 of the latter within its last hour
+    assert count(hour_before) == 3
     assert count(far_gap) == 3                                           # every other night's gap
     assert count(first_pass) == 0                                        # a dense pass is no night's gap
