@@ -473,7 +473,8 @@ def _measured(ctx, one, say, first: _Outcome | None = None) -> _Outcome:
         say("the same burns as the first search: its verdict stands")
         return first
     if not found.burns:
-        return _Outcome(found, None, [], "no impulsive burn in the gaps between the observations explains it")
+        return _Outcome(found, None, [], found.unsized or "no impulsive burn in the gaps between the observations "
+                        "explains it")
     say(f"checking the time of the {_count(len(found.burns), 'burn')} found against every other time the arc allows "
         "(full fits in each night's gap)")
     found, doubt = _times_allowed(ctx, one, found, say)
@@ -556,7 +557,7 @@ def _burn_doubt(fit, burns) -> str:
     than outliers explain (:func:`_rejects_too_many`)."""
     from cistrack.least_squares.burn_search import suspicion
 
-    tried = "; ".join(f"{b.magnitude_ms:.3g} +- {b.magnitude_sigma_ms:.3g} m/s" for b in burns)
+    tried = "; ".join(_size_text(b) for b in burns)
     traded = [b for b in burns if not b.widened and _time_trade(b) > MAX_TIME_TRADE]
     if traded:
         return (f"the burn the search kept ({tried}) trades its size against its time (within one sigma of its "
@@ -573,6 +574,15 @@ def _burn_doubt(fit, burns) -> str:
     if still:  # the burns do not explain what made the fit suspect: not reported as maneuvers
         return f"with the burns found ({tried}) {still}: they do not explain it (outliers, a bias or another object are as likely)"
     return ""
+
+
+def _size_text(burn: BurnEstimate) -> str:
+    """"N +- S m/s" for ``burn``, or, for a burn of any size
+    (:func:`~cistrack.least_squares.burn_search.any_size`), those words with no figure."""
+    from cistrack.least_squares.burn_search import any_size
+
+    beyond = any_size(burn)
+    return f"one of any size: {beyond}" if beyond else f"{burn.magnitude_ms:.3g} +- {burn.magnitude_sigma_ms:.3g} m/s"
 
 
 MIN_TESTED_BURN_SIGMAS = 2.0

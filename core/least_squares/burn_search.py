@@ -57,7 +57,7 @@ from cistrack.propagation.impulses import ImpulsiveDynamics
 
 __all__ = ["suspicion", "screen_suspicion", "end_night_bias", "end_night_rejected", "burn_fit_options", "BURN_ITERATIONS", "END_BIAS_CHI2", "search_maneuvers", "ManeuverSearch", "burn_key", "flown", "rival_time", "RivalTime", "MIN_GAP_HOURS",
            "MAX_BURNS", "FALSE_ALARM", "GAPS_TRIED", "BLOCK_SHARE", "MAX_RMS", "MAX_BURN_MS", "RIVAL_COST", "ALLOWED_COST",
-           "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed"]
+           "RIVAL_FALSE_ALARM", "RIVAL_SCREEN_SLACK", "times_allowed", "any_size"]
 
 MIN_GAP_HOURS = 0.2
 """Gaps between observations at least this long (12 minutes) are candidate burn intervals: between
@@ -88,8 +88,10 @@ right 1 m/s burn (heo-s198: cost 41,384 below the ballistic fit's, weighted RMS 
 was not kept. A fit that converges within 30 is the same fit."""
 
 MAX_BURN_MS = 1000.0
-"""The largest burn the search keeps, m/s (a lunar orbit insertion's size): a larger one fitted
-between observations of a cislunar object explains outliers or another object, not a maneuver."""
+"""The largest burn the search keeps, m/s (a lunar orbit insertion's size; a cislunar object moves
+at about 1 km/s, and the escape speed from the Earth at the Moon's distance is 1.4 km/s): a larger
+one fitted between observations of a cislunar object explains outliers or another object, not a
+maneuver. A burn whose size's sigma exceeds it is of any size too: the observations bound none."""
 MAX_RMS = 1.5
 """A fit whose weighted RMS exceeds this is suspect (1 when the noise is as stated)."""
 RIVAL_COST = 4.0
@@ -248,6 +250,8 @@ class ManeuverSearch:
                                    of the same ballistic fit given it reuses those fits
     ballistic : FitResult or None  the fit without burns the search began from (the time check
                                    fits trial times from it too: :func:`_from_ballistic`)
+    unsized : str                  why the search stopped at a burn that lowers the cost enough but is
+                                   of any size (:func:`any_size`), in words ("" when it did not)
     """
 
     result: FitResult
@@ -258,6 +262,7 @@ class ManeuverSearch:
     prior: Any = None
     screened: dict = field(default_factory=dict, repr=False)
     ballistic: FitResult | None = field(default=None, repr=False)
+    unsized: str = ""
 
 
 def burn_key(burns: list[BurnEstimate]) -> tuple:
@@ -467,16 +472,47 @@ def search_maneuvers(dynamics: Dynamics, sensor: Sensor, ms: MeasurementSet, bal
             break
         fit, window, t_sigma = step
         ev = burn_evidence(found.result, fit, FALSE_ALARM, found.prior)
-        b = fit.searched
-        plausible = b.magnitude_ms <= MAX_BURN_MS
-        say(f"burn tried in the gap {_utc_days(window[0]):.3f}-{_utc_days(window[1]):.3f} d: |dv| = "
-            f"{b.magnitude_ms:.4f} +- {b.magnitude_sigma_ms:.4f} m/s, cost drop {ev.cost_drop:.1f} "
-            f"(needs > {ev.cost_threshold:.1f}), " + ("kept" if ev.accepted and plausible else "not kept")
-            + ("" if plausible else f" (larger than {MAX_BURN_MS:g} m/s: not a burn between observations)"))
-        if not (ev.accepted and plausible):
+        beyond = any_size(fit.searched)
+        say(_tried_words(window, fit.searched, ev, beyond))
+        if beyond and ev.accepted:
+            found.unsized = (f"no impulsive burn of at most {MAX_BURN_MS:g} m/s in the gaps between the observations "
+                             f"explains it: the burn that lowers the cost enough (by {ev.cost_drop:.3g}, "
+                             f"{ev.cost_threshold:.3g} needed), in the gap {_gap_words(window)}, is one of any size "
+                             f"({beyond}): these observations cannot tell a burn from outliers or another object")
+        if beyond or not ev.accepted:
             break
         found = _add_burn(arc, found, fit, window, t_sigma)
     return found
+
+
+def any_size(burn: BurnEstimate) -> str:
+    """Why ``burn`` is one of any size, in words ("" when it is not): its delta-v or the sigma of its
+    size beyond :data:`MAX_BURN_MS` (m/s; NaN counts as beyond). The observations then bound no
+    burn there, and a figure of hundreds of km/s would describe nothing: six observations over three
+    nights, one an outlier, had been "tried" with a burn of 85,501 m/s, and another kept one of
+    466 +- 6e14 m/s between two exposures 14 minutes apart."""
+    if not burn.magnitude_ms <= MAX_BURN_MS:
+        return f"the fit puts it beyond {MAX_BURN_MS:g} m/s"
+    if not burn.magnitude_sigma_ms <= MAX_BURN_MS:
+        return f"the sigma of its size is beyond {MAX_BURN_MS:g} m/s"
+    return ""
+
+
+def _gap_words(window: tuple[float, float]) -> str:
+    """The gap ``window`` (TU) as "a-b d" (days since the epoch)."""
+    return f"{_utc_days(window[0]):.3f}-{_utc_days(window[1]):.3f} d"
+
+
+def _tried_words(window: tuple[float, float], burn: BurnEstimate, ev, beyond: str) -> str:
+    """The progress line of one burn tried in the gap ``window``: its size and the test against the
+    fit without it (``ev``, a :class:`~cistrack.least_squares.impulse_fit.BurnEvidence`), or, for a
+    burn of any size (``beyond``: :func:`any_size`'s words), no figure for its size."""
+    test = f"cost drop {ev.cost_drop:.1f} (needs > {ev.cost_threshold:.1f})"
+    if beyond:
+        return (f"burn tried in the gap {_gap_words(window)}: one of any size ({beyond}, no burn of a cislunar object), "
+                f"{test}, not kept: these observations cannot tell a burn there")
+    return (f"burn tried in the gap {_gap_words(window)}: |dv| = {burn.magnitude_ms:.4f} +- "
+            f"{burn.magnitude_sigma_ms:.4f} m/s, {test}, " + ("kept" if ev.accepted else "not kept"))
 
 
 def _add_burn(arc: BurnArc, found: ManeuverSearch, fit: ImpulseFit, window: tuple[float, float],
