@@ -169,7 +169,10 @@ def test_a_burn_before_the_arcs_start_is_not_confirmed_in_a_later_gap():
 def test_a_station_keeping_burn_whose_time_the_arc_does_not_place_is_not_confirmed():
     """example-1-maneuver seed 2 with 3,000 particles: its second 0.1 m/s burn (13.133 d) had been
     confirmed as 0.199 +- 0.072 m/s at 11.564 +- 0.68 d along +x (the truth: -y), though a burn
-    anywhere in 11.4-14.2 d fits within 4.3 of its cost; the first burn's estimate stays confirmed."""
+    anywhere in 11.4-14.2 d fits within 4.3 of its cost; the first burn's estimate stays confirmed.
+    Where the search's minimum falls in that flat stretch depends on the last bits of the
+    arithmetic: on some machines at the arc's start (11.424 d), which the start-of-arc rule refuses
+    to confirm for its own reason."""
     from cistrack.runs.pipeline import run_scenario
     from cistrack.scenario.loading import load_scenario
     from cistrack.scenario.settings import apply_settings
@@ -177,7 +180,9 @@ def test_a_station_keeping_burn_whose_time_the_arc_does_not_place_is_not_confirm
     sc = apply_settings(load_scenario("example-1-maneuver"), ["filter.n_particles=3000", "iod.n_particles=3000"])
     first, second = run_scenario(sc, seed=2).summary.maneuvers
     assert first["confirmed"] and abs(first["delta_v_ms"] - 0.1) < 3 * first["delta_v_sigma_ms"]
-    assert not second["confirmed"] and second["unconfirmed_reason"].startswith("its burn time and delta-v are not")
+    reason = second["unconfirmed_reason"]
+    assert not second["confirmed"]
+    assert reason.startswith("its burn time and delta-v are not") or "is the start of its arc" in reason
 
 
 def test_a_station_keeping_burn_put_at_its_arcs_start_is_not_confirmed():
